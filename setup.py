@@ -1,0 +1,44 @@
+"""ament_python package that also installs with plain ``pip install .``."""
+from glob import glob
+
+from setuptools import find_packages, setup
+
+package_name = 'catenary_monitor'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    package_data={package_name: ['py.typed', 'data/*']},
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name + '/config', glob('config/*.yaml')),
+    ],
+    python_requires='>=3.10',
+    install_requires=[
+        'setuptools',
+        'numpy>=1.24',
+        'scipy>=1.10',
+        'pyyaml',
+        'matplotlib>=3.7',
+        'mcap>=1.1',
+        'mcap-ros2-support>=0.5',
+        'ros-jazzy-rclpy[fastrtps]',
+        'ros-jazzy-common-interfaces',
+    ],
+    extras_require={
+        'test': ['pytest>=7', 'hypothesis>=6', 'mpmath>=1.3', 'flake8>=6', 'pytest-timeout'],
+        'peers': ['moorpy'],
+    },
+    zip_safe=True,
+    maintainer='catenary_monitor developers',
+    maintainer_email='catenary-monitor@example.org',
+    description='Live anchor-uplift monitor for moored floating docks (ROS 2 Jazzy).',
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [
+            'catenary-monitor = catenary_monitor.cli:main',
+        ],
+    },
+)
