@@ -1,0 +1,8 @@
+"""catenary_monitor: live anchor-uplift monitoring for moored floating docks (ROS 2 Jazzy).
+
+The numerical core (this package's top level, ``catenary``, ``solve``) imports no rclpy.
+"""
+from .solve import ALL_KEYS, STATUS_MESSAGES, SolveResult, Status, solve
+
+__version__ = '0.1.0'
+__all__ = ['solve', 'SolveResult', 'Status', 'STATUS_MESSAGES', 'ALL_KEYS', '__version__']

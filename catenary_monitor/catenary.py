@@ -1,0 +1,398 @@
+"""Numerically stable catenary kernels for a chain running from a hook point down to a seabed anchor.
+
+Notation (SI units throughout): ``w`` submerged weight per metre [N/m], ``h`` vertical distance
+anchor -> hook [m], ``x`` horizontal distance hook -> anchor [m], ``R`` horizontal tension [N],
+``T`` hook (top) tension [N], ``a = R / w`` the catenary parameter [m].
+
+The chain is a catenary ``y = a cosh(xi)`` in its own parameter ``xi``; the anchor sits at ``xi = u``
+(``u = 0``: the chain meets the seabed tangentially, no uplift) and the hook at ``xi = u + X`` with
+``X = x / a``.  Every kernel below is written so that nothing cancels that the problem itself does
+not make ill-conditioned: ``cosh(z) - 1`` is evaluated as ``2 sinh(z/2)**2``, ``acosh(1 + z)`` as
+``log1p(z + sqrt(z (2 + z)))``, and the uplift solve iterates on ``log(X - log1p(h/B))`` so that
+both of its ends (``x -> 0`` and ``x -> x_min``) keep full relative accuracy.
+
+Each closed form takes an array namespace ``xp`` (``numpy`` or :mod:`math` through ``_MATH``) so the
+same formula serves the vectorized path and the fast scalar path.  Inputs here are assumed valid:
+validation lives in :mod:`catenary_monitor.solve`.
+"""
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+from typing import Any, NamedTuple
+
+import numpy as np
+
+#: Newton stops after a step of at most this size in its log variable (relative size of the
+#: unknown): convergence is quadratic, so the error left is ~STEP_TOL**2, far below rounding.
+STEP_TOL = 1e-9
+#: Iteration cap; never reached on the physical domain (see test_catenary.py::test_iteration_counts).
+MAXITER = 60
+
+_MATH = SimpleNamespace(
+    sqrt=math.sqrt, log=math.log, maximum=max, log1p=math.log1p, exp=math.exp, expm1=math.expm1,
+    sinh=math.sinh, cosh=math.cosh, tanh=math.tanh, asinh=math.asinh, arctan2=math.atan2,
+)
+
+
+def acosh1p(z: Any, xp: Any = np) -> Any:
+    """``acosh(1 + z)`` for ``z >= 0`` without the cancellation of ``acosh(1 + tiny)``."""
+    return xp.log1p(z + xp.sqrt(z * (2.0 + z)))
+
+
+def two_prod_diff(t: Any, w: Any, h: Any) -> Any:
+    """``t - w*h`` with the product's rounding error compensated (Dekker/Veltkamp split).
+
+    The anchor-end tension ``T - w h`` cancels when the chain is nearly vertical (h/a large);
+    computing it in compensated arithmetic keeps it correctly rounded in that regime.
+    """
+    p = w * h
+    split = 134217729.0  # 2**27 + 1
+    cw = split * w
+    wh = cw - (cw - w)
+    wl = w - wh
+    ch = split * h
+    hh = ch - (ch - h)
+    hl = h - hh
+    err = ((wh * hh - p) + wh * hl + wl * hh) + wl * hl
+    return (t - p) - err
+
+
+# --------------------------------------------------------------------------------------------
+# Problems 1 and 3: anchor tangent to the seabed (no uplift), closed forms.
+# --------------------------------------------------------------------------------------------
+class Grounded(NamedTuple):
+    """Chain meeting the seabed tangentially: the minimum anchor distance for its load."""
+
+    min_anchor_distance: Any  # m, horizontal span of the suspended chain
+    suspended_length: Any  # m
+    top_angle: Any  # rad, from the horizontal at the hook
+
+
+def grounded(a: Any, h: Any, xp: Any = np) -> Grounded:
+    """Suspended span, length and top angle of a catenary with its vertex at the anchor.
+
+    ``x_min = a acosh(1 + h/a)``, ``L = sqrt(h (h + 2a))``, ``tan(beta) = L / a``.
+    """
+    x_min = a * acosh1p(h / a, xp)
+    length = xp.sqrt(h * (h + 2.0 * a))
+    return Grounded(x_min, length, xp.arctan2(length, a))
+
+
+def depth_reached(a: Any, x: Any, xp: Any = np) -> Any:
+    """Depth ``a (cosh(x/a) - 1)`` [m] spanned by a no-uplift catenary over horizontal distance x."""
+    s = xp.sinh(0.5 * x / a)
+    return 2.0 * a * s * s
+
+
+# --------------------------------------------------------------------------------------------
+# Lifted anchor: a catenary whose anchor end leaves the seabed at angle alpha.
+# --------------------------------------------------------------------------------------------
+class Lifted(NamedTuple):
+    """State of a chain whose anchor end is lifted (all in SI; zero uplift when t == 0)."""
+
+    horizontal_tension: Any  # N
+    uplift_force: Any  # N, vertical pull on the anchor
+    anchor_angle: Any  # rad
+    top_tension: Any  # N
+    top_angle: Any  # rad
+    suspended_length: Any  # m
+
+
+def _lifted_state(w: Any, a: Any, u_sinh: Any, u_cosh: Any, big_x: Any, xp: Any) -> Lifted:
+    """Quantities of the catenary with anchor at ``xi = u`` and hook at ``xi = u + X``.
+
+    ``u_sinh = sinh(u)``, ``u_cosh = cosh(u)`` (given separately to keep their accuracy).
+    """
+    sx = xp.sinh(big_x)
+    half = xp.sinh(0.5 * big_x)
+    cm1 = 2.0 * half * half  # cosh(X) - 1
+    top_sinh = u_sinh * (1.0 + cm1) + u_cosh * sx  # sinh(u + X)
+    top_cosh = u_cosh * (1.0 + cm1) + u_sinh * sx  # cosh(u + X)
+    r = w * a
+    return Lifted(
+        horizontal_tension=r,
+        uplift_force=r * u_sinh,
+        anchor_angle=xp.arctan2(u_sinh, 1.0),
+        top_tension=r * top_cosh,
+        top_angle=xp.arctan2(top_sinh, 1.0),
+        suspended_length=a * (u_sinh * cm1 + u_cosh * sx),
+    )
+
+
+def lifted_from_horizontal(w: Any, h: Any, a: Any, x: Any, xp: Any = np) -> Lifted:
+    """Problem 2: horizontal tension (``a = R/w``) and span x given, anchor closer than x_min.
+
+    Closed form: with ``p = sinh(X/2)`` and ``q = h / (2 a p)``, the anchor parameter is
+    ``u = asinh(q) - asinh(p)``, evaluated as ``asinh((q - p)(q + p) / (q sqrt(1+p^2) + p sqrt(1+q^2)))``
+    where ``q - p = (h/a - 2 p^2) / (2p)``: the only subtraction left is the problem's own
+    (depth minus the depth a no-uplift chain reaches).  Negative ``u`` is clipped to 0 (grounded).
+    """
+    big_x = x / a
+    p = xp.sinh(0.5 * big_x)
+    q = h / (2.0 * a * p)
+    q_minus_p = (h / a - 2.0 * p * p) / (2.0 * p)
+    # sinh(u) = sinh(asinh(q) - asinh(p)) = tan(alpha), the anchor-end slope.
+    u_sinh = q_minus_p * (q + p) / (q * xp.sqrt(1.0 + p * p) + p * xp.sqrt(1.0 + q * q))
+    u_sinh = xp.maximum(u_sinh, 0.0)
+    return _lifted_state(w, a, u_sinh, xp.sqrt(1.0 + u_sinh * u_sinh), big_x, xp)
+
+
+# --------------------------------------------------------------------------------------------
+# Problem 4: hook tension T and span x given, anchor closer than x_min -> uplift state.
+# --------------------------------------------------------------------------------------------
+#
+# With B = T/w - h (anchor-end tension over w), e = h / B, the span in catenary units
+# X = x / a lies in [log1p(e), acosh(1+e)].  Writing X = log1p(e) + d, the exact relation
+#     (x sinh(X) / (B X))**2 = expm1(d) * (e (2 + e) - expm1(-d))
+# has no cancellation for any d > 0; we solve it by Newton in eta = log(d) on the log of the
+# ratio of both sides, which is close to linear in eta over the whole range.  Then
+#     sech(u) = x / (B X),   tanh(u) = (e - 2 sinh(X/2)**2) / sinh(X).
+
+def _uplift_residual(eta: Any, e: Any, r02: Any, xlo: Any, m: Any, xp: Any) -> tuple[Any, Any]:
+    """Residual ``log(x(d)^2 / x_t^2)`` and its derivative with respect to ``eta = log(d)``.
+
+    ``r02 = e (2 + e)``, ``xlo = log1p(e)``, ``m = x_t / B``.  The residual is the log of one
+    product of well-conditioned factors, so its absolute error is a few ulps.
+    """
+    d = xp.exp(eta)
+    big_x = xlo + d
+    em = xp.expm1(d)
+    emn = -xp.expm1(-d)
+    p = r02 + emn
+    ratio = em * p * (big_x / (m * xp.sinh(big_x))) ** 2
+    # d/dd log(sinh X / X) = coth X - 1/X; its cancellation for small X only slows nothing:
+    # the 1/d term dominates the derivative there.
+    dfdd = (1.0 + em) / em + (1.0 - emn) / p - 2.0 * (1.0 / xp.tanh(big_x) - 1.0 / big_x)
+    return xp.log(ratio), dfdd * d
+
+
+def _uplift_setup(b: Any, h: Any, x: Any, xp: Any) -> tuple[Any, Any, Any, Any, Any, Any]:
+    """Constants of the uplift solve and the starting point.
+
+    Returns ``e, r02, xlo, m, eta0, eta_max``; ``eta_max = log(d_max)`` is where x = x_min.
+    The start inverts the model ``x ~ x_min sqrt(d / d_max)`` (exact at d_max, right in shape
+    as d -> 0).
+    """
+    e = h / b
+    r02 = e * (2.0 + e)
+    xlo = xp.log1p(e)
+    m = x / b
+    x0 = acosh1p(e, xp)
+    eta_max = xp.log(x0 - xlo)
+    eta0 = eta_max + 2.0 * xp.log(m / x0)
+    return e, r02, xlo, m, eta0, eta_max
+
+
+def _lifted_from_d(w: Any, b: Any, e: Any, xlo: Any, m: Any, d: Any, xp: Any) -> Lifted:
+    """Uplift state from the solved ``d``: ``sech u = m / X``, ``tanh u = (e - cosh X + 1)/sinh X``."""
+    big_x = xlo + d
+    s = m / big_x
+    half = xp.sinh(0.5 * big_x)
+    t = (e - 2.0 * half * half) / xp.sinh(big_x)
+    t = xp.maximum(t, 0.0)
+    return _lifted_state(w, b * s, t / s, 1.0 / s, big_x, xp)
+
+
+def lifted_from_tension(w: np.ndarray, b: np.ndarray, h: np.ndarray, x: np.ndarray
+                        ) -> tuple[Lifted, np.ndarray, np.ndarray]:
+    """Problem 4, vectorized: uplift state for hook tension ``T = w (B + h)`` and span x < x_min.
+
+    All arguments are 1-D float arrays of one length (``b = T/w - h``).  Returns the state, the
+    iteration count and a converged flag per element.
+
+    Notes
+    -----
+    Newton in ``eta``, safeguarded by a bracket that every evaluated residual tightens (the
+    residual increases with eta).  A step that leaves the bracket is replaced by bisection, or
+    by a step of -4 in eta while no lower bound is known.  Each iteration evaluates only the
+    elements still active.  Stopping test: ``|step| <= STEP_TOL`` in eta (relative in d); the
+    convergence is quadratic, so the error left after that step is at rounding level.
+    """
+    e, r02, xlo, m, eta, eta_hi = _uplift_setup(b, h, x, np)
+    eta = np.minimum(eta, eta_hi)
+    eta_lo = np.full_like(eta, -np.inf)
+    iters = np.zeros(eta.shape, dtype=np.int64)
+    done = np.zeros(eta.shape, dtype=bool)
+    idx = np.arange(eta.size)
+    for it in range(1, MAXITER + 1):
+        if idx.size == 0:
+            break
+        cur = eta[idx]
+        f, fp = _uplift_residual(cur, e[idx], r02[idx], xlo[idx], m[idx], np)
+        lo = np.where(f < 0.0, np.maximum(eta_lo[idx], cur), eta_lo[idx])
+        hi = np.where(f > 0.0, np.minimum(eta_hi[idx], cur), eta_hi[idx])
+        step = -f / fp
+        new = cur + step
+        converged = (np.abs(step) <= STEP_TOL) | (f == 0.0)
+        bad = ~((new >= lo) & (new <= hi) | converged)  # also catches NaN
+        new = np.where(bad, np.where(np.isfinite(lo), 0.5 * (lo + hi), cur - 4.0), new)
+        eta[idx], eta_lo[idx], eta_hi[idx] = np.where(f == 0.0, cur, new), lo, hi
+        iters[idx] = it
+        done[idx[converged]] = True
+        idx = idx[~converged]
+    return _lifted_from_d(w, b, e, xlo, m, np.exp(eta), np), iters, done
+
+
+def lifted_from_tension_scalar(w: float, b: float, h: float, x: float) -> tuple[Lifted, int, bool]:
+    """Problem 4 for one element in plain floats (the node's and the CLI's fast path).
+
+    Same formulas, start, safeguard and stopping test as :func:`lifted_from_tension`.
+    """
+    e, r02, xlo, m, eta, eta_hi = _uplift_setup(b, h, x, _MATH)
+    eta = min(eta, eta_hi)
+    eta_lo = -math.inf
+    for it in range(1, MAXITER + 1):
+        f, fp = _uplift_residual(eta, e, r02, xlo, m, _MATH)
+        if f == 0.0:
+            return _lifted_from_d(w, b, e, xlo, m, math.exp(eta), _MATH), it, True
+        if f < 0.0:
+            eta_lo = max(eta_lo, eta)
+        else:
+            eta_hi = min(eta_hi, eta)
+        step = -f / fp
+        if abs(step) <= STEP_TOL:
+            return _lifted_from_d(w, b, e, xlo, m, math.exp(eta + step), _MATH), it, True
+        eta += step
+        if not eta_lo <= eta <= eta_hi:
+            eta = 0.5 * (eta_lo + eta_hi) if eta_lo > -math.inf else eta - step - 4.0
+    return _lifted_from_d(w, b, e, xlo, m, math.exp(eta), _MATH), MAXITER, False
+
+
+# --------------------------------------------------------------------------------------------
+# Load margin: the hook tension at which a no-uplift chain just reaches the anchor at x.
+# --------------------------------------------------------------------------------------------
+def critical_parameter(h: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Catenary parameter ``a`` [m] of the no-uplift chain spanning (x, h); vectorized.
+
+    Solves ``2 a sinh(x/2a)**2 = h``, i.e. ``sinh(D)**2 / D = h / x`` with ``D = x / (2a)``, by
+    safeguarded Newton in ``log D`` (the left side is increasing in D).  The critical hook
+    tension is ``w (a + h)``.  Returns ``a`` and a converged flag.
+    """
+    c = h / x
+    # Start: sinh(D)^2/D ~ D for small D, ~ e^{2D}/(4D) for large D.
+    big = np.log(4.0 * np.maximum(c, 1.0))
+    d0 = np.where(c < 1.0, c, 0.5 * (big + np.log(np.maximum(0.5 * big, 1.0))))
+    eta = np.log(np.maximum(d0, 1e-300))
+    done = np.zeros(eta.shape, dtype=bool)
+    idx = np.arange(eta.size)
+    for _ in range(MAXITER):
+        if idx.size == 0:
+            break
+        f, fp = _critical_residual(eta[idx], c[idx], np)
+        step = np.clip(-f / fp, -4.0, 4.0)
+        eta[idx] += step
+        conv = np.abs(step) <= STEP_TOL
+        done[idx[conv]] = True
+        idx = idx[~conv]
+    return x / (2.0 * np.exp(eta)), done
+
+
+def _critical_residual(eta: Any, c: Any, xp: Any) -> tuple[Any, Any]:
+    """``log(sinh(D)^2 / (D c))`` and its derivative in ``eta = log D`` (``D coth D`` terms)."""
+    d = xp.exp(eta)
+    # log sinh D = D + log1p(-exp(-2D)) - log 2: no overflow for large D.
+    log_sinh = d + xp.log(-xp.expm1(-2.0 * d)) - math.log(2.0)
+    f = 2.0 * log_sinh - eta - xp.log(c)
+    fp = 2.0 * d / xp.tanh(d) - 1.0
+    return f, fp
+
+
+def critical_parameter_scalar(h: float, x: float) -> float:
+    """Scalar twin of :func:`critical_parameter` (same start and stopping test)."""
+    c = h / x
+    if c < 1.0:
+        d0 = c
+    else:
+        big = math.log(4.0 * c)
+        d0 = 0.5 * (big + math.log(max(0.5 * big, 1.0)))
+    eta = math.log(d0)
+    for _ in range(MAXITER):
+        f, fp = _critical_residual(eta, c, _MATH)
+        step = min(max(-f / fp, -4.0), 4.0)
+        eta += step
+        if abs(step) <= STEP_TOL:
+            break
+    return x / (2.0 * math.exp(eta))
+
+
+# --------------------------------------------------------------------------------------------
+# Problem 5: paid-out chain length Lm and span x given (Hou et al. 2005).
+# --------------------------------------------------------------------------------------------
+def grounded_parameter_from_length(h: np.ndarray, excess: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Catenary parameter [m] of a chain lying on the seabed, from ``excess = Lm - x``.
+
+    With ``theta = acosh(1 + h/a)`` (the suspended span over a), suspended length minus span is
+    ``a (sinh(theta) - theta)`` and ``h = a (cosh(theta) - 1)``, so theta solves
+    ``(sinh(theta) - theta) / (2 sinh(theta/2)**2) = excess / h``, left side increasing from 0
+    to 1; requires ``0 < excess < h``.  ``sinh(theta) - theta`` uses its series below 0.5.
+    Bisection-safeguarded Newton in theta.  Returns ``a`` and a converged flag.
+    """
+    target = excess / h
+    lo = np.zeros_like(target)
+    hi = np.full_like(target, 2.0)
+    while True:  # widen the upper bound until it brackets (the ratio tends to 1)
+        grow = _excess_ratio(hi) < target
+        if not grow.any():
+            break
+        hi = np.where(grow, 2.0 * hi, hi)
+    theta = np.minimum(3.0 * target, 0.5 * hi)  # ratio ~ theta/3 for small theta
+    done = np.zeros(theta.shape, dtype=bool)
+    for _ in range(4 * MAXITER):
+        r = _excess_ratio(theta)
+        f = r - target
+        lo = np.where(f < 0.0, theta, lo)
+        hi = np.where(f > 0.0, theta, hi)
+        dr = _excess_ratio_derivative(theta, r)
+        new = theta - f / dr
+        new = np.where((new > lo) & (new < hi), new, 0.5 * (lo + hi))
+        step = np.abs(new - theta)
+        theta = np.where(done, theta, new)
+        done |= (step <= 4.0 * np.finfo(float).eps * theta) | (f == 0.0)
+        if done.all():
+            break
+    half = np.sinh(0.5 * theta)
+    return h / (2.0 * half * half), done
+
+
+def _sinh_minus_x(z: np.ndarray) -> np.ndarray:
+    """``sinh(z) - z`` without cancellation (series for |z| < 0.5)."""
+    z2 = z * z
+    series = z * z2 / 6.0 * (1.0 + z2 / 20.0 * (1.0 + z2 / 42.0 * (1.0 + z2 / 72.0 * (
+        1.0 + z2 / 110.0 * (1.0 + z2 / 156.0 * (1.0 + z2 / 210.0))))))
+    return np.where(np.abs(z) < 0.5, series, np.sinh(z) - z)
+
+
+def _excess_ratio(theta: np.ndarray) -> np.ndarray:
+    half = np.sinh(0.5 * theta)
+    return _sinh_minus_x(theta) / (2.0 * half * half)
+
+
+def _excess_ratio_derivative(theta: np.ndarray, ratio: np.ndarray) -> np.ndarray:
+    # d/dtheta [(sinh t - t)/(cosh t - 1)] = (cosh t - 1 - ratio sinh t)/(cosh t - 1)
+    half = np.sinh(0.5 * theta)
+    cm1 = 2.0 * half * half
+    return (cm1 - ratio * np.sinh(theta)) / cm1
+
+
+def taut_parameter_from_length(h: np.ndarray, x: np.ndarray, length: np.ndarray
+                               ) -> tuple[np.ndarray, np.ndarray]:
+    """Catenary parameter of a fully suspended chain of given length between two points.
+
+    Solves ``sqrt(L^2 - h^2) = 2 a sinh(x / 2a)`` (requires ``L^2 > x^2 + h^2``), i.e.
+    ``sinh(D)/D = sqrt(L^2 - h^2)/x`` with ``D = x/(2a)``, by Newton in D from an upper start
+    (the left side is convex, so Newton from above decreases monotonically).
+    """
+    k = np.sqrt((length - h) * (length + h)) / x
+    d = np.maximum(np.sqrt(6.0 * np.maximum(k - 1.0, 0.0)), np.log(2.0 * k) + np.log(np.log(2.0 * k) + 1.0))
+    done = np.zeros(d.shape, dtype=bool)
+    for _ in range(4 * MAXITER):
+        sh = np.sinh(d)
+        f = sh / d - k
+        fp = (np.cosh(d) - sh / d) / d
+        new = np.where(done, d, d - f / fp)
+        done |= np.abs(new - d) <= 4.0 * np.finfo(float).eps * d
+        d = new
+        if done.all():
+            break
+    return x / (2.0 * d), done

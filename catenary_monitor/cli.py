@@ -1,0 +1,188 @@
+"""``catenary-monitor``: the command line (solve, paper, bench-core; node, replay and bench added by their modules).
+
+Exit status: 0 success, 2 invalid or physically impossible input (one line on stderr naming it),
+1 unexpected failure.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from typing import Callable, Optional, Sequence
+
+import numpy as np
+
+from .solve import STATUS_MESSAGES, SolveResult, Status, solve
+
+#: Display unit, scale from SI and format for each key of the human-readable table.
+DISPLAY = {
+    'horizontal_tension': ('horizontal tension R', 'kN', 1e-3, '{:.4f}'),
+    'top_tension': ('hook tension T', 'kN', 1e-3, '{:.4f}'),
+    'min_anchor_distance': ('minimum anchor distance', 'm', 1.0, '{:.4f}'),
+    'suspended_length': ('suspended length L', 'm', 1.0, '{:.4f}'),
+    'top_angle_deg': ('top angle beta', 'deg', 1.0, '{:.5f}'),
+    'anchor_angle_deg': ('anchor angle alpha', 'deg', 1.0, '{:.5f}'),
+    'uplift_force': ('uplift force F', 'kN', 1e-3, '{:.4f}'),
+    'anchor_margin': ('anchor margin', 'm', 1.0, '{:+.4f}'),
+    'tide_margin': ('tide margin', 'm', 1.0, '{:+.4f}'),
+    'load_margin': ('load margin', 'kN', 1e-3, '{:+.4f}'),
+    'grounded_length': ('grounded length', 'm', 1.0, '{:.4f}'),
+    'safety_factor': ('safety factor MBL/T', '-', 1.0, '{:.3f}'),
+}
+
+
+class UsageError(Exception):
+    """Invalid input: reported as one line on stderr with exit status 2."""
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """ArgumentParser whose errors are one line on stderr (exit 2), usage left to --help."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
+
+
+def format_table(rows: Sequence[Sequence[str]], header: Sequence[str]) -> str:
+    """Plain-text table with right-aligned columns (first column left-aligned)."""
+    widths = [max(len(str(r[i])) for r in [header, *rows]) for i in range(len(header))]
+    def line(r: Sequence[str]) -> str:
+        cells = [str(c).ljust(widths[0]) if i == 0 else str(c).rjust(widths[i]) for i, c in enumerate(r)]
+        return '  '.join(cells).rstrip()
+    rule = '  '.join('-' * w for w in widths)
+    return '\n'.join([line(header), rule, *(line(r) for r in rows)])
+
+
+def result_table(result: SolveResult) -> str:
+    """Human-readable table of a scalar result, display units (kN, m, deg)."""
+    rows = []
+    for key in result.keys:
+        label, unit, scale, fmt = DISPLAY[key]
+        rows.append((label, fmt.format(getattr(result, key) * scale), unit, key))
+    return format_table(rows, ('quantity', 'value', 'unit', 'json key'))
+
+
+def _positive_or_any(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'not a number: {text!r}') from None
+
+
+def _status_line(result: SolveResult, args: argparse.Namespace) -> str:
+    code = Status(int(result.status))
+    detail = ''
+    if code == Status.TENSION:
+        detail = f' (T = {args.tension:g} N, w*h = {args.weight * args.depth:g} N)'
+    elif code == Status.CHAIN_TOO_SHORT:
+        detail = f' (Lm = {args.chain_length:g} m, sqrt(x^2+h^2) = {math.hypot(args.anchor_distance, args.depth):g} m)'
+    elif code == Status.CHAIN_SLACK:
+        detail = f' (Lm = {args.chain_length:g} m, x + h = {args.anchor_distance + args.depth:g} m)'
+    return f'invalid input: {STATUS_MESSAGES[code]}{detail}'
+
+
+def cmd_solve(args: argparse.Namespace) -> int:
+    """Solve one catenary problem and print a table or JSON."""
+    if args.chain_length is not None and args.anchor_distance is None:
+        raise UsageError('--chain-length needs --anchor-distance (the chain runs from hook to anchor)')
+    result = solve(args.weight, args.depth, tension=args.tension, horizontal=args.horizontal,
+                   anchor_distance=args.anchor_distance, chain_length=args.chain_length, mbl=args.mbl)
+    if int(result.status) != Status.OK:
+        raise UsageError(_status_line(result, args))
+    if args.json:
+        print(json.dumps(result.to_dict()))
+    else:
+        given = f'w = {args.weight:g} N/m, h = {args.depth:g} m'
+        for name, unit in (('tension', 'N'), ('horizontal', 'N'), ('chain_length', 'm'),
+                           ('anchor_distance', 'm'), ('mbl', 'N')):
+            v = getattr(args, name)
+            if v is not None:
+                given += f', {name} = {v:g} {unit}'
+        lifted = result.uplift_force > 0
+        state = 'ANCHOR LIFTED' if lifted else 'anchor on the seabed (no uplift)'
+        print(f'{given}\n{state}; model: {result.model}\n')
+        print(result_table(result))
+    return 0
+
+
+def paper_table() -> str:
+    """The seed paper's floating-dock worked examples (Hu & Tang 2004), solved exactly."""
+    w, h = 1300.0, 20.85
+    cases = [
+        ('T2 pretension', dict(horizontal=372e3, anchor_distance=120.0)),
+        ('T3 typhoon, line 11', dict(horizontal=1584.6e3, anchor_distance=121.06)),
+        ('T4 measured T', dict(tension=1623.5e3)),
+        ('T4 measured T, line 11', dict(tension=1623.5e3, anchor_distance=121.06)),
+    ]
+    rows = []
+    for label, kw in cases:
+        r = solve(w, h, **kw)
+        rows.append((label, f'{r.horizontal_tension / 1e3:.3f}', f'{r.top_tension / 1e3:.3f}',
+                     f'{r.min_anchor_distance:.4f}', f'{r.suspended_length:.4f}',
+                     f'{r.top_angle_deg:.5f}', f'{r.anchor_angle_deg:.5f}', f'{r.uplift_force / 1e3:.3f}',
+                     '' if np.isnan(r.anchor_margin) else f'{r.anchor_margin:+.3f}'))
+    header = ('case (w = 1.3 kN/m, h = 20.85 m)', 'R kN', 'T kN', 'x_min m', 'L m', 'beta deg',
+              'alpha deg', 'F kN', 'margin m')
+    return format_table(rows, header)
+
+
+def cmd_paper(args: argparse.Namespace) -> int:
+    """Print the seed paper's dock examples solved by the core."""
+    print('Floating dock of Hu & Tang (2004): 12 x U3 chain, 81 mm, w = 1300 N/m submerged (g = 10)\n')
+    print(paper_table())
+    print('\nErrata: table 4 prints x = 255.9719 m (transposed digits: 225.97 m); table 3 prints '
+          'beta = 15.5595 deg (12.559 deg).')
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = OneLineParser(prog='catenary-monitor',
+                                     description='Anchor-chain catenary monitor for moored docks.')
+    sub = parser.add_subparsers(dest='command', required=True, metavar='COMMAND',
+                                parser_class=OneLineParser)
+
+    p = sub.add_parser('solve', help='solve one catenary problem (SI units)',
+                       description='Solve the chain catenary: minimum anchor distance, uplift, margins.')
+    p.add_argument('--weight', type=_positive_or_any, required=True, metavar='W',
+                   help='submerged chain weight per metre [N/m]')
+    p.add_argument('--depth', type=_positive_or_any, required=True, metavar='H',
+                   help='vertical distance anchor -> hook point [m]')
+    load = p.add_mutually_exclusive_group(required=True)
+    load.add_argument('--tension', type=_positive_or_any, metavar='T', help='measured hook tension [N]')
+    load.add_argument('--horizontal', type=_positive_or_any, metavar='R', help='horizontal tension [N]')
+    load.add_argument('--chain-length', type=_positive_or_any, metavar='LM',
+                      help='paid-out chain length [m] (needs --anchor-distance)')
+    p.add_argument('--anchor-distance', type=_positive_or_any, metavar='X',
+                   help='installed horizontal distance hook -> anchor [m]')
+    p.add_argument('--mbl', type=_positive_or_any, metavar='M', help='minimum breaking load [N]')
+    p.add_argument('--json', action='store_true', help='print one JSON object instead of a table')
+    p.set_defaults(func=cmd_solve)
+
+    p = sub.add_parser('paper', help="print the seed paper's floating-dock examples, solved")
+    p.set_defaults(func=cmd_paper)
+    p = sub.add_parser('demo', help='the embedded default: the paper dock example')
+    p.set_defaults(func=cmd_paper)
+
+    for register in _EXTENSIONS:
+        register(sub)
+    return parser
+
+
+#: Sub-command registrars of the shell modules (node, replay, benchmarks).
+_EXTENSIONS: list[Callable[[argparse._SubParsersAction], None]] = []
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args) or 0)
+    except UsageError as exc:
+        print(f'catenary-monitor: {exc}', file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == '__main__':
+    sys.exit(main())
