@@ -158,7 +158,10 @@ def solve(weight: ArrayLike, depth: ArrayLike, tension: Optional[ArrayLike] = No
             floats = {k: float(v) for k, v in given.items()}
         except (TypeError, ValueError) as exc:
             raise ValueError(f'inputs must be numbers: {exc}') from None
-        return _solve_tension_scalar(**floats)
+        try:
+            return _solve_tension_scalar(**floats)
+        except (OverflowError, ZeroDivisionError, ValueError):
+            pass  # beyond float range in plain math (e.g. sinh overflow): numpy gives inf instead
     try:
         arrays = dict(zip(given, np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in given.values()))))
     except ValueError as exc:
@@ -193,7 +196,7 @@ def _validate(problem: str, a: dict[str, np.ndarray]) -> np.ndarray:
     flag(~(w > 0), Status.WEIGHT)
     flag(~(h > 0), Status.DEPTH)
     if problem == 'tension':
-        flag(~(cat.two_prod_diff(a['tension'], w, h) > 0), Status.TENSION)
+        flag(~(a['tension'] > w * h), Status.TENSION)
     if problem == 'horizontal':
         flag(~(a['horizontal'] > 0), Status.HORIZONTAL)
     if 'anchor_distance' in a:
@@ -208,6 +211,11 @@ def _validate(problem: str, a: dict[str, np.ndarray]) -> np.ndarray:
 
 
 def _solve_arrays(problem: str, full: dict[str, np.ndarray], scalar: bool) -> SolveResult:
+    with np.errstate(over='ignore', invalid='ignore', divide='ignore'):
+        return _solve_valid(problem, full, scalar)
+
+
+def _solve_valid(problem: str, full: dict[str, np.ndarray], scalar: bool) -> SolveResult:
     status = _validate(problem, full)
     shape = status.shape
     ok = status == 0
@@ -317,7 +325,7 @@ def _solve_tension_scalar(weight: float, depth: float, tension: float,
         status = Status.WEIGHT
     elif not h > 0:
         status = Status.DEPTH
-    elif not cat.two_prod_diff(t, w, h) > 0:
+    elif not t > w * h:
         status = Status.TENSION
     elif x is not None and not x > 0:
         status = Status.DISTANCE
