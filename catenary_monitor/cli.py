@@ -163,13 +163,15 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser('demo', help='the embedded default: the paper dock example')
     p.set_defaults(func=cmd_paper)
 
-    for register in _EXTENSIONS:
+    for register in _extensions():
         register(sub)
     return parser
 
 
-#: Sub-command registrars of the shell modules (node, replay, benchmarks).
-_EXTENSIONS: list[Callable[[argparse._SubParsersAction], None]] = []
+def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
+    """Sub-command registrars of the other modules (imported lazily: no rclpy for `solve`)."""
+    from . import bench_core
+    return [bench_core.register]
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

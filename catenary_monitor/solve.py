@@ -11,9 +11,9 @@ Two tiers of errors (scipy / sgp4 style):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+import functools
 from enum import IntEnum
-from typing import Any, Optional, Union
+from typing import Any, NamedTuple, Optional, Union
 
 import numpy as np
 
@@ -62,10 +62,10 @@ ALL_KEYS = (
 )
 
 
-@dataclass(frozen=True)
-class SolveResult:
+class SolveResult(NamedTuple):
     """Solution of one catenary problem, element by element (SI units, angles in degrees).
 
+    An immutable named tuple (cheap to build: the live node makes one per update).
     Attributes carry the JSON key names. Arrays have the broadcast shape of the inputs; when every
     input was a scalar they are Python floats (``status`` an int).  Values are NaN where
     ``status != 0`` and for keys that do not apply to the problem (see ``keys``).
@@ -85,7 +85,7 @@ class SolveResult:
     safety_factor: Any  # MBL / hook tension
     status: Any  # int codes, see Status
     problem: str  # 'tension', 'horizontal' or 'chain_length'
-    keys: tuple[str, ...] = field(default=())
+    keys: tuple[str, ...] = ()
     model: str = 'inextensible catenary'
     method: str = 'closed form + safeguarded Newton (catenary_monitor.catenary)'
 
@@ -169,6 +169,7 @@ def solve(weight: ArrayLike, depth: ArrayLike, tension: Optional[ArrayLike] = No
     return _solve_arrays(problem, arrays, scalar)
 
 
+@functools.lru_cache(maxsize=None)
 def _keys(problem: str, has_x: bool, has_mbl: bool) -> tuple[str, ...]:
     skip = set()
     if not has_x:
@@ -316,10 +317,11 @@ _NAN = math.nan
 def _solve_tension_scalar(weight: float, depth: float, tension: float,
                           anchor_distance: Optional[float] = None,
                           mbl: Optional[float] = None) -> SolveResult:
+    """Problems 3 and 4 for one element in plain floats (same checks and formulas as arrays)."""
     w, h, t, x = weight, depth, tension, anchor_distance
-    vals = [w, h, t] + [v for v in (x, mbl) if v is not None]
-    status = Status.OK
-    if not all(math.isfinite(v) for v in vals):
+    isfinite = math.isfinite
+    if not (isfinite(w) and isfinite(h) and isfinite(t) and (x is None or isfinite(x))
+            and (mbl is None or isfinite(mbl))):
         status = Status.NON_FINITE
     elif not w > 0:
         status = Status.WEIGHT
@@ -331,32 +333,28 @@ def _solve_tension_scalar(weight: float, depth: float, tension: float,
         status = Status.DISTANCE
     elif mbl is not None and not mbl > 0:
         status = Status.MBL
+    else:
+        status = 0
     keys = _keys('tension', x is not None, mbl is not None)
-    out = dict.fromkeys(ALL_KEYS, _NAN)
-    if status == Status.OK:
-        b = cat.two_prod_diff(t, w, h) / w
-        g = cat.grounded(b, h, cat._MATH)
-        out.update(horizontal_tension=w * b, top_tension=t, min_anchor_distance=g.min_anchor_distance,
-                   suspended_length=g.suspended_length, top_angle_deg=math.degrees(g.top_angle),
-                   anchor_angle_deg=0.0, uplift_force=0.0)
-        if x is not None:
-            if x < g.min_anchor_distance:
-                s, _, converged = cat.lifted_from_tension_scalar(w, b, h, x)
-                if not converged:
-                    status = Status.NO_CONVERGENCE
-                out.update(horizontal_tension=s.horizontal_tension, suspended_length=s.suspended_length,
-                           top_angle_deg=math.degrees(s.top_angle),
-                           anchor_angle_deg=math.degrees(s.anchor_angle), uplift_force=s.uplift_force)
-            a_now = out['horizontal_tension'] / w
-            out.update(anchor_margin=x - g.min_anchor_distance,
-                       tide_margin=cat.depth_reached(a_now, x, cat._MATH) - h,
-                       load_margin=w * (cat.critical_parameter_scalar(h, x) + h) - t)
-        if mbl is not None:
-            out['safety_factor'] = mbl / t
-    if status != Status.OK:
-        out = dict.fromkeys(ALL_KEYS, _NAN)
-    for k in ALL_KEYS:
-        if k not in keys:
-            out[k] = _NAN
-    return SolveResult(**out, status=int(status), problem='tension', keys=keys)
-
+    nan = _NAN
+    if status:
+        return SolveResult(nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan,
+                           int(status), 'tension', keys)
+    b = cat.two_prod_diff(t, w, h) / w
+    x_min, length, beta = cat.grounded(b, h, cat._MATH)
+    r, alpha, uplift = w * b, 0.0, 0.0
+    anchor_margin = tide_margin = load_margin = safety = nan
+    if x is not None:
+        if x < x_min:
+            s, _, converged = cat.lifted_from_tension_scalar(w, b, h, x)
+            if not converged:
+                return SolveResult(nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan,
+                                   int(Status.NO_CONVERGENCE), 'tension', keys)
+            r, uplift, alpha, _, beta, length = s
+        anchor_margin = x - x_min
+        tide_margin = cat.depth_reached(r / w, x, cat._MATH) - h
+        load_margin = w * (cat.critical_parameter_scalar(h, x) + h) - t
+    if mbl is not None:
+        safety = mbl / t
+    return SolveResult(r, t, x_min, length, math.degrees(beta), math.degrees(alpha), uplift,
+                       anchor_margin, tide_margin, load_margin, nan, safety, 0, 'tension', keys)
