@@ -65,7 +65,9 @@ def run(n_scalar: int = 2000, n_vector: int = 200_000) -> dict[str, float]:
 
     def naive4(i: int) -> float:
         big_a, b = tl[i] / W, tl[i] / W - hl[i]
-        g = lambda a: a * (math.acosh(big_a / a) - math.acosh(b / a)) - xl[i]
+
+        def g(a: float) -> float:
+            return a * (math.acosh(big_a / a) - math.acosh(b / a)) - xl[i]
         return brentq(g, 1e-12 * b, b, xtol=1e-300, rtol=8.9e-16)
 
     out: dict[str, float] = {}

@@ -46,6 +46,7 @@ class OneLineParser(argparse.ArgumentParser):
 def format_table(rows: Sequence[Sequence[str]], header: Sequence[str]) -> str:
     """Plain-text table with right-aligned columns (first column left-aligned)."""
     widths = [max(len(str(r[i])) for r in [header, *rows]) for i in range(len(header))]
+
     def line(r: Sequence[str]) -> str:
         cells = [str(c).ljust(widths[0]) if i == 0 else str(c).rjust(widths[i]) for i, c in enumerate(r)]
         return '  '.join(cells).rstrip()
@@ -137,7 +138,7 @@ def cmd_paper(args: argparse.Namespace) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = OneLineParser(prog='catenary-monitor',
-                                     description='Anchor-chain catenary monitor for moored docks.')
+                           description='Anchor-chain catenary monitor for moored docks.')
     sub = parser.add_subparsers(dest='command', required=True, metavar='COMMAND',
                                 parser_class=OneLineParser)
 

@@ -43,6 +43,7 @@ def uplift_from_tension(w, t, h, x):
         w, t, h, x = _mp(w, t, h, x)
         b = t / w - h                                        # anchor-end tension / w
         # Anchor angle alpha: a = b cos(alpha); equation (1) y(x; alpha) = h.
+
         def y_minus_h(alpha):
             a = b * mp.cos(alpha)
             return a * (mp.sec(alpha) * (mp.cosh(x / a) - 1) + mp.tan(alpha) * mp.sinh(x / a)) - h
@@ -60,6 +61,7 @@ def uplift_from_horizontal(w, h, r, x):
     with mp.workdps(DPS):
         w, h, r, x = _mp(w, h, r, x)
         a = r / w
+
         def y_minus_h(alpha):
             return a * (mp.sec(alpha) * (mp.cosh(x / a) - 1) + mp.tan(alpha) * mp.sinh(x / a)) - h
         alpha = _bisect(y_minus_h, mp.mpf(0), mp.pi / 2)
@@ -76,7 +78,9 @@ def critical_tension(w, h, x):
         w, h, x = _mp(w, h, x)
         # d = x / 2a solves sinh(d)^2 / d = h / x; bracket it on a log scale.
         c = h / x
-        f = lambda ld: 2 * mp.log(mp.sinh(mp.exp(ld))) - ld - mp.log(c)
+
+        def f(ld):
+            return 2 * mp.log(mp.sinh(mp.exp(ld))) - ld - mp.log(c)
         ld = _bisect(f, mp.mpf(-80), mp.mpf(8))
         a = x / (2 * mp.exp(ld))
         return w * (a + h)
