@@ -390,6 +390,7 @@ class _Scanner:
         self.unknown: dict[int, tuple[int, int]] = {}  # channel id -> (count, first offset)
         self.stats_counts: dict[int, int] | None = None
         self._top_messages: list[int] = []
+        self._recovered = 0
 
     # -- reporting
     def skip(self, offset: int, kind: str, reason: str, lost: int | None = None) -> None:
@@ -487,15 +488,20 @@ class _Scanner:
                 pos = self._resync(pos, f'invalid record opcode 0x{op:02x}')
                 continue
             if end > n:
+                # Either the writer was killed inside this record (nothing valid follows) or
+                # its length field is damaged (a valid chunk follows somewhere).
+                if self.file_report.finished or _find_chunk(data, pos + 1) >= 0:
+                    pos = self._resync(pos, f'record (opcode 0x{op:02x}) of {length} B runs '
+                                            'past the end of the file')
+                    continue
+                recovered = ''
                 if op == _OP_CHUNK:
                     yield from self._flush_top()
                     yield from self._partial_chunk(pos)
-                if self.file_report.finished:
-                    pos = self._resync(pos, f'record (opcode 0x{op:02x}) of {length} B '
-                                            'runs past the end of a finished file')
-                    continue
+                    recovered = (f'; {self._recovered} message record(s) recovered from the cut '
+                                 'chunk without CRC check')
                 self.skip(pos, 'truncated', f'file ends inside a record (opcode 0x{op:02x}, '
-                          f'{length} B, {n - pos - 9} B present)')
+                          f'{length} B, {n - pos - 9} B present){recovered}')
                 break
             body = pos + 9
             if op == _OP_CHUNK:
@@ -602,6 +608,7 @@ class _Scanner:
         except Exception:  # noqa: BLE001 - whatever cannot be decoded is simply not recovered
             return
         offsets, _ = _locate_messages(records[:usize], {}, self._add_schema, self._add_channel)
+        self._recovered = len(offsets)
         if len(offsets):
             self.file_report.chunks += 1
             block = self._select(records, offsets, pos)
