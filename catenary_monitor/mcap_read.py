@@ -196,16 +196,14 @@ class ReadReport:
         return not self.skips and all(f.finished for f in self.files)
 
     @property
-    def messages_lost(self) -> int | None:
-        """Known number of requested-topic messages lost (None if some loss is unknowable)."""
-        total = 0
-        for skip in self.skips:
-            if skip.kind == 'truncated' and skip.messages_lost is None:
-                continue  # a cut tail loses only what was never written completely
-            if skip.messages_lost is None:
-                return None
-            total += skip.messages_lost
-        return total
+    def messages_lost(self) -> int:
+        """Requested-topic messages known to be lost (a lower bound, see ``loss_known``)."""
+        return sum(s.messages_lost for s in self.skips if s.messages_lost is not None)
+
+    @property
+    def loss_known(self) -> bool:
+        """True if every skipped part has a known loss (a cut tail never has)."""
+        return all(s.messages_lost is not None for s in self.skips)
 
     def summary(self) -> str:
         """Multi-line human summary."""
