@@ -4,10 +4,11 @@ Two entry points:
 
 * :func:`read_float64_topics` reads ``std_msgs/msg/Float64`` topics into numpy columns
   (log time in ns, value) at well over a million messages per second. Chunks are decompressed
-  with zstandard/lz4 and their message records are located through the Message Index records
-  that follow each chunk, then parsed in one vectorised gather per chunk. Every index entry is
-  checked against the record it points to, and every byte of the chunk that the index does not
-  cover is walked record by record, so a missing or wrong index only costs speed, never data.
+  with zstandard/lz4 and gathered into batches of up to 8 MiB; their message records are
+  located through the Message Index records that follow each chunk and parsed with one
+  vectorised gather per batch. Every index entry is checked against the record it points to,
+  and every byte that the index does not cover is walked record by record, so a missing or
+  wrong index only costs speed, never data.
 * :func:`iter_messages` yields every message of the chosen topics as raw CDR bytes
   (:class:`RawMessage`), in file order, through the same tolerant scanner.
 
@@ -330,8 +331,16 @@ def iter_messages(
 
     Slower than :func:`read_float64_topics` (one Python object per message) but works for any
     message type; decode ``data`` with ``rclpy.serialization.deserialize_message`` or
-    ``mcap_ros2``. Damaged parts are skipped as in :func:`read_float64_topics` and recorded in
-    ``report`` if one is given.
+    ``mcap_ros2``. Files are read in the order given (a directory's files sorted by name);
+    messages are not re-sorted by time. Damaged parts are skipped as in
+    :func:`read_float64_topics` and recorded in ``report`` if one is given.
+
+    Raises
+    ------
+    FileNotFoundError
+        If a path does not exist.
+    McapReadError
+        If a file is not MCAP at all.
     """
     wanted = None if topics is None else set(_unique(topics))
     report = ReadReport() if report is None else report
