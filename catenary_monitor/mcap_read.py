@@ -409,7 +409,9 @@ class _Scanner:
         self.data_arr = np.frombuffer(self.data, np.uint8)
         self.file_report = FileReport(self.path, len(self.data))
         report.files.append(self.file_report)
-        self.schemas: dict[int, tuple[str, str]] = {}
+        self.schemas: dict[int, str] = {}                # schema id -> name (data section)
+        self.summary_schemas: dict[int, str] = {}
+        self.summary_channels: dict[int, tuple[int, str, str]] = {}  # id -> schema, topic, enc
         self.channels: dict[int, _Channel] = {}
         self.accepted: set[int] = set()
         self.topic_names: list[str] = []          # accepted channel -> topic index
@@ -436,22 +438,20 @@ class _Scanner:
 
     # -- channel bookkeeping
     def _add_schema(self, buf: bytes | memoryview, pos: int, end: int) -> None:
-        if end - pos < 2 + 4 + 4 + 4:
-            raise _BadRecord(f'Schema record of {end - pos} B is too short')
-        schema_id, = struct.unpack_from('<H', buf, pos)
-        name, p = _string(buf, pos + 2, end)
-        encoding, _ = _string(buf, p, end)
-        self.schemas[schema_id] = (name, encoding)
+        schema_id, name = _parse_schema(buf, pos, end)
+        self.schemas[schema_id] = name
 
     def _add_channel(self, buf: bytes | memoryview, pos: int, end: int) -> None:
-        if end - pos < 4 + 4 + 4 + 4:
-            raise _BadRecord(f'Channel record of {end - pos} B is too short')
-        channel_id, schema_id = struct.unpack_from('<HH', buf, pos)
-        topic, p = _string(buf, pos + 4, end)
-        encoding, _ = _string(buf, p, end)
+        self._register(*_parse_channel(buf, pos, end))
+
+    def _register(self, channel_id: int, schema_id: int, topic: str, encoding: str) -> None:
+        """Make a channel known; the data section's definition wins over the summary's."""
         if channel_id in self.channels:
             return
-        schema_name = self.schemas.get(schema_id, ('', ''))[0] if schema_id else ''
+        if schema_id == 0:
+            schema_name = ''
+        else:
+            schema_name = self.schemas.get(schema_id, self.summary_schemas.get(schema_id, ''))
         channel = _Channel(channel_id, topic, encoding, schema_id, schema_name)
         self.channels[channel_id] = channel
         self.known_lut[channel_id] = True
@@ -462,12 +462,19 @@ class _Scanner:
                 self.topic_names.append(topic)
             self.topic_lut[channel_id] = index
 
+    def _resolve(self, channel_ids: Iterable[int]) -> None:
+        """Take channels not (yet) defined in the data section from the summary."""
+        for cid in channel_ids:
+            if cid not in self.channels and cid in self.summary_channels:
+                self._register(cid, *self.summary_channels[cid])
+
     def _count_unknown(self, missing: np.ndarray, file_offset: int) -> None:
         for cid, n in zip(*np.unique(missing, return_counts=True)):
             count, first = self.unknown.get(int(cid), (0, file_offset))
             self.unknown[int(cid)] = (count + int(n), first)
 
-    # -- summary (read first: it repeats every Schema and Channel)
+    # -- summary (read first: it repeats every Schema and Channel; used for channels whose
+    #    definition in the data section was lost)
     def _read_summary(self) -> None:
         data = self.data
         n = len(data)
@@ -493,9 +500,11 @@ class _Scanner:
                 break
             try:
                 if op == _OP_SCHEMA:
-                    self._add_schema(data, body, end)
+                    schema_id, name = _parse_schema(data, body, end)
+                    self.summary_schemas[schema_id] = name
                 elif op == _OP_CHANNEL:
-                    self._add_channel(data, body, end)
+                    channel_id, *rest = _parse_channel(data, body, end)
+                    self.summary_channels[channel_id] = tuple(rest)  # type: ignore[assignment]
                 elif op == _OP_STATISTICS:
                     self.stats_counts = _statistics_counts(data, body, end)
             except _BadRecord as exc:
@@ -511,7 +520,9 @@ class _Scanner:
             if MAGIC.startswith(data[:len(MAGIC)]):
                 self.skip(0, 'truncated', f'file ends after {n} byte(s), inside the magic')
                 return
-            raise McapReadError(f'{self.path} is not an MCAP file (bad magic)')
+            if not _looks_like_header(data):
+                raise McapReadError(f'{self.path} is not an MCAP file (bad magic)')
+            self.skip(0, 'corrupt_region', 'damaged magic bytes before a valid Header record')
         self._read_summary()
         batch: list[_Piece] = []
         batch_bytes = 0
@@ -568,8 +579,8 @@ class _Scanner:
                     self._add_channel(data, body, end)
                 elif op == _OP_HEADER:
                     self.file_report.profile, _ = _string(data, body, end)
-                elif op == _OP_FOOTER:
-                    break
+                elif op == _OP_FOOTER or op == _OP_DATA_END:
+                    break  # the summary section was read (CRC-checked) by _read_summary
             except _BadRecord as exc:
                 self.skip(pos, 'corrupt_region', f'unreadable record (opcode 0x{op:02x}): {exc}')
             pos = end
@@ -621,6 +632,7 @@ class _Scanner:
 
     def _lost_in(self, indexes: list[tuple[int, int, int]]) -> int | None:
         """Requested-topic messages listed by the indexes of a lost chunk, if knowable."""
+        self._resolve(cid for cid, _, _ in indexes)
         if not indexes or any(cid not in self.channels for cid, _, _ in indexes):
             return None
         return sum(count for cid, _, count in indexes if cid in self.accepted)
@@ -805,6 +817,9 @@ class _Scanner:
         arr = np.frombuffer(buf, np.uint8)
         channels = _gather(arr, offsets + 9, 2).view('<u2').ravel()
         known = self.known_lut[channels]
+        if not known.all() and self.summary_channels:
+            self._resolve(np.unique(channels[~known]).tolist())
+            known = self.known_lut[channels]
         if not known.all():
             self._count_unknown(channels[~known], file_offset)
         keep = self.topic_lut[channels] >= 0
@@ -826,6 +841,42 @@ def _string(buf: bytes | memoryview, pos: int, end: int) -> tuple[str, int]:
     if stop > end:
         raise _BadRecord(f'string of {length} B runs past its record')
     return bytes(buf[pos + 4:stop]).decode('utf-8', 'replace'), stop
+
+
+def _parse_schema(buf: bytes | memoryview, pos: int, end: int) -> tuple[int, str]:
+    """(schema id, name) of a Schema record body."""
+    if end - pos < 2 + 4 + 4 + 4:
+        raise _BadRecord(f'Schema record of {end - pos} B is too short')
+    schema_id, = struct.unpack_from('<H', buf, pos)
+    name, p = _string(buf, pos + 2, end)
+    _string(buf, p, end)  # encoding
+    return schema_id, name
+
+
+def _parse_channel(buf: bytes | memoryview, pos: int, end: int) -> tuple[int, int, str, str]:
+    """(channel id, schema id, topic, message encoding) of a Channel record body."""
+    if end - pos < 4 + 4 + 4 + 4:
+        raise _BadRecord(f'Channel record of {end - pos} B is too short')
+    channel_id, schema_id = struct.unpack_from('<HH', buf, pos)
+    topic, p = _string(buf, pos + 4, end)
+    encoding, _ = _string(buf, p, end)
+    return channel_id, schema_id, topic, encoding
+
+
+def _looks_like_header(data: bytes) -> bool:
+    """True if a Header record (two strings filling its length) follows the 8 magic bytes."""
+    if len(data) < len(MAGIC) + 9 + 8:
+        return False
+    op, length = _RECORD_HEAD.unpack_from(data, len(MAGIC))
+    body, end = len(MAGIC) + 9, len(MAGIC) + 9 + length
+    if op != _OP_HEADER or end > len(data):
+        return False
+    try:
+        _, p = _string(data, body, end)
+        _, p = _string(data, p, end)
+    except _BadRecord:
+        return False
+    return p == end
 
 
 def _statistics_counts(buf: bytes, pos: int, end: int) -> dict[int, int] | None:
