@@ -567,11 +567,12 @@ class _Scanner:
                         yield from self._flush_batch(batch)
                         batch, batch_bytes = [], 0
                 continue
+            if batch and op in (_OP_MESSAGE, _OP_SCHEMA, _OP_CHANNEL):
+                # Keep file order: the batched chunks may define what this record uses.
+                yield from self._flush_batch(batch)
+                batch, batch_bytes = [], 0
             try:
                 if op == _OP_MESSAGE:
-                    if batch:
-                        yield from self._flush_batch(batch)
-                        batch, batch_bytes = [], 0
                     self._top_messages.append(pos)
                 elif op == _OP_SCHEMA:
                     self._add_schema(data, body, end)
