@@ -1,0 +1,619 @@
+"""ROS 2-profile MCAP logger: rotation, bounded loss on SIGKILL, no exceptions on disk errors.
+
+The logger takes messages that are already serialized to CDR (``raw=True`` subscriptions or
+``rclpy.serialization.serialize_message``) so this module never imports rclpy. Files open in
+Foxglove and ``ros2 bag info/play``:
+
+* header profile ``"ros2"`` (CONVENTIONS C11);
+* one Schema per type: ``encoding="ros2msg"``, ``name="pkg/msg/Type"``, data = the concatenated
+  ``.msg`` text rosbag2 writes (C12, :func:`catenary_monitor.ros_schemas.message_definition`);
+* one Channel per topic: ``message_encoding="cdr"``, metadata ``offered_qos_profiles`` (rosbag2
+  YAML, optional) and ``topic_type_hash`` when the ROS wheels provide it (C13);
+* chunk compression only (zstd, lz4 or none), message indexes and the summary are kept (C16);
+* metadata records added with :meth:`McapLogger.add_metadata` are repeated in every file (C15).
+
+Crash safety (C17)
+------------------
+The mcap writer holds the open chunk in memory. The logger ends the chunk, flushes the file and
+(by default) ``fsync``\\ s it as soon as the oldest unflushed message is ``flush_period`` seconds
+old. The check runs in :meth:`McapLogger.write` and in :meth:`McapLogger.tick`; call ``tick()``
+from a timer (period <= ``flush_period``) so that the last messages before a quiet spell are
+flushed too. After a SIGKILL the file has no summary; :mod:`catenary_monitor.mcap_read` reads
+every complete chunk of it. Call :meth:`McapLogger.close` from the node's ``finally:`` block
+(SIGINT/SIGTERM) to write the summary.
+
+Disk errors
+-----------
+No file-system error escapes: an unwritable directory, a full disk or a failing flush sets
+:attr:`McapLogger.error` (a sentence for an ERROR diagnostic), counts the lost messages in
+:attr:`McapLogger.dropped`, abandons the broken file and retries opening a new file every
+``retry_period`` seconds. Mistakes in the call itself (unregistered topic, data that is not bytes,
+negative time) raise ``ValueError`` / ``TypeError``.
+
+Example
+-------
+>>> log = McapLogger('/var/log/dock', max_seconds=3600.0)          # doctest: +SKIP
+>>> log.register('/chain_01/tension', 'std_msgs/msg/Float64')       # doctest: +SKIP
+>>> log.write('/chain_01/tension', cdr_bytes, time.time_ns())       # doctest: +SKIP
+>>> log.tick()              # from a 1 Hz timer                     # doctest: +SKIP
+>>> log.close()             # in finally:                           # doctest: +SKIP
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import os
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import TracebackType
+from typing import IO, Any, Callable, Mapping
+
+from mcap.well_known import MessageEncoding, SchemaEncoding
+from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, Writer
+
+from .ros_schemas import (
+    QOS_DEFAULT,
+    QOS_LATCHED,
+    QOS_SENSOR_DATA,
+    message_definition,
+    type_description_hash,
+)
+
+__all__ = ['McapLogger', 'QOS_PRESETS']
+
+#: Named QoS presets accepted by :meth:`McapLogger.register` (rosbag2 ``offered_qos_profiles``).
+QOS_PRESETS: dict[str, str] = {
+    'latched': QOS_LATCHED,
+    'sensor_data': QOS_SENSOR_DATA,
+    'default': QOS_DEFAULT,
+}
+
+_COMPRESSION = {
+    'zstd': CompressionType.ZSTD,
+    'lz4': CompressionType.LZ4,
+    'none': CompressionType.NONE,
+    '': CompressionType.NONE,
+    None: CompressionType.NONE,
+}
+_U64 = 1 << 64
+_LIBRARY = f'catenary_monitor.mcap_log; {LIBRARY_IDENTIFIER}'
+# Record overhead of one Message record in a chunk: opcode 1 + length 8 + header 22 bytes.
+_MESSAGE_OVERHEAD = 31
+
+
+@dataclass
+class _Topic:
+    type_name: str
+    schema_text: bytes
+    metadata: dict[str, str]
+    sequence: int = 0
+    channel_id: int = 0  # in the current file; 0 = not registered there yet
+
+
+@dataclass
+class _OpenFile:
+    path: Path
+    stream: IO[bytes]
+    writer: Writer
+    opened_at: float  # monotonic s
+    schema_ids: dict[str, int] = field(default_factory=dict)
+    messages: int = 0
+
+
+class McapLogger:
+    """Write CDR messages to rotating ROS 2-profile MCAP files.
+
+    Parameters
+    ----------
+    log_dir
+        Directory for the files; created if missing.
+    prefix
+        File name prefix. Files are named ``<prefix>_<UTC YYYYmmddTHHMMSSZ>_<index>.mcap``; the
+        index counts the files of this logger (0000, 0001, ...).
+    max_bytes
+        Rotate once the current file has about this many bytes (B). Must be > 0.
+    max_seconds
+        Rotate once the current file has been open this long (s, monotonic clock). Must be > 0.
+    flush_period
+        Largest age (s) of a message that may still be only in memory, provided ``write`` or
+        ``tick`` is called at least that often. Must be > 0.
+    compression
+        Chunk compression: ``'zstd'``, ``'lz4'`` or ``'none'``.
+    chunk_size
+        Uncompressed chunk size (B) at which a chunk is ended even before ``flush_period``.
+    retry_period
+        After an error, wait this long (s) before trying to open a new file.
+    fsync
+        ``os.fsync`` the file at every flush, so the bound also holds across power loss.
+    clock
+        Monotonic clock in seconds used for flush, rotation and retry timing (inject for tests).
+    wall_clock
+        Clock in seconds since the Unix epoch used for file names.
+
+    Attributes
+    ----------
+    error : str or None
+        Current error (None while logging works), e.g.
+        ``"cannot write MCAP log in /data: [Errno 28] No space left on device"``.
+    last_error : str or None
+        Most recent error, kept after recovery.
+    error_count : int
+        Number of errors so far.
+    dropped : int
+        Messages accepted by :meth:`write` that did not reach a file.
+    messages_written : dict[str, int]
+        Messages handed to the writer, per topic (minus those later lost to an error).
+    bytes_written : dict[str, int]
+        CDR payload bytes handed to the writer, per topic (same accounting).
+    files : list[pathlib.Path]
+        Files that were finished with a summary.
+    """
+
+    def __init__(
+        self,
+        log_dir: str | os.PathLike[str],
+        prefix: str = 'catenary_monitor',
+        *,
+        max_bytes: int = 256 * 1024 * 1024,
+        max_seconds: float = 3600.0,
+        flush_period: float = 1.0,
+        compression: str | None = 'zstd',
+        chunk_size: int = 512 * 1024,
+        retry_period: float = 5.0,
+        fsync: bool = True,
+        clock: Callable[[], float] = time.monotonic,
+        wall_clock: Callable[[], float] = time.time,
+    ) -> None:
+        if compression not in _COMPRESSION:
+            raise ValueError(f"compression must be 'zstd', 'lz4' or 'none', got {compression!r}")
+        for name, value in (('max_bytes', max_bytes), ('max_seconds', max_seconds),
+                            ('flush_period', flush_period), ('chunk_size', chunk_size),
+                            ('retry_period', retry_period)):
+            if not value > 0:
+                raise ValueError(f'{name} must be > 0, got {value!r}')
+        if not prefix or os.sep in prefix:
+            raise ValueError(f'prefix must be a non-empty file name part, got {prefix!r}')
+        self.log_dir = Path(log_dir)
+        self.prefix = prefix
+        self.max_bytes = int(max_bytes)
+        self.max_seconds = float(max_seconds)
+        self.flush_period = float(flush_period)
+        self.compression = _COMPRESSION[compression]
+        self.chunk_size = int(chunk_size)
+        self.retry_period = float(retry_period)
+        self.fsync = bool(fsync)
+        self._clock = clock
+        self._wall_clock = wall_clock
+
+        self.error: str | None = None
+        self.last_error: str | None = None
+        self.error_count = 0
+        self.dropped = 0
+        self.messages_written: dict[str, int] = {}
+        self.bytes_written: dict[str, int] = {}
+        self.files: list[Path] = []
+
+        self._lock = threading.RLock()
+        self._topics: dict[str, _Topic] = {}
+        self._metadata: dict[str, dict[str, str]] = {}
+        self._file: _OpenFile | None = None
+        self._file_index = 0
+        self._closed = False
+        self._next_retry = float('-inf')
+        self._finished_bytes = 0
+        # Messages in the writer's open chunk (not yet flushed), per topic, with payload bytes.
+        self._pending: dict[str, list[int]] = {}
+        self._pending_count = 0
+        self._pending_bytes = 0
+        self._oldest_pending: float | None = None
+        self._flushed_size = 0  # file size (B) after the last flush
+        self._ensure_open(self._clock())
+
+    # ------------------------------------------------------------------ public API
+    @property
+    def ok(self) -> bool:
+        """True when a file is open and the last operation on it succeeded."""
+        return self.error is None and self._file is not None
+
+    @property
+    def current_path(self) -> Path | None:
+        """Path of the file being written, or None."""
+        return self._file.path if self._file is not None else None
+
+    @property
+    def file_bytes(self) -> int:
+        """Bytes written to all files of this logger so far (B), finished and current."""
+        with self._lock:
+            current = 0
+            if self._file is not None:
+                try:
+                    current = self._file.stream.tell()
+                except (OSError, ValueError):
+                    current = self._flushed_size
+            return self._finished_bytes + current
+
+    def register(self, topic: str, type_name: str, qos: str | None = None) -> None:
+        """Declare a topic and its ROS 2 type before writing to it.
+
+        Parameters
+        ----------
+        topic
+            ROS topic name, e.g. ``'/chain_01/tension'``.
+        type_name
+            ROS 2 type, e.g. ``'std_msgs/msg/Float64'``, ``'diagnostic_msgs/msg/DiagnosticArray'``.
+        qos
+            Offered QoS stored as the channel's ``offered_qos_profiles``: a preset name from
+            :data:`QOS_PRESETS` (``'latched'``, ``'sensor_data'``, ``'default'``), a rosbag2 YAML
+            string, or None to omit it (playback then uses default QoS).
+
+        Raises
+        ------
+        ValueError
+            If the topic is already registered with another type.
+        catenary_monitor.ros_schemas.SchemaNotFoundError
+            If the ``.msg`` definition of ``type_name`` is not installed.
+        """
+        if not topic:
+            raise ValueError('topic must be a non-empty string')
+        with self._lock:
+            known = self._topics.get(topic)
+            if known is not None:
+                if known.type_name != type_name:
+                    raise ValueError(
+                        f'topic {topic!r} is already registered as {known.type_name!r}, '
+                        f'not {type_name!r}')
+                return
+            metadata: dict[str, str] = {}
+            if qos is not None:
+                metadata['offered_qos_profiles'] = QOS_PRESETS.get(qos, qos)
+            type_hash = type_description_hash(type_name)
+            if type_hash is not None:
+                metadata['topic_type_hash'] = type_hash
+            info = _Topic(type_name, message_definition(type_name).encode(), metadata)
+            self._topics[topic] = info
+            self.messages_written.setdefault(topic, 0)
+            self.bytes_written.setdefault(topic, 0)
+            if self._file is not None:
+                try:
+                    self._register_channel(self._file, topic, info)
+                except Exception as exc:  # noqa: BLE001 - disk errors never reach the caller
+                    self._fail('cannot write MCAP channel', exc)
+
+    def add_metadata(self, name: str, data: Mapping[str, Any]) -> None:
+        """Write a file-level Metadata record now and repeat it at the start of later files.
+
+        Parameters
+        ----------
+        name
+            Record name, e.g. ``'catenary_monitor'`` (config hash, version, units).
+        data
+            Key/value pairs; values are stored as ``str(value)``.
+        """
+        if not name:
+            raise ValueError('metadata name must be a non-empty string')
+        record = {str(k): str(v) for k, v in data.items()}
+        with self._lock:
+            self._metadata[name] = record
+            if self._ensure_open(self._clock()):
+                try:
+                    assert self._file is not None
+                    self._file.writer.add_metadata(name, record)
+                except Exception as exc:  # noqa: BLE001
+                    self._fail('cannot write MCAP metadata', exc)
+
+    def write(
+        self,
+        topic: str,
+        data: bytes | bytearray | memoryview,
+        log_time_ns: int,
+        publish_time_ns: int | None = None,
+        sequence: int | None = None,
+    ) -> bool:
+        """Append one serialized message.
+
+        Parameters
+        ----------
+        topic
+            A topic given to :meth:`register`.
+        data
+            CDR bytes (``rclpy.serialization.serialize_message(msg)``), stored unchanged.
+        log_time_ns
+            Receive time, ns since the Unix epoch (or the ROS clock epoch under sim time).
+        publish_time_ns
+            Publish or header stamp (ns); defaults to ``log_time_ns``.
+        sequence
+            MCAP sequence number; defaults to a per-topic counter (wraps at 2**32).
+
+        Returns
+        -------
+        bool
+            True if the message was handed to an open file; False if it was dropped because of
+            an error (see :attr:`error`, :attr:`dropped`).
+        """
+        if not isinstance(data, (bytes, bytearray, memoryview)):
+            raise TypeError(f'data must be bytes (serialized CDR), got {type(data).__name__}')
+        log_time_ns = _check_time('log_time_ns', log_time_ns)
+        publish_time_ns = (log_time_ns if publish_time_ns is None
+                           else _check_time('publish_time_ns', publish_time_ns))
+        with self._lock:
+            info = self._topics.get(topic)
+            if info is None:
+                raise ValueError(f'topic {topic!r} is not registered; call register() first')
+            if sequence is None:
+                sequence = info.sequence
+            info.sequence = (sequence + 1) % (1 << 32)
+            now = self._clock()
+            self._rotate_if_due(now)
+            if not self._ensure_open(now):
+                self.dropped += 1
+                return False
+            assert self._file is not None
+            payload = bytes(data)
+            try:
+                self._file.writer.add_message(
+                    channel_id=info.channel_id, log_time=log_time_ns, data=payload,
+                    publish_time=publish_time_ns, sequence=sequence % (1 << 32))
+            except Exception as exc:  # noqa: BLE001
+                self.dropped += 1  # this message was in the chunk that failed to write
+                self._fail('cannot write MCAP message', exc)
+                return False
+            self._file.messages += 1
+            self.messages_written[topic] += 1
+            self.bytes_written[topic] += len(payload)
+            slot = self._pending.setdefault(topic, [0, 0])
+            slot[0] += 1
+            slot[1] += len(payload)
+            self._pending_count += 1
+            self._pending_bytes += len(payload) + _MESSAGE_OVERHEAD
+            if self._oldest_pending is None:
+                self._oldest_pending = now
+            if self._pending_bytes >= self.chunk_size:
+                self._flush(now)
+            else:
+                self._flush_if_due(now)
+            return True
+
+    def flush_if_due(self, now: float | None = None) -> bool:
+        """Flush if the oldest unflushed message is ``flush_period`` old; retry after errors.
+
+        Also rotates a file that reached ``max_seconds``. ``now`` is the monotonic clock (s);
+        defaults to the logger's clock. Returns True if data was flushed.
+        """
+        with self._lock:
+            if self._closed:
+                return False
+            now = self._clock() if now is None else float(now)
+            self._rotate_if_due(now)
+            if self._file is None:
+                self._ensure_open(now)
+                return False
+            return self._flush_if_due(now)
+
+    def tick(self) -> bool:
+        """Timer hook: same as ``flush_if_due()`` with the logger's clock."""
+        return self.flush_if_due()
+
+    def flush(self) -> bool:
+        """End the open chunk, write it and fsync now. Returns False on error."""
+        with self._lock:
+            if self._file is None:
+                return False
+            return self._flush(self._clock())
+
+    def rotate(self) -> None:
+        """Finish the current file (with summary) and open the next one."""
+        with self._lock:
+            if self._closed:
+                return
+            self._finish_current()
+            self._ensure_open(self._clock(), force=True)
+
+    def close(self) -> None:
+        """Finish the current file with its summary. Idempotent; later writes are dropped."""
+        with self._lock:
+            if self._closed:
+                return
+            self._finish_current()
+            self._closed = True
+
+    def diagnostic_values(self) -> dict[str, str]:
+        """Key/value strings for a ``DiagnosticStatus`` about the logger (units in the keys)."""
+        with self._lock:
+            return {
+                'file': str(self.current_path or ''),
+                'messages_written': str(sum(self.messages_written.values())),
+                'messages_dropped': str(self.dropped),
+                'file_bytes_B': str(self.file_bytes),
+                'files_finished': str(len(self.files)),
+                'error': self.error or '',
+            }
+
+    def __enter__(self) -> 'McapLogger':
+        """Context manager: returns the logger."""
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        """Context manager: :meth:`close` on exit."""
+        self.close()
+
+    # ------------------------------------------------------------------ internals
+    def _rotate_if_due(self, now: float) -> None:
+        f = self._file
+        if f is None or f.messages == 0:
+            return
+        too_old = now - f.opened_at >= self.max_seconds
+        too_big = self._flushed_size + self._pending_bytes >= self.max_bytes
+        if too_old or too_big:
+            self._finish_current()
+            self._ensure_open(now, force=True)
+
+    def _flush_if_due(self, now: float) -> bool:
+        if self._oldest_pending is None or now - self._oldest_pending < self.flush_period:
+            return False
+        return self._flush(now)
+
+    def _flush(self, now: float) -> bool:
+        f = self._file
+        if f is None:
+            return False
+        try:
+            f.writer.flush()
+            if self.fsync:
+                os.fsync(f.stream.fileno())
+            self._flushed_size = f.stream.tell()
+        except Exception as exc:  # noqa: BLE001
+            self._fail('cannot flush MCAP log', exc)
+            return False
+        self._clear_pending()
+        if self._flushed_size >= self.max_bytes:
+            self._rotate_if_due(now)
+        return True
+
+    def _clear_pending(self) -> None:
+        self._pending.clear()
+        self._pending_count = 0
+        self._pending_bytes = 0
+        self._oldest_pending = None
+
+    def _ensure_open(self, now: float, force: bool = False) -> bool:
+        """Open a file unless one is open; honours ``retry_period`` after an error."""
+        if self._closed:
+            return False
+        if self._file is not None:
+            return True
+        if not force and now < self._next_retry:
+            return False
+        path: Path | None = None
+        stream: IO[bytes] | None = None
+        try:
+            self.log_dir.mkdir(parents=True, exist_ok=True)
+            path, stream = self._create_file()
+            # The logger ends chunks itself (size or age) so that each end is flushed at once;
+            # the writer's own limit is only a backstop.
+            writer = Writer(stream, chunk_size=4 * self.chunk_size, compression=self.compression)
+            writer.start(profile='ros2', library=_LIBRARY)
+            opened = _OpenFile(path, stream, writer, now)
+            for topic, info in self._topics.items():
+                self._register_channel(opened, topic, info)
+            for name, record in self._metadata.items():
+                writer.add_metadata(name, record)
+            writer.flush()
+            if self.fsync:
+                os.fsync(stream.fileno())
+            self._flushed_size = stream.tell()
+        except Exception as exc:  # noqa: BLE001
+            for info in self._topics.values():
+                info.channel_id = 0
+            if stream is not None:
+                _close_quietly(stream)
+            if path is not None:
+                try:  # don't leave one empty file per retry on a full disk
+                    path.unlink()
+                except OSError:
+                    pass
+            self._record_error(f'cannot open MCAP log in {self.log_dir}', exc)
+            self._next_retry = now + self.retry_period
+            return False
+        self._file = opened
+        self._file_index += 1
+        self._clear_pending()
+        self.error = None
+        return True
+
+    def _create_file(self) -> tuple[Path, IO[bytes]]:
+        stamp = _dt.datetime.fromtimestamp(self._wall_clock(), _dt.timezone.utc)
+        stamp_text = stamp.strftime('%Y%m%dT%H%M%SZ')
+        index = self._file_index
+        for _ in range(1000):
+            path = self.log_dir / f'{self.prefix}_{stamp_text}_{index:04d}.mcap'
+            try:
+                return path, open(path, 'xb')
+            except FileExistsError:
+                index += 1
+        raise FileExistsError(f'no free file name for {self.prefix}_{stamp_text}_*.mcap')
+
+    def _register_channel(self, f: _OpenFile, topic: str, info: _Topic) -> None:
+        schema_id = f.schema_ids.get(info.type_name)
+        if schema_id is None:
+            schema_id = f.writer.register_schema(
+                name=info.type_name, encoding=SchemaEncoding.ROS2, data=info.schema_text)
+            f.schema_ids[info.type_name] = schema_id
+        info.channel_id = f.writer.register_channel(
+            topic=topic, message_encoding=MessageEncoding.CDR, schema_id=schema_id,
+            metadata=dict(info.metadata))
+
+    def _finish_current(self) -> None:
+        f = self._file
+        if f is None:
+            return
+        try:
+            f.writer.finish()
+            f.stream.flush()
+            if self.fsync:
+                os.fsync(f.stream.fileno())
+            size = f.stream.tell()
+            f.stream.close()
+        except Exception as exc:  # noqa: BLE001
+            self._fail('cannot finish MCAP log', exc)
+            return
+        self._finished_bytes += size
+        self.files.append(f.path)
+        self._file = None
+        self._flushed_size = 0
+        self._clear_pending()
+        for info in self._topics.values():
+            info.channel_id = 0
+
+    def _fail(self, what: str, exc: BaseException) -> None:
+        """Abandon the current file after an error; its unflushed messages are lost."""
+        f = self._file
+        where = f.path if f is not None else self.log_dir
+        self._record_error(f'{what} {where}', exc)
+        for topic, (count, nbytes) in self._pending.items():
+            self.messages_written[topic] -= count
+            self.bytes_written[topic] -= nbytes
+        self.dropped += self._pending_count
+        self._clear_pending()
+        if f is not None:
+            _close_quietly(f.stream)
+            try:
+                self._finished_bytes += f.path.stat().st_size
+            except OSError:
+                pass
+        self._file = None
+        self._flushed_size = 0
+        for info in self._topics.values():
+            info.channel_id = 0
+        self._next_retry = self._clock() + self.retry_period
+
+    def _record_error(self, what: str, exc: BaseException) -> None:
+        self.error = f'{what}: {exc}'
+        self.last_error = self.error
+        self.error_count += 1
+
+
+def _check_time(name: str, value: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        try:
+            value = int(value.__index__())  # numpy integers
+        except AttributeError:
+            raise TypeError(f'{name} must be an int (ns), got {type(value).__name__}') from None
+    if not 0 <= value < _U64:
+        raise ValueError(f'{name} must be in [0, 2**64) ns, got {value}')
+    return value
+
+
+def _close_quietly(stream: IO[bytes]) -> None:
+    try:
+        stream.close()
+    except Exception:  # noqa: BLE001 - closing a broken file may fail again
+        try:
+            os.close(stream.fileno())
+        except (OSError, ValueError):
+            pass
