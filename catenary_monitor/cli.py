@@ -160,8 +160,6 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser('paper', help="print the seed paper's floating-dock examples, solved")
     p.set_defaults(func=cmd_paper)
-    p = sub.add_parser('demo', help='the embedded default: the paper dock example')
-    p.set_defaults(func=cmd_paper)
 
     for register in _EXTENSIONS:
         register(sub)
@@ -170,6 +168,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 #: Sub-command registrars of the shell modules (node, replay, benchmarks).
 _EXTENSIONS: list[Callable[[argparse._SubParsersAction], None]] = []
+
+from .node_cli import register as _register_node  # noqa: E402 - run, demo, bench-latency
+_EXTENSIONS.append(_register_node)
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
