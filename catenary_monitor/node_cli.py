@@ -13,12 +13,14 @@ __all__ = ['register']
 
 def cmd_run(args: argparse.Namespace) -> int:
     """Start the monitor node on a params file (Ctrl-C or SIGTERM stop it cleanly)."""
-    from .cli import UsageError
+    import sys
+
     from .config import ConfigError, load_params_file
     try:
         load_params_file(args.params_file)  # one-line error for a missing or malformed file
     except ConfigError as err:
-        raise UsageError(str(err)) from None
+        print(f'catenary-monitor: {err}', file=sys.stderr)
+        return 2
     from .node import main
     return main(['catenary-monitor', '--ros-args', '--params-file', args.params_file,
                  *args.ros_args], log_dir=args.log_dir)

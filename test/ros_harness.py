@@ -95,11 +95,15 @@ class Client:
             rclpy.init()
         self.rclpy = rclpy
         self.node = rclpy.create_node(name)
-        self.lock = threading.Lock()
+        self.lock = threading.RLock()
         self.diagnostics: list[tuple[float, dict[str, dict[str, Any]]]] = []
         self.outputs: dict[str, list[tuple[float, list[float]]]] = defaultdict(list)
         self._publishers: dict[str, Any] = {}
+        self.feeds: dict[str, float] = {}
+        self.diag_stamps: list[int] = []
+        self.sent: dict[str, list[tuple[float, float]]] = defaultdict(list)
         self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diag, 50)
+        self.node.create_timer(0.1, self._on_feed)
         self.executor = SingleThreadedExecutor()
         self.executor.add_node(self.node)
         self._thread = threading.Thread(target=self._spin, daemon=True)
@@ -113,8 +117,10 @@ class Client:
 
     def _on_diag(self, msg: Any) -> None:
         entry = {s.name: status_dict(s) for s in msg.status}
+        stamp = msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec
         with self.lock:
             self.diagnostics.append((time.monotonic(), entry))
+            self.diag_stamps.append(stamp)
 
     def subscribe_outputs(self, topic: str) -> None:
         """Record every Float64MultiArray on ``topic``."""
@@ -125,13 +131,45 @@ class Client:
                 self.outputs[topic].append((time.monotonic(), list(msg.data)))
         self.node.create_subscription(Float64MultiArray, topic, cb, 100)
 
-    def publish(self, topic: str, value: float) -> None:
-        """Publish one std_msgs/Float64 (reliable, as many drivers do)."""
+    def publisher(self, topic: str) -> Any:
+        """The std_msgs/Float64 publisher for ``topic`` (reliable, as many drivers use)."""
         from std_msgs.msg import Float64
         pub = self._publishers.get(topic)
         if pub is None:
             pub = self._publishers[topic] = self.node.create_publisher(Float64, topic, 10)
-        pub.publish(Float64(data=float(value)))
+        return pub
+
+    def wait_matched(self, topics: list[str], timeout: float) -> None:
+        """Wait until every publisher in ``topics`` has a subscriber (the monitor)."""
+        pubs = [self.publisher(t) for t in topics]
+        deadline = time.monotonic() + timeout
+        while any(p.get_subscription_count() == 0 for p in pubs):
+            if time.monotonic() > deadline:
+                raise AssertionError(f'no subscriber on {topics} after {timeout} s')
+            time.sleep(0.05)
+
+    def publish(self, topic: str, value: float) -> None:
+        """Publish one std_msgs/Float64 and record it in ``sent``."""
+        from std_msgs.msg import Float64
+        pub = self.publisher(topic)
+        with self.lock:
+            pub.publish(Float64(data=float(value)))
+            self.sent[topic].append((time.monotonic(), float(value)))
+
+    def feed(self, topic: str, value: Optional[float]) -> None:
+        """Publish ``value`` on ``topic`` at 10 Hz from now on (None: stop)."""
+        self.publisher(topic)
+        with self.lock:
+            if value is None:
+                self.feeds.pop(topic, None)
+            else:
+                self.feeds[topic] = float(value)
+
+    def _on_feed(self) -> None:
+        with self.lock:
+            feeds = list(self.feeds.items())
+        for topic, value in feeds:
+            self.publish(topic, value)
 
     def wait_for(self, predicate: Callable[[], Any], timeout: float, what: str = '') -> Any:
         """Poll ``predicate`` (called under the lock) until it returns a truthy value."""
