@@ -259,7 +259,8 @@ class AlarmConfig:
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
-            object.__setattr__(self, f.name, _check(f.name, _GLOBAL[f.name], getattr(self, f.name)))
+            value = _check(f.name, _GLOBAL[f.name], getattr(self, f.name))
+            object.__setattr__(self, f.name, value)
 
 
 @dataclass(frozen=True)

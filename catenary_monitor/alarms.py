@@ -1,0 +1,440 @@
+"""Per-line alarm logic: a pure state machine that is handed the time, and its vectorized replay.
+
+No clocks and no rclpy: the node passes its clock (``use_sim_time`` honoured), replay passes log
+times, and both get the same transitions. Times are seconds on one clock, forces N, lengths m.
+
+Conditions, each with its own latch:
+
+``uplift`` (ERROR)
+    raised when ``uplift_force > allowed_uplift`` has lasted ``on_delay`` (0: at the first such
+    update); cleared when ``uplift_force <= max(allowed_uplift - uplift_clear_hysteresis, 0)``
+    (and, when that level is 0 N, ``anchor_margin >= uplift_clear_margin``) has held for
+    ``clear_hold``.
+``input`` (ERROR)
+    raised at once by an impossible input (solver ``status != 0``: NaN, negative tension,
+    tension <= weight * depth, ...); cleared after ``clear_hold`` of valid input.
+``anchor_margin``, ``tide_margin``, ``load_margin``, ``safety_factor`` (WARN)
+    raised when the value ``< *_warn`` has lasted ``on_delay``; cleared when ``>= *_warn +
+    *_deadband`` has held for ``warn_clear_hold``.
+stale (STALE, no latch)
+    tension older than ``tension_timeout`` or depth older than ``depth_timeout``; a line that has
+    never received a sample counts its age from its first update.
+
+A latch only moves on evidence: an update whose value is NaN (not applicable) keeps the latch and
+restarts its pending timer. **While any input is stale nothing clears** (clearing on old data would
+hide a lifted anchor); raising still works. Wave-frequency oscillation therefore keeps an alarm
+up, as long as ``clear_hold`` exceeds the wave period: one transition, not one per wave.
+
+Level: ERROR if an ERROR latch is up, else STALE if stale, else WARN if a warning latch is up,
+else OK. **ERROR outranks STALE** (a sensor dropout must not hide a lifted anchor) although
+``Level.STALE`` is numerically larger; STALE outranks WARN (a warning from old data is not
+news). The message joins every applicable condition with ``'; '``, ERRORs first.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from enum import IntEnum
+from typing import Any, Mapping, NamedTuple, Sequence
+
+import numpy as np
+
+from catenary_monitor.config import AlarmConfig, LineConfig
+
+__all__ = [
+    'Level', 'AlarmInputs', 'Latch', 'AlarmState', 'Transition', 'LineAlarm', 'ReplayResult',
+    'CONDITIONS', 'DIAGNOSTIC_KEYS', 'replay_levels', 'diagnostic_values',
+]
+
+
+class Level(IntEnum):
+    """DiagnosticStatus level (same numbers as diagnostic_msgs)."""
+
+    OK = 0
+    WARN = 1
+    ERROR = 2
+    STALE = 3
+
+
+#: Severity rank used to combine and order levels (not the level number: ERROR > STALE).
+_RANK = {Level.OK: 0, Level.WARN: 1, Level.STALE: 2, Level.ERROR: 3}
+
+#: Latched conditions, in message order: ERRORs, then WARNs.
+CONDITIONS = ('uplift', 'input', 'anchor_margin', 'tide_margin', 'load_margin', 'safety_factor')
+_ERRORS = CONDITIONS[:2]
+_WARNS = CONDITIONS[2:]
+_HOLD, _BREACH, _CLEAR = 0, 1, 2  # classification of one update for one condition
+
+
+@dataclass(frozen=True)
+class AlarmInputs:
+    """One update of one line: solved quantities (SI) and the stamps of the newest samples.
+
+    NaN marks a quantity that does not apply. ``status`` is the solver's code (0 = ok) and
+    ``status_message`` its sentence. Stamps are the receive times (s, same clock as ``now``)
+    of the newest tension and depth samples; NaN means none received yet.
+    """
+
+    uplift_force: float = math.nan   # N, vertical force on the anchor
+    anchor_margin: float = math.nan  # m, installed minus minimum anchor distance
+    tide_margin: float = math.nan    # m, depth rise the chain takes before uplift
+    load_margin: float = math.nan    # N, as reported by the solver
+    safety_factor: float = math.nan  # -, MBL / top tension
+    status: int = 0
+    status_message: str = ''
+    tension_stamp: float = math.nan  # s
+    depth_stamp: float = math.nan    # s
+
+
+class Latch(NamedTuple):
+    """One condition's latch: up or not, and when the pending raise or clear started (s)."""
+
+    active: bool = False
+    since: float | None = None
+
+
+@dataclass(frozen=True)
+class AlarmState:
+    """Everything a line's alarm remembers between updates (immutable)."""
+
+    level: Level = Level.OK
+    message: str = 'OK'
+    latches: tuple[Latch, ...] = (Latch(),) * len(CONDITIONS)
+    started: float | None = None          # s, time of the first update
+    entered: tuple[float, ...] = (math.nan,) * 4  # s, when each severity rank was last entered
+    input_message: str = ''               # last impossible-input sentence, while its alarm holds
+
+
+class Transition(NamedTuple):
+    """A level change. ``duration`` (s) is set when severity drops: how long the old level or
+    worse lasted (for a return to OK, the whole incident); otherwise None."""
+
+    time: float
+    old: Level
+    new: Level
+    message: str
+    duration: float | None
+
+
+class ReplayResult(NamedTuple):
+    """Level after every update (int8 array of :class:`Level` values) and the transitions."""
+
+    levels: np.ndarray
+    transitions: list[Transition]
+
+
+def _fmt(value: float, scale: float = 1.0, digits: int = 1) -> str:
+    if math.isnan(value):
+        return 'n/a'
+    v = value / scale
+    return f'{v:.{digits}f}' if v == 0 or abs(v) >= 10.0**-digits else f'{v:.2g}'
+
+
+@dataclass(frozen=True)
+class LineAlarm:
+    """The alarm rules for one line: :class:`AlarmConfig` plus the line's allowed uplift (N)."""
+
+    config: AlarmConfig = field(default_factory=AlarmConfig)
+    allowed_uplift: float = 0.0
+
+    @classmethod
+    def for_line(cls, line: LineConfig, config: AlarmConfig) -> LineAlarm:
+        """Rules for ``line`` under ``config``."""
+        return cls(config, line.allowed_uplift)
+
+    @property
+    def uplift_clear_level(self) -> float:
+        """Uplift force (N) at or below which the uplift alarm may clear."""
+        return max(self.allowed_uplift - self.config.uplift_clear_hysteresis, 0.0)
+
+    def _timing(self, cond: str) -> tuple[float, float]:
+        """(on_delay, hold) in s for a condition."""
+        c = self.config
+        if cond == 'input':
+            return 0.0, c.clear_hold
+        return c.on_delay, (c.clear_hold if cond == 'uplift' else c.warn_clear_hold)
+
+    def _warn_limits(self, cond: str) -> tuple[float, float]:
+        """(raise below, clear at or above) for a warning condition."""
+        warn = getattr(self.config, f'{cond}_warn')
+        return warn, warn + getattr(self.config, f'{cond}_deadband')
+
+    def initial(self) -> AlarmState:
+        """State before the first update (level OK)."""
+        return AlarmState()
+
+    def update(self, state: AlarmState, inputs: AlarmInputs,
+               now: float) -> tuple[AlarmState, list[Transition]]:
+        """Advance ``state`` by one update at time ``now`` (s); return it and any transition.
+
+        Call it on every solved update and also periodically (e.g. at the diagnostic rate) with
+        the newest inputs, so that staleness is noticed when samples stop. ``now`` should not
+        decrease; if it does, pending timers restart at ``now``.
+        """
+        if not math.isfinite(now):
+            raise ValueError(f'now must be finite, got {now!r}')
+        started = now if state.started is None else state.started
+        stale_t = _age(now, inputs.tension_stamp, started) > self.config.tension_timeout
+        stale_d = _age(now, inputs.depth_stamp, started) > self.config.depth_timeout
+        stale = stale_t or stale_d
+        latches = []
+        for cond, latch in zip(CONDITIONS, state.latches):
+            code = self._classify(cond, inputs, stale)
+            latches.append(_step(latch, code, now, *self._timing(cond)))
+        input_message = state.input_message
+        if inputs.status != 0:
+            input_message = _status_text(inputs.status, inputs.status_message)
+        active = [latch.active for latch in latches]
+        level = _combine(active, stale)
+        message = self._message(active, inputs, now, started, stale_t, stale_d, input_message)
+        entered, events = state.entered, []
+        if level != state.level:
+            entered, duration = _episode(entered, state.level, level, now)
+            events.append(Transition(now, state.level, level, message, duration))
+        new = replace(state, level=level, message=message, latches=tuple(latches),
+                      started=started, entered=entered,
+                      input_message=input_message if active[1] else '')
+        return new, events
+
+    def _classify(self, cond: str, x: AlarmInputs, stale: bool) -> int:
+        if cond == 'input':
+            return _BREACH if x.status != 0 else (_HOLD if stale else _CLEAR)
+        if cond == 'uplift':
+            breach = x.uplift_force > self.allowed_uplift
+            level = self.uplift_clear_level
+            clear = x.uplift_force <= level and (
+                level > 0.0 or x.anchor_margin >= self.config.uplift_clear_margin)
+        else:
+            low, high = self._warn_limits(cond)
+            value = getattr(x, cond)
+            breach, clear = value < low, value >= high
+        return _BREACH if breach else (_CLEAR if clear and not stale else _HOLD)
+
+    def _message(self, active: Sequence[bool], x: AlarmInputs, now: float, started: float,
+                 stale_t: bool, stale_d: bool, input_message: str) -> str:
+        """Operator message for the conditions that apply, joined with '; '."""
+        parts = []
+        hold_e, hold_w = self.config.clear_hold, self.config.warn_clear_hold
+        if active[0]:
+            f, allowed = x.uplift_force, self.allowed_uplift
+            if f > allowed:
+                parts.append(f'anchor uplift {_fmt(f, 1e3)} kN > allowed {_fmt(allowed, 1e3)} kN')
+            else:
+                level = self.uplift_clear_level
+                text = (f'anchor uplift alarm held: uplift {_fmt(f, 1e3)} kN, anchor margin '
+                        f'{_fmt(x.anchor_margin)} m (clears after {hold_e:g} s at uplift <= '
+                        f'{_fmt(level, 1e3)} kN')
+                if level == 0.0:
+                    text += f' and anchor margin >= {_fmt(self.config.uplift_clear_margin)} m'
+                parts.append(text + ')')
+        if active[1]:
+            if x.status != 0:
+                parts.append(f'impossible input: {input_message}')
+            else:
+                parts.append(f'impossible input alarm held: last was "{input_message}" '
+                             f'(clears after {hold_e:g} s of valid input)')
+        for name, is_stale, stamp, timeout in (
+                ('tension', stale_t, x.tension_stamp, self.config.tension_timeout),
+                ('depth', stale_d, x.depth_stamp, self.config.depth_timeout)):
+            if is_stale:
+                age = _fmt(_age(now, stamp, started))
+                what = f'none received in {age} s' if math.isnan(stamp) else \
+                    f'last sample {age} s ago'
+                parts.append(f'{name} stale: {what} (timeout {timeout:g} s)')
+        for cond, up in zip(_WARNS, active[2:]):
+            if up:
+                parts.append(self._warn_text(cond, getattr(x, cond), hold_w))
+        return '; '.join(parts) if parts else 'OK'
+
+    def _warn_text(self, cond: str, value: float, hold: float) -> str:
+        low, high = self._warn_limits(cond)
+        label = cond.replace('_', ' ')
+        scale, unit, digits = {'load_margin': (1e3, ' kN', 1),
+                               'safety_factor': (1.0, '', 2)}.get(cond, (1.0, ' m', 1))
+        v, lo, hi = (_fmt(a, scale, digits) for a in (value, low, high))
+        if value < low:
+            return f'{label} {v}{unit} < {lo}{unit}'
+        return f'{label} {v}{unit}, warning held (clears after {hold:g} s at >= {hi}{unit})'
+
+
+def _age(now: float, stamp: float, started: float) -> float:
+    """Age (s) of the newest sample; a sample never received counts from ``started``."""
+    return now - (started if math.isnan(stamp) else stamp)
+
+
+def _status_text(status: int, message: str) -> str:
+    return message or f'solver status {status}'
+
+
+def _step(latch: Latch, code: int, now: float, on_delay: float, hold: float) -> Latch:
+    """One latch update: raise after ``on_delay`` of breaches, clear after ``hold`` of clears."""
+    want = _CLEAR if latch.active else _BREACH
+    if code != want:
+        return Latch(latch.active, None)
+    since = now if latch.since is None or latch.since > now else latch.since
+    if now - since >= (hold if latch.active else on_delay):
+        return Latch(not latch.active, None)
+    return Latch(latch.active, since)
+
+
+def _combine(active: Sequence[bool], stale: bool) -> Level:
+    """Explicit precedence ERROR > STALE > WARN > OK (not a max over level numbers)."""
+    if any(active[:2]):
+        return Level.ERROR
+    if stale:
+        return Level.STALE
+    return Level.WARN if any(active[2:]) else Level.OK
+
+
+def _episode(entered: tuple[float, ...], old: Level, new: Level,
+             now: float) -> tuple[tuple[float, ...], float | None]:
+    """Update the time each severity rank was entered; return the ending episode's length."""
+    r_old, r_new = _RANK[old], _RANK[new]
+    if r_new > r_old:
+        return tuple(now if r_old < r <= r_new else t for r, t in enumerate(entered)), None
+    return entered, now - entered[r_old]
+
+
+# --- vectorized replay --------------------------------------------------------------------------
+
+_INPUT_FIELDS = ('uplift_force', 'anchor_margin', 'tide_margin', 'load_margin', 'safety_factor',
+                 'tension_stamp', 'depth_stamp')
+
+
+def _latch_series(codes: np.ndarray, t: np.ndarray, on_delay: float, hold: float) -> np.ndarray:
+    """Latch state after each update, exactly as repeated :func:`_step` from an inactive latch.
+
+    A raise or clear is decided inside one run of equal codes, timed from the run's first
+    update, and never depends on the latch state at the run's start (a breach run cannot clear,
+    a clear run cannot raise). So every "set" and "reset" candidate is found independently and
+    the latch is the most recent candidate, forward-filled.
+    """
+    n = codes.size
+    idx = np.arange(n)
+    starts = np.empty(n, dtype=bool)
+    starts[0] = True
+    np.not_equal(codes[1:], codes[:-1], out=starts[1:])
+    run_start = np.maximum.accumulate(np.where(starts, idx, 0))
+    elapsed = t - t[run_start]
+    event = np.full(n, -1, dtype=np.int8)
+    event[(codes == _CLEAR) & (elapsed >= hold)] = 0
+    event[(codes == _BREACH) & (elapsed >= on_delay)] = 1
+    last = np.maximum.accumulate(np.where(event >= 0, idx, -1))
+    return (last >= 0) & (event[np.maximum(last, 0)] == 1)
+
+
+def replay_levels(times: Any, inputs: Mapping[str, Any], alarm: LineAlarm,
+                  status_messages: Mapping[int, str] | None = None) -> ReplayResult:
+    """Levels and transitions for a whole sequence of updates of one line, vectorized.
+
+    Gives exactly the transitions (times, levels, messages, durations) of feeding
+    ``alarm.update`` one update at a time from ``alarm.initial()``.
+
+    Parameters
+    ----------
+    times : array (n,), s, non-decreasing
+        Update times (the ``now`` of each update).
+    inputs : mapping of field name to array or scalar broadcastable to (n,)
+        The :class:`AlarmInputs` fields; a missing field takes its default. ``status_message``
+        may be an array of str; otherwise ``status_messages`` maps codes to sentences.
+    alarm : LineAlarm
+    status_messages : mapping int -> str, optional
+
+    Returns
+    -------
+    ReplayResult
+        ``levels`` (int8, one per update) and the list of :class:`Transition`.
+
+    Notes
+    -----
+    Cost is a few dozen numpy passes over the arrays plus Python work per transition only.
+    """
+    t = np.asarray(times, dtype=np.float64)
+    if t.ndim != 1:
+        raise ValueError(f'times must be one-dimensional, got shape {t.shape}')
+    n = t.size
+    if n == 0:
+        return ReplayResult(np.zeros(0, dtype=np.int8), [])
+    if not np.all(np.isfinite(t)) or np.any(t[1:] < t[:-1]):
+        raise ValueError('times must be finite and non-decreasing')
+    unknown = set(inputs) - set(_INPUT_FIELDS) - {'status', 'status_message'}
+    if unknown:
+        raise ValueError(f'unknown input fields {sorted(unknown)}')
+    default = AlarmInputs()
+    x = {k: np.broadcast_to(np.asarray(inputs.get(k, getattr(default, k)), dtype=np.float64),
+                            (n,)) for k in _INPUT_FIELDS}
+    status = np.broadcast_to(np.asarray(inputs.get('status', 0), dtype=np.int64), (n,))
+    cfg = alarm.config
+    started = t[0]
+    age_t = t - np.where(np.isnan(x['tension_stamp']), started, x['tension_stamp'])
+    age_d = t - np.where(np.isnan(x['depth_stamp']), started, x['depth_stamp'])
+    stale_t, stale_d = age_t > cfg.tension_timeout, age_d > cfg.depth_timeout
+    stale = stale_t | stale_d
+
+    def codes(breach: np.ndarray, clear: np.ndarray) -> np.ndarray:
+        return np.where(breach, _BREACH, np.where(clear & ~stale, _CLEAR, _HOLD)).astype(np.int8)
+
+    level_up = alarm.uplift_clear_level
+    f = x['uplift_force']
+    up_clear = f <= level_up
+    if not level_up > 0.0:
+        up_clear &= x['anchor_margin'] >= cfg.uplift_clear_margin
+    classified = {'uplift': codes(f > alarm.allowed_uplift, up_clear),
+                  'input': codes(status != 0, status == 0)}
+    for cond in _WARNS:
+        low, high = alarm._warn_limits(cond)
+        classified[cond] = codes(x[cond] < low, x[cond] >= high)
+    active = {cond: _latch_series(classified[cond], t, *alarm._timing(cond))
+              for cond in CONDITIONS}
+    err = active['uplift'] | active['input']
+    warn = np.zeros(n, dtype=bool)
+    for cond in _WARNS:
+        warn |= active[cond]
+    levels = np.where(err, Level.ERROR, np.where(
+        stale, Level.STALE, np.where(warn, Level.WARN, Level.OK))).astype(np.int8)
+
+    changed = np.flatnonzero(np.diff(levels, prepend=np.int8(Level.OK)))
+    last_bad = np.maximum.accumulate(np.where(status != 0, np.arange(n), -1))
+    texts = inputs.get('status_message')
+    transitions: list[Transition] = []
+    entered: tuple[float, ...] = AlarmState().entered
+    old = Level.OK
+    for i in changed.tolist():
+        j = int(last_bad[i])
+        held = ''
+        if j >= 0:
+            code = int(status[j])
+            text = str(np.broadcast_to(texts, (n,))[j]) if texts is not None else (
+                (status_messages or {}).get(code, ''))
+            held = _status_text(code, text)
+        sample = AlarmInputs(**{k: float(x[k][i]) for k in _INPUT_FIELDS},
+                             status=int(status[i]))
+        flags = [bool(active[cond][i]) for cond in CONDITIONS]
+        message = alarm._message(flags, sample, float(t[i]), float(started),
+                                 bool(stale_t[i]), bool(stale_d[i]), held)
+        new = Level(int(levels[i]))
+        entered, duration = _episode(entered, old, new, float(t[i]))
+        transitions.append(Transition(float(t[i]), old, new, message, duration))
+        old = new
+    return ReplayResult(levels, transitions)
+
+
+# --- diagnostics values -------------------------------------------------------------------------
+
+#: KeyValue keys of each line's DiagnosticStatus (contract, SI units).
+DIAGNOSTIC_KEYS = ('top_tension', 'depth', 'horizontal_tension', 'min_anchor_distance',
+                   'anchor_margin', 'uplift_force', 'tide_margin', 'load_margin', 'safety_factor')
+
+
+def diagnostic_values(result_fields: Any) -> list[tuple[str, str]]:
+    """``[(key, value)]`` for :data:`DIAGNOSTIC_KEYS`, values as ``repr(float(x))``.
+
+    ``result_fields`` is a mapping or an object with those attributes (e.g. a scalar solve
+    result); a missing field gives ``'nan'``. ``float()`` parses every value back exactly.
+    """
+    def get(key: str) -> Any:
+        if isinstance(result_fields, Mapping):
+            return result_fields.get(key, math.nan)
+        return getattr(result_fields, key, math.nan)
+
+    return [(key, repr(float(get(key)))) for key in DIAGNOSTIC_KEYS]
