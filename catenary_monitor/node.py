@@ -415,6 +415,18 @@ class CatenaryMonitor(Node):
             self.log.close()
 
 
+def _make_executor() -> Any:
+    """rclpy's EventsExecutor where available (several times cheaper per message), else the
+    SingleThreadedExecutor; ``CATENARY_MONITOR_EXECUTOR=single`` forces the latter."""
+    if os.environ.get('CATENARY_MONITOR_EXECUTOR', 'events') != 'single':
+        try:
+            from rclpy.experimental import EventsExecutor
+            return EventsExecutor()
+        except ImportError:
+            pass
+    return SingleThreadedExecutor()
+
+
 def _install_signal_handlers(stop: threading.Event) -> None:
     """SIGINT/SIGTERM end the spin loop between callbacks (never inside a publish)."""
     def handler(signum: int, frame: Any) -> None:
@@ -449,8 +461,10 @@ def main(args: Optional[Sequence[str]] = None, log_dir: Optional[str] = None) ->
         except ConfigError as err:
             print(f'{NODE_NAME}: {err}', file=sys.stderr)
             return 2
-        executor = SingleThreadedExecutor()
+        executor = _make_executor()
         executor.add_node(node)
+        # The signal handler only sets ``stop``, seen within 0.2 s, so a signal never lands
+        # inside a publish. (The EventsExecutor's spin_once() without a timeout busy-waits.)
         while not stop.is_set() and rclpy.ok():
             executor.spin_once(timeout_sec=0.2)
     except (KeyboardInterrupt, ExternalShutdownException):
