@@ -16,7 +16,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any, Optional
+from typing import Optional
 
 import numpy as np
 
@@ -59,7 +59,8 @@ def _relay(proc: subprocess.Popen, t0: float, colour: bool, events: list, ready:
             t = time.time() - t0
             events.append((t, name, old, new, text))
             on, off = (_LEVEL_COLOURS.get(new, ''), '\033[0m') if colour else ('', '')
-            print(f'  t = {t:5.1f} s  {on}{name:8s} {old:>5s} -> {new:5s}{off}  {text}', flush=True)
+            print(f'  t = {t:5.1f} s  {on}{name:8s} {old:>5s} -> {new:5s}{off}  {text}',
+                  flush=True)
         elif 'Traceback' in line or line.startswith('catenary_monitor:'):
             print(f'  monitor: {line}', file=sys.stderr, flush=True)
 

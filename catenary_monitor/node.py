@@ -35,7 +35,7 @@ from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 
 from . import __version__
 from .alarms import AlarmInputs, Level, LineAlarm, diagnostic_values
-from .config import (PARAMETERS, ConfigError, MonitorConfig, ParamSpec, config_from_params,
+from .config import (ConfigError, MonitorConfig, ParamSpec, config_from_params,
                      config_hash, config_to_params, expand_parameters)
 from .health import logger_status, tide_status
 from .mcap_log import McapLogger
@@ -231,7 +231,7 @@ class CatenaryMonitor(Node):
 
     @_guarded
     def _on_depth(self, data: bytes) -> None:
-        """A depth sample (m): log it, then solve every line that has a tension (one array call)."""
+        """A depth sample (m): log it, solve every line that has a tension (one array call)."""
         now_ns = self._clock.now().nanoseconds
         self._write(self._depth_topic, data, now_ns)
         self._depth = deserialize_message(data, Float64).data

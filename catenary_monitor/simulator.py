@@ -48,8 +48,9 @@ def default_config_path() -> str:
     """config/floating_dock.yaml, found without the ament index (source tree or pip install)."""
     from pathlib import Path
     here = Path(__file__).resolve().parent
-    candidates = [here / 'data' / 'floating_dock.yaml', here.parent / 'config' / 'floating_dock.yaml',
-                  Path(sys.prefix) / 'share' / 'catenary_monitor' / 'config' / 'floating_dock.yaml']
+    name = 'floating_dock.yaml'
+    candidates = [here / 'data' / name, here.parent / 'config' / name,
+                  Path(sys.prefix) / 'share' / 'catenary_monitor' / 'config' / name]
     try:  # a colcon / ROS install
         from ament_index_python.packages import get_package_share_directory
         candidates.append(Path(get_package_share_directory('catenary_monitor')) / 'config' /
@@ -97,7 +98,8 @@ class Scenario:
     def depth(self, t: float) -> float:
         """Tide depth [m]: one compressed M2 cycle, mean level at the storm peak."""
         peak = 0.5 * (self.build[1] + self.ease[0]) * self.duration
-        return MEAN_DEPTH + self.tide_amplitude * math.sin(2 * math.pi * (t - peak) / self.duration)
+        phase = 2 * math.pi * (t - peak) / self.duration
+        return MEAN_DEPTH + self.tide_amplitude * math.sin(phase)
 
     def time_scale(self) -> float:
         """Simulated seconds of tide per wall second."""

@@ -180,7 +180,8 @@ class Client:
             if value:
                 return value
             if time.monotonic() > deadline:
-                raise AssertionError(f'timed out after {timeout} s waiting for {what or predicate}')
+                raise AssertionError(
+                    f'timed out after {timeout} s waiting for {what or predicate}')
             time.sleep(0.02)
 
     def latest_status(self, name: str, since: float = -math.inf) -> Optional[dict[str, Any]]:

@@ -132,8 +132,8 @@ def test_uplift_raises_error_and_clears_with_hysteresis(client, monitor):
     client.feed(topic('up'), 1623.5e3)
     s = client.wait_status(name('up'), 3.0, ERROR, since=t_up)
     assert 'uplift' in s['message'] and 'kN' in s['message']
-    assert float(s['values']['uplift_force']) == pytest.approx(expected(1623.5e3, 'up')
-                                                              .uplift_force, rel=1e-9)
+    uplift = expected(1623.5e3, 'up').uplift_force
+    assert float(s['values']['uplift_force']) == pytest.approx(uplift, rel=1e-9)
     # Hysteresis: no uplift any more, but the anchor margin (0.5 m) is below the 1 m clear level.
     t_hold = time.monotonic()
     t_near = _tension_at_margin(0.5)
