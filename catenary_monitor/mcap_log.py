@@ -104,6 +104,9 @@ class _OpenFile:
 class McapLogger:
     """Write CDR messages to rotating ROS 2-profile MCAP files.
 
+    The first file is opened by the constructor (so an unwritable ``log_dir`` shows in
+    :attr:`ok` / :attr:`error` at once); no file-system error is ever raised.
+
     Parameters
     ----------
     log_dir

@@ -4,10 +4,11 @@ Two entry points:
 
 * :func:`read_float64_topics` reads ``std_msgs/msg/Float64`` topics into numpy columns
   (log time in ns, value) at well over a million messages per second. Chunks are decompressed
-  with zstandard/lz4 and their message records are located through the Message Index records
-  that follow each chunk, then parsed in one vectorised gather per chunk. Every index entry is
-  checked against the record it points to, and every byte of the chunk that the index does not
-  cover is walked record by record, so a missing or wrong index only costs speed, never data.
+  with zstandard/lz4 and gathered into batches of up to 8 MiB; their message records are
+  located through the Message Index records that follow each chunk and parsed with one
+  vectorised gather per batch. Every index entry is checked against the record it points to,
+  and every byte that the index does not cover is walked record by record, so a missing or
+  wrong index only costs speed, never data.
 * :func:`iter_messages` yields every message of the chosen topics as raw CDR bytes
   (:class:`RawMessage`), in file order, through the same tolerant scanner.
 
@@ -34,13 +35,17 @@ from __future__ import annotations
 
 import os
 import struct
+import threading
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable, Iterable, Iterator, NamedTuple, Union
+from typing import TYPE_CHECKING, Callable, Iterable, Iterator, NamedTuple, Union
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
+
+if TYPE_CHECKING:
+    import zstandard
 
 __all__ = [
     'FLOAT64_TYPE',
@@ -77,6 +82,8 @@ _MESSAGE_HEAD = struct.Struct('<HIQQ')     # channel id, sequence, log time, pub
 _CHUNK_HEAD = struct.Struct('<QQQII')      # start, end, uncompressed size, crc, len(compression)
 _MESSAGE_MIN = 9 + 22                      # smallest Message record (empty payload), B
 _FLOAT64_RECORD = 9 + 22 + 12              # Message record of one CDR Float64, B
+_BATCH_BYTES = 8 << 20                     # decompressed chunk bytes handled per numpy pass
+_BATCH_PIECES = 4096                       # chunks handled per numpy pass
 _INDEX_ENTRY = np.dtype([('t', '<u8'), ('o', '<u8')])
 # One Float64 Message record seen as a struct (offsets within the record).
 _FLOAT64_ROW = np.dtype({
@@ -190,16 +197,14 @@ class ReadReport:
         return not self.skips and all(f.finished for f in self.files)
 
     @property
-    def messages_lost(self) -> int | None:
-        """Known number of requested-topic messages lost (None if some loss is unknowable)."""
-        total = 0
-        for skip in self.skips:
-            if skip.kind == 'truncated' and skip.messages_lost is None:
-                continue  # a cut tail loses only what was never written completely
-            if skip.messages_lost is None:
-                return None
-            total += skip.messages_lost
-        return total
+    def messages_lost(self) -> int:
+        """Requested-topic messages known to be lost (a lower bound, see ``loss_known``)."""
+        return sum(s.messages_lost for s in self.skips if s.messages_lost is not None)
+
+    @property
+    def loss_known(self) -> bool:
+        """True if every skipped part has a known loss (a cut tail never has)."""
+        return all(s.messages_lost is not None for s in self.skips)
 
     def summary(self) -> str:
         """Multi-line human summary."""
@@ -326,8 +331,16 @@ def iter_messages(
 
     Slower than :func:`read_float64_topics` (one Python object per message) but works for any
     message type; decode ``data`` with ``rclpy.serialization.deserialize_message`` or
-    ``mcap_ros2``. Damaged parts are skipped as in :func:`read_float64_topics` and recorded in
-    ``report`` if one is given.
+    ``mcap_ros2``. Files are read in the order given (a directory's files sorted by name);
+    messages are not re-sorted by time. Damaged parts are skipped as in
+    :func:`read_float64_topics` and recorded in ``report`` if one is given.
+
+    Raises
+    ------
+    FileNotFoundError
+        If a path does not exist.
+    McapReadError
+        If a file is not MCAP at all.
     """
     wanted = None if topics is None else set(_unique(topics))
     report = ReadReport() if report is None else report
@@ -359,12 +372,26 @@ class _Channel(NamedTuple):
     schema_name: str
 
 
+class _BadRecord(Exception):
+    """A record whose fields do not fit its length."""
+
+
+@dataclass
+class _Piece:
+    """A decompressed chunk waiting in a batch."""
+
+    data: bytes | memoryview
+    file_offset: int                       # offset of the Chunk record in the file
+    indexes: list[tuple[int, int, int]]    # (channel id, file offset of 1st entry, entries)
+    partial: bool = False                  # cut by the end of the file
+
+
 @dataclass
 class _Block:
     """Message records of accepted channels in one buffer (a chunk or the file itself)."""
 
     buf: bytes | memoryview
-    offsets: np.ndarray   # int64, record starts, file order
+    offsets: np.ndarray   # int64, record starts in buf, file order
     lengths: np.ndarray   # int64, record body lengths
     channels: np.ndarray  # uint16
     file_offset: int      # where the buffer comes from in the file (for reports)
@@ -379,17 +406,22 @@ class _Scanner:
         self.accept = accept
         self.report = report
         self.data = path.read_bytes()
+        self.data_arr = np.frombuffer(self.data, np.uint8)
         self.file_report = FileReport(self.path, len(self.data))
         report.files.append(self.file_report)
-        self.schemas: dict[int, tuple[str, str]] = {}
+        self.schemas: dict[int, str] = {}                # schema id -> name (data section)
+        self.summary_schemas: dict[int, str] = {}
+        self.summary_channels: dict[int, tuple[int, str, str]] = {}  # id -> schema, topic, enc
         self.channels: dict[int, _Channel] = {}
         self.accepted: set[int] = set()
         self.topic_names: list[str] = []          # accepted channel -> topic index
         self.topic_index: dict[str, int] = {}
         self.topic_lut = np.full(1 << 16, -1, np.int64)  # accepted channel id -> topic index
+        self.known_lut = np.zeros(1 << 16, bool)         # channel id seen
         self.unknown: dict[int, tuple[int, int]] = {}  # channel id -> (count, first offset)
         self.stats_counts: dict[int, int] | None = None
         self._top_messages: list[int] = []
+        self._recovered = 0
 
     # -- reporting
     def skip(self, offset: int, kind: str, reason: str, lost: int | None = None) -> None:
@@ -406,20 +438,23 @@ class _Scanner:
 
     # -- channel bookkeeping
     def _add_schema(self, buf: bytes | memoryview, pos: int, end: int) -> None:
-        schema_id, = struct.unpack_from('<H', buf, pos)
-        name, p = _string(buf, pos + 2, end)
-        encoding, _ = _string(buf, p, end)
-        self.schemas[schema_id] = (name, encoding)
+        schema_id, name = _parse_schema(buf, pos, end)
+        self.schemas[schema_id] = name
 
     def _add_channel(self, buf: bytes | memoryview, pos: int, end: int) -> None:
-        channel_id, schema_id = struct.unpack_from('<HH', buf, pos)
-        topic, p = _string(buf, pos + 4, end)
-        encoding, _ = _string(buf, p, end)
+        self._register(*_parse_channel(buf, pos, end))
+
+    def _register(self, channel_id: int, schema_id: int, topic: str, encoding: str) -> None:
+        """Make a channel known; the data section's definition wins over the summary's."""
         if channel_id in self.channels:
             return
-        schema_name = self.schemas.get(schema_id, ('', ''))[0] if schema_id else ''
+        if schema_id == 0:
+            schema_name = ''
+        else:
+            schema_name = self.schemas.get(schema_id, self.summary_schemas.get(schema_id, ''))
         channel = _Channel(channel_id, topic, encoding, schema_id, schema_name)
         self.channels[channel_id] = channel
+        self.known_lut[channel_id] = True
         if self.accept(channel):
             self.accepted.add(channel_id)
             index = self.topic_index.setdefault(topic, len(self.topic_names))
@@ -427,14 +462,19 @@ class _Scanner:
                 self.topic_names.append(topic)
             self.topic_lut[channel_id] = index
 
-    def _count_unknown(self, channel_ids: np.ndarray, file_offset: int) -> None:
-        known = np.fromiter(self.channels, dtype=np.int64, count=len(self.channels))
-        missing = channel_ids[~np.isin(channel_ids, known)]
+    def _resolve(self, channel_ids: Iterable[int]) -> None:
+        """Take channels not (yet) defined in the data section from the summary."""
+        for cid in channel_ids:
+            if cid not in self.channels and cid in self.summary_channels:
+                self._register(cid, *self.summary_channels[cid])
+
+    def _count_unknown(self, missing: np.ndarray, file_offset: int) -> None:
         for cid, n in zip(*np.unique(missing, return_counts=True)):
             count, first = self.unknown.get(int(cid), (0, file_offset))
             self.unknown[int(cid)] = (count + int(n), first)
 
-    # -- summary (read first: it repeats every Schema and Channel)
+    # -- summary (read first: it repeats every Schema and Channel; used for channels whose
+    #    definition in the data section was lost)
     def _read_summary(self) -> None:
         data = self.data
         n = len(data)
@@ -458,24 +498,34 @@ class _Scanner:
             body, end = pos + 9, pos + 9 + length
             if end > footer_at:
                 break
-            if op == _OP_SCHEMA:
-                self._add_schema(data, body, end)
-            elif op == _OP_CHANNEL:
-                self._add_channel(data, body, end)
-            elif op == _OP_STATISTICS:
-                self.stats_counts = _statistics_counts(data, body, end)
+            try:
+                if op == _OP_SCHEMA:
+                    schema_id, name = _parse_schema(data, body, end)
+                    self.summary_schemas[schema_id] = name
+                elif op == _OP_CHANNEL:
+                    channel_id, *rest = _parse_channel(data, body, end)
+                    self.summary_channels[channel_id] = tuple(rest)  # type: ignore[assignment]
+                elif op == _OP_STATISTICS:
+                    self.stats_counts = _statistics_counts(data, body, end)
+            except _BadRecord as exc:
+                self.skip(pos, 'corrupt_region', f'unreadable summary record: {exc}')
             pos = end
 
     # -- main walk
     def blocks(self) -> Iterator[_Block]:
+        """Yield the accepted message records of the file in file order, batch by batch."""
         data = self.data
         n = len(data)
         if n < len(MAGIC) or data[:len(MAGIC)] != MAGIC:
             if MAGIC.startswith(data[:len(MAGIC)]):
                 self.skip(0, 'truncated', f'file ends after {n} byte(s), inside the magic')
                 return
-            raise McapReadError(f'{self.path} is not an MCAP file (bad magic)')
+            if not _looks_like_header(data):
+                raise McapReadError(f'{self.path} is not an MCAP file (bad magic)')
+            self.skip(0, 'corrupt_region', 'damaged magic bytes before a valid Header record')
         self._read_summary()
+        batch: list[_Piece] = []
+        batch_bytes = 0
         pos = len(MAGIC)
         while pos < n:
             if pos + 9 > n:
@@ -487,34 +537,55 @@ class _Scanner:
                 pos = self._resync(pos, f'invalid record opcode 0x{op:02x}')
                 continue
             if end > n:
+                # Either the writer was killed inside this record (nothing valid follows) or
+                # its length field is damaged (a valid chunk follows somewhere).
+                if self.file_report.finished or _find_chunk(data, pos + 1) >= 0:
+                    pos = self._resync(pos, f'record (opcode 0x{op:02x}) of {length} B runs '
+                                            'past the end of the file')
+                    continue
+                recovered = ''
                 if op == _OP_CHUNK:
                     yield from self._flush_top()
-                    yield from self._partial_chunk(pos)
-                if self.file_report.finished:
-                    pos = self._resync(pos, f'record (opcode 0x{op:02x}) of {length} B '
-                                            'runs past the end of a finished file')
-                    continue
+                    piece = self._partial_chunk(pos)
+                    if piece is not None:
+                        batch.append(piece)
+                    yield from self._flush_batch(batch)
+                    batch = []
+                    recovered = (f'; {self._recovered} message record(s) recovered from the cut '
+                                 'chunk without CRC check')
                 self.skip(pos, 'truncated', f'file ends inside a record (opcode 0x{op:02x}, '
-                          f'{length} B, {n - pos - 9} B present)')
+                          f'{length} B, {n - pos - 9} B present){recovered}')
                 break
             body = pos + 9
             if op == _OP_CHUNK:
                 yield from self._flush_top()
-                pos, block = self._chunk(pos, end)
-                if block is not None:
-                    yield block
+                pos, piece = self._chunk(pos, end)
+                if piece is not None:
+                    batch.append(piece)
+                    batch_bytes += len(piece.data)
+                    if batch_bytes >= _BATCH_BYTES or len(batch) >= _BATCH_PIECES:
+                        yield from self._flush_batch(batch)
+                        batch, batch_bytes = [], 0
                 continue
-            if op == _OP_MESSAGE:
-                self._top_messages.append(pos)
-            elif op == _OP_SCHEMA:
-                self._add_schema(data, body, end)
-            elif op == _OP_CHANNEL:
-                self._add_channel(data, body, end)
-            elif op == _OP_HEADER:
-                self.file_report.profile, _ = _string(data, body, end)
-            elif op == _OP_FOOTER:
-                break
+            if batch and op in (_OP_MESSAGE, _OP_SCHEMA, _OP_CHANNEL):
+                # Keep file order: the batched chunks may define what this record uses.
+                yield from self._flush_batch(batch)
+                batch, batch_bytes = [], 0
+            try:
+                if op == _OP_MESSAGE:
+                    self._top_messages.append(pos)
+                elif op == _OP_SCHEMA:
+                    self._add_schema(data, body, end)
+                elif op == _OP_CHANNEL:
+                    self._add_channel(data, body, end)
+                elif op == _OP_HEADER:
+                    self.file_report.profile, _ = _string(data, body, end)
+                elif op == _OP_FOOTER or op == _OP_DATA_END:
+                    break  # the summary section was read (CRC-checked) by _read_summary
+            except _BadRecord as exc:
+                self.skip(pos, 'corrupt_region', f'unreadable record (opcode 0x{op:02x}): {exc}')
             pos = end
+        yield from self._flush_batch(batch)
         yield from self._flush_top()
 
     def _flush_top(self) -> Iterator[_Block]:
@@ -524,6 +595,14 @@ class _Scanner:
         offsets = np.asarray(self._top_messages, dtype=np.int64)
         self._top_messages = []
         block = self._select(self.data, offsets, int(offsets[0]))
+        if block is not None:
+            yield block
+
+    def _flush_batch(self, pieces: list[_Piece]) -> Iterator[_Block]:
+        if not pieces:
+            return
+        buf, offsets = self._locate_messages(pieces)
+        block = self._select(buf, offsets, pieces[0].file_offset)
         if block is not None:
             yield block
 
@@ -537,30 +616,29 @@ class _Scanner:
         self.skip(pos, 'corrupt_region', f'{reason}; skipped {found - pos} B to the next chunk')
         return found
 
-    def _message_indexes(self, pos: int) -> tuple[int, dict[int, np.ndarray]]:
-        """Parse the Message Index records that follow a chunk; return the position after."""
+    def _message_indexes(self, pos: int) -> tuple[int, list[tuple[int, int, int]]]:
+        """Find the Message Index records after a chunk: (channel, first entry, entries)."""
         data, n = self.data, len(self.data)
-        indexes: dict[int, np.ndarray] = {}
-        while pos + 9 <= n:
+        indexes: list[tuple[int, int, int]] = []
+        while pos + 15 <= n:
             op, length = _RECORD_HEAD.unpack_from(data, pos)
             if op != _OP_MESSAGE_INDEX or pos + 9 + length > n or length < 6:
                 break
             channel_id, nbytes = struct.unpack_from('<HI', data, pos + 9)
             if nbytes % 16 or 6 + nbytes > length:
                 break
-            entries = np.frombuffer(data, _INDEX_ENTRY, nbytes // 16, pos + 15)
-            indexes[channel_id] = entries['o'].astype(np.int64)
+            indexes.append((channel_id, pos + 15, nbytes // 16))
             pos += 9 + length
         return pos, indexes
 
-    def _lost_in(self, indexes: dict[int, np.ndarray]) -> int | None:
-        if not indexes:
+    def _lost_in(self, indexes: list[tuple[int, int, int]]) -> int | None:
+        """Requested-topic messages listed by the indexes of a lost chunk, if knowable."""
+        self._resolve(cid for cid, _, _ in indexes)
+        if not indexes or any(cid not in self.channels for cid, _, _ in indexes):
             return None
-        if any(cid not in self.channels for cid in indexes):
-            return None
-        return sum(len(v) for cid, v in indexes.items() if cid in self.accepted)
+        return sum(count for cid, _, count in indexes if cid in self.accepted)
 
-    def _chunk(self, pos: int, end: int) -> tuple[int, _Block | None]:
+    def _chunk(self, pos: int, end: int) -> tuple[int, _Piece | None]:
         data = self.data
         after, indexes = self._message_indexes(end)
         header = _chunk_header(data, pos + 9, end)
@@ -583,30 +661,154 @@ class _Scanner:
             self.skip(pos, 'corrupt_chunk', 'chunk CRC mismatch', self._lost_in(indexes))
             return after, None
         self.file_report.chunks += 1
-        offsets, stop = _locate_messages(records, indexes, self._add_schema, self._add_channel)
-        if stop < len(records):
-            self.skip(pos, 'corrupt_chunk', f'chunk records unreadable from byte {stop} of '
-                      f'{len(records)}; the messages before it are used')
-        return after, self._select(records, offsets, pos)
+        return after, _Piece(records, pos, indexes)
 
-    def _partial_chunk(self, pos: int) -> Iterator[_Block]:
-        """Recover the complete records at the start of a chunk cut by the end of the file."""
+    def _partial_chunk(self, pos: int) -> _Piece | None:
+        """The decodable start of a chunk cut by the end of the file (walked, not indexed)."""
         data = self.data
+        self._recovered = 0
         header = _chunk_header(data, pos + 9, len(data), partial=True)
         if header is None:
-            return
+            return None
         usize, _, compression, rec_start, rec_end = header
         try:
             records = _decompress_partial(data, rec_start, min(rec_end, len(data)),
                                           compression)
         except Exception:  # noqa: BLE001 - whatever cannot be decoded is simply not recovered
-            return
-        offsets, _ = _locate_messages(records[:usize], {}, self._add_schema, self._add_channel)
-        if len(offsets):
-            self.file_report.chunks += 1
-            block = self._select(records, offsets, pos)
-            if block is not None:
-                yield block
+            return None
+        found: list[int] = []
+        self._walk(records[:usize], 0, min(len(records), usize), found)
+        self._recovered = len(found)
+        if not found:
+            return None
+        self.file_report.chunks += 1
+        return _Piece(records[:usize], pos, [], partial=True)
+
+    def _walk(self, buf: bytes | memoryview, start: int, end: int, found: list[int]) -> int:
+        """Walk records in ``buf[start:end]``; collect Message offsets; return where it stopped.
+
+        Schema and Channel records are registered on the way.
+        """
+        unpack = _RECORD_HEAD.unpack_from
+        pos = start
+        while pos + 9 <= end:
+            op, length = unpack(buf, pos)
+            stop = pos + 9 + length
+            if stop > end or op == 0 or (op not in _KNOWN_OPS and op < 0x80):
+                return pos
+            if op == _OP_MESSAGE:
+                if length < 22:
+                    return pos
+                found.append(pos)
+            elif op == _OP_SCHEMA or op == _OP_CHANNEL:
+                try:
+                    if op == _OP_SCHEMA:
+                        self._add_schema(buf, pos + 9, stop)
+                    else:
+                        self._add_channel(buf, pos + 9, stop)
+                except _BadRecord:
+                    return pos
+            pos = stop
+        return pos
+
+    def _locate_messages(self, pieces: list[_Piece]) -> tuple[bytes | memoryview, np.ndarray]:
+        """Concatenate decompressed chunks; return the buffer and its Message record offsets.
+
+        Message Index entries are checked in one vectorised pass over the batch: each must
+        point inside its chunk at a Message record of its channel, and records must not
+        overlap. Chunks whose entries fail are walked record by record, and so is every byte
+        range that valid entries do not cover (Schema/Channel records, or messages of a
+        channel whose index is missing). Offsets come back sorted, i.e. in file order.
+        """
+        k = len(pieces)
+        sizes = np.fromiter((len(p.data) for p in pieces), np.int64, k)
+        starts = np.zeros(k, np.int64)
+        np.cumsum(sizes[:-1], out=starts[1:])
+        piece_ends = starts + sizes
+        buf = pieces[0].data if k == 1 else b''.join(p.data for p in pieces)
+        arr = np.frombuffer(buf, np.uint8)
+        indexed = np.fromiter((bool(p.indexes) for p in pieces), bool, k)
+        entries = [(i, cid, at, count) for i, p in enumerate(pieces)
+                   for cid, at, count in p.indexes if count]
+        g = np.empty(0, np.int64)
+        e = np.empty(0, np.int64)
+        owner = np.empty(0, np.int64)
+        if entries:
+            table = np.array(entries, np.int64)
+            counts = table[:, 3]
+            which = np.repeat(np.arange(len(table)), counts)
+            within = np.arange(len(which)) - np.repeat(np.cumsum(counts) - counts, counts)
+            entry_at = table[which, 2] + 16 * within + 8
+            off = _gather(self.data_arr, entry_at, 8).view('<u8').ravel()
+            owner = table[which, 0]
+            ok = off < sizes[owner].astype(np.uint64)
+            off = np.where(ok, off, 0).astype(np.int64)
+            ok &= off + _MESSAGE_MIN <= sizes[owner]
+            g = np.where(ok, starts[owner] + off, 0)
+            if len(arr) >= _MESSAGE_MIN:
+                head = _gather(arr, np.minimum(g, len(arr) - _MESSAGE_MIN), 11)
+                ok &= head[:, 0] == _OP_MESSAGE
+                ok &= head[:, 9:11].copy().view('<u2').ravel() == table[which, 1]
+                length = head[:, 1:9].copy().view('<u8').ravel()
+                ok &= (length >= 22) & (length <= sizes[owner].astype(np.uint64))
+                e = g + 9 + np.where(ok, length, 0).astype(np.int64)
+                ok &= e <= piece_ends[owner]
+            else:
+                ok[:] = False
+                e = g.copy()
+            bad = np.zeros(k, bool)
+            bad[owner[~ok]] = True
+            keep = ~bad[owner]
+            g, e, owner = g[keep], e[keep], owner[keep]
+            if len(g) > 1 and np.any(g[1:] < g[:-1]):
+                order = np.argsort(g, kind='stable')
+                g, e, owner = g[order], e[order], owner[order]
+            overlap = np.flatnonzero(e[:-1] > g[1:])
+            if len(overlap):
+                bad[owner[overlap]] = True
+                keep = ~bad[owner]
+                g, e, owner = g[keep], e[keep], owner[keep]
+            indexed &= ~bad
+        # Byte ranges to walk: between consecutive covered records and at chunk edges; a
+        # chunk without (valid) index entries is one whole range.
+        edge_s = np.concatenate((g, starts, piece_ends))
+        edge_e = np.concatenate((e, starts, piece_ends))
+        order = np.lexsort((edge_e, edge_s))
+        edge_s, edge_e = edge_s[order], edge_e[order]
+        gaps = np.flatnonzero(edge_e[:-1] < edge_s[1:])
+        found: list[int] = []
+        rewalk: set[int] = set()
+        for i in gaps.tolist():
+            a, b = int(edge_e[i]), int(edge_s[i + 1])
+            piece = int(np.searchsorted(starts, a, 'right')) - 1
+            stop = self._walk(buf, a, b, found)
+            if stop != b:
+                if indexed[piece]:
+                    rewalk.add(piece)  # the index and the records disagree: trust neither
+                else:
+                    self._unreadable(pieces[piece], stop - int(starts[piece]),
+                                     int(sizes[piece]))
+        if rewalk:
+            drop = np.zeros(k, bool)
+            drop[list(rewalk)] = True
+            g = g[~drop[owner]]
+            found = [f for f in found
+                     if not drop[int(np.searchsorted(starts, f, 'right')) - 1]]
+            for piece in sorted(rewalk):
+                a, b = int(starts[piece]), int(piece_ends[piece])
+                stop = self._walk(buf, a, b, found)
+                if stop != b:
+                    self._unreadable(pieces[piece], stop - a, b - a)
+        if found:
+            g = np.concatenate((g, np.asarray(found, np.int64)))
+            g.sort(kind='stable')
+        return buf, g
+
+    def _unreadable(self, piece: _Piece, stop: int, size: int) -> None:
+        if piece.partial:
+            return  # that is the cut itself, reported as 'truncated'
+        self.skip(piece.file_offset, 'corrupt_chunk', f'chunk records unreadable from byte '
+                  f'{stop} of {size}; the messages before it are used')
 
     def _select(self, buf: bytes | memoryview, offsets: np.ndarray,
                 file_offset: int) -> _Block | None:
@@ -615,26 +817,67 @@ class _Scanner:
             return None
         arr = np.frombuffer(buf, np.uint8)
         channels = _gather(arr, offsets + 9, 2).view('<u2').ravel()
-        if len(self.unknown) or not np.isin(channels, list(self.channels)).all():
-            self._count_unknown(channels.astype(np.int64), file_offset)
-        if not self.accepted:
-            return None
-        keep = np.isin(channels, list(self.accepted))
+        known = self.known_lut[channels]
+        if not known.all() and self.summary_channels:
+            self._resolve(np.unique(channels[~known]).tolist())
+            known = self.known_lut[channels]
+        if not known.all():
+            self._count_unknown(channels[~known], file_offset)
+        keep = self.topic_lut[channels] >= 0
         if not keep.any():
             return None
-        offsets = offsets[keep]
+        if not keep.all():
+            offsets, channels = offsets[keep], channels[keep]
         lengths = _gather(arr, offsets + 1, 8).view('<u8').ravel().astype(np.int64)
-        return _Block(buf, offsets, lengths, channels[keep], file_offset)
+        return _Block(buf, offsets, lengths, channels, file_offset)
 
 
 # ---------------------------------------------------------------------------- record helpers
 def _string(buf: bytes | memoryview, pos: int, end: int) -> tuple[str, int]:
     """Read a uint32-length-prefixed UTF-8 string; return it and the position after it."""
+    if pos + 4 > end:
+        raise _BadRecord('string length runs past its record')
     length, = struct.unpack_from('<I', buf, pos)
     stop = pos + 4 + length
     if stop > end:
-        raise McapReadError(f'string of {length} B runs past its record')
+        raise _BadRecord(f'string of {length} B runs past its record')
     return bytes(buf[pos + 4:stop]).decode('utf-8', 'replace'), stop
+
+
+def _parse_schema(buf: bytes | memoryview, pos: int, end: int) -> tuple[int, str]:
+    """(schema id, name) of a Schema record body."""
+    if end - pos < 2 + 4 + 4 + 4:
+        raise _BadRecord(f'Schema record of {end - pos} B is too short')
+    schema_id, = struct.unpack_from('<H', buf, pos)
+    name, p = _string(buf, pos + 2, end)
+    _string(buf, p, end)  # encoding
+    return schema_id, name
+
+
+def _parse_channel(buf: bytes | memoryview, pos: int, end: int) -> tuple[int, int, str, str]:
+    """(channel id, schema id, topic, message encoding) of a Channel record body."""
+    if end - pos < 4 + 4 + 4 + 4:
+        raise _BadRecord(f'Channel record of {end - pos} B is too short')
+    channel_id, schema_id = struct.unpack_from('<HH', buf, pos)
+    topic, p = _string(buf, pos + 4, end)
+    encoding, _ = _string(buf, p, end)
+    return channel_id, schema_id, topic, encoding
+
+
+def _looks_like_header(data: bytes) -> bool:
+    """True if a Header record (two strings filling its length) follows the 8 magic bytes."""
+    if len(data) < len(MAGIC) + 9 + 8:
+        return False
+    op, length = _RECORD_HEAD.unpack_from(data, len(MAGIC))
+    body, end = len(MAGIC) + 9, len(MAGIC) + 9 + length
+    if op != _OP_HEADER or end > len(data):
+        return False
+    try:
+        _, p = _string(data, body, end)
+        _, p = _string(data, p, end)
+    except _BadRecord:
+        return False
+    return p == end
 
 
 def _statistics_counts(buf: bytes, pos: int, end: int) -> dict[int, int] | None:
@@ -690,12 +933,23 @@ def _decompress(data: bytes, start: int, end: int, compression: str, usize: int
     if compression == '':
         return memoryview(data)[start:end]
     if compression == 'zstd':
-        import zstandard
-        return zstandard.ZstdDecompressor().decompress(data[start:end], max_output_size=usize)
+        return _zstd().decompress(memoryview(data)[start:end], max_output_size=usize)
     if compression == 'lz4':
         import lz4.frame
         return lz4.frame.decompress(data[start:end])
     raise McapReadError(f'unsupported chunk compression {compression!r}')
+
+
+_ZSTD = threading.local()
+
+
+def _zstd() -> 'zstandard.ZstdDecompressor':
+    """A per-thread zstd decompressor (creating one per chunk costs ~10 us)."""
+    decompressor = getattr(_ZSTD, 'decompressor', None)
+    if decompressor is None:
+        import zstandard
+        decompressor = _ZSTD.decompressor = zstandard.ZstdDecompressor()
+    return decompressor
 
 
 def _decompress_partial(data: bytes, start: int, end: int, compression: str
@@ -710,99 +964,9 @@ def _decompress_partial(data: bytes, start: int, end: int, compression: str
     return lz4.frame.LZ4FrameDecompressor().decompress(data[start:end])
 
 
-def _walk(buf: bytes | memoryview, start: int, end: int, messages: list[int],
-          on_schema: Callable[[bytes | memoryview, int, int], None],
-          on_channel: Callable[[bytes | memoryview, int, int], None]) -> int:
-    """Walk records in ``buf[start:end]``; collect Message offsets; return where it stopped."""
-    unpack = _RECORD_HEAD.unpack_from
-    pos = start
-    while pos + 9 <= end:
-        op, length = unpack(buf, pos)
-        stop = pos + 9 + length
-        if stop > end or op == 0 or (op not in _KNOWN_OPS and op < 0x80):
-            return pos
-        if op == _OP_MESSAGE:
-            if length < 22:
-                return pos
-            messages.append(pos)
-        elif op == _OP_SCHEMA:
-            on_schema(buf, pos + 9, stop)
-        elif op == _OP_CHANNEL:
-            on_channel(buf, pos + 9, stop)
-        pos = stop
-    return pos
-
-
 def _gather(arr: np.ndarray, positions: np.ndarray, width: int) -> np.ndarray:
     """Copy ``width`` bytes at each position into a contiguous (n, width) uint8 array."""
     return sliding_window_view(arr, width)[positions]
-
-
-def _locate_messages(
-    records: bytes | memoryview,
-    indexes: dict[int, np.ndarray],
-    on_schema: Callable[[bytes | memoryview, int, int], None],
-    on_channel: Callable[[bytes | memoryview, int, int], None],
-) -> tuple[np.ndarray, int]:
-    """Offsets of all Message records in a decompressed chunk, in file order.
-
-    Uses the Message Index entries when they check out (each points at a Message record of its
-    channel, records do not overlap) and walks every byte range they do not cover; otherwise
-    walks the whole chunk. Returns the offsets and the position where walking stopped
-    (``len(records)`` when the whole chunk was understood).
-    """
-    size = len(records)
-    arr = np.frombuffer(records, np.uint8)
-    if indexes:
-        offsets = _checked_index(arr, indexes)
-        if offsets is not None:
-            extra: list[int] = []
-            ends = offsets + 9 + _gather(arr, offsets + 1, 8).view('<u8').ravel().astype(
-                np.int64)
-            gap_start = np.concatenate(([0], ends))
-            gap_end = np.concatenate((offsets, [size]))
-            if np.all(gap_start <= gap_end):
-                ok = True
-                for i in np.flatnonzero(gap_start < gap_end).tolist():
-                    a, b = int(gap_start[i]), int(gap_end[i])
-                    if _walk(records, a, b, extra, on_schema, on_channel) != b:
-                        ok = False
-                        break
-                if ok:
-                    if extra:
-                        offsets = np.sort(np.concatenate((offsets, np.asarray(extra, np.int64))))
-                    return offsets, size
-    found: list[int] = []
-    stop = _walk(records, 0, size, found, on_schema, on_channel)
-    return np.asarray(found, dtype=np.int64), stop
-
-
-def _checked_index(arr: np.ndarray, indexes: dict[int, np.ndarray]) -> np.ndarray | None:
-    """Sorted, verified record offsets from Message Index entries, or None if any is wrong."""
-    size = len(arr)
-    parts = []
-    for channel_id, offs in indexes.items():
-        if len(offs) == 0:
-            continue
-        if offs.min() < 0 or offs.max() + _MESSAGE_MIN > size:
-            return None
-        if not np.all(arr[offs] == _OP_MESSAGE):
-            return None
-        if not np.all(_gather(arr, offs + 9, 2).view('<u2').ravel() == channel_id):
-            return None
-        parts.append(offs)
-    if not parts:
-        return np.empty(0, np.int64)
-    offsets = np.concatenate(parts) if len(parts) > 1 else parts[0]
-    if len(parts) > 1 or np.any(offsets[1:] < offsets[:-1]):
-        offsets = np.sort(offsets, kind='stable')
-    lengths = _gather(arr, offsets + 1, 8).view('<u8').ravel()
-    if np.any(lengths < 22) or np.any(lengths > size):
-        return None
-    ends = offsets + 9 + lengths.astype(np.int64)
-    if ends[-1] > size or np.any(ends[:-1] > offsets[1:]):
-        return None
-    return offsets
 
 
 def _extract_float64(block: _Block, topic_lut: np.ndarray

@@ -95,17 +95,16 @@ def _share_dir(package: str) -> Path:
         candidate = prefix / 'share' / package
         if candidate.is_dir():
             return candidate
-    raise SchemaNotFoundError(
-        package, 'package share directory not found via the ament index or under '
+    raise LookupError(
+        f'share directory of package {package!r} not found via the ament index or under '
         + ', '.join(str(p / 'share') for p in _candidate_prefixes()))
 
 
 @functools.lru_cache(maxsize=None)
 def _read_msg(package: str, namespace: str, name: str) -> str:
-    path = _share_dir(package) / namespace / f'{name}.msg'
     try:
-        return path.read_text(encoding='utf-8')
-    except OSError as exc:
+        return (_share_dir(package) / namespace / f'{name}.msg').read_text(encoding='utf-8')
+    except (LookupError, OSError) as exc:
         raise SchemaNotFoundError(f'{package}/{namespace}/{name}', str(exc)) from exc
 
 
@@ -141,6 +140,7 @@ def message_definition(type_name: str) -> str:
         If the type name is malformed or a ``.msg`` file cannot be found.
     """
     seen: set[str] = set()
+    _split_type(type_name)  # reject malformed names before any file access
 
     def append(dep_name: str, depth: int) -> str:
         if depth <= 0:
@@ -154,7 +154,12 @@ def message_definition(type_name: str) -> str:
                 result += f'\n{DELIMITER}\nMSG: {dep}\n' + append(dep, depth - 1)
         return result
 
-    return append(type_name, 50)
+    try:
+        return append(type_name, 50)
+    except SchemaNotFoundError as exc:
+        if exc.type_name == type_name:
+            raise
+        raise SchemaNotFoundError(type_name, f'dependency: {exc}') from exc
 
 
 @functools.lru_cache(maxsize=None)
@@ -168,7 +173,7 @@ def type_description_hash(type_name: str) -> str | None:
         path = _share_dir(package) / namespace / f'{name}.json'
         with open(path, encoding='utf-8') as handle:
             hashes = json.load(handle).get('type_hashes', [])
-    except (SchemaNotFoundError, OSError, ValueError):
+    except (LookupError, OSError, ValueError):
         return None
     full_name = f'{package}/{namespace}/{name}'
     for entry in hashes:
