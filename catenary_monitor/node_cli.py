@@ -23,7 +23,7 @@ def cmd_run(args: argparse.Namespace) -> int:
         return 2
     from .node import main
     return main(['catenary-monitor', '--ros-args', '--params-file', args.params_file,
-                 *args.ros_args], log_dir=args.log_dir)
+                 *args.ros_args], log_dir=args.log_dir)  # later -p values win
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
@@ -46,7 +46,8 @@ def register(sub: Any) -> None:
     p.add_argument('--params-file', required=True, metavar='FILE',
                    help='ROS 2 params YAML (top key catenary_monitor or /**)')
     p.add_argument('--log-dir', metavar='DIR', help='MCAP log directory (overrides log_dir)')
-    p.add_argument('ros_args', nargs=argparse.REMAINDER, help=argparse.SUPPRESS)
+    p.add_argument('--ros-args', dest='ros_args', nargs=argparse.REMAINDER, default=[],
+                   metavar='ARG', help='the rest is passed to ROS (e.g. -p clear_hold:=10.0)')
     p.set_defaults(func=cmd_run)
 
     p = sub.add_parser('demo', help='the embedded default: the paper dock through a storm',

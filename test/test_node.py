@@ -211,6 +211,47 @@ def test_diagnostics_steady_rate_and_named_statuses(client, monitor):
     assert client.latest_status('catenary_monitor: logger')['level'] == OK
 
 
+def test_parameter_change_is_validated_by_config(client, monitor):
+    from rclpy.parameter import Parameter
+    from rclpy.parameter_client import AsyncParameterClient
+
+    params = AsyncParameterClient(client.node, 'catenary_monitor')
+    assert params.wait_for_services(10.0)
+
+    def set_(name, value):
+        future = params.set_parameters([Parameter(name, value=value)])
+        client.wait_for(future.done, 10.0, f'set {name}')
+        return future.result().results[0]
+
+    bad = set_('val.mbl', -1.0)
+    assert not bad.successful and 'val.mbl' in bad.reason
+    assert not set_('lines', ['x']).successful  # structural: read-only
+    assert set_('tension_timeout', TENSION_TIMEOUT).successful
+    assert monitor.poll() is None
+
+
+def test_unwritable_log_dir_is_an_error_diagnostic_not_a_stop(client, tmp_path):
+    blocker = tmp_path / 'a_file'
+    blocker.write_text('not a directory')
+    lines = {'nolog': dict(weight=W, anchor_distance=120.0, mbl=MBL)}
+    params = write_params(tmp_path / 'params.yaml', lines)
+    proc = start_monitor(params, blocker / 'log', out_dir=tmp_path)
+    try:
+        s = client.wait_status('catenary_monitor: logger', 30.0, ERROR,
+                               check=lambda s: str(blocker) in s['message'])
+        assert 'MCAP log not written' in s['message']
+        client.wait_matched([topic('nolog')], 30.0)
+        client.feed('/tide/depth', DEPTH)
+        client.feed(topic('nolog'), 400e3)
+        s = client.wait_status(name('nolog'), 10.0, OK,
+                               check=lambda s: s['values']['top_tension'] == repr(400e3))
+        assert proc.poll() is None
+    finally:
+        client.feed(topic('nolog'), None)
+        client.feed('/tide/depth', None)
+        assert stop(proc, signal.SIGTERM) == 0
+
+
 def _read_log(log_dir: Path):
     """Decode every message of the finished log with the mcap library (needs the summary)."""
     from mcap.reader import make_reader
@@ -233,8 +274,9 @@ def test_sigterm_exits_zero_and_the_log_holds_every_message(client, monitor, tmp
         client.feed(topic(line), None)
     client.feed('/tide/depth', None)
     # Let the last inputs arrive (their outputs come back), then stop.
+    mine = {topic(line) for line in LINES}  # other tests' monitors have their own lines
     with client.lock:
-        last = {t: v[-1][1] for t, v in client.sent.items() if v and t != '/tide/depth'}
+        last = {t: v[-1][1] for t, v in client.sent.items() if v and t in mine}
     for t, v in last.items():
         line = t.split('/')[2]
         client.wait_for(lambda: client.outputs[out_topic(line)] and
@@ -244,9 +286,12 @@ def test_sigterm_exits_zero_and_the_log_holds_every_message(client, monitor, tmp
     log_dir = Path(monitor.args[monitor.args.index('-p') + 1].split(':=', 1)[1])
     logged = _read_log(log_dir)
     with client.lock:
-        sent = {t: [v for _, v in vals] for t, vals in client.sent.items()}
-        outputs = {t: [tuple(d) for _, d in vals] for t, vals in client.outputs.items()}
-        stamps = list(client.diag_stamps)
+        sent = {t: [v for _, v in vals] for t, vals in client.sent.items()
+                if t in mine or t == '/tide/depth'}
+        outputs = {t: [tuple(d) for _, d in vals] for t, vals in client.outputs.items()
+                   if t in {out_topic(line) for line in LINES}}
+        stamps = [st for st, (_, e) in zip(client.diag_stamps, client.diagnostics)
+                  if name('val') in e]  # this monitor's arrays
     for t, values in sent.items():
         got = Counter(repr(m.data) for _, m in logged.get(t, []))
         missing = Counter(map(repr, values)) - got
