@@ -173,15 +173,19 @@ class CatenaryMonitor(Node):
         try:
             # Flushed at 0.75 s age, checked every 0.25 s: a SIGKILL loses at most the last second.
             log = McapLogger(self._log_dir(), prefix=NODE_NAME, flush_period=0.75)
-            log.add_metadata(NODE_NAME, {
-                'version': __version__, 'config_hash': config_hash(self.config),
-                'parameters': json.dumps(config_to_params(self.config), sort_keys=True),
-                'output_fields': ','.join(OUTPUT_FIELDS), 'units': 'SI (N, m, s)'})
+            log.add_metadata(NODE_NAME, self._metadata(self.config))
             return log
         except Exception as exc:  # noqa: BLE001 - logging must never stop the monitoring
             self._log_setup_error = f'cannot start the MCAP logger: {exc}'
             self.get_logger().error(self._log_setup_error)
             return None
+
+    @staticmethod
+    def _metadata(config: MonitorConfig) -> dict[str, str]:
+        """MCAP metadata record: version, configuration and its hash, output layout."""
+        return {'version': __version__, 'config_hash': config_hash(config),
+                'parameters': json.dumps(config_to_params(config), sort_keys=True),
+                'output_fields': ','.join(OUTPUT_FIELDS), 'units': 'SI (N, m, s)'}
 
     def _register(self, topic: str, type_name: str, qos: str) -> None:
         if self.log is None:
@@ -402,10 +406,7 @@ class CatenaryMonitor(Node):
         self._apply_config(config)
         self._diag_timer.timer_period_ns = int(1e9 / config.alarm.diagnostic_rate)
         if self.log is not None:
-            self.log.add_metadata(NODE_NAME, {
-                'version': __version__, 'config_hash': config_hash(config),
-                'parameters': json.dumps(config_to_params(config), sort_keys=True),
-                'output_fields': ','.join(OUTPUT_FIELDS), 'units': 'SI (N, m, s)'})
+            self.log.add_metadata(NODE_NAME, self._metadata(config))
         self.get_logger().info('parameters changed: ' + ', '.join(
             f'{p.name}={p.value!r}' for p in params))
 
