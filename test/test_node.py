@@ -223,6 +223,14 @@ def test_parameter_change_is_validated_by_config(client, monitor):
         client.wait_for(future.done, 10.0, f'set {name}')
         return future.result().results[0]
 
+    future = params.describe_parameters(['val.weight', 'lines', 'clear_hold'])
+    client.wait_for(future.done, 10.0, 'describe_parameters')
+    weight, lines, hold = future.result().descriptors
+    assert weight.description and 'N/m' in weight.description
+    assert (weight.floating_point_range[0].from_value,
+            weight.floating_point_range[0].to_value) == (1.0, 1.0e5)
+    assert lines.read_only and hold.floating_point_range and not hold.read_only
+
     bad = set_('val.mbl', -1.0)
     assert not bad.successful and 'val.mbl' in bad.reason
     assert not set_('lines', ['x']).successful  # structural: read-only
