@@ -332,6 +332,7 @@ def test_sigkill_loses_at_most_the_last_second(client, tmp_path):
         client.feed(topic('kill'), None)
         t_start = time.monotonic()
         i = 0
+
         def received_before(t: float) -> int:
             with client.lock:
                 return len([o for o in client.outputs[out_topic('kill')] if t_start < o[0] < t])
