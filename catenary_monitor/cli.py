@@ -171,6 +171,9 @@ def build_parser() -> argparse.ArgumentParser:
 #: Sub-command registrars of the shell modules (node, replay, benchmarks).
 _EXTENSIONS: list[Callable[[argparse._SubParsersAction], None]] = []
 
+from .bench_methods import register as _register_bench_methods  # noqa: E402  (light import)
+_EXTENSIONS.append(_register_bench_methods)
+
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = build_parser()

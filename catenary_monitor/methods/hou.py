@@ -108,8 +108,8 @@ def p4_golden(w: float, h: float, t: float, x: float) -> tuple[float, float]:
     raise NoConvergence('0.618 search: iteration cap')
 
 
-_WHY = ('cancelling formula (acosh(B/a) near a = B, and the two acosh for h << B), and the '
-        'wrong unknown: the fixed-point map is a contraction only where |g\'(a)| < 1')
+_WHY = ("wrong unknown: a <- x / (acosh(A/a) - acosh(B/a)) is not a contraction (|g'(a)| > 1) "
+        'except for steep chains (h >> B), so the iterates leave 0 < a <= B')
 METHODS = [
     Method('Hou fixed point', 4, p4_fixed_point, None, 'hou', why=_WHY),
     Method('Hou 0.618 search', 4, p4_golden, None, 'hou',

@@ -72,7 +72,9 @@ PEERS = {
                why='absolute tolerance: Tol = 1e-6 m on the line-end position, whatever the '
                    'scale; no profile for very short or very long catenaries'),
         Method('MoorPy + brentq on L', 4, moorpy_brentq, None, 'peers', slow=True,
-               why='inherits MoorPy\'s absolute 1e-6 m tolerance, amplified by dT/dL near taut'),
+               why="our wrapper's bracket [taut chord (1 + 1e-9), x + h] misses the root where the "
+                   'measured T exceeds the tension MoorPy gives at 1e-9 stretch (large a), plus '
+                   "MoorPy's absolute 1e-6 m tolerance"),
     ],
     'pycatenary': [
         Method('pycatenary (L given)', 4, pycatenary_given_length, None, 'peers', given='length',

@@ -48,7 +48,7 @@ def _p3(w: mp.mpf, h: mp.mpf, t: mp.mpf) -> tuple[mp.mpf, mp.mpf, mp.mpf]:
         x = a * mp.acosh(1 + h / a)  # equation (1) with alpha = 0, inverted
         length = a * mp.sinh(x / a)  # equation (2) with alpha = 0
         return mp.sqrt(r * r + (w * length) ** 2) - t
-    r = mp.findroot(top, t - w * h, tol=mp.mpf(10) ** (-2 * DPS + 10))
+    r = mp.findroot(top, t - w * h, tol=mp.mpf(10) ** (-2 * DPS + 10), verify=False)
     a = r / w
     x = a * mp.acosh(1 + h / a)
     y, length = _y_and_l(a, mp.mpf(0), x)
@@ -75,10 +75,16 @@ def _p4(w: mp.mpf, h: mp.mpf, t: mp.mpf, x: mp.mpf) -> tuple[mp.mpf, mp.mpf, mp.
         raise ValueError('x >= x_min: the anchor is not lifted')
     while resid(hi) <= 0:
         lo, hi = hi, 2 * hi
-    u = mp.findroot(resid, (lo, hi), solver='anderson', tol=mp.mpf(10) ** (-2 * DPS + 10),
+    u = mp.findroot(resid, (lo, hi), solver='anderson', tol=mp.mpf(10) ** (-2 * DPS + 10), verify=False,
                     maxsteps=400)
-    if not lo <= u <= hi:  # anderson keeps to the bracket in practice; bisect if not
-        u = mp.findroot(resid, (lo, hi), solver='bisect', maxsteps=400)
+    if not (lo <= u <= hi and abs(resid(u)) <= _CHECK * h):  # plain bisection, 2^-240 of the bracket
+        for _ in range(240):
+            mid = (lo + hi) / 2
+            if resid(mid) < 0:
+                lo = mid
+            else:
+                hi = mid
+        u = (lo + hi) / 2
     a = b / mp.cosh(u)
     r = w * a
     y, length = _y_and_l(a, u, x)
@@ -100,9 +106,17 @@ def problem4(w: float, h: float, t: float, x: float) -> Ref:
 
 
 def _pl(w: mp.mpf, h: mp.mpf, x: mp.mpf, length: mp.mpf, a0: mp.mpf) -> tuple[mp.mpf, mp.mpf]:
-    chord = mp.sqrt(length * length - h * h)
-    a = mp.findroot(lambda a: 2 * a * mp.sinh(x / (2 * a)) - chord, a0,
-                    tol=mp.mpf(10) ** (-2 * DPS + 10))
+    # chord = 2 a sinh(x / 2a): in D = x / 2a, sinh(D) = k D with k = chord / x > 1, one root
+    k = mp.sqrt(length * length - h * h) / x
+    lo, hi = mp.mpf(0), mp.mpf(1)
+    while mp.sinh(hi) - k * hi <= 0:
+        lo, hi = hi, 2 * hi
+    lo = max(lo, hi / 4) if lo == 0 else lo
+    while mp.sinh(lo) - k * lo >= 0:
+        lo /= 2
+    d = mp.findroot(lambda d: mp.sinh(d) - k * d, (lo, hi), solver='anderson',
+                    tol=mp.mpf(10) ** (-2 * DPS + 10), verify=False, maxsteps=400)
+    a = x / (2 * d)
     u = mp.atanh(h / length) - x / (2 * a)
     if u < 0:
         raise ValueError('chain long enough to lie on the seabed')

@@ -6,7 +6,7 @@ Problem 4 (T, x given) in the unknown ``a = R/w`` reads, with ``A = T/w`` and ``
 
     f(a) = a [acosh(A/a) - acosh(B/a)] - x = 0,      0 < a <= B,
 
-increasing... no: f(0+) = -x < 0 and f(B) = x_min - x > 0, one root.  ``acosh(B/a)`` near
+with f(0+) = -x < 0, f(B) = x_min - x > 0 and one root; f has an infinite slope at a = B.  ``acosh(B/a)`` near
 ``a = B`` is ``acosh`` of a number just above 1 (half the digits lost), and for ``h << B`` the
 two ``acosh`` are nearly equal and cancel: the formula, not the root finder, limits accuracy.
 Problem 3 in the unknown x: ``a (cosh(x/a) - 1) = h`` with ``a = (T - w h)/w``, root in
@@ -266,8 +266,8 @@ _CANCEL4 = ('cancelling formula: acosh(B/a) near a = B, and acosh(A/a) - acosh(B
 METHODS = [
     Method('bisection', 4, p4_bisect, p4_bisect_vec, 'roots', why=_CANCEL4),
     Method('Newton', 4, p4_newton, p4_newton_vec, 'roots',
-           why='wrong unknown: f(a) has an infinite slope at a = B, so Newton steps leave 0 < a <= B '
-               '(NaN); plus the cancelling formula'),
+           why='wrong unknown: f(a) is flat at small a and infinitely steep at a = B, so from below '
+               'the root Newton steps past B (out of the domain); plus the cancelling formula'),
     Method('safeguarded Newton', 4, p4_safe_newton, None, 'roots', why=_CANCEL4),
     Method('brentq', 4, p4_brentq, None, 'roots',
            why='absolute tolerance: xtol = 2e-12 m is coarse when a is micrometres (h >> B, x << x_min); '
@@ -276,14 +276,17 @@ METHODS = [
     Method('brentq on log d', 4, p4_brentq_logd, None, 'roots',
            why="the default's unknown and residual under a generic solver: accurate, slower"),
     Method('root/fsolve (R, alpha)', 4, p4_fsolve, None, 'roots',
-           why='two badly scaled unknowns (N and rad) from a fixed start; hybr stops at a relative '
-               'xtol of 1.5e-8 or wanders off'),
+           why='two badly scaled unknowns (N and rad) from a fixed start: hybr stalls ("not making '
+               'good progress") away from the dock scale, and stops at a relative xtol of 1.5e-8'),
     Method('bisection', 3, p3_bisect, p3_bisect_vec, 'roots',
-           why='cancelling formula: cosh(x/a) - 1 for h << a'),
+           why='cancelling formula: cosh(x/a) - 1 for h << a; cosh(x/a) overflows at the bracket end '
+               'a + h when h/a > 710'),
     Method('Newton', 3, p3_newton, None, 'roots',
-           why='cancelling formula: cosh(x/a) - 1 for h << a'),
+           why='cancelling formula: cosh(x/a) - 1 for h << a is rounding noise at the root, so the '
+               'relative step test is never met (iteration cap)'),
     Method('brentq', 3, p3_brentq, None, 'roots',
            why='cosh(x/a) overflows at the bracket end a + h when h >> a; cancelling formula for h << a'),
     Method('root/fsolve (x, R)', 3, p3_fsolve, None, 'roots',
-           why='two badly scaled unknowns; hybr stops at a relative xtol of 1.5e-8'),
+           why='two badly scaled unknowns; hybr stops at a relative xtol of 1.5e-8; cosh overflows '
+               'on its trial steps for h >> a'),
 ]
