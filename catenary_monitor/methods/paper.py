@@ -46,12 +46,12 @@ class _Budget:
 
 
 def _search_down(f: Callable[[float], float], v: float, step: float, tol: float,
-                 budget: _Budget) -> float:
+                 budget: _Budget, what: str) -> float:
     """Step v down until ``|f(v)| <= tol``; f > 0 above the root.  Back up and step/10 on overshoot."""
     budget.spend()
     fv = f(v)
     if fv < -tol:
-        raise NoConvergence('stepping search: the start is already below the root')
+        raise NoConvergence(f'stepping search: the start {what} is already below the root')
     while abs(fv) > tol:
         new = v - step
         if new > 0.0:
@@ -64,7 +64,7 @@ def _search_down(f: Callable[[float], float], v: float, step: float, tol: float,
         else:
             step /= 10.0
             if v - step == v:
-                raise NoConvergence('stepping search: step below the resolution of x')
+                raise NoConvergence(f'stepping search: step below the resolution of {what}')
     return v
 
 
@@ -78,12 +78,14 @@ def _y_and_l(a: float, alpha: float, x: float) -> tuple[float, float]:
 
 def _span(w: float, h: float, r: float, budget: _Budget) -> float:
     a = r / w
-    return _search_down(lambda x: _y_and_l(a, 0.0, x)[0] - h, X_START, X_STEP, Y_TOL, budget)
+    return _search_down(lambda x: _y_and_l(a, 0.0, x)[0] - h, X_START, X_STEP, Y_TOL, budget,
+                        'x = 1000 m')
 
 
 def _angle(w: float, h: float, r: float, x: float, budget: _Budget) -> float:
     a = r / w
-    return _search_down(lambda al: _y_and_l(a, al, x)[0] - h, ALPHA_START, ALPHA_STEP, Y_TOL, budget)
+    return _search_down(lambda al: _y_and_l(a, al, x)[0] - h, ALPHA_START, ALPHA_STEP, Y_TOL, budget,
+                        'alpha = 44 deg')
 
 
 def p1_stepping(w: float, h: float, r: float) -> float:
@@ -108,7 +110,7 @@ def p3_stepping(w: float, h: float, t: float) -> tuple[float, float]:
         length = _y_and_l(r / w, 0.0, x)[1]
         return math.hypot(r, w * length) - t
 
-    r = _search_down(excess, t - R_OFFSET, R_STEP, T_TOL, budget)
+    r = _search_down(excess, t - R_OFFSET, R_STEP, T_TOL, budget, 'R = T - 2 kN')
     return r, found[r]
 
 
@@ -123,7 +125,7 @@ def p4_stepping(w: float, h: float, t: float, x: float) -> tuple[float, float]:
         length = _y_and_l(r / w, alpha, x)[1]
         return math.hypot(r, r * math.tan(alpha) + w * length) - t
 
-    r = _search_down(excess, t - R_OFFSET, R_STEP, T_TOL, budget)
+    r = _search_down(excess, t - R_OFFSET, R_STEP, T_TOL, budget, 'R = T - 2 kN')
     return r, r * math.tan(found[r])
 
 
