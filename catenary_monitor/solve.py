@@ -148,6 +148,13 @@ def solve(weight: ArrayLike, depth: ArrayLike, tension: Optional[ArrayLike] = No
     well-conditioned (see README, "Accuracy").  With all-scalar ``tension`` inputs a plain-float
     path gives the same numbers to rounding, an order of magnitude faster.
     """
+    if (tension is not None and horizontal is None and chain_length is None
+            and type(weight) in _PLAIN and type(depth) in _PLAIN and type(tension) in _PLAIN
+            and (anchor_distance is None or type(anchor_distance) in _PLAIN)
+            and (mbl is None or type(mbl) in _PLAIN)):  # the node's case: skip the generic dispatch
+        return _solve_tension_scalar(float(weight), float(depth), float(tension),
+                                     None if anchor_distance is None else float(anchor_distance),
+                                     None if mbl is None else float(mbl))
     problem = _check_call(tension, horizontal, chain_length, anchor_distance)
     inputs = {'weight': weight, 'depth': depth, 'tension': tension, 'horizontal': horizontal,
               'anchor_distance': anchor_distance, 'chain_length': chain_length, 'mbl': mbl}
@@ -303,52 +310,92 @@ def _fill_margins(out: dict[str, np.ndarray], w: np.ndarray, h: np.ndarray, x: n
 # Plain-float path for one measured tension (the live node's case): same formulas, no arrays.
 # --------------------------------------------------------------------------------------------
 _NAN = math.nan
+#: Input types that take the plain-float path straight away (``float()`` is exact for them).
+_PLAIN = (float, int, np.float64)
+_KEYS_CACHE: dict[tuple[str, bool, bool], tuple[str, ...]] = {}
+_DEFAULT_MODEL = SolveResult.model
+_DEFAULT_METHOD = SolveResult.method
+
+
+def _cached_keys(problem: str, has_x: bool, has_mbl: bool) -> tuple[str, ...]:
+    k = (problem, has_x, has_mbl)
+    keys = _KEYS_CACHE.get(k)
+    if keys is None:
+        keys = _KEYS_CACHE[k] = _keys(problem, has_x, has_mbl)
+    return keys
+
+
+def _result_from_dict(values: dict[str, Any]) -> SolveResult:
+    """A :class:`SolveResult` built without the frozen dataclass's per-field ``__setattr__``.
+
+    ``values`` holds every field.  Equivalent to ``SolveResult(**values)`` (tested); used only
+    on the scalar path, where the generated ``__init__`` is a third of the solve time.
+    """
+    result = object.__new__(SolveResult)
+    result.__dict__.update(values)
+    return result
 
 
 def _solve_tension_scalar(weight: float, depth: float, tension: float,
                           anchor_distance: Optional[float] = None,
                           mbl: Optional[float] = None) -> SolveResult:
     w, h, t, x = weight, depth, tension, anchor_distance
-    vals = [w, h, t] + [v for v in (x, mbl) if v is not None]
-    status = Status.OK
-    if not all(math.isfinite(v) for v in vals):
+    isfinite = math.isfinite
+    b_w = 0.0
+    if not (isfinite(w) and isfinite(h) and isfinite(t) and (x is None or isfinite(x))
+            and (mbl is None or isfinite(mbl))):
         status = Status.NON_FINITE
     elif not w > 0:
         status = Status.WEIGHT
     elif not h > 0:
         status = Status.DEPTH
-    elif not cat.two_prod_diff(t, w, h) > 0:
+    elif not (b_w := cat.two_prod_diff(t, w, h)) > 0:
         status = Status.TENSION
     elif x is not None and not x > 0:
         status = Status.DISTANCE
     elif mbl is not None and not mbl > 0:
         status = Status.MBL
-    keys = _keys('tension', x is not None, mbl is not None)
+    else:
+        status = Status.OK
+    keys = _cached_keys('tension', x is not None, mbl is not None)
     out = dict.fromkeys(ALL_KEYS, _NAN)
-    if status == Status.OK:
-        b = cat.two_prod_diff(t, w, h) / w
-        g = cat.grounded(b, h, cat._MATH)
-        out.update(horizontal_tension=w * b, top_tension=t, min_anchor_distance=g.min_anchor_distance,
-                   suspended_length=g.suspended_length, top_angle_deg=math.degrees(g.top_angle),
-                   anchor_angle_deg=0.0, uplift_force=0.0)
+    if not status:  # Status.OK
+        b = b_w / w
+        # cat.grounded(b, h), inline
+        z = h / b
+        x_min = b * math.log1p(z + math.sqrt(z * (2.0 + z)))
+        length = math.sqrt(h * (h + 2.0 * b))
+        out['horizontal_tension'] = r = w * b
+        out['top_tension'] = t
+        out['min_anchor_distance'] = x_min
+        out['suspended_length'] = length
+        out['top_angle_deg'] = math.degrees(math.atan2(length, b))
+        out['anchor_angle_deg'] = 0.0
+        out['uplift_force'] = 0.0
         if x is not None:
-            if x < g.min_anchor_distance:
+            if x < x_min:
                 s, _, converged = cat.lifted_from_tension_scalar(w, b, h, x)
                 if not converged:
                     status = Status.NO_CONVERGENCE
-                out.update(horizontal_tension=s.horizontal_tension, suspended_length=s.suspended_length,
-                           top_angle_deg=math.degrees(s.top_angle),
-                           anchor_angle_deg=math.degrees(s.anchor_angle), uplift_force=s.uplift_force)
-            a_now = out['horizontal_tension'] / w
-            out.update(anchor_margin=x - g.min_anchor_distance,
-                       tide_margin=cat.depth_reached(a_now, x, cat._MATH) - h,
-                       load_margin=w * (cat.critical_parameter_scalar(h, x) + h) - t)
+                out['horizontal_tension'] = r = s.horizontal_tension
+                out['suspended_length'] = s.suspended_length
+                out['top_angle_deg'] = math.degrees(s.top_angle)
+                out['anchor_angle_deg'] = math.degrees(s.anchor_angle)
+                out['uplift_force'] = s.uplift_force
+            a_now = r / w
+            half = math.sinh(0.5 * x / a_now)  # cat.depth_reached(a_now, x), inline
+            out['anchor_margin'] = x - x_min
+            out['tide_margin'] = 2.0 * a_now * half * half - h
+            out['load_margin'] = w * (cat.critical_parameter_scalar(h, x) + h) - t
         if mbl is not None:
             out['safety_factor'] = mbl / t
-    if status != Status.OK:
-        out = dict.fromkeys(ALL_KEYS, _NAN)
-    for k in ALL_KEYS:
-        if k not in keys:
-            out[k] = _NAN
-    return SolveResult(**out, status=int(status), problem='tension', keys=keys)
-
+        if status:  # no convergence: nothing is reported
+            out = dict.fromkeys(ALL_KEYS, _NAN)
+        # keys that do not apply (grounded_length, and the margins / safety factor without x /
+        # mbl) were never set: they are NaN already
+    out['status'] = int(status)
+    out['problem'] = 'tension'
+    out['keys'] = keys
+    out['model'] = _DEFAULT_MODEL
+    out['method'] = _DEFAULT_METHOD
+    return _result_from_dict(out)
