@@ -358,41 +358,42 @@ def _solve_tension_scalar(weight: float, depth: float, tension: float,
     else:
         status = Status.OK
     keys = _cached_keys('tension', x is not None, mbl is not None)
-    out = dict.fromkeys(ALL_KEYS, _NAN)
-    if not status:  # Status.OK
+    if status:  # invalid input: every value NaN
+        out = dict.fromkeys(ALL_KEYS, _NAN)
+    else:
         b = b_w / w
         # cat.grounded(b, h), inline
         z = h / b
         x_min = b * math.log1p(z + math.sqrt(z * (2.0 + z)))
         length = math.sqrt(h * (h + 2.0 * b))
-        out['horizontal_tension'] = r = w * b
-        out['top_tension'] = t
-        out['min_anchor_distance'] = x_min
-        out['suspended_length'] = length
-        out['top_angle_deg'] = math.degrees(math.atan2(length, b))
-        out['anchor_angle_deg'] = 0.0
-        out['uplift_force'] = 0.0
+        r = w * b
+        top_angle = math.degrees(math.atan2(length, b))
+        anchor_angle = uplift = 0.0
+        anchor_margin = tide_margin = load_margin = _NAN
         if x is not None:
             if x < x_min:
                 s, _, converged = cat.lifted_from_tension_scalar(w, b, h, x)
                 if not converged:
                     status = Status.NO_CONVERGENCE
-                out['horizontal_tension'] = r = s.horizontal_tension
-                out['suspended_length'] = s.suspended_length
-                out['top_angle_deg'] = math.degrees(s.top_angle)
-                out['anchor_angle_deg'] = math.degrees(s.anchor_angle)
-                out['uplift_force'] = s.uplift_force
+                r = s.horizontal_tension
+                length = s.suspended_length
+                top_angle = math.degrees(s.top_angle)
+                anchor_angle = math.degrees(s.anchor_angle)
+                uplift = s.uplift_force
             a_now = r / w
             half = math.sinh(0.5 * x / a_now)  # cat.depth_reached(a_now, x), inline
-            out['anchor_margin'] = x - x_min
-            out['tide_margin'] = 2.0 * a_now * half * half - h
-            out['load_margin'] = w * (cat.critical_parameter_scalar(h, x) + h) - t
-        if mbl is not None:
-            out['safety_factor'] = mbl / t
+            anchor_margin = x - x_min
+            tide_margin = 2.0 * a_now * half * half - h
+            load_margin = w * (cat.critical_parameter_scalar(h, x) + h) - t
+        # keys that do not apply (grounded_length, and the margins / safety factor without x /
+        # mbl) stay NaN
+        out = {'horizontal_tension': r, 'top_tension': t, 'min_anchor_distance': x_min,
+               'suspended_length': length, 'top_angle_deg': top_angle, 'anchor_angle_deg': anchor_angle,
+               'uplift_force': uplift, 'anchor_margin': anchor_margin, 'tide_margin': tide_margin,
+               'load_margin': load_margin, 'grounded_length': _NAN,
+               'safety_factor': _NAN if mbl is None else mbl / t}
         if status:  # no convergence: nothing is reported
             out = dict.fromkeys(ALL_KEYS, _NAN)
-        # keys that do not apply (grounded_length, and the margins / safety factor without x /
-        # mbl) were never set: they are NaN already
     out['status'] = int(status)
     out['problem'] = 'tension'
     out['keys'] = keys
