@@ -166,63 +166,82 @@ def _args(sc: Scenes, i: int, given: str) -> tuple[float, ...]:
     return sc.w[i], sc.h[i], sc.t[i], sc.x[i]
 
 
-def run_scalar(m: Any, sc: Scenes, idx: np.ndarray, progress: Callable[[str], None],
-               repeats: int = 5) -> Outcome:
-    import warnings
-    err = np.empty(idx.size)
-    t_us = np.empty(idx.size)
-    why: dict[str, int] = {}
-    ref, cond = (sc.ref_l, sc.cond_l) if m.given == 'length' else (sc.ref, sc.cond)
-    for k, i in enumerate(idx):
-        if k % 8 == 0:
-            progress(f'problem {sc.problem}: {m.name}: {k}/{idx.size}')
-        args = _args(sc, i, m.given)
-        best = math.inf
-        val: Any = None
-        with warnings.catch_warnings():
-            warnings.simplefilter('ignore')
-            for rep in range(repeats):
-                t0 = time.perf_counter()
-                try:
-                    out = m.scalar_fn(*args)
-                except Exception as exc:  # a failure of the method, recorded
-                    out = exc
-                dt = time.perf_counter() - t0
-                best = min(best, dt)
-                val = out
-                if dt > 2e-3:  # slow method: one timing is enough
-                    break
-        t_us[k] = best * 1e6
-        if isinstance(val, Exception):
-            err[k] = math.inf
-            key = re.sub(r'[-+]?\d[\d.e+-]*', '#', f'{type(val).__name__}: {str(val)}')[:90]
-            why[key] = why.get(key, 0) + 1
-        else:
-            err[k] = scene_error(val, ref[i], cond[i])
-            if not math.isfinite(err[k]):
-                why['NaN or inf returned'] = why.get('NaN or inf returned', 0) + 1
-    return Outcome(m, idx, err, t_us, why)
+def _call(m: Any, args: tuple) -> tuple[Any, float]:
+    t0 = time.perf_counter()
+    try:
+        out = m.scalar_fn(*args)
+    except Exception as exc:  # a failure of the method, recorded
+        out = exc
+    return out, time.perf_counter() - t0
 
 
-def run_vector(m: Any, sc: Scenes, out: Outcome, n_elem: int) -> None:
-    """Time the vectorized form on the sweep tiled to n_elem elements; errors on the sweep itself."""
-    if m.vector_fn is None:
-        return
+def _record(m: Any, val: Any, ref: np.ndarray, cond: np.ndarray, why: dict[str, int]) -> float:
+    if isinstance(val, Exception):
+        key = re.sub(r'[-+]?\d[\d.e+-]*', '#', f'{type(val).__name__}: {str(val)}')[:90]
+        why[key] = why.get(key, 0) + 1
+        return math.inf
+    err = scene_error(val, ref, cond)
+    if not math.isfinite(err):
+        why['NaN or inf returned'] = why.get('NaN or inf returned', 0) + 1
+    return err
+
+
+def run_scalar(methods: list, sc: Scenes, idx: np.ndarray, progress: Callable[[str], None],
+               repeats: int = 5) -> list[Outcome]:
+    """Run methods on the scenes ``idx``; per scene the best of ``repeats`` timed calls.
+
+    The timing runs in rounds; in each round every method sweeps all the scenes (warm caches
+    within a sweep), and a scene's time is its best over the rounds.  A burst of load from
+    elsewhere on the machine therefore slows every method alike and the same-run ratios stay
+    fair.  Calls slower than 2 ms are timed once.  Inputs are passed as Python floats.
+    """
     import warnings
-    cols = [sc.w, sc.h, sc.t] + ([sc.x] if sc.problem == 4 else [])
+    k_m = len(methods)
+    err = np.empty((k_m, idx.size))
+    t_us = np.full((k_m, idx.size), math.inf)
+    why: list[dict[str, int]] = [{} for _ in methods]
+    args = [[tuple(float(v) for v in _args(sc, i, m.given)) for i in idx] for m in methods]
     with warnings.catch_warnings():
         warnings.simplefilter('ignore')
-        r1, r2 = m.vector_fn(*(c.copy() for c in cols))
-        out.vec_err = np.array([scene_error((r1[i], r2[i]), sc.ref[i], sc.cond[i]) for i in range(sc.n)])
-        reps = -(-n_elem // sc.n)
-        big = [np.tile(c, reps) for c in cols]
-        best = math.inf
-        for _ in range(3):
-            args = [c.copy() for c in big]
-            t0 = time.perf_counter()
-            m.vector_fn(*args)
-            best = min(best, time.perf_counter() - t0)
-    out.vec_ns = best / big[0].size * 1e9
+        for rep in range(repeats):
+            for j, m in enumerate(methods):
+                ref, cond = (sc.ref_l, sc.cond_l) if m.given == 'length' else (sc.ref, sc.cond)
+                for k, i in enumerate(idx):
+                    if k % 8 == 0:
+                        progress(f'problem {sc.problem}, round {rep + 1}/{repeats}: {m.name}: {k}/{idx.size}')
+                    if rep and t_us[j, k] > 2000.0:
+                        continue
+                    val, dt = _call(m, args[j][k])
+                    t_us[j, k] = min(t_us[j, k], dt * 1e6)
+                    if rep == 0:
+                        err[j, k] = _record(m, val, ref[i], cond[i], why[j])
+    return [Outcome(m, idx, err[j], t_us[j], why[j]) for j, m in enumerate(methods)]
+
+
+def time_vectors(outcomes: list[Outcome], scenes: dict[int, Scenes], n_elem: int, repeats: int = 5) -> None:
+    """Vectorized forms: errors on the sweep; time per element on the sweep tiled to n_elem,
+    best of ``repeats`` rounds in which every method runs once (interleaved, as the scalars)."""
+    import warnings
+    todo = [o for o in outcomes if o.method.vector_fn is not None]
+    data = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore')
+        for o in todo:
+            sc = scenes[o.method.problem]
+            cols = [sc.w, sc.h, sc.t] + ([sc.x] if sc.problem == 4 else [])
+            r1, r2 = o.method.vector_fn(*(c.copy() for c in cols))
+            o.vec_err = np.array([scene_error((r1[i], r2[i]), sc.ref[i], sc.cond[i]) for i in range(sc.n)])
+            reps = -(-n_elem // sc.n)
+            data[id(o)] = [np.tile(c, reps) for c in cols]
+        best = {id(o): math.inf for o in todo}
+        for _ in range(repeats):
+            for o in todo:
+                args = [c.copy() for c in data[id(o)]]
+                t0 = time.perf_counter()
+                o.method.vector_fn(*args)
+                best[id(o)] = min(best[id(o)], time.perf_counter() - t0)
+    for o in todo:
+        o.vec_ns = best[id(o)] / data[id(o)][0].size * 1e9
 
 
 # ------------------------------------------------------------------------------ reporting
@@ -411,15 +430,20 @@ def run(quick: bool = False, out_dir: Optional[str] = 'docs', only: Optional[str
     for p in (3, 4):
         compute_reference(scenes[p], has_len and p == 4, progress)
     thin = 4 if quick else 1
-    outcomes = []
-    for m in methods:
-        sc = scenes[m.problem]
+    by_name: dict[tuple[int, str], Outcome] = {}
+    for p in (3, 4):
+        sc = scenes[p]
+        fast = [m for m in methods if m.problem == p and not m.slow]
+        for o in run_scalar(fast, sc, np.arange(sc.n), progress, repeats=3 if quick else 7):
+            by_name[(p, o.method.name)] = o
         idx = np.arange(sc.n)
-        if m.slow:
-            idx = np.concatenate([idx[~sc.seed][::thin], np.flatnonzero(sc.seed)])
-        o = run_scalar(m, sc, idx, progress, repeats=3 if quick else 7)
-        run_vector(m, sc, o, 20_000 if quick else 100_000)
-        outcomes.append(o)
+        idx = np.concatenate([idx[~sc.seed][::thin], np.flatnonzero(sc.seed)])
+        for m in methods:
+            if m.problem == p and m.slow:
+                by_name[(p, m.name)] = run_scalar([m], sc, idx, progress, repeats=1)[0]
+    outcomes = [by_name[(m.problem, m.name)] for m in methods]
+    progress('vectorized forms')
+    time_vectors(outcomes, scenes, 20_000 if quick else 100_000)
     rows = [o.row() for o in outcomes]
 
     def pick(problem: int, name: str) -> Optional[dict]:

@@ -68,7 +68,8 @@ def p4_default_vec(w, h, t, x):
 
 def p4_kernel(w: float, h: float, t: float, x: float) -> tuple[float, float]:
     b = cat.two_prod_diff(t, w, h) / w
-    if x >= cat.grounded(b, h, cat._MATH).min_anchor_distance:
+    z = h / b
+    if x >= b * math.log1p(z + math.sqrt(z * (2.0 + z))):  # x_min, as in cat.grounded
         return w * b, 0.0
     s, _, ok = cat.lifted_from_tension_scalar(w, b, h, x)
     return (s.horizontal_tension, s.uplift_force) if ok else (math.nan, math.nan)
