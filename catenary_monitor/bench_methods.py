@@ -474,7 +474,7 @@ def run(quick: bool = False, out_dir: Optional[str] = 'docs', only: Optional[str
         f'Run: {time.strftime("%Y-%m-%d %H:%M")}, {platform.python_implementation()} '
         f'{platform.python_version()}, numpy {np.__version__}, {os.cpu_count()} cores shared, '
         f'{"quick" if quick else "full"} sweep: {scenes[4].n} problem-4 scenes, {scenes[3].n} problem-3 scenes '
-        f'(slow methods on every {thin}th). Peers: '
+        f'({"slow methods on every " + str(thin) + "th scene" if thin > 1 else "every method on every scene"}). Peers: '
         + ', '.join(f'{k} {v}' if v else f'{k} absent' for k, v in versions.items()) + '.',
         '',
         'Error = relative error of each output (R and x_min, or R and F) divided by max(1, condition '
@@ -507,7 +507,8 @@ def run(quick: bool = False, out_dir: Optional[str] = 'docs', only: Optional[str
 
 def cmd_bench_methods(args: argparse.Namespace) -> int:
     """Run the methods benchmark and print its table."""
-    res = run(quick=args.quick, out_dir=args.out, only=args.only)
+    out = args.out if args.out is not None else (None if args.quick else 'docs')
+    res = run(quick=args.quick, out_dir=out or None, only=args.only)
     print('\n'.join(res['summary']))
     print()
     hdr = ('problem', 'method', 'scenes', 'scalar µs', 'vec ns/el', 'err median', 'err worst', 'failures')
@@ -515,8 +516,8 @@ def cmd_bench_methods(args: argparse.Namespace) -> int:
     print(format_table([(r['problem'], r['method'], r['scenes'], fmt(r['scalar_us_median']),
                          fmt(r['vector_ns_per_element']), fmt(r['error_median'], 'err'),
                          fmt(r['error_worst'], 'err'), r['failures']) for r in res['rows']], hdr))
-    if args.out:
-        print(f'\nwrote {args.out}/methods.md, methods.csv, speed_accuracy.png, stability_map.png')
+    if out:
+        print(f'\nwrote {out}/methods.md, methods.csv, speed_accuracy.png, stability_map.png')
     return 0
 
 
@@ -525,8 +526,9 @@ def register(sub: Any) -> None:
     p = sub.add_parser('bench-methods', help='every solver method: speed, accuracy, stability map',
                        description=__doc__.split('\n\n')[0])
     p.add_argument('--quick', action='store_true', help='coarser sweep, finishes in under a minute')
-    p.add_argument('--out', default='docs', metavar='DIR',
-                   help="where to write the tables and pictures ('' to write nothing)")
+    p.add_argument('--out', default=None, metavar='DIR',
+                   help="where to write the tables and pictures (default: docs for a full run, "
+                        "nothing for --quick; '' writes nothing)")
     p.add_argument('--only', default=None, metavar='TEXT',
                    help='run only the methods whose name contains TEXT (plus the baselines)')
     p.set_defaults(func=cmd_bench_methods)

@@ -72,14 +72,15 @@ PEERS = {
                why='absolute tolerance: Tol = 1e-6 m on the line-end position, whatever the '
                    'scale; no profile for very short or very long catenaries'),
         Method('MoorPy + brentq on L', 4, moorpy_brentq, None, 'peers', slow=True,
-               why="our wrapper's bracket [taut chord (1 + 1e-9), x + h] misses the root where the "
-                   'measured T exceeds the tension MoorPy gives at 1e-9 stretch (large a), plus '
-                   "MoorPy's absolute 1e-6 m tolerance"),
+               why="bracket missing the root: our wrapper's [taut chord (1 + 1e-9), x + h] misses it "
+                   'where the measured T exceeds the tension MoorPy gives at 1e-9 stretch (large a); '
+                   "for steep chains (h >> a) MoorPy's absolute 1e-6 m tolerance, amplified by dT/dL"),
     ],
     'pycatenary': [
         Method('pycatenary (L given)', 4, pycatenary_given_length, None, 'peers', given='length',
-               why='bracket missing the root: bisection for a only on [1e-2, 1e10] m, absolute '
-                   'tolerance 1e-6'),
+               why='cancelling formulas (cosh(d/a) - 1, 2a sinh(d/2a) - chord) for a >> x: its profile '
+                   'test and bisection run on rounding noise ("Line is too stretched"); and a bracket '
+                   '[1e-2, 1e10] m that misses a < 1 cm, where it silently returns the bracket end'),
     ],
 }
 
