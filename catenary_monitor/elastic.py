@@ -15,8 +15,9 @@ The second equation gives the anchor-end tension in closed form whatever the upl
   ``x_min = (R/w) asinh(V_B/R) + R V_B / (w EA)`` (closed form);
 * uplift (problem 4, x < x_min): with ``R = T_A sech u``, ``V_A = T_A tanh u`` the span
   ``x(u) = (T_A/w) sech u [acosh((T/T_A) cosh u) - u] + R (V_B - V_A)/(w EA)`` decreases with
-  u; both terms are written as sums of positive parts and x(u) = x is solved by bisection in
-  ``log u`` (vectorized, 64 halvings: to rounding).
+  u; both terms are written as sums of positive parts and x(u) = x is solved in ``log u`` by
+  Illinois regula falsi with a bisection every third step (vectorized, to a 4 eps bracket),
+  started from the rigid chain with the same end tensions (the core's uplift kernel).
 
 ``EA -> inf`` gives back the inextensible formulas exactly.
 
@@ -31,6 +32,7 @@ even stiff chains need the elastic model there.
 from __future__ import annotations
 
 import dataclasses
+import math
 from typing import Any, Optional
 
 import numpy as np
@@ -42,7 +44,7 @@ from .solve import SolveResult, solve as solve_rigid
 ELASTIC_TOL = 1e-6
 INEXTENSIBLE = 'inextensible catenary'
 ELASTIC = 'elastic catenary'
-_HALVINGS = 64
+_ETA_MAX = math.log(700.0)  # u <= 700: sech(700) underflows, so no span is shorter
 
 
 def anchor_end_tension(w: Any, h: Any, t: Any, ea: Any) -> tuple[Any, Any]:
@@ -85,11 +87,59 @@ def _span(u: Any, w: Any, t: Any, ta: Any, d: Any, ea: Any) -> Any:
     return ta / w * _x_over_b(u, d / ta) + r * d * (t + ta) / ((vb + va) * w * ea)
 
 
+def _illinois(fun: Any, lo: np.ndarray, hi: np.ndarray, flo: np.ndarray, fhi: np.ndarray,
+              maxiter: int = 200) -> np.ndarray:
+    """Root of a decreasing ``fun`` in ``[lo, hi]`` (``flo > 0 > fhi``), vectorized.
+
+    Illinois regula falsi, with a plain bisection every third step so the bracket at least
+    halves every three evaluations; stops when the bracket is ``4 eps`` wide (relative, or
+    absolute below 1) or a residual is exactly 0.  Each iteration evaluates only the elements
+    still active.
+    """
+    lo, hi, flo, fhi = (np.array(v, dtype=float) for v in (lo, hi, flo, fhi))
+    side = np.zeros(lo.shape, dtype=np.int8)
+    root = 0.5 * (lo + hi)
+    idx = np.arange(lo.size)
+    for k in range(maxiter):
+        if idx.size == 0:
+            break
+        a, b, fa, fb = lo[idx], hi[idx], flo[idx], fhi[idx]
+        mid = (a * fb - b * fa) / (fb - fa) if k % 3 != 2 else 0.5 * (a + b)
+        mid = np.where((mid > a) & (mid < b), mid, 0.5 * (a + b))
+        fm = fun(mid, idx)
+        pos = fm > 0.0
+        # Illinois: halve the residual kept at the end that did not move twice in a row
+        fb = np.where(pos & (side[idx] == 1), 0.5 * fb, fb)
+        fa = np.where(~pos & (side[idx] == -1), 0.5 * fa, fa)
+        lo[idx] = np.where(pos, mid, a)
+        flo[idx] = np.where(pos, fm, fa)
+        hi[idx] = np.where(pos, b, mid)
+        fhi[idx] = np.where(pos, fb, fm)
+        side[idx] = np.where(pos, 1, -1)
+        root[idx] = mid
+        width = hi[idx] - lo[idx]
+        done = (fm == 0.0) | (width <= 4.0 * np.finfo(float).eps * np.maximum(1.0, np.abs(mid)))
+        root[idx[done]] = np.where(fm[done] == 0.0, mid[done], 0.5 * (lo[idx[done]] + hi[idx[done]]))
+        idx = idx[~done]
+    return root
+
+
+def _x_min_elastic(w: Any, t: Any, ta: Any, d: Any, ea: Any) -> Any:
+    """Closed-form elastic x_min: ``(R/w) asinh(V/R) + R V/(w EA)`` with ``R = T_A``, ``V^2 = D (T + T_A)``."""
+    v = np.sqrt(d * (t + ta))
+    return ta / w * np.arcsinh(v / ta) + ta * v / (w * ea)
+
+
 def elastic_state(w: Any, h: Any, t: Any, x: Optional[Any], ea: Any) -> dict[str, np.ndarray]:
     """Elastic solution (vectorized): R, x_min, F, stretched and unstretched suspended length.
 
     ``x`` may be None (problem 3).  Where ``x >= x_min`` the anchor is not lifted (F = 0).
     """
+    with np.errstate(over='ignore', invalid='ignore', divide='ignore'):
+        return _elastic_state(w, h, t, x, ea)
+
+
+def _elastic_state(w: Any, h: Any, t: Any, x: Optional[Any], ea: Any) -> dict[str, np.ndarray]:
     w, h, t, ea = (np.asarray(v, dtype=float) for v in (w, h, t, ea))
     shape = np.broadcast(w, h, t, ea, *(() if x is None else (np.asarray(x, dtype=float),))).shape
     w, h, t, ea = (np.broadcast_to(v, shape).astype(float).ravel() for v in (w, h, t, ea))
@@ -107,18 +157,38 @@ def elastic_state(w: Any, h: Any, t: Any, x: Optional[Any], ea: Any) -> dict[str
         if lift.any():
             args = [v[lift] for v in (w, t, ta, d, ea)]
             target = x[lift]
-            lo = np.full(target.shape, -200.0)  # log u: u from e^-200 ...
-            hi = np.zeros(target.shape)
-            grow = _span(np.exp(hi), *args) > target
-            while grow.any():  # ... to where x(u) < x
-                hi = np.where(grow, hi + 1.0, hi)
-                grow = _span(np.exp(hi), *args) > target
-            for _ in range(_HALVINGS):
-                mid = 0.5 * (lo + hi)
-                above = _span(np.exp(mid), *args) > target
-                lo = np.where(above, mid, lo)
-                hi = np.where(above, hi, mid)
-            ul = np.exp(0.5 * (lo + hi))
+
+            def f(eta: np.ndarray, sel: np.ndarray) -> np.ndarray:
+                return _span(np.exp(eta), *(v[sel] for v in args)) - target[sel]
+
+            # start from the rigid chain with the same end tensions: the rigid span is exact there
+            # and the elastic term is positive, so f > 0 (a lower bound on u) where it is lifted
+            wl, tal, dl = args[0], args[2], args[3]
+            rigid_lift = target < tal / wl * np.arcsinh(np.sqrt(dl * (args[1] + tal)) / tal)
+            lo = np.full(target.shape, -200.0)  # log u: u = e^-200 is x_min to rounding
+            if rigid_lift.any():
+                s_r, _, ok_r = cat.lifted_from_tension(wl[rigid_lift], tal[rigid_lift] / wl[rigid_lift],
+                                                       dl[rigid_lift] / wl[rigid_lift], target[rigid_lift])
+                u_r = np.arcsinh(s_r.uplift_force / s_r.horizontal_tension)
+                lo[rigid_lift] = np.where(ok_r & (u_r > 0), np.log(np.maximum(u_r, 1e-300)), -200.0)
+            all_idx = np.arange(target.size)
+            flo = f(lo, all_idx)
+            bad = ~(flo > 0.0)  # rounding at the start point: fall back to the far end
+            lo[bad] = -200.0
+            flo[bad] = f(lo[bad], all_idx[bad])
+            step = np.full(target.shape, 1e-3)
+            hi = lo + step
+            fhi = f(hi, all_idx)
+            grow = fhi >= 0.0
+            while grow.any():  # ... up to where x(u) < x
+                lo = np.where(grow, hi, lo)
+                flo = np.where(grow, fhi, flo)
+                step = np.where(grow, 4.0 * step, step)
+                hi = np.where(grow, np.minimum(hi + step, _ETA_MAX), hi)
+                sel = all_idx[grow]
+                fhi[grow] = f(hi[grow], sel)
+                grow = (fhi >= 0.0) & (hi < _ETA_MAX)
+            ul = np.exp(_illinois(f, lo, hi, flo, fhi))
             u[lift] = ul
             r[lift], vb[lift] = _top_vertical(ul, t[lift], ta[lift], d[lift])
             va[lift] = ta[lift] * np.tanh(ul)
@@ -133,33 +203,49 @@ def elastic_state(w: Any, h: Any, t: Any, x: Optional[Any], ea: Any) -> dict[str
 
 def _elastic_critical_tension(w: np.ndarray, h: np.ndarray, x: np.ndarray, ea: np.ndarray,
                               t_rigid: np.ndarray) -> np.ndarray:
-    """Hook tension at which the elastic chain's x_min equals x (x_min grows with T): bisection."""
-    lo = np.log(w * h)
-    hi = np.log(t_rigid)  # stretch lengthens the span: the elastic T_crit is below the rigid one
-    for _ in range(120):
-        mid = 0.5 * (lo + hi)
-        tm = np.exp(mid)
-        ok = tm > w * h
-        xm = np.where(ok, elastic_state(w, h, np.where(ok, tm, 2 * w * h), None, ea)['min_anchor_distance'], 0.0)
-        below = xm < x
-        lo = np.where(below, mid, lo)
-        hi = np.where(below, hi, mid)
-    return np.exp(0.5 * (lo + hi))
+    """Hook tension at which the elastic chain's x_min equals x (x_min grows with T).
+
+    Root of ``x - x_min(T)`` (decreasing in T) in ``log T`` on ``(log(w h), log(T_rigid)]``:
+    stretch lengthens the span, so the elastic critical tension is below the rigid one.
+    """
+    def f(lt: np.ndarray, sel: np.ndarray) -> np.ndarray:
+        t = np.exp(lt)
+        ta, d = anchor_end_tension(w[sel], h[sel], t, ea[sel])
+        return x[sel] - _x_min_elastic(w[sel], t, ta, d, ea[sel])
+
+    idx = np.arange(x.size)
+    hi = np.log(t_rigid)
+    fhi = f(hi, idx)
+    lo = hi - 4.0 * np.maximum(t_rigid / ea, 1e-12)  # the strain sets the shift
+    flo = f(lo, idx)
+    grow = ~(flo > 0.0)
+    while grow.any():
+        hi = np.where(grow, lo, hi)
+        fhi = np.where(grow, flo, fhi)
+        lo = np.where(grow, lo - 4.0 * (hi - lo + 1e-12), lo)
+        lo = np.maximum(lo, np.log(w * h) * (1.0 + 1e-15))
+        flo[grow] = f(lo[grow], idx[grow])
+        grow = ~(flo > 0.0) & (lo > np.log(w * h) * (1.0 + 1e-15))
+    return np.exp(_illinois(f, lo, hi, flo, np.minimum(fhi, -0.0)))
 
 
 def _elastic_depth_reach(w: np.ndarray, r: np.ndarray, x: np.ndarray, ea: np.ndarray) -> np.ndarray:
-    """Depth a no-uplift elastic chain with horizontal tension R spans over x (for the tide margin)."""
-    # x = (R/w) asinh(V/R) + R V/(w EA) increases with V: bisection on log(V/R)
-    lo = np.full(r.shape, -200.0)
-    hi = np.log(np.sinh(np.minimum(x * w / r, 700.0)) + 1.0)  # the rigid V/R is an upper bound
-    for _ in range(_HALVINGS + 8):
-        mid = 0.5 * (lo + hi)
-        v = r * np.exp(mid)
-        below = r / w * np.arcsinh(v / r) + r * v / (w * ea) < x
-        lo = np.where(below, mid, lo)
-        hi = np.where(below, hi, mid)
-    v = r * np.exp(0.5 * (lo + hi))
-    return v * v / ((np.hypot(r, v) + r) * w) + v * v / (2.0 * ea * w)
+    """Depth a no-uplift elastic chain with horizontal tension R spans over x (for the tide margin).
+
+    In ``nu = asinh(V/R)``: ``x = (R/w) nu + R^2 sinh(nu)/(w EA)``, increasing and convex, so
+    Newton from the rigid ``nu = x w / R`` (to the right of the root) decreases monotonically.
+    Then ``h = 2 (R/w) sinh(nu/2)^2 + R^2 sinh(nu)^2 / (2 EA w)``.
+    """
+    a = r / w
+    k = r / ea
+    nu = np.minimum(x / a, 700.0)
+    for _ in range(100):
+        g = a * nu + a * k * np.sinh(nu) - x
+        step = g / (a + a * k * np.cosh(nu))
+        nu = nu - step
+        if np.all(np.abs(step) <= 4.0 * np.finfo(float).eps * nu):
+            break
+    return 2.0 * a * np.sinh(0.5 * nu) ** 2 + a * k * np.sinh(nu) ** 2 / 2.0
 
 
 def elastic_correction(rigid: SolveResult, el: dict[str, np.ndarray]) -> np.ndarray:

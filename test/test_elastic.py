@@ -83,6 +83,19 @@ def test_elastic_solution_matches_50_digit_solution(strain):
         assert abs(st['unstretched_length'][i] - l0) <= (1e-12 + 8 * eps * kappa_l) * l0
 
 
+def test_elastic_uplift_between_the_rigid_and_the_elastic_lift_off_distance():
+    """x beyond the rigid lift-off distance (same end tensions) but short of the elastic one."""
+    w, h, t = 1300.0, 20.85, 1623.5e3
+    ta, d = elastic.anchor_end_tension(w, h, t, EA_DOCK)
+    x_rigid = float(ta / w * np.arcsinh(np.sqrt(d * (t + ta)) / ta))
+    x_el = float(elastic.elastic_state(w, h, t, None, EA_DOCK)['min_anchor_distance'])
+    for x in (x_rigid + 0.5 * (x_el - x_rigid), x_el * (1 - 1e-9), x_el * 1e-4):
+        st = elastic.elastic_state(w, h, t, x, EA_DOCK)
+        r, va, l0, _ = _mp_elastic(w, h, t, x, EA_DOCK)
+        assert float(st['horizontal_tension']) == pytest.approx(r, rel=1e-12)
+        assert abs(float(st['uplift_force']) - va) <= 1e-11 * t
+
+
 def test_elastic_min_distance_closed_form_matches_50_digit_solution():
     w, h, t, _ = scenes(40, seed=11)
     ea = t / 1e-3
