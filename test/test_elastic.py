@@ -158,7 +158,8 @@ def test_elastic_margins_are_consistent():
     res, _ = elastic.solve(w, h, 1623.5e3, x, ea=EA_DOCK)
     assert res.uplift_force == 0.0 and res.anchor_margin > 0
     t_crit = 1623.5e3 + res.load_margin
-    assert float(elastic.elastic_state(w, h, t_crit, None, EA_DOCK)['min_anchor_distance']) == pytest.approx(x, rel=1e-12)
+    x_min_crit = float(elastic.elastic_state(w, h, t_crit, None, EA_DOCK)['min_anchor_distance'])
+    assert x_min_crit == pytest.approx(x, rel=1e-12)
     # tide margin: the no-uplift chain with the same R at depth h + tide_margin spans exactly x
     r, h2 = res.horizontal_tension, h + res.tide_margin
     s = 1 + r / EA_DOCK

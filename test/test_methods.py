@@ -21,7 +21,6 @@ import pytest
 from catenary_monitor import catenary as cat
 from catenary_monitor.bench_methods import FAIL, GOOD, H_DOCK, W_DOCK, scene_error
 from catenary_monitor.methods import Method, NoConvergence, all_methods, hou, paper, peers, reference
-from catenary_monitor.methods import closed
 
 METHODS = {(m.problem, m.name): m for m in all_methods(peers=True)}
 
