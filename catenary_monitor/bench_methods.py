@@ -75,6 +75,12 @@ def build_scenes(problem: int, quick: bool) -> Scenes:
     rows = []
     for q in ha:
         t = W_DOCK * (H_DOCK / q + H_DOCK)
+        if problem == 2:  # the load is R; x_min of a no-uplift chain with that R
+            r = W_DOCK * H_DOCK / q
+            x_min = float(grounded(r / W_DOCK, H_DOCK).min_anchor_distance)
+            for xr_ in xr:
+                rows.append((W_DOCK, H_DOCK, r, xr_ * x_min, q, xr_, False))
+            continue
         if problem == 3:
             rows.append((W_DOCK, H_DOCK, t, math.nan, q, 1.0, False))
             continue
@@ -87,9 +93,11 @@ def build_scenes(problem: int, quick: bool) -> Scenes:
               (1300.0, 20.85, 1623.5e3)]
     seeds4 = [(1300.0, 20.85, 1623.5e3, 121.06), (1300.0, 20.85, 1623.5e3, 200.0),
               (1300.0, 20.85, 399.1048e3, 100.0)]
-    for s in (seeds3 if problem == 3 else seeds4):
+    seeds2 = [(1300.0, 20.85, 1584.6e3, 121.06)]  # table 3
+    for s in {2: seeds2, 3: seeds3, 4: seeds4}[problem]:
         w, h, t = s[:3]
-        rows.append((w, h, t, s[3] if problem == 4 else math.nan, h / (t / w - h), math.nan, True))
+        ha_s = h / (t / w) if problem == 2 else h / (t / w - h)
+        rows.append((w, h, t, s[3] if problem != 3 else math.nan, ha_s, math.nan, True))
     cols = list(zip(*rows))
     return Scenes(problem, *(np.array(c, dtype=float) for c in cols[:6]), np.array(cols[6], bool))
 
@@ -105,6 +113,8 @@ def compute_reference(sc: Scenes, with_length: bool, progress: Callable[[str], N
         progress(f'reference (mpmath, 50 digits), problem {sc.problem}: {i + 1}/{sc.n}')
         if sc.problem == 3:
             r = ref.problem3(sc.w[i], sc.h[i], sc.t[i])
+        elif sc.problem == 2:
+            r = ref.problem2(sc.w[i], sc.h[i], sc.t[i], sc.x[i])
         else:
             r = ref.problem4(sc.w[i], sc.h[i], sc.t[i], sc.x[i])
             sc.length[i] = r.length
@@ -228,7 +238,7 @@ def time_vectors(outcomes: list[Outcome], scenes: dict[int, Scenes], n_elem: int
         warnings.simplefilter('ignore')
         for o in todo:
             sc = scenes[o.method.problem]
-            cols = [sc.w, sc.h, sc.t] + ([sc.x] if sc.problem == 4 else [])
+            cols = [sc.w, sc.h, sc.t] + ([sc.x] if sc.problem != 3 else [])
             r1, r2 = o.method.vector_fn(*(c.copy() for c in cols))
             o.vec_err = np.array([scene_error((r1[i], r2[i]), sc.ref[i], sc.cond[i]) for i in range(sc.n)])
             reps = -(-n_elem // sc.n)
@@ -258,9 +268,10 @@ def plot_speed_accuracy(rows: list[dict], path: str) -> None:
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 2, figsize=(15, 6.4))
-    for ax, problem, title in ((axes[0], 3, 'problem 3: hook tension -> minimum anchor distance'),
-                               (axes[1], 4, 'problem 4: tension + anchor distance -> uplift')):
+    fig, axes = plt.subplots(1, 3, figsize=(21, 6.4))
+    for ax, problem, title in ((axes[0], 4, 'problem 4: tension + anchor distance -> uplift'),
+                               (axes[1], 3, 'problem 3: hook tension -> minimum anchor distance'),
+                               (axes[2], 2, 'problem 2: horizontal tension + distance -> uplift')):
         rs = [r for r in rows if r['problem'] == problem]
         labels = []
         for k, r in enumerate(rs, 1):
@@ -298,7 +309,7 @@ def plot_speed_accuracy(rows: list[dict], path: str) -> None:
                  'X red = fails on some scenes, amber = loses accuracy, green = within 1e-12 everywhere',
                  fontsize=10)
     fig.tight_layout()
-    fig.subplots_adjust(wspace=0.75, right=0.8)
+    fig.subplots_adjust(wspace=0.85, right=0.86)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
@@ -309,17 +320,17 @@ def plot_stability(outcomes: list[Outcome], scenes: dict[int, Scenes], path: str
     import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap
     cmap = ListedColormap(['#2ca02c', '#ffbf00', '#d62728', '#d9d9d9'])
-    o4 = [o for o in outcomes if o.method.problem == 4]
+    o4 = [o for o in outcomes if o.method.problem == 4] + [o for o in outcomes if o.method.problem == 2]
     o3 = [o for o in outcomes if o.method.problem == 3]
     ncol = 4
     nrow4 = -(-len(o4) // ncol)
     fig = plt.figure(figsize=(3.4 * ncol, 2.5 * nrow4 + 0.45 * len(o3) + 1.6))
     gs = fig.add_gridspec(nrow4 + 1, ncol, height_ratios=[1] * nrow4 + [0.18 * len(o3) + 0.3])
-    sc4 = scenes[4]
-    grid_idx = np.flatnonzero(~sc4.seed)
-    ha_u = np.unique(sc4.ha[grid_idx])
-    xr_u = np.unique(sc4.xr[grid_idx])
     for k, o in enumerate(o4):
+        sc4 = scenes[o.method.problem]
+        grid_idx = np.flatnonzero(~sc4.seed)
+        ha_u = np.unique(sc4.ha[grid_idx])
+        xr_u = np.unique(sc4.xr[grid_idx])
         ax = fig.add_subplot(gs[k // ncol, k % ncol])
         z = np.full((xr_u.size, ha_u.size), 3.0)
         for j, i in enumerate(o.idx):
@@ -329,7 +340,8 @@ def plot_stability(outcomes: list[Outcome], scenes: dict[int, Scenes], path: str
             z[np.searchsorted(xr_u, sc4.xr[i]), np.searchsorted(ha_u, sc4.ha[i])] = (
                 0 if e <= GOOD else 1 if e <= FAIL else 2)
         ax.pcolormesh(np.arange(ha_u.size + 1), np.arange(xr_u.size + 1), z, cmap=cmap, vmin=0, vmax=3)
-        ax.set_title(f'{o.method.name}', fontsize=8)
+        ax.set_title(f'{o.method.name}' + ('  [problem 2: R given]' if o.method.problem == 2 else ''),
+                     fontsize=8)
         xt = [i for i, v in enumerate(ha_u) if abs(math.log10(v) - round(math.log10(v))) < 1e-9
               and round(math.log10(v)) % 3 == 2]
         ax.set_xticks([i + 0.5 for i in xt])
@@ -339,7 +351,7 @@ def plot_stability(outcomes: list[Outcome], scenes: dict[int, Scenes], path: str
         ax.set_yticklabels([f'{xr_u[i]:.6g}' for i in yt], fontsize=6)
         if k % ncol == 0:
             ax.set_ylabel('x / x_min', fontsize=7)
-        ax.set_xlabel('h / a', fontsize=7)
+        ax.set_xlabel('h / a' + (' (a = R/w)' if o.method.problem == 2 else ''), fontsize=7)
     ax = fig.add_subplot(gs[nrow4, :])
     sc3 = scenes[3]
     g3 = np.flatnonzero(~sc3.seed)
@@ -359,7 +371,7 @@ def plot_stability(outcomes: list[Outcome], scenes: dict[int, Scenes], path: str
     ax.set_xlabel('h / a', fontsize=7)
     ax.set_title('problem 3 (minimum anchor distance from T): h / a only', fontsize=8)
     fig.suptitle('Where each method holds: green error <= 1e-12, amber <= 1e-6 (loses accuracy), '
-                 'red fails (> 1e-6, NaN, exception), grey not run.  Problem 4 panels: '
+                 'red fails (> 1e-6, NaN, exception), grey not run.  Problem 4 (and 2) panels: '
                  'x from 1e-3 x_min (bottom) to 1 - 1e-6 (top); dock chain w = 1.3 kN/m, h = 20.85 m',
                  fontsize=8)
     fig.tight_layout(rect=(0, 0, 1, 0.97))
@@ -386,8 +398,11 @@ def write_tables(rows: list[dict], summary: list[str], out_dir: str) -> None:
             wr.writerow(r)
     lines = ['# Methods benchmark (generated by `catenary-monitor bench-methods`)', '']
     lines += summary + ['']
-    for problem in (4, 3):
-        lines += [f'## Problem {problem}', '',
+    titles = {4: 'Problem 4: hook tension T and anchor distance x -> uplift (the live problem)',
+              3: 'Problem 3: hook tension T -> minimum anchor distance',
+              2: 'Problem 2 (table 3): horizontal tension R and x -> anchor angle and uplift'}
+    for problem in (4, 3, 2):
+        lines += [f'## {titles[problem]}', '',
                   '| method | scenes | scalar µs (median) | vectorized ns/element | error median | '
                   'error worst | failures | why it fails where it fails |',
                   '|---|---:|---:|---:|---:|---:|---:|---|']
@@ -421,17 +436,17 @@ def run(quick: bool = False, out_dir: Optional[str] = 'docs', only: Optional[str
             stream.flush()
 
     versions = peer_versions()
-    methods = [m for m in all_methods(peers=True) if m.problem in (3, 4)]
+    methods = [m for m in all_methods(peers=True) if m.problem in (2, 3, 4)]
     if only:
         methods = [m for m in methods if only.lower() in m.name.lower() or m.default
                    or m.name == 'closed form (stable)']
     has_len = any(m.given == 'length' for m in methods)
-    scenes = {p: build_scenes(p, quick) for p in (3, 4)}
-    for p in (3, 4):
+    scenes = {p: build_scenes(p, quick) for p in (2, 3, 4)}
+    for p in (2, 3, 4):
         compute_reference(scenes[p], has_len and p == 4, progress)
     thin = 4 if quick else 1
     by_name: dict[tuple[int, str], Outcome] = {}
-    for p in (3, 4):
+    for p in (2, 3, 4):
         sc = scenes[p]
         fast = [m for m in methods if m.problem == p and not m.slow]
         for o in run_scalar(fast, sc, np.arange(sc.n), progress, repeats=3 if quick else 7):

@@ -38,6 +38,17 @@ def ref4(ha, xr):
     return reference.problem4(*dock_scene(ha, xr))
 
 
+def dock_scene2(ha, xr):
+    """Problem 2 on the dock: R = w h / (h/a), x = xr * x_min(R)."""
+    r = W_DOCK * H_DOCK / ha
+    return W_DOCK, H_DOCK, r, xr * float(cat.grounded(r / W_DOCK, H_DOCK).min_anchor_distance)
+
+
+@lru_cache(maxsize=None)
+def ref2(ha, xr):
+    return reference.problem2(*dock_scene2(ha, xr))
+
+
 @lru_cache(maxsize=None)
 def ref3(ha):
     return reference.problem3(*dock_scene(ha))
@@ -50,6 +61,9 @@ def outcome(problem, name, ha, xr=None):
     if problem == 3:
         r = ref3(ha)
         args = dock_scene(ha)
+    elif problem == 2:
+        r = ref2(ha, xr)
+        args = dock_scene2(ha, xr)
     elif m.given == 'length':
         r4 = ref4(ha, xr)
         w, h, t, x = dock_scene(ha, xr)
@@ -132,6 +146,11 @@ KNOWN = [
     (3, 'paper stepping (Fig. 2)', 1e-5, None, 'fails', 'start below the root (x_min > 1000 m)'),
     (3, 'paper stepping (Fig. 2)', 1.0, None, 'fails', 'absolute tolerance 1e-5 m on a 2 m span'),
     (3, 'paper stepping (Fig. 2)', 20.85 / 1228.0, None, 'loses', 'the dock of table 4: 5 digits'),
+    # problem 2: R and x given (table 3)
+    (2, 'paper stepping (Fig. 2)', 1.0, 0.5, 'fails', 'start alpha = 44 deg below the root'),
+    (2, 'paper stepping (Fig. 2)', 1e-2, 0.9, 'loses', 'absolute tolerance 1e-5 m in y'),
+    (2, 'closed form (textbook)', 1e-3, 0.99, 'ok', 'its subtraction is the problem\'s own'),
+    (2, 'closed form (textbook)', 1e2, 0.1, 'ok', ''),
 ]
 
 
@@ -142,7 +161,8 @@ def test_stability_map_claims(problem, name, ha, xr, expected, why):
     assert got == expected, f'{name} at h/a={ha:g}, x/x_min={xr}: {got} ({detail}); map says {expected}: {why}'
 
 
-NEVER_FAIL = ('default kernel', 'closed form (stable)', 'brentq on log d')
+NEVER_FAIL = {(4, 'default kernel'), (3, 'closed form (stable)'), (4, 'brentq on log d'),
+              (2, 'closed form (textbook)')}
 
 
 def test_every_weaker_method_has_a_failure_row_and_an_ok_row():
@@ -150,7 +170,7 @@ def test_every_weaker_method_has_a_failure_row_and_an_ok_row():
     for problem, name, _, _, expected, _ in KNOWN:
         rows.setdefault((problem, name), set()).add(expected)
     for (problem, name), m in METHODS.items():
-        if m.default or problem not in (3, 4) or name in NEVER_FAIL:
+        if m.default or (problem, name) in NEVER_FAIL:
             continue
         assert (problem, name) in rows, f'no stability row for {name} (problem {problem})'
         assert rows[(problem, name)] & {'fails', 'loses'}, name
@@ -163,6 +183,7 @@ def test_default_holds_where_the_others_fail(ha, xr):
     for name in ('default', 'default kernel'):
         assert outcome(4, name, ha, xr)[0] == 'ok'
     assert outcome(3, 'default', ha)[0] == 'ok'
+    assert outcome(2, 'default', ha, xr)[0] == 'ok'
 
 
 def test_paper_method_reproduces_its_own_tables():

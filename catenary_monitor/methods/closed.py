@@ -90,10 +90,12 @@ def p4_kernel_vec(w, h, t, x):
 
 
 def p2_textbook(w: float, h: float, r: float, x: float) -> tuple[float, float]:
-    """``tan(alpha)`` from equation (1) solved for alpha: ``sec a C + tan a S = h/a``.
+    """Equation (1) solved for the anchor angle: ``u = asinh(h / (2 a sinh(X/2))) - X/2``.
 
-    With ``C = cosh X - 1``, ``S = sinh X``: ``tan(alpha) = (k q - C sqrt(k^2 - 1 ... ))``; here
-    the textbook route ``u = asinh(h / (2 a sinh(X/2))) - X/2`` (two asinh that cancel near x_min).
+    With ``tan(alpha) = sinh(u)`` and ``X = x/a``, equation (1) is the depth of the catenary from
+    ``u`` to ``u + X``: ``a (cosh(u + X) - cosh u) = 2 a sinh(X/2) sinh(u + X/2) = h``.  The
+    subtraction loses digits as x -> x_min (u -> 0), but no more than the problem's own
+    conditioning there.
     """
     a = r / w
     big = x / a
@@ -120,7 +122,9 @@ METHODS = [
     Method('default kernel', 4, p4_kernel, p4_kernel_vec, 'closed',
            why='the default without the solve() API around it (no validation, no margins)'),
     Method('closed form (textbook)', 2, p2_textbook, None, 'closed',
-           why='cancelling formula: asinh(q) - asinh(p) cancels as x -> x_min'),
+           why='never fails: its subtraction asinh(...) - X/2 near x_min costs no more digits than '
+               'the problem itself loses there'),
     Method('default', 2, p2_default, None, 'closed', default=True,
-           why='closed form with the subtraction rewritten as the depth deficit'),
+           why='closed form with the subtraction rewritten as the depth deficit; solve() with '
+               'horizontal= has no plain-float path, so a scalar call pays the array path'),
 ]

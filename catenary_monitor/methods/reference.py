@@ -16,6 +16,7 @@ length-given problem) come from a 1e-25 relative perturbation of the same 50-dig
 """
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import mpmath as mp
@@ -137,3 +138,39 @@ def given_length(w: float, h: float, x: float, length: float, a0: float) -> Ref:
         r2, f2 = _pl(*args[:3], args[3] * (1 + d), r / args[0])
         return Ref(float(r), float(f), float(abs((r2 - r) / r / d)), float(abs((f2 - f) / f / d)),
                    length)
+
+
+def _p2(w: mp.mpf, h: mp.mpf, r: mp.mpf, x: mp.mpf) -> tuple[mp.mpf, mp.mpf]:
+    a = r / w
+
+    def resid(u: mp.mpf) -> mp.mpf:
+        return _y_and_l(a, u, x)[0] - h  # increases with u
+
+    lo, hi = mp.mpf(0), mp.mpf(1)
+    if resid(lo) >= 0:
+        raise ValueError('x >= x_min: the anchor is not lifted')
+    while resid(hi) <= 0:
+        lo, hi = hi, 2 * hi
+    u = mp.findroot(resid, (lo, hi), solver='anderson', tol=mp.mpf(10) ** (-2 * DPS + 10), verify=False,
+                    maxsteps=400)
+    if not (lo <= u <= hi and abs(resid(u)) <= _CHECK * h):
+        for _ in range(240):
+            mid = (lo + hi) / 2
+            if resid(mid) < 0:
+                lo = mid
+            else:
+                hi = mid
+        u = (lo + hi) / 2
+    assert abs(resid(u)) <= _CHECK * h, 'reference did not converge'
+    return mp.atan(mp.sinh(u)), r * mp.sinh(u)
+
+
+def problem2(w: float, h: float, r: float, x: float) -> Ref:
+    """Problem 2 (table 3): horizontal tension R and span x < x_min -> (anchor angle [rad], F)."""
+    with mp.workdps(DPS):
+        args = [mp.mpf(v) for v in (w, h, r, x)]
+        alpha, f = _p2(*args)
+        d = mp.mpf(10) ** -25
+        alpha2, f2 = _p2(*args[:3], args[3] * (1 + d))
+        return Ref(float(alpha), float(f), float(abs((alpha2 - alpha) / alpha / d)),
+                   float(abs((f2 - f) / f / d)), math.nan)
