@@ -268,7 +268,7 @@ def plot_speed_accuracy(rows: list[dict], path: str) -> None:
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
-    fig, axes = plt.subplots(1, 3, figsize=(21, 6.4))
+    fig, axes = plt.subplots(1, 3, figsize=(19, 9.0))
     for ax, problem, title in ((axes[0], 4, 'problem 4: tension + anchor distance -> uplift'),
                                (axes[1], 3, 'problem 3: hook tension -> minimum anchor distance'),
                                (axes[2], 2, 'problem 2: horizontal tension + distance -> uplift')):
@@ -303,13 +303,13 @@ def plot_speed_accuracy(rows: list[dict], path: str) -> None:
         ax.set_ylabel('error / max(1, condition number): marker median, bar to worst finite')
         ax.set_title(title, fontsize=10)
         ax.legend(loc='center left', fontsize=7)
-        ax.text(1.01, 0.0, '\n'.join(labels), transform=ax.transAxes, fontsize=7, va='bottom', family='monospace')
+        ax.text(0.0, -0.13, '\n'.join(labels), transform=ax.transAxes, fontsize=7.5, va='top',
+                family='monospace')
         ax.grid(True, which='major', alpha=0.3)
     fig.suptitle('Speed against accuracy: green line 1e-12 (target), red line 1e-6 (failure); '
                  'X red = fails on some scenes, amber = loses accuracy, green = within 1e-12 everywhere',
                  fontsize=10)
-    fig.tight_layout()
-    fig.subplots_adjust(wspace=0.85, right=0.86)
+    fig.subplots_adjust(left=0.05, right=0.99, top=0.92, bottom=0.36, wspace=0.25)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
@@ -371,10 +371,10 @@ def plot_stability(outcomes: list[Outcome], scenes: dict[int, Scenes], path: str
     ax.set_xlabel('h / a', fontsize=7)
     ax.set_title('problem 3 (minimum anchor distance from T): h / a only', fontsize=8)
     fig.suptitle('Where each method holds: green error <= 1e-12, amber <= 1e-6 (loses accuracy), '
-                 'red fails (> 1e-6, NaN, exception), grey not run.  Problem 4 (and 2) panels: '
+                 'red fails (> 1e-6, NaN, exception), grey not run.\nProblem 4 (and 2) panels: '
                  'x from 1e-3 x_min (bottom) to 1 - 1e-6 (top); dock chain w = 1.3 kN/m, h = 20.85 m',
-                 fontsize=8)
-    fig.tight_layout(rect=(0, 0, 1, 0.97))
+                 fontsize=9)
+    fig.tight_layout(rect=(0, 0, 1, 0.96))
     fig.savefig(path, dpi=100)
     plt.close(fig)
 
