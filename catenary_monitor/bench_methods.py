@@ -488,7 +488,8 @@ def run(quick: bool = False, out_dir: Optional[str] = 'docs', only: Optional[str
     summary = [
         f'Run: {time.strftime("%Y-%m-%d %H:%M")}, {platform.python_implementation()} '
         f'{platform.python_version()}, numpy {np.__version__}, {os.cpu_count()} cores shared, '
-        f'{"quick" if quick else "full"} sweep: {scenes[4].n} problem-4 scenes, {scenes[3].n} problem-3 scenes '
+        f'{"quick" if quick else "full"} sweep: {scenes[4].n} problem-4, {scenes[3].n} problem-3 and '
+        f'{scenes[2].n} problem-2 scenes '
         f'({"slow methods on every " + str(thin) + "th scene" if thin > 1 else "every method on every scene"}). Peers: '
         + ', '.join(f'{k} {v}' if v else f'{k} absent' for k, v in versions.items()) + '.',
         '',
