@@ -91,8 +91,9 @@ def peer_versions() -> dict[str, str | None]:
     out: dict[str, str | None] = {}
     for name in PEERS:
         try:
+            __import__(name)
             out[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
+        except Exception:  # not installed, or installed but not importable: absent
             out[name] = None
     return out
 
