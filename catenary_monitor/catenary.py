@@ -250,8 +250,11 @@ def lifted_from_tension_scalar(w: float, b: float, h: float, x: float) -> tuple[
     x0 = log1p(e + math.sqrt(r02))  # acosh1p(e)
     eta_hi = log(x0 - xlo)
     eta = eta_hi + 2.0 * log(m / x0)
-    eta = min(eta, eta_hi)
-    eta_lo = -math.inf
+    if eta > eta_hi:
+        eta = eta_hi
+    neg_inf = -math.inf
+    eta_lo = neg_inf
+    tol = STEP_TOL
     it = 0
     converged = False
     while it < MAXITER:
@@ -263,21 +266,23 @@ def lifted_from_tension_scalar(w: float, b: float, h: float, x: float) -> tuple[
         p = r02 + emn
         q = big_x / (m * sinh(big_x))
         f = log(em * p * (q * q))  # numpy's ** 2 on arrays is this product
-        if f == 0.0:
-            converged = True
-            break
         if f < 0.0:
-            eta_lo = max(eta_lo, eta)
+            if eta > eta_lo:
+                eta_lo = eta
         else:
-            eta_hi = min(eta_hi, eta)
+            if f == 0.0:
+                converged = True
+                break
+            if eta < eta_hi:  # f > 0 (or NaN, as in the vectorized path's bracket update)
+                eta_hi = eta
         step = -f / (((1.0 + em) / em + (1.0 - emn) / p - 2.0 * (1.0 / tanh(big_x) - 1.0 / big_x)) * d)
-        if abs(step) <= STEP_TOL:
+        if -tol <= step <= tol:
             eta += step
             converged = True
             break
         eta += step
         if not eta_lo <= eta <= eta_hi:
-            eta = 0.5 * (eta_lo + eta_hi) if eta_lo > -math.inf else eta - step - 4.0
+            eta = 0.5 * (eta_lo + eta_hi) if eta_lo > neg_inf else eta - step - 4.0
     # _lifted_from_d and _lifted_state, inline
     big_x = xlo + exp(eta)
     s = m / big_x
@@ -346,12 +351,17 @@ def critical_parameter_scalar(h: float, x: float) -> float:
     eta = log(d0)
     log_c = log(c)
     log_2 = _LOG_2
+    tol = STEP_TOL
     for _ in range(MAXITER):
         d = exp(eta)
         f = 2.0 * (d + log(-expm1(-2.0 * d)) - log_2) - eta - log_c  # _critical_residual
-        step = min(max(-f / (2.0 * d / tanh(d) - 1.0), -4.0), 4.0)
+        step = -f / (2.0 * d / tanh(d) - 1.0)
+        if step > 4.0:  # the clip of the vectorized path
+            step = 4.0
+        elif step < -4.0:
+            step = -4.0
         eta += step
-        if abs(step) <= STEP_TOL:
+        if -tol <= step <= tol:
             break
     return x / (2.0 * exp(eta))
 
