@@ -273,7 +273,7 @@ def lifted_from_tension_scalar(w: float, b: float, h: float, x: float) -> tuple[
             if f == 0.0:
                 converged = True
                 break
-            if eta < eta_hi:  # f > 0 (or NaN, as in the vectorized path's bracket update)
+            if eta < eta_hi:  # f > 0 (or NaN, as the scalar code always did)
                 eta_hi = eta
         step = -f / (((1.0 + em) / em + (1.0 - emn) / p - 2.0 * (1.0 / tanh(big_x) - 1.0 / big_x)) * d)
         if -tol <= step <= tol:
