@@ -332,7 +332,7 @@ def _result_from_dict(values: dict[str, Any]) -> SolveResult:
     on the scalar path, where the generated ``__init__`` is a third of the solve time.
     """
     result = object.__new__(SolveResult)
-    result.__dict__.update(values)
+    object.__setattr__(result, '__dict__', values)
     return result
 
 
@@ -356,8 +356,10 @@ def _solve_tension_scalar(weight: float, depth: float, tension: float,
     elif mbl is not None and not mbl > 0:
         status = Status.MBL
     else:
-        status = Status.OK
-    keys = _cached_keys('tension', x is not None, mbl is not None)
+        status = 0  # Status.OK
+    keys = _KEYS_CACHE.get(('tension', x is not None, mbl is not None))
+    if keys is None:
+        keys = _cached_keys('tension', x is not None, mbl is not None)
     if status:  # invalid input: every value NaN
         out = dict.fromkeys(ALL_KEYS, _NAN)
     else:
@@ -375,11 +377,11 @@ def _solve_tension_scalar(weight: float, depth: float, tension: float,
                 s, _, converged = cat.lifted_from_tension_scalar(w, b, h, x)
                 if not converged:
                     status = Status.NO_CONVERGENCE
-                r = s.horizontal_tension
-                length = s.suspended_length
-                top_angle = math.degrees(s.top_angle)
-                anchor_angle = math.degrees(s.anchor_angle)
-                uplift = s.uplift_force
+                # Lifted(horizontal_tension, uplift_force, anchor_angle, top_tension, top_angle,
+                #        suspended_length)
+                r, uplift, anchor_angle, _, top_angle, length = s
+                top_angle = math.degrees(top_angle)
+                anchor_angle = math.degrees(anchor_angle)
             a_now = r / w
             half = math.sinh(0.5 * x / a_now)  # cat.depth_reached(a_now, x), inline
             anchor_margin = x - x_min
