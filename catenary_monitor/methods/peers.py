@@ -73,8 +73,9 @@ PEERS = {
                    'scale; no profile for very short or very long catenaries'),
         Method('MoorPy + brentq on L', 4, moorpy_brentq, None, 'peers', slow=True,
                why="bracket missing the root: our wrapper's [taut chord (1 + 1e-9), x + h] misses it "
-                   'where the measured T exceeds the tension MoorPy gives at 1e-9 stretch (large a); '
-                   "for steep chains (h >> a) MoorPy's absolute 1e-6 m tolerance, amplified by dT/dL"),
+                   'where MoorPy\'s tension at 1e-9 stretch does not exceed the measured T (large a, '
+                   "and steep chains with h >> a); elsewhere MoorPy's absolute 1e-6 m tolerance, "
+                   'amplified by dT/dL'),
     ],
     'pycatenary': [
         Method('pycatenary (L given)', 4, pycatenary_given_length, None, 'peers', given='length',

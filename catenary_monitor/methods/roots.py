@@ -267,7 +267,8 @@ METHODS = [
     Method('bisection', 4, p4_bisect, p4_bisect_vec, 'roots', why=_CANCEL4),
     Method('Newton', 4, p4_newton, p4_newton_vec, 'roots',
            why='wrong unknown: f(a) is flat at small a and infinitely steep at a = B, so from below '
-               'the root Newton steps past B (out of the domain); plus the cancelling formula'),
+               'the root Newton steps past B (out of the domain) or cycles; plus the cancelling '
+               'formula'),
     Method('safeguarded Newton', 4, p4_safe_newton, None, 'roots', why=_CANCEL4),
     Method('brentq', 4, p4_brentq, None, 'roots',
            why='absolute tolerance: xtol = 2e-12 m is coarse when a is micrometres (h >> B, x << x_min); '
