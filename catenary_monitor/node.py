@@ -39,7 +39,7 @@ from .config import (ConfigError, MonitorConfig, ParamSpec, config_from_params,
                      config_hash, config_to_params, expand_parameters)
 from .health import logger_status, tide_status
 from .mcap_log import McapLogger
-from .solve import solve
+from .solve import SolveResult, solve
 
 __all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'CatenaryMonitor', 'main']
 
@@ -292,11 +292,11 @@ class CatenaryMonitor(Node):
         now = now_ns * 1e-9
         if result is None:  # no depth yet: nothing to solve
             values, status, text = dict.fromkeys(_RESULT_FIELDS, _NAN), -1, ''
-        elif isinstance(result, tuple):
-            values, status, text = result
-        else:
+        elif isinstance(result, SolveResult):  # a scalar solve
             values = {k: getattr(result, k) for k in _RESULT_FIELDS if k != 'depth'}
             status, text = result.status, result.message
+        else:  # (values, status, message) of one element of a vectorized solve
+            values, status, text = result
         values['depth'] = self._depth + line.config.hook_height
         values['status'] = float(status)
         line.values = values

@@ -18,7 +18,8 @@ import pytest
 from scipy.optimize import brentq
 
 from catenary_monitor import solve
-from ros_harness import (Client, child_env, output_of, start_monitor, stop, write_params)
+from ros_harness import (Client, callback_errors, child_env, output_of, start_monitor, stop,
+                         write_params)
 
 pytestmark = pytest.mark.ros
 
@@ -49,6 +50,15 @@ def out_topic(line: str) -> str:
 
 def name(line: str) -> str:
     return f'catenary_monitor: {line}'
+
+
+@pytest.fixture(autouse=True)
+def no_callback_errors():
+    """A monitor that logged an exception in a callback fails the test, even if it went on."""
+    callback_errors()
+    yield
+    errors = callback_errors()
+    assert not errors, errors[:3]
 
 
 @pytest.fixture(scope='module')
