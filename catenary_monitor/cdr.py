@@ -1,0 +1,116 @@
+"""CDR (XCDR1, little endian) encoding of the few ROS 2 messages replay writes, without rclpy.
+
+``std_msgs/msg/Float64`` and ``std_msgs/msg/Float64MultiArray`` with a fixed layout are a
+constant byte prefix followed by doubles, so whole columns are encoded with numpy at once
+(:func:`float64_payloads`, :func:`multiarray_payloads`). ``diagnostic_msgs/msg/DiagnosticArray``
+is encoded field by field (:func:`diagnostic_array`); the tests check every encoding against
+``rclpy.serialization``.
+
+Alignment follows the CDR rule: a primitive of size n starts at an offset (counted after the
+4-byte encapsulation header) that is a multiple of n.
+"""
+from __future__ import annotations
+
+import struct
+from typing import Sequence
+
+import numpy as np
+
+__all__ = ['ENCAPSULATION', 'float64_payloads', 'multiarray_prefix', 'multiarray_payloads',
+           'diagnostic_array']
+
+#: CDR little-endian encapsulation header.
+ENCAPSULATION = b'\x00\x01\x00\x00'
+
+
+class _Buffer:
+    """Append-only CDR body with alignment relative to the end of the encapsulation header."""
+
+    def __init__(self) -> None:
+        self.parts: list[bytes] = []
+        self.size = 0
+
+    def align(self, n: int) -> None:
+        pad = -self.size % n
+        if pad:
+            self.parts.append(b'\0' * pad)
+            self.size += pad
+
+    def raw(self, data: bytes) -> None:
+        self.parts.append(data)
+        self.size += len(data)
+
+    def u32(self, value: int) -> None:
+        self.align(4)
+        self.raw(struct.pack('<I', value))
+
+    def i32(self, value: int) -> None:
+        self.align(4)
+        self.raw(struct.pack('<i', value))
+
+    def string(self, text: str) -> None:
+        data = text.encode('utf-8') + b'\0'
+        self.u32(len(data))
+        self.raw(data)
+
+    def bytes(self) -> bytes:
+        return ENCAPSULATION + b''.join(self.parts)
+
+
+def float64_payloads(values: np.ndarray) -> np.ndarray:
+    """``(n, 12)`` uint8: the CDR of ``std_msgs/msg/Float64`` for each value."""
+    values = np.asarray(values, np.float64)
+    out = np.empty((len(values), 12), np.uint8)
+    out[:, :4] = np.frombuffer(ENCAPSULATION, np.uint8)
+    out[:, 4:] = values.astype('<f8').view(np.uint8).reshape(-1, 8)
+    return out
+
+
+def multiarray_prefix(label: str, size: int) -> bytes:
+    """CDR bytes of a ``Float64MultiArray`` with one dimension ``(label, size, size)``,
+    ``data_offset`` 0 and ``size`` doubles, up to (not including) the first double."""
+    b = _Buffer()
+    b.u32(1)              # layout.dim: one MultiArrayDimension
+    b.string(label)
+    b.u32(size)           # size
+    b.u32(size)           # stride
+    b.u32(0)              # layout.data_offset
+    b.u32(size)           # data: sequence length
+    b.align(8)
+    return b.bytes()
+
+
+def multiarray_payloads(label: str, data: np.ndarray) -> np.ndarray:
+    """``(n, len(prefix) + 8 k)`` uint8: one ``Float64MultiArray`` per row of ``data`` (n, k)."""
+    data = np.ascontiguousarray(data, '<f8')
+    n, k = data.shape
+    prefix = np.frombuffer(multiarray_prefix(label, k), np.uint8)
+    out = np.empty((n, len(prefix) + 8 * k), np.uint8)
+    out[:, :len(prefix)] = prefix
+    out[:, len(prefix):] = data.view(np.uint8).reshape(n, 8 * k)
+    return out
+
+
+def diagnostic_array(stamp_ns: int, statuses: Sequence[tuple[int, str, str, str,
+                                                              Sequence[tuple[str, str]]]],
+                     frame_id: str = '') -> bytes:
+    """CDR of a ``diagnostic_msgs/msg/DiagnosticArray``.
+
+    ``statuses``: ``(level, name, message, hardware_id, [(key, value), ...])`` each;
+    ``stamp_ns`` fills ``header.stamp``.
+    """
+    b = _Buffer()
+    b.i32(stamp_ns // 1_000_000_000)
+    b.u32(stamp_ns % 1_000_000_000)
+    b.string(frame_id)
+    b.u32(len(statuses))
+    for level, name, message, hardware_id, values in statuses:
+        b.raw(bytes([level]))
+        b.string(name)
+        b.string(message)
+        b.string(hardware_id)
+        b.u32(len(values))
+        for key, value in values:
+            b.string(key)
+            b.string(value)
+    return b.bytes()
