@@ -91,9 +91,10 @@ def multiarray_payloads(label: str, data: np.ndarray) -> np.ndarray:
     return out
 
 
-def diagnostic_array(stamp_ns: int, statuses: Sequence[tuple[int, str, str, str,
-                                                              Sequence[tuple[str, str]]]],
-                     frame_id: str = '') -> bytes:
+Status = tuple[int, str, str, str, Sequence[tuple[str, str]]]
+
+
+def diagnostic_array(stamp_ns: int, statuses: Sequence[Status], frame_id: str = '') -> bytes:
     """CDR of a ``diagnostic_msgs/msg/DiagnosticArray``.
 
     ``statuses``: ``(level, name, message, hardware_id, [(key, value), ...])`` each;

@@ -171,8 +171,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
     """Sub-command registrars of the other modules (imported lazily: no rclpy for `solve`)."""
-    from . import bench_core
-    return [bench_core.register]
+    from . import bench_core, bench_replay, replay
+    return [bench_core.register, replay.register, bench_replay.register]
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

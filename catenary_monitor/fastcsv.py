@@ -95,10 +95,14 @@ class LabelColumn:
         self.table = np.frombuffer(raw, '<u4').reshape(len(texts), width)
         raw0 = b''.join(t.ljust(4 * width, b'\0') for t in texts)
         self.table_first = np.frombuffer(raw0, '<u4').reshape(len(texts), width)
+        width = (max(len(t) for t in texts) + 2 + 3) // 4
+        raw1 = b''.join((b',' + t + b'\n').ljust(4 * width, b'\0') for t in texts)
+        self.table_last = np.frombuffer(raw1, '<u4').reshape(len(texts), width)
         self.name, self.index = name, np.asarray(index, np.int64)
 
-    def words(self, lo: int, hi: int, first: bool) -> list[np.ndarray]:
-        rows = (self.table_first if first else self.table)[self.index[lo:hi]]
+    def words(self, lo: int, hi: int, first: bool, last: bool = False) -> list[np.ndarray]:
+        table = self.table_first if first else (self.table_last if last else self.table)
+        rows = table[self.index[lo:hi]]
         return [rows[:, k] for k in range(rows.shape[1])]
 
 
@@ -106,7 +110,11 @@ Column = Union[FloatColumn, IntColumn, LabelColumn]
 
 
 def _number_words(q: np.ndarray, neg: np.ndarray, d: int, first: bool) -> list[np.ndarray]:
-    """Word columns of ``[,][-]digits[.decimals]`` for non-negative int64 ``q`` (scaled by 10**d)."""
+    """Word columns of ``[,][-]digits[.decimals]`` for non-negative int64 ``q`` (scaled by 10**d).
+
+    The comma and the sign go into the leading integer word when every row of the block has
+    room for them there (its unused leading bytes), else into a word of their own.
+    """
     if d:
         scale = 10 ** d
         ip = q // scale
@@ -114,27 +122,47 @@ def _number_words(q: np.ndarray, neg: np.ndarray, d: int, first: bool) -> list[n
     else:
         ip, frac = q, None
     top = int(ip.max()) if len(ip) else 0
-    groups = max(1, (len(str(top)) + 3) // 4)
-    sign = np.where(neg, _NEG if first else _SEP_NEG, np.uint32(0) if first else _SEP)
-    words = [sign.astype(np.uint32)]
-    if groups == 1:
-        words.append(_LUT4NZ[ip])
+    n_top = len(str(top))
+    groups = max(1, (n_top + 3) // 4)
+    parts = []
+    rest = ip
+    for _ in range(groups - 1):
+        nxt = rest // 10000
+        parts.append(rest - nxt * 10000)
+        rest = nxt
+    parts.append(rest)
+    parts.reverse()
+    if groups == 1 or int(ip.min()) >= 10 ** (n_top - 1):
+        # Every row has the same number of digits: no per-row leading-group choice.
+        words = [_LUT4NZ[parts[0]]] + [_LUT4[g] for g in parts[1:]]
+        g0 = parts[0]
     else:
-        ndig = 1 + np.searchsorted(_POW10, ip, 'right')
-        lead = groups - (ndig + 3) // 4  # index of the first (partial) group
-        parts = []
-        rest = ip
-        for _ in range(groups - 1):
-            nxt = rest // 10000
-            parts.append(rest - nxt * 10000)
-            rest = nxt
-        parts.append(rest)
-        parts.reverse()
+        lead = np.zeros(len(ip), np.int64)  # index of the first non-zero group
+        for k in range(1, groups):
+            lead += ip < 10 ** (4 * (groups - k))
+        words = []
         for k, g in enumerate(parts):
             w = np.where(lead == k, _LUT4NZ[g], _LUT4[g])
             if k < groups - 1:
                 w[lead > k] = 0
             words.append(w)
+        g0 = np.where(lead == 0, parts[0], -1)  # -1: the first word is empty
+    # Free leading bytes of the first word: 4 - digits it holds (an empty word has 4).
+    free = 3 - (g0 >= 10).astype(np.int64) - (g0 >= 100) - (g0 >= 1000)
+    if groups > 1:
+        free[g0 < 0] = 4
+    need = neg.astype(np.int64) + (0 if first else 1)
+    any_neg = bool(neg.any())
+    if first and not any_neg:
+        pass
+    elif bool((free >= need).all()):
+        if first:
+            words[0] = words[0] | np.where(neg, _NEG, np.uint32(0))
+        else:
+            words[0] = words[0] | np.where(neg, _SEP_NEG, _SEP)
+    else:
+        sign = np.where(neg, _NEG if first else _SEP_NEG, np.uint32(0) if first else _SEP)
+        words.insert(0, sign.astype(np.uint32))
     if d:
         pieces = []
         rest = frac
@@ -172,20 +200,26 @@ def _put_specials(words: list[np.ndarray], rows: np.ndarray, v: np.ndarray, firs
 
 
 def write_rows(stream: IO[bytes], columns: Sequence[Column], n: int, header: bool = True,
-               block: int = 32768) -> int:
-    """Write ``n`` rows of ``columns`` as CSV to a binary stream; return the bytes written."""
+               block: int = 32768, start: int = 0) -> int:
+    """Write rows ``start`` to ``n - 1`` of ``columns`` as CSV to a binary stream (with the
+    header line if ``header``); return the bytes written."""
     written = 0
     if header:
         text = (','.join(c.name for c in columns) + '\n').encode()
         stream.write(text)
         written += len(text)
     newline = np.full(block, 10, np.uint32)
-    for lo in range(0, n, block):
+    label_last = len(columns) > 1 and isinstance(columns[-1], LabelColumn)
+    for lo in range(start, n, block):
         hi = min(lo + block, n)
         cols: list[np.ndarray] = []
         for i, c in enumerate(columns):
-            cols.extend(c.words(lo, hi, i == 0))
-        cols.append(newline[:hi - lo])
+            if label_last and i == len(columns) - 1:
+                cols.extend(c.words(lo, hi, False, True))
+            else:
+                cols.extend(c.words(lo, hi, i == 0))
+        if not label_last:
+            cols.append(newline[:hi - lo])
         data = np.stack(cols, axis=1).tobytes().translate(None, b'\0')
         stream.write(data)
         written += len(data)

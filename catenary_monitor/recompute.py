@@ -273,7 +273,7 @@ def recompute_line(line: LineConfig, alarm: LineAlarm, tension: tuple[np.ndarray
         values['depth'] = h
 
     # Merge the ticks: updates first at equal times; a tick repeats the previous inputs.
-    n_e, n_k = len(ev_t), len(tick_ns)
+    n_e = len(ev_t)
     all_t = np.concatenate((ev_t, tick_ns))
     order = np.argsort(all_t, kind='stable')
     is_ev = order < n_e

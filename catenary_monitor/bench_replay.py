@@ -1,0 +1,240 @@
+"""``catenary-monitor bench-replay``: replay speed against the obvious per-message loop.
+
+Generates (seeded) a log shaped like the node's: the paper dock's 12 lines at 10 Hz and the tide
+at 1 Hz, a storm that lifts line 11's anchor, zstd chunks of 512 KiB; ``--messages`` in total
+(default 1e6). Then, in the same run:
+
+* replay: decode + solve + alarms + CSV (``read_float64_topics``, :func:`recompute`,
+  :func:`write_csv` to a file), messages per second over the whole log;
+* MCAP output of the same results (inputs, per-line outputs, /diagnostics), reported beside;
+* baseline: the obvious loop -- ``mcap_ros2`` decoding of each message in log-time order, the
+  node's schedule with the scalar ``solve()`` and ``LineAlarm.update`` per update, ``csv.writer``
+  per tension row -- timed on the first ``--baseline-messages`` messages of the same log (its
+  rate does not depend on the log length).
+
+Targets (issue 4): replay >= 1e6 messages/s and >= 20 times the baseline. The machines are
+shared: read the ratio first.
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import math
+import os
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .alarms import AlarmInputs, LineAlarm
+from .cdr import float64_payloads
+from .config import LineConfig, MonitorConfig
+from .mcap_fast import ColumnWriter
+from .ros_schemas import QOS_SENSOR_DATA, message_definition
+from .solve import solve
+
+__all__ = ['dock_config', 'generate_log', 'run', 'register']
+
+T0_NS = 1_763_900_000_000_000_000
+
+
+def dock_config(lines: int = 12) -> MonitorConfig:
+    """The paper dock (config/floating_dock.yaml values): line 11 at 121.06 m."""
+    return MonitorConfig(lines=tuple(
+        LineConfig(name=f'line_{k:02d}', weight=1300.0,
+                   anchor_distance=121.06 if k == 11 else 120.0, mbl=4827000.0)
+        for k in range(1, lines + 1)))
+
+
+def generate_log(path: Path, messages: int, config: MonitorConfig, seed: int = 1,
+                 rate: float = 10.0, depth_rate: float = 1.0) -> dict[str, Any]:
+    """Write a seeded dock log of about ``messages`` Float64 messages; returns its facts."""
+    rng = np.random.default_rng(seed)
+    n_lines = len(config.lines)
+    per_second = n_lines * rate + depth_rate
+    seconds = messages / per_second
+    n_t = int(seconds * rate)
+    n_d = messages - n_t * n_lines
+    t_all, v_all, c_all = [], [], []
+    with open(path, 'wb') as f:
+        w = ColumnWriter(f, chunk_bytes=512 * 1024, level=3)
+        sid = w.register_schema('std_msgs/msg/Float64', 'ros2msg',
+                                message_definition('std_msgs/msg/Float64').encode())
+        meta = {'offered_qos_profiles': QOS_SENSOR_DATA}
+        for k, line in enumerate(config.lines):
+            cid = w.register_channel(line.tension_topic, 'cdr', sid, meta)
+            t = T0_NS + np.sort(rng.integers(0, int(seconds * 1e9), n_t))
+            s = (t - T0_NS) * 1e-9
+            storm = (1.25e6 if line.name == 'line_11' else 0.25e6) * np.exp(
+                -((s - seconds / 2) / (seconds / 10)) ** 2)
+            v = 372e3 + storm + 60e3 * np.sin(2 * np.pi * s / 9.0 + k) + rng.normal(0, 4e3, n_t)
+            t_all.append(t)
+            v_all.append(v)
+            c_all.append(np.full(n_t, cid))
+        cid = w.register_channel(config.depth_topic, 'cdr', sid, meta)
+        td = T0_NS + np.sort(rng.integers(0, int(seconds * 1e9), n_d))
+        t_all.append(td)
+        v_all.append(20.85 + 1.2 * np.sin(2 * np.pi * (td - T0_NS) * 1e-9 / 44700.0))
+        c_all.append(np.full(n_d, cid))
+        t = np.concatenate(t_all)
+        order = np.argsort(t, kind='stable')
+        w.write_columns(np.concatenate(c_all)[order], t[order],
+                        float64_payloads(np.concatenate(v_all)[order]))
+        w.finish()
+    return {'messages': int(len(t)), 'seconds': seconds, 'bytes': path.stat().st_size}
+
+
+def baseline(path: Path, config: MonitorConfig, limit: int, out: io.TextIOBase) -> int:
+    """The obvious loop over the first ``limit`` messages; returns the messages handled."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    topics = {line.tension_topic: line for line in config.lines}
+    alarms = {line.name: LineAlarm.for_line(line, config.alarm) for line in config.lines}
+    state = {name: a.initial() for name, a in alarms.items()}
+    inputs = {name: AlarmInputs() for name in alarms}
+    tension: dict[str, tuple[float, float]] = {}
+    depth, depth_t = math.nan, math.nan
+    period = 1.0 / config.alarm.diagnostic_rate
+    next_tick = None
+    writer = csv.writer(out)
+    writer.writerow(['time', 'line', 'top_tension', 'depth', 'min_anchor_distance',
+                     'anchor_margin', 'uplift_force', 'level'])
+
+    def step(line: LineConfig, t: float, now: float) -> Any:
+        r = solve(line.weight, depth + line.hook_height, tension=tension[line.name][0],
+                  anchor_distance=line.anchor_distance, mbl=line.mbl)
+        inputs[line.name] = AlarmInputs(r.uplift_force, r.anchor_margin, r.tide_margin,
+                                        r.load_margin, r.safety_factor, r.status, r.message,
+                                        tension[line.name][1], depth_t)
+        state[line.name], _ = alarms[line.name].update(state[line.name], inputs[line.name],
+                                                       now)
+        return r
+
+    n = 0
+    with open(path, 'rb') as f:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        for _, channel, message, decoded in reader.iter_decoded_messages(
+                topics=[config.depth_topic, *topics], log_time_order=True):
+            now = message.log_time * 1e-9
+            if next_tick is None:
+                next_tick = now
+            while next_tick <= now:
+                for name, a in alarms.items():
+                    state[name], _ = a.update(state[name], inputs[name], next_tick)
+                next_tick += period
+            if channel.topic == config.depth_topic:
+                depth, depth_t = decoded.data, now
+                for line in config.lines:
+                    if line.name in tension:
+                        step(line, now, now)
+            else:
+                line = topics[channel.topic]
+                tension[line.name] = (decoded.data, now)
+                if math.isnan(depth_t):
+                    r = None
+                else:
+                    r = step(line, now, now)
+                writer.writerow([repr(now), line.name, repr(decoded.data), repr(depth)] + (
+                    [repr(r.min_anchor_distance), repr(r.anchor_margin), repr(r.uplift_force)]
+                    if r is not None else ['nan'] * 3) + [state[line.name].level.name])
+            n += 1
+            if n >= limit:
+                break
+    return n
+
+
+def run(messages: int = 1_000_000, baseline_messages: int = 50_000,
+        workdir: str | None = None) -> dict[str, Any]:
+    """Generate the log, time replay, MCAP output and the baseline; returns the figures."""
+    from .replay import input_topics, run_replay
+    from .replay_output import write_csv, write_mcap
+
+    config = dock_config()
+    with tempfile.TemporaryDirectory(dir=workdir) as tmp:
+        log = Path(tmp) / 'dock.mcap'
+        t0 = time.perf_counter()
+        facts = generate_log(log, messages, config)
+        gen_s = time.perf_counter() - t0
+        log.read_bytes()  # warm the page cache: time the work, not the disk
+        t0 = time.perf_counter()
+        result, tensions, depth, report, timing = run_replay([log], config, ticks='grid')
+        t1 = time.perf_counter()
+        with open(Path(tmp) / 'out.csv', 'wb', buffering=1 << 20) as f:
+            rows = write_csv(f, result)
+        t2 = time.perf_counter()
+        csv_bytes = (Path(tmp) / 'out.csv').stat().st_size
+        topics, depth_topic = input_topics(config)
+        with open(Path(tmp) / 'out.mcap', 'wb', buffering=1 << 20) as f:
+            written = write_mcap(f, result, config, tensions, depth, topics, depth_topic)
+        t3 = time.perf_counter()
+        out_bytes = (Path(tmp) / 'out.mcap').stat().st_size
+        sink = io.StringIO()
+        t4 = time.perf_counter()
+        done = baseline(log, config, baseline_messages, sink)
+        base_s = time.perf_counter() - t4
+    n = facts['messages']
+    replay_s = t2 - t0
+    rate = n / replay_s
+    base_rate = done / base_s
+    return {
+        'messages': n, 'log_bytes': facts['bytes'], 'log_seconds': round(facts['seconds'], 1),
+        'generate_s': round(gen_s, 3),
+        'replay_s': round(replay_s, 3), 'read_s': round(timing['read_s'], 3),
+        'solve_alarm_s': round(timing['solve_s'], 3), 'csv_s': round(t2 - t1, 3),
+        'csv_rows': rows, 'csv_bytes': csv_bytes,
+        'replay_msg_per_s': round(rate), 'updates': result.updates,
+        'transitions': sum(len(r.transitions) for r in result.lines),
+        'mcap_out_s': round(t3 - t2, 3), 'mcap_out_messages': written,
+        'mcap_out_msg_per_s': round(written / (t3 - t2)), 'mcap_out_bytes': out_bytes,
+        'baseline_messages': done, 'baseline_s': round(base_s, 3),
+        'baseline_msg_per_s': round(base_rate),
+        'speedup': round(rate / base_rate, 1),
+        'target_rate_met': rate >= 1e6, 'target_speedup_met': rate / base_rate >= 20,
+    }
+
+
+def cmd_bench_replay(args: argparse.Namespace) -> int:
+    """Print the benchmark figures (table or JSON)."""
+    r = run(args.messages, args.baseline_messages, args.workdir)
+    if args.json:
+        print(json.dumps(r))
+        return 0
+    print(f'log: {r["messages"]} messages ({r["log_bytes"] / 1e6:.1f} MB, '
+          f'{r["log_seconds"]:.0f} s of dock time), generated in {r["generate_s"]:.2f} s')
+    print(f'replay (decode + solve + alarms + CSV): {r["replay_s"]:.3f} s = '
+          f'{r["replay_msg_per_s"] / 1e6:.2f} M msg/s  [read {r["read_s"]:.3f} s, '
+          f'solve+alarms {r["solve_alarm_s"]:.3f} s, CSV {r["csv_s"]:.3f} s for '
+          f'{r["csv_rows"]} rows / {r["csv_bytes"] / 1e6:.0f} MB]')
+    print(f'MCAP output: {r["mcap_out_messages"]} messages in {r["mcap_out_s"]:.3f} s = '
+          f'{r["mcap_out_msg_per_s"] / 1e6:.2f} M msg/s ({r["mcap_out_bytes"] / 1e6:.0f} MB)')
+    print(f'baseline (mcap_ros2 decode + scalar solve + alarm + csv.writer, first '
+          f'{r["baseline_messages"]} messages): {r["baseline_msg_per_s"] / 1e3:.1f} k msg/s')
+    print(f'speed-up: {r["speedup"]:.1f}x  (targets: >= 1e6 msg/s '
+          f'{"met" if r["target_rate_met"] else "NOT met"}, >= 20x '
+          f'{"met" if r["target_speedup_met"] else "NOT met"})')
+    return 0
+
+
+def register(sub: Any) -> None:
+    """Add ``bench-replay`` to the ``catenary-monitor`` parser."""
+    p = sub.add_parser('bench-replay', help='replay speed vs the per-message loop (benchmark)',
+                       description=__doc__.split('\n\n')[0])
+    p.add_argument('--messages', type=int, default=1_000_000,
+                   help='messages in the generated log (default 1e6)')
+    p.add_argument('--baseline-messages', type=int, default=50_000,
+                   help='messages timed for the baseline loop (default 50 000)')
+    p.add_argument('--workdir', default=os.environ.get('TMPDIR'),
+                   help='directory for the temporary files')
+    p.add_argument('--json', action='store_true', help='print one JSON object')
+    p.set_defaults(func=cmd_bench_replay)
+
+
+if __name__ == '__main__':  # pragma: no cover
+    sys.exit(cmd_bench_replay(argparse.Namespace(messages=1_000_000, baseline_messages=50_000,
+                                                 workdir=None, json=False)))
