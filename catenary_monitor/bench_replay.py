@@ -70,9 +70,9 @@ def generate_log(path: Path, messages: int, config: MonitorConfig, seed: int = 1
             cid = w.register_channel(line.tension_topic, 'cdr', sid, meta)
             t = T0_NS + np.sort(rng.integers(0, int(seconds * 1e9), n_t))
             s = (t - T0_NS) * 1e-9
-            storm = (1.25e6 if line.name == 'line_11' else 0.25e6) * np.exp(
+            storm = (1.25e6 if line.name == 'line_11' else 0.05e6) * np.exp(
                 -((s - seconds / 2) / (seconds / 10)) ** 2)
-            v = 372e3 + storm + 60e3 * np.sin(2 * np.pi * s / 9.0 + k) + rng.normal(0, 4e3, n_t)
+            v = 372e3 + storm + 40e3 * np.sin(2 * np.pi * s / 9.0 + k) + rng.normal(0, 4e3, n_t)
             t_all.append(t)
             v_all.append(v)
             c_all.append(np.full(n_t, cid))

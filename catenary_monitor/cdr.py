@@ -94,24 +94,45 @@ def multiarray_payloads(label: str, data: np.ndarray) -> np.ndarray:
 Status = tuple[int, str, str, str, Sequence[tuple[str, str]]]
 
 
+_U32 = struct.Struct('<I').pack
+_PAD = (b'', b'\0', b'\0\0', b'\0\0\0')
+_STRINGS: dict[str, bytes] = {}
+
+
+def _string(buf: bytearray, text: str) -> None:
+    """Append a CDR string (aligned uint32 length incl. NUL, UTF-8, NUL) to ``buf``.
+
+    ``buf`` starts with the 4-byte encapsulation header, so alignment is ``len(buf) % 4``.
+    """
+    cdr = _STRINGS.get(text)
+    if cdr is None:
+        data = text.encode('utf-8')
+        cdr = _U32(len(data) + 1) + data + b'\0'
+        if len(_STRINGS) < 4096:
+            _STRINGS[text] = cdr
+    buf += _PAD[-len(buf) % 4]
+    buf += cdr
+
+
 def diagnostic_array(stamp_ns: int, statuses: Sequence[Status], frame_id: str = '') -> bytes:
     """CDR of a ``diagnostic_msgs/msg/DiagnosticArray``.
 
     ``statuses``: ``(level, name, message, hardware_id, [(key, value), ...])`` each;
     ``stamp_ns`` fills ``header.stamp``.
     """
-    b = _Buffer()
-    b.i32(stamp_ns // 1_000_000_000)
-    b.u32(stamp_ns % 1_000_000_000)
-    b.string(frame_id)
-    b.u32(len(statuses))
+    buf = bytearray(ENCAPSULATION)
+    buf += struct.pack('<iI', stamp_ns // 1_000_000_000, stamp_ns % 1_000_000_000)
+    _string(buf, frame_id)
+    buf += _PAD[-len(buf) % 4]
+    buf += _U32(len(statuses))
     for level, name, message, hardware_id, values in statuses:
-        b.raw(bytes([level]))
-        b.string(name)
-        b.string(message)
-        b.string(hardware_id)
-        b.u32(len(values))
+        buf.append(level)
+        _string(buf, name)
+        _string(buf, message)
+        _string(buf, hardware_id)
+        buf += _PAD[-len(buf) % 4]
+        buf += _U32(len(values))
         for key, value in values:
-            b.string(key)
-            b.string(value)
-    return b.bytes()
+            _string(buf, key)
+            _string(buf, value)
+    return bytes(buf)

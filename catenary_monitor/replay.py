@@ -234,7 +234,7 @@ def _offline(args: argparse.Namespace) -> int:
     paths = _expand(args.logs)
     config = load_config(args.params_file)
     size = sum(p.stat().st_size for p in paths)
-    progress = Progress(not args.quiet and size > 8_000_000)
+    progress = Progress(args.progress or (not args.quiet and size > 8_000_000))
     t_start = time.perf_counter()
     result, tensions, depth, report, timing = run_replay(paths, config, ticks=args.ticks,
                                                          progress=progress)
@@ -345,6 +345,8 @@ def register(sub: Any) -> None:
                         'safety_factor, status')
     p.add_argument('--json', action='store_true', help='print the summary as one JSON object')
     p.add_argument('--quiet', action='store_true', help='no progress on stderr')
+    p.add_argument('--progress', action='store_true',
+                   help='show progress on stderr even for a short log (default: logs > 8 MB)')
     p.add_argument('--ticks', choices=('auto', 'log', 'grid'), default='auto',
                    help='periodic alarm steps: the log\'s /diagnostics times (auto: if present) '
                         'or a grid at diagnostic_rate')

@@ -224,7 +224,7 @@ _SHADE = {Level.WARN: ('#f2c744', 'WARN'), Level.STALE: ('#9e9e9e', 'STALE'),
           Level.ERROR: ('#d62728', 'ERROR')}
 
 
-def _envelope(t: np.ndarray, v: np.ndarray, bins: int = 3000) -> tuple[np.ndarray, np.ndarray]:
+def _envelope(t: np.ndarray, v: np.ndarray, bins: int = 1000) -> tuple[np.ndarray, np.ndarray]:
     """Min/max decimation keeping peaks: at most ``2 * bins`` points."""
     n = len(t)
     if n <= 2 * bins:
@@ -308,7 +308,7 @@ def write_plots(path: Path, result: ReplayResult, config: MonitorConfig,
         fig.suptitle(f'{r.name}: replay ({len(r.transitions)} alarm transitions)')
         fig.tight_layout()
         out = path.with_name(f'{path.stem}_{r.name}{path.suffix or ".png"}')
-        fig.savefig(out, dpi=90)
+        fig.savefig(out, dpi=72)
         plt.close(fig)
         written.append(out)
     n = len(result.lines)
@@ -327,7 +327,7 @@ def write_plots(path: Path, result: ReplayResult, config: MonitorConfig,
     axes[0, 0].legend(handles=legend, loc='upper left', fontsize=7, ncol=3)
     fig.suptitle('replay: hook tension per line, alarm periods shaded; tide')
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    fig.savefig(path, dpi=72)
     plt.close(fig)
     return [path] + written
 

@@ -157,3 +157,57 @@ def simulate_node(config: MonitorConfig, tensions: dict[str, tuple[np.ndarray, n
                 ln['transitions'] += ev
                 ln['ticks'].append((now_ns, int(ln['state'].level)))
     return lines
+
+
+def write_log(path: Path, config: MonitorConfig,
+              tensions: dict[str, tuple[np.ndarray, np.ndarray]],
+              depth: tuple[np.ndarray, np.ndarray], writer: str = 'column',
+              chunk_size: int = 16 * 1024) -> Path:
+    """Write the inputs as a ROS 2 MCAP log.
+
+    ``writer``: ``'column'`` (catenary_monitor.mcap_fast), ``'logger'`` (the node's McapLogger,
+    small chunks, no fsync) or ``'ros2'`` (mcap_ros2.writer, as rosbag2-compatible tools do).
+    """
+    topics = [(line.tension_topic, *tensions[line.name]) for line in config.lines
+              if line.name in tensions] + [(config.depth_topic, *depth)]
+    t = np.concatenate([tt for _, tt, _ in topics])
+    v = np.concatenate([vv for _, _, vv in topics])
+    k = np.concatenate([np.full(len(tt), i) for i, (_, tt, _) in enumerate(topics)])
+    order = np.argsort(t, kind='stable')
+    t, v, k = t[order], v[order], k[order]
+    if writer == 'column':
+        from catenary_monitor.cdr import float64_payloads
+        from catenary_monitor.mcap_fast import ColumnWriter
+        from catenary_monitor.ros_schemas import message_definition
+        with open(path, 'wb') as f:
+            w = ColumnWriter(f, chunk_bytes=chunk_size)
+            sid = w.register_schema('std_msgs/msg/Float64', 'ros2msg',
+                                    message_definition('std_msgs/msg/Float64').encode())
+            ids = [w.register_channel(name, 'cdr', sid) for name, _, _ in topics]
+            w.write_columns(np.array(ids)[k], t, float64_payloads(v))
+            w.finish()
+    elif writer == 'logger':
+        import struct
+        from catenary_monitor.mcap_log import McapLogger
+        log = McapLogger(path.parent, prefix=path.stem, chunk_size=chunk_size, fsync=False)
+        for name, _, _ in topics:
+            log.register(name, 'std_msgs/msg/Float64', 'sensor_data')
+        for tt, vv, kk in zip(t.tolist(), v.tolist(), k.tolist()):
+            log.write(topics[kk][0], b'\x00\x01\x00\x00' + struct.pack('<d', vv), tt)
+        log.close()
+        written = log.files[0]
+        written.rename(path)
+    elif writer == 'ros2':
+        from mcap_ros2.writer import Writer
+        from catenary_monitor.ros_schemas import message_definition
+        with open(path, 'wb') as f:
+            w = Writer(f, chunk_size=chunk_size)
+            schema = w.register_msgdef('std_msgs/msg/Float64',
+                                       message_definition('std_msgs/msg/Float64'))
+            for tt, vv, kk in zip(t.tolist(), v.tolist(), k.tolist()):
+                w.write_message(topics[kk][0], schema, {'data': vv}, log_time=tt,
+                                publish_time=tt)
+            w.finish()
+    else:
+        raise ValueError(writer)
+    return path
