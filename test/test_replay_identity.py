@@ -114,3 +114,21 @@ def test_rows_per_tension_message():
         assert (res.kind[rows] == KIND_TENSION).all()
         np.testing.assert_array_equal(res.values['top_tension'][rows][res.status[rows] == 0],
                                       tensions[res.name][1][res.status[rows] == 0])
+
+
+def test_latch_fast_path_without_breach():
+    """alarms._latch_series returns at once when no update breaches (most conditions of most
+    lines in a real log); it equals the scalar latch step, with and without breaches."""
+    from catenary_monitor import alarms
+    rng = np.random.default_rng(0)
+    t = np.cumsum(rng.uniform(0, 1, 400))
+    cases = [rng.choice([alarms._HOLD, alarms._CLEAR], 400),
+             np.full(400, alarms._CLEAR), np.full(400, alarms._HOLD),
+             rng.choice([alarms._HOLD, alarms._CLEAR, alarms._BREACH], 400)]
+    for codes in cases:
+        codes = codes.astype(np.int8)
+        latch, want = alarms.Latch(), []
+        for c, now in zip(codes.tolist(), t.tolist()):
+            latch = alarms._step(latch, c, now, 0.5, 3.0)
+            want.append(latch.active)
+        assert alarms._latch_series(codes, t, 0.5, 3.0).tolist() == want
