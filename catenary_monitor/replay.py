@@ -41,6 +41,7 @@ from .mcap_read import (EmptyLogError, McapReadError, ReadReport, TopicTypeError
 from .recompute import ReplayResult, recompute
 
 __all__ = ['register', 'cmd_replay', 'resolve_topic', 'input_topics', 'diagnostics_times',
+           'periodic_ticks',
            'run_replay', 'EXIT_EMPTY']
 
 #: Exit status for a log without any message on the requested topics.
@@ -143,6 +144,25 @@ def diagnostics_times(paths: Sequence[Path], report: Optional[ReadReport] = None
     return np.sort(np.concatenate(found)) if found else np.zeros(0, np.int64)
 
 
+def periodic_ticks(diag_ns: np.ndarray, tensions: dict[str, tuple[np.ndarray, np.ndarray]],
+                   depth: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """The periodic steps among the log times of ``/diagnostics`` messages.
+
+    The node also publishes ``/diagnostics`` at once when an update changes a level; such a
+    message steps no other line. When it is logged at the update's own time (the receive time
+    of the tension or depth message), it is recognised by that exact time and dropped: a step
+    of every line there would be one the node did not make. Repeated times are kept once.
+    """
+    diag_ns = np.unique(diag_ns)
+    inputs = [depth[0], *(t for t, _ in tensions.values())]
+    inputs = [t for t in inputs if len(t)]
+    if not len(diag_ns) or not inputs:
+        return diag_ns
+    update_ns = np.unique(np.concatenate(inputs))
+    pos = np.minimum(np.searchsorted(update_ns, diag_ns), len(update_ns) - 1)
+    return diag_ns[update_ns[pos] != diag_ns]
+
+
 def _expand(paths: Sequence[str]) -> list[Path]:
     out = []
     for p in paths:
@@ -198,7 +218,7 @@ def run_replay(paths: Sequence[Path], config: MonitorConfig, *, ticks: str = 'au
     tick_ns = None
     if ticks in ('auto', 'log'):
         t1 = time.perf_counter()
-        found = diagnostics_times(paths)
+        found = periodic_ticks(diagnostics_times(paths), tensions, depth)
         timing['ticks_s'] = time.perf_counter() - t1
         if len(found):
             tick_ns = found

@@ -122,7 +122,11 @@ def _diagnostics(result: ReplayResult, config: MonitorConfig,
     """
     times = set(result.tick_ns.tolist())
     for r in result.lines:
-        times.update(int(round(tr.time * 1e9)) for tr in r.transitions)
+        if r.transitions:
+            # The exact receive time (ns) of the step that made each transition.
+            steps = np.unique(np.concatenate((r.t_ns, r.tick_ns)))
+            at = np.searchsorted(steps * 1e-9, [tr.time for tr in r.transitions])
+            times.update(steps[np.minimum(at, len(steps) - 1)].tolist())
     stamps = np.array(sorted(times), np.int64)
     per_line = []
     for r in result.lines:

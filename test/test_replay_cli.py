@@ -136,6 +136,18 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
     assert again['ticks']['source'] == 'log /diagnostics'
     for r in ref.lines:
         assert again['lines'][r.name]['transitions'] == len(r.transitions)
+        assert [e['start'] for e in again['lines'][r.name]['episodes']] == \
+            [e['start'] for e in r.episodes()]
+
+
+def test_periodic_ticks_drop_update_triggered_diagnostics():
+    from catenary_monitor.replay import periodic_ticks
+    ten = {'a': (np.array([5, 17, 30]), np.zeros(3)), 'b': (np.array([12]), np.zeros(1))}
+    dep = (np.array([3, 25]), np.zeros(2))
+    diag = np.array([10, 17, 20, 20, 25, 26, 40])  # 17 and 25: logged at an update's time
+    assert periodic_ticks(diag, ten, dep).tolist() == [10, 20, 26, 40]
+    empty = (np.zeros(0, np.int64), np.zeros(0))
+    assert periodic_ticks(diag, {}, empty).tolist() == [10, 17, 20, 25, 26, 40]
 
 
 def test_csv_all_columns_and_stdout_summary(scene, capsys):
