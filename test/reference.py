@@ -84,3 +84,15 @@ def critical_tension(w, h, x):
         ld = _bisect(f, mp.mpf(-80), mp.mpf(8))
         a = x / (2 * mp.exp(ld))
         return w * (a + h)
+
+
+def grounded_from_length(w, h, length, x):
+    """Problem 5 (Hou 2005): chain of length Lm lying on the seabed, span x -> R, grounded length."""
+    with mp.workdps(DPS):
+        w, h, length, x = _mp(w, h, length, x)
+
+        def excess(log_a):  # (suspended length - span) - (Lm - x), decreasing in a
+            a = mp.exp(log_a)
+            return -((mp.sqrt(h * h + 2 * a * h) - a * mp.acosh(1 + h / a)) - (length - x))
+        a = mp.exp(_bisect(excess, mp.log(h) - 200, mp.log(h) + 200, iterations=260))
+        return {'horizontal_tension': w * a, 'grounded_length': length - mp.sqrt(h * h + 2 * a * h)}

@@ -160,3 +160,22 @@ def test_anchor_right_under_the_hook(frac):
     want = ref.uplift_from_tension(w, t, h, x)
     assert rel(r.uplift_force, want['uplift_force']) <= 1e-10
     assert rel(r.horizontal_tension, want['horizontal_tension']) <= 1e-10
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.tuples(log_uniform(1e-1, 1e3), log_uniform(1e-3, 1e3), log_uniform(1e-6, 1e3)))
+def test_problem5_chain_length(s):
+    """Chain lying on the seabed: R and grounded length from the paid-out length.
+
+    Scenes are built from a = R/w, h/a and the grounded length g/a. As Lm - x -> h the chain goes
+    slack (R -> 0) and R becomes ill-conditioned in Lm: the bound is stated for h/a <= 1e3.
+    """
+    a, ha, ga = s
+    h, g = ha * a, ga * a
+    x_s = a * math.acosh(1 + ha)
+    x, length = x_s + g, math.sqrt(h * h + 2 * a * h) + g
+    r = solve(10.0, h, chain_length=length, anchor_distance=x)
+    assert r.status == 0 and r.uplift_force == 0
+    want = ref.grounded_from_length(10.0, h, length, x)
+    assert rel(r.horizontal_tension, want['horizontal_tension']) <= REL
+    assert abs(r.grounded_length - float(want['grounded_length'])) <= REL * length
