@@ -305,3 +305,15 @@ def test_progress_on_long_logs(scene, tmp_path):
     assert 'replay: writing CSV 100%' in p.stderr
     p = _cli(scene['log'], '--params-file', scene['params'], '--quiet')
     assert p.stderr == ''
+
+
+def test_offline_replay_imports_without_rclpy():
+    """Offline replay needs no ROS: its modules import with rclpy unavailable."""
+    code = ('import sys; sys.modules["rclpy"] = None\n'
+            'import catenary_monitor.recompute, catenary_monitor.replay, '
+            'catenary_monitor.replay_output, catenary_monitor.fastcsv, catenary_monitor.cdr, '
+            'catenary_monitor.mcap_fast, catenary_monitor.bench_replay\n'
+            'from catenary_monitor.cli import build_parser; build_parser()\n')
+    p = subprocess.run([sys.executable, '-c', code], cwd=ROOT, capture_output=True, text=True,
+                       timeout=60)
+    assert p.returncode == 0, p.stderr
