@@ -12,12 +12,12 @@ Alignment follows the CDR rule: a primitive of size n starts at an offset (count
 from __future__ import annotations
 
 import struct
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
 __all__ = ['ENCAPSULATION', 'float64_payloads', 'multiarray_prefix', 'multiarray_payloads',
-           'diagnostic_array']
+           'diagnostic_array', 'status_header', 'key_values', 'diagnostic_array_parts']
 
 #: CDR little-endian encapsulation header.
 ENCAPSULATION = b'\x00\x01\x00\x00'
@@ -136,3 +136,58 @@ def diagnostic_array(stamp_ns: int, statuses: Sequence[Status], frame_id: str = 
             _string(buf, key)
             _string(buf, value)
     return bytes(buf)
+
+
+# --- DiagnosticArray from pre-encoded pieces (replay writes one per line per tick) ----------
+# A status is ``header(level, name, message, hardware_id, count)`` + ``key/value pairs``. The
+# header ends on a 4-byte boundary (the count), so the pairs' bytes never depend on where the
+# status starts; the header depends on it only through ``offset % 4``.
+
+def status_header(level: int, name: str, message: str, hardware_id: str, n_values: int,
+                  align: int) -> bytes:
+    """Bytes of a DiagnosticStatus up to its ``values`` count, starting at ``offset % 4 ==
+    align`` (the padding before each field included)."""
+    buf = bytearray(b'\0' * (4 + align))  # a stand-in prefix with the same alignment
+    start = len(buf)
+    buf.append(level)
+    _string(buf, name)
+    _string(buf, message)
+    _string(buf, hardware_id)
+    buf += _PAD[-len(buf) % 4]
+    buf += _U32(n_values)
+    return bytes(buf[start:])
+
+
+def key_values(pairs: Sequence[tuple[str, str]]) -> bytes:
+    """Bytes of a KeyValue sequence's elements, starting on a 4-byte boundary."""
+    out = []
+    pos = 0
+    for key, value in pairs:
+        k = _STRINGS.get(key)
+        if k is None:
+            data = key.encode('utf-8')
+            k = _U32(len(data) + 1) + data + b'\0'
+        pad = -pos & 3
+        out.append(_PAD[pad])
+        out.append(k)
+        pos += pad + len(k)
+        v = value.encode('utf-8')
+        pad = -pos & 3
+        out.append(_PAD[pad] + _U32(len(v) + 1) + v + b'\0')
+        pos += pad + 5 + len(v)
+    return b''.join(out)
+
+
+def diagnostic_array_parts(stamp_ns: int, statuses: Sequence[tuple[Callable[[int], bytes],
+                                                                   bytes]]) -> bytes:
+    """CDR of a DiagnosticArray (empty ``frame_id``) from, per status, a function giving its
+    header for an alignment (see :func:`status_header`) and its :func:`key_values` bytes."""
+    parts = [ENCAPSULATION, struct.pack('<iI', stamp_ns // 1_000_000_000,
+                                        stamp_ns % 1_000_000_000),
+             b'\x01\x00\x00\x00\x00\x00\x00\x00', _U32(len(statuses))]
+    align = 0  # offset 20 after the encapsulation
+    for header, pairs in statuses:
+        parts.append(header(align))
+        parts.append(pairs)
+        align = len(pairs) % 4
+    return b''.join(parts)

@@ -6,6 +6,7 @@ No rclpy: the MCAP messages are encoded by :mod:`catenary_monitor.cdr` and writt
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 import json
 import math
 from pathlib import Path
@@ -15,7 +16,8 @@ import numpy as np
 
 from . import __version__
 from .alarms import DIAGNOSTIC_KEYS, Level
-from .cdr import diagnostic_array, float64_payloads, multiarray_payloads
+from .cdr import (diagnostic_array_parts, float64_payloads, key_values, multiarray_payloads,
+                  status_header)
 from .config import MonitorConfig, config_hash, config_to_params
 from .fastcsv import FloatColumn, IntColumn, LabelColumn, write_rows
 from .mcap_fast import ColumnWriter
@@ -128,24 +130,29 @@ def _diagnostics(result: ReplayResult, config: MonitorConfig,
             at = np.searchsorted(steps * 1e-9, [tr.time for tr in r.transitions])
             times.update(steps[np.minimum(at, len(steps) - 1)].tolist())
     stamps = np.array(sorted(times), np.int64)
-    per_line = []
+    statuses: list[list[tuple[Any, bytes]]] = [[] for _ in range(len(stamps))]
     for r in result.lines:
         upd, level = _state_at(stamps, r)
         tr_t = np.array([tr.time for tr in r.transitions])
-        tr_i = np.searchsorted(tr_t, stamps * 1e-9 + 1e-7, 'right') - 1
-        per_line.append((r, upd, level, tr_i))
-    payloads = []
-    for k, stamp in enumerate(stamps.tolist()):
-        statuses = []
-        for r, upd, level, tr_i in per_line:
-            i = int(upd[k])
-            values = [(key, repr(float(r.values[key][i])) if i >= 0 else 'nan')
-                      for key in DIAGNOSTIC_KEYS]
-            j = int(tr_i[k])
-            message = r.transitions[j].message if j >= 0 else 'OK'
-            statuses.append((int(level[k]), f'{NODE_NAME}: {r.name}', message,
-                             topics[r.name], values))
-        payloads.append(diagnostic_array(stamp, statuses))
+        tr_i = np.searchsorted(tr_t, stamps * 1e-9, 'right') - 1
+        name, hw = f'{NODE_NAME}: {r.name}', topics[r.name]
+        n_keys = len(DIAGNOSTIC_KEYS)
+        headers: dict[tuple[int, int], Any] = {}
+        pairs: dict[int, bytes] = {-1: key_values([(k, 'nan') for k in DIAGNOSTIC_KEYS])}
+        used = np.unique(upd[upd >= 0])
+        texts = {key: dict(zip(used.tolist(), map(repr, r.values[key][used].tolist())))
+                 for key in DIAGNOSTIC_KEYS}
+        for k, (i, lv, j) in enumerate(zip(upd.tolist(), level.tolist(), tr_i.tolist())):
+            header = headers.get((lv, j))
+            if header is None:
+                message = r.transitions[j].message if j >= 0 else 'OK'
+                header = headers[(lv, j)] = functools.lru_cache(maxsize=4)(functools.partial(
+                    status_header, lv, name, message, hw, n_keys))
+            kv = pairs.get(i)
+            if kv is None:
+                kv = pairs[i] = key_values([(key, texts[key][i]) for key in DIAGNOSTIC_KEYS])
+            statuses[k].append((header, kv))
+    payloads = [diagnostic_array_parts(stamp, st) for stamp, st in zip(stamps.tolist(), statuses)]
     return stamps.tolist(), payloads
 
 
