@@ -285,7 +285,7 @@ def _offline(args: argparse.Namespace) -> int:
     summary = out.summary_dict(result, report, {
         'outputs': outputs, 'timing': {k: round(v, 3) for k, v in timing.items()}})
     if args.json:
-        print(json.dumps(summary, allow_nan=False, default=_json_default))
+        print(json.dumps(_finite(summary), allow_nan=False, default=_json_default))
     else:
         print(out.summary_text(summary))
     return 0
@@ -303,6 +303,17 @@ def _csv_columns(text: str) -> Sequence[str]:
         raise ReplayError(f'--csv-columns: unknown column {unknown[0]!r}; known: '
                           + ', '.join(name for name, _ in CSV_ALL))
     return names
+
+
+def _finite(value: Any) -> Any:
+    """The summary with non-finite floats as None (JSON has no NaN)."""
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
 
 
 def _json_default(value: Any) -> Any:

@@ -317,3 +317,21 @@ def test_offline_replay_imports_without_rclpy():
     p = subprocess.run([sys.executable, '-c', code], cwd=ROOT, capture_output=True, text=True,
                        timeout=60)
     assert p.returncode == 0, p.stderr
+
+
+def test_topic_names_resolve_like_the_node(tmp_path):
+    from catenary_monitor.replay import resolve_topic
+    from catenary_monitor.replay_publish import float64_topics
+    assert resolve_topic('/tide/depth') == '/tide/depth'
+    assert resolve_topic('mooring/a/tension') == '/mooring/a/tension'
+    assert resolve_topic('~/a/tension') == '/catenary_monitor/a/tension'
+    # --publish without a params file plays every Float64 topic (summary, or a scan when the
+    # file has none).
+    config = dock_config(2)
+    tensions, depth = generate(config, seconds=5.0, seed=2, dropouts=False)
+    log = write_log(tmp_path / 'a.mcap', config, tensions, depth)
+    want = ['/mooring/line_01/tension', '/mooring/line_02/tension', '/tide/depth']
+    assert sorted(float64_topics([log])) == want
+    cut = tmp_path / 'cut.mcap'
+    cut.write_bytes(log.read_bytes()[:-200])
+    assert sorted(float64_topics([cut])) == want
