@@ -335,3 +335,14 @@ def test_topic_names_resolve_like_the_node(tmp_path):
     cut = tmp_path / 'cut.mcap'
     cut.write_bytes(log.read_bytes()[:-200])
     assert sorted(float64_topics([cut])) == want
+
+
+def test_bench_replay_command_runs():
+    """Smoke test of the benchmark command (not a timing test: the figures are not checked)."""
+    p = subprocess.run([sys.executable, '-m', 'catenary_monitor.cli', 'bench-replay',
+                        '--messages', '20000', '--baseline-messages', '300', '--json'],
+                       cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert p.returncode == 0, p.stderr
+    r = json.loads(p.stdout)
+    assert r['messages'] == 20000 and r['csv_rows'] > 19000 and r['transitions'] > 0
+    assert r['baseline_messages'] == 300 and r['mcap_out_messages'] > 40000
