@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Callable, Mapping, Optional, Sequence
+from typing import Callable, Mapping, Optional
 
 import numpy as np
 
@@ -356,8 +356,3 @@ def worst(result: LineResult) -> dict[str, Optional[dict[str, float]]]:
         i = int(pick(v))
         out[key] = {'value': float(v[i]), 'time': float(result.t_ns[i] * 1e-9)}
     return out
-
-
-def level_names(levels: Sequence[int]) -> list[str]:
-    """Level names for an array of level numbers."""
-    return [Level(int(v)).name for v in levels]

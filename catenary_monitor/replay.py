@@ -261,14 +261,14 @@ def _offline(args: argparse.Namespace) -> int:
     outputs: dict[str, Any] = {}
     if args.csv:
         t1 = time.perf_counter()
-        with _open_out(args.csv) as f:
+        with _OutputFile(args.csv) as f:
             rows = out.write_csv(f, result, progress, _csv_columns(args.csv_columns))
         timing['csv_s'] = time.perf_counter() - t1
         outputs['csv'] = f'{args.csv} ({rows} rows)'
     if args.out:
         t1 = time.perf_counter()
         topics, depth_topic = input_topics(config)
-        with _open_out(args.out) as f:
+        with _OutputFile(args.out) as f:
             n = out.write_mcap(f, result, config, tensions, depth, topics, depth_topic,
                                [str(p) for p in paths], progress)
         timing['mcap_s'] = time.perf_counter() - t1
@@ -322,7 +322,7 @@ def _json_default(value: Any) -> Any:
     raise TypeError(f'not JSON serializable: {type(value).__name__}')
 
 
-class _open_out:
+class _OutputFile:
     """Open an output file for writing; a failure is a one-line ReplayError."""
 
     def __init__(self, path: str) -> None:
