@@ -317,7 +317,7 @@ def write_plots(path: Path, result: ReplayResult, config: MonitorConfig,
         axes[3].set_xlabel('time (UTC)')
         axes[0].legend(handles=legend, loc='upper left', fontsize=8, ncol=3)
         fig.suptitle(f'{r.name}: replay ({len(r.transitions)} alarm transitions)')
-        fig.tight_layout()
+        fig.subplots_adjust(left=0.08, right=0.98, top=0.94, bottom=0.07, hspace=0.12)
         out = path.with_name(f'{path.stem}_{r.name}{path.suffix or ".png"}')
         fig.savefig(out, dpi=72)
         plt.close(fig)
@@ -337,7 +337,8 @@ def write_plots(path: Path, result: ReplayResult, config: MonitorConfig,
     ax.set_xlabel('time (UTC)')
     axes[0, 0].legend(handles=legend, loc='upper left', fontsize=7, ncol=3)
     fig.suptitle('replay: hook tension per line, alarm periods shaded; tide')
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.09, right=0.98, top=1 - 0.75 / (1.6 * (n + 1) + 1),
+                        bottom=0.6 / (1.6 * (n + 1) + 1), hspace=0.15)
     fig.savefig(path, dpi=72)
     plt.close(fig)
     return [path] + written

@@ -5,6 +5,7 @@ subscribes to the input topics and checks that every message arrives, in order, 
 recorded value and the recorded timing divided by ``--rate``.
 """
 import os
+import signal
 import subprocess
 import sys
 import threading
@@ -69,13 +70,36 @@ def test_publish_plays_the_recorded_inputs(tmp_path):
     total = sum(len(t) for t, _ in topics.values())
     while time.monotonic() < deadline and sum(len(v) for v in got.values()) < total:
         time.sleep(0.05)
+    first = {k: list(v) for k, v in got.items()}
+    # --loop: the log plays again and again until SIGTERM (exit 0).
+    with lock:
+        got.clear()
+    looping = subprocess.Popen(
+        [sys.executable, '-m', 'catenary_monitor.cli', 'replay', str(log), '--publish',
+         '--rate', '20', '--loop', '--wait-subscribers', '20', '--quiet'],
+        cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        deadline = time.monotonic() + 30.0
+        depth_topic = config.depth_topic
+        while time.monotonic() < deadline and len(got[depth_topic]) < 2.5 * len(depth[0]):
+            time.sleep(0.05)
+        looping.send_signal(signal.SIGTERM)
+        loop_code = looping.wait(10)
+    finally:
+        if looping.poll() is None:
+            looping.kill()
     executor.shutdown()
     node.destroy_node()
     rclpy.try_shutdown()
     assert proc.returncode == 0, err
     assert f'{total} messages on 3 topic(s)' in err
+    assert loop_code == 0
+    played = [v for _, v in got[config.depth_topic]]
+    n_depth = len(depth[0])
+    assert len(played) >= 2 * n_depth
+    assert played[n_depth:2 * n_depth] == played[:n_depth] == depth[1].tolist()
     for topic, (t_ns, values) in topics.items():
-        arrived = got[topic]
+        arrived = first[topic]
         assert [v for _, v in arrived] == values.tolist(), topic
         # Recorded timing scaled by 1/rate: compare the spans (scheduling jitter allowed).
         span_recorded = (t_ns[-1] - t_ns[0]) * 1e-9 / rate
