@@ -346,3 +346,12 @@ def test_bench_replay_command_runs():
     r = json.loads(p.stdout)
     assert r['messages'] == 20000 and r['csv_rows'] > 19000 and r['transitions'] > 0
     assert r['baseline_messages'] == 300 and r['mcap_out_messages'] > 40000
+
+
+def test_ticks_option(scene, capsys):
+    code, out = run_cli(scene['log'], '--params-file', scene['params'], '--ticks', 'log',
+                        capsys=capsys)
+    assert code == 2 and 'no /diagnostics' in out.err
+    code, out = run_cli(scene['log'], '--params-file', scene['params'], '--ticks', 'grid',
+                        '--json', capsys=capsys)
+    assert code == 0 and json.loads(out.out)['ticks']['source'] == 'synthetic grid'
