@@ -423,7 +423,10 @@ def summary_text(summary: dict[str, Any]) -> str:
                    f'tide margin {_fmt(w["tide_margin"], 1, "m", "+.2f")}')
         out.append(f'  worst load margin {_fmt(w["load_margin"], 1e3, "kN", "+.1f")}; '
                    f'safety factor {_fmt(w["safety_factor"], 1, "", ".2f")}')
-        out.append(f'  max uplift {_fmt(w["uplift_force"], 1e3, "kN", ".1f")}; '
+        uplift = w['uplift_force']
+        lifted = 'none (anchor never lifted)' if uplift is not None and uplift['value'] == 0 \
+            else _fmt(uplift, 1e3, 'kN', '.1f')
+        out.append(f'  max uplift {lifted}; '
                    f'max hook tension {_fmt(w["top_tension"], 1e3, "kN", ".1f")}')
         eps = ln['episodes']
         if not eps:
@@ -434,7 +437,7 @@ def summary_text(summary: dict[str, Any]) -> str:
             dur = '' if e['duration'] is None else f'{e["duration"]:.1f} s, '
             out.append(f'  {e["worst"]:<5} from {_utc(e["start"])} ({dur}{end}): {e["message"]}')
     for key in ('outputs', 'timing'):
-        if key in summary:
+        if summary.get(key):
             out.append('')
             out.append(f'{key}: ' + ', '.join(f'{k} {v}' for k, v in summary[key].items()))
     return '\n'.join(out)
