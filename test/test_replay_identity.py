@@ -6,13 +6,14 @@ solver calls (scalar on a tension sample, one array call on a depth sample).
 """
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
 
 from catenary_monitor.alarms import Level
 from catenary_monitor.recompute import (KIND_TENSION, VALUE_FIELDS, critical_parameters,
                                         recompute, solve_updates, tick_grid)
 from catenary_monitor.solve import solve
 
-from replay_data import dock_config, generate, simulate_node
+from replay_data import T0_NS, dock_config, generate, simulate_node
 
 
 def _compare(config, tensions, depth, ticks):
@@ -132,3 +133,28 @@ def test_latch_fast_path_without_breach():
             latch = alarms._step(latch, c, now, 0.5, 3.0)
             want.append(latch.active)
         assert alarms._latch_series(codes, t, 0.5, 3.0).tolist() == want
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(data=st.data())
+def test_random_schedules_equal_the_node(data):
+    """Short random schedules: any interleaving of tension, depth and ticks, equal times, gaps,
+    impossible samples, uplift and warning crossings, on-delays and hold times."""
+    on_delay = data.draw(st.sampled_from([0.0, 0.3]))
+    config = dock_config(2, on_delay=on_delay, clear_hold=data.draw(st.sampled_from([0.0, 0.7])),
+                         warn_clear_hold=0.5, tension_timeout=0.6, depth_timeout=1.1)
+    grid = st.integers(0, 40).map(lambda k: T0_NS + k * 100_000_000)  # 0.1 s grid: collisions
+    tension_value = st.one_of(st.floats(3.0e5, 2.0e6), st.sampled_from([float('nan'), -1.0, 0.0]))
+    tensions = {}
+    for line in config.lines:
+        times = sorted(data.draw(st.lists(grid, max_size=25)))
+        values = data.draw(st.lists(tension_value, min_size=len(times), max_size=len(times)))
+        tensions[line.name] = (np.array(times, np.int64), np.array(values, float))
+    d_times = sorted(data.draw(st.lists(grid, max_size=8)))
+    d_values = data.draw(st.lists(st.one_of(st.floats(15.0, 26.0), st.just(-1.0)),
+                                  min_size=len(d_times), max_size=len(d_times)))
+    depth = (np.array(d_times, np.int64), np.array(d_values, float))
+    ticks = np.array(sorted(set(data.draw(st.lists(grid, max_size=12)))), np.int64)
+    if not any(len(t) for t, _ in tensions.values()) and not len(d_times) and not len(ticks):
+        return
+    _compare(config, tensions, depth, ticks)
