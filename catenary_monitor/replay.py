@@ -35,7 +35,8 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
-from .config import ConfigError, MonitorConfig, config_from_params, load_params_file
+from .config import (ConfigError, MonitorConfig, config_from_params, config_hash,
+                     load_params_file)
 from .mcap_read import (EmptyLogError, McapReadError, ReadReport, TopicTypeError,
                         iter_messages, read_float64_topics)
 from .recompute import ReplayResult, recompute
@@ -178,6 +179,47 @@ def _expand(paths: Sequence[str]) -> list[Path]:
     return out
 
 
+def log_parameters(paths: Sequence[Path]) -> Optional[tuple[str, dict[str, Any]]]:
+    """``(config hash, flat parameters)`` of the last ``catenary_monitor`` metadata record of
+    the files (the node writes one at start and on every parameter change), or None.
+
+    Finished files answer from their summary; an unfinished file from its first MiB (where
+    the node's logger writes the record).
+    """
+    import io
+    from mcap.reader import NonSeekingReader, make_reader
+    found = None
+    for path in paths:
+        records = []
+        try:
+            with open(path, 'rb') as f:
+                reader = make_reader(f)
+                try:
+                    summary = reader.get_summary()
+                except Exception:  # noqa: BLE001 - no footer: the writer was killed
+                    summary = None
+                if summary is not None:
+                    records = list(reader.iter_metadata())
+                else:
+                    f.seek(0)
+                    head = NonSeekingReader(io.BytesIO(f.read(1 << 20)))
+                    try:
+                        for record in head.iter_metadata():
+                            records.append(record)
+                    except Exception:  # noqa: BLE001 - the cut at 1 MiB, or damage
+                        pass
+        except Exception:  # noqa: BLE001 - an unreadable summary: no parameters from it
+            continue
+        for record in records:
+            if record.name == NODE_NAME and 'parameters' in record.metadata:
+                try:
+                    found = (record.metadata.get('config_hash', ''),
+                             json.loads(record.metadata['parameters']))
+                except ValueError:
+                    continue
+    return found
+
+
 def load_config(path: str) -> MonitorConfig:
     """The monitor configuration of a params file (ReplayError with the one-line reason)."""
     try:
@@ -240,8 +282,6 @@ def cmd_replay(args: argparse.Namespace) -> int:
             config = load_config(args.params_file) if args.params_file else None
             return publish(paths, config, rate=args.rate, loop=args.loop,
                            wait=args.wait_subscribers, quiet=args.quiet)
-        if not args.params_file:
-            raise ReplayError('--params-file is required (it names the topics and the lines)')
         return _offline(args)
     except ReplayError as err:
         print(f'catenary-monitor replay: {err}', file=sys.stderr)
@@ -252,7 +292,23 @@ def _offline(args: argparse.Namespace) -> int:
     from . import replay_output as out
 
     paths = _expand(args.logs)
-    config = load_config(args.params_file)
+    recorded = log_parameters(paths)
+    if args.params_file:
+        config = load_config(args.params_file)
+        source = args.params_file
+    elif recorded is not None:
+        try:
+            config = config_from_params(recorded[1])
+        except ConfigError as err:
+            raise ReplayError(f'the parameters recorded in the log are invalid: {err}; give '
+                              '--params-file') from err
+        source = 'recorded in the log'
+    else:
+        raise ReplayError('--params-file is required: the log holds no catenary_monitor '
+                          'parameters (it names the topics and the lines)')
+    params = {'source': source, 'config_hash': config_hash(config),
+              'recorded_config_hash': recorded[0] if recorded else None}
+    params['same_as_recorded'] = None if recorded is None else params['config_hash'] == recorded[0]
     size = sum(p.stat().st_size for p in paths)
     progress = Progress(args.progress or (not args.quiet and size > 8_000_000))
     t_start = time.perf_counter()
@@ -283,7 +339,8 @@ def _offline(args: argparse.Namespace) -> int:
     progress.done()
     timing['total_s'] = time.perf_counter() - t_start
     summary = out.summary_dict(result, report, {
-        'outputs': outputs, 'timing': {k: round(v, 3) for k, v in timing.items()}})
+        'parameters': params, 'outputs': outputs,
+        'timing': {k: round(v, 3) for k, v in timing.items()}})
     if args.json:
         print(json.dumps(_finite(summary), allow_nan=False, default=_json_default))
     else:
@@ -362,7 +419,8 @@ def register(sub: Any) -> None:
     p.add_argument('logs', nargs='+', metavar='LOG.mcap',
                    help='MCAP file(s) (a rotated set) or directories of *.mcap')
     p.add_argument('--params-file', metavar='FILE',
-                   help='ROS 2 params YAML of the monitor (lines, topics, alarm settings)')
+                   help='ROS 2 params YAML of the monitor (lines, topics, alarm settings); '
+                        'default: the parameters the node recorded in the log')
     p.add_argument('--out', metavar='RESULTS.mcap',
                    help='write inputs, per-line outputs and /diagnostics as a ROS 2 MCAP log')
     p.add_argument('--csv', metavar='RESULTS.csv',

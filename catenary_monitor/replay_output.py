@@ -405,6 +405,15 @@ def summary_text(summary: dict[str, Any]) -> str:
            f'{_utc(summary["start"])} to {_utc(summary["end"])} UTC '
            f'({summary["duration"]:.1f} s); {summary["ticks"]["count"]} periodic steps '
            f'({summary["ticks"]["source"]})']
+    par = summary.get('parameters')
+    if par:
+        text = f'parameters: {par["source"]} (config hash {par["config_hash"][:12]})'
+        if par['same_as_recorded'] is False:
+            text += (f'; the log was recorded with other parameters (config hash '
+                     f'{par["recorded_config_hash"][:12]})')
+        elif par['same_as_recorded']:
+            text += '; the same as recorded in the log'
+        out.append(text)
     if summary['skipped'] or summary['unfinished_files']:
         out.append('DAMAGED INPUT: everything readable was used; skipped:')
         for f in summary['unfinished_files']:

@@ -355,3 +355,32 @@ def test_ticks_option(scene, capsys):
     code, out = run_cli(scene['log'], '--params-file', scene['params'], '--ticks', 'grid',
                         '--json', capsys=capsys)
     assert code == 0 and json.loads(out.out)['ticks']['source'] == 'synthetic grid'
+
+
+def test_parameters_recorded_in_the_log(scene, capsys, tmp_path):
+    """Without --params-file, replay takes the parameters the log recorded (the node's
+    metadata record); with one, the summary says whether they differ from the recorded."""
+    results = tmp_path / 'results.mcap'
+    assert run_cli(scene['log'], '--params-file', scene['params'], '--out', results,
+                   capsys=capsys)[0] == 0
+    code, out = run_cli(results, '--json', capsys=capsys)
+    assert code == 0, out.err
+    par = json.loads(out.out)['parameters']
+    assert par['source'] == 'recorded in the log' and par['same_as_recorded'] is True
+    other = params_yaml(dock_config(3, clear_hold=9.0), tmp_path / 'other.yaml')
+    code, out = run_cli(results, '--params-file', other, capsys=capsys)
+    assert code == 0 and 'the log was recorded with other parameters' in out.out
+    # An unfinished file written by the node's logger: the record is near its start.
+    from catenary_monitor.mcap_log import McapLogger
+    from catenary_monitor.config import config_hash, config_to_params
+    from catenary_monitor.replay import log_parameters
+    log = McapLogger(tmp_path / 'node', fsync=False)
+    log.add_metadata('catenary_monitor', {
+        'config_hash': config_hash(scene['config']),
+        'parameters': json.dumps(config_to_params(scene['config']))})
+    log.register('/tide/depth', 'std_msgs/msg/Float64')
+    log.write('/tide/depth', b'\x00\x01\x00\x00' + bytes(8), 1)
+    log.flush()
+    got = log_parameters([log.current_path])
+    assert got is not None and got[0] == config_hash(scene['config'])
+    log.close()
