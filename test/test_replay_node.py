@@ -155,3 +155,14 @@ def test_replay_of_a_live_node_log_matches_the_node(tmp_path):
         for (_, _, message), tr in zip(said, r.transitions):
             if tr.time in updates:
                 assert message == tr.message, r.name
+
+
+@pytest.mark.skipif(not _node_available(), reason='the live node (catenary_monitor.node) is '
+                                                  'not in this tree yet')
+def test_output_layout_is_the_nodes():
+    """Replay writes the node's per-line output layout (recompute.OUTPUT_FIELDS)."""
+    from catenary_monitor import node
+    from catenary_monitor.recompute import OUTPUT_FIELDS
+    from catenary_monitor.replay_output import NODE_NAME, output_topic
+    assert node.OUTPUT_FIELDS == OUTPUT_FIELDS
+    assert node.NODE_NAME == NODE_NAME and output_topic('l1') == f'/{node.NODE_NAME}/l1/outputs'
