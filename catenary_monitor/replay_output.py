@@ -200,10 +200,9 @@ def write_mcap(stream: IO[bytes], result: ReplayResult, config: MonitorConfig,
                                                  for n in topics if n in tensions]
     t_in_all = np.concatenate(t_in)
     order = np.argsort(t_in_all, kind='stable')
-    w.write_columns(np.concatenate(c_in)[order], t_in_all[order],
-                    float64_payloads(np.concatenate(v_in)[order]))
-    if progress is not None:
-        progress('writing MCAP', 0.2)
+    t_in_all = t_in_all[order]
+    c_in_all = np.concatenate(c_in)[order]
+    v_in_all = np.concatenate(v_in)[order]
     # Outputs, merged in time order.
     t_out = np.concatenate([r.t_ns for r in result.lines])
     c_out = np.concatenate([np.full(len(r.t_ns), cid) for r, cid in zip(result.lines, out_ids)])
@@ -212,18 +211,33 @@ def write_mcap(stream: IO[bytes], result: ReplayResult, config: MonitorConfig,
     columns = [np.concatenate([r.values[key] for r in result.lines]) for key in VALUE_FIELDS]
     columns.append(np.concatenate([r.status for r in result.lines]).astype(np.float64))
     columns.append(np.concatenate([r.level for r in result.lines]).astype(np.float64))
-    n_out = len(t_out)
-    step = 1 << 17
-    for lo in range(0, n_out, step):
-        sel = order[lo:lo + step]
-        data = np.empty((len(sel), len(OUTPUT_FIELDS)))
-        for k, col in enumerate(columns):
-            data[:, k] = col[sel]
-        w.write_columns(c_out[sel], t_out[sel], multiarray_payloads(label, data))
-        if progress is not None:
-            progress('writing MCAP', 0.2 + 0.6 * min(1.0, (lo + step) / max(n_out, 1)))
     stamps, payloads = _diagnostics(result, config, topics)
-    w.write_messages(diag_id, stamps, payloads)
+    diag_t = np.asarray(stamps, np.int64)
+    # Written window by window (inputs, outputs, diagnostics of each time window), so that the
+    # chunks of the three streams overlap only within a window.
+    n_out = len(t_out)
+    step = 1 << 14  # about two minutes of a 12-line dock at 10 Hz
+    t_sorted = t_out[order]
+    edges = [t_sorted[k] for k in range(step, n_out, step)]
+    bounds = [None, *edges, None]
+    for k in range(len(bounds) - 1):
+        lo_t, hi_t = bounds[k], bounds[k + 1]
+
+        def part(times: np.ndarray) -> slice:
+            a = 0 if lo_t is None else int(np.searchsorted(times, lo_t, 'left'))
+            b = len(times) if hi_t is None else int(np.searchsorted(times, hi_t, 'left'))
+            return slice(a, b)
+        s_in = part(t_in_all)
+        w.write_columns(c_in_all[s_in], t_in_all[s_in], float64_payloads(v_in_all[s_in]))
+        sel = order[part(t_sorted)]
+        data = np.empty((len(sel), len(OUTPUT_FIELDS)))
+        for j, col in enumerate(columns):
+            data[:, j] = col[sel]
+        w.write_columns(c_out[sel], t_out[sel], multiarray_payloads(label, data))
+        s_d = part(diag_t)
+        w.write_messages(diag_id, stamps[s_d], payloads[s_d])
+        if progress is not None:
+            progress('writing MCAP', (k + 1) / (len(bounds) - 1))
     w.finish()
     if progress is not None:
         progress('writing MCAP', 1.0)
