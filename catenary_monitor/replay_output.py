@@ -61,7 +61,8 @@ def _tension_rows(result: ReplayResult, keys: Sequence[str] = VALUE_FIELDS
     order = np.argsort(t, kind='stable')
     values = {k: np.concatenate([r.values[k][rows] for r, rows in parts])[order]
               for k in VALUE_FIELDS if k in keys}
-    status = np.concatenate([r.status[rows] for r, rows in parts])[order]
+    status = np.concatenate([r.status[rows] for r, rows in parts])[order] \
+        if 'status' in keys else np.zeros(0, np.int64)
     level = np.concatenate([r.level[rows] for r, rows in parts])[order]
     return t[order], values, line[order], status, level
 
