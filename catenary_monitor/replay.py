@@ -309,6 +309,7 @@ def _offline(args: argparse.Namespace) -> int:
     params = {'source': source, 'config_hash': config_hash(config),
               'recorded_config_hash': recorded[0] if recorded else None}
     params['same_as_recorded'] = None if recorded is None else params['config_hash'] == recorded[0]
+    csv_columns = _csv_columns(args.csv_columns)
     size = sum(p.stat().st_size for p in paths)
     progress = Progress(args.progress or (not args.quiet and size > 8_000_000))
     t_start = time.perf_counter()
@@ -318,7 +319,7 @@ def _offline(args: argparse.Namespace) -> int:
     if args.csv:
         t1 = time.perf_counter()
         with _OutputFile(args.csv) as f:
-            rows = out.write_csv(f, result, progress, _csv_columns(args.csv_columns))
+            rows = out.write_csv(f, result, progress, csv_columns)
         timing['csv_s'] = time.perf_counter() - t1
         outputs['csv'] = f'{args.csv} ({rows} rows)'
     if args.out:
