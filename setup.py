@@ -39,6 +39,8 @@ setup(
     entry_points={
         'console_scripts': [
             'catenary-monitor = catenary_monitor.cli:main',
+            'monitor = catenary_monitor.node:main',
+            'dock_simulator = catenary_monitor.simulator:main',
         ],
     },
 )

@@ -1,4 +1,4 @@
-"""``catenary-monitor``: the command line (solve, paper, bench-core; node, replay and bench added by their modules).
+"""``catenary-monitor``: the command line (solve, paper, bench; run, demo, replay and the other benchmarks come from their modules).
 
 Exit status: 0 success, 2 invalid or physically impossible input (one line on stderr naming it),
 1 unexpected failure.
@@ -161,8 +161,6 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser('paper', help="print the seed paper's floating-dock examples, solved")
     p.set_defaults(func=cmd_paper)
-    p = sub.add_parser('demo', help='the embedded default: the paper dock example')
-    p.set_defaults(func=cmd_paper)
 
     for register in _extensions():
         register(sub)
@@ -171,8 +169,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
     """Sub-command registrars of the other modules (imported lazily: no rclpy for `solve`)."""
-    from . import bench_core, bench_replay, replay
-    return [bench_core.register, replay.register, bench_replay.register]
+    from . import bench_core, bench_replay, node_cli, replay
+    return [bench_core.register, node_cli.register, replay.register, bench_replay.register]
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

@@ -1,0 +1,228 @@
+"""``catenary-monitor demo``: the paper's dock through a storm, simulator and monitor as processes.
+
+Starts the monitor (``python -m catenary_monitor.node``) on config/floating_dock.yaml, then the
+dock simulator (``python -m catenary_monitor.simulator``); prints each alarm transition the
+monitor reports as it happens; after the episode stops the monitor with SIGINT (the MCAP file
+gets its summary), reads the log back and draws a PNG chart (matplotlib, Agg backend).
+The demo itself imports no rclpy except to decode the logged outputs for the chart.
+"""
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+from .simulator import default_config_path
+
+__all__ = ['run_demo', 'DEMO_OVERRIDES']
+
+#: Alarm timings for the compressed episode (the storm and a tide cycle in under a minute):
+#: clear holds longer than the simulator's 4 s wave period, shorter than the episode.
+DEMO_OVERRIDES = {'clear_hold': 6.0, 'warn_clear_hold': 6.0}
+
+_ALARM = re.compile(r'\[(\d+\.\d+)\] \[[^\]]+\]: ALARM (\S+): (\S+) -> (\S+): (.*)$')
+_LEVEL_COLOURS = {'OK': '', 'WARN': '\033[33m', 'ERROR': '\033[31;1m', 'STALE': '\033[35m'}
+
+
+def _env() -> dict[str, str]:
+    """Child environment: this package importable, discovery on this machine, a private domain."""
+    env = dict(os.environ)
+    root = str(Path(__file__).resolve().parent.parent)
+    env['PYTHONPATH'] = os.pathsep.join(p for p in (root, env.get('PYTHONPATH')) if p)
+    env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    env.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 100))
+    env['PYTHONUNBUFFERED'] = '1'
+    env['RCUTILS_LOGGING_BUFFERED_STREAM'] = '0'
+    return env
+
+
+def _relay(proc: subprocess.Popen, t0: float, colour: bool, events: list, ready: threading.Event,
+           transcript: list) -> None:
+    """Print the monitor's alarm transitions as they arrive; keep everything it says."""
+    assert proc.stdout is not None
+    for raw in proc.stdout:
+        line = raw.rstrip('\n')
+        transcript.append(line)
+        if 'monitoring' in line:
+            ready.set()
+        m = _ALARM.search(line)
+        if m:
+            stamp, name, old, new, text = m.groups()
+            t = time.time() - t0
+            events.append((t, name, old, new, text))
+            on, off = (_LEVEL_COLOURS.get(new, ''), '\033[0m') if colour else ('', '')
+            print(f'  t = {t:5.1f} s  {on}{name:8s} {old:>5s} -> {new:5s}{off}  {text}',
+                  flush=True)
+        elif 'Traceback' in line or line.startswith('catenary_monitor:'):
+            print(f'  monitor: {line}', file=sys.stderr, flush=True)
+
+
+def run_demo(out_dir: str = 'catenary_monitor_demo', duration: float = 55.0,
+             params_file: Optional[str] = None) -> int:
+    """Run the demo; return 0 on success. Leaves the MCAP log and ``demo.png`` in ``out_dir``."""
+    params = params_file or default_config_path()
+    out = Path(out_dir).resolve()
+    log_dir = out / 'log'
+    log_dir.mkdir(parents=True, exist_ok=True)
+    before = set(log_dir.glob('*.mcap'))
+    env = _env()
+    colour = sys.stdout.isatty()
+    print(f'catenary_monitor demo: the floating dock of Hu & Tang (2004), 12 chains, {params}')
+    print(f'  a storm builds to the typhoon load on line_11 (R = 1584.6 kN), then eases; '
+          f'{duration:g} s of wall time (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]})')
+    overrides = [a for k, v in DEMO_OVERRIDES.items() for a in ('-p', f'{k}:={v}')]
+    monitor = subprocess.Popen(
+        [sys.executable, '-m', 'catenary_monitor.node', '--ros-args', '--params-file', params,
+         '-p', f'log_dir:={log_dir}', *overrides],
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
+    t0 = time.time()
+    events: list = []
+    transcript: list = []
+    ready = threading.Event()
+    relay = threading.Thread(target=_relay, args=(monitor, t0, colour, events, ready, transcript),
+                             daemon=True)
+    relay.start()
+    sim: Optional[subprocess.Popen] = None
+    try:
+        if not ready.wait(30.0) or monitor.poll() is not None:
+            print('catenary_monitor demo: the monitor did not start:\n' + '\n'.join(transcript),
+                  file=sys.stderr)
+            return 1
+        print('  monitor running; starting the dock simulator (alarm transitions follow)\n')
+        sim = subprocess.Popen(
+            [sys.executable, '-m', 'catenary_monitor.simulator', '--params-file', params,
+             '--duration', str(duration)], env=env,
+            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        _, sim_err = sim.communicate(timeout=duration + 60.0)
+        if sim.returncode != 0:
+            print(f'catenary_monitor demo: simulator failed:\n{sim_err}', file=sys.stderr)
+            return 1
+    except KeyboardInterrupt:
+        print('\n  interrupted')
+    finally:
+        if sim is not None and sim.poll() is None:
+            sim.send_signal(signal.SIGINT)
+            sim.wait(10)
+        if monitor.poll() is None:
+            monitor.send_signal(signal.SIGINT)
+        try:
+            monitor.wait(15)
+        except subprocess.TimeoutExpired:
+            monitor.kill()
+        relay.join(5)
+    files = sorted(set(log_dir.glob('*.mcap')) - before)
+    print(f'\n  {len(events)} alarm transitions in {time.time() - t0:.0f} s; monitor exit status '
+          f'{monitor.returncode}')
+    if not files:
+        print('catenary_monitor demo: no MCAP log was written', file=sys.stderr)
+        return 1
+    chart = out / 'demo.png'
+    try:
+        plot_episode(files, chart, params)
+    except Exception as exc:  # noqa: BLE001 - the log is the product; the chart is a bonus
+        print(f'catenary_monitor demo: could not draw the chart: {exc}', file=sys.stderr)
+        chart = None
+    for f in files:
+        print(f'  MCAP log: {f}')
+    if chart is not None:
+        print(f'  chart:    {chart}')
+    return 0 if monitor.returncode == 0 else 1
+
+
+def _outputs(files: list[Path], topics: list[str]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Logged output arrays per topic: (log time ns, values (n, k))."""
+    from rclpy.serialization import deserialize_message
+    from std_msgs.msg import Float64MultiArray
+
+    from .mcap_read import iter_messages
+    acc: dict[str, tuple[list, list]] = {t: ([], []) for t in topics}
+    for m in iter_messages(files, topics):
+        acc[m.topic][0].append(m.log_time_ns)
+        acc[m.topic][1].append(np.asarray(deserialize_message(m.data, Float64MultiArray).data))
+    return {t: (np.asarray(a, dtype=np.int64), np.vstack(b) if b else np.zeros((0, 0)))
+            for t, (a, b) in acc.items()}
+
+
+def plot_episode(files: list[Path], png: Path, params: str) -> Path:
+    """Chart of the episode from the MCAP log: depth, hook tensions, line 11, alarm levels."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+
+    from .config import config_from_params, load_params_file
+    from .mcap_read import read_float64_topics
+    from .node import NODE_NAME, OUTPUT_FIELDS
+
+    config = config_from_params(load_params_file(params))
+    names = [line.name for line in config.lines]
+    tension_topics = {line.name: line.tension_topic for line in config.lines}
+    cols, _ = read_float64_topics(files, [config.depth_topic, *tension_topics.values()])
+    out_topics = {n: f'/{NODE_NAME}/{n}/outputs' for n in names}
+    outs = _outputs(files, list(out_topics.values()))
+    t_all = [c[0][:1] for c in cols.values() if c[0].size]
+    t0 = min(int(t[0]) for t in t_all) if t_all else 0
+    sec = lambda ns: (np.asarray(ns) - t0) * 1e-9  # noqa: E731
+    idx = {k: i for i, k in enumerate(OUTPUT_FIELDS)}
+    focus = [n for n in ('line_11', 'line_10', 'line_12', 'line_01') if n in names] or names[:3]
+    colours = dict(zip(focus, ('tab:red', 'tab:orange', 'tab:purple', 'tab:green')))
+
+    fig, axes = plt.subplots(4, 1, figsize=(11, 11), sharex=True)
+    ax = axes[0]
+    t, v = cols[config.depth_topic]
+    ax.plot(sec(t), v, color='tab:blue')
+    ax.set_ylabel('depth at hook [m]')
+    ax.set_title('catenary_monitor demo: floating dock (Hu & Tang 2004), storm on line_11')
+    ax = axes[1]
+    for n in names:
+        t, v = cols[tension_topics[n]]
+        ax.plot(sec(t), v / 1e3, lw=1.2 if n in focus else 0.5, color=colours.get(n, 'grey'),
+                alpha=1.0 if n in focus else 0.5, label=n if n in focus else None)
+    ax.plot([], [], color='grey', lw=0.5, label='other lines')
+    ax.axhline(1623.4, color='k', ls=':', lw=0.8)
+    ax.text(0.99, 1623.4, 'table 3 (typhoon, line 11): T = 1623.4 kN ', va='bottom', ha='right',
+            fontsize=8, transform=ax.get_yaxis_transform())
+    ax.set_ylabel('hook tension [kN]')
+    ax.legend(loc='upper left', fontsize=8)
+    ax = axes[2]
+    t, data = outs[out_topics[focus[0]]]
+    if data.size:
+        ax.plot(sec(t), data[:, idx['uplift_force']] / 1e3, color='k', lw=1.5,
+                label=f'{focus[0]} uplift force [kN]')
+        ax2 = ax.twinx()
+        for n in focus:
+            c = colours[n]
+            tt, dd = outs[out_topics[n]]
+            if dd.size:
+                ax2.plot(sec(tt), dd[:, idx['anchor_margin']], color=c, lw=0.8, ls='--',
+                         label=f'{n} anchor margin [m]')
+        ax2.set_ylim(-20, 25)
+        ax2.axhline(config.alarm.anchor_margin_warn, color='tab:orange', ls='--', lw=0.8)
+        ax2.set_ylabel('anchor margin [m]')
+        ax2.legend(loc='upper right', fontsize=8)
+    ax.set_ylabel('uplift force [kN]')
+    ax.legend(loc='upper left', fontsize=8)
+    ax = axes[3]
+    for k, n in enumerate(names):
+        tt, dd = outs[out_topics[n]]
+        if dd.size:
+            ax.step(sec(tt), dd[:, idx['level']] + 0.04 * k, where='post',
+                    lw=1.2 if n in focus else 0.6, color=colours.get(n, 'grey'),
+                    label=n if n in focus else None)
+    ax.set_yticks([0, 1, 2, 3], ['OK', 'WARN', 'ERROR', 'STALE'])
+    ax.set_ylabel('alarm level')
+    ax.set_xlabel('time [s]')
+    ax.legend(loc='upper right', fontsize=8)
+    for a in axes:
+        a.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(png, dpi=110)
+    plt.close(fig)
+    return png

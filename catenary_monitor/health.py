@@ -1,0 +1,50 @@
+"""Health of the node's shared inputs and of its logger: pure decisions, handed the time.
+
+No rclpy. The node asks these functions which level and message its ``tide`` and ``logger``
+diagnostic statuses carry, so that the node itself makes no threshold comparison. Times are
+seconds on one clock (the node clock, or log time in replay).
+"""
+from __future__ import annotations
+
+import math
+from typing import Optional
+
+from .alarms import Level
+
+__all__ = ['tide_status', 'logger_status']
+
+
+def tide_status(depth: float, stamp: float, now: float, started: float,
+                timeout: float) -> tuple[Level, str]:
+    """Level and message of the tide (depth) input.
+
+    Parameters
+    ----------
+    depth : newest depth sample [m]; NaN if none was received.
+    stamp : receive time of that sample [s]; NaN if none.
+    now : current time [s].
+    started : time the node started [s]; the age of a missing sample counts from it.
+    timeout : depth_timeout [s].
+
+    Returns
+    -------
+    (Level.STALE, ...) when the newest sample is older than ``timeout`` (or none arrived within
+    it), (Level.ERROR, ...) when the sample is not a positive finite number, else (Level.OK, ...).
+    """
+    age = now - (started if math.isnan(stamp) else stamp)
+    if math.isnan(stamp):
+        if age > timeout:
+            return Level.STALE, f'no depth received in {age:.1f} s (timeout {timeout:g} s)'
+        return Level.OK, 'waiting for the first depth sample'
+    if age > timeout:
+        return Level.STALE, f'depth stale: last sample {age:.1f} s ago (timeout {timeout:g} s)'
+    if not (math.isfinite(depth) and depth > 0.0):
+        return Level.ERROR, f'impossible depth {depth!r} m (must be a positive number)'
+    return Level.OK, f'depth {depth:.3f} m'
+
+
+def logger_status(error: Optional[str], path: Optional[str]) -> tuple[Level, str]:
+    """Level and message of the MCAP logger: ERROR while it cannot write, else OK."""
+    if error:
+        return Level.ERROR, f'MCAP log not written: {error}'
+    return Level.OK, f'logging to {path}' if path else 'logging'

@@ -1,0 +1,24 @@
+"""The README's parameter table is the one generated from config.PARAMETERS (no ROS needed)."""
+from pathlib import Path
+
+from catenary_monitor.config import parameters_markdown
+
+README = Path(__file__).resolve().parent.parent / 'README.md'
+
+
+def test_readme_parameter_table_is_generated_from_the_parameter_table():
+    text = README.read_text(encoding='utf-8')
+    begin, end = '<!-- parameters:begin -->\n', '<!-- parameters:end -->'
+    assert begin in text and end in text
+    table = text.split(begin, 1)[1].split(end, 1)[0]
+    assert table == parameters_markdown(), 'regenerate with config.parameters_markdown()'
+
+
+def test_core_and_node_cli_import_without_rclpy():
+    import subprocess
+    import sys
+    code = ("import sys; sys.modules['rclpy'] = None\n"
+            "import catenary_monitor.cli, catenary_monitor.simulator, catenary_monitor.health\n"
+            "import catenary_monitor.config, catenary_monitor.alarms\n")
+    subprocess.run([sys.executable, '-c', code], check=True,
+                   env={'PYTHONPATH': str(README.parent), 'PATH': '/usr/bin:/bin'})
