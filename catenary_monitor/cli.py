@@ -1,4 +1,7 @@
-"""``catenary-monitor``: the command line (solve, paper, bench; run, demo, replay and the other benchmarks come from their modules).
+"""``catenary-monitor``: the command line.
+
+``solve``, ``paper`` and ``bench`` live here; run, demo, replay and the other benchmarks come
+from their own modules.
 
 Exit status: 0 success, 2 invalid or physically impossible input (one line on stderr naming it),
 1 unexpected failure.
