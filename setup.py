@@ -29,7 +29,7 @@ setup(
     ],
     extras_require={
         'test': ['pytest>=7', 'hypothesis>=6', 'mpmath>=1.3', 'flake8>=6', 'pytest-timeout'],
-        'peers': ['moorpy'],
+        'peers': ['moorpy', 'pycatenary'],
     },
     zip_safe=True,
     maintainer='catenary_monitor developers',

@@ -237,26 +237,67 @@ def lifted_from_tension(w: np.ndarray, b: np.ndarray, h: np.ndarray, x: np.ndarr
 def lifted_from_tension_scalar(w: float, b: float, h: float, x: float) -> tuple[Lifted, int, bool]:
     """Problem 4 for one element in plain floats (the node's and the CLI's fast path).
 
-    Same formulas, start, safeguard and stopping test as :func:`lifted_from_tension`.
+    Same formulas, start, safeguard and stopping test as :func:`lifted_from_tension`, written out
+    inline with local ``math`` functions (``_uplift_setup``, ``_uplift_residual``,
+    ``_lifted_from_d`` and ``_lifted_state`` in the same operation order): about twice as fast
+    as calling those helpers through the ``_MATH`` namespace, same results.
     """
-    e, r02, xlo, m, eta, eta_hi = _uplift_setup(b, h, x, _MATH)
-    eta = min(eta, eta_hi)
-    eta_lo = -math.inf
-    for it in range(1, MAXITER + 1):
-        f, fp = _uplift_residual(eta, e, r02, xlo, m, _MATH)
-        if f == 0.0:
-            return _lifted_from_d(w, b, e, xlo, m, math.exp(eta), _MATH), it, True
+    log, log1p, exp, expm1, sinh, tanh = math.log, math.log1p, math.exp, math.expm1, math.sinh, math.tanh
+    e = h / b
+    r02 = e * (2.0 + e)
+    xlo = log1p(e)
+    m = x / b
+    x0 = log1p(e + math.sqrt(r02))  # acosh1p(e)
+    eta_hi = log(x0 - xlo)
+    eta = eta_hi + 2.0 * log(m / x0)
+    if eta > eta_hi:
+        eta = eta_hi
+    neg_inf = -math.inf
+    eta_lo = neg_inf
+    tol = STEP_TOL
+    it = 0
+    converged = False
+    while it < MAXITER:
+        it += 1
+        d = exp(eta)
+        big_x = xlo + d
+        em = expm1(d)
+        emn = -expm1(-d)
+        p = r02 + emn
+        q = big_x / (m * sinh(big_x))
+        f = log(em * p * (q * q))  # numpy's ** 2 on arrays is this product
         if f < 0.0:
-            eta_lo = max(eta_lo, eta)
+            if eta > eta_lo:
+                eta_lo = eta
         else:
-            eta_hi = min(eta_hi, eta)
-        step = -f / fp
-        if abs(step) <= STEP_TOL:
-            return _lifted_from_d(w, b, e, xlo, m, math.exp(eta + step), _MATH), it, True
+            if f == 0.0:
+                converged = True
+                break
+            if eta < eta_hi:  # f > 0 (or NaN, as the scalar code always did)
+                eta_hi = eta
+        step = -f / (((1.0 + em) / em + (1.0 - emn) / p - 2.0 * (1.0 / tanh(big_x) - 1.0 / big_x)) * d)
+        if -tol <= step <= tol:
+            eta += step
+            converged = True
+            break
         eta += step
         if not eta_lo <= eta <= eta_hi:
-            eta = 0.5 * (eta_lo + eta_hi) if eta_lo > -math.inf else eta - step - 4.0
-    return _lifted_from_d(w, b, e, xlo, m, math.exp(eta), _MATH), MAXITER, False
+            eta = 0.5 * (eta_lo + eta_hi) if eta_lo > neg_inf else eta - step - 4.0
+    # _lifted_from_d and _lifted_state, inline
+    big_x = xlo + exp(eta)
+    s = m / big_x
+    half = sinh(0.5 * big_x)
+    sx = sinh(big_x)
+    cm1 = 2.0 * half * half
+    t = max((e - cm1) / sx, 0.0)
+    u_sinh = t / s
+    u_cosh = 1.0 / s
+    a = b * s
+    r = w * a
+    # Lifted(horizontal_tension, uplift_force, anchor_angle, top_tension, top_angle, suspended_length)
+    return Lifted(r, r * u_sinh, math.atan2(u_sinh, 1.0), r * (u_cosh * (1.0 + cm1) + u_sinh * sx),
+                  math.atan2(u_sinh * (1.0 + cm1) + u_cosh * sx, 1.0),
+                  a * (u_sinh * cm1 + u_cosh * sx)), it, converged
 
 
 # --------------------------------------------------------------------------------------------
@@ -299,21 +340,33 @@ def _critical_residual(eta: Any, c: Any, xp: Any) -> tuple[Any, Any]:
 
 
 def critical_parameter_scalar(h: float, x: float) -> float:
-    """Scalar twin of :func:`critical_parameter` (same start and stopping test)."""
+    """Scalar twin of :func:`critical_parameter` (same start and stopping test), inline ``math``."""
+    log, exp, expm1, tanh = math.log, math.exp, math.expm1, math.tanh
     c = h / x
     if c < 1.0:
         d0 = c
     else:
-        big = math.log(4.0 * c)
-        d0 = 0.5 * (big + math.log(max(0.5 * big, 1.0)))
-    eta = math.log(d0)
+        big = log(4.0 * c)
+        d0 = 0.5 * (big + log(max(0.5 * big, 1.0)))
+    eta = log(d0)
+    log_c = log(c)
+    log_2 = _LOG_2
+    tol = STEP_TOL
     for _ in range(MAXITER):
-        f, fp = _critical_residual(eta, c, _MATH)
-        step = min(max(-f / fp, -4.0), 4.0)
+        d = exp(eta)
+        f = 2.0 * (d + log(-expm1(-2.0 * d)) - log_2) - eta - log_c  # _critical_residual
+        step = -f / (2.0 * d / tanh(d) - 1.0)
+        if step > 4.0:  # the clip of the vectorized path
+            step = 4.0
+        elif step < -4.0:
+            step = -4.0
         eta += step
-        if abs(step) <= STEP_TOL:
+        if -tol <= step <= tol:
             break
-    return x / (2.0 * math.exp(eta))
+    return x / (2.0 * exp(eta))
+
+
+_LOG_2 = math.log(2.0)
 
 
 # --------------------------------------------------------------------------------------------

@@ -149,6 +149,16 @@ def solve(weight: ArrayLike, depth: ArrayLike, tension: Optional[ArrayLike] = No
     path gives the same numbers to rounding, an order of magnitude faster.
     """
     problem = _check_call(tension, horizontal, chain_length, anchor_distance)
+    if (tension is not None and horizontal is None and chain_length is None
+            and type(weight) in _PLAIN and type(depth) in _PLAIN and type(tension) in _PLAIN
+            and (anchor_distance is None or type(anchor_distance) in _PLAIN)
+            and (mbl is None or type(mbl) in _PLAIN)):  # the node's case: skip the generic dispatch
+        try:
+            return _solve_tension_scalar(float(weight), float(depth), float(tension),
+                                         None if anchor_distance is None else float(anchor_distance),
+                                         None if mbl is None else float(mbl))
+        except (OverflowError, ZeroDivisionError, ValueError):
+            pass  # beyond float range in plain math (e.g. sinh overflow): numpy gives inf instead
     inputs = {'weight': weight, 'depth': depth, 'tension': tension, 'horizontal': horizontal,
               'anchor_distance': anchor_distance, 'chain_length': chain_length, 'mbl': mbl}
     given = {k: v for k, v in inputs.items() if v is not None}
@@ -312,6 +322,8 @@ def _fill_margins(out: dict[str, np.ndarray], w: np.ndarray, h: np.ndarray, x: n
 # Plain-float path for one measured tension (the live node's case): same formulas, no arrays.
 # --------------------------------------------------------------------------------------------
 _NAN = math.nan
+#: Input types that take the plain-float path straight away (``float()`` is exact for them).
+_PLAIN = (float, int, np.float64)
 
 
 def _solve_tension_scalar(weight: float, depth: float, tension: float,

@@ -1,0 +1,356 @@
+"""The elastic chain (axial stiffness EA) and the rule that picks the inextensible model.
+
+Model (Irvine's elastic catenary; weight ``w`` per unstretched metre, strain ``T/EA``).  With
+horizontal tension R, vertical tension ``V_A`` at the anchor and ``V_B`` at the hook, tensions
+``T_A = sqrt(R^2 + V_A^2)`` and ``T = sqrt(R^2 + V_B^2)``, unstretched suspended length
+``L0 = (V_B - V_A)/w``:
+
+    x = (R/w) [asinh(V_B/R) - asinh(V_A/R)] + R L0 / EA
+    h = (T - T_A)/w + (T^2 - T_A^2) / (2 EA w)
+
+The second equation gives the anchor-end tension in closed form whatever the uplift:
+``T - T_A = D`` with ``h w = D (1 + (2T - D)/(2 EA))``, solved without cancellation.  Then
+
+* no uplift (``V_A = 0``, problem 3): ``R = T - D``, ``V_B = sqrt(D (T + R))``, and
+  ``x_min = (R/w) asinh(V_B/R) + R V_B / (w EA)`` (closed form);
+* uplift (problem 4, x < x_min): with ``R = T_A sech u``, ``V_A = T_A tanh u`` the span
+  ``x(u) = (T_A/w) sech u [acosh((T/T_A) cosh u) - u] + R (V_B - V_A)/(w EA)`` decreases with
+  u; both terms are written as sums of positive parts and x(u) = x is solved in ``log u`` by
+  Illinois regula falsi with a bisection every third step (vectorized, to a 4 eps bracket),
+  started from the rigid chain with the same end tensions (the core's uplift kernel).
+
+``EA -> inf`` gives back the inextensible formulas exactly.
+
+The rule (``solve``): the inextensible answer is kept where the elastic correction, the largest of
+``|dx_min|/x_min``, ``|dR|/R``, ``|dF|/T`` and ``|dL|/L`` (elastic minus inextensible; F relative
+to the hook tension since it may be 0), is at most ``tol`` (default ``ELASTIC_TOL = 1e-6``: below
+what a load cell or a tide gauge resolves, so the extra model changes nothing a user can see);
+elsewhere the elastic answer is returned.  ``SolveResult.model`` says which, element by element.
+Near the lift-off distance the uplift correction grows like the square root of the strain, so
+even stiff chains need the elastic model there.
+"""
+from __future__ import annotations
+
+import math
+from typing import Any, Optional
+
+import numpy as np
+
+from . import catenary as cat
+from .solve import SolveResult, solve as solve_rigid
+
+#: Keep the inextensible answer when the elastic correction is at most this (relative).
+ELASTIC_TOL = 1e-6
+INEXTENSIBLE = 'inextensible catenary'
+ELASTIC = 'elastic catenary'
+_ETA_MAX = math.log(700.0)  # u <= 700: sech(700) underflows, so no span is shorter
+
+
+def anchor_end_tension(w: Any, h: Any, t: Any, ea: Any) -> tuple[Any, Any]:
+    """``(T_A, D)``: ``T_A = T - D`` with ``h w = D (1 + (2T - D)/(2EA))``, no cancellation.
+
+    ``D = h w k`` with ``k = 2 / ((1+s) + sqrt((1+s)^2 - q))``, ``s = T/EA``, ``q = 2hw/EA``, and
+    ``T_A = (T - w h) + w h (1 - k)`` where ``1 - k`` is a ratio of positive terms.  Both are
+    returned: ``T - T_A`` recomputed from a rounded T_A would cancel when T_A ~ T.
+    """
+    s = t / ea
+    q = 2.0 * h * w / ea
+    root = np.sqrt((1.0 + s) ** 2 - q)
+    den = (1.0 + s) + root
+    one_minus_k = (s + (2.0 * s + s * s - q) / (root + 1.0)) / den
+    return cat.two_prod_diff(t, w, h) + w * h * one_minus_k, 2.0 * w * h / den
+
+
+def _x_over_b(u: Any, e: Any) -> Any:
+    """``sech(u) [acosh((1+e) cosh u) - u]`` as one log1p of positive terms."""
+    c, s = np.cosh(u), np.sinh(u)
+    p = (1.0 + e) * c
+    pm1 = 2.0 * np.sinh(0.5 * u) ** 2 + e * c
+    sp = np.sqrt(pm1 * (p + 1.0))
+    num = e * c + e * c * c * (2.0 + e) / (sp + s)
+    return np.log1p(num / (c + s)) / c
+
+
+def _top_vertical(u: Any, t: Any, ta: Any, d: Any) -> tuple[Any, Any]:
+    """``R = T_A sech u`` and ``V_B = sqrt(T^2 - R^2)`` with ``T - R = D + T_A (1 - sech u)``."""
+    c = np.cosh(u)
+    r = ta / c
+    t_minus_r = d + ta * 2.0 * np.sinh(0.5 * u) ** 2 / c
+    return r, np.sqrt(t_minus_r * (t + r))
+
+
+def _span(u: Any, w: Any, t: Any, ta: Any, d: Any, ea: Any) -> Any:
+    """Elastic span x(u) for hook tension T, anchor-end tension T_A = T - D."""
+    r, vb = _top_vertical(u, t, ta, d)
+    va = ta * np.tanh(u)
+    return ta / w * _x_over_b(u, d / ta) + r * d * (t + ta) / ((vb + va) * w * ea)
+
+
+def _illinois(fun: Any, lo: np.ndarray, hi: np.ndarray, flo: np.ndarray, fhi: np.ndarray,
+              maxiter: int = 200) -> np.ndarray:
+    """Root of a decreasing ``fun`` in ``[lo, hi]`` (``flo > 0 > fhi``), vectorized.
+
+    Illinois regula falsi, with a plain bisection every third step so the bracket at least
+    halves every three evaluations; stops when the bracket is ``4 eps`` wide (relative, or
+    absolute below 1) or a residual is exactly 0.  Each iteration evaluates only the elements
+    still active.
+    """
+    lo, hi, flo, fhi = (np.array(v, dtype=float) for v in (lo, hi, flo, fhi))
+    side = np.zeros(lo.shape, dtype=np.int8)
+    root = 0.5 * (lo + hi)
+    idx = np.arange(lo.size)
+    for k in range(maxiter):
+        if idx.size == 0:
+            break
+        a, b, fa, fb = lo[idx], hi[idx], flo[idx], fhi[idx]
+        mid = (a * fb - b * fa) / (fb - fa) if k % 3 != 2 else 0.5 * (a + b)
+        mid = np.where((mid > a) & (mid < b), mid, 0.5 * (a + b))
+        fm = fun(mid, idx)
+        pos = fm > 0.0
+        # Illinois: halve the residual kept at the end that did not move twice in a row
+        fb = np.where(pos & (side[idx] == 1), 0.5 * fb, fb)
+        fa = np.where(~pos & (side[idx] == -1), 0.5 * fa, fa)
+        lo[idx] = np.where(pos, mid, a)
+        flo[idx] = np.where(pos, fm, fa)
+        hi[idx] = np.where(pos, b, mid)
+        fhi[idx] = np.where(pos, fb, fm)
+        side[idx] = np.where(pos, 1, -1)
+        root[idx] = mid
+        width = hi[idx] - lo[idx]
+        done = (fm == 0.0) | (width <= 4.0 * np.finfo(float).eps * np.maximum(1.0, np.abs(mid)))
+        root[idx[done]] = np.where(fm[done] == 0.0, mid[done], 0.5 * (lo[idx[done]] + hi[idx[done]]))
+        idx = idx[~done]
+    return root
+
+
+def _x_min_elastic(w: Any, t: Any, ta: Any, d: Any, ea: Any) -> Any:
+    """Closed-form elastic x_min: ``(R/w) asinh(V/R) + R V/(w EA)`` with ``R = T_A``, ``V^2 = D (T + T_A)``."""
+    v = np.sqrt(d * (t + ta))
+    return ta / w * np.arcsinh(v / ta) + ta * v / (w * ea)
+
+
+def elastic_state(w: Any, h: Any, t: Any, x: Optional[Any], ea: Any) -> dict[str, np.ndarray]:
+    """Elastic solution (vectorized): R, x_min, F, stretched and unstretched suspended length.
+
+    ``x`` may be None (problem 3).  Where ``x >= x_min`` the anchor is not lifted (F = 0).
+    """
+    with np.errstate(over='ignore', invalid='ignore', divide='ignore'):
+        return _elastic_state(w, h, t, x, ea)
+
+
+def _elastic_state(w: Any, h: Any, t: Any, x: Optional[Any], ea: Any) -> dict[str, np.ndarray]:
+    w, h, t, ea = (np.asarray(v, dtype=float) for v in (w, h, t, ea))
+    shape = np.broadcast(w, h, t, ea, *(() if x is None else (np.asarray(x, dtype=float),))).shape
+    w, h, t, ea = (np.broadcast_to(v, shape).astype(float).ravel() for v in (w, h, t, ea))
+    out_shape, shape = shape, w.shape
+    ta, d = (np.asarray(v, dtype=float) for v in anchor_end_tension(w, h, t, ea))
+    # no uplift: V_A = 0, R = T_A
+    r = ta.copy()
+    vb = np.sqrt(d * (t + ta))
+    x_min = r / w * np.arcsinh(vb / r) + r * vb / (w * ea)
+    va = np.zeros(shape)
+    u = np.zeros(shape)
+    if x is not None:
+        x = np.broadcast_to(np.asarray(x, dtype=float), out_shape).ravel()
+        lift = x < x_min
+        if lift.any():
+            args = [v[lift] for v in (w, t, ta, d, ea)]
+            target = x[lift]
+
+            def f(eta: np.ndarray, sel: np.ndarray) -> np.ndarray:
+                return _span(np.exp(eta), *(v[sel] for v in args)) - target[sel]
+
+            # start from the rigid chain with the same end tensions: the rigid span is exact there
+            # and the elastic term is positive, so f > 0 (a lower bound on u) where it is lifted
+            wl, tal, dl = args[0], args[2], args[3]
+            rigid_lift = target < tal / wl * np.arcsinh(np.sqrt(dl * (args[1] + tal)) / tal)
+            lo = np.full(target.shape, -200.0)  # log u: u = e^-200 is x_min to rounding
+            if rigid_lift.any():
+                s_r, _, ok_r = cat.lifted_from_tension(wl[rigid_lift], tal[rigid_lift] / wl[rigid_lift],
+                                                       dl[rigid_lift] / wl[rigid_lift], target[rigid_lift])
+                u_r = np.arcsinh(s_r.uplift_force / s_r.horizontal_tension)
+                lo[rigid_lift] = np.where(ok_r & (u_r > 0), np.log(np.maximum(u_r, 1e-300)), -200.0)
+            all_idx = np.arange(target.size)
+            flo = f(lo, all_idx)
+            bad = ~(flo > 0.0)  # rounding at the start point: fall back to the far end
+            lo[bad] = -200.0
+            flo[bad] = f(lo[bad], all_idx[bad])
+            step = np.full(target.shape, 1e-3)
+            hi = lo + step
+            fhi = f(hi, all_idx)
+            grow = fhi >= 0.0
+            while grow.any():  # ... up to where x(u) < x
+                lo = np.where(grow, hi, lo)
+                flo = np.where(grow, fhi, flo)
+                step = np.where(grow, 4.0 * step, step)
+                hi = np.where(grow, np.minimum(hi + step, _ETA_MAX), hi)
+                sel = all_idx[grow]
+                fhi[grow] = f(hi[grow], sel)
+                grow = (fhi >= 0.0) & (hi < _ETA_MAX)
+            ul = np.exp(_illinois(f, lo, hi, flo, fhi))
+            u[lift] = ul
+            r[lift], vb[lift] = _top_vertical(ul, t[lift], ta[lift], d[lift])
+            va[lift] = ta[lift] * np.tanh(ul)
+    l0 = d * (t + ta) / ((vb + va) * w)  # (V_B - V_A)/w without the cancellation
+    # stretch: integral of T/EA along the chain (Irvine)
+    stretch = (vb * t - va * np.hypot(r, va) + r * r * (np.arcsinh(vb / r) - np.arcsinh(va / r))) / (2.0 * ea * w)
+    out = {'horizontal_tension': r, 'min_anchor_distance': x_min, 'uplift_force': va,
+           'unstretched_length': l0, 'suspended_length': l0 + stretch, 'top_vertical': vb,
+           'anchor_tension': ta}
+    return {k: v.reshape(out_shape) for k, v in out.items()}
+
+
+def _elastic_critical_tension(w: np.ndarray, h: np.ndarray, x: np.ndarray, ea: np.ndarray,
+                              t_rigid: np.ndarray) -> np.ndarray:
+    """Hook tension at which the elastic chain's x_min equals x (x_min grows with T).
+
+    Root of ``x - x_min(T)`` (decreasing in T) in ``log T`` on ``(log(w h), log(T_rigid)]``:
+    stretch lengthens the span, so the elastic critical tension is below the rigid one.
+    """
+    def f(lt: np.ndarray, sel: np.ndarray) -> np.ndarray:
+        t = np.exp(lt)
+        ta, d = anchor_end_tension(w[sel], h[sel], t, ea[sel])
+        return x[sel] - _x_min_elastic(w[sel], t, ta, d, ea[sel])
+
+    idx = np.arange(x.size)
+    hi = np.log(t_rigid)
+    fhi = f(hi, idx)
+    lo = hi - 4.0 * np.maximum(t_rigid / ea, 1e-12)  # the strain sets the shift
+    flo = f(lo, idx)
+    grow = ~(flo > 0.0)
+    while grow.any():
+        hi = np.where(grow, lo, hi)
+        fhi = np.where(grow, flo, fhi)
+        lo = np.where(grow, lo - 4.0 * (hi - lo + 1e-12), lo)
+        lo = np.maximum(lo, np.log(w * h) * (1.0 + 1e-15))
+        flo[grow] = f(lo[grow], idx[grow])
+        grow = ~(flo > 0.0) & (lo > np.log(w * h) * (1.0 + 1e-15))
+    return np.exp(_illinois(f, lo, hi, flo, np.minimum(fhi, -0.0)))
+
+
+def _elastic_depth_reach(w: np.ndarray, r: np.ndarray, x: np.ndarray, ea: np.ndarray) -> np.ndarray:
+    """Depth a no-uplift elastic chain with horizontal tension R spans over x (for the tide margin).
+
+    In ``nu = asinh(V/R)``: ``x = (R/w) nu + R^2 sinh(nu)/(w EA)``, increasing and convex, so
+    Newton from the rigid ``nu = x w / R`` (to the right of the root) decreases monotonically.
+    Then ``h = 2 (R/w) sinh(nu/2)^2 + R^2 sinh(nu)^2 / (2 EA w)``.
+    """
+    a = r / w
+    k = r / ea
+    nu = np.minimum(x / a, 700.0)
+    for _ in range(100):
+        g = a * nu + a * k * np.sinh(nu) - x
+        step = g / (a + a * k * np.cosh(nu))
+        nu = nu - step
+        if np.all(np.abs(step) <= 4.0 * np.finfo(float).eps * nu):
+            break
+    return 2.0 * a * np.sinh(0.5 * nu) ** 2 + a * k * np.sinh(nu) ** 2 / 2.0
+
+
+def elastic_correction(rigid: SolveResult, el: dict[str, np.ndarray]) -> np.ndarray:
+    """Largest relative change the elastic model makes to the reported quantities."""
+    t = np.asarray(rigid.top_tension, dtype=float)
+    parts = [
+        np.abs(el['min_anchor_distance'] - rigid.min_anchor_distance) / rigid.min_anchor_distance,
+        np.abs(el['horizontal_tension'] - rigid.horizontal_tension) / rigid.horizontal_tension,
+        np.abs(el['uplift_force'] - rigid.uplift_force) / t,
+        np.abs(el['suspended_length'] - rigid.suspended_length) / rigid.suspended_length,
+    ]
+    return np.max(parts, axis=0)
+
+
+def solve(weight: Any, depth: Any, tension: Any, anchor_distance: Any = None, ea: Any = None,
+          mbl: Any = None, tol: float = ELASTIC_TOL) -> tuple[SolveResult, Any]:
+    """Problems 3 and 4 with an optional axial stiffness ``ea`` [N]; the model chosen by the rule.
+
+    Returns ``(result, correction)``: a :class:`SolveResult` whose ``model`` names the model used
+    (per element for arrays) and the elastic correction that decided it (0 without ``ea``).
+    With ``ea=None`` this is exactly ``catenary_monitor.solve``.
+    """
+    if tol < 0:
+        raise ValueError(f'tol must be >= 0 (got {tol})')
+    rigid = solve_rigid(weight, depth, tension=tension, anchor_distance=anchor_distance, mbl=mbl)
+    scalar = np.ndim(rigid.status) == 0
+    if ea is None:
+        return rigid, 0.0 if scalar else np.zeros(np.shape(rigid.status))
+    ea_arr = np.asarray(ea, dtype=float)
+    if np.any(~(ea_arr > 0)):
+        raise ValueError('ea (axial stiffness) must be > 0 N')
+    status = np.asarray(rigid.status)
+    shape = status.shape
+    ok = status == 0
+    bc = lambda v: np.broadcast_to(np.asarray(v, dtype=float), shape)  # noqa: E731
+    w, h, t, ea_b = bc(weight)[ok], bc(depth)[ok], bc(tension)[ok], bc(ea_arr)[ok]
+    x = None if anchor_distance is None else bc(anchor_distance)[ok]
+    el = elastic_state(w, h, t, x, ea_b)
+    rig = {k: np.atleast_1d(np.asarray(getattr(rigid, k), dtype=float))[ok.ravel()] if scalar
+           else np.asarray(getattr(rigid, k), dtype=float)[ok]
+           for k in ('min_anchor_distance', 'horizontal_tension', 'uplift_force', 'suspended_length',
+                     'top_tension', 'top_angle_deg', 'anchor_angle_deg', 'anchor_margin',
+                     'tide_margin', 'load_margin')}
+    corr = elastic_correction(SimpleRigid(rig), el)
+    use = corr > tol
+    out = {k: v.copy() for k, v in rig.items()}
+    if use.any():
+        r, vb, va = el['horizontal_tension'], el['top_vertical'], el['uplift_force']
+        new = {
+            'min_anchor_distance': el['min_anchor_distance'], 'horizontal_tension': r,
+            'uplift_force': va, 'suspended_length': el['suspended_length'],
+            'top_angle_deg': np.degrees(np.arctan2(vb, r)), 'anchor_angle_deg': np.degrees(np.arctan2(va, r)),
+        }
+        if x is not None:
+            new['anchor_margin'] = x - el['min_anchor_distance']
+            new['tide_margin'] = _elastic_depth_reach(w, r, x, ea_b) - h
+            t_crit_rigid = rig['top_tension'] + rig['load_margin']
+            new['load_margin'] = _elastic_critical_tension(w, h, x, ea_b, t_crit_rigid) - t
+        for k, v in new.items():
+            out[k] = np.where(use, v, out[k])
+    fields: dict[str, Any] = {}
+    for k, v in out.items():
+        if k not in rigid.keys and k != 'top_tension':
+            continue
+        full = np.full(shape, np.nan)
+        full[ok] = v
+        fields[k] = float(full) if scalar else full
+    model = np.full(shape, INEXTENSIBLE, dtype=object)
+    model[ok] = np.where(use, f'{ELASTIC}', INEXTENSIBLE)
+    corr_full = np.zeros(shape)
+    corr_full[ok] = corr
+    res = rigid._replace(**fields, model=str(model) if scalar else model)
+    return res, (float(corr_full) if scalar else corr_full)
+
+
+class SimpleRigid:
+    """Attribute view of a dict (the rigid values of the valid elements)."""
+
+    def __init__(self, d: dict[str, np.ndarray]) -> None:
+        self.__dict__.update(d)
+
+
+#: Lines of the report (README): submerged weight [N/m] and axial stiffness EA [N].
+#: U3 studlink chain 81 mm: EA ~ 1.01e8 d^2 kN (d in m), the usual studlink estimate; the
+#: paper's w = 1.3 kN/m.  Steel wire of similar strength (six-strand 76 mm): metallic area
+#: ~0.58 pi d^2/4, effective modulus ~90 GPa, ~0.25 kN/m in water.  Polyester 160 mm:
+#: quasi-static EA ~ 15 x MBL (MBL ~ 5 MN), nearly neutrally buoyant, ~30 N/m in water.
+REPORT_LINES = (
+    ('U3 studlink chain, 81 mm (the paper\'s dock)', 1300.0, 1.01e8 * 0.081 ** 2 * 1e3),
+    ('six-strand steel wire, 76 mm', 250.0, 90e9 * 0.58 * np.pi / 4 * 0.076 ** 2),
+    ('polyester rope, 160 mm', 30.0, 15 * 5.0e6),
+)
+
+
+def report(depth: float = 20.85, tension: float = 1623.5e3, anchor_distance: float = 121.06
+           ) -> list[dict[str, Any]]:
+    """How much elasticity changes x_min and the uplift, per line, at one dock scene."""
+    rows = []
+    for name, w, ea in REPORT_LINES:
+        rigid = solve_rigid(w, depth, tension=tension, anchor_distance=anchor_distance)
+        el = {k: float(v) for k, v in elastic_state(w, depth, tension, anchor_distance, ea).items()}
+        rows.append({
+            'line': name, 'w': w, 'ea': ea, 'strain': tension / ea,
+            'x_min_rigid': rigid.min_anchor_distance, 'x_min_elastic': el['min_anchor_distance'],
+            'uplift_rigid': rigid.uplift_force, 'uplift_elastic': el['uplift_force'],
+            'dx_min_rel': (el['min_anchor_distance'] - rigid.min_anchor_distance) / rigid.min_anchor_distance,
+            'duplift_over_t': (el['uplift_force'] - rigid.uplift_force) / tension,
+        })
+    return rows

@@ -1,0 +1,188 @@
+"""The elastic chain: limit, equations, an independent peer, and the model-picking rule."""
+import math
+
+import mpmath as mp
+import numpy as np
+import pytest
+
+from catenary_monitor import catenary as cat
+from catenary_monitor import elastic, solve
+
+EA_DOCK = 1.01e8 * 0.081 ** 2 * 1e3  # U3 studlink 81 mm, N
+
+
+def scenes(n, seed=3):
+    rng = np.random.default_rng(seed)
+    w = 10.0 ** rng.uniform(1, 4, n)
+    h = 10.0 ** rng.uniform(0, 3, n)
+    t = w * (h / 10.0 ** rng.uniform(-6, 3, n) + h)
+    b = cat.two_prod_diff(t, w, h) / w
+    x = cat.grounded(b, h).min_anchor_distance * 10.0 ** rng.uniform(-3, 0, n)
+    return w, h, t, x
+
+
+def test_infinitely_stiff_is_the_inextensible_catenary():
+    w, h, t, x = scenes(2000)
+    rigid = solve(w, h, tension=t, anchor_distance=x)
+    el = elastic.elastic_state(w, h, t, x, 1e40)
+    for key in ('horizontal_tension', 'min_anchor_distance', 'uplift_force', 'suspended_length'):
+        ref = getattr(rigid, key)
+        assert np.all(np.abs(el[key] - ref) <= 1e-12 * np.abs(ref) + 1e-12 * t * (key == 'uplift_force')), key
+
+
+def _mp_elastic(w, h, t, x, ea):
+    """Irvine's equations solved in 50 digits: (R, V_A, L0, x_min), anchor lifted when x < x_min."""
+    with mp.workdps(50):
+        w, h, t, ea = (mp.mpf(float(v)) for v in (w, h, t, ea))
+        s = 1 + t / ea
+        d = ea * (s - mp.sqrt(s * s - 2 * h * w / ea))  # h w = D (1 + (2T - D)/(2 EA))
+        ta = t - d
+
+        def state(u):
+            r = ta / mp.cosh(u)
+            va, vb = ta * mp.tanh(u), mp.sqrt(t * t - r * r)
+            l0 = (vb - va) / w
+            span = r / w * (mp.asinh(vb / r) - mp.asinh(va / r)) + r * l0 / ea
+            depth = (t - mp.sqrt(r * r + va * va)) / w + (vb * vb - va * va) / (2 * ea * w)
+            assert abs(depth - h) <= mp.mpf(10) ** -30 * h
+            return r, va, l0, span
+
+        x_min = state(mp.mpf(0))[3]
+        if x is None or x >= x_min:
+            r, va, l0, _ = state(mp.mpf(0))
+            return float(r), 0.0, float(l0), float(x_min)
+        x = mp.mpf(float(x))
+        lo, hi = mp.mpf(0), mp.mpf(1)
+        while state(hi)[3] > x:
+            lo, hi = hi, 2 * hi
+        for _ in range(200):
+            mid = (lo + hi) / 2
+            if state(mid)[3] > x:
+                lo = mid
+            else:
+                hi = mid
+        r, va, l0, _ = state((lo + hi) / 2)
+        return float(r), float(va), float(l0), float(x_min)
+
+
+@pytest.mark.parametrize('strain', [1e-9, 1e-5, 2.5e-3, 0.05])
+def test_elastic_solution_matches_50_digit_solution(strain):
+    w, h, t, x = scenes(12, seed=int(-math.log10(strain) * 10))
+    ea = t / strain
+    st = elastic.elastic_state(w, h, t, x, ea)
+    assert np.all(st['uplift_force'] > 0)
+    eps = np.finfo(float).eps
+    for i in range(12):
+        r, va, l0, x_min = _mp_elastic(w[i], h[i], t[i], x[i], ea[i])
+        r2, va2, l02, _ = _mp_elastic(w[i], h[i], t[i], x[i] * (1 + 1e-9), ea[i])
+        kappa_f = abs((va2 - va) / va / 1e-9)  # condition number of the uplift (to ~1e-6)
+        kappa_l = abs((l02 - l0) / l0 / 1e-9)
+        assert st['horizontal_tension'][i] == pytest.approx(r, rel=1e-12)
+        assert st['min_anchor_distance'][i] == pytest.approx(x_min, rel=1e-12)
+        assert abs(st['uplift_force'][i] - va) <= (1e-12 + 8 * eps * kappa_f) * va
+        assert abs(st['unstretched_length'][i] - l0) <= (1e-12 + 8 * eps * kappa_l) * l0
+
+
+def test_elastic_uplift_between_the_rigid_and_the_elastic_lift_off_distance():
+    """x beyond the rigid lift-off distance (same end tensions) but short of the elastic one."""
+    w, h, t = 1300.0, 20.85, 1623.5e3
+    ta, d = elastic.anchor_end_tension(w, h, t, EA_DOCK)
+    x_rigid = float(ta / w * np.arcsinh(np.sqrt(d * (t + ta)) / ta))
+    x_el = float(elastic.elastic_state(w, h, t, None, EA_DOCK)['min_anchor_distance'])
+    for x in (x_rigid + 0.5 * (x_el - x_rigid), x_el * (1 - 1e-9), x_el * 1e-4):
+        st = elastic.elastic_state(w, h, t, x, EA_DOCK)
+        r, va, l0, _ = _mp_elastic(w, h, t, x, EA_DOCK)
+        assert float(st['horizontal_tension']) == pytest.approx(r, rel=1e-12)
+        assert abs(float(st['uplift_force']) - va) <= 1e-11 * t
+
+
+def test_elastic_min_distance_closed_form_matches_50_digit_solution():
+    w, h, t, _ = scenes(40, seed=11)
+    ea = t / 1e-3
+    st = elastic.elastic_state(w, h, t, None, ea)
+    assert np.all(st['uplift_force'] == 0)
+    for i in range(40):
+        r, _, l0, x_min = _mp_elastic(w[i], h[i], t[i], None, ea[i])
+        assert st['min_anchor_distance'][i] == pytest.approx(x_min, rel=1e-12)
+        assert st['horizontal_tension'][i] == pytest.approx(r, rel=1e-12)
+        assert st['unstretched_length'][i] == pytest.approx(l0, rel=1e-12)
+
+
+def test_agrees_with_moorpy_for_the_dock_chain():
+    """MoorPy's elastic catenary, given our unstretched length and EA, gives our tensions (to its 1e-6 m)."""
+    catenary = pytest.importorskip('moorpy.Catenary', exc_type=ImportError).catenary
+    import os
+    os.environ.setdefault('PYTHONBREAKPOINT', '0')
+    w, h, t, x = 1300.0, 20.85, 1623.5e3, 121.06
+    st = {k: float(v) for k, v in elastic.elastic_state(w, h, t, x, EA_DOCK).items()}
+    fah, fav, fbh, fbv, _ = catenary(x, h, st['unstretched_length'], EA_DOCK, w)
+    assert fah == pytest.approx(st['horizontal_tension'], rel=1e-6)
+    assert fav == pytest.approx(st['uplift_force'], rel=1e-5)
+    assert math.hypot(fbh, fbv) == pytest.approx(t, rel=1e-6)
+
+
+def test_rule_picks_the_elastic_model_for_the_dock_chain():
+    res, corr = elastic.solve(1300.0, 20.85, 1623.5e3, 121.06, ea=EA_DOCK)
+    assert res.model == elastic.ELASTIC and corr > 1e-3
+    rigid = solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06)
+    assert rigid.model == elastic.INEXTENSIBLE
+    # the dock chain stretches 2.4e-3: x_min moves by ~0.28 m, the uplift by ~0.2 kN
+    assert 0.2 < res.min_anchor_distance - rigid.min_anchor_distance < 0.4
+    assert 100.0 < res.uplift_force - rigid.uplift_force < 400.0
+    assert res.anchor_margin == pytest.approx(121.06 - res.min_anchor_distance, rel=1e-15)
+
+
+def test_rule_keeps_the_inextensible_model_when_the_correction_is_below_tol():
+    res, corr = elastic.solve(1300.0, 20.85, 1623.5e3, 121.06, ea=1e18)
+    assert res.model == elastic.INEXTENSIBLE and corr <= elastic.ELASTIC_TOL
+    rigid = solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06)
+    assert res.uplift_force == rigid.uplift_force and res.load_margin == rigid.load_margin
+    # the same scene with a looser tolerance keeps the rigid answer even for the real chain
+    res, corr = elastic.solve(1300.0, 20.85, 1623.5e3, 121.06, ea=EA_DOCK, tol=1e-2)
+    assert res.model == elastic.INEXTENSIBLE and 1e-3 < corr < 1e-2
+
+
+def test_rule_element_by_element_and_invalid_elements():
+    t = np.array([1623.5e3, 1623.5e3, 10.0])  # the last: T <= w h, invalid
+    ea = np.array([EA_DOCK, 1e18, EA_DOCK])
+    res, corr = elastic.solve(1300.0, 20.85, t, 121.06, ea=ea)
+    assert list(res.model) == [elastic.ELASTIC, elastic.INEXTENSIBLE, elastic.INEXTENSIBLE]
+    assert list(res.status) == [0, 0, 4]
+    assert np.isnan(res.uplift_force[2]) and np.isfinite(res.uplift_force[:2]).all()
+    assert corr[2] == 0.0
+
+
+def test_elastic_margins_are_consistent():
+    """load margin: at T + load_margin the elastic x_min equals x; tide margin: depth reach - h."""
+    w, h, x = 1300.0, 20.85, 240.0
+    res, _ = elastic.solve(w, h, 1623.5e3, x, ea=EA_DOCK)
+    assert res.uplift_force == 0.0 and res.anchor_margin > 0
+    t_crit = 1623.5e3 + res.load_margin
+    x_min_crit = float(elastic.elastic_state(w, h, t_crit, None, EA_DOCK)['min_anchor_distance'])
+    assert x_min_crit == pytest.approx(x, rel=1e-12)
+    # tide margin: the no-uplift chain with the same R at depth h + tide_margin spans exactly x
+    r, h2 = res.horizontal_tension, h + res.tide_margin
+    s = 1 + r / EA_DOCK
+    d = 2 * h2 * w / (s + math.sqrt(s * s + 2 * h2 * w / EA_DOCK))  # h2 w = D (1 + (2R + D)/(2EA))
+    st = elastic.elastic_state(w, h2, r + d, None, EA_DOCK)
+    assert res.tide_margin > 0
+    assert float(st['horizontal_tension']) == pytest.approx(r, rel=1e-12)
+    assert float(st['min_anchor_distance']) == pytest.approx(x, rel=1e-11)
+
+
+def test_report_lines_and_magnitudes():
+    rows = {r['line'].split(',')[0]: r for r in elastic.report()}
+    chain, wire, poly = rows['U3 studlink chain'], rows['six-strand steel wire'], rows['polyester rope']
+    assert 1e-3 < chain['dx_min_rel'] < 2e-3
+    assert wire['strain'] > chain['strain'] and poly['strain'] > wire['strain']
+    for r in rows.values():  # elasticity moves the answers by far more than the solver's 1e-15
+        assert abs(r['dx_min_rel']) > 1e-6 and abs(r['duplift_over_t']) > 1e-6
+
+
+def test_bad_arguments():
+    with pytest.raises(ValueError, match='ea'):
+        elastic.solve(1300.0, 20.85, 1623.5e3, 121.06, ea=-1.0)
+    with pytest.raises(ValueError, match='tol'):
+        elastic.solve(1300.0, 20.85, 1623.5e3, 121.06, ea=1e9, tol=-1.0)
+    res, corr = elastic.solve(1300.0, 20.85, 1623.5e3, 121.06)
+    assert res.model == elastic.INEXTENSIBLE and corr == 0.0
