@@ -342,10 +342,13 @@ def _offline(args: argparse.Namespace) -> int:
     summary = out.summary_dict(result, report, {
         'parameters': params, 'outputs': outputs,
         'timing': {k: round(v, 3) for k, v in timing.items()}})
-    if args.json:
-        print(json.dumps(_finite(summary), allow_nan=False, default=_json_default))
-    else:
-        print(out.summary_text(summary))
+    text = json.dumps(_finite(summary), allow_nan=False, default=_json_default) if args.json \
+        else out.summary_text(summary)
+    try:
+        print(text)
+        sys.stdout.flush()
+    except BrokenPipeError:  # e.g. piped into head: the reader has what it wanted
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0
 
 
