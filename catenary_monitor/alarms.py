@@ -310,6 +310,8 @@ def _latch_series(codes: np.ndarray, t: np.ndarray, on_delay: float, hold: float
     the latch is the most recent candidate, forward-filled.
     """
     n = codes.size
+    if not (codes == _BREACH).any():
+        return np.zeros(n, dtype=bool)  # only a breach run can raise the latch
     idx = np.arange(n)
     starts = np.empty(n, dtype=bool)
     starts[0] = True

@@ -172,8 +172,9 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
     """Sub-command registrars of the other modules (imported lazily: no rclpy for `solve`)."""
-    from . import bench_core, bench_methods, node_cli
-    return [bench_core.register, bench_methods.register, node_cli.register]
+    from . import bench_core, bench_methods, bench_replay, node_cli, replay
+    return [bench_core.register, bench_methods.register, node_cli.register, replay.register,
+            bench_replay.register]
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:

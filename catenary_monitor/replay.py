@@ -1,0 +1,453 @@
+"""``catenary-monitor replay``: recompute a recorded MCAP log offline, or play it onto ROS.
+
+Offline (no ROS graph)::
+
+    catenary-monitor replay LOG.mcap [LOG2.mcap ...] --params-file FILE
+        [--out RESULTS.mcap] [--csv RESULTS.csv] [--plot CHART.png] [--json] [--quiet]
+
+reads the tension and depth topics named by the params file from any ROS 2-profile MCAP (the
+node's own logs, rosbag2 recordings; a rotated set or a directory), recomputes every update with
+the live node's schedule and alarm logic (:mod:`catenary_monitor.recompute`), writes the chosen
+outputs (:mod:`catenary_monitor.replay_output`) and prints a summary (``--json``: one JSON
+object). Periodic alarm steps are taken at the log times of the node's ``/diagnostics``
+messages when the log has them, otherwise on a grid at ``diagnostic_rate``.
+
+Playback::
+
+    catenary-monitor replay LOG.mcap --publish [--params-file FILE] [--rate X] [--loop]
+
+publishes the recorded inputs (``std_msgs/Float64``) on their topics with their recorded timing
+scaled by X (:mod:`catenary_monitor.replay_publish`, needs rclpy).
+
+Exit status: 0 done; 2 bad arguments, params file, missing file, not MCAP, or a topic with an
+unexpected type (one line naming it); 3 no message on any requested topic (empty log).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import struct
+import sys
+import time
+from pathlib import Path
+from typing import Any, Optional, Sequence
+
+import numpy as np
+
+from .config import (ConfigError, MonitorConfig, config_from_params, config_hash,
+                     load_params_file)
+from .mcap_read import (EmptyLogError, McapReadError, ReadReport, TopicTypeError,
+                        iter_messages, read_float64_topics)
+from .recompute import ReplayResult, recompute
+
+__all__ = ['register', 'cmd_replay', 'resolve_topic', 'input_topics', 'diagnostics_times',
+           'periodic_ticks',
+           'run_replay', 'EXIT_EMPTY']
+
+#: Exit status for a log without any message on the requested topics.
+EXIT_EMPTY = 3
+NODE_NAME = 'catenary_monitor'
+
+
+class ReplayError(Exception):
+    """A user-facing failure: ``str()`` is one line; ``code`` the exit status."""
+
+    def __init__(self, message: str, code: int = 2) -> None:
+        super().__init__(message)
+        self.code = code
+
+
+def resolve_topic(topic: str) -> str:
+    """A topic name as the node resolves it (node ``catenary_monitor`` in namespace ``/``)."""
+    if topic.startswith('~'):
+        return f'/{NODE_NAME}' + ('/' + topic[1:].lstrip('/') if len(topic) > 1 else '')
+    return topic if topic.startswith('/') else '/' + topic
+
+
+def input_topics(config: MonitorConfig) -> tuple[dict[str, str], str]:
+    """(line name -> resolved tension topic, resolved depth topic)."""
+    return ({line.name: resolve_topic(line.tension_topic) for line in config.lines},
+            resolve_topic(config.depth_topic))
+
+
+class Progress:
+    """Stage progress on stderr for long logs (``\\r`` updates on a terminal)."""
+
+    def __init__(self, enabled: bool) -> None:
+        self.enabled = enabled
+        self.tty = sys.stderr.isatty()
+        self.last = 0.0
+        self.start = time.monotonic()
+
+    def __call__(self, stage: str, fraction: float = 0.0) -> None:
+        if not self.enabled:
+            return
+        now = time.monotonic()
+        if fraction < 1.0 and now - self.last < (0.2 if self.tty else 2.0) and fraction > 0:
+            return
+        self.last = now
+        text = f'replay: {stage} {100 * fraction:3.0f}% ({now - self.start:.1f} s)'
+        if self.tty:
+            sys.stderr.write('\r' + text.ljust(60) + ('\n' if fraction >= 1.0 else ''))
+        else:
+            sys.stderr.write(text + '\n')
+        sys.stderr.flush()
+
+    def done(self) -> None:
+        if self.enabled and self.tty:
+            sys.stderr.write('\n')
+
+
+def _message_index_times(path: Path, topic: str) -> Optional[np.ndarray]:
+    """Log times of ``topic`` from the Message Index records of a finished file (no chunk is
+    decompressed), or None if the file has no usable summary."""
+    from mcap.reader import make_reader
+    try:
+        with open(path, 'rb') as f:
+            summary = make_reader(f).get_summary()
+            if summary is None:
+                return None
+            ids = [c.id for c in summary.channels.values() if c.topic == topic]
+            if not ids:
+                return np.zeros(0, np.int64)
+            cid = ids[0]
+            times = []
+            for ci in summary.chunk_indexes:
+                off = ci.message_index_offsets.get(cid)
+                if off is None:
+                    continue
+                f.seek(off)
+                head = f.read(15)
+                op, length, channel, nbytes = struct.unpack('<BQHI', head)
+                if op != 0x07 or channel != cid or nbytes % 16:
+                    return None
+                entries = np.frombuffer(f.read(nbytes), [('t', '<u8'), ('o', '<u8')])
+                times.append(entries['t'].astype(np.int64))
+            return np.sort(np.concatenate(times)) if times else np.zeros(0, np.int64)
+    except Exception:  # noqa: BLE001 - damaged summary: the caller scans the data instead
+        return None
+
+
+def diagnostics_times(paths: Sequence[Path], report: Optional[ReadReport] = None
+                      ) -> np.ndarray:
+    """Log times (ns, sorted) of the ``/diagnostics`` messages in the files (may be empty).
+
+    Finished files answer from their message indexes; unfinished or damaged ones are scanned.
+    """
+    found = []
+    for path in paths:
+        times = _message_index_times(path, '/diagnostics')
+        if times is None:
+            scan = iter_messages(path, ['/diagnostics'], ReadReport())
+            times = np.array([m.log_time_ns for m in scan], np.int64)
+        found.append(times)
+    return np.sort(np.concatenate(found)) if found else np.zeros(0, np.int64)
+
+
+def periodic_ticks(diag_ns: np.ndarray, tensions: dict[str, tuple[np.ndarray, np.ndarray]],
+                   depth: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    """The periodic steps among the log times of ``/diagnostics`` messages.
+
+    The node also publishes ``/diagnostics`` at once when an update changes a level; such a
+    message steps no other line. When it is logged at the update's own time (the receive time
+    of the tension or depth message), it is recognised by that exact time and dropped: a step
+    of every line there would be one the node did not make. Repeated times are kept once.
+    """
+    diag_ns = np.unique(diag_ns)
+    inputs = [depth[0], *(t for t, _ in tensions.values())]
+    inputs = [t for t in inputs if len(t)]
+    if not len(diag_ns) or not inputs:
+        return diag_ns
+    update_ns = np.unique(np.concatenate(inputs))
+    pos = np.minimum(np.searchsorted(update_ns, diag_ns), len(update_ns) - 1)
+    return diag_ns[update_ns[pos] != diag_ns]
+
+
+def _expand(paths: Sequence[str]) -> list[Path]:
+    out = []
+    for p in paths:
+        path = Path(p)
+        if path.is_dir():
+            out.extend(sorted(path.glob('*.mcap')))
+        elif path.exists():
+            out.append(path)
+        else:
+            raise ReplayError(f'no such MCAP file or directory: {path}')
+    if not out:
+        raise ReplayError(f'no *.mcap file in {", ".join(paths)}')
+    return out
+
+
+def log_parameters(paths: Sequence[Path]) -> Optional[tuple[str, dict[str, Any]]]:
+    """``(config hash, flat parameters)`` of the last ``catenary_monitor`` metadata record of
+    the files (the node writes one at start and on every parameter change), or None.
+
+    Finished files answer from their summary; an unfinished file from its first MiB (where
+    the node's logger writes the record).
+    """
+    import io
+    from mcap.reader import NonSeekingReader, make_reader
+    found = None
+    for path in paths:
+        records = []
+        try:
+            with open(path, 'rb') as f:
+                reader = make_reader(f)
+                try:
+                    summary = reader.get_summary()
+                except Exception:  # noqa: BLE001 - no footer: the writer was killed
+                    summary = None
+                if summary is not None:
+                    records = list(reader.iter_metadata())
+                else:
+                    f.seek(0)
+                    head = NonSeekingReader(io.BytesIO(f.read(1 << 20)))
+                    try:
+                        for record in head.iter_metadata():
+                            records.append(record)
+                    except Exception:  # noqa: BLE001 - the cut at 1 MiB, or damage
+                        pass
+        except Exception:  # noqa: BLE001 - an unreadable summary: no parameters from it
+            continue
+        for record in records:
+            if record.name == NODE_NAME and 'parameters' in record.metadata:
+                try:
+                    found = (record.metadata.get('config_hash', ''),
+                             json.loads(record.metadata['parameters']))
+                except ValueError:
+                    continue
+    return found
+
+
+def load_config(path: str) -> MonitorConfig:
+    """The monitor configuration of a params file (ReplayError with the one-line reason)."""
+    try:
+        return config_from_params(load_params_file(path))
+    except ConfigError as err:
+        raise ReplayError(f'{path}: {err}') from err
+
+
+def read_inputs(paths: Sequence[Path], config: MonitorConfig
+                ) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]],
+                           tuple[np.ndarray, np.ndarray], ReadReport]:
+    """Tension columns per line, the depth column and the read report."""
+    topics, depth_topic = input_topics(config)
+    try:
+        columns, report = read_float64_topics(paths, [depth_topic, *topics.values()])
+    except TopicTypeError as err:
+        raise ReplayError(f'unexpected message type: {err} (check the params file topics)')
+    except EmptyLogError as err:
+        raise ReplayError(f'empty log: {err}; nothing to replay', EXIT_EMPTY) from err
+    except McapReadError as err:
+        raise ReplayError(str(err)) from err
+    tensions = {name: columns[topic] for name, topic in topics.items()}
+    return tensions, columns[depth_topic], report
+
+
+def run_replay(paths: Sequence[Path], config: MonitorConfig, *, ticks: str = 'auto',
+               progress: Optional[Progress] = None) -> tuple[
+                   ReplayResult, dict[str, tuple[np.ndarray, np.ndarray]],
+                   tuple[np.ndarray, np.ndarray], ReadReport, dict[str, float]]:
+    """Read and recompute; returns the result, the input columns, the report and timings (s)."""
+    prog = progress or Progress(False)
+    timing: dict[str, float] = {}
+    t0 = time.perf_counter()
+    prog('reading', 0.0)
+    tensions, depth, report = read_inputs(paths, config)
+    timing['read_s'] = time.perf_counter() - t0
+    prog('reading', 1.0)
+    tick_ns = None
+    if ticks in ('auto', 'log'):
+        t1 = time.perf_counter()
+        found = periodic_ticks(diagnostics_times(paths), tensions, depth)
+        timing['ticks_s'] = time.perf_counter() - t1
+        if len(found):
+            tick_ns = found
+        elif ticks == 'log':
+            raise ReplayError('--ticks log: the log has no /diagnostics messages')
+    t1 = time.perf_counter()
+    result = recompute(config, tensions, depth, tick_ns,
+                       progress=lambda k, n, name: prog('solving', k / n))
+    timing['solve_s'] = time.perf_counter() - t1
+    return result, tensions, depth, report, timing
+
+
+def cmd_replay(args: argparse.Namespace) -> int:
+    """Entry point of ``catenary-monitor replay``."""
+    try:
+        if args.publish:
+            from .replay_publish import publish
+            paths = _expand(args.logs)
+            config = load_config(args.params_file) if args.params_file else None
+            return publish(paths, config, rate=args.rate, loop=args.loop,
+                           wait=args.wait_subscribers, quiet=args.quiet)
+        return _offline(args)
+    except ReplayError as err:
+        print(f'catenary-monitor replay: {err}', file=sys.stderr)
+        return err.code
+
+
+def _offline(args: argparse.Namespace) -> int:
+    from . import replay_output as out
+
+    paths = _expand(args.logs)
+    recorded = log_parameters(paths)
+    if args.params_file:
+        config = load_config(args.params_file)
+        source = args.params_file
+    elif recorded is not None:
+        try:
+            config = config_from_params(recorded[1])
+        except ConfigError as err:
+            raise ReplayError(f'the parameters recorded in the log are invalid: {err}; give '
+                              '--params-file') from err
+        source = 'recorded in the log'
+    else:
+        raise ReplayError('--params-file is required: the log holds no catenary_monitor '
+                          'parameters (it names the topics and the lines)')
+    params = {'source': source, 'config_hash': config_hash(config),
+              'recorded_config_hash': recorded[0] if recorded else None}
+    params['same_as_recorded'] = None if recorded is None else params['config_hash'] == recorded[0]
+    csv_columns = _csv_columns(args.csv_columns)
+    size = sum(p.stat().st_size for p in paths)
+    progress = Progress(args.progress or (not args.quiet and size > 8_000_000))
+    t_start = time.perf_counter()
+    result, tensions, depth, report, timing = run_replay(paths, config, ticks=args.ticks,
+                                                         progress=progress)
+    outputs: dict[str, Any] = {}
+    if args.csv:
+        t1 = time.perf_counter()
+        with _OutputFile(args.csv) as f:
+            rows = out.write_csv(f, result, progress, csv_columns)
+        timing['csv_s'] = time.perf_counter() - t1
+        outputs['csv'] = f'{args.csv} ({rows} rows)'
+    if args.out:
+        t1 = time.perf_counter()
+        topics, depth_topic = input_topics(config)
+        with _OutputFile(args.out) as f:
+            n = out.write_mcap(f, result, config, tensions, depth, topics, depth_topic,
+                               [str(p) for p in paths], progress)
+        timing['mcap_s'] = time.perf_counter() - t1
+        outputs['mcap'] = f'{args.out} ({n} messages)'
+    if args.plot:
+        t1 = time.perf_counter()
+        progress('plotting', 0.0)
+        files = out.write_plots(Path(args.plot), result, config, depth)
+        timing['plot_s'] = time.perf_counter() - t1
+        outputs['plots'] = ' '.join(str(p) for p in files)
+        progress('plotting', 1.0)
+    progress.done()
+    timing['total_s'] = time.perf_counter() - t_start
+    summary = out.summary_dict(result, report, {
+        'parameters': params, 'outputs': outputs,
+        'timing': {k: round(v, 3) for k, v in timing.items()}})
+    text = json.dumps(_finite(summary), allow_nan=False, default=_json_default) if args.json \
+        else out.summary_text(summary)
+    try:
+        print(text)
+        sys.stdout.flush()
+    except BrokenPipeError:  # e.g. piped into head: the reader has what it wanted
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    return 0
+
+
+def _csv_columns(text: str) -> Sequence[str]:
+    from .replay_output import CSV_ALL, CSV_COLUMNS
+    if not text:
+        return CSV_COLUMNS
+    if text == 'all':
+        return [name for name, _ in CSV_ALL]
+    names = [t.strip() for t in text.split(',') if t.strip()]
+    unknown = [n for n in names if n not in {name for name, _ in CSV_ALL}]
+    if unknown:
+        raise ReplayError(f'--csv-columns: unknown column {unknown[0]!r}; known: '
+                          + ', '.join(name for name, _ in CSV_ALL))
+    return names
+
+
+def _finite(value: Any) -> Any:
+    """The summary with non-finite floats as None (JSON has no NaN)."""
+    if isinstance(value, dict):
+        return {k: _finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_finite(v) for v in value]
+    if isinstance(value, float) and not np.isfinite(value):
+        return None
+    return value
+
+
+def _json_default(value: Any) -> Any:
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f'not JSON serializable: {type(value).__name__}')
+
+
+class _OutputFile:
+    """Open an output file for writing; a failure is a one-line ReplayError."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+
+    def __enter__(self) -> Any:
+        try:
+            parent = os.path.dirname(self.path)
+            if parent:
+                os.makedirs(parent, exist_ok=True)
+            self.f = open(self.path, 'wb', buffering=1 << 20)
+        except OSError as err:
+            raise ReplayError(f'cannot write {self.path}: {err}') from err
+        return self.f
+
+    def __exit__(self, *exc: Any) -> None:
+        self.f.close()
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'not a number: {text!r}') from None
+    if not value > 0 or value == float('inf'):
+        raise argparse.ArgumentTypeError(f'must be a positive number, got {text!r}')
+    return value
+
+
+def register(sub: Any) -> None:
+    """Add the ``replay`` sub-command to the ``catenary-monitor`` parser."""
+    p = sub.add_parser(
+        'replay', help='recompute a recorded MCAP log offline, or play it onto ROS',
+        description='Recompute every update of a recorded log with the live node\'s alarm '
+                    'logic (vectorized), write MCAP/CSV/PNG results and print a summary; or, '
+                    'with --publish, publish the recorded inputs with their recorded timing.')
+    p.add_argument('logs', nargs='+', metavar='LOG.mcap',
+                   help='MCAP file(s) (a rotated set) or directories of *.mcap')
+    p.add_argument('--params-file', metavar='FILE',
+                   help='ROS 2 params YAML of the monitor (lines, topics, alarm settings); '
+                        'default: the parameters the node recorded in the log')
+    p.add_argument('--out', metavar='RESULTS.mcap',
+                   help='write inputs, per-line outputs and /diagnostics as a ROS 2 MCAP log')
+    p.add_argument('--csv', metavar='RESULTS.csv',
+                   help='write one CSV row per tension message, in time order')
+    p.add_argument('--plot', metavar='CHART.png',
+                   help='write an overview PNG and one PNG per line (CHART_<line>.png)')
+    p.add_argument('--csv-columns', metavar='LIST', default='',
+                   help='comma-separated CSV columns, or "all" (default: time, line, '
+                        'top_tension, depth, min_anchor_distance, anchor_margin, uplift_force, '
+                        'level); also horizontal_tension, tide_margin, load_margin, '
+                        'safety_factor, status')
+    p.add_argument('--json', action='store_true', help='print the summary as one JSON object')
+    p.add_argument('--quiet', action='store_true', help='no progress on stderr')
+    p.add_argument('--progress', action='store_true',
+                   help='show progress on stderr even for a short log (default: logs > 8 MB)')
+    p.add_argument('--ticks', choices=('auto', 'log', 'grid'), default='auto',
+                   help='periodic alarm steps: the log\'s /diagnostics times (auto: if present) '
+                        'or a grid at diagnostic_rate')
+    p.add_argument('--publish', action='store_true',
+                   help='publish the recorded inputs onto ROS instead (needs rclpy)')
+    p.add_argument('--rate', type=_positive, default=1.0, metavar='X',
+                   help='--publish: play X times faster than recorded (default 1)')
+    p.add_argument('--loop', action='store_true', help='--publish: start again at the end')
+    p.add_argument('--wait-subscribers', type=float, default=0.0, metavar='S',
+                   help='--publish: wait up to S s until every topic has a subscriber')
+    p.set_defaults(func=cmd_replay)

@@ -1,0 +1,467 @@
+"""Replay outputs: CSV rows, an MCAP results log, PNG charts and the summary (text or JSON).
+
+No rclpy: the MCAP messages are encoded by :mod:`catenary_monitor.cdr` and written by
+:mod:`catenary_monitor.mcap_fast`.
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import functools
+import json
+import math
+from pathlib import Path
+from typing import IO, Any, Callable, Optional, Sequence
+
+import numpy as np
+
+from . import __version__
+from .alarms import DIAGNOSTIC_KEYS, Level
+from .cdr import (diagnostic_array_parts, float64_payloads, key_values, multiarray_payloads,
+                  status_header)
+from .config import MonitorConfig, config_hash, config_to_params
+from .fastcsv import FloatColumn, IntColumn, LabelColumn, write_rows
+from .mcap_fast import ColumnWriter
+from .recompute import NO_DEPTH, OUTPUT_FIELDS, VALUE_FIELDS, LineResult, ReplayResult, worst
+from .ros_schemas import (QOS_DEFAULT, QOS_SENSOR_DATA, message_definition,
+                          type_description_hash)
+
+__all__ = ['CSV_ALL', 'CSV_COLUMNS', 'NODE_NAME', 'write_csv', 'write_mcap', 'write_plots',
+           'summary_dict', 'summary_text', 'output_topic']
+
+NODE_NAME = 'catenary_monitor'
+#: Every CSV column, in order, with its decimals (None: a label). Units: s, N, m, -.
+#: ``time`` is exact (ns); forces have 3 decimals (1 mN), lengths 3 (1 mm), the safety factor 3.
+CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
+    ('time', 9), ('line', None), ('top_tension', 3), ('depth', 3),
+    ('horizontal_tension', 3), ('min_anchor_distance', 3), ('anchor_margin', 3),
+    ('uplift_force', 3), ('tide_margin', 3), ('load_margin', 3), ('safety_factor', 3),
+    ('status', None), ('level', None))
+#: The default columns (the issue's contract), in this order.
+CSV_COLUMNS = ('time', 'line', 'top_tension', 'depth', 'min_anchor_distance', 'anchor_margin',
+               'uplift_force', 'level')
+_LEVELS = [lv.name for lv in sorted(Level)]
+_STATUS_LABELS = [str(s) for s in range(NO_DEPTH, 11)]
+
+Progress = Optional[Callable[[str, float], None]]
+
+
+def output_topic(line: str) -> str:
+    """The node's per-line output topic (``~/NAME/outputs`` of node ``catenary_monitor``)."""
+    return f'/{NODE_NAME}/{line}/outputs'
+
+
+def _tension_rows(result: ReplayResult, keys: Sequence[str] = VALUE_FIELDS
+                  ) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray, np.ndarray,
+                             np.ndarray]:
+    """All lines' tension updates merged in time order (stable: config order at equal times):
+    times, the value columns ``keys``, line index, status and level."""
+    parts = [(r, r.tension_rows) for r in result.lines]
+    t = np.concatenate([r.t_ns[rows] for r, rows in parts])
+    line = np.concatenate([np.full(len(rows), k, np.int64) for k, (_, rows) in enumerate(parts)])
+    order = np.argsort(t, kind='stable')
+    values = {k: np.concatenate([r.values[k][rows] for r, rows in parts])[order]
+              for k in VALUE_FIELDS if k in keys}
+    status = np.concatenate([r.status[rows] for r, rows in parts])[order] \
+        if 'status' in keys else np.zeros(0, np.int64)
+    level = np.concatenate([r.level[rows] for r, rows in parts])[order]
+    return t[order], values, line[order], status, level
+
+
+def write_csv(stream: IO[bytes], result: ReplayResult, progress: Progress = None,
+              columns: Sequence[str] = CSV_COLUMNS) -> int:
+    """One row per tension message, in time order; returns the number of rows.
+
+    ``columns`` are names from :data:`CSV_ALL` (written in that order): ``time`` is the
+    receive time in s (exact ns), forces in N and lengths in m with 3 decimals, ``status`` the
+    solver code (-1: no depth yet, 0: solved), ``level`` OK/WARN/ERROR/STALE after the update.
+    """
+    unknown = set(columns) - {name for name, _ in CSV_ALL}
+    if unknown:
+        raise ValueError(f'unknown CSV column(s) {sorted(unknown)}; known: '
+                         + ', '.join(name for name, _ in CSV_ALL))
+    wanted = [(name, d) for name, d in CSV_ALL if name in set(columns)]
+    t, values, line, status, level = _tension_rows(result, [n for n, _ in wanted])
+    names = [r.name for r in result.lines]
+    out_columns: list[Any] = []
+    for name, decimals in wanted:
+        if name == 'time':
+            out_columns.append(IntColumn(name, t, 9))
+        elif name == 'line':
+            out_columns.append(LabelColumn(name, line, names))
+        elif name == 'status':
+            out_columns.append(LabelColumn(name, status - NO_DEPTH, _STATUS_LABELS))
+        elif name == 'level':
+            out_columns.append(LabelColumn(name, level, _LEVELS))
+        else:
+            out_columns.append(FloatColumn(name, values[name], decimals or 0))
+    n = len(t)
+    step = max(1 << 18, n // 10)
+    for lo in range(0, max(n, 1), step):
+        hi = min(n, lo + step)
+        write_rows(stream, out_columns, hi, header=lo == 0, start=lo)
+        if progress is not None:
+            progress('writing CSV', hi / max(n, 1))
+    return n
+
+
+# ---------------------------------------------------------------------------- MCAP
+def _state_at(times_ns: np.ndarray, r: LineResult) -> tuple[np.ndarray, np.ndarray]:
+    """Per time: index of the newest update (-1: none) and the level, for one line."""
+    all_t = np.concatenate((r.t_ns, r.tick_ns))
+    all_level = np.concatenate((r.level, r.tick_level))
+    order = np.argsort(all_t, kind='stable')
+    pos = np.searchsorted(all_t[order], times_ns, 'right') - 1
+    level = np.where(pos >= 0, all_level[order][np.maximum(pos, 0)], Level.OK)
+    upd = np.searchsorted(r.t_ns, times_ns, 'right') - 1
+    return upd, level
+
+
+def _diagnostics(result: ReplayResult, config: MonitorConfig,
+                 topics: dict[str, str]) -> tuple[list[int], list[bytes]]:
+    """A DiagnosticArray at every tick and at every transition (as the node publishes them).
+
+    Each line's status: level at that time, the message of its latest transition (``OK`` before
+    any), the diagnostic values of its newest update.
+    """
+    times = set(result.tick_ns.tolist())
+    for r in result.lines:
+        if r.transitions:
+            # The exact receive time (ns) of the step that made each transition.
+            steps = np.unique(np.concatenate((r.t_ns, r.tick_ns)))
+            at = np.searchsorted(steps * 1e-9, [tr.time for tr in r.transitions])
+            times.update(steps[np.minimum(at, len(steps) - 1)].tolist())
+    stamps = np.array(sorted(times), np.int64)
+    statuses: list[list[tuple[Any, bytes]]] = [[] for _ in range(len(stamps))]
+    for r in result.lines:
+        upd, level = _state_at(stamps, r)
+        tr_t = np.array([tr.time for tr in r.transitions])
+        tr_i = np.searchsorted(tr_t, stamps * 1e-9, 'right') - 1
+        name, hw = f'{NODE_NAME}: {r.name}', topics[r.name]
+        n_keys = len(DIAGNOSTIC_KEYS)
+        headers: dict[tuple[int, int], Any] = {}
+        pairs: dict[int, bytes] = {-1: key_values([(k, 'nan') for k in DIAGNOSTIC_KEYS])}
+        used = np.unique(upd[upd >= 0])
+        texts = {key: dict(zip(used.tolist(), map(repr, r.values[key][used].tolist())))
+                 for key in DIAGNOSTIC_KEYS}
+        for k, (i, lv, j) in enumerate(zip(upd.tolist(), level.tolist(), tr_i.tolist())):
+            header = headers.get((lv, j))
+            if header is None:
+                message = r.transitions[j].message if j >= 0 else 'OK'
+                header = headers[(lv, j)] = functools.lru_cache(maxsize=4)(functools.partial(
+                    status_header, lv, name, message, hw, n_keys))
+            kv = pairs.get(i)
+            if kv is None:
+                kv = pairs[i] = key_values([(key, texts[key][i]) for key in DIAGNOSTIC_KEYS])
+            statuses[k].append((header, kv))
+    payloads = [diagnostic_array_parts(stamp, st) for stamp, st in zip(stamps.tolist(), statuses)]
+    return stamps.tolist(), payloads
+
+
+def write_mcap(stream: IO[bytes], result: ReplayResult, config: MonitorConfig,
+               tensions: dict[str, tuple[np.ndarray, np.ndarray]],
+               depth: tuple[np.ndarray, np.ndarray], topics: dict[str, str], depth_topic: str,
+               sources: Sequence[str] = (), progress: Progress = None) -> int:
+    """Results as a ROS 2 MCAP log shaped like the node's: inputs, outputs, /diagnostics.
+
+    The recorded inputs are copied (``std_msgs/msg/Float64``); each line's updates go to
+    :func:`output_topic` as ``std_msgs/msg/Float64MultiArray`` (:data:`OUTPUT_FIELDS`, label =
+    the field names joined by commas); ``/diagnostics`` holds a ``DiagnosticArray`` at every
+    tick and transition. Returns the number of messages written.
+    """
+    w = ColumnWriter(stream)
+    schemas = {}
+    for type_name in ('std_msgs/msg/Float64', 'std_msgs/msg/Float64MultiArray',
+                      'diagnostic_msgs/msg/DiagnosticArray'):
+        schemas[type_name] = w.register_schema(type_name, 'ros2msg',
+                                               message_definition(type_name).encode())
+
+    def channel(topic: str, type_name: str, qos: str) -> int:
+        meta = {'offered_qos_profiles': qos}
+        type_hash = type_description_hash(type_name)
+        if type_hash:
+            meta['topic_type_hash'] = type_hash
+        return w.register_channel(topic, 'cdr', schemas[type_name], meta)
+
+    in_ids = {name: channel(topics[name], 'std_msgs/msg/Float64', QOS_SENSOR_DATA)
+              for name in topics}
+    depth_id = channel(depth_topic, 'std_msgs/msg/Float64', QOS_SENSOR_DATA)
+    out_ids = [channel(output_topic(r.name), 'std_msgs/msg/Float64MultiArray', QOS_DEFAULT)
+               for r in result.lines]
+    diag_id = channel('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', QOS_DEFAULT)
+    w.add_metadata(NODE_NAME, {
+        'version': __version__, 'config_hash': config_hash(config),
+        'parameters': json.dumps(config_to_params(config), sort_keys=True),
+        'output_fields': ','.join(OUTPUT_FIELDS), 'units': 'SI (N, m, s)',
+        'source': 'catenary-monitor replay', 'replayed_files': ','.join(sources)})
+
+    # Inputs, merged in time order.
+    t_in = [depth[0]] + [tensions[n][0] for n in topics if n in tensions]
+    v_in = [depth[1]] + [tensions[n][1] for n in topics if n in tensions]
+    c_in = [np.full(len(depth[0]), depth_id)] + [np.full(len(tensions[n][0]), in_ids[n])
+                                                 for n in topics if n in tensions]
+    t_in_all = np.concatenate(t_in)
+    order = np.argsort(t_in_all, kind='stable')
+    t_in_all = t_in_all[order]
+    c_in_all = np.concatenate(c_in)[order]
+    v_in_all = np.concatenate(v_in)[order]
+    # Outputs, merged in time order.
+    t_out = np.concatenate([r.t_ns for r in result.lines])
+    c_out = np.concatenate([np.full(len(r.t_ns), cid) for r, cid in zip(result.lines, out_ids)])
+    order = np.argsort(t_out, kind='stable')
+    label = ','.join(OUTPUT_FIELDS)
+    columns = [np.concatenate([r.values[key] for r in result.lines]) for key in VALUE_FIELDS]
+    columns.append(np.concatenate([r.status for r in result.lines]).astype(np.float64))
+    columns.append(np.concatenate([r.level for r in result.lines]).astype(np.float64))
+    stamps, payloads = _diagnostics(result, config, topics)
+    diag_t = np.asarray(stamps, np.int64)
+    # Written window by window (inputs, outputs, diagnostics of each time window), so that the
+    # chunks of the three streams overlap only within a window.
+    n_out = len(t_out)
+    step = 1 << 14  # about two minutes of a 12-line dock at 10 Hz
+    t_sorted = t_out[order]
+    edges = [t_sorted[k] for k in range(step, n_out, step)]
+    bounds = [None, *edges, None]
+    for k in range(len(bounds) - 1):
+        lo_t, hi_t = bounds[k], bounds[k + 1]
+
+        def part(times: np.ndarray) -> slice:
+            a = 0 if lo_t is None else int(np.searchsorted(times, lo_t, 'left'))
+            b = len(times) if hi_t is None else int(np.searchsorted(times, hi_t, 'left'))
+            return slice(a, b)
+        s_in = part(t_in_all)
+        w.write_columns(c_in_all[s_in], t_in_all[s_in], float64_payloads(v_in_all[s_in]))
+        sel = order[part(t_sorted)]
+        data = np.empty((len(sel), len(OUTPUT_FIELDS)))
+        for j, col in enumerate(columns):
+            data[:, j] = col[sel]
+        w.write_columns(c_out[sel], t_out[sel], multiarray_payloads(label, data))
+        s_d = part(diag_t)
+        w.write_messages(diag_id, stamps[s_d], payloads[s_d])
+        if progress is not None:
+            progress('writing MCAP', (k + 1) / (len(bounds) - 1))
+    w.finish()
+    if progress is not None:
+        progress('writing MCAP', 1.0)
+    return w.messages
+
+
+# ---------------------------------------------------------------------------- charts
+_SHADE = {Level.WARN: ('#f2c744', 'WARN'), Level.STALE: ('#9e9e9e', 'STALE'),
+          Level.ERROR: ('#d62728', 'ERROR')}
+
+
+def _envelope(t: np.ndarray, v: np.ndarray, bins: int = 1000) -> tuple[np.ndarray, np.ndarray]:
+    """Min/max decimation keeping peaks: at most ``2 * bins`` points."""
+    n = len(t)
+    if n <= 2 * bins:
+        return t, v
+    edges = np.linspace(0, n, bins + 1).astype(np.int64)
+    starts = edges[:-1]
+    vv = np.where(np.isnan(v), np.inf, v)
+    lo = np.minimum.reduceat(vv, starts)
+    vv = np.where(np.isnan(v), -np.inf, v)
+    hi = np.maximum.reduceat(vv, starts)
+    tt = t[starts]
+    lo = np.where(np.isinf(lo), np.nan, lo)
+    hi = np.where(np.isinf(hi), np.nan, hi)
+    return np.repeat(tt, 2), np.column_stack((lo, hi)).ravel()
+
+
+def _periods(r: LineResult, end_ns: int) -> list[tuple[float, float, Level]]:
+    """(start s, end s, level) of every non-OK period from the transitions."""
+    out = []
+    cur: Optional[tuple[float, Level]] = None
+    for tr in r.transitions:
+        if cur is not None:
+            out.append((cur[0], tr.time, cur[1]))
+        cur = (tr.time, tr.new) if tr.new != Level.OK else None
+    if cur is not None:
+        out.append((cur[0], end_ns * 1e-9, cur[1]))
+    return out
+
+
+def _dates(t_s: np.ndarray) -> np.ndarray:
+    return (np.asarray(t_s) * 1e6).astype('int64').astype('datetime64[us]')
+
+
+def _shade(ax: Any, periods: list[tuple[float, float, Level]]) -> None:
+    for a, b, level in periods:
+        color, _ = _SHADE[level]
+        ax.axvspan(_dates(np.array([a]))[0], _dates(np.array([b]))[0], color=color, alpha=0.3,
+                   lw=0)
+
+
+def write_plots(path: Path, result: ReplayResult, config: MonitorConfig,
+                depth: tuple[np.ndarray, np.ndarray]) -> list[Path]:
+    """PNG charts: ``path`` (overview: every line's tension, alarms shaded, and the tide) and
+    ``<stem>_<line><suffix>`` per line (hook tension; minimum vs installed anchor distance;
+    uplift force vs allowed; tide), alarm periods shaded (WARN yellow, STALE grey, ERROR red).
+    """
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+    from matplotlib.patches import Patch
+
+    path = Path(path)
+    written = []
+    legend = [Patch(color=c, alpha=0.3, label=name) for c, name in _SHADE.values()]
+    td, dv = _envelope(depth[0] * 1e-9, depth[1])
+    for r in result.lines:
+        lc = config.line(r.name)
+        fig, axes = plt.subplots(4, 1, figsize=(11, 9), sharex=True)
+        t = r.t_ns * 1e-9
+        periods = _periods(r, result.end_ns)
+        series = [('hook tension [kN]', r.values['top_tension'] / 1e3, None),
+                  ('minimum anchor distance [m]', r.values['min_anchor_distance'],
+                   (lc.anchor_distance, 'installed')),
+                  ('uplift force [kN]', r.values['uplift_force'] / 1e3,
+                   (lc.allowed_uplift / 1e3, 'allowed'))]
+        for ax, (label, v, ref) in zip(axes, series):
+            x, y = _envelope(t, v)
+            ax.plot(_dates(x), y, lw=0.7)
+            if ref is not None:
+                ax.axhline(ref[0], color='k', ls='--', lw=0.8, label=ref[1])
+                ax.legend(loc='upper right', fontsize=8)
+            ax.set_ylabel(label, fontsize=9)
+            _shade(ax, periods)
+            ax.grid(alpha=0.3)
+        axes[3].plot(_dates(td), dv, lw=0.7, color='tab:blue')
+        axes[3].set_ylabel('tide depth [m]', fontsize=9)
+        axes[3].grid(alpha=0.3)
+        _shade(axes[3], periods)
+        axes[3].set_xlabel('time (UTC)')
+        axes[0].legend(handles=legend, loc='upper left', fontsize=8, ncol=3)
+        fig.suptitle(f'{r.name}: replay ({len(r.transitions)} alarm transitions)')
+        fig.subplots_adjust(left=0.08, right=0.98, top=0.94, bottom=0.07, hspace=0.12)
+        out = path.with_name(f'{path.stem}_{r.name}{path.suffix or ".png"}')
+        fig.savefig(out, dpi=72)
+        plt.close(fig)
+        written.append(out)
+    n = len(result.lines)
+    fig, axes = plt.subplots(n + 1, 1, figsize=(11, 1.6 * (n + 1) + 1), sharex=True,
+                             squeeze=False)
+    for ax, r in zip(axes[:, 0], result.lines):
+        x, y = _envelope(r.t_ns * 1e-9, r.values['top_tension'] / 1e3)
+        ax.plot(_dates(x), y, lw=0.6)
+        _shade(ax, _periods(r, result.end_ns))
+        ax.set_ylabel(f'{r.name}\nT [kN]', fontsize=8)
+        ax.grid(alpha=0.3)
+    ax = axes[n, 0]
+    ax.plot(_dates(td), dv, lw=0.7)
+    ax.set_ylabel('tide [m]', fontsize=8)
+    ax.set_xlabel('time (UTC)')
+    axes[0, 0].legend(handles=legend, loc='upper left', fontsize=7, ncol=3)
+    fig.suptitle('replay: hook tension per line, alarm periods shaded; tide')
+    fig.subplots_adjust(left=0.09, right=0.98, top=1 - 0.75 / (1.6 * (n + 1) + 1),
+                        bottom=0.6 / (1.6 * (n + 1) + 1), hspace=0.15)
+    fig.savefig(path, dpi=72)
+    plt.close(fig)
+    return [path] + written
+
+
+# ---------------------------------------------------------------------------- summary
+def _utc(t: Optional[float]) -> str:
+    if t is None or not math.isfinite(t):
+        return '-'
+    return _dt.datetime.fromtimestamp(t, _dt.timezone.utc).strftime('%Y-%m-%d %H:%M:%S.%f')[:-3]
+
+
+def _final_level(r: LineResult) -> Level:
+    """Level after the line's last step (update or tick)."""
+    if r.transitions:
+        return r.transitions[-1].new
+    return Level.OK
+
+
+def summary_dict(result: ReplayResult, report: Any, extra: Optional[dict[str, Any]] = None
+                 ) -> dict[str, Any]:
+    """Machine-readable summary (``--json``): SI units, times in s since the Unix epoch."""
+    lines = {}
+    for r in result.lines:
+        lines[r.name] = {
+            'tension_messages': int(len(r.tension_rows)),
+            'updates': int(len(r.t_ns)),
+            'unsolved_updates': int(np.count_nonzero(r.status != 0)),
+            'worst': worst(r),
+            'transitions': len(r.transitions),
+            'final_level': _final_level(r).name,
+            'episodes': r.episodes(result.end_ns),
+        }
+    out: dict[str, Any] = {
+        'files': [f.path for f in report.files],
+        'complete': bool(report.complete),
+        'messages': dict(report.messages),
+        'missing_topics': list(report.missing_topics),
+        'skipped': [{'path': s.path, 'offset': s.offset, 'kind': s.kind, 'reason': s.reason,
+                     'messages_lost': s.messages_lost} for s in report.skips],
+        'unfinished_files': [f.path for f in report.files if not f.finished],
+        'start': result.start_ns * 1e-9, 'end': result.end_ns * 1e-9,
+        'duration': (result.end_ns - result.start_ns) * 1e-9,
+        'ticks': {'count': int(len(result.tick_ns)),
+                  'source': 'log /diagnostics' if result.ticks_from_log else 'synthetic grid'},
+        'lines': lines,
+    }
+    if extra:
+        out.update(extra)
+    return out
+
+
+def _fmt(value: Optional[dict[str, float]], scale: float, unit: str, fmt: str) -> str:
+    if value is None:
+        return 'n/a'
+    return f'{format(value["value"] / scale, fmt)} {unit} at {_utc(value["time"])[11:]}'.replace(
+        '  ', ' ')
+
+
+def summary_text(summary: dict[str, Any]) -> str:
+    """Human-readable summary: per line the worst margins and each alarm episode."""
+    msgs = summary['messages']
+    out = [f'replayed {len(summary["files"])} file(s): {sum(msgs.values())} messages, '
+           f'{_utc(summary["start"])} to {_utc(summary["end"])} UTC '
+           f'({summary["duration"]:.1f} s); {summary["ticks"]["count"]} periodic steps '
+           f'({summary["ticks"]["source"]})']
+    par = summary.get('parameters')
+    if par:
+        text = f'parameters: {par["source"]} (config hash {par["config_hash"][:12]})'
+        if par['same_as_recorded'] is False:
+            text += (f'; the log was recorded with other parameters (config hash '
+                     f'{par["recorded_config_hash"][:12]})')
+        elif par['same_as_recorded']:
+            text += '; the same as recorded in the log'
+        out.append(text)
+    if summary['skipped'] or summary['unfinished_files']:
+        out.append('DAMAGED INPUT: everything readable was used; skipped:')
+        for f in summary['unfinished_files']:
+            out.append(f'  {f}: not finished by its writer (no summary; killed?)')
+        for s in summary['skipped']:
+            lost = '' if s['messages_lost'] is None else f' ({s["messages_lost"]} messages lost)'
+            out.append(f'  {s["path"]} @ byte {s["offset"]}: {s["kind"]}: {s["reason"]}{lost}')
+    if summary['missing_topics']:
+        out.append(f'no messages on: {", ".join(summary["missing_topics"])}')
+    for name, ln in summary['lines'].items():
+        w = ln['worst']
+        out.append('')
+        out.append(f'{name}: {ln["tension_messages"]} tension messages, {ln["updates"]} updates'
+                   f' ({ln["unsolved_updates"]} unsolved), final level {ln["final_level"]}')
+        out.append(f'  worst anchor margin {_fmt(w["anchor_margin"], 1, "m", "+.2f")}; '
+                   f'tide margin {_fmt(w["tide_margin"], 1, "m", "+.2f")}')
+        out.append(f'  worst load margin {_fmt(w["load_margin"], 1e3, "kN", "+.1f")}; '
+                   f'safety factor {_fmt(w["safety_factor"], 1, "", ".2f")}')
+        uplift = w['uplift_force']
+        lifted = 'none (anchor never lifted)' if uplift is not None and uplift['value'] == 0 \
+            else _fmt(uplift, 1e3, 'kN', '.1f')
+        out.append(f'  max uplift {lifted}; '
+                   f'max hook tension {_fmt(w["top_tension"], 1e3, "kN", ".1f")}')
+        eps = ln['episodes']
+        if not eps:
+            out.append('  no alarm episode')
+        for e in eps:
+            end = 'still active at the end of the log' if e['end'] is None else \
+                f'until {_utc(e["end"])[11:]}'
+            dur = '' if e['duration'] is None else f'{e["duration"]:.1f} s, '
+            out.append(f'  {e["worst"]:<5} from {_utc(e["start"])} ({dur}{end}): {e["message"]}')
+    for key in ('outputs', 'timing'):
+        if summary.get(key):
+            out.append('')
+            out.append(f'{key}: ' + ', '.join(f'{k} {v}' for k, v in summary[key].items()))
+    return '\n'.join(out)
