@@ -28,7 +28,9 @@ setup(
         'ros-jazzy-common-interfaces',
     ],
     extras_require={
-        'test': ['pytest>=7', 'hypothesis>=6', 'mpmath>=1.3', 'flake8>=6', 'pytest-timeout'],
+        # The test suite also checks the peers (MoorPy, pycatenary): nothing there is skipped.
+        'test': ['pytest>=7', 'hypothesis>=6', 'mpmath>=1.3', 'flake8>=6', 'pytest-timeout',
+                 'moorpy', 'pycatenary'],
         'peers': ['moorpy', 'pycatenary'],
     },
     zip_safe=True,

@@ -9,7 +9,6 @@ with SIGTERM and replays its MCAP log. Compared with what the node logged itself
   alarm level after the update, and values to rounding;
 * every ``/diagnostics`` message: each line's level equals replay's level at that time.
 """
-import importlib.util
 import os
 import re
 import signal
@@ -33,30 +32,6 @@ ROOT = Path(__file__).resolve().parents[1]
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
 
-def _node_available():
-    return importlib.util.find_spec('catenary_monitor.node') is not None
-
-
-def _node_drops_solved_tension_updates():
-    """True while node.py's ``_update`` takes a solve() result for its ``(values, status,
-    text)`` tuple: ``SolveResult`` is a NamedTuple, so every solved tension update raises
-    ``ValueError: too many values to unpack`` (logged by ``_guarded``) and publishes nothing."""
-    if not _node_available():
-        return False
-    import inspect
-    from catenary_monitor import node
-    from catenary_monitor.solve import SolveResult
-    source = inspect.getsource(node.CatenaryMonitor._update)
-    return issubclass(SolveResult, tuple) and 'elif isinstance(result, tuple):' in source
-
-
-@pytest.mark.skipif(not _node_available(), reason='the live node (catenary_monitor.node) is '
-                                                  'not in this tree yet')
-@pytest.mark.xfail(_node_drops_solved_tension_updates(), strict=False,
-                   reason='node.py bug: _update unpacks a SolveResult (a NamedTuple) as '
-                          '(values, status, text); the node logs no output for solved tension '
-                          'updates. Passes with the check made `isinstance(result, tuple) and '
-                          'len(result) == 3`.')
 def test_replay_of_a_live_node_log_matches_the_node(tmp_path):
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
@@ -175,8 +150,6 @@ def test_replay_of_a_live_node_log_matches_the_node(tmp_path):
                 assert message == tr.message, r.name
 
 
-@pytest.mark.skipif(not _node_available(), reason='the live node (catenary_monitor.node) is '
-                                                  'not in this tree yet')
 def test_output_layout_is_the_nodes():
     """Replay writes the node's per-line output layout (recompute.OUTPUT_FIELDS)."""
     from catenary_monitor import node
