@@ -248,12 +248,20 @@ class CatenaryMonitor(Node):
     @_guarded
     def _on_period(self) -> None:
         """Steady diagnostics: re-check every line (staleness) and publish /diagnostics."""
-        now = self._now()
+        self._tick(self._clock.now().nanoseconds)
+
+    def _tick(self, now_ns: int) -> None:
+        """Step every line with its last inputs at ``now_ns`` and publish (logged at ``now_ns``).
+
+        Every /diagnostics message not logged at an input's receive time is such a tick, so
+        replay can take the logged /diagnostics times as the node's ticks.
+        """
+        now = now_ns * 1e-9
         self._check_tide(now)
         self._check_logger()
         for line in self.lines:
             self._step_alarm(line, line.inputs, now)
-        self._publish_diagnostics(now)
+        self._publish_diagnostics(now_ns)
 
     @_guarded
     def _on_log_timer(self) -> None:
@@ -261,7 +269,7 @@ class CatenaryMonitor(Node):
         if self.log is not None:
             self.log.tick()
         if self._check_logger():
-            self._publish_diagnostics(self._now())
+            self._tick(self._clock.now().nanoseconds)
 
     # ------------------------------------------------------------------ core calls
     def _solve_one(self, line: _Line) -> Any:
@@ -313,7 +321,7 @@ class CatenaryMonitor(Node):
         line.publisher.publish(data)
         self._write(line.output_topic, data, now_ns)
         if changed:
-            self._publish_diagnostics(now)
+            self._publish_diagnostics(now_ns)
 
     def _step_alarm(self, line: _Line, inputs: AlarmInputs, now: float) -> bool:
         """Advance the line's alarm state; log each transition. True if the level changed."""
@@ -365,10 +373,11 @@ class CatenaryMonitor(Node):
             message=line.state.message, hardware_id=line.tension_topic,
             values=[KeyValue(key=k, value=v) for k, v in values + extra])
 
-    def _publish_diagnostics(self, now: float) -> None:
-        """One DiagnosticArray: every line, then the tide and the logger."""
+    def _publish_diagnostics(self, now_ns: int) -> None:
+        """One DiagnosticArray at node time ``now_ns``: every line, then the tide and the logger."""
+        now = now_ns * 1e-9
         array = DiagnosticArray()
-        array.header.stamp = self._clock.now().to_msg()
+        array.header.stamp.sec, array.header.stamp.nanosec = divmod(now_ns, 10**9)
         array.status = [self._line_status(line, now) for line in self.lines]
         level, text = self._tide
         array.status.append(DiagnosticStatus(
@@ -384,7 +393,7 @@ class CatenaryMonitor(Node):
             values=[KeyValue(key=k, value=v) for k, v in log_values.items()]))
         data = serialize_message(array)
         self._diag_pub.publish(data)
-        self._write('/diagnostics', data, self._clock.now().nanoseconds)
+        self._write('/diagnostics', data, now_ns)
 
     # ------------------------------------------------------------------ parameters
     def _current_params(self) -> dict[str, Any]:
