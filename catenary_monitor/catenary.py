@@ -311,9 +311,12 @@ def critical_parameter(h: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.nda
     tension is ``w (a + h)``.  Returns ``a`` and a converged flag.
     """
     c = h / x
-    # Start: sinh(D)^2/D ~ D for small D, ~ e^{2D}/(4D) for large D.
+    # Start: the series inverse D = c - c^3/3 + 13 c^5/45 for small c (sinh(D)^2/D =
+    # D + D^3/3 + 2 D^5/45 + ...), ~ e^{2D}/(4D) for large D.
     big = np.log(4.0 * np.maximum(c, 1.0))
-    d0 = np.where(c < 1.0, c, 0.5 * (big + np.log(np.maximum(0.5 * big, 1.0))))
+    c2 = c * c
+    d0 = np.where(c < 0.5, c * (1.0 - c2 * (1.0 / 3.0 - c2 * (13.0 / 45.0))),
+                  np.where(c < 1.0, c, 0.5 * (big + np.log(np.maximum(0.5 * big, 1.0)))))
     eta = np.log(np.maximum(d0, 1e-300))
     done = np.zeros(eta.shape, dtype=bool)
     idx = np.arange(eta.size)
@@ -343,7 +346,10 @@ def critical_parameter_scalar(h: float, x: float) -> float:
     """Scalar twin of :func:`critical_parameter` (same start and stopping test), inline ``math``."""
     log, exp, expm1, tanh = math.log, math.exp, math.expm1, math.tanh
     c = h / x
-    if c < 1.0:
+    if c < 0.5:
+        c2 = c * c
+        d0 = c * (1.0 - c2 * (1.0 / 3.0 - c2 * (13.0 / 45.0)))
+    elif c < 1.0:
         d0 = c
     else:
         big = log(4.0 * c)
