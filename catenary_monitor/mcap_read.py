@@ -277,7 +277,7 @@ def read_float64_topics(
     times: dict[str, list[np.ndarray]] = {t: [] for t in wanted}
     values: dict[str, list[np.ndarray]] = {t: [] for t in wanted}
 
-    for path in _expand(paths):
+    for path in expand_paths(paths):
         def accept(channel: _Channel, path: str = str(path)) -> bool:
             if channel.topic not in wanted_set:
                 return False
@@ -344,7 +344,7 @@ def iter_messages(
     """
     wanted = None if topics is None else set(_unique(topics))
     report = ReadReport() if report is None else report
-    for path in _expand(paths):
+    for path in expand_paths(paths):
         def accept(channel: _Channel) -> bool:
             return wanted is None or channel.topic in wanted
 
@@ -1007,7 +1007,8 @@ def _unique(items: Iterable[str]) -> list[str]:
     return out
 
 
-def _expand(paths: PathLike | Iterable[PathLike]) -> list[Path]:
+def expand_paths(paths: PathLike | Iterable[PathLike]) -> list[Path]:
+    """MCAP files named by ``paths``: files as given, directories as their sorted ``*.mcap``."""
     if isinstance(paths, (str, os.PathLike)):
         paths = [paths]
     out: list[Path] = []

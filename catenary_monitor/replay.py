@@ -38,7 +38,7 @@ import numpy as np
 from .config import (ConfigError, MonitorConfig, config_from_params, config_hash,
                      load_params_file)
 from .mcap_read import (EmptyLogError, McapReadError, ReadReport, TopicTypeError,
-                        iter_messages, read_float64_topics)
+                        expand_paths, iter_messages, read_float64_topics)
 from .recompute import ReplayResult, recompute
 
 __all__ = ['register', 'cmd_replay', 'resolve_topic', 'input_topics', 'diagnostics_times',
@@ -165,15 +165,10 @@ def periodic_ticks(diag_ns: np.ndarray, tensions: dict[str, tuple[np.ndarray, np
 
 
 def _expand(paths: Sequence[str]) -> list[Path]:
-    out = []
-    for p in paths:
-        path = Path(p)
-        if path.is_dir():
-            out.extend(sorted(path.glob('*.mcap')))
-        elif path.exists():
-            out.append(path)
-        else:
-            raise ReplayError(f'no such MCAP file or directory: {path}')
+    try:
+        out = expand_paths(paths)
+    except FileNotFoundError as err:
+        raise ReplayError(str(err)) from None
     if not out:
         raise ReplayError(f'no *.mcap file in {", ".join(paths)}')
     return out
