@@ -305,6 +305,7 @@ class CatenaryMonitor(Node):
             status, text = result.status, result.message
         else:  # (values, status, message) of one element of a vectorized solve
             values, status, text = result
+        values['top_tension'] = line.tension  # the measured tension, solved or not
         values['depth'] = self._depth + line.config.hook_height
         values['status'] = float(status)
         line.values = values

@@ -143,7 +143,8 @@ def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
 
     Returns
     -------
-    values : dict of :data:`VALUE_FIELDS` -> float64 arrays (NaN where status != 0)
+    values : dict of :data:`VALUE_FIELDS` -> float64 arrays (NaN where status != 0, except
+        ``top_tension`` and ``depth``, the measured inputs, as the node publishes them)
     status : int64 array, :class:`~catenary_monitor.solve.Status` codes, :data:`NO_DEPTH` where
         ``depth`` is NaN.
 
@@ -164,6 +165,7 @@ def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
         status[np.isnan(depth)] = NO_DEPTH
         out['depth'] = depth.copy()
         ok = status == 0
+        out['top_tension'] = tension.copy()
         all_ok = bool(ok.all())
         t = tension if all_ok else tension[ok]
         h = depth if all_ok else depth[ok]
@@ -184,7 +186,6 @@ def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
             uplift[lift] = state.uplift_force
             angle[lift] = np.degrees(state.anchor_angle)
         cols = {
-            'top_tension': t.copy(),
             'horizontal_tension': r,
             'min_anchor_distance': x_min,
             'anchor_margin': x - x_min,

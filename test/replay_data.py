@@ -112,6 +112,7 @@ def simulate_node(config: MonitorConfig, tensions: dict[str, tuple[np.ndarray, n
         # node._update
         now = now_ns * 1e-9
         values = dict(result)
+        values['top_tension'] = ln['tension']  # the measured tension, solved or not
         values['depth'] = d_value + ln['cfg'].hook_height
         ln['inputs'] = AlarmInputs(
             uplift_force=values['uplift_force'], anchor_margin=values['anchor_margin'],

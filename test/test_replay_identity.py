@@ -102,6 +102,9 @@ def test_solve_updates_is_bit_identical_to_solve_on_arrays():
         for key in VALUE_FIELDS:
             if key == 'depth':
                 continue
+            if key == 'top_tension':  # the measured input, also where it could not be solved
+                np.testing.assert_array_equal(got[key], t)
+                continue
             np.testing.assert_array_equal(got[key], getattr(ref, key), err_msg=key)
 
 
