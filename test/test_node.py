@@ -270,6 +270,28 @@ def test_unwritable_log_dir_is_an_error_diagnostic_not_a_stop(client, tmp_path):
         assert stop(proc, signal.SIGTERM) == 0
 
 
+def test_level_change_publishes_diagnostics_at_once(client, tmp_path):
+    """With a 50 s diagnostics period, the uplift ERROR still arrives within seconds."""
+    lines = {'now': dict(weight=W, anchor_distance=121.06, mbl=MBL)}
+    params = write_params(tmp_path / 'params.yaml', lines, diagnostic_rate=0.02)
+    proc = start_monitor(params, tmp_path / 'log')
+    try:
+        client.subscribe_outputs(out_topic('now'))
+        client.wait_matched(['/tide/depth', topic('now')], 30.0)
+        client.feed('/tide/depth', DEPTH)
+        client.feed(topic('now'), 400e3)
+        client.wait_for(lambda: client.outputs[out_topic('now')], 10.0, 'output of now')
+        t_up = time.monotonic()
+        client.feed(topic('now'), 1623.5e3)
+        s = client.wait_status(name('now'), 5.0, ERROR, since=t_up)
+        assert 'uplift' in s['message']
+        assert time.monotonic() - t_up < 10.0  # far inside the 50 s period: published on change
+    finally:
+        client.feed(topic('now'), None)
+        client.feed('/tide/depth', None)
+        assert stop(proc, signal.SIGTERM) == 0
+
+
 def _read_log(log_dir: Path):
     """Decode every message of the finished log with the mcap library (needs the summary)."""
     from mcap.reader import make_reader
