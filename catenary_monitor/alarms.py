@@ -250,7 +250,7 @@ class LineAlarm:
         low, high = self._warn_limits(cond)
         label = cond.replace('_', ' ')
         scale, unit, digits = {'load_margin': (1e3, ' kN', 1),
-                               'safety_factor': (1.0, '', 2)}.get(cond, (1.0, ' m', 1))
+                               'safety_factor': (1.0, '', 2)}.get(cond, (1.0, ' m', 2))
         v, lo, hi = (_fmt(a, scale, digits) for a in (value, low, high))
         if value < low:
             return f'{label} {v}{unit} < {lo}{unit}'

@@ -239,14 +239,14 @@ def test_stale_outranks_warn_and_warn_returns_after_recovery():
     _, levels, events = run(alarm, updates)
     assert levels == [Level.WARN] * 3 + [Level.STALE] * 2 + [Level.WARN]
     assert events[1].message == ('tension stale: last sample 3.0 s ago (timeout 2 s); '
-                                 'anchor margin 4.0 m < 5.0 m')
+                                 'anchor margin 4.00 m < 5.00 m')
 
 
 # --- warnings ----------------------------------------------------------------------------------
 
 @pytest.mark.parametrize('name, low, between, high, text', [
-    ('anchor_margin', 4.2, 5.5, 6.0, 'anchor margin 4.2 m < 5.0 m'),
-    ('tide_margin', 0.8, 1.1, 1.2, 'tide margin 0.8 m < 1.0 m'),
+    ('anchor_margin', 4.2, 5.5, 6.0, 'anchor margin 4.20 m < 5.00 m'),
+    ('tide_margin', 0.8, 1.1, 1.2, 'tide margin 0.80 m < 1.00 m'),
     ('load_margin', -2e4, 5e3, 1e4, 'load margin -20.0 kN < 0.0 kN'),
     ('safety_factor', 1.9, 2.05, 2.1, 'safety factor 1.90 < 2.00'),
 ])
@@ -265,7 +265,7 @@ def test_several_conditions_are_joined_errors_first():
     x = fresh(0.0, uplift_force=193264.0, anchor_margin=-30.0, safety_factor=1.9)
     _, _, events = run(alarm_with(), [(0.0, x)])
     assert events[0].message == ('anchor uplift 193.3 kN > allowed 0.0 kN; '
-                                 'anchor margin -30.0 m < 5.0 m; safety factor 1.90 < 2.00')
+                                 'anchor margin -30.00 m < 5.00 m; safety factor 1.90 < 2.00')
 
 
 def test_episode_durations_for_nested_levels():
