@@ -26,6 +26,8 @@ import numpy as np
 #: Newton stops after a step of at most this size in its log variable (relative size of the
 #: unknown): convergence is quadratic, so the error left is ~STEP_TOL**2, far below rounding.
 STEP_TOL = 1e-9
+#: Plain Newton steps taken on whole arrays before the safeguarded active-set loop (problem 4).
+FAST_STEPS = 4
 #: Iteration cap; never reached on the physical domain (see test_catenary.py::test_iteration_counts).
 MAXITER = 60
 
@@ -211,11 +213,23 @@ def lifted_from_tension(w: np.ndarray, b: np.ndarray, h: np.ndarray, x: np.ndarr
     """
     e, r02, xlo, m, eta, eta_hi = _uplift_setup(b, h, x, np)
     eta = np.minimum(eta, eta_hi)
+    # Fast phase: FAST_STEPS plain Newton steps on the whole arrays (no gather, no bracket
+    # bookkeeping; the residual costs little more than one closed-form evaluation).  Elements
+    # whose last step was at rounding level are done; the others continue below, safeguarded,
+    # from where they are if that is finite and inside (-inf, eta_max], else from the start.
+    start = eta.copy()
+    step = np.zeros_like(eta)
+    for _ in range(FAST_STEPS):
+        f, fp = _uplift_residual(eta, e, r02, xlo, m, np)
+        step = -f / fp
+        eta = np.minimum(eta + step, eta_hi)
+    done = np.abs(step) <= STEP_TOL
+    iters = np.full(eta.shape, FAST_STEPS, dtype=np.int64)
+    restart = ~np.isfinite(eta)
+    eta[restart] = start[restart]
     eta_lo = np.full_like(eta, -np.inf)
-    iters = np.zeros(eta.shape, dtype=np.int64)
-    done = np.zeros(eta.shape, dtype=bool)
-    idx = np.arange(eta.size)
-    for it in range(1, MAXITER + 1):
+    idx = np.flatnonzero(~done)
+    for it in range(FAST_STEPS + 1, MAXITER + 1):
         if idx.size == 0:
             break
         cur = eta[idx]
@@ -320,9 +334,18 @@ def critical_parameter(h: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.nda
     eta = np.log(np.maximum(d0, 1e-300))
     done = np.zeros(eta.shape, dtype=bool)
     idx = np.arange(eta.size)
-    for _ in range(MAXITER):
+    for it in range(MAXITER):
         if idx.size == 0:
             break
+        if it < FAST_STEPS:  # whole arrays: no gather while most elements are still moving
+            f, fp = _critical_residual(eta, c, np)
+            step = np.clip(-f / fp, -4.0, 4.0)
+            eta += step
+            if it == FAST_STEPS - 1:
+                idx = np.flatnonzero(~(np.abs(step) <= STEP_TOL))
+                done[:] = True
+                done[idx] = False
+            continue
         f, fp = _critical_residual(eta[idx], c[idx], np)
         step = np.clip(-f / fp, -4.0, 4.0)
         eta[idx] += step

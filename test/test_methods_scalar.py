@@ -83,7 +83,7 @@ def test_lifted_scalar_kernel_matches_vectorized_kernel():
     vec, it_v, ok_v = cat.lifted_from_tension(w, b, h, x)
     for i in range(0, 5000, 7):
         one, it, ok = cat.lifted_from_tension_scalar(w[i], b[i], h[i], x[i])
-        assert ok and ok_v[i] and it == it_v[i]
+        assert ok and ok_v[i] and it_v[i] == max(it, cat.FAST_STEPS)  # vector: >= FAST_STEPS
         assert one.horizontal_tension == pytest.approx(vec.horizontal_tension[i], rel=1e-14)
         assert one.suspended_length == pytest.approx(vec.suspended_length[i], rel=1e-14)
         assert abs(one.uplift_force - vec.uplift_force[i]) <= 1e-14 * t[i]
