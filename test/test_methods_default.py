@@ -68,10 +68,12 @@ def cross_check(w, h, t, x):
     return (r.astype(float), f.astype(float), kappa_r.astype(float), kappa_f.astype(float))
 
 
+#: numpy's longdouble carries a 64-bit mantissa on x86-64 Linux; elsewhere it may be plain double.
+EXTENDED = np.finfo(LD).eps < 1e-18
+
+
 @pytest.fixture(scope='module')
 def solved():
-    if np.finfo(LD).eps > 1e-18:
-        pytest.skip('numpy longdouble is plain double here: the cross-check needs extended precision')
     w, h, t, x = random_scenes(N)
     res = solve(w, h, tension=t, anchor_distance=x)
     return (w, h, t, x), res
@@ -88,6 +90,12 @@ def test_default_never_fails(solved):
 
 def test_default_within_1e12_of_cross_check_on_all_scenes(solved):
     (w, h, t, x), res = solved
+    if not EXTENDED:  # no extended precision here: check a seeded subset against mpmath instead
+        for i in np.random.default_rng(11).choice(N, 300, replace=False):
+            ref = reference.problem4(w[i], h[i], t[i], x[i])
+            assert abs(res.horizontal_tension[i] - ref.v1) <= (1e-12 + 8 * EPS * ref.c1) * ref.v1
+            assert abs(res.uplift_force[i] - ref.v2) <= (1e-12 + 8 * EPS * ref.c2) * ref.v2
+        return
     r, f, kr, kf = cross_check(w, h, t, x)
     err_r = np.abs(res.horizontal_tension - r) / r
     err_f = np.abs(res.uplift_force - f) / f
@@ -98,7 +106,7 @@ def test_default_within_1e12_of_cross_check_on_all_scenes(solved):
 
 
 def test_cross_check_agrees_with_mpmath_and_default_too(solved):
-    """On a subset: the 50-digit reference, the cross-check and the default agree."""
+    """On a subset: the 50-digit reference, the cross-check (if extended precision) and the default."""
     (w, h, t, x), res = solved
     idx = np.random.default_rng(7).choice(N, 40, replace=False)
     r, f, kr, kf = cross_check(w[idx], h[idx], t[idx], x[idx])
@@ -107,9 +115,10 @@ def test_cross_check_agrees_with_mpmath_and_default_too(solved):
         tol_r, tol_f = 1e-12 + 8 * EPS * ref.c1, 1e-12 + 8 * EPS * ref.c2
         assert abs(res.horizontal_tension[i] - ref.v1) <= tol_r * ref.v1
         assert abs(res.uplift_force[i] - ref.v2) <= tol_f * ref.v2
-        assert abs(r[j] - ref.v1) <= 1e-13 * ref.v1 * max(1, ref.c1)
-        assert abs(f[j] - ref.v2) <= 1e-13 * ref.v2 * max(1, ref.c2)
-        assert kf[j] == pytest.approx(ref.c2, rel=1e-3, abs=1e-6)
+        if EXTENDED:
+            assert abs(r[j] - ref.v1) <= 1e-13 * ref.v1 * max(1, ref.c1)
+            assert abs(f[j] - ref.v2) <= 1e-13 * ref.v2 * max(1, ref.c2)
+            assert kf[j] == pytest.approx(ref.c2, rel=1e-3, abs=1e-6)
 
 
 def test_default_problem3_on_random_scenes_subset():
