@@ -27,12 +27,12 @@ import numpy as np
 #: unknown): convergence is quadratic, so the error left is ~STEP_TOL**2, far below rounding.
 STEP_TOL = 1e-9
 #: Plain Newton steps taken on whole arrays before the safeguarded active-set loop (problem 4).
-FAST_STEPS = 4
-#: Iteration cap; never reached on the physical domain (see test_catenary.py::test_iteration_counts).
+FAST_STEPS = 2
+#: Iteration cap; never reached on the physical domain (see test_accuracy.py, residual counts).
 MAXITER = 60
 
 _MATH = SimpleNamespace(
-    sqrt=math.sqrt, log=math.log, maximum=max, log1p=math.log1p, exp=math.exp, expm1=math.expm1,
+    sqrt=math.sqrt, log=math.log, maximum=max, minimum=min, log1p=math.log1p, exp=math.exp, expm1=math.expm1,
     sinh=math.sinh, cosh=math.cosh, tanh=math.tanh, asinh=math.asinh, arctan2=math.atan2,
 )
 
@@ -173,17 +173,30 @@ def _uplift_setup(b: Any, h: Any, x: Any, xp: Any) -> tuple[Any, Any, Any, Any, 
     """Constants of the uplift solve and the starting point.
 
     Returns ``e, r02, xlo, m, eta0, eta_max``; ``eta_max = log(d_max)`` is where x = x_min.
-    The start inverts the model ``x ~ x_min sqrt(d / d_max)`` (exact at d_max, right in shape
-    as d -> 0).
+    The start solves the model ``m^2 = c d (r02 + d)`` (exact as d -> 0 with ``c = c0``, and at
+    d_max with ``c = c1``) twice: first with ``c1``, then with ``log c`` interpolated linearly in
+    ``d / d_max`` at the first root.  It is within 1e-3 in eta over most of the domain (within 0.2
+    everywhere), so Newton needs 2-3 residuals instead of 3-6.
     """
     e = h / b
     r02 = e * (2.0 + e)
     xlo = xp.log1p(e)
     m = x / b
     x0 = acosh1p(e, xp)
-    eta_max = xp.log(x0 - xlo)
-    eta0 = eta_max + 2.0 * xp.log(m / x0)
-    return e, r02, xlo, m, eta0, eta_max
+    d_max = x0 - xlo
+    eta_max = xp.log(d_max)
+    m2 = m * m
+    c1 = x0 * x0 / (d_max * (r02 + d_max))
+    d = _start_root(m2 / c1, r02, xp)
+    frac = xp.minimum(d / d_max, 1.0)
+    c0 = 2.0 * (1.0 + e) * xlo / r02
+    d = _start_root(m2 / (c1 * xp.exp((1.0 - frac) * xp.log(c0 * c0 / c1))), r02, xp)
+    return e, r02, xlo, m, xp.log(xp.maximum(d, 1e-300)), eta_max
+
+
+def _start_root(q: Any, r02: Any, xp: Any) -> Any:
+    """Positive root of ``d (r02 + d) = q``, without cancellation."""
+    return 2.0 * q / (r02 + xp.sqrt(r02 * r02 + 4.0 * q))
 
 
 def _lifted_from_d(w: Any, b: Any, e: Any, xlo: Any, m: Any, d: Any, xp: Any) -> Lifted:
@@ -257,13 +270,24 @@ def lifted_from_tension_scalar(w: float, b: float, h: float, x: float) -> tuple[
     as calling those helpers through the ``_MATH`` namespace, same results.
     """
     log, log1p, exp, expm1, sinh, tanh = math.log, math.log1p, math.exp, math.expm1, math.sinh, math.tanh
+    sqrt = math.sqrt
     e = h / b
     r02 = e * (2.0 + e)
     xlo = log1p(e)
     m = x / b
-    x0 = log1p(e + math.sqrt(r02))  # acosh1p(e)
-    eta_hi = log(x0 - xlo)
-    eta = eta_hi + 2.0 * log(m / x0)
+    x0 = log1p(e + sqrt(r02))  # acosh1p(e)
+    d_max = x0 - xlo
+    eta_hi = log(d_max)
+    m2 = m * m
+    c1 = x0 * x0 / (d_max * (r02 + d_max))
+    q = m2 / c1
+    d = 2.0 * q / (r02 + sqrt(r02 * r02 + 4.0 * q))
+    frac = d / d_max
+    if frac < 1.0:  # else the second model solve gives the same d
+        c0 = 2.0 * (1.0 + e) * xlo / r02
+        q = m2 / (c1 * exp((1.0 - frac) * log(c0 * c0 / c1)))
+        d = 2.0 * q / (r02 + sqrt(r02 * r02 + 4.0 * q))
+    eta = log(d if d > 1e-300 else 1e-300)
     if eta > eta_hi:
         eta = eta_hi
     neg_inf = -math.inf
@@ -325,60 +349,78 @@ def critical_parameter(h: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.nda
     tension is ``w (a + h)``.  Returns ``a`` and a converged flag.
     """
     c = h / x
-    # Start: the series inverse D = c - c^3/3 + 13 c^5/45 for small c (sinh(D)^2/D =
-    # D + D^3/3 + 2 D^5/45 + ...), ~ e^{2D}/(4D) for large D.
-    big = np.log(4.0 * np.maximum(c, 1.0))
-    c2 = c * c
-    d0 = np.where(c < 0.5, c * (1.0 - c2 * (1.0 / 3.0 - c2 * (13.0 / 45.0))),
-                  np.where(c < 1.0, c, 0.5 * (big + np.log(np.maximum(0.5 * big, 1.0)))))
-    eta = np.log(np.maximum(d0, 1e-300))
-    done = np.zeros(eta.shape, dtype=bool)
+    log_c = np.log(c)
+    pos = (log_c - _CRIT_Y0) * _CRIT_INV_DY
+    inside = (pos >= 0.0) & (pos < _CRIT_N)
+    k = np.clip(np.floor(np.where(inside, pos, 0.0)), 0, max(_CRIT_N - 1, 0)).astype(np.intp)
+    eta = np.where(inside, _hermite(pos - k, *(tab[k] for tab in _CRIT_TABLE)), _critical_series_start(c))
+    eta = _critical_newton(eta, log_c)
+    return x / (2.0 * np.exp(eta)), np.isfinite(eta)
+
+
+def _critical_newton(eta: np.ndarray, log_c: np.ndarray) -> np.ndarray:
+    """Newton in ``eta = log D`` from ``eta`` (updated in place), steps clipped to +-4."""
     idx = np.arange(eta.size)
     for it in range(MAXITER):
         if idx.size == 0:
             break
         if it < FAST_STEPS:  # whole arrays: no gather while most elements are still moving
-            f, fp = _critical_residual(eta, c, np)
+            f, fp = _critical_residual(eta, log_c, np)
             step = np.clip(-f / fp, -4.0, 4.0)
             eta += step
             if it == FAST_STEPS - 1:
                 idx = np.flatnonzero(~(np.abs(step) <= STEP_TOL))
-                done[:] = True
-                done[idx] = False
             continue
-        f, fp = _critical_residual(eta[idx], c[idx], np)
+        f, fp = _critical_residual(eta[idx], log_c[idx], np)
         step = np.clip(-f / fp, -4.0, 4.0)
         eta[idx] += step
-        conv = np.abs(step) <= STEP_TOL
-        done[idx[conv]] = True
-        idx = idx[~conv]
-    return x / (2.0 * np.exp(eta)), done
+        idx = idx[~(np.abs(step) <= STEP_TOL)]
+    eta[idx] = np.nan  # not converged within MAXITER
+    return eta
 
 
-def _critical_residual(eta: Any, c: Any, xp: Any) -> tuple[Any, Any]:
+def _critical_residual(eta: Any, log_c: Any, xp: Any) -> tuple[Any, Any]:
     """``log(sinh(D)^2 / (D c))`` and its derivative in ``eta = log D`` (``D coth D`` terms)."""
     d = xp.exp(eta)
     # log sinh D = D + log1p(-exp(-2D)) - log 2: no overflow for large D.
-    log_sinh = d + xp.log(-xp.expm1(-2.0 * d)) - math.log(2.0)
-    f = 2.0 * log_sinh - eta - xp.log(c)
+    log_sinh = d + xp.log(-xp.expm1(-2.0 * d)) - _LOG_2
+    f = 2.0 * log_sinh - eta - log_c
     fp = 2.0 * d / xp.tanh(d) - 1.0
     return f, fp
+
+
+def _critical_series_start(c: np.ndarray) -> np.ndarray:
+    """Start ``log D`` outside the table: the series inverse ``D = c - c^3/3 + 13 c^5/45`` for
+    small c (``sinh(D)^2/D = D + D^3/3 + 2 D^5/45 + ...``), ``~ e^{2D}/(4D)`` for large D."""
+    big = np.log(4.0 * np.maximum(c, 1.0))
+    c2 = c * c
+    d0 = np.where(c < 0.5, c * (1.0 - c2 * (1.0 / 3.0 - c2 * (13.0 / 45.0))),
+                  np.where(c < 1.0, c, 0.5 * (big + np.log(np.maximum(0.5 * big, 1.0)))))
+    return np.log(np.maximum(d0, 1e-300))
+
+
+def _hermite(t: Any, y0: Any, y1: Any, s0: Any, s1: Any) -> Any:
+    """Cubic Hermite interpolation on [0, 1] from end values y0, y1 and end slopes s0, s1."""
+    return y0 + t * (s0 + t * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) + t * (2.0 * (y0 - y1) + s0 + s1)))
 
 
 def critical_parameter_scalar(h: float, x: float) -> float:
     """Scalar twin of :func:`critical_parameter` (same start and stopping test), inline ``math``."""
     log, exp, expm1, tanh = math.log, math.exp, math.expm1, math.tanh
     c = h / x
-    if c < 0.5:
+    log_c = log(c)
+    pos = (log_c - _CRIT_Y0) * _CRIT_INV_DY
+    if 0.0 <= pos < _CRIT_N:  # _hermite, inline
+        k = int(pos)
+        t = pos - k
+        y0, y1, s0, s1 = _CRIT_ETA[k], _CRIT_ETA[k + 1], _CRIT_SLOPE[k], _CRIT_SLOPE[k + 1]
+        eta = y0 + t * (s0 + t * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) + t * (2.0 * (y0 - y1) + s0 + s1)))
+    elif c < 0.5:  # _critical_series_start, inline
         c2 = c * c
-        d0 = c * (1.0 - c2 * (1.0 / 3.0 - c2 * (13.0 / 45.0)))
-    elif c < 1.0:
-        d0 = c
+        eta = log(c * (1.0 - c2 * (1.0 / 3.0 - c2 * (13.0 / 45.0))))
     else:
         big = log(4.0 * c)
-        d0 = 0.5 * (big + log(max(0.5 * big, 1.0)))
-    eta = log(d0)
-    log_c = log(c)
+        eta = log(0.5 * (big + log(max(0.5 * big, 1.0))))
     log_2 = _LOG_2
     tol = STEP_TOL
     for _ in range(MAXITER):
@@ -391,11 +433,33 @@ def critical_parameter_scalar(h: float, x: float) -> float:
             step = -4.0
         eta += step
         if -tol <= step <= tol:
-            break
-    return x / (2.0 * exp(eta))
+            return x / (2.0 * exp(eta))
+    return math.nan
 
 
 _LOG_2 = math.log(2.0)
+# Start of the load-margin solve: ``eta = log D`` tabulated against ``log c`` on a uniform grid
+# (c from 0.1 to 7e9), interpolated by cubic Hermite with the exact slopes
+# ``d eta / d log c = 1 / (2 D coth D - 1)``.  The start is then within 4e-6 of the root, so
+# Newton stops after 1-2 residuals (4 from the series start at c > 0.5).  The table is solved at
+# import by the same Newton from the series start (0.1 ms).
+_CRIT_Y0, _CRIT_DY = math.log(0.1), 0.25
+_CRIT_INV_DY = 1.0 / _CRIT_DY
+_CRIT_N = 0  # no table while it is being built
+
+
+def _critical_table(n: int) -> tuple[list[float], list[float]]:
+    log_c = _CRIT_Y0 + _CRIT_DY * np.arange(n + 1)
+    eta = _critical_newton(_critical_series_start(np.exp(log_c)), log_c)
+    d = np.exp(eta)
+    slope = _CRIT_DY / (2.0 * d / np.tanh(d) - 1.0)
+    return eta.tolist(), slope.tolist()
+
+
+_CRIT_ETA, _CRIT_SLOPE = _critical_table(100)
+_CRIT_N = 100
+_CRIT_TABLE = (np.array(_CRIT_ETA[:-1]), np.array(_CRIT_ETA[1:]), np.array(_CRIT_SLOPE[:-1]),
+               np.array(_CRIT_SLOPE[1:]))
 
 
 # --------------------------------------------------------------------------------------------

@@ -148,8 +148,7 @@ def solve(weight: ArrayLike, depth: ArrayLike, tension: Optional[ArrayLike] = No
     well-conditioned (see README, "Accuracy").  With all-scalar ``tension`` inputs a plain-float
     path gives the same numbers to rounding, an order of magnitude faster.
     """
-    problem = _check_call(tension, horizontal, chain_length, anchor_distance)
-    if (tension is not None and horizontal is None and chain_length is None
+    if (horizontal is None and chain_length is None and tension is not None
             and type(weight) in _PLAIN and type(depth) in _PLAIN and type(tension) in _PLAIN
             and (anchor_distance is None or type(anchor_distance) in _PLAIN)
             and (mbl is None or type(mbl) in _PLAIN)):  # the node's case: skip the generic dispatch
@@ -159,6 +158,7 @@ def solve(weight: ArrayLike, depth: ArrayLike, tension: Optional[ArrayLike] = No
                                          None if mbl is None else float(mbl))
         except (OverflowError, ZeroDivisionError, ValueError):
             pass  # beyond float range in plain math (e.g. sinh overflow): numpy gives inf instead
+    problem = _check_call(tension, horizontal, chain_length, anchor_distance)
     inputs = {'weight': weight, 'depth': depth, 'tension': tension, 'horizontal': horizontal,
               'anchor_distance': anchor_distance, 'chain_length': chain_length, 'mbl': mbl}
     given = {k: v for k, v in inputs.items() if v is not None}
@@ -324,12 +324,19 @@ def _fill_margins(out: dict[str, np.ndarray], w: np.ndarray, h: np.ndarray, x: n
 _NAN = math.nan
 #: Input types that take the plain-float path straight away (``float()`` is exact for them).
 _PLAIN = (float, int, np.float64)
+_new_tuple = tuple.__new__  # builds a SolveResult without its keyword-handling constructor
+_MODEL, _METHOD = SolveResult._field_defaults['model'], SolveResult._field_defaults['method']
+_TAIL = (_MODEL, _METHOD)
+_NAN12 = (_NAN,) * 12
 
 
 def _solve_tension_scalar(weight: float, depth: float, tension: float,
                           anchor_distance: Optional[float] = None,
                           mbl: Optional[float] = None) -> SolveResult:
-    """Problems 3 and 4 for one element in plain floats (same checks and formulas as arrays)."""
+    """Problems 3 and 4 for one element in plain floats (same checks and formulas as arrays).
+
+    ``cat.grounded`` and ``cat.depth_reached`` are written out inline, in their operation order.
+    """
     w, h, t, x = weight, depth, tension, anchor_distance
     isfinite = math.isfinite
     if not (isfinite(w) and isfinite(h) and isfinite(t) and (x is None or isfinite(x))
@@ -348,25 +355,28 @@ def _solve_tension_scalar(weight: float, depth: float, tension: float,
     else:
         status = 0
     keys = _keys('tension', x is not None, mbl is not None)
-    nan = _NAN
     if status:
-        return SolveResult(nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan,
-                           int(status), 'tension', keys)
+        return _new_tuple(SolveResult, _NAN12 + (int(status), 'tension', keys) + _TAIL)
     b = cat.two_prod_diff(t, w, h) / w
-    x_min, length, beta = cat.grounded(b, h, cat._MATH)
+    z = h / b
+    x_min = b * math.log1p(z + math.sqrt(z * (2.0 + z)))
+    length = math.sqrt(h * (h + 2.0 * b))
+    beta = math.atan2(length, b)
     r, alpha, uplift = w * b, 0.0, 0.0
-    anchor_margin = tide_margin = load_margin = safety = nan
+    anchor_margin = tide_margin = load_margin = safety = _NAN
     if x is not None:
         if x < x_min:
             s, _, converged = cat.lifted_from_tension_scalar(w, b, h, x)
             if not converged:
-                return SolveResult(nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan,
-                                   int(Status.NO_CONVERGENCE), 'tension', keys)
+                return _new_tuple(SolveResult, _NAN12 + (int(Status.NO_CONVERGENCE), 'tension', keys) + _TAIL)
             r, uplift, alpha, _, beta, length = s
         anchor_margin = x - x_min
-        tide_margin = cat.depth_reached(r / w, x, cat._MATH) - h
+        a_now = r / w
+        half = math.sinh(0.5 * x / a_now)
+        tide_margin = 2.0 * a_now * half * half - h
         load_margin = w * (cat.critical_parameter_scalar(h, x) + h) - t
     if mbl is not None:
         safety = mbl / t
-    return SolveResult(r, t, x_min, length, math.degrees(beta), math.degrees(alpha), uplift,
-                       anchor_margin, tide_margin, load_margin, nan, safety, 0, 'tension', keys)
+    return _new_tuple(SolveResult, (r, t, x_min, length, math.degrees(beta), math.degrees(alpha), uplift,
+                                    anchor_margin, tide_margin, load_margin, _NAN, safety, 0, 'tension', keys,
+                                    _MODEL, _METHOD))
