@@ -405,7 +405,10 @@ def _hermite(t: Any, y0: Any, y1: Any, s0: Any, s1: Any) -> Any:
 
 
 def critical_parameter_scalar(h: float, x: float) -> float:
-    """Scalar twin of :func:`critical_parameter` (same start and stopping test), inline ``math``."""
+    """Scalar twin of :func:`critical_parameter` (same start and stopping test), inline ``math``.
+
+    Returns NaN if Newton has not converged after MAXITER residuals (never on the physical domain).
+    """
     log, exp, expm1, tanh = math.log, math.exp, math.expm1, math.tanh
     c = h / x
     log_c = log(c)

@@ -270,7 +270,7 @@ def _solve_valid(problem: str, full: dict[str, np.ndarray], scalar: bool) -> Sol
             _fill_lifted(out, taut, state)
             out['grounded_length'][taut] = 0.0
     if x is not None:
-        _fill_margins(out, w, h, x)
+        conv &= _fill_margins(out, w, h, x)
     if 'mbl' in a:
         out['safety_factor'] = a['mbl'] / out['top_tension']
     bad = ~conv
@@ -310,12 +310,14 @@ def _fill_lifted(out: dict[str, np.ndarray], where: np.ndarray, s: cat.Lifted) -
     out['uplift_force'][where] = s.uplift_force
 
 
-def _fill_margins(out: dict[str, np.ndarray], w: np.ndarray, h: np.ndarray, x: np.ndarray) -> None:
+def _fill_margins(out: dict[str, np.ndarray], w: np.ndarray, h: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """Anchor, tide and load margins; returns the load-margin solve's converged flags."""
     out['anchor_margin'] = x - out['min_anchor_distance']
     a_now = out['horizontal_tension'] / w
     out['tide_margin'] = cat.depth_reached(a_now, x) - h
     a_crit, conv = cat.critical_parameter(h, x)
     out['load_margin'] = w * (a_crit + h) - out['top_tension']
+    return conv
 
 
 # --------------------------------------------------------------------------------------------
@@ -375,6 +377,8 @@ def _solve_tension_scalar(weight: float, depth: float, tension: float,
         half = math.sinh(0.5 * x / a_now)
         tide_margin = 2.0 * a_now * half * half - h
         load_margin = w * (cat.critical_parameter_scalar(h, x) + h) - t
+        if load_margin != load_margin:  # NaN: the load-margin solve did not converge
+            return _new_tuple(SolveResult, _NAN12 + (int(Status.NO_CONVERGENCE), 'tension', keys) + _TAIL)
     if mbl is not None:
         safety = mbl / t
     return _new_tuple(SolveResult, (r, t, x_min, length, math.degrees(beta), math.degrees(alpha), uplift,

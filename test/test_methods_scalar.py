@@ -90,3 +90,30 @@ def test_lifted_scalar_kernel_matches_vectorized_kernel():
     a_v, _ = cat.critical_parameter(h, x)
     for i in range(0, 5000, 7):
         assert cat.critical_parameter_scalar(h[i], x[i]) == pytest.approx(a_v[i], rel=1e-14)
+
+
+def test_uplift_start_leaves_two_residuals_at_the_median():
+    """The model-based start of the problem-4 Newton (``cat._uplift_setup``) is what makes the
+    scalar solve fast: most scenes converge after 2 residuals, none needs more than 6."""
+    w, h, t, x = scenes(4000, seed=11, beyond=0.0)
+    b = cat.two_prod_diff(t, w, h) / w
+    counts = np.array([cat.lifted_from_tension_scalar(w[i], b[i], h[i], x[i])[1] for i in range(w.size)])
+    assert np.median(counts) <= 2 and np.mean(counts <= 3) >= 0.9 and counts.max() <= 6
+
+
+@pytest.mark.parametrize('c', np.geomspace(0.1, 5e9, 301))
+def test_load_margin_start_converges_in_two_residuals(c, monkeypatch):
+    """Inside its table (0.1 <= h/x <= 7e9) the Hermite start leaves at most 2 Newton residuals."""
+    full = cat.critical_parameter_scalar(c * 40.0, 40.0)
+    monkeypatch.setattr(cat, 'MAXITER', 2)
+    assert cat.critical_parameter_scalar(c * 40.0, 40.0) == pytest.approx(full, rel=1e-15)
+    monkeypatch.setattr(cat, 'MAXITER', 0)
+    assert math.isnan(cat.critical_parameter_scalar(c * 40.0, 40.0))  # not converged: NaN, not a guess
+
+
+def test_load_margin_no_convergence_is_reported(monkeypatch):
+    monkeypatch.setattr(cat, 'MAXITER', 0)
+    one = solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=300.0)
+    arr = solve(1300.0, 20.85, tension=[1623.5e3], anchor_distance=[300.0])
+    assert one.status == arr.status[0] == Status.NO_CONVERGENCE
+    assert math.isnan(one.load_margin) and math.isnan(arr.load_margin[0])
