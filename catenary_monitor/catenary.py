@@ -101,6 +101,9 @@ class Lifted(NamedTuple):
     suspended_length: Any  # m
 
 
+_new_tuple = tuple.__new__  # builds a NamedTuple from a tuple without its keyword handling
+
+
 def _lifted_state(w: Any, a: Any, u_sinh: Any, u_cosh: Any, big_x: Any, xp: Any) -> Lifted:
     """Quantities of the catenary with anchor at ``xi = u`` and hook at ``xi = u + X``.
 
@@ -160,12 +163,12 @@ def _uplift_residual(eta: Any, e: Any, r02: Any, xlo: Any, m: Any, xp: Any) -> t
     d = xp.exp(eta)
     big_x = xlo + d
     em = xp.expm1(d)
-    emn = -xp.expm1(-d)
-    p = r02 + emn
+    ed = 1.0 + em  # exp(d)
+    p = r02 + em / ed  # em / ed = -expm1(-d)
     ratio = em * p * (big_x / (m * xp.sinh(big_x))) ** 2
     # d/dd log(sinh X / X) = coth X - 1/X; its cancellation for small X only slows nothing:
     # the 1/d term dominates the derivative there.
-    dfdd = (1.0 + em) / em + (1.0 - emn) / p - 2.0 * (1.0 / xp.tanh(big_x) - 1.0 / big_x)
+    dfdd = ed / em + 1.0 / (ed * p) - 2.0 * (1.0 / xp.tanh(big_x) - 1.0 / big_x)
     return xp.log(ratio), dfdd * d
 
 
@@ -300,8 +303,8 @@ def lifted_from_tension_scalar(w: float, b: float, h: float, x: float) -> tuple[
         d = exp(eta)
         big_x = xlo + d
         em = expm1(d)
-        emn = -expm1(-d)
-        p = r02 + emn
+        ed = 1.0 + em
+        p = r02 + em / ed
         q = big_x / (m * sinh(big_x))
         f = log(em * p * (q * q))  # numpy's ** 2 on arrays is this product
         if f < 0.0:
@@ -313,7 +316,7 @@ def lifted_from_tension_scalar(w: float, b: float, h: float, x: float) -> tuple[
                 break
             if eta < eta_hi:  # f > 0 (or NaN, as the scalar code always did)
                 eta_hi = eta
-        step = -f / (((1.0 + em) / em + (1.0 - emn) / p - 2.0 * (1.0 / tanh(big_x) - 1.0 / big_x)) * d)
+        step = -f / ((ed / em + 1.0 / (ed * p) - 2.0 * (1.0 / tanh(big_x) - 1.0 / big_x)) * d)
         if -tol <= step <= tol:
             eta += step
             converged = True
@@ -327,15 +330,16 @@ def lifted_from_tension_scalar(w: float, b: float, h: float, x: float) -> tuple[
     half = sinh(0.5 * big_x)
     sx = sinh(big_x)
     cm1 = 2.0 * half * half
-    t = max((e - cm1) / sx, 0.0)
-    u_sinh = t / s
+    t = (e - cm1) / sx
+    u_sinh = 0.0 if t <= 0.0 else t / s  # max(t, 0) / s, NaN kept
     u_cosh = 1.0 / s
     a = b * s
     r = w * a
+    atan2 = math.atan2
     # Lifted(horizontal_tension, uplift_force, anchor_angle, top_tension, top_angle, suspended_length)
-    return Lifted(r, r * u_sinh, math.atan2(u_sinh, 1.0), r * (u_cosh * (1.0 + cm1) + u_sinh * sx),
-                  math.atan2(u_sinh * (1.0 + cm1) + u_cosh * sx, 1.0),
-                  a * (u_sinh * cm1 + u_cosh * sx)), it, converged
+    return _new_tuple(Lifted, (r, r * u_sinh, atan2(u_sinh, 1.0), r * (u_cosh * (1.0 + cm1) + u_sinh * sx),
+                               atan2(u_sinh * (1.0 + cm1) + u_cosh * sx, 1.0),
+                               a * (u_sinh * cm1 + u_cosh * sx))), it, converged
 
 
 # --------------------------------------------------------------------------------------------
@@ -442,11 +446,12 @@ def critical_parameter_scalar(h: float, x: float) -> float:
 
 _LOG_2 = math.log(2.0)
 # Start of the load-margin solve: ``eta = log D`` tabulated against ``log c`` on a uniform grid
-# (c from 0.1 to 7e9), interpolated by cubic Hermite with the exact slopes
-# ``d eta / d log c = 1 / (2 D coth D - 1)``.  The start is then within 4e-6 of the root, so
-# Newton stops after 1-2 residuals (4 from the series start at c > 0.5).  The table is solved at
-# import by the same Newton from the series start (0.1 ms).
-_CRIT_Y0, _CRIT_DY = math.log(0.1), 0.25
+# (c = h/x from 0.02 to 7e9, 1066 nodes), interpolated by cubic Hermite with the exact slopes
+# ``d eta / d log c = 1 / (2 D coth D - 1)``.  The start is within ~2e-10 of the root, so the
+# first Newton step is already below STEP_TOL: one residual, against 2-4 from the series start
+# (which stays below c = 0.02, where it is within 1e-10).  The table is solved at import by the
+# vectorized Newton from the series start (about 1 ms).
+_CRIT_Y0, _CRIT_DY = math.log(0.02), 0.025
 _CRIT_INV_DY = 1.0 / _CRIT_DY
 _CRIT_N = 0  # no table while it is being built
 
@@ -459,8 +464,8 @@ def _critical_table(n: int) -> tuple[list[float], list[float]]:
     return eta.tolist(), slope.tolist()
 
 
-_CRIT_ETA, _CRIT_SLOPE = _critical_table(100)
-_CRIT_N = 100
+_CRIT_ETA, _CRIT_SLOPE = _critical_table(1065)
+_CRIT_N = 1065
 _CRIT_TABLE = (np.array(_CRIT_ETA[:-1]), np.array(_CRIT_ETA[1:]), np.array(_CRIT_SLOPE[:-1]),
                np.array(_CRIT_SLOPE[1:]))
 
