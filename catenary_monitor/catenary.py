@@ -355,24 +355,29 @@ def critical_parameter(h: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.nda
     c = h / x
     log_c = np.log(c)
     pos = (log_c - _CRIT_Y0) * _CRIT_INV_DY
-    inside = (pos >= 0.0) & (pos < _CRIT_N)
-    k = np.clip(np.floor(np.where(inside, pos, 0.0)), 0, max(_CRIT_N - 1, 0)).astype(np.intp)
-    eta = np.where(inside, _hermite(pos - k, *(tab[k] for tab in _CRIT_TABLE)), _critical_series_start(c))
-    eta = _critical_newton(eta, log_c)
+    outside = ~((pos >= 0.0) & (pos < _CRIT_N))
+    k = np.where(outside, 0.0, pos).astype(np.intp)
+    eta = _hermite(pos - k, *(tab[k] for tab in _CRIT_TABLE))
+    if outside.any():
+        eta[outside] = _critical_series_start(c[outside])
+    eta = _critical_newton(eta, log_c, fast_steps=1)  # one residual converges from the table
     return x / (2.0 * np.exp(eta)), np.isfinite(eta)
 
 
-def _critical_newton(eta: np.ndarray, log_c: np.ndarray) -> np.ndarray:
-    """Newton in ``eta = log D`` from ``eta`` (updated in place), steps clipped to +-4."""
+def _critical_newton(eta: np.ndarray, log_c: np.ndarray, fast_steps: int = FAST_STEPS) -> np.ndarray:
+    """Newton in ``eta = log D`` from ``eta`` (updated in place), steps clipped to +-4.
+
+    The first ``fast_steps`` steps run on the whole arrays; then only on the moving elements.
+    """
     idx = np.arange(eta.size)
     for it in range(MAXITER):
         if idx.size == 0:
             break
-        if it < FAST_STEPS:  # whole arrays: no gather while most elements are still moving
+        if it < fast_steps:  # whole arrays: no gather while most elements are still moving
             f, fp = _critical_residual(eta, log_c, np)
             step = np.clip(-f / fp, -4.0, 4.0)
             eta += step
-            if it == FAST_STEPS - 1:
+            if it == fast_steps - 1:
                 idx = np.flatnonzero(~(np.abs(step) <= STEP_TOL))
             continue
         f, fp = _critical_residual(eta[idx], log_c[idx], np)
