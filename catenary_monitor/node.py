@@ -39,6 +39,7 @@ from .config import (ConfigError, MonitorConfig, ParamSpec, config_from_params,
                      config_hash, config_to_params, expand_parameters)
 from .health import logger_status, tide_status
 from .mcap_log import McapLogger
+from . import elastic
 from .solve import SolveResult, solve
 
 __all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'CatenaryMonitor', 'main']
@@ -98,6 +99,7 @@ class _Line:
         self.tension_stamp = _NAN    # s, node clock at receipt
         self.inputs = AlarmInputs()  # newest solved update, handed again by the periodic check
         self.values: dict[str, float] = dict.fromkeys(_RESULT_FIELDS, _NAN)
+        self.model = ''  # model of the newest solved update ('' before the first one)
         self.state: Any = None
         self.alarm: Any = None
         self.config: Any = None
@@ -153,8 +155,9 @@ class CatenaryMonitor(Node):
             self.declare_parameter(name, value, _descriptor(spec, name), ignore_override=True)
         for line in config.lines:
             if line.ea is not None:
-                self.get_logger().warning(
-                    f'{line.name}.ea is set but the live solver models an inextensible chain')
+                self.get_logger().info(
+                    f'{line.name}: EA = {line.ea:g} N, elastic catenary wherever it changes the answer by '
+                    f'more than {elastic.ELASTIC_TOL:g} (diagnostics key "model")')
         return config
 
     def _apply_config(self, config: MonitorConfig) -> None:
@@ -272,39 +275,47 @@ class CatenaryMonitor(Node):
             self._tick(self._clock.now().nanoseconds)
 
     # ------------------------------------------------------------------ core calls
-    def _solve_one(self, line: _Line) -> Any:
-        """Solve one line at the newest depth (the core's scalar fast path)."""
+    def _solve_one(self, line: _Line) -> SolveResult:
+        """Solve one line at the newest depth (the core's scalar fast path; with ``ea``, the
+        elastic model's rule)."""
         lc = line.config
+        if lc.ea is not None:
+            return elastic.solve(lc.weight, self._depth + lc.hook_height, line.tension,
+                                 anchor_distance=lc.anchor_distance, ea=lc.ea, mbl=lc.mbl)[0]
         return solve(lc.weight, self._depth + lc.hook_height, tension=line.tension,
                      anchor_distance=lc.anchor_distance, mbl=lc.mbl)
 
-    def _solve_many(self, lines: Sequence[_Line]) -> Any:
-        """Solve several lines at the newest depth in one vectorized call."""
+    def _solve_many(self, lines: Sequence[_Line]) -> SolveResult:
+        """Solve several lines at the newest depth in one vectorized call (lines without ``ea``
+        get EA = inf there, which keeps the inextensible answer bit for bit)."""
         cfgs = [line.config for line in lines]
-        return solve(np.array([c.weight for c in cfgs]),
-                     self._depth + np.array([c.hook_height for c in cfgs]),
-                     tension=np.array([line.tension for line in lines]),
-                     anchor_distance=np.array([c.anchor_distance for c in cfgs]),
-                     mbl=np.array([c.mbl for c in cfgs]))
+        args = (np.array([c.weight for c in cfgs]), self._depth + np.array([c.hook_height for c in cfgs]),
+                np.array([line.tension for line in lines]))
+        kw = dict(anchor_distance=np.array([c.anchor_distance for c in cfgs]), mbl=np.array([c.mbl for c in cfgs]))
+        if any(c.ea is not None for c in cfgs):
+            ea = np.array([math.inf if c.ea is None else c.ea for c in cfgs])
+            return elastic.solve(*args, ea=ea, **kw)[0]
+        return solve(args[0], args[1], tension=args[2], **kw)
 
-    def _update_many(self, lines: Sequence[_Line], result: Any, now_ns: int) -> None:
+    def _update_many(self, lines: Sequence[_Line], result: SolveResult, now_ns: int) -> None:
         messages = result.message
+        models = np.broadcast_to(np.asarray(result.model, dtype=object), np.shape(result.status))
         columns = {k: np.asarray(getattr(result, k)).tolist() for k in _RESULT_FIELDS
                    if k != 'depth'}
         for i, line in enumerate(lines):
             values = {k: v[i] for k, v in columns.items()}
-            self._update(line, (values, int(result.status[i]), str(messages[i])), now_ns)
+            self._update(line, (values, int(result.status[i]), str(messages[i]), str(models[i])), now_ns)
 
     def _update(self, line: _Line, result: Any, now_ns: int) -> None:
         """Hand one solved update to the alarm, publish the outputs, report a level change."""
         now = now_ns * 1e-9
         if result is None:  # no depth yet: nothing to solve
-            values, status, text = dict.fromkeys(_RESULT_FIELDS, _NAN), -1, ''
+            values, status, text, line.model = dict.fromkeys(_RESULT_FIELDS, _NAN), -1, '', ''
         elif isinstance(result, SolveResult):  # a scalar solve
             values = {k: getattr(result, k) for k in _RESULT_FIELDS if k != 'depth'}
-            status, text = result.status, result.message
-        else:  # (values, status, message) of one element of a vectorized solve
-            values, status, text = result
+            status, text, line.model = result.status, result.message, result.model
+        else:  # (values, status, message, model) of one element of a vectorized solve
+            values, status, text, line.model = result
         values['top_tension'] = line.tension  # the measured tension, solved or not
         values['depth'] = self._depth + line.config.hook_height
         values['status'] = float(status)
@@ -368,7 +379,8 @@ class CatenaryMonitor(Node):
                  ('anchor_distance', repr(line.config.anchor_distance)),
                  ('allowed_uplift', repr(line.config.allowed_uplift)),
                  ('anchor_angle_deg', repr(float(line.values['anchor_angle_deg']))),
-                 ('solver_status', str(int(line.values.get('status', -1))))]
+                 ('solver_status', str(int(line.values.get('status', -1)))),
+                 ('model', line.model)]
         return DiagnosticStatus(
             level=bytes([int(line.state.level)]), name=f'{NODE_NAME}: {line.name}',
             message=line.state.message, hardware_id=line.tension_topic,

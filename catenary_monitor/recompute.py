@@ -34,6 +34,7 @@ from typing import Callable, Mapping, Optional
 import numpy as np
 
 from . import catenary as cat
+from . import elastic
 from .alarms import Level, LineAlarm, Transition, replay_levels
 from .config import LineConfig, MonitorConfig
 from .solve import STATUS_MESSAGES, Status
@@ -151,8 +152,11 @@ def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
     Notes
     -----
     Same checks (first failed rule wins) and the same floating-point operations as
-    ``solve(w, h, tension=T, anchor_distance=x, mbl=mbl)`` on arrays.
+    ``solve(w, h, tension=T, anchor_distance=x, mbl=mbl)`` on arrays.  A line with an axial
+    stiffness (``line.ea``) is solved by ``elastic.solve`` as the node does (``a_crit`` unused).
     """
+    if line.ea is not None:
+        return _solve_updates_elastic(line, tension, depth)
     n = len(tension)
     w, x, mbl = line.weight, line.anchor_distance, line.mbl
     out = {k: np.full(n, np.nan) for k in VALUE_FIELDS}
@@ -207,6 +211,24 @@ def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
                 out[k] = v
             else:
                 out[k][ok] = v
+    return out, status
+
+
+def _solve_updates_elastic(line: LineConfig, tension: np.ndarray, depth: np.ndarray
+                           ) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """:func:`solve_updates` for a line with ``ea``: ``elastic.solve`` (the rule picks the model)."""
+    n = len(tension)
+    out = {k: np.full(n, np.nan) for k in VALUE_FIELDS}
+    out['depth'], out['top_tension'] = depth.copy(), tension.copy()
+    status = np.full(n, NO_DEPTH, dtype=np.int64)
+    has = ~np.isnan(depth)
+    if has.any():
+        res, _ = elastic.solve(line.weight, depth[has], tension[has], anchor_distance=line.anchor_distance,
+                               ea=line.ea, mbl=line.mbl)
+        status[has] = res.status
+        for k in VALUE_FIELDS:
+            if k not in ('depth', 'top_tension'):
+                out[k][has] = getattr(res, k)
     return out, status
 
 

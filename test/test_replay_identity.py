@@ -9,7 +9,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from catenary_monitor.alarms import Level
-from catenary_monitor.recompute import (KIND_TENSION, VALUE_FIELDS, critical_parameters,
+from catenary_monitor.recompute import (KIND_TENSION, NO_DEPTH, VALUE_FIELDS, critical_parameters,
                                         recompute, solve_updates, tick_grid)
 from catenary_monitor.solve import solve
 
@@ -161,3 +161,25 @@ def test_random_schedules_equal_the_node(data):
     if not any(len(t) for t, _ in tensions.values()) and not len(d_times) and not len(ticks):
         return
     _compare(config, tensions, depth, ticks)
+
+
+def test_solve_updates_of_an_elastic_line_is_elastic_solve():
+    """A line with ``ea``: replay solves it with ``elastic.solve``, as the node does."""
+    from dataclasses import replace
+    from catenary_monitor import elastic
+    line = replace(dock_config(2).lines[1], ea=6.6e8)
+    rng = np.random.default_rng(4)
+    t = rng.uniform(-1e5, 3e6, 3000)
+    t[::97] = np.nan
+    h = rng.uniform(-1.0, 30.0, 3000)
+    h[:10] = np.nan  # before the first depth
+    got, status = solve_updates(line, t, h, critical_parameters(line, h))
+    ref, _ = elastic.solve(line.weight, h, t, anchor_distance=line.anchor_distance, ea=line.ea, mbl=line.mbl)
+    assert status[:10].tolist() == [NO_DEPTH] * 10 and status[10:].tolist() == ref.status[10:].tolist()
+    assert (ref.model[10:][status[10:] == 0] == elastic.ELASTIC).all() and (ref.uplift_force[10:] > 0).sum() > 100
+    for key in VALUE_FIELDS:
+        if key in ('depth', 'top_tension'):  # the measured inputs, also where unsolved
+            np.testing.assert_array_equal(got[key], h if key == 'depth' else t)
+            continue
+        np.testing.assert_array_equal(got[key][10:], getattr(ref, key)[10:], err_msg=key)
+        assert np.isnan(got[key][:10]).all()

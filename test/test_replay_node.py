@@ -2,8 +2,9 @@
 
 The monitor runs as its own process (``python -m catenary_monitor.node --ros-args --params-file
 F``); this process publishes tension and depth with rclpy (a storm that lifts line_02's anchor,
-a tension dropout and a NaN on line_01, tension before the first depth), then stops the node
-with SIGTERM and replays its MCAP log. Compared with what the node logged itself:
+a tension dropout and a NaN on line_01, tension before the first depth; line_03 is an elastic
+chain, ``ea`` set), then stops the node with SIGTERM and replays its MCAP log. Compared with what
+the node logged itself:
 
 * every output message (``/catenary_monitor/NAME/outputs``): same update times, solver status,
   alarm level after the update, and values to rounding;
@@ -42,7 +43,8 @@ def test_replay_of_a_live_node_log_matches_the_node(tmp_path):
     log_dir = tmp_path / 'logs'
     config = MonitorConfig(
         lines=(LineConfig('line_01', 1300.0, 120.0, 4827000.0),
-               LineConfig('line_02', 1300.0, 121.06, 4827000.0, allowed_uplift=20e3)),
+               LineConfig('line_02', 1300.0, 121.06, 4827000.0, allowed_uplift=20e3),
+               LineConfig('line_03', 1300.0, 121.06, 4827000.0, allowed_uplift=20e3, ea=6.6e8)),
         log_dir=str(log_dir),
         alarm=AlarmConfig(tension_timeout=0.8, depth_timeout=3.0, clear_hold=1.0,
                           warn_clear_hold=1.0, diagnostic_rate=4.0))
@@ -59,7 +61,7 @@ def test_replay_of_a_live_node_log_matches_the_node(tmp_path):
         client = rclpy.create_node('replay_node_test')
         qos = QoSProfile(depth=10)
         pubs = {name: client.create_publisher(Float64, f'/mooring/{name}/tension', qos)
-                for name in ('line_01', 'line_02')}
+                for name in ('line_01', 'line_02', 'line_03')}
         depth_pub = client.create_publisher(Float64, '/tide/depth', qos)
         deadline = time.monotonic() + 30.0
         while time.monotonic() < deadline and not (
@@ -79,6 +81,7 @@ def test_replay_of_a_live_node_log_matches_the_node(tmp_path):
                 value = float('nan') if k == 30 else 372e3 + wave + rng.normal(0, 3e3)
                 pubs['line_01'].publish(Float64(data=value))
             pubs['line_02'].publish(Float64(data=372e3 + storm - wave))
+            pubs['line_03'].publish(Float64(data=372e3 + 0.9 * storm + wave))
             if now > 0.5 and k % 10 == 0:
                 depth_pub.publish(Float64(data=20.85 + 0.3 * np.sin(now / 3)))
             k += 1
@@ -122,18 +125,23 @@ def test_replay_of_a_live_node_log_matches_the_node(tmp_path):
         order = np.argsort(t, kind='stable')
         steps[r.name] = (t[order], lv[order])
     n_diag = 0
+    models = {name: set() for name in steps}
     for m in iter_messages(files, ['/diagnostics']):
         msg = deserialize_message(m.data, DiagnosticArray)
         for status in msg.status:
             name = status.name.split(': ')[-1]
             if name not in steps:
                 continue
+            models[name] |= {kv.value for kv in status.values if kv.key == 'model'}
             t, lv = steps[name]
             i = np.searchsorted(t, m.log_time_ns, 'right') - 1
             want = int(lv[i]) if i >= 0 else int(Level.OK)
             assert status.level[0] == want, (name, m.log_time_ns)
             n_diag += 1
     assert n_diag > 40
+    # The elastic line says which model its results used; the others stay inextensible.
+    assert models['line_03'] - {''} == {'elastic catenary'}  # '': before the first depth
+    assert models['line_01'] - {''} == models['line_02'] - {''} == {'inextensible catenary'}
     assert {int(Level.ERROR), int(Level.STALE)} <= levels_seen
     # The node's own transition log lines: same sequence of levels per line, and the same
     # message for every transition made by an update (a periodic step's message may show an
