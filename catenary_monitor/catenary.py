@@ -26,9 +26,10 @@ import numpy as np
 #: Newton stops after a step of at most this size in its log variable (relative size of the
 #: unknown): convergence is quadratic, so the error left is ~STEP_TOL**2, far below rounding.
 STEP_TOL = 1e-9
-#: Plain Newton steps taken on whole arrays before the safeguarded active-set loop (problem 4).
+#: Plain Newton steps taken on whole arrays before the safeguarded active-set loop (problem 4;
+#: from its model-based start most elements have converged after 2).
 FAST_STEPS = 2
-#: Iteration cap; never reached on the physical domain (see test_accuracy.py, residual counts).
+#: Iteration cap; never reached on the physical domain (residual counts: test/test_methods_scalar.py).
 MAXITER = 60
 
 _MATH = SimpleNamespace(
