@@ -145,17 +145,17 @@ def solve(weight: ArrayLike, depth: ArrayLike, tension: Optional[ArrayLike] = No
     -----
     Every input may be an array; arrays broadcast and are solved in vectorized code.  The
     relative error against a 50-digit reference is below 1e-12 wherever the problem is
-    well-conditioned (see README, "Accuracy").  With all-scalar ``tension`` inputs a plain-float
-    path gives the same numbers to rounding, an order of magnitude faster.
+    well-conditioned (see README, "Accuracy").  With all-scalar ``tension`` or ``horizontal``
+    inputs a plain-float path gives the same numbers to rounding, an order of magnitude faster.
     """
     if (horizontal is None and chain_length is None and tension is not None
             and type(weight) in _PLAIN and type(depth) in _PLAIN and type(tension) in _PLAIN
             and (anchor_distance is None or type(anchor_distance) in _PLAIN)
             and (mbl is None or type(mbl) in _PLAIN)):  # the node's case: skip the generic dispatch
         try:
-            return _solve_tension_scalar(float(weight), float(depth), float(tension),
-                                         None if anchor_distance is None else float(anchor_distance),
-                                         None if mbl is None else float(mbl))
+            return _solve_scalar('tension', float(weight), float(depth), float(tension),
+                                 None if anchor_distance is None else float(anchor_distance),
+                                 None if mbl is None else float(mbl))
         except (OverflowError, ZeroDivisionError, ValueError):
             pass  # beyond float range in plain math (e.g. sinh overflow): numpy gives inf instead
     problem = _check_call(tension, horizontal, chain_length, anchor_distance)
@@ -163,13 +163,14 @@ def solve(weight: ArrayLike, depth: ArrayLike, tension: Optional[ArrayLike] = No
               'anchor_distance': anchor_distance, 'chain_length': chain_length, 'mbl': mbl}
     given = {k: v for k, v in inputs.items() if v is not None}
     scalar = all(np.ndim(v) == 0 for v in given.values())
-    if scalar and problem == 'tension':
+    if scalar and problem != 'chain_length':
         try:
             floats = {k: float(v) for k, v in given.items()}
         except (TypeError, ValueError) as exc:
             raise ValueError(f'inputs must be numbers: {exc}') from None
         try:
-            return _solve_tension_scalar(**floats)
+            return _solve_scalar(problem, floats['weight'], floats['depth'], floats[problem],
+                                 floats.get('anchor_distance'), floats.get('mbl'))
         except (OverflowError, ZeroDivisionError, ValueError):
             pass  # beyond float range in plain math (e.g. sinh overflow): numpy gives inf instead
     try:
@@ -332,34 +333,42 @@ _TAIL = (_MODEL, _METHOD)
 _NAN12 = (_NAN,) * 12
 
 
-def _solve_tension_scalar(weight: float, depth: float, tension: float,
-                          anchor_distance: Optional[float] = None,
-                          mbl: Optional[float] = None) -> SolveResult:
-    """Problems 3 and 4 for one element in plain floats (same checks and formulas as arrays).
+def _solve_scalar(problem: str, w: float, h: float, load: float, x: Optional[float] = None,
+                  mbl: Optional[float] = None) -> SolveResult:
+    """Problems 1-4 for one element in plain floats (same checks and formulas as arrays).
 
-    ``cat.grounded`` and ``cat.depth_reached`` are written out inline, in their operation order.
+    ``load`` is the hook tension T (``problem='tension'``) or the horizontal tension R
+    (``'horizontal'``).  ``cat.grounded`` and ``cat.depth_reached`` are written out inline, in
+    their operation order.
     """
-    w, h, t, x = weight, depth, tension, anchor_distance
     isfinite = math.isfinite
-    if not (isfinite(w) and isfinite(h) and isfinite(t) and (x is None or isfinite(x))
+    by_tension = problem == 'tension'
+    if not (isfinite(w) and isfinite(h) and isfinite(load) and (x is None or isfinite(x))
             and (mbl is None or isfinite(mbl))):
         status = Status.NON_FINITE
     elif not w > 0:
         status = Status.WEIGHT
     elif not h > 0:
         status = Status.DEPTH
-    elif not t > w * h:
+    elif by_tension and not load > w * h:
         status = Status.TENSION
+    elif not by_tension and not load > 0:
+        status = Status.HORIZONTAL
     elif x is not None and not x > 0:
         status = Status.DISTANCE
     elif mbl is not None and not mbl > 0:
         status = Status.MBL
     else:
         status = 0
-    keys = _keys('tension', x is not None, mbl is not None)
+    keys = _keys(problem, x is not None, mbl is not None)
     if status:
-        return _new_tuple(SolveResult, _NAN12 + (int(status), 'tension', keys) + _TAIL)
-    b = cat.two_prod_diff(t, w, h) / w
+        return _new_tuple(SolveResult, _NAN12 + (int(status), problem, keys) + _TAIL)
+    if by_tension:
+        b = cat.two_prod_diff(load, w, h) / w  # anchor-end tension / w
+        t = load
+    else:
+        b = load / w
+        t = w * (b + h)
     z = h / b
     x_min = b * math.log1p(z + math.sqrt(z * (2.0 + z)))
     length = math.sqrt(h * (h + 2.0 * b))
@@ -368,19 +377,22 @@ def _solve_tension_scalar(weight: float, depth: float, tension: float,
     anchor_margin = tide_margin = load_margin = safety = _NAN
     if x is not None:
         if x < x_min:
-            s, _, converged = cat.lifted_from_tension_scalar(w, b, h, x)
-            if not converged:
-                return _new_tuple(SolveResult, _NAN12 + (int(Status.NO_CONVERGENCE), 'tension', keys) + _TAIL)
-            r, uplift, alpha, _, beta, length = s
+            if by_tension:
+                s, _, converged = cat.lifted_from_tension_scalar(w, b, h, x)
+                if not converged:
+                    return _new_tuple(SolveResult, _NAN12 + (int(Status.NO_CONVERGENCE), problem, keys) + _TAIL)
+                r, uplift, alpha, _, beta, length = s  # top_tension: the measured one
+            else:
+                r, uplift, alpha, t, beta, length = cat.lifted_from_horizontal(w, h, b, x, cat._MATH)
         anchor_margin = x - x_min
         a_now = r / w
         half = math.sinh(0.5 * x / a_now)
         tide_margin = 2.0 * a_now * half * half - h
         load_margin = w * (cat.critical_parameter_scalar(h, x) + h) - t
         if load_margin != load_margin:  # NaN: the load-margin solve did not converge
-            return _new_tuple(SolveResult, _NAN12 + (int(Status.NO_CONVERGENCE), 'tension', keys) + _TAIL)
+            return _new_tuple(SolveResult, _NAN12 + (int(Status.NO_CONVERGENCE), problem, keys) + _TAIL)
     if mbl is not None:
         safety = mbl / t
     return _new_tuple(SolveResult, (r, t, x_min, length, math.degrees(beta), math.degrees(alpha), uplift,
-                                    anchor_margin, tide_margin, load_margin, _NAN, safety, 0, 'tension', keys,
+                                    anchor_margin, tide_margin, load_margin, _NAN, safety, 0, problem, keys,
                                     _MODEL, _METHOD))

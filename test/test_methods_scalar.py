@@ -118,3 +118,26 @@ def test_load_margin_no_convergence_is_reported(monkeypatch):
     arr = solve(1300.0, 20.85, tension=[1623.5e3], anchor_distance=[300.0])
     assert one.status == arr.status[0] == Status.NO_CONVERGENCE
     assert math.isnan(one.load_margin) and math.isnan(arr.load_margin[0])
+
+
+def test_scalar_horizontal_path_equals_vectorized_path():
+    """Problems 1 and 2 (R given) take the plain-float path too, with the array path's numbers."""
+    w, h, t, x = scenes(2000, seed=5)
+    r = cat.two_prod_diff(t, w, h)  # R = w a for a no-uplift chain at that tension
+    vec = solve(w, h, horizontal=r, anchor_distance=x, mbl=5 * t)
+    assert (vec.status == 0).all() and (vec.uplift_force > 0).sum() > 500
+    for i in range(w.size):
+        one = solve(float(w[i]), float(h[i]), horizontal=float(r[i]), anchor_distance=float(x[i]),
+                    mbl=float(5 * t[i]))
+        assert one.status == 0 and one.keys == vec.keys and one.problem == 'horizontal'
+        for k in ('horizontal_tension', 'top_tension', 'min_anchor_distance', 'suspended_length',
+                  'top_angle_deg', 'safety_factor'):
+            assert getattr(one, k) == pytest.approx(getattr(vec, k)[i], rel=2e-14, abs=0), k
+        scale = {'anchor_margin': max(x[i], vec.min_anchor_distance[i]), 'tide_margin': h[i] + abs(vec.tide_margin[i]),
+                 'uplift_force': vec.top_tension[i], 'anchor_angle_deg': 90.0,
+                 'load_margin': vec.top_tension[i] + abs(vec.load_margin[i])}
+        for k, sc in scale.items():
+            assert abs(getattr(one, k) - getattr(vec, k)[i]) <= 2e-14 * sc, k
+    for bad, code in ((0.0, Status.HORIZONTAL), (-5.0, Status.HORIZONTAL), (math.nan, Status.NON_FINITE)):
+        one = solve(1300.0, 20.0, horizontal=bad, anchor_distance=100.0)
+        assert one.status == code and math.isnan(one.uplift_force)
