@@ -19,6 +19,10 @@ The second equation gives the anchor-end tension in closed form whatever the upl
   Illinois regula falsi with a bisection every third step (vectorized, to a 4 eps bracket),
   started from the rigid chain with the same end tensions (the core's uplift kernel).
 
+The load margin needs the hook tension at which ``x_min = x``: Newton in ``log T_A`` (T from T_A
+in closed form, ``d x_min / d T_A`` too), started from the rigid critical chain.  The elastic
+critical tension may be below ``w h`` (the stretched chain reaches the depth with less).
+
 ``EA -> inf`` gives back the inextensible formulas exactly.
 
 The rule (``solve``): the inextensible answer is kept where the elastic correction, the largest of
@@ -200,32 +204,62 @@ def _elastic_state(w: Any, h: Any, t: Any, x: Optional[Any], ea: Any) -> dict[st
     return {k: v.reshape(out_shape) for k, v in out.items()}
 
 
-def _elastic_critical_tension(w: np.ndarray, h: np.ndarray, x: np.ndarray, ea: np.ndarray,
-                              t_rigid: np.ndarray) -> np.ndarray:
-    """Hook tension at which the elastic chain's x_min equals x (x_min grows with T).
+def _critical_residual(rho: Any, w: Any, h: Any, x: Any, ea: Any, xp: Any = np) -> tuple[Any, Any]:
+    """``log(x_min / x)`` and its derivative in ``rho = log R`` for the no-uplift chain with R = T_A.
 
-    Root of ``x - x_min(T)`` (decreasing in T) in ``log T`` on ``(log(w h), log(T_rigid)]``:
-    stretch lengthens the span, so the elastic critical tension is below the rigid one.
+    With R given, ``D = T - R`` solves ``h w = D (1 + (2R + D)/(2EA))`` in closed form (a sum of
+    positive terms), ``V = sqrt(D (2R + D))`` and ``x_min = (R/w) asinh(V/R) + R V/(w EA)``, whose
+    derivative is ``w dx_min/dR = asinh(V/R) - D/V + V/EA``.
     """
-    def f(lt: np.ndarray, sel: np.ndarray) -> np.ndarray:
-        t = np.exp(lt)
-        ta, d = anchor_end_tension(w[sel], h[sel], t, ea[sel])
-        return x[sel] - _x_min_elastic(w[sel], t, ta, d, ea[sel])
+    r = xp.exp(rho)
+    s = 1.0 + r / ea
+    d = 2.0 * h * w / (s + xp.sqrt(s * s + 2.0 * h * w / ea))
+    v = xp.sqrt(d * (2.0 * r + d))
+    y = xp.arcsinh(v / r)
+    x_min = r / w * y + r * v / (w * ea)
+    return xp.log(x_min / x), r * (y - d / v + v / ea) / (w * x_min)
 
-    idx = np.arange(x.size)
-    hi = np.log(t_rigid)
-    fhi = f(hi, idx)
-    lo = hi - 4.0 * np.maximum(t_rigid / ea, 1e-12)  # the strain sets the shift
-    flo = f(lo, idx)
-    grow = ~(flo > 0.0)
-    while grow.any():
-        hi = np.where(grow, lo, hi)
-        fhi = np.where(grow, flo, fhi)
-        lo = np.where(grow, lo - 4.0 * (hi - lo + 1e-12), lo)
-        lo = np.maximum(lo, np.log(w * h) * (1.0 + 1e-15))
-        flo[grow] = f(lo[grow], idx[grow])
-        grow = ~(flo > 0.0) & (lo > np.log(w * h) * (1.0 + 1e-15))
-    return np.exp(_illinois(f, lo, hi, flo, np.minimum(fhi, -0.0)))
+
+def _critical_tension_from(rho: Any, w: Any, h: Any, ea: Any, xp: Any = np) -> Any:
+    """Hook tension ``T = R + D`` [N] of the no-uplift chain with anchor-end tension ``R = e^rho``."""
+    r = xp.exp(rho)
+    s = 1.0 + r / ea
+    return r + 2.0 * h * w / (s + xp.sqrt(s * s + 2.0 * h * w / ea))
+
+
+def _elastic_critical_tension(w: np.ndarray, h: np.ndarray, x: np.ndarray, ea: np.ndarray,
+                              a_rigid: np.ndarray) -> np.ndarray:
+    """Hook tension [N] at which the elastic chain's x_min equals x (x_min grows with T).
+
+    Unknown ``rho = log R`` (anchor-end tension R at lift-off), in which ``log x_min`` is smooth
+    and nearly linear (slope 1/2 for shallow chains, ~1 for steep ones), from the rigid critical
+    parameter ``a_rigid`` [m] (``R = w a``: off by about the strain).  Newton on
+    :func:`_critical_residual`, safeguarded by the bracket its residuals give (a step leaving it
+    is replaced by bisection, or by a step of 4 toward the root while one side is unknown), steps
+    clipped to +-4.  Stops after a step of at most ``STEP_TOL`` (applied): the convergence is
+    quadratic, so the error left is ~STEP_TOL^2, below rounding.  Each iteration evaluates only
+    the active elements; the result is never NaN for a finite start.
+    """
+    rho = np.log(w * a_rigid)
+    lo = np.full(rho.shape, -np.inf)
+    hi = np.full(rho.shape, np.inf)
+    idx = np.arange(rho.size)
+    for _ in range(cat.MAXITER):
+        if idx.size == 0:
+            break
+        cur = rho[idx]
+        f, fp = _critical_residual(cur, w[idx], h[idx], x[idx], ea[idx])
+        lo_i = np.where(f < 0.0, np.maximum(lo[idx], cur), lo[idx])
+        hi_i = np.where(f > 0.0, np.minimum(hi[idx], cur), hi[idx])
+        step = np.clip(-f / fp, -4.0, 4.0)
+        new = cur + step
+        converged = (np.abs(step) <= cat.STEP_TOL) | (f == 0.0)
+        bad = ~((new >= lo_i) & (new <= hi_i) | converged)  # also catches NaN
+        new = np.where(bad, np.where(np.isfinite(lo_i) & np.isfinite(hi_i), 0.5 * (lo_i + hi_i),
+                                     np.where(f > 0.0, cur - 4.0, cur + 4.0)), new)
+        rho[idx], lo[idx], hi[idx] = np.where(f == 0.0, cur, new), lo_i, hi_i
+        idx = idx[~converged]
+    return _critical_tension_from(rho, w, h, ea)
 
 
 def _elastic_depth_reach(w: np.ndarray, r: np.ndarray, x: np.ndarray, ea: np.ndarray) -> np.ndarray:
@@ -301,8 +335,8 @@ def solve(weight: Any, depth: Any, tension: Any, anchor_distance: Any = None, ea
         if x is not None:
             new['anchor_margin'] = x - el['min_anchor_distance']
             new['tide_margin'] = _elastic_depth_reach(w, r, x, ea_b) - h
-            t_crit_rigid = rig['top_tension'] + rig['load_margin']
-            new['load_margin'] = _elastic_critical_tension(w, h, x, ea_b, t_crit_rigid) - t
+            a_rigid, _ = cat.critical_parameter(h, x)  # converged: else the status is not 0
+            new['load_margin'] = _elastic_critical_tension(w, h, x, ea_b, a_rigid) - t
         for k, v in new.items():
             out[k] = np.where(use, v, out[k])
     fields: dict[str, Any] = {}

@@ -186,3 +186,20 @@ def test_bad_arguments():
         elastic.solve(1300.0, 20.85, 1623.5e3, 121.06, ea=1e9, tol=-1.0)
     res, corr = elastic.solve(1300.0, 20.85, 1623.5e3, 121.06)
     assert res.model == elastic.INEXTENSIBLE and corr == 0.0
+
+
+def test_elastic_load_margin_matches_50_digit_solution_also_below_w_h():
+    """At T + load_margin the 50-digit elastic x_min is x, also where that tension is below w h
+    (a stretched chain reaches the depth with less than its weight; the rigid one cannot)."""
+    w, h, t, x = scenes(60, seed=5)
+    ea = t / 10.0 ** np.random.default_rng(6).uniform(-6, math.log10(5e-2), 60)
+    res, _ = elastic.solve(w, h, t, x, ea=ea)
+    elastic_rows = np.flatnonzero(res.model == elastic.ELASTIC)
+    t_crit = t + res.load_margin
+    assert np.any(t_crit[elastic_rows] < w[elastic_rows] * h[elastic_rows])
+    for i in elastic_rows:
+        x_min = _mp_elastic(w[i], h[i], t_crit[i], None, ea[i])[3]
+        x_min2 = _mp_elastic(w[i], h[i], t_crit[i] * (1 + 1e-9), None, ea[i])[3]
+        kappa = abs((x_min2 - x_min) / x_min / 1e-9)  # d log x_min / d log T (to ~1e-6)
+        cancel = (t[i] + abs(res.load_margin[i])) / t_crit[i]  # T + margin rounds relative to T
+        assert abs(x_min - x[i]) <= (1e-13 + 4 * np.finfo(float).eps * kappa * cancel) * x[i]
