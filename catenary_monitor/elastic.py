@@ -16,8 +16,9 @@ The second equation gives the anchor-end tension in closed form whatever the upl
 * uplift (problem 4, x < x_min): with ``R = T_A sech u``, ``V_A = T_A tanh u`` the span
   ``x(u) = (T_A/w) sech u [acosh((T/T_A) cosh u) - u] + R (V_B - V_A)/(w EA)`` decreases with
   u; both terms are written as sums of positive parts and x(u) = x is solved in ``log u`` by
-  Illinois regula falsi with a bisection every third step (vectorized, to a 4 eps bracket),
-  started from the rigid chain with the same end tensions (the core's uplift kernel).
+  Illinois regula falsi with a bisection every third step (vectorized, to a 4 eps bracket or a
+  residual below 4 eps x), started from the rigid chain with the same end tensions (the core's
+  uplift kernel).
 
 The load margin needs the hook tension at which ``x_min = x``: Newton in ``log T_A`` (T from T_A
 in closed form, ``d x_min / d T_A`` too), started from the rigid critical chain.  The elastic
@@ -102,12 +103,16 @@ def _stretch(w: Any, t: Any, ta: Any, d: Any, r: Any, va: Any, vb: Any, l0: Any,
 
 
 def _illinois(fun: Any, lo: np.ndarray, hi: np.ndarray, flo: np.ndarray, fhi: np.ndarray,
-              maxiter: int = 200) -> np.ndarray:
+              maxiter: int = 200, ftol: Any = 0.0) -> np.ndarray:
     """Root of a decreasing ``fun`` in ``[lo, hi]`` (``flo > 0 > fhi``), vectorized.
 
     Illinois regula falsi, with a plain bisection every third step so the bracket at least
-    halves every three evaluations; stops when the bracket is ``4 eps`` wide (relative, or
-    absolute below 1) or a residual is exactly 0.  Each iteration evaluates only the elements
+    halves every three evaluations.  A regula falsi point is kept ``2 eps`` inside the bracket
+    (relative, or absolute below 1): once the iterates reach the root from one side, the next one
+    lands on the other side and closes the bracket (without this, ~40 bisections follow).  Stops
+    when the bracket is ``4 eps`` wide (same scale), returning its midpoint, or when a residual is
+    at most ``ftol`` in size (per element: the rounding level of ``fun``; 0, the default, stops
+    only on an exact zero), returning that point.  Each iteration evaluates only the elements
     still active.
     """
     lo, hi, flo, fhi = (np.array(v, dtype=float) for v in (lo, hi, flo, fhi))
@@ -118,7 +123,12 @@ def _illinois(fun: Any, lo: np.ndarray, hi: np.ndarray, flo: np.ndarray, fhi: np
         if idx.size == 0:
             break
         a, b, fa, fb = lo[idx], hi[idx], flo[idx], fhi[idx]
-        mid = (a * fb - b * fa) / (fb - fa) if k % 3 != 2 else 0.5 * (a + b)
+        if k % 3 != 2:
+            mid = (a * fb - b * fa) / (fb - fa)
+            near = 2.0 * _EPS * np.maximum(1.0, np.abs(mid))  # kept this far inside
+            mid = np.minimum(np.maximum(mid, a + near), b - near)
+        else:
+            mid = 0.5 * (a + b)
         mid = np.where((mid > a) & (mid < b), mid, 0.5 * (a + b))
         fm = fun(mid, idx)
         pos = fm > 0.0
@@ -132,13 +142,15 @@ def _illinois(fun: Any, lo: np.ndarray, hi: np.ndarray, flo: np.ndarray, fhi: np
         side[idx] = np.where(pos, 1, -1)
         root[idx] = mid
         width = hi[idx] - lo[idx]
-        done = (fm == 0.0) | (width <= 4.0 * np.finfo(float).eps * np.maximum(1.0, np.abs(mid)))
-        root[idx[done]] = np.where(fm[done] == 0.0, mid[done], 0.5 * (lo[idx[done]] + hi[idx[done]]))
+        small = np.abs(fm) <= (ftol[idx] if np.ndim(ftol) else ftol)
+        done = small | (width <= 4.0 * _EPS * np.maximum(1.0, np.abs(mid)))
+        root[idx[done]] = np.where(small[done], mid[done], 0.5 * (lo[idx[done]] + hi[idx[done]]))
         idx = idx[~done]
     return root
 
 
-def _illinois_scalar(fun: Any, lo: float, hi: float, flo: float, fhi: float, maxiter: int = 200) -> float:
+def _illinois_scalar(fun: Any, lo: float, hi: float, flo: float, fhi: float, maxiter: int = 200,
+                     ftol: float = 0.0) -> float:
     """Scalar twin of :func:`_illinois` (same steps and stopping test) for a plain-float ``fun``."""
     side = 0
     mid = 0.5 * (lo + hi)
@@ -146,6 +158,12 @@ def _illinois_scalar(fun: Any, lo: float, hi: float, flo: float, fhi: float, max
     for k in range(maxiter):
         a, b, fa, fb = lo, hi, flo, fhi
         mid = (a * fb - b * fa) / (fb - fa) if k % 3 != 2 and fb != fa else 0.5 * (a + b)
+        if k % 3 != 2:
+            near = 2.0 * _EPS * max(1.0, abs(mid))
+            if mid < a + near:
+                mid = a + near
+            if mid > b - near:
+                mid = b - near
         if not a < mid < b:  # also NaN
             mid = 0.5 * (a + b)
         fm = fun(mid)
@@ -157,7 +175,7 @@ def _illinois_scalar(fun: Any, lo: float, hi: float, flo: float, fhi: float, max
             if side == -1:
                 fa = 0.5 * fa
             lo, flo, hi, fhi, side = a, fa, mid, fm, -1
-        if fm == 0.0:
+        if abs(fm) <= ftol:
             return mid
         if hi - lo <= tiny * max(1.0, abs(mid)):
             return 0.5 * (lo + hi)
@@ -222,7 +240,7 @@ def _elastic_state(w: Any, h: Any, t: Any, x: Optional[Any], ea: Any) -> dict[st
                 sel = all_idx[grow]
                 fhi[grow] = f(hi[grow], sel)
                 grow = (fhi >= 0.0) & (hi < _ETA_MAX)
-            ul = np.exp(_illinois(f, lo, hi, flo, fhi))
+            ul = np.exp(_illinois(f, lo, hi, flo, fhi, ftol=4.0 * _EPS * target))  # x to rounding
             u[lift] = ul
             r[lift], vb[lift] = _top_vertical(ul, t[lift], ta[lift], d[lift])
             va[lift] = ta[lift] * np.tanh(ul)
@@ -272,7 +290,7 @@ def _elastic_state_scalar(w: float, h: float, t: float, x: Optional[float], ea: 
             hi = min(hi + step, _ETA_MAX)
             fhi = f(hi)
             grow = fhi >= 0.0 and hi < _ETA_MAX
-        u = exp(_illinois_scalar(f, lo, hi, flo, fhi))
+        u = exp(_illinois_scalar(f, lo, hi, flo, fhi, ftol=4.0 * _EPS * x))
         r, vb = _top_vertical(u, t, ta, d, xm)
         va = ta * math.tanh(u)
     l0 = d * (t + ta) / ((vb + va) * w)

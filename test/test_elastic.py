@@ -293,3 +293,19 @@ def test_stretched_length_matches_50_digit_solution_also_for_nearly_straight_cha
     for i in range(40):
         *_, length = _mp_elastic(w[i], h[i], t[i], x[i], ea[i], stretched=True)
         assert st['suspended_length'][i] == pytest.approx(length, rel=1e-14)
+
+
+def test_uplift_solve_closes_its_bracket(monkeypatch):
+    """Residual count of the uplift solve: once regula falsi reaches the root from one side the
+    bracket closes (it used to stall there and bisect ~40 more times; up to 53 residuals)."""
+    w, h, t, x, ea = _random_elastic_scenes(400, seed=24)
+    calls = []
+    span = elastic._span
+    monkeypatch.setattr(elastic, '_span', lambda *a: calls.append(1) or span(*a))
+    counts = []
+    for i in range(400):
+        calls.clear()
+        r, _, va, *_ = elastic._elastic_state_scalar(*(float(v[i]) for v in (w, h, t, x, ea)))
+        if va > 0:
+            counts.append(len(calls))
+    assert len(counts) > 200 and max(counts) <= 30 and np.mean(counts) < 10
