@@ -228,11 +228,23 @@ def _random_elastic_scenes(n, seed):
 _SCALE = {'uplift_force': 't', 'load_margin': 't', 'anchor_margin': 'x', 'tide_margin': 'h'}
 
 
+def _dock_scenes_near_lift_off():
+    """The dock chain with x between the rigid and the elastic lift-off distance (same end
+    tensions), where the uplift solve cannot start from the rigid chain, and just short of both."""
+    w, h, t = 1300.0, 20.85, 1623.5e3
+    ta, d = elastic.anchor_end_tension(w, h, t, EA_DOCK)
+    x_rigid = float(ta / w * np.arcsinh(np.sqrt(d * (t + ta)) / ta))
+    x_el = float(elastic.elastic_state(w, h, t, None, EA_DOCK)['min_anchor_distance'])
+    x = np.array([x_rigid + f * (x_el - x_rigid) for f in (1e-3, 0.5, 1 - 1e-6)] + [x_rigid * (1 - 1e-6)])
+    return np.full(4, w), np.full(4, h), np.full(4, t), x, np.full(4, EA_DOCK)
+
+
 @pytest.mark.parametrize('with_x', [True, False])
 def test_scalar_path_matches_the_arrays(with_x):
     """Plain-float scalar calls give the vectorized results to rounding, model and correction included."""
-    n = 300
-    w, h, t, x, ea = _random_elastic_scenes(n, seed=21 if with_x else 22)
+    random = _random_elastic_scenes(300, seed=21 if with_x else 22)
+    w, h, t, x, ea = (np.concatenate(v) for v in zip(random, _dock_scenes_near_lift_off()))
+    n = w.size
     mbl = 3.0 * t
     res, corr = elastic.solve(w, h, t, x if with_x else None, ea=ea, mbl=mbl)
     assert {elastic.ELASTIC, elastic.INEXTENSIBLE} <= set(res.model)
