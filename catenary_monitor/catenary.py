@@ -35,6 +35,7 @@ MAXITER = 60
 _MATH = SimpleNamespace(
     sqrt=math.sqrt, log=math.log, maximum=max, minimum=min, log1p=math.log1p, exp=math.exp, expm1=math.expm1,
     sinh=math.sinh, cosh=math.cosh, tanh=math.tanh, asinh=math.asinh, arctan2=math.atan2,
+    arcsinh=math.asinh,
 )
 
 

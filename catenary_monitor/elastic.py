@@ -16,8 +16,13 @@ The second equation gives the anchor-end tension in closed form whatever the upl
 * uplift (problem 4, x < x_min): with ``R = T_A sech u``, ``V_A = T_A tanh u`` the span
   ``x(u) = (T_A/w) sech u [acosh((T/T_A) cosh u) - u] + R (V_B - V_A)/(w EA)`` decreases with
   u; both terms are written as sums of positive parts and x(u) = x is solved in ``log u`` by
-  Illinois regula falsi with a bisection every third step (vectorized, to a 4 eps bracket),
-  started from the rigid chain with the same end tensions (the core's uplift kernel).
+  Illinois regula falsi with a bisection every third step (vectorized, to a 4 eps bracket or a
+  residual below 4 eps x), started from the rigid chain with the same end tensions (the core's
+  uplift kernel).
+
+The load margin needs the hook tension at which ``x_min = x``: Newton in ``log T_A`` (T from T_A
+in closed form, ``d x_min / d T_A`` too), started from the rigid critical chain.  The elastic
+critical tension may be below ``w h`` (the stretched chain reaches the depth with less).
 
 ``EA -> inf`` gives back the inextensible formulas exactly.
 
@@ -43,10 +48,11 @@ from .solve import SolveResult, solve as solve_rigid
 ELASTIC_TOL = 1e-6
 INEXTENSIBLE = 'inextensible catenary'
 ELASTIC = 'elastic catenary'
+_EPS = float(np.finfo(float).eps)
 _ETA_MAX = math.log(700.0)  # u <= 700: sech(700) underflows, so no span is shorter
 
 
-def anchor_end_tension(w: Any, h: Any, t: Any, ea: Any) -> tuple[Any, Any]:
+def anchor_end_tension(w: Any, h: Any, t: Any, ea: Any, xp: Any = np) -> tuple[Any, Any]:
     """``(T_A, D)``: ``T_A = T - D`` with ``h w = D (1 + (2T - D)/(2EA))``, no cancellation.
 
     ``D = h w k`` with ``k = 2 / ((1+s) + sqrt((1+s)^2 - q))``, ``s = T/EA``, ``q = 2hw/EA``, and
@@ -55,44 +61,58 @@ def anchor_end_tension(w: Any, h: Any, t: Any, ea: Any) -> tuple[Any, Any]:
     """
     s = t / ea
     q = 2.0 * h * w / ea
-    root = np.sqrt((1.0 + s) ** 2 - q)
+    root = xp.sqrt((1.0 + s) ** 2 - q)
     den = (1.0 + s) + root
     one_minus_k = (s + (2.0 * s + s * s - q) / (root + 1.0)) / den
     return cat.two_prod_diff(t, w, h) + w * h * one_minus_k, 2.0 * w * h / den
 
 
-def _x_over_b(u: Any, e: Any) -> Any:
+def _x_over_b(u: Any, e: Any, xp: Any = np) -> Any:
     """``sech(u) [acosh((1+e) cosh u) - u]`` as one log1p of positive terms."""
-    c, s = np.cosh(u), np.sinh(u)
+    c, s = xp.cosh(u), xp.sinh(u)
     p = (1.0 + e) * c
-    pm1 = 2.0 * np.sinh(0.5 * u) ** 2 + e * c
-    sp = np.sqrt(pm1 * (p + 1.0))
+    pm1 = 2.0 * xp.sinh(0.5 * u) ** 2 + e * c
+    sp = xp.sqrt(pm1 * (p + 1.0))
     num = e * c + e * c * c * (2.0 + e) / (sp + s)
-    return np.log1p(num / (c + s)) / c
+    return xp.log1p(num / (c + s)) / c
 
 
-def _top_vertical(u: Any, t: Any, ta: Any, d: Any) -> tuple[Any, Any]:
-    """``R = T_A sech u`` and ``V_B = sqrt(T^2 - R^2)`` with ``T - R = D + T_A (1 - sech u)``."""
-    c = np.cosh(u)
+def _top_vertical(u: Any, t: Any, ta: Any, d: Any, xp: Any = np) -> tuple[Any, Any]:
+    """``R = T_A sech u`` and ``V_B = sqrt(T^2 - R^2)`` [N] with ``T - R = D + T_A (1 - sech u)``."""
+    c = xp.cosh(u)
     r = ta / c
-    t_minus_r = d + ta * 2.0 * np.sinh(0.5 * u) ** 2 / c
-    return r, np.sqrt(t_minus_r * (t + r))
+    t_minus_r = d + ta * 2.0 * xp.sinh(0.5 * u) ** 2 / c
+    return r, xp.sqrt(t_minus_r * (t + r))
 
 
-def _span(u: Any, w: Any, t: Any, ta: Any, d: Any, ea: Any) -> Any:
-    """Elastic span x(u) for hook tension T, anchor-end tension T_A = T - D."""
-    r, vb = _top_vertical(u, t, ta, d)
-    va = ta * np.tanh(u)
-    return ta / w * _x_over_b(u, d / ta) + r * d * (t + ta) / ((vb + va) * w * ea)
+def _span(u: Any, w: Any, t: Any, ta: Any, d: Any, ea: Any, xp: Any = np) -> Any:
+    """Elastic span x(u) [m] for hook tension T, anchor-end tension T_A = T - D."""
+    r, vb = _top_vertical(u, t, ta, d, xp)
+    va = ta * xp.tanh(u)
+    return ta / w * _x_over_b(u, d / ta, xp) + r * d * (t + ta) / ((vb + va) * w * ea)
+
+
+def _stretch(w: Any, t: Any, ta: Any, d: Any, r: Any, va: Any, vb: Any, l0: Any, ea: Any, xp: Any = np) -> Any:
+    """Elastic stretch [m]: the integral of T/EA along the chain (Irvine), as a sum of positive terms.
+
+    ``[V T + R^2 asinh(V/R)]`` from V_A to V_B over ``2 EA w``, with ``V_B T - V_A T_A = w L0 T + V_A D``
+    and ``asinh(V_B/R) - asinh(V_A/R) = asinh(D (T + T_A) / (V_B T_A + V_A T))`` (no cancellation
+    when the chain is nearly straight).
+    """
+    return (w * l0 * t + va * d + r * r * xp.arcsinh(d * (t + ta) / (vb * ta + va * t))) / (2.0 * ea * w)
 
 
 def _illinois(fun: Any, lo: np.ndarray, hi: np.ndarray, flo: np.ndarray, fhi: np.ndarray,
-              maxiter: int = 200) -> np.ndarray:
+              maxiter: int = 200, ftol: Any = 0.0) -> np.ndarray:
     """Root of a decreasing ``fun`` in ``[lo, hi]`` (``flo > 0 > fhi``), vectorized.
 
     Illinois regula falsi, with a plain bisection every third step so the bracket at least
-    halves every three evaluations; stops when the bracket is ``4 eps`` wide (relative, or
-    absolute below 1) or a residual is exactly 0.  Each iteration evaluates only the elements
+    halves every three evaluations.  A regula falsi point is kept ``2 eps`` inside the bracket
+    (relative, or absolute below 1): once the iterates reach the root from one side, the next one
+    lands on the other side and closes the bracket (without this, ~40 bisections follow).  Stops
+    when the bracket is ``4 eps`` wide (same scale), returning its midpoint, or when a residual is
+    at most ``ftol`` in size (per element: the rounding level of ``fun``; 0, the default, stops
+    only on an exact zero), returning that point.  Each iteration evaluates only the elements
     still active.
     """
     lo, hi, flo, fhi = (np.array(v, dtype=float) for v in (lo, hi, flo, fhi))
@@ -103,7 +123,12 @@ def _illinois(fun: Any, lo: np.ndarray, hi: np.ndarray, flo: np.ndarray, fhi: np
         if idx.size == 0:
             break
         a, b, fa, fb = lo[idx], hi[idx], flo[idx], fhi[idx]
-        mid = (a * fb - b * fa) / (fb - fa) if k % 3 != 2 else 0.5 * (a + b)
+        if k % 3 != 2:
+            mid = (a * fb - b * fa) / (fb - fa)
+            near = 2.0 * _EPS * np.maximum(1.0, np.abs(mid))  # kept this far inside
+            mid = np.minimum(np.maximum(mid, a + near), b - near)
+        else:
+            mid = 0.5 * (a + b)
         mid = np.where((mid > a) & (mid < b), mid, 0.5 * (a + b))
         fm = fun(mid, idx)
         pos = fm > 0.0
@@ -117,16 +142,44 @@ def _illinois(fun: Any, lo: np.ndarray, hi: np.ndarray, flo: np.ndarray, fhi: np
         side[idx] = np.where(pos, 1, -1)
         root[idx] = mid
         width = hi[idx] - lo[idx]
-        done = (fm == 0.0) | (width <= 4.0 * np.finfo(float).eps * np.maximum(1.0, np.abs(mid)))
-        root[idx[done]] = np.where(fm[done] == 0.0, mid[done], 0.5 * (lo[idx[done]] + hi[idx[done]]))
+        small = np.abs(fm) <= (ftol[idx] if np.ndim(ftol) else ftol)
+        done = small | (width <= 4.0 * _EPS * np.maximum(1.0, np.abs(mid)))
+        root[idx[done]] = np.where(small[done], mid[done], 0.5 * (lo[idx[done]] + hi[idx[done]]))
         idx = idx[~done]
     return root
 
 
-def _x_min_elastic(w: Any, t: Any, ta: Any, d: Any, ea: Any) -> Any:
-    """Closed-form elastic x_min: ``(R/w) asinh(V/R) + R V/(w EA)`` with ``R = T_A``, ``V^2 = D (T + T_A)``."""
-    v = np.sqrt(d * (t + ta))
-    return ta / w * np.arcsinh(v / ta) + ta * v / (w * ea)
+def _illinois_scalar(fun: Any, lo: float, hi: float, flo: float, fhi: float, maxiter: int = 200,
+                     ftol: float = 0.0) -> float:
+    """Scalar twin of :func:`_illinois` (same steps and stopping test) for a plain-float ``fun``."""
+    side = 0
+    mid = 0.5 * (lo + hi)
+    tiny = 4.0 * _EPS
+    for k in range(maxiter):
+        a, b, fa, fb = lo, hi, flo, fhi
+        mid = (a * fb - b * fa) / (fb - fa) if k % 3 != 2 and fb != fa else 0.5 * (a + b)
+        if k % 3 != 2:
+            near = 2.0 * _EPS * max(1.0, abs(mid))
+            if mid < a + near:
+                mid = a + near
+            if mid > b - near:
+                mid = b - near
+        if not a < mid < b:  # also NaN
+            mid = 0.5 * (a + b)
+        fm = fun(mid)
+        if fm > 0.0:
+            if side == 1:  # Illinois: halve the residual kept at the end that did not move twice
+                fb = 0.5 * fb
+            lo, flo, hi, fhi, side = mid, fm, b, fb, 1
+        else:
+            if side == -1:
+                fa = 0.5 * fa
+            lo, flo, hi, fhi, side = a, fa, mid, fm, -1
+        if abs(fm) <= ftol:
+            return mid
+        if hi - lo <= tiny * max(1.0, abs(mid)):
+            return 0.5 * (lo + hi)
+    return mid
 
 
 def elastic_state(w: Any, h: Any, t: Any, x: Optional[Any], ea: Any) -> dict[str, np.ndarray]:
@@ -187,45 +240,119 @@ def _elastic_state(w: Any, h: Any, t: Any, x: Optional[Any], ea: Any) -> dict[st
                 sel = all_idx[grow]
                 fhi[grow] = f(hi[grow], sel)
                 grow = (fhi >= 0.0) & (hi < _ETA_MAX)
-            ul = np.exp(_illinois(f, lo, hi, flo, fhi))
+            ul = np.exp(_illinois(f, lo, hi, flo, fhi, ftol=4.0 * _EPS * target))  # x to rounding
             u[lift] = ul
             r[lift], vb[lift] = _top_vertical(ul, t[lift], ta[lift], d[lift])
             va[lift] = ta[lift] * np.tanh(ul)
     l0 = d * (t + ta) / ((vb + va) * w)  # (V_B - V_A)/w without the cancellation
-    # stretch: integral of T/EA along the chain (Irvine)
-    stretch = (vb * t - va * np.hypot(r, va) + r * r * (np.arcsinh(vb / r) - np.arcsinh(va / r))) / (2.0 * ea * w)
+    stretch = _stretch(w, t, ta, d, r, va, vb, l0, ea, np)
     out = {'horizontal_tension': r, 'min_anchor_distance': x_min, 'uplift_force': va,
            'unstretched_length': l0, 'suspended_length': l0 + stretch, 'top_vertical': vb,
            'anchor_tension': ta}
     return {k: v.reshape(out_shape) for k, v in out.items()}
 
 
-def _elastic_critical_tension(w: np.ndarray, h: np.ndarray, x: np.ndarray, ea: np.ndarray,
-                              t_rigid: np.ndarray) -> np.ndarray:
-    """Hook tension at which the elastic chain's x_min equals x (x_min grows with T).
+def _elastic_state_scalar(w: float, h: float, t: float, x: Optional[float], ea: float
+                          ) -> tuple[float, float, float, float, float, float]:
+    """Plain-float twin of :func:`_elastic_state` (same formulas, start and iteration) for one scene.
 
-    Root of ``x - x_min(T)`` (decreasing in T) in ``log T`` on ``(log(w h), log(T_rigid)]``:
-    stretch lengthens the span, so the elastic critical tension is below the rigid one.
+    Returns ``(R, x_min, V_A, L, V_B, T_A)`` [N, m, N, m, N, N] (L the stretched suspended length).
+    May raise OverflowError, ZeroDivisionError or ValueError where numpy would give inf or NaN.
     """
-    def f(lt: np.ndarray, sel: np.ndarray) -> np.ndarray:
-        t = np.exp(lt)
-        ta, d = anchor_end_tension(w[sel], h[sel], t, ea[sel])
-        return x[sel] - _x_min_elastic(w[sel], t, ta, d, ea[sel])
+    xm = cat._MATH
+    sqrt, asinh, exp, log = math.sqrt, math.asinh, math.exp, math.log
+    ta, d = anchor_end_tension(w, h, t, ea, xm)
+    r = ta
+    vb = sqrt(d * (t + ta))
+    x_min = r / w * asinh(vb / r) + r * vb / (w * ea)
+    va = 0.0
+    if x is not None and x < x_min:
+        def f(eta: float) -> float:
+            return _span(exp(eta), w, t, ta, d, ea, xm) - x
 
-    idx = np.arange(x.size)
-    hi = np.log(t_rigid)
-    fhi = f(hi, idx)
-    lo = hi - 4.0 * np.maximum(t_rigid / ea, 1e-12)  # the strain sets the shift
-    flo = f(lo, idx)
-    grow = ~(flo > 0.0)
-    while grow.any():
-        hi = np.where(grow, lo, hi)
-        fhi = np.where(grow, flo, fhi)
-        lo = np.where(grow, lo - 4.0 * (hi - lo + 1e-12), lo)
-        lo = np.maximum(lo, np.log(w * h) * (1.0 + 1e-15))
-        flo[grow] = f(lo[grow], idx[grow])
-        grow = ~(flo > 0.0) & (lo > np.log(w * h) * (1.0 + 1e-15))
-    return np.exp(_illinois(f, lo, hi, flo, np.minimum(fhi, -0.0)))
+        lo = -200.0
+        if x < ta / w * asinh(sqrt(d * (t + ta)) / ta):  # rigid chain with the same end tensions lifted
+            s_r, _, ok_r = cat.lifted_from_tension_scalar(w, ta / w, d / w, x)
+            u_r = asinh(s_r.uplift_force / s_r.horizontal_tension)
+            if ok_r and u_r > 0:
+                lo = log(max(u_r, 1e-300))
+        flo = f(lo)
+        if not flo > 0.0:
+            lo = -200.0
+            flo = f(lo)
+        step = 1e-3
+        hi = lo + step
+        fhi = f(hi)
+        grow = fhi >= 0.0
+        while grow:
+            lo, flo = hi, fhi
+            step *= 4.0
+            hi = min(hi + step, _ETA_MAX)
+            fhi = f(hi)
+            grow = fhi >= 0.0 and hi < _ETA_MAX
+        u = exp(_illinois_scalar(f, lo, hi, flo, fhi, ftol=4.0 * _EPS * x))
+        r, vb = _top_vertical(u, t, ta, d, xm)
+        va = ta * math.tanh(u)
+    l0 = d * (t + ta) / ((vb + va) * w)
+    return r, x_min, va, l0 + _stretch(w, t, ta, d, r, va, vb, l0, ea, xm), vb, ta
+
+
+def _critical_residual(rho: Any, w: Any, h: Any, x: Any, ea: Any, xp: Any = np) -> tuple[Any, Any]:
+    """``log(x_min / x)`` and its derivative in ``rho = log R`` for the no-uplift chain with R = T_A.
+
+    With R given, ``D = T - R`` solves ``h w = D (1 + (2R + D)/(2EA))`` in closed form (a sum of
+    positive terms), ``V = sqrt(D (2R + D))`` and ``x_min = (R/w) asinh(V/R) + R V/(w EA)``, whose
+    derivative is ``w dx_min/dR = asinh(V/R) - D/V + V/EA``.
+    """
+    r = xp.exp(rho)
+    s = 1.0 + r / ea
+    d = 2.0 * h * w / (s + xp.sqrt(s * s + 2.0 * h * w / ea))
+    v = xp.sqrt(d * (2.0 * r + d))
+    y = xp.arcsinh(v / r)
+    x_min = r / w * y + r * v / (w * ea)
+    return xp.log(x_min / x), r * (y - d / v + v / ea) / (w * x_min)
+
+
+def _critical_tension_from(rho: Any, w: Any, h: Any, ea: Any, xp: Any = np) -> Any:
+    """Hook tension ``T = R + D`` [N] of the no-uplift chain with anchor-end tension ``R = e^rho``."""
+    r = xp.exp(rho)
+    s = 1.0 + r / ea
+    return r + 2.0 * h * w / (s + xp.sqrt(s * s + 2.0 * h * w / ea))
+
+
+def _elastic_critical_tension(w: np.ndarray, h: np.ndarray, x: np.ndarray, ea: np.ndarray,
+                              a_rigid: np.ndarray) -> np.ndarray:
+    """Hook tension [N] at which the elastic chain's x_min equals x (x_min grows with T).
+
+    Unknown ``rho = log R`` (anchor-end tension R at lift-off), in which ``log x_min`` is smooth
+    and nearly linear (slope 1/2 for shallow chains, ~1 for steep ones), from the rigid critical
+    parameter ``a_rigid`` [m] (``R = w a``: off by about the strain).  Newton on
+    :func:`_critical_residual`, safeguarded by the bracket its residuals give (a step leaving it
+    is replaced by bisection, or by a step of 4 toward the root while one side is unknown), steps
+    clipped to +-4.  Stops after a step of at most ``STEP_TOL`` (applied): the convergence is
+    quadratic, so the error left is ~STEP_TOL^2, below rounding.  Each iteration evaluates only
+    the active elements; the result is never NaN for a finite start.
+    """
+    rho = np.log(w * a_rigid)
+    lo = np.full(rho.shape, -np.inf)
+    hi = np.full(rho.shape, np.inf)
+    idx = np.arange(rho.size)
+    for _ in range(cat.MAXITER):
+        if idx.size == 0:
+            break
+        cur = rho[idx]
+        f, fp = _critical_residual(cur, w[idx], h[idx], x[idx], ea[idx])
+        lo_i = np.where(f < 0.0, np.maximum(lo[idx], cur), lo[idx])
+        hi_i = np.where(f > 0.0, np.minimum(hi[idx], cur), hi[idx])
+        step = np.clip(-f / fp, -4.0, 4.0)
+        new = cur + step
+        converged = (np.abs(step) <= cat.STEP_TOL) | (f == 0.0)
+        bad = ~((new >= lo_i) & (new <= hi_i) | converged)  # also catches NaN
+        new = np.where(bad, np.where(np.isfinite(lo_i) & np.isfinite(hi_i), 0.5 * (lo_i + hi_i),
+                                     np.where(f > 0.0, cur - 4.0, cur + 4.0)), new)
+        rho[idx], lo[idx], hi[idx] = np.where(f == 0.0, cur, new), lo_i, hi_i
+        idx = idx[~converged]
+    return _critical_tension_from(rho, w, h, ea)
 
 
 def _elastic_depth_reach(w: np.ndarray, r: np.ndarray, x: np.ndarray, ea: np.ndarray) -> np.ndarray:
@@ -245,6 +372,52 @@ def _elastic_depth_reach(w: np.ndarray, r: np.ndarray, x: np.ndarray, ea: np.nda
         if np.all(np.abs(step) <= 4.0 * np.finfo(float).eps * nu):
             break
     return 2.0 * a * np.sinh(0.5 * nu) ** 2 + a * k * np.sinh(nu) ** 2 / 2.0
+
+
+def _elastic_critical_tension_scalar(w: float, h: float, x: float, ea: float, a_rigid: float) -> float:
+    """Plain-float twin of :func:`_elastic_critical_tension` (same start, safeguard and stop) [N]."""
+    xm = cat._MATH
+    rho = math.log(w * a_rigid)
+    lo, hi = -math.inf, math.inf
+    for _ in range(cat.MAXITER):
+        f, fp = _critical_residual(rho, w, h, x, ea, xm)
+        if f < 0.0:
+            lo = max(lo, rho)
+        elif f > 0.0:
+            hi = min(hi, rho)
+        elif f == 0.0:
+            break
+        step = -f / fp
+        if step > 4.0:
+            step = 4.0
+        elif step < -4.0:
+            step = -4.0
+        new = rho + step
+        if -cat.STEP_TOL <= step <= cat.STEP_TOL:
+            rho = new
+            break
+        if not lo <= new <= hi:  # also NaN
+            new = 0.5 * (lo + hi) if -math.inf < lo and hi < math.inf else (rho - 4.0 if f > 0.0 else rho + 4.0)
+        rho = new
+    return _critical_tension_from(rho, w, h, ea, xm)
+
+
+def _elastic_depth_reach_scalar(w: float, r: float, x: float, ea: float) -> float:
+    """Plain-float twin of :func:`_elastic_depth_reach` [m]."""
+    sinh, cosh = math.sinh, math.cosh
+    a = r / w
+    k = r / ea
+    nu = min(x / a, 700.0)
+    tiny = 4.0 * _EPS
+    for _ in range(100):
+        g = a * nu + a * k * sinh(nu) - x
+        step = g / (a + a * k * cosh(nu))
+        nu = nu - step
+        if abs(step) <= tiny * nu:
+            break
+    s = sinh(0.5 * nu)
+    sn = sinh(nu)
+    return 2.0 * a * (s * s) + a * k * (sn * sn) / 2.0
 
 
 def elastic_correction(rigid: SolveResult, el: dict[str, np.ndarray]) -> np.ndarray:
@@ -273,6 +446,17 @@ def solve(weight: Any, depth: Any, tension: Any, anchor_distance: Any = None, ea
     scalar = np.ndim(rigid.status) == 0
     if ea is None:
         return rigid, 0.0 if scalar else np.zeros(np.shape(rigid.status))
+    if scalar and type(ea) in _PLAIN:  # the node's case: plain floats, no arrays
+        ea_f = float(ea)
+        if not ea_f > 0:
+            raise ValueError('ea (axial stiffness) must be > 0 N')
+        if rigid.status != 0:
+            return rigid, 0.0
+        try:
+            return _solve_scalar(rigid, float(weight), float(depth), float(tension),
+                                 None if anchor_distance is None else float(anchor_distance), ea_f, tol)
+        except (OverflowError, ZeroDivisionError, ValueError):
+            pass  # beyond float range in plain math: the arrays below give inf / NaN instead
     ea_arr = np.asarray(ea, dtype=float)
     if np.any(~(ea_arr > 0)):
         raise ValueError('ea (axial stiffness) must be > 0 N')
@@ -301,8 +485,8 @@ def solve(weight: Any, depth: Any, tension: Any, anchor_distance: Any = None, ea
         if x is not None:
             new['anchor_margin'] = x - el['min_anchor_distance']
             new['tide_margin'] = _elastic_depth_reach(w, r, x, ea_b) - h
-            t_crit_rigid = rig['top_tension'] + rig['load_margin']
-            new['load_margin'] = _elastic_critical_tension(w, h, x, ea_b, t_crit_rigid) - t
+            a_rigid, _ = cat.critical_parameter(h, x)  # converged: else the status is not 0
+            new['load_margin'] = _elastic_critical_tension(w, h, x, ea_b, a_rigid) - t
         for k, v in new.items():
             out[k] = np.where(use, v, out[k])
     fields: dict[str, Any] = {}
@@ -318,6 +502,35 @@ def solve(weight: Any, depth: Any, tension: Any, anchor_distance: Any = None, ea
     corr_full[ok] = corr
     res = rigid._replace(**fields, model=str(model) if scalar else model)
     return res, (float(corr_full) if scalar else corr_full)
+
+
+_PLAIN = (float, int, np.float64)
+
+
+def _solve_scalar(rigid: SolveResult, w: float, h: float, t: float, x: Optional[float], ea: float,
+                  tol: float) -> tuple[SolveResult, float]:
+    """:func:`solve` for one valid scene in plain floats (same formulas and rule as the arrays).
+
+    ``rigid`` is the scalar inextensible result (status 0).  May raise OverflowError,
+    ZeroDivisionError or ValueError where numpy would give inf or NaN (the caller falls back).
+    """
+    r, x_min, va, length, vb, _ = _elastic_state_scalar(w, h, t, x, ea)
+    parts = (abs(x_min - rigid.min_anchor_distance) / rigid.min_anchor_distance,
+             abs(r - rigid.horizontal_tension) / rigid.horizontal_tension,
+             abs(va - rigid.uplift_force) / t,
+             abs(length - rigid.suspended_length) / rigid.suspended_length)
+    corr = math.nan if any(p != p for p in parts) else max(parts)  # NaN propagates, as np.max
+    if not corr > tol:
+        return rigid, corr
+    new = {'min_anchor_distance': x_min, 'horizontal_tension': r, 'uplift_force': va,
+           'suspended_length': length, 'top_angle_deg': math.degrees(math.atan2(vb, r)),
+           'anchor_angle_deg': math.degrees(math.atan2(va, r))}
+    if x is not None:
+        new['anchor_margin'] = x - x_min
+        new['tide_margin'] = _elastic_depth_reach_scalar(w, r, x, ea) - h
+        a_rigid = cat.critical_parameter_scalar(h, x)
+        new['load_margin'] = _elastic_critical_tension_scalar(w, h, x, ea, a_rigid) - t
+    return rigid._replace(model=ELASTIC, **new), corr
 
 
 class SimpleRigid:

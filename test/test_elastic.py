@@ -30,8 +30,11 @@ def test_infinitely_stiff_is_the_inextensible_catenary():
         assert np.all(np.abs(el[key] - ref) <= 1e-12 * np.abs(ref) + 1e-12 * t * (key == 'uplift_force')), key
 
 
-def _mp_elastic(w, h, t, x, ea):
-    """Irvine's equations solved in 50 digits: (R, V_A, L0, x_min), anchor lifted when x < x_min."""
+def _mp_elastic(w, h, t, x, ea, stretched=False):
+    """Irvine's equations solved in 50 digits: (R, V_A, L0, x_min), anchor lifted when x < x_min.
+
+    With ``stretched``, also the stretched suspended length, L0 plus the integral of T/EA by quadrature.
+    """
     with mp.workdps(50):
         w, h, t, ea = (mp.mpf(float(v)) for v in (w, h, t, ea))
         s = 1 + t / ea
@@ -47,10 +50,17 @@ def _mp_elastic(w, h, t, x, ea):
             assert abs(depth - h) <= mp.mpf(10) ** -30 * h
             return r, va, l0, span
 
+        def out(u):
+            r, va, l0, _ = state(u)
+            res = (float(r), float(va), float(l0), float(x_min))
+            if not stretched:
+                return res
+            vb = va + w * l0  # ds = dV / w, T = sqrt(R^2 + V^2)
+            return res + (float(l0 + mp.quad(lambda v: mp.sqrt(r * r + v * v), [va, vb]) / (ea * w)),)
+
         x_min = state(mp.mpf(0))[3]
         if x is None or x >= x_min:
-            r, va, l0, _ = state(mp.mpf(0))
-            return float(r), 0.0, float(l0), float(x_min)
+            return out(mp.mpf(0))
         x = mp.mpf(float(x))
         lo, hi = mp.mpf(0), mp.mpf(1)
         while state(hi)[3] > x:
@@ -61,8 +71,7 @@ def _mp_elastic(w, h, t, x, ea):
                 lo = mid
             else:
                 hi = mid
-        r, va, l0, _ = state((lo + hi) / 2)
-        return float(r), float(va), float(l0), float(x_min)
+        return out((lo + hi) / 2)
 
 
 @pytest.mark.parametrize('strain', [1e-9, 1e-5, 2.5e-3, 0.05])
@@ -186,3 +195,129 @@ def test_bad_arguments():
         elastic.solve(1300.0, 20.85, 1623.5e3, 121.06, ea=1e9, tol=-1.0)
     res, corr = elastic.solve(1300.0, 20.85, 1623.5e3, 121.06)
     assert res.model == elastic.INEXTENSIBLE and corr == 0.0
+
+
+def test_elastic_load_margin_matches_50_digit_solution_also_below_w_h():
+    """At T + load_margin the 50-digit elastic x_min is x, also where that tension is below w h
+    (a stretched chain reaches the depth with less than its weight; the rigid one cannot)."""
+    w, h, t, x = scenes(60, seed=5)
+    ea = t / 10.0 ** np.random.default_rng(6).uniform(-6, math.log10(5e-2), 60)
+    res, _ = elastic.solve(w, h, t, x, ea=ea)
+    elastic_rows = np.flatnonzero(res.model == elastic.ELASTIC)
+    t_crit = t + res.load_margin
+    assert np.any(t_crit[elastic_rows] < w[elastic_rows] * h[elastic_rows])
+    for i in elastic_rows:
+        x_min = _mp_elastic(w[i], h[i], t_crit[i], None, ea[i])[3]
+        x_min2 = _mp_elastic(w[i], h[i], t_crit[i] * (1 + 1e-9), None, ea[i])[3]
+        kappa = abs((x_min2 - x_min) / x_min / 1e-9)  # d log x_min / d log T (to ~1e-6)
+        cancel = (t[i] + abs(res.load_margin[i])) / t_crit[i]  # T + margin rounds relative to T
+        assert abs(x_min - x[i]) <= (1e-13 + 4 * np.finfo(float).eps * kappa * cancel) * x[i]
+
+
+def _random_elastic_scenes(n, seed):
+    """Lifted and grounded scenes (x from 1e-3 to 3 rigid x_min), strain T/EA from 1e-6 to 5e-2."""
+    w, h, t, _ = scenes(n, seed=seed)
+    rng = np.random.default_rng(seed + 100)
+    b = cat.two_prod_diff(t, w, h) / w
+    x = cat.grounded(b, h).min_anchor_distance * 10.0 ** rng.uniform(-3, 0.5, n)
+    ea = t / 10.0 ** rng.uniform(-6, math.log10(5e-2), n)
+    return w, h, t, x, ea
+
+
+# relative scale of each key's rounding: itself, or what it is a margin / component of
+_SCALE = {'uplift_force': 't', 'load_margin': 't', 'anchor_margin': 'x', 'tide_margin': 'h'}
+
+
+def _dock_scenes_near_lift_off():
+    """The dock chain with x between the rigid and the elastic lift-off distance (same end
+    tensions), where the uplift solve cannot start from the rigid chain, and just short of both."""
+    w, h, t = 1300.0, 20.85, 1623.5e3
+    ta, d = elastic.anchor_end_tension(w, h, t, EA_DOCK)
+    x_rigid = float(ta / w * np.arcsinh(np.sqrt(d * (t + ta)) / ta))
+    x_el = float(elastic.elastic_state(w, h, t, None, EA_DOCK)['min_anchor_distance'])
+    x = np.array([x_rigid + f * (x_el - x_rigid) for f in (1e-3, 0.5, 1 - 1e-6)] + [x_rigid * (1 - 1e-6)])
+    return np.full(4, w), np.full(4, h), np.full(4, t), x, np.full(4, EA_DOCK)
+
+
+@pytest.mark.parametrize('with_x', [True, False])
+def test_scalar_path_matches_the_arrays(with_x):
+    """Plain-float scalar calls give the vectorized results to rounding, model and correction included."""
+    random = _random_elastic_scenes(300, seed=21 if with_x else 22)
+    w, h, t, x, ea = (np.concatenate(v) for v in zip(random, _dock_scenes_near_lift_off()))
+    n = w.size
+    mbl = 3.0 * t
+    res, corr = elastic.solve(w, h, t, x if with_x else None, ea=ea, mbl=mbl)
+    assert {elastic.ELASTIC, elastic.INEXTENSIBLE} <= set(res.model)
+    if with_x:
+        lifted = res.uplift_force > 0
+        assert 0.2 < lifted.mean() < 0.9 and np.any(lifted & (res.model == elastic.ELASTIC))
+    for i in range(n):
+        one, c = elastic.solve(float(w[i]), float(h[i]), float(t[i]), float(x[i]) if with_x else None,
+                               ea=float(ea[i]), mbl=float(mbl[i]))
+        assert type(c) is float and type(one.model) is str and one.keys == res.keys
+        assert abs(c - corr[i]) <= 1e-13  # a relative change: its rounding is absolute
+        if abs(corr[i] - elastic.ELASTIC_TOL) > 1e-12:
+            assert one.model == res.model[i]
+        assert one.status == res.status[i] == 0
+        scale = {'t': t[i], 'x': x[i], 'h': h[i]}
+        for key in one.keys:
+            got, ref = getattr(one, key), getattr(res, key)[i]
+            assert type(got) is float, key
+            tol = 1e-13 * max(abs(ref), scale.get(_SCALE.get(key), 0.0), 90.0 if key.endswith('_deg') else 0.0)
+            assert abs(got - ref) <= tol, (i, key, got, ref)
+
+
+def test_scalar_path_public_behaviour(monkeypatch):
+    """Errors, invalid elements, int inputs and the array fallback are those of the array path."""
+    args = (1300.0, 20.85, 1623.5e3, 121.06)
+    for bad in (-1.0, 0.0, 0, math.nan, np.float64(-2.0)):
+        with pytest.raises(ValueError, match='ea'):
+            elastic.solve(*args, ea=bad)
+    with pytest.raises(ValueError, match='tol'):
+        elastic.solve(*args, ea=EA_DOCK, tol=-1.0)
+    res, corr = elastic.solve(1300.0, 20.85, 10.0, 121.06, ea=EA_DOCK)  # T <= w h
+    ref = solve(1300.0, 20.85, tension=10.0, anchor_distance=121.06)
+    assert res.status == ref.status == 4 and corr == 0.0 and res.model == elastic.INEXTENSIBLE
+    assert all(math.isnan(getattr(res, k)) for k in res.keys)
+    res_int, corr_int = elastic.solve(1300, 21, 1623500, 121, ea=int(EA_DOCK))
+    res_f, corr_f = elastic.solve(1300.0, 21.0, 1623500.0, 121.0, ea=float(int(EA_DOCK)))
+    assert res_int == res_f and corr_int == corr_f
+    scalar, c1 = elastic.solve(*args, ea=EA_DOCK, mbl=4.8e6)
+    arrays, c2 = elastic.solve(*(np.array([v]) for v in args), ea=np.array([EA_DOCK]), mbl=np.array([4.8e6]))
+    assert scalar.to_dict() == pytest.approx({k: v[0] for k, v in arrays.to_dict().items()}, rel=1e-13)
+    assert c1 == pytest.approx(c2[0], rel=1e-12)
+
+    def overflow(*_):
+        raise OverflowError('math range error')
+
+    monkeypatch.setattr(elastic, '_solve_scalar', overflow)  # plain math out of range: numpy answers
+    fallback, c3 = elastic.solve(*args, ea=EA_DOCK, mbl=4.8e6)
+    assert type(fallback.uplift_force) is float and type(fallback.model) is str and type(c3) is float
+    assert fallback.to_dict() == pytest.approx(scalar.to_dict(), rel=1e-13) and c3 == pytest.approx(c1, rel=1e-12)
+
+
+def test_stretched_length_matches_50_digit_solution_also_for_nearly_straight_chains():
+    """The stretch is a sum of positive terms: full accuracy where V_A ~ V_B (T >> w h)."""
+    w, h, t, x, ea = _random_elastic_scenes(40, seed=23)
+    t = w * h * 10.0 ** np.linspace(0.01, 6, 40)  # up to nearly straight chains
+    x = np.minimum(x, 0.9 * elastic.elastic_state(w, h, t, None, ea)['min_anchor_distance'])  # all lifted
+    st = elastic.elastic_state(w, h, t, x, ea)
+    for i in range(40):
+        *_, length = _mp_elastic(w[i], h[i], t[i], x[i], ea[i], stretched=True)
+        assert st['suspended_length'][i] == pytest.approx(length, rel=1e-14)
+
+
+def test_uplift_solve_closes_its_bracket(monkeypatch):
+    """Residual count of the uplift solve: once regula falsi reaches the root from one side the
+    bracket closes (it used to stall there and bisect ~40 more times; up to 53 residuals)."""
+    w, h, t, x, ea = _random_elastic_scenes(400, seed=24)
+    calls = []
+    span = elastic._span
+    monkeypatch.setattr(elastic, '_span', lambda *a: calls.append(1) or span(*a))
+    counts = []
+    for i in range(400):
+        calls.clear()
+        r, _, va, *_ = elastic._elastic_state_scalar(*(float(v[i]) for v in (w, h, t, x, ea)))
+        if va > 0:
+            counts.append(len(calls))
+    assert len(counts) > 200 and max(counts) <= 30 and np.mean(counts) < 10
