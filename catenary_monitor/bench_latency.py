@@ -141,8 +141,11 @@ def _stats(lat: list[float], sent: int) -> dict[str, Any]:
 
 
 def run_bench(lines: int = 12, rate: float = 20.0, duration: float = 20.0,
-              json_out: bool = False, warmup: float = 2.0) -> int:
-    """Measure echo and monitor one after the other; print the comparison."""
+              json_out: bool = False, warmup: float = 2.0, ea: Optional[float] = None) -> int:
+    """Measure echo and monitor one after the other; print the comparison.
+
+    ``ea`` [N]: axial stiffness on every line (the node's elastic model); None: inextensible.
+    """
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from std_msgs.msg import Float64, Float64MultiArray
@@ -156,6 +159,8 @@ def run_bench(lines: int = 12, rate: float = 20.0, duration: float = 20.0,
     for n in names:
         text += [f'    {n}:', f'      weight: {_W}', '      anchor_distance: 120.0',
                  '      mbl: 4827000.0', f'      tension_topic: /bench/{n}/tension']
+        if ea is not None:
+            text.append(f'      ea: {float(ea)!r}')
     params.write_text('\n'.join(text) + '\n')
     echo = subprocess.Popen([sys.executable, '-m', 'catenary_monitor.bench_latency', 'echo',
                              str(lines)], env=env)
@@ -169,7 +174,8 @@ def run_bench(lines: int = 12, rate: float = 20.0, duration: float = 20.0,
     executor.add_node(node)
     spinner = threading.Thread(target=executor.spin, daemon=True)
     results: dict[str, Any] = {'lines': lines, 'rate_hz': rate, 'duration_s': duration,
-                               'messages_per_s': lines * rate}
+                               'messages_per_s': lines * rate, 'ea': ea,
+                               'model': 'inextensible catenary' if ea is None else 'elastic catenary (rule)'}
     try:
         echo_d = _Driver(node, [f'/bench_echo/{n}/in' for n in names],
                          [f'/bench_echo/{n}/out' for n in names], Float64)
@@ -209,6 +215,8 @@ def run_bench(lines: int = 12, rate: float = 20.0, duration: float = 20.0,
             except subprocess.TimeoutExpired:
                 proc.kill()
         executor.shutdown(timeout_sec=1.0)
+        if spinner.is_alive():
+            spinner.join(5.0)  # a daemon thread left inside rclpy aborts the interpreter at exit
         node.destroy_node()
         rclpy.try_shutdown()
     e, m = results['echo'], results['monitor']
@@ -221,7 +229,8 @@ def run_bench(lines: int = 12, rate: float = 20.0, duration: float = 20.0,
         return 0
     print(f'tension -> result across processes, {lines} lines x {rate:g} Hz '
           f'({lines * rate:g} msg/s, evenly spread), {duration:g} s per node, '
-          f'{os.cpu_count()} CPUs, load {os.getloadavg()[0]:.2f}')
+          f'{os.cpu_count()} CPUs, load {os.getloadavg()[0]:.2f}, '
+          + ('inextensible lines' if ea is None else f'elastic lines, EA = {ea:g} N'))
     print(f'{"node":8s} {"sent":>6s} {"recv":>6s} {"median ms":>10s} {"p99 ms":>8s} '
           f'{"max ms":>8s} {"CPU % of 1 core":>16s}')
     for label in ('echo', 'monitor'):

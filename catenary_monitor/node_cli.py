@@ -35,7 +35,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
 def cmd_bench_latency(args: argparse.Namespace) -> int:
     """Tension-to-result latency across processes against a bare rclpy echo node."""
     from .bench_latency import run_bench
-    return run_bench(lines=args.lines, rate=args.rate, duration=args.duration, json_out=args.json)
+    return run_bench(lines=args.lines, rate=args.rate, duration=args.duration, json_out=args.json,
+                     ea=args.ea)
 
 
 def register(sub: Any) -> None:
@@ -68,5 +69,8 @@ def register(sub: Any) -> None:
     p.add_argument('--rate', type=float, default=20.0, help='rate per line [Hz] (default: 20)')
     p.add_argument('--duration', type=float, default=20.0,
                    help='measuring time per node [s] (default: 20)')
+    p.add_argument('--ea', type=float, default=None, metavar='N',
+                   help='axial stiffness EA [N] on every line: measures the elastic model '
+                        '(e.g. 6.63e8 for the U3 81 mm chain; default: inextensible)')
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench_latency)
