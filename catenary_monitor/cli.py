@@ -16,6 +16,7 @@ from typing import Callable, Optional, Sequence
 
 import numpy as np
 
+from .allocator import keep_freed_memory
 from .solve import STATUS_MESSAGES, SolveResult, Status, solve
 
 #: Display unit, scale from SI and format for each key of the human-readable table.
@@ -180,6 +181,7 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
 def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    keep_freed_memory()  # large numpy temporaries: no page faults on every allocation
     try:
         return int(args.func(args) or 0)
     except UsageError as exc:
