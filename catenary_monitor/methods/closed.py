@@ -125,6 +125,6 @@ METHODS = [
            why='never fails: its subtraction asinh(...) - X/2 near x_min costs no more digits than '
                'the problem itself loses there'),
     Method('default', 2, p2_default, None, 'closed', default=True,
-           why='closed form with the subtraction rewritten as the depth deficit; solve() with '
-               'horizontal= has no plain-float path, so a scalar call pays the array path'),
+           why='closed form with the subtraction rewritten as the depth deficit; solve() adds '
+               'validation and the margins (a second solve) around it'),
 ]
