@@ -99,7 +99,7 @@ class _Line:
         self.tension_stamp = _NAN    # s, node clock at receipt
         self.inputs = AlarmInputs()  # newest solved update, handed again by the periodic check
         self.values: dict[str, float] = dict.fromkeys(_RESULT_FIELDS, _NAN)
-        self.model = ''  # model of the newest solved update ('' before the first one)
+        self.model = 'none'  # model of the newest solved update ('none' before the first one)
         self.state: Any = None
         self.alarm: Any = None
         self.config: Any = None
@@ -310,7 +310,7 @@ class CatenaryMonitor(Node):
         """Hand one solved update to the alarm, publish the outputs, report a level change."""
         now = now_ns * 1e-9
         if result is None:  # no depth yet: nothing to solve
-            values, status, text, line.model = dict.fromkeys(_RESULT_FIELDS, _NAN), -1, '', ''
+            values, status, text, line.model = dict.fromkeys(_RESULT_FIELDS, _NAN), -1, '', 'none'
         elif isinstance(result, SolveResult):  # a scalar solve
             values = {k: getattr(result, k) for k in _RESULT_FIELDS if k != 'depth'}
             status, text, line.model = result.status, result.message, result.model

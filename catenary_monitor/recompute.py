@@ -52,6 +52,9 @@ VALUE_FIELDS = OUTPUT_FIELDS[:-2]
 #: Solver status of an update made before any depth sample arrived (as the node publishes it).
 NO_DEPTH = -1
 
+#: Model names by :attr:`LineResult.model_codes` (as the node's ``/diagnostics`` key ``model``).
+MODEL_NAMES = ('none', elastic.INEXTENSIBLE, elastic.ELASTIC)
+
 #: Update kinds in :attr:`LineResult.kind`.
 KIND_DEPTH, KIND_TENSION = 0, 1
 
@@ -66,6 +69,8 @@ class LineResult:
     ``level`` the alarm level after the update (int8 :class:`~catenary_monitor.alarms.Level`).
     ``tick_ns`` / ``tick_level``: the periodic steps and the level after each.
     ``transitions``: every level change, ticks included.
+    ``elastic``: per update, True where the elastic model answered (None: an inextensible line,
+    no ``ea``); see :func:`model_names`.
     """
 
     name: str
@@ -77,6 +82,16 @@ class LineResult:
     tick_ns: np.ndarray
     tick_level: np.ndarray
     transitions: list[Transition] = field(default_factory=list)
+    elastic: Optional[np.ndarray] = None
+
+    @property
+    def model_codes(self) -> np.ndarray:
+        """Per update: index into :data:`MODEL_NAMES` (0, ``none``, before the first depth)."""
+        code = np.ones(len(self.t_ns), np.int64)
+        if self.elastic is not None:
+            code[self.elastic] = 2
+        code[self.status == NO_DEPTH] = 0
+        return code
 
     @property
     def tension_rows(self) -> np.ndarray:
@@ -156,7 +171,7 @@ def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
     stiffness (``line.ea``) is solved by ``elastic.solve`` as the node does (``a_crit`` unused).
     """
     if line.ea is not None:
-        return _solve_updates_elastic(line, tension, depth)
+        return _solve_updates_elastic(line, tension, depth)[:2]
     n = len(tension)
     w, x, mbl = line.weight, line.anchor_distance, line.mbl
     out = {k: np.full(n, np.nan) for k in VALUE_FIELDS}
@@ -215,21 +230,26 @@ def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
 
 
 def _solve_updates_elastic(line: LineConfig, tension: np.ndarray, depth: np.ndarray
-                           ) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    """:func:`solve_updates` for a line with ``ea``: ``elastic.solve`` (the rule picks the model)."""
+                           ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+    """:func:`solve_updates` for a line with ``ea``: ``elastic.solve`` (the rule picks the model).
+
+    Also returns, per update, whether the elastic model answered.
+    """
     n = len(tension)
     out = {k: np.full(n, np.nan) for k in VALUE_FIELDS}
     out['depth'], out['top_tension'] = depth.copy(), tension.copy()
     status = np.full(n, NO_DEPTH, dtype=np.int64)
+    used = np.zeros(n, dtype=bool)
     has = ~np.isnan(depth)
     if has.any():
         res, _ = elastic.solve(line.weight, depth[has], tension[has], anchor_distance=line.anchor_distance,
                                ea=line.ea, mbl=line.mbl)
         status[has] = res.status
+        used[has] = np.asarray(res.model) == elastic.ELASTIC
         for k in VALUE_FIELDS:
             if k not in ('depth', 'top_tension'):
                 out[k][has] = getattr(res, k)
-    return out, status
+    return out, status, used
 
 
 def critical_parameters(line: LineConfig, depth: np.ndarray) -> np.ndarray:
@@ -291,7 +311,12 @@ def recompute_line(line: LineConfig, alarm: LineAlarm, tension: tuple[np.ndarray
     else:
         h = np.full(len(ev_t), np.nan)
         ac = h
-    values, status = solve_updates(line, tv[ev_i] if n_t else np.zeros(0), h, ac)
+    t_ev = tv[ev_i] if n_t else np.zeros(0)
+    used: Optional[np.ndarray] = None
+    if line.ea is not None:
+        values, status, used = _solve_updates_elastic(line, t_ev, h)
+    else:
+        values, status = solve_updates(line, t_ev, h, ac)
     if len(dv) == 0:
         values['depth'] = h
 
@@ -321,7 +346,7 @@ def recompute_line(line: LineConfig, alarm: LineAlarm, tension: tuple[np.ndarray
     pos[order] = np.arange(len(order))
     return LineResult(line.name, ev_t, ev_kind, values, status,
                       result.levels[pos[:n_e]], tick_ns, result.levels[pos[n_e:]],
-                      result.transitions)
+                      result.transitions, used)
 
 
 def recompute(config: MonitorConfig, tensions: Mapping[str, tuple[np.ndarray, np.ndarray]],

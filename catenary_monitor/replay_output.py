@@ -21,7 +21,7 @@ from .cdr import (diagnostic_array_parts, float64_payloads, key_values, multiarr
 from .config import MonitorConfig, config_hash, config_to_params
 from .fastcsv import FloatColumn, IntColumn, LabelColumn, write_rows
 from .mcap_fast import ColumnWriter
-from .recompute import NO_DEPTH, OUTPUT_FIELDS, VALUE_FIELDS, LineResult, ReplayResult, worst
+from .recompute import MODEL_NAMES, NO_DEPTH, OUTPUT_FIELDS, VALUE_FIELDS, LineResult, ReplayResult, worst
 from .ros_schemas import (QOS_DEFAULT, QOS_SENSOR_DATA, message_definition,
                           type_description_hash)
 
@@ -35,7 +35,7 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('time', 9), ('line', None), ('top_tension', 3), ('depth', 3),
     ('horizontal_tension', 3), ('min_anchor_distance', 3), ('anchor_margin', 3),
     ('uplift_force', 3), ('tide_margin', 3), ('load_margin', 3), ('safety_factor', 3),
-    ('status', None), ('level', None))
+    ('status', None), ('level', None), ('model', None))
 #: The default columns (the issue's contract), in this order.
 CSV_COLUMNS = ('time', 'line', 'top_tension', 'depth', 'min_anchor_distance', 'anchor_margin',
                'uplift_force', 'level')
@@ -64,6 +64,8 @@ def _tension_rows(result: ReplayResult, keys: Sequence[str] = VALUE_FIELDS
     status = np.concatenate([r.status[rows] for r, rows in parts])[order] \
         if 'status' in keys else np.zeros(0, np.int64)
     level = np.concatenate([r.level[rows] for r, rows in parts])[order]
+    if 'model' in keys:
+        values['model'] = np.concatenate([r.model_codes[rows] for r, rows in parts])[order]
     return t[order], values, line[order], status, level
 
 
@@ -73,7 +75,9 @@ def write_csv(stream: IO[bytes], result: ReplayResult, progress: Progress = None
 
     ``columns`` are names from :data:`CSV_ALL` (written in that order): ``time`` is the
     receive time in s (exact ns), forces in N and lengths in m with 3 decimals, ``status`` the
-    solver code (-1: no depth yet, 0: solved), ``level`` OK/WARN/ERROR/STALE after the update.
+    solver code (-1: no depth yet, 0: solved), ``level`` OK/WARN/ERROR/STALE after the update,
+    ``model`` the model that answered (``inextensible catenary`` or ``elastic catenary``;
+    ``none`` before the first depth).
     """
     unknown = set(columns) - {name for name, _ in CSV_ALL}
     if unknown:
@@ -92,6 +96,8 @@ def write_csv(stream: IO[bytes], result: ReplayResult, progress: Progress = None
             out_columns.append(LabelColumn(name, status - NO_DEPTH, _STATUS_LABELS))
         elif name == 'level':
             out_columns.append(LabelColumn(name, level, _LEVELS))
+        elif name == 'model':
+            out_columns.append(LabelColumn(name, values['model'], list(MODEL_NAMES)))
         else:
             out_columns.append(FloatColumn(name, values[name], decimals or 0))
     n = len(t)

@@ -157,8 +157,10 @@ def test_csv_all_columns_and_stdout_summary(scene, capsys):
     assert code == 0
     with open(tmp / 'all.csv', newline='') as f:
         header = next(csv.reader(f))
-    assert header[:2] == ['time', 'line'] and header[-2:] == ['status', 'level']
+        models = {row[-1] for row in csv.reader(f)}
+    assert header[:2] == ['time', 'line'] and header[-3:] == ['status', 'level', 'model']
     assert {'tide_margin', 'load_margin', 'safety_factor', 'horizontal_tension'} <= set(header)
+    assert 'inextensible catenary' in models and models <= {'none', 'inextensible catenary'}
     text = out.out
     assert 'line_02:' in text and 'worst anchor margin' in text and 'ERROR from' in text
     code, out = run_cli(scene['log'], '--params-file', scene['params'], '--csv',

@@ -10,6 +10,8 @@ the node logged itself:
   alarm level after the update, and values to rounding;
 * every ``/diagnostics`` message: each line's level equals replay's level at that time.
 """
+import csv
+import io
 import os
 import re
 import signal
@@ -26,6 +28,7 @@ from catenary_monitor.config import AlarmConfig, LineConfig, MonitorConfig
 from catenary_monitor.mcap_read import iter_messages
 from catenary_monitor.recompute import VALUE_FIELDS
 from catenary_monitor.replay import run_replay
+from catenary_monitor.replay_output import write_csv
 
 from replay_data import params_yaml
 
@@ -140,8 +143,15 @@ def test_replay_of_a_live_node_log_matches_the_node(tmp_path):
             n_diag += 1
     assert n_diag > 40
     # The elastic line says which model its results used; the others stay inextensible.
-    assert models['line_03'] - {''} == {'elastic catenary'}  # '': before the first depth
-    assert models['line_01'] - {''} == models['line_02'] - {''} == {'inextensible catenary'}
+    assert models['line_03'] - {'none'} == {'elastic catenary'}  # none: before the first depth
+    assert models['line_01'] - {'none'} == models['line_02'] - {'none'} == {'inextensible catenary'}
+    # Replay's CSV says the same, row by row.
+    buf = io.BytesIO()
+    write_csv(buf, result, columns=('time', 'line', 'model'))
+    rows = list(csv.reader(io.StringIO(buf.getvalue().decode())))[1:]
+    csv_models = {name: {m for _, n, m in rows if n == name} for name in models}
+    assert csv_models['line_03'] - {'none'} == {'elastic catenary'}
+    assert csv_models['line_01'] - {'none'} == {'inextensible catenary'}
     assert {int(Level.ERROR), int(Level.STALE)} <= levels_seen
     # The node's own transition log lines: same sequence of levels per line, and the same
     # message for every transition made by an update (a periodic step's message may show an
