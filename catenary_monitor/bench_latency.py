@@ -27,6 +27,8 @@ from typing import Any, Optional
 
 import numpy as np
 
+from .demo import child_env
+
 __all__ = ['run_bench', 'echo_main']
 
 _W = 1300.0
@@ -74,15 +76,6 @@ def _cpu_seconds(pid: int) -> float:
         if int(entry.name) == pid or int(fields[1]) == pid:
             total += (int(fields[11]) + int(fields[12])) / tick
     return total
-
-
-def _env() -> dict[str, str]:
-    env = dict(os.environ)
-    root = str(Path(__file__).resolve().parent.parent)
-    env['PYTHONPATH'] = os.pathsep.join(p for p in (root, env.get('PYTHONPATH')) if p)
-    env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    env.setdefault('ROS_DOMAIN_ID', str(101 + os.getpid() % 100))
-    return env
 
 
 class _Driver:
@@ -150,7 +143,7 @@ def run_bench(lines: int = 12, rate: float = 20.0, duration: float = 20.0,
     from rclpy.executors import SingleThreadedExecutor
     from std_msgs.msg import Float64, Float64MultiArray
 
-    env = _env()
+    env = child_env(101)
     os.environ.update({k: env[k] for k in ('ROS_AUTOMATIC_DISCOVERY_RANGE', 'ROS_DOMAIN_ID')})
     names = [f'l{k:02d}' for k in range(lines)]
     tmp = Path(tempfile.mkdtemp(prefix='catenary_bench_'))

@@ -32,13 +32,15 @@ _ALARM = re.compile(r'\[(\d+\.\d+)\] \[[^\]]+\]: ALARM (\S+): (\S+) -> (\S+): (.
 _LEVEL_COLOURS = {'OK': '', 'WARN': '\033[33m', 'ERROR': '\033[31;1m', 'STALE': '\033[35m'}
 
 
-def _env() -> dict[str, str]:
-    """Child environment: this package importable, discovery on this machine, a private domain."""
+def child_env(domain_base: int = 1) -> dict[str, str]:
+    """Child environment: this package importable, discovery on this machine, a private domain
+    (``domain_base + pid % 100`` unless ROS_DOMAIN_ID is set; the demo and the latency
+    benchmark use different bases so that both can run at once)."""
     env = dict(os.environ)
     root = str(Path(__file__).resolve().parent.parent)
     env['PYTHONPATH'] = os.pathsep.join(p for p in (root, env.get('PYTHONPATH')) if p)
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    env.setdefault('ROS_DOMAIN_ID', str(1 + os.getpid() % 100))
+    env.setdefault('ROS_DOMAIN_ID', str(domain_base + os.getpid() % 100))
     env['PYTHONUNBUFFERED'] = '1'
     env['RCUTILS_LOGGING_BUFFERED_STREAM'] = '0'
     return env
@@ -73,7 +75,7 @@ def run_demo(out_dir: str = 'catenary_monitor_demo', duration: float = 55.0,
     log_dir = out / 'log'
     log_dir.mkdir(parents=True, exist_ok=True)
     before = set(log_dir.glob('*.mcap'))
-    env = _env()
+    env = child_env()
     colour = sys.stdout.isatty()
     print(f'catenary_monitor demo: the floating dock of Hu & Tang (2004), 12 chains, {params}')
     print(f'  a storm builds to the typhoon load on line_11 (R = 1584.6 kN), then eases; '
