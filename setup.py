@@ -40,9 +40,11 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'catenary-monitor = catenary_monitor.cli:main',
-            'monitor = catenary_monitor.node:main',
-            'dock_simulator = catenary_monitor.simulator:main',
+            'catenary-monitor = catenary_monitor.cli.main:main',
+            'monitor = catenary_monitor.ros.node:main',
+            'dock_simulator = catenary_monitor.ros.simulator:main',
         ],
+        # The benchmarks and the methods study add their sub-commands through this group.
+        'catenary_monitor.commands': ['study = catenary_monitor_study.commands:register'],
     },
 )

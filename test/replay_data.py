@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from catenary_monitor.alarms import AlarmInputs, LineAlarm
-from catenary_monitor.config import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.solve import solve
+from catenary_monitor.core.alarms import AlarmInputs, LineAlarm
+from catenary_monitor.core.config import AlarmConfig, LineConfig, MonitorConfig
+from catenary_monitor.core.solve import solve
 
 T0_NS = 1_763_900_000_000_000_000  # 2025-11-23, an epoch-like receive time
 
@@ -35,7 +35,7 @@ def dock_config(n_lines: int = 3, **alarm: Any) -> MonitorConfig:
 
 def params_yaml(config: MonitorConfig, path: Path) -> Path:
     """Write ``config`` as a ROS params file (the ``catenary_monitor`` section)."""
-    from catenary_monitor.config import config_to_params
+    from catenary_monitor.core.config import config_to_params
     flat = config_to_params(config)
     out = ['catenary_monitor:', '  ros__parameters:']
     for key, value in flat.items():
@@ -166,7 +166,7 @@ def write_log(path: Path, config: MonitorConfig,
               chunk_size: int = 16 * 1024) -> Path:
     """Write the inputs as a ROS 2 MCAP log.
 
-    ``writer``: ``'column'`` (catenary_monitor.mcap_fast), ``'logger'`` (the node's McapLogger,
+    ``writer``: ``'column'`` (catenary_monitor.io.mcap_fast), ``'logger'`` (the node's McapLogger,
     small chunks, no fsync) or ``'ros2'`` (mcap_ros2.writer, as rosbag2-compatible tools do).
     """
     topics = [(line.tension_topic, *tensions[line.name]) for line in config.lines
@@ -177,9 +177,9 @@ def write_log(path: Path, config: MonitorConfig,
     order = np.argsort(t, kind='stable')
     t, v, k = t[order], v[order], k[order]
     if writer == 'column':
-        from catenary_monitor.cdr import float64_payloads
-        from catenary_monitor.mcap_fast import ColumnWriter
-        from catenary_monitor.ros_schemas import message_definition
+        from catenary_monitor.io.cdr import float64_payloads
+        from catenary_monitor.io.mcap_fast import ColumnWriter
+        from catenary_monitor.io.ros_schemas import message_definition
         with open(path, 'wb') as f:
             w = ColumnWriter(f, chunk_bytes=chunk_size)
             sid = w.register_schema('std_msgs/msg/Float64', 'ros2msg',
@@ -189,7 +189,8 @@ def write_log(path: Path, config: MonitorConfig,
             w.finish()
     elif writer == 'logger':
         import struct
-        from catenary_monitor.mcap_log import McapLogger
+
+        from catenary_monitor.io.mcap_log import McapLogger
         log = McapLogger(path.parent, prefix=path.stem, chunk_size=chunk_size, fsync=False)
         for name, _, _ in topics:
             log.register(name, 'std_msgs/msg/Float64', 'sensor_data')
@@ -200,7 +201,8 @@ def write_log(path: Path, config: MonitorConfig,
         written.rename(path)
     elif writer == 'ros2':
         from mcap_ros2.writer import Writer
-        from catenary_monitor.ros_schemas import message_definition
+
+        from catenary_monitor.io.ros_schemas import message_definition
         with open(path, 'wb') as f:
             w = Writer(f, chunk_size=chunk_size)
             schema = w.register_msgdef('std_msgs/msg/Float64',

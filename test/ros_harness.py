@@ -47,10 +47,10 @@ def write_params(path: Path, lines: dict[str, dict[str, Any]], key: str = 'caten
 
 def start_monitor(params_file: Path, log_dir: Path, *ros_args: str,
                   out_dir: Optional[Path] = None) -> subprocess.Popen:
-    """Start ``python -m catenary_monitor.node`` with a params file; stdout/stderr to files."""
+    """Start ``python -m catenary_monitor.ros.node`` with a params file; stdout/stderr to files."""
     out_dir = out_dir or log_dir.parent
     out = open(out_dir / f'monitor_{os.getpid()}_{time.monotonic_ns()}.out', 'w+')
-    cmd = [sys.executable, '-m', 'catenary_monitor.node', '--ros-args', '--params-file',
+    cmd = [sys.executable, '-m', 'catenary_monitor.ros.node', '--ros-args', '--params-file',
            str(params_file), '-p', f'log_dir:={log_dir}', *ros_args]
     proc = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, env=child_env())
     proc.output_file = out  # type: ignore[attr-defined]

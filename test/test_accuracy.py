@@ -11,9 +11,9 @@ import math
 import mpmath as mp
 import numpy as np
 import pytest
+import reference as ref
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-import reference as ref
 from catenary_monitor import solve
 
 EPS = np.finfo(float).eps

@@ -11,10 +11,9 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from catenary_monitor.alarms import (
-    AlarmInputs, DIAGNOSTIC_KEYS, Level, LineAlarm, Transition, diagnostic_values, replay_levels,
-)
-from catenary_monitor.config import AlarmConfig, LineConfig
+from catenary_monitor.core.alarms import (DIAGNOSTIC_KEYS, AlarmInputs, Level, LineAlarm,
+                                          Transition, diagnostic_values, replay_levels)
+from catenary_monitor.core.config import AlarmConfig, LineConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 # A line well inside every limit (SI): no uplift, margins above their warning thresholds.
@@ -418,7 +417,7 @@ def test_diagnostic_values_keys_and_exact_strings():
 
 def test_core_modules_import_without_rclpy():
     code = ("import sys; sys.modules['rclpy'] = None; "
-            "import catenary_monitor.config, catenary_monitor.alarms; print('ok')")
+            "import catenary_monitor.core.config, catenary_monitor.core.alarms; print('ok')")
     out = subprocess.run([sys.executable, '-c', code], cwd=ROOT, capture_output=True, text=True,
                          env={'PYTHONPATH': str(ROOT)}, timeout=60)
     assert out.returncode == 0, out.stderr

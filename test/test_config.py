@@ -5,11 +5,10 @@ from pathlib import Path
 
 import pytest
 
-from catenary_monitor.config import (
-    AlarmConfig, ConfigError, LineConfig, MonitorConfig, PARAMETERS, REQUIRED,
-    config_from_params, config_hash, config_to_params, expand_parameters, load_params_file,
-    parameters_markdown,
-)
+from catenary_monitor.core.config import (PARAMETERS, REQUIRED, AlarmConfig, ConfigError,
+                                          LineConfig, MonitorConfig, config_from_params,
+                                          config_hash, config_to_params, expand_parameters,
+                                          load_params_file, parameters_markdown)
 
 DOCK_YAML = Path(__file__).resolve().parents[1] / 'config' / 'floating_dock.yaml'
 

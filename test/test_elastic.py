@@ -5,8 +5,8 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from catenary_monitor import catenary as cat
-from catenary_monitor import elastic, solve
+from catenary_monitor import solve
+from catenary_monitor.core import catenary as cat, elastic
 
 EA_DOCK = 1.01e8 * 0.081 ** 2 * 1e3  # U3 studlink 81 mm, N
 
@@ -119,8 +119,9 @@ def test_elastic_min_distance_closed_form_matches_50_digit_solution():
 
 def test_agrees_with_moorpy_for_the_dock_chain():
     """MoorPy's elastic catenary, given our unstretched length and EA, gives our tensions (to its 1e-6 m)."""
-    from moorpy.Catenary import catenary  # in the test extra: this check always runs
     import os
+
+    from moorpy.Catenary import catenary  # in the test extra: this check always runs
     os.environ.setdefault('PYTHONBREAKPOINT', '0')
     w, h, t, x = 1300.0, 20.85, 1623.5e3, 121.06
     st = {k: float(v) for k, v in elastic.elastic_state(w, h, t, x, EA_DOCK).items()}

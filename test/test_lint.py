@@ -10,6 +10,6 @@ ROOT = Path(__file__).resolve().parents[1]
 
 @pytest.mark.linter
 def test_flake8():
-    p = subprocess.run([sys.executable, '-m', 'flake8', 'catenary_monitor', 'test', 'setup.py'],
-                       cwd=ROOT, capture_output=True, text=True)
+    p = subprocess.run([sys.executable, '-m', 'flake8', 'catenary_monitor',
+                        'catenary_monitor_study', 'test', 'setup.py'], cwd=ROOT, capture_output=True, text=True)
     assert p.returncode == 0, p.stdout + p.stderr

@@ -1,4 +1,4 @@
-"""Behaviour tests of catenary_monitor.mcap_log (writer) against independent readers."""
+"""Behaviour tests of catenary_monitor.io.mcap_log (writer) against independent readers."""
 from __future__ import annotations
 
 import errno
@@ -18,9 +18,9 @@ from mcap.reader import make_reader
 from mcap.stream_reader import StreamReader
 from mcap_ros2.decoder import DecoderFactory
 
-from catenary_monitor import ros_schemas
-from catenary_monitor.mcap_log import McapLogger
-from catenary_monitor.mcap_read import read_float64_topics
+from catenary_monitor.io import ros_schemas
+from catenary_monitor.io.mcap_log import McapLogger
+from catenary_monitor.io.mcap_read import read_float64_topics
 
 REPO = Path(__file__).resolve().parents[1]
 FLOAT64 = 'std_msgs/msg/Float64'
@@ -401,7 +401,7 @@ def test_open_fails_on_dev_full(tmp_path: Path, monkeypatch) -> None:
 # --------------------------------------------------------------------------- crash safety
 _WRITER_SCRIPT = r'''
 import struct, sys, time
-from catenary_monitor.mcap_log import McapLogger
+from catenary_monitor.io.mcap_log import McapLogger
 log = McapLogger(sys.argv[1], flush_period=1.0)
 log.register('/counter', 'std_msgs/msg/Float64')
 i = 0

@@ -1,4 +1,4 @@
-"""Behaviour tests of catenary_monitor.mcap_read against the mcap library as oracle."""
+"""Behaviour tests of catenary_monitor.io.mcap_read against the mcap library as oracle."""
 from __future__ import annotations
 
 import os
@@ -14,21 +14,11 @@ import pytest
 from mcap.reader import NonSeekingReader, make_reader
 from mcap.writer import CompressionType, IndexType, Writer
 
-from catenary_monitor.mcap_log import McapLogger
-from catenary_monitor.mcap_read import (
-    EmptyLogError,
-    McapReadError,
-    ReadReport,
-    TopicTypeError,
-    iter_messages,
-    read_float64_topics,
-)
-from catenary_monitor.ros_schemas import (
-    QOS_DEFAULT,
-    QOS_LATCHED,
-    message_definition,
-    type_description_hash,
-)
+from catenary_monitor.io.mcap_log import McapLogger
+from catenary_monitor.io.mcap_read import (EmptyLogError, McapReadError, ReadReport,
+                                           TopicTypeError, iter_messages, read_float64_topics)
+from catenary_monitor.io.ros_schemas import (QOS_DEFAULT, QOS_LATCHED, message_definition,
+                                             type_description_hash)
 
 FLOAT64 = 'std_msgs/msg/Float64'
 DIAG = 'diagnostic_msgs/msg/DiagnosticArray'
@@ -503,8 +493,8 @@ def test_read_throughput_exceeds_one_million_messages_per_second(
 def test_modules_import_without_rclpy() -> None:
     """The reader, the logger and the schema helpers are usable where rclpy is absent."""
     code = ("import sys; sys.modules['rclpy'] = None\n"
-            "import catenary_monitor.mcap_read, catenary_monitor.mcap_log\n"
-            "import catenary_monitor.ros_schemas\n"
+            "import catenary_monitor.io.mcap_read, catenary_monitor.io.mcap_log\n"
+            "import catenary_monitor.io.ros_schemas\n"
             "assert sys.modules['rclpy'] is None")
     env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
     result = subprocess.run([sys.executable, '-c', code], env=env, capture_output=True,

@@ -18,9 +18,10 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
-from catenary_monitor import catenary as cat
-from catenary_monitor.bench_methods import FAIL, GOOD, H_DOCK, W_DOCK, scene_error
-from catenary_monitor.methods import Method, NoConvergence, all_methods, hou, paper, peers, reference
+from catenary_monitor.core import catenary as cat
+from catenary_monitor_study.bench_methods import FAIL, GOOD, H_DOCK, W_DOCK, scene_error
+from catenary_monitor_study.methods import (Method, NoConvergence, all_methods, hou, paper, peers,
+                                            reference)
 
 METHODS = {(m.problem, m.name): m for m in all_methods(peers=True)}
 
@@ -252,7 +253,7 @@ def test_peers_absent_are_reported(monkeypatch):
 
 def test_bench_smoke(tmp_path):
     """A reduced benchmark run writes its four files and the same-run ratios."""
-    from catenary_monitor.bench_methods import run
+    from catenary_monitor_study.bench_methods import run
     res = run(quick=True, out_dir=str(tmp_path), only='kernel', stream=None)
     for f in ('methods.csv', 'methods.md', 'speed_accuracy.png', 'stability_map.png'):
         assert (tmp_path / f).stat().st_size > 0
@@ -262,6 +263,6 @@ def test_bench_smoke(tmp_path):
 
 
 def test_cli_registers_bench_methods():
-    from catenary_monitor.cli import build_parser
+    from catenary_monitor.cli.main import build_parser
     args = build_parser().parse_args(['bench-methods', '--quick', '--out', ''])
     assert args.quick and args.func.__name__ == 'cmd_bench_methods'

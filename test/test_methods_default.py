@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from catenary_monitor import solve
-from catenary_monitor import catenary as cat
-from catenary_monitor.methods import reference
+from catenary_monitor.core import catenary as cat
+from catenary_monitor_study.methods import reference
 
 N = 100_000
 EPS = np.finfo(float).eps

@@ -15,11 +15,11 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
+from ros_harness import (Client, callback_errors, child_env, output_of, start_monitor, stop,
+                         write_params)
 from scipy.optimize import brentq
 
 from catenary_monitor import solve
-from ros_harness import (Client, callback_errors, child_env, output_of, start_monitor, stop,
-                         write_params)
 
 pytestmark = pytest.mark.ros
 
@@ -347,9 +347,10 @@ def test_sigterm_exits_zero_and_the_log_holds_every_message(client, monitor, tmp
 
 
 def test_sigkill_loses_at_most_the_last_second(client, tmp_path):
-    from catenary_monitor.mcap_read import iter_messages
     from rclpy.serialization import deserialize_message
     from std_msgs.msg import Float64
+
+    from catenary_monitor.io.mcap_read import iter_messages
 
     lines = {'kill': dict(weight=W, anchor_distance=120.0, mbl=MBL)}
     params = write_params(tmp_path / 'params.yaml', lines)  # top key: catenary_monitor
@@ -404,7 +405,7 @@ BAD = {
 def test_bad_parameter_file_exits_nonzero_with_one_line(tmp_path, case):
     lines, needle = BAD[case]
     params = write_params(tmp_path / 'p.yaml', lines)
-    r = subprocess.run([sys.executable, '-m', 'catenary_monitor.node', '--ros-args',
+    r = subprocess.run([sys.executable, '-m', 'catenary_monitor.ros.node', '--ros-args',
                         '--params-file', str(params)], capture_output=True, text=True,
                        env=child_env(), timeout=30)
     assert r.returncode != 0

@@ -1,7 +1,7 @@
 """The README's parameter table is the one generated from config.PARAMETERS (no ROS needed)."""
 from pathlib import Path
 
-from catenary_monitor.config import parameters_markdown
+from catenary_monitor.core.config import parameters_markdown
 
 README = Path(__file__).resolve().parent.parent / 'README.md'
 
@@ -18,7 +18,7 @@ def test_core_and_node_cli_import_without_rclpy():
     import subprocess
     import sys
     code = ("import sys; sys.modules['rclpy'] = None\n"
-            "import catenary_monitor.cli, catenary_monitor.simulator, catenary_monitor.health\n"
-            "import catenary_monitor.config, catenary_monitor.alarms\n")
+            "import catenary_monitor.cli.main, catenary_monitor.ros.simulator, catenary_monitor.core.health\n"
+            "import catenary_monitor.core.config, catenary_monitor.core.alarms\n")
     subprocess.run([sys.executable, '-c', code], check=True,
                    env={'PYTHONPATH': str(README.parent), 'PATH': '/usr/bin:/bin'})

@@ -1,7 +1,7 @@
 """``catenary-monitor replay``: the command's contract, its outputs and damaged input.
 
 Logs are generated here (seeded), never downloaded. The command runs in-process through
-``catenary_monitor.cli.main`` except where its exit status or stderr must be seen from outside.
+``catenary_monitor.cli.main.main`` except where its exit status or stderr must be seen from outside.
 """
 import csv
 import json
@@ -12,12 +12,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from catenary_monitor.alarms import Level
-from catenary_monitor.cli import main
-from catenary_monitor.recompute import recompute
-
 from replay_data import dock_config, generate, params_yaml, simulate_node, write_log
+
+from catenary_monitor.cli.main import main
+from catenary_monitor.core.alarms import Level
+from catenary_monitor.core.batch import recompute
 
 ROOT = Path(__file__).resolve().parents[1]
 CONTRACT = ['time', 'line', 'top_tension', 'depth', 'min_anchor_distance', 'anchor_margin',
@@ -90,9 +89,9 @@ def test_csv_json_mcap_png(scene, capsys):
 def test_results_mcap_is_a_node_shaped_log(scene, capsys):
     """The results log opens with the mcap reader (CRCs checked) and rclpy; replaying it uses
     its /diagnostics as ticks and gives the same alarm levels."""
+    from diagnostic_msgs.msg import DiagnosticArray
     from mcap.reader import make_reader
     from rclpy.serialization import deserialize_message
-    from diagnostic_msgs.msg import DiagnosticArray
     from std_msgs.msg import Float64MultiArray
 
     tmp = scene['tmp']
@@ -141,7 +140,7 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
 
 
 def test_periodic_ticks_drop_update_triggered_diagnostics():
-    from catenary_monitor.replay import periodic_ticks
+    from catenary_monitor.cli.replay import periodic_ticks
     ten = {'a': (np.array([5, 17, 30]), np.zeros(3)), 'b': (np.array([12]), np.zeros(1))}
     dep = (np.array([3, 25]), np.zeros(2))
     diag = np.array([10, 17, 20, 20, 25, 26, 40])  # 17 and 25: logged at an update's time
@@ -238,6 +237,7 @@ def test_truncated_log_uses_what_is_readable(scene, capsys, tmp_path, fraction):
 
 def test_corrupt_chunk_is_skipped_and_reported(scene, capsys, tmp_path):
     import io
+
     from mcap.reader import make_reader
     data = bytearray(_cut_log(scene, tmp_path))
     chunks = make_reader(io.BytesIO(bytes(data))).get_summary().chunk_indexes
@@ -266,7 +266,8 @@ def _cli(*args):
 
 def test_unexpected_topic_type_is_a_clear_error(scene, tmp_path):
     from mcap_ros2.writer import Writer
-    from catenary_monitor.ros_schemas import message_definition
+
+    from catenary_monitor.io.ros_schemas import message_definition
     path = tmp_path / 'wrong.mcap'
     with open(path, 'wb') as f:
         w = Writer(f)
@@ -312,18 +313,18 @@ def test_progress_on_long_logs(scene, tmp_path):
 def test_offline_replay_imports_without_rclpy():
     """Offline replay needs no ROS: its modules import with rclpy unavailable."""
     code = ('import sys; sys.modules["rclpy"] = None\n'
-            'import catenary_monitor.recompute, catenary_monitor.replay, '
-            'catenary_monitor.replay_output, catenary_monitor.fastcsv, catenary_monitor.cdr, '
-            'catenary_monitor.mcap_fast, catenary_monitor.bench_replay\n'
-            'from catenary_monitor.cli import build_parser; build_parser()\n')
+            'import catenary_monitor.core.batch, catenary_monitor.cli.replay, '
+            'catenary_monitor.cli.replay_output, catenary_monitor.io.fastcsv, catenary_monitor.io.cdr, '
+            'catenary_monitor.io.mcap_fast, catenary_monitor_study.bench_replay\n'
+            'from catenary_monitor.cli.main import build_parser; build_parser()\n')
     p = subprocess.run([sys.executable, '-c', code], cwd=ROOT, capture_output=True, text=True,
                        timeout=60)
     assert p.returncode == 0, p.stderr
 
 
 def test_topic_names_resolve_like_the_node(tmp_path):
-    from catenary_monitor.replay import resolve_topic
-    from catenary_monitor.replay_publish import float64_topics
+    from catenary_monitor.cli.replay import resolve_topic
+    from catenary_monitor.ros.playback import float64_topics
     assert resolve_topic('/tide/depth') == '/tide/depth'
     assert resolve_topic('mooring/a/tension') == '/mooring/a/tension'
     assert resolve_topic('~/a/tension') == '/catenary_monitor/a/tension'
@@ -373,9 +374,9 @@ def test_parameters_recorded_in_the_log(scene, capsys, tmp_path):
     code, out = run_cli(results, '--params-file', other, capsys=capsys)
     assert code == 0 and 'the log was recorded with other parameters' in out.out
     # An unfinished file written by the node's logger: the record is near its start.
-    from catenary_monitor.mcap_log import McapLogger
-    from catenary_monitor.config import config_hash, config_to_params
-    from catenary_monitor.replay import log_parameters
+    from catenary_monitor.cli.replay import log_parameters
+    from catenary_monitor.core.config import config_hash, config_to_params
+    from catenary_monitor.io.mcap_log import McapLogger
     log = McapLogger(tmp_path / 'node', fsync=False)
     log.add_metadata('catenary_monitor', {
         'config_hash': config_hash(scene['config']),

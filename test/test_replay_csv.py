@@ -1,4 +1,4 @@
-"""The numpy CSV formatter (catenary_monitor.fastcsv): every field parses back, with the
+"""The numpy CSV formatter (catenary_monitor.io.fastcsv): every field parses back, with the
 stated precision, and the rows are what the csv module reads."""
 import csv
 import io
@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from catenary_monitor.fastcsv import FloatColumn, IntColumn, LabelColumn, write_rows
+from catenary_monitor.io.fastcsv import FloatColumn, IntColumn, LabelColumn, write_rows
 
 EDGES = [0.0, -0.0, 0.0004, -0.0004, 0.0005, -0.0005, 0.0015, 9999.9995, -9999.9995, 0.9999999,
          1e-300, -1e-300, 123456789012.3449, 999999999999.999, 1e12, -1e12, 1e15, 1.5e300,

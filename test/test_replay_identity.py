@@ -7,13 +7,12 @@ solver calls (scalar on a tension sample, one array call on a depth sample).
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
-
-from catenary_monitor.alarms import Level
-from catenary_monitor.recompute import (KIND_TENSION, NO_DEPTH, VALUE_FIELDS, critical_parameters,
-                                        recompute, solve_updates, tick_grid)
-from catenary_monitor.solve import solve
-
 from replay_data import T0_NS, dock_config, generate, simulate_node
+
+from catenary_monitor.core.alarms import Level
+from catenary_monitor.core.batch import (KIND_TENSION, NO_DEPTH, VALUE_FIELDS, critical_parameters,
+                                         recompute, solve_updates, tick_grid)
+from catenary_monitor.core.solve import solve
 
 
 def _compare(config, tensions, depth, ticks):
@@ -123,7 +122,7 @@ def test_rows_per_tension_message():
 def test_latch_fast_path_without_breach():
     """alarms._latch_series returns at once when no update breaches (most conditions of most
     lines in a real log); it equals the scalar latch step, with and without breaches."""
-    from catenary_monitor import alarms
+    from catenary_monitor.core import alarms
     rng = np.random.default_rng(0)
     t = np.cumsum(rng.uniform(0, 1, 400))
     cases = [rng.choice([alarms._HOLD, alarms._CLEAR], 400),
@@ -166,7 +165,8 @@ def test_random_schedules_equal_the_node(data):
 def test_solve_updates_of_an_elastic_line_is_elastic_solve():
     """A line with ``ea``: replay solves it with ``elastic.solve``, as the node does."""
     from dataclasses import replace
-    from catenary_monitor import elastic
+
+    from catenary_monitor.core import elastic
     line = replace(dock_config(2).lines[1], ea=6.6e8)
     rng = np.random.default_rng(4)
     t = rng.uniform(-1e5, 3e6, 3000)

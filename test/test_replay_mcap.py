@@ -5,12 +5,12 @@ import functools
 import numpy as np
 import pytest
 
-from catenary_monitor.cdr import (diagnostic_array, diagnostic_array_parts, float64_payloads,
-                                  key_values, multiarray_payloads, status_header)
-from catenary_monitor.mcap_fast import ColumnWriter
-from catenary_monitor.mcap_read import read_float64_topics
-from catenary_monitor.recompute import OUTPUT_FIELDS
-from catenary_monitor.ros_schemas import message_definition
+from catenary_monitor.core.batch import OUTPUT_FIELDS
+from catenary_monitor.io.cdr import (diagnostic_array, diagnostic_array_parts, float64_payloads,
+                                     key_values, multiarray_payloads, status_header)
+from catenary_monitor.io.mcap_fast import ColumnWriter
+from catenary_monitor.io.mcap_read import read_float64_topics
+from catenary_monitor.io.ros_schemas import message_definition
 
 VALUES = [0.0, -1.5, 372e3, float('nan'), float('inf'), 1e-300]
 

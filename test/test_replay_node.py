@@ -1,6 +1,6 @@
 """Replay of a log written by the real live node gives the node's own alarm levels.
 
-The monitor runs as its own process (``python -m catenary_monitor.node --ros-args --params-file
+The monitor runs as its own process (``python -m catenary_monitor.ros.node --ros-args --params-file
 F``); this process publishes tension and depth with rclpy (a storm that lifts line_02's anchor,
 a tension dropout and a NaN on line_01, tension before the first depth; line_03 is an elastic
 chain, ``ea`` set), then stops the node with SIGTERM and replays its MCAP log. Compared with what
@@ -22,15 +22,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from catenary_monitor.alarms import Level
-from catenary_monitor.config import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.mcap_read import iter_messages
-from catenary_monitor.recompute import VALUE_FIELDS
-from catenary_monitor.replay import run_replay
-from catenary_monitor.replay_output import write_csv
-
 from replay_data import params_yaml
+
+from catenary_monitor.cli.replay import run_replay
+from catenary_monitor.cli.replay_output import write_csv
+from catenary_monitor.core.alarms import Level
+from catenary_monitor.core.batch import VALUE_FIELDS
+from catenary_monitor.core.config import AlarmConfig, LineConfig, MonitorConfig
+from catenary_monitor.io.mcap_read import iter_messages
 
 ROOT = Path(__file__).resolve().parents[1]
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -56,7 +55,7 @@ def test_replay_of_a_live_node_log_matches_the_node(tmp_path):
         p for p in (str(ROOT), os.environ.get('PYTHONPATH')) if p), PYTHONUNBUFFERED='1')
     out = open(tmp_path / 'node.out', 'w+')
     node_proc = subprocess.Popen(
-        [sys.executable, '-m', 'catenary_monitor.node', '--ros-args', '--params-file',
+        [sys.executable, '-m', 'catenary_monitor.ros.node', '--ros-args', '--params-file',
          str(params)], env=env, stdout=out, stderr=subprocess.STDOUT)
     try:
         if not rclpy.ok():
@@ -170,8 +169,8 @@ def test_replay_of_a_live_node_log_matches_the_node(tmp_path):
 
 def test_output_layout_is_the_nodes():
     """Replay writes the node's per-line output layout (recompute.OUTPUT_FIELDS)."""
-    from catenary_monitor import node
-    from catenary_monitor.recompute import OUTPUT_FIELDS
-    from catenary_monitor.replay_output import NODE_NAME, output_topic
+    from catenary_monitor.cli.replay_output import NODE_NAME, output_topic
+    from catenary_monitor.core.batch import OUTPUT_FIELDS
+    from catenary_monitor.ros import node
     assert node.OUTPUT_FIELDS == OUTPUT_FIELDS
     assert node.NODE_NAME == NODE_NAME and output_topic('l1') == f'/{node.NODE_NAME}/l1/outputs'

@@ -15,7 +15,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from replay_data import dock_config, generate, params_yaml, write_log
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -100,7 +100,7 @@ def test_uplift_grows_as_anchor_gets_closer():
 
 def test_core_imports_no_rclpy():
     code = ("import sys; sys.modules['rclpy'] = None\n"
-            "import catenary_monitor, catenary_monitor.catenary, catenary_monitor.solve\n"
+            "import catenary_monitor, catenary_monitor.core.catenary, catenary_monitor.core.solve\n"
             "print(catenary_monitor.solve(1300.0, 20.85, tension=1623.5e3).min_anchor_distance)")
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True)
     assert float(out.stdout) == pytest.approx(225.97, abs=0.01)

@@ -33,11 +33,10 @@ from typing import Callable, Mapping, Optional
 
 import numpy as np
 
-from . import catenary as cat
-from . import elastic
-from .alarms import Level, LineAlarm, Transition, replay_levels
-from .config import LineConfig, MonitorConfig
-from .solve import STATUS_MESSAGES, Status
+from catenary_monitor.core import catenary as cat, elastic
+from catenary_monitor.core.alarms import Level, LineAlarm, Transition, replay_levels
+from catenary_monitor.core.config import LineConfig, MonitorConfig
+from catenary_monitor.core.solve import STATUS_MESSAGES, Status
 
 __all__ = ['OUTPUT_FIELDS', 'NO_DEPTH', 'LineResult', 'ReplayResult', 'solve_updates',
            'tick_grid', 'recompute', 'recompute_line']

@@ -14,16 +14,17 @@ from typing import IO, Any, Callable, Optional, Sequence
 
 import numpy as np
 
-from . import __version__
-from .alarms import DIAGNOSTIC_KEYS, Level
-from .cdr import (diagnostic_array_parts, float64_payloads, key_values, multiarray_payloads,
-                  status_header)
-from .config import MonitorConfig, config_hash, config_to_params
-from .fastcsv import FloatColumn, IntColumn, LabelColumn, write_rows
-from .mcap_fast import ColumnWriter
-from .recompute import MODEL_NAMES, NO_DEPTH, OUTPUT_FIELDS, VALUE_FIELDS, LineResult, ReplayResult, worst
-from .ros_schemas import (QOS_DEFAULT, QOS_SENSOR_DATA, message_definition,
-                          type_description_hash)
+from catenary_monitor import __version__
+from catenary_monitor.core.alarms import DIAGNOSTIC_KEYS, Level
+from catenary_monitor.core.batch import (MODEL_NAMES, NO_DEPTH, OUTPUT_FIELDS, VALUE_FIELDS,
+                                         LineResult, ReplayResult, worst)
+from catenary_monitor.core.config import MonitorConfig, config_hash, config_to_params
+from catenary_monitor.io.cdr import (diagnostic_array_parts, float64_payloads, key_values,
+                                     multiarray_payloads, status_header)
+from catenary_monitor.io.fastcsv import FloatColumn, IntColumn, LabelColumn, write_rows
+from catenary_monitor.io.mcap_fast import ColumnWriter
+from catenary_monitor.io.ros_schemas import (QOS_DEFAULT, QOS_SENSOR_DATA, message_definition,
+                                             type_description_hash)
 
 __all__ = ['CSV_ALL', 'CSV_COLUMNS', 'NODE_NAME', 'write_csv', 'write_mcap', 'write_plots',
            'summary_dict', 'summary_text', 'output_topic']

@@ -39,7 +39,7 @@ from typing import Any, Mapping, NamedTuple, Sequence
 
 import numpy as np
 
-from catenary_monitor.config import AlarmConfig, LineConfig
+from catenary_monitor.core.config import AlarmConfig, LineConfig
 
 __all__ = [
     'Level', 'AlarmInputs', 'Latch', 'AlarmState', 'Transition', 'LineAlarm', 'ReplayResult',

@@ -1,4 +1,4 @@
-"""Sub-commands of the live shell: ``run``, ``demo`` and ``bench-latency``.
+"""Sub-commands of the live shell: ``run`` and ``demo``.
 
 Registered through ``cli._extensions()``. rclpy is imported only when one of them runs, so the core
 commands (solve, paper) keep working without ROS.
@@ -15,32 +15,25 @@ def cmd_run(args: argparse.Namespace) -> int:
     """Start the monitor node on a params file (Ctrl-C or SIGTERM stop it cleanly)."""
     import sys
 
-    from .config import ConfigError, load_params_file
+    from catenary_monitor.core.config import ConfigError, load_params_file
     try:
         load_params_file(args.params_file)  # one-line error for a missing or malformed file
     except ConfigError as err:
         print(f'catenary-monitor: {err}', file=sys.stderr)
         return 2
-    from .node import main
+    from catenary_monitor.ros.node import main
     return main(['catenary-monitor', '--ros-args', '--params-file', args.params_file,
                  *args.ros_args], log_dir=args.log_dir)  # later -p values win
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
     """Simulator + monitor as processes through a storm; leaves an MCAP log and a PNG chart."""
-    from .demo import run_demo
+    from catenary_monitor.cli.demo import run_demo
     return run_demo(args.out_dir, duration=args.duration)
 
 
-def cmd_bench_latency(args: argparse.Namespace) -> int:
-    """Tension-to-result latency across processes against a bare rclpy echo node."""
-    from .bench_latency import run_bench
-    return run_bench(lines=args.lines, rate=args.rate, duration=args.duration, json_out=args.json,
-                     ea=args.ea)
-
-
 def register(sub: Any) -> None:
-    """Add ``run``, ``demo`` and ``bench-latency`` to the ``catenary-monitor`` parser."""
+    """Add ``run`` and ``demo`` to the ``catenary-monitor`` parser."""
     p = sub.add_parser('run', help='run the live monitor node (ROS 2)',
                        description='Run the catenary_monitor node. Extra --ros-args are passed '
                                    'to ROS (e.g. --ros-args -p clear_hold:=10.0).')
@@ -60,17 +53,3 @@ def register(sub: Any) -> None:
     p.add_argument('--duration', type=float, default=55.0, metavar='S',
                    help='episode length in wall seconds (default: %(default)s)')
     p.set_defaults(func=cmd_demo)
-
-    p = sub.add_parser('bench-latency', help='latency and CPU of the node vs a bare echo node',
-                       description='Measure tension message -> published result latency '
-                                   'across processes (median, p99) for the monitor and for a '
-                                   'bare rclpy echo node in the same run, and the CPU use.')
-    p.add_argument('--lines', type=int, default=12, help='number of lines (default: 12)')
-    p.add_argument('--rate', type=float, default=20.0, help='rate per line [Hz] (default: 20)')
-    p.add_argument('--duration', type=float, default=20.0,
-                   help='measuring time per node [s] (default: 20)')
-    p.add_argument('--ea', type=float, default=None, metavar='N',
-                   help='axial stiffness EA [N] on every line: measures the elastic model '
-                        '(e.g. 6.63e8 for the U3 81 mm chain; default: inextensible)')
-    p.add_argument('--json', action='store_true', help='print one JSON object')
-    p.set_defaults(func=cmd_bench_latency)

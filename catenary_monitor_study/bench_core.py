@@ -18,7 +18,7 @@ from typing import Callable
 
 import numpy as np
 
-from .solve import solve
+from catenary_monitor.core.solve import solve
 
 W, H = 1300.0, 20.85  # the paper's dock chain and mean depth
 
@@ -115,7 +115,7 @@ def report(r: dict[str, float]) -> str:
          f"numpy closed form {r['vector_floor_ns']:.1f} ns/elem",
          f"x{r['p4_vector_ratio_to_floor']:.1f} the floor"),
     ]
-    from .cli import format_table
+    from catenary_monitor.cli.main import format_table
     return format_table(rows, ('problem', 'path', 'time', 'baseline (same run)', 'ratio'))
 
 

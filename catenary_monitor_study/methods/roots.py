@@ -20,7 +20,8 @@ import math
 import numpy as np
 from scipy import optimize
 
-from .. import catenary as cat
+from catenary_monitor.core import catenary as cat
+
 from .base import Method, NoConvergence
 
 EPS = np.finfo(float).eps

@@ -10,14 +10,14 @@ Two tiers of errors (scipy / sgp4 style):
 """
 from __future__ import annotations
 
-import math
 import functools
+import math
 from enum import IntEnum
 from typing import Any, NamedTuple, Optional, Union
 
 import numpy as np
 
-from . import catenary as cat
+from catenary_monitor.core import catenary as cat
 
 ArrayLike = Union[float, int, np.ndarray, list]
 

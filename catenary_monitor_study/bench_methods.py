@@ -70,7 +70,7 @@ def grid(quick: bool) -> tuple[np.ndarray, np.ndarray]:
 
 
 def build_scenes(problem: int, quick: bool) -> Scenes:
-    from .catenary import grounded, two_prod_diff
+    from catenary_monitor.core.catenary import grounded, two_prod_diff
     ha, xr = grid(quick)
     rows = []
     for q in ha:
@@ -103,7 +103,7 @@ def build_scenes(problem: int, quick: bool) -> Scenes:
 
 
 def compute_reference(sc: Scenes, with_length: bool, progress: Callable[[str], None]) -> None:
-    from .methods import reference as ref
+    from catenary_monitor_study.methods import reference as ref
     sc.ref = np.empty((sc.n, 2))
     sc.cond = np.ones((sc.n, 2))
     sc.length = np.full(sc.n, np.nan)
@@ -443,8 +443,8 @@ def run(quick: bool = False, out_dir: Optional[str] = 'docs', only: Optional[str
         stream: Any = sys.stderr) -> dict[str, Any]:
     """Run the benchmark; returns rows, outcomes and the same-run ratios."""
     os.environ.setdefault('PYTHONBREAKPOINT', '0')
-    from .methods import all_methods
-    from .methods.peers import peer_versions
+    from catenary_monitor_study.methods import all_methods
+    from catenary_monitor_study.methods.peers import peer_versions
     t_start = time.perf_counter()
     last = [0.0]
 
@@ -548,7 +548,7 @@ def cmd_bench_methods(args: argparse.Namespace) -> int:
     print('\n'.join(res['summary']))
     print()
     hdr = ('problem', 'method', 'scenes', 'scalar µs', 'vec ns/el', 'err median', 'err worst', 'failures')
-    from .cli import format_table
+    from catenary_monitor.cli.main import format_table
     print(format_table([(r['problem'], r['method'], r['scenes'], fmt(r['scalar_us_median']),
                          fmt(r['vector_ns_per_element']), fmt(r['error_median'], 'err'),
                          fmt(r['error_worst'], 'err'), r['failures']) for r in res['rows']], hdr))

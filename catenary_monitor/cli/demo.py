@@ -1,7 +1,7 @@
 """``catenary-monitor demo``: the paper's dock through a storm, simulator and monitor as processes.
 
-Starts the monitor (``python -m catenary_monitor.node``) on config/floating_dock.yaml, then the
-dock simulator (``python -m catenary_monitor.simulator``); prints each alarm transition the
+Starts the monitor (``python -m catenary_monitor.ros.node``) on config/floating_dock.yaml, then the
+dock simulator (``python -m catenary_monitor.ros.simulator``); prints each alarm transition the
 monitor reports as it happens; after the episode stops the monitor with SIGINT (the MCAP file
 gets its summary), reads the log back and draws a PNG chart (matplotlib, Agg backend).
 The demo itself imports no rclpy except to decode the logged outputs for the chart.
@@ -20,7 +20,7 @@ from typing import Optional
 
 import numpy as np
 
-from .simulator import default_config_path
+from catenary_monitor.ros.simulator import default_config_path
 
 __all__ = ['run_demo', 'DEMO_OVERRIDES']
 
@@ -82,7 +82,7 @@ def run_demo(out_dir: str = 'catenary_monitor_demo', duration: float = 55.0,
           f'{duration:g} s of wall time (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]})')
     overrides = [a for k, v in DEMO_OVERRIDES.items() for a in ('-p', f'{k}:={v}')]
     monitor = subprocess.Popen(
-        [sys.executable, '-m', 'catenary_monitor.node', '--ros-args', '--params-file', params,
+        [sys.executable, '-m', 'catenary_monitor.ros.node', '--ros-args', '--params-file', params,
          '-p', f'log_dir:={log_dir}', *overrides],
         stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
     t0 = time.time()
@@ -100,7 +100,7 @@ def run_demo(out_dir: str = 'catenary_monitor_demo', duration: float = 55.0,
             return 1
         print('  monitor running; starting the dock simulator (alarm transitions follow)\n')
         sim = subprocess.Popen(
-            [sys.executable, '-m', 'catenary_monitor.simulator', '--params-file', params,
+            [sys.executable, '-m', 'catenary_monitor.ros.simulator', '--params-file', params,
              '--duration', str(duration)], env=env,
             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
         _, sim_err = sim.communicate(timeout=duration + 60.0)
@@ -144,7 +144,7 @@ def _outputs(files: list[Path], topics: list[str]) -> dict[str, tuple[np.ndarray
     from rclpy.serialization import deserialize_message
     from std_msgs.msg import Float64MultiArray
 
-    from .mcap_read import iter_messages
+    from catenary_monitor.io.mcap_read import iter_messages
     acc: dict[str, tuple[list, list]] = {t: ([], []) for t in topics}
     for m in iter_messages(files, topics):
         acc[m.topic][0].append(m.log_time_ns)
@@ -159,9 +159,9 @@ def plot_episode(files: list[Path], png: Path, params: str) -> Path:
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
 
-    from .config import config_from_params, load_params_file
-    from .mcap_read import read_float64_topics
-    from .node import NODE_NAME, OUTPUT_FIELDS
+    from catenary_monitor.core.config import config_from_params, load_params_file
+    from catenary_monitor.io.mcap_read import read_float64_topics
+    from catenary_monitor.ros.node import NODE_NAME, OUTPUT_FIELDS
 
     config = config_from_params(load_params_file(params))
     names = [line.name for line in config.lines]

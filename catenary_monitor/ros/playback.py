@@ -23,9 +23,9 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
-from .cdr import float64_payloads
-from .config import MonitorConfig
-from .mcap_read import FLOAT64_TYPE, ReadReport, iter_messages
+from catenary_monitor.core.config import MonitorConfig
+from catenary_monitor.io.cdr import float64_payloads
+from catenary_monitor.io.mcap_read import FLOAT64_TYPE, ReadReport, iter_messages
 
 __all__ = ['float64_topics', 'publish']
 
@@ -56,7 +56,7 @@ def float64_topics(paths: Sequence[Path]) -> list[str]:
 def publish(paths: Sequence[Path], config: Optional[MonitorConfig], *, rate: float = 1.0,
             loop: bool = False, wait: float = 0.0, quiet: bool = False) -> int:
     """Play the inputs; returns the exit status (see :mod:`catenary_monitor.replay`)."""
-    from .replay import ReplayError, input_topics, read_inputs
+    from catenary_monitor.cli.replay import ReplayError, input_topics, read_inputs
 
     if config is not None:
         tensions, depth, report = read_inputs(paths, config)
@@ -64,7 +64,7 @@ def publish(paths: Sequence[Path], config: Optional[MonitorConfig], *, rate: flo
         columns = {names[n]: tensions[n] for n in names}
         columns[depth_topic] = depth
     else:
-        from .mcap_read import EmptyLogError, McapReadError, read_float64_topics
+        from catenary_monitor.io.mcap_read import EmptyLogError, McapReadError, read_float64_topics
         topics = float64_topics(paths)
         if not topics:
             raise ReplayError('empty log: no std_msgs/msg/Float64 topic to publish', 3)

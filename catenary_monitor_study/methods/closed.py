@@ -14,8 +14,9 @@ import math
 
 import numpy as np
 
-from .. import catenary as cat
-from ..solve import solve
+from catenary_monitor.core import catenary as cat
+from catenary_monitor.core.solve import solve
+
 from .base import Method
 
 # ---------------------------------------------------------------- problem 3: T -> (R, x_min)

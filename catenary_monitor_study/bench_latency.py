@@ -1,7 +1,7 @@
 """``catenary-monitor bench-latency``: what the monitor adds to a tension message's trip.
 
 Starts two processes: a bare rclpy echo node (Float64 in, the same Float64 out, per line) and
-the monitor (``python -m catenary_monitor.node``, MCAP logging on, in a temporary directory).
+the monitor (``python -m catenary_monitor.ros.node``, MCAP logging on, in a temporary directory).
 The driver (this process) publishes each line's hook tension at ``rate`` Hz, the lines spread
 evenly over the period, with sensor-data QoS, and takes the time from publishing a tension to
 receiving the result that carries it: the echo's Float64, or the monitor's
@@ -27,7 +27,7 @@ from typing import Any, Optional
 
 import numpy as np
 
-from .demo import child_env
+from catenary_monitor.cli.demo import child_env
 
 __all__ = ['run_bench', 'echo_main']
 
@@ -158,7 +158,7 @@ def run_bench(lines: int = 12, rate: float = 20.0, duration: float = 20.0,
     echo = subprocess.Popen([sys.executable, '-m', 'catenary_monitor.bench_latency', 'echo',
                              str(lines)], env=env)
     monitor = subprocess.Popen(
-        [sys.executable, '-m', 'catenary_monitor.node', '--ros-args', '--params-file',
+        [sys.executable, '-m', 'catenary_monitor.ros.node', '--ros-args', '--params-file',
          str(params), '-p', f'log_dir:={tmp / "log"}'], env=env,
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     rclpy.init()

@@ -35,11 +35,12 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
-from .config import (ConfigError, MonitorConfig, config_from_params, config_hash,
-                     load_params_file)
-from .mcap_read import (EmptyLogError, McapReadError, ReadReport, TopicTypeError,
-                        expand_paths, iter_messages, read_float64_topics)
-from .recompute import ReplayResult, recompute
+from catenary_monitor.core.batch import ReplayResult, recompute
+from catenary_monitor.core.config import (ConfigError, MonitorConfig, config_from_params,
+                                          config_hash, load_params_file)
+from catenary_monitor.io.mcap_read import (EmptyLogError, McapReadError, ReadReport,
+                                           TopicTypeError, expand_paths, iter_messages,
+                                           read_float64_topics)
 
 __all__ = ['register', 'cmd_replay', 'resolve_topic', 'input_topics', 'diagnostics_times',
            'periodic_ticks',
@@ -182,6 +183,7 @@ def log_parameters(paths: Sequence[Path]) -> Optional[tuple[str, dict[str, Any]]
     the node's logger writes the record).
     """
     import io
+
     from mcap.reader import NonSeekingReader, make_reader
     found = None
     for path in paths:
@@ -272,7 +274,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
     """Entry point of ``catenary-monitor replay``."""
     try:
         if args.publish:
-            from .replay_publish import publish
+            from catenary_monitor.ros.playback import publish
             paths = _expand(args.logs)
             config = load_config(args.params_file) if args.params_file else None
             return publish(paths, config, rate=args.rate, loop=args.loop,
@@ -284,8 +286,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
 
 
 def _offline(args: argparse.Namespace) -> int:
-    from . import replay_output as out
+    from catenary_monitor.cli import replay_output as out
+    from catenary_monitor.cli.allocator import keep_freed_memory
 
+    keep_freed_memory()  # a batch job on large arrays (see cli.allocator)
     paths = _expand(args.logs)
     recorded = log_parameters(paths)
     if args.params_file:
@@ -348,7 +352,7 @@ def _offline(args: argparse.Namespace) -> int:
 
 
 def _csv_columns(text: str) -> Sequence[str]:
-    from .replay_output import CSV_ALL, CSV_COLUMNS
+    from catenary_monitor.cli.replay_output import CSV_ALL, CSV_COLUMNS
     if not text:
         return CSV_COLUMNS
     if text == 'all':

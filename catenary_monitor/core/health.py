@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from typing import Optional
 
-from .alarms import Level
+from catenary_monitor.core.alarms import Level
 
 __all__ = ['tide_status', 'logger_status']
 

@@ -1,6 +1,6 @@
 """Dock simulator for the demo: the seed paper's floating dock through a compressed storm.
 
-Console script ``dock_simulator`` (or ``python -m catenary_monitor.simulator``). It publishes, as
+Console script ``dock_simulator`` (or ``python -m catenary_monitor.ros.simulator``). It publishes, as
 a sensor driver would, ``std_msgs/Float64`` hook tensions (N) on every line's tension topic and
 the tide depth (m) on the depth topic, with sensor-data QoS, then exits by itself.
 
@@ -29,8 +29,8 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from .config import MonitorConfig, config_from_params, load_params_file
-from .solve import solve
+from catenary_monitor.core.config import MonitorConfig, config_from_params, load_params_file
+from catenary_monitor.core.solve import solve
 
 __all__ = ['Scenario', 'default_config_path', 'main']
 

@@ -16,8 +16,7 @@ from typing import Callable, Optional, Sequence
 
 import numpy as np
 
-from .allocator import keep_freed_memory
-from .solve import STATUS_MESSAGES, SolveResult, Status, solve
+from catenary_monitor.core.solve import STATUS_MESSAGES, SolveResult, Status, solve
 
 #: Display unit, scale from SI and format for each key of the human-readable table.
 DISPLAY = {
@@ -171,17 +170,29 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: Entry-point group through which installed extensions (the benchmarks of
+#: ``catenary_monitor_study``) add sub-commands; the monitor never imports them itself.
+COMMAND_GROUP = 'catenary_monitor.commands'
+
+
 def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
-    """Sub-command registrars of the other modules (imported lazily: no rclpy for `solve`)."""
-    from . import bench_core, bench_methods, bench_replay, node_cli, replay
-    return [bench_core.register, bench_methods.register, node_cli.register, replay.register,
-            bench_replay.register]
+    """Sub-command registrars: the shell's own (imported lazily: no rclpy for ``solve``), then
+    those installed under the :data:`COMMAND_GROUP` entry points."""
+    from importlib.metadata import entry_points
+
+    from catenary_monitor.cli import live, replay
+    found = [live.register, replay.register]
+    for ep in sorted(entry_points(group=COMMAND_GROUP), key=lambda e: e.name):
+        try:
+            found.append(ep.load())
+        except ImportError:  # an extension whose dependencies are missing: leave it out
+            continue
+    return found
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    keep_freed_memory()  # large numpy temporaries: no page faults on every allocation
     try:
         return int(args.func(args) or 0)
     except UsageError as exc:

@@ -52,13 +52,8 @@ from typing import IO, Any, Callable, Mapping
 from mcap.well_known import MessageEncoding, SchemaEncoding
 from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, Writer
 
-from .ros_schemas import (
-    QOS_DEFAULT,
-    QOS_LATCHED,
-    QOS_SENSOR_DATA,
-    message_definition,
-    type_description_hash,
-)
+from catenary_monitor.io.ros_schemas import (QOS_DEFAULT, QOS_LATCHED, QOS_SENSOR_DATA,
+                                             message_definition, type_description_hash)
 
 __all__ = ['McapLogger', 'QOS_PRESETS']
 

@@ -6,7 +6,7 @@ and transitions, ``health`` decides the tide and logger statuses. No physics and
 comparison live here.
 
 Run it as ``monitor --ros-args --params-file FILE`` (``ros2 run catenary_monitor monitor ...``),
-``python -m catenary_monitor.node --ros-args --params-file FILE`` or
+``python -m catenary_monitor.ros.node --ros-args --params-file FILE`` or
 ``catenary-monitor run --params-file FILE [--log-dir DIR]``.
 """
 from __future__ import annotations
@@ -33,14 +33,15 @@ from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.signals import SignalHandlerOptions
 from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 
-from . import __version__
-from .alarms import AlarmInputs, Level, LineAlarm, diagnostic_values
-from .config import (ConfigError, MonitorConfig, ParamSpec, config_from_params,
-                     config_hash, config_to_params, expand_parameters)
-from .health import logger_status, tide_status
-from .mcap_log import McapLogger
-from . import elastic
-from .solve import SolveResult, solve
+from catenary_monitor import __version__
+from catenary_monitor.core import elastic
+from catenary_monitor.core.alarms import AlarmInputs, Level, LineAlarm, diagnostic_values
+from catenary_monitor.core.config import (ConfigError, MonitorConfig, ParamSpec,
+                                          config_from_params, config_hash, config_to_params,
+                                          expand_parameters)
+from catenary_monitor.core.health import logger_status, tide_status
+from catenary_monitor.core.solve import SolveResult, solve
+from catenary_monitor.io.mcap_log import McapLogger
 
 __all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'CatenaryMonitor', 'main']
 

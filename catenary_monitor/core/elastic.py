@@ -41,8 +41,8 @@ from typing import Any, Optional
 
 import numpy as np
 
-from . import catenary as cat
-from .solve import SolveResult, solve as solve_rigid
+from catenary_monitor.core import catenary as cat
+from catenary_monitor.core.solve import SolveResult, solve as solve_rigid
 
 #: Keep the inextensible answer when the elastic correction is at most this (relative).
 ELASTIC_TOL = 1e-6

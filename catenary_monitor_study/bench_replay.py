@@ -35,12 +35,12 @@ from typing import Any
 
 import numpy as np
 
-from .alarms import AlarmInputs, LineAlarm
-from .cdr import float64_payloads
-from .config import LineConfig, MonitorConfig
-from .mcap_fast import ColumnWriter
-from .ros_schemas import QOS_SENSOR_DATA, message_definition
-from .solve import solve
+from catenary_monitor.core.alarms import AlarmInputs, LineAlarm
+from catenary_monitor.core.config import LineConfig, MonitorConfig
+from catenary_monitor.core.solve import solve
+from catenary_monitor.io.cdr import float64_payloads
+from catenary_monitor.io.mcap_fast import ColumnWriter
+from catenary_monitor.io.ros_schemas import QOS_SENSOR_DATA, message_definition
 
 __all__ = ['dock_config', 'generate_log', 'run', 'register']
 
@@ -178,8 +178,8 @@ def run(messages: int = 1_000_000, baseline_messages: int = 50_000,
         repeat: int = 3) -> dict[str, Any]:
     """Generate the log, time replay and the two baselines (``repeat`` interleaved rounds, the
     median of each) and the MCAP output; returns the figures."""
-    from .replay import input_topics, run_replay
-    from .replay_output import write_csv, write_mcap
+    from catenary_monitor.cli.replay import input_topics, run_replay
+    from catenary_monitor.cli.replay_output import write_csv, write_mcap
 
     config = dock_config()
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:

@@ -1,0 +1,1 @@
+"""The ``catenary-monitor`` command line: sub-commands, the demo, replay and its outputs."""
