@@ -132,7 +132,7 @@ def test_agrees_with_moorpy_for_the_dock_chain():
 
 
 def test_rule_picks_the_elastic_model_for_the_dock_chain():
-    res, corr = elastic.solve(1300.0, 20.85, 1623.5e3, 121.06, ea=EA_DOCK)
+    res, corr = elastic.solve_with_correction(1300.0, 20.85, 1623.5e3, 121.06, ea=EA_DOCK)
     assert res.model == elastic.ELASTIC and corr > 1e-3
     rigid = solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06)
     assert rigid.model == elastic.INEXTENSIBLE
@@ -143,19 +143,19 @@ def test_rule_picks_the_elastic_model_for_the_dock_chain():
 
 
 def test_rule_keeps_the_inextensible_model_when_the_correction_is_below_tol():
-    res, corr = elastic.solve(1300.0, 20.85, 1623.5e3, 121.06, ea=1e18)
+    res, corr = elastic.solve_with_correction(1300.0, 20.85, 1623.5e3, 121.06, ea=1e18)
     assert res.model == elastic.INEXTENSIBLE and corr <= elastic.ELASTIC_TOL
     rigid = solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06)
     assert res.uplift_force == rigid.uplift_force and res.load_margin == rigid.load_margin
     # the same scene with a looser tolerance keeps the rigid answer even for the real chain
-    res, corr = elastic.solve(1300.0, 20.85, 1623.5e3, 121.06, ea=EA_DOCK, tol=1e-2)
+    res, corr = elastic.solve_with_correction(1300.0, 20.85, 1623.5e3, 121.06, ea=EA_DOCK, tol=1e-2)
     assert res.model == elastic.INEXTENSIBLE and 1e-3 < corr < 1e-2
 
 
 def test_rule_element_by_element_and_invalid_elements():
     t = np.array([1623.5e3, 1623.5e3, 10.0])  # the last: T <= w h, invalid
     ea = np.array([EA_DOCK, 1e18, EA_DOCK])
-    res, corr = elastic.solve(1300.0, 20.85, t, 121.06, ea=ea)
+    res, corr = elastic.solve_with_correction(1300.0, 20.85, t, 121.06, ea=ea)
     assert list(res.model) == [elastic.ELASTIC, elastic.INEXTENSIBLE, elastic.INEXTENSIBLE]
     assert list(res.status) == [0, 0, 4]
     assert np.isnan(res.uplift_force[2]) and np.isfinite(res.uplift_force[:2]).all()
@@ -165,7 +165,7 @@ def test_rule_element_by_element_and_invalid_elements():
 def test_elastic_margins_are_consistent():
     """load margin: at T + load_margin the elastic x_min equals x; tide margin: depth reach - h."""
     w, h, x = 1300.0, 20.85, 240.0
-    res, _ = elastic.solve(w, h, 1623.5e3, x, ea=EA_DOCK)
+    res, _ = elastic.solve_with_correction(w, h, 1623.5e3, x, ea=EA_DOCK)
     assert res.uplift_force == 0.0 and res.anchor_margin > 0
     t_crit = 1623.5e3 + res.load_margin
     x_min_crit = float(elastic.elastic_state(w, h, t_crit, None, EA_DOCK)['min_anchor_distance'])
@@ -191,10 +191,10 @@ def test_report_lines_and_magnitudes():
 
 def test_bad_arguments():
     with pytest.raises(ValueError, match='ea'):
-        elastic.solve(1300.0, 20.85, 1623.5e3, 121.06, ea=-1.0)
+        elastic.solve_with_correction(1300.0, 20.85, 1623.5e3, 121.06, ea=-1.0)
     with pytest.raises(ValueError, match='tol'):
-        elastic.solve(1300.0, 20.85, 1623.5e3, 121.06, ea=1e9, tol=-1.0)
-    res, corr = elastic.solve(1300.0, 20.85, 1623.5e3, 121.06)
+        elastic.solve_with_correction(1300.0, 20.85, 1623.5e3, 121.06, ea=1e9, tol=-1.0)
+    res, corr = elastic.solve_with_correction(1300.0, 20.85, 1623.5e3, 121.06)
     assert res.model == elastic.INEXTENSIBLE and corr == 0.0
 
 
@@ -203,7 +203,7 @@ def test_elastic_load_margin_matches_50_digit_solution_also_below_w_h():
     (a stretched chain reaches the depth with less than its weight; the rigid one cannot)."""
     w, h, t, x = scenes(60, seed=5)
     ea = t / 10.0 ** np.random.default_rng(6).uniform(-6, math.log10(5e-2), 60)
-    res, _ = elastic.solve(w, h, t, x, ea=ea)
+    res, _ = elastic.solve_with_correction(w, h, t, x, ea=ea)
     elastic_rows = np.flatnonzero(res.model == elastic.ELASTIC)
     t_crit = t + res.load_margin
     assert np.any(t_crit[elastic_rows] < w[elastic_rows] * h[elastic_rows])
@@ -247,14 +247,15 @@ def test_scalar_path_matches_the_arrays(with_x):
     w, h, t, x, ea = (np.concatenate(v) for v in zip(random, _dock_scenes_near_lift_off()))
     n = w.size
     mbl = 3.0 * t
-    res, corr = elastic.solve(w, h, t, x if with_x else None, ea=ea, mbl=mbl)
+    res, corr = elastic.solve_with_correction(w, h, t, x if with_x else None, ea=ea, mbl=mbl)
     assert {elastic.ELASTIC, elastic.INEXTENSIBLE} <= set(res.model)
     if with_x:
         lifted = res.uplift_force > 0
         assert 0.2 < lifted.mean() < 0.9 and np.any(lifted & (res.model == elastic.ELASTIC))
     for i in range(n):
-        one, c = elastic.solve(float(w[i]), float(h[i]), float(t[i]), float(x[i]) if with_x else None,
-                               ea=float(ea[i]), mbl=float(mbl[i]))
+        one, c = elastic.solve_with_correction(
+            float(w[i]), float(h[i]), float(t[i]), float(x[i]) if with_x else None,
+            ea=float(ea[i]), mbl=float(mbl[i]))
         assert type(c) is float and type(one.model) is str and one.keys == res.keys
         assert abs(c - corr[i]) <= 1e-13  # a relative change: its rounding is absolute
         if abs(corr[i] - elastic.ELASTIC_TOL) > 1e-12:
@@ -273,18 +274,19 @@ def test_scalar_path_public_behaviour(monkeypatch):
     args = (1300.0, 20.85, 1623.5e3, 121.06)
     for bad in (-1.0, 0.0, 0, math.nan, np.float64(-2.0)):
         with pytest.raises(ValueError, match='ea'):
-            elastic.solve(*args, ea=bad)
+            elastic.solve_with_correction(*args, ea=bad)
     with pytest.raises(ValueError, match='tol'):
-        elastic.solve(*args, ea=EA_DOCK, tol=-1.0)
-    res, corr = elastic.solve(1300.0, 20.85, 10.0, 121.06, ea=EA_DOCK)  # T <= w h
+        elastic.solve_with_correction(*args, ea=EA_DOCK, tol=-1.0)
+    res, corr = elastic.solve_with_correction(1300.0, 20.85, 10.0, 121.06, ea=EA_DOCK)  # T <= w h
     ref = solve(1300.0, 20.85, tension=10.0, anchor_distance=121.06)
     assert res.status == ref.status == 4 and corr == 0.0 and res.model == elastic.INEXTENSIBLE
     assert all(math.isnan(getattr(res, k)) for k in res.keys)
-    res_int, corr_int = elastic.solve(1300, 21, 1623500, 121, ea=int(EA_DOCK))
-    res_f, corr_f = elastic.solve(1300.0, 21.0, 1623500.0, 121.0, ea=float(int(EA_DOCK)))
+    res_int, corr_int = elastic.solve_with_correction(1300, 21, 1623500, 121, ea=int(EA_DOCK))
+    res_f, corr_f = elastic.solve_with_correction(1300.0, 21.0, 1623500.0, 121.0, ea=float(int(EA_DOCK)))
     assert res_int == res_f and corr_int == corr_f
-    scalar, c1 = elastic.solve(*args, ea=EA_DOCK, mbl=4.8e6)
-    arrays, c2 = elastic.solve(*(np.array([v]) for v in args), ea=np.array([EA_DOCK]), mbl=np.array([4.8e6]))
+    scalar, c1 = elastic.solve_with_correction(*args, ea=EA_DOCK, mbl=4.8e6)
+    arrays, c2 = elastic.solve_with_correction(*(np.array([v]) for v in args),
+                                               ea=np.array([EA_DOCK]), mbl=np.array([4.8e6]))
     assert scalar.to_dict() == pytest.approx({k: v[0] for k, v in arrays.to_dict().items()}, rel=1e-13)
     assert c1 == pytest.approx(c2[0], rel=1e-12)
 
@@ -292,7 +294,7 @@ def test_scalar_path_public_behaviour(monkeypatch):
         raise OverflowError('math range error')
 
     monkeypatch.setattr(elastic, '_solve_scalar', overflow)  # plain math out of range: numpy answers
-    fallback, c3 = elastic.solve(*args, ea=EA_DOCK, mbl=4.8e6)
+    fallback, c3 = elastic.solve_with_correction(*args, ea=EA_DOCK, mbl=4.8e6)
     assert type(fallback.uplift_force) is float and type(fallback.model) is str and type(c3) is float
     assert fallback.to_dict() == pytest.approx(scalar.to_dict(), rel=1e-13) and c3 == pytest.approx(c1, rel=1e-12)
 
@@ -322,3 +324,15 @@ def test_uplift_solve_closes_its_bracket(monkeypatch):
         if va > 0:
             counts.append(len(calls))
     assert len(counts) > 200 and max(counts) <= 30 and np.mean(counts) < 10
+
+
+def test_solve_with_ea_is_the_elastic_model_through_the_one_entry():
+    """``catenary_monitor.solve(..., ea=EA)`` returns the elastic rule's result itself."""
+    direct, _ = elastic.solve_with_correction(1300.0, 20.85, 1623.5e3, 121.06, ea=EA_DOCK, mbl=4.8e6)
+    one = solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06, mbl=4.8e6, ea=EA_DOCK)
+    assert one == direct and one.model == elastic.ELASTIC
+    stiff = solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06, ea=math.inf)
+    assert stiff.model == elastic.INEXTENSIBLE
+    assert stiff == solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06)
+    with pytest.raises(ValueError, match='measured hook tension'):
+        solve(1300.0, 20.85, horizontal=1.5e6, ea=EA_DOCK)

@@ -163,7 +163,7 @@ def test_random_schedules_equal_the_node(data):
 
 
 def test_solve_updates_of_an_elastic_line_is_elastic_solve():
-    """A line with ``ea``: replay solves it with ``elastic.solve``, as the node does."""
+    """A line with ``ea``: replay solves it with ``elastic.solve_with_correction``, as the node does."""
     from dataclasses import replace
 
     from catenary_monitor.core import elastic
@@ -174,7 +174,8 @@ def test_solve_updates_of_an_elastic_line_is_elastic_solve():
     h = rng.uniform(-1.0, 30.0, 3000)
     h[:10] = np.nan  # before the first depth
     got, status = solve_updates(line, t, h, critical_parameters(line, h))
-    ref, _ = elastic.solve(line.weight, h, t, anchor_distance=line.anchor_distance, ea=line.ea, mbl=line.mbl)
+    ref, _ = elastic.solve_with_correction(line.weight, h, t, anchor_distance=line.anchor_distance,
+                                           ea=line.ea, mbl=line.mbl)
     assert status[:10].tolist() == [NO_DEPTH] * 10 and status[10:].tolist() == ref.status[10:].tolist()
     assert (ref.model[10:][status[10:] == 0] == elastic.ELASTIC).all() and (ref.uplift_force[10:] > 0).sum() > 100
     for key in VALUE_FIELDS:

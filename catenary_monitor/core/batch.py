@@ -167,7 +167,7 @@ def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
     -----
     Same checks (first failed rule wins) and the same floating-point operations as
     ``solve(w, h, tension=T, anchor_distance=x, mbl=mbl)`` on arrays.  A line with an axial
-    stiffness (``line.ea``) is solved by ``elastic.solve`` as the node does (``a_crit`` unused).
+    stiffness (``line.ea``) is solved by ``elastic.solve_with_correction`` as the node does (``a_crit`` unused).
     """
     if line.ea is not None:
         return _solve_updates_elastic(line, tension, depth)[:2]
@@ -230,7 +230,7 @@ def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
 
 def _solve_updates_elastic(line: LineConfig, tension: np.ndarray, depth: np.ndarray
                            ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
-    """:func:`solve_updates` for a line with ``ea``: ``elastic.solve`` (the rule picks the model).
+    """:func:`solve_updates` for a line with ``ea``: ``elastic.solve_with_correction`` (the rule picks the model).
 
     Also returns, per update, whether the elastic model answered.
     """
@@ -241,8 +241,9 @@ def _solve_updates_elastic(line: LineConfig, tension: np.ndarray, depth: np.ndar
     used = np.zeros(n, dtype=bool)
     has = ~np.isnan(depth)
     if has.any():
-        res, _ = elastic.solve(line.weight, depth[has], tension[has], anchor_distance=line.anchor_distance,
-                               ea=line.ea, mbl=line.mbl)
+        res, _ = elastic.solve_with_correction(
+            line.weight, depth[has], tension[has], anchor_distance=line.anchor_distance,
+            ea=line.ea, mbl=line.mbl)
         status[has] = res.status
         used[has] = np.asarray(res.model) == elastic.ELASTIC
         for k in VALUE_FIELDS:

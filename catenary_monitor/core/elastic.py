@@ -42,7 +42,8 @@ from typing import Any, Optional
 import numpy as np
 
 from catenary_monitor.core import catenary as cat
-from catenary_monitor.core.solve import SolveResult, solve as solve_rigid
+from catenary_monitor.core.inextensible import solve_inextensible as solve_rigid
+from catenary_monitor.core.result import SolveResult
 
 #: Keep the inextensible answer when the elastic correction is at most this (relative).
 ELASTIC_TOL = 1e-6
@@ -432,13 +433,15 @@ def elastic_correction(rigid: SolveResult, el: dict[str, np.ndarray]) -> np.ndar
     return np.max(parts, axis=0)
 
 
-def solve(weight: Any, depth: Any, tension: Any, anchor_distance: Any = None, ea: Any = None,
-          mbl: Any = None, tol: float = ELASTIC_TOL) -> tuple[SolveResult, Any]:
+def solve_with_correction(weight: Any, depth: Any, tension: Any, anchor_distance: Any = None,
+                          ea: Any = None, mbl: Any = None,
+                          tol: float = ELASTIC_TOL) -> tuple[SolveResult, Any]:
     """Problems 3 and 4 with an optional axial stiffness ``ea`` [N]; the model chosen by the rule.
 
     Returns ``(result, correction)``: a :class:`SolveResult` whose ``model`` names the model used
     (per element for arrays) and the elastic correction that decided it (0 without ``ea``).
-    With ``ea=None`` this is exactly ``catenary_monitor.solve``.
+    With ``ea=None`` this is exactly the inextensible solve. ``catenary_monitor.solve(..., ea=EA)``
+    returns the result alone.
     """
     if tol < 0:
         raise ValueError(f'tol must be >= 0 (got {tol})')

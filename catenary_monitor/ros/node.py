@@ -280,11 +280,8 @@ class CatenaryMonitor(Node):
         """Solve one line at the newest depth (the core's scalar fast path; with ``ea``, the
         elastic model's rule)."""
         lc = line.config
-        if lc.ea is not None:
-            return elastic.solve(lc.weight, self._depth + lc.hook_height, line.tension,
-                                 anchor_distance=lc.anchor_distance, ea=lc.ea, mbl=lc.mbl)[0]
         return solve(lc.weight, self._depth + lc.hook_height, tension=line.tension,
-                     anchor_distance=lc.anchor_distance, mbl=lc.mbl)
+                     anchor_distance=lc.anchor_distance, mbl=lc.mbl, ea=lc.ea)
 
     def _solve_many(self, lines: Sequence[_Line]) -> SolveResult:
         """Solve several lines at the newest depth in one vectorized call (lines without ``ea``
@@ -295,7 +292,7 @@ class CatenaryMonitor(Node):
         kw = dict(anchor_distance=np.array([c.anchor_distance for c in cfgs]), mbl=np.array([c.mbl for c in cfgs]))
         if any(c.ea is not None for c in cfgs):
             ea = np.array([math.inf if c.ea is None else c.ea for c in cfgs])
-            return elastic.solve(*args, ea=ea, **kw)[0]
+            return elastic.solve_with_correction(*args, ea=ea, **kw)[0]
         return solve(args[0], args[1], tension=args[2], **kw)
 
     def _update_many(self, lines: Sequence[_Line], result: SolveResult, now_ns: int) -> None:
