@@ -31,12 +31,12 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 
-from catenary_monitor.core.alarms import AlarmInputs, LineAlarm
 from catenary_monitor.core.config import LineConfig, MonitorConfig
+from catenary_monitor.core.monitor import Depth, MonitorCore, Tension, Tick
 from catenary_monitor.core.solve import solve
 from catenary_monitor.io.cdr import float64_payloads
 from catenary_monitor.io.mcap_fast import ColumnWriter
@@ -98,76 +98,53 @@ def baseline(path: Path, config: MonitorConfig, limit: int, out: io.TextIOBase,
              alarms_too: bool = True) -> int:
     """The obvious loop over the first ``limit`` messages; returns the messages handled.
 
-    ``alarms_too``: the node's whole schedule (depth re-solves, periodic steps, alarm state
-    machine); False: only decode, a scalar solve per tension message at the newest depth and a
-    CSV row (the minimal loop, the conservative baseline).
+    ``alarms_too``: every message decoded and stepped through the monitor core
+    (:class:`~catenary_monitor.core.monitor.MonitorCore`, the node's own decision path: depth
+    re-solves, periodic ticks, alarms) and a CSV row per tension; False: only decode, a scalar
+    solve per tension message at the newest depth and a CSV row (the minimal loop, the
+    conservative baseline).
     """
     from mcap.reader import make_reader
     from mcap_ros2.decoder import DecoderFactory
 
-    topics = {line.tension_topic: line for line in config.lines}
-    alarms = {line.name: LineAlarm.for_line(line, config.alarm) for line in config.lines}
-    state = {name: a.initial() for name, a in alarms.items()}
-    inputs = {name: AlarmInputs() for name in alarms}
-    tension: dict[str, tuple[float, float]] = {}
-    depth, depth_t = math.nan, math.nan
-    period = 1.0 / config.alarm.diagnostic_rate
-    next_tick = None
+    index = {line.tension_topic: k for k, line in enumerate(config.lines)}
     writer = csv.writer(out)
     writer.writerow(['time', 'line', 'top_tension', 'depth', 'min_anchor_distance',
                      'anchor_margin', 'uplift_force', 'level'])
-
-    def step(line: LineConfig, t: float, now: float) -> Any:
-        r = solve(line.weight, depth + line.hook_height, tension=tension[line.name][0],
-                  anchor_distance=line.anchor_distance, mbl=line.mbl)
-        inputs[line.name] = AlarmInputs(r.uplift_force, r.anchor_margin, r.tide_margin,
-                                        r.load_margin, r.safety_factor, r.status, r.message,
-                                        tension[line.name][1], depth_t)
-        state[line.name], _ = alarms[line.name].update(state[line.name], inputs[line.name],
-                                                       now)
-        return r
-
-    n = 0
+    period = int(1e9 / config.alarm.diagnostic_rate)
+    core: Optional[MonitorCore] = None
+    next_tick, depth, n = 0, math.nan, 0
     with open(path, 'rb') as f:
         reader = make_reader(f, decoder_factories=[DecoderFactory()])
         for _, channel, message, decoded in reader.iter_decoded_messages(
-                topics=[config.depth_topic, *topics], log_time_order=True):
-            now = message.log_time * 1e-9
+                topics=[config.depth_topic, *index], log_time_order=True):
+            stamp = message.log_time
             n += 1
             if not alarms_too:
                 if channel.topic == config.depth_topic:
                     depth = decoded.data
-                    continue
-                line = topics[channel.topic]
-                r = solve(line.weight, depth + line.hook_height, tension=decoded.data,
-                          anchor_distance=line.anchor_distance, mbl=line.mbl)
-                writer.writerow([repr(now), line.name, repr(decoded.data), repr(depth),
-                                 repr(r.min_anchor_distance), repr(r.anchor_margin),
-                                 repr(r.uplift_force)])
-                if n >= limit:
-                    break
-                continue
-            if next_tick is None:
-                next_tick = now
-            while next_tick <= now:
-                for name, a in alarms.items():
-                    state[name], _ = a.update(state[name], inputs[name], next_tick)
-                next_tick += period
-            if channel.topic == config.depth_topic:
-                depth, depth_t = decoded.data, now
-                for line in config.lines:
-                    if line.name in tension:
-                        step(line, now, now)
-            else:
-                line = topics[channel.topic]
-                tension[line.name] = (decoded.data, now)
-                if math.isnan(depth_t):
-                    r = None
                 else:
-                    r = step(line, now, now)
-                writer.writerow([repr(now), line.name, repr(decoded.data), repr(depth)] + (
-                    [repr(r.min_anchor_distance), repr(r.anchor_margin), repr(r.uplift_force)]
-                    if r is not None else ['nan'] * 3) + [state[line.name].level.name])
+                    line = config.lines[index[channel.topic]]
+                    r = solve(line.weight, depth + line.hook_height, tension=decoded.data,
+                              anchor_distance=line.anchor_distance, mbl=line.mbl)
+                    writer.writerow([repr(stamp * 1e-9), line.name, repr(decoded.data),
+                                     repr(depth), repr(r.min_anchor_distance),
+                                     repr(r.anchor_margin), repr(r.uplift_force)])
+            else:
+                if core is None:
+                    core, next_tick = MonitorCore(config, stamp), stamp
+                while next_tick < stamp:
+                    core.step(Tick(next_tick))
+                    next_tick += period
+                if channel.topic == config.depth_topic:
+                    core.step(Depth(stamp, decoded.data))
+                else:
+                    k = index[channel.topic]
+                    step = core.step(Tension(stamp, k, decoded.data))
+                    v = step.outputs[0].values
+                    writer.writerow([repr(stamp * 1e-9), config.lines[k].name, repr(v[0]),
+                                     repr(v[1]), repr(v[3]), repr(v[4]), repr(v[5]),
+                                     core.lines[k].state.level.name])
             if n >= limit:
                 break
     return n

@@ -1,9 +1,4 @@
-"""Seeded generated recordings for the replay tests, and a pure simulation of the live node.
-
-``simulate_node`` feeds the same messages through the scalar alarm machine exactly as the
-node's callbacks do (``catenary_monitor/node.py``: ``_on_tension``, ``_on_depth``,
-``_on_period``), with no ROS: the oracle for replay's vectorized schedule.
-"""
+"""Seeded generated recordings for the replay tests (the oracle is the monitor core itself)."""
 from __future__ import annotations
 
 import math
@@ -12,9 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from catenary_monitor.core.alarms import AlarmInputs, LineAlarm
 from catenary_monitor.core.config import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.solve import solve
+from catenary_monitor.core.monitor import Depth, MonitorCore, Tension, Tick
 
 T0_NS = 1_763_900_000_000_000_000  # 2025-11-23, an epoch-like receive time
 
@@ -88,76 +82,24 @@ def generate(config: MonitorConfig, seconds: float = 120.0, rate: float = 10.0,
     return tensions, (td.astype(np.int64), dv)
 
 
-def simulate_node(config: MonitorConfig, tensions: dict[str, tuple[np.ndarray, np.ndarray]],
-                  depth: tuple[np.ndarray, np.ndarray], ticks: np.ndarray) -> dict[str, Any]:
-    """The node's callbacks, in receive-time order (depth, tension, tick at equal times).
+def events_of(config: MonitorConfig, tensions: dict[str, tuple[np.ndarray, np.ndarray]],
+              depth: tuple[np.ndarray, np.ndarray], ticks: np.ndarray) -> list[Any]:
+    """All events in time order (depth, tensions in config order, tick at equal times)."""
+    events = [(int(t), 0, 0, Depth(int(t), float(v))) for t, v in zip(*depth)]
+    for k, line in enumerate(config.lines):
+        ts, vs = tensions.get(line.name, (np.zeros(0, np.int64), np.zeros(0)))
+        events += [(int(t), 1, k, Tension(int(t), k, float(v))) for t, v in zip(ts, vs)]
+    events += [(int(t), 2, 0, Tick(int(t))) for t in ticks]
+    events.sort(key=lambda e: e[:3])
+    return [e[3] for e in events]
 
-    Returns per line: ``updates`` [(t_ns, kind, level, values dict)], ``transitions``
-    [Transition], ``ticks`` [(t_ns, level)].
-    """
-    events = [(int(t), 0, None, float(v)) for t, v in zip(*depth)]
-    for name, (ts, vs) in tensions.items():
-        events += [(int(t), 1, name, float(v)) for t, v in zip(ts, vs)]
-    events += [(int(t), 2, None, 0.0) for t in ticks]
-    events.sort(key=lambda e: (e[0], e[1]))
-    lines = {lc.name: dict(cfg=lc, alarm=LineAlarm.for_line(lc, config.alarm), state=None,
-                           tension=math.nan, tension_stamp=math.nan, inputs=AlarmInputs(),
-                           updates=[], transitions=[], ticks=[]) for lc in config.lines}
-    for ln in lines.values():
-        ln['state'] = ln['alarm'].initial()
-    d_value, d_stamp = math.nan, math.nan
 
-    def update(ln: dict[str, Any], result: Any, status: int, text: str, now_ns: int,
-               kind: int) -> None:
-        # node._update
-        now = now_ns * 1e-9
-        values = dict(result)
-        values['top_tension'] = ln['tension']  # the measured tension, solved or not
-        values['depth'] = d_value + ln['cfg'].hook_height
-        ln['inputs'] = AlarmInputs(
-            uplift_force=values['uplift_force'], anchor_margin=values['anchor_margin'],
-            tide_margin=values['tide_margin'], load_margin=values['load_margin'],
-            safety_factor=values['safety_factor'], status=max(status, 0), status_message=text,
-            tension_stamp=ln['tension_stamp'], depth_stamp=d_stamp)
-        ln['state'], ev = ln['alarm'].update(ln['state'], ln['inputs'], now)
-        ln['transitions'] += ev
-        ln['updates'].append((now_ns, kind, int(ln['state'].level), values, status))
-
-    keys = ('top_tension', 'horizontal_tension', 'min_anchor_distance', 'anchor_margin',
-            'uplift_force', 'tide_margin', 'load_margin', 'safety_factor', 'anchor_angle_deg',
-            'suspended_length')
-    for now_ns, kind, name, value in events:
-        if kind == 1:  # node._on_tension: scalar solve at the newest depth
-            ln = lines[name]
-            ln['tension'] = value
-            ln['tension_stamp'] = now_ns * 1e-9
-            if math.isnan(d_stamp):
-                update(ln, dict.fromkeys(keys, math.nan), -1, '', now_ns, kind)
-            else:
-                lc = ln['cfg']
-                r = solve(lc.weight, d_value + lc.hook_height, tension=ln['tension'],
-                          anchor_distance=lc.anchor_distance, mbl=lc.mbl)
-                update(ln, {k: getattr(r, k) for k in keys}, r.status, r.message, now_ns, kind)
-        elif kind == 0:  # node._on_depth: one array solve of the lines that have a tension
-            d_value, d_stamp = value, now_ns * 1e-9
-            have = [ln for ln in lines.values() if not math.isnan(ln['tension_stamp'])]
-            if have:
-                cfgs = [ln['cfg'] for ln in have]
-                r = solve(np.array([c.weight for c in cfgs]),
-                          d_value + np.array([c.hook_height for c in cfgs]),
-                          tension=np.array([ln['tension'] for ln in have]),
-                          anchor_distance=np.array([c.anchor_distance for c in cfgs]),
-                          mbl=np.array([c.mbl for c in cfgs]))
-                msgs = r.message
-                for i, ln in enumerate(have):
-                    update(ln, {k: float(np.asarray(getattr(r, k))[i]) for k in keys},
-                           int(r.status[i]), str(msgs[i]), now_ns, kind)
-        else:  # node._on_period
-            for ln in lines.values():
-                ln['state'], ev = ln['alarm'].update(ln['state'], ln['inputs'], now_ns * 1e-9)
-                ln['transitions'] += ev
-                ln['ticks'].append((now_ns, int(ln['state'].level)))
-    return lines
+def core_steps(config: MonitorConfig, tensions: dict[str, tuple[np.ndarray, np.ndarray]],
+               depth: tuple[np.ndarray, np.ndarray], ticks: np.ndarray,
+               start_ns: int) -> tuple[MonitorCore, list[Any]]:
+    """The oracle: every event stepped through a MonitorCore, one at a time."""
+    core = MonitorCore(config, start_ns)
+    return core, [core.step(ev) for ev in events_of(config, tensions, depth, ticks)]
 
 
 def write_log(path: Path, config: MonitorConfig,

@@ -26,9 +26,18 @@ def fresh(now, **values):
     return AlarmInputs(**{**CALM, **values}, tension_stamp=now, depth_stamp=now)
 
 
-def run(alarm, updates):
-    """Feed ``[(now, inputs)]`` to the scalar machine; return (final state, levels, events)."""
-    state, levels, events = alarm.initial(), [], []
+def in_service(alarm, now):
+    """A line that has seen calm, fresh data until ``now`` (level OK)."""
+    state, _ = alarm.update(alarm.initial(now - 1.0), fresh(now - 1.0), now - 1.0)
+    assert state.level == Level.OK
+    return state
+
+
+def run(alarm, updates, state=None):
+    """Feed ``[(now, inputs)]`` to the scalar machine from a line in service (or ``state``);
+    return (final state, levels, events)."""
+    state = in_service(alarm, updates[0][0]) if state is None else state
+    levels, events = [], []
     for now, inputs in updates:
         state, new = alarm.update(state, inputs, now)
         levels.append(state.level)
@@ -43,6 +52,8 @@ def alarm_with(allowed_uplift=0.0, **config):
 def as_arrays(updates):
     """The same updates as the column arrays replay_levels takes."""
     names = [f.name for f in fields(AlarmInputs) if f.name != 'status_message']
+    if all(x.depth_stale is None for _, x in updates):
+        names.remove('depth_stale')  # the alarm decides from the depth's age
     times = np.array([now for now, _ in updates])
     cols = {name: np.array([getattr(x, name) for _, x in updates]) for name in names}
     cols['status_message'] = np.array([x.status_message for _, x in updates], dtype=object)
@@ -157,7 +168,7 @@ def test_wave_oscillation_around_a_warning_gives_one_transition():
         updates.append((float(t), fresh(t, anchor_margin=margin)))
     _, _, events = run(alarm_with(), updates)
     assert [(e.old, e.new) for e in events] == [(Level.OK, Level.WARN)]
-    assert replay_levels(*as_arrays(updates), alarm_with()).transitions == events
+    assert assert_replay_matches(alarm_with(), updates) == events
 
 
 # --- impossible input --------------------------------------------------------------------------
@@ -203,13 +214,27 @@ def test_stale_tension_is_detected_and_recovers():
     assert events[1] == Transition(9.0, Level.STALE, Level.OK, 'OK', 2.0)
 
 
-def test_depth_never_received_is_stale_after_its_timeout_from_start():
+def test_a_line_starts_blind_and_says_what_it_misses():
     alarm = alarm_with(depth_timeout=60.0)
+    start = alarm.initial(100.0)
+    assert (start.level, start.message) == (
+        Level.STALE, 'no tension received yet; no depth received yet')
     updates = [(float(t), AlarmInputs(**CALM, tension_stamp=float(t)))
-               for t in range(100, 200, 10)]
-    _, levels, events = run(alarm, updates)
-    assert levels == [Level.OK] * 7 + [Level.STALE] * 3
-    assert events[0].message == 'depth stale: none received in 70.0 s (timeout 60 s)'
+               for t in range(110, 200, 10)]
+    state, levels, events = run(alarm, updates, start)
+    assert levels == [Level.STALE] * 9 and events == []     # never OK without a depth
+    assert state.message == 'no depth received yet'
+    state, levels, events = run(alarm, [(200.0, fresh(200.0))], state)
+    assert events == [Transition(200.0, Level.STALE, Level.OK, 'OK', 100.0)]
+
+
+def test_depth_stale_decision_of_the_monitor_wins_over_the_age():
+    alarm = alarm_with(depth_timeout=60.0)
+    said_stale = AlarmInputs(**CALM, tension_stamp=5.0, depth_stamp=4.0, depth_stale=True)
+    said_fresh = AlarmInputs(**CALM, tension_stamp=95.0, depth_stamp=4.0, depth_stale=False)
+    _, levels, events = run(alarm, [(5.0, said_stale), (95.0, said_fresh)])
+    assert levels == [Level.STALE, Level.OK]
+    assert events[0].message == 'depth stale: last sample 1.0 s ago (timeout 60 s)'
 
 
 def test_error_outranks_stale_and_nothing_clears_on_stale_data():
@@ -288,7 +313,7 @@ def test_time_going_backwards_restarts_pending_timers():
 
 def test_rejects_non_finite_time():
     with pytest.raises(ValueError, match='now must be finite'):
-        alarm_with().update(LineAlarm().initial(), fresh(0.0), math.nan)
+        alarm_with().update(LineAlarm().initial(0.0), fresh(0.0), math.nan)
 
 
 def test_for_line_takes_the_lines_allowance():
@@ -342,11 +367,16 @@ def build_updates(dts, cols):
     return updates
 
 
-def assert_replay_matches(alarm, updates, **kwargs):
-    _, levels, events = run(alarm, updates)
-    result = replay_levels(*as_arrays(updates), alarm, **kwargs)
+def assert_replay_matches(alarm, updates, initial=None, **kwargs):
+    start = in_service(alarm, updates[0][0]) if initial is None else initial
+    state, levels, events = run(alarm, updates, start)
+    result = replay_levels(*as_arrays(updates), alarm, initial=start, **kwargs)
     assert result.levels.tolist() == [int(level) for level in levels]
     assert result.transitions == events
+    assert result.final_state() == state
+    for i in (0, len(updates) // 2, len(updates) - 1):
+        want, _, _ = run(alarm, updates[:i + 1], start)
+        assert result.message_at(i) == want.message
     return events
 
 
@@ -384,7 +414,8 @@ def test_vectorized_wave_and_status_table():
     times, cols = as_arrays([(0.0, fresh(0.0)), (1.0, AlarmInputs(status=4, tension_stamp=1.0,
                                                                   depth_stamp=1.0))])
     del cols['status_message']
-    result = replay_levels(times, cols, alarm_with(), status_messages={4: 'tension is NaN'})
+    result = replay_levels(times, cols, alarm_with(), status_messages={4: 'tension is NaN'},
+                           initial=in_service(alarm_with(), 0.0))
     assert result.transitions[0].message == 'impossible input: tension is NaN'
 
 

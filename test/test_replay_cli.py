@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from replay_data import dock_config, generate, params_yaml, simulate_node, write_log
+from replay_data import core_steps, dock_config, generate, params_yaml, write_log
 
 from catenary_monitor.cli.main import main
 from catenary_monitor.core.alarms import Level
@@ -126,27 +126,18 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
     assert len(diags) >= len(ref.tick_ns)
     names = [s.name for s in diags[-1][1].status]
     assert names == ['catenary_monitor: line_01', 'catenary_monitor: line_02',
-                     'catenary_monitor: line_03']
+                     'catenary_monitor: line_03', 'catenary_monitor: tide',
+                     'catenary_monitor: logger']
     keys = {kv.key for kv in diags[-1][1].status[1].values}
     assert {'top_tension', 'uplift_force', 'anchor_margin', 'safety_factor'} <= keys
-    # Replaying the results log: its /diagnostics become the ticks, levels are unchanged.
+    # Replaying the results log: its recorded ticks are taken, levels are unchanged.
     code, res = run_cli(out, '--params-file', scene['params'], '--json', capsys=capsys)
     again = json.loads(res.out)
-    assert again['ticks']['source'] == 'log /diagnostics'
+    assert again['ticks']['source'] == 'recorded by the node'
     for r in ref.lines:
         assert again['lines'][r.name]['transitions'] == len(r.transitions)
         assert [e['start'] for e in again['lines'][r.name]['episodes']] == \
             [e['start'] for e in r.episodes()]
-
-
-def test_periodic_ticks_drop_update_triggered_diagnostics():
-    from catenary_monitor.cli.replay import periodic_ticks
-    ten = {'a': (np.array([5, 17, 30]), np.zeros(3)), 'b': (np.array([12]), np.zeros(1))}
-    dep = (np.array([3, 25]), np.zeros(2))
-    diag = np.array([10, 17, 20, 20, 25, 26, 40])  # 17 and 25: logged at an update's time
-    assert periodic_ticks(diag, ten, dep).tolist() == [10, 20, 26, 40]
-    empty = (np.zeros(0, np.int64), np.zeros(0))
-    assert periodic_ticks(diag, {}, empty).tolist() == [10, 17, 20, 25, 26, 40]
 
 
 def test_csv_all_columns_and_stdout_summary(scene, capsys):
@@ -169,19 +160,21 @@ def test_csv_all_columns_and_stdout_summary(scene, capsys):
 
 def test_identity_through_the_command(scene, capsys, tmp_path):
     """Written by the node's own logger, replayed by the command: the CSV levels equal the
-    levels of the simulated node after each tension message."""
+    levels the monitor core gives after each tension message, stepped one event at a time."""
     log = write_log(tmp_path / 'node_like.mcap', scene['config'], scene['tensions'],
                     scene['depth'], writer='logger')
     code, _ = run_cli(log, '--params-file', scene['params'], '--csv', tmp_path / 'o.csv',
                       '--csv-columns', 'time,line,status,level', capsys=capsys)
     assert code == 0
     rep = recompute(scene['config'], scene['tensions'], scene['depth'])
-    sim = simulate_node(scene['config'], scene['tensions'], scene['depth'], rep.tick_ns)
+    _, steps = core_steps(scene['config'], scene['tensions'], scene['depth'], rep.tick_ns,
+                          rep.start_ns)
     with open(tmp_path / 'o.csv', newline='') as f:
         rows = list(csv.DictReader(f))
-    for name, ln in sim.items():
-        want = [Level(u[2]).name for u in ln['updates'] if u[1] == 1]
-        assert [r['level'] for r in rows if r['line'] == name] == want
+    for k, line in enumerate(scene['config'].lines):
+        want = [Level(int(o.values[12])).name for s in steps if s.kind == 'tension'
+                for o in s.outputs if o.line == k]
+        assert [r['level'] for r in rows if r['line'] == line.name] == want
 
 
 def test_rosbag2_style_and_rotated_set(scene, capsys, tmp_path):
@@ -323,7 +316,7 @@ def test_offline_replay_imports_without_rclpy():
 
 
 def test_topic_names_resolve_like_the_node(tmp_path):
-    from catenary_monitor.cli.replay import resolve_topic
+    from catenary_monitor.core.config import resolve_topic
     from catenary_monitor.ros.playback import float64_topics
     assert resolve_topic('/tide/depth') == '/tide/depth'
     assert resolve_topic('mooring/a/tension') == '/mooring/a/tension'
@@ -354,7 +347,7 @@ def test_bench_replay_command_runs():
 def test_ticks_option(scene, capsys):
     code, out = run_cli(scene['log'], '--params-file', scene['params'], '--ticks', 'log',
                         capsys=capsys)
-    assert code == 2 and 'no /diagnostics' in out.err
+    assert code == 2 and 'no catenary_monitor events channel' in out.err
     code, out = run_cli(scene['log'], '--params-file', scene['params'], '--ticks', 'grid',
                         '--json', capsys=capsys)
     assert code == 0 and json.loads(out.out)['ticks']['source'] == 'synthetic grid'

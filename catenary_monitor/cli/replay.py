@@ -7,10 +7,11 @@ Offline (no ROS graph)::
 
 reads the tension and depth topics named by the params file from any ROS 2-profile MCAP (the
 node's own logs, rosbag2 recordings; a rotated set or a directory), recomputes every update with
-the live node's schedule and alarm logic (:mod:`catenary_monitor.recompute`), writes the chosen
+the live node's schedule and alarm logic (:mod:`catenary_monitor.core.batch`), writes the chosen
 outputs (:mod:`catenary_monitor.replay_output`) and prints a summary (``--json``: one JSON
-object). Periodic alarm steps are taken at the log times of the node's ``/diagnostics``
-messages when the log has them, otherwise on a grid at ``diagnostic_rate``.
+object). Every step is redone as the node made it: the node records its ticks, its start and
+its logger and parameter changes on ``/catenary_monitor/events``; a log without that channel (a
+rosbag2 recording of the sensors) is stepped on a grid of ticks at ``diagnostic_rate``.
 
 Playback::
 
@@ -27,28 +28,28 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import struct
 import sys
 import time
 from pathlib import Path
-from typing import Any, Optional, Sequence
+from typing import Any, NamedTuple, Optional, Sequence
 
 import numpy as np
 
 from catenary_monitor.core.batch import ReplayResult, recompute
 from catenary_monitor.core.config import (ConfigError, MonitorConfig, config_from_params,
-                                          config_hash, load_params_file)
+                                          config_hash, load_params_file, resolve_topic)
+from catenary_monitor.core.monitor import (EVENTS_TOPIC, NODE_NAME, Reconfigure, Start, Tick,
+                                           parse_event_record)
+from catenary_monitor.io.cdr import string_text
 from catenary_monitor.io.mcap_read import (EmptyLogError, McapReadError, ReadReport,
                                            TopicTypeError, expand_paths, iter_messages,
                                            read_float64_topics)
 
-__all__ = ['register', 'cmd_replay', 'resolve_topic', 'input_topics', 'diagnostics_times',
-           'periodic_ticks',
-           'run_replay', 'EXIT_EMPTY']
+__all__ = ['register', 'cmd_replay', 'input_topics', 'read_events', 'run_replay',
+           'EXIT_EMPTY']
 
 #: Exit status for a log without any message on the requested topics.
 EXIT_EMPTY = 3
-NODE_NAME = 'catenary_monitor'
 
 
 class ReplayError(Exception):
@@ -59,11 +60,11 @@ class ReplayError(Exception):
         self.code = code
 
 
-def resolve_topic(topic: str) -> str:
-    """A topic name as the node resolves it (node ``catenary_monitor`` in namespace ``/``)."""
-    if topic.startswith('~'):
-        return f'/{NODE_NAME}' + ('/' + topic[1:].lstrip('/') if len(topic) > 1 else '')
-    return topic if topic.startswith('/') else '/' + topic
+class LogEvents(NamedTuple):
+    """The node's events-channel records: tick stamps (ns) and the other records."""
+
+    ticks: np.ndarray
+    others: list[Any]
 
 
 def input_topics(config: MonitorConfig) -> tuple[dict[str, str], str]:
@@ -100,69 +101,26 @@ class Progress:
             sys.stderr.write('\n')
 
 
-def _message_index_times(path: Path, topic: str) -> Optional[np.ndarray]:
-    """Log times of ``topic`` from the Message Index records of a finished file (no chunk is
-    decompressed), or None if the file has no usable summary."""
-    from mcap.reader import make_reader
-    try:
-        with open(path, 'rb') as f:
-            summary = make_reader(f).get_summary()
-            if summary is None:
-                return None
-            ids = [c.id for c in summary.channels.values() if c.topic == topic]
-            if not ids:
-                return np.zeros(0, np.int64)
-            cid = ids[0]
-            times = []
-            for ci in summary.chunk_indexes:
-                off = ci.message_index_offsets.get(cid)
-                if off is None:
-                    continue
-                f.seek(off)
-                head = f.read(15)
-                op, length, channel, nbytes = struct.unpack('<BQHI', head)
-                if op != 0x07 or channel != cid or nbytes % 16:
-                    return None
-                entries = np.frombuffer(f.read(nbytes), [('t', '<u8'), ('o', '<u8')])
-                times.append(entries['t'].astype(np.int64))
-            return np.sort(np.concatenate(times)) if times else np.zeros(0, np.int64)
-    except Exception:  # noqa: BLE001 - damaged summary: the caller scans the data instead
+def read_events(paths: Sequence[Path], config: MonitorConfig) -> Optional[LogEvents]:
+    """The node's records on its events channel (ticks, start, logger changes,
+    reconfigurations), or None when the log has no such channel (not a node log)."""
+    report = ReadReport()
+    ticks, others, seen = [], [], False
+    for message in iter_messages(paths, [EVENTS_TOPIC], report):
+        seen = True
+        try:
+            text = string_text(message.data)
+        except ValueError:
+            continue
+        event = parse_event_record(message.log_time_ns, text)
+        if isinstance(event, Tick):
+            ticks.append(event.stamp_ns)
+        elif event is not None:
+            others.append(event)
+    if not seen:
         return None
-
-
-def diagnostics_times(paths: Sequence[Path], report: Optional[ReadReport] = None
-                      ) -> np.ndarray:
-    """Log times (ns, sorted) of the ``/diagnostics`` messages in the files (may be empty).
-
-    Finished files answer from their message indexes; unfinished or damaged ones are scanned.
-    """
-    found = []
-    for path in paths:
-        times = _message_index_times(path, '/diagnostics')
-        if times is None:
-            scan = iter_messages(path, ['/diagnostics'], ReadReport())
-            times = np.array([m.log_time_ns for m in scan], np.int64)
-        found.append(times)
-    return np.sort(np.concatenate(found)) if found else np.zeros(0, np.int64)
-
-
-def periodic_ticks(diag_ns: np.ndarray, tensions: dict[str, tuple[np.ndarray, np.ndarray]],
-                   depth: tuple[np.ndarray, np.ndarray]) -> np.ndarray:
-    """The periodic steps among the log times of ``/diagnostics`` messages.
-
-    The node also publishes ``/diagnostics`` at once when an update changes a level; such a
-    message steps no other line. When it is logged at the update's own time (the receive time
-    of the tension or depth message), it is recognised by that exact time and dropped: a step
-    of every line there would be one the node did not make. Repeated times are kept once.
-    """
-    diag_ns = np.unique(diag_ns)
-    inputs = [depth[0], *(t for t, _ in tensions.values())]
-    inputs = [t for t in inputs if len(t)]
-    if not len(diag_ns) or not inputs:
-        return diag_ns
-    update_ns = np.unique(np.concatenate(inputs))
-    pos = np.minimum(np.searchsorted(update_ns, diag_ns), len(update_ns) - 1)
-    return diag_ns[update_ns[pos] != diag_ns]
+    others.sort(key=lambda e: e.stamp_ns)
+    return LogEvents(np.array(sorted(ticks), np.int64), others)
 
 
 def _expand(paths: Sequence[str]) -> list[Path]:
@@ -176,8 +134,9 @@ def _expand(paths: Sequence[str]) -> list[Path]:
 
 
 def log_parameters(paths: Sequence[Path]) -> Optional[tuple[str, dict[str, Any]]]:
-    """``(config hash, flat parameters)`` of the last ``catenary_monitor`` metadata record of
-    the files (the node writes one at start and on every parameter change), or None.
+    """``(config hash, flat parameters)`` of the first ``catenary_monitor`` metadata record of
+    the files: the parameters the node started with (it writes one at start and one on every
+    parameter change, which replay follows from the events channel), or None.
 
     Finished files answer from their summary; an unfinished file from its first MiB (where
     the node's logger writes the record).
@@ -185,7 +144,6 @@ def log_parameters(paths: Sequence[Path]) -> Optional[tuple[str, dict[str, Any]]
     import io
 
     from mcap.reader import NonSeekingReader, make_reader
-    found = None
     for path in paths:
         records = []
         try:
@@ -210,11 +168,11 @@ def log_parameters(paths: Sequence[Path]) -> Optional[tuple[str, dict[str, Any]]
         for record in records:
             if record.name == NODE_NAME and 'parameters' in record.metadata:
                 try:
-                    found = (record.metadata.get('config_hash', ''),
-                             json.loads(record.metadata['parameters']))
+                    return (record.metadata.get('config_hash', ''),
+                            json.loads(record.metadata['parameters']))
                 except ValueError:
                     continue
-    return found
+    return None
 
 
 def load_config(path: str) -> MonitorConfig:
@@ -243,29 +201,39 @@ def read_inputs(paths: Sequence[Path], config: MonitorConfig
 
 
 def run_replay(paths: Sequence[Path], config: MonitorConfig, *, ticks: str = 'auto',
+               follow_log: bool = True, snapshots: bool = False,
                progress: Optional[Progress] = None) -> tuple[
                    ReplayResult, dict[str, tuple[np.ndarray, np.ndarray]],
                    tuple[np.ndarray, np.ndarray], ReadReport, dict[str, float]]:
-    """Read and recompute; returns the result, the input columns, the report and timings (s)."""
+    """Read and recompute; returns the result, the input columns, the report and timings (s).
+
+    ``ticks``: ``auto`` takes the node's recorded ticks when the log has them, else a grid;
+    ``log`` requires them; ``grid`` ignores them. ``follow_log``: apply the parameter changes
+    the node recorded (only meaningful when replaying with the recorded parameters).
+    """
     prog = progress or Progress(False)
     timing: dict[str, float] = {}
     t0 = time.perf_counter()
     prog('reading', 0.0)
     tensions, depth, report = read_inputs(paths, config)
+    recorded = read_events(paths, config) if ticks != 'grid' else None
     timing['read_s'] = time.perf_counter() - t0
     prog('reading', 1.0)
-    tick_ns = None
-    if ticks in ('auto', 'log'):
-        t1 = time.perf_counter()
-        found = periodic_ticks(diagnostics_times(paths), tensions, depth)
-        timing['ticks_s'] = time.perf_counter() - t1
-        if len(found):
-            tick_ns = found
-        elif ticks == 'log':
-            raise ReplayError('--ticks log: the log has no /diagnostics messages')
+    if ticks == 'log' and recorded is None:
+        raise ReplayError('--ticks log: the log has no catenary_monitor events channel '
+                          f'({EVENTS_TOPIC}); it was not recorded by the node')
+    tick_ns, events, start = None, [], None
+    if recorded is not None:
+        tick_ns = recorded.ticks
+        events = [e for e in recorded.others if follow_log or not isinstance(e, Reconfigure)]
+        starts = [e.stamp_ns for e in events if isinstance(e, Start)]
+        if starts:
+            start, events = starts[0], [e for e in events if e.stamp_ns != starts[0]
+                                        or not isinstance(e, Start)]
     t1 = time.perf_counter()
-    result = recompute(config, tensions, depth, tick_ns,
-                       progress=lambda k, n, name: prog('solving', k / n))
+    prog('solving', 0.0)
+    result = recompute(config, tensions, depth, tick_ns, events, start, snapshots)
+    prog('solving', 1.0)
     timing['solve_s'] = time.perf_counter() - t1
     return result, tensions, depth, report, timing
 
@@ -312,8 +280,11 @@ def _offline(args: argparse.Namespace) -> int:
     size = sum(p.stat().st_size for p in paths)
     progress = Progress(args.progress or (not args.quiet and size > 8_000_000))
     t_start = time.perf_counter()
-    result, tensions, depth, report, timing = run_replay(paths, config, ticks=args.ticks,
-                                                         progress=progress)
+    follow = params['same_as_recorded'] is not False
+    params['follows_recorded_changes'] = follow
+    result, tensions, depth, report, timing = run_replay(
+        paths, config, ticks=args.ticks, follow_log=follow, snapshots=bool(args.out),
+        progress=progress)
     outputs: dict[str, Any] = {}
     if args.csv:
         t1 = time.perf_counter()

@@ -15,12 +15,13 @@ from typing import IO, Any, Callable, Optional, Sequence
 import numpy as np
 
 from catenary_monitor import __version__
-from catenary_monitor.core.alarms import DIAGNOSTIC_KEYS, Level
+from catenary_monitor.core.alarms import Level
 from catenary_monitor.core.batch import (MODEL_NAMES, NO_DEPTH, OUTPUT_FIELDS, VALUE_FIELDS,
                                          LineResult, ReplayResult, worst)
+from catenary_monitor.core.monitor import EVENTS_TOPIC, NODE_NAME, Start, Tick, event_record
 from catenary_monitor.core.config import MonitorConfig, config_hash, config_to_params
 from catenary_monitor.io.cdr import (diagnostic_array_parts, float64_payloads, key_values,
-                                     multiarray_payloads, status_header)
+                                     multiarray_payloads, status_header, string_message)
 from catenary_monitor.io.fastcsv import FloatColumn, IntColumn, LabelColumn, write_rows
 from catenary_monitor.io.mcap_fast import ColumnWriter
 from catenary_monitor.io.ros_schemas import (QOS_DEFAULT, QOS_SENSOR_DATA, message_definition,
@@ -29,7 +30,6 @@ from catenary_monitor.io.ros_schemas import (QOS_DEFAULT, QOS_SENSOR_DATA, messa
 __all__ = ['CSV_ALL', 'CSV_COLUMNS', 'NODE_NAME', 'write_csv', 'write_mcap', 'write_plots',
            'summary_dict', 'summary_text', 'output_topic']
 
-NODE_NAME = 'catenary_monitor'
 #: Every CSV column, in order, with its decimals (None: a label). Units: s, N, m, -.
 #: ``time`` is exact (ns); forces have 3 decimals (1 mN), lengths 3 (1 mm), the safety factor 3.
 CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
@@ -112,56 +112,40 @@ def write_csv(stream: IO[bytes], result: ReplayResult, progress: Progress = None
 
 
 # ---------------------------------------------------------------------------- MCAP
-def _state_at(times_ns: np.ndarray, r: LineResult) -> tuple[np.ndarray, np.ndarray]:
-    """Per time: index of the newest update (-1: none) and the level, for one line."""
-    all_t = np.concatenate((r.t_ns, r.tick_ns))
-    all_level = np.concatenate((r.level, r.tick_level))
-    order = np.argsort(all_t, kind='stable')
-    pos = np.searchsorted(all_t[order], times_ns, 'right') - 1
-    level = np.where(pos >= 0, all_level[order][np.maximum(pos, 0)], Level.OK)
-    upd = np.searchsorted(r.t_ns, times_ns, 'right') - 1
-    return upd, level
+def _event_payloads(result: ReplayResult) -> tuple[list[int], list[bytes]]:
+    """The events channel of the results log (start, ticks, the other records), so that a
+    replay of the results redoes the same steps."""
+    records = [(result.started_ns, Start(result.started_ns))]
+    records += [(int(t), Tick(int(t))) for t in result.tick_ns.tolist()]
+    records += [(e.stamp_ns, e) for e in result.events]
+    records.sort(key=lambda r: r[0])
+    stamps, payloads = [], []
+    for stamp, event in records:
+        record = event_record(event)
+        if record is not None:
+            stamps.append(stamp)
+            payloads.append(string_message(json.dumps(record)))
+    return stamps, payloads
 
 
-def _diagnostics(result: ReplayResult, config: MonitorConfig,
-                 topics: dict[str, str]) -> tuple[list[int], list[bytes]]:
-    """A DiagnosticArray at every tick and at every transition (as the node publishes them).
-
-    Each line's status: level at that time, the message of its latest transition (``OK`` before
-    any), the diagnostic values of its newest update.
-    """
-    times = set(result.tick_ns.tolist())
-    for r in result.lines:
-        if r.transitions:
-            # The exact receive time (ns) of the step that made each transition.
-            steps = np.unique(np.concatenate((r.t_ns, r.tick_ns)))
-            at = np.searchsorted(steps * 1e-9, [tr.time for tr in r.transitions])
-            times.update(steps[np.minimum(at, len(steps) - 1)].tolist())
-    stamps = np.array(sorted(times), np.int64)
-    statuses: list[list[tuple[Any, bytes]]] = [[] for _ in range(len(stamps))]
-    for r in result.lines:
-        upd, level = _state_at(stamps, r)
-        tr_t = np.array([tr.time for tr in r.transitions])
-        tr_i = np.searchsorted(tr_t, stamps * 1e-9, 'right') - 1
-        name, hw = f'{NODE_NAME}: {r.name}', topics[r.name]
-        n_keys = len(DIAGNOSTIC_KEYS)
-        headers: dict[tuple[int, int], Any] = {}
-        pairs: dict[int, bytes] = {-1: key_values([(k, 'nan') for k in DIAGNOSTIC_KEYS])}
-        used = np.unique(upd[upd >= 0])
-        texts = {key: dict(zip(used.tolist(), map(repr, r.values[key][used].tolist())))
-                 for key in DIAGNOSTIC_KEYS}
-        for k, (i, lv, j) in enumerate(zip(upd.tolist(), level.tolist(), tr_i.tolist())):
-            header = headers.get((lv, j))
+def _snapshot_payloads(result: ReplayResult) -> tuple[list[int], list[bytes]]:
+    """Every snapshot of the replay as a DiagnosticArray in CDR (stamps ns, payloads)."""
+    headers: dict[tuple[int, str, str, str, int], Any] = {}
+    stamps, payloads = [], []
+    for snap in result.snapshots:
+        parts = []
+        for st in snap.statuses:
+            key = (int(st.level), st.name, st.message, st.hardware_id, len(st.values))
+            header = headers.get(key)
             if header is None:
-                message = r.transitions[j].message if j >= 0 else 'OK'
-                header = headers[(lv, j)] = functools.lru_cache(maxsize=4)(functools.partial(
-                    status_header, lv, name, message, hw, n_keys))
-            kv = pairs.get(i)
-            if kv is None:
-                kv = pairs[i] = key_values([(key, texts[key][i]) for key in DIAGNOSTIC_KEYS])
-            statuses[k].append((header, kv))
-    payloads = [diagnostic_array_parts(stamp, st) for stamp, st in zip(stamps.tolist(), statuses)]
-    return stamps.tolist(), payloads
+                if len(headers) > 4096:
+                    headers.clear()
+                header = headers[key] = functools.lru_cache(maxsize=4)(
+                    functools.partial(status_header, *key))
+            parts.append((header, key_values(st.values)))
+        stamps.append(snap.stamp_ns)
+        payloads.append(diagnostic_array_parts(snap.stamp_ns, parts))
+    return stamps, payloads
 
 
 def write_mcap(stream: IO[bytes], result: ReplayResult, config: MonitorConfig,
@@ -173,12 +157,13 @@ def write_mcap(stream: IO[bytes], result: ReplayResult, config: MonitorConfig,
     The recorded inputs are copied (``std_msgs/msg/Float64``); each line's updates go to
     :func:`output_topic` as ``std_msgs/msg/Float64MultiArray`` (:data:`OUTPUT_FIELDS`, label =
     the field names joined by commas); ``/diagnostics`` holds a ``DiagnosticArray`` at every
-    tick and transition. Returns the number of messages written.
+    snapshot the monitor made (``result`` recomputed with ``snapshots=True``). Returns the number
+    of messages written.
     """
     w = ColumnWriter(stream)
     schemas = {}
     for type_name in ('std_msgs/msg/Float64', 'std_msgs/msg/Float64MultiArray',
-                      'diagnostic_msgs/msg/DiagnosticArray'):
+                      'diagnostic_msgs/msg/DiagnosticArray', 'std_msgs/msg/String'):
         schemas[type_name] = w.register_schema(type_name, 'ros2msg',
                                                message_definition(type_name).encode())
 
@@ -195,6 +180,7 @@ def write_mcap(stream: IO[bytes], result: ReplayResult, config: MonitorConfig,
     out_ids = [channel(output_topic(r.name), 'std_msgs/msg/Float64MultiArray', QOS_DEFAULT)
                for r in result.lines]
     diag_id = channel('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', QOS_DEFAULT)
+    event_id = channel(EVENTS_TOPIC, 'std_msgs/msg/String', QOS_DEFAULT)
     w.add_metadata(NODE_NAME, {
         'version': __version__, 'config_hash': config_hash(config),
         'parameters': json.dumps(config_to_params(config), sort_keys=True),
@@ -219,8 +205,10 @@ def write_mcap(stream: IO[bytes], result: ReplayResult, config: MonitorConfig,
     columns = [np.concatenate([r.values[key] for r in result.lines]) for key in VALUE_FIELDS]
     columns.append(np.concatenate([r.status for r in result.lines]).astype(np.float64))
     columns.append(np.concatenate([r.level for r in result.lines]).astype(np.float64))
-    stamps, payloads = _diagnostics(result, config, topics)
+    stamps, payloads = _snapshot_payloads(result)
     diag_t = np.asarray(stamps, np.int64)
+    ev_stamps, ev_payloads = _event_payloads(result)
+    ev_t = np.asarray(ev_stamps, np.int64)
     # Written window by window (inputs, outputs, diagnostics of each time window), so that the
     # chunks of the three streams overlap only within a window.
     n_out = len(t_out)
@@ -244,6 +232,8 @@ def write_mcap(stream: IO[bytes], result: ReplayResult, config: MonitorConfig,
         w.write_columns(c_out[sel], t_out[sel], multiarray_payloads(label, data))
         s_d = part(diag_t)
         w.write_messages(diag_id, stamps[s_d], payloads[s_d])
+        s_e = part(ev_t)
+        w.write_messages(event_id, ev_stamps[s_e], ev_payloads[s_e])
         if progress is not None:
             progress('writing MCAP', (k + 1) / (len(bounds) - 1))
     w.finish()
@@ -374,10 +364,10 @@ def _utc(t: Optional[float]) -> str:
 
 
 def _final_level(r: LineResult) -> Level:
-    """Level after the line's last step (update or tick)."""
-    if r.transitions:
-        return r.transitions[-1].new
-    return Level.OK
+    """Level after the line's last step (update or tick); blind (STALE) if it made none."""
+    if len(r.step_level):
+        return Level(int(r.step_level[-1]))
+    return Level.STALE
 
 
 def summary_dict(result: ReplayResult, report: Any, extra: Optional[dict[str, Any]] = None
@@ -405,7 +395,8 @@ def summary_dict(result: ReplayResult, report: Any, extra: Optional[dict[str, An
         'start': result.start_ns * 1e-9, 'end': result.end_ns * 1e-9,
         'duration': (result.end_ns - result.start_ns) * 1e-9,
         'ticks': {'count': int(len(result.tick_ns)),
-                  'source': 'log /diagnostics' if result.ticks_from_log else 'synthetic grid'},
+                  'source': 'recorded by the node' if result.ticks_from_log else
+                  'synthetic grid'},
         'lines': lines,
     }
     if extra:

@@ -17,13 +17,18 @@ Conditions, each with its own latch:
     raised when the value ``< *_warn`` has lasted ``on_delay``; cleared when ``>= *_warn +
     *_deadband`` has held for ``warn_clear_hold``.
 stale (STALE, no latch)
-    tension older than ``tension_timeout`` or depth older than ``depth_timeout``; a line that has
-    never received a sample counts its age from its first update.
+    no tension or no depth received yet (the line is blind: its results cannot be computed), the
+    newest tension older than ``tension_timeout``, or the depth stale (older than
+    ``depth_timeout``; the monitor decides this once for every line, see
+    :attr:`AlarmInputs.depth_stale`).
 
 A latch only moves on evidence: an update whose value is NaN (not applicable) keeps the latch and
 restarts its pending timer. **While any input is stale nothing clears** (clearing on old data would
 hide a lifted anchor); raising still works. Wave-frequency oscillation therefore keeps an alarm
 up, as long as ``clear_hold`` exceeds the wave period: one transition, not one per wave.
+
+A line starts blind: :meth:`LineAlarm.initial` is STALE ("no tension received yet; no depth
+received yet"), never OK before its inputs are known.
 
 Level: ERROR if an ERROR latch is up, else STALE if stale, else WARN if a warning latch is up,
 else OK. **ERROR outranks STALE** (a sensor dropout must not hide a lifted anchor) although
@@ -42,8 +47,8 @@ import numpy as np
 from catenary_monitor.core.config import AlarmConfig, LineConfig
 
 __all__ = [
-    'Level', 'AlarmInputs', 'Latch', 'AlarmState', 'Transition', 'LineAlarm', 'ReplayResult',
-    'CONDITIONS', 'DIAGNOSTIC_KEYS', 'replay_levels', 'diagnostic_values',
+    'Level', 'AlarmInputs', 'Latch', 'AlarmState', 'Transition', 'LineAlarm', 'LevelSeries',
+    'CONDITIONS', 'DIAGNOSTIC_KEYS', 'RANK', 'replay_levels', 'diagnostic_values',
 ]
 
 
@@ -57,7 +62,7 @@ class Level(IntEnum):
 
 
 #: Severity rank used to combine and order levels (not the level number: ERROR > STALE).
-_RANK = {Level.OK: 0, Level.WARN: 1, Level.STALE: 2, Level.ERROR: 3}
+RANK = {Level.OK: 0, Level.WARN: 1, Level.STALE: 2, Level.ERROR: 3}
 
 #: Latched conditions, in message order: ERRORs, then WARNs.
 CONDITIONS = ('uplift', 'input', 'anchor_margin', 'tide_margin', 'load_margin', 'safety_factor')
@@ -72,7 +77,9 @@ class AlarmInputs:
 
     NaN marks a quantity that does not apply. ``status`` is the solver's code (0 = ok) and
     ``status_message`` its sentence. Stamps are the receive times (s, same clock as ``now``)
-    of the newest tension and depth samples; NaN means none received yet.
+    of the newest tension and depth samples; NaN means none received yet. ``depth_stale`` is
+    the monitor's decision that the depth is older than ``depth_timeout`` (taken once for all
+    lines, so they agree); None lets the alarm decide from ``depth_stamp`` itself.
     """
 
     uplift_force: float = math.nan   # N, vertical force on the anchor
@@ -84,6 +91,7 @@ class AlarmInputs:
     status_message: str = ''
     tension_stamp: float = math.nan  # s
     depth_stamp: float = math.nan    # s
+    depth_stale: bool | None = None
 
 
 class Latch(NamedTuple):
@@ -97,10 +105,9 @@ class Latch(NamedTuple):
 class AlarmState:
     """Everything a line's alarm remembers between updates (immutable)."""
 
-    level: Level = Level.OK
-    message: str = 'OK'
+    level: Level = Level.STALE
+    message: str = 'no tension received yet; no depth received yet'
     latches: tuple[Latch, ...] = (Latch(),) * len(CONDITIONS)
-    started: float | None = None          # s, time of the first update
     entered: tuple[float, ...] = (math.nan,) * 4  # s, when each severity rank was last entered
     input_message: str = ''               # last impossible-input sentence, while its alarm holds
 
@@ -114,13 +121,6 @@ class Transition(NamedTuple):
     new: Level
     message: str
     duration: float | None
-
-
-class ReplayResult(NamedTuple):
-    """Level after every update (int8 array of :class:`Level` values) and the transitions."""
-
-    levels: np.ndarray
-    transitions: list[Transition]
 
 
 def _fmt(value: float, scale: float = 1.0, digits: int = 1) -> str:
@@ -159,9 +159,9 @@ class LineAlarm:
         warn = getattr(self.config, f'{cond}_warn')
         return warn, warn + getattr(self.config, f'{cond}_deadband')
 
-    def initial(self) -> AlarmState:
-        """State before the first update (level OK)."""
-        return AlarmState()
+    def initial(self, now: float) -> AlarmState:
+        """State of a line that has received nothing yet, at time ``now`` (s): blind, STALE."""
+        return AlarmState(entered=(now, now, now, math.nan))
 
     def update(self, state: AlarmState, inputs: AlarmInputs,
                now: float) -> tuple[AlarmState, list[Transition]]:
@@ -173,9 +173,7 @@ class LineAlarm:
         """
         if not math.isfinite(now):
             raise ValueError(f'now must be finite, got {now!r}')
-        started = now if state.started is None else state.started
-        stale_t = _age(now, inputs.tension_stamp, started) > self.config.tension_timeout
-        stale_d = _age(now, inputs.depth_stamp, started) > self.config.depth_timeout
+        stale_t, stale_d = self._stale(inputs, now)
         stale = stale_t or stale_d
         latches = []
         for cond, latch in zip(CONDITIONS, state.latches):
@@ -186,15 +184,24 @@ class LineAlarm:
             input_message = _status_text(inputs.status, inputs.status_message)
         active = [latch.active for latch in latches]
         level = _combine(active, stale)
-        message = self._message(active, inputs, now, started, stale_t, stale_d, input_message)
+        message = self._message(active, inputs, now, stale_t, stale_d, input_message)
         entered, events = state.entered, []
         if level != state.level:
             entered, duration = _episode(entered, state.level, level, now)
             events.append(Transition(now, state.level, level, message, duration))
         new = replace(state, level=level, message=message, latches=tuple(latches),
-                      started=started, entered=entered,
-                      input_message=input_message if active[1] else '')
+                      entered=entered, input_message=input_message if active[1] else '')
         return new, events
+
+    def _stale(self, x: AlarmInputs, now: float) -> tuple[bool, bool]:
+        """(tension stale or never received, depth stale or never received)."""
+        ts, ds = x.tension_stamp, x.depth_stamp
+        stale_t = ts != ts or now - ts > self.config.tension_timeout
+        if ds != ds:
+            return stale_t, True
+        if x.depth_stale is None:
+            return stale_t, now - ds > self.config.depth_timeout
+        return stale_t, bool(x.depth_stale)
 
     def _classify(self, cond: str, x: AlarmInputs, stale: bool) -> int:
         if cond == 'input':
@@ -210,7 +217,7 @@ class LineAlarm:
             breach, clear = value < low, value >= high
         return _BREACH if breach else (_CLEAR if clear and not stale else _HOLD)
 
-    def _message(self, active: Sequence[bool], x: AlarmInputs, now: float, started: float,
+    def _message(self, active: Sequence[bool], x: AlarmInputs, now: float,
                  stale_t: bool, stale_d: bool, input_message: str) -> str:
         """Operator message for the conditions that apply, joined with '; '."""
         parts = []
@@ -236,11 +243,13 @@ class LineAlarm:
         for name, is_stale, stamp, timeout in (
                 ('tension', stale_t, x.tension_stamp, self.config.tension_timeout),
                 ('depth', stale_d, x.depth_stamp, self.config.depth_timeout)):
-            if is_stale:
-                age = _fmt(_age(now, stamp, started))
-                what = f'none received in {age} s' if math.isnan(stamp) else \
-                    f'last sample {age} s ago'
-                parts.append(f'{name} stale: {what} (timeout {timeout:g} s)')
+            if not is_stale:
+                continue
+            if math.isnan(stamp):
+                parts.append(f'no {name} received yet')
+            else:
+                parts.append(f'{name} stale: last sample {_fmt(now - stamp)} s ago '
+                             f'(timeout {timeout:g} s)')
         for cond, up in zip(_WARNS, active[2:]):
             if up:
                 parts.append(self._warn_text(cond, getattr(x, cond), hold_w))
@@ -255,11 +264,6 @@ class LineAlarm:
         if value < low:
             return f'{label} {v}{unit} < {lo}{unit}'
         return f'{label} {v}{unit}, warning held (clears after {hold:g} s at >= {hi}{unit})'
-
-
-def _age(now: float, stamp: float, started: float) -> float:
-    """Age (s) of the newest sample; a sample never received counts from ``started``."""
-    return now - (started if math.isnan(stamp) else stamp)
 
 
 def _status_text(status: int, message: str) -> str:
@@ -289,7 +293,7 @@ def _combine(active: Sequence[bool], stale: bool) -> Level:
 def _episode(entered: tuple[float, ...], old: Level, new: Level,
              now: float) -> tuple[tuple[float, ...], float | None]:
     """Update the time each severity rank was entered; return the ending episode's length."""
-    r_old, r_new = _RANK[old], _RANK[new]
+    r_old, r_new = RANK[old], RANK[new]
     if r_new > r_old:
         return tuple(now if r_old < r <= r_new else t for r, t in enumerate(entered)), None
     return entered, now - entered[r_old]
@@ -301,51 +305,134 @@ _INPUT_FIELDS = ('uplift_force', 'anchor_margin', 'tide_margin', 'load_margin', 
                  'tension_stamp', 'depth_stamp')
 
 
-def _latch_series(codes: np.ndarray, t: np.ndarray, on_delay: float, hold: float) -> np.ndarray:
-    """Latch state after each update, exactly as repeated :func:`_step` from an inactive latch.
+def _latch_series(codes: np.ndarray, t: np.ndarray, on_delay: float, hold: float,
+                  start: Latch = Latch()) -> tuple[np.ndarray, Latch]:
+    """Latch state after each update, exactly as repeated :func:`_step` from ``start``.
 
     A raise or clear is decided inside one run of equal codes, timed from the run's first
-    update, and never depends on the latch state at the run's start (a breach run cannot clear,
-    a clear run cannot raise). So every "set" and "reset" candidate is found independently and
-    the latch is the most recent candidate, forward-filled.
+    update (or from ``start.since`` when the first run continues a pending one), and never
+    depends on the latch state at the run's start (a breach run cannot clear, a clear run cannot
+    raise). So every "set" and "reset" candidate is found independently and the latch is the
+    most recent candidate, forward-filled from ``start.active``. Also returns the final latch.
     """
     n = codes.size
-    if not (codes == _BREACH).any():
-        return np.zeros(n, dtype=bool)  # only a breach run can raise the latch
+    if n == 0:
+        return np.zeros(0, dtype=bool), start
+    if not start.active and not (codes == _BREACH).any():
+        return np.zeros(n, dtype=bool), Latch()  # only a breach run can raise the latch
     idx = np.arange(n)
     starts = np.empty(n, dtype=bool)
     starts[0] = True
     np.not_equal(codes[1:], codes[:-1], out=starts[1:])
     run_start = np.maximum.accumulate(np.where(starts, idx, 0))
-    elapsed = t - t[run_start]
+    began = t[run_start]
+    pending = _CLEAR if start.active else _BREACH
+    if start.since is not None and codes[0] == pending:
+        first = np.flatnonzero(starts[1:])
+        began[:first[0] + 1 if first.size else n] = start.since
+    elapsed = t - began
     event = np.full(n, -1, dtype=np.int8)
     event[(codes == _CLEAR) & (elapsed >= hold)] = 0
     event[(codes == _BREACH) & (elapsed >= on_delay)] = 1
     last = np.maximum.accumulate(np.where(event >= 0, idx, -1))
-    return (last >= 0) & (event[np.maximum(last, 0)] == 1)
+    active = np.where(last >= 0, event[np.maximum(last, 0)] == 1, start.active)
+    final_active = bool(active[-1])
+    want = _CLEAR if final_active else _BREACH
+    since = float(began[-1]) if codes[-1] == want else None
+    return active, Latch(final_active, since)
+
+
+class LevelSeries:
+    """Levels of a whole sequence of updates of one line, and what the scalar machine says.
+
+    ``levels`` (int8, one per update) and ``transitions`` equal those of feeding
+    ``alarm.update`` one update at a time from ``initial``; :meth:`message_at` gives the
+    message after update ``i`` and :meth:`final_state` the state after the last one.
+    """
+
+    def __init__(self, alarm: LineAlarm, times: np.ndarray, x: dict[str, np.ndarray],
+                 status: np.ndarray, texts: Any, stale_t: np.ndarray, stale_d: np.ndarray,
+                 active: dict[str, np.ndarray], latches: tuple[Latch, ...],
+                 initial: AlarmState, status_messages: Mapping[int, str] | None) -> None:
+        self.alarm, self.times, self._x, self._status = alarm, times, x, status
+        self._texts, self._table = texts, status_messages or {}
+        self._stale_t, self._stale_d, self._active = stale_t, stale_d, active
+        self._latches, self._initial = latches, initial
+        n = times.size
+        err = active['uplift'] | active['input']
+        warn = np.zeros(n, dtype=bool)
+        for cond in _WARNS:
+            warn |= active[cond]
+        stale = stale_t | stale_d
+        self.levels = np.where(err, Level.ERROR, np.where(
+            stale, Level.STALE, np.where(warn, Level.WARN, Level.OK))).astype(np.int8)
+        self._last_bad = np.maximum.accumulate(np.where(status != 0, np.arange(n), -1)) \
+            if n else np.zeros(0, np.int64)
+        self.transitions, self._entered = self._walk()
+
+    def _held(self, i: int) -> str:
+        """The impossible-input sentence the input alarm holds after update ``i``."""
+        j = int(self._last_bad[i])
+        if j < 0:
+            return self._initial.input_message
+        code = int(self._status[j])
+        text = str(self._texts[j]) if self._texts is not None else self._table.get(code, '')
+        return _status_text(code, text)
+
+    def message_at(self, i: int) -> str:
+        """The line's message after update ``i`` (as ``AlarmState.message``)."""
+        if self.levels[i] == Level.OK:
+            return 'OK'
+        sample = AlarmInputs(**{k: float(self._x[k][i]) for k in _INPUT_FIELDS},
+                             status=int(self._status[i]))
+        flags = [bool(self._active[cond][i]) for cond in CONDITIONS]
+        return self.alarm._message(flags, sample, float(self.times[i]),
+                                   bool(self._stale_t[i]), bool(self._stale_d[i]),
+                                   self._held(i))
+
+    def _walk(self) -> tuple[list[Transition], tuple[float, ...]]:
+        """Transitions (with messages and episode durations) from the initial state."""
+        changed = np.flatnonzero(np.diff(self.levels, prepend=np.int8(self._initial.level)))
+        transitions: list[Transition] = []
+        entered, old = self._initial.entered, self._initial.level
+        for i in changed.tolist():
+            new = Level(int(self.levels[i]))
+            now = float(self.times[i])
+            entered, duration = _episode(entered, old, new, now)
+            transitions.append(Transition(now, old, new, self.message_at(i), duration))
+            old = new
+        return transitions, entered
+
+    def final_state(self) -> AlarmState:
+        """The :class:`AlarmState` after the last update (the initial state if there is none)."""
+        n = self.times.size
+        if n == 0:
+            return self._initial
+        held = self._held(n - 1) if self._active['input'][-1] else ''
+        return AlarmState(level=Level(int(self.levels[-1])), message=self.message_at(n - 1),
+                          latches=self._latches, entered=self._entered, input_message=held)
 
 
 def replay_levels(times: Any, inputs: Mapping[str, Any], alarm: LineAlarm,
-                  status_messages: Mapping[int, str] | None = None) -> ReplayResult:
+                  status_messages: Mapping[int, str] | None = None,
+                  initial: AlarmState | None = None) -> LevelSeries:
     """Levels and transitions for a whole sequence of updates of one line, vectorized.
 
-    Gives exactly the transitions (times, levels, messages, durations) of feeding
-    ``alarm.update`` one update at a time from ``alarm.initial()``.
+    Gives exactly the levels, transitions (times, levels, messages, durations) and final state
+    of feeding ``alarm.update`` one update at a time from ``initial`` (default: a blind line,
+    ``alarm.initial(times[0])``).
 
     Parameters
     ----------
     times : array (n,), s, non-decreasing
         Update times (the ``now`` of each update).
     inputs : mapping of field name to array or scalar broadcastable to (n,)
-        The :class:`AlarmInputs` fields; a missing field takes its default. ``status_message``
-        may be an array of str; otherwise ``status_messages`` maps codes to sentences.
+        The :class:`AlarmInputs` fields; a missing field takes its default (``depth_stale``
+        missing: decided from ``depth_stamp``). ``status_message`` may be an array of str;
+        otherwise ``status_messages`` maps codes to sentences.
     alarm : LineAlarm
     status_messages : mapping int -> str, optional
-
-    Returns
-    -------
-    ReplayResult
-        ``levels`` (int8, one per update) and the list of :class:`Transition`.
+    initial : AlarmState, optional
 
     Notes
     -----
@@ -355,70 +442,63 @@ def replay_levels(times: Any, inputs: Mapping[str, Any], alarm: LineAlarm,
     if t.ndim != 1:
         raise ValueError(f'times must be one-dimensional, got shape {t.shape}')
     n = t.size
-    if n == 0:
-        return ReplayResult(np.zeros(0, dtype=np.int8), [])
-    if not np.all(np.isfinite(t)) or np.any(t[1:] < t[:-1]):
+    if n and (not np.all(np.isfinite(t)) or np.any(t[1:] < t[:-1])):
         raise ValueError('times must be finite and non-decreasing')
-    unknown = set(inputs) - set(_INPUT_FIELDS) - {'status', 'status_message'}
+    unknown = set(inputs) - set(_INPUT_FIELDS) - {'status', 'status_message', 'depth_stale'}
     if unknown:
         raise ValueError(f'unknown input fields {sorted(unknown)}')
+    if initial is None:
+        initial = alarm.initial(float(t[0]) if n else 0.0)
     default = AlarmInputs()
     x = {k: np.broadcast_to(np.asarray(inputs.get(k, getattr(default, k)), dtype=np.float64),
                             (n,)) for k in _INPUT_FIELDS}
     status = np.broadcast_to(np.asarray(inputs.get('status', 0), dtype=np.int64), (n,))
-    cfg = alarm.config
-    started = t[0]
-    age_t = t - np.where(np.isnan(x['tension_stamp']), started, x['tension_stamp'])
-    age_d = t - np.where(np.isnan(x['depth_stamp']), started, x['depth_stamp'])
-    stale_t, stale_d = age_t > cfg.tension_timeout, age_d > cfg.depth_timeout
+    stale_t, stale_d = _stale_columns(alarm, t, x, inputs.get('depth_stale'))
     stale = stale_t | stale_d
+    classified = _classify_columns(alarm, x, status, stale)
+    active, latches = {}, []
+    for cond, latch in zip(CONDITIONS, initial.latches):
+        active[cond], end = _latch_series(classified[cond], t, *alarm._timing(cond), latch)
+        latches.append(end)
+    texts = inputs.get('status_message')
+    if texts is not None:
+        texts = np.broadcast_to(np.asarray(texts, dtype=object), (n,))
+    return LevelSeries(alarm, t, x, status, texts, stale_t, stale_d, active, tuple(latches),
+                       initial, status_messages)
 
+
+def _stale_columns(alarm: LineAlarm, t: np.ndarray, x: dict[str, np.ndarray],
+                   depth_stale: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Per update: (tension stale or never received, depth stale or never received)."""
+    cfg = alarm.config
+    ts, ds = x['tension_stamp'], x['depth_stamp']
+    with np.errstate(invalid='ignore'):
+        stale_t = np.isnan(ts) | (t - ts > cfg.tension_timeout)
+        if depth_stale is None:
+            stale_d = np.isnan(ds) | (t - ds > cfg.depth_timeout)
+        else:
+            stale_d = np.isnan(ds) | np.broadcast_to(np.asarray(depth_stale, bool), t.shape)
+    return stale_t, stale_d
+
+
+def _classify_columns(alarm: LineAlarm, x: dict[str, np.ndarray], status: np.ndarray,
+                      stale: np.ndarray) -> dict[str, np.ndarray]:
+    """Each condition's code (breach, clear, hold) per update, as :meth:`LineAlarm._classify`."""
     def codes(breach: np.ndarray, clear: np.ndarray) -> np.ndarray:
         return np.where(breach, _BREACH, np.where(clear & ~stale, _CLEAR, _HOLD)).astype(np.int8)
 
+    cfg = alarm.config
     level_up = alarm.uplift_clear_level
     f = x['uplift_force']
     up_clear = f <= level_up
     if not level_up > 0.0:
         up_clear &= x['anchor_margin'] >= cfg.uplift_clear_margin
-    classified = {'uplift': codes(f > alarm.allowed_uplift, up_clear),
-                  'input': codes(status != 0, status == 0)}
+    out = {'uplift': codes(f > alarm.allowed_uplift, up_clear),
+           'input': codes(status != 0, status == 0)}
     for cond in _WARNS:
         low, high = alarm._warn_limits(cond)
-        classified[cond] = codes(x[cond] < low, x[cond] >= high)
-    active = {cond: _latch_series(classified[cond], t, *alarm._timing(cond))
-              for cond in CONDITIONS}
-    err = active['uplift'] | active['input']
-    warn = np.zeros(n, dtype=bool)
-    for cond in _WARNS:
-        warn |= active[cond]
-    levels = np.where(err, Level.ERROR, np.where(
-        stale, Level.STALE, np.where(warn, Level.WARN, Level.OK))).astype(np.int8)
-
-    changed = np.flatnonzero(np.diff(levels, prepend=np.int8(Level.OK)))
-    last_bad = np.maximum.accumulate(np.where(status != 0, np.arange(n), -1))
-    texts = inputs.get('status_message')
-    transitions: list[Transition] = []
-    entered: tuple[float, ...] = AlarmState().entered
-    old = Level.OK
-    for i in changed.tolist():
-        j = int(last_bad[i])
-        held = ''
-        if j >= 0:
-            code = int(status[j])
-            text = str(np.broadcast_to(texts, (n,))[j]) if texts is not None else (
-                (status_messages or {}).get(code, ''))
-            held = _status_text(code, text)
-        sample = AlarmInputs(**{k: float(x[k][i]) for k in _INPUT_FIELDS},
-                             status=int(status[i]))
-        flags = [bool(active[cond][i]) for cond in CONDITIONS]
-        message = alarm._message(flags, sample, float(t[i]), float(started),
-                                 bool(stale_t[i]), bool(stale_d[i]), held)
-        new = Level(int(levels[i]))
-        entered, duration = _episode(entered, old, new, float(t[i]))
-        transitions.append(Transition(float(t[i]), old, new, message, duration))
-        old = new
-    return ReplayResult(levels, transitions)
+        out[cond] = codes(x[cond] < low, x[cond] >= high)
+    return out
 
 
 # --- diagnostics values -------------------------------------------------------------------------

@@ -1,75 +1,82 @@
-"""Offline recompute of a recorded log with the live node's update schedule (no rclpy, no I/O).
+"""The vectorized twin of :class:`~catenary_monitor.core.monitor.MonitorCore` over log columns.
 
-The live node (``catenary_monitor.node``) updates a line's alarm on three occasions:
+:func:`advance` takes a :class:`MonitorCore` and a :class:`Window` of events in time order
+(tension samples per line, depth samples, ticks: columns of receive times in ns and values) and
+leaves the core in exactly the state that stepping it event by event would leave (alarm
+states, newest inputs and results, tide), returning what those steps did: every line's solved
+updates (:data:`~catenary_monitor.core.monitor.OUTPUT_FIELDS`), every level transition and,
+on request, every diagnostic snapshot. It exists only because it is measured faster (replay of
+a day of log in seconds); ``test/test_batch.py`` feeds the same events to both and compares
+every step.
 
-* a tension sample of the line (receive time t): the line is solved at the newest depth
-  (``depth + hook_height``) and its alarm stepped with the solved
-  :class:`~catenary_monitor.alarms.AlarmInputs` (``tension_stamp = t``, ``depth_stamp`` = receive
-  time of the newest depth); before the first depth sample the inputs are NaN, status 0;
-* a depth sample: every line that already has a tension is re-solved at the new depth and stepped;
-* a periodic tick (``1 / diagnostic_rate``): every line is stepped again with its previous inputs
-  (this is where staleness and hold-time clears fire); a line that has had no update yet is
-  stepped with ``AlarmInputs()``.
-
-:func:`recompute` builds that schedule per line from whole columns (receive times in ns and
-values), solves every update in vectorized code and runs
-:func:`~catenary_monitor.alarms.replay_levels`, the exact vectorized equivalent of the scalar
-alarm state machine. For the same inputs it gives the node's alarm transitions.
-
-Events with equal receive times are taken in the order depth, tension, tick (the node's receive
-times are distinct clock readings; the rule only matters for generated data).
+It follows the core's schedule (:mod:`catenary_monitor.core.monitor`): each line is stepped at
+its tension samples, at every depth sample and at every tick; a line is solved at its tension
+samples and, once it has a tension, at every depth sample; the tide is decided at depth samples
+and ticks. Events with equal times are taken in the order depth, tensions (config order), tick
+(the node's own logs have distinct stamps, so the rule only matters for other recordings).
 
 Reuse: the critical hook tension of the load margin depends only on depth and line, so it is
 solved once per depth sample, not once per update; the uplift iteration runs only on the updates
-whose anchor is lifted. Every formula is the one :func:`catenary_monitor.solve` evaluates on
-arrays, in the same order, so the values are bit-identical to ``solve()`` on arrays (and equal
-to its scalar path, which the node uses for tension updates, to rounding).
+whose anchor is lifted. The formulas are the ones :func:`catenary_monitor.solve` evaluates on
+arrays, so values equal the core's scalar path to rounding (1e-12 relative) and levels and
+messages are identical.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Callable, Mapping, Optional
+from typing import Any, NamedTuple, Optional
 
 import numpy as np
 
 from catenary_monitor.core import catenary as cat, elastic
-from catenary_monitor.core.alarms import Level, LineAlarm, Transition, replay_levels
+from catenary_monitor.core.alarms import Level, LevelSeries, Transition, replay_levels
 from catenary_monitor.core.config import LineConfig, MonitorConfig
+from catenary_monitor.core.health import tide_status
+from catenary_monitor.core.monitor import (NO_DEPTH, NO_MODEL, OUTPUT_FIELDS, VALUE_FIELDS,
+                                           Change, ComponentStatus, LineState, MonitorCore,
+                                           Snapshot, Start, line_status, tide_component)
 from catenary_monitor.core.solve import STATUS_MESSAGES, Status
 
-__all__ = ['OUTPUT_FIELDS', 'NO_DEPTH', 'LineResult', 'ReplayResult', 'solve_updates',
-           'tick_grid', 'recompute', 'recompute_line']
+__all__ = ['OUTPUT_FIELDS', 'VALUE_FIELDS', 'NO_DEPTH', 'MODEL_NAMES', 'KIND_DEPTH',
+           'KIND_TENSION', 'KIND_TICK', 'Column', 'Window', 'LineResult', 'WindowResult',
+           'ReplayResult', 'advance', 'run_log', 'recompute', 'solve_updates',
+           'critical_parameters', 'tick_grid', 'worst']
 
-#: Element order of the node's per-line ``Float64MultiArray`` outputs
-#: (``/catenary_monitor/NAME/outputs``), same as ``catenary_monitor.node.OUTPUT_FIELDS``.
-OUTPUT_FIELDS = ('top_tension', 'depth', 'horizontal_tension', 'min_anchor_distance',
-                 'anchor_margin', 'uplift_force', 'tide_margin', 'load_margin', 'safety_factor',
-                 'anchor_angle_deg', 'suspended_length', 'status', 'level')
-#: The solved quantities among them (float64 columns of :class:`LineResult`).
-VALUE_FIELDS = OUTPUT_FIELDS[:-2]
-#: Solver status of an update made before any depth sample arrived (as the node publishes it).
-NO_DEPTH = -1
+#: Model names by :attr:`LineResult.model_codes` (as the ``/diagnostics`` key ``model``).
+MODEL_NAMES = (NO_MODEL, elastic.INEXTENSIBLE, elastic.ELASTIC)
+#: Step kinds in :attr:`LineResult.kind` and :attr:`LineResult.step_kind`.
+KIND_DEPTH, KIND_TENSION, KIND_TICK = 0, 1, 2
 
-#: Model names by :attr:`LineResult.model_codes` (as the node's ``/diagnostics`` key ``model``).
-MODEL_NAMES = ('none', elastic.INEXTENSIBLE, elastic.ELASTIC)
+Column = tuple[np.ndarray, np.ndarray]  # (receive times ns int64, values float64), sorted
+_EMPTY: Column = (np.zeros(0, np.int64), np.zeros(0))
 
-#: Update kinds in :attr:`LineResult.kind`.
-KIND_DEPTH, KIND_TENSION = 0, 1
+
+@dataclass
+class Window:
+    """Events of a stretch of log, each column sorted by time (ns): ``tensions`` per line
+    (config order), ``depth``, and the ``ticks``."""
+
+    tensions: list[Column]
+    depth: Column = _EMPTY
+    ticks: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+
+    @property
+    def messages(self) -> int:
+        """Input messages in the window."""
+        return sum(len(t) for t, _ in self.tensions) + len(self.depth[0])
 
 
 @dataclass
 class LineResult:
-    """Every solved update of one line (tension and depth updates, time order) and its alarms.
+    """What one line's steps did in a window.
 
-    ``t_ns`` are receive times (ns); ``values`` maps each of :data:`VALUE_FIELDS` to a float64
-    array (SI; ``depth`` is depth + hook height, the depth the chain was solved at);
-    ``status`` the solver code per update (:data:`NO_DEPTH` before the first depth);
-    ``level`` the alarm level after the update (int8 :class:`~catenary_monitor.alarms.Level`).
-    ``tick_ns`` / ``tick_level``: the periodic steps and the level after each.
-    ``transitions``: every level change, ticks included.
-    ``elastic``: per update, True where the elastic model answered (None: an inextensible line,
-    no ``ea``); see :func:`model_names`.
+    Updates (the solved steps, one output message each): ``t_ns``, ``kind`` (tension or depth),
+    ``values`` (:data:`VALUE_FIELDS` -> float64 arrays, SI; ``depth`` is depth + hook height),
+    ``status`` (solver code, :data:`NO_DEPTH` before the first depth), ``level`` after the
+    update, ``elastic`` (True where the elastic model answered; None for an inextensible line).
+    Steps (every alarm step, ticks and unsolved depth steps too): ``step_ns``, ``step_kind``,
+    ``step_level``. ``transitions``: every level change.
     """
 
     name: str
@@ -78,8 +85,9 @@ class LineResult:
     values: dict[str, np.ndarray]
     status: np.ndarray
     level: np.ndarray
-    tick_ns: np.ndarray
-    tick_level: np.ndarray
+    step_ns: np.ndarray
+    step_kind: np.ndarray
+    step_level: np.ndarray
     transitions: list[Transition] = field(default_factory=list)
     elastic: Optional[np.ndarray] = None
 
@@ -129,19 +137,28 @@ class LineResult:
 
 
 @dataclass
-class ReplayResult:
-    """Recompute of a whole log: one :class:`LineResult` per configured line, in config order."""
+class WindowResult:
+    """What :func:`advance` did: one :class:`LineResult` per line (config order), the tide's
+    transitions, the snapshots (if asked for) and the window's time span (ns)."""
 
     lines: list[LineResult]
-    tick_ns: np.ndarray
-    ticks_from_log: bool
+    tide: list[Transition]
+    snapshots: list[Snapshot]
     start_ns: int
     end_ns: int
+    others: list[Change] = field(default_factory=list)  # e.g. the logger's
 
     @property
     def updates(self) -> int:
         """Solved updates over all lines."""
         return sum(len(r.t_ns) for r in self.lines)
+
+    def changes(self) -> list[Change]:
+        """Every transition of the window as the core reports them, in time order."""
+        out = [Change('tide', tr) for tr in self.tide] + list(self.others)
+        for r in self.lines:
+            out += [Change(r.name, tr) for tr in r.transitions]
+        return sorted(out, key=lambda c: c.transition.time)
 
 
 def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
@@ -167,7 +184,8 @@ def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
     -----
     Same checks (first failed rule wins) and the same floating-point operations as
     ``solve(w, h, tension=T, anchor_distance=x, mbl=mbl)`` on arrays.  A line with an axial
-    stiffness (``line.ea``) is solved by ``elastic.solve_with_correction`` as the node does (``a_crit`` unused).
+    stiffness (``line.ea``) is solved by ``elastic.solve_with_correction`` as the core
+    does (``a_crit`` unused).
     """
     if line.ea is not None:
         return _solve_updates_elastic(line, tension, depth)[:2]
@@ -230,7 +248,8 @@ def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
 
 def _solve_updates_elastic(line: LineConfig, tension: np.ndarray, depth: np.ndarray
                            ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
-    """:func:`solve_updates` for a line with ``ea``: ``elastic.solve_with_correction`` (the rule picks the model).
+    """:func:`solve_updates` for a line with ``ea``: ``elastic.solve_with_correction`` (the
+    rule picks the model).
 
     Also returns, per update, whether the elastic model answered.
     """
@@ -273,118 +292,283 @@ def tick_grid(start_ns: int, end_ns: int, rate_hz: float) -> np.ndarray:
     return ticks[ticks <= end_ns]
 
 
-def recompute_line(line: LineConfig, alarm: LineAlarm, tension: tuple[np.ndarray, np.ndarray],
-                   depth: tuple[np.ndarray, np.ndarray], a_crit: np.ndarray,
-                   tick_ns: np.ndarray) -> LineResult:
-    """Schedule, solve and alarm one line (see the module docstring for the schedule).
+# --- the engine ----------------------------------------------------------------------------------
 
-    ``tension`` and ``depth`` are ``(receive time ns int64, value float64)``, sorted by time;
-    ``depth`` values are the raw tide depth (hook height is added here); ``a_crit`` the
-    critical parameter per depth sample (:func:`critical_parameters`); ``tick_ns`` sorted.
+def _merge(dd: np.ndarray, tt: np.ndarray, kk: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Merge sorted depth, tension and tick times (ties: depth, tension, tick): (times, kinds)."""
+    before = np.searchsorted
+    pos_d = np.arange(len(dd)) + before(tt, dd, 'left') + before(kk, dd, 'left')
+    pos_t = np.arange(len(tt)) + before(dd, tt, 'right') + before(kk, tt, 'left')
+    pos_k = np.arange(len(kk)) + before(dd, kk, 'right') + before(tt, kk, 'right')
+    n = len(dd) + len(tt) + len(kk)
+    times = np.empty(n, np.int64)
+    kinds = np.empty(n, np.int8)
+    for pos, src, kind in ((pos_d, dd, KIND_DEPTH), (pos_t, tt, KIND_TENSION),
+                           (pos_k, kk, KIND_TICK)):
+        times[pos] = src
+        kinds[pos] = kind
+    return times, kinds
+
+
+def _newest(mask: np.ndarray) -> np.ndarray:
+    """Per step: index (within the window) of the newest step where ``mask`` holds (-1: none)."""
+    return np.cumsum(mask) - 1
+
+
+@dataclass
+class _Tide:
+    """The tide's decisions in a window (at depth samples and ticks, in time order)."""
+
+    times: np.ndarray       # ns
+    depth: np.ndarray       # m, newest depth at each decision
+    depth_s: np.ndarray     # s, its stamp (NaN: none)
+    level: np.ndarray       # int8 Level
+    stale: np.ndarray       # bool, the depth-stale decision the lines take
+
+
+def _decide_tide(core: MonitorCore, window: Window) -> tuple[_Tide, list[Transition]]:
+    """The tide's decisions in the window and its transitions (the core is not changed)."""
+    dd, dv = window.depth
+    times, kinds = _merge(dd, np.zeros(0, np.int64), window.ticks)
+    d_idx = _newest(kinds == KIND_DEPTH)
+    have = d_idx >= 0
+    j = np.maximum(d_idx, 0)
+    depth = np.where(have, dv[j] if len(dv) else math.nan, core.depth)
+    depth_s = np.where(have, dd[j] * 1e-9 if len(dd) else math.nan, core.depth_s)
+    now = times * 1e-9
+    timeout = core.config.alarm.depth_timeout
+    with np.errstate(invalid='ignore'):
+        blind = np.isnan(depth_s)
+        stale = ~blind & (now - depth_s > timeout)
+        bad = ~(np.isfinite(depth) & (depth > 0))
+    level = np.where(blind | stale, Level.STALE, np.where(bad, Level.ERROR, Level.OK))
+    level = level.astype(np.int8)
+    tide = _Tide(times, depth, depth_s, level, stale)
+    transitions = []
+    old, entered = core.tide[0], core.tide_entered
+    for i in _changed(level, old).tolist():
+        new = tide_status(float(depth[i]), float(depth_s[i]), float(now[i]), timeout)
+        transitions.append(Transition(float(now[i]), old, new[0], new[1],
+                                      float(now[i]) - entered))
+        old, entered = new[0], float(now[i])
+    return tide, transitions
+
+
+def _write_tide(core: MonitorCore, window: Window, tide: _Tide,
+                transitions: list[Transition]) -> None:
+    """The core's depth and tide state after the window's last event."""
+    if len(tide.times):
+        i = len(tide.times) - 1
+        core.tide = tide_status(float(tide.depth[i]), float(tide.depth_s[i]),
+                                float(tide.times[i] * 1e-9), core.config.alarm.depth_timeout)
+        core.depth_stale = bool(tide.stale[i])
+    if transitions:
+        core.tide_entered = transitions[-1].time
+    dd, dv = window.depth
+    if len(dd):
+        core.depth, core.depth_s = float(dv[-1]), float(dd[-1] * 1e-9)
+
+
+@dataclass
+class _Steps:
+    """One line's steps in a window and what each step sees."""
+
+    times: np.ndarray       # ns
+    kinds: np.ndarray       # int8
+    t_idx: np.ndarray       # newest tension sample in the window (-1: the core's)
+    d_idx: np.ndarray       # newest depth sample in the window (-1: the core's)
+    dk_idx: np.ndarray      # newest tide decision in the window (-1: the core's)
+    solved: np.ndarray      # bool: the line is solved at this step
+    s_idx: np.ndarray       # newest solve in the window (-1: the core's)
+
+
+def _line_steps(line: LineState, tt: np.ndarray, window: Window) -> _Steps:
+    times, kinds = _merge(window.depth[0], tt, window.ticks)
+    t_idx = _newest(kinds == KIND_TENSION)
+    known = (t_idx >= 0) | (line.tension_s == line.tension_s)
+    solved = (kinds == KIND_TENSION) | ((kinds == KIND_DEPTH) & known)
+    return _Steps(times, kinds, t_idx, _newest(kinds == KIND_DEPTH),
+                  _newest(kinds != KIND_TENSION), solved, _newest(solved))
+
+
+def _pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
+    """``column[idx]`` where ``idx >= 0``, else ``before`` (the core's value before the window)."""
+    if not len(column):
+        return np.full(len(idx), before)
+    return np.where(idx >= 0, column[np.maximum(idx, 0)], before)
+
+
+def _solve_line(core: MonitorCore, line: LineState, steps: _Steps, tv: np.ndarray,
+                window: Window
+                ) -> tuple[dict[str, np.ndarray], np.ndarray, Optional[np.ndarray]]:
+    """Values, status and elastic flags at the line's solved steps."""
+    lc = line.config
+    where = np.flatnonzero(steps.solved)
+    tension = _pick(steps.t_idx[where], tv, line.tension)
+    d_idx = steps.d_idx[where]
+    dv = window.depth[1]
+    h = _pick(d_idx, dv + lc.hook_height, core.depth + lc.hook_height)  # NaN: no depth yet
+    if lc.ea is not None:
+        return _solve_updates_elastic(lc, tension, h)
+    a_depth = critical_parameters(lc, dv + lc.hook_height)
+    a_before = critical_parameters(lc, np.array([core.depth + lc.hook_height]))[0]
+    values, status = solve_updates(lc, tension, h, _pick(d_idx, a_depth, a_before))
+    return values, status, None
+
+
+def _line_inputs(core: MonitorCore, line: LineState, steps: _Steps, tide: _Tide,
+                 values: dict[str, np.ndarray], status: np.ndarray,
+                 window: Window, tt: np.ndarray) -> dict[str, Any]:
+    """The alarm inputs at every step of the line (newest solve, stamps, tide decision)."""
+    s = steps.s_idx
+    before = dict(zip(VALUE_FIELDS, line.values))
+    inputs: dict[str, Any] = {k: _pick(s, values[k], before[k]) for k in (
+        'uplift_force', 'anchor_margin', 'tide_margin', 'load_margin', 'safety_factor')}
+    inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
+        np.int64)
+    inputs['tension_stamp'] = _pick(steps.t_idx, tt * 1e-9, line.tension_s)
+    inputs['depth_stamp'] = _pick(steps.d_idx, window.depth[0] * 1e-9, core.depth_s)
+    inputs['depth_stale'] = _pick(steps.dk_idx, tide.stale.astype(np.float64),
+                                  float(core.depth_stale)).astype(bool)
+    return inputs
+
+
+def _advance_line(core: MonitorCore, k: int, window: Window,
+                  tide: _Tide) -> tuple[LineResult, LevelSeries, _Steps]:
+    """One line through the window; leaves the line's state in the core as after the steps
+    (the core's depth and tide still as before the window)."""
+    line = core.lines[k]
+    tt, tv = window.tensions[k]
+    steps = _line_steps(line, tt, window)
+    values, status, used = _solve_line(core, line, steps, tv, window)
+    inputs = _line_inputs(core, line, steps, tide, values, status, window, tt)
+    series = replay_levels(steps.times * 1e-9, inputs, line.alarm, STATUS_MESSAGES,
+                           initial=line.state)
+    where = np.flatnonzero(steps.solved)
+    result = LineResult(line.config.name, steps.times[where], steps.kinds[where], values, status,
+                        series.levels[where], steps.times, steps.kinds, series.levels,
+                        series.transitions, used)
+    _write_back(line, series, values, status, used, tt, tv)
+    return result, series, steps
+
+
+def _write_back(line: LineState, series: LevelSeries, values: dict[str, np.ndarray],
+                status: np.ndarray, used: Optional[np.ndarray], tt: np.ndarray,
+                tv: np.ndarray) -> None:
+    """The line's state after its last step in the window."""
+    line.state = series.final_state()
+    if len(tt):
+        line.tension, line.tension_s = float(tv[-1]), float(tt[-1] * 1e-9)
+    if len(status):
+        line.values = tuple(float(values[key][-1]) for key in VALUE_FIELDS)
+        line.status = int(status[-1])
+        line.status_message = '' if line.status == NO_DEPTH else STATUS_MESSAGES[line.status]
+        code = 0 if line.status == NO_DEPTH else (2 if used is not None and used[-1] else 1)
+        line.model = MODEL_NAMES[code]
+
+
+def advance(core: MonitorCore, window: Window, snapshots: bool = False) -> WindowResult:
+    """Step ``core`` through every event of ``window`` in vectorized code.
+
+    Leaves ``core`` as ``core.step`` would, event by event (depth, tensions, tick at equal
+    times), and returns what the steps did; ``snapshots=True`` also builds every diagnostic
+    snapshot the core would have made (ticks and level changes).
     """
-    t_ns, tv = tension
-    d_ns, dv = depth
-    n_t = len(t_ns)
-    if n_t:
-        first = np.searchsorted(d_ns, t_ns[0], 'right')   # depths after the first tension
-        dep_t = d_ns[first:]
-        dep_i = np.searchsorted(t_ns, dep_t, 'left') - 1   # newest tension before the depth
-        dep_j = np.arange(first, len(d_ns))
-        ten_j = np.searchsorted(d_ns, t_ns, 'right') - 1   # newest depth at the tension
-        ev_t = np.concatenate((dep_t, t_ns))
-        ev_i = np.concatenate((dep_i, np.arange(n_t)))
-        ev_j = np.concatenate((dep_j, ten_j))
-        ev_kind = np.concatenate((np.full(len(dep_t), KIND_DEPTH, np.int8),
-                                  np.full(n_t, KIND_TENSION, np.int8)))
-        if len(dep_t):
-            order = np.argsort(ev_t, kind='stable')        # depth first at equal times
-            ev_t, ev_i, ev_j, ev_kind = ev_t[order], ev_i[order], ev_j[order], ev_kind[order]
-    else:
-        ev_t = np.zeros(0, np.int64)
-        ev_i = ev_j = np.zeros(0, np.int64)
-        ev_kind = np.zeros(0, np.int8)
-    has_d = ev_j >= 0
-    jj = np.where(has_d, ev_j, 0)
-    if len(dv):
-        h = np.where(has_d, dv[jj] + line.hook_height, np.nan)
-        ac = np.where(has_d, a_crit[jj], np.nan)
-    else:
-        h = np.full(len(ev_t), np.nan)
-        ac = h
-    t_ev = tv[ev_i] if n_t else np.zeros(0)
-    used: Optional[np.ndarray] = None
-    if line.ea is not None:
-        values, status, used = _solve_updates_elastic(line, t_ev, h)
-    else:
-        values, status = solve_updates(line, t_ev, h, ac)
-    if len(dv) == 0:
-        values['depth'] = h
-
-    # Merge the ticks: updates first at equal times; a tick repeats the previous inputs.
-    n_e = len(ev_t)
-    all_t = np.concatenate((ev_t, tick_ns))
-    order = np.argsort(all_t, kind='stable')
-    is_ev = order < n_e
-    src = np.maximum.accumulate(np.where(is_ev, order, -1)) if len(order) else order
-    have = src >= 0
-    s = np.where(have, src, 0)
-    times = all_t[order] * 1e-9
-
-    def col(a: np.ndarray, default: float = math.nan) -> np.ndarray:
-        if n_e == 0:
-            return np.full(len(order), default)
-        return np.where(have, a[s], default)
-
-    d_stamp = np.where(has_d, d_ns[jj] * 1e-9, np.nan) if len(d_ns) else np.full(n_e, np.nan)
-    inputs = {k: col(values[k]) for k in ('uplift_force', 'anchor_margin', 'tide_margin',
-                                          'load_margin', 'safety_factor')}
-    inputs['status'] = np.maximum(col(status, 0), 0).astype(np.int64) if n_e else 0
-    inputs['tension_stamp'] = col(t_ns[ev_i] * 1e-9 if n_t else ev_t * 1e-9)
-    inputs['depth_stamp'] = col(d_stamp)
-    result = replay_levels(times, inputs, alarm, STATUS_MESSAGES)
-    pos = np.empty(len(order), np.int64)
-    pos[order] = np.arange(len(order))
-    return LineResult(line.name, ev_t, ev_kind, values, status,
-                      result.levels[pos[:n_e]], tick_ns, result.levels[pos[n_e:]],
-                      result.transitions, used)
+    if len(window.tensions) != len(core.lines):
+        raise ValueError(f'window has {len(window.tensions)} tension columns for '
+                         f'{len(core.lines)} lines')
+    depth_before = (core.depth, core.depth_s, core.depth_stale)
+    tide_before = core.tide
+    lines_before = [_Before(line.state.level, line.state.message, line.values, line.status,
+                            line.model, line.tension_s) for line in core.lines]
+    tide, tide_transitions = _decide_tide(core, window)
+    results, series, steps = [], [], []
+    for k in range(len(core.lines)):
+        r, s, st = _advance_line(core, k, window, tide)
+        results.append(r)
+        series.append(s)
+        steps.append(st)
+    times = [c[0] for c in (*window.tensions, window.depth, (window.ticks, None)) if len(c[0])]
+    start = int(min(t[0] for t in times)) if times else core.last_ns
+    end = int(max(t[-1] for t in times)) if times else core.last_ns
+    snaps: list[Snapshot] = []
+    if snapshots:
+        snaps = _snapshots(core, window, tide, results, series, steps, depth_before,
+                           tide_before, lines_before)
+    _write_tide(core, window, tide, tide_transitions)
+    core.last_ns = max(core.last_ns, end)
+    return WindowResult(results, tide_transitions, snaps, start, end)
 
 
-def recompute(config: MonitorConfig, tensions: Mapping[str, tuple[np.ndarray, np.ndarray]],
-              depth: tuple[np.ndarray, np.ndarray], tick_ns: Optional[np.ndarray] = None,
-              progress: Optional[Callable[[int, int, str], None]] = None) -> ReplayResult:
-    """Recompute every line of ``config`` from recorded columns.
+# --- snapshots -----------------------------------------------------------------------------------
 
-    Parameters
-    ----------
-    config : the monitor configuration (lines, alarm settings).
-    tensions : line name -> (receive time ns int64, tension N), sorted by time (missing = none).
-    depth : (receive time ns int64, tide depth m), sorted by time.
-    tick_ns : periodic tick times (ns); None gives a synthetic grid at ``diagnostic_rate``
-        from the first to the last message (:func:`tick_grid`).
-    progress : optional ``callback(done, total, line name)`` called after each line.
-    """
-    empty = (np.zeros(0, np.int64), np.zeros(0))
-    starts = [c[0][0] for c in (*tensions.values(), depth) if len(c[0])]
-    ends = [c[0][-1] for c in (*tensions.values(), depth) if len(c[0])]
-    start = int(min(starts)) if starts else 0
-    end = int(max(ends)) if ends else 0
-    from_log = tick_ns is not None
-    if tick_ns is None:
-        tick_ns = tick_grid(start, end, config.alarm.diagnostic_rate) if starts else empty[0]
-    else:
-        tick_ns = np.sort(np.asarray(tick_ns, np.int64))
-        if len(tick_ns):
-            start, end = min(start, int(tick_ns[0])) if starts else int(tick_ns[0]), \
-                max(end, int(tick_ns[-1]))
-    results = []
-    for k, line in enumerate(config.lines):
-        alarm = LineAlarm.for_line(line, config.alarm)
-        a_crit = critical_parameters(line, depth[1] + line.hook_height)
-        results.append(recompute_line(line, alarm, tensions.get(line.name, empty), depth,
-                                      a_crit, tick_ns))
-        if progress is not None:
-            progress(k + 1, len(config.lines), line.name)
-    return ReplayResult(results, tick_ns, from_log, start, end)
+class _Before(NamedTuple):
+    """A line as the core held it before the window (for snapshots before its first step)."""
+
+    level: Level
+    message: str
+    values: tuple[float, ...]
+    status: int
+    model: str
+    tension_s: float
+
+
+def _changed(levels: np.ndarray, before: Level) -> np.ndarray:
+    """Indexes where the level differs from the one before (the first against ``before``)."""
+    return np.flatnonzero(np.diff(levels, prepend=np.int8(before)))
+
+
+def _snapshots(core: MonitorCore, window: Window, tide: _Tide, results: list[LineResult],
+               series: list[LevelSeries], steps: list[_Steps],
+               depth_before: tuple[float, float, bool], tide_before: tuple[Level, str],
+               lines_before: list[_Before]) -> list[Snapshot]:
+    """Every snapshot the core made in the window (ticks and level changes), built from the
+    vectorized results."""
+    parts = [window.ticks, tide.times[_changed(tide.level, tide_before[0])]]
+    parts += [r.step_ns[_changed(r.step_level, b.level)] for r, b in zip(results, lines_before)]
+    stamps = np.unique(np.concatenate(parts))
+    dd, dv = window.depth
+    tide_at = np.searchsorted(tide.times, stamps, 'right') - 1
+    depth_at = np.searchsorted(dd, stamps, 'right') - 1
+    timeout = core.config.alarm.depth_timeout
+    columns = [_line_statuses(core.lines[k], results[k], series[k], steps[k], stamps,
+                              window.tensions[k][0], lines_before[k])
+               for k in range(len(results))]
+    logger = ComponentStatus('catenary_monitor: logger', core.logger[0], core.logger[1],
+                             core.logger_id, ())
+    out = []
+    for n, stamp in enumerate(stamps.tolist()):
+        i, j = int(tide_at[n]), int(depth_at[n])
+        depth = float(dv[j]) if j >= 0 else depth_before[0]
+        depth_s = float(dd[j] * 1e-9) if j >= 0 else depth_before[1]
+        state = tide_before if i < 0 else tide_status(
+            float(tide.depth[i]), float(tide.depth_s[i]), float(tide.times[i] * 1e-9), timeout)
+        statuses = [col[n] for col in columns]
+        statuses.append(tide_component(state, core.depth_id, depth, stamp * 1e-9 - depth_s))
+        statuses.append(logger)
+        out.append(Snapshot(stamp, tuple(statuses)))
+    return out
+
+
+def _line_statuses(line: LineState, r: LineResult, series: LevelSeries, steps: _Steps,
+                   stamps: np.ndarray, tt: np.ndarray, before: _Before) -> list[ComponentStatus]:
+    """The line's status in each snapshot (as after its newest step at or before the stamp)."""
+    at = np.searchsorted(steps.times, stamps, 'right') - 1
+    out = []
+    for n, i in enumerate(at.tolist()):
+        level, message = before.level, before.message
+        values, status, model, ts = before.values, before.status, before.model, before.tension_s
+        if i >= 0:
+            level, message = Level(int(series.levels[i])), series.message_at(i)
+            s, t = int(steps.s_idx[i]), int(steps.t_idx[i])
+            if s >= 0:
+                values = tuple(float(r.values[key][s]) for key in VALUE_FIELDS)
+                status, model = int(r.status[s]), MODEL_NAMES[int(r.model_codes[s])]
+            if t >= 0:
+                ts = float(tt[t] * 1e-9)
+        out.append(line_status(line.config, line.hardware_id, level, message, values, status,
+                               model, stamps[n] * 1e-9 - ts))
+    return out
 
 
 def worst(result: LineResult) -> dict[str, Optional[dict[str, float]]]:
@@ -404,3 +588,115 @@ def worst(result: LineResult) -> dict[str, Optional[dict[str, float]]]:
         i = int(pick(v))
         out[key] = {'value': float(v[i]), 'time': float(result.t_ns[i] * 1e-9)}
     return out
+
+
+# --- a whole log ---------------------------------------------------------------------------------
+
+def _slice(window: Window, lo: Optional[int], hi: Optional[int]) -> Window:
+    """The events of ``window`` with ``lo <= t < hi`` (None: unbounded)."""
+    def cut(times: np.ndarray) -> slice:
+        a = 0 if lo is None else int(np.searchsorted(times, lo, 'left'))
+        b = len(times) if hi is None else int(np.searchsorted(times, hi, 'left'))
+        return slice(a, b)
+    tensions = [(t[cut(t)], v[cut(t)]) for t, v in window.tensions]
+    dt, dv = window.depth
+    return Window(tensions, (dt[cut(dt)], dv[cut(dt)]), window.ticks[cut(window.ticks)])
+
+
+def _concat(parts: list[LineResult]) -> LineResult:
+    """One line's results of consecutive windows as one."""
+    if len(parts) == 1:
+        return parts[0]
+    cat_ = np.concatenate
+    flags = [p.elastic for p in parts]
+    used = None if all(f is None for f in flags) else cat_(
+        [np.zeros(len(p.t_ns), bool) if f is None else f for p, f in zip(parts, flags)])
+    return LineResult(parts[0].name, cat_([p.t_ns for p in parts]),
+                      cat_([p.kind for p in parts]),
+                      {k: cat_([p.values[k] for p in parts]) for k in VALUE_FIELDS},
+                      cat_([p.status for p in parts]), cat_([p.level for p in parts]),
+                      cat_([p.step_ns for p in parts]), cat_([p.step_kind for p in parts]),
+                      cat_([p.step_level for p in parts]),
+                      [tr for p in parts for tr in p.transitions], used)
+
+
+def run_log(core: MonitorCore, window: Window, events: Any = (),
+            snapshots: bool = False) -> tuple[WindowResult, MonitorCore]:
+    """Advance ``core`` over a whole log; return the results and the core at the end.
+
+    ``window`` holds the input columns and the ticks; ``events`` the other records in time
+    order: logger changes and reconfigurations, stepped by the core itself between vectorized
+    stretches (inputs before an event's stamp go first), and :class:`Start` (the monitor
+    restarted: a new core, blind again, from then on).
+    """
+    pieces: list[WindowResult] = []
+    extra: list[Snapshot] = []
+    others: list[Change] = []
+    lo: Optional[int] = None
+    for event in [*events, None]:
+        hi = None if event is None else event.stamp_ns
+        pieces.append(advance(core, _slice(window, lo, hi), snapshots))
+        if isinstance(event, Start):
+            core = MonitorCore(core.config, event.stamp_ns, _ids(core), core.depth_id,
+                               core.logger_id)
+        elif event is not None:
+            step = core.step(event)
+            others += list(step.transitions)
+            if snapshots and step.snapshot is not None:
+                extra.append(step.snapshot)
+        lo = hi
+    lines = [_concat([p.lines[k] for p in pieces]) for k in range(len(core.lines))]
+    tide = [tr for p in pieces for tr in p.tide]
+    snaps = sorted([s for p in pieces for s in p.snapshots] + extra, key=lambda s: s.stamp_ns)
+    return WindowResult(lines, tide, snaps, min(p.start_ns for p in pieces),
+                        max(p.end_ns for p in pieces), others), core
+
+
+def _ids(core: MonitorCore) -> dict[str, str]:
+    return {line.config.name: line.hardware_id for line in core.lines}
+
+
+@dataclass
+class ReplayResult(WindowResult):
+    """:func:`recompute` of a log: the :class:`WindowResult` and the ticks it used (ns),
+    taken from the log's events channel (``ticks_from_log``) or on a grid at
+    ``diagnostic_rate``."""
+
+    tick_ns: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    ticks_from_log: bool = False
+    started_ns: int = 0                               # when the monitor started (blind)
+    events: list[Any] = field(default_factory=list)   # the other records it was given
+
+
+def recompute(config: MonitorConfig, tensions: dict[str, Column], depth: Column,
+              tick_ns: Optional[np.ndarray] = None, events: Any = (),
+              start_ns: Optional[int] = None, snapshots: bool = False) -> ReplayResult:
+    """Every step of a recorded log, as the monitor made them.
+
+    Parameters
+    ----------
+    config : the monitor configuration (lines, topics, alarm settings).
+    tensions : line name -> (receive time ns, tension N), sorted (a missing line: none).
+    depth : (receive time ns, tide depth m), sorted.
+    tick_ns : the ticks (ns), as the node recorded them; None: a grid at ``diagnostic_rate``
+        from ``start_ns`` to the last message.
+    events : the node's other records in time order (:class:`Start`, logger changes,
+        reconfigurations).
+    start_ns : when the monitor started (blind); default the first message.
+    snapshots : also build every diagnostic snapshot.
+    """
+    columns = [tensions.get(line.name, _EMPTY) for line in config.lines]
+    stamps = [c[0] for c in (*columns, depth) if len(c[0])]
+    first = int(min(t[0] for t in stamps)) if stamps else 0
+    last = int(max(t[-1] for t in stamps)) if stamps else 0
+    start = first if start_ns is None else int(start_ns)
+    from_log = tick_ns is not None
+    if tick_ns is None:
+        tick_ns = tick_grid(start, last, config.alarm.diagnostic_rate) if stamps else \
+            np.zeros(0, np.int64)
+    ticks = np.sort(np.asarray(tick_ns, np.int64))
+    core = MonitorCore(config, start)
+    result, _ = run_log(core, Window(columns, depth, ticks), events, snapshots)
+    return ReplayResult(result.lines, result.tide, result.snapshots,
+                        min(start, result.start_ns), result.end_ns, result.others, ticks,
+                        from_log, start, list(events))

@@ -23,6 +23,7 @@ __all__ = [
     'REQUIRED', 'ParamSpec', 'PARAMETERS', 'ROS_BUILTIN_PARAMETERS', 'ConfigError',
     'LineConfig', 'AlarmConfig', 'MonitorConfig', 'expand_parameters', 'load_params_file',
     'config_from_params', 'config_to_params', 'config_hash', 'parameters_markdown',
+    'resolve_topic',
 ]
 
 
@@ -400,6 +401,13 @@ def config_to_params(config: MonitorConfig) -> dict[str, Any]:
             value = getattr(line, key)
             flat[f'{line.name}.{key}'] = 0.0 if key == 'ea' and value is None else value
     return flat
+
+
+def resolve_topic(topic: str, node_name: str = 'catenary_monitor') -> str:
+    """A topic name as a node ``node_name`` in the root namespace resolves it."""
+    if topic.startswith('~'):
+        return f'/{node_name}' + ('/' + topic[1:].lstrip('/') if len(topic) > 1 else '')
+    return topic if topic.startswith('/') else '/' + topic
 
 
 def config_hash(config: MonitorConfig) -> str:

@@ -14,8 +14,7 @@ from catenary_monitor.core.alarms import Level
 __all__ = ['tide_status', 'logger_status']
 
 
-def tide_status(depth: float, stamp: float, now: float, started: float,
-                timeout: float) -> tuple[Level, str]:
+def tide_status(depth: float, stamp: float, now: float, timeout: float) -> tuple[Level, str]:
     """Level and message of the tide (depth) input.
 
     Parameters
@@ -23,19 +22,17 @@ def tide_status(depth: float, stamp: float, now: float, started: float,
     depth : newest depth sample [m]; NaN if none was received.
     stamp : receive time of that sample [s]; NaN if none.
     now : current time [s].
-    started : time the node started [s]; the age of a missing sample counts from it.
     timeout : depth_timeout [s].
 
     Returns
     -------
-    (Level.STALE, ...) when the newest sample is older than ``timeout`` (or none arrived within
-    it), (Level.ERROR, ...) when the sample is not a positive finite number, else (Level.OK, ...).
+    (Level.STALE, ...) before the first sample and when the newest one is older than
+    ``timeout``; (Level.ERROR, ...) when the sample is not a positive finite number; else
+    (Level.OK, ...).
     """
-    age = now - (started if math.isnan(stamp) else stamp)
     if math.isnan(stamp):
-        if age > timeout:
-            return Level.STALE, f'no depth received in {age:.1f} s (timeout {timeout:g} s)'
-        return Level.OK, 'waiting for the first depth sample'
+        return Level.STALE, 'no depth received yet'
+    age = now - stamp
     if age > timeout:
         return Level.STALE, f'depth stale: last sample {age:.1f} s ago (timeout {timeout:g} s)'
     if not (math.isfinite(depth) and depth > 0.0):

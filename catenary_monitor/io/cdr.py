@@ -17,7 +17,8 @@ from typing import Callable, Sequence
 import numpy as np
 
 __all__ = ['ENCAPSULATION', 'float64_payloads', 'multiarray_prefix', 'multiarray_payloads',
-           'diagnostic_array', 'status_header', 'key_values', 'diagnostic_array_parts']
+           'diagnostic_array', 'status_header', 'key_values', 'diagnostic_array_parts',
+           'string_message', 'string_text']
 
 #: CDR little-endian encapsulation header.
 ENCAPSULATION = b'\x00\x01\x00\x00'
@@ -191,3 +192,23 @@ def diagnostic_array_parts(stamp_ns: int, statuses: Sequence[tuple[Callable[[int
         parts.append(pairs)
         align = len(pairs) % 4
     return b''.join(parts)
+
+
+# --- std_msgs/msg/String ------------------------------------------------------------------------
+
+def string_message(text: str) -> bytes:
+    """CDR of a ``std_msgs/msg/String``."""
+    buf = bytearray(ENCAPSULATION)
+    _string(buf, text)
+    return bytes(buf)
+
+
+def string_text(data: bytes) -> str:
+    """The text of a ``std_msgs/msg/String`` in CDR (ValueError if it is not one)."""
+    if len(data) < 9 or data[1] not in (0, 1):
+        raise ValueError('not a CDR std_msgs/String')
+    order = '<' if data[1] == 1 else '>'
+    (n,) = struct.unpack(order + 'I', data[4:8])
+    if n < 1 or 8 + n > len(data) or data[8 + n - 1] != 0:
+        raise ValueError('not a CDR std_msgs/String')
+    return data[8:8 + n - 1].decode('utf-8')

@@ -1,9 +1,15 @@
 """The live monitor: the rclpy node ``catenary_monitor`` (console script ``monitor``).
 
-Imperative shell only. The node wires topics, parameters, timers and the MCAP logger to the
-core: ``config`` validates the parameters, ``solve`` does the physics, ``alarms`` decides levels
-and transitions, ``health`` decides the tide and logger statuses. No physics and no threshold
-comparison live here.
+Wiring only. Subscriptions, timers, parameters, publishers and the MCAP logger around one
+:class:`~catenary_monitor.core.monitor.MonitorCore`: every received sample, every periodic tick,
+every logger change and every accepted parameter change becomes one core event, and the node
+publishes and logs what the core's :class:`~catenary_monitor.core.monitor.Step` says. No
+physics, no threshold comparison and no level decision live here.
+
+Each event gets a distinct, increasing stamp (the node clock, moved on by 1 ns when two events
+would share a reading), used as the MCAP log time of everything the event produced; the events
+that are not input messages (ticks, logger changes, parameter changes) are recorded on the
+MCAP-only channel ``/catenary_monitor/events``, so replay redoes every step exactly.
 
 Run it as ``monitor --ros-args --params-file FILE`` (``ros2 run catenary_monitor monitor ...``),
 ``python -m catenary_monitor.ros.node --ros-args --params-file FILE`` or
@@ -12,7 +18,6 @@ Run it as ``monitor --ros-args --params-file FILE`` (``ros2 run catenary_monitor
 from __future__ import annotations
 
 import json
-import math
 import os
 import signal
 import sys
@@ -21,7 +26,6 @@ import traceback
 from functools import partial, wraps
 from typing import Any, Optional, Sequence
 
-import numpy as np
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
@@ -31,31 +35,22 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, qos_profile_sensor_data
 from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.signals import SignalHandlerOptions
-from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
+from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension, String
 
 from catenary_monitor import __version__
 from catenary_monitor.core import elastic
-from catenary_monitor.core.alarms import AlarmInputs, Level, LineAlarm, diagnostic_values
+from catenary_monitor.core.alarms import Level
 from catenary_monitor.core.config import (ConfigError, MonitorConfig, ParamSpec,
                                           config_from_params, config_hash, config_to_params,
                                           expand_parameters)
-from catenary_monitor.core.health import logger_status, tide_status
-from catenary_monitor.core.solve import SolveResult, solve
+from catenary_monitor.core.monitor import (EVENTS_TOPIC, NODE_NAME, OUTPUT_FIELDS, Change,
+                                           Depth, Event, LoggerHealth, MonitorCore,
+                                           Reconfigure, Snapshot, Start, Step, Tension,
+                                           Tick, event_record)
 from catenary_monitor.io.mcap_log import McapLogger
 
 __all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'CatenaryMonitor', 'main']
 
-#: Node name (params files use it as their top key; ``/**`` works too).
-NODE_NAME = 'catenary_monitor'
-
-#: Element order of each line's ``~/NAME/outputs`` Float64MultiArray (SI; ``status`` is the
-#: solver code, -1 while no depth has been received; ``level`` the diagnostic level 0-3).
-OUTPUT_FIELDS = ('top_tension', 'depth', 'horizontal_tension', 'min_anchor_distance',
-                 'anchor_margin', 'uplift_force', 'tide_margin', 'load_margin', 'safety_factor',
-                 'anchor_angle_deg', 'suspended_length', 'status', 'level')
-
-_RESULT_FIELDS = OUTPUT_FIELDS[:-2]
-_NAN = math.nan
 _PARAM_TYPES = {'double': Parameter.Type.DOUBLE, 'string': Parameter.Type.STRING,
                 'string_array': Parameter.Type.STRING_ARRAY}
 _RELIABLE = QoSProfile(depth=10)
@@ -91,27 +86,6 @@ def _descriptor(spec: ParamSpec, name: str) -> ParameterDescriptor:
     return desc
 
 
-class _Line:
-    """Runtime state of one chain: its constants, newest inputs, alarm state and publisher."""
-
-    def __init__(self, name: str) -> None:
-        self.name = name
-        self.tension = _NAN          # N, newest sample
-        self.tension_stamp = _NAN    # s, node clock at receipt
-        self.inputs = AlarmInputs()  # newest solved update, handed again by the periodic check
-        self.values: dict[str, float] = dict.fromkeys(_RESULT_FIELDS, _NAN)
-        self.model = 'none'  # model of the newest solved update ('none' before the first one)
-        self.state: Any = None
-        self.alarm: Any = None
-        self.config: Any = None
-        self.output_topic = ''
-        self.tension_topic = ''
-        self.publisher: Any = None
-        self.message = Float64MultiArray()
-        self.message.layout.dim = [MultiArrayDimension(
-            label=','.join(OUTPUT_FIELDS), size=len(OUTPUT_FIELDS), stride=len(OUTPUT_FIELDS))]
-
-
 class CatenaryMonitor(Node):
     """Subscribes to every chain's hook tension and the tide depth; publishes results,
     diagnostics and alarms; logs every input and output message to MCAP."""
@@ -121,23 +95,23 @@ class CatenaryMonitor(Node):
                          **kwargs)
         self.config = self._declare_parameters(log_dir)
         self._clock = self.get_clock()
-        self._started = self._now()
-        self._depth = _NAN
-        self._depth_stamp = _NAN
-        self._tide: tuple[Level, str] = (Level.OK, '')
-        self._logger_state: tuple[Level, str] = (Level.OK, '')
+        self._last_ns = 0
         self._log_setup_error = ''
+        self._logger_known = False
+        self._logger_error: Optional[str] = None
         self.callback_errors = 0
-        self.lines = [_Line(line.name) for line in self.config.lines]
-        self._apply_config(self.config)
-        for line in self.lines:
-            line.state = line.alarm.initial()
         self.log = self._open_log()
         self._create_interfaces()
+        start = self._stamp()
+        self.core = MonitorCore(self.config, start,
+                                hardware_ids=dict(zip(self._names, self._tension_topics)),
+                                depth_id=self._depth_topic, logger_id=self._log_dir())
+        self._write_record(Start(start))
+        self._check_logger()
         self.add_on_set_parameters_callback(self._validate_change)
         self.add_post_set_parameters_callback(self._apply_change)
         self.get_logger().info(
-            f'monitoring {len(self.lines)} lines ({", ".join(l.name for l in self.lines)}), '
+            f'monitoring {len(self._names)} lines ({", ".join(self._names)}), '
             f'depth from {self.config.depth_topic}, log in {self._log_dir()}')
 
     # ------------------------------------------------------------------ set-up
@@ -157,17 +131,9 @@ class CatenaryMonitor(Node):
         for line in config.lines:
             if line.ea is not None:
                 self.get_logger().info(
-                    f'{line.name}: EA = {line.ea:g} N, elastic catenary wherever it changes the answer by '
-                    f'more than {elastic.ELASTIC_TOL:g} (diagnostics key "model")')
+                    f'{line.name}: EA = {line.ea:g} N, elastic catenary wherever it changes '
+                    f'the answer by more than {elastic.ELASTIC_TOL:g} (diagnostics key "model")')
         return config
-
-    def _apply_config(self, config: MonitorConfig) -> None:
-        """Take line constants and alarm rules from ``config`` (alarm states are kept)."""
-        self.config = config
-        for line in self.lines:
-            lc = config.line(line.name)
-            line.config = lc
-            line.alarm = LineAlarm.for_line(lc, config.alarm)
 
     def _log_dir(self) -> str:
         return os.path.expanduser(self.config.log_dir)
@@ -202,209 +168,141 @@ class CatenaryMonitor(Node):
     def _create_interfaces(self) -> None:
         """Subscriptions (sensor-data QoS, raw CDR), publishers and timers."""
         cfg = self.config
-        for line in self.lines:
+        self._names = [line.name for line in cfg.lines]
+        self._tension_topics: list[str] = []
+        self._output_topics: list[str] = []
+        self._output_pubs: list[Any] = []
+        for k, line in enumerate(cfg.lines):
             sub = self.create_subscription(
-                Float64, line.config.tension_topic, partial(self._on_tension, line),
+                Float64, line.tension_topic, partial(self._on_tension, k),
                 qos_profile_sensor_data, raw=True)
-            line.tension_topic = sub.topic_name
+            self._tension_topics.append(sub.topic_name)
             self._register(sub.topic_name, 'std_msgs/msg/Float64', 'sensor_data')
-            line.publisher = self.create_publisher(
-                Float64MultiArray, f'~/{line.name}/outputs', _RELIABLE)
-            line.output_topic = line.publisher.topic_name
-            self._register(line.output_topic, 'std_msgs/msg/Float64MultiArray', 'default')
+            pub = self.create_publisher(Float64MultiArray, f'~/{line.name}/outputs', _RELIABLE)
+            self._output_pubs.append(pub)
+            self._output_topics.append(pub.topic_name)
+            self._register(pub.topic_name, 'std_msgs/msg/Float64MultiArray', 'default')
         sub = self.create_subscription(Float64, cfg.depth_topic, self._on_depth,
                                        qos_profile_sensor_data, raw=True)
         self._depth_topic = sub.topic_name
         self._register(self._depth_topic, 'std_msgs/msg/Float64', 'sensor_data')
         self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', _RELIABLE)
         self._register('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', 'default')
+        self._register(EVENTS_TOPIC, 'std_msgs/msg/String', 'default')
+        self._output = Float64MultiArray()
+        self._output.layout.dim = [MultiArrayDimension(
+            label=','.join(OUTPUT_FIELDS), size=len(OUTPUT_FIELDS), stride=len(OUTPUT_FIELDS))]
         self._diag_timer = self.create_timer(1.0 / cfg.alarm.diagnostic_rate, self._on_period)
         self._log_timer = self.create_timer(0.25, self._on_log_timer)
 
     # ------------------------------------------------------------------ callbacks
-    def _now(self) -> float:
-        return self._clock.now().nanoseconds * 1e-9
+    def _stamp(self) -> int:
+        """A distinct, increasing event stamp (ns): the node clock, or 1 ns after the last one."""
+        now = self._clock.now().nanoseconds
+        self._last_ns = now if now > self._last_ns else self._last_ns + 1
+        return self._last_ns
 
     @_guarded
-    def _on_tension(self, line: _Line, data: bytes) -> None:
-        """A hook tension sample (N): log it, solve the line, alarm, publish."""
-        now_ns = self._clock.now().nanoseconds
-        self._write(line.tension_topic, data, now_ns)
-        line.tension = deserialize_message(data, Float64).data
-        line.tension_stamp = now_ns * 1e-9
-        if math.isnan(self._depth_stamp):
-            self._update(line, None, now_ns)
-        else:
-            self._update(line, self._solve_one(line), now_ns)
+    def _on_tension(self, line: int, data: bytes) -> None:
+        """A hook tension sample (N): log it, one core event, publish what it says."""
+        stamp = self._stamp()
+        self._write(self._tension_topics[line], data, stamp)
+        self._run(Tension(stamp, line, deserialize_message(data, Float64).data))
 
     @_guarded
     def _on_depth(self, data: bytes) -> None:
-        """A depth sample (m): log it, solve every line that has a tension (one array call)."""
-        now_ns = self._clock.now().nanoseconds
-        self._write(self._depth_topic, data, now_ns)
-        self._depth = deserialize_message(data, Float64).data
-        self._depth_stamp = now_ns * 1e-9
-        self._check_tide(now_ns * 1e-9)
-        lines = [line for line in self.lines if not math.isnan(line.tension_stamp)]
-        if lines:
-            self._update_many(lines, self._solve_many(lines), now_ns)
+        """A depth sample (m): log it, one core event, publish what it says."""
+        stamp = self._stamp()
+        self._write(self._depth_topic, data, stamp)
+        self._run(Depth(stamp, deserialize_message(data, Float64).data))
 
     @_guarded
     def _on_period(self) -> None:
-        """Steady diagnostics: re-check every line (staleness) and publish /diagnostics."""
-        self._tick(self._clock.now().nanoseconds)
-
-    def _tick(self, now_ns: int) -> None:
-        """Step every line with its last inputs at ``now_ns`` and publish (logged at ``now_ns``).
-
-        Every /diagnostics message not logged at an input's receive time is such a tick, so
-        replay can take the logged /diagnostics times as the node's ticks.
-        """
-        now = now_ns * 1e-9
-        self._check_tide(now)
-        self._check_logger()
-        for line in self.lines:
-            self._step_alarm(line, line.inputs, now)
-        self._publish_diagnostics(now_ns)
+        """The periodic tick: staleness and hold-time clears; /diagnostics at a steady rate."""
+        self._record(Tick(self._stamp()))
 
     @_guarded
     def _on_log_timer(self) -> None:
         """Flush the MCAP chunk when due (bounded loss on SIGKILL); report logger changes."""
         if self.log is not None:
             self.log.tick()
-        if self._check_logger():
-            self._tick(self._clock.now().nanoseconds)
+        self._check_logger()
 
-    # ------------------------------------------------------------------ core calls
-    def _solve_one(self, line: _Line) -> SolveResult:
-        """Solve one line at the newest depth (the core's scalar fast path; with ``ea``, the
-        elastic model's rule)."""
-        lc = line.config
-        return solve(lc.weight, self._depth + lc.hook_height, tension=line.tension,
-                     anchor_distance=lc.anchor_distance, mbl=lc.mbl, ea=lc.ea)
-
-    def _solve_many(self, lines: Sequence[_Line]) -> SolveResult:
-        """Solve several lines at the newest depth in one vectorized call (lines without ``ea``
-        get EA = inf there, which keeps the inextensible answer bit for bit)."""
-        cfgs = [line.config for line in lines]
-        args = (np.array([c.weight for c in cfgs]), self._depth + np.array([c.hook_height for c in cfgs]),
-                np.array([line.tension for line in lines]))
-        kw = dict(anchor_distance=np.array([c.anchor_distance for c in cfgs]), mbl=np.array([c.mbl for c in cfgs]))
-        if any(c.ea is not None for c in cfgs):
-            ea = np.array([math.inf if c.ea is None else c.ea for c in cfgs])
-            return elastic.solve_with_correction(*args, ea=ea, **kw)[0]
-        return solve(args[0], args[1], tension=args[2], **kw)
-
-    def _update_many(self, lines: Sequence[_Line], result: SolveResult, now_ns: int) -> None:
-        messages = result.message
-        models = np.broadcast_to(np.asarray(result.model, dtype=object), np.shape(result.status))
-        columns = {k: np.asarray(getattr(result, k)).tolist() for k in _RESULT_FIELDS
-                   if k != 'depth'}
-        for i, line in enumerate(lines):
-            values = {k: v[i] for k, v in columns.items()}
-            self._update(line, (values, int(result.status[i]), str(messages[i]), str(models[i])), now_ns)
-
-    def _update(self, line: _Line, result: Any, now_ns: int) -> None:
-        """Hand one solved update to the alarm, publish the outputs, report a level change."""
-        now = now_ns * 1e-9
-        if result is None:  # no depth yet: nothing to solve
-            values, status, text, line.model = dict.fromkeys(_RESULT_FIELDS, _NAN), -1, '', 'none'
-        elif isinstance(result, SolveResult):  # a scalar solve
-            values = {k: getattr(result, k) for k in _RESULT_FIELDS if k != 'depth'}
-            status, text, line.model = result.status, result.message, result.model
-        else:  # (values, status, message, model) of one element of a vectorized solve
-            values, status, text, line.model = result
-        values['top_tension'] = line.tension  # the measured tension, solved or not
-        values['depth'] = self._depth + line.config.hook_height
-        values['status'] = float(status)
-        line.values = values
-        line.inputs = AlarmInputs(
-            uplift_force=values['uplift_force'], anchor_margin=values['anchor_margin'],
-            tide_margin=values['tide_margin'], load_margin=values['load_margin'],
-            safety_factor=values['safety_factor'], status=max(status, 0), status_message=text,
-            tension_stamp=line.tension_stamp, depth_stamp=self._depth_stamp)
-        changed = self._step_alarm(line, line.inputs, now)
-        msg = line.message
-        msg.data = [values[k] for k in _RESULT_FIELDS] + [values['status'],
-                                                          float(line.state.level)]
-        data = serialize_message(msg)
-        line.publisher.publish(data)
-        self._write(line.output_topic, data, now_ns)
-        if changed:
-            self._publish_diagnostics(now_ns)
-
-    def _step_alarm(self, line: _Line, inputs: AlarmInputs, now: float) -> bool:
-        """Advance the line's alarm state; log each transition. True if the level changed."""
-        line.state, events = line.alarm.update(line.state, inputs, now)
-        for ev in events:
-            took = '' if ev.duration is None else f' (after {ev.duration:.1f} s)'
-            text = f'ALARM {line.name}: {ev.old.name} -> {ev.new.name}: {ev.message}{took}'
-            # rclpy fixes the severity per call site: one call per severity.
-            if ev.new == Level.ERROR:
-                self.get_logger().error(text)
-            elif ev.new == Level.OK:
-                self.get_logger().info(text)
-            else:
-                self.get_logger().warning(text)
-        return bool(events)
-
-    def _check_tide(self, now: float) -> None:
-        self._tide = tide_status(self._depth, self._depth_stamp, now, self._started,
-                                 self.config.alarm.depth_timeout)
-
-    def _check_logger(self) -> bool:
-        """Refresh the logger status; True if its level changed."""
+    def _check_logger(self) -> None:
+        """A LoggerHealth event whenever the logger's error changes (and once at start)."""
         if self.log is None:
-            state = logger_status(self._log_setup_error or 'no logger', None)
+            error, path = self._log_setup_error or 'no logger', None
         else:
-            path = self.log.current_path
-            state = logger_status(self.log.error, str(path) if path else None)
-        changed = state[0] != self._logger_state[0]
-        if changed and state[0] != Level.OK:
-            self.get_logger().error(state[1])
-        self._logger_state = state
-        return changed
+            current = self.log.current_path
+            error, path = self.log.error, str(current) if current else None
+        if self._logger_known and error == self._logger_error:
+            return
+        self._logger_known, self._logger_error = True, error
+        if error:
+            self.get_logger().error(f'MCAP log not written: {error}')
+        self._record(LoggerHealth(self._stamp(), error, path))
+
+    def _write_record(self, event: Any) -> None:
+        """Log a record of a non-input event (or the start) on the events channel."""
+        record = event_record(event)
+        if record is not None:
+            self._write(EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))),
+                        event.stamp_ns)
+
+    def _record(self, event: Event) -> None:
+        """Record a non-input event, then run it through the core."""
+        self._write_record(event)
+        self._run(event)
+
+    def _run(self, event: Event) -> Step:
+        """One core step; publish and log its outputs and snapshot, report its transitions."""
+        step = self.core.step(event)
+        for out in step.outputs:
+            self._output.data = list(out.values)
+            data = serialize_message(self._output)
+            self._output_pubs[out.line].publish(data)
+            self._write(self._output_topics[out.line], data, step.stamp_ns)
+        for change in step.transitions:
+            self._report(change)
+        if step.snapshot is not None:
+            self._publish_diagnostics(step.snapshot)
+        return step
+
+    def _report(self, change: Change) -> None:
+        """One console line per level change: ``ALARM NAME: OLD -> NEW: message (after N s)``."""
+        ev = change.transition
+        took = '' if ev.duration is None else f' (after {ev.duration:.1f} s)'
+        text = f'ALARM {change.component}: {ev.old.name} -> {ev.new.name}: {ev.message}{took}'
+        # rclpy fixes the severity per call site: one call per severity.
+        if ev.new == Level.ERROR:
+            self.get_logger().error(text)
+        elif ev.new == Level.OK:
+            self.get_logger().info(text)
+        else:
+            self.get_logger().warning(text)
 
     # ------------------------------------------------------------------ output
-    def _write(self, topic: str, data: bytes, now_ns: int) -> None:
+    def _write(self, topic: str, data: bytes, stamp_ns: int) -> None:
         if self.log is not None:
-            self.log.write(topic, data, now_ns)
+            self.log.write(topic, data, stamp_ns)
 
-    def _line_status(self, line: _Line, now: float) -> DiagnosticStatus:
-        values = diagnostic_values(line.values)
-        extra = [('measured_tension', repr(float(line.tension))),
-                 ('tension_age', repr(now - line.tension_stamp)),
-                 ('anchor_distance', repr(line.config.anchor_distance)),
-                 ('allowed_uplift', repr(line.config.allowed_uplift)),
-                 ('anchor_angle_deg', repr(float(line.values['anchor_angle_deg']))),
-                 ('solver_status', str(int(line.values.get('status', -1)))),
-                 ('model', line.model)]
-        return DiagnosticStatus(
-            level=bytes([int(line.state.level)]), name=f'{NODE_NAME}: {line.name}',
-            message=line.state.message, hardware_id=line.tension_topic,
-            values=[KeyValue(key=k, value=v) for k, v in values + extra])
-
-    def _publish_diagnostics(self, now_ns: int) -> None:
-        """One DiagnosticArray at node time ``now_ns``: every line, then the tide and the logger."""
-        now = now_ns * 1e-9
+    def _publish_diagnostics(self, snapshot: Snapshot) -> None:
+        """The core's snapshot as one DiagnosticArray (the logger's counters filled in here)."""
         array = DiagnosticArray()
-        array.header.stamp.sec, array.header.stamp.nanosec = divmod(now_ns, 10**9)
-        array.status = [self._line_status(line, now) for line in self.lines]
-        level, text = self._tide
-        array.status.append(DiagnosticStatus(
-            level=bytes([int(level)]), name=f'{NODE_NAME}: tide', message=text,
-            hardware_id=self._depth_topic,
-            values=[KeyValue(key='depth', value=repr(float(self._depth))),
-                    KeyValue(key='depth_age', value=repr(now - self._depth_stamp))]))
-        level, text = self._logger_state
-        log_values = self.log.diagnostic_values() if self.log is not None else {}
-        array.status.append(DiagnosticStatus(
-            level=bytes([int(level)]), name=f'{NODE_NAME}: logger', message=text,
-            hardware_id=self._log_dir(),
-            values=[KeyValue(key=k, value=v) for k, v in log_values.items()]))
+        array.header.stamp.sec, array.header.stamp.nanosec = divmod(snapshot.stamp_ns, 10**9)
+        statuses = []
+        for st in snapshot.statuses:
+            values = st.values
+            if st.name == f'{NODE_NAME}: logger' and self.log is not None:
+                values = tuple(self.log.diagnostic_values().items())
+            statuses.append(DiagnosticStatus(
+                level=bytes([int(st.level)]), name=st.name, message=st.message,
+                hardware_id=st.hardware_id,
+                values=[KeyValue(key=k, value=v) for k, v in values]))
+        array.status = statuses
         data = serialize_message(array)
         self._diag_pub.publish(data)
-        self._write('/diagnostics', data, now_ns)
+        self._write('/diagnostics', data, snapshot.stamp_ns)
 
     # ------------------------------------------------------------------ parameters
     def _current_params(self) -> dict[str, Any]:
@@ -421,9 +319,10 @@ class CatenaryMonitor(Node):
         return SetParametersResult(successful=True)
 
     def _apply_change(self, params: list[Parameter]) -> None:
-        """Apply an accepted change: new line constants and alarm rules, states kept."""
+        """Apply an accepted change: a Reconfigure event (states kept), recorded in the log."""
         config = config_from_params(self._current_params())
-        self._apply_config(config)
+        self.config = config
+        self._record(Reconfigure(self._stamp(), config))
         self._diag_timer.timer_period_ns = int(1e9 / config.alarm.diagnostic_rate)
         if self.log is not None:
             self.log.add_metadata(NODE_NAME, self._metadata(config))

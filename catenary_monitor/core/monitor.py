@@ -1,0 +1,422 @@
+"""The monitor core: one object that owns every decision of the live monitor (no rclpy, no clock).
+
+:class:`MonitorCore` holds the per-line state (newest inputs and results, alarm states), the
+tide and logger statuses, and turns each event into one :class:`Step`:
+
+* :class:`Tension` (a hook tension sample of one line), :class:`Depth` (a tide depth sample),
+  :class:`Tick` (the periodic step, at ``diagnostic_rate``), :class:`LoggerHealth` (the MCAP
+  logger's state changed) and :class:`Reconfigure` (accepted parameter change), each with its
+  time ``stamp_ns`` (ns on the monitor's clock; events come in time order).
+
+What an event does, in this order (the one schedule the node, replay and the tests share):
+
+1. its input is taken: the line's newest tension, or the depth, stamped ``stamp_ns``;
+2. at a depth event or a tick the tide is decided: its level and message, and whether the depth
+   is stale (older than ``depth_timeout``), one decision that every line then takes;
+3. lines are solved (``solve(..., ea=line.ea)``): a tension event solves its line at the newest
+   depth (``depth + hook_height``); a depth event solves every line that has a tension;
+4. alarms are stepped (:class:`~catenary_monitor.core.alarms.LineAlarm`): the solved line at a
+   tension event, every line at a depth event or a tick;
+5. a diagnostic snapshot is taken when the event is a tick or when any level changed: never two
+   per event, so the statuses of one snapshot always agree.
+
+The :class:`Step` carries the outputs of the lines solved (:data:`OUTPUT_FIELDS`), the snapshot
+(or None) and the level transitions. A line is never OK while blind: before its first tension
+and before the first depth it is STALE and says what is missing. Times in the alarm logic are
+seconds (``stamp_ns * 1e-9``); forces N, lengths m.
+"""
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from typing import Any, NamedTuple, Optional, Sequence, Union
+
+import numpy as np
+
+from catenary_monitor.core.alarms import (AlarmInputs, AlarmState, Level, LineAlarm, Transition,
+                                          diagnostic_values)
+from catenary_monitor.core.config import (LineConfig, MonitorConfig, config_from_params,
+                                          config_to_params, resolve_topic)
+from catenary_monitor.core.health import logger_status, tide_status
+from catenary_monitor.core.solve import solve
+
+__all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'VALUE_FIELDS', 'NO_DEPTH', 'NO_MODEL', 'EVENTS_TOPIC',
+           'Tension', 'Depth', 'Tick', 'LoggerHealth', 'Reconfigure', 'Start', 'Event', 'LineOutput',
+           'ComponentStatus', 'Snapshot', 'Change', 'Step', 'LineState', 'MonitorCore',
+           'line_status', 'tide_component', 'event_record', 'parse_event_record']
+
+#: Node name: the ``/diagnostics`` status names start with it; params files use it as top key.
+NODE_NAME = 'catenary_monitor'
+#: Element order of each line's outputs (``/catenary_monitor/NAME/outputs``), SI units;
+#: ``status`` is the solver code (:data:`NO_DEPTH` before the first depth), ``level`` 0-3.
+OUTPUT_FIELDS = ('top_tension', 'depth', 'horizontal_tension', 'min_anchor_distance',
+                 'anchor_margin', 'uplift_force', 'tide_margin', 'load_margin', 'safety_factor',
+                 'anchor_angle_deg', 'suspended_length', 'status', 'level')
+#: The solved quantities among them.
+VALUE_FIELDS = OUTPUT_FIELDS[:-2]
+#: Solver status of an update made before any depth sample arrived.
+NO_DEPTH = -1
+#: ``model`` of a line that has not been solved yet.
+NO_MODEL = 'none'
+#: MCAP-only channel where the node records the events that are not input messages (ticks,
+#: logger changes, reconfigurations), so that replay redoes every step exactly.
+EVENTS_TOPIC = f'/{NODE_NAME}/events'
+
+_NAN = math.nan
+_SOLVED = VALUE_FIELDS[2:]  # taken from the solve result (the first two are the inputs)
+_NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
+
+
+class Tension(NamedTuple):
+    """A hook tension sample [N] of line number ``line`` (config order), received at
+    ``stamp_ns``."""
+
+    stamp_ns: int
+    line: int
+    value: float
+
+
+class Depth(NamedTuple):
+    """A tide depth sample [m] at the hooks, received at ``stamp_ns``."""
+
+    stamp_ns: int
+    value: float
+
+
+class Tick(NamedTuple):
+    """The periodic step at ``stamp_ns`` (staleness and hold-time clears are decided here)."""
+
+    stamp_ns: int
+
+
+class LoggerHealth(NamedTuple):
+    """The MCAP logger's state at ``stamp_ns``: ``error`` (None while it writes) and its file."""
+
+    stamp_ns: int
+    error: Optional[str]
+    path: Optional[str]
+
+
+class Start(NamedTuple):
+    """Not an event but a record: the monitor started (blind) at ``stamp_ns``."""
+
+    stamp_ns: int
+
+
+class Reconfigure(NamedTuple):
+    """Accepted parameter change at ``stamp_ns``: the new configuration (same lines)."""
+
+    stamp_ns: int
+    config: MonitorConfig
+
+
+Event = Union[Tension, Depth, Tick, LoggerHealth, Reconfigure]
+
+
+class LineOutput(NamedTuple):
+    """The outputs of line number ``line`` after a solve: :data:`OUTPUT_FIELDS` as floats."""
+
+    line: int
+    values: tuple[float, ...]
+
+
+class ComponentStatus(NamedTuple):
+    """One ``DiagnosticStatus``: name, level, message, hardware id and ``(key, value)`` strings."""
+
+    name: str
+    level: Level
+    message: str
+    hardware_id: str
+    values: tuple[tuple[str, str], ...]
+
+
+class Snapshot(NamedTuple):
+    """One ``DiagnosticArray`` at ``stamp_ns``: every line, then the tide, then the logger."""
+
+    stamp_ns: int
+    statuses: tuple[ComponentStatus, ...]
+
+
+class Change(NamedTuple):
+    """A level transition of one component (a line name, ``tide`` or ``logger``)."""
+
+    component: str
+    transition: Transition
+
+
+class Step(NamedTuple):
+    """What one event did: the outputs of the lines solved, the snapshot (or None), the
+    transitions; ``kind`` is ``tension``, ``depth``, ``tick``, ``logger`` or ``configure``."""
+
+    stamp_ns: int
+    kind: str
+    outputs: tuple[LineOutput, ...]
+    snapshot: Optional[Snapshot]
+    transitions: tuple[Change, ...]
+
+
+@dataclass
+class LineState:
+    """Everything the core remembers of one line between events."""
+
+    config: LineConfig
+    alarm: LineAlarm
+    hardware_id: str
+    state: AlarmState
+    tension: float = _NAN          # N, newest sample
+    tension_s: float = _NAN        # s, its stamp (NaN: none yet)
+    values: tuple[float, ...] = _NAN_VALUES  # VALUE_FIELDS of the newest solve
+    status: int = NO_DEPTH         # solver status of the newest solve
+    status_message: str = ''
+    model: str = NO_MODEL          # model of the newest solve
+
+    def inputs(self, depth_s: float, depth_stale: bool) -> AlarmInputs:
+        """The alarm inputs of this line now (newest results, stamps, the tide's decision)."""
+        v = self.values
+        return AlarmInputs(uplift_force=v[5], anchor_margin=v[4], tide_margin=v[6],
+                           load_margin=v[7], safety_factor=v[8], status=max(self.status, 0),
+                           status_message=self.status_message, tension_stamp=self.tension_s,
+                           depth_stamp=depth_s, depth_stale=depth_stale)
+
+
+def _stamp_s(stamp_ns: int) -> float:
+    return stamp_ns * 1e-9
+
+
+class MonitorCore:
+    """The monitor's state and its one decision path: :meth:`step` an event, get a :class:`Step`.
+
+    Parameters
+    ----------
+    config : the validated configuration (lines, topics, alarm settings).
+    start_ns : time the monitor starts (ns); lines and tide are blind (STALE) from then.
+    hardware_ids : line name -> the tension topic as resolved by the node (default: resolved
+        in the root namespace); ``depth_id`` the depth topic; ``logger_id`` the log directory.
+    """
+
+    def __init__(self, config: MonitorConfig, start_ns: int,
+                 hardware_ids: Optional[dict[str, str]] = None, depth_id: Optional[str] = None,
+                 logger_id: str = '') -> None:
+        ids = hardware_ids or {}
+        start = _stamp_s(start_ns)
+        self.config = config
+        self.lines = [LineState(lc, LineAlarm.for_line(lc, config.alarm),
+                                ids.get(lc.name, resolve_topic(lc.tension_topic)),
+                                LineAlarm.for_line(lc, config.alarm).initial(start))
+                      for lc in config.lines]
+        self.index = {line.config.name: k for k, line in enumerate(self.lines)}
+        self.depth_id = depth_id or resolve_topic(config.depth_topic)
+        self.logger_id = logger_id
+        self.depth = _NAN      # m, newest sample
+        self.depth_s = _NAN    # s, its stamp
+        self.depth_stale = False
+        self.tide: tuple[Level, str] = tide_status(_NAN, _NAN, start, config.alarm.depth_timeout)
+        self.tide_entered = start
+        self.logger: tuple[Level, str] = (Level.OK, 'logging')
+        self.logger_entered = start
+        self.last_ns = start_ns
+
+    # ------------------------------------------------------------------ events
+    def step(self, event: Event) -> Step:
+        """Apply one event (see the module docstring for the schedule); return what it did."""
+        self.last_ns = event.stamp_ns
+        if isinstance(event, Tension):
+            return self._on_tension(event)
+        if isinstance(event, Depth):
+            return self._on_depth(event)
+        if isinstance(event, Tick):
+            return self._on_tick(event)
+        if isinstance(event, LoggerHealth):
+            return self._on_logger(event)
+        if isinstance(event, Reconfigure):
+            self.reconfigure(event.config)
+            return Step(event.stamp_ns, 'configure', (), None, ())
+        raise TypeError(f'not a monitor event: {event!r}')
+
+    def _on_tension(self, ev: Tension) -> Step:
+        line = self.lines[ev.line]
+        line.tension, line.tension_s = float(ev.value), _stamp_s(ev.stamp_ns)
+        self._solve_one(line)
+        changes = self._step_lines([ev.line], ev.stamp_ns)
+        return self._finish(ev.stamp_ns, 'tension', [ev.line], changes)
+
+    def _on_depth(self, ev: Depth) -> Step:
+        self.depth, self.depth_s = float(ev.value), _stamp_s(ev.stamp_ns)
+        changes = self._decide_tide(ev.stamp_ns)
+        solved = [k for k, line in enumerate(self.lines) if line.tension_s == line.tension_s]
+        self._solve_many(solved)
+        changes += self._step_lines(range(len(self.lines)), ev.stamp_ns)
+        return self._finish(ev.stamp_ns, 'depth', solved, changes)
+
+    def _on_tick(self, ev: Tick) -> Step:
+        changes = self._decide_tide(ev.stamp_ns)
+        changes += self._step_lines(range(len(self.lines)), ev.stamp_ns)
+        return Step(ev.stamp_ns, 'tick', (), self.snapshot(ev.stamp_ns), tuple(changes))
+
+    def _on_logger(self, ev: LoggerHealth) -> Step:
+        new = logger_status(ev.error, ev.path)
+        changes = self._set_component('logger', new, ev.stamp_ns)
+        return self._finish(ev.stamp_ns, 'logger', [], changes)
+
+    def reconfigure(self, config: MonitorConfig) -> None:
+        """Take new line constants and alarm rules (same line names); alarm states are kept."""
+        names = [lc.name for lc in config.lines]
+        if names != [line.config.name for line in self.lines]:
+            raise ValueError(f'reconfigure: the lines must stay {list(self.index)}, got {names}')
+        self.config = config
+        for line, lc in zip(self.lines, config.lines):
+            line.config, line.alarm = lc, LineAlarm.for_line(lc, config.alarm)
+
+    # ------------------------------------------------------------------ decisions
+    def _decide_tide(self, stamp_ns: int) -> list[Change]:
+        """Tide level and message, and the one depth-stale decision every line takes."""
+        now = _stamp_s(stamp_ns)
+        timeout = self.config.alarm.depth_timeout
+        self.depth_stale = self.depth_s == self.depth_s and now - self.depth_s > timeout
+        return self._set_component('tide', tide_status(self.depth, self.depth_s, now, timeout),
+                                   stamp_ns)
+
+    def _set_component(self, name: str, new: tuple[Level, str], stamp_ns: int) -> list[Change]:
+        """Set the tide's or the logger's (level, message); a Change if the level moved."""
+        old: tuple[Level, str] = getattr(self, name)
+        setattr(self, name, new)
+        if new[0] == old[0]:
+            return []
+        now = _stamp_s(stamp_ns)
+        entered = getattr(self, f'{name}_entered')
+        setattr(self, f'{name}_entered', now)
+        return [Change(name, Transition(now, old[0], new[0], new[1], now - entered))]
+
+    def _solve_one(self, line: LineState) -> None:
+        """Solve one line at the newest depth (the scalar fast path)."""
+        lc, t = line.config, line.tension
+        h = self.depth + lc.hook_height
+        if self.depth_s != self.depth_s:  # no depth yet: nothing to solve
+            line.values, line.status, line.status_message, line.model = (
+                (t, h) + _NAN_VALUES[2:], NO_DEPTH, '', NO_MODEL)
+            return
+        r = solve(lc.weight, h, tension=t, anchor_distance=lc.anchor_distance, mbl=lc.mbl,
+                  ea=lc.ea)
+        line.values = (t, h, r.horizontal_tension, r.min_anchor_distance, r.anchor_margin,
+                       r.uplift_force, r.tide_margin, r.load_margin, r.safety_factor,
+                       r.anchor_angle_deg, r.suspended_length)
+        line.status, line.status_message, line.model = int(r.status), r.message, r.model
+
+    def _solve_many(self, which: Sequence[int]) -> None:
+        """Solve several lines at the newest depth in one vectorized call."""
+        if not which:
+            return
+        lines = [self.lines[k] for k in which]
+        cfgs = [line.config for line in lines]
+        tension = np.array([line.tension for line in lines])
+        h = self.depth + np.array([c.hook_height for c in cfgs])
+        ea = None
+        if any(c.ea is not None for c in cfgs):
+            ea = np.array([math.inf if c.ea is None else c.ea for c in cfgs])
+        r = solve(np.array([c.weight for c in cfgs]), h, tension=tension,
+                  anchor_distance=np.array([c.anchor_distance for c in cfgs]),
+                  mbl=np.array([c.mbl for c in cfgs]), ea=ea)
+        columns = [tension.tolist(), h.tolist()] + [np.asarray(getattr(r, k)).tolist()
+                                                    for k in _SOLVED]
+        models = np.broadcast_to(np.asarray(r.model, dtype=object), tension.shape)
+        messages, status = r.message, np.asarray(r.status).tolist()
+        for i, line in enumerate(lines):
+            line.values = tuple(col[i] for col in columns)
+            line.status, line.status_message = int(status[i]), str(messages[i])
+            line.model = str(models[i])
+
+    def _step_lines(self, which: Any, stamp_ns: int) -> list[Change]:
+        """Step the alarms of the given lines at ``stamp_ns``; their transitions."""
+        now = _stamp_s(stamp_ns)
+        changes = []
+        for k in which:
+            line = self.lines[k]
+            line.state, events = line.alarm.update(
+                line.state, line.inputs(self.depth_s, self.depth_stale), now)
+            changes += [Change(line.config.name, ev) for ev in events]
+        return changes
+
+    def _finish(self, stamp_ns: int, kind: str, solved: Sequence[int],
+                changes: list[Change]) -> Step:
+        """The Step of an input event: outputs of the solved lines, a snapshot on a change."""
+        outputs = tuple(self.output(k) for k in solved)
+        snapshot = self.snapshot(stamp_ns) if changes else None
+        return Step(stamp_ns, kind, outputs, snapshot, tuple(changes))
+
+    # ------------------------------------------------------------------ views
+    def output(self, k: int) -> LineOutput:
+        """Line ``k``'s outputs now (:data:`OUTPUT_FIELDS`)."""
+        line = self.lines[k]
+        return LineOutput(k, line.values + (float(line.status), float(int(line.state.level))))
+
+    def snapshot(self, stamp_ns: int) -> Snapshot:
+        """The diagnostic snapshot at ``stamp_ns``: every line, the tide, the logger."""
+        now = _stamp_s(stamp_ns)
+        statuses = [line_status(line.config, line.hardware_id, line.state.level,
+                                line.state.message, line.values, line.status, line.model,
+                                now - line.tension_s) for line in self.lines]
+        statuses.append(tide_component(self.tide, self.depth_id, self.depth, now - self.depth_s))
+        level, message = self.logger
+        statuses.append(ComponentStatus(f'{NODE_NAME}: logger', level, message, self.logger_id,
+                                        ()))
+        return Snapshot(stamp_ns, tuple(statuses))
+
+
+def line_status(config: LineConfig, hardware_id: str, level: Level, message: str,
+                values: Sequence[float], status: int, model: str,
+                tension_age: float) -> ComponentStatus:
+    """One line's ``DiagnosticStatus``: the contract keys (SI strings ``float()`` reads back
+    exactly), then ``measured_tension``, ``tension_age`` [s], ``anchor_distance``,
+    ``allowed_uplift``, ``anchor_angle_deg``, ``solver_status`` and ``model``."""
+    named = dict(zip(VALUE_FIELDS, values))
+    pairs = diagnostic_values(named) + [
+        ('measured_tension', repr(float(values[0]))), ('tension_age', repr(float(tension_age))),
+        ('anchor_distance', repr(config.anchor_distance)),
+        ('allowed_uplift', repr(config.allowed_uplift)),
+        ('anchor_angle_deg', repr(float(values[9]))), ('solver_status', str(int(status))),
+        ('model', model)]
+    return ComponentStatus(f'{NODE_NAME}: {config.name}', level, message, hardware_id,
+                           tuple(pairs))
+
+
+def tide_component(tide: tuple[Level, str], hardware_id: str, depth: float,
+                   depth_age: float) -> ComponentStatus:
+    """The tide's ``DiagnosticStatus``: values ``depth`` [m] and ``depth_age`` [s]."""
+    return ComponentStatus(f'{NODE_NAME}: tide', tide[0], tide[1], hardware_id,
+                           (('depth', repr(float(depth))), ('depth_age', repr(float(depth_age)))))
+
+
+# --- the events channel ---------------------------------------------------------------------------
+
+def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
+    """What the node records on :data:`EVENTS_TOPIC` for an event that is not an input message
+    (None for tension and depth: their input messages are the record)."""
+    if isinstance(event, Start):
+        return {'kind': 'start'}
+    if isinstance(event, Tick):
+        return {'kind': 'tick'}
+    if isinstance(event, LoggerHealth):
+        return {'kind': 'logger', 'error': event.error, 'path': event.path}
+    if isinstance(event, Reconfigure):
+        return {'kind': 'configure', 'parameters': config_to_params(event.config)}
+    return None
+
+
+def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]]:
+    """The event (or :class:`Start`) of one :data:`EVENTS_TOPIC` record (None for an unknown
+    or damaged one)."""
+    try:
+        record = json.loads(text)
+        kind = record['kind']
+        if kind == 'start':
+            return Start(stamp_ns)
+        if kind == 'tick':
+            return Tick(stamp_ns)
+        if kind == 'logger':
+            return LoggerHealth(stamp_ns, record.get('error'), record.get('path'))
+        if kind == 'configure':
+            return Reconfigure(stamp_ns, config_from_params(record['parameters']))
+    except (ValueError, KeyError, TypeError):
+        return None
+    return None

@@ -1,0 +1,274 @@
+"""The vectorized twin (core.batch.advance) against the monitor core itself, event by event.
+
+The scalar :class:`MonitorCore` is the oracle: the same events are stepped through it one at a
+time and handed to ``advance`` as columns (in one window or several), and every output, level,
+transition and snapshot must agree (values to 1e-12, everything else exactly), as must the
+core's state afterwards.
+"""
+import math
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings, strategies as st
+
+from catenary_monitor.core.batch import KIND_TENSION, Window, advance, recompute, tick_grid
+from catenary_monitor.core.config import LineConfig, MonitorConfig
+from catenary_monitor.core.monitor import VALUE_FIELDS, Depth, MonitorCore, Tension, Tick
+
+from replay_data import T0_NS, core_steps, dock_config, generate
+
+
+def window_of(config, tensions, depth, ticks, lo=None, hi=None):
+    """The columns of the events with lo <= t < hi."""
+    def cut(t, *cols):
+        keep = np.ones(len(t), bool)
+        if lo is not None:
+            keep &= t >= lo
+        if hi is not None:
+            keep &= t < hi
+        return (t[keep], *(c[keep] for c in cols))
+    empty = (np.zeros(0, np.int64), np.zeros(0))
+    cols = [cut(*tensions.get(line.name, empty)) for line in config.lines]
+    return Window(cols, cut(*depth), cut(ticks)[0])
+
+
+def _nan_free(x):
+    """``x`` with every NaN float as None (NaN != NaN would fail equal states)."""
+    if isinstance(x, float) and math.isnan(x):
+        return None
+    if isinstance(x, tuple):
+        return type(x)(*map(_nan_free, x)) if hasattr(x, '_fields') else tuple(map(_nan_free, x))
+    return x
+
+
+def core_state(core):
+    lines = [(_nan_free((line.state.level, line.state.message, line.state.latches,
+                         line.state.entered, line.state.input_message)),
+              _nan_free((line.tension, line.tension_s)), line.values,
+              line.status, line.status_message, line.model) for line in core.lines]
+    rest = (core.depth, core.depth_s, core.depth_stale, core.tide, core.tide_entered)
+    return lines, _nan_free(rest)
+
+
+def assert_same_float(a, b, what):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    assert a.shape == b.shape, what
+    np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-9, equal_nan=True, err_msg=what)
+
+
+def assert_statuses_agree(got, want, stamp):
+    assert len(got) == len(want), stamp
+    for g, w in zip(got, want):
+        assert (g.name, g.level, g.message, g.hardware_id) == \
+            (w.name, w.level, w.message, w.hardware_id), (stamp, g.name)
+        assert [k for k, _ in g.values] == [k for k, _ in w.values], (stamp, g.name)
+        for (key, gv), (_, wv) in zip(g.values, w.values):
+            if key == 'model':
+                assert gv == wv, (stamp, g.name)
+                continue
+            try:
+                assert_same_float(float(gv), float(wv), f'{stamp} {g.name} {key}')
+            except ValueError:
+                assert gv == wv, (stamp, g.name, key)
+
+
+def compare(config, tensions, depth, ticks, cuts=(), check_snapshots=True):
+    """Core event by event vs advance over windows split at ``cuts``; returns the steps.
+
+    Snapshots are compared only where no two events share a stamp (the node's logs): with
+    equal stamps the twin sees every event of that stamp at once.
+    """
+    start = T0_NS
+    core, steps = core_steps(config, tensions, depth, ticks, start)
+    twin = MonitorCore(config, start)
+    bounds = [None, *cuts, None]
+    results = [advance(twin, window_of(config, tensions, depth, ticks, lo, hi), snapshots=True)
+               for lo, hi in zip(bounds[:-1], bounds[1:])]
+    # Outputs: every solved update of every line, in order.
+    for k, line in enumerate(config.lines):
+        want = [(s.stamp_ns, s.kind, o.values) for s in steps for o in s.outputs if o.line == k]
+        t_ns = np.concatenate([r.lines[k].t_ns for r in results])
+        assert t_ns.tolist() == [w[0] for w in want], line.name
+        kinds = np.concatenate([r.lines[k].kind for r in results])
+        assert [('tension' if x == KIND_TENSION else 'depth') for x in kinds] == \
+            [w[1] for w in want], line.name
+        data = np.array([w[2] for w in want]).reshape(-1, 13)
+        for j, key in enumerate(VALUE_FIELDS):
+            got = np.concatenate([r.lines[k].values[key] for r in results])
+            assert_same_float(got, data[:, j], f'{line.name} {key}')
+        status = np.concatenate([r.lines[k].status for r in results])
+        level = np.concatenate([r.lines[k].level for r in results])
+        assert status.tolist() == data[:, 11].astype(int).tolist(), line.name
+        assert level.tolist() == data[:, 12].astype(int).tolist(), line.name
+    # Transitions, component by component.
+    want_tr = [c for s in steps for c in s.transitions]
+    got_tr = [c for r in results for c in r.changes()]
+    assert sorted(got_tr, key=lambda c: (c.transition.time, c.component)) == \
+        sorted(want_tr, key=lambda c: (c.transition.time, c.component))
+    if not check_snapshots:
+        return steps
+    # Snapshots: the same stamps, the same statuses.
+    want_sn = [s.snapshot for s in steps if s.snapshot is not None]
+    got_sn = [sn for r in results for sn in r.snapshots]
+    assert [s.stamp_ns for s in got_sn] == [s.stamp_ns for s in want_sn]
+    for g, w in zip(got_sn, want_sn):
+        assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
+    # The state left behind.
+    got_lines, got_rest = core_state(twin)
+    want_lines, want_rest = core_state(core)
+    assert got_rest == want_rest
+    for g, w in zip(got_lines, want_lines):
+        assert g[:2] == w[:2] and g[3:] == w[3:]
+        assert_same_float(g[2], w[2], 'values')
+    return steps
+
+
+def ticks_for(tensions, depth, rate=1.0, offset_ns=123_456):
+    starts = [c[0][0] for c in (*tensions.values(), depth) if len(c[0])]
+    ends = [c[0][-1] for c in (*tensions.values(), depth) if len(c[0])]
+    return tick_grid(int(min(starts)) + offset_ns, int(max(ends)), rate)
+
+
+@pytest.mark.parametrize('seed', [1, 2, 3])
+def test_advance_equals_the_core_on_a_storm_with_dropouts(seed):
+    config = dock_config(3)
+    tensions, depth = generate(config, seconds=90.0, seed=seed)
+    steps = compare(config, tensions, depth, ticks_for(tensions, depth))
+    levels = {c.transition.new.name for s in steps for c in s.transitions}
+    assert levels == {'OK', 'WARN', 'ERROR', 'STALE'}  # not vacuous: every level is reached
+    assert sum(len(s.transitions) for s in steps) >= 10
+
+
+def test_advance_in_several_windows_equals_one_core():
+    config = dock_config(3)
+    tensions, depth = generate(config, seconds=90.0, seed=4)
+    ticks = ticks_for(tensions, depth)
+    cuts = [T0_NS + int(s * 1e9) for s in (0.2, 17.3, 45.0, 45.5, 60.0)]
+    compare(config, tensions, depth, ticks, cuts)
+
+
+def test_late_first_depth_and_lines_without_tension():
+    config = dock_config(3, depth_timeout=2.0)
+    tensions, depth = generate(config, seconds=40.0, seed=5)
+    late = depth[0] > T0_NS + int(8e9)           # the first depth 8 s after the tensions
+    depth = (depth[0][late], depth[1][late])
+    del tensions['line_03']                        # a line that never reports
+    steps = compare(config, tensions, depth, ticks_for(tensions, depth, rate=2.0))
+    first = [s for s in steps if s.kind == 'depth'][0]
+    assert first.snapshot is not None
+    lines = {st.name.split(': ')[1]: st for st in first.snapshot.statuses}
+    assert lines['line_03'].message == 'no tension received yet'
+    assert lines['line_03'].level.name == 'STALE'
+
+
+def test_elastic_line_and_depth_loss():
+    base = dock_config(2, depth_timeout=3.0)
+    lines = base.lines + (LineConfig('line_03', 1300.0, 121.06, 4827000.0, ea=6.6e8),)
+    config = MonitorConfig(lines=lines, alarm=base.alarm)
+    tensions, depth = generate(config, seconds=60.0, seed=6, storm_line=2)
+    steps = compare(config, tensions, depth, ticks_for(tensions, depth, rate=4.0))
+    models = {o.values[11] for s in steps for o in s.outputs if o.line == 2}
+    assert 0.0 in models
+
+
+def test_before_any_input_every_line_is_stale_and_says_why():
+    config = dock_config(2)
+    core = MonitorCore(config, T0_NS)
+    step = core.step(Tick(T0_NS + 10**9))
+    messages = {st.name: (st.level.name, st.message) for st in step.snapshot.statuses}
+    assert messages['catenary_monitor: line_01'] == (
+        'STALE', 'no tension received yet; no depth received yet')
+    assert messages['catenary_monitor: tide'] == ('STALE', 'no depth received yet')
+    step = core.step(Tension(T0_NS + 2 * 10**9, 0, 372e3))
+    assert step.outputs[0].values[11] == -1 and math.isnan(step.outputs[0].values[4])
+    assert core.lines[0].state.message == 'no depth received yet'
+
+
+def test_a_late_first_depth_gives_one_snapshot_that_agrees_with_itself():
+    """The old node stepped lines one at a time and published after each change."""
+    config = dock_config(3, depth_timeout=2.0)
+    core = MonitorCore(config, T0_NS)
+    for k in range(3):
+        core.step(Tension(T0_NS + (k + 1) * 10**8, k, 372e3))
+    core.step(Tick(T0_NS + 5 * 10**9))
+    step = core.step(Depth(T0_NS + 6 * 10**9, 20.85))
+    assert step.snapshot is not None and len(step.outputs) == 3
+    levels = {st.name: st.level.name for st in step.snapshot.statuses}
+    # Tensions are 5.9 s old (timeout 1.5 s): every line STALE for that, in the one snapshot.
+    assert [levels[f'catenary_monitor: line_0{k}'] for k in (1, 2, 3)] == ['STALE'] * 3
+    assert levels['catenary_monitor: tide'] == 'OK'
+
+
+def test_coincident_times_and_synthetic_ticks_and_on_delay():
+    """Receive times that coincide with ticks and with each other (order depth, tension,
+    tick), an on-delay, and the synthetic tick grid."""
+    config = dock_config(2, on_delay=1.5, tension_timeout=0.9)
+    tensions, depth = generate(config, seconds=60.0, rate=5.0, seed=11)
+    snap = lambda t: (t // 500_000_000) * 500_000_000  # noqa: E731 - a 0.5 s grid
+    tensions = {k: (snap(t), v) for k, (t, v) in tensions.items()}
+    depth = (snap(depth[0]), depth[1])
+    rep = recompute(config, tensions, depth)
+    assert not rep.ticks_from_log and len(rep.tick_ns) > 50
+    compare(config, tensions, depth, rep.tick_ns, check_snapshots=False)
+
+
+def test_a_log_without_depth_and_a_line_without_tension():
+    config = dock_config(2)
+    tensions, depth = generate(config, seconds=20.0, seed=5, dropouts=False)
+    del tensions['line_02']
+    empty = (np.zeros(0, np.int64), np.zeros(0))
+    rep = recompute(config, tensions, empty)
+    compare(config, tensions, empty, rep.tick_ns)
+    assert set(rep.lines[0].status.tolist()) == {-1}          # unsolved, as the node publishes
+    assert set(rep.lines[1].step_level.tolist()) == {3}       # STALE throughout: never seen
+    assert rep.lines[1].transitions == []
+
+
+@st.composite
+def schedules(draw, distinct):
+    """Random schedules: any interleaving of tension, depth and ticks, gaps, impossible
+    samples, uplift and warning crossings, on-delays and hold times; ``distinct``: no two
+    events share a stamp (as in the node's logs), else a coarse grid with collisions."""
+    config = dock_config(2, on_delay=draw(st.sampled_from([0.0, 0.3])),
+                         clear_hold=draw(st.sampled_from([0.0, 0.7])), warn_clear_hold=0.5,
+                         tension_timeout=0.6, depth_timeout=1.1)
+    grid = st.integers(0, 40).map(lambda k: T0_NS + k * 100_000_000)
+    used = set()
+
+    def stamps(max_size):
+        times = sorted(draw(st.lists(grid, max_size=max_size)))
+        if distinct:
+            out = []
+            for t in times:
+                while t in used:
+                    t += 1
+                used.add(t)
+                out.append(t)
+            times = sorted(out)
+        return np.array(times, np.int64)
+    value = st.one_of(st.floats(3.0e5, 2.0e6), st.sampled_from([math.nan, -1.0, 0.0]))
+    tensions = {}
+    for line in config.lines:
+        t = stamps(25)
+        tensions[line.name] = (t, np.array(draw(st.lists(value, min_size=len(t),
+                                                         max_size=len(t))), float))
+    d = stamps(8)
+    depth = (d, np.array(draw(st.lists(st.one_of(st.floats(15.0, 26.0), st.just(-1.0)),
+                                       min_size=len(d), max_size=len(d))), float))
+    ticks = np.unique(stamps(12))
+    cuts = sorted(draw(st.lists(grid, max_size=3)))
+    return config, tensions, depth, ticks, cuts
+
+
+@settings(max_examples=60, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(schedules(distinct=True))
+def test_random_schedules_with_distinct_stamps(case):
+    compare(*case)
+
+
+@settings(max_examples=40, deadline=None, database=None,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(schedules(distinct=False))
+def test_random_schedules_with_equal_stamps(case):
+    compare(*case, check_snapshots=False)
