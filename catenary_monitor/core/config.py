@@ -2,8 +2,9 @@
 
 No rclpy here. The node declares its parameters from :data:`PARAMETERS` (description, unit,
 range) and builds a :class:`MonitorConfig` with :func:`config_from_params`; replay builds the same
-dataclass from the same YAML with :func:`load_params_file`. Both share one validation, and every
-failure is a :class:`ConfigError` whose message is one line naming the parameter and the rule.
+dataclass from the same YAML with :func:`load_params_file`, which reads it by rcl's rules
+(:mod:`catenary_monitor.core.params_file`). Both share one validation, and every failure is a
+:class:`ConfigError` whose message is one line naming the parameter and the rule.
 
 Units are SI: N, N/m, m, s, Hz.
 """
@@ -311,48 +312,22 @@ def expand_parameters(lines: tuple[str, ...] | list[str]) -> Iterator[tuple[str,
             yield spec.full_name(line), spec
 
 
-def _flatten(tree: Mapping[str, Any], prefix: str = '') -> dict[str, Any]:
-    flat: dict[str, Any] = {}
-    for key, value in tree.items():
-        name = f'{prefix}{key}'
-        if isinstance(value, Mapping):
-            flat.update(_flatten(value, name + '.'))
-        else:
-            flat[name] = value
-    return flat
+def load_params_file(path: str | Path, node_name: str = 'catenary_monitor',
+                     node_namespace: str = '/') -> dict[str, Any]:
+    """Parameters of node ``node_namespace/node_name`` in a ROS 2 params YAML, flattened.
 
-
-def load_params_file(path: str | Path, node_name: str = 'catenary_monitor') -> dict[str, Any]:
-    """Read a ROS 2 params YAML and return its parameters for ``node_name``, flattened.
-
-    Sections ``/**``, ``/**/NODE``, ``NODE`` and ``/NODE`` are merged in that order (the node's
-    own section wins), then ``ros__parameters`` is flattened to dotted names
-    (``line_01: {weight: 1300}`` becomes ``line_01.weight``), as ROS does.
+    Read as the live node reads ``--params-file`` (:mod:`catenary_monitor.core.params_file`:
+    rcl's YAML rules, rclpy's section matching): the same files are refused, and the dotted names,
+    types and values are those of ``node._parameter_overrides`` (``1300`` an int, ``1e6`` a
+    float, ``[]`` None). A file with no section for the node gives ``{}``. Every failure is one
+    :class:`ConfigError` line for ``--params-file``.
     """
-    import yaml  # local: config users that never read files need no yaml
+    from catenary_monitor.core.params_file import ParamsFileError, read_params_file
 
     try:
-        text = Path(path).read_text(encoding='utf-8')
-        doc = yaml.safe_load(text)
-    except (OSError, yaml.YAMLError) as err:
-        raise ConfigError('--params-file', f'cannot read {str(path)!r}: {err}') from err
-    if not isinstance(doc, Mapping):
-        raise ConfigError('--params-file', f'{str(path)!r} is not a mapping of node names')
-    flat: dict[str, Any] = {}
-    found = False
-    for key in ('/**', f'/**/{node_name}', node_name, f'/{node_name}'):
-        section = doc.get(key)
-        if section is None:
-            continue
-        params = section.get('ros__parameters') if isinstance(section, Mapping) else None
-        if not isinstance(params, Mapping):
-            raise ConfigError('--params-file', f'{str(path)!r}: section {key!r} has no '
-                                               'ros__parameters mapping')
-        found = True
-        flat.update(_flatten(params))
-    if not found:
-        raise ConfigError('--params-file', f'{str(path)!r} has no {node_name!r} or /** section')
-    return flat
+        return read_params_file(path, node_name, node_namespace)
+    except ParamsFileError as err:
+        raise ConfigError('--params-file', str(err)) from err
 
 
 def config_from_params(flat: Mapping[str, Any]) -> MonitorConfig:
