@@ -1,4 +1,5 @@
 """ament_python package that also installs with plain ``pip install .``."""
+
 from glob import glob
 
 from setuptools import find_packages, setup
@@ -29,8 +30,15 @@ setup(
     ],
     extras_require={
         # The test suite also checks the peers (MoorPy, pycatenary): nothing there is skipped.
-        'test': ['pytest>=7', 'hypothesis>=6', 'mpmath>=1.3', 'flake8>=6', 'pytest-timeout',
-                 'moorpy', 'pycatenary'],
+        'test': [
+            'pytest>=7',
+            'hypothesis>=6',
+            'mpmath>=1.3',
+            'flake8>=6',
+            'pytest-timeout',
+            'moorpy',
+            'pycatenary',
+        ],
         'peers': ['moorpy', 'pycatenary'],
     },
     zip_safe=True,

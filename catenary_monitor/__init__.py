@@ -2,6 +2,7 @@
 
 The numerical core (this package's top level, ``catenary``, ``solve``) imports no rclpy.
 """
+
 from catenary_monitor.core.solve import ALL_KEYS, STATUS_MESSAGES, SolveResult, Status, solve
 
 __version__ = '0.1.0'

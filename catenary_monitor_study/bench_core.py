@@ -1,4 +1,4 @@
-"""``catenary-monitor bench``: speed of the core's problems 3 and 4, against baselines in the same run.
+"""``catenary-monitor bench``: speed of the core's problems 3 and 4, against same-run baselines.
 
 Scalar: median microseconds per ``solve()`` call with plain floats, against the obvious way a
 newcomer would write it (problem 3: ``a * math.acosh(1 + h/a)``; problem 4: scipy ``brentq`` on
@@ -7,6 +7,7 @@ arrays, against one naive numpy closed-form evaluation of problem 3 on the same 
 the work a single catenary evaluation needs).  The machines are shared and noisy: compare the
 ratios, not the absolute numbers.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -68,14 +69,19 @@ def run(n_scalar: int = 2000, n_vector: int = 200_000) -> dict[str, float]:
 
         def g(a: float) -> float:
             return a * (math.acosh(big_a / a) - math.acosh(b / a)) - xl[i]
+
         return brentq(g, 1e-12 * b, b, xtol=1e-300, rtol=8.9e-16)
 
     out: dict[str, float] = {}
     steps = [
         ('p3_scalar_us', lambda: _median_us(lambda i: solve(W, hl[i], tension=tl[i]), n_scalar)),
         ('p3_scalar_baseline_us', lambda: _median_us(naive3, n_scalar)),
-        ('p4_scalar_us', lambda: _median_us(
-            lambda i: solve(W, hl[i], tension=tl[i], anchor_distance=xl[i]), n_scalar)),
+        (
+            'p4_scalar_us',
+            lambda: _median_us(
+                lambda i: solve(W, hl[i], tension=tl[i], anchor_distance=xl[i]), n_scalar
+            ),
+        ),
         ('p4_scalar_baseline_us', lambda: _median_us(naive4, n_scalar // 4)),
     ]
     tv, hv, xv = _scenes(n_vector, seed=2)
@@ -86,8 +92,12 @@ def run(n_scalar: int = 2000, n_vector: int = 200_000) -> dict[str, float]:
 
     steps += [
         ('p3_vector_ns', lambda: _median_ns_per_elem(lambda: solve(W, hv, tension=tv), n_vector)),
-        ('p4_vector_ns', lambda: _median_ns_per_elem(
-            lambda: solve(W, hv, tension=tv, anchor_distance=xv), n_vector)),
+        (
+            'p4_vector_ns',
+            lambda: _median_ns_per_elem(
+                lambda: solve(W, hv, tension=tv, anchor_distance=xv), n_vector
+            ),
+        ),
         ('vector_floor_ns', lambda: _median_ns_per_elem(floor, n_vector)),
     ]
     for k, (name, step) in enumerate(steps, 1):
@@ -103,19 +113,37 @@ def run(n_scalar: int = 2000, n_vector: int = 200_000) -> dict[str, float]:
 
 def report(r: dict[str, float]) -> str:
     rows = [
-        ('problem 3 (x_min from T)', 'scalar solve()', f"{r['p3_scalar_us']:.2f} us",
-         f"naive math.acosh {r['p3_scalar_baseline_us']:.2f} us", f"x{r['p3_scalar_ratio']:.1f} slower"),
-        ('problem 4 (uplift from T, x)', 'scalar solve()', f"{r['p4_scalar_us']:.2f} us",
-         f"scipy brentq {r['p4_scalar_baseline_us']:.2f} us",
-         f"x{r['p4_scalar_speedup_vs_brentq']:.1f} faster"),
-        ('problem 3', 'vectorized solve()', f"{r['p3_vector_ns']:.1f} ns/elem",
-         f"numpy closed form {r['vector_floor_ns']:.1f} ns/elem",
-         f"x{r['p3_vector_ratio_to_floor']:.1f} the floor"),
-        ('problem 4', 'vectorized solve()', f"{r['p4_vector_ns']:.1f} ns/elem",
-         f"numpy closed form {r['vector_floor_ns']:.1f} ns/elem",
-         f"x{r['p4_vector_ratio_to_floor']:.1f} the floor"),
+        (
+            'problem 3 (x_min from T)',
+            'scalar solve()',
+            f"{r['p3_scalar_us']:.2f} us",
+            f"naive math.acosh {r['p3_scalar_baseline_us']:.2f} us",
+            f"x{r['p3_scalar_ratio']:.1f} slower",
+        ),
+        (
+            'problem 4 (uplift from T, x)',
+            'scalar solve()',
+            f"{r['p4_scalar_us']:.2f} us",
+            f"scipy brentq {r['p4_scalar_baseline_us']:.2f} us",
+            f"x{r['p4_scalar_speedup_vs_brentq']:.1f} faster",
+        ),
+        (
+            'problem 3',
+            'vectorized solve()',
+            f"{r['p3_vector_ns']:.1f} ns/elem",
+            f"numpy closed form {r['vector_floor_ns']:.1f} ns/elem",
+            f"x{r['p3_vector_ratio_to_floor']:.1f} the floor",
+        ),
+        (
+            'problem 4',
+            'vectorized solve()',
+            f"{r['p4_vector_ns']:.1f} ns/elem",
+            f"numpy closed form {r['vector_floor_ns']:.1f} ns/elem",
+            f"x{r['p4_vector_ratio_to_floor']:.1f} the floor",
+        ),
     ]
     from catenary_monitor.cli.main import format_table
+
     return format_table(rows, ('problem', 'path', 'time', 'baseline (same run)', 'ratio'))
 
 
@@ -127,9 +155,14 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser('bench', help='benchmark the core (problems 3 and 4, scalar and vectorized)',
-                       description=__doc__.split('\n\n')[0])
-    p.add_argument('--n-scalar', type=int, default=2000, help='scalar calls per timing (default 2000)')
+    p = sub.add_parser(
+        'bench',
+        help='benchmark the core (problems 3 and 4, scalar and vectorized)',
+        description=__doc__.split('\n\n')[0],
+    )
+    p.add_argument(
+        '--n-scalar', type=int, default=2000, help='scalar calls per timing (default 2000)'
+    )
     p.add_argument('--n-vector', type=int, default=200_000, help='elements per vectorized call')
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench)

@@ -12,6 +12,7 @@ phase, read from /proc.
 
 ``python -m catenary_monitor.bench_latency echo N`` runs the echo node alone.
 """
+
 from __future__ import annotations
 
 import json
@@ -49,8 +50,12 @@ def echo_main(lines: int) -> int:
     node = rclpy.create_node('bench_echo')
     for k in range(lines):
         pub = node.create_publisher(Float64, f'/bench_echo/l{k:02d}/out', QoSProfile(depth=10))
-        node.create_subscription(Float64, f'/bench_echo/l{k:02d}/in',
-                                 lambda msg, pub=pub: pub.publish(msg), qos_profile_sensor_data)
+        node.create_subscription(
+            Float64,
+            f'/bench_echo/l{k:02d}/in',
+            lambda msg, pub=pub: pub.publish(msg),
+            qos_profile_sensor_data,
+        )
     try:
         while not stop.is_set():
             rclpy.spin_once(node, timeout_sec=0.2)
@@ -81,13 +86,14 @@ def _cpu_seconds(pid: int) -> float:
 class _Driver:
     """Publishes tensions on a schedule and times the results that come back."""
 
-    def __init__(self, node: Any, in_topics: list[str], out_topics: list[str],
-                 out_type: Any) -> None:
+    def __init__(
+        self, node: Any, in_topics: list[str], out_topics: list[str], out_type: Any
+    ) -> None:
         from rclpy.qos import QoSProfile, qos_profile_sensor_data
         from std_msgs.msg import Float64
+
         self.Float64 = Float64
-        self.pubs = [node.create_publisher(Float64, t, qos_profile_sensor_data)
-                     for t in in_topics]
+        self.pubs = [node.create_publisher(Float64, t, qos_profile_sensor_data) for t in in_topics]
         self.sent: dict[float, int] = {}
         self.latencies: list[float] = []
         self.lock = threading.Lock()
@@ -127,14 +133,23 @@ class _Driver:
 
 def _stats(lat: list[float], sent: int) -> dict[str, Any]:
     a = np.asarray(lat) * 1e3
-    return {'sent': sent, 'received': int(a.size),
-            'median_ms': float(np.median(a)) if a.size else float('nan'),
-            'p99_ms': float(np.percentile(a, 99)) if a.size else float('nan'),
-            'max_ms': float(a.max()) if a.size else float('nan')}
+    return {
+        'sent': sent,
+        'received': int(a.size),
+        'median_ms': float(np.median(a)) if a.size else float('nan'),
+        'p99_ms': float(np.percentile(a, 99)) if a.size else float('nan'),
+        'max_ms': float(a.max()) if a.size else float('nan'),
+    }
 
 
-def run_bench(lines: int = 12, rate: float = 20.0, duration: float = 20.0,
-              json_out: bool = False, warmup: float = 2.0, ea: Optional[float] = None) -> int:
+def run_bench(
+    lines: int = 12,
+    rate: float = 20.0,
+    duration: float = 20.0,
+    json_out: bool = False,
+    warmup: float = 2.0,
+    ea: Optional[float] = None,
+) -> int:
     """Measure echo and monitor one after the other; print the comparison.
 
     ``ea`` [N]: axial stiffness on every line (the node's elastic model); None: inextensible.
@@ -150,43 +165,78 @@ def run_bench(lines: int = 12, rate: float = 20.0, duration: float = 20.0,
     params = tmp / 'params.yaml'
     text = ['catenary_monitor:', '  ros__parameters:', f'    lines: [{", ".join(names)}]']
     for n in names:
-        text += [f'    {n}:', f'      weight: {_W}', '      anchor_distance: 120.0',
-                 '      mbl: 4827000.0', f'      tension_topic: /bench/{n}/tension']
+        text += [
+            f'    {n}:',
+            f'      weight: {_W}',
+            '      anchor_distance: 120.0',
+            '      mbl: 4827000.0',
+            f'      tension_topic: /bench/{n}/tension',
+        ]
         if ea is not None:
             text.append(f'      ea: {float(ea)!r}')
     params.write_text('\n'.join(text) + '\n')
-    echo = subprocess.Popen([sys.executable, '-m', 'catenary_monitor.bench_latency', 'echo',
-                             str(lines)], env=env)
+    echo = subprocess.Popen(
+        [sys.executable, '-m', 'catenary_monitor.bench_latency', 'echo', str(lines)], env=env
+    )
     monitor = subprocess.Popen(
-        [sys.executable, '-m', 'catenary_monitor.ros.node', '--ros-args', '--params-file',
-         str(params), '-p', f'log_dir:={tmp / "log"}'], env=env,
-        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        [
+            sys.executable,
+            '-m',
+            'catenary_monitor.ros.node',
+            '--ros-args',
+            '--params-file',
+            str(params),
+            '-p',
+            f'log_dir:={tmp / "log"}',
+        ],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     rclpy.init()
     node = rclpy.create_node('bench_driver')
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     spinner = threading.Thread(target=executor.spin, daemon=True)
-    results: dict[str, Any] = {'lines': lines, 'rate_hz': rate, 'duration_s': duration,
-                               'messages_per_s': lines * rate, 'ea': ea,
-                               'model': 'inextensible catenary' if ea is None else 'elastic catenary (rule)'}
+    results: dict[str, Any] = {
+        'lines': lines,
+        'rate_hz': rate,
+        'duration_s': duration,
+        'messages_per_s': lines * rate,
+        'ea': ea,
+        'model': 'inextensible catenary' if ea is None else 'elastic catenary (rule)',
+    }
     try:
-        echo_d = _Driver(node, [f'/bench_echo/{n}/in' for n in names],
-                         [f'/bench_echo/{n}/out' for n in names], Float64)
-        mon_d = _Driver(node, [f'/bench/{n}/tension' for n in names],
-                        [f'/catenary_monitor/{n}/outputs' for n in names], Float64MultiArray)
+        echo_d = _Driver(
+            node,
+            [f'/bench_echo/{n}/in' for n in names],
+            [f'/bench_echo/{n}/out' for n in names],
+            Float64,
+        )
+        mon_d = _Driver(
+            node,
+            [f'/bench/{n}/tension' for n in names],
+            [f'/catenary_monitor/{n}/outputs' for n in names],
+            Float64MultiArray,
+        )
         depth_pub = node.create_publisher(Float64, '/tide/depth', 10)
         node.create_timer(1.0, lambda: depth_pub.publish(Float64(data=20.85)))
         spinner.start()
         deadline = time.monotonic() + 60.0
         while not (echo_d.matched() and mon_d.matched()):
-            if time.monotonic() > deadline or echo.poll() is not None or \
-                    monitor.poll() is not None:
+            if (
+                time.monotonic() > deadline
+                or echo.poll() is not None
+                or monitor.poll() is not None
+            ):
                 print('bench-latency: the nodes did not come up', file=sys.stderr)
                 return 1
             time.sleep(0.1)
         time.sleep(1.0)  # discovery of the result topics (return path)
-        for label, driver, proc, base in (('echo', echo_d, echo, 4.0e5),
-                                          ('monitor', mon_d, monitor, 5.0e5)):
+        for label, driver, proc, base in (
+            ('echo', echo_d, echo, 4.0e5),
+            ('monitor', mon_d, monitor, 5.0e5),
+        ):
             driver.run(rate, warmup, base - 5e4)  # warm-up, not counted
             time.sleep(0.2)
             with driver.lock:
@@ -215,24 +265,31 @@ def run_bench(lines: int = 12, rate: float = 20.0, duration: float = 20.0,
     e, m = results['echo'], results['monitor']
     results['added_median_ms'] = m['median_ms'] - e['median_ms']
     results['added_p99_ms'] = m['p99_ms'] - e['p99_ms']
-    results['target_met'] = bool(results['added_median_ms'] <= 1.0 and
-                                 m['cpu_percent'] <= 20.0)
+    results['target_met'] = bool(results['added_median_ms'] <= 1.0 and m['cpu_percent'] <= 20.0)
     if json_out:
         print(json.dumps(results))
         return 0
-    print(f'tension -> result across processes, {lines} lines x {rate:g} Hz '
-          f'({lines * rate:g} msg/s, evenly spread), {duration:g} s per node, '
-          f'{os.cpu_count()} CPUs, load {os.getloadavg()[0]:.2f}, '
-          + ('inextensible lines' if ea is None else f'elastic lines, EA = {ea:g} N'))
-    print(f'{"node":8s} {"sent":>6s} {"recv":>6s} {"median ms":>10s} {"p99 ms":>8s} '
-          f'{"max ms":>8s} {"CPU % of 1 core":>16s}')
+    print(
+        f'tension -> result across processes, {lines} lines x {rate:g} Hz '
+        f'({lines * rate:g} msg/s, evenly spread), {duration:g} s per node, '
+        f'{os.cpu_count()} CPUs, load {os.getloadavg()[0]:.2f}, '
+        + ('inextensible lines' if ea is None else f'elastic lines, EA = {ea:g} N')
+    )
+    print(
+        f'{"node":8s} {"sent":>6s} {"recv":>6s} {"median ms":>10s} {"p99 ms":>8s} '
+        f'{"max ms":>8s} {"CPU % of 1 core":>16s}'
+    )
     for label in ('echo', 'monitor'):
         r = results[label]
-        print(f'{label:8s} {r["sent"]:6d} {r["received"]:6d} {r["median_ms"]:10.3f} '
-              f'{r["p99_ms"]:8.3f} {r["max_ms"]:8.2f} {r["cpu_percent"]:16.1f}')
-    print(f'added by the monitor: median {results["added_median_ms"]:+.3f} ms, p99 '
-          f'{results["added_p99_ms"]:+.3f} ms; target (<= 1 ms median, <= 20 % CPU) '
-          f'{"met" if results["target_met"] else "NOT met"}')
+        print(
+            f'{label:8s} {r["sent"]:6d} {r["received"]:6d} {r["median_ms"]:10.3f} '
+            f'{r["p99_ms"]:8.3f} {r["max_ms"]:8.2f} {r["cpu_percent"]:16.1f}'
+        )
+    print(
+        f'added by the monitor: median {results["added_median_ms"]:+.3f} ms, p99 '
+        f'{results["added_p99_ms"]:+.3f} ms; target (<= 1 ms median, <= 20 % CPU) '
+        f'{"met" if results["target_met"] else "NOT met"}'
+    )
     return 0
 
 

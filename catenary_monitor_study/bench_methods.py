@@ -16,6 +16,7 @@ Every speed figure is reported as a ratio to a baseline timed in the same run: t
 closed form of problem 3 (one catenary evaluation: the floor) and one MoorPy catenary call.
 Writes ``methods.csv``, ``methods.md``, ``speed_accuracy.png`` and ``stability_map.png``.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -71,6 +72,7 @@ def grid(quick: bool) -> tuple[np.ndarray, np.ndarray]:
 
 def build_scenes(problem: int, quick: bool) -> Scenes:
     from catenary_monitor.core.catenary import grounded, two_prod_diff
+
     ha, xr = grid(quick)
     rows = []
     for q in ha:
@@ -89,10 +91,16 @@ def build_scenes(problem: int, quick: bool) -> Scenes:
         for r in xr:
             rows.append((W_DOCK, H_DOCK, t, r * x_min, q, r, False))
     # seed tables: ship (table 1, R = 89.63 kN as the paper computed it), dock (tables 2-4)
-    seeds3 = [(517.0, 80.0, 89.63e3 + 517.0 * 80.0), (1300.0, 20.85, 372e3 + 1300.0 * 20.85),
-              (1300.0, 20.85, 1623.5e3)]
-    seeds4 = [(1300.0, 20.85, 1623.5e3, 121.06), (1300.0, 20.85, 1623.5e3, 200.0),
-              (1300.0, 20.85, 399.1048e3, 100.0)]
+    seeds3 = [
+        (517.0, 80.0, 89.63e3 + 517.0 * 80.0),
+        (1300.0, 20.85, 372e3 + 1300.0 * 20.85),
+        (1300.0, 20.85, 1623.5e3),
+    ]
+    seeds4 = [
+        (1300.0, 20.85, 1623.5e3, 121.06),
+        (1300.0, 20.85, 1623.5e3, 200.0),
+        (1300.0, 20.85, 399.1048e3, 100.0),
+    ]
     seeds2 = [(1300.0, 20.85, 1584.6e3, 121.06)]  # table 3
     for s in {2: seeds2, 3: seeds3, 4: seeds4}[problem]:
         w, h, t = s[:3]
@@ -104,6 +112,7 @@ def build_scenes(problem: int, quick: bool) -> Scenes:
 
 def compute_reference(sc: Scenes, with_length: bool, progress: Callable[[str], None]) -> None:
     from catenary_monitor_study.methods import reference as ref
+
     sc.ref = np.empty((sc.n, 2))
     sc.cond = np.ones((sc.n, 2))
     sc.length = np.full(sc.n, np.nan)
@@ -156,14 +165,17 @@ class Outcome:
         e = np.maximum(self.err[ok], TINY) if ok.any() else np.array([math.inf])
         vec_fail = '' if self.vec_err is None else int(np.sum(~(self.vec_err <= FAIL)))
         return {
-            'problem': self.method.problem, 'method': self.method.name,
-            'family': self.method.family, 'scenes': int(self.idx.size),
+            'problem': self.method.problem,
+            'method': self.method.name,
+            'family': self.method.family,
+            'scenes': int(self.idx.size),
             'scalar_us_median': float(np.median(self.t_us)),
             'vector_ns_per_element': self.vec_ns,
             'error_median': float(np.median(np.maximum(self.err, TINY))),
             'error_worst': float(np.max(np.maximum(self.err, TINY))),
             'error_worst_finite': float(np.max(e)),
-            'failures': self.failures, 'vector_failures': vec_fail,
+            'failures': self.failures,
+            'vector_failures': vec_fail,
             'why': self.method.why,
         }
 
@@ -210,8 +222,9 @@ def _record(m: Any, val: Any, ref: np.ndarray, cond: np.ndarray, why: dict[str, 
     return err
 
 
-def run_scalar(methods: list, sc: Scenes, idx: np.ndarray, progress: Callable[[str], None],
-               repeats: int = 5) -> list[Outcome]:
+def run_scalar(
+    methods: list, sc: Scenes, idx: np.ndarray, progress: Callable[[str], None], repeats: int = 5
+) -> list[Outcome]:
     """Run methods on the scenes ``idx``; per scene the best of ``repeats`` timed calls.
 
     The timing runs in rounds; in each round every method sweeps all the scenes (warm caches
@@ -221,6 +234,7 @@ def run_scalar(methods: list, sc: Scenes, idx: np.ndarray, progress: Callable[[s
     loops of back-to-back calls from the second round on.  Inputs are passed as Python floats.
     """
     import warnings
+
     k_m = len(methods)
     err = np.empty((k_m, idx.size))
     t_us = np.full((k_m, idx.size), math.inf)
@@ -234,7 +248,10 @@ def run_scalar(methods: list, sc: Scenes, idx: np.ndarray, progress: Callable[[s
                 ref, cond = (sc.ref_l, sc.cond_l) if m.given == 'length' else (sc.ref, sc.cond)
                 for k, i in enumerate(idx):
                     if k % 8 == 0:
-                        progress(f'problem {sc.problem}, round {rep + 1}/{repeats}: {m.name}: {k}/{idx.size}')
+                        progress(
+                            f'problem {sc.problem}, round {rep + 1}/{repeats}: '
+                            f'{m.name}: {k}/{idx.size}'
+                        )
                     if rep and t_us[j, k] > 2000.0:
                         continue
                     if rep and not raised[j, k] and t_us[j, k] < SAMPLE_S * 1e6:
@@ -248,10 +265,13 @@ def run_scalar(methods: list, sc: Scenes, idx: np.ndarray, progress: Callable[[s
     return [Outcome(m, idx, err[j], t_us[j], why[j]) for j, m in enumerate(methods)]
 
 
-def time_vectors(outcomes: list[Outcome], scenes: dict[int, Scenes], n_elem: int, repeats: int = 5) -> None:
+def time_vectors(
+    outcomes: list[Outcome], scenes: dict[int, Scenes], n_elem: int, repeats: int = 5
+) -> None:
     """Vectorized forms: errors on the sweep; time per element on the sweep tiled to n_elem,
     best of ``repeats`` rounds in which every method runs once (interleaved, as the scalars)."""
     import warnings
+
     todo = [o for o in outcomes if o.method.vector_fn is not None]
     data = {}
     with warnings.catch_warnings():
@@ -260,7 +280,9 @@ def time_vectors(outcomes: list[Outcome], scenes: dict[int, Scenes], n_elem: int
             sc = scenes[o.method.problem]
             cols = [sc.w, sc.h, sc.t] + ([sc.x] if sc.problem != 3 else [])
             r1, r2 = o.method.vector_fn(*(c.copy() for c in cols))
-            o.vec_err = np.array([scene_error((r1[i], r2[i]), sc.ref[i], sc.cond[i]) for i in range(sc.n)])
+            o.vec_err = np.array(
+                [scene_error((r1[i], r2[i]), sc.ref[i], sc.cond[i]) for i in range(sc.n)]
+            )
             reps = -(-n_elem // sc.n)
             data[id(o)] = [np.tile(c, reps) for c in cols]
         best = {id(o): math.inf for o in todo}
@@ -286,34 +308,73 @@ def pareto(points: list[tuple[float, float]]) -> list[int]:
 
 def plot_speed_accuracy(rows: list[dict], path: str) -> None:
     import matplotlib
+
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
+
     fig, axes = plt.subplots(1, 3, figsize=(19, 9.0))
-    for ax, problem, title in ((axes[0], 4, 'problem 4: tension + anchor distance -> uplift'),
-                               (axes[1], 3, 'problem 3: hook tension -> minimum anchor distance'),
-                               (axes[2], 2, 'problem 2: horizontal tension + distance -> uplift')):
+    for ax, problem, title in (
+        (axes[0], 4, 'problem 4: tension + anchor distance -> uplift'),
+        (axes[1], 3, 'problem 3: hook tension -> minimum anchor distance'),
+        (axes[2], 2, 'problem 2: horizontal tension + distance -> uplift'),
+    ):
         rs = [r for r in rows if r['problem'] == problem]
         labels = []
         for k, r in enumerate(rs, 1):
             t, e_med, e_fin = r['scalar_us_median'], r['error_median'], r['error_worst_finite']
             failed = r['failures'] > 0
             e_show = min(e_fin if math.isfinite(e_fin) else 1.0, 1.0)
-            colour = 'tab:red' if failed else ('tab:green' if r['error_worst'] <= GOOD else 'tab:orange')
+            colour = (
+                'tab:red'
+                if failed
+                else ('tab:green' if r['error_worst'] <= GOOD else 'tab:orange')
+            )
             ax.plot([t, t], [min(e_med, 1.0), e_show], color=colour, lw=1.5, alpha=0.6)
-            ax.scatter([t], [min(e_med, 1.0)], s=120, marker='X' if failed else 'o', color=colour,
-                       edgecolor='k', zorder=3)
-            ax.annotate(str(k), (t, min(e_med, 1.0)), textcoords='offset points', xytext=(7, -3), fontsize=8,
-                        weight='bold')
+            ax.scatter(
+                [t],
+                [min(e_med, 1.0)],
+                s=120,
+                marker='X' if failed else 'o',
+                color=colour,
+                edgecolor='k',
+                zorder=3,
+            )
+            ax.annotate(
+                str(k),
+                (t, min(e_med, 1.0)),
+                textcoords='offset points',
+                xytext=(7, -3),
+                fontsize=8,
+                weight='bold',
+            )
             if not math.isnan(r['vector_ns_per_element']):
                 tv = r['vector_ns_per_element'] / 1e3
-                ax.scatter([tv], [min(e_med, 1.0)], s=40, marker='s', facecolor='none', edgecolor=colour, zorder=2)
+                ax.scatter(
+                    [tv],
+                    [min(e_med, 1.0)],
+                    s=40,
+                    marker='s',
+                    facecolor='none',
+                    edgecolor=colour,
+                    zorder=2,
+                )
                 ax.plot([tv, t], [min(e_med, 1.0)] * 2, color=colour, lw=0.6, ls=':')
-            labels.append(f"{k}  {r['method']}" + (f"  [{r['failures']}/{r['scenes']} fail]" if failed else ''))
+            labels.append(
+                f"{k}  {r['method']}"
+                + (f"  [{r['failures']}/{r['scenes']} fail]" if failed else '')
+            )
         ok = [r for r in rs if r['failures'] == 0]
         pts = [(r['scalar_us_median'], r['error_worst']) for r in ok]
         front = pareto(pts)
-        ax.step([pts[i][0] for i in front], [pts[i][1] for i in front], where='post', color='k', lw=1,
-                ls='--', label='Pareto front of the methods that never fail (worst error)')
+        ax.step(
+            [pts[i][0] for i in front],
+            [pts[i][1] for i in front],
+            where='post',
+            color='k',
+            lw=1,
+            ls='--',
+            label='Pareto front of the methods that never fail (worst error)',
+        )
         ax.axhline(GOOD, color='tab:green', lw=0.6)
         ax.axhline(FAIL, color='tab:red', lw=0.6)
         ax.set_xscale('log')
@@ -323,12 +384,21 @@ def plot_speed_accuracy(rows: list[dict], path: str) -> None:
         ax.set_ylabel('error / max(1, condition number): marker median, bar to worst finite')
         ax.set_title(title, fontsize=10)
         ax.legend(loc='center left', fontsize=7)
-        ax.text(0.0, -0.13, '\n'.join(labels), transform=ax.transAxes, fontsize=7.5, va='top',
-                family='monospace')
+        ax.text(
+            0.0,
+            -0.13,
+            '\n'.join(labels),
+            transform=ax.transAxes,
+            fontsize=7.5,
+            va='top',
+            family='monospace',
+        )
         ax.grid(True, which='major', alpha=0.3)
-    fig.suptitle('Speed against accuracy: green line 1e-12 (target), red line 1e-6 (failure); '
-                 'X red = fails on some scenes, amber = loses accuracy, green = within 1e-12 everywhere',
-                 fontsize=10)
+    fig.suptitle(
+        'Speed against accuracy: green line 1e-12 (target), red line 1e-6 (failure); '
+        'X red = fails on some scenes, amber = loses accuracy, green = within 1e-12 everywhere',
+        fontsize=10,
+    )
     fig.subplots_adjust(left=0.05, right=0.99, top=0.92, bottom=0.36, wspace=0.25)
     fig.savefig(path, dpi=110)
     plt.close(fig)
@@ -336,11 +406,15 @@ def plot_speed_accuracy(rows: list[dict], path: str) -> None:
 
 def plot_stability(outcomes: list[Outcome], scenes: dict[int, Scenes], path: str) -> None:
     import matplotlib
+
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
     from matplotlib.colors import ListedColormap
+
     cmap = ListedColormap(['#2ca02c', '#ffbf00', '#d62728', '#d9d9d9'])
-    o4 = [o for o in outcomes if o.method.problem == 4] + [o for o in outcomes if o.method.problem == 2]
+    o4 = [o for o in outcomes if o.method.problem == 4] + [
+        o for o in outcomes if o.method.problem == 2
+    ]
     o3 = [o for o in outcomes if o.method.problem == 3]
     ncol = 4
     nrow4 = -(-len(o4) // ncol)
@@ -358,12 +432,20 @@ def plot_stability(outcomes: list[Outcome], scenes: dict[int, Scenes], path: str
                 continue
             e = o.err[j]
             z[np.searchsorted(xr_u, sc4.xr[i]), np.searchsorted(ha_u, sc4.ha[i])] = (
-                0 if e <= GOOD else 1 if e <= FAIL else 2)
-        ax.pcolormesh(np.arange(ha_u.size + 1), np.arange(xr_u.size + 1), z, cmap=cmap, vmin=0, vmax=3)
-        ax.set_title(f'{o.method.name}' + ('  [problem 2: R given]' if o.method.problem == 2 else ''),
-                     fontsize=8)
-        xt = [i for i, v in enumerate(ha_u) if abs(math.log10(v) - round(math.log10(v))) < 1e-9
-              and round(math.log10(v)) % 3 == 2]
+                0 if e <= GOOD else 1 if e <= FAIL else 2
+            )
+        ax.pcolormesh(
+            np.arange(ha_u.size + 1), np.arange(xr_u.size + 1), z, cmap=cmap, vmin=0, vmax=3
+        )
+        ax.set_title(
+            f'{o.method.name}' + ('  [problem 2: R given]' if o.method.problem == 2 else ''),
+            fontsize=8,
+        )
+        xt = [
+            i
+            for i, v in enumerate(ha_u)
+            if abs(math.log10(v) - round(math.log10(v))) < 1e-9 and round(math.log10(v)) % 3 == 2
+        ]
         ax.set_xticks([i + 0.5 for i in xt])
         ax.set_xticklabels([f'1e{round(math.log10(ha_u[i]))}' for i in xt], fontsize=6)
         yt = [0, xr_u.size // 2, xr_u.size - 4, xr_u.size - 1]
@@ -390,10 +472,12 @@ def plot_stability(outcomes: list[Outcome], scenes: dict[int, Scenes], path: str
     ax.set_xticklabels([f'1e{round(math.log10(ha3[i]))}' for i in xt], fontsize=6)
     ax.set_xlabel('h / a', fontsize=7)
     ax.set_title('problem 3 (minimum anchor distance from T): h / a only', fontsize=8)
-    fig.suptitle('Where each method holds: green error <= 1e-12, amber <= 1e-6 (loses accuracy), '
-                 'red fails (> 1e-6, NaN, exception), grey not run.\nProblem 4 (and 2) panels: '
-                 'x from 1e-3 x_min (bottom) to 1 - 1e-6 (top); dock chain w = 1.3 kN/m, h = 20.85 m',
-                 fontsize=9)
+    fig.suptitle(
+        'Where each method holds: green error <= 1e-12, amber <= 1e-6 (loses accuracy), '
+        'red fails (> 1e-6, NaN, exception), grey not run.\nProblem 4 (and 2) panels: '
+        'x from 1e-3 x_min (bottom) to 1 - 1e-6 (top); dock chain w = 1.3 kN/m, h = 20.85 m',
+        fontsize=9,
+    )
     fig.tight_layout(rect=(0, 0, 1, 0.96))
     fig.savefig(path, dpi=100)
     plt.close(fig)
@@ -418,33 +502,45 @@ def write_tables(rows: list[dict], summary: list[str], out_dir: str) -> None:
             wr.writerow(r)
     lines = ['# Methods benchmark (generated by `catenary-monitor bench-methods`)', '']
     lines += summary + ['']
-    titles = {4: 'Problem 4: hook tension T and anchor distance x -> uplift (the live problem)',
-              3: 'Problem 3: hook tension T -> minimum anchor distance',
-              2: 'Problem 2 (table 3): horizontal tension R and x -> anchor angle and uplift'}
+    titles = {
+        4: 'Problem 4: hook tension T and anchor distance x -> uplift (the live problem)',
+        3: 'Problem 3: hook tension T -> minimum anchor distance',
+        2: 'Problem 2 (table 3): horizontal tension R and x -> anchor angle and uplift',
+    }
     for problem in (4, 3, 2):
-        lines += [f'## {titles[problem]}', '',
-                  '| method | scenes | scalar µs (median) | vectorized ns/element | error median | '
-                  'error worst | failures | why it fails where it fails |',
-                  '|---|---:|---:|---:|---:|---:|---:|---|']
+        lines += [
+            f'## {titles[problem]}',
+            '',
+            '| method | scenes | scalar µs (median) | vectorized ns/element | error median | '
+            'error worst | failures | why it fails where it fails |',
+            '|---|---:|---:|---:|---:|---:|---:|---|',
+        ]
         for r in rows:
             if r['problem'] != problem:
                 continue
             vf = f" ({r['vector_failures']} vec)" if r['vector_failures'] not in ('', 0) else ''
-            lines.append(f"| {r['method']} | {r['scenes']} | {fmt(r['scalar_us_median'])} | "
-                         f"{fmt(r['vector_ns_per_element'])} | {fmt(r['error_median'], 'err')} | "
-                         f"{fmt(r['error_worst'], 'err')} | {r['failures']}{vf} | {r['why']} |")
+            lines.append(
+                f"| {r['method']} | {r['scenes']} | {fmt(r['scalar_us_median'])} | "
+                f"{fmt(r['vector_ns_per_element'])} | {fmt(r['error_median'], 'err')} | "
+                f"{fmt(r['error_worst'], 'err')} | {r['failures']}{vf} | {r['why']} |"
+            )
         lines.append('')
     with open(os.path.join(out_dir, 'methods.md'), 'w') as fh:
         fh.write('\n'.join(lines))
 
 
 # ------------------------------------------------------------------------------ main
-def run(quick: bool = False, out_dir: Optional[str] = 'docs', only: Optional[str] = None,
-        stream: Any = sys.stderr) -> dict[str, Any]:
+def run(
+    quick: bool = False,
+    out_dir: Optional[str] = 'docs',
+    only: Optional[str] = None,
+    stream: Any = sys.stderr,
+) -> dict[str, Any]:
     """Run the benchmark; returns rows, outcomes and the same-run ratios."""
     os.environ.setdefault('PYTHONBREAKPOINT', '0')
     from catenary_monitor_study.methods import all_methods
     from catenary_monitor_study.methods.peers import peer_versions
+
     t_start = time.perf_counter()
     last = [0.0]
 
@@ -458,8 +554,11 @@ def run(quick: bool = False, out_dir: Optional[str] = 'docs', only: Optional[str
     versions = peer_versions()
     methods = [m for m in all_methods(peers=True) if m.problem in (2, 3, 4)]
     if only:
-        methods = [m for m in methods if only.lower() in m.name.lower() or m.default
-                   or m.name == 'closed form (stable)']
+        methods = [
+            m
+            for m in methods
+            if only.lower() in m.name.lower() or m.default or m.name == 'closed form (stable)'
+        ]
     has_len = any(m.given == 'length' for m in methods)
     scenes = {p: build_scenes(p, quick) for p in (2, 3, 4)}
     for p in (2, 3, 4):
@@ -495,7 +594,8 @@ def run(quick: bool = False, out_dir: Optional[str] = 'docs', only: Optional[str
         'default_p4_vector_ns': default4['vector_ns_per_element'],
         'kernel_p4_vector_ns': kernel4['vector_ns_per_element'],
         'vector_p4_over_floor': default4['vector_ns_per_element'] / floor['vector_ns_per_element'],
-        'vector_kernel_p4_over_floor': kernel4['vector_ns_per_element'] / floor['vector_ns_per_element'],
+        'vector_kernel_p4_over_floor': kernel4['vector_ns_per_element']
+        / floor['vector_ns_per_element'],
         'scalar_p4_over_floor': default4['scalar_us_median'] / floor['scalar_us_median'],
     }
     if moorpy:
@@ -503,31 +603,47 @@ def run(quick: bool = False, out_dir: Optional[str] = 'docs', only: Optional[str
         ratios['moorpy_over_default'] = moorpy['scalar_us_median'] / default4['scalar_us_median']
         ratios['moorpy_over_kernel'] = moorpy['scalar_us_median'] / kernel4['scalar_us_median']
     for r in rows:
-        r['vs_default_scalar'] = r['scalar_us_median'] / (default4 if r['problem'] == 4 else
-                                                          pick(3, 'default'))['scalar_us_median']
+        r['vs_default_scalar'] = (
+            r['scalar_us_median']
+            / (default4 if r['problem'] == 4 else pick(3, 'default'))['scalar_us_median']
+        )
     summary = [
         f'Run: {time.strftime("%Y-%m-%d %H:%M")}, {platform.python_implementation()} '
         f'{platform.python_version()}, numpy {np.__version__}, {os.cpu_count()} cores shared, '
-        f'{"quick" if quick else "full"} sweep: {scenes[4].n} problem-4, {scenes[3].n} problem-3 and '
+        f'{"quick" if quick else "full"} sweep: {scenes[4].n} problem-4, '
+        f'{scenes[3].n} problem-3 and '
         f'{scenes[2].n} problem-2 scenes '
-        f'({"slow methods on every " + str(thin) + "th scene" if thin > 1 else "every method on every scene"}). Peers: '
-        + ', '.join(f'{k} {v}' if v else f'{k} absent' for k, v in versions.items()) + '.',
+        + (
+            f'(slow methods on every {thin}th scene). Peers: '
+            if thin > 1
+            else '(every method on every scene). Peers: '
+        )
+        + ', '.join(f'{k} {v}' if v else f'{k} absent' for k, v in versions.items())
+        + '.',
         '',
-        'Error = relative error of each output (R and x_min, or R and F) divided by max(1, condition '
-        'number), worst over outputs, against the 50-digit mpmath solution of the paper\'s equations '
+        'Error = relative error of each output (R and x_min, or R and F) divided by '
+        'max(1, condition '
+        'number), worst over outputs, against the 50-digit mpmath solution of the '
+        'paper\'s equations '
         'computed in this run. Failure = exception, no convergence, NaN, or error > 1e-6.',
         '',
         'Same-run ratios (targets of issue 5):',
         '',
-        f'* default problem-4 scalar solve (`solve()`): {ratios["default_p4_scalar_us"]:.2f} µs median'
-        + (f'; one MoorPy catenary call: {ratios["moorpy_us"]:.0f} µs, '
-           f'**MoorPy / default = {ratios["moorpy_over_default"]:.1f}×** (target ≥ 20×; '
-           f'kernel alone {ratios["moorpy_over_kernel"]:.0f}×)' if moorpy else '; MoorPy absent'),
+        f'* default problem-4 scalar solve (`solve()`): '
+        f'{ratios["default_p4_scalar_us"]:.2f} µs median'
+        + (
+            f'; one MoorPy catenary call: {ratios["moorpy_us"]:.0f} µs, '
+            f'**MoorPy / default = {ratios["moorpy_over_default"]:.1f}×** (target ≥ 20×; '
+            f'kernel alone {ratios["moorpy_over_kernel"]:.0f}×)'
+            if moorpy
+            else '; MoorPy absent'
+        ),
         f'* problem-4 scalar solve / one scalar closed-form evaluation of problem 3: '
         f'{ratios["scalar_p4_over_floor"]:.1f}×',
         f'* vectorized problem 4 / one vectorized closed-form evaluation of problem 3 (the floor, '
         f'{ratios["floor_p3_vector_ns"]:.1f} ns/element): `solve()` '
-        f'**{ratios["vector_p4_over_floor"]:.1f}×**, kernel alone **{ratios["vector_kernel_p4_over_floor"]:.1f}×** '
+        f'**{ratios["vector_p4_over_floor"]:.1f}×**, kernel alone '
+        f'**{ratios["vector_kernel_p4_over_floor"]:.1f}×** '
         f'(target ≤ 10×)',
     ]
     if out_dir:
@@ -537,8 +653,16 @@ def run(quick: bool = False, out_dir: Optional[str] = 'docs', only: Optional[str
         plot_speed_accuracy(rows, os.path.join(out_dir, 'speed_accuracy.png'))
         plot_stability(outcomes, scenes, os.path.join(out_dir, 'stability_map.png'))
     if stream is not None:
-        stream.write(f'\r[bench-methods] done in {time.perf_counter() - t_start:.0f} s' + ' ' * 80 + '\n')
-    return {'rows': rows, 'outcomes': outcomes, 'ratios': ratios, 'summary': summary, 'scenes': scenes}
+        stream.write(
+            f'\r[bench-methods] done in {time.perf_counter() - t_start:.0f} s' + ' ' * 80 + '\n'
+        )
+    return {
+        'rows': rows,
+        'outcomes': outcomes,
+        'ratios': ratios,
+        'summary': summary,
+        'scenes': scenes,
+    }
 
 
 def cmd_bench_methods(args: argparse.Namespace) -> int:
@@ -547,11 +671,36 @@ def cmd_bench_methods(args: argparse.Namespace) -> int:
     res = run(quick=args.quick, out_dir=out or None, only=args.only)
     print('\n'.join(res['summary']))
     print()
-    hdr = ('problem', 'method', 'scenes', 'scalar µs', 'vec ns/el', 'err median', 'err worst', 'failures')
+    hdr = (
+        'problem',
+        'method',
+        'scenes',
+        'scalar µs',
+        'vec ns/el',
+        'err median',
+        'err worst',
+        'failures',
+    )
     from catenary_monitor.cli.main import format_table
-    print(format_table([(r['problem'], r['method'], r['scenes'], fmt(r['scalar_us_median']),
-                         fmt(r['vector_ns_per_element']), fmt(r['error_median'], 'err'),
-                         fmt(r['error_worst'], 'err'), r['failures']) for r in res['rows']], hdr))
+
+    print(
+        format_table(
+            [
+                (
+                    r['problem'],
+                    r['method'],
+                    r['scenes'],
+                    fmt(r['scalar_us_median']),
+                    fmt(r['vector_ns_per_element']),
+                    fmt(r['error_median'], 'err'),
+                    fmt(r['error_worst'], 'err'),
+                    r['failures'],
+                )
+                for r in res['rows']
+            ],
+            hdr,
+        )
+    )
     if out:
         print(f'\nwrote {out}/methods.md, methods.csv, speed_accuracy.png, stability_map.png')
     return 0
@@ -559,12 +708,25 @@ def cmd_bench_methods(args: argparse.Namespace) -> int:
 
 def register(sub: Any) -> None:
     """Add ``bench-methods`` to the ``catenary-monitor`` sub-commands."""
-    p = sub.add_parser('bench-methods', help='every solver method: speed, accuracy, stability map',
-                       description=__doc__.split('\n\n')[0])
-    p.add_argument('--quick', action='store_true', help='coarser sweep, finishes in under a minute')
-    p.add_argument('--out', default=None, metavar='DIR',
-                   help="where to write the tables and pictures (default: docs for a full run, "
-                        "nothing for --quick; '' writes nothing)")
-    p.add_argument('--only', default=None, metavar='TEXT',
-                   help='run only the methods whose name contains TEXT (plus the baselines)')
+    p = sub.add_parser(
+        'bench-methods',
+        help='every solver method: speed, accuracy, stability map',
+        description=__doc__.split('\n\n')[0],
+    )
+    p.add_argument(
+        '--quick', action='store_true', help='coarser sweep, finishes in under a minute'
+    )
+    p.add_argument(
+        '--out',
+        default=None,
+        metavar='DIR',
+        help="where to write the tables and pictures (default: docs for a full run, "
+        "nothing for --quick; '' writes nothing)",
+    )
+    p.add_argument(
+        '--only',
+        default=None,
+        metavar='TEXT',
+        help='run only the methods whose name contains TEXT (plus the baselines)',
+    )
     p.set_defaults(func=cmd_bench_methods)

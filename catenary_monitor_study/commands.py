@@ -4,6 +4,7 @@
 baselines in the same run. They live outside the monitor's runtime import graph: the command line
 finds this module through its entry point, and nothing in ``catenary_monitor`` imports it.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -18,37 +19,51 @@ __all__ = ['register']
 def cmd_bench_latency(args: argparse.Namespace) -> int:
     """Tension-to-result latency across processes against a bare rclpy echo node."""
     from catenary_monitor_study.bench_latency import run_bench
-    return run_bench(lines=args.lines, rate=args.rate, duration=args.duration, json_out=args.json,
-                     ea=args.ea)
+
+    return run_bench(
+        lines=args.lines, rate=args.rate, duration=args.duration, json_out=args.json, ea=args.ea
+    )
 
 
 def _batch(func: Any) -> Any:
     """A batch command on large arrays: keep freed memory for reuse (see cli.allocator)."""
+
     @functools.wraps(func)
     def run(args: argparse.Namespace) -> int:
         keep_freed_memory()
         return int(func(args) or 0)
+
     return run
 
 
 def register(sub: Any) -> None:
     """Add the benchmark sub-commands to the ``catenary-monitor`` parser."""
     from catenary_monitor_study import bench_core, bench_methods, bench_replay
+
     for module in (bench_core, bench_methods, bench_replay):
         module.register(sub)
     for name in ('bench', 'bench-methods', 'bench-replay'):
         parser = sub.choices[name]
         parser.set_defaults(func=_batch(parser.get_default('func')))
-    p = sub.add_parser('bench-latency', help='latency and CPU of the node vs a bare echo node',
-                       description='Measure tension message -> published result latency '
-                                   'across processes (median, p99) for the monitor and for a '
-                                   'bare rclpy echo node in the same run, and the CPU use.')
+    p = sub.add_parser(
+        'bench-latency',
+        help='latency and CPU of the node vs a bare echo node',
+        description='Measure tension message -> published result latency '
+        'across processes (median, p99) for the monitor and for a '
+        'bare rclpy echo node in the same run, and the CPU use.',
+    )
     p.add_argument('--lines', type=int, default=12, help='number of lines (default: 12)')
     p.add_argument('--rate', type=float, default=20.0, help='rate per line [Hz] (default: 20)')
-    p.add_argument('--duration', type=float, default=20.0,
-                   help='measuring time per node [s] (default: 20)')
-    p.add_argument('--ea', type=float, default=None, metavar='N',
-                   help='axial stiffness EA [N] on every line: measures the elastic model '
-                        '(e.g. 6.63e8 for the U3 81 mm chain; default: inextensible)')
+    p.add_argument(
+        '--duration', type=float, default=20.0, help='measuring time per node [s] (default: 20)'
+    )
+    p.add_argument(
+        '--ea',
+        type=float,
+        default=None,
+        metavar='N',
+        help='axial stiffness EA [N] on every line: measures the elastic model '
+        '(e.g. 6.63e8 for the U3 81 mm chain; default: inextensible)',
+    )
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench_latency)

@@ -1,4 +1,5 @@
 """Shared test set-up: keep DDS discovery on this machine, one domain per test session."""
+
 import os
 import random
 

@@ -4,6 +4,7 @@ Independent of the project's formulation: the uplift state is found by solving t
 equation (1), y(x; alpha) = h, for the anchor angle, with the catenary parameter eliminated
 through the anchor-end tension. Used only by the tests.
 """
+
 from __future__ import annotations
 
 import mpmath as mp
@@ -31,29 +32,39 @@ def grounded(w, h, a):
     with mp.workdps(DPS):
         w, h, a = _mp(w, h, a)
         x = a * mp.acosh(1 + h / a)
-        length = a * mp.sinh(x / a)                         # eq. (2), alpha = 0
+        length = a * mp.sinh(x / a)  # eq. (2), alpha = 0
         beta = mp.degrees(mp.atan(mp.sinh(x / a)))
-        return {'min_anchor_distance': x, 'suspended_length': length, 'top_angle_deg': beta,
-                'horizontal_tension': w * a, 'top_tension': w * (a + h)}
+        return {
+            'min_anchor_distance': x,
+            'suspended_length': length,
+            'top_angle_deg': beta,
+            'horizontal_tension': w * a,
+            'top_tension': w * (a + h),
+        }
 
 
 def uplift_from_tension(w, t, h, x):
     """Problem 4: hook tension T and span x < x_min -> R, F, alpha, L, beta (paper eqs. 1, 2)."""
     with mp.workdps(DPS):
         w, t, h, x = _mp(w, t, h, x)
-        b = t / w - h                                        # anchor-end tension / w
+        b = t / w - h  # anchor-end tension / w
         # Anchor angle alpha: a = b cos(alpha); equation (1) y(x; alpha) = h.
 
         def y_minus_h(alpha):
             a = b * mp.cos(alpha)
             return a * (mp.sec(alpha) * (mp.cosh(x / a) - 1) + mp.tan(alpha) * mp.sinh(x / a)) - h
+
         alpha = _bisect(y_minus_h, mp.mpf(0), mp.pi / 2)
         a = b * mp.cos(alpha)
         length = a * (mp.tan(alpha) * (mp.cosh(x / a) - 1) + mp.sec(alpha) * mp.sinh(x / a))
         top_slope = mp.sinh(mp.asinh(mp.tan(alpha)) + x / a)
-        return {'horizontal_tension': w * a, 'uplift_force': w * a * mp.tan(alpha),
-                'anchor_angle_deg': mp.degrees(alpha), 'suspended_length': length,
-                'top_angle_deg': mp.degrees(mp.atan(top_slope))}
+        return {
+            'horizontal_tension': w * a,
+            'uplift_force': w * a * mp.tan(alpha),
+            'anchor_angle_deg': mp.degrees(alpha),
+            'suspended_length': length,
+            'top_angle_deg': mp.degrees(mp.atan(top_slope)),
+        }
 
 
 def uplift_from_horizontal(w, h, r, x):
@@ -64,12 +75,17 @@ def uplift_from_horizontal(w, h, r, x):
 
         def y_minus_h(alpha):
             return a * (mp.sec(alpha) * (mp.cosh(x / a) - 1) + mp.tan(alpha) * mp.sinh(x / a)) - h
+
         alpha = _bisect(y_minus_h, mp.mpf(0), mp.pi / 2)
         length = a * (mp.tan(alpha) * (mp.cosh(x / a) - 1) + mp.sec(alpha) * mp.sinh(x / a))
         v_top = r * mp.tan(alpha) + w * length
-        return {'anchor_angle_deg': mp.degrees(alpha), 'uplift_force': r * mp.tan(alpha),
-                'top_tension': mp.sqrt(r * r + v_top * v_top), 'suspended_length': length,
-                'top_angle_deg': mp.degrees(mp.atan(v_top / r))}
+        return {
+            'anchor_angle_deg': mp.degrees(alpha),
+            'uplift_force': r * mp.tan(alpha),
+            'top_tension': mp.sqrt(r * r + v_top * v_top),
+            'suspended_length': length,
+            'top_angle_deg': mp.degrees(mp.atan(v_top / r)),
+        }
 
 
 def critical_tension(w, h, x):
@@ -81,18 +97,23 @@ def critical_tension(w, h, x):
 
         def f(ld):
             return 2 * mp.log(mp.sinh(mp.exp(ld))) - ld - mp.log(c)
+
         ld = _bisect(f, mp.mpf(-80), mp.mpf(8))
         a = x / (2 * mp.exp(ld))
         return w * (a + h)
 
 
 def grounded_from_length(w, h, length, x):
-    """Problem 5 (Hou 2005): chain of length Lm lying on the seabed, span x -> R, grounded length."""
+    """Problem 5 (Hou 2005): chain of length Lm on the seabed, span x -> R, grounded length."""
     with mp.workdps(DPS):
         w, h, length, x = _mp(w, h, length, x)
 
         def excess(log_a):  # (suspended length - span) - (Lm - x), decreasing in a
             a = mp.exp(log_a)
             return -((mp.sqrt(h * h + 2 * a * h) - a * mp.acosh(1 + h / a)) - (length - x))
+
         a = mp.exp(_bisect(excess, mp.log(h) - 200, mp.log(h) + 200, iterations=260))
-        return {'horizontal_tension': w * a, 'grounded_length': length - mp.sqrt(h * h + 2 * a * h)}
+        return {
+            'horizontal_tension': w * a,
+            'grounded_length': length - mp.sqrt(h * h + 2 * a * h),
+        }

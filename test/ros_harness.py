@@ -3,6 +3,7 @@
 The test process runs one rclpy node spun in a background thread; assertions wait on what it
 received with a bounded deadline (``Client.wait_for``), never on a sleep.
 """
+
 from __future__ import annotations
 
 import math
@@ -31,13 +32,18 @@ def child_env() -> dict[str, str]:
     return env
 
 
-def write_params(path: Path, lines: dict[str, dict[str, Any]], key: str = 'catenary_monitor',
-                 **global_params: Any) -> Path:
+def write_params(
+    path: Path,
+    lines: dict[str, dict[str, Any]],
+    key: str = 'catenary_monitor',
+    **global_params: Any,
+) -> Path:
     """A ROS 2 params YAML for the monitor (flow style, no yaml dependency needed)."""
     out = [f'{key}:', '  ros__parameters:', f'    lines: [{", ".join(lines)}]']
     for name, value in global_params.items():
-        out.append(f'    {name}: {value!r}' if not isinstance(value, str) else
-                   f'    {name}: "{value}"')
+        out.append(
+            f'    {name}: {value!r}' if not isinstance(value, str) else f'    {name}: "{value}"'
+        )
     for line, params in lines.items():
         out.append(f'    {line}:')
         out.extend(f'      {k}: {v!r}' for k, v in params.items())
@@ -45,13 +51,23 @@ def write_params(path: Path, lines: dict[str, dict[str, Any]], key: str = 'caten
     return path
 
 
-def start_monitor(params_file: Path, log_dir: Path, *ros_args: str,
-                  out_dir: Optional[Path] = None) -> subprocess.Popen:
+def start_monitor(
+    params_file: Path, log_dir: Path, *ros_args: str, out_dir: Optional[Path] = None
+) -> subprocess.Popen:
     """Start ``python -m catenary_monitor.ros.node`` with a params file; stdout/stderr to files."""
     out_dir = out_dir or log_dir.parent
     out = open(out_dir / f'monitor_{os.getpid()}_{time.monotonic_ns()}.out', 'w+')
-    cmd = [sys.executable, '-m', 'catenary_monitor.ros.node', '--ros-args', '--params-file',
-           str(params_file), '-p', f'log_dir:={log_dir}', *ros_args]
+    cmd = [
+        sys.executable,
+        '-m',
+        'catenary_monitor.ros.node',
+        '--ros-args',
+        '--params-file',
+        str(params_file),
+        '-p',
+        f'log_dir:={log_dir}',
+        *ros_args,
+    ]
     proc = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, env=child_env())
     proc.output_file = out  # type: ignore[attr-defined]
     STARTED.append(proc)
@@ -64,8 +80,12 @@ STARTED: list = []
 
 def callback_errors() -> list[str]:
     """Lines where a started monitor logged an exception in a callback, then forget them."""
-    found = [line for proc in STARTED for line in output_of(proc).splitlines()
-             if 'failed (monitoring goes on)' in line]
+    found = [
+        line
+        for proc in STARTED
+        for line in output_of(proc).splitlines()
+        if 'failed (monitoring goes on)' in line
+    ]
     STARTED.clear()
     return found
 
@@ -91,9 +111,13 @@ def stop(proc: subprocess.Popen, sig: int = 15, timeout: float = 10.0) -> int:
 
 def status_dict(status: Any) -> dict[str, Any]:
     """A DiagnosticStatus as a plain dict: level (int), message, values (str -> str)."""
-    return {'level': status.level[0] if isinstance(status.level, bytes) else int(status.level),
-            'name': status.name, 'message': status.message, 'hardware_id': status.hardware_id,
-            'values': {kv.key: kv.value for kv in status.values}}
+    return {
+        'level': status.level[0] if isinstance(status.level, bytes) else int(status.level),
+        'name': status.name,
+        'message': status.message,
+        'hardware_id': status.hardware_id,
+        'values': {kv.key: kv.value for kv in status.values},
+    }
 
 
 class Client:
@@ -142,11 +166,13 @@ class Client:
         def cb(msg: Any) -> None:
             with self.lock:
                 self.outputs[topic].append((time.monotonic(), list(msg.data)))
+
         self.node.create_subscription(Float64MultiArray, topic, cb, 100)
 
     def publisher(self, topic: str) -> Any:
         """The std_msgs/Float64 publisher for ``topic`` (reliable, as many drivers use)."""
         from std_msgs.msg import Float64
+
         pub = self._publishers.get(topic)
         if pub is None:
             pub = self._publishers[topic] = self.node.create_publisher(Float64, topic, 10)
@@ -164,6 +190,7 @@ class Client:
     def publish(self, topic: str, value: float) -> None:
         """Publish one std_msgs/Float64 and record it in ``sent``."""
         from std_msgs.msg import Float64
+
         pub = self.publisher(topic)
         with self.lock:
             pub.publish(Float64(data=float(value)))
@@ -194,7 +221,8 @@ class Client:
                 return value
             if time.monotonic() > deadline:
                 raise AssertionError(
-                    f'timed out after {timeout} s waiting for {what or predicate}')
+                    f'timed out after {timeout} s waiting for {what or predicate}'
+                )
             time.sleep(0.02)
 
     def latest_status(self, name: str, since: float = -math.inf) -> Optional[dict[str, Any]]:
@@ -206,14 +234,24 @@ class Client:
                 return entry[name]
         return None
 
-    def wait_status(self, name: str, timeout: float, level: Optional[int] = None,
-                    since: float = -math.inf,
-                    check: Callable[[dict[str, Any]], bool] = lambda s: True) -> dict[str, Any]:
+    def wait_status(
+        self,
+        name: str,
+        timeout: float,
+        level: Optional[int] = None,
+        since: float = -math.inf,
+        check: Callable[[dict[str, Any]], bool] = lambda s: True,
+    ) -> dict[str, Any]:
         """Wait for a status ``name`` with ``level`` received after ``since``."""
+
         def pred() -> Any:
             s = self.latest_status(name, since)
-            return s if s is not None and (level is None or s['level'] == level) and check(s) \
+            return (
+                s
+                if s is not None and (level is None or s['level'] == level) and check(s)
                 else None
+            )
+
         try:
             return self.wait_for(pred, timeout, f'{name} at level {LEVELS.get(level, level)}')
         except AssertionError as err:

@@ -6,6 +6,7 @@ the problem itself is ill-conditioned (x -> x_min, F -> 0): there the bound is 1
 kappa = |x/F dF/dx| computed by the reference.  Margins: absolute error <= 1e-12 of the larger
 term of their difference.
 """
+
 import math
 
 import mpmath as mp
@@ -21,13 +22,15 @@ REL = 1e-12
 
 
 def log_uniform(lo: float, hi: float):
-    return st.floats(math.log10(lo), math.log10(hi)).map(lambda v: 10.0 ** v)
+    return st.floats(math.log10(lo), math.log10(hi)).map(lambda v: 10.0**v)
 
 
-scene = st.tuples(log_uniform(1.0, 1e5),      # w [N/m]
-                  log_uniform(1e-1, 1e4),     # a = R/w at the anchor end [m]
-                  log_uniform(1e-9, 1e4),     # h / a
-                  log_uniform(1e-3, 1.0))     # x / x_min
+scene = st.tuples(
+    log_uniform(1.0, 1e5),  # w [N/m]
+    log_uniform(1e-1, 1e4),  # a = R/w at the anchor end [m]
+    log_uniform(1e-9, 1e4),  # h / a
+    log_uniform(1e-3, 1.0),
+)  # x / x_min
 
 
 def tension_scene(w, a, ha, frac):

@@ -1,5 +1,6 @@
 """Alarm state machine: uplift, hysteresis, hold, chatter, impossible and stale input, warnings,
 and the vectorized replay agreeing exactly with the scalar machine."""
+
 import math
 import subprocess
 import sys
@@ -11,14 +12,22 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from catenary_monitor.core.alarms import (DIAGNOSTIC_KEYS, AlarmInputs, Level, LineAlarm,
-                                          Transition, diagnostic_values, replay_levels)
+from catenary_monitor.core.alarms import (
+    DIAGNOSTIC_KEYS,
+    AlarmInputs,
+    Level,
+    LineAlarm,
+    Transition,
+    diagnostic_values,
+    replay_levels,
+)
 from catenary_monitor.core.config import AlarmConfig, LineConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 # A line well inside every limit (SI): no uplift, margins above their warning thresholds.
-CALM = dict(uplift_force=0.0, anchor_margin=20.0, tide_margin=3.0, load_margin=2e6,
-            safety_factor=5.0)
+CALM = dict(
+    uplift_force=0.0, anchor_margin=20.0, tide_margin=3.0, load_margin=2e6, safety_factor=5.0
+)
 
 
 def fresh(now, **values):
@@ -62,11 +71,13 @@ def as_arrays(updates):
 
 # --- uplift ------------------------------------------------------------------------------------
 
+
 def test_uplift_raises_error_at_the_very_first_update():
     state, levels, events = run(alarm_with(), [(0.0, fresh(0.0, uplift_force=193264.0))])
     assert levels == [Level.ERROR]
-    assert events == [Transition(0.0, Level.OK, Level.ERROR,
-                                 'anchor uplift 193.3 kN > allowed 0.0 kN', None)]
+    assert events == [
+        Transition(0.0, Level.OK, Level.ERROR, 'anchor uplift 193.3 kN > allowed 0.0 kN', None)
+    ]
     assert state.message == events[0].message
 
 
@@ -96,17 +107,23 @@ def test_uplift_clears_with_force_hysteresis():
     forces = [1.2e5, 9.5e4, 9.1e4, 9.0e4]  # 95 and 91 kN: below allowed, above the clear level
     _, levels, events = run(alarm, [(t, fresh(t, uplift_force=f)) for t, f in enumerate(forces)])
     assert levels == [Level.ERROR, Level.ERROR, Level.ERROR, Level.OK]
-    assert 'anchor uplift alarm held: uplift 95.0 kN' in run(alarm, [
-        (0.0, fresh(0.0, uplift_force=1.2e5)), (1.0, fresh(1.0, uplift_force=9.5e4))])[0].message
+    assert (
+        'anchor uplift alarm held: uplift 95.0 kN'
+        in run(
+            alarm, [(0.0, fresh(0.0, uplift_force=1.2e5)), (1.0, fresh(1.0, uplift_force=9.5e4))]
+        )[0].message
+    )
     assert events[-1] == Transition(3.0, Level.ERROR, Level.OK, 'OK', 3.0)
 
 
 def test_zero_allowance_clears_only_with_anchor_margin_deadband():
-    alarm = alarm_with(uplift_clear_margin=1.0, clear_hold=0.0, anchor_margin_warn=0.0,
-                       warn_clear_hold=0.0)
+    alarm = alarm_with(
+        uplift_clear_margin=1.0, clear_hold=0.0, anchor_margin_warn=0.0, warn_clear_hold=0.0
+    )
     margins = [-3.0, 0.2, 0.99, 1.0]
     updates = [(0.0, fresh(0.0, uplift_force=2e4, anchor_margin=-3.0))] + [
-        (float(t), fresh(t, anchor_margin=m)) for t, m in enumerate(margins[1:], 1)]
+        (float(t), fresh(t, anchor_margin=m)) for t, m in enumerate(margins[1:], 1)
+    ]
     _, levels, _ = run(alarm, updates)
     assert levels == [Level.ERROR, Level.ERROR, Level.ERROR, Level.OK]
 
@@ -114,16 +131,19 @@ def test_zero_allowance_clears_only_with_anchor_margin_deadband():
 def test_clear_hold_time_restarts_on_any_interruption():
     alarm = alarm_with(clear_hold=30.0)
     updates = [(0.0, fresh(0.0, uplift_force=1e5))]
-    updates += [(t, fresh(t)) for t in np.arange(1.0, 25.0)]            # 24 s of calm
-    updates += [(25.0, fresh(25.0, uplift_force=10.0))]                   # a brief lift
+    updates += [(t, fresh(t)) for t in np.arange(1.0, 25.0)]  # 24 s of calm
+    updates += [(25.0, fresh(25.0, uplift_force=10.0))]  # a brief lift
     updates += [(t, fresh(t)) for t in np.arange(26.0, 60.0)]
     _, levels, events = run(alarm, updates)
     assert [(e.time, e.old, e.new) for e in events] == [
-        (0.0, Level.OK, Level.ERROR), (56.0, Level.ERROR, Level.OK)]      # 26 + 30 s
+        (0.0, Level.OK, Level.ERROR),
+        (56.0, Level.ERROR, Level.OK),
+    ]  # 26 + 30 s
     assert events[-1].duration == 56.0
 
 
 # --- chatter -----------------------------------------------------------------------------------
+
 
 def wave_updates(period, seconds=600.0, rate=20.0, mean=5e3, amplitude=4e4):
     """Hook tension swinging at wave frequency around the onset of uplift, sampled at ``rate``.
@@ -133,8 +153,9 @@ def wave_updates(period, seconds=600.0, rate=20.0, mean=5e3, amplitude=4e4):
     updates = []
     for t in np.arange(0.0, seconds, 1.0 / rate):
         swing = mean + amplitude * math.sin(2.0 * math.pi * t / period)
-        updates.append((float(t), fresh(t, uplift_force=max(swing, 0.0),
-                                        anchor_margin=-swing / 1e4)))
+        updates.append(
+            (float(t), fresh(t, uplift_force=max(swing, 0.0), anchor_margin=-swing / 1e4))
+        )
     return updates
 
 
@@ -142,8 +163,11 @@ def wave_updates(period, seconds=600.0, rate=20.0, mean=5e3, amplitude=4e4):
 def test_wave_oscillation_around_uplift_gives_one_transition(period):
     updates = wave_updates(period)
     _, levels, events = run(alarm_with(), updates)
-    crossings = sum(1 for (_, a), (_, b) in zip(updates, updates[1:])
-                    if (a.uplift_force > 0) != (b.uplift_force > 0))
+    crossings = sum(
+        1
+        for (_, a), (_, b) in zip(updates, updates[1:])
+        if (a.uplift_force > 0) != (b.uplift_force > 0)
+    )
     assert crossings > 100  # the input really does cross the threshold, many times
     assert [(e.old, e.new) for e in events] == [(Level.OK, Level.ERROR)]
     # The storm eases: one more transition, after the hold, giving the episode length.
@@ -173,11 +197,14 @@ def test_wave_oscillation_around_a_warning_gives_one_transition():
 
 # --- impossible input --------------------------------------------------------------------------
 
+
 def test_impossible_input_is_an_error_at_once_with_the_solvers_sentence():
     sentence = 'hook tension 2.0e+04 N is not above weight x depth 2.7e+04 N'
     bad = AlarmInputs(status=3, status_message=sentence, tension_stamp=1.0, depth_stamp=1.0)
-    _, levels, events = run(alarm_with(clear_hold=5.0),
-                            [(0.0, fresh(0.0)), (1.0, bad)] + [(t, fresh(t)) for t in range(2, 9)])
+    _, levels, events = run(
+        alarm_with(clear_hold=5.0),
+        [(0.0, fresh(0.0)), (1.0, bad)] + [(t, fresh(t)) for t in range(2, 9)],
+    )
     assert levels == [Level.OK] + [Level.ERROR] * 6 + [Level.OK] * 2  # clear at 2 + 5 s
     assert events[0].message == f'impossible input: {sentence}'
     assert events[1].time == 7.0 and events[1].duration == 6.0
@@ -188,8 +215,10 @@ def test_impossible_input_held_message_and_default_sentence():
     nan_input = AlarmInputs(status=1, tension_stamp=0.0, depth_stamp=0.0)
     state, _, events = run(alarm, [(0.0, nan_input), (1.0, fresh(1.0))])
     assert events[0].message == 'impossible input: solver status 1'
-    assert state.message == ('impossible input alarm held: last was "solver status 1" '
-                             '(clears after 5 s of valid input)')
+    assert state.message == (
+        'impossible input alarm held: last was "solver status 1" '
+        '(clears after 5 s of valid input)'
+    )
 
 
 def test_nan_quantity_keeps_a_raised_alarm():
@@ -202,6 +231,7 @@ def test_nan_quantity_keeps_a_raised_alarm():
 
 # --- stale -------------------------------------------------------------------------------------
 
+
 def test_stale_tension_is_detected_and_recovers():
     alarm = alarm_with(tension_timeout=5.0)
     updates = [(t, fresh(t)) for t in (0.0, 1.0)]
@@ -209,8 +239,9 @@ def test_stale_tension_is_detected_and_recovers():
     updates += [(9.0, fresh(9.0))]
     state, levels, events = run(alarm, updates)
     assert levels == [Level.OK] * 7 + [Level.STALE] * 2 + [Level.OK]  # age 6 s > 5 s at t = 7
-    assert events[0] == Transition(7.0, Level.OK, Level.STALE,
-                                   'tension stale: last sample 6.0 s ago (timeout 5 s)', None)
+    assert events[0] == Transition(
+        7.0, Level.OK, Level.STALE, 'tension stale: last sample 6.0 s ago (timeout 5 s)', None
+    )
     assert events[1] == Transition(9.0, Level.STALE, Level.OK, 'OK', 2.0)
 
 
@@ -218,11 +249,14 @@ def test_a_line_starts_blind_and_says_what_it_misses():
     alarm = alarm_with(depth_timeout=60.0)
     start = alarm.initial(100.0)
     assert (start.level, start.message) == (
-        Level.STALE, 'no tension received yet; no depth received yet')
-    updates = [(float(t), AlarmInputs(**CALM, tension_stamp=float(t)))
-               for t in range(110, 200, 10)]
+        Level.STALE,
+        'no tension received yet; no depth received yet',
+    )
+    updates = [
+        (float(t), AlarmInputs(**CALM, tension_stamp=float(t))) for t in range(110, 200, 10)
+    ]
     state, levels, events = run(alarm, updates, start)
-    assert levels == [Level.STALE] * 9 and events == []     # never OK without a depth
+    assert levels == [Level.STALE] * 9 and events == []  # never OK without a depth
     assert state.message == 'no depth received yet'
     state, levels, events = run(alarm, [(200.0, fresh(200.0))], state)
     assert events == [Transition(200.0, Level.STALE, Level.OK, 'OK', 100.0)]
@@ -241,9 +275,10 @@ def test_error_outranks_stale_and_nothing_clears_on_stale_data():
     alarm = alarm_with(clear_hold=3.0, tension_timeout=2.0)
     updates = [(0.0, fresh(0.0, uplift_force=5e4))]
     # Tension stops at t = 1 with a calm sample; 10 s of ticks on that stale sample.
-    updates += [(1.0, fresh(1.0))] + [(float(t), AlarmInputs(**CALM, tension_stamp=1.0,
-                                                             depth_stamp=float(t)))
-                                      for t in range(2, 12)]
+    updates += [(1.0, fresh(1.0))] + [
+        (float(t), AlarmInputs(**CALM, tension_stamp=1.0, depth_stamp=float(t)))
+        for t in range(2, 12)
+    ]
     state, levels, events = run(alarm, updates)
     assert set(levels) == {Level.ERROR}  # the stale calm sample never cleared the uplift alarm
     assert state.message.startswith('anchor uplift alarm held')
@@ -257,23 +292,33 @@ def test_error_outranks_stale_and_nothing_clears_on_stale_data():
 def test_stale_outranks_warn_and_warn_returns_after_recovery():
     alarm = alarm_with(tension_timeout=2.0)
     updates = [(0.0, fresh(0.0, anchor_margin=4.0))]
-    updates += [(float(t), AlarmInputs(**{**CALM, 'anchor_margin': 4.0}, tension_stamp=0.0,
-                                       depth_stamp=float(t))) for t in range(1, 5)]
+    updates += [
+        (
+            float(t),
+            AlarmInputs(**{**CALM, 'anchor_margin': 4.0}, tension_stamp=0.0, depth_stamp=float(t)),
+        )
+        for t in range(1, 5)
+    ]
     updates += [(5.0, fresh(5.0, anchor_margin=4.0))]
     _, levels, events = run(alarm, updates)
     assert levels == [Level.WARN] * 3 + [Level.STALE] * 2 + [Level.WARN]
-    assert events[1].message == ('tension stale: last sample 3.0 s ago (timeout 2 s); '
-                                 'anchor margin 4.00 m < 5.00 m')
+    assert events[1].message == (
+        'tension stale: last sample 3.0 s ago (timeout 2 s); ' 'anchor margin 4.00 m < 5.00 m'
+    )
 
 
 # --- warnings ----------------------------------------------------------------------------------
 
-@pytest.mark.parametrize('name, low, between, high, text', [
-    ('anchor_margin', 4.2, 5.5, 6.0, 'anchor margin 4.20 m < 5.00 m'),
-    ('tide_margin', 0.8, 1.1, 1.2, 'tide margin 0.80 m < 1.00 m'),
-    ('load_margin', -2e4, 5e3, 1e4, 'load margin -20.0 kN < 0.0 kN'),
-    ('safety_factor', 1.9, 2.05, 2.1, 'safety factor 1.90 < 2.00'),
-])
+
+@pytest.mark.parametrize(
+    'name, low, between, high, text',
+    [
+        ('anchor_margin', 4.2, 5.5, 6.0, 'anchor margin 4.20 m < 5.00 m'),
+        ('tide_margin', 0.8, 1.1, 1.2, 'tide margin 0.80 m < 1.00 m'),
+        ('load_margin', -2e4, 5e3, 1e4, 'load margin -20.0 kN < 0.0 kN'),
+        ('safety_factor', 1.9, 2.05, 2.1, 'safety factor 1.90 < 2.00'),
+    ],
+)
 def test_warning_thresholds_with_deadband_and_hold(name, low, between, high, text):
     alarm = alarm_with(warn_clear_hold=10.0)
     values = [low] + [between] * 20 + [high] * 11
@@ -288,25 +333,39 @@ def test_warning_thresholds_with_deadband_and_hold(name, low, between, high, tex
 def test_several_conditions_are_joined_errors_first():
     x = fresh(0.0, uplift_force=193264.0, anchor_margin=-30.0, safety_factor=1.9)
     _, _, events = run(alarm_with(), [(0.0, x)])
-    assert events[0].message == ('anchor uplift 193.3 kN > allowed 0.0 kN; '
-                                 'anchor margin -30.00 m < 5.00 m; safety factor 1.90 < 2.00')
+    assert events[0].message == (
+        'anchor uplift 193.3 kN > allowed 0.0 kN; '
+        'anchor margin -30.00 m < 5.00 m; safety factor 1.90 < 2.00'
+    )
 
 
 def test_episode_durations_for_nested_levels():
     alarm = alarm_with(clear_hold=0.0, warn_clear_hold=0.0)
-    updates = [(0.0, fresh(0.0)), (10.0, fresh(10.0, anchor_margin=4.0)),
-               (20.0, fresh(20.0, anchor_margin=-1.0, uplift_force=1e4)),
-               (25.0, fresh(25.0, anchor_margin=4.0)), (40.0, fresh(40.0))]
+    updates = [
+        (0.0, fresh(0.0)),
+        (10.0, fresh(10.0, anchor_margin=4.0)),
+        (20.0, fresh(20.0, anchor_margin=-1.0, uplift_force=1e4)),
+        (25.0, fresh(25.0, anchor_margin=4.0)),
+        (40.0, fresh(40.0)),
+    ]
     _, _, events = run(alarm, updates)
     assert [(e.time, e.old, e.new, e.duration) for e in events] == [
-        (10.0, Level.OK, Level.WARN, None), (20.0, Level.WARN, Level.ERROR, None),
-        (25.0, Level.ERROR, Level.WARN, 5.0), (40.0, Level.WARN, Level.OK, 30.0)]
+        (10.0, Level.OK, Level.WARN, None),
+        (20.0, Level.WARN, Level.ERROR, None),
+        (25.0, Level.ERROR, Level.WARN, 5.0),
+        (40.0, Level.WARN, Level.OK, 30.0),
+    ]
 
 
 def test_time_going_backwards_restarts_pending_timers():
     alarm = alarm_with(clear_hold=5.0)
-    updates = [(100.0, fresh(100.0, uplift_force=1e4)), (101.0, fresh(101.0)),
-               (0.0, fresh(0.0)), (4.0, fresh(4.0)), (5.0, fresh(5.0))]
+    updates = [
+        (100.0, fresh(100.0, uplift_force=1e4)),
+        (101.0, fresh(101.0)),
+        (0.0, fresh(0.0)),
+        (4.0, fresh(4.0)),
+        (5.0, fresh(5.0)),
+    ]
     _, levels, _ = run(alarm, updates)
     assert levels == [Level.ERROR] * 4 + [Level.OK]
 
@@ -337,7 +396,8 @@ def scenarios(draw):
         tension_timeout=draw(st.sampled_from([0.5, 2.0])),
         depth_timeout=draw(st.sampled_from([1.0, 5.0])),
         uplift_clear_hysteresis=draw(st.sampled_from([0.0, 1e4, 1e5])),
-        anchor_margin_deadband=draw(st.sampled_from([0.0, 1.0])))
+        anchor_margin_deadband=draw(st.sampled_from([0.0, 1.0])),
+    )
     n = draw(st.integers(1, 60))
     pick = lambda pool: draw(st.lists(st.sampled_from(pool), min_size=n, max_size=n))  # noqa
     dts = pick([0.0, 0.1, 0.25, 0.5, 1.0, 1.9, 2.0, 3.0])
@@ -349,7 +409,8 @@ def scenarios(draw):
         safety_factor=pick([1.5, 2.0, 2.05, 2.1, 5.0, NAN]),
         status=pick([0, 0, 0, 0, 1, 3]),
         tension_fresh=pick([True, True, True, False]),
-        depth_fresh=pick([True, True, False]))
+        depth_fresh=pick([True, True, False]),
+    )
     return LineAlarm(config, allowed), dts, cols
 
 
@@ -360,10 +421,18 @@ def build_updates(dts, cols):
         t_stamp = now if cols['tension_fresh'][k] else t_stamp
         d_stamp = now if cols['depth_fresh'][k] else d_stamp
         status = cols['status'][k]
-        updates.append((now, AlarmInputs(
-            **{name: cols[name][k] for name in CALM}, status=status,
-            status_message=f'bad input {status}' if status else '',
-            tension_stamp=t_stamp, depth_stamp=d_stamp)))
+        updates.append(
+            (
+                now,
+                AlarmInputs(
+                    **{name: cols[name][k] for name in CALM},
+                    status=status,
+                    status_message=f'bad input {status}' if status else '',
+                    tension_stamp=t_stamp,
+                    depth_stamp=d_stamp,
+                ),
+            )
+        )
     return updates
 
 
@@ -375,13 +444,14 @@ def assert_replay_matches(alarm, updates, initial=None, **kwargs):
     assert result.transitions == events
     assert result.final_state() == state
     for i in (0, len(updates) // 2, len(updates) - 1):
-        want, _, _ = run(alarm, updates[:i + 1], start)
+        want, _, _ = run(alarm, updates[: i + 1], start)
         assert result.message_at(i) == want.message
     return events
 
 
-@settings(max_examples=120, deadline=None, database=None,
-          suppress_health_check=[HealthCheck.too_slow])
+@settings(
+    max_examples=120, deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow]
+)
 @given(scenarios())
 def test_vectorized_replay_equals_scalar_machine(scenario):
     alarm, dts, cols = scenario
@@ -391,8 +461,16 @@ def test_vectorized_replay_equals_scalar_machine(scenario):
 def test_vectorized_equals_scalar_on_a_long_random_sequence():
     rng = np.random.default_rng(7)
     n = 4000
-    alarm = LineAlarm(AlarmConfig(on_delay=0.3, clear_hold=2.0, warn_clear_hold=1.0,
-                                  tension_timeout=0.6, depth_timeout=3.0), 2e4)
+    alarm = LineAlarm(
+        AlarmConfig(
+            on_delay=0.3,
+            clear_hold=2.0,
+            warn_clear_hold=1.0,
+            tension_timeout=0.6,
+            depth_timeout=3.0,
+        ),
+        2e4,
+    )
     dts = rng.choice([0.05, 0.05, 0.1, 0.7, 3.5], n).tolist()
     cols = dict(
         uplift_force=np.where(rng.random(n) < 0.5, 0.0, rng.normal(2e4, 2e4, n)).tolist(),
@@ -402,7 +480,8 @@ def test_vectorized_equals_scalar_on_a_long_random_sequence():
         safety_factor=rng.normal(2.5, 0.3, n).tolist(),
         status=np.where(rng.random(n) < 0.01, 2, 0).tolist(),
         tension_fresh=(rng.random(n) < 0.95).tolist(),
-        depth_fresh=(rng.random(n) < 0.3).tolist())
+        depth_fresh=(rng.random(n) < 0.3).tolist(),
+    )
     events = assert_replay_matches(alarm, build_updates(dts, cols))
     # Not vacuous: many transitions, into every level.
     assert len(events) > 50 and {e.new for e in events} == set(Level)
@@ -411,18 +490,31 @@ def test_vectorized_equals_scalar_on_a_long_random_sequence():
 def test_vectorized_wave_and_status_table():
     updates = wave_updates(8.0, seconds=120.0)
     assert len(assert_replay_matches(alarm_with(), updates)) == 1
-    times, cols = as_arrays([(0.0, fresh(0.0)), (1.0, AlarmInputs(status=4, tension_stamp=1.0,
-                                                                  depth_stamp=1.0))])
+    times, cols = as_arrays(
+        [(0.0, fresh(0.0)), (1.0, AlarmInputs(status=4, tension_stamp=1.0, depth_stamp=1.0))]
+    )
     del cols['status_message']
-    result = replay_levels(times, cols, alarm_with(), status_messages={4: 'tension is NaN'},
-                           initial=in_service(alarm_with(), 0.0))
+    result = replay_levels(
+        times,
+        cols,
+        alarm_with(),
+        status_messages={4: 'tension is NaN'},
+        initial=in_service(alarm_with(), 0.0),
+    )
     assert result.transitions[0].message == 'impossible input: tension is NaN'
 
 
 def test_replay_accepts_scalars_and_rejects_bad_calls():
-    result = replay_levels([0.0, 1.0, 2.0], {'uplift_force': [0.0, 1.0, 0.0],
-                                             'anchor_margin': 20.0, 'tension_stamp': [0, 1, 2],
-                                             'depth_stamp': 0.0}, alarm_with())
+    result = replay_levels(
+        [0.0, 1.0, 2.0],
+        {
+            'uplift_force': [0.0, 1.0, 0.0],
+            'anchor_margin': 20.0,
+            'tension_stamp': [0, 1, 2],
+            'depth_stamp': 0.0,
+        },
+        alarm_with(),
+    )
     assert result.levels.tolist() == [Level.OK, Level.ERROR, Level.ERROR]
     assert replay_levels([], {}, alarm_with()).levels.size == 0
     with pytest.raises(ValueError, match='non-decreasing'):
@@ -433,13 +525,22 @@ def test_replay_accepts_scalars_and_rejects_bad_calls():
 
 # --- diagnostics values and purity ---------------------------------------------------------------
 
+
 def test_diagnostic_values_keys_and_exact_strings():
     fields_ = {key: 1.0 / (k + 3) for k, key in enumerate(DIAGNOSTIC_KEYS)}
     fields_['uplift_force'] = np.float64(193258.123456789)
     values = diagnostic_values(fields_)
     assert [key for key, _ in values] == [
-        'top_tension', 'depth', 'horizontal_tension', 'min_anchor_distance', 'anchor_margin',
-        'uplift_force', 'tide_margin', 'load_margin', 'safety_factor']
+        'top_tension',
+        'depth',
+        'horizontal_tension',
+        'min_anchor_distance',
+        'anchor_margin',
+        'uplift_force',
+        'tide_margin',
+        'load_margin',
+        'safety_factor',
+    ]
     assert all(isinstance(v, str) and float(v) == float(fields_[k]) for k, v in values)
     from_object = dict(diagnostic_values(SimpleNamespace(depth=20.85)))
     assert from_object['depth'] == '20.85'
@@ -447,9 +548,17 @@ def test_diagnostic_values_keys_and_exact_strings():
 
 
 def test_core_modules_import_without_rclpy():
-    code = ("import sys; sys.modules['rclpy'] = None; "
-            "import catenary_monitor.core.config, catenary_monitor.core.alarms; print('ok')")
-    out = subprocess.run([sys.executable, '-c', code], cwd=ROOT, capture_output=True, text=True,
-                         env={'PYTHONPATH': str(ROOT)}, timeout=60)
+    code = (
+        "import sys; sys.modules['rclpy'] = None; "
+        "import catenary_monitor.core.config, catenary_monitor.core.alarms; print('ok')"
+    )
+    out = subprocess.run(
+        [sys.executable, '-c', code],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        env={'PYTHONPATH': str(ROOT)},
+        timeout=60,
+    )
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == 'ok'

@@ -1,4 +1,5 @@
 """The command-line processes keep freed memory for reuse (glibc mallopt), and only they do."""
+
 import platform
 import subprocess
 import sys
@@ -12,6 +13,9 @@ def test_keep_freed_memory_applies_on_glibc_and_is_a_no_op_elsewhere():
 
 
 def test_importing_the_library_leaves_the_allocator_alone():
-    code = ('import catenary_monitor, catenary_monitor.core.solve, catenary_monitor.core.elastic, sys; '
-            'sys.exit(int("catenary_monitor.cli.allocator" in sys.modules))')
+    code = (
+        'import catenary_monitor, catenary_monitor.core.solve, '
+        'catenary_monitor.core.elastic, sys; '
+        'sys.exit(int("catenary_monitor.cli.allocator" in sys.modules))'
+    )
     assert subprocess.run([sys.executable, '-c', code]).returncode == 0

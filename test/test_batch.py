@@ -5,6 +5,7 @@ time and handed to ``advance`` as columns (in one window or several), and every 
 transition and snapshot must agree (values to 1e-12, everything else exactly), as must the
 core's state afterwards.
 """
+
 import math
 
 import numpy as np
@@ -20,6 +21,7 @@ from replay_data import T0_NS, core_steps, dock_config, generate
 
 def window_of(config, tensions, depth, ticks, lo=None, hi=None):
     """The columns of the events with lo <= t < hi."""
+
     def cut(t, *cols):
         keep = np.ones(len(t), bool)
         if lo is not None:
@@ -27,6 +29,7 @@ def window_of(config, tensions, depth, ticks, lo=None, hi=None):
         if hi is not None:
             keep &= t < hi
         return (t[keep], *(c[keep] for c in cols))
+
     empty = (np.zeros(0, np.int64), np.zeros(0))
     cols = [cut(*tensions.get(line.name, empty)) for line in config.lines]
     return Window(cols, cut(*depth), cut(ticks)[0])
@@ -42,10 +45,25 @@ def _nan_free(x):
 
 
 def core_state(core):
-    lines = [(_nan_free((line.state.level, line.state.message, line.state.latches,
-                         line.state.entered, line.state.input_message)),
-              _nan_free((line.tension, line.tension_s)), line.values,
-              line.status, line.status_message, line.model) for line in core.lines]
+    lines = [
+        (
+            _nan_free(
+                (
+                    line.state.level,
+                    line.state.message,
+                    line.state.latches,
+                    line.state.entered,
+                    line.state.input_message,
+                )
+            ),
+            _nan_free((line.tension, line.tension_s)),
+            line.values,
+            line.status,
+            line.status_message,
+            line.model,
+        )
+        for line in core.lines
+    ]
     rest = (core.depth, core.depth_s, core.depth_stale, core.tide, core.tide_entered)
     return lines, _nan_free(rest)
 
@@ -59,8 +77,12 @@ def assert_same_float(a, b, what):
 def assert_statuses_agree(got, want, stamp):
     assert len(got) == len(want), stamp
     for g, w in zip(got, want):
-        assert (g.name, g.level, g.message, g.hardware_id) == \
-            (w.name, w.level, w.message, w.hardware_id), (stamp, g.name)
+        assert (g.name, g.level, g.message, g.hardware_id) == (
+            w.name,
+            w.level,
+            w.message,
+            w.hardware_id,
+        ), (stamp, g.name)
         assert [k for k, _ in g.values] == [k for k, _ in w.values], (stamp, g.name)
         for (key, gv), (_, wv) in zip(g.values, w.values):
             if key == 'model':
@@ -82,16 +104,19 @@ def compare(config, tensions, depth, ticks, cuts=(), check_snapshots=True):
     core, steps = core_steps(config, tensions, depth, ticks, start)
     twin = MonitorCore(config, start)
     bounds = [None, *cuts, None]
-    results = [advance(twin, window_of(config, tensions, depth, ticks, lo, hi), snapshots=True)
-               for lo, hi in zip(bounds[:-1], bounds[1:])]
+    results = [
+        advance(twin, window_of(config, tensions, depth, ticks, lo, hi), snapshots=True)
+        for lo, hi in zip(bounds[:-1], bounds[1:])
+    ]
     # Outputs: every solved update of every line, in order.
     for k, line in enumerate(config.lines):
         want = [(s.stamp_ns, s.kind, o.values) for s in steps for o in s.outputs if o.line == k]
         t_ns = np.concatenate([r.lines[k].t_ns for r in results])
         assert t_ns.tolist() == [w[0] for w in want], line.name
         kinds = np.concatenate([r.lines[k].kind for r in results])
-        assert [('tension' if x == KIND_TENSION else 'depth') for x in kinds] == \
-            [w[1] for w in want], line.name
+        assert [('tension' if x == KIND_TENSION else 'depth') for x in kinds] == [
+            w[1] for w in want
+        ], line.name
         data = np.array([w[2] for w in want]).reshape(-1, 13)
         for j, key in enumerate(VALUE_FIELDS):
             got = np.concatenate([r.lines[k].values[key] for r in results])
@@ -103,8 +128,9 @@ def compare(config, tensions, depth, ticks, cuts=(), check_snapshots=True):
     # Transitions, component by component.
     want_tr = [c for s in steps for c in s.transitions]
     got_tr = [c for r in results for c in r.changes()]
-    assert sorted(got_tr, key=lambda c: (c.transition.time, c.component)) == \
-        sorted(want_tr, key=lambda c: (c.transition.time, c.component))
+    assert sorted(got_tr, key=lambda c: (c.transition.time, c.component)) == sorted(
+        want_tr, key=lambda c: (c.transition.time, c.component)
+    )
     if not check_snapshots:
         return steps
     # Snapshots: the same stamps, the same statuses.
@@ -150,9 +176,9 @@ def test_advance_in_several_windows_equals_one_core():
 def test_late_first_depth_and_lines_without_tension():
     config = dock_config(3, depth_timeout=2.0)
     tensions, depth = generate(config, seconds=40.0, seed=5)
-    late = depth[0] > T0_NS + int(8e9)           # the first depth 8 s after the tensions
+    late = depth[0] > T0_NS + int(8e9)  # the first depth 8 s after the tensions
     depth = (depth[0][late], depth[1][late])
-    del tensions['line_03']                        # a line that never reports
+    del tensions['line_03']  # a line that never reports
     steps = compare(config, tensions, depth, ticks_for(tensions, depth, rate=2.0))
     first = [s for s in steps if s.kind == 'depth'][0]
     assert first.snapshot is not None
@@ -177,7 +203,9 @@ def test_before_any_input_every_line_is_stale_and_says_why():
     step = core.step(Tick(T0_NS + 10**9))
     messages = {st.name: (st.level.name, st.message) for st in step.snapshot.statuses}
     assert messages['catenary_monitor: line_01'] == (
-        'STALE', 'no tension received yet; no depth received yet')
+        'STALE',
+        'no tension received yet; no depth received yet',
+    )
     assert messages['catenary_monitor: tide'] == ('STALE', 'no depth received yet')
     step = core.step(Tension(T0_NS + 2 * 10**9, 0, 372e3))
     assert step.outputs[0].values[11] == -1 and math.isnan(step.outputs[0].values[4])
@@ -219,8 +247,8 @@ def test_a_log_without_depth_and_a_line_without_tension():
     empty = (np.zeros(0, np.int64), np.zeros(0))
     rep = recompute(config, tensions, empty)
     compare(config, tensions, empty, rep.tick_ns)
-    assert set(rep.lines[0].status.tolist()) == {-1}          # unsolved, as the node publishes
-    assert set(rep.lines[1].step_level.tolist()) == {3}       # STALE throughout: never seen
+    assert set(rep.lines[0].status.tolist()) == {-1}  # unsolved, as the node publishes
+    assert set(rep.lines[1].step_level.tolist()) == {3}  # STALE throughout: never seen
     assert rep.lines[1].transitions == []
 
 
@@ -229,9 +257,14 @@ def schedules(draw, distinct):
     """Random schedules: any interleaving of tension, depth and ticks, gaps, impossible
     samples, uplift and warning crossings, on-delays and hold times; ``distinct``: no two
     events share a stamp (as in the node's logs), else a coarse grid with collisions."""
-    config = dock_config(2, on_delay=draw(st.sampled_from([0.0, 0.3])),
-                         clear_hold=draw(st.sampled_from([0.0, 0.7])), warn_clear_hold=0.5,
-                         tension_timeout=0.6, depth_timeout=1.1)
+    config = dock_config(
+        2,
+        on_delay=draw(st.sampled_from([0.0, 0.3])),
+        clear_hold=draw(st.sampled_from([0.0, 0.7])),
+        warn_clear_hold=0.5,
+        tension_timeout=0.6,
+        depth_timeout=1.1,
+    )
     grid = st.integers(0, 40).map(lambda k: T0_NS + k * 100_000_000)
     used = set()
 
@@ -246,29 +279,45 @@ def schedules(draw, distinct):
                 out.append(t)
             times = sorted(out)
         return np.array(times, np.int64)
+
     value = st.one_of(st.floats(3.0e5, 2.0e6), st.sampled_from([math.nan, -1.0, 0.0]))
     tensions = {}
     for line in config.lines:
         t = stamps(25)
-        tensions[line.name] = (t, np.array(draw(st.lists(value, min_size=len(t),
-                                                         max_size=len(t))), float))
+        tensions[line.name] = (
+            t,
+            np.array(draw(st.lists(value, min_size=len(t), max_size=len(t))), float),
+        )
     d = stamps(8)
-    depth = (d, np.array(draw(st.lists(st.one_of(st.floats(15.0, 26.0), st.just(-1.0)),
-                                       min_size=len(d), max_size=len(d))), float))
+    depth = (
+        d,
+        np.array(
+            draw(
+                st.lists(
+                    st.one_of(st.floats(15.0, 26.0), st.just(-1.0)),
+                    min_size=len(d),
+                    max_size=len(d),
+                )
+            ),
+            float,
+        ),
+    )
     ticks = np.unique(stamps(12))
     cuts = sorted(draw(st.lists(grid, max_size=3)))
     return config, tensions, depth, ticks, cuts
 
 
-@settings(max_examples=60, deadline=None, database=None,
-          suppress_health_check=[HealthCheck.too_slow])
+@settings(
+    max_examples=60, deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow]
+)
 @given(schedules(distinct=True))
 def test_random_schedules_with_distinct_stamps(case):
     compare(*case)
 
 
-@settings(max_examples=40, deadline=None, database=None,
-          suppress_health_check=[HealthCheck.too_slow])
+@settings(
+    max_examples=40, deadline=None, database=None, suppress_health_check=[HealthCheck.too_slow]
+)
 @given(schedules(distinct=False))
 def test_random_schedules_with_equal_stamps(case):
     compare(*case, check_snapshots=False)

@@ -1,14 +1,25 @@
 """Configuration: the parameter table, YAML loading, validation messages, round trips."""
+
 import dataclasses
 import math
 from pathlib import Path
 
 import pytest
 
-from catenary_monitor.core.config import (PARAMETERS, REQUIRED, AlarmConfig, ConfigError,
-                                          LineConfig, MonitorConfig, config_from_params,
-                                          config_hash, config_to_params, expand_parameters,
-                                          load_params_file, parameters_markdown)
+from catenary_monitor.core.config import (
+    PARAMETERS,
+    REQUIRED,
+    AlarmConfig,
+    ConfigError,
+    LineConfig,
+    MonitorConfig,
+    config_from_params,
+    config_hash,
+    config_to_params,
+    expand_parameters,
+    load_params_file,
+    parameters_markdown,
+)
 
 DOCK_YAML = Path(__file__).resolve().parents[1] / 'config' / 'floating_dock.yaml'
 
@@ -28,6 +39,7 @@ def _error(flat) -> ConfigError:
 
 
 # --- floating_dock.yaml -----------------------------------------------------------------------
+
 
 def test_floating_dock_matches_the_paper():
     config = config_from_params(load_params_file(DOCK_YAML))
@@ -65,11 +77,14 @@ def test_hash_changes_with_any_value():
 
 # --- loading YAML -----------------------------------------------------------------------------
 
+
 def test_nested_line_dicts_flatten_and_integers_become_floats(tmp_path):
     path = tmp_path / 'p.yaml'
-    path.write_text('/**:\n  ros__parameters:\n    lines: [a]\n'
-                    '    a: {weight: 1300, anchor_distance: 120, mbl: 4800000}\n'
-                    '    clear_hold: 5\n')
+    path.write_text(
+        '/**:\n  ros__parameters:\n    lines: [a]\n'
+        '    a: {weight: 1300, anchor_distance: 120, mbl: 4800000}\n'
+        '    clear_hold: 5\n'
+    )
     flat = load_params_file(path)
     assert flat['a.weight'] == 1300
     config = config_from_params(flat)
@@ -79,8 +94,10 @@ def test_nested_line_dicts_flatten_and_integers_become_floats(tmp_path):
 
 def test_node_section_overrides_wildcard(tmp_path):
     path = tmp_path / 'p.yaml'
-    path.write_text('/**:\n  ros__parameters:\n    clear_hold: 5.0\n    depth_topic: /x\n'
-                    'catenary_monitor:\n  ros__parameters:\n    clear_hold: 7.0\n')
+    path.write_text(
+        '/**:\n  ros__parameters:\n    clear_hold: 5.0\n    depth_topic: /x\n'
+        'catenary_monitor:\n  ros__parameters:\n    clear_hold: 7.0\n'
+    )
     assert load_params_file(path) == {'clear_hold': 7.0, 'depth_topic': '/x'}
 
 
@@ -94,12 +111,15 @@ def test_other_node_name(tmp_path):
         config_from_params(load_params_file(path))
 
 
-@pytest.mark.parametrize('text, rule', [
-    ('catenary_monitor:\n  lines: [a]\n', 'Sequences can only be values'),
-    ('catenary_monitor:\n  lines: a\n', 'Cannot have a value before ros__parameters'),
-    ('- a\n- b\n', 'Sequences cannot be key'),
-    ('catenary_monitor: {ros__parameters: [\n', 'cannot read'),
-])
+@pytest.mark.parametrize(
+    'text, rule',
+    [
+        ('catenary_monitor:\n  lines: [a]\n', 'Sequences can only be values'),
+        ('catenary_monitor:\n  lines: a\n', 'Cannot have a value before ros__parameters'),
+        ('- a\n- b\n', 'Sequences cannot be key'),
+        ('catenary_monitor: {ros__parameters: [\n', 'cannot read'),
+    ],
+)
 def test_bad_files_give_one_line(tmp_path, text, rule):
     path = tmp_path / 'p.yaml'
     path.write_text(text)
@@ -115,30 +135,46 @@ def test_missing_file(tmp_path):
 
 # --- validation messages ----------------------------------------------------------------------
 
-@pytest.mark.parametrize('flat, parameter, rule', [
-    ({}, 'lines', 'missing required'),
-    ({'lines': []}, 'lines', 'at least one line'),
-    ({'lines': 'a'}, 'lines', 'list of strings'),
-    ({'lines': ['a', 'a']}, 'lines', "duplicate line name 'a'"),
-    ({'lines': ['1a']}, 'lines', 'start with a letter'),
-    ({'lines': ['a.b']}, 'lines', 'start with a letter'),
-    (_minimal(**{'a.wieght': 3.0}), 'a.wieght', "unknown parameter (did you mean 'a.weight'?)"),
-    (_minimal(**{'b.weight': 3.0}), 'b.weight', 'unknown parameter'),
-    (_minimal(bogus=1), 'bogus', 'unknown parameter'),
-    ({'lines': ['a'], 'a.weight': 1300.0, 'a.mbl': 1e6}, 'a.anchor_distance', 'missing required'),
-    (_minimal(**{'a.weight': '1300'}), 'a.weight', "expected a number (N/m), got str '1300'"),
-    (_minimal(**{'a.weight': True}), 'a.weight', 'got bool'),
-    (_minimal(**{'a.weight': -1.0}), 'a.weight', '-1.0 out of range [1.0, 100000.0] N/m'),
-    (_minimal(**{'a.mbl': math.nan}), 'a.mbl', 'must be finite'),
-    (_minimal(**{'a.allowed_uplift': -5}), 'a.allowed_uplift', 'out of range'),
-    (_minimal(**{'a.tension_topic': 5}), 'a.tension_topic', 'expected a string'),
-    (_minimal(**{'a.tension_topic': 'bad topic'}), 'a.tension_topic', 'not a valid ROS topic'),
-    (_minimal(depth_topic='/mooring/a/tension'), 'a.tension_topic', 'already used by depth_topic'),
-    (_minimal(clear_hold=-1.0), 'clear_hold', 'out of range [0.0, 3600.0] s'),
-    (_minimal(tension_timeout=0), 'tension_timeout', 'out of range'),
-    (_minimal(diagnostic_rate='fast'), 'diagnostic_rate', 'expected a number (Hz)'),
-    (_minimal(log_dir=''), 'log_dir', 'must not be empty'),
-])
+
+@pytest.mark.parametrize(
+    'flat, parameter, rule',
+    [
+        ({}, 'lines', 'missing required'),
+        ({'lines': []}, 'lines', 'at least one line'),
+        ({'lines': 'a'}, 'lines', 'list of strings'),
+        ({'lines': ['a', 'a']}, 'lines', "duplicate line name 'a'"),
+        ({'lines': ['1a']}, 'lines', 'start with a letter'),
+        ({'lines': ['a.b']}, 'lines', 'start with a letter'),
+        (
+            _minimal(**{'a.wieght': 3.0}),
+            'a.wieght',
+            "unknown parameter (did you mean 'a.weight'?)",
+        ),
+        (_minimal(**{'b.weight': 3.0}), 'b.weight', 'unknown parameter'),
+        (_minimal(bogus=1), 'bogus', 'unknown parameter'),
+        (
+            {'lines': ['a'], 'a.weight': 1300.0, 'a.mbl': 1e6},
+            'a.anchor_distance',
+            'missing required',
+        ),
+        (_minimal(**{'a.weight': '1300'}), 'a.weight', "expected a number (N/m), got str '1300'"),
+        (_minimal(**{'a.weight': True}), 'a.weight', 'got bool'),
+        (_minimal(**{'a.weight': -1.0}), 'a.weight', '-1.0 out of range [1.0, 100000.0] N/m'),
+        (_minimal(**{'a.mbl': math.nan}), 'a.mbl', 'must be finite'),
+        (_minimal(**{'a.allowed_uplift': -5}), 'a.allowed_uplift', 'out of range'),
+        (_minimal(**{'a.tension_topic': 5}), 'a.tension_topic', 'expected a string'),
+        (_minimal(**{'a.tension_topic': 'bad topic'}), 'a.tension_topic', 'not a valid ROS topic'),
+        (
+            _minimal(depth_topic='/mooring/a/tension'),
+            'a.tension_topic',
+            'already used by depth_topic',
+        ),
+        (_minimal(clear_hold=-1.0), 'clear_hold', 'out of range [0.0, 3600.0] s'),
+        (_minimal(tension_timeout=0), 'tension_timeout', 'out of range'),
+        (_minimal(diagnostic_rate='fast'), 'diagnostic_rate', 'expected a number (Hz)'),
+        (_minimal(log_dir=''), 'log_dir', 'must not be empty'),
+    ],
+)
 def test_every_error_is_one_line_naming_the_parameter(flat, parameter, rule):
     err = _error(flat)
     assert err.parameter == parameter
@@ -147,14 +183,22 @@ def test_every_error_is_one_line_naming_the_parameter(flat, parameter, rule):
 
 
 def test_two_lines_on_one_topic():
-    flat = _minimal(**{'lines': ['a', 'b'], 'b.weight': 1.0, 'b.anchor_distance': 1.0,
-                       'b.mbl': 1.0, 'b.tension_topic': '/mooring/a/tension'})
+    flat = _minimal(
+        **{
+            'lines': ['a', 'b'],
+            'b.weight': 1.0,
+            'b.anchor_distance': 1.0,
+            'b.mbl': 1.0,
+            'b.tension_topic': '/mooring/a/tension',
+        }
+    )
     assert _error(flat).parameter == 'b.tension_topic'
 
 
 def test_ros_builtin_parameters_are_accepted():
-    config = config_from_params(_minimal(use_sim_time=True, **{
-        'qos_overrides./parameter_events.publisher.depth': 1000}))
+    config = config_from_params(
+        _minimal(use_sim_time=True, **{'qos_overrides./parameter_events.publisher.depth': 1000})
+    )
     assert config.line('a').tension_topic == '/mooring/a/tension'
 
 
@@ -175,13 +219,20 @@ def test_ea_zero_means_rigid_and_positive_is_kept():
 
 # --- the table itself -------------------------------------------------------------------------
 
+
 def test_table_covers_every_config_field_and_contract_names():
     global_names = {s.name for s in PARAMETERS if s.scope == 'global'}
     line_names = {s.name for s in PARAMETERS if s.scope == 'line'}
     assert {f.name for f in dataclasses.fields(AlarmConfig)} <= global_names
     assert {'lines', 'depth_topic', 'log_dir'} <= global_names
-    assert {'weight', 'anchor_distance', 'mbl', 'allowed_uplift', 'hook_height',
-            'tension_topic'} <= line_names
+    assert {
+        'weight',
+        'anchor_distance',
+        'mbl',
+        'allowed_uplift',
+        'hook_height',
+        'tension_topic',
+    } <= line_names
     assert line_names == {f.name for f in dataclasses.fields(LineConfig)} - {'name'}
 
 

@@ -1,4 +1,5 @@
 """The elastic chain: limit, equations, an independent peer, and the model-picking rule."""
+
 import math
 
 import mpmath as mp
@@ -8,7 +9,7 @@ import pytest
 from catenary_monitor import solve
 from catenary_monitor.core import catenary as cat, elastic
 
-EA_DOCK = 1.01e8 * 0.081 ** 2 * 1e3  # U3 studlink 81 mm, N
+EA_DOCK = 1.01e8 * 0.081**2 * 1e3  # U3 studlink 81 mm, N
 
 
 def scenes(n, seed=3):
@@ -27,13 +28,16 @@ def test_infinitely_stiff_is_the_inextensible_catenary():
     el = elastic.elastic_state(w, h, t, x, 1e40)
     for key in ('horizontal_tension', 'min_anchor_distance', 'uplift_force', 'suspended_length'):
         ref = getattr(rigid, key)
-        assert np.all(np.abs(el[key] - ref) <= 1e-12 * np.abs(ref) + 1e-12 * t * (key == 'uplift_force')), key
+        assert np.all(
+            np.abs(el[key] - ref) <= 1e-12 * np.abs(ref) + 1e-12 * t * (key == 'uplift_force')
+        ), key
 
 
 def _mp_elastic(w, h, t, x, ea, stretched=False):
     """Irvine's equations solved in 50 digits: (R, V_A, L0, x_min), anchor lifted when x < x_min.
 
-    With ``stretched``, also the stretched suspended length, L0 plus the integral of T/EA by quadrature.
+    With ``stretched``, also the stretched suspended length, L0 plus the integral of T/EA by
+    quadrature.
     """
     with mp.workdps(50):
         w, h, t, ea = (mp.mpf(float(v)) for v in (w, h, t, ea))
@@ -56,7 +60,9 @@ def _mp_elastic(w, h, t, x, ea, stretched=False):
             if not stretched:
                 return res
             vb = va + w * l0  # ds = dV / w, T = sqrt(R^2 + V^2)
-            return res + (float(l0 + mp.quad(lambda v: mp.sqrt(r * r + v * v), [va, vb]) / (ea * w)),)
+            return res + (
+                float(l0 + mp.quad(lambda v: mp.sqrt(r * r + v * v), [va, vb]) / (ea * w)),
+            )
 
         x_min = state(mp.mpf(0))[3]
         if x is None or x >= x_min:
@@ -118,10 +124,12 @@ def test_elastic_min_distance_closed_form_matches_50_digit_solution():
 
 
 def test_agrees_with_moorpy_for_the_dock_chain():
-    """MoorPy's elastic catenary, given our unstretched length and EA, gives our tensions (to its 1e-6 m)."""
+    """MoorPy's elastic catenary, given our unstretched length and EA, gives our tensions
+    (to its 1e-6 m)."""
     import os
 
     from moorpy.Catenary import catenary  # in the test extra: this check always runs
+
     os.environ.setdefault('PYTHONBREAKPOINT', '0')
     w, h, t, x = 1300.0, 20.85, 1623.5e3, 121.06
     st = {k: float(v) for k, v in elastic.elastic_state(w, h, t, x, EA_DOCK).items()}
@@ -148,7 +156,9 @@ def test_rule_keeps_the_inextensible_model_when_the_correction_is_below_tol():
     rigid = solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06)
     assert res.uplift_force == rigid.uplift_force and res.load_margin == rigid.load_margin
     # the same scene with a looser tolerance keeps the rigid answer even for the real chain
-    res, corr = elastic.solve_with_correction(1300.0, 20.85, 1623.5e3, 121.06, ea=EA_DOCK, tol=1e-2)
+    res, corr = elastic.solve_with_correction(
+        1300.0, 20.85, 1623.5e3, 121.06, ea=EA_DOCK, tol=1e-2
+    )
     assert res.model == elastic.INEXTENSIBLE and 1e-3 < corr < 1e-2
 
 
@@ -182,7 +192,11 @@ def test_elastic_margins_are_consistent():
 
 def test_report_lines_and_magnitudes():
     rows = {r['line'].split(',')[0]: r for r in elastic.report()}
-    chain, wire, poly = rows['U3 studlink chain'], rows['six-strand steel wire'], rows['polyester rope']
+    chain, wire, poly = (
+        rows['U3 studlink chain'],
+        rows['six-strand steel wire'],
+        rows['polyester rope'],
+    )
     assert 1e-3 < chain['dx_min_rel'] < 2e-3
     assert wire['strain'] > chain['strain'] and poly['strain'] > wire['strain']
     for r in rows.values():  # elasticity moves the answers by far more than the solver's 1e-15
@@ -236,13 +250,16 @@ def _dock_scenes_near_lift_off():
     ta, d = elastic.anchor_end_tension(w, h, t, EA_DOCK)
     x_rigid = float(ta / w * np.arcsinh(np.sqrt(d * (t + ta)) / ta))
     x_el = float(elastic.elastic_state(w, h, t, None, EA_DOCK)['min_anchor_distance'])
-    x = np.array([x_rigid + f * (x_el - x_rigid) for f in (1e-3, 0.5, 1 - 1e-6)] + [x_rigid * (1 - 1e-6)])
+    x = np.array(
+        [x_rigid + f * (x_el - x_rigid) for f in (1e-3, 0.5, 1 - 1e-6)] + [x_rigid * (1 - 1e-6)]
+    )
     return np.full(4, w), np.full(4, h), np.full(4, t), x, np.full(4, EA_DOCK)
 
 
 @pytest.mark.parametrize('with_x', [True, False])
 def test_scalar_path_matches_the_arrays(with_x):
-    """Plain-float scalar calls give the vectorized results to rounding, model and correction included."""
+    """Plain-float scalar calls give the vectorized results to rounding, model and correction
+    included."""
     random = _random_elastic_scenes(300, seed=21 if with_x else 22)
     w, h, t, x, ea = (np.concatenate(v) for v in zip(random, _dock_scenes_near_lift_off()))
     n = w.size
@@ -254,8 +271,13 @@ def test_scalar_path_matches_the_arrays(with_x):
         assert 0.2 < lifted.mean() < 0.9 and np.any(lifted & (res.model == elastic.ELASTIC))
     for i in range(n):
         one, c = elastic.solve_with_correction(
-            float(w[i]), float(h[i]), float(t[i]), float(x[i]) if with_x else None,
-            ea=float(ea[i]), mbl=float(mbl[i]))
+            float(w[i]),
+            float(h[i]),
+            float(t[i]),
+            float(x[i]) if with_x else None,
+            ea=float(ea[i]),
+            mbl=float(mbl[i]),
+        )
         assert type(c) is float and type(one.model) is str and one.keys == res.keys
         assert abs(c - corr[i]) <= 1e-13  # a relative change: its rounding is absolute
         if abs(corr[i] - elastic.ELASTIC_TOL) > 1e-12:
@@ -265,7 +287,9 @@ def test_scalar_path_matches_the_arrays(with_x):
         for key in one.keys:
             got, ref = getattr(one, key), getattr(res, key)[i]
             assert type(got) is float, key
-            tol = 1e-13 * max(abs(ref), scale.get(_SCALE.get(key), 0.0), 90.0 if key.endswith('_deg') else 0.0)
+            tol = 1e-13 * max(
+                abs(ref), scale.get(_SCALE.get(key), 0.0), 90.0 if key.endswith('_deg') else 0.0
+            )
             assert abs(got - ref) <= tol, (i, key, got, ref)
 
 
@@ -282,28 +306,41 @@ def test_scalar_path_public_behaviour(monkeypatch):
     assert res.status == ref.status == 4 and corr == 0.0 and res.model == elastic.INEXTENSIBLE
     assert all(math.isnan(getattr(res, k)) for k in res.keys)
     res_int, corr_int = elastic.solve_with_correction(1300, 21, 1623500, 121, ea=int(EA_DOCK))
-    res_f, corr_f = elastic.solve_with_correction(1300.0, 21.0, 1623500.0, 121.0, ea=float(int(EA_DOCK)))
+    res_f, corr_f = elastic.solve_with_correction(
+        1300.0, 21.0, 1623500.0, 121.0, ea=float(int(EA_DOCK))
+    )
     assert res_int == res_f and corr_int == corr_f
     scalar, c1 = elastic.solve_with_correction(*args, ea=EA_DOCK, mbl=4.8e6)
-    arrays, c2 = elastic.solve_with_correction(*(np.array([v]) for v in args),
-                                               ea=np.array([EA_DOCK]), mbl=np.array([4.8e6]))
-    assert scalar.to_dict() == pytest.approx({k: v[0] for k, v in arrays.to_dict().items()}, rel=1e-13)
+    arrays, c2 = elastic.solve_with_correction(
+        *(np.array([v]) for v in args), ea=np.array([EA_DOCK]), mbl=np.array([4.8e6])
+    )
+    assert scalar.to_dict() == pytest.approx(
+        {k: v[0] for k, v in arrays.to_dict().items()}, rel=1e-13
+    )
     assert c1 == pytest.approx(c2[0], rel=1e-12)
 
     def overflow(*_):
         raise OverflowError('math range error')
 
-    monkeypatch.setattr(elastic, '_solve_scalar', overflow)  # plain math out of range: numpy answers
+    monkeypatch.setattr(
+        elastic, '_solve_scalar', overflow
+    )  # plain math out of range: numpy answers
     fallback, c3 = elastic.solve_with_correction(*args, ea=EA_DOCK, mbl=4.8e6)
-    assert type(fallback.uplift_force) is float and type(fallback.model) is str and type(c3) is float
-    assert fallback.to_dict() == pytest.approx(scalar.to_dict(), rel=1e-13) and c3 == pytest.approx(c1, rel=1e-12)
+    assert (
+        type(fallback.uplift_force) is float and type(fallback.model) is str and type(c3) is float
+    )
+    assert fallback.to_dict() == pytest.approx(
+        scalar.to_dict(), rel=1e-13
+    ) and c3 == pytest.approx(c1, rel=1e-12)
 
 
 def test_stretched_length_matches_50_digit_solution_also_for_nearly_straight_chains():
     """The stretch is a sum of positive terms: full accuracy where V_A ~ V_B (T >> w h)."""
     w, h, t, x, ea = _random_elastic_scenes(40, seed=23)
     t = w * h * 10.0 ** np.linspace(0.01, 6, 40)  # up to nearly straight chains
-    x = np.minimum(x, 0.9 * elastic.elastic_state(w, h, t, None, ea)['min_anchor_distance'])  # all lifted
+    x = np.minimum(
+        x, 0.9 * elastic.elastic_state(w, h, t, None, ea)['min_anchor_distance']
+    )  # all lifted
     st = elastic.elastic_state(w, h, t, x, ea)
     for i in range(40):
         *_, length = _mp_elastic(w[i], h[i], t[i], x[i], ea[i], stretched=True)
@@ -328,7 +365,9 @@ def test_uplift_solve_closes_its_bracket(monkeypatch):
 
 def test_solve_with_ea_is_the_elastic_model_through_the_one_entry():
     """``catenary_monitor.solve(..., ea=EA)`` returns the elastic rule's result itself."""
-    direct, _ = elastic.solve_with_correction(1300.0, 20.85, 1623.5e3, 121.06, ea=EA_DOCK, mbl=4.8e6)
+    direct, _ = elastic.solve_with_correction(
+        1300.0, 20.85, 1623.5e3, 121.06, ea=EA_DOCK, mbl=4.8e6
+    )
     one = solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06, mbl=4.8e6, ea=EA_DOCK)
     assert one == direct and one.model == elastic.ELASTIC
     stiff = solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06, ea=math.inf)

@@ -1,4 +1,5 @@
 """Behaviour tests of catenary_monitor.io.mcap_log (writer) against independent readers."""
+
 from __future__ import annotations
 
 import errno
@@ -57,24 +58,33 @@ def decoded(path: Path, topics: list[str] | None = None) -> list:
 # --------------------------------------------------------------------------- schema text
 def test_schema_text_is_rosbag2_concatenation() -> None:
     share = Path(ros_schemas._share_dir('diagnostic_msgs')).parent
-    texts = {name: (share / pkg / 'msg' / f'{typ}.msg').read_text()
-             for name, pkg, typ in [
-                 ('root', 'diagnostic_msgs', 'DiagnosticArray'),
-                 ('diagnostic_msgs/DiagnosticStatus', 'diagnostic_msgs', 'DiagnosticStatus'),
-                 ('diagnostic_msgs/KeyValue', 'diagnostic_msgs', 'KeyValue'),
-                 ('std_msgs/Header', 'std_msgs', 'Header'),
-                 ('builtin_interfaces/Time', 'builtin_interfaces', 'Time')]}
+    texts = {
+        name: (share / pkg / 'msg' / f'{typ}.msg').read_text()
+        for name, pkg, typ in [
+            ('root', 'diagnostic_msgs', 'DiagnosticArray'),
+            ('diagnostic_msgs/DiagnosticStatus', 'diagnostic_msgs', 'DiagnosticStatus'),
+            ('diagnostic_msgs/KeyValue', 'diagnostic_msgs', 'KeyValue'),
+            ('std_msgs/Header', 'std_msgs', 'Header'),
+            ('builtin_interfaces/Time', 'builtin_interfaces', 'Time'),
+        ]
+    }
     # rosbag2 visits dependencies depth first, sorted per file, each once.
     expected = texts['root']
-    for dep in ['diagnostic_msgs/DiagnosticStatus', 'diagnostic_msgs/KeyValue',
-                'std_msgs/Header', 'builtin_interfaces/Time']:
+    for dep in [
+        'diagnostic_msgs/DiagnosticStatus',
+        'diagnostic_msgs/KeyValue',
+        'std_msgs/Header',
+        'builtin_interfaces/Time',
+    ]:
         expected += '\n' + '=' * 80 + f'\nMSG: {dep}\n' + texts[dep]
     assert ros_schemas.message_definition('diagnostic_msgs/msg/DiagnosticArray') == expected
     float64 = ros_schemas.message_definition(FLOAT64)
     assert float64 == (share / 'std_msgs' / 'msg' / 'Float64.msg').read_text()
     multi = ros_schemas.message_definition('std_msgs/msg/Float64MultiArray')
     assert re.findall(r'^MSG: (\S+)$', multi, re.M) == [
-        'std_msgs/MultiArrayLayout', 'std_msgs/MultiArrayDimension']
+        'std_msgs/MultiArrayLayout',
+        'std_msgs/MultiArrayDimension',
+    ]
 
 
 def test_unknown_type_and_misuse_raise(tmp_path: Path) -> None:
@@ -106,9 +116,13 @@ def test_round_trip_with_independent_readers(tmp_path: Path) -> None:
     from rclpy.serialization import deserialize_message, serialize_message
     from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 
-    status = DiagnosticStatus(level=DiagnosticStatus.ERROR, name='catenary_monitor: chain_01',
-                              message='anchor uplift', hardware_id='lc-01',
-                              values=[KeyValue(key='hook_tension_N', value='123456.5')])
+    status = DiagnosticStatus(
+        level=DiagnosticStatus.ERROR,
+        name='catenary_monitor: chain_01',
+        message='anchor uplift',
+        hardware_id='lc-01',
+        values=[KeyValue(key='hook_tension_N', value='123456.5')],
+    )
     diag = DiagnosticArray(status=[status])
     diag.header.stamp.sec = 17
     margins = Float64MultiArray(data=[0.25, -1.5, 3.0])
@@ -118,11 +132,16 @@ def test_round_trip_with_independent_readers(tmp_path: Path) -> None:
     with McapLogger(tmp_path, fsync=False) as log:
         log.register('/chain_01/tension', FLOAT64, qos='sensor_data')
         log.register('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', qos='latched')
-        log.add_metadata('catenary_monitor', {'config_sha256': 'ab12', 'version': '0.1.0',
-                                              'units': 'N, m, s'})
+        log.add_metadata(
+            'catenary_monitor', {'config_sha256': 'ab12', 'version': '0.1.0', 'units': 'N, m, s'}
+        )
         for i, value in enumerate(values):
-            log.write('/chain_01/tension', serialize_message(Float64(data=float(value))),
-                      T0 + i * 10_000_000, publish_time_ns=T0 + i * 10_000_000 - 5)
+            log.write(
+                '/chain_01/tension',
+                serialize_message(Float64(data=float(value))),
+                T0 + i * 10_000_000,
+                publish_time_ns=T0 + i * 10_000_000 - 5,
+            )
         log.write('/diagnostics', serialize_message(diag), T0 + 10**9)
         # A topic registered after writing started lands in the same file.
         log.register('/margins', 'std_msgs/msg/Float64MultiArray')
@@ -140,31 +159,39 @@ def test_round_trip_with_independent_readers(tmp_path: Path) -> None:
         summary = reader.get_summary()
         metadata = list(reader.iter_metadata())
     schemas = {s.name: s for s in summary.schemas.values()}
-    assert set(schemas) == {FLOAT64, 'diagnostic_msgs/msg/DiagnosticArray',
-                            'std_msgs/msg/Float64MultiArray'}
+    assert set(schemas) == {
+        FLOAT64,
+        'diagnostic_msgs/msg/DiagnosticArray',
+        'std_msgs/msg/Float64MultiArray',
+    }
     for name, schema in schemas.items():
         assert schema.encoding == 'ros2msg'
         assert schema.data.decode() == ros_schemas.message_definition(name)
     channels = {c.topic: c for c in summary.channels.values()}
     assert all(c.message_encoding == 'cdr' for c in channels.values())
     assert channels['/diagnostics'].metadata['offered_qos_profiles'] == ros_schemas.QOS_LATCHED
-    assert re.fullmatch(r'RIHS01_[0-9a-f]{64}',
-                        channels['/margins'].metadata['topic_type_hash'])
+    assert re.fullmatch(r'RIHS01_[0-9a-f]{64}', channels['/margins'].metadata['topic_type_hash'])
     assert summary.statistics.message_count == 52
     assert [(m.name, m.metadata) for m in metadata] == [
-        ('catenary_monitor', {'config_sha256': 'ab12', 'version': '0.1.0', 'units': 'N, m, s'})]
+        ('catenary_monitor', {'config_sha256': 'ab12', 'version': '0.1.0', 'units': 'N, m, s'})
+    ]
 
     msgs = decoded(path)
     tension = [m for m in msgs if m.channel.topic == '/chain_01/tension']
     assert [m.decoded_message.data for m in tension] == values.tolist()
     assert [m.message.log_time for m in tension] == [T0 + i * 10_000_000 for i in range(50)]
-    assert [m.message.publish_time for m in tension] == [T0 + i * 10_000_000 - 5
-                                                         for i in range(50)]
+    assert [m.message.publish_time for m in tension] == [
+        T0 + i * 10_000_000 - 5 for i in range(50)
+    ]
     assert [m.message.sequence for m in tension] == list(range(50))
     [d] = [m for m in msgs if m.channel.topic == '/diagnostics']
     got = d.decoded_message.status[0]
     assert (got.level, got.name, got.message, got.hardware_id) == (
-        2, 'catenary_monitor: chain_01', 'anchor uplift', 'lc-01')
+        2,
+        'catenary_monitor: chain_01',
+        'anchor uplift',
+        'lc-01',
+    )
     assert (got.values[0].key, got.values[0].value) == ('hook_tension_N', '123456.5')
     # The stored bytes are what rclpy serialized: rclpy reads them back unchanged.
     back = deserialize_message(d.message.data, DiagnosticArray)
@@ -184,10 +211,16 @@ def test_offered_qos_yaml_is_rosbag2_format() -> None:
     [profile] = yaml.safe_load(ros_schemas.QOS_LATCHED)
     infinite = {'sec': 9223372036, 'nsec': 854775807}
     assert profile == {
-        'history': 'keep_last', 'depth': 1, 'reliability': 'reliable',
-        'durability': 'transient_local', 'deadline': infinite, 'lifespan': infinite,
-        'liveliness': 'automatic', 'liveliness_lease_duration': infinite,
-        'avoid_ros_namespace_conventions': False}
+        'history': 'keep_last',
+        'depth': 1,
+        'reliability': 'reliable',
+        'durability': 'transient_local',
+        'deadline': infinite,
+        'lifespan': infinite,
+        'liveliness': 'automatic',
+        'liveliness_lease_duration': infinite,
+        'avoid_ros_namespace_conventions': False,
+    }
     assert not ros_schemas.QOS_LATCHED.endswith('\n')  # YAML::Dump adds no final newline
     [sensor] = yaml.safe_load(ros_schemas.QOS_SENSOR_DATA)
     assert (sensor['reliability'], sensor['depth']) == ('best_effort', 5)
@@ -213,8 +246,15 @@ def test_compression_options(tmp_path: Path, compression: str) -> None:
 def test_rotation_by_size_keeps_every_message_once(tmp_path: Path) -> None:
     clock = FakeClock()
     wall = [1_795_000_000.0]
-    with McapLogger(tmp_path, prefix='dock', max_bytes=20_000, chunk_size=4_000, fsync=False,
-                    clock=clock, wall_clock=lambda: wall[0]) as log:
+    with McapLogger(
+        tmp_path,
+        prefix='dock',
+        max_bytes=20_000,
+        chunk_size=4_000,
+        fsync=False,
+        clock=clock,
+        wall_clock=lambda: wall[0],
+    ) as log:
         log.register('/a', FLOAT64)
         log.register('/b', FLOAT64)
         log.add_metadata('catenary_monitor', {'config_sha256': 'cafe'})
@@ -340,7 +380,7 @@ class _FullDisk:
 
     def write(self, data: bytes) -> int:
         if len(data) > self._budget:
-            self._f.write(bytes(data[:self._budget]))
+            self._f.write(bytes(data[: self._budget]))
             self._f.flush()
             self._budget = 0
             raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
@@ -384,13 +424,14 @@ def test_full_disk_mid_file_is_recorded_not_raised(tmp_path: Path, monkeypatch) 
     assert log.messages_written['/a'] <= len(got) <= len(accepted)
     assert got == sorted(set(got)) and set(got) <= set(accepted)
     after_recovery = [int(m.decoded_message.data) for m in decoded(files[1])]
-    assert after_recovery == accepted[-len(after_recovery):] == got[-len(after_recovery):]
+    assert after_recovery == accepted[-len(after_recovery) :] == got[-len(after_recovery) :]
     assert len(after_recovery) > 100
 
 
 def test_open_fails_on_dev_full(tmp_path: Path, monkeypatch) -> None:
-    monkeypatch.setattr(McapLogger, '_create_file',
-                        lambda self: (tmp_path / 'never', open('/dev/full', 'wb')))
+    monkeypatch.setattr(
+        McapLogger, '_create_file', lambda self: (tmp_path / 'never', open('/dev/full', 'wb'))
+    )
     log = McapLogger(tmp_path)
     assert not log.ok and 'No space left on device' in (log.error or '')
     log.register('/a', FLOAT64)
@@ -418,8 +459,12 @@ while True:
 
 def test_sigkill_loses_at_most_about_one_second(tmp_path: Path) -> None:
     env = dict(os.environ, PYTHONPATH=str(REPO))
-    proc = subprocess.Popen([sys.executable, '-c', _WRITER_SCRIPT, str(tmp_path)],
-                            env=env, stdout=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, '-c', _WRITER_SCRIPT, str(tmp_path)],
+        env=env,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
         assert proc.stdout is not None and proc.stdout.readline().strip() == 'started'
         # Flushes happen about 1.0, 2.0, 3.0 s after the first message: killing at 2.95 s

@@ -1,4 +1,5 @@
 """Behaviour tests of catenary_monitor.io.mcap_read against the mcap library as oracle."""
+
 from __future__ import annotations
 
 import os
@@ -15,10 +16,20 @@ from mcap.reader import NonSeekingReader, make_reader
 from mcap.writer import CompressionType, IndexType, Writer
 
 from catenary_monitor.io.mcap_log import McapLogger
-from catenary_monitor.io.mcap_read import (EmptyLogError, McapReadError, ReadReport,
-                                           TopicTypeError, iter_messages, read_float64_topics)
-from catenary_monitor.io.ros_schemas import (QOS_DEFAULT, QOS_LATCHED, message_definition,
-                                             type_description_hash)
+from catenary_monitor.io.mcap_read import (
+    EmptyLogError,
+    McapReadError,
+    ReadReport,
+    TopicTypeError,
+    iter_messages,
+    read_float64_topics,
+)
+from catenary_monitor.io.ros_schemas import (
+    QOS_DEFAULT,
+    QOS_LATCHED,
+    message_definition,
+    type_description_hash,
+)
 
 FLOAT64 = 'std_msgs/msg/Float64'
 DIAG = 'diagnostic_msgs/msg/DiagnosticArray'
@@ -73,12 +84,23 @@ def write_rosbag2_style(
     index = IndexType.ALL if message_index else IndexType.ALL & ~IndexType.MESSAGE
     options = dict(
         chunk_size=chunk_size,
-        compression={'none': CompressionType.NONE, 'zstd': CompressionType.ZSTD,
-                     'lz4': CompressionType.LZ4}[compression],
-        enable_crcs=chunk_crc, use_chunking=chunked, index_types=index)
+        compression={
+            'none': CompressionType.NONE,
+            'zstd': CompressionType.ZSTD,
+            'lz4': CompressionType.LZ4,
+        }[compression],
+        enable_crcs=chunk_crc,
+        use_chunking=chunked,
+        index_types=index,
+    )
     if not summary:
-        options.update(index_types=IndexType.NONE, repeat_channels=False, repeat_schemas=False,
-                       use_statistics=False, use_summary_offsets=False)
+        options.update(
+            index_types=IndexType.NONE,
+            repeat_channels=False,
+            repeat_schemas=False,
+            use_statistics=False,
+            use_summary_offsets=False,
+        )
     with open(path, 'wb') as handle:
         writer = Writer(handle, **options)
         writer.start(profile='ros2', library='libmcap 1.4.1')
@@ -89,15 +111,27 @@ def write_rosbag2_style(
                 type_name = types.get(topic, FLOAT64)
                 if type_name not in schema_ids:
                     schema_ids[type_name] = writer.register_schema(
-                        type_name, 'ros2msg', message_definition(type_name).encode())
+                        type_name, 'ros2msg', message_definition(type_name).encode()
+                    )
                 channel_ids[topic] = writer.register_channel(
-                    topic, 'cdr', schema_ids[type_name],
-                    {'offered_qos_profiles': QOS_LATCHED if topic == '/diagnostics'
-                     else QOS_DEFAULT,
-                     'topic_type_hash': type_description_hash(type_name) or ''})
+                    topic,
+                    'cdr',
+                    schema_ids[type_name],
+                    {
+                        'offered_qos_profiles': (
+                            QOS_LATCHED if topic == '/diagnostics' else QOS_DEFAULT
+                        ),
+                        'topic_type_hash': type_description_hash(type_name) or '',
+                    },
+                )
             writer.add_message(channel_ids[topic], log_time, data, log_time, seq)
-        writer.add_metadata('rosbag2', {'serialized_metadata': 'rosbag2_bagfile_information:\n'
-                                        '  version: 9\n  storage_identifier: mcap\n'})
+        writer.add_metadata(
+            'rosbag2',
+            {
+                'serialized_metadata': 'rosbag2_bagfile_information:\n'
+                '  version: 9\n  storage_identifier: mcap\n'
+            },
+        )
         writer.finish()
     return path
 
@@ -120,8 +154,9 @@ def oracle(paths: Iterable[Path], topic: str) -> tuple[list[int], list[float]]:
     rows = []
     for path in paths:
         with open(path, 'rb') as handle:
-            for _, channel, message in NonSeekingReader(handle, validate_crcs=True
-                                                        ).iter_messages(topics=[topic]):
+            for _, channel, message in NonSeekingReader(handle, validate_crcs=True).iter_messages(
+                topics=[topic]
+            ):
                 rows.append((message.log_time, struct.unpack('<d', message.data[4:12])[0]))
     rows.sort(key=lambda r: r[0])
     return [r[0] for r in rows], [r[1] for r in rows]
@@ -135,8 +170,9 @@ def chunk_layout(path: Path) -> list[tuple[int, int, int]]:
     for ci in sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset):
         first = (ci.message_start_time - T0) // DT
         last = (ci.message_end_time - T0) // DT
-        out.append((ci.chunk_start_offset, ci.chunk_start_offset + ci.chunk_length,
-                    int(last - first + 1)))
+        out.append(
+            (ci.chunk_start_offset, ci.chunk_start_offset + ci.chunk_length, int(last - first + 1))
+        )
     return out
 
 
@@ -161,8 +197,9 @@ ROSBAG2_LAYOUTS = {
 @pytest.mark.parametrize('layout', sorted(ROSBAG2_LAYOUTS))
 def test_rosbag2_layouts_match_oracle(tmp_path: Path, layout: str) -> None:
     n = 3000
-    path = write_rosbag2_style(tmp_path / 'bag_0.mcap', sample_messages(n), chunk_size=8192,
-                               **ROSBAG2_LAYOUTS[layout])
+    path = write_rosbag2_style(
+        tmp_path / 'bag_0.mcap', sample_messages(n), chunk_size=8192, **ROSBAG2_LAYOUTS[layout]
+    )
     columns, report = read_float64_topics(path, TOPICS)
     for topic in TOPICS:
         assert as_lists(columns, topic) == expected(n, topic) == oracle([path], topic)
@@ -190,9 +227,9 @@ def test_big_endian_and_bad_payloads(tmp_path: Path) -> None:
     messages = [
         ('/chain_01/tension', T0, cdr_f64(1.5)),
         ('/chain_01/tension', T0 + 1, cdr_f64(-2.25, big_endian=True)),
-        ('/chain_01/tension', T0 + 2, b'\x00\x01\x00\x00' + b'\x00' * 4),   # too short
-        ('/chain_01/tension', T0 + 3, b'\x00\x03\x00\x00' + bytes(8)),      # PL_CDR_LE
-        ('/chain_01/tension', T0 + 4, cdr_f64(4.0) + bytes(4)),             # padded: fine
+        ('/chain_01/tension', T0 + 2, b'\x00\x01\x00\x00' + b'\x00' * 4),  # too short
+        ('/chain_01/tension', T0 + 3, b'\x00\x03\x00\x00' + bytes(8)),  # PL_CDR_LE
+        ('/chain_01/tension', T0 + 4, cdr_f64(4.0) + bytes(4)),  # padded: fine
     ]
     path = write_rosbag2_style(tmp_path / 'x.mcap', messages)
     columns, report = read_float64_topics(path, ['/chain_01/tension'])
@@ -275,8 +312,8 @@ def test_truncated_file_gives_the_readable_prefix(tmp_path: Path, compression: s
     for cut in sorted(cuts):
         cut_path = tmp_path / f'cut_{cut}.mcap'
         cut_path.write_bytes(data[:cut])
-        complete = sum(k for s, e, k in layout if e <= cut)   # whole chunks before the cut
-        started = sum(k for s, e, k in layout if s < cut)     # chunks begun before the cut
+        complete = sum(k for s, e, k in layout if e <= cut)  # whole chunks before the cut
+        started = sum(k for s, e, k in layout if s < cut)  # chunks begun before the cut
         try:
             columns, report = read_float64_topics(cut_path, TOPICS)
         except EmptyLogError as exc:
@@ -289,7 +326,8 @@ def test_truncated_file_gives_the_readable_prefix(tmp_path: Path, compression: s
             # The result is exactly the first `got` messages: a prefix, nothing invented.
             assert t_all.tolist() == [T0 + i * DT for i in range(got)], cut
             assert as_lists(columns, topic)[1] == [
-                v for v in expected(n, topic)[1] if v < got], cut
+                v for v in expected(n, topic)[1] if v < got
+            ], cut
         assert complete <= got <= started, (cut, complete, got, started)
         recovered_beyond_complete_chunks += got > complete
         assert not report.files[0].finished and not report.complete
@@ -314,7 +352,7 @@ def test_corrupt_chunk_is_skipped_and_counted(tmp_path: Path, compression: str) 
     layout = chunk_layout(path)
     start, end, lost = layout[2]
     middle = (_chunk_records_start(data, start) + end) // 2
-    data[middle:middle + 4] = bytes(b ^ 0x5A for b in data[middle:middle + 4])
+    data[middle : middle + 4] = bytes(b ^ 0x5A for b in data[middle : middle + 4])
     path.write_bytes(data)
     columns, report = read_float64_topics(path, TOPICS)
     [skip] = report.skips
@@ -345,13 +383,14 @@ def test_lost_channel_definitions_come_from_the_summary(tmp_path: Path) -> None:
     assert got.tolist() == [T0 + i * DT for i in range(lost, n)]
     # Killed writer: no summary, so the surviving messages cannot be attributed to topics.
     unfinished = tmp_path / 'unfinished.mcap'
-    unfinished.write_bytes(data[:layout[-1][1]])
+    unfinished.write_bytes(data[: layout[-1][1]])
     with pytest.raises(EmptyLogError) as info:
         read_float64_topics(unfinished, TOPICS)
     kinds = [s.kind for s in info.value.report.skips]
     assert kinds[0] == 'corrupt_chunk' and kinds.count('unknown_channel') == 4  # 3 + diagnostics
-    orphans = sum(int(s.reason.split()[0]) for s in info.value.report.skips
-                  if s.kind == 'unknown_channel')
+    orphans = sum(
+        int(s.reason.split()[0]) for s in info.value.report.skips if s.kind == 'unknown_channel'
+    )
     assert orphans == n - lost + sum(i % 50 == 0 for i in range(lost, n))  # + diagnostics
 
 
@@ -362,7 +401,7 @@ def test_damaged_chunk_length_resyncs_to_the_next_chunk(tmp_path: Path) -> None:
     data = bytearray(path.read_bytes())
     start, _, _ = layout[3]
     struct.pack_into('<Q', data, start + 1, 2**40)  # absurd record length
-    for name, blob in [('finished', data), ('unfinished', data[:layout[-1][1]])]:
+    for name, blob in [('finished', data), ('unfinished', data[: layout[-1][1]])]:
         cut = tmp_path / f'{name}.mcap'
         cut.write_bytes(blob)
         columns, report = read_float64_topics(cut, TOPICS)
@@ -370,15 +409,21 @@ def test_damaged_chunk_length_resyncs_to_the_next_chunk(tmp_path: Path) -> None:
         first_lost = sum(k for _, _, k in layout[:3])
         got = np.sort(np.concatenate([columns[t][0] for t in TOPICS]))
         lost = layout[3][2]
-        assert got.tolist() == [T0 + i * DT for i in range(n)
-                                if not first_lost <= i < first_lost + lost], name
+        assert got.tolist() == [
+            T0 + i * DT for i in range(n) if not first_lost <= i < first_lost + lost
+        ], name
 
 
 def test_corrupt_message_index_falls_back_to_walking(tmp_path: Path) -> None:
     """Message Index records carry no CRC: a wrong entry must not lose or invent data."""
     n = 900
-    path = write_rosbag2_style(tmp_path / 'x.mcap', sample_messages(n), compression='zstd',
-                               chunk_crc=True, chunk_size=4096)
+    path = write_rosbag2_style(
+        tmp_path / 'x.mcap',
+        sample_messages(n),
+        compression='zstd',
+        chunk_crc=True,
+        chunk_size=4096,
+    )
     with open(path, 'rb') as handle:
         summary = make_reader(handle).get_summary()
     data = bytearray(path.read_bytes())
@@ -423,8 +468,11 @@ def test_random_damage_never_raises_or_invents_data(tmp_path: Path) -> None:
         except EmptyLogError:
             outcomes['empty'] += 1
             continue
-        got = {(t, v) for topic in TOPICS
-               for t, v in zip(columns[topic][0].tolist(), columns[topic][1].tolist())}
+        got = {
+            (t, v)
+            for topic in TOPICS
+            for t, v in zip(columns[topic][0].tolist(), columns[topic][1].tolist())
+        }
         assert got <= truth, report.summary()
         assert sum(len(columns[t][0]) for t in TOPICS) + report.messages_lost <= n
         outcomes['read'] += 1
@@ -439,10 +487,19 @@ def test_iter_messages_matches_mcap_library(tmp_path: Path) -> None:
     want = []
     for path in files:
         with open(path, 'rb') as handle:
-            for schema, channel, message in make_reader(handle, validate_crcs=True
-                                                        ).iter_messages(log_time_order=False):
-                want.append((channel.topic, message.log_time, schema.name, message.data,
-                             message.publish_time, message.sequence))
+            for schema, channel, message in make_reader(handle, validate_crcs=True).iter_messages(
+                log_time_order=False
+            ):
+                want.append(
+                    (
+                        channel.topic,
+                        message.log_time,
+                        schema.name,
+                        message.data,
+                        message.publish_time,
+                        message.sequence,
+                    )
+                )
     assert [tuple(m) for m in got] == want
     diagnostics = list(iter_messages(files, ['/diagnostics']))
     assert len(diagnostics) == 60
@@ -453,7 +510,7 @@ def test_iter_messages_reports_damage(tmp_path: Path) -> None:
     [path] = write_own_log(tmp_path, 900, chunk_size=3000)
     data = path.read_bytes()
     start, end, _ = chunk_layout(path)[4]
-    (tmp_path / 'cut.mcap').write_bytes(data[:(start + end) // 2])
+    (tmp_path / 'cut.mcap').write_bytes(data[: (start + end) // 2])
     report = ReadReport()
     got = list(iter_messages(tmp_path / 'cut.mcap', ['/tide/depth'], report=report))
     assert got and all(m.topic == '/tide/depth' for m in got)
@@ -465,7 +522,8 @@ def test_iter_messages_reports_damage(tmp_path: Path) -> None:
 # --------------------------------------------------------------------------- speed
 @pytest.mark.parametrize('chunk_size', [1 << 20, 6000], ids=['1MiB-chunks', '1s-chunks'])
 def test_read_throughput_exceeds_one_million_messages_per_second(
-        tmp_path: Path, chunk_size: int) -> None:
+    tmp_path: Path, chunk_size: int
+) -> None:
     # 6000 B chunks hold ~130 messages: what the node's logger writes at 12 topics x 10 Hz
     # with one flush per second.
     n = 200_000
@@ -492,11 +550,14 @@ def test_read_throughput_exceeds_one_million_messages_per_second(
 
 def test_modules_import_without_rclpy() -> None:
     """The reader, the logger and the schema helpers are usable where rclpy is absent."""
-    code = ("import sys; sys.modules['rclpy'] = None\n"
-            "import catenary_monitor.io.mcap_read, catenary_monitor.io.mcap_log\n"
-            "import catenary_monitor.io.ros_schemas\n"
-            "assert sys.modules['rclpy'] is None")
+    code = (
+        "import sys; sys.modules['rclpy'] = None\n"
+        "import catenary_monitor.io.mcap_read, catenary_monitor.io.mcap_log\n"
+        "import catenary_monitor.io.ros_schemas\n"
+        "assert sys.modules['rclpy'] is None"
+    )
     env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[1]))
-    result = subprocess.run([sys.executable, '-c', code], env=env, capture_output=True,
-                            text=True, timeout=60)
+    result = subprocess.run(
+        [sys.executable, '-c', code], env=env, capture_output=True, text=True, timeout=60
+    )
     assert result.returncode == 0, result.stderr

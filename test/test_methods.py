@@ -12,6 +12,7 @@ on the paper's dock (w = 1300 N/m, h = 20.85 m) located by ``h/a`` (anchor-end p
 Each ``fails``/``loses`` row is a region of ``docs/stability_map.png`` asserted; each method also
 has an ``ok`` row so the assertion cannot pass by the method being broken everywhere.
 """
+
 import math
 from functools import lru_cache
 
@@ -20,8 +21,15 @@ import pytest
 
 from catenary_monitor.core import catenary as cat
 from catenary_monitor_study.bench_methods import FAIL, GOOD, H_DOCK, W_DOCK, scene_error
-from catenary_monitor_study.methods import (Method, NoConvergence, all_methods, hou, paper, peers,
-                                            reference)
+from catenary_monitor_study.methods import (
+    Method,
+    NoConvergence,
+    all_methods,
+    hou,
+    paper,
+    peers,
+    reference,
+)
 
 METHODS = {(m.problem, m.name): m for m in all_methods(peers=True)}
 
@@ -84,6 +92,7 @@ def outcome(problem, name, ha, xr=None):
 class _quiet:
     def __enter__(self):
         import warnings
+
         self._w = warnings.catch_warnings()
         self._w.__enter__()
         warnings.simplefilter('ignore')
@@ -108,13 +117,34 @@ KNOWN = [
     (4, 'brentq', 1e-8, 0.9999, 'fails', 'cancelling formula'),
     (4, 'brentq', 1e4, 0.01, 'loses', 'absolute xtol = 2e-12 m on a of micrometres'),
     (4, 'brentq', 1.0, 0.1, 'ok', ''),
-    (4, 'brentq', 1e4, 0.999999, 'fails', 'absolute xtol on micrometre a, near x_min (1.00005e-6)'),
-    (4, 'brentq (xtol=5e-324)', 1e4, 0.01, 'ok', 'relative tolerance cures the absolute-xtol loss'),
+    (
+        4,
+        'brentq',
+        1e4,
+        0.999999,
+        'fails',
+        'absolute xtol on micrometre a, near x_min (1.00005e-6)',
+    ),
+    (
+        4,
+        'brentq (xtol=5e-324)',
+        1e4,
+        0.01,
+        'ok',
+        'relative tolerance cures the absolute-xtol loss',
+    ),
     (4, 'brentq (xtol=5e-324)', 1e-8, 0.9999, 'fails', 'but not the cancelling formula'),
     (4, 'brentq on log d', 1e-8, 0.9999, 'ok', 'the right unknown cures it'),
     (4, 'brentq on log d', 1e4, 0.001, 'ok', ''),
     (4, 'root/fsolve (R, alpha)', 1e-3, 1e-3, 'fails', 'badly scaled two-unknown system'),
-    (4, 'root/fsolve (R, alpha)', 1.0, 0.1, 'fails', 'converges to a wrong point and reports success'),
+    (
+        4,
+        'root/fsolve (R, alpha)',
+        1.0,
+        0.1,
+        'fails',
+        'converges to a wrong point and reports success',
+    ),
     (4, 'root/fsolve (R, alpha)', 1.0, 0.999999, 'ok', ''),
     (4, 'Hou fixed point', 1.0, 0.5, 'fails', 'not a contraction'),
     (4, 'Hou fixed point', 1e-6, 0.1, 'fails', 'not a contraction'),
@@ -123,18 +153,39 @@ KNOWN = [
     (4, 'Hou 0.618 search', 1e-6, 0.1, 'loses', 'cancelling formula'),
     (4, 'Hou 0.618 search', 1.0, 0.1, 'ok', ''),
     (4, 'paper stepping (Fig. 2)', 1.0, 0.5, 'fails', 'start alpha = 44 deg below the root'),
-    (4, 'paper stepping (Fig. 2)', 1e-5, 0.23, 'fails', 'absolute 0.1 kN steps in R: > 1e5 evaluations'),
+    (
+        4,
+        'paper stepping (Fig. 2)',
+        1e-5,
+        0.23,
+        'fails',
+        'absolute 0.1 kN steps in R: > 1e5 evaluations',
+    ),
     (4, 'paper stepping (Fig. 2)', 0.1, 0.9, 'fails', 'absolute tolerances 1e-5 m, 1 N'),
     (4, 'paper stepping (Fig. 2)', 1e-3, 0.5, 'loses', 'absolute tolerances 1e-5 m, 1 N'),
     (4, 'MoorPy catenary (L given)', 1.0, 0.5, 'loses', 'absolute 1e-6 m tolerance'),
     (4, 'MoorPy catenary (L given)', 1e-3, 1e-3, 'ok', ''),
-    (4, 'MoorPy catenary (L given)', 1e4, 0.093216975178615730, 'fails', 'absolute 1e-6 m on a 0.3 m span'),
+    (
+        4,
+        'MoorPy catenary (L given)',
+        1e4,
+        0.093216975178615730,
+        'fails',
+        'absolute 1e-6 m on a 0.3 m span',
+    ),
     (4, 'pycatenary (L given)', 1e-6, 0.1, 'fails', 'bracket [1e-2, 1e10] m misses a'),
     (4, 'pycatenary (L given)', 1e4, 0.1, 'fails', 'a < 1e-2 m: silently wrong'),
     (4, 'pycatenary (L given)', 1.0, 0.1, 'ok', ''),
     (4, 'MoorPy + brentq on L', 1e-6, 0.1, 'fails', "wrapper's bracket misses the root"),
     (4, 'MoorPy + brentq on L', 1.0, 0.5, 'loses', 'absolute 1e-6 m tolerance'),
-    (4, 'MoorPy + brentq on L', 1e3, 1e-3, 'fails', "wrapper's bracket misses the root (steep chain)"),
+    (
+        4,
+        'MoorPy + brentq on L',
+        1e3,
+        1e-3,
+        'fails',
+        "wrapper's bracket misses the root (steep chain)",
+    ),
     # problem 3: minimum anchor distance
     (3, 'closed form (textbook)', 1e-9, None, 'loses', 'cancelling formula acosh(1 + h/a)'),
     (3, 'closed form (textbook)', 1.0, None, 'ok', ''),
@@ -159,15 +210,24 @@ KNOWN = [
 ]
 
 
-@pytest.mark.parametrize('problem,name,ha,xr,expected,why', KNOWN,
-                         ids=[f'p{k[0]}-{k[1]}-{k[2]:g}-{k[3]}-{k[4]}' for k in KNOWN])
+@pytest.mark.parametrize(
+    'problem,name,ha,xr,expected,why',
+    KNOWN,
+    ids=[f'p{k[0]}-{k[1]}-{k[2]:g}-{k[3]}-{k[4]}' for k in KNOWN],
+)
 def test_stability_map_claims(problem, name, ha, xr, expected, why):
     got, detail = outcome(problem, name, ha, xr)
-    assert got == expected, f'{name} at h/a={ha:g}, x/x_min={xr}: {got} ({detail}); map says {expected}: {why}'
+    assert (
+        got == expected
+    ), f'{name} at h/a={ha:g}, x/x_min={xr}: {got} ({detail}); map says {expected}: {why}'
 
 
-NEVER_FAIL = {(4, 'default kernel'), (3, 'closed form (stable)'), (4, 'brentq on log d'),
-              (2, 'closed form (textbook)')}
+NEVER_FAIL = {
+    (4, 'default kernel'),
+    (3, 'closed form (stable)'),
+    (4, 'brentq on log d'),
+    (2, 'closed form (textbook)'),
+}
 
 
 def test_every_weaker_method_has_a_failure_row_and_an_ok_row():
@@ -182,8 +242,9 @@ def test_every_weaker_method_has_a_failure_row_and_an_ok_row():
         assert rows[(problem, name)] & {'ok', 'loses'}, f'{name}: no row where it works'
 
 
-@pytest.mark.parametrize('ha,xr', [(1e-9, 0.9999), (1e-9, 1e-3), (1e4, 1e-3), (1e4, 0.999999),
-                                   (1.0, 0.5)])
+@pytest.mark.parametrize(
+    'ha,xr', [(1e-9, 0.9999), (1e-9, 1e-3), (1e4, 1e-3), (1e4, 0.999999), (1.0, 0.5)]
+)
 def test_default_holds_where_the_others_fail(ha, xr):
     for name in ('default', 'default kernel'):
         assert outcome(4, name, ha, xr)[0] == 'ok'
@@ -211,9 +272,16 @@ def test_paper_method_needs_its_start_above_the_root():
 
 def test_hou_reproduces_his_table():
     """Hou 2005's check table: w = 25 kg/m, dm = 11 m; Fh in kgf, lying length in m."""
-    for lm, h, lying, fh in [(20, 15, 0.563, 127.33), (20, 13, 4.68, 63.09),
-                             (21, 15, 2.90, 85.51), (21, 13, 6.59, 37.14)]:
-        for r, g in (hou.p5_fixed_point(25.0, h, lm, 11.0), hou.p5_golden(25.0, h, lm, 11.0, 400.0)):
+    for lm, h, lying, fh in [
+        (20, 15, 0.563, 127.33),
+        (20, 13, 4.68, 63.09),
+        (21, 15, 2.90, 85.51),
+        (21, 13, 6.59, 37.14),
+    ]:
+        for r, g in (
+            hou.p5_fixed_point(25.0, h, lm, 11.0),
+            hou.p5_golden(25.0, h, lm, 11.0, 400.0),
+        ):
             assert r == pytest.approx(fh, abs=0.04)
             assert g == pytest.approx(lying, abs=0.006)
 
@@ -235,11 +303,14 @@ def test_vectorized_forms_match_scalar_on_good_scenes():
         r, f = m.vector_fn(*(c.copy() for c in cols))
         for i, s in enumerate(scenes):
             rs, fs = m.scalar_fn(*s)
-            assert r[i] == pytest.approx(rs, rel=1e-12) and f[i] == pytest.approx(fs, rel=1e-11), m.name
+            assert r[i] == pytest.approx(rs, rel=1e-12) and f[i] == pytest.approx(
+                fs, rel=1e-11
+            ), m.name
 
 
 def test_peers_absent_are_reported(monkeypatch):
     import builtins
+
     real = builtins.__import__
 
     def fake(name, *a, **k):
@@ -254,6 +325,7 @@ def test_peers_absent_are_reported(monkeypatch):
 def test_bench_smoke(tmp_path):
     """A reduced benchmark run writes its four files and the same-run ratios."""
     from catenary_monitor_study.bench_methods import run
+
     res = run(quick=True, out_dir=str(tmp_path), only='kernel', stream=None)
     for f in ('methods.csv', 'methods.md', 'speed_accuracy.png', 'stability_map.png'):
         assert (tmp_path / f).stat().st_size > 0
@@ -264,5 +336,6 @@ def test_bench_smoke(tmp_path):
 
 def test_cli_registers_bench_methods():
     from catenary_monitor.cli.main import build_parser
+
     args = build_parser().parse_args(['bench-methods', '--quick', '--out', ''])
     assert args.quick and args.func.__name__ == 'cmd_bench_methods'

@@ -13,6 +13,7 @@ as one ``log1p`` of positive terms) and runs in numpy ``longdouble`` (64-bit man
 Tolerance: 1e-12 relative, plus ``8 eps kappa`` where the problem itself is ill-conditioned
 (``kappa = |x/F dF/dx|`` of the uplift force as x -> x_min), the bound the README states.
 """
+
 import numpy as np
 import pytest
 
@@ -82,8 +83,14 @@ def solved():
 def test_default_never_fails(solved):
     _, res = solved
     assert np.all(res.status == 0)
-    for key in ('horizontal_tension', 'uplift_force', 'anchor_angle_deg', 'suspended_length',
-                'min_anchor_distance', 'top_angle_deg'):
+    for key in (
+        'horizontal_tension',
+        'uplift_force',
+        'anchor_angle_deg',
+        'suspended_length',
+        'min_anchor_distance',
+        'top_angle_deg',
+    ):
         assert np.all(np.isfinite(getattr(res, key))), key
     assert np.all(res.uplift_force > 0)  # every scene has x < x_min: the anchor is lifted
 
@@ -106,7 +113,7 @@ def test_default_within_1e12_of_cross_check_on_all_scenes(solved):
 
 
 def test_cross_check_agrees_with_mpmath_and_default_too(solved):
-    """On a subset: the 50-digit reference, the cross-check (if extended precision) and the default."""
+    """On a subset: the 50-digit reference, the cross-check (extended precision), the default."""
     (w, h, t, x), res = solved
     idx = np.random.default_rng(7).choice(N, 40, replace=False)
     r, f, kr, kf = cross_check(w[idx], h[idx], t[idx], x[idx])

@@ -1,4 +1,5 @@
 """The README's parameter table is the one generated from config.PARAMETERS (no ROS needed)."""
+
 from pathlib import Path
 
 from catenary_monitor.core.config import parameters_markdown
@@ -17,8 +18,15 @@ def test_readme_parameter_table_is_generated_from_the_parameter_table():
 def test_core_and_node_cli_import_without_rclpy():
     import subprocess
     import sys
-    code = ("import sys; sys.modules['rclpy'] = None\n"
-            "import catenary_monitor.cli.main, catenary_monitor.ros.simulator, catenary_monitor.core.health\n"
-            "import catenary_monitor.core.config, catenary_monitor.core.alarms\n")
-    subprocess.run([sys.executable, '-c', code], check=True,
-                   env={'PYTHONPATH': str(README.parent), 'PATH': '/usr/bin:/bin'})
+
+    code = (
+        "import sys; sys.modules['rclpy'] = None\n"
+        "import catenary_monitor.cli.main, catenary_monitor.ros.simulator\n"
+        "import catenary_monitor.core.health\n"
+        "import catenary_monitor.core.config, catenary_monitor.core.alarms\n"
+    )
+    subprocess.run(
+        [sys.executable, '-c', code],
+        check=True,
+        env={'PYTHONPATH': str(README.parent), 'PATH': '/usr/bin:/bin'},
+    )

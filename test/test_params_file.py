@@ -7,6 +7,7 @@
 * a corpus of files through the real rcl + rclpy (one subprocess, one ``rclpy.init`` per file) and
   through ``load_params_file``: accepted by both or refused by both, same names, types, values.
 """
+
 from __future__ import annotations
 
 import ctypes
@@ -24,8 +25,14 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings, strategies as st
 
 from catenary_monitor.core.config import ConfigError, config_from_params, load_params_file
-from catenary_monitor.core.params_file import (ParamsFileError, c_strtod, c_strtol,
-                                               parameters_for_node, parse_params, rcl_scalar)
+from catenary_monitor.core.params_file import (
+    ParamsFileError,
+    c_strtod,
+    c_strtol,
+    parameters_for_node,
+    parse_params,
+    rcl_scalar,
+)
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCK_YAML = ROOT / 'config' / 'floating_dock.yaml'
@@ -47,18 +54,57 @@ def _refused(text: str | bytes) -> str:
 
 # --- scalar typing ----------------------------------------------------------------------------
 
-@pytest.mark.parametrize('text, expected', [
-    ('5.17e6', 5.17e6), ('1e6', 1e6), ('1e+06', 1e6), ('1300', 1300), ('0x10', 16), ('0X1A', 26),
-    ('010', 8), ('-0x10', -16), ('+5', 5), ('-0', 0), ('08', 8.0), ('1.', 1.0), ('.5', 0.5),
-    ('inf', math.inf), ('infinity', math.inf), ('-.INF', -math.inf), ('+.Inf', math.inf),
-    ('0x1p3', 8.0), ('99999999999999999999', 1e20), ('-9223372036854775808', -2 ** 63),
-    ('-9223372036854775809', -9.223372036854775809e18), ('0x1p-1074', 5e-324),
-    ('yes', True), ('Yes', True), ('ON', True), ('y', True), ('N', False), ('off', False),
-    ('1_000', '1_000'), ('~', '~'), ('null', 'null'), ('tRUE', 'tRUE'), ('1e6x', '1e6x'),
-    ('0b11', '0b11'), ('1e400', '1e400'), ('1e-400', '1e-400'), ('4e-320', '4e-320'),
-    ('.Nan', '.Nan'), ('-.nan', '-.nan'), ('12e', '12e'), ('0x', '0x'), ('5\n', '5\n'),
-    (' 5', 5), ('\n5', 5), ('5 ', '5 '),
-])
+
+@pytest.mark.parametrize(
+    'text, expected',
+    [
+        ('5.17e6', 5.17e6),
+        ('1e6', 1e6),
+        ('1e+06', 1e6),
+        ('1300', 1300),
+        ('0x10', 16),
+        ('0X1A', 26),
+        ('010', 8),
+        ('-0x10', -16),
+        ('+5', 5),
+        ('-0', 0),
+        ('08', 8.0),
+        ('1.', 1.0),
+        ('.5', 0.5),
+        ('inf', math.inf),
+        ('infinity', math.inf),
+        ('-.INF', -math.inf),
+        ('+.Inf', math.inf),
+        ('0x1p3', 8.0),
+        ('99999999999999999999', 1e20),
+        ('-9223372036854775808', -(2**63)),
+        ('-9223372036854775809', -9.223372036854775809e18),
+        ('0x1p-1074', 5e-324),
+        ('yes', True),
+        ('Yes', True),
+        ('ON', True),
+        ('y', True),
+        ('N', False),
+        ('off', False),
+        ('1_000', '1_000'),
+        ('~', '~'),
+        ('null', 'null'),
+        ('tRUE', 'tRUE'),
+        ('1e6x', '1e6x'),
+        ('0b11', '0b11'),
+        ('1e400', '1e400'),
+        ('1e-400', '1e-400'),
+        ('4e-320', '4e-320'),
+        ('.Nan', '.Nan'),
+        ('-.nan', '-.nan'),
+        ('12e', '12e'),
+        ('0x', '0x'),
+        ('5\n', '5\n'),
+        (' 5', 5),
+        ('\n5', 5),
+        ('5 ', '5 '),
+    ],
+)
 def test_plain_scalar_typing(text: str, expected: Any) -> None:
     kind, value = rcl_scalar(text)
     assert type(value) is type(expected) and value == expected, (kind, value)
@@ -74,10 +120,15 @@ def test_negative_zero_keeps_its_sign() -> None:
     assert math.copysign(1.0, rcl_scalar('-0.0')[1]) == -1.0
 
 
-@pytest.mark.parametrize('text, style, tag', [
-    ('5', "'", None), ('yes', '"', None), ('5', '', 'tag:yaml.org,2002:str'),
-    ('1e6', '|', 'tag:yaml.org,2002:str'),
-])
+@pytest.mark.parametrize(
+    'text, style, tag',
+    [
+        ('5', "'", None),
+        ('yes', '"', None),
+        ('5', '', 'tag:yaml.org,2002:str'),
+        ('1e6', '|', 'tag:yaml.org,2002:str'),
+    ],
+)
 def test_quoted_and_str_tagged_are_strings(text: str, style: str, tag: Optional[str]) -> None:
     assert rcl_scalar(text, style, tag) == ('string', text)
 
@@ -90,32 +141,43 @@ def test_other_tags_are_ignored_and_c_strings_end_at_nul() -> None:
 
 def test_block_scalars_are_typed_like_plain_ones() -> None:
     assert _params(H + '    a: |\n      5\n    b: |-\n      5\n    c: >-\n      1e3\n') == {
-        'a': '5\n', 'b': 5, 'c': 1000.0}
+        'a': '5\n',
+        'b': 5,
+        'c': 1000.0,
+    }
 
 
 # --- structure --------------------------------------------------------------------------------
 
+
 def test_nested_maps_flatten_and_dotted_keys_are_the_same_name() -> None:
-    assert _params(H + '    line_01.weight: 1\n    line_01:\n      weight: 2\n'
-                   '    a: {b: {c: 1}, d: 2}\n') == {'line_01.weight': 2, 'a.b.c': 1, 'a.d': 2}
+    assert _params(
+        H + '    line_01.weight: 1\n    line_01:\n      weight: 2\n' '    a: {b: {c: 1}, d: 2}\n'
+    ) == {'line_01.weight': 2, 'a.b.c': 1, 'a.d': 2}
 
 
 def test_closing_a_map_cuts_the_name_at_its_last_dot() -> None:
     """rcl's quirk: ``x: {a.b: {c: 1}, d: 2}`` gives ``x.a.d``, not ``x.d``."""
     assert _params(H + '    x:\n      a.b:\n        c: 1\n      d: 2\n') == {
-        'x.a.b.c': 1, 'x.a.d': 2}
+        'x.a.b.c': 1,
+        'x.a.d': 2,
+    }
 
 
 def test_duplicates_later_wins_within_a_type_first_type_wins_across() -> None:
     assert _params(H + '    a: 1\n    a: 2\n') == {'a': 2}
-    assert _params(H + '    a: 1\n    a: 2.0\n    b: x\n    b: 2.5\n    c: [x]\n    c: 1\n') \
-        == {'a': 1, 'b': 2.5, 'c': 1}
+    assert _params(H + '    a: 1\n    a: 2.0\n    b: x\n    b: 2.5\n    c: [x]\n    c: 1\n') == {
+        'a': 1,
+        'b': 2.5,
+        'c': 1,
+    }
 
 
 def test_sequences() -> None:
-    assert _params(H + '    a: [true, false]\n    b: [1.5, 2e3]\n    c: []\n    d: [[1]]\n'
-                   '    e: [1, [2]]\n    f: "[1,2]"\n') == {
-        'a': [True, False], 'b': [1.5, 2000.0], 'c': None, 'd': [1], 'e': [2], 'f': '[1,2]'}
+    assert _params(
+        H + '    a: [true, false]\n    b: [1.5, 2e3]\n    c: []\n    d: [[1]]\n'
+        '    e: [1, [2]]\n    f: "[1,2]"\n'
+    ) == {'a': [True, False], 'b': [1.5, 2000.0], 'c': None, 'd': [1], 'e': [2], 'f': '[1,2]'}
 
 
 def test_empty_map_is_not_set_and_ends_ros_parameters() -> None:
@@ -125,83 +187,117 @@ def test_empty_map_is_not_set_and_ends_ros_parameters() -> None:
 
 def test_keys_are_text_and_documents_merge() -> None:
     assert _params(H + '    3: 4\n    "x": 1\n    ? y\n    : 2\n---\n' + H + '    z: 5\n') == {
-        '3': 4, 'x': 1, 'y': 2, 'z': 5}
+        '3': 4,
+        'x': 1,
+        'y': 2,
+        'z': 5,
+    }
 
 
-@pytest.mark.parametrize('text, expected', [
-    ('', {}), ('# nothing\n', {}), ('5\n', {}),
-    ('other:\n  ros__parameters:\n    a: 1\n', {}),
-    ('catenary_monitor:\n  ros__parametersXYZ:\n    a: 1\n', {'a': 1}),
-    ('/:\n  catenary_monitor:\n    ros__parameters:\n      a: 1\n', {'a': 1}),
-    ('"/**":\n  ros__parameters:\n    a: 1\n', {'a': 1}),
-    ('/**/*:\n  ros__parameters:\n    a: 1\n', {'a': 1}),
-])
+@pytest.mark.parametrize(
+    'text, expected',
+    [
+        ('', {}),
+        ('# nothing\n', {}),
+        ('5\n', {}),
+        ('other:\n  ros__parameters:\n    a: 1\n', {}),
+        ('catenary_monitor:\n  ros__parametersXYZ:\n    a: 1\n', {'a': 1}),
+        ('/:\n  catenary_monitor:\n    ros__parameters:\n      a: 1\n', {'a': 1}),
+        ('"/**":\n  ros__parameters:\n    a: 1\n', {'a': 1}),
+        ('/**/*:\n  ros__parameters:\n    a: 1\n', {'a': 1}),
+    ],
+)
 def test_sections(text: str, expected: dict[str, Any]) -> None:
     assert _params(text) == expected
 
 
 def test_matching_and_order_of_sections() -> None:
-    text = ''.join(f'{name}:\n  ros__parameters:\n    {key}: 1\n' for name, key in [
-        ('/**', 'a'), ('/**/catenary_monitor', 'b'), ('/*/catenary_monitor', 'c'),
-        ('/catenary_monitor', 'd'), ('other', 'e'), ('/ns/catenary_monitor', 'f'), ('/*', 'g'),
-        (NODE, 'h')])
+    text = ''.join(
+        f'{name}:\n  ros__parameters:\n    {key}: 1\n'
+        for name, key in [
+            ('/**', 'a'),
+            ('/**/catenary_monitor', 'b'),
+            ('/*/catenary_monitor', 'c'),
+            ('/catenary_monitor', 'd'),
+            ('other', 'e'),
+            ('/ns/catenary_monitor', 'f'),
+            ('/*', 'g'),
+            (NODE, 'h'),
+        ]
+    )
     assert set(_params(text)) == set('abdgh')
     assert set(_params(text, '/ns')) == set('abcf')
     # entries in order of first appearance; a repeated name merges into its first entry
-    assert _params(H + '    a: 1\n/**:\n  ros__parameters:\n    a: 2.0\n' + H + '    a: 3\n') \
-        == {'a': 2.0}
-    assert _params(H + '    a: 1\n/**:\n  ros__parameters:\n    a: 2\n'
-                   '/catenary_monitor:\n  ros__parameters:\n    a: 3\n') == {'a': 3}
+    assert _params(H + '    a: 1\n/**:\n  ros__parameters:\n    a: 2.0\n' + H + '    a: 3\n') == {
+        'a': 2.0
+    }
+    assert _params(
+        H + '    a: 1\n/**:\n  ros__parameters:\n    a: 2\n'
+        '/catenary_monitor:\n  ros__parameters:\n    a: 3\n'
+    ) == {'a': 3}
 
 
-@pytest.mark.parametrize('text, rule', [
-    (H + '    a: [1, 2.0]\n', 'Sequence should be of same type'),
-    (H + '    a: [a, 1]\n', 'Sequence should be of same type'),
-    (H + '    a:\n', 'No value (line 3)'),
-    (H + '    "": 1\n', 'No key'),
-    ('[1, 2]\n', 'Sequences cannot be key'),
-    (H + '    a: [[1], [2]]\n', 'Sequences cannot be key'),
-    (H + '    a: &x 1\n    b: *x\n', 'Will not support aliasing'),
-    ('catenary_monitor:\n  other: 1\n  ros__parameters:\n    a: 1\n', 'Cannot have a value'),
-    ('catenary_monitor: 5\n', 'Cannot have a value'),
-    ('catenary_monitor:\n  ros__parameters: 5\n', 'Cannot have a value'),
-    ('catenary_monitor:\n  ros__parameters:\n  a: 1\n', 'Cannot have a value'),
-    ('ros__parameters: {}\n', 'There are no node names before'),
-    ('1abc:\n  ros__parameters:\n    a: 1\n', 'must not start with a number'),
-    ('cat*:\n  ros__parameters:\n    a: 1\n', 'other than alphanumerics'),
-    ('ns:\n  /**:\n    ros__parameters:\n      a: 1\n', '/ns// contains repeated forward slash'),
-    ('/:\n  ros__parameters:\n    a: 1\n', 'node name must not be empty'),
-    ('a' * 256 + ':\n  ros__parameters:\n    a: 1\n', "should not exceed '255'"),
-    ('/' + 'b' * 245 + '/n:\n  ros__parameters:\n    a: 1\n', 'namespace should not exceed'),
-    (H + '    ? {x: 1}\n    : 2\n', 'Internal error creating param namespace'),
-    (H + '    a: [\n', 'YAML syntax'),
-    (b'\xff\xfe\x00', 'YAML syntax'),
-    (H.encode() + b'    a: \xff\xfe\n', 'YAML syntax'),
-    (bytes(range(256)), 'YAML syntax'),
-])
+@pytest.mark.parametrize(
+    'text, rule',
+    [
+        (H + '    a: [1, 2.0]\n', 'Sequence should be of same type'),
+        (H + '    a: [a, 1]\n', 'Sequence should be of same type'),
+        (H + '    a:\n', 'No value (line 3)'),
+        (H + '    "": 1\n', 'No key'),
+        ('[1, 2]\n', 'Sequences cannot be key'),
+        (H + '    a: [[1], [2]]\n', 'Sequences cannot be key'),
+        (H + '    a: &x 1\n    b: *x\n', 'Will not support aliasing'),
+        ('catenary_monitor:\n  other: 1\n  ros__parameters:\n    a: 1\n', 'Cannot have a value'),
+        ('catenary_monitor: 5\n', 'Cannot have a value'),
+        ('catenary_monitor:\n  ros__parameters: 5\n', 'Cannot have a value'),
+        ('catenary_monitor:\n  ros__parameters:\n  a: 1\n', 'Cannot have a value'),
+        ('ros__parameters: {}\n', 'There are no node names before'),
+        ('1abc:\n  ros__parameters:\n    a: 1\n', 'must not start with a number'),
+        ('cat*:\n  ros__parameters:\n    a: 1\n', 'other than alphanumerics'),
+        (
+            'ns:\n  /**:\n    ros__parameters:\n      a: 1\n',
+            '/ns// contains repeated forward slash',
+        ),
+        ('/:\n  ros__parameters:\n    a: 1\n', 'node name must not be empty'),
+        ('a' * 256 + ':\n  ros__parameters:\n    a: 1\n', "should not exceed '255'"),
+        ('/' + 'b' * 245 + '/n:\n  ros__parameters:\n    a: 1\n', 'namespace should not exceed'),
+        (H + '    ? {x: 1}\n    : 2\n', 'Internal error creating param namespace'),
+        (H + '    a: [\n', 'YAML syntax'),
+        (b'\xff\xfe\x00', 'YAML syntax'),
+        (H.encode() + b'    a: \xff\xfe\n', 'YAML syntax'),
+        (bytes(range(256)), 'YAML syntax'),
+    ],
+)
 def test_refused(text: str | bytes, rule: str) -> None:
     assert rule in _refused(text)
 
 
-@pytest.mark.parametrize('refused, accepted', [
-    ('%YAML 1.2\n---\n', '%YAML 1.1\n---\n'), ('    a: [x:y]\n', '    a: [x: y]\n'),
-    ('    a: [x ?y]\n', '    a: [x y]\n'), ('    a: "\\/"\n', '    a: "/"\n'),
-    ('    a: [!!str, x]\n', '    a: [!!str "", x]\n'),
-])
+@pytest.mark.parametrize(
+    'refused, accepted',
+    [
+        ('%YAML 1.2\n---\n', '%YAML 1.1\n---\n'),
+        ('    a: [x:y]\n', '    a: [x: y]\n'),
+        ('    a: [x ?y]\n', '    a: [x y]\n'),
+        ('    a: "\\/"\n', '    a: "/"\n'),
+        ('    a: [!!str, x]\n', '    a: [!!str "", x]\n'),
+    ],
+)
 def test_libyaml_versions_disagree_so_refused(refused: str, accepted: str) -> None:
     """ROS 2's pip wheels link libyaml 0.1.7, Jazzy's debs 0.2.5: accept only what both accept."""
+
     def text(part: str) -> str:
         return part + _p('a: 1') if part.startswith('%') else H + part
+
     assert 'libyaml 0.1.7' in _refused(text(refused))
     parse_params(text(accepted).encode())
 
 
 def test_utf16_with_bom_is_read() -> None:
-    assert parameters_for_node(parse_params((H + '    a: 1\n').encode('utf-16')), NODE) == \
-        {'a': 1}
+    assert parameters_for_node(parse_params((H + '    a: 1\n').encode('utf-16')), NODE) == {'a': 1}
 
 
 # --- through config ---------------------------------------------------------------------------
+
 
 def test_config_errors_are_one_line(tmp_path: Path) -> None:
     path = tmp_path / 'p.yaml'
@@ -227,6 +323,7 @@ def test_namespace_argument(tmp_path: Path) -> None:
 
 # --- glibc strtol / strtod (ctypes) -----------------------------------------------------------
 
+
 def _libc() -> Optional[ctypes.CDLL]:
     try:
         libc = ctypes.CDLL(ctypes.util.find_library('c') or 'libc.so.6', use_errno=True)
@@ -241,8 +338,9 @@ def _libc() -> Optional[ctypes.CDLL]:
 
 
 LIBC = _libc()
-needs_glibc = pytest.mark.skipif(LIBC is None or ctypes.sizeof(ctypes.c_long) != 8,
-                                 reason='glibc with a 64-bit long needed')
+needs_glibc = pytest.mark.skipif(
+    LIBC is None or ctypes.sizeof(ctypes.c_long) != 8, reason='glibc with a 64-bit long needed'
+)
 
 
 def _c_call(name: str, text: str) -> tuple[Any, int, bool]:
@@ -262,13 +360,36 @@ def _same_double(a: float, b: float) -> bool:
     return a == b and math.copysign(1.0, a) == math.copysign(1.0, b)
 
 
-EDGE_NUMBERS = ['2.2250738585072011e-308', '2.2250738585072013e-308', '2.225073858507201e-308',
-                '0x1.fffffffffffffp-1023', '0x1.fffffffffffff8p-1023', '0x0.fffffffffffff8p-1022',
-                '0x1p-1075', '0x1.8p-1075', '0x1.0000000000001p-1075', '4.9406564584124654e-324',
-                '2.4703282292062327e-324', '2.4703282292062328e-324', '1.7976931348623158e308',
-                '1.7976931348623159e308', '0x1.fffffffffffff8p1023', '1e-99999999999', '0e-400',
-                'nan(0x12)', 'nan(', 'infinit', '0x.8', '0x.p1', '0X1P', '-0x8000000000000000',
-                '0x8000000000000000', '0777777777777777777777', '1' * 400, '.' + '0' * 400 + '1']
+EDGE_NUMBERS = [
+    '2.2250738585072011e-308',
+    '2.2250738585072013e-308',
+    '2.225073858507201e-308',
+    '0x1.fffffffffffffp-1023',
+    '0x1.fffffffffffff8p-1023',
+    '0x0.fffffffffffff8p-1022',
+    '0x1p-1075',
+    '0x1.8p-1075',
+    '0x1.0000000000001p-1075',
+    '4.9406564584124654e-324',
+    '2.4703282292062327e-324',
+    '2.4703282292062328e-324',
+    '1.7976931348623158e308',
+    '1.7976931348623159e308',
+    '0x1.fffffffffffff8p1023',
+    '1e-99999999999',
+    '0e-400',
+    'nan(0x12)',
+    'nan(',
+    'infinit',
+    '0x.8',
+    '0x.p1',
+    '0X1P',
+    '-0x8000000000000000',
+    '0x8000000000000000',
+    '0777777777777777777777',
+    '1' * 400,
+    '.' + '0' * 400 + '1',
+]
 
 
 @needs_glibc
@@ -292,11 +413,18 @@ def _check_against_libc(text: str) -> None:
 
 # --- rcl itself through ctypes ----------------------------------------------------------------
 
+
 def _ros_library(stem: str) -> Optional[ctypes.CDLL]:
     """A ROS 2 shared library from LD_LIBRARY_PATH, this venv's lib/ or the ament prefixes."""
-    dirs = [''] + [str(Path(sys.prefix) / 'lib')] + [
-        str(Path(p) / 'lib') for p in os.environ.get('AMENT_PREFIX_PATH', '').split(os.pathsep)
-        if p]
+    dirs = (
+        ['']
+        + [str(Path(sys.prefix) / 'lib')]
+        + [
+            str(Path(p) / 'lib')
+            for p in os.environ.get('AMENT_PREFIX_PATH', '').split(os.pathsep)
+            if p
+        ]
+    )
     for directory in dirs:
         try:
             return ctypes.CDLL(os.path.join(directory, f'lib{stem}.so'))
@@ -306,8 +434,10 @@ def _ros_library(stem: str) -> Optional[ctypes.CDLL]:
 
 
 class _Alloc(ctypes.Structure):
-    _fields_ = [(n, ctypes.c_void_p) for n in ('allocate', 'deallocate', 'reallocate',
-                                               'zero_allocate', 'state')]
+    _fields_ = [
+        (n, ctypes.c_void_p)
+        for n in ('allocate', 'deallocate', 'reallocate', 'zero_allocate', 'state')
+    ]
 
 
 class _Array(ctypes.Structure):
@@ -315,28 +445,44 @@ class _Array(ctypes.Structure):
 
 
 class _StringArray(ctypes.Structure):
-    _fields_ = [('size', ctypes.c_size_t), ('data', ctypes.POINTER(ctypes.c_char_p)),
-                ('allocator', _Alloc)]
+    _fields_ = [
+        ('size', ctypes.c_size_t),
+        ('data', ctypes.POINTER(ctypes.c_char_p)),
+        ('allocator', _Alloc),
+    ]
 
 
 class _Variant(ctypes.Structure):
-    _fields_ = [('bool', ctypes.POINTER(ctypes.c_bool)), ('int', ctypes.POINTER(ctypes.c_int64)),
-                ('double', ctypes.POINTER(ctypes.c_double)), ('string', ctypes.c_char_p),
-                ('bytes', ctypes.POINTER(_Array)), ('bools', ctypes.POINTER(_Array)),
-                ('ints', ctypes.POINTER(_Array)), ('doubles', ctypes.POINTER(_Array)),
-                ('strings', ctypes.POINTER(_StringArray))]
+    _fields_ = [
+        ('bool', ctypes.POINTER(ctypes.c_bool)),
+        ('int', ctypes.POINTER(ctypes.c_int64)),
+        ('double', ctypes.POINTER(ctypes.c_double)),
+        ('string', ctypes.c_char_p),
+        ('bytes', ctypes.POINTER(_Array)),
+        ('bools', ctypes.POINTER(_Array)),
+        ('ints', ctypes.POINTER(_Array)),
+        ('doubles', ctypes.POINTER(_Array)),
+        ('strings', ctypes.POINTER(_StringArray)),
+    ]
 
 
 class _NodeParams(ctypes.Structure):
-    _fields_ = [('names', ctypes.POINTER(ctypes.c_char_p)),
-                ('values', ctypes.POINTER(_Variant)), ('num', ctypes.c_size_t),
-                ('capacity', ctypes.c_size_t)]
+    _fields_ = [
+        ('names', ctypes.POINTER(ctypes.c_char_p)),
+        ('values', ctypes.POINTER(_Variant)),
+        ('num', ctypes.c_size_t),
+        ('capacity', ctypes.c_size_t),
+    ]
 
 
 class _Params(ctypes.Structure):
-    _fields_ = [('names', ctypes.POINTER(ctypes.c_char_p)),
-                ('params', ctypes.POINTER(_NodeParams)), ('num', ctypes.c_size_t),
-                ('capacity', ctypes.c_size_t), ('allocator', _Alloc)]
+    _fields_ = [
+        ('names', ctypes.POINTER(ctypes.c_char_p)),
+        ('params', ctypes.POINTER(_NodeParams)),
+        ('num', ctypes.c_size_t),
+        ('capacity', ctypes.c_size_t),
+        ('allocator', _Alloc),
+    ]
 
 
 class Rcl:
@@ -351,18 +497,27 @@ class Rcl:
         parser.rcl_parse_yaml_file.argtypes = [ctypes.c_char_p, ctypes.POINTER(_Params)]
         parser.rcl_yaml_node_struct_fini.argtypes = [ctypes.POINTER(_Params)]
         parser.get_value.restype = ctypes.c_void_p
-        parser.get_value.argtypes = [ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p,
-                                     ctypes.POINTER(ctypes.c_int), _Alloc]
+        parser.get_value.argtypes = [
+            ctypes.c_char_p,
+            ctypes.c_int,
+            ctypes.c_char_p,
+            ctypes.POINTER(ctypes.c_int),
+            _Alloc,
+        ]
 
     def scalar(self, text: str, style: int = 1, tag: Optional[str] = None) -> tuple[str, Any]:
         """rcl's get_value (style: libyaml's, 1 plain 2 single 3 double 4 literal)."""
         kind = ctypes.c_int()
         allocator = self.rcutils.rcutils_get_default_allocator()
-        ptr = self.parser.get_value(text.encode(), style, tag and tag.encode(),
-                                    ctypes.byref(kind), allocator)
+        ptr = self.parser.get_value(
+            text.encode(), style, tag and tag.encode(), ctypes.byref(kind), allocator
+        )
         ctype = {1: ctypes.c_bool, 2: ctypes.c_int64, 3: ctypes.c_double}.get(kind.value)
-        value = ctypes.string_at(ptr).decode() if ctype is None else ctypes.cast(
-            ptr, ctypes.POINTER(ctype))[0]
+        value = (
+            ctypes.string_at(ptr).decode()
+            if ctype is None
+            else ctypes.cast(ptr, ctypes.POINTER(ctype))[0]
+        )
         return ['', 'bool', 'int', 'double', 'string'][kind.value], value
 
     def parse(self, path: Path) -> Optional[list[tuple[str, dict[str, Any]]]]:
@@ -373,8 +528,10 @@ class Rcl:
             if not self.parser.rcl_parse_yaml_file(str(path).encode(), params):
                 self.rcutils.rcutils_reset_error()
                 return None
-            return [(params[0].names[i].decode(), self._node(params[0].params[i]))
-                    for i in range(params[0].num)]
+            return [
+                (params[0].names[i].decode(), self._node(params[0].params[i]))
+                for i in range(params[0].num)
+            ]
         finally:
             self.parser.rcl_yaml_node_struct_fini(params)
 
@@ -392,12 +549,16 @@ class Rcl:
                 return getattr(v, name)[0]
         if v.string is not None:
             return v.string.decode()
-        for name, ctype in (('bools', ctypes.c_bool), ('ints', ctypes.c_int64),
-                            ('doubles', ctypes.c_double)):
+        for name, ctype in (
+            ('bools', ctypes.c_bool),
+            ('ints', ctypes.c_int64),
+            ('doubles', ctypes.c_double),
+        ):
             if getattr(v, name):
                 array = getattr(v, name)[0]
-                return [ctypes.cast(array.values, ctypes.POINTER(ctype))[k]
-                        for k in range(array.size)]
+                return [
+                    ctypes.cast(array.values, ctypes.POINTER(ctype))[k] for k in range(array.size)
+                ]
         if v.strings:
             return [v.strings[0].data[k].decode() for k in range(v.strings[0].size)]
         return None
@@ -428,15 +589,26 @@ def _tagged(value: Any) -> Any:
 
 @needs_rcl
 @settings(max_examples=3000, deadline=None)
-@given(st.text(ALPHABET, max_size=12),
-       st.sampled_from([(1, None), (2, None), (3, None), (4, None),
-                        (1, 'tag:yaml.org,2002:str'), (1, 'tag:yaml.org,2002:int')]))
+@given(
+    st.text(ALPHABET, max_size=12),
+    st.sampled_from(
+        [
+            (1, None),
+            (2, None),
+            (3, None),
+            (4, None),
+            (1, 'tag:yaml.org,2002:str'),
+            (1, 'tag:yaml.org,2002:int'),
+        ]
+    ),
+)
 @example('.NaN', (1, None))
 @example('-.INF', (1, None))
 @example('Yes', (1, None))
 @example('Yes', (2, None))
-def test_scalar_typing_matches_rcl_get_value(text: str,
-                                             style_tag: tuple[int, Optional[str]]) -> None:
+def test_scalar_typing_matches_rcl_get_value(
+    text: str, style_tag: tuple[int, Optional[str]]
+) -> None:
     style, tag = style_tag
     kind, value = rcl_scalar(text, {1: '', 2: "'", 3: '"', 4: '|'}[style], tag)
     rcl_kind, rcl_value = RCL.scalar(text, style, tag)
@@ -444,13 +616,68 @@ def test_scalar_typing_matches_rcl_get_value(text: str,
 
 
 # whole files: generated from the constructs rcl handles, none where libyaml versions disagree
-_KEYS = ['a', 'b', 'c', 'a.b', 'line_01', 'weight', 'x.y', '3', '"a"', '~', 'ros__parameters',
-         'ros__parametersX'] * 3 + ['""', '"\\0"']
-_NODES = [NODE, NODE, '/catenary_monitor', '/**', '/**', '/*', '/**/catenary_monitor', 'other',
-          'a/b', '"/**"', '"*"', 'ns/**', '1abc', 'cat*', 'ros__parameters', '""']
-_SCALARS = ['1', '0x10', '010', '08', '1e6', '1.', 'inf', '.nan', '-.INF', 'yes', 'ON', 'tRUE',
-            '~', '1_000', '1e400', '"5"', "'x'", '!!str 5', '!!float 1', '"\\0"', '""', '|-\n{i}5',
-            '|\n{i}x', 'é', '1', 'x', '2.5', 'true'] * 2 + ['&an 1', '*an', '""']
+_KEYS = [
+    'a',
+    'b',
+    'c',
+    'a.b',
+    'line_01',
+    'weight',
+    'x.y',
+    '3',
+    '"a"',
+    '~',
+    'ros__parameters',
+    'ros__parametersX',
+] * 3 + ['""', '"\\0"']
+_NODES = [
+    NODE,
+    NODE,
+    '/catenary_monitor',
+    '/**',
+    '/**',
+    '/*',
+    '/**/catenary_monitor',
+    'other',
+    'a/b',
+    '"/**"',
+    '"*"',
+    'ns/**',
+    '1abc',
+    'cat*',
+    'ros__parameters',
+    '""',
+]
+_SCALARS = [
+    '1',
+    '0x10',
+    '010',
+    '08',
+    '1e6',
+    '1.',
+    'inf',
+    '.nan',
+    '-.INF',
+    'yes',
+    'ON',
+    'tRUE',
+    '~',
+    '1_000',
+    '1e400',
+    '"5"',
+    "'x'",
+    '!!str 5',
+    '!!float 1',
+    '"\\0"',
+    '""',
+    '|-\n{i}5',
+    '|\n{i}x',
+    'é',
+    '1',
+    'x',
+    '2.5',
+    'true',
+] * 2 + ['&an 1', '*an', '""']
 
 
 def _scalar(draw: Any, indent: int) -> str:
@@ -465,8 +692,10 @@ def _value(draw: Any, indent: int, depth: int) -> str:
     if kind == 's':
         return ' ' + _scalar(draw, indent)
     if kind == 'q':
-        items = [_scalar(draw, indent).split('\n')[0].replace('|-', '1').replace('|', '1')
-                 for _ in range(draw(st.integers(0, 3)))]
+        items = [
+            _scalar(draw, indent).split('\n')[0].replace('|-', '1').replace('|', '1')
+            for _ in range(draw(st.integers(0, 3)))
+        ]
         nested = ['[' + i + ']' for i in items[:1]] if draw(st.booleans()) else []
         return ' [' + ', '.join(items + nested) + ']'
     if kind in 'eE':
@@ -486,18 +715,23 @@ def params_files(draw: Any) -> str:
         name, body = draw(st.sampled_from(_NODES)), ''
         for _ in range(draw(st.sampled_from([1] * 9 + [2]))):
             key = draw(st.sampled_from(['ros__parameters'] * 9 + ['other']))
-            value = _value(draw, 2, 0) if draw(st.integers(0, 9)) == 0 else '\n' + _mapping(
-                draw, 4, 1)
+            value = (
+                _value(draw, 2, 0) if draw(st.integers(0, 9)) == 0 else '\n' + _mapping(draw, 4, 1)
+            )
             body += f'  {key}:{value}\n'
         sections.append(f'{name}:\n{body}')
     docs = draw(st.sampled_from([1] * 4 + [2]))
     return draw(st.sampled_from([''] * 4 + ['---\n'])) + '---\n'.join(
-        ''.join(sections[i::docs]) for i in range(docs))
+        ''.join(sections[i::docs]) for i in range(docs)
+    )
 
 
 @needs_rcl
-@settings(max_examples=600, deadline=None,
-          suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=600,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 @given(params_files())
 def test_generated_files_match_rcl_parse_yaml_file(tmp_path: Path, text: str) -> None:
     path = tmp_path / 'p.yaml'
@@ -518,6 +752,7 @@ def _entries(entries: Optional[list[tuple[str, dict[str, Any]]]]) -> Optional[li
 
 # --- the corpus, through rclpy ----------------------------------------------------------------
 
+
 def _p(*lines: str) -> str:
     '''A catenary_monitor section with these lines under ros__parameters.'''
     return H + ''.join(f'    {line}\n' for line in lines)
@@ -527,23 +762,103 @@ def _sections(*names_keys: tuple[str, str]) -> str:
     return ''.join(f'{n}:\n  ros__parameters:\n    {k}: 1\n' for n, k in names_keys)
 
 
-SCALARS = ['5.17e6', '1e6', '1300', '0x10', '010', '.inf', 'nan', "'x'", 'yes', '"5"', '1_000',
-           '1e400', '99999999999999999999', '+5', '1.', 'inf', '0x1p3', '4e-320', '!!str 5', '~',
-           'null', '1e-400', '1e+06', '0b11', '1e6x', '" 5"', '-0x10', '0.0e0', '-.inf', '.NaN',
-           'Yes', 'TRUE', 'tRUE', '1.5E3', '0X1A', '1e3.5', '12e', 'infinity', '-nan', '0x', '08',
-           '-0', '-0.0', '0x1p-1074', '-9223372036854775809', '!!float 1', '!!int "3"', '.Nan',
-           'N', 'Off', 'ON', 'y', 'YES', 'no', 'False']
-WILD = [('/**', 'a'), (NODE, 'a'), ('/**/catenary_monitor', 'b'), ('/*/catenary_monitor', 'c'),
-        ('/catenary_monitor', 'd'), ('other', 'e'), ('/ns/catenary_monitor', 'f'), ('/*', 'g')]
-WILD_NS = [('/**', 'a'), (NODE, 'b'), ('/*/catenary_monitor', 'c'), ('/ns/catenary_monitor', 'd'),
-           ('/*', 'e'), ('/ns/*', 'f'), ('/**/*', 'g'), ('ns/catenary_monitor', 'h')]
+SCALARS = [
+    '5.17e6',
+    '1e6',
+    '1300',
+    '0x10',
+    '010',
+    '.inf',
+    'nan',
+    "'x'",
+    'yes',
+    '"5"',
+    '1_000',
+    '1e400',
+    '99999999999999999999',
+    '+5',
+    '1.',
+    'inf',
+    '0x1p3',
+    '4e-320',
+    '!!str 5',
+    '~',
+    'null',
+    '1e-400',
+    '1e+06',
+    '0b11',
+    '1e6x',
+    '" 5"',
+    '-0x10',
+    '0.0e0',
+    '-.inf',
+    '.NaN',
+    'Yes',
+    'TRUE',
+    'tRUE',
+    '1.5E3',
+    '0X1A',
+    '1e3.5',
+    '12e',
+    'infinity',
+    '-nan',
+    '0x',
+    '08',
+    '-0',
+    '-0.0',
+    '0x1p-1074',
+    '-9223372036854775809',
+    '!!float 1',
+    '!!int "3"',
+    '.Nan',
+    'N',
+    'Off',
+    'ON',
+    'y',
+    'YES',
+    'no',
+    'False',
+]
+WILD = [
+    ('/**', 'a'),
+    (NODE, 'a'),
+    ('/**/catenary_monitor', 'b'),
+    ('/*/catenary_monitor', 'c'),
+    ('/catenary_monitor', 'd'),
+    ('other', 'e'),
+    ('/ns/catenary_monitor', 'f'),
+    ('/*', 'g'),
+]
+WILD_NS = [
+    ('/**', 'a'),
+    (NODE, 'b'),
+    ('/*/catenary_monitor', 'c'),
+    ('/ns/catenary_monitor', 'd'),
+    ('/*', 'e'),
+    ('/ns/*', 'f'),
+    ('/**/*', 'g'),
+    ('ns/catenary_monitor', 'h'),
+]
 LONG_NS = '/' + 'b' * 244
 
 CORPUS: list[tuple[str, str | bytes, str]] = [
     ('scalars', _p(*(f'k{i}: {v}' for i, v in enumerate(SCALARS))), '/'),
     ('blocks', _p('a: |', '  text', 'b: |-', '  5', 'c: >-', '  1e3', 'd: |2-', '    7'), '/'),
-    ('lists', _p('a: [true, false]', 'b: [1.5, 2e3]', 'c: "[1,2]"', 'd: [a, b]', 'e: []',
-                 'f: [[1]]', 'g: [1, [2]]', 'h: [1, [2.0]]', 'i: [{b: 1}]'), '/'),
+    (
+        'lists',
+        _p(
+            'a: [true, false]',
+            'b: [1.5, 2e3]',
+            'c: "[1,2]"',
+            'd: [a, b]',
+            'e: []',
+            'f: [[1]]',
+            'g: [1, [2]]',
+            'h: [1, [2.0]]',
+            'i: [{b: 1}]',
+        ),
+        '/',
+    ),
     ('list_mixed_float', _p('a: [1, 2.0]'), '/'),
     ('list_mixed_str', _p('a: [a, 1]'), '/'),
     ('list_mixed_empty_str', _p('a: [1, ""]'), '/'),
@@ -552,39 +867,115 @@ CORPUS: list[tuple[str, str | bytes, str]] = [
     ('wildcards', _sections(*WILD), '/'),
     ('wildcards_in_ns', _sections(*WILD_NS), '/ns'),
     ('order_first_appearance', _p('a: 1') + _sections(('/**', 'a')) + _p('a: 3'), '/'),
-    ('order_distinct_names', _p('a: 2') + _sections(('/**', 'a'))
-     + '/catenary_monitor:\n  ros__parameters:\n    a: 3\n', '/'),
-    ('order_root_ns', '/:\n  catenary_monitor:\n    ros__parameters:\n      a: 3\n'
-     + _sections(('/**', 'a')) + '/catenary_monitor:\n  ros__parameters:\n    a: 2\n', '/'),
-    ('wildcard_after_specific', '/**/catenary_monitor:\n  ros__parameters:\n    a: 2\n'
-     + _sections(('/**', 'a')), '/'),
+    (
+        'order_distinct_names',
+        _p('a: 2')
+        + _sections(('/**', 'a'))
+        + '/catenary_monitor:\n  ros__parameters:\n    a: 3\n',
+        '/',
+    ),
+    (
+        'order_root_ns',
+        '/:\n  catenary_monitor:\n    ros__parameters:\n      a: 3\n'
+        + _sections(('/**', 'a'))
+        + '/catenary_monitor:\n  ros__parameters:\n    a: 2\n',
+        '/',
+    ),
+    (
+        'wildcard_after_specific',
+        '/**/catenary_monitor:\n  ros__parameters:\n    a: 2\n' + _sections(('/**', 'a')),
+        '/',
+    ),
     ('root_namespace_key', '/:\n  catenary_monitor:\n    ros__parameters:\n      a: 1\n', '/'),
-    ('nested_namespaces', '/:\n  ns:\n    catenary_monitor:\n      ros__parameters:\n'
-     '        a: 1\n  catenary_monitor:\n    ros__parameters:\n      b: 2\n', '/ns'),
+    (
+        'nested_namespaces',
+        '/:\n  ns:\n    catenary_monitor:\n      ros__parameters:\n'
+        '        a: 1\n  catenary_monitor:\n    ros__parameters:\n      b: 2\n',
+        '/ns',
+    ),
     ('quoted_wildcard', '"/**":\n  ros__parameters:\n    a: 1\n', '/'),
-    ('star_names', _sections(('"*"', 'a'), ('"**"', 'b'), ('/**/**', 'c'), ('/**/*', 'd')),
-     '/'),
+    ('star_names', _sections(('"*"', 'a'), ('"**"', 'b'), ('/**/**', 'c'), ('/**/*', 'd')), '/'),
     ('no_matching_section', _sections(('other', 'a')), '/'),
     ('empty_file', '', '/'),
     ('comments_only', '# nothing here\n', '/'),
     ('scalar_document', '5\n', '/'),
     ('empty_first_document', '---\n---\n' + _p('a: 1'), '/'),
     ('multi_document', _p('a: 1') + '---\n' + _p('b: 1') + '...\n', '/'),
-    ('dotted_and_nested', _p('line_01.weight: 1', 'line_01:', '  weight: 2', 'a.b: 1', 'a:',
-                             '  c: 2'), '/'),
-    ('nested_quirks', _p('x:', '  a.b:', '    c: 1', '  d: 2', 'e:', '  f: 1', 'e:', '  f: 2.0',
-                         'g:', '  h:', '    i: 1', '  j: 2'), '/'),
-    ('duplicates', _p('a: 1', 'a: 2', 'b: 1', 'b: 2.0', 'c: x', 'c: 2', 'd: 2.0', 'd: true',
-                      'e: 1', 'e: [1]', 'f: [x]', 'f: [1]', 'g: [true]', 'g: [1]'), '/'),
+    (
+        'dotted_and_nested',
+        _p('line_01.weight: 1', 'line_01:', '  weight: 2', 'a.b: 1', 'a:', '  c: 2'),
+        '/',
+    ),
+    (
+        'nested_quirks',
+        _p(
+            'x:',
+            '  a.b:',
+            '    c: 1',
+            '  d: 2',
+            'e:',
+            '  f: 1',
+            'e:',
+            '  f: 2.0',
+            'g:',
+            '  h:',
+            '    i: 1',
+            '  j: 2',
+        ),
+        '/',
+    ),
+    (
+        'duplicates',
+        _p(
+            'a: 1',
+            'a: 2',
+            'b: 1',
+            'b: 2.0',
+            'c: x',
+            'c: 2',
+            'd: 2.0',
+            'd: true',
+            'e: 1',
+            'e: [1]',
+            'f: [x]',
+            'f: [1]',
+            'g: [true]',
+            'g: [1]',
+        ),
+        '/',
+    ),
     ('empty_map_last', _p('b: 2', 'a: {}'), '/'),
     ('empty_map_then_key', _p('a: {}', 'b: 2'), '/'),
-    ('keys', _p('"a": 1', '? b', ': 2', '3: 4', '~: 5', 'é: "ü"', 'ros__parameters: 6',
-                'ros__parametersX: 7', '"\\0": 8'), '/'),
+    (
+        'keys',
+        _p(
+            '"a": 1',
+            '? b',
+            ': 2',
+            '3: 4',
+            '~: 5',
+            'é: "ü"',
+            'ros__parameters: 6',
+            'ros__parametersX: 7',
+            '"\\0": 8',
+        ),
+        '/',
+    ),
     ('prefix_of_ros_parameters', 'catenary_monitor:\n  ros__parametersXYZ:\n    a: 1\n', '/'),
     ('flow_style', '{catenary_monitor: {ros__parameters: {a: 1, b: [1, 2], c: {d: x}}}}\n', '/'),
     ('crlf_and_tabs', _p('a:\t1').replace('\n', '\r\n'), '/'),
-    ('strings', _p('a: "x\\0y"', 'b: ""', 'c: !!str ""', 'd: "\\xff"',
-                   'e: !<tag:yaml.org,2002:str> 5', 'f: !foo 3'), '/'),
+    (
+        'strings',
+        _p(
+            'a: "x\\0y"',
+            'b: ""',
+            'c: !!str ""',
+            'd: "\\xff"',
+            'e: !<tag:yaml.org,2002:str> 5',
+            'f: !foo 3',
+        ),
+        '/',
+    ),
     ('anchor_without_alias', _p('a: &x 1'), '/'),
     ('alias', _p('a: &x 1', 'b: *x'), '/'),
     ('no_value', _p('a:'), '/'),
@@ -602,10 +993,17 @@ CORPUS: list[tuple[str, str | bytes, str]] = [
     ('dedented_params', 'catenary_monitor:\n  ros__parameters:\n  a: 1\n', '/'),
     ('null_section', 'foo:\n', '/'),
     ('params_twice', _p('a: 2') + '  ros__parameters:\n    b: 1\n', '/'),
-    ('params_twice_in_ns', 'ns:\n  catenary_monitor:\n    ros__parameters:\n      a: 1\n'
-     '    ros__parameters:\n      b: 1\n', '/'),
-    ('stale_index_list', _p('a: 1', 'b: 2') + '---\ncatenary_monitor:\n  ros__parameters: [5]\n',
-     '/'),
+    (
+        'params_twice_in_ns',
+        'ns:\n  catenary_monitor:\n    ros__parameters:\n      a: 1\n'
+        '    ros__parameters:\n      b: 1\n',
+        '/',
+    ),
+    (
+        'stale_index_list',
+        _p('a: 1', 'b: 2') + '---\ncatenary_monitor:\n  ros__parameters: [5]\n',
+        '/',
+    ),
     ('only_params_key', 'ros__parameters: {}\n', '/'),
     ('digit_node', _sections(('1abc', 'a')), '/'),
     ('star_in_name', _sections(('cat*', 'a')), '/'),
@@ -621,8 +1019,11 @@ CORPUS: list[tuple[str, str | bytes, str]] = [
     ('ns_token_244', _sections((LONG_NS + '/catenary_monitor', 'a')), '/'),
     ('ns_token_245', _sections((LONG_NS + 'b/catenary_monitor', 'a')), '/'),
     ('nul_node', _sections(('"\\0x"', 'a')), '/'),
-    ('nul_section_without_params', '"\\0x": {}\ncatenary_monitor: {ros__parameters: {a: 1}}\n',
-     '/'),
+    (
+        'nul_section_without_params',
+        '"\\0x": {}\ncatenary_monitor: {ros__parameters: {a: 1}}\n',
+        '/',
+    ),
     ('yaml_error', _p('a: ['), '/'),
     ('yaml_error_indent', _p('a: 1') + '   b: 2\n', '/'),
     ('document_end_then_content', _p('a: 1') + '...\nb: 2\n', '/'),
@@ -692,10 +1093,18 @@ for path, namespace in json.loads(sys.argv[1]):
 
 def _run_rclpy(files: list[tuple[str, str]]) -> Results:
     """Run the real rcl + rclpy on each file in one child process: (libyaml version, results)."""
-    env = dict(os.environ, ROS_DOMAIN_ID=str(random.randint(100, 200)),
-               ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST')
-    proc = subprocess.run([sys.executable, '-c', RCLPY_SCRIPT, json.dumps(files)], env=env,
-                          capture_output=True, text=True, timeout=120)
+    env = dict(
+        os.environ,
+        ROS_DOMAIN_ID=str(random.randint(100, 200)),
+        ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST',
+    )
+    proc = subprocess.run(
+        [sys.executable, '-c', RCLPY_SCRIPT, json.dumps(files)],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     lines = [json.loads(line) for line in proc.stdout.splitlines() if line.startswith('{')]
     assert lines and proc.returncode == 0, proc.stderr[-3000:]
     return lines[0]['libyaml'], {r.pop('file'): r for r in lines[1:]}
@@ -735,8 +1144,9 @@ def test_corpus_agrees_with_rclpy(rclpy_results: Results, name: str, namespace: 
 
 
 @pytest.mark.parametrize('name, accepted_by_017', [(n, a) for n, _, a in DIVERGENT])
-def test_libyaml_divergences_are_refused(rclpy_results: Results, name: str,
-                                         accepted_by_017: bool) -> None:
+def test_libyaml_divergences_are_refused(
+    rclpy_results: Results, name: str, accepted_by_017: bool
+) -> None:
     version, results = rclpy_results
     path = next(p for p in results if Path(p).stem == name)
     assert 'error' in _ours(path, '/')

@@ -1,8 +1,10 @@
 """``catenary-monitor replay``: the command's contract, its outputs and damaged input.
 
 Logs are generated here (seeded), never downloaded. The command runs in-process through
-``catenary_monitor.cli.main.main`` except where its exit status or stderr must be seen from outside.
+``catenary_monitor.cli.main.main`` except where its exit status or stderr must be seen from
+outside.
 """
+
 import csv
 import json
 import math
@@ -19,8 +21,16 @@ from catenary_monitor.core.alarms import Level
 from catenary_monitor.core.batch import recompute
 
 ROOT = Path(__file__).resolve().parents[1]
-CONTRACT = ['time', 'line', 'top_tension', 'depth', 'min_anchor_distance', 'anchor_margin',
-            'uplift_force', 'level']
+CONTRACT = [
+    'time',
+    'line',
+    'top_tension',
+    'depth',
+    'min_anchor_distance',
+    'anchor_margin',
+    'uplift_force',
+    'level',
+]
 
 
 @pytest.fixture(scope='module')
@@ -42,9 +52,19 @@ def run_cli(*args, capsys=None):
 
 def test_csv_json_mcap_png(scene, capsys):
     tmp = scene['tmp']
-    code, out = run_cli(scene['log'], '--params-file', scene['params'], '--csv',
-                        tmp / 'out.csv', '--out', tmp / 'out.mcap', '--plot', tmp / 'chart.png',
-                        '--json', capsys=capsys)
+    code, out = run_cli(
+        scene['log'],
+        '--params-file',
+        scene['params'],
+        '--csv',
+        tmp / 'out.csv',
+        '--out',
+        tmp / 'out.mcap',
+        '--plot',
+        tmp / 'chart.png',
+        '--json',
+        capsys=capsys,
+    )
     assert code == 0, out.err
     summary = json.loads(out.out)
     ref = recompute(scene['config'], scene['tensions'], scene['depth'])
@@ -55,7 +75,8 @@ def test_csv_json_mcap_png(scene, capsys):
         s = summary['lines'][r.name]
         assert s['transitions'] == len(r.transitions)
         assert s['worst']['anchor_margin']['value'] == pytest.approx(
-            float(np.nanmin(r.values['anchor_margin'])))
+            float(np.nanmin(r.values['anchor_margin']))
+        )
         assert [e['start'] for e in s['episodes']] == [e['start'] for e in r.episodes(ref.end_ns)]
     storm = summary['lines']['line_02']
     assert storm['worst']['uplift_force']['value'] > 50e3
@@ -96,8 +117,9 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
 
     tmp = scene['tmp']
     out = tmp / 'results.mcap'
-    code, _ = run_cli(scene['log'], '--params-file', scene['params'], '--out', out, '--quiet',
-                      capsys=capsys)
+    code, _ = run_cli(
+        scene['log'], '--params-file', scene['params'], '--out', out, '--quiet', capsys=capsys
+    )
     assert code == 0
     ref = recompute(scene['config'], scene['tensions'], scene['depth'])
     with open(out, 'rb') as f:
@@ -111,11 +133,13 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
         outputs, diags = [], []
         for _, channel, message in reader.iter_messages(log_time_order=True):
             if channel.topic == '/catenary_monitor/line_02/outputs':
-                outputs.append((message.log_time,
-                                deserialize_message(message.data, Float64MultiArray)))
+                outputs.append(
+                    (message.log_time, deserialize_message(message.data, Float64MultiArray))
+                )
             elif channel.topic == '/diagnostics':
-                diags.append((message.log_time,
-                              deserialize_message(message.data, DiagnosticArray)))
+                diags.append(
+                    (message.log_time, deserialize_message(message.data, DiagnosticArray))
+                )
     r = ref.lines[1]
     assert [t for t, _ in outputs] == r.t_ns.tolist()
     fields = outputs[0][1].layout.dim[0].label.split(',')
@@ -125,9 +149,13 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
     np.testing.assert_array_equal(got[:, fields.index('uplift_force')], r.values['uplift_force'])
     assert len(diags) >= len(ref.tick_ns)
     names = [s.name for s in diags[-1][1].status]
-    assert names == ['catenary_monitor: line_01', 'catenary_monitor: line_02',
-                     'catenary_monitor: line_03', 'catenary_monitor: tide',
-                     'catenary_monitor: logger']
+    assert names == [
+        'catenary_monitor: line_01',
+        'catenary_monitor: line_02',
+        'catenary_monitor: line_03',
+        'catenary_monitor: tide',
+        'catenary_monitor: logger',
+    ]
     keys = {kv.key for kv in diags[-1][1].status[1].values}
     assert {'top_tension', 'uplift_force', 'anchor_margin', 'safety_factor'} <= keys
     # Replaying the results log: its recorded ticks are taken, levels are unchanged.
@@ -136,14 +164,23 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
     assert again['ticks']['source'] == 'recorded by the node'
     for r in ref.lines:
         assert again['lines'][r.name]['transitions'] == len(r.transitions)
-        assert [e['start'] for e in again['lines'][r.name]['episodes']] == \
-            [e['start'] for e in r.episodes()]
+        assert [e['start'] for e in again['lines'][r.name]['episodes']] == [
+            e['start'] for e in r.episodes()
+        ]
 
 
 def test_csv_all_columns_and_stdout_summary(scene, capsys):
     tmp = scene['tmp']
-    code, out = run_cli(scene['log'], '--params-file', scene['params'], '--csv', tmp / 'all.csv',
-                        '--csv-columns', 'all', capsys=capsys)
+    code, out = run_cli(
+        scene['log'],
+        '--params-file',
+        scene['params'],
+        '--csv',
+        tmp / 'all.csv',
+        '--csv-columns',
+        'all',
+        capsys=capsys,
+    )
     assert code == 0
     with open(tmp / 'all.csv', newline='') as f:
         header = next(csv.reader(f))
@@ -153,27 +190,54 @@ def test_csv_all_columns_and_stdout_summary(scene, capsys):
     assert 'inextensible catenary' in models and models <= {'none', 'inextensible catenary'}
     text = out.out
     assert 'line_02:' in text and 'worst anchor margin' in text and 'ERROR from' in text
-    code, out = run_cli(scene['log'], '--params-file', scene['params'], '--csv',
-                        tmp / 'x.csv', '--csv-columns', 'time,bogus', capsys=capsys)
+    code, out = run_cli(
+        scene['log'],
+        '--params-file',
+        scene['params'],
+        '--csv',
+        tmp / 'x.csv',
+        '--csv-columns',
+        'time,bogus',
+        capsys=capsys,
+    )
     assert code == 2 and "unknown column 'bogus'" in out.err
 
 
 def test_identity_through_the_command(scene, capsys, tmp_path):
     """Written by the node's own logger, replayed by the command: the CSV levels equal the
     levels the monitor core gives after each tension message, stepped one event at a time."""
-    log = write_log(tmp_path / 'node_like.mcap', scene['config'], scene['tensions'],
-                    scene['depth'], writer='logger')
-    code, _ = run_cli(log, '--params-file', scene['params'], '--csv', tmp_path / 'o.csv',
-                      '--csv-columns', 'time,line,status,level', capsys=capsys)
+    log = write_log(
+        tmp_path / 'node_like.mcap',
+        scene['config'],
+        scene['tensions'],
+        scene['depth'],
+        writer='logger',
+    )
+    code, _ = run_cli(
+        log,
+        '--params-file',
+        scene['params'],
+        '--csv',
+        tmp_path / 'o.csv',
+        '--csv-columns',
+        'time,line,status,level',
+        capsys=capsys,
+    )
     assert code == 0
     rep = recompute(scene['config'], scene['tensions'], scene['depth'])
-    _, steps = core_steps(scene['config'], scene['tensions'], scene['depth'], rep.tick_ns,
-                          rep.start_ns)
+    _, steps = core_steps(
+        scene['config'], scene['tensions'], scene['depth'], rep.tick_ns, rep.start_ns
+    )
     with open(tmp_path / 'o.csv', newline='') as f:
         rows = list(csv.DictReader(f))
     for k, line in enumerate(scene['config'].lines):
-        want = [Level(int(o.values[12])).name for s in steps if s.kind == 'tension'
-                for o in s.outputs if o.line == k]
+        want = [
+            Level(int(o.values[12])).name
+            for s in steps
+            if s.kind == 'tension'
+            for o in s.outputs
+            if o.line == k
+        ]
         assert [r['level'] for r in rows if r['line'] == line.name] == want
 
 
@@ -200,8 +264,14 @@ def test_rosbag2_style_and_rotated_set(scene, capsys, tmp_path):
 
 
 def _cut_log(scene, tmp_path):
-    log = write_log(tmp_path / 'killed.mcap', scene['config'], scene['tensions'],
-                    scene['depth'], writer='logger', chunk_size=8 * 1024)
+    log = write_log(
+        tmp_path / 'killed.mcap',
+        scene['config'],
+        scene['tensions'],
+        scene['depth'],
+        writer='logger',
+        chunk_size=8 * 1024,
+    )
     return log.read_bytes()
 
 
@@ -209,9 +279,16 @@ def _cut_log(scene, tmp_path):
 def test_truncated_log_uses_what_is_readable(scene, capsys, tmp_path, fraction):
     data = _cut_log(scene, tmp_path)
     cut = tmp_path / 'cut.mcap'
-    cut.write_bytes(data[:int(len(data) * fraction)])
-    code, out = run_cli(cut, '--params-file', scene['params'], '--json', '--csv',
-                        tmp_path / 'cut.csv', capsys=capsys)
+    cut.write_bytes(data[: int(len(data) * fraction)])
+    code, out = run_cli(
+        cut,
+        '--params-file',
+        scene['params'],
+        '--json',
+        '--csv',
+        tmp_path / 'cut.csv',
+        capsys=capsys,
+    )
     assert code == 0, out.err
     summary = json.loads(out.out)
     assert not summary['complete']
@@ -232,6 +309,7 @@ def test_corrupt_chunk_is_skipped_and_reported(scene, capsys, tmp_path):
     import io
 
     from mcap.reader import make_reader
+
     data = bytearray(_cut_log(scene, tmp_path))
     chunks = make_reader(io.BytesIO(bytes(data))).get_summary().chunk_indexes
     assert len(chunks) > 4
@@ -253,20 +331,29 @@ def test_corrupt_chunk_is_skipped_and_reported(scene, capsys, tmp_path):
 
 
 def _cli(*args):
-    return subprocess.run([sys.executable, '-m', 'catenary_monitor.cli', 'replay', *map(str, args)],
-                          cwd=ROOT, capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, '-m', 'catenary_monitor.cli', 'replay', *map(str, args)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
 
 
 def test_unexpected_topic_type_is_a_clear_error(scene, tmp_path):
     from mcap_ros2.writer import Writer
 
     from catenary_monitor.io.ros_schemas import message_definition
+
     path = tmp_path / 'wrong.mcap'
     with open(path, 'wb') as f:
         w = Writer(f)
-        schema = w.register_msgdef('std_msgs/msg/String', message_definition('std_msgs/msg/String'))
-        w.write_message('/mooring/line_01/tension', schema, {'data': '372 kN'}, log_time=1,
-                        publish_time=1)
+        schema = w.register_msgdef(
+            'std_msgs/msg/String', message_definition('std_msgs/msg/String')
+        )
+        w.write_message(
+            '/mooring/line_01/tension', schema, {'data': '372 kN'}, log_time=1, publish_time=1
+        )
         w.finish()
     p = _cli(path, '--params-file', scene['params'])
     assert p.returncode == 2
@@ -275,8 +362,9 @@ def test_unexpected_topic_type_is_a_clear_error(scene, tmp_path):
 
 
 def test_empty_log_and_bad_arguments(scene, tmp_path):
-    empty = write_log(tmp_path / 'empty.mcap', dock_config(1), {},
-                      (np.zeros(0, np.int64), np.zeros(0)))
+    empty = write_log(
+        tmp_path / 'empty.mcap', dock_config(1), {}, (np.zeros(0, np.int64), np.zeros(0))
+    )
     p = _cli(empty, '--params-file', scene['params'])
     assert p.returncode == 3 and 'empty log' in p.stderr and 'no messages' in p.stderr
     p = _cli(tmp_path / 'missing.mcap', '--params-file', scene['params'])
@@ -294,8 +382,9 @@ def test_empty_log_and_bad_arguments(scene, tmp_path):
 
 
 def test_progress_on_long_logs(scene, tmp_path):
-    p = _cli(scene['log'], '--params-file', scene['params'], '--progress', '--csv',
-             tmp_path / 'p.csv')
+    p = _cli(
+        scene['log'], '--params-file', scene['params'], '--progress', '--csv', tmp_path / 'p.csv'
+    )
     assert p.returncode == 0
     assert 'replay: reading' in p.stderr and 'replay: solving' in p.stderr
     assert 'replay: writing CSV 100%' in p.stderr
@@ -305,19 +394,24 @@ def test_progress_on_long_logs(scene, tmp_path):
 
 def test_offline_replay_imports_without_rclpy():
     """Offline replay needs no ROS: its modules import with rclpy unavailable."""
-    code = ('import sys; sys.modules["rclpy"] = None\n'
-            'import catenary_monitor.core.batch, catenary_monitor.cli.replay, '
-            'catenary_monitor.cli.replay_output, catenary_monitor.io.fastcsv, catenary_monitor.io.cdr, '
-            'catenary_monitor.io.mcap_fast, catenary_monitor_study.bench_replay\n'
-            'from catenary_monitor.cli.main import build_parser; build_parser()\n')
-    p = subprocess.run([sys.executable, '-c', code], cwd=ROOT, capture_output=True, text=True,
-                       timeout=60)
+    code = (
+        'import sys; sys.modules["rclpy"] = None\n'
+        'import catenary_monitor.core.batch, catenary_monitor.cli.replay, '
+        'catenary_monitor.cli.replay_output, catenary_monitor.io.fastcsv, '
+        'catenary_monitor.io.cdr, '
+        'catenary_monitor.io.mcap_fast, catenary_monitor_study.bench_replay\n'
+        'from catenary_monitor.cli.main import build_parser; build_parser()\n'
+    )
+    p = subprocess.run(
+        [sys.executable, '-c', code], cwd=ROOT, capture_output=True, text=True, timeout=60
+    )
     assert p.returncode == 0, p.stderr
 
 
 def test_topic_names_resolve_like_the_node(tmp_path):
     from catenary_monitor.core.config import resolve_topic
     from catenary_monitor.ros.playback import float64_topics
+
     assert resolve_topic('/tide/depth') == '/tide/depth'
     assert resolve_topic('mooring/a/tension') == '/mooring/a/tension'
     assert resolve_topic('~/a/tension') == '/catenary_monitor/a/tension'
@@ -335,9 +429,23 @@ def test_topic_names_resolve_like_the_node(tmp_path):
 
 def test_bench_replay_command_runs():
     """Smoke test of the benchmark command (not a timing test: the figures are not checked)."""
-    p = subprocess.run([sys.executable, '-m', 'catenary_monitor.cli', 'bench-replay',
-                        '--messages', '20000', '--baseline-messages', '300', '--json'],
-                       cwd=ROOT, capture_output=True, text=True, timeout=120)
+    p = subprocess.run(
+        [
+            sys.executable,
+            '-m',
+            'catenary_monitor.cli',
+            'bench-replay',
+            '--messages',
+            '20000',
+            '--baseline-messages',
+            '300',
+            '--json',
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert p.returncode == 0, p.stderr
     r = json.loads(p.stdout)
     assert r['messages'] == 20000 and r['csv_rows'] > 19000 and r['transitions'] > 0
@@ -345,11 +453,13 @@ def test_bench_replay_command_runs():
 
 
 def test_ticks_option(scene, capsys):
-    code, out = run_cli(scene['log'], '--params-file', scene['params'], '--ticks', 'log',
-                        capsys=capsys)
+    code, out = run_cli(
+        scene['log'], '--params-file', scene['params'], '--ticks', 'log', capsys=capsys
+    )
     assert code == 2 and 'no catenary_monitor events channel' in out.err
-    code, out = run_cli(scene['log'], '--params-file', scene['params'], '--ticks', 'grid',
-                        '--json', capsys=capsys)
+    code, out = run_cli(
+        scene['log'], '--params-file', scene['params'], '--ticks', 'grid', '--json', capsys=capsys
+    )
     assert code == 0 and json.loads(out.out)['ticks']['source'] == 'synthetic grid'
 
 
@@ -357,8 +467,10 @@ def test_parameters_recorded_in_the_log(scene, capsys, tmp_path):
     """Without --params-file, replay takes the parameters the log recorded (the node's
     metadata record); with one, the summary says whether they differ from the recorded."""
     results = tmp_path / 'results.mcap'
-    assert run_cli(scene['log'], '--params-file', scene['params'], '--out', results,
-                   capsys=capsys)[0] == 0
+    assert (
+        run_cli(scene['log'], '--params-file', scene['params'], '--out', results, capsys=capsys)[0]
+        == 0
+    )
     code, out = run_cli(results, '--json', capsys=capsys)
     assert code == 0, out.err
     par = json.loads(out.out)['parameters']
@@ -370,10 +482,15 @@ def test_parameters_recorded_in_the_log(scene, capsys, tmp_path):
     from catenary_monitor.cli.replay import log_parameters
     from catenary_monitor.core.config import config_hash, config_to_params
     from catenary_monitor.io.mcap_log import McapLogger
+
     log = McapLogger(tmp_path / 'node', fsync=False)
-    log.add_metadata('catenary_monitor', {
-        'config_hash': config_hash(scene['config']),
-        'parameters': json.dumps(config_to_params(scene['config']))})
+    log.add_metadata(
+        'catenary_monitor',
+        {
+            'config_hash': config_hash(scene['config']),
+            'parameters': json.dumps(config_to_params(scene['config'])),
+        },
+    )
     log.register('/tide/depth', 'std_msgs/msg/Float64')
     log.write('/tide/depth', b'\x00\x01\x00\x00' + bytes(8), 1)
     log.flush()

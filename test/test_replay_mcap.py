@@ -1,13 +1,20 @@
 """Replay's writers: numpy CDR against rclpy's serializer, the column MCAP writer against the
 mcap library's reader (CRCs, indexes, summary) and the project's own reader."""
+
 import functools
 
 import numpy as np
 import pytest
 
 from catenary_monitor.core.batch import OUTPUT_FIELDS
-from catenary_monitor.io.cdr import (diagnostic_array, diagnostic_array_parts, float64_payloads,
-                                     key_values, multiarray_payloads, status_header)
+from catenary_monitor.io.cdr import (
+    diagnostic_array,
+    diagnostic_array_parts,
+    float64_payloads,
+    key_values,
+    multiarray_payloads,
+    status_header,
+)
 from catenary_monitor.io.mcap_fast import ColumnWriter
 from catenary_monitor.io.mcap_read import read_float64_topics
 from catenary_monitor.io.ros_schemas import message_definition
@@ -29,22 +36,44 @@ def test_cdr_equals_rclpy():
         msg.layout.dim = [MultiArrayDimension(label=label, size=len(row), stride=len(row))]
         assert deserialize_message(bytes(payload), Float64MultiArray) == msg
         assert len(payload) == len(serialize_message(msg))
-    statuses = [(2, 'catenary_monitor: line_01', 'anchor uplift 193.3 kN > allowed 0.0 kN',
-                 '/mooring/line_01/tension', [('top_tension', '1623500.0'), ('depth', 'nan')]),
-                (0, 'catenary_monitor: l2', 'OK', 'hw', []),
-                (3, 'x', 'tension stale: é', '', [('a', 'b'), ('abcdef', '1')])]
+    statuses = [
+        (
+            2,
+            'catenary_monitor: line_01',
+            'anchor uplift 193.3 kN > allowed 0.0 kN',
+            '/mooring/line_01/tension',
+            [('top_tension', '1623500.0'), ('depth', 'nan')],
+        ),
+        (0, 'catenary_monitor: l2', 'OK', 'hw', []),
+        (3, 'x', 'tension stale: é', '', [('a', 'b'), ('abcdef', '1')]),
+    ]
     raw = diagnostic_array(1_763_900_000_123_456_789, statuses)
-    parts = diagnostic_array_parts(1_763_900_000_123_456_789, [
-        (functools.partial(status_header, lv, n, m, h, len(kv)), key_values(kv))
-        for lv, n, m, h, kv in statuses])
+    parts = diagnostic_array_parts(
+        1_763_900_000_123_456_789,
+        [
+            (functools.partial(status_header, lv, n, m, h, len(kv)), key_values(kv))
+            for lv, n, m, h, kv in statuses
+        ],
+    )
     assert raw == parts
     msg = deserialize_message(raw, DiagnosticArray)
     assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == (1_763_900_000, 123_456_789)
-    assert [(s.level[0], s.name, s.message, s.hardware_id,
-             [(kv.key, kv.value) for kv in s.values]) for s in msg.status] == statuses
-    ref = DiagnosticArray(status=[DiagnosticStatus(
-        level=bytes([lv]), name=n, message=m, hardware_id=h,
-        values=[KeyValue(key=k, value=v) for k, v in kv]) for lv, n, m, h, kv in statuses])
+    assert [
+        (s.level[0], s.name, s.message, s.hardware_id, [(kv.key, kv.value) for kv in s.values])
+        for s in msg.status
+    ] == statuses
+    ref = DiagnosticArray(
+        status=[
+            DiagnosticStatus(
+                level=bytes([lv]),
+                name=n,
+                message=m,
+                hardware_id=h,
+                values=[KeyValue(key=k, value=v) for k, v in kv],
+            )
+            for lv, n, m, h, kv in statuses
+        ]
+    )
     ref.header.stamp.sec, ref.header.stamp.nanosec = 1_763_900_000, 123_456_789
     # rclpy leaves garbage in padding bytes: compare messages, and sizes.
     assert msg == ref and len(raw) == len(serialize_message(ref))
@@ -63,10 +92,13 @@ def test_column_writer_reads_back(compression, tmp_path):
     which = rng.integers(0, 3, n)
     with open(path, 'wb') as f:
         w = ColumnWriter(f, compression=compression, chunk_bytes=64 * 1024)
-        sid = w.register_schema('std_msgs/msg/Float64', 'ros2msg',
-                                message_definition('std_msgs/msg/Float64').encode())
-        ids = [w.register_channel(f'/t{k}', 'cdr', sid, {'offered_qos_profiles': ''})
-               for k in range(3)]
+        sid = w.register_schema(
+            'std_msgs/msg/Float64', 'ros2msg', message_definition('std_msgs/msg/Float64').encode()
+        )
+        ids = [
+            w.register_channel(f'/t{k}', 'cdr', sid, {'offered_qos_profiles': ''})
+            for k in range(3)
+        ]
         w.add_metadata('catenary_monitor', {'version': 'test'})
         w.write_columns(np.array(ids)[which], t, float64_payloads(v))
         w.finish()
@@ -76,8 +108,10 @@ def test_column_writer_reads_back(compression, tmp_path):
         assert summary.statistics.message_count == n
         assert len(summary.chunk_indexes) > 5
         assert [m.name for m in reader.iter_metadata()] == ['catenary_monitor']
-        got = [(c.topic, m.log_time, d.data)
-               for _, c, m, d in reader.iter_decoded_messages(log_time_order=True)]
+        got = [
+            (c.topic, m.log_time, d.data)
+            for _, c, m, d in reader.iter_decoded_messages(log_time_order=True)
+        ]
     order = np.argsort(t, kind='stable')
     assert [g[1] for g in got] == t[order].tolist()
     assert sorted(g[2] for g in got) == sorted(v.tolist())

@@ -1,17 +1,22 @@
-"""Replay of a log written by the real live node gives the node's own alarm levels.
+"""Replay of a log written by the real live node gives, step for step, what the node did.
 
-The monitor runs as its own process (``python -m catenary_monitor.ros.node --ros-args --params-file
-F``); this process publishes tension and depth with rclpy (a storm that lifts line_02's anchor,
-a tension dropout and a NaN on line_01, tension before the first depth; line_03 is an elastic
-chain, ``ea`` set), then stops the node with SIGTERM and replays its MCAP log. Compared with what
-the node logged itself:
+The monitor runs as its own process on a params file; this process publishes tension and depth
+with rclpy: tension before the first depth (a late first depth), a storm that lifts line_02's
+anchor, a tension dropout and a NaN on line_01, a depth dropout longer than ``depth_timeout``,
+and line_03 an elastic chain (``ea`` set). The node is stopped with SIGTERM and its MCAP log is
+replayed with the same params file. Compared with what the node logged itself:
 
-* every output message (``/catenary_monitor/NAME/outputs``): same update times, solver status,
-  alarm level after the update, and values to rounding;
-* every ``/diagnostics`` message: each line's level equals replay's level at that time.
+* every output message (``/catenary_monitor/NAME/outputs``): same times, solver status and
+  level, values to 1e-12;
+* every ``/diagnostics`` message: the same stamps, and for every line and the tide the same
+  level, message and values (numbers to 1e-12);
+* every alarm transition the node printed, with its message.
+
+The params files are written in the forms rcl accepts and PyYAML reads differently (``5.17e6``,
+``1e6``, integers for doubles, the ``/**`` key, dotted and nested names): the node and replay
+must read the same configuration from them (same configuration hash).
 """
-import csv
-import io
+
 import os
 import re
 import signal
@@ -22,155 +27,249 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from replay_data import params_yaml
 
-from catenary_monitor.cli.replay import run_replay
-from catenary_monitor.cli.replay_output import write_csv
-from catenary_monitor.core.alarms import Level
-from catenary_monitor.core.batch import VALUE_FIELDS
-from catenary_monitor.core.config import AlarmConfig, LineConfig, MonitorConfig
+from catenary_monitor.cli.replay import load_config, log_parameters, run_replay
+from catenary_monitor.core.config import config_hash
+from catenary_monitor.core.monitor import OUTPUT_FIELDS, VALUE_FIELDS
 from catenary_monitor.io.mcap_read import iter_messages
 
 ROOT = Path(__file__).resolve().parents[1]
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
+#: Two params files for the same monitor, in the forms rcl reads its own way.
+PARAMS = {
+    'wildcard_key_and_rcl_scalars': '''\
+/**:
+  ros__parameters:
+    lines: [line_01, line_02, line_03]
+    log_dir: "{log_dir}"
+    tension_timeout: 8e-1
+    depth_timeout: 3
+    clear_hold: 1
+    warn_clear_hold: 1.
+    diagnostic_rate: 4
+    line_01: {{weight: 1300, anchor_distance: 120, mbl: 4.827e6}}
+    line_02.weight: 13e2
+    line_02.anchor_distance: 121.06
+    line_02.mbl: 4827000
+    line_02.allowed_uplift: 2e4
+    line_03:
+      weight: 1.3e3
+      anchor_distance: 121.06
+      mbl: 4.827E6
+      allowed_uplift: 20000
+      ea: 6.6e8
+''',
+    'node_key_and_plain_floats': '''\
+catenary_monitor:
+  ros__parameters:
+    lines: ["line_01", "line_02", "line_03"]
+    log_dir: {log_dir}
+    tension_timeout: 0.8
+    depth_timeout: 3.0
+    clear_hold: 1.0
+    warn_clear_hold: 1.0
+    diagnostic_rate: 4.0
+    line_01:
+      weight: 1300.0
+      anchor_distance: 120.0
+      mbl: 4827000.0
+    line_02:
+      weight: 1300.0
+      anchor_distance: 121.06
+      mbl: 4827000.0
+      allowed_uplift: 20000.0
+    line_03:
+      weight: 1300.0
+      anchor_distance: 121.06
+      mbl: 4827000.0
+      allowed_uplift: 20000.0
+      ea: 660000000.0
+''',
+}
 
-def test_replay_of_a_live_node_log_matches_the_node(tmp_path):
+
+def _publish_scenario(pubs, depth_pub):
+    """About 9 s of inputs: see the module docstring."""
+    from std_msgs.msg import Float64
+
+    rng = np.random.default_rng(5)
+    start = time.monotonic()
+    k = 0
+    while (now := time.monotonic() - start) < 9.0:
+        storm = 1.3e6 * max(0.0, 1.0 - abs(now - 4.0) / 1.5)
+        wave = 40e3 * np.sin(2 * np.pi * now / 1.3)
+        if not 4.5 < now < 6.0:
+            value = float('nan') if k == 30 else 372e3 + wave + rng.normal(0, 3e3)
+            pubs['line_01'].publish(Float64(data=value))
+        pubs['line_02'].publish(Float64(data=372e3 + storm - wave))
+        pubs['line_03'].publish(Float64(data=372e3 + 0.9 * storm + wave))
+        # First depth at 1.2 s; none from 5 to 8.6 s (longer than depth_timeout 3 s).
+        if now > 1.2 and not 5.0 < now < 8.6 and k % 10 == 0:
+            depth_pub.publish(Float64(data=20.85 + 0.3 * np.sin(now / 3)))
+        k += 1
+        time.sleep(0.05)
+
+
+def _run_node(params: Path, out_path: Path) -> tuple[int, str]:
     import rclpy
-    from diagnostic_msgs.msg import DiagnosticArray
     from rclpy.qos import QoSProfile
-    from rclpy.serialization import deserialize_message
-    from std_msgs.msg import Float64, Float64MultiArray
+    from std_msgs.msg import Float64
 
-    log_dir = tmp_path / 'logs'
-    config = MonitorConfig(
-        lines=(LineConfig('line_01', 1300.0, 120.0, 4827000.0),
-               LineConfig('line_02', 1300.0, 121.06, 4827000.0, allowed_uplift=20e3),
-               LineConfig('line_03', 1300.0, 121.06, 4827000.0, allowed_uplift=20e3, ea=6.6e8)),
-        log_dir=str(log_dir),
-        alarm=AlarmConfig(tension_timeout=0.8, depth_timeout=3.0, clear_hold=1.0,
-                          warn_clear_hold=1.0, diagnostic_rate=4.0))
-    params = params_yaml(config, tmp_path / 'params.yaml')
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-        p for p in (str(ROOT), os.environ.get('PYTHONPATH')) if p), PYTHONUNBUFFERED='1')
-    out = open(tmp_path / 'node.out', 'w+')
-    node_proc = subprocess.Popen(
-        [sys.executable, '-m', 'catenary_monitor.ros.node', '--ros-args', '--params-file',
-         str(params)], env=env, stdout=out, stderr=subprocess.STDOUT)
+    env = dict(
+        os.environ,
+        PYTHONPATH=os.pathsep.join(p for p in (str(ROOT), os.environ.get('PYTHONPATH')) if p),
+        PYTHONUNBUFFERED='1',
+    )
+    out = open(out_path, 'w+')
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            '-m',
+            'catenary_monitor.ros.node',
+            '--ros-args',
+            '--params-file',
+            str(params),
+        ],
+        env=env,
+        stdout=out,
+        stderr=subprocess.STDOUT,
+    )
     try:
         if not rclpy.ok():
             rclpy.init()
         client = rclpy.create_node('replay_node_test')
         qos = QoSProfile(depth=10)
-        pubs = {name: client.create_publisher(Float64, f'/mooring/{name}/tension', qos)
-                for name in ('line_01', 'line_02', 'line_03')}
+        pubs = {
+            name: client.create_publisher(Float64, f'/mooring/{name}/tension', qos)
+            for name in ('line_01', 'line_02', 'line_03')
+        }
         depth_pub = client.create_publisher(Float64, '/tide/depth', qos)
-        deadline = time.monotonic() + 30.0
-        while time.monotonic() < deadline and not (
+        deadline = time.monotonic() + 60.0
+        while (
+            time.monotonic() < deadline
+            and proc.poll() is None
+            and not (
                 all(p.get_subscription_count() for p in pubs.values())
-                and depth_pub.get_subscription_count()):
+                and depth_pub.get_subscription_count()
+            )
+        ):
             time.sleep(0.05)
-        assert node_proc.poll() is None, Path(out.name).read_text()
-        assert depth_pub.get_subscription_count(), 'the node did not subscribe in 30 s'
-        rng = np.random.default_rng(5)
-        start = time.monotonic()
-        k = 0
-        while (now := time.monotonic() - start) < 8.0:
-            # line_02: storm 2-5 s, lifts the anchor; line_01: silent 4-5.5 s, one NaN.
-            storm = 1.3e6 * max(0.0, 1.0 - abs(now - 3.5) / 1.5)
-            wave = 40e3 * np.sin(2 * np.pi * now / 1.3)
-            if not 4.0 < now < 5.5:
-                value = float('nan') if k == 30 else 372e3 + wave + rng.normal(0, 3e3)
-                pubs['line_01'].publish(Float64(data=value))
-            pubs['line_02'].publish(Float64(data=372e3 + storm - wave))
-            pubs['line_03'].publish(Float64(data=372e3 + 0.9 * storm + wave))
-            if now > 0.5 and k % 10 == 0:
-                depth_pub.publish(Float64(data=20.85 + 0.3 * np.sin(now / 3)))
-            k += 1
-            time.sleep(0.05)
+        assert proc.poll() is None, out_path.read_text()
+        assert depth_pub.get_subscription_count(), 'the node did not subscribe in 60 s'
+        _publish_scenario(pubs, depth_pub)
         time.sleep(1.0)
         client.destroy_node()
     finally:
-        if node_proc.poll() is None:
-            node_proc.send_signal(signal.SIGTERM)
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
         try:
-            code = node_proc.wait(20)
+            code = proc.wait(30)
         except subprocess.TimeoutExpired:
-            node_proc.kill()
-            node_proc.wait(5)
-            raise AssertionError('the node did not stop within 20 s of SIGTERM')
-    assert code == 0, Path(out.name).read_text()
-    files = sorted(log_dir.glob('*.mcap'))
-    assert files, Path(out.name).read_text()
+            proc.kill()
+            proc.wait(5)
+            raise AssertionError('the node did not stop within 30 s of SIGTERM')
+    return code, out_path.read_text()
 
-    result, tensions, depth, report, _ = run_replay(files, config)
+
+def _assert_values_equal(got, want, what):
+    np.testing.assert_allclose(
+        np.asarray(got, float),
+        np.asarray(want, float),
+        rtol=1e-12,
+        atol=1e-6,
+        equal_nan=True,
+        err_msg=what,
+    )
+
+
+def _assert_status_equal(node_status, replay_status, what):
+    assert node_status.name == replay_status.name, what
+    assert node_status.level[0] == int(replay_status.level), (
+        what,
+        node_status.message,
+        replay_status.message,
+    )
+    assert node_status.message == replay_status.message, what
+    if node_status.name.endswith(': logger'):
+        return  # its counters are the node's own
+    got = {kv.key: kv.value for kv in node_status.values}
+    want = dict(replay_status.values)
+    assert list(got) == list(want), what
+    for key, value in want.items():
+        if key == 'model':
+            assert got[key] == value, what
+        else:
+            _assert_values_equal(float(got[key]), float(value), f'{what} {key}')
+
+
+@pytest.mark.parametrize('form', sorted(PARAMS))
+def test_replay_of_a_live_node_log_redoes_every_step(tmp_path, form):
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.serialization import deserialize_message
+    from std_msgs.msg import Float64MultiArray
+
+    log_dir = tmp_path / 'logs'
+    params = tmp_path / 'params.yaml'
+    params.write_text(PARAMS[form].format(log_dir=log_dir))
+    config = load_config(str(params))  # replay's reading of the file
+    assert config.line('line_03').ea == 6.6e8 and config.alarm.depth_timeout == 3.0
+    code, text = _run_node(params, tmp_path / 'node.out')
+    assert code == 0, text
+    files = sorted(log_dir.glob('*.mcap'))
+    assert files, text
+    # The node read the same configuration from the file (its recorded hash).
+    recorded = log_parameters(files)
+    assert recorded is not None and recorded[0] == config_hash(config)
+
+    result, tensions, _, report, _ = run_replay(files, config, ticks='log', snapshots=True)
     assert report.complete and result.ticks_from_log
-    assert sum(len(t) for t, _ in tensions.values()) > 150
+    assert sum(len(t) for t, _ in tensions.values()) > 300
     levels_seen = set()
     for r in result.lines:
-        logged = [(m.log_time_ns, deserialize_message(m.data, Float64MultiArray))
-                  for m in iter_messages(files, [f'/catenary_monitor/{r.name}/outputs'])]
-        fields = logged[0][1].layout.dim[0].label.split(',')
+        logged = [
+            (m.log_time_ns, deserialize_message(m.data, Float64MultiArray))
+            for m in iter_messages(files, [f'/catenary_monitor/{r.name}/outputs'])
+        ]
+        assert logged[0][1].layout.dim[0].label.split(',') == list(OUTPUT_FIELDS)
         data = np.array([m.data for _, m in logged])
         assert [t for t, _ in logged] == r.t_ns.tolist(), r.name
-        np.testing.assert_array_equal(data[:, fields.index('status')], r.status)
-        np.testing.assert_array_equal(data[:, fields.index('level')], r.level, err_msg=r.name)
-        for key in VALUE_FIELDS:
-            np.testing.assert_allclose(data[:, fields.index(key)], r.values[key], rtol=1e-12,
-                                       atol=1e-6, err_msg=f'{r.name} {key}')
-        levels_seen |= set(r.level.tolist())
-    # Every /diagnostics message: each line's level is replay's level at that time.
-    steps = {}
-    for r in result.lines:
-        t = np.concatenate((r.t_ns, r.tick_ns))
-        lv = np.concatenate((r.level, r.tick_level))
-        order = np.argsort(t, kind='stable')
-        steps[r.name] = (t[order], lv[order])
-    n_diag = 0
-    models = {name: set() for name in steps}
-    for m in iter_messages(files, ['/diagnostics']):
-        msg = deserialize_message(m.data, DiagnosticArray)
-        for status in msg.status:
-            name = status.name.split(': ')[-1]
-            if name not in steps:
-                continue
-            models[name] |= {kv.value for kv in status.values if kv.key == 'model'}
-            t, lv = steps[name]
-            i = np.searchsorted(t, m.log_time_ns, 'right') - 1
-            want = int(lv[i]) if i >= 0 else int(Level.OK)
-            assert status.level[0] == want, (name, m.log_time_ns)
-            n_diag += 1
-    assert n_diag > 40
-    # The elastic line says which model its results used; the others stay inextensible.
-    assert models['line_03'] - {'none'} == {'elastic catenary'}  # none: before the first depth
-    assert models['line_01'] - {'none'} == models['line_02'] - {'none'} == {'inextensible catenary'}
-    # Replay's CSV says the same, row by row.
-    buf = io.BytesIO()
-    write_csv(buf, result, columns=('time', 'line', 'model'))
-    rows = list(csv.reader(io.StringIO(buf.getvalue().decode())))[1:]
-    csv_models = {name: {m for _, n, m in rows if n == name} for name in models}
-    assert csv_models['line_03'] - {'none'} == {'elastic catenary'}
-    assert csv_models['line_01'] - {'none'} == {'inextensible catenary'}
-    assert {int(Level.ERROR), int(Level.STALE)} <= levels_seen
-    # The node's own transition log lines: same sequence of levels per line, and the same
-    # message for every transition made by an update (a periodic step's message may show an
-    # age rounded differently: replay steps at the log time of the node's /diagnostics).
-    text = Path(out.name).read_text()
-    for r in result.lines:
-        said = re.findall(rf'ALARM {r.name}: (\w+) -> (\w+): (.*?)(?: \(after [\d.]+ s\))?$',
-                          text, re.M)
-        assert [(old, new) for old, new, _ in said] == \
-            [(tr.old.name, tr.new.name) for tr in r.transitions], r.name
-        updates = set((r.t_ns * 1e-9).tolist())
-        for (_, _, message), tr in zip(said, r.transitions):
-            if tr.time in updates:
-                assert message == tr.message, r.name
+        assert data[:, 11].tolist() == r.status.tolist(), r.name
+        assert data[:, 12].tolist() == r.level.tolist(), r.name
+        for j, key in enumerate(VALUE_FIELDS):
+            _assert_values_equal(data[:, j], r.values[key], f'{r.name} {key}')
+        levels_seen |= set(r.step_level.tolist())
+    # Every /diagnostics array: the same stamps, the same statuses, one array per stamp.
+    arrays = [
+        (m.log_time_ns, deserialize_message(m.data, DiagnosticArray))
+        for m in iter_messages(files, ['/diagnostics'])
+    ]
+    assert [t for t, _ in arrays] == [s.stamp_ns for s in result.snapshots]
+    assert len({t for t, _ in arrays}) == len(arrays)
+    for (stamp, array), snap in zip(arrays, result.snapshots):
+        assert len(array.status) == len(snap.statuses)
+        for got, want in zip(array.status, snap.statuses):
+            _assert_status_equal(got, want, f'{stamp} {got.name}')
+    # The scenario reached what it was written for.
+    assert {0, 2, 3} <= levels_seen  # OK, ERROR (uplift, NaN), STALE (dropouts, start)
+    tide = [(tr.old.name, tr.new.name) for tr in result.tide]
+    assert tide[0] == ('STALE', 'OK') and ('OK', 'STALE') in tide
+    models = {r.name: set(r.model_codes.tolist()) for r in result.lines}
+    assert 2 in models['line_03'] and 2 not in models['line_01']
+    # The node's own transition lines: the same sequence, with the same messages.
+    said = re.findall(r'ALARM (\w+): (\w+) -> (\w+): (.*?)(?: \(after [\d.]+ s\))?$', text, re.M)
+    want = [
+        (c.component, c.transition.old.name, c.transition.new.name, c.transition.message)
+        for c in result.changes()
+    ]
+    assert sorted(said) == sorted(want)
 
 
 def test_output_layout_is_the_nodes():
-    """Replay writes the node's per-line output layout (recompute.OUTPUT_FIELDS)."""
-    from catenary_monitor.cli.replay_output import NODE_NAME, output_topic
-    from catenary_monitor.core.batch import OUTPUT_FIELDS
+    """The node publishes the core's layout; replay writes it too."""
+    from catenary_monitor.cli.replay_output import output_topic
+    from catenary_monitor.core import monitor
     from catenary_monitor.ros import node
-    assert node.OUTPUT_FIELDS == OUTPUT_FIELDS
-    assert node.NODE_NAME == NODE_NAME and output_topic('l1') == f'/{node.NODE_NAME}/l1/outputs'
+
+    assert node.OUTPUT_FIELDS is monitor.OUTPUT_FIELDS
+    assert output_topic('l1') == f'/{monitor.NODE_NAME}/l1/outputs'

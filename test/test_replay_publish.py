@@ -4,6 +4,7 @@ The player runs as its own process (``catenary-monitor replay LOG --publish``); 
 subscribes to the input topics and checks that every message arrives, in order, with its
 recorded value and the recorded timing divided by ``--rate``.
 """
+
 import os
 import signal
 import subprocess
@@ -29,8 +30,9 @@ def test_publish_plays_the_recorded_inputs(tmp_path):
     from std_msgs.msg import Float64
 
     config = dock_config(2)
-    tensions, depth = generate(config, seconds=6.0, rate=10.0, depth_rate=2.0, seed=21,
-                               dropouts=False)
+    tensions, depth = generate(
+        config, seconds=6.0, rate=10.0, depth_rate=2.0, seed=21, dropouts=False
+    )
     log = write_log(tmp_path / 'play.mcap', config, tensions, depth)
     params = params_yaml(config, tmp_path / 'params.yaml')
     topics = {line.tension_topic: tensions[line.name] for line in config.lines}
@@ -48,18 +50,38 @@ def test_publish_plays_the_recorded_inputs(tmp_path):
             got[topic].append((time.monotonic(), msg.data))
 
     for topic in topics:
-        node.create_subscription(Float64, topic, lambda m, t=topic: on(t, m),
-                                 QoSProfile(depth=200))
+        node.create_subscription(
+            Float64, topic, lambda m, t=topic: on(t, m), QoSProfile(depth=200)
+        )
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     spin = threading.Thread(target=executor.spin, daemon=True)
     spin.start()
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(
-        p for p in (str(ROOT), os.environ.get('PYTHONPATH')) if p))
+    env = dict(
+        os.environ,
+        PYTHONPATH=os.pathsep.join(p for p in (str(ROOT), os.environ.get('PYTHONPATH')) if p),
+    )
     proc = subprocess.Popen(
-        [sys.executable, '-m', 'catenary_monitor.cli', 'replay', str(log), '--publish',
-         '--params-file', str(params), '--rate', str(rate), '--wait-subscribers', '20'],
-        cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        [
+            sys.executable,
+            '-m',
+            'catenary_monitor.cli',
+            'replay',
+            str(log),
+            '--publish',
+            '--params-file',
+            str(params),
+            '--rate',
+            str(rate),
+            '--wait-subscribers',
+            '20',
+        ],
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         _, err = proc.communicate(timeout=60)
     finally:
@@ -74,9 +96,26 @@ def test_publish_plays_the_recorded_inputs(tmp_path):
     with lock:
         got.clear()
     looping = subprocess.Popen(
-        [sys.executable, '-m', 'catenary_monitor.cli', 'replay', str(log), '--publish',
-         '--rate', '20', '--loop', '--wait-subscribers', '20', '--quiet'],
-        cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        [
+            sys.executable,
+            '-m',
+            'catenary_monitor.cli',
+            'replay',
+            str(log),
+            '--publish',
+            '--rate',
+            '20',
+            '--loop',
+            '--wait-subscribers',
+            '20',
+            '--quiet',
+        ],
+        cwd=ROOT,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     try:
         deadline = time.monotonic() + 30.0
         depth_topic = config.depth_topic
@@ -96,7 +135,7 @@ def test_publish_plays_the_recorded_inputs(tmp_path):
     played = [v for _, v in got[config.depth_topic]]
     n_depth = len(depth[0])
     assert len(played) >= 2 * n_depth
-    assert played[n_depth:2 * n_depth] == played[:n_depth] == depth[1].tolist()
+    assert played[n_depth : 2 * n_depth] == played[:n_depth] == depth[1].tolist()
     for topic, (t_ns, values) in topics.items():
         arrived = first[topic]
         assert [v for _, v in arrived] == values.tolist(), topic

@@ -4,6 +4,7 @@ g is taken as 10 as in the paper: 0.0517 t/m -> 517 N/m, 0.13 t/m -> 1300 N/m.
 Printed values carry ~5 significant digits (the paper's search tolerance), so a printed value is
 matched to its last printed digit; the errata check the exact value and the printed one's offset.
 """
+
 import math
 
 import pytest
@@ -16,7 +17,7 @@ DOCK_W, DOCK_H = 1300.0, 20.85
 def printed(value: float, text: str) -> bool:
     """True when value rounds to the printed decimal string (within one unit of its last digit)."""
     digits = len(text.split('.')[1]) if '.' in text else 0
-    return abs(value - float(text)) <= 10.0 ** -digits
+    return abs(value - float(text)) <= 10.0**-digits
 
 
 def test_table1_matches_r_8963():
@@ -65,14 +66,15 @@ def test_table3_typhoon_line11():
 
 
 def test_erratum_table3_top_angle():
-    """beta is printed 15.5595 deg in most rows; the exact value is 12.559 deg (one row: 12.5597)."""
+    """beta is printed 15.5595 deg in most rows; exactly it is 12.559 deg (one row: 12.5597)."""
     r = solve(DOCK_W, DOCK_H, horizontal=1584.6e3, anchor_distance=121.06)
     assert printed(r.top_angle_deg, '12.559')
     assert abs((15.5595 - r.top_angle_deg) - 3.0) < 1e-3  # a leading digit off by 3
 
 
 def test_erratum_table3_search_stopped_short():
-    """The paper's stepping search stopped ~1e-5 short: exact alpha, F and T differ in the last digits."""
+    """The paper's stepping search stopped ~1e-5 short: exact alpha, F and T differ in the last
+    digits."""
     r = solve(DOCK_W, DOCK_H, horizontal=1584.6e3, anchor_distance=121.06)
     assert printed(r.anchor_angle_deg, '6.95347')
     assert printed(r.uplift_force / 1e3, '193.258')
@@ -106,10 +108,15 @@ def test_erratum_equation2_printed_cot():
     assert math.isclose(r.suspended_length, a * math.sinh(x / a), rel_tol=1e-12)  # tan(alpha) form
 
 
-@pytest.mark.parametrize('lm,h,lying,fh', [
-    (20.0, 15.0, '0.563', '127.33'), (20.0, 13.0, '4.68', '63.09'),
-    (21.0, 15.0, '2.90', '85.51'), (21.0, 13.0, '6.59', '37.14'),
-])
+@pytest.mark.parametrize(
+    'lm,h,lying,fh',
+    [
+        (20.0, 15.0, '0.563', '127.33'),
+        (20.0, 13.0, '4.68', '63.09'),
+        (21.0, 15.0, '2.90', '85.51'),
+        (21.0, 13.0, '6.59', '37.14'),
+    ],
+)
 def test_hou_2005_table(lm, h, lying, fh):
     """Hou et al. 2005: w = 25 kgf/m, dm = 11 m (units consistent in kgf and m)."""
     r = solve(25.0, h, chain_length=lm, anchor_distance=11.0)

@@ -1,4 +1,5 @@
-"""The solve() contract: shapes, statuses, call errors, scalar == vectorized, no rclpy in the core."""
+"""The solve() contract: shapes, statuses, call errors, scalar == vectorized, no rclpy in core."""
+
 import json
 import subprocess
 import sys
@@ -24,7 +25,9 @@ def test_vectorized_equals_scalar_loop(shape):
     for i, (ti, hi, xi) in enumerate(zip(np.ravel(t), np.ravel(h), np.ravel(x))):
         s = solve(W, float(hi), tension=float(ti), anchor_distance=float(xi), mbl=6.5e6)
         for key in r.keys:
-            np.testing.assert_allclose(flat[key][i], getattr(s, key), rtol=1e-13, atol=1e-9, err_msg=key)
+            np.testing.assert_allclose(
+                flat[key][i], getattr(s, key), rtol=1e-13, atol=1e-9, err_msg=key
+            )
 
 
 def test_every_status_in_one_call():
@@ -63,19 +66,31 @@ def test_chain_length_statuses():
 def test_scalar_result_types_and_keys():
     r = solve(W, H, tension=T)
     assert isinstance(r.status, int) and isinstance(r.min_anchor_distance, float)
-    assert r.keys == ('horizontal_tension', 'top_tension', 'min_anchor_distance', 'suspended_length',
-                      'top_angle_deg', 'anchor_angle_deg', 'uplift_force')
+    assert r.keys == (
+        'horizontal_tension',
+        'top_tension',
+        'min_anchor_distance',
+        'suspended_length',
+        'top_angle_deg',
+        'anchor_angle_deg',
+        'uplift_force',
+    )
     assert np.isnan(r.anchor_margin)  # does not apply without a distance
     full = solve(W, H, tension=T, anchor_distance=X, mbl=6e6)
     assert set(full.keys) == set(ALL_KEYS) - {'grounded_length'}
-    assert set(solve(25.0, 15.0, chain_length=20.0, anchor_distance=11.0).keys) >= {'grounded_length'}
+    assert set(solve(25.0, 15.0, chain_length=20.0, anchor_distance=11.0).keys) >= {
+        'grounded_length'
+    }
 
 
-@pytest.mark.parametrize('kwargs,match', [
-    (dict(), 'exactly one'),
-    (dict(tension=T, horizontal=1e6), 'exactly one'),
-    (dict(chain_length=200.0), 'needs anchor_distance'),
-])
+@pytest.mark.parametrize(
+    'kwargs,match',
+    [
+        (dict(), 'exactly one'),
+        (dict(tension=T, horizontal=1e6), 'exactly one'),
+        (dict(chain_length=200.0), 'needs anchor_distance'),
+    ],
+)
 def test_call_mistakes_raise(kwargs, match):
     with pytest.raises(ValueError, match=match):
         solve(W, H, **kwargs)
@@ -99,22 +114,37 @@ def test_uplift_grows_as_anchor_gets_closer():
 
 
 def test_core_imports_no_rclpy():
-    code = ("import sys; sys.modules['rclpy'] = None\n"
-            "import catenary_monitor, catenary_monitor.core.catenary, catenary_monitor.core.solve\n"
-            "print(catenary_monitor.solve(1300.0, 20.85, tension=1623.5e3).min_anchor_distance)")
+    code = (
+        "import sys; sys.modules['rclpy'] = None\n"
+        "import catenary_monitor, catenary_monitor.core.catenary, catenary_monitor.core.solve\n"
+        "print(catenary_monitor.solve(1300.0, 20.85, tension=1623.5e3).min_anchor_distance)"
+    )
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True)
     assert float(out.stdout) == pytest.approx(225.97, abs=0.01)
 
 
 # ---------------------------------------------------------------------------------- CLI
 def cli(*args):
-    return subprocess.run([sys.executable, '-m', 'catenary_monitor.cli', *args],
-                          capture_output=True, text=True)
+    return subprocess.run(
+        [sys.executable, '-m', 'catenary_monitor.cli', *args], capture_output=True, text=True
+    )
 
 
 def test_cli_json_contract():
-    p = cli('solve', '--weight', '1300', '--depth', '20.85', '--tension', '1623.5e3',
-            '--anchor-distance', '121.06', '--mbl', '6.5e6', '--json')
+    p = cli(
+        'solve',
+        '--weight',
+        '1300',
+        '--depth',
+        '20.85',
+        '--tension',
+        '1623.5e3',
+        '--anchor-distance',
+        '121.06',
+        '--mbl',
+        '6.5e6',
+        '--json',
+    )
     assert p.returncode == 0, p.stderr
     data = json.loads(p.stdout)
     assert set(data) == set(ALL_KEYS) - {'grounded_length'}
@@ -133,17 +163,26 @@ def test_cli_table_default():
     assert 'minimum anchor distance' in p.stdout and '225.9716' in p.stdout
 
 
-@pytest.mark.parametrize('args,needle', [
-    (['--weight', 'nan', '--depth', '20', '--tension', '1e6'], 'NaN'),
-    (['--weight', '-1', '--depth', '20', '--tension', '1e6'], 'weight'),
-    (['--weight', '1300', '--depth', '0', '--tension', '1e6'], 'depth'),
-    (['--weight', '1300', '--depth', '20.85', '--tension', '2e4'], 'T > w*h'),
-    (['--weight', '1300', '--depth', '20.85', '--tension', '1e6', '--anchor-distance', '0'], 'anchor distance'),
-    (['--weight', '25', '--depth', '15', '--chain-length', '10', '--anchor-distance', '11'], 'chain length'),
-    (['--weight', '25', '--depth', '15', '--chain-length', '10'], '--anchor-distance'),
-    (['--weight', '1300', '--depth', '20.85'], 'required'),
-    (['--weight', '1300', '--depth', '20.85', '--tension', 'abc'], 'not a number'),
-])
+@pytest.mark.parametrize(
+    'args,needle',
+    [
+        (['--weight', 'nan', '--depth', '20', '--tension', '1e6'], 'NaN'),
+        (['--weight', '-1', '--depth', '20', '--tension', '1e6'], 'weight'),
+        (['--weight', '1300', '--depth', '0', '--tension', '1e6'], 'depth'),
+        (['--weight', '1300', '--depth', '20.85', '--tension', '2e4'], 'T > w*h'),
+        (
+            ['--weight', '1300', '--depth', '20.85', '--tension', '1e6', '--anchor-distance', '0'],
+            'anchor distance',
+        ),
+        (
+            ['--weight', '25', '--depth', '15', '--chain-length', '10', '--anchor-distance', '11'],
+            'chain length',
+        ),
+        (['--weight', '25', '--depth', '15', '--chain-length', '10'], '--anchor-distance'),
+        (['--weight', '1300', '--depth', '20.85'], 'required'),
+        (['--weight', '1300', '--depth', '20.85', '--tension', 'abc'], 'not a number'),
+    ],
+)
 def test_cli_invalid_input_exit_2_one_line(args, needle):
     p = cli('solve', *args)
     assert p.returncode == 2

@@ -6,6 +6,7 @@ monitor reports as it happens; after the episode stops the monitor with SIGINT (
 gets its summary), reads the log back and draws a PNG chart (matplotlib, Agg backend).
 The demo itself imports no rclpy except to decode the logged outputs for the chart.
 """
+
 from __future__ import annotations
 
 import os
@@ -46,8 +47,14 @@ def child_env(domain_base: int = 1) -> dict[str, str]:
     return env
 
 
-def _relay(proc: subprocess.Popen, t0: float, colour: bool, events: list, ready: threading.Event,
-           transcript: list) -> None:
+def _relay(
+    proc: subprocess.Popen,
+    t0: float,
+    colour: bool,
+    events: list,
+    ready: threading.Event,
+    transcript: list,
+) -> None:
     """Print the monitor's alarm transitions as they arrive; keep everything it says."""
     assert proc.stdout is not None
     for raw in proc.stdout:
@@ -61,14 +68,18 @@ def _relay(proc: subprocess.Popen, t0: float, colour: bool, events: list, ready:
             t = time.time() - t0
             events.append((t, name, old, new, text))
             on, off = (_LEVEL_COLOURS.get(new, ''), '\033[0m') if colour else ('', '')
-            print(f'  t = {t:5.1f} s  {on}{name:8s} {old:>5s} -> {new:5s}{off}  {text}',
-                  flush=True)
+            print(
+                f'  t = {t:5.1f} s  {on}{name:8s} {old:>5s} -> {new:5s}{off}  {text}', flush=True
+            )
         elif 'Traceback' in line or line.startswith('catenary_monitor:'):
             print(f'  monitor: {line}', file=sys.stderr, flush=True)
 
 
-def run_demo(out_dir: str = 'catenary_monitor_demo', duration: float = 55.0,
-             params_file: Optional[str] = None) -> int:
+def run_demo(
+    out_dir: str = 'catenary_monitor_demo',
+    duration: float = 55.0,
+    params_file: Optional[str] = None,
+) -> int:
     """Run the demo; return 0 on success. Leaves the MCAP log and ``demo.png`` in ``out_dir``."""
     params = params_file or default_config_path()
     out = Path(out_dir).resolve()
@@ -78,31 +89,60 @@ def run_demo(out_dir: str = 'catenary_monitor_demo', duration: float = 55.0,
     env = child_env()
     colour = sys.stdout.isatty()
     print(f'catenary_monitor demo: the floating dock of Hu & Tang (2004), 12 chains, {params}')
-    print(f'  a storm builds to the typhoon load on line_11 (R = 1584.6 kN), then eases; '
-          f'{duration:g} s of wall time (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]})')
+    print(
+        f'  a storm builds to the typhoon load on line_11 (R = 1584.6 kN), then eases; '
+        f'{duration:g} s of wall time (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]})'
+    )
     overrides = [a for k, v in DEMO_OVERRIDES.items() for a in ('-p', f'{k}:={v}')]
     monitor = subprocess.Popen(
-        [sys.executable, '-m', 'catenary_monitor.ros.node', '--ros-args', '--params-file', params,
-         '-p', f'log_dir:={log_dir}', *overrides],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, env=env)
+        [
+            sys.executable,
+            '-m',
+            'catenary_monitor.ros.node',
+            '--ros-args',
+            '--params-file',
+            params,
+            '-p',
+            f'log_dir:={log_dir}',
+            *overrides,
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=env,
+    )
     t0 = time.time()
     events: list = []
     transcript: list = []
     ready = threading.Event()
-    relay = threading.Thread(target=_relay, args=(monitor, t0, colour, events, ready, transcript),
-                             daemon=True)
+    relay = threading.Thread(
+        target=_relay, args=(monitor, t0, colour, events, ready, transcript), daemon=True
+    )
     relay.start()
     sim: Optional[subprocess.Popen] = None
     try:
         if not ready.wait(30.0) or monitor.poll() is not None:
-            print('catenary_monitor demo: the monitor did not start:\n' + '\n'.join(transcript),
-                  file=sys.stderr)
+            print(
+                'catenary_monitor demo: the monitor did not start:\n' + '\n'.join(transcript),
+                file=sys.stderr,
+            )
             return 1
         print('  monitor running; starting the dock simulator (alarm transitions follow)\n')
         sim = subprocess.Popen(
-            [sys.executable, '-m', 'catenary_monitor.ros.simulator', '--params-file', params,
-             '--duration', str(duration)], env=env,
-            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            [
+                sys.executable,
+                '-m',
+                'catenary_monitor.ros.simulator',
+                '--params-file',
+                params,
+                '--duration',
+                str(duration),
+            ],
+            env=env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
         _, sim_err = sim.communicate(timeout=duration + 60.0)
         if sim.returncode != 0:
             print(f'catenary_monitor demo: simulator failed:\n{sim_err}', file=sys.stderr)
@@ -121,8 +161,10 @@ def run_demo(out_dir: str = 'catenary_monitor_demo', duration: float = 55.0,
             monitor.kill()
         relay.join(5)
     files = sorted(set(log_dir.glob('*.mcap')) - before)
-    print(f'\n  {len(events)} alarm transitions in {time.time() - t0:.0f} s; monitor exit status '
-          f'{monitor.returncode}')
+    print(
+        f'\n  {len(events)} alarm transitions in {time.time() - t0:.0f} s; monitor exit status '
+        f'{monitor.returncode}'
+    )
     if not files:
         print('catenary_monitor demo: no MCAP log was written', file=sys.stderr)
         return 1
@@ -145,17 +187,21 @@ def _outputs(files: list[Path], topics: list[str]) -> dict[str, tuple[np.ndarray
     from std_msgs.msg import Float64MultiArray
 
     from catenary_monitor.io.mcap_read import iter_messages
+
     acc: dict[str, tuple[list, list]] = {t: ([], []) for t in topics}
     for m in iter_messages(files, topics):
         acc[m.topic][0].append(m.log_time_ns)
         acc[m.topic][1].append(np.asarray(deserialize_message(m.data, Float64MultiArray).data))
-    return {t: (np.asarray(a, dtype=np.int64), np.vstack(b) if b else np.zeros((0, 0)))
-            for t, (a, b) in acc.items()}
+    return {
+        t: (np.asarray(a, dtype=np.int64), np.vstack(b) if b else np.zeros((0, 0)))
+        for t, (a, b) in acc.items()
+    }
 
 
 def plot_episode(files: list[Path], png: Path, params: str) -> Path:
     """Chart of the episode from the MCAP log: depth, hook tensions, line 11, alarm levels."""
     import matplotlib
+
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
 
@@ -185,26 +231,50 @@ def plot_episode(files: list[Path], png: Path, params: str) -> Path:
     ax = axes[1]
     for n in names:
         t, v = cols[tension_topics[n]]
-        ax.plot(sec(t), v / 1e3, lw=1.2 if n in focus else 0.5, color=colours.get(n, 'grey'),
-                alpha=1.0 if n in focus else 0.5, label=n if n in focus else None)
+        ax.plot(
+            sec(t),
+            v / 1e3,
+            lw=1.2 if n in focus else 0.5,
+            color=colours.get(n, 'grey'),
+            alpha=1.0 if n in focus else 0.5,
+            label=n if n in focus else None,
+        )
     ax.plot([], [], color='grey', lw=0.5, label='other lines')
     ax.axhline(1623.4, color='k', ls=':', lw=0.8)
-    ax.text(0.99, 1623.4, 'table 3 (typhoon, line 11): T = 1623.4 kN ', va='bottom', ha='right',
-            fontsize=8, transform=ax.get_yaxis_transform())
+    ax.text(
+        0.99,
+        1623.4,
+        'table 3 (typhoon, line 11): T = 1623.4 kN ',
+        va='bottom',
+        ha='right',
+        fontsize=8,
+        transform=ax.get_yaxis_transform(),
+    )
     ax.set_ylabel('hook tension [kN]')
     ax.legend(loc='upper left', fontsize=8)
     ax = axes[2]
     t, data = outs[out_topics[focus[0]]]
     if data.size:
-        ax.plot(sec(t), data[:, idx['uplift_force']] / 1e3, color='k', lw=1.5,
-                label=f'{focus[0]} uplift force [kN]')
+        ax.plot(
+            sec(t),
+            data[:, idx['uplift_force']] / 1e3,
+            color='k',
+            lw=1.5,
+            label=f'{focus[0]} uplift force [kN]',
+        )
         ax2 = ax.twinx()
         for n in focus:
             c = colours[n]
             tt, dd = outs[out_topics[n]]
             if dd.size:
-                ax2.plot(sec(tt), dd[:, idx['anchor_margin']], color=c, lw=0.8, ls='--',
-                         label=f'{n} anchor margin [m]')
+                ax2.plot(
+                    sec(tt),
+                    dd[:, idx['anchor_margin']],
+                    color=c,
+                    lw=0.8,
+                    ls='--',
+                    label=f'{n} anchor margin [m]',
+                )
         ax2.set_ylim(-20, 25)
         ax2.axhline(config.alarm.anchor_margin_warn, color='tab:orange', ls='--', lw=0.8)
         ax2.set_ylabel('anchor margin [m]')
@@ -215,9 +285,14 @@ def plot_episode(files: list[Path], png: Path, params: str) -> Path:
     for k, n in enumerate(names):
         tt, dd = outs[out_topics[n]]
         if dd.size:
-            ax.step(sec(tt), dd[:, idx['level']] + 0.04 * k, where='post',
-                    lw=1.2 if n in focus else 0.6, color=colours.get(n, 'grey'),
-                    label=n if n in focus else None)
+            ax.step(
+                sec(tt),
+                dd[:, idx['level']] + 0.04 * k,
+                where='post',
+                lw=1.2 if n in focus else 0.6,
+                color=colours.get(n, 'grey'),
+                label=n if n in focus else None,
+            )
     ax.set_yticks([0, 1, 2, 3], ['OK', 'WARN', 'ERROR', 'STALE'])
     ax.set_ylabel('alarm level')
     ax.set_xlabel('time [s]')

@@ -6,6 +6,7 @@ from their own modules.
 Exit status: 0 success, 2 invalid or physically impossible input (one line on stderr naming it),
 1 unexpected failure.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -51,8 +52,11 @@ def format_table(rows: Sequence[Sequence[str]], header: Sequence[str]) -> str:
     widths = [max(len(str(r[i])) for r in [header, *rows]) for i in range(len(header))]
 
     def line(r: Sequence[str]) -> str:
-        cells = [str(c).ljust(widths[0]) if i == 0 else str(c).rjust(widths[i]) for i, c in enumerate(r)]
+        cells = [
+            str(c).ljust(widths[0]) if i == 0 else str(c).rjust(widths[i]) for i, c in enumerate(r)
+        ]
         return '  '.join(cells).rstrip()
+
     rule = '  '.join('-' * w for w in widths)
     return '\n'.join([line(header), rule, *(line(r) for r in rows)])
 
@@ -79,26 +83,43 @@ def _status_line(result: SolveResult, args: argparse.Namespace) -> str:
     if code == Status.TENSION:
         detail = f' (T = {args.tension:g} N, w*h = {args.weight * args.depth:g} N)'
     elif code == Status.CHAIN_TOO_SHORT:
-        detail = f' (Lm = {args.chain_length:g} m, sqrt(x^2+h^2) = {math.hypot(args.anchor_distance, args.depth):g} m)'
+        chord = math.hypot(args.anchor_distance, args.depth)
+        detail = f' (Lm = {args.chain_length:g} m, sqrt(x^2+h^2) = {chord:g} m)'
     elif code == Status.CHAIN_SLACK:
-        detail = f' (Lm = {args.chain_length:g} m, x + h = {args.anchor_distance + args.depth:g} m)'
+        detail = (
+            f' (Lm = {args.chain_length:g} m, x + h = {args.anchor_distance + args.depth:g} m)'
+        )
     return f'invalid input: {STATUS_MESSAGES[code]}{detail}'
 
 
 def cmd_solve(args: argparse.Namespace) -> int:
     """Solve one catenary problem and print a table or JSON."""
     if args.chain_length is not None and args.anchor_distance is None:
-        raise UsageError('--chain-length needs --anchor-distance (the chain runs from hook to anchor)')
-    result = solve(args.weight, args.depth, tension=args.tension, horizontal=args.horizontal,
-                   anchor_distance=args.anchor_distance, chain_length=args.chain_length, mbl=args.mbl)
+        raise UsageError(
+            '--chain-length needs --anchor-distance (the chain runs from hook to anchor)'
+        )
+    result = solve(
+        args.weight,
+        args.depth,
+        tension=args.tension,
+        horizontal=args.horizontal,
+        anchor_distance=args.anchor_distance,
+        chain_length=args.chain_length,
+        mbl=args.mbl,
+    )
     if int(result.status) != Status.OK:
         raise UsageError(_status_line(result, args))
     if args.json:
         print(json.dumps(result.to_dict()))
     else:
         given = f'w = {args.weight:g} N/m, h = {args.depth:g} m'
-        for name, unit in (('tension', 'N'), ('horizontal', 'N'), ('chain_length', 'm'),
-                           ('anchor_distance', 'm'), ('mbl', 'N')):
+        for name, unit in (
+            ('tension', 'N'),
+            ('horizontal', 'N'),
+            ('chain_length', 'm'),
+            ('anchor_distance', 'm'),
+            ('mbl', 'N'),
+        ):
             v = getattr(args, name)
             if v is not None:
                 given += f', {name} = {v:g} {unit}'
@@ -121,43 +142,93 @@ def paper_table() -> str:
     rows = []
     for label, kw in cases:
         r = solve(w, h, **kw)
-        rows.append((label, f'{r.horizontal_tension / 1e3:.3f}', f'{r.top_tension / 1e3:.3f}',
-                     f'{r.min_anchor_distance:.4f}', f'{r.suspended_length:.4f}',
-                     f'{r.top_angle_deg:.5f}', f'{r.anchor_angle_deg:.5f}', f'{r.uplift_force / 1e3:.3f}',
-                     '' if np.isnan(r.anchor_margin) else f'{r.anchor_margin:+.3f}'))
-    header = ('case (w = 1.3 kN/m, h = 20.85 m)', 'R kN', 'T kN', 'x_min m', 'L m', 'beta deg',
-              'alpha deg', 'F kN', 'margin m')
+        rows.append(
+            (
+                label,
+                f'{r.horizontal_tension / 1e3:.3f}',
+                f'{r.top_tension / 1e3:.3f}',
+                f'{r.min_anchor_distance:.4f}',
+                f'{r.suspended_length:.4f}',
+                f'{r.top_angle_deg:.5f}',
+                f'{r.anchor_angle_deg:.5f}',
+                f'{r.uplift_force / 1e3:.3f}',
+                '' if np.isnan(r.anchor_margin) else f'{r.anchor_margin:+.3f}',
+            )
+        )
+    header = (
+        'case (w = 1.3 kN/m, h = 20.85 m)',
+        'R kN',
+        'T kN',
+        'x_min m',
+        'L m',
+        'beta deg',
+        'alpha deg',
+        'F kN',
+        'margin m',
+    )
     return format_table(rows, header)
 
 
 def cmd_paper(args: argparse.Namespace) -> int:
     """Print the seed paper's dock examples solved by the core."""
-    print('Floating dock of Hu & Tang (2004): 12 x U3 chain, 81 mm, w = 1300 N/m submerged (g = 10)\n')
+    print(
+        'Floating dock of Hu & Tang (2004): 12 x U3 chain, 81 mm, '
+        'w = 1300 N/m submerged (g = 10)\n'
+    )
     print(paper_table())
-    print('\nErrata: table 4 prints x = 255.9719 m (transposed digits: 225.97 m); table 3 prints '
-          'beta = 15.5595 deg (12.559 deg).')
+    print(
+        '\nErrata: table 4 prints x = 255.9719 m (transposed digits: 225.97 m); table 3 prints '
+        'beta = 15.5595 deg (12.559 deg).'
+    )
     return 0
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = OneLineParser(prog='catenary-monitor',
-                           description='Anchor-chain catenary monitor for moored docks.')
-    sub = parser.add_subparsers(dest='command', required=True, metavar='COMMAND',
-                                parser_class=OneLineParser)
+    parser = OneLineParser(
+        prog='catenary-monitor', description='Anchor-chain catenary monitor for moored docks.'
+    )
+    sub = parser.add_subparsers(
+        dest='command', required=True, metavar='COMMAND', parser_class=OneLineParser
+    )
 
-    p = sub.add_parser('solve', help='solve one catenary problem (SI units)',
-                       description='Solve the chain catenary: minimum anchor distance, uplift, margins.')
-    p.add_argument('--weight', type=_positive_or_any, required=True, metavar='W',
-                   help='submerged chain weight per metre [N/m]')
-    p.add_argument('--depth', type=_positive_or_any, required=True, metavar='H',
-                   help='vertical distance anchor -> hook point [m]')
+    p = sub.add_parser(
+        'solve',
+        help='solve one catenary problem (SI units)',
+        description='Solve the chain catenary: minimum anchor distance, uplift, margins.',
+    )
+    p.add_argument(
+        '--weight',
+        type=_positive_or_any,
+        required=True,
+        metavar='W',
+        help='submerged chain weight per metre [N/m]',
+    )
+    p.add_argument(
+        '--depth',
+        type=_positive_or_any,
+        required=True,
+        metavar='H',
+        help='vertical distance anchor -> hook point [m]',
+    )
     load = p.add_mutually_exclusive_group(required=True)
-    load.add_argument('--tension', type=_positive_or_any, metavar='T', help='measured hook tension [N]')
-    load.add_argument('--horizontal', type=_positive_or_any, metavar='R', help='horizontal tension [N]')
-    load.add_argument('--chain-length', type=_positive_or_any, metavar='LM',
-                      help='paid-out chain length [m] (needs --anchor-distance)')
-    p.add_argument('--anchor-distance', type=_positive_or_any, metavar='X',
-                   help='installed horizontal distance hook -> anchor [m]')
+    load.add_argument(
+        '--tension', type=_positive_or_any, metavar='T', help='measured hook tension [N]'
+    )
+    load.add_argument(
+        '--horizontal', type=_positive_or_any, metavar='R', help='horizontal tension [N]'
+    )
+    load.add_argument(
+        '--chain-length',
+        type=_positive_or_any,
+        metavar='LM',
+        help='paid-out chain length [m] (needs --anchor-distance)',
+    )
+    p.add_argument(
+        '--anchor-distance',
+        type=_positive_or_any,
+        metavar='X',
+        help='installed horizontal distance hook -> anchor [m]',
+    )
     p.add_argument('--mbl', type=_positive_or_any, metavar='M', help='minimum breaking load [N]')
     p.add_argument('--json', action='store_true', help='print one JSON object instead of a table')
     p.set_defaults(func=cmd_solve)
@@ -181,6 +252,7 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
     from importlib.metadata import entry_points
 
     from catenary_monitor.cli import live, replay
+
     found = [live.register, replay.register]
     for ep in sorted(entry_points(group=COMMAND_GROUP), key=lambda e: e.name):
         try:

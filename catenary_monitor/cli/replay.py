@@ -23,6 +23,7 @@ scaled by X (:mod:`catenary_monitor.replay_publish`, needs rclpy).
 Exit status: 0 done; 2 bad arguments, params file, missing file, not MCAP, or a topic with an
 unexpected type (one line naming it); 3 no message on any requested topic (empty log).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -36,17 +37,34 @@ from typing import Any, NamedTuple, Optional, Sequence
 import numpy as np
 
 from catenary_monitor.core.batch import ReplayResult, recompute
-from catenary_monitor.core.config import (ConfigError, MonitorConfig, config_from_params,
-                                          config_hash, load_params_file, resolve_topic)
-from catenary_monitor.core.monitor import (EVENTS_TOPIC, NODE_NAME, Reconfigure, Start, Tick,
-                                           parse_event_record)
+from catenary_monitor.core.config import (
+    ConfigError,
+    MonitorConfig,
+    config_from_params,
+    config_hash,
+    load_params_file,
+    resolve_topic,
+)
+from catenary_monitor.core.monitor import (
+    EVENTS_TOPIC,
+    NODE_NAME,
+    Reconfigure,
+    Start,
+    Tick,
+    parse_event_record,
+)
 from catenary_monitor.io.cdr import string_text
-from catenary_monitor.io.mcap_read import (EmptyLogError, McapReadError, ReadReport,
-                                           TopicTypeError, expand_paths, iter_messages,
-                                           read_float64_topics)
+from catenary_monitor.io.mcap_read import (
+    EmptyLogError,
+    McapReadError,
+    ReadReport,
+    TopicTypeError,
+    expand_paths,
+    iter_messages,
+    read_float64_topics,
+)
 
-__all__ = ['register', 'cmd_replay', 'input_topics', 'read_events', 'run_replay',
-           'EXIT_EMPTY']
+__all__ = ['register', 'cmd_replay', 'input_topics', 'read_events', 'run_replay', 'EXIT_EMPTY']
 
 #: Exit status for a log without any message on the requested topics.
 EXIT_EMPTY = 3
@@ -69,8 +87,10 @@ class LogEvents(NamedTuple):
 
 def input_topics(config: MonitorConfig) -> tuple[dict[str, str], str]:
     """(line name -> resolved tension topic, resolved depth topic)."""
-    return ({line.name: resolve_topic(line.tension_topic) for line in config.lines},
-            resolve_topic(config.depth_topic))
+    return (
+        {line.name: resolve_topic(line.tension_topic) for line in config.lines},
+        resolve_topic(config.depth_topic),
+    )
 
 
 class Progress:
@@ -144,6 +164,7 @@ def log_parameters(paths: Sequence[Path]) -> Optional[tuple[str, dict[str, Any]]
     import io
 
     from mcap.reader import NonSeekingReader, make_reader
+
     for path in paths:
         records = []
         try:
@@ -168,8 +189,10 @@ def log_parameters(paths: Sequence[Path]) -> Optional[tuple[str, dict[str, Any]]
         for record in records:
             if record.name == NODE_NAME and 'parameters' in record.metadata:
                 try:
-                    return (record.metadata.get('config_hash', ''),
-                            json.loads(record.metadata['parameters']))
+                    return (
+                        record.metadata.get('config_hash', ''),
+                        json.loads(record.metadata['parameters']),
+                    )
                 except ValueError:
                     continue
     return None
@@ -183,9 +206,9 @@ def load_config(path: str) -> MonitorConfig:
         raise ReplayError(f'{path}: {err}') from err
 
 
-def read_inputs(paths: Sequence[Path], config: MonitorConfig
-                ) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]],
-                           tuple[np.ndarray, np.ndarray], ReadReport]:
+def read_inputs(
+    paths: Sequence[Path], config: MonitorConfig
+) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], tuple[np.ndarray, np.ndarray], ReadReport]:
     """Tension columns per line, the depth column and the read report."""
     topics, depth_topic = input_topics(config)
     try:
@@ -200,11 +223,21 @@ def read_inputs(paths: Sequence[Path], config: MonitorConfig
     return tensions, columns[depth_topic], report
 
 
-def run_replay(paths: Sequence[Path], config: MonitorConfig, *, ticks: str = 'auto',
-               follow_log: bool = True, snapshots: bool = False,
-               progress: Optional[Progress] = None) -> tuple[
-                   ReplayResult, dict[str, tuple[np.ndarray, np.ndarray]],
-                   tuple[np.ndarray, np.ndarray], ReadReport, dict[str, float]]:
+def run_replay(
+    paths: Sequence[Path],
+    config: MonitorConfig,
+    *,
+    ticks: str = 'auto',
+    follow_log: bool = True,
+    snapshots: bool = False,
+    progress: Optional[Progress] = None,
+) -> tuple[
+    ReplayResult,
+    dict[str, tuple[np.ndarray, np.ndarray]],
+    tuple[np.ndarray, np.ndarray],
+    ReadReport,
+    dict[str, float],
+]:
     """Read and recompute; returns the result, the input columns, the report and timings (s).
 
     ``ticks``: ``auto`` takes the node's recorded ticks when the log has them, else a grid;
@@ -220,16 +253,19 @@ def run_replay(paths: Sequence[Path], config: MonitorConfig, *, ticks: str = 'au
     timing['read_s'] = time.perf_counter() - t0
     prog('reading', 1.0)
     if ticks == 'log' and recorded is None:
-        raise ReplayError('--ticks log: the log has no catenary_monitor events channel '
-                          f'({EVENTS_TOPIC}); it was not recorded by the node')
+        raise ReplayError(
+            '--ticks log: the log has no catenary_monitor events channel '
+            f'({EVENTS_TOPIC}); it was not recorded by the node'
+        )
     tick_ns, events, start = None, [], None
     if recorded is not None:
         tick_ns = recorded.ticks
         events = [e for e in recorded.others if follow_log or not isinstance(e, Reconfigure)]
         starts = [e.stamp_ns for e in events if isinstance(e, Start)]
         if starts:
-            start, events = starts[0], [e for e in events if e.stamp_ns != starts[0]
-                                        or not isinstance(e, Start)]
+            start, events = starts[0], [
+                e for e in events if e.stamp_ns != starts[0] or not isinstance(e, Start)
+            ]
     t1 = time.perf_counter()
     prog('solving', 0.0)
     result = recompute(config, tensions, depth, tick_ns, events, start, snapshots)
@@ -243,10 +279,17 @@ def cmd_replay(args: argparse.Namespace) -> int:
     try:
         if args.publish:
             from catenary_monitor.ros.playback import publish
+
             paths = _expand(args.logs)
             config = load_config(args.params_file) if args.params_file else None
-            return publish(paths, config, rate=args.rate, loop=args.loop,
-                           wait=args.wait_subscribers, quiet=args.quiet)
+            return publish(
+                paths,
+                config,
+                rate=args.rate,
+                loop=args.loop,
+                wait=args.wait_subscribers,
+                quiet=args.quiet,
+            )
         return _offline(args)
     except ReplayError as err:
         print(f'catenary-monitor replay: {err}', file=sys.stderr)
@@ -267,14 +310,20 @@ def _offline(args: argparse.Namespace) -> int:
         try:
             config = config_from_params(recorded[1])
         except ConfigError as err:
-            raise ReplayError(f'the parameters recorded in the log are invalid: {err}; give '
-                              '--params-file') from err
+            raise ReplayError(
+                f'the parameters recorded in the log are invalid: {err}; give ' '--params-file'
+            ) from err
         source = 'recorded in the log'
     else:
-        raise ReplayError('--params-file is required: the log holds no catenary_monitor '
-                          'parameters (it names the topics and the lines)')
-    params = {'source': source, 'config_hash': config_hash(config),
-              'recorded_config_hash': recorded[0] if recorded else None}
+        raise ReplayError(
+            '--params-file is required: the log holds no catenary_monitor '
+            'parameters (it names the topics and the lines)'
+        )
+    params = {
+        'source': source,
+        'config_hash': config_hash(config),
+        'recorded_config_hash': recorded[0] if recorded else None,
+    }
     params['same_as_recorded'] = None if recorded is None else params['config_hash'] == recorded[0]
     csv_columns = _csv_columns(args.csv_columns)
     size = sum(p.stat().st_size for p in paths)
@@ -283,8 +332,13 @@ def _offline(args: argparse.Namespace) -> int:
     follow = params['same_as_recorded'] is not False
     params['follows_recorded_changes'] = follow
     result, tensions, depth, report, timing = run_replay(
-        paths, config, ticks=args.ticks, follow_log=follow, snapshots=bool(args.out),
-        progress=progress)
+        paths,
+        config,
+        ticks=args.ticks,
+        follow_log=follow,
+        snapshots=bool(args.out),
+        progress=progress,
+    )
     outputs: dict[str, Any] = {}
     if args.csv:
         t1 = time.perf_counter()
@@ -296,8 +350,17 @@ def _offline(args: argparse.Namespace) -> int:
         t1 = time.perf_counter()
         topics, depth_topic = input_topics(config)
         with _OutputFile(args.out) as f:
-            n = out.write_mcap(f, result, config, tensions, depth, topics, depth_topic,
-                               [str(p) for p in paths], progress)
+            n = out.write_mcap(
+                f,
+                result,
+                config,
+                tensions,
+                depth,
+                topics,
+                depth_topic,
+                [str(p) for p in paths],
+                progress,
+            )
         timing['mcap_s'] = time.perf_counter() - t1
         outputs['mcap'] = f'{args.out} ({n} messages)'
     if args.plot:
@@ -309,11 +372,20 @@ def _offline(args: argparse.Namespace) -> int:
         progress('plotting', 1.0)
     progress.done()
     timing['total_s'] = time.perf_counter() - t_start
-    summary = out.summary_dict(result, report, {
-        'parameters': params, 'outputs': outputs,
-        'timing': {k: round(v, 3) for k, v in timing.items()}})
-    text = json.dumps(_finite(summary), allow_nan=False, default=_json_default) if args.json \
+    summary = out.summary_dict(
+        result,
+        report,
+        {
+            'parameters': params,
+            'outputs': outputs,
+            'timing': {k: round(v, 3) for k, v in timing.items()},
+        },
+    )
+    text = (
+        json.dumps(_finite(summary), allow_nan=False, default=_json_default)
+        if args.json
         else out.summary_text(summary)
+    )
     try:
         print(text)
         sys.stdout.flush()
@@ -324,6 +396,7 @@ def _offline(args: argparse.Namespace) -> int:
 
 def _csv_columns(text: str) -> Sequence[str]:
     from catenary_monitor.cli.replay_output import CSV_ALL, CSV_COLUMNS
+
     if not text:
         return CSV_COLUMNS
     if text == 'all':
@@ -331,8 +404,10 @@ def _csv_columns(text: str) -> Sequence[str]:
     names = [t.strip() for t in text.split(',') if t.strip()]
     unknown = [n for n in names if n not in {name for name, _ in CSV_ALL}]
     if unknown:
-        raise ReplayError(f'--csv-columns: unknown column {unknown[0]!r}; known: '
-                          + ', '.join(name for name, _ in CSV_ALL))
+        raise ReplayError(
+            f'--csv-columns: unknown column {unknown[0]!r}; known: '
+            + ', '.join(name for name, _ in CSV_ALL)
+        )
     return names
 
 
@@ -386,38 +461,78 @@ def _positive(text: str) -> float:
 def register(sub: Any) -> None:
     """Add the ``replay`` sub-command to the ``catenary-monitor`` parser."""
     p = sub.add_parser(
-        'replay', help='recompute a recorded MCAP log offline, or play it onto ROS',
+        'replay',
+        help='recompute a recorded MCAP log offline, or play it onto ROS',
         description='Recompute every update of a recorded log with the live node\'s alarm '
-                    'logic (vectorized), write MCAP/CSV/PNG results and print a summary; or, '
-                    'with --publish, publish the recorded inputs with their recorded timing.')
-    p.add_argument('logs', nargs='+', metavar='LOG.mcap',
-                   help='MCAP file(s) (a rotated set) or directories of *.mcap')
-    p.add_argument('--params-file', metavar='FILE',
-                   help='ROS 2 params YAML of the monitor (lines, topics, alarm settings); '
-                        'default: the parameters the node recorded in the log')
-    p.add_argument('--out', metavar='RESULTS.mcap',
-                   help='write inputs, per-line outputs and /diagnostics as a ROS 2 MCAP log')
-    p.add_argument('--csv', metavar='RESULTS.csv',
-                   help='write one CSV row per tension message, in time order')
-    p.add_argument('--plot', metavar='CHART.png',
-                   help='write an overview PNG and one PNG per line (CHART_<line>.png)')
-    p.add_argument('--csv-columns', metavar='LIST', default='',
-                   help='comma-separated CSV columns, or "all" (default: time, line, '
-                        'top_tension, depth, min_anchor_distance, anchor_margin, uplift_force, '
-                        'level); also horizontal_tension, tide_margin, load_margin, '
-                        'safety_factor, status')
+        'logic (vectorized), write MCAP/CSV/PNG results and print a summary; or, '
+        'with --publish, publish the recorded inputs with their recorded timing.',
+    )
+    p.add_argument(
+        'logs',
+        nargs='+',
+        metavar='LOG.mcap',
+        help='MCAP file(s) (a rotated set) or directories of *.mcap',
+    )
+    p.add_argument(
+        '--params-file',
+        metavar='FILE',
+        help='ROS 2 params YAML of the monitor (lines, topics, alarm settings); '
+        'default: the parameters the node recorded in the log',
+    )
+    p.add_argument(
+        '--out',
+        metavar='RESULTS.mcap',
+        help='write inputs, per-line outputs and /diagnostics as a ROS 2 MCAP log',
+    )
+    p.add_argument(
+        '--csv', metavar='RESULTS.csv', help='write one CSV row per tension message, in time order'
+    )
+    p.add_argument(
+        '--plot',
+        metavar='CHART.png',
+        help='write an overview PNG and one PNG per line (CHART_<line>.png)',
+    )
+    p.add_argument(
+        '--csv-columns',
+        metavar='LIST',
+        default='',
+        help='comma-separated CSV columns, or "all" (default: time, line, '
+        'top_tension, depth, min_anchor_distance, anchor_margin, uplift_force, '
+        'level); also horizontal_tension, tide_margin, load_margin, '
+        'safety_factor, status',
+    )
     p.add_argument('--json', action='store_true', help='print the summary as one JSON object')
     p.add_argument('--quiet', action='store_true', help='no progress on stderr')
-    p.add_argument('--progress', action='store_true',
-                   help='show progress on stderr even for a short log (default: logs > 8 MB)')
-    p.add_argument('--ticks', choices=('auto', 'log', 'grid'), default='auto',
-                   help='periodic alarm steps: the log\'s /diagnostics times (auto: if present) '
-                        'or a grid at diagnostic_rate')
-    p.add_argument('--publish', action='store_true',
-                   help='publish the recorded inputs onto ROS instead (needs rclpy)')
-    p.add_argument('--rate', type=_positive, default=1.0, metavar='X',
-                   help='--publish: play X times faster than recorded (default 1)')
+    p.add_argument(
+        '--progress',
+        action='store_true',
+        help='show progress on stderr even for a short log (default: logs > 8 MB)',
+    )
+    p.add_argument(
+        '--ticks',
+        choices=('auto', 'log', 'grid'),
+        default='auto',
+        help='periodic alarm steps: the log\'s /diagnostics times (auto: if present) '
+        'or a grid at diagnostic_rate',
+    )
+    p.add_argument(
+        '--publish',
+        action='store_true',
+        help='publish the recorded inputs onto ROS instead (needs rclpy)',
+    )
+    p.add_argument(
+        '--rate',
+        type=_positive,
+        default=1.0,
+        metavar='X',
+        help='--publish: play X times faster than recorded (default 1)',
+    )
     p.add_argument('--loop', action='store_true', help='--publish: start again at the end')
-    p.add_argument('--wait-subscribers', type=float, default=0.0, metavar='S',
-                   help='--publish: wait up to S s until every topic has a subscriber')
+    p.add_argument(
+        '--wait-subscribers',
+        type=float,
+        default=0.0,
+        metavar='S',
+        help='--publish: wait up to S s until every topic has a subscriber',
+    )
     p.set_defaults(func=cmd_replay)

@@ -3,6 +3,7 @@
 No rclpy: the MCAP messages are encoded by :mod:`catenary_monitor.cdr` and written by
 :mod:`catenary_monitor.mcap_fast`.
 """
+
 from __future__ import annotations
 
 import datetime as _dt
@@ -16,30 +17,75 @@ import numpy as np
 
 from catenary_monitor import __version__
 from catenary_monitor.core.alarms import Level
-from catenary_monitor.core.batch import (MODEL_NAMES, NO_DEPTH, OUTPUT_FIELDS, VALUE_FIELDS,
-                                         LineResult, ReplayResult, worst)
+from catenary_monitor.core.batch import (
+    MODEL_NAMES,
+    NO_DEPTH,
+    OUTPUT_FIELDS,
+    VALUE_FIELDS,
+    LineResult,
+    ReplayResult,
+    worst,
+)
 from catenary_monitor.core.monitor import EVENTS_TOPIC, NODE_NAME, Start, Tick, event_record
 from catenary_monitor.core.config import MonitorConfig, config_hash, config_to_params
-from catenary_monitor.io.cdr import (diagnostic_array_parts, float64_payloads, key_values,
-                                     multiarray_payloads, status_header, string_message)
+from catenary_monitor.io.cdr import (
+    diagnostic_array_parts,
+    float64_payloads,
+    key_values,
+    multiarray_payloads,
+    status_header,
+    string_message,
+)
 from catenary_monitor.io.fastcsv import FloatColumn, IntColumn, LabelColumn, write_rows
 from catenary_monitor.io.mcap_fast import ColumnWriter
-from catenary_monitor.io.ros_schemas import (QOS_DEFAULT, QOS_SENSOR_DATA, message_definition,
-                                             type_description_hash)
+from catenary_monitor.io.ros_schemas import (
+    QOS_DEFAULT,
+    QOS_SENSOR_DATA,
+    message_definition,
+    type_description_hash,
+)
 
-__all__ = ['CSV_ALL', 'CSV_COLUMNS', 'NODE_NAME', 'write_csv', 'write_mcap', 'write_plots',
-           'summary_dict', 'summary_text', 'output_topic']
+__all__ = [
+    'CSV_ALL',
+    'CSV_COLUMNS',
+    'NODE_NAME',
+    'write_csv',
+    'write_mcap',
+    'write_plots',
+    'summary_dict',
+    'summary_text',
+    'output_topic',
+]
 
 #: Every CSV column, in order, with its decimals (None: a label). Units: s, N, m, -.
 #: ``time`` is exact (ns); forces have 3 decimals (1 mN), lengths 3 (1 mm), the safety factor 3.
 CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
-    ('time', 9), ('line', None), ('top_tension', 3), ('depth', 3),
-    ('horizontal_tension', 3), ('min_anchor_distance', 3), ('anchor_margin', 3),
-    ('uplift_force', 3), ('tide_margin', 3), ('load_margin', 3), ('safety_factor', 3),
-    ('status', None), ('level', None), ('model', None))
+    ('time', 9),
+    ('line', None),
+    ('top_tension', 3),
+    ('depth', 3),
+    ('horizontal_tension', 3),
+    ('min_anchor_distance', 3),
+    ('anchor_margin', 3),
+    ('uplift_force', 3),
+    ('tide_margin', 3),
+    ('load_margin', 3),
+    ('safety_factor', 3),
+    ('status', None),
+    ('level', None),
+    ('model', None),
+)
 #: The default columns (the issue's contract), in this order.
-CSV_COLUMNS = ('time', 'line', 'top_tension', 'depth', 'min_anchor_distance', 'anchor_margin',
-               'uplift_force', 'level')
+CSV_COLUMNS = (
+    'time',
+    'line',
+    'top_tension',
+    'depth',
+    'min_anchor_distance',
+    'anchor_margin',
+    'uplift_force',
+    'level',
+)
 _LEVELS = [lv.name for lv in sorted(Level)]
 _STATUS_LABELS = [str(s) for s in range(NO_DEPTH, 11)]
 
@@ -51,27 +97,37 @@ def output_topic(line: str) -> str:
     return f'/{NODE_NAME}/{line}/outputs'
 
 
-def _tension_rows(result: ReplayResult, keys: Sequence[str] = VALUE_FIELDS
-                  ) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray, np.ndarray,
-                             np.ndarray]:
+def _tension_rows(
+    result: ReplayResult, keys: Sequence[str] = VALUE_FIELDS
+) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray, np.ndarray, np.ndarray]:
     """All lines' tension updates merged in time order (stable: config order at equal times):
     times, the value columns ``keys``, line index, status and level."""
     parts = [(r, r.tension_rows) for r in result.lines]
     t = np.concatenate([r.t_ns[rows] for r, rows in parts])
     line = np.concatenate([np.full(len(rows), k, np.int64) for k, (_, rows) in enumerate(parts)])
     order = np.argsort(t, kind='stable')
-    values = {k: np.concatenate([r.values[k][rows] for r, rows in parts])[order]
-              for k in VALUE_FIELDS if k in keys}
-    status = np.concatenate([r.status[rows] for r, rows in parts])[order] \
-        if 'status' in keys else np.zeros(0, np.int64)
+    values = {
+        k: np.concatenate([r.values[k][rows] for r, rows in parts])[order]
+        for k in VALUE_FIELDS
+        if k in keys
+    }
+    status = (
+        np.concatenate([r.status[rows] for r, rows in parts])[order]
+        if 'status' in keys
+        else np.zeros(0, np.int64)
+    )
     level = np.concatenate([r.level[rows] for r, rows in parts])[order]
     if 'model' in keys:
         values['model'] = np.concatenate([r.model_codes[rows] for r, rows in parts])[order]
     return t[order], values, line[order], status, level
 
 
-def write_csv(stream: IO[bytes], result: ReplayResult, progress: Progress = None,
-              columns: Sequence[str] = CSV_COLUMNS) -> int:
+def write_csv(
+    stream: IO[bytes],
+    result: ReplayResult,
+    progress: Progress = None,
+    columns: Sequence[str] = CSV_COLUMNS,
+) -> int:
     """One row per tension message, in time order; returns the number of rows.
 
     ``columns`` are names from :data:`CSV_ALL` (written in that order): ``time`` is the
@@ -82,8 +138,10 @@ def write_csv(stream: IO[bytes], result: ReplayResult, progress: Progress = None
     """
     unknown = set(columns) - {name for name, _ in CSV_ALL}
     if unknown:
-        raise ValueError(f'unknown CSV column(s) {sorted(unknown)}; known: '
-                         + ', '.join(name for name, _ in CSV_ALL))
+        raise ValueError(
+            f'unknown CSV column(s) {sorted(unknown)}; known: '
+            + ', '.join(name for name, _ in CSV_ALL)
+        )
     wanted = [(name, d) for name, d in CSV_ALL if name in set(columns)]
     t, values, line, status, level = _tension_rows(result, [n for n, _ in wanted])
     names = [r.name for r in result.lines]
@@ -141,17 +199,25 @@ def _snapshot_payloads(result: ReplayResult) -> tuple[list[int], list[bytes]]:
                 if len(headers) > 4096:
                     headers.clear()
                 header = headers[key] = functools.lru_cache(maxsize=4)(
-                    functools.partial(status_header, *key))
+                    functools.partial(status_header, *key)
+                )
             parts.append((header, key_values(st.values)))
         stamps.append(snap.stamp_ns)
         payloads.append(diagnostic_array_parts(snap.stamp_ns, parts))
     return stamps, payloads
 
 
-def write_mcap(stream: IO[bytes], result: ReplayResult, config: MonitorConfig,
-               tensions: dict[str, tuple[np.ndarray, np.ndarray]],
-               depth: tuple[np.ndarray, np.ndarray], topics: dict[str, str], depth_topic: str,
-               sources: Sequence[str] = (), progress: Progress = None) -> int:
+def write_mcap(
+    stream: IO[bytes],
+    result: ReplayResult,
+    config: MonitorConfig,
+    tensions: dict[str, tuple[np.ndarray, np.ndarray]],
+    depth: tuple[np.ndarray, np.ndarray],
+    topics: dict[str, str],
+    depth_topic: str,
+    sources: Sequence[str] = (),
+    progress: Progress = None,
+) -> int:
     """Results as a ROS 2 MCAP log shaped like the node's: inputs, outputs, /diagnostics.
 
     The recorded inputs are copied (``std_msgs/msg/Float64``); each line's updates go to
@@ -162,10 +228,15 @@ def write_mcap(stream: IO[bytes], result: ReplayResult, config: MonitorConfig,
     """
     w = ColumnWriter(stream)
     schemas = {}
-    for type_name in ('std_msgs/msg/Float64', 'std_msgs/msg/Float64MultiArray',
-                      'diagnostic_msgs/msg/DiagnosticArray', 'std_msgs/msg/String'):
-        schemas[type_name] = w.register_schema(type_name, 'ros2msg',
-                                               message_definition(type_name).encode())
+    for type_name in (
+        'std_msgs/msg/Float64',
+        'std_msgs/msg/Float64MultiArray',
+        'diagnostic_msgs/msg/DiagnosticArray',
+        'std_msgs/msg/String',
+    ):
+        schemas[type_name] = w.register_schema(
+            type_name, 'ros2msg', message_definition(type_name).encode()
+        )
 
     def channel(topic: str, type_name: str, qos: str) -> int:
         meta = {'offered_qos_profiles': qos}
@@ -174,24 +245,35 @@ def write_mcap(stream: IO[bytes], result: ReplayResult, config: MonitorConfig,
             meta['topic_type_hash'] = type_hash
         return w.register_channel(topic, 'cdr', schemas[type_name], meta)
 
-    in_ids = {name: channel(topics[name], 'std_msgs/msg/Float64', QOS_SENSOR_DATA)
-              for name in topics}
+    in_ids = {
+        name: channel(topics[name], 'std_msgs/msg/Float64', QOS_SENSOR_DATA) for name in topics
+    }
     depth_id = channel(depth_topic, 'std_msgs/msg/Float64', QOS_SENSOR_DATA)
-    out_ids = [channel(output_topic(r.name), 'std_msgs/msg/Float64MultiArray', QOS_DEFAULT)
-               for r in result.lines]
+    out_ids = [
+        channel(output_topic(r.name), 'std_msgs/msg/Float64MultiArray', QOS_DEFAULT)
+        for r in result.lines
+    ]
     diag_id = channel('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', QOS_DEFAULT)
     event_id = channel(EVENTS_TOPIC, 'std_msgs/msg/String', QOS_DEFAULT)
-    w.add_metadata(NODE_NAME, {
-        'version': __version__, 'config_hash': config_hash(config),
-        'parameters': json.dumps(config_to_params(config), sort_keys=True),
-        'output_fields': ','.join(OUTPUT_FIELDS), 'units': 'SI (N, m, s)',
-        'source': 'catenary-monitor replay', 'replayed_files': ','.join(sources)})
+    w.add_metadata(
+        NODE_NAME,
+        {
+            'version': __version__,
+            'config_hash': config_hash(config),
+            'parameters': json.dumps(config_to_params(config), sort_keys=True),
+            'output_fields': ','.join(OUTPUT_FIELDS),
+            'units': 'SI (N, m, s)',
+            'source': 'catenary-monitor replay',
+            'replayed_files': ','.join(sources),
+        },
+    )
 
     # Inputs, merged in time order.
     t_in = [depth[0]] + [tensions[n][0] for n in topics if n in tensions]
     v_in = [depth[1]] + [tensions[n][1] for n in topics if n in tensions]
-    c_in = [np.full(len(depth[0]), depth_id)] + [np.full(len(tensions[n][0]), in_ids[n])
-                                                 for n in topics if n in tensions]
+    c_in = [np.full(len(depth[0]), depth_id)] + [
+        np.full(len(tensions[n][0]), in_ids[n]) for n in topics if n in tensions
+    ]
     t_in_all = np.concatenate(t_in)
     order = np.argsort(t_in_all, kind='stable')
     t_in_all = t_in_all[order]
@@ -223,6 +305,7 @@ def write_mcap(stream: IO[bytes], result: ReplayResult, config: MonitorConfig,
             a = 0 if lo_t is None else int(np.searchsorted(times, lo_t, 'left'))
             b = len(times) if hi_t is None else int(np.searchsorted(times, hi_t, 'left'))
             return slice(a, b)
+
         s_in = part(t_in_all)
         w.write_columns(c_in_all[s_in], t_in_all[s_in], float64_payloads(v_in_all[s_in]))
         sel = order[part(t_sorted)]
@@ -243,8 +326,11 @@ def write_mcap(stream: IO[bytes], result: ReplayResult, config: MonitorConfig,
 
 
 # ---------------------------------------------------------------------------- charts
-_SHADE = {Level.WARN: ('#f2c744', 'WARN'), Level.STALE: ('#9e9e9e', 'STALE'),
-          Level.ERROR: ('#d62728', 'ERROR')}
+_SHADE = {
+    Level.WARN: ('#f2c744', 'WARN'),
+    Level.STALE: ('#9e9e9e', 'STALE'),
+    Level.ERROR: ('#d62728', 'ERROR'),
+}
 
 
 def _envelope(t: np.ndarray, v: np.ndarray, bins: int = 1000) -> tuple[np.ndarray, np.ndarray]:
@@ -284,17 +370,20 @@ def _dates(t_s: np.ndarray) -> np.ndarray:
 def _shade(ax: Any, periods: list[tuple[float, float, Level]]) -> None:
     for a, b, level in periods:
         color, _ = _SHADE[level]
-        ax.axvspan(_dates(np.array([a]))[0], _dates(np.array([b]))[0], color=color, alpha=0.3,
-                   lw=0)
+        ax.axvspan(
+            _dates(np.array([a]))[0], _dates(np.array([b]))[0], color=color, alpha=0.3, lw=0
+        )
 
 
-def write_plots(path: Path, result: ReplayResult, config: MonitorConfig,
-                depth: tuple[np.ndarray, np.ndarray]) -> list[Path]:
+def write_plots(
+    path: Path, result: ReplayResult, config: MonitorConfig, depth: tuple[np.ndarray, np.ndarray]
+) -> list[Path]:
     """PNG charts: ``path`` (overview: every line's tension, alarms shaded, and the tide) and
     ``<stem>_<line><suffix>`` per line (hook tension; minimum vs installed anchor distance;
     uplift force vs allowed; tide), alarm periods shaded (WARN yellow, STALE grey, ERROR red).
     """
     import matplotlib
+
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
@@ -308,11 +397,19 @@ def write_plots(path: Path, result: ReplayResult, config: MonitorConfig,
         fig, axes = plt.subplots(4, 1, figsize=(11, 9), sharex=True)
         t = r.t_ns * 1e-9
         periods = _periods(r, result.end_ns)
-        series = [('hook tension [kN]', r.values['top_tension'] / 1e3, None),
-                  ('minimum anchor distance [m]', r.values['min_anchor_distance'],
-                   (lc.anchor_distance, 'installed')),
-                  ('uplift force [kN]', r.values['uplift_force'] / 1e3,
-                   (lc.allowed_uplift / 1e3, 'allowed'))]
+        series = [
+            ('hook tension [kN]', r.values['top_tension'] / 1e3, None),
+            (
+                'minimum anchor distance [m]',
+                r.values['min_anchor_distance'],
+                (lc.anchor_distance, 'installed'),
+            ),
+            (
+                'uplift force [kN]',
+                r.values['uplift_force'] / 1e3,
+                (lc.allowed_uplift / 1e3, 'allowed'),
+            ),
+        ]
         for ax, (label, v, ref) in zip(axes, series):
             x, y = _envelope(t, v)
             ax.plot(_dates(x), y, lw=0.7)
@@ -335,8 +432,7 @@ def write_plots(path: Path, result: ReplayResult, config: MonitorConfig,
         plt.close(fig)
         written.append(out)
     n = len(result.lines)
-    fig, axes = plt.subplots(n + 1, 1, figsize=(11, 1.6 * (n + 1) + 1), sharex=True,
-                             squeeze=False)
+    fig, axes = plt.subplots(n + 1, 1, figsize=(11, 1.6 * (n + 1) + 1), sharex=True, squeeze=False)
     for ax, r in zip(axes[:, 0], result.lines):
         x, y = _envelope(r.t_ns * 1e-9, r.values['top_tension'] / 1e3)
         ax.plot(_dates(x), y, lw=0.6)
@@ -349,8 +445,13 @@ def write_plots(path: Path, result: ReplayResult, config: MonitorConfig,
     ax.set_xlabel('time (UTC)')
     axes[0, 0].legend(handles=legend, loc='upper left', fontsize=7, ncol=3)
     fig.suptitle('replay: hook tension per line, alarm periods shaded; tide')
-    fig.subplots_adjust(left=0.09, right=0.98, top=1 - 0.75 / (1.6 * (n + 1) + 1),
-                        bottom=0.6 / (1.6 * (n + 1) + 1), hspace=0.15)
+    fig.subplots_adjust(
+        left=0.09,
+        right=0.98,
+        top=1 - 0.75 / (1.6 * (n + 1) + 1),
+        bottom=0.6 / (1.6 * (n + 1) + 1),
+        hspace=0.15,
+    )
     fig.savefig(path, dpi=72)
     plt.close(fig)
     return [path] + written
@@ -370,8 +471,9 @@ def _final_level(r: LineResult) -> Level:
     return Level.STALE
 
 
-def summary_dict(result: ReplayResult, report: Any, extra: Optional[dict[str, Any]] = None
-                 ) -> dict[str, Any]:
+def summary_dict(
+    result: ReplayResult, report: Any, extra: Optional[dict[str, Any]] = None
+) -> dict[str, Any]:
     """Machine-readable summary (``--json``): SI units, times in s since the Unix epoch."""
     lines = {}
     for r in result.lines:
@@ -389,14 +491,24 @@ def summary_dict(result: ReplayResult, report: Any, extra: Optional[dict[str, An
         'complete': bool(report.complete),
         'messages': dict(report.messages),
         'missing_topics': list(report.missing_topics),
-        'skipped': [{'path': s.path, 'offset': s.offset, 'kind': s.kind, 'reason': s.reason,
-                     'messages_lost': s.messages_lost} for s in report.skips],
+        'skipped': [
+            {
+                'path': s.path,
+                'offset': s.offset,
+                'kind': s.kind,
+                'reason': s.reason,
+                'messages_lost': s.messages_lost,
+            }
+            for s in report.skips
+        ],
         'unfinished_files': [f.path for f in report.files if not f.finished],
-        'start': result.start_ns * 1e-9, 'end': result.end_ns * 1e-9,
+        'start': result.start_ns * 1e-9,
+        'end': result.end_ns * 1e-9,
         'duration': (result.end_ns - result.start_ns) * 1e-9,
-        'ticks': {'count': int(len(result.tick_ns)),
-                  'source': 'recorded by the node' if result.ticks_from_log else
-                  'synthetic grid'},
+        'ticks': {
+            'count': int(len(result.tick_ns)),
+            'source': 'recorded by the node' if result.ticks_from_log else 'synthetic grid',
+        },
         'lines': lines,
     }
     if extra:
@@ -408,22 +520,27 @@ def _fmt(value: Optional[dict[str, float]], scale: float, unit: str, fmt: str) -
     if value is None:
         return 'n/a'
     return f'{format(value["value"] / scale, fmt)} {unit} at {_utc(value["time"])[11:]}'.replace(
-        '  ', ' ')
+        '  ', ' '
+    )
 
 
 def summary_text(summary: dict[str, Any]) -> str:
     """Human-readable summary: per line the worst margins and each alarm episode."""
     msgs = summary['messages']
-    out = [f'replayed {len(summary["files"])} file(s): {sum(msgs.values())} messages, '
-           f'{_utc(summary["start"])} to {_utc(summary["end"])} UTC '
-           f'({summary["duration"]:.1f} s); {summary["ticks"]["count"]} periodic steps '
-           f'({summary["ticks"]["source"]})']
+    out = [
+        f'replayed {len(summary["files"])} file(s): {sum(msgs.values())} messages, '
+        f'{_utc(summary["start"])} to {_utc(summary["end"])} UTC '
+        f'({summary["duration"]:.1f} s); {summary["ticks"]["count"]} periodic steps '
+        f'({summary["ticks"]["source"]})'
+    ]
     par = summary.get('parameters')
     if par:
         text = f'parameters: {par["source"]} (config hash {par["config_hash"][:12]})'
         if par['same_as_recorded'] is False:
-            text += (f'; the log was recorded with other parameters (config hash '
-                     f'{par["recorded_config_hash"][:12]})')
+            text += (
+                f'; the log was recorded with other parameters (config hash '
+                f'{par["recorded_config_hash"][:12]})'
+            )
         elif par['same_as_recorded']:
             text += '; the same as recorded in the log'
         out.append(text)
@@ -439,23 +556,37 @@ def summary_text(summary: dict[str, Any]) -> str:
     for name, ln in summary['lines'].items():
         w = ln['worst']
         out.append('')
-        out.append(f'{name}: {ln["tension_messages"]} tension messages, {ln["updates"]} updates'
-                   f' ({ln["unsolved_updates"]} unsolved), final level {ln["final_level"]}')
-        out.append(f'  worst anchor margin {_fmt(w["anchor_margin"], 1, "m", "+.2f")}; '
-                   f'tide margin {_fmt(w["tide_margin"], 1, "m", "+.2f")}')
-        out.append(f'  worst load margin {_fmt(w["load_margin"], 1e3, "kN", "+.1f")}; '
-                   f'safety factor {_fmt(w["safety_factor"], 1, "", ".2f")}')
+        out.append(
+            f'{name}: {ln["tension_messages"]} tension messages, {ln["updates"]} updates'
+            f' ({ln["unsolved_updates"]} unsolved), final level {ln["final_level"]}'
+        )
+        out.append(
+            f'  worst anchor margin {_fmt(w["anchor_margin"], 1, "m", "+.2f")}; '
+            f'tide margin {_fmt(w["tide_margin"], 1, "m", "+.2f")}'
+        )
+        out.append(
+            f'  worst load margin {_fmt(w["load_margin"], 1e3, "kN", "+.1f")}; '
+            f'safety factor {_fmt(w["safety_factor"], 1, "", ".2f")}'
+        )
         uplift = w['uplift_force']
-        lifted = 'none (anchor never lifted)' if uplift is not None and uplift['value'] == 0 \
+        lifted = (
+            'none (anchor never lifted)'
+            if uplift is not None and uplift['value'] == 0
             else _fmt(uplift, 1e3, 'kN', '.1f')
-        out.append(f'  max uplift {lifted}; '
-                   f'max hook tension {_fmt(w["top_tension"], 1e3, "kN", ".1f")}')
+        )
+        out.append(
+            f'  max uplift {lifted}; '
+            f'max hook tension {_fmt(w["top_tension"], 1e3, "kN", ".1f")}'
+        )
         eps = ln['episodes']
         if not eps:
             out.append('  no alarm episode')
         for e in eps:
-            end = 'still active at the end of the log' if e['end'] is None else \
-                f'until {_utc(e["end"])[11:]}'
+            end = (
+                'still active at the end of the log'
+                if e['end'] is None
+                else f'until {_utc(e["end"])[11:]}'
+            )
             dur = '' if e['duration'] is None else f'{e["duration"]:.1f} s, '
             out.append(f'  {e["worst"]:<5} from {_utc(e["start"])} ({dur}{end}): {e["message"]}')
     for key in ('outputs', 'timing'):

@@ -35,6 +35,7 @@ else OK. **ERROR outranks STALE** (a sensor dropout must not hide a lifted ancho
 ``Level.STALE`` is numerically larger; STALE outranks WARN (a warning from old data is not
 news). The message joins every applicable condition with ``'; '``, ERRORs first.
 """
+
 from __future__ import annotations
 
 import math
@@ -47,8 +48,18 @@ import numpy as np
 from catenary_monitor.core.config import AlarmConfig, LineConfig
 
 __all__ = [
-    'Level', 'AlarmInputs', 'Latch', 'AlarmState', 'Transition', 'LineAlarm', 'LevelSeries',
-    'CONDITIONS', 'DIAGNOSTIC_KEYS', 'RANK', 'replay_levels', 'diagnostic_values',
+    'Level',
+    'AlarmInputs',
+    'Latch',
+    'AlarmState',
+    'Transition',
+    'LineAlarm',
+    'LevelSeries',
+    'CONDITIONS',
+    'DIAGNOSTIC_KEYS',
+    'RANK',
+    'replay_levels',
+    'diagnostic_values',
 ]
 
 
@@ -82,15 +93,15 @@ class AlarmInputs:
     lines, so they agree); None lets the alarm decide from ``depth_stamp`` itself.
     """
 
-    uplift_force: float = math.nan   # N, vertical force on the anchor
+    uplift_force: float = math.nan  # N, vertical force on the anchor
     anchor_margin: float = math.nan  # m, installed minus minimum anchor distance
-    tide_margin: float = math.nan    # m, depth rise the chain takes before uplift
-    load_margin: float = math.nan    # N, as reported by the solver
+    tide_margin: float = math.nan  # m, depth rise the chain takes before uplift
+    load_margin: float = math.nan  # N, as reported by the solver
     safety_factor: float = math.nan  # -, MBL / top tension
     status: int = 0
     status_message: str = ''
     tension_stamp: float = math.nan  # s
-    depth_stamp: float = math.nan    # s
+    depth_stamp: float = math.nan  # s
     depth_stale: bool | None = None
 
 
@@ -109,7 +120,7 @@ class AlarmState:
     message: str = 'no tension received yet; no depth received yet'
     latches: tuple[Latch, ...] = (Latch(),) * len(CONDITIONS)
     entered: tuple[float, ...] = (math.nan,) * 4  # s, when each severity rank was last entered
-    input_message: str = ''               # last impossible-input sentence, while its alarm holds
+    input_message: str = ''  # last impossible-input sentence, while its alarm holds
 
 
 class Transition(NamedTuple):
@@ -163,8 +174,9 @@ class LineAlarm:
         """State of a line that has received nothing yet, at time ``now`` (s): blind, STALE."""
         return AlarmState(entered=(now, now, now, math.nan))
 
-    def update(self, state: AlarmState, inputs: AlarmInputs,
-               now: float) -> tuple[AlarmState, list[Transition]]:
+    def update(
+        self, state: AlarmState, inputs: AlarmInputs, now: float
+    ) -> tuple[AlarmState, list[Transition]]:
         """Advance ``state`` by one update at time ``now`` (s); return it and any transition.
 
         Call it on every solved update and also periodically (e.g. at the diagnostic rate) with
@@ -189,8 +201,14 @@ class LineAlarm:
         if level != state.level:
             entered, duration = _episode(entered, state.level, level, now)
             events.append(Transition(now, state.level, level, message, duration))
-        new = replace(state, level=level, message=message, latches=tuple(latches),
-                      entered=entered, input_message=input_message if active[1] else '')
+        new = replace(
+            state,
+            level=level,
+            message=message,
+            latches=tuple(latches),
+            entered=entered,
+            input_message=input_message if active[1] else '',
+        )
         return new, events
 
     def _stale(self, x: AlarmInputs, now: float) -> tuple[bool, bool]:
@@ -210,15 +228,23 @@ class LineAlarm:
             breach = x.uplift_force > self.allowed_uplift
             level = self.uplift_clear_level
             clear = x.uplift_force <= level and (
-                level > 0.0 or x.anchor_margin >= self.config.uplift_clear_margin)
+                level > 0.0 or x.anchor_margin >= self.config.uplift_clear_margin
+            )
         else:
             low, high = self._warn_limits(cond)
             value = getattr(x, cond)
             breach, clear = value < low, value >= high
         return _BREACH if breach else (_CLEAR if clear and not stale else _HOLD)
 
-    def _message(self, active: Sequence[bool], x: AlarmInputs, now: float,
-                 stale_t: bool, stale_d: bool, input_message: str) -> str:
+    def _message(
+        self,
+        active: Sequence[bool],
+        x: AlarmInputs,
+        now: float,
+        stale_t: bool,
+        stale_d: bool,
+        input_message: str,
+    ) -> str:
         """Operator message for the conditions that apply, joined with '; '."""
         parts = []
         hold_e, hold_w = self.config.clear_hold, self.config.warn_clear_hold
@@ -228,9 +254,11 @@ class LineAlarm:
                 parts.append(f'anchor uplift {_fmt(f, 1e3)} kN > allowed {_fmt(allowed, 1e3)} kN')
             else:
                 level = self.uplift_clear_level
-                text = (f'anchor uplift alarm held: uplift {_fmt(f, 1e3)} kN, anchor margin '
-                        f'{_fmt(x.anchor_margin)} m (clears after {hold_e:g} s at uplift <= '
-                        f'{_fmt(level, 1e3)} kN')
+                text = (
+                    f'anchor uplift alarm held: uplift {_fmt(f, 1e3)} kN, anchor margin '
+                    f'{_fmt(x.anchor_margin)} m (clears after {hold_e:g} s at uplift <= '
+                    f'{_fmt(level, 1e3)} kN'
+                )
                 if level == 0.0:
                     text += f' and anchor margin >= {_fmt(self.config.uplift_clear_margin)} m'
                 parts.append(text + ')')
@@ -238,18 +266,23 @@ class LineAlarm:
             if x.status != 0:
                 parts.append(f'impossible input: {input_message}')
             else:
-                parts.append(f'impossible input alarm held: last was "{input_message}" '
-                             f'(clears after {hold_e:g} s of valid input)')
+                parts.append(
+                    f'impossible input alarm held: last was "{input_message}" '
+                    f'(clears after {hold_e:g} s of valid input)'
+                )
         for name, is_stale, stamp, timeout in (
-                ('tension', stale_t, x.tension_stamp, self.config.tension_timeout),
-                ('depth', stale_d, x.depth_stamp, self.config.depth_timeout)):
+            ('tension', stale_t, x.tension_stamp, self.config.tension_timeout),
+            ('depth', stale_d, x.depth_stamp, self.config.depth_timeout),
+        ):
             if not is_stale:
                 continue
             if math.isnan(stamp):
                 parts.append(f'no {name} received yet')
             else:
-                parts.append(f'{name} stale: last sample {_fmt(now - stamp)} s ago '
-                             f'(timeout {timeout:g} s)')
+                parts.append(
+                    f'{name} stale: last sample {_fmt(now - stamp)} s ago '
+                    f'(timeout {timeout:g} s)'
+                )
         for cond, up in zip(_WARNS, active[2:]):
             if up:
                 parts.append(self._warn_text(cond, getattr(x, cond), hold_w))
@@ -258,8 +291,9 @@ class LineAlarm:
     def _warn_text(self, cond: str, value: float, hold: float) -> str:
         low, high = self._warn_limits(cond)
         label = cond.replace('_', ' ')
-        scale, unit, digits = {'load_margin': (1e3, ' kN', 1),
-                               'safety_factor': (1.0, '', 2)}.get(cond, (1.0, ' m', 2))
+        scale, unit, digits = {'load_margin': (1e3, ' kN', 1), 'safety_factor': (1.0, '', 2)}.get(
+            cond, (1.0, ' m', 2)
+        )
         v, lo, hi = (_fmt(a, scale, digits) for a in (value, low, high))
         if value < low:
             return f'{label} {v}{unit} < {lo}{unit}'
@@ -290,8 +324,9 @@ def _combine(active: Sequence[bool], stale: bool) -> Level:
     return Level.WARN if any(active[2:]) else Level.OK
 
 
-def _episode(entered: tuple[float, ...], old: Level, new: Level,
-             now: float) -> tuple[tuple[float, ...], float | None]:
+def _episode(
+    entered: tuple[float, ...], old: Level, new: Level, now: float
+) -> tuple[tuple[float, ...], float | None]:
     """Update the time each severity rank was entered; return the ending episode's length."""
     r_old, r_new = RANK[old], RANK[new]
     if r_new > r_old:
@@ -301,12 +336,20 @@ def _episode(entered: tuple[float, ...], old: Level, new: Level,
 
 # --- vectorized replay --------------------------------------------------------------------------
 
-_INPUT_FIELDS = ('uplift_force', 'anchor_margin', 'tide_margin', 'load_margin', 'safety_factor',
-                 'tension_stamp', 'depth_stamp')
+_INPUT_FIELDS = (
+    'uplift_force',
+    'anchor_margin',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'tension_stamp',
+    'depth_stamp',
+)
 
 
-def _latch_series(codes: np.ndarray, t: np.ndarray, on_delay: float, hold: float,
-                  start: Latch = Latch()) -> tuple[np.ndarray, Latch]:
+def _latch_series(
+    codes: np.ndarray, t: np.ndarray, on_delay: float, hold: float, start: Latch = Latch()
+) -> tuple[np.ndarray, Latch]:
     """Latch state after each update, exactly as repeated :func:`_step` from ``start``.
 
     A raise or clear is decided inside one run of equal codes, timed from the run's first
@@ -329,7 +372,7 @@ def _latch_series(codes: np.ndarray, t: np.ndarray, on_delay: float, hold: float
     pending = _CLEAR if start.active else _BREACH
     if start.since is not None and codes[0] == pending:
         first = np.flatnonzero(starts[1:])
-        began[:first[0] + 1 if first.size else n] = start.since
+        began[: first[0] + 1 if first.size else n] = start.since
     elapsed = t - began
     event = np.full(n, -1, dtype=np.int8)
     event[(codes == _CLEAR) & (elapsed >= hold)] = 0
@@ -350,10 +393,20 @@ class LevelSeries:
     message after update ``i`` and :meth:`final_state` the state after the last one.
     """
 
-    def __init__(self, alarm: LineAlarm, times: np.ndarray, x: dict[str, np.ndarray],
-                 status: np.ndarray, texts: Any, stale_t: np.ndarray, stale_d: np.ndarray,
-                 active: dict[str, np.ndarray], latches: tuple[Latch, ...],
-                 initial: AlarmState, status_messages: Mapping[int, str] | None) -> None:
+    def __init__(
+        self,
+        alarm: LineAlarm,
+        times: np.ndarray,
+        x: dict[str, np.ndarray],
+        status: np.ndarray,
+        texts: Any,
+        stale_t: np.ndarray,
+        stale_d: np.ndarray,
+        active: dict[str, np.ndarray],
+        latches: tuple[Latch, ...],
+        initial: AlarmState,
+        status_messages: Mapping[int, str] | None,
+    ) -> None:
         self.alarm, self.times, self._x, self._status = alarm, times, x, status
         self._texts, self._table = texts, status_messages or {}
         self._stale_t, self._stale_d, self._active = stale_t, stale_d, active
@@ -364,10 +417,14 @@ class LevelSeries:
         for cond in _WARNS:
             warn |= active[cond]
         stale = stale_t | stale_d
-        self.levels = np.where(err, Level.ERROR, np.where(
-            stale, Level.STALE, np.where(warn, Level.WARN, Level.OK))).astype(np.int8)
-        self._last_bad = np.maximum.accumulate(np.where(status != 0, np.arange(n), -1)) \
-            if n else np.zeros(0, np.int64)
+        self.levels = np.where(
+            err, Level.ERROR, np.where(stale, Level.STALE, np.where(warn, Level.WARN, Level.OK))
+        ).astype(np.int8)
+        self._last_bad = (
+            np.maximum.accumulate(np.where(status != 0, np.arange(n), -1))
+            if n
+            else np.zeros(0, np.int64)
+        )
         self.transitions, self._entered = self._walk()
 
     def _held(self, i: int) -> str:
@@ -383,12 +440,18 @@ class LevelSeries:
         """The line's message after update ``i`` (as ``AlarmState.message``)."""
         if self.levels[i] == Level.OK:
             return 'OK'
-        sample = AlarmInputs(**{k: float(self._x[k][i]) for k in _INPUT_FIELDS},
-                             status=int(self._status[i]))
+        sample = AlarmInputs(
+            **{k: float(self._x[k][i]) for k in _INPUT_FIELDS}, status=int(self._status[i])
+        )
         flags = [bool(self._active[cond][i]) for cond in CONDITIONS]
-        return self.alarm._message(flags, sample, float(self.times[i]),
-                                   bool(self._stale_t[i]), bool(self._stale_d[i]),
-                                   self._held(i))
+        return self.alarm._message(
+            flags,
+            sample,
+            float(self.times[i]),
+            bool(self._stale_t[i]),
+            bool(self._stale_d[i]),
+            self._held(i),
+        )
 
     def _walk(self) -> tuple[list[Transition], tuple[float, ...]]:
         """Transitions (with messages and episode durations) from the initial state."""
@@ -409,13 +472,22 @@ class LevelSeries:
         if n == 0:
             return self._initial
         held = self._held(n - 1) if self._active['input'][-1] else ''
-        return AlarmState(level=Level(int(self.levels[-1])), message=self.message_at(n - 1),
-                          latches=self._latches, entered=self._entered, input_message=held)
+        return AlarmState(
+            level=Level(int(self.levels[-1])),
+            message=self.message_at(n - 1),
+            latches=self._latches,
+            entered=self._entered,
+            input_message=held,
+        )
 
 
-def replay_levels(times: Any, inputs: Mapping[str, Any], alarm: LineAlarm,
-                  status_messages: Mapping[int, str] | None = None,
-                  initial: AlarmState | None = None) -> LevelSeries:
+def replay_levels(
+    times: Any,
+    inputs: Mapping[str, Any],
+    alarm: LineAlarm,
+    status_messages: Mapping[int, str] | None = None,
+    initial: AlarmState | None = None,
+) -> LevelSeries:
     """Levels and transitions for a whole sequence of updates of one line, vectorized.
 
     Gives exactly the levels, transitions (times, levels, messages, durations) and final state
@@ -450,8 +522,10 @@ def replay_levels(times: Any, inputs: Mapping[str, Any], alarm: LineAlarm,
     if initial is None:
         initial = alarm.initial(float(t[0]) if n else 0.0)
     default = AlarmInputs()
-    x = {k: np.broadcast_to(np.asarray(inputs.get(k, getattr(default, k)), dtype=np.float64),
-                            (n,)) for k in _INPUT_FIELDS}
+    x = {
+        k: np.broadcast_to(np.asarray(inputs.get(k, getattr(default, k)), dtype=np.float64), (n,))
+        for k in _INPUT_FIELDS
+    }
     status = np.broadcast_to(np.asarray(inputs.get('status', 0), dtype=np.int64), (n,))
     stale_t, stale_d = _stale_columns(alarm, t, x, inputs.get('depth_stale'))
     stale = stale_t | stale_d
@@ -463,12 +537,24 @@ def replay_levels(times: Any, inputs: Mapping[str, Any], alarm: LineAlarm,
     texts = inputs.get('status_message')
     if texts is not None:
         texts = np.broadcast_to(np.asarray(texts, dtype=object), (n,))
-    return LevelSeries(alarm, t, x, status, texts, stale_t, stale_d, active, tuple(latches),
-                       initial, status_messages)
+    return LevelSeries(
+        alarm,
+        t,
+        x,
+        status,
+        texts,
+        stale_t,
+        stale_d,
+        active,
+        tuple(latches),
+        initial,
+        status_messages,
+    )
 
 
-def _stale_columns(alarm: LineAlarm, t: np.ndarray, x: dict[str, np.ndarray],
-                   depth_stale: Any) -> tuple[np.ndarray, np.ndarray]:
+def _stale_columns(
+    alarm: LineAlarm, t: np.ndarray, x: dict[str, np.ndarray], depth_stale: Any
+) -> tuple[np.ndarray, np.ndarray]:
     """Per update: (tension stale or never received, depth stale or never received)."""
     cfg = alarm.config
     ts, ds = x['tension_stamp'], x['depth_stamp']
@@ -481,9 +567,11 @@ def _stale_columns(alarm: LineAlarm, t: np.ndarray, x: dict[str, np.ndarray],
     return stale_t, stale_d
 
 
-def _classify_columns(alarm: LineAlarm, x: dict[str, np.ndarray], status: np.ndarray,
-                      stale: np.ndarray) -> dict[str, np.ndarray]:
+def _classify_columns(
+    alarm: LineAlarm, x: dict[str, np.ndarray], status: np.ndarray, stale: np.ndarray
+) -> dict[str, np.ndarray]:
     """Each condition's code (breach, clear, hold) per update, as :meth:`LineAlarm._classify`."""
+
     def codes(breach: np.ndarray, clear: np.ndarray) -> np.ndarray:
         return np.where(breach, _BREACH, np.where(clear & ~stale, _CLEAR, _HOLD)).astype(np.int8)
 
@@ -493,8 +581,10 @@ def _classify_columns(alarm: LineAlarm, x: dict[str, np.ndarray], status: np.nda
     up_clear = f <= level_up
     if not level_up > 0.0:
         up_clear &= x['anchor_margin'] >= cfg.uplift_clear_margin
-    out = {'uplift': codes(f > alarm.allowed_uplift, up_clear),
-           'input': codes(status != 0, status == 0)}
+    out = {
+        'uplift': codes(f > alarm.allowed_uplift, up_clear),
+        'input': codes(status != 0, status == 0),
+    }
     for cond in _WARNS:
         low, high = alarm._warn_limits(cond)
         out[cond] = codes(x[cond] < low, x[cond] >= high)
@@ -504,8 +594,17 @@ def _classify_columns(alarm: LineAlarm, x: dict[str, np.ndarray], status: np.nda
 # --- diagnostics values -------------------------------------------------------------------------
 
 #: KeyValue keys of each line's DiagnosticStatus (contract, SI units).
-DIAGNOSTIC_KEYS = ('top_tension', 'depth', 'horizontal_tension', 'min_anchor_distance',
-                   'anchor_margin', 'uplift_force', 'tide_margin', 'load_margin', 'safety_factor')
+DIAGNOSTIC_KEYS = (
+    'top_tension',
+    'depth',
+    'horizontal_tension',
+    'min_anchor_distance',
+    'anchor_margin',
+    'uplift_force',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+)
 
 
 def diagnostic_values(result_fields: Any) -> list[tuple[str, str]]:
@@ -514,6 +613,7 @@ def diagnostic_values(result_fields: Any) -> list[tuple[str, str]]:
     ``result_fields`` is a mapping or an object with those attributes (e.g. a scalar solve
     result); a missing field gives ``'nan'``. ``float()`` parses every value back exactly.
     """
+
     def get(key: str) -> Any:
         if isinstance(result_fields, Mapping):
             return result_fields.get(key, math.nan)

@@ -21,6 +21,7 @@ whose anchor is lifted. The formulas are the ones :func:`catenary_monitor.solve`
 arrays, so values equal the core's scalar path to rounding (1e-12 relative) and levels and
 messages are identical.
 """
+
 from __future__ import annotations
 
 import math
@@ -33,15 +34,43 @@ from catenary_monitor.core import catenary as cat, elastic
 from catenary_monitor.core.alarms import Level, LevelSeries, Transition, replay_levels
 from catenary_monitor.core.config import LineConfig, MonitorConfig
 from catenary_monitor.core.health import tide_status
-from catenary_monitor.core.monitor import (NO_DEPTH, NO_MODEL, OUTPUT_FIELDS, VALUE_FIELDS,
-                                           Change, ComponentStatus, LineState, MonitorCore,
-                                           Snapshot, Start, line_status, tide_component)
+from catenary_monitor.core.monitor import (
+    NO_DEPTH,
+    NO_MODEL,
+    OUTPUT_FIELDS,
+    VALUE_FIELDS,
+    Change,
+    ComponentStatus,
+    LineState,
+    MonitorCore,
+    Snapshot,
+    Start,
+    line_status,
+    tide_component,
+)
 from catenary_monitor.core.solve import STATUS_MESSAGES, Status
 
-__all__ = ['OUTPUT_FIELDS', 'VALUE_FIELDS', 'NO_DEPTH', 'MODEL_NAMES', 'KIND_DEPTH',
-           'KIND_TENSION', 'KIND_TICK', 'Column', 'Window', 'LineResult', 'WindowResult',
-           'ReplayResult', 'advance', 'run_log', 'recompute', 'solve_updates',
-           'critical_parameters', 'tick_grid', 'worst']
+__all__ = [
+    'OUTPUT_FIELDS',
+    'VALUE_FIELDS',
+    'NO_DEPTH',
+    'MODEL_NAMES',
+    'KIND_DEPTH',
+    'KIND_TENSION',
+    'KIND_TICK',
+    'Column',
+    'Window',
+    'LineResult',
+    'WindowResult',
+    'ReplayResult',
+    'advance',
+    'run_log',
+    'recompute',
+    'solve_updates',
+    'critical_parameters',
+    'tick_grid',
+    'worst',
+]
 
 #: Model names by :attr:`LineResult.model_codes` (as the ``/diagnostics`` key ``model``).
 MODEL_NAMES = (NO_MODEL, elastic.INEXTENSIBLE, elastic.ELASTIC)
@@ -117,8 +146,13 @@ class LineResult:
         cur: Optional[dict[str, object]] = None
         for tr in self.transitions:
             if cur is None and tr.new != Level.OK:
-                cur = {'start': tr.time, 'end': None, 'duration': None, 'worst': tr.new.name,
-                       'message': tr.message}
+                cur = {
+                    'start': tr.time,
+                    'end': None,
+                    'duration': None,
+                    'worst': tr.new.name,
+                    'message': tr.message,
+                }
             elif cur is not None:
                 if tr.new == Level.OK:
                     cur['end'] = tr.time
@@ -161,8 +195,9 @@ class WindowResult:
         return sorted(out, key=lambda c: c.transition.time)
 
 
-def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
-                  a_crit: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray]:
+def solve_updates(
+    line: LineConfig, tension: np.ndarray, depth: np.ndarray, a_crit: np.ndarray
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """Problems 3 and 4 for one line on arrays, with the critical parameter given per element.
 
     Parameters
@@ -215,8 +250,9 @@ def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
         lift = np.flatnonzero(x < x_min)
         if lift.size:
             m = lift.size
-            state, _, conv = cat.lifted_from_tension(np.full(m, w), b[lift], h[lift],
-                                                     np.full(m, x))
+            state, _, conv = cat.lifted_from_tension(
+                np.full(m, w), b[lift], h[lift], np.full(m, x)
+            )
             r[lift] = state.horizontal_tension
             length[lift] = state.suspended_length
             uplift[lift] = state.uplift_force
@@ -246,8 +282,9 @@ def solve_updates(line: LineConfig, tension: np.ndarray, depth: np.ndarray,
     return out, status
 
 
-def _solve_updates_elastic(line: LineConfig, tension: np.ndarray, depth: np.ndarray
-                           ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+def _solve_updates_elastic(
+    line: LineConfig, tension: np.ndarray, depth: np.ndarray
+) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
     """:func:`solve_updates` for a line with ``ea``: ``elastic.solve_with_correction`` (the
     rule picks the model).
 
@@ -261,8 +298,13 @@ def _solve_updates_elastic(line: LineConfig, tension: np.ndarray, depth: np.ndar
     has = ~np.isnan(depth)
     if has.any():
         res, _ = elastic.solve_with_correction(
-            line.weight, depth[has], tension[has], anchor_distance=line.anchor_distance,
-            ea=line.ea, mbl=line.mbl)
+            line.weight,
+            depth[has],
+            tension[has],
+            anchor_distance=line.anchor_distance,
+            ea=line.ea,
+            mbl=line.mbl,
+        )
         status[has] = res.status
         used[has] = np.asarray(res.model) == elastic.ELASTIC
         for k in VALUE_FIELDS:
@@ -294,6 +336,7 @@ def tick_grid(start_ns: int, end_ns: int, rate_hz: float) -> np.ndarray:
 
 # --- the engine ----------------------------------------------------------------------------------
 
+
 def _merge(dd: np.ndarray, tt: np.ndarray, kk: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Merge sorted depth, tension and tick times (ties: depth, tension, tick): (times, kinds)."""
     before = np.searchsorted
@@ -303,8 +346,11 @@ def _merge(dd: np.ndarray, tt: np.ndarray, kk: np.ndarray) -> tuple[np.ndarray, 
     n = len(dd) + len(tt) + len(kk)
     times = np.empty(n, np.int64)
     kinds = np.empty(n, np.int8)
-    for pos, src, kind in ((pos_d, dd, KIND_DEPTH), (pos_t, tt, KIND_TENSION),
-                           (pos_k, kk, KIND_TICK)):
+    for pos, src, kind in (
+        (pos_d, dd, KIND_DEPTH),
+        (pos_t, tt, KIND_TENSION),
+        (pos_k, kk, KIND_TICK),
+    ):
         times[pos] = src
         kinds[pos] = kind
     return times, kinds
@@ -319,11 +365,11 @@ def _newest(mask: np.ndarray) -> np.ndarray:
 class _Tide:
     """The tide's decisions in a window (at depth samples and ticks, in time order)."""
 
-    times: np.ndarray       # ns
-    depth: np.ndarray       # m, newest depth at each decision
-    depth_s: np.ndarray     # s, its stamp (NaN: none)
-    level: np.ndarray       # int8 Level
-    stale: np.ndarray       # bool, the depth-stale decision the lines take
+    times: np.ndarray  # ns
+    depth: np.ndarray  # m, newest depth at each decision
+    depth_s: np.ndarray  # s, its stamp (NaN: none)
+    level: np.ndarray  # int8 Level
+    stale: np.ndarray  # bool, the depth-stale decision the lines take
 
 
 def _decide_tide(core: MonitorCore, window: Window) -> tuple[_Tide, list[Transition]]:
@@ -348,19 +394,23 @@ def _decide_tide(core: MonitorCore, window: Window) -> tuple[_Tide, list[Transit
     old, entered = core.tide[0], core.tide_entered
     for i in _changed(level, old).tolist():
         new = tide_status(float(depth[i]), float(depth_s[i]), float(now[i]), timeout)
-        transitions.append(Transition(float(now[i]), old, new[0], new[1],
-                                      float(now[i]) - entered))
+        transitions.append(Transition(float(now[i]), old, new[0], new[1], float(now[i]) - entered))
         old, entered = new[0], float(now[i])
     return tide, transitions
 
 
-def _write_tide(core: MonitorCore, window: Window, tide: _Tide,
-                transitions: list[Transition]) -> None:
+def _write_tide(
+    core: MonitorCore, window: Window, tide: _Tide, transitions: list[Transition]
+) -> None:
     """The core's depth and tide state after the window's last event."""
     if len(tide.times):
         i = len(tide.times) - 1
-        core.tide = tide_status(float(tide.depth[i]), float(tide.depth_s[i]),
-                                float(tide.times[i] * 1e-9), core.config.alarm.depth_timeout)
+        core.tide = tide_status(
+            float(tide.depth[i]),
+            float(tide.depth_s[i]),
+            float(tide.times[i] * 1e-9),
+            core.config.alarm.depth_timeout,
+        )
         core.depth_stale = bool(tide.stale[i])
     if transitions:
         core.tide_entered = transitions[-1].time
@@ -373,13 +423,13 @@ def _write_tide(core: MonitorCore, window: Window, tide: _Tide,
 class _Steps:
     """One line's steps in a window and what each step sees."""
 
-    times: np.ndarray       # ns
-    kinds: np.ndarray       # int8
-    t_idx: np.ndarray       # newest tension sample in the window (-1: the core's)
-    d_idx: np.ndarray       # newest depth sample in the window (-1: the core's)
-    dk_idx: np.ndarray      # newest tide decision in the window (-1: the core's)
-    solved: np.ndarray      # bool: the line is solved at this step
-    s_idx: np.ndarray       # newest solve in the window (-1: the core's)
+    times: np.ndarray  # ns
+    kinds: np.ndarray  # int8
+    t_idx: np.ndarray  # newest tension sample in the window (-1: the core's)
+    d_idx: np.ndarray  # newest depth sample in the window (-1: the core's)
+    dk_idx: np.ndarray  # newest tide decision in the window (-1: the core's)
+    solved: np.ndarray  # bool: the line is solved at this step
+    s_idx: np.ndarray  # newest solve in the window (-1: the core's)
 
 
 def _line_steps(line: LineState, tt: np.ndarray, window: Window) -> _Steps:
@@ -387,8 +437,15 @@ def _line_steps(line: LineState, tt: np.ndarray, window: Window) -> _Steps:
     t_idx = _newest(kinds == KIND_TENSION)
     known = (t_idx >= 0) | (line.tension_s == line.tension_s)
     solved = (kinds == KIND_TENSION) | ((kinds == KIND_DEPTH) & known)
-    return _Steps(times, kinds, t_idx, _newest(kinds == KIND_DEPTH),
-                  _newest(kinds != KIND_TENSION), solved, _newest(solved))
+    return _Steps(
+        times,
+        kinds,
+        t_idx,
+        _newest(kinds == KIND_DEPTH),
+        _newest(kinds != KIND_TENSION),
+        solved,
+        _newest(solved),
+    )
 
 
 def _pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
@@ -398,9 +455,9 @@ def _pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
     return np.where(idx >= 0, column[np.maximum(idx, 0)], before)
 
 
-def _solve_line(core: MonitorCore, line: LineState, steps: _Steps, tv: np.ndarray,
-                window: Window
-                ) -> tuple[dict[str, np.ndarray], np.ndarray, Optional[np.ndarray]]:
+def _solve_line(
+    core: MonitorCore, line: LineState, steps: _Steps, tv: np.ndarray, window: Window
+) -> tuple[dict[str, np.ndarray], np.ndarray, Optional[np.ndarray]]:
     """Values, status and elastic flags at the line's solved steps."""
     lc = line.config
     where = np.flatnonzero(steps.solved)
@@ -416,25 +473,37 @@ def _solve_line(core: MonitorCore, line: LineState, steps: _Steps, tv: np.ndarra
     return values, status, None
 
 
-def _line_inputs(core: MonitorCore, line: LineState, steps: _Steps, tide: _Tide,
-                 values: dict[str, np.ndarray], status: np.ndarray,
-                 window: Window, tt: np.ndarray) -> dict[str, Any]:
+def _line_inputs(
+    core: MonitorCore,
+    line: LineState,
+    steps: _Steps,
+    tide: _Tide,
+    values: dict[str, np.ndarray],
+    status: np.ndarray,
+    window: Window,
+    tt: np.ndarray,
+) -> dict[str, Any]:
     """The alarm inputs at every step of the line (newest solve, stamps, tide decision)."""
     s = steps.s_idx
     before = dict(zip(VALUE_FIELDS, line.values))
-    inputs: dict[str, Any] = {k: _pick(s, values[k], before[k]) for k in (
-        'uplift_force', 'anchor_margin', 'tide_margin', 'load_margin', 'safety_factor')}
+    inputs: dict[str, Any] = {
+        k: _pick(s, values[k], before[k])
+        for k in ('uplift_force', 'anchor_margin', 'tide_margin', 'load_margin', 'safety_factor')
+    }
     inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
-        np.int64)
+        np.int64
+    )
     inputs['tension_stamp'] = _pick(steps.t_idx, tt * 1e-9, line.tension_s)
     inputs['depth_stamp'] = _pick(steps.d_idx, window.depth[0] * 1e-9, core.depth_s)
-    inputs['depth_stale'] = _pick(steps.dk_idx, tide.stale.astype(np.float64),
-                                  float(core.depth_stale)).astype(bool)
+    inputs['depth_stale'] = _pick(
+        steps.dk_idx, tide.stale.astype(np.float64), float(core.depth_stale)
+    ).astype(bool)
     return inputs
 
 
-def _advance_line(core: MonitorCore, k: int, window: Window,
-                  tide: _Tide) -> tuple[LineResult, LevelSeries, _Steps]:
+def _advance_line(
+    core: MonitorCore, k: int, window: Window, tide: _Tide
+) -> tuple[LineResult, LevelSeries, _Steps]:
     """One line through the window; leaves the line's state in the core as after the steps
     (the core's depth and tide still as before the window)."""
     line = core.lines[k]
@@ -442,19 +511,36 @@ def _advance_line(core: MonitorCore, k: int, window: Window,
     steps = _line_steps(line, tt, window)
     values, status, used = _solve_line(core, line, steps, tv, window)
     inputs = _line_inputs(core, line, steps, tide, values, status, window, tt)
-    series = replay_levels(steps.times * 1e-9, inputs, line.alarm, STATUS_MESSAGES,
-                           initial=line.state)
+    series = replay_levels(
+        steps.times * 1e-9, inputs, line.alarm, STATUS_MESSAGES, initial=line.state
+    )
     where = np.flatnonzero(steps.solved)
-    result = LineResult(line.config.name, steps.times[where], steps.kinds[where], values, status,
-                        series.levels[where], steps.times, steps.kinds, series.levels,
-                        series.transitions, used)
+    result = LineResult(
+        line.config.name,
+        steps.times[where],
+        steps.kinds[where],
+        values,
+        status,
+        series.levels[where],
+        steps.times,
+        steps.kinds,
+        series.levels,
+        series.transitions,
+        used,
+    )
     _write_back(line, series, values, status, used, tt, tv)
     return result, series, steps
 
 
-def _write_back(line: LineState, series: LevelSeries, values: dict[str, np.ndarray],
-                status: np.ndarray, used: Optional[np.ndarray], tt: np.ndarray,
-                tv: np.ndarray) -> None:
+def _write_back(
+    line: LineState,
+    series: LevelSeries,
+    values: dict[str, np.ndarray],
+    status: np.ndarray,
+    used: Optional[np.ndarray],
+    tt: np.ndarray,
+    tv: np.ndarray,
+) -> None:
     """The line's state after its last step in the window."""
     line.state = series.final_state()
     if len(tt):
@@ -475,12 +561,22 @@ def advance(core: MonitorCore, window: Window, snapshots: bool = False) -> Windo
     snapshot the core would have made (ticks and level changes).
     """
     if len(window.tensions) != len(core.lines):
-        raise ValueError(f'window has {len(window.tensions)} tension columns for '
-                         f'{len(core.lines)} lines')
+        raise ValueError(
+            f'window has {len(window.tensions)} tension columns for ' f'{len(core.lines)} lines'
+        )
     depth_before = (core.depth, core.depth_s, core.depth_stale)
     tide_before = core.tide
-    lines_before = [_Before(line.state.level, line.state.message, line.values, line.status,
-                            line.model, line.tension_s) for line in core.lines]
+    lines_before = [
+        _Before(
+            line.state.level,
+            line.state.message,
+            line.values,
+            line.status,
+            line.model,
+            line.tension_s,
+        )
+        for line in core.lines
+    ]
     tide, tide_transitions = _decide_tide(core, window)
     results, series, steps = [], [], []
     for k in range(len(core.lines)):
@@ -493,14 +589,16 @@ def advance(core: MonitorCore, window: Window, snapshots: bool = False) -> Windo
     end = int(max(t[-1] for t in times)) if times else core.last_ns
     snaps: list[Snapshot] = []
     if snapshots:
-        snaps = _snapshots(core, window, tide, results, series, steps, depth_before,
-                           tide_before, lines_before)
+        snaps = _snapshots(
+            core, window, tide, results, series, steps, depth_before, tide_before, lines_before
+        )
     _write_tide(core, window, tide, tide_transitions)
     core.last_ns = max(core.last_ns, end)
     return WindowResult(results, tide_transitions, snaps, start, end)
 
 
 # --- snapshots -----------------------------------------------------------------------------------
+
 
 class _Before(NamedTuple):
     """A line as the core held it before the window (for snapshots before its first step)."""
@@ -518,10 +616,17 @@ def _changed(levels: np.ndarray, before: Level) -> np.ndarray:
     return np.flatnonzero(np.diff(levels, prepend=np.int8(before)))
 
 
-def _snapshots(core: MonitorCore, window: Window, tide: _Tide, results: list[LineResult],
-               series: list[LevelSeries], steps: list[_Steps],
-               depth_before: tuple[float, float, bool], tide_before: tuple[Level, str],
-               lines_before: list[_Before]) -> list[Snapshot]:
+def _snapshots(
+    core: MonitorCore,
+    window: Window,
+    tide: _Tide,
+    results: list[LineResult],
+    series: list[LevelSeries],
+    steps: list[_Steps],
+    depth_before: tuple[float, float, bool],
+    tide_before: tuple[Level, str],
+    lines_before: list[_Before],
+) -> list[Snapshot]:
     """Every snapshot the core made in the window (ticks and level changes), built from the
     vectorized results."""
     parts = [window.ticks, tide.times[_changed(tide.level, tide_before[0])]]
@@ -531,18 +636,33 @@ def _snapshots(core: MonitorCore, window: Window, tide: _Tide, results: list[Lin
     tide_at = np.searchsorted(tide.times, stamps, 'right') - 1
     depth_at = np.searchsorted(dd, stamps, 'right') - 1
     timeout = core.config.alarm.depth_timeout
-    columns = [_line_statuses(core.lines[k], results[k], series[k], steps[k], stamps,
-                              window.tensions[k][0], lines_before[k])
-               for k in range(len(results))]
-    logger = ComponentStatus('catenary_monitor: logger', core.logger[0], core.logger[1],
-                             core.logger_id, ())
+    columns = [
+        _line_statuses(
+            core.lines[k],
+            results[k],
+            series[k],
+            steps[k],
+            stamps,
+            window.tensions[k][0],
+            lines_before[k],
+        )
+        for k in range(len(results))
+    ]
+    logger = ComponentStatus(
+        'catenary_monitor: logger', core.logger[0], core.logger[1], core.logger_id, ()
+    )
     out = []
     for n, stamp in enumerate(stamps.tolist()):
         i, j = int(tide_at[n]), int(depth_at[n])
         depth = float(dv[j]) if j >= 0 else depth_before[0]
         depth_s = float(dd[j] * 1e-9) if j >= 0 else depth_before[1]
-        state = tide_before if i < 0 else tide_status(
-            float(tide.depth[i]), float(tide.depth_s[i]), float(tide.times[i] * 1e-9), timeout)
+        state = (
+            tide_before
+            if i < 0
+            else tide_status(
+                float(tide.depth[i]), float(tide.depth_s[i]), float(tide.times[i] * 1e-9), timeout
+            )
+        )
         statuses = [col[n] for col in columns]
         statuses.append(tide_component(state, core.depth_id, depth, stamp * 1e-9 - depth_s))
         statuses.append(logger)
@@ -550,8 +670,15 @@ def _snapshots(core: MonitorCore, window: Window, tide: _Tide, results: list[Lin
     return out
 
 
-def _line_statuses(line: LineState, r: LineResult, series: LevelSeries, steps: _Steps,
-                   stamps: np.ndarray, tt: np.ndarray, before: _Before) -> list[ComponentStatus]:
+def _line_statuses(
+    line: LineState,
+    r: LineResult,
+    series: LevelSeries,
+    steps: _Steps,
+    stamps: np.ndarray,
+    tt: np.ndarray,
+    before: _Before,
+) -> list[ComponentStatus]:
     """The line's status in each snapshot (as after its newest step at or before the stamp)."""
     at = np.searchsorted(steps.times, stamps, 'right') - 1
     out = []
@@ -566,8 +693,18 @@ def _line_statuses(line: LineState, r: LineResult, series: LevelSeries, steps: _
                 status, model = int(r.status[s]), MODEL_NAMES[int(r.model_codes[s])]
             if t >= 0:
                 ts = float(tt[t] * 1e-9)
-        out.append(line_status(line.config, line.hardware_id, level, message, values, status,
-                               model, stamps[n] * 1e-9 - ts))
+        out.append(
+            line_status(
+                line.config,
+                line.hardware_id,
+                level,
+                message,
+                values,
+                status,
+                model,
+                stamps[n] * 1e-9 - ts,
+            )
+        )
     return out
 
 
@@ -578,9 +715,14 @@ def worst(result: LineResult) -> dict[str, Optional[dict[str, float]]]:
     ``uplift_force`` and ``top_tension``. None when the quantity never had a value.
     """
     out: dict[str, Optional[dict[str, float]]] = {}
-    for key, pick in (('anchor_margin', np.nanargmin), ('tide_margin', np.nanargmin),
-                      ('load_margin', np.nanargmin), ('safety_factor', np.nanargmin),
-                      ('uplift_force', np.nanargmax), ('top_tension', np.nanargmax)):
+    for key, pick in (
+        ('anchor_margin', np.nanargmin),
+        ('tide_margin', np.nanargmin),
+        ('load_margin', np.nanargmin),
+        ('safety_factor', np.nanargmin),
+        ('uplift_force', np.nanargmax),
+        ('top_tension', np.nanargmax),
+    ):
         v = result.values[key]
         if len(v) == 0 or np.all(np.isnan(v)):
             out[key] = None
@@ -592,12 +734,15 @@ def worst(result: LineResult) -> dict[str, Optional[dict[str, float]]]:
 
 # --- a whole log ---------------------------------------------------------------------------------
 
+
 def _slice(window: Window, lo: Optional[int], hi: Optional[int]) -> Window:
     """The events of ``window`` with ``lo <= t < hi`` (None: unbounded)."""
+
     def cut(times: np.ndarray) -> slice:
         a = 0 if lo is None else int(np.searchsorted(times, lo, 'left'))
         b = len(times) if hi is None else int(np.searchsorted(times, hi, 'left'))
         return slice(a, b)
+
     tensions = [(t[cut(t)], v[cut(t)]) for t, v in window.tensions]
     dt, dv = window.depth
     return Window(tensions, (dt[cut(dt)], dv[cut(dt)]), window.ticks[cut(window.ticks)])
@@ -609,19 +754,29 @@ def _concat(parts: list[LineResult]) -> LineResult:
         return parts[0]
     cat_ = np.concatenate
     flags = [p.elastic for p in parts]
-    used = None if all(f is None for f in flags) else cat_(
-        [np.zeros(len(p.t_ns), bool) if f is None else f for p, f in zip(parts, flags)])
-    return LineResult(parts[0].name, cat_([p.t_ns for p in parts]),
-                      cat_([p.kind for p in parts]),
-                      {k: cat_([p.values[k] for p in parts]) for k in VALUE_FIELDS},
-                      cat_([p.status for p in parts]), cat_([p.level for p in parts]),
-                      cat_([p.step_ns for p in parts]), cat_([p.step_kind for p in parts]),
-                      cat_([p.step_level for p in parts]),
-                      [tr for p in parts for tr in p.transitions], used)
+    used = (
+        None
+        if all(f is None for f in flags)
+        else cat_([np.zeros(len(p.t_ns), bool) if f is None else f for p, f in zip(parts, flags)])
+    )
+    return LineResult(
+        parts[0].name,
+        cat_([p.t_ns for p in parts]),
+        cat_([p.kind for p in parts]),
+        {k: cat_([p.values[k] for p in parts]) for k in VALUE_FIELDS},
+        cat_([p.status for p in parts]),
+        cat_([p.level for p in parts]),
+        cat_([p.step_ns for p in parts]),
+        cat_([p.step_kind for p in parts]),
+        cat_([p.step_level for p in parts]),
+        [tr for p in parts for tr in p.transitions],
+        used,
+    )
 
 
-def run_log(core: MonitorCore, window: Window, events: Any = (),
-            snapshots: bool = False) -> tuple[WindowResult, MonitorCore]:
+def run_log(
+    core: MonitorCore, window: Window, events: Any = (), snapshots: bool = False
+) -> tuple[WindowResult, MonitorCore]:
     """Advance ``core`` over a whole log; return the results and the core at the end.
 
     ``window`` holds the input columns and the ticks; ``events`` the other records in time
@@ -637,8 +792,9 @@ def run_log(core: MonitorCore, window: Window, events: Any = (),
         hi = None if event is None else event.stamp_ns
         pieces.append(advance(core, _slice(window, lo, hi), snapshots))
         if isinstance(event, Start):
-            core = MonitorCore(core.config, event.stamp_ns, _ids(core), core.depth_id,
-                               core.logger_id)
+            core = MonitorCore(
+                core.config, event.stamp_ns, _ids(core), core.depth_id, core.logger_id
+            )
         elif event is not None:
             step = core.step(event)
             others += list(step.transitions)
@@ -648,8 +804,17 @@ def run_log(core: MonitorCore, window: Window, events: Any = (),
     lines = [_concat([p.lines[k] for p in pieces]) for k in range(len(core.lines))]
     tide = [tr for p in pieces for tr in p.tide]
     snaps = sorted([s for p in pieces for s in p.snapshots] + extra, key=lambda s: s.stamp_ns)
-    return WindowResult(lines, tide, snaps, min(p.start_ns for p in pieces),
-                        max(p.end_ns for p in pieces), others), core
+    return (
+        WindowResult(
+            lines,
+            tide,
+            snaps,
+            min(p.start_ns for p in pieces),
+            max(p.end_ns for p in pieces),
+            others,
+        ),
+        core,
+    )
 
 
 def _ids(core: MonitorCore) -> dict[str, str]:
@@ -664,13 +829,19 @@ class ReplayResult(WindowResult):
 
     tick_ns: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     ticks_from_log: bool = False
-    started_ns: int = 0                               # when the monitor started (blind)
-    events: list[Any] = field(default_factory=list)   # the other records it was given
+    started_ns: int = 0  # when the monitor started (blind)
+    events: list[Any] = field(default_factory=list)  # the other records it was given
 
 
-def recompute(config: MonitorConfig, tensions: dict[str, Column], depth: Column,
-              tick_ns: Optional[np.ndarray] = None, events: Any = (),
-              start_ns: Optional[int] = None, snapshots: bool = False) -> ReplayResult:
+def recompute(
+    config: MonitorConfig,
+    tensions: dict[str, Column],
+    depth: Column,
+    tick_ns: Optional[np.ndarray] = None,
+    events: Any = (),
+    start_ns: Optional[int] = None,
+    snapshots: bool = False,
+) -> ReplayResult:
     """Every step of a recorded log, as the monitor made them.
 
     Parameters
@@ -692,11 +863,23 @@ def recompute(config: MonitorConfig, tensions: dict[str, Column], depth: Column,
     start = first if start_ns is None else int(start_ns)
     from_log = tick_ns is not None
     if tick_ns is None:
-        tick_ns = tick_grid(start, last, config.alarm.diagnostic_rate) if stamps else \
-            np.zeros(0, np.int64)
+        tick_ns = (
+            tick_grid(start, last, config.alarm.diagnostic_rate)
+            if stamps
+            else np.zeros(0, np.int64)
+        )
     ticks = np.sort(np.asarray(tick_ns, np.int64))
     core = MonitorCore(config, start)
     result, _ = run_log(core, Window(columns, depth, ticks), events, snapshots)
-    return ReplayResult(result.lines, result.tide, result.snapshots,
-                        min(start, result.start_ns), result.end_ns, result.others, ticks,
-                        from_log, start, list(events))
+    return ReplayResult(
+        result.lines,
+        result.tide,
+        result.snapshots,
+        min(start, result.start_ns),
+        result.end_ns,
+        result.others,
+        ticks,
+        from_log,
+        start,
+        list(events),
+    )

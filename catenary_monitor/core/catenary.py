@@ -1,20 +1,23 @@
-"""Numerically stable catenary kernels for a chain running from a hook point down to a seabed anchor.
+"""Numerically stable catenary kernels for a chain from a hook point down to a seabed anchor.
 
 Notation (SI units throughout): ``w`` submerged weight per metre [N/m], ``h`` vertical distance
 anchor -> hook [m], ``x`` horizontal distance hook -> anchor [m], ``R`` horizontal tension [N],
 ``T`` hook (top) tension [N], ``a = R / w`` the catenary parameter [m].
 
-The chain is a catenary ``y = a cosh(xi)`` in its own parameter ``xi``; the anchor sits at ``xi = u``
+The chain is a catenary ``y = a cosh(xi)`` in its own parameter ``xi``; the anchor sits at ``xi =
+u``
 (``u = 0``: the chain meets the seabed tangentially, no uplift) and the hook at ``xi = u + X`` with
 ``X = x / a``.  Every kernel below is written so that nothing cancels that the problem itself does
 not make ill-conditioned: ``cosh(z) - 1`` is evaluated as ``2 sinh(z/2)**2``, ``acosh(1 + z)`` as
 ``log1p(z + sqrt(z (2 + z)))``, and the uplift solve iterates on ``log(X - log1p(h/B))`` so that
 both of its ends (``x -> 0`` and ``x -> x_min``) keep full relative accuracy.
 
-Each closed form takes an array namespace ``xp`` (``numpy`` or :mod:`math` through ``_MATH``) so the
+Each closed form takes an array namespace ``xp`` (``numpy`` or :mod:`math` through ``_MATH``) so
+the
 same formula serves the vectorized path and the fast scalar path.  Inputs here are assumed valid:
 validation lives in :mod:`catenary_monitor.solve`.
 """
+
 from __future__ import annotations
 
 import math
@@ -29,13 +32,25 @@ STEP_TOL = 1e-9
 #: Plain Newton steps taken on whole arrays before the safeguarded active-set loop (problem 4;
 #: from its model-based start most elements have converged after 2).
 FAST_STEPS = 2
-#: Iteration cap; never reached on the physical domain (residual counts: test/test_methods_scalar.py).
+# : Iteration cap; never reached on the physical domain (residual counts:
+# test/test_methods_scalar.py).
 MAXITER = 60
 
 _MATH = SimpleNamespace(
-    sqrt=math.sqrt, log=math.log, maximum=max, minimum=min, log1p=math.log1p, exp=math.exp, expm1=math.expm1,
-    sinh=math.sinh, cosh=math.cosh, tanh=math.tanh, asinh=math.asinh, arctan2=math.atan2,
-    arcsinh=math.asinh, arctan=math.atan,
+    sqrt=math.sqrt,
+    log=math.log,
+    maximum=max,
+    minimum=min,
+    log1p=math.log1p,
+    exp=math.exp,
+    expm1=math.expm1,
+    sinh=math.sinh,
+    cosh=math.cosh,
+    tanh=math.tanh,
+    asinh=math.asinh,
+    arctan2=math.atan2,
+    arcsinh=math.asinh,
+    arctan=math.atan,
 )
 
 
@@ -84,7 +99,7 @@ def grounded(a: Any, h: Any, xp: Any = np) -> Grounded:
 
 
 def depth_reached(a: Any, x: Any, xp: Any = np) -> Any:
-    """Depth ``a (cosh(x/a) - 1)`` [m] spanned by a no-uplift catenary over horizontal distance x."""
+    """Depth ``a (cosh(x/a) - 1)`` [m] a no-uplift catenary spans over horizontal distance x."""
     s = xp.sinh(0.5 * x / a)
     return 2.0 * a * s * s
 
@@ -131,7 +146,8 @@ def lifted_from_horizontal(w: Any, h: Any, a: Any, x: Any, xp: Any = np) -> Lift
     """Problem 2: horizontal tension (``a = R/w``) and span x given, anchor closer than x_min.
 
     Closed form: with ``p = sinh(X/2)`` and ``q = h / (2 a p)``, the anchor parameter is
-    ``u = asinh(q) - asinh(p)``, evaluated as ``asinh((q - p)(q + p) / (q sqrt(1+p^2) + p sqrt(1+q^2)))``
+    ``u = asinh(q) - asinh(p)``, evaluated as ``asinh((q - p)(q + p) / (q sqrt(1+p^2) + p
+    sqrt(1+q^2)))``
     where ``q - p = (h/a - 2 p^2) / (2p)``: the only subtraction left is the problem's own
     (depth minus the depth a no-uplift chain reaches).  Negative ``u`` is clipped to 0 (grounded).
     """
@@ -155,6 +171,7 @@ def lifted_from_horizontal(w: Any, h: Any, a: Any, x: Any, xp: Any = np) -> Lift
 # has no cancellation for any d > 0; we solve it by Newton in eta = log(d) on the log of the
 # ratio of both sides, which is close to linear in eta over the whole range.  Then
 #     sech(u) = x / (B X),   tanh(u) = (e - 2 sinh(X/2)**2) / sinh(X).
+
 
 def _uplift_residual(eta: Any, e: Any, r02: Any, xlo: Any, m: Any, xp: Any) -> tuple[Any, Any]:
     """Residual ``log(x(d)^2 / x_t^2)`` and its derivative with respect to ``eta = log(d)``.
@@ -206,7 +223,8 @@ def _start_root(q: Any, r02: Any, r02_sq: Any, xp: Any) -> Any:
 
 
 def _lifted_from_d(w: Any, b: Any, e: Any, xlo: Any, m: Any, d: Any, xp: Any) -> Lifted:
-    """Uplift state from the solved ``d``: ``sech u = m / X``, ``tanh u = (e - cosh X + 1)/sinh X``.
+    """Uplift state from the solved ``d``: ``sech u = m / X``,
+    ``tanh u = (e - cosh X + 1)/sinh X``.
 
     :func:`_lifted_state` with ``a = B sech u`` simplified: ``R = w B sech u``, ``F = w B tanh u``,
     ``T = w B (cosh X + tanh u sinh X)``, ``L = B (tanh u (cosh X - 1) + sinh X)``.
@@ -219,13 +237,19 @@ def _lifted_from_d(w: Any, b: Any, e: Any, xlo: Any, m: Any, d: Any, xp: Any) ->
     t = xp.maximum((e - cm1) / sx, 0.0)  # tanh u
     wb = w * b
     c = 1.0 + cm1
-    return Lifted(horizontal_tension=wb * s, uplift_force=wb * t, anchor_angle=xp.arctan(t / s),
-                  top_tension=wb * (c + t * sx), top_angle=xp.arctan((t * c + sx) / s),
-                  suspended_length=b * (t * cm1 + sx))
+    return Lifted(
+        horizontal_tension=wb * s,
+        uplift_force=wb * t,
+        anchor_angle=xp.arctan(t / s),
+        top_tension=wb * (c + t * sx),
+        top_angle=xp.arctan((t * c + sx) / s),
+        suspended_length=b * (t * cm1 + sx),
+    )
 
 
-def lifted_from_tension(w: np.ndarray, b: np.ndarray, h: np.ndarray, x: np.ndarray
-                        ) -> tuple[Lifted, np.ndarray, np.ndarray]:
+def lifted_from_tension(
+    w: np.ndarray, b: np.ndarray, h: np.ndarray, x: np.ndarray
+) -> tuple[Lifted, np.ndarray, np.ndarray]:
     """Problem 4, vectorized: uplift state for hook tension ``T = w (B + h)`` and span x < x_min.
 
     All arguments are 1-D float arrays of one length (``b = T/w - h``).  Returns the state, the
@@ -284,7 +308,14 @@ def lifted_from_tension_scalar(w: float, b: float, h: float, x: float) -> tuple[
     ``_lifted_from_d`` in the same operation order): about twice as fast
     as calling those helpers through the ``_MATH`` namespace, same results.
     """
-    log, log1p, exp, expm1, sinh, tanh = math.log, math.log1p, math.exp, math.expm1, math.sinh, math.tanh
+    log, log1p, exp, expm1, sinh, tanh = (
+        math.log,
+        math.log1p,
+        math.exp,
+        math.expm1,
+        math.sinh,
+        math.tanh,
+    )
     sqrt = math.sqrt
     e = h / b
     r02 = e * (2.0 + e)
@@ -348,9 +379,23 @@ def lifted_from_tension_scalar(w: float, b: float, h: float, x: float) -> tuple[
     wb = w * b
     c = 1.0 + cm1
     atan = math.atan
-    # Lifted(horizontal_tension, uplift_force, anchor_angle, top_tension, top_angle, suspended_length)
-    return _new_tuple(Lifted, (wb * s, wb * t, atan(t / s), wb * (c + t * sx), atan((t * c + sx) / s),
-                               b * (t * cm1 + sx))), it, converged
+    # Lifted(horizontal_tension, uplift_force, anchor_angle, top_tension, top_angle,
+    # suspended_length)
+    return (
+        _new_tuple(
+            Lifted,
+            (
+                wb * s,
+                wb * t,
+                atan(t / s),
+                wb * (c + t * sx),
+                atan((t * c + sx) / s),
+                b * (t * cm1 + sx),
+            ),
+        ),
+        it,
+        converged,
+    )
 
 
 # --------------------------------------------------------------------------------------------
@@ -375,7 +420,9 @@ def critical_parameter(h: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.nda
     return x / (2.0 * np.exp(eta)), np.isfinite(eta)
 
 
-def _critical_newton(eta: np.ndarray, log_c: np.ndarray, fast_steps: int = FAST_STEPS) -> np.ndarray:
+def _critical_newton(
+    eta: np.ndarray, log_c: np.ndarray, fast_steps: int = FAST_STEPS
+) -> np.ndarray:
     """Newton in ``eta = log D`` from ``eta`` (updated in place), steps clipped to +-4.
 
     The first ``fast_steps`` steps run on the whole arrays; then only on the moving elements.
@@ -414,14 +461,19 @@ def _critical_series_start(c: np.ndarray) -> np.ndarray:
     small c (``sinh(D)^2/D = D + D^3/3 + 2 D^5/45 + ...``), ``~ e^{2D}/(4D)`` for large D."""
     big = np.log(4.0 * np.maximum(c, 1.0))
     c2 = c * c
-    d0 = np.where(c < 0.5, c * (1.0 - c2 * (1.0 / 3.0 - c2 * (13.0 / 45.0))),
-                  np.where(c < 1.0, c, 0.5 * (big + np.log(np.maximum(0.5 * big, 1.0)))))
+    d0 = np.where(
+        c < 0.5,
+        c * (1.0 - c2 * (1.0 / 3.0 - c2 * (13.0 / 45.0))),
+        np.where(c < 1.0, c, 0.5 * (big + np.log(np.maximum(0.5 * big, 1.0)))),
+    )
     return np.log(np.maximum(d0, 1e-300))
 
 
 def _hermite(t: Any, y0: Any, y1: Any, s0: Any, s1: Any) -> Any:
     """Cubic Hermite interpolation on [0, 1] from end values y0, y1 and end slopes s0, s1."""
-    return y0 + t * (s0 + t * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) + t * (2.0 * (y0 - y1) + s0 + s1)))
+    return y0 + t * (
+        s0 + t * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) + t * (2.0 * (y0 - y1) + s0 + s1))
+    )
 
 
 def critical_parameter_scalar(h: float, x: float) -> float:
@@ -437,7 +489,9 @@ def critical_parameter_scalar(h: float, x: float) -> float:
         k = int(pos)
         t = pos - k
         y0, y1, s0, s1 = _CRIT_ETA[k], _CRIT_ETA[k + 1], _CRIT_SLOPE[k], _CRIT_SLOPE[k + 1]
-        eta = y0 + t * (s0 + t * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) + t * (2.0 * (y0 - y1) + s0 + s1)))
+        eta = y0 + t * (
+            s0 + t * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) + t * (2.0 * (y0 - y1) + s0 + s1))
+        )
     elif c < 0.5:  # _critical_series_start, inline
         c2 = c * c
         eta = log(c * (1.0 - c2 * (1.0 / 3.0 - c2 * (13.0 / 45.0))))
@@ -482,14 +536,20 @@ def _critical_table(n: int) -> tuple[list[float], list[float]]:
 
 _CRIT_ETA, _CRIT_SLOPE = _critical_table(1065)
 _CRIT_N = 1065
-_CRIT_TABLE = (np.array(_CRIT_ETA[:-1]), np.array(_CRIT_ETA[1:]), np.array(_CRIT_SLOPE[:-1]),
-               np.array(_CRIT_SLOPE[1:]))
+_CRIT_TABLE = (
+    np.array(_CRIT_ETA[:-1]),
+    np.array(_CRIT_ETA[1:]),
+    np.array(_CRIT_SLOPE[:-1]),
+    np.array(_CRIT_SLOPE[1:]),
+)
 
 
 # --------------------------------------------------------------------------------------------
 # Problem 5: paid-out chain length Lm and span x given (Hou et al. 2005).
 # --------------------------------------------------------------------------------------------
-def grounded_parameter_from_length(h: np.ndarray, excess: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def grounded_parameter_from_length(
+    h: np.ndarray, excess: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Catenary parameter [m] of a chain lying on the seabed, from ``excess = Lm - x``.
 
     With ``theta = acosh(1 + h/a)`` (the suspended span over a), suspended length minus span is
@@ -528,8 +588,22 @@ def grounded_parameter_from_length(h: np.ndarray, excess: np.ndarray) -> tuple[n
 def _sinh_minus_x(z: np.ndarray) -> np.ndarray:
     """``sinh(z) - z`` without cancellation (series for |z| < 0.5)."""
     z2 = z * z
-    series = z * z2 / 6.0 * (1.0 + z2 / 20.0 * (1.0 + z2 / 42.0 * (1.0 + z2 / 72.0 * (
-        1.0 + z2 / 110.0 * (1.0 + z2 / 156.0 * (1.0 + z2 / 210.0))))))
+    series = (
+        z
+        * z2
+        / 6.0
+        * (
+            1.0
+            + z2
+            / 20.0
+            * (
+                1.0
+                + z2
+                / 42.0
+                * (1.0 + z2 / 72.0 * (1.0 + z2 / 110.0 * (1.0 + z2 / 156.0 * (1.0 + z2 / 210.0))))
+            )
+        )
+    )
     return np.where(np.abs(z) < 0.5, series, np.sinh(z) - z)
 
 
@@ -545,8 +619,9 @@ def _excess_ratio_derivative(theta: np.ndarray, ratio: np.ndarray) -> np.ndarray
     return (cm1 - ratio * np.sinh(theta)) / cm1
 
 
-def taut_parameter_from_length(h: np.ndarray, x: np.ndarray, length: np.ndarray
-                               ) -> tuple[np.ndarray, np.ndarray]:
+def taut_parameter_from_length(
+    h: np.ndarray, x: np.ndarray, length: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Catenary parameter of a fully suspended chain of given length between two points.
 
     Solves ``sqrt(L^2 - h^2) = 2 a sinh(x / 2a)`` (requires ``L^2 > x^2 + h^2``), i.e.
@@ -554,7 +629,9 @@ def taut_parameter_from_length(h: np.ndarray, x: np.ndarray, length: np.ndarray
     (the left side is convex, so Newton from above decreases monotonically).
     """
     k = np.sqrt((length - h) * (length + h)) / x
-    d = np.maximum(np.sqrt(6.0 * np.maximum(k - 1.0, 0.0)), np.log(2.0 * k) + np.log(np.log(2.0 * k) + 1.0))
+    d = np.maximum(
+        np.sqrt(6.0 * np.maximum(k - 1.0, 0.0)), np.log(2.0 * k) + np.log(np.log(2.0 * k) + 1.0)
+    )
     done = np.zeros(d.shape, dtype=bool)
     for _ in range(4 * MAXITER):
         sh = np.sinh(d)

@@ -8,6 +8,7 @@ dataclass from the same YAML with :func:`load_params_file`, which reads it by rc
 
 Units are SI: N, N/m, m, s, Hz.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -21,9 +22,20 @@ from pathlib import Path
 from typing import Any, Iterator, Mapping, NamedTuple
 
 __all__ = [
-    'REQUIRED', 'ParamSpec', 'PARAMETERS', 'ROS_BUILTIN_PARAMETERS', 'ConfigError',
-    'LineConfig', 'AlarmConfig', 'MonitorConfig', 'expand_parameters', 'load_params_file',
-    'config_from_params', 'config_to_params', 'config_hash', 'parameters_markdown',
+    'REQUIRED',
+    'ParamSpec',
+    'PARAMETERS',
+    'ROS_BUILTIN_PARAMETERS',
+    'ConfigError',
+    'LineConfig',
+    'AlarmConfig',
+    'MonitorConfig',
+    'expand_parameters',
+    'load_params_file',
+    'config_from_params',
+    'config_to_params',
+    'config_hash',
+    'parameters_markdown',
     'resolve_topic',
 ]
 
@@ -71,77 +83,248 @@ class ParamSpec(NamedTuple):
 _L = 'line'
 #: The one source of truth for every parameter: the node declares these, the README renders them.
 PARAMETERS: tuple[ParamSpec, ...] = (
-    ParamSpec('lines', 'string_array', REQUIRED,
-              'Names of the monitored chains; each NAME gets the NAME.* parameters below',
-              '', None, None, read_only=True),
-    ParamSpec('depth_topic', 'string', '/tide/depth',
-              'std_msgs/Float64 topic with the water depth at the hooks (m)', '', None, None,
-              read_only=True),
-    ParamSpec('log_dir', 'string', '~/.ros/catenary_monitor',
-              'Directory for the MCAP logs (~ is expanded by the logger)', '', None, None,
-              read_only=True),
+    ParamSpec(
+        'lines',
+        'string_array',
+        REQUIRED,
+        'Names of the monitored chains; each NAME gets the NAME.* parameters below',
+        '',
+        None,
+        None,
+        read_only=True,
+    ),
+    ParamSpec(
+        'depth_topic',
+        'string',
+        '/tide/depth',
+        'std_msgs/Float64 topic with the water depth at the hooks (m)',
+        '',
+        None,
+        None,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_dir',
+        'string',
+        '~/.ros/catenary_monitor',
+        'Directory for the MCAP logs (~ is expanded by the logger)',
+        '',
+        None,
+        None,
+        read_only=True,
+    ),
     # Per line.
-    ParamSpec('weight', 'double', REQUIRED, 'Submerged weight of the chain per metre',
-              'N/m', 1.0, 1.0e5, _L),
-    ParamSpec('anchor_distance', 'double', REQUIRED,
-              'Installed horizontal distance anchor to hook point', 'm', 0.1, 1.0e4, _L),
-    ParamSpec('mbl', 'double', REQUIRED, 'Minimum breaking load of the chain', 'N',
-              1.0, 1.0e9, _L),
-    ParamSpec('allowed_uplift', 'double', 0.0,
-              'Vertical force on the anchor tolerated before the uplift alarm', 'N',
-              0.0, 1.0e9, _L),
-    ParamSpec('hook_height', 'double', 0.0,
-              'Height of the hook point above the water surface, added to the depth', 'm',
-              -100.0, 100.0, _L),
-    ParamSpec('tension_topic', 'string', '/mooring/{line}/tension',
-              'std_msgs/Float64 topic with the measured hook tension (N)', '', None, None, _L,
-              read_only=True),
-    ParamSpec('ea', 'double', 0.0,
-              'Axial stiffness EA of the chain; 0 means inextensible', 'N', 0.0, 1.0e12, _L),
+    ParamSpec(
+        'weight',
+        'double',
+        REQUIRED,
+        'Submerged weight of the chain per metre',
+        'N/m',
+        1.0,
+        1.0e5,
+        _L,
+    ),
+    ParamSpec(
+        'anchor_distance',
+        'double',
+        REQUIRED,
+        'Installed horizontal distance anchor to hook point',
+        'm',
+        0.1,
+        1.0e4,
+        _L,
+    ),
+    ParamSpec(
+        'mbl', 'double', REQUIRED, 'Minimum breaking load of the chain', 'N', 1.0, 1.0e9, _L
+    ),
+    ParamSpec(
+        'allowed_uplift',
+        'double',
+        0.0,
+        'Vertical force on the anchor tolerated before the uplift alarm',
+        'N',
+        0.0,
+        1.0e9,
+        _L,
+    ),
+    ParamSpec(
+        'hook_height',
+        'double',
+        0.0,
+        'Height of the hook point above the water surface, added to the depth',
+        'm',
+        -100.0,
+        100.0,
+        _L,
+    ),
+    ParamSpec(
+        'tension_topic',
+        'string',
+        '/mooring/{line}/tension',
+        'std_msgs/Float64 topic with the measured hook tension (N)',
+        '',
+        None,
+        None,
+        _L,
+        read_only=True,
+    ),
+    ParamSpec(
+        'ea',
+        'double',
+        0.0,
+        'Axial stiffness EA of the chain; 0 means inextensible',
+        'N',
+        0.0,
+        1.0e12,
+        _L,
+    ),
     # Alarm thresholds (WARN).
-    ParamSpec('anchor_margin_warn', 'double', 5.0,
-              'WARN when installed minus minimum anchor distance falls below this', 'm',
-              0.0, 1000.0),
-    ParamSpec('anchor_margin_deadband', 'double', 1.0,
-              'Anchor-margin warning clears only at warn + deadband or more', 'm', 0.0, 100.0),
-    ParamSpec('tide_margin_warn', 'double', 1.0,
-              'WARN when the depth rise the chain can take without uplift falls below this',
-              'm', 0.0, 100.0),
-    ParamSpec('tide_margin_deadband', 'double', 0.2,
-              'Tide-margin warning clears only at warn + deadband or more', 'm', 0.0, 10.0),
-    ParamSpec('load_margin_warn', 'double', 0.0,
-              'WARN when the load margin falls below this (0: only a negative margin warns)',
-              'N', 0.0, 1.0e9),
-    ParamSpec('load_margin_deadband', 'double', 1.0e4,
-              'Load-margin warning clears only at warn + deadband or more', 'N', 0.0, 1.0e8),
-    ParamSpec('safety_factor_warn', 'double', 2.0,
-              'WARN when MBL / top tension falls below this (2.0: tension above 50 % MBL)',
-              '', 1.0, 100.0),
-    ParamSpec('safety_factor_deadband', 'double', 0.1,
-              'Safety-factor warning clears only at warn + deadband or more', '', 0.0, 10.0),
-    ParamSpec('warn_clear_hold', 'double', 30.0,
-              'A warning clears only after its clear condition has held this long', 's',
-              0.0, 3600.0),
+    ParamSpec(
+        'anchor_margin_warn',
+        'double',
+        5.0,
+        'WARN when installed minus minimum anchor distance falls below this',
+        'm',
+        0.0,
+        1000.0,
+    ),
+    ParamSpec(
+        'anchor_margin_deadband',
+        'double',
+        1.0,
+        'Anchor-margin warning clears only at warn + deadband or more',
+        'm',
+        0.0,
+        100.0,
+    ),
+    ParamSpec(
+        'tide_margin_warn',
+        'double',
+        1.0,
+        'WARN when the depth rise the chain can take without uplift falls below this',
+        'm',
+        0.0,
+        100.0,
+    ),
+    ParamSpec(
+        'tide_margin_deadband',
+        'double',
+        0.2,
+        'Tide-margin warning clears only at warn + deadband or more',
+        'm',
+        0.0,
+        10.0,
+    ),
+    ParamSpec(
+        'load_margin_warn',
+        'double',
+        0.0,
+        'WARN when the load margin falls below this (0: only a negative margin warns)',
+        'N',
+        0.0,
+        1.0e9,
+    ),
+    ParamSpec(
+        'load_margin_deadband',
+        'double',
+        1.0e4,
+        'Load-margin warning clears only at warn + deadband or more',
+        'N',
+        0.0,
+        1.0e8,
+    ),
+    ParamSpec(
+        'safety_factor_warn',
+        'double',
+        2.0,
+        'WARN when MBL / top tension falls below this (2.0: tension above 50 % MBL)',
+        '',
+        1.0,
+        100.0,
+    ),
+    ParamSpec(
+        'safety_factor_deadband',
+        'double',
+        0.1,
+        'Safety-factor warning clears only at warn + deadband or more',
+        '',
+        0.0,
+        10.0,
+    ),
+    ParamSpec(
+        'warn_clear_hold',
+        'double',
+        30.0,
+        'A warning clears only after its clear condition has held this long',
+        's',
+        0.0,
+        3600.0,
+    ),
     # Uplift alarm (ERROR).
-    ParamSpec('on_delay', 'double', 0.0,
-              'Uplift and warnings are raised only after persisting this long (0: at once)',
-              's', 0.0, 3600.0),
-    ParamSpec('uplift_clear_hysteresis', 'double', 1.0e4,
-              'Uplift alarm clears at uplift <= allowed_uplift - this (not below 0 N)', 'N',
-              0.0, 1.0e8),
-    ParamSpec('uplift_clear_margin', 'double', 1.0,
-              'When the clear level is 0 N, the anchor margin must also reach this', 'm',
-              0.0, 100.0),
-    ParamSpec('clear_hold', 'double', 30.0,
-              'An ERROR (uplift or impossible input) clears only after clear input held this long',
-              's', 0.0, 3600.0),
+    ParamSpec(
+        'on_delay',
+        'double',
+        0.0,
+        'Uplift and warnings are raised only after persisting this long (0: at once)',
+        's',
+        0.0,
+        3600.0,
+    ),
+    ParamSpec(
+        'uplift_clear_hysteresis',
+        'double',
+        1.0e4,
+        'Uplift alarm clears at uplift <= allowed_uplift - this (not below 0 N)',
+        'N',
+        0.0,
+        1.0e8,
+    ),
+    ParamSpec(
+        'uplift_clear_margin',
+        'double',
+        1.0,
+        'When the clear level is 0 N, the anchor margin must also reach this',
+        'm',
+        0.0,
+        100.0,
+    ),
+    ParamSpec(
+        'clear_hold',
+        'double',
+        30.0,
+        'An ERROR (uplift or impossible input) clears only after clear input held this long',
+        's',
+        0.0,
+        3600.0,
+    ),
     # Staleness and rates.
-    ParamSpec('tension_timeout', 'double', 5.0,
-              'STALE when the newest tension sample is older than this', 's', 0.01, 3600.0),
-    ParamSpec('depth_timeout', 'double', 60.0,
-              'STALE when the newest depth sample is older than this', 's', 0.01, 86400.0),
-    ParamSpec('diagnostic_rate', 'double', 1.0,
-              'Rate of the periodic /diagnostics publication', 'Hz', 0.01, 100.0),
+    ParamSpec(
+        'tension_timeout',
+        'double',
+        5.0,
+        'STALE when the newest tension sample is older than this',
+        's',
+        0.01,
+        3600.0,
+    ),
+    ParamSpec(
+        'depth_timeout',
+        'double',
+        60.0,
+        'STALE when the newest depth sample is older than this',
+        's',
+        0.01,
+        86400.0,
+    ),
+    ParamSpec(
+        'diagnostic_rate',
+        'double',
+        1.0,
+        'Rate of the periodic /diagnostics publication',
+        'Hz',
+        0.01,
+        100.0,
+    ),
 )
 
 _GLOBAL = {p.name: p for p in PARAMETERS if p.scope == 'global'}
@@ -171,19 +354,25 @@ def _check(full_name: str, spec: ParamSpec, value: Any) -> Any:
     if spec.type == 'double':
         # ROS YAML gives 1300 as an integer for a double parameter: accept it; reject bool.
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ConfigError(full_name, f'expected a number ({spec.unit or "-"}), '
-                                         f'got {type(value).__name__} {value!r}')
+            raise ConfigError(
+                full_name,
+                f'expected a number ({spec.unit or "-"}), '
+                f'got {type(value).__name__} {value!r}',
+            )
         value = float(value)
         if not math.isfinite(value):
             raise ConfigError(full_name, f'must be finite, got {value!r}')
         if spec.min is not None and value < spec.min or spec.max is not None and value > spec.max:
-            raise ConfigError(full_name, f'{value!r} out of range [{spec.min!r}, {spec.max!r}]'
-                                         f' {spec.unit}'.rstrip())
+            raise ConfigError(
+                full_name,
+                f'{value!r} out of range [{spec.min!r}, {spec.max!r}]' f' {spec.unit}'.rstrip(),
+            )
         return value
     if spec.type == 'string':
         if not isinstance(value, str):
-            raise ConfigError(full_name, f'expected a string, got {type(value).__name__} '
-                                         f'{value!r}')
+            raise ConfigError(
+                full_name, f'expected a string, got {type(value).__name__} ' f'{value!r}'
+            )
         return value
     if spec.type == 'string_array':
         if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
@@ -216,8 +405,11 @@ class LineConfig:
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not _LINE_NAME.match(self.name):
-            raise ConfigError('lines', f'line name {self.name!r} must start with a letter and '
-                                       'hold only letters, digits and _')
+            raise ConfigError(
+                'lines',
+                f'line name {self.name!r} must start with a letter and '
+                'hold only letters, digits and _',
+            )
         values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         if values['tension_topic'] == '':
             values['tension_topic'] = _PER_LINE['tension_topic'].default_for(self.name)
@@ -291,8 +483,10 @@ class MonitorConfig:
         for line in self.lines:
             other = seen.setdefault(line.tension_topic, f'{line.name}.tension_topic')
             if other != f'{line.name}.tension_topic':
-                raise ConfigError(f'{line.name}.tension_topic',
-                                  f'topic {line.tension_topic!r} is already used by {other}')
+                raise ConfigError(
+                    f'{line.name}.tension_topic',
+                    f'topic {line.tension_topic!r} is already used by {other}',
+                )
 
     def line(self, name: str) -> LineConfig:
         """The line called ``name`` (KeyError if there is none)."""
@@ -312,8 +506,9 @@ def expand_parameters(lines: tuple[str, ...] | list[str]) -> Iterator[tuple[str,
             yield spec.full_name(line), spec
 
 
-def load_params_file(path: str | Path, node_name: str = 'catenary_monitor',
-                     node_namespace: str = '/') -> dict[str, Any]:
+def load_params_file(
+    path: str | Path, node_name: str = 'catenary_monitor', node_namespace: str = '/'
+) -> dict[str, Any]:
     """Parameters of node ``node_namespace/node_name`` in a ROS 2 params YAML, flattened.
 
     Read as the live node reads ``--params-file`` (:mod:`catenary_monitor.core.params_file`:
@@ -343,33 +538,52 @@ def config_from_params(flat: Mapping[str, Any]) -> MonitorConfig:
         raise ConfigError('lines', 'must name at least one line')
     for name in lines:
         if not _LINE_NAME.match(name):
-            raise ConfigError('lines', f'line name {name!r} must start with a letter and '
-                                       'hold only letters, digits and _')
+            raise ConfigError(
+                'lines',
+                f'line name {name!r} must start with a letter and '
+                'hold only letters, digits and _',
+            )
         if lines.count(name) > 1:
             raise ConfigError('lines', f'duplicate line name {name!r}')
     known = dict(expand_parameters(lines))
     for name in flat:
-        if name in known or name in ROS_BUILTIN_PARAMETERS or name.startswith(
-                _ROS_BUILTIN_PREFIXES):
+        if (
+            name in known
+            or name in ROS_BUILTIN_PARAMETERS
+            or name.startswith(_ROS_BUILTIN_PREFIXES)
+        ):
             continue
         close = difflib.get_close_matches(name, list(known), n=1)
         hint = f" (did you mean '{close[0]}'?)" if close else ''
         raise ConfigError(name, f'unknown parameter{hint}')
-    values = {name: _check(name, spec, flat.get(name, spec.default_for(
-        name.split('.')[0] if spec.scope == 'line' else None)))
-        for name, spec in known.items()}
+    values = {
+        name: _check(
+            name,
+            spec,
+            flat.get(name, spec.default_for(name.split('.')[0] if spec.scope == 'line' else None)),
+        )
+        for name, spec in known.items()
+    }
     line_configs = tuple(
         LineConfig(name=line, **{key: values[f'{line}.{key}'] for key in _PER_LINE})
-        for line in lines)
+        for line in lines
+    )
     alarm = AlarmConfig(**{f.name: values[f.name] for f in dataclasses.fields(AlarmConfig)})
-    return MonitorConfig(lines=line_configs, depth_topic=values['depth_topic'],
-                         log_dir=values['log_dir'], alarm=alarm)
+    return MonitorConfig(
+        lines=line_configs,
+        depth_topic=values['depth_topic'],
+        log_dir=values['log_dir'],
+        alarm=alarm,
+    )
 
 
 def config_to_params(config: MonitorConfig) -> dict[str, Any]:
     """Flat parameters that :func:`config_from_params` turns back into ``config``."""
-    flat: dict[str, Any] = {'lines': [line.name for line in config.lines],
-                            'depth_topic': config.depth_topic, 'log_dir': config.log_dir}
+    flat: dict[str, Any] = {
+        'lines': [line.name for line in config.lines],
+        'depth_topic': config.depth_topic,
+        'log_dir': config.log_dir,
+    }
     flat.update(dataclasses.asdict(config.alarm))
     for line in config.lines:
         for key in _PER_LINE:
@@ -393,14 +607,18 @@ def config_hash(config: MonitorConfig) -> str:
 
 def parameters_markdown() -> str:
     """The parameter table as Markdown (name, type, default, unit, range, description)."""
-    rows = ['| parameter | type | default | unit | min | max | description |',
-            '|---|---|---|---|---|---|---|']
+    rows = [
+        '| parameter | type | default | unit | min | max | description |',
+        '|---|---|---|---|---|---|---|',
+    ]
     for spec in PARAMETERS:
         name = spec.full_name('NAME')
         default = 'required' if spec.default is REQUIRED else f'`{spec.default_for("NAME")!r}`'
         low = '' if spec.min is None else repr(spec.min)
         high = '' if spec.max is None else repr(spec.max)
         ro = ' (read-only)' if spec.read_only else ''
-        rows.append(f'| `{name}` | {spec.type} | {default} | {spec.unit} | {low} | {high} | '
-                    f'{spec.description}{ro} |')
+        rows.append(
+            f'| `{name}` | {spec.type} | {default} | {spec.unit} | {low} | {high} | '
+            f'{spec.description}{ro} |'
+        )
     return '\n'.join(rows) + '\n'

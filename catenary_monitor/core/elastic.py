@@ -34,6 +34,7 @@ elsewhere the elastic answer is returned.  ``SolveResult.model`` says which, ele
 Near the lift-off distance the uplift correction grows like the square root of the strain, so
 even stiff chains need the elastic model there.
 """
+
 from __future__ import annotations
 
 import math
@@ -79,7 +80,7 @@ def _x_over_b(u: Any, e: Any, xp: Any = np) -> Any:
 
 
 def _top_vertical(u: Any, t: Any, ta: Any, d: Any, xp: Any = np) -> tuple[Any, Any]:
-    """``R = T_A sech u`` and ``V_B = sqrt(T^2 - R^2)`` [N] with ``T - R = D + T_A (1 - sech u)``."""
+    """``R = T_A sech u``, ``V_B = sqrt(T^2 - R^2)`` [N], ``T - R = D + T_A (1 - sech u)``."""
     c = xp.cosh(u)
     r = ta / c
     t_minus_r = d + ta * 2.0 * xp.sinh(0.5 * u) ** 2 / c
@@ -93,18 +94,30 @@ def _span(u: Any, w: Any, t: Any, ta: Any, d: Any, ea: Any, xp: Any = np) -> Any
     return ta / w * _x_over_b(u, d / ta, xp) + r * d * (t + ta) / ((vb + va) * w * ea)
 
 
-def _stretch(w: Any, t: Any, ta: Any, d: Any, r: Any, va: Any, vb: Any, l0: Any, ea: Any, xp: Any = np) -> Any:
-    """Elastic stretch [m]: the integral of T/EA along the chain (Irvine), as a sum of positive terms.
+def _stretch(
+    w: Any, t: Any, ta: Any, d: Any, r: Any, va: Any, vb: Any, l0: Any, ea: Any, xp: Any = np
+) -> Any:
+    """Elastic stretch [m]: the integral of T/EA along the chain (Irvine), a sum of positive terms.
 
-    ``[V T + R^2 asinh(V/R)]`` from V_A to V_B over ``2 EA w``, with ``V_B T - V_A T_A = w L0 T + V_A D``
+    ``[V T + R^2 asinh(V/R)]`` from V_A to V_B over ``2 EA w``, with ``V_B T - V_A T_A = w L0 T +
+    V_A D``
     and ``asinh(V_B/R) - asinh(V_A/R) = asinh(D (T + T_A) / (V_B T_A + V_A T))`` (no cancellation
     when the chain is nearly straight).
     """
-    return (w * l0 * t + va * d + r * r * xp.arcsinh(d * (t + ta) / (vb * ta + va * t))) / (2.0 * ea * w)
+    return (w * l0 * t + va * d + r * r * xp.arcsinh(d * (t + ta) / (vb * ta + va * t))) / (
+        2.0 * ea * w
+    )
 
 
-def _illinois(fun: Any, lo: np.ndarray, hi: np.ndarray, flo: np.ndarray, fhi: np.ndarray,
-              maxiter: int = 200, ftol: Any = 0.0) -> np.ndarray:
+def _illinois(
+    fun: Any,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    flo: np.ndarray,
+    fhi: np.ndarray,
+    maxiter: int = 200,
+    ftol: Any = 0.0,
+) -> np.ndarray:
     """Root of a decreasing ``fun`` in ``[lo, hi]`` (``flo > 0 > fhi``), vectorized.
 
     Illinois regula falsi, with a plain bisection every third step so the bracket at least
@@ -150,9 +163,10 @@ def _illinois(fun: Any, lo: np.ndarray, hi: np.ndarray, flo: np.ndarray, fhi: np
     return root
 
 
-def _illinois_scalar(fun: Any, lo: float, hi: float, flo: float, fhi: float, maxiter: int = 200,
-                     ftol: float = 0.0) -> float:
-    """Scalar twin of :func:`_illinois` (same steps and stopping test) for a plain-float ``fun``."""
+def _illinois_scalar(
+    fun: Any, lo: float, hi: float, flo: float, fhi: float, maxiter: int = 200, ftol: float = 0.0
+) -> float:
+    """Scalar twin of :func:`_illinois` (same steps and stopping test), plain-float ``fun``."""
     side = 0
     mid = 0.5 * (lo + hi)
     tiny = 4.0 * _EPS
@@ -220,10 +234,16 @@ def _elastic_state(w: Any, h: Any, t: Any, x: Optional[Any], ea: Any) -> dict[st
             rigid_lift = target < tal / wl * np.arcsinh(np.sqrt(dl * (args[1] + tal)) / tal)
             lo = np.full(target.shape, -200.0)  # log u: u = e^-200 is x_min to rounding
             if rigid_lift.any():
-                s_r, _, ok_r = cat.lifted_from_tension(wl[rigid_lift], tal[rigid_lift] / wl[rigid_lift],
-                                                       dl[rigid_lift] / wl[rigid_lift], target[rigid_lift])
+                s_r, _, ok_r = cat.lifted_from_tension(
+                    wl[rigid_lift],
+                    tal[rigid_lift] / wl[rigid_lift],
+                    dl[rigid_lift] / wl[rigid_lift],
+                    target[rigid_lift],
+                )
                 u_r = np.arcsinh(s_r.uplift_force / s_r.horizontal_tension)
-                lo[rigid_lift] = np.where(ok_r & (u_r > 0), np.log(np.maximum(u_r, 1e-300)), -200.0)
+                lo[rigid_lift] = np.where(
+                    ok_r & (u_r > 0), np.log(np.maximum(u_r, 1e-300)), -200.0
+                )
             all_idx = np.arange(target.size)
             flo = f(lo, all_idx)
             bad = ~(flo > 0.0)  # rounding at the start point: fall back to the far end
@@ -247,15 +267,22 @@ def _elastic_state(w: Any, h: Any, t: Any, x: Optional[Any], ea: Any) -> dict[st
             va[lift] = ta[lift] * np.tanh(ul)
     l0 = d * (t + ta) / ((vb + va) * w)  # (V_B - V_A)/w without the cancellation
     stretch = _stretch(w, t, ta, d, r, va, vb, l0, ea, np)
-    out = {'horizontal_tension': r, 'min_anchor_distance': x_min, 'uplift_force': va,
-           'unstretched_length': l0, 'suspended_length': l0 + stretch, 'top_vertical': vb,
-           'anchor_tension': ta}
+    out = {
+        'horizontal_tension': r,
+        'min_anchor_distance': x_min,
+        'uplift_force': va,
+        'unstretched_length': l0,
+        'suspended_length': l0 + stretch,
+        'top_vertical': vb,
+        'anchor_tension': ta,
+    }
     return {k: v.reshape(out_shape) for k, v in out.items()}
 
 
-def _elastic_state_scalar(w: float, h: float, t: float, x: Optional[float], ea: float
-                          ) -> tuple[float, float, float, float, float, float]:
-    """Plain-float twin of :func:`_elastic_state` (same formulas, start and iteration) for one scene.
+def _elastic_state_scalar(
+    w: float, h: float, t: float, x: Optional[float], ea: float
+) -> tuple[float, float, float, float, float, float]:
+    """Plain-float twin of :func:`_elastic_state` (same formulas, start and iteration), one scene.
 
     Returns ``(R, x_min, V_A, L, V_B, T_A)`` [N, m, N, m, N, N] (L the stretched suspended length).
     May raise OverflowError, ZeroDivisionError or ValueError where numpy would give inf or NaN.
@@ -268,11 +295,14 @@ def _elastic_state_scalar(w: float, h: float, t: float, x: Optional[float], ea: 
     x_min = r / w * asinh(vb / r) + r * vb / (w * ea)
     va = 0.0
     if x is not None and x < x_min:
+
         def f(eta: float) -> float:
             return _span(exp(eta), w, t, ta, d, ea, xm) - x
 
         lo = -200.0
-        if x < ta / w * asinh(sqrt(d * (t + ta)) / ta):  # rigid chain with the same end tensions lifted
+        if x < ta / w * asinh(
+            sqrt(d * (t + ta)) / ta
+        ):  # rigid chain with the same end tensions lifted
             s_r, _, ok_r = cat.lifted_from_tension_scalar(w, ta / w, d / w, x)
             u_r = asinh(s_r.uplift_force / s_r.horizontal_tension)
             if ok_r and u_r > 0:
@@ -299,7 +329,7 @@ def _elastic_state_scalar(w: float, h: float, t: float, x: Optional[float], ea: 
 
 
 def _critical_residual(rho: Any, w: Any, h: Any, x: Any, ea: Any, xp: Any = np) -> tuple[Any, Any]:
-    """``log(x_min / x)`` and its derivative in ``rho = log R`` for the no-uplift chain with R = T_A.
+    """``log(x_min / x)`` and its derivative in ``rho = log R``, no-uplift chain with R = T_A.
 
     With R given, ``D = T - R`` solves ``h w = D (1 + (2R + D)/(2EA))`` in closed form (a sum of
     positive terms), ``V = sqrt(D (2R + D))`` and ``x_min = (R/w) asinh(V/R) + R V/(w EA)``, whose
@@ -315,14 +345,15 @@ def _critical_residual(rho: Any, w: Any, h: Any, x: Any, ea: Any, xp: Any = np) 
 
 
 def _critical_tension_from(rho: Any, w: Any, h: Any, ea: Any, xp: Any = np) -> Any:
-    """Hook tension ``T = R + D`` [N] of the no-uplift chain with anchor-end tension ``R = e^rho``."""
+    """Hook tension ``T = R + D`` [N] of the no-uplift chain, anchor-end tension ``R = e^rho``."""
     r = xp.exp(rho)
     s = 1.0 + r / ea
     return r + 2.0 * h * w / (s + xp.sqrt(s * s + 2.0 * h * w / ea))
 
 
-def _elastic_critical_tension(w: np.ndarray, h: np.ndarray, x: np.ndarray, ea: np.ndarray,
-                              a_rigid: np.ndarray) -> np.ndarray:
+def _elastic_critical_tension(
+    w: np.ndarray, h: np.ndarray, x: np.ndarray, ea: np.ndarray, a_rigid: np.ndarray
+) -> np.ndarray:
     """Hook tension [N] at which the elastic chain's x_min equals x (x_min grows with T).
 
     Unknown ``rho = log R`` (anchor-end tension R at lift-off), in which ``log x_min`` is smooth
@@ -349,15 +380,24 @@ def _elastic_critical_tension(w: np.ndarray, h: np.ndarray, x: np.ndarray, ea: n
         new = cur + step
         converged = (np.abs(step) <= cat.STEP_TOL) | (f == 0.0)
         bad = ~((new >= lo_i) & (new <= hi_i) | converged)  # also catches NaN
-        new = np.where(bad, np.where(np.isfinite(lo_i) & np.isfinite(hi_i), 0.5 * (lo_i + hi_i),
-                                     np.where(f > 0.0, cur - 4.0, cur + 4.0)), new)
+        new = np.where(
+            bad,
+            np.where(
+                np.isfinite(lo_i) & np.isfinite(hi_i),
+                0.5 * (lo_i + hi_i),
+                np.where(f > 0.0, cur - 4.0, cur + 4.0),
+            ),
+            new,
+        )
         rho[idx], lo[idx], hi[idx] = np.where(f == 0.0, cur, new), lo_i, hi_i
         idx = idx[~converged]
     return _critical_tension_from(rho, w, h, ea)
 
 
-def _elastic_depth_reach(w: np.ndarray, r: np.ndarray, x: np.ndarray, ea: np.ndarray) -> np.ndarray:
-    """Depth a no-uplift elastic chain with horizontal tension R spans over x (for the tide margin).
+def _elastic_depth_reach(
+    w: np.ndarray, r: np.ndarray, x: np.ndarray, ea: np.ndarray
+) -> np.ndarray:
+    """Depth a no-uplift elastic chain of horizontal tension R spans over x (the tide margin).
 
     In ``nu = asinh(V/R)``: ``x = (R/w) nu + R^2 sinh(nu)/(w EA)``, increasing and convex, so
     Newton from the rigid ``nu = x w / R`` (to the right of the root) decreases monotonically.
@@ -375,8 +415,10 @@ def _elastic_depth_reach(w: np.ndarray, r: np.ndarray, x: np.ndarray, ea: np.nda
     return 2.0 * a * np.sinh(0.5 * nu) ** 2 + a * k * np.sinh(nu) ** 2 / 2.0
 
 
-def _elastic_critical_tension_scalar(w: float, h: float, x: float, ea: float, a_rigid: float) -> float:
-    """Plain-float twin of :func:`_elastic_critical_tension` (same start, safeguard and stop) [N]."""
+def _elastic_critical_tension_scalar(
+    w: float, h: float, x: float, ea: float, a_rigid: float
+) -> float:
+    """Plain-float twin of :func:`_elastic_critical_tension` (same start, safeguard, stop) [N]."""
     xm = cat._MATH
     rho = math.log(w * a_rigid)
     lo, hi = -math.inf, math.inf
@@ -398,7 +440,11 @@ def _elastic_critical_tension_scalar(w: float, h: float, x: float, ea: float, a_
             rho = new
             break
         if not lo <= new <= hi:  # also NaN
-            new = 0.5 * (lo + hi) if -math.inf < lo and hi < math.inf else (rho - 4.0 if f > 0.0 else rho + 4.0)
+            new = (
+                0.5 * (lo + hi)
+                if -math.inf < lo and hi < math.inf
+                else (rho - 4.0 if f > 0.0 else rho + 4.0)
+            )
         rho = new
     return _critical_tension_from(rho, w, h, ea, xm)
 
@@ -433,9 +479,15 @@ def elastic_correction(rigid: SolveResult, el: dict[str, np.ndarray]) -> np.ndar
     return np.max(parts, axis=0)
 
 
-def solve_with_correction(weight: Any, depth: Any, tension: Any, anchor_distance: Any = None,
-                          ea: Any = None, mbl: Any = None,
-                          tol: float = ELASTIC_TOL) -> tuple[SolveResult, Any]:
+def solve_with_correction(
+    weight: Any,
+    depth: Any,
+    tension: Any,
+    anchor_distance: Any = None,
+    ea: Any = None,
+    mbl: Any = None,
+    tol: float = ELASTIC_TOL,
+) -> tuple[SolveResult, Any]:
     """Problems 3 and 4 with an optional axial stiffness ``ea`` [N]; the model chosen by the rule.
 
     Returns ``(result, correction)``: a :class:`SolveResult` whose ``model`` names the model used
@@ -456,8 +508,15 @@ def solve_with_correction(weight: Any, depth: Any, tension: Any, anchor_distance
         if rigid.status != 0:
             return rigid, 0.0
         try:
-            return _solve_scalar(rigid, float(weight), float(depth), float(tension),
-                                 None if anchor_distance is None else float(anchor_distance), ea_f, tol)
+            return _solve_scalar(
+                rigid,
+                float(weight),
+                float(depth),
+                float(tension),
+                None if anchor_distance is None else float(anchor_distance),
+                ea_f,
+                tol,
+            )
         except (OverflowError, ZeroDivisionError, ValueError):
             pass  # beyond float range in plain math: the arrays below give inf / NaN instead
     ea_arr = np.asarray(ea, dtype=float)
@@ -470,20 +529,37 @@ def solve_with_correction(weight: Any, depth: Any, tension: Any, anchor_distance
     w, h, t, ea_b = bc(weight)[ok], bc(depth)[ok], bc(tension)[ok], bc(ea_arr)[ok]
     x = None if anchor_distance is None else bc(anchor_distance)[ok]
     el = elastic_state(w, h, t, x, ea_b)
-    rig = {k: np.atleast_1d(np.asarray(getattr(rigid, k), dtype=float))[ok.ravel()] if scalar
-           else np.asarray(getattr(rigid, k), dtype=float)[ok]
-           for k in ('min_anchor_distance', 'horizontal_tension', 'uplift_force', 'suspended_length',
-                     'top_tension', 'top_angle_deg', 'anchor_angle_deg', 'anchor_margin',
-                     'tide_margin', 'load_margin')}
+    rig = {
+        k: (
+            np.atleast_1d(np.asarray(getattr(rigid, k), dtype=float))[ok.ravel()]
+            if scalar
+            else np.asarray(getattr(rigid, k), dtype=float)[ok]
+        )
+        for k in (
+            'min_anchor_distance',
+            'horizontal_tension',
+            'uplift_force',
+            'suspended_length',
+            'top_tension',
+            'top_angle_deg',
+            'anchor_angle_deg',
+            'anchor_margin',
+            'tide_margin',
+            'load_margin',
+        )
+    }
     corr = elastic_correction(SimpleRigid(rig), el)
     use = corr > tol
     out = {k: v.copy() for k, v in rig.items()}
     if use.any():
         r, vb, va = el['horizontal_tension'], el['top_vertical'], el['uplift_force']
         new = {
-            'min_anchor_distance': el['min_anchor_distance'], 'horizontal_tension': r,
-            'uplift_force': va, 'suspended_length': el['suspended_length'],
-            'top_angle_deg': np.degrees(np.arctan2(vb, r)), 'anchor_angle_deg': np.degrees(np.arctan2(va, r)),
+            'min_anchor_distance': el['min_anchor_distance'],
+            'horizontal_tension': r,
+            'uplift_force': va,
+            'suspended_length': el['suspended_length'],
+            'top_angle_deg': np.degrees(np.arctan2(vb, r)),
+            'anchor_angle_deg': np.degrees(np.arctan2(va, r)),
         }
         if x is not None:
             new['anchor_margin'] = x - el['min_anchor_distance']
@@ -510,24 +586,32 @@ def solve_with_correction(weight: Any, depth: Any, tension: Any, anchor_distance
 _PLAIN = (float, int, np.float64)
 
 
-def _solve_scalar(rigid: SolveResult, w: float, h: float, t: float, x: Optional[float], ea: float,
-                  tol: float) -> tuple[SolveResult, float]:
+def _solve_scalar(
+    rigid: SolveResult, w: float, h: float, t: float, x: Optional[float], ea: float, tol: float
+) -> tuple[SolveResult, float]:
     """:func:`solve` for one valid scene in plain floats (same formulas and rule as the arrays).
 
     ``rigid`` is the scalar inextensible result (status 0).  May raise OverflowError,
     ZeroDivisionError or ValueError where numpy would give inf or NaN (the caller falls back).
     """
     r, x_min, va, length, vb, _ = _elastic_state_scalar(w, h, t, x, ea)
-    parts = (abs(x_min - rigid.min_anchor_distance) / rigid.min_anchor_distance,
-             abs(r - rigid.horizontal_tension) / rigid.horizontal_tension,
-             abs(va - rigid.uplift_force) / t,
-             abs(length - rigid.suspended_length) / rigid.suspended_length)
+    parts = (
+        abs(x_min - rigid.min_anchor_distance) / rigid.min_anchor_distance,
+        abs(r - rigid.horizontal_tension) / rigid.horizontal_tension,
+        abs(va - rigid.uplift_force) / t,
+        abs(length - rigid.suspended_length) / rigid.suspended_length,
+    )
     corr = math.nan if any(p != p for p in parts) else max(parts)  # NaN propagates, as np.max
     if not corr > tol:
         return rigid, corr
-    new = {'min_anchor_distance': x_min, 'horizontal_tension': r, 'uplift_force': va,
-           'suspended_length': length, 'top_angle_deg': math.degrees(math.atan2(vb, r)),
-           'anchor_angle_deg': math.degrees(math.atan2(va, r))}
+    new = {
+        'min_anchor_distance': x_min,
+        'horizontal_tension': r,
+        'uplift_force': va,
+        'suspended_length': length,
+        'top_angle_deg': math.degrees(math.atan2(vb, r)),
+        'anchor_angle_deg': math.degrees(math.atan2(va, r)),
+    }
     if x is not None:
         new['anchor_margin'] = x - x_min
         new['tide_margin'] = _elastic_depth_reach_scalar(w, r, x, ea) - h
@@ -549,24 +633,35 @@ class SimpleRigid:
 #: ~0.58 pi d^2/4, effective modulus ~90 GPa, ~0.25 kN/m in water.  Polyester 160 mm:
 #: quasi-static EA ~ 15 x MBL (MBL ~ 5 MN), nearly neutrally buoyant, ~30 N/m in water.
 REPORT_LINES = (
-    ('U3 studlink chain, 81 mm (the paper\'s dock)', 1300.0, 1.01e8 * 0.081 ** 2 * 1e3),
-    ('six-strand steel wire, 76 mm', 250.0, 90e9 * 0.58 * np.pi / 4 * 0.076 ** 2),
+    ('U3 studlink chain, 81 mm (the paper\'s dock)', 1300.0, 1.01e8 * 0.081**2 * 1e3),
+    ('six-strand steel wire, 76 mm', 250.0, 90e9 * 0.58 * np.pi / 4 * 0.076**2),
     ('polyester rope, 160 mm', 30.0, 15 * 5.0e6),
 )
 
 
-def report(depth: float = 20.85, tension: float = 1623.5e3, anchor_distance: float = 121.06
-           ) -> list[dict[str, Any]]:
+def report(
+    depth: float = 20.85, tension: float = 1623.5e3, anchor_distance: float = 121.06
+) -> list[dict[str, Any]]:
     """How much elasticity changes x_min and the uplift, per line, at one dock scene."""
     rows = []
     for name, w, ea in REPORT_LINES:
         rigid = solve_rigid(w, depth, tension=tension, anchor_distance=anchor_distance)
-        el = {k: float(v) for k, v in elastic_state(w, depth, tension, anchor_distance, ea).items()}
-        rows.append({
-            'line': name, 'w': w, 'ea': ea, 'strain': tension / ea,
-            'x_min_rigid': rigid.min_anchor_distance, 'x_min_elastic': el['min_anchor_distance'],
-            'uplift_rigid': rigid.uplift_force, 'uplift_elastic': el['uplift_force'],
-            'dx_min_rel': (el['min_anchor_distance'] - rigid.min_anchor_distance) / rigid.min_anchor_distance,
-            'duplift_over_t': (el['uplift_force'] - rigid.uplift_force) / tension,
-        })
+        el = {
+            k: float(v) for k, v in elastic_state(w, depth, tension, anchor_distance, ea).items()
+        }
+        rows.append(
+            {
+                'line': name,
+                'w': w,
+                'ea': ea,
+                'strain': tension / ea,
+                'x_min_rigid': rigid.min_anchor_distance,
+                'x_min_elastic': el['min_anchor_distance'],
+                'uplift_rigid': rigid.uplift_force,
+                'uplift_elastic': el['uplift_force'],
+                'dx_min_rel': (el['min_anchor_distance'] - rigid.min_anchor_distance)
+                / rigid.min_anchor_distance,
+                'duplift_over_t': (el['uplift_force'] - rigid.uplift_force) / tension,
+            }
+        )
     return rows

@@ -4,6 +4,7 @@ No rclpy. The node asks these functions which level and message its ``tide`` and
 diagnostic statuses carry, so that the node itself makes no threshold comparison. Times are
 seconds on one clock (the node clock, or log time in replay).
 """
+
 from __future__ import annotations
 
 import math

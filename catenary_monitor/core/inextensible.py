@@ -8,6 +8,7 @@ Two tiers of errors (scipy / sgp4 style):
   never raises: it gets a non-zero ``status`` and NaN outputs, and the other elements are solved
   as if it were not there.  ``STATUS_MESSAGES`` maps each code to one sentence.
 """
+
 from __future__ import annotations
 
 import functools
@@ -23,22 +24,37 @@ ArrayLike = Union[float, int, np.ndarray, list]
 
 
 def _check_call(tension: Any, horizontal: Any, chain_length: Any, anchor_distance: Any) -> str:
-    given = [name for name, v in (('tension', tension), ('horizontal', horizontal),
-                                  ('chain_length', chain_length)) if v is not None]
+    given = [
+        name
+        for name, v in (
+            ('tension', tension),
+            ('horizontal', horizontal),
+            ('chain_length', chain_length),
+        )
+        if v is not None
+    ]
     if len(given) != 1:
-        raise ValueError('give exactly one of tension, horizontal, chain_length '
-                         f'(got {", ".join(given) if given else "none"})')
+        raise ValueError(
+            'give exactly one of tension, horizontal, chain_length '
+            f'(got {", ".join(given) if given else "none"})'
+        )
     if given[0] == 'chain_length' and anchor_distance is None:
-        raise ValueError('chain_length needs anchor_distance (the chain lies on the seabed '
-                         'between hook and anchor)')
+        raise ValueError(
+            'chain_length needs anchor_distance (the chain lies on the seabed '
+            'between hook and anchor)'
+        )
     return given[0]
 
 
-def solve_inextensible(weight: ArrayLike, depth: ArrayLike, tension: Optional[ArrayLike] = None,
-                       horizontal: Optional[ArrayLike] = None,
-                       anchor_distance: Optional[ArrayLike] = None,
-                       chain_length: Optional[ArrayLike] = None,
-                       mbl: Optional[ArrayLike] = None) -> SolveResult:
+def solve_inextensible(
+    weight: ArrayLike,
+    depth: ArrayLike,
+    tension: Optional[ArrayLike] = None,
+    horizontal: Optional[ArrayLike] = None,
+    anchor_distance: Optional[ArrayLike] = None,
+    chain_length: Optional[ArrayLike] = None,
+    mbl: Optional[ArrayLike] = None,
+) -> SolveResult:
     """Solve the anchor-chain catenary for the minimum anchor distance, uplift and margins.
 
     Parameters
@@ -62,19 +78,37 @@ def solve_inextensible(weight: ArrayLike, depth: ArrayLike, tension: Optional[Ar
     well-conditioned (see README, "Accuracy").  With all-scalar ``tension`` or ``horizontal``
     inputs a plain-float path gives the same numbers to rounding, an order of magnitude faster.
     """
-    if (horizontal is None and chain_length is None and tension is not None
-            and type(weight) in _PLAIN and type(depth) in _PLAIN and type(tension) in _PLAIN
-            and (anchor_distance is None or type(anchor_distance) in _PLAIN)
-            and (mbl is None or type(mbl) in _PLAIN)):  # the node's case: skip the generic dispatch
+    if (
+        horizontal is None
+        and chain_length is None
+        and tension is not None
+        and type(weight) in _PLAIN
+        and type(depth) in _PLAIN
+        and type(tension) in _PLAIN
+        and (anchor_distance is None or type(anchor_distance) in _PLAIN)
+        and (mbl is None or type(mbl) in _PLAIN)
+    ):  # the node's case: skip the generic dispatch
         try:
-            return _solve_scalar('tension', float(weight), float(depth), float(tension),
-                                 None if anchor_distance is None else float(anchor_distance),
-                                 None if mbl is None else float(mbl))
+            return _solve_scalar(
+                'tension',
+                float(weight),
+                float(depth),
+                float(tension),
+                None if anchor_distance is None else float(anchor_distance),
+                None if mbl is None else float(mbl),
+            )
         except (OverflowError, ZeroDivisionError, ValueError):
             pass  # beyond float range in plain math (e.g. sinh overflow): numpy gives inf instead
     problem = _check_call(tension, horizontal, chain_length, anchor_distance)
-    inputs = {'weight': weight, 'depth': depth, 'tension': tension, 'horizontal': horizontal,
-              'anchor_distance': anchor_distance, 'chain_length': chain_length, 'mbl': mbl}
+    inputs = {
+        'weight': weight,
+        'depth': depth,
+        'tension': tension,
+        'horizontal': horizontal,
+        'anchor_distance': anchor_distance,
+        'chain_length': chain_length,
+        'mbl': mbl,
+    }
     given = {k: v for k, v in inputs.items() if v is not None}
     scalar = all(np.ndim(v) == 0 for v in given.values())
     if scalar and problem != 'chain_length':
@@ -83,12 +117,20 @@ def solve_inextensible(weight: ArrayLike, depth: ArrayLike, tension: Optional[Ar
         except (TypeError, ValueError) as exc:
             raise ValueError(f'inputs must be numbers: {exc}') from None
         try:
-            return _solve_scalar(problem, floats['weight'], floats['depth'], floats[problem],
-                                 floats.get('anchor_distance'), floats.get('mbl'))
+            return _solve_scalar(
+                problem,
+                floats['weight'],
+                floats['depth'],
+                floats[problem],
+                floats.get('anchor_distance'),
+                floats.get('mbl'),
+            )
         except (OverflowError, ZeroDivisionError, ValueError):
             pass  # beyond float range in plain math (e.g. sinh overflow): numpy gives inf instead
     try:
-        arrays = dict(zip(given, np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in given.values()))))
+        arrays = dict(
+            zip(given, np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in given.values())))
+        )
     except ValueError as exc:
         raise ValueError(f'inputs do not broadcast together: {exc}') from None
     return _solve_arrays(problem, arrays, scalar)
@@ -168,7 +210,11 @@ def _solve_valid(problem: str, full: dict[str, np.ndarray], scalar: bool) -> Sol
         if x is not None:
             lift = x < out['min_anchor_distance']
             if lift.any():
-                _fill_lifted(out, lift, cat.lifted_from_horizontal(w[lift], h[lift], r[lift] / w[lift], x[lift]))
+                _fill_lifted(
+                    out,
+                    lift,
+                    cat.lifted_from_horizontal(w[lift], h[lift], r[lift] / w[lift], x[lift]),
+                )
     else:
         lm = a['chain_length']
         am, c = cat.grounded_parameter_from_length(h, lm - x)
@@ -202,10 +248,14 @@ def _solve_valid(problem: str, full: dict[str, np.ndarray], scalar: bool) -> Sol
         if k in keys:
             full_v[ok] = out[k]
         result[k] = float(full_v) if scalar else full_v
-    return SolveResult(**result, status=int(status) if scalar else status, problem=problem, keys=keys)
+    return SolveResult(
+        **result, status=int(status) if scalar else status, problem=problem, keys=keys
+    )
 
 
-def _fill_grounded(out: dict[str, np.ndarray], w: np.ndarray, a: np.ndarray, h: np.ndarray) -> None:
+def _fill_grounded(
+    out: dict[str, np.ndarray], w: np.ndarray, a: np.ndarray, h: np.ndarray
+) -> None:
     g = cat.grounded(a, h)
     out['horizontal_tension'] = w * a
     out['top_tension'] = w * (a + h)
@@ -225,7 +275,9 @@ def _fill_lifted(out: dict[str, np.ndarray], where: np.ndarray, s: cat.Lifted) -
     out['uplift_force'][where] = s.uplift_force
 
 
-def _fill_margins(out: dict[str, np.ndarray], w: np.ndarray, h: np.ndarray, x: np.ndarray) -> np.ndarray:
+def _fill_margins(
+    out: dict[str, np.ndarray], w: np.ndarray, h: np.ndarray, x: np.ndarray
+) -> np.ndarray:
     """Anchor, tide and load margins; returns the load-margin solve's converged flags."""
     out['anchor_margin'] = x - out['min_anchor_distance']
     a_now = out['horizontal_tension'] / w
@@ -247,8 +299,14 @@ _TAIL = (_MODEL, _METHOD)
 _NAN12 = (_NAN,) * 12
 
 
-def _solve_scalar(problem: str, w: float, h: float, load: float, x: Optional[float] = None,
-                  mbl: Optional[float] = None) -> SolveResult:
+def _solve_scalar(
+    problem: str,
+    w: float,
+    h: float,
+    load: float,
+    x: Optional[float] = None,
+    mbl: Optional[float] = None,
+) -> SolveResult:
     """Problems 1-4 for one element in plain floats (same checks and formulas as arrays).
 
     ``load`` is the hook tension T (``problem='tension'``) or the horizontal tension R
@@ -257,8 +315,13 @@ def _solve_scalar(problem: str, w: float, h: float, load: float, x: Optional[flo
     """
     isfinite = math.isfinite
     by_tension = problem == 'tension'
-    if not (isfinite(w) and isfinite(h) and isfinite(load) and (x is None or isfinite(x))
-            and (mbl is None or isfinite(mbl))):
+    if not (
+        isfinite(w)
+        and isfinite(h)
+        and isfinite(load)
+        and (x is None or isfinite(x))
+        and (mbl is None or isfinite(mbl))
+    ):
         status = Status.NON_FINITE
     elif not w > 0:
         status = Status.WEIGHT
@@ -294,19 +357,44 @@ def _solve_scalar(problem: str, w: float, h: float, load: float, x: Optional[flo
             if by_tension:
                 s, _, converged = cat.lifted_from_tension_scalar(w, b, h, x)
                 if not converged:
-                    return _new_tuple(SolveResult, _NAN12 + (int(Status.NO_CONVERGENCE), problem, keys) + _TAIL)
+                    return _new_tuple(
+                        SolveResult, _NAN12 + (int(Status.NO_CONVERGENCE), problem, keys) + _TAIL
+                    )
                 r, uplift, alpha, _, beta, length = s  # top_tension: the measured one
             else:
-                r, uplift, alpha, t, beta, length = cat.lifted_from_horizontal(w, h, b, x, cat._MATH)
+                r, uplift, alpha, t, beta, length = cat.lifted_from_horizontal(
+                    w, h, b, x, cat._MATH
+                )
         anchor_margin = x - x_min
         a_now = r / w
         half = math.sinh(0.5 * x / a_now)
         tide_margin = 2.0 * a_now * half * half - h
         load_margin = w * (cat.critical_parameter_scalar(h, x) + h) - t
         if load_margin != load_margin:  # NaN: the load-margin solve did not converge
-            return _new_tuple(SolveResult, _NAN12 + (int(Status.NO_CONVERGENCE), problem, keys) + _TAIL)
+            return _new_tuple(
+                SolveResult, _NAN12 + (int(Status.NO_CONVERGENCE), problem, keys) + _TAIL
+            )
     if mbl is not None:
         safety = mbl / t
-    return _new_tuple(SolveResult, (r, t, x_min, length, math.degrees(beta), math.degrees(alpha), uplift,
-                                    anchor_margin, tide_margin, load_margin, _NAN, safety, 0, problem, keys,
-                                    _MODEL, _METHOD))
+    return _new_tuple(
+        SolveResult,
+        (
+            r,
+            t,
+            x_min,
+            length,
+            math.degrees(beta),
+            math.degrees(alpha),
+            uplift,
+            anchor_margin,
+            tide_margin,
+            load_margin,
+            _NAN,
+            safety,
+            0,
+            problem,
+            keys,
+            _MODEL,
+            _METHOD,
+        ),
+    )

@@ -25,6 +25,7 @@ The :class:`Step` carries the outputs of the lines solved (:data:`OUTPUT_FIELDS`
 and before the first depth it is STALE and says what is missing. Times in the alarm logic are
 seconds (``stamp_ns * 1e-9``); forces N, lengths m.
 """
+
 from __future__ import annotations
 
 import json
@@ -34,25 +35,70 @@ from typing import Any, NamedTuple, Optional, Sequence, Union
 
 import numpy as np
 
-from catenary_monitor.core.alarms import (AlarmInputs, AlarmState, Level, LineAlarm, Transition,
-                                          diagnostic_values)
-from catenary_monitor.core.config import (LineConfig, MonitorConfig, config_from_params,
-                                          config_to_params, resolve_topic)
+from catenary_monitor.core.alarms import (
+    AlarmInputs,
+    AlarmState,
+    Level,
+    LineAlarm,
+    Transition,
+    diagnostic_values,
+)
+from catenary_monitor.core.config import (
+    LineConfig,
+    MonitorConfig,
+    config_from_params,
+    config_to_params,
+    resolve_topic,
+)
 from catenary_monitor.core.health import logger_status, tide_status
 from catenary_monitor.core.solve import solve
 
-__all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'VALUE_FIELDS', 'NO_DEPTH', 'NO_MODEL', 'EVENTS_TOPIC',
-           'Tension', 'Depth', 'Tick', 'LoggerHealth', 'Reconfigure', 'Start', 'Event', 'LineOutput',
-           'ComponentStatus', 'Snapshot', 'Change', 'Step', 'LineState', 'MonitorCore',
-           'line_status', 'tide_component', 'event_record', 'parse_event_record']
+__all__ = [
+    'NODE_NAME',
+    'OUTPUT_FIELDS',
+    'VALUE_FIELDS',
+    'NO_DEPTH',
+    'NO_MODEL',
+    'EVENTS_TOPIC',
+    'Tension',
+    'Depth',
+    'Tick',
+    'LoggerHealth',
+    'Reconfigure',
+    'Start',
+    'Event',
+    'LineOutput',
+    'ComponentStatus',
+    'Snapshot',
+    'Change',
+    'Step',
+    'LineState',
+    'MonitorCore',
+    'line_status',
+    'tide_component',
+    'event_record',
+    'parse_event_record',
+]
 
 #: Node name: the ``/diagnostics`` status names start with it; params files use it as top key.
 NODE_NAME = 'catenary_monitor'
 #: Element order of each line's outputs (``/catenary_monitor/NAME/outputs``), SI units;
 #: ``status`` is the solver code (:data:`NO_DEPTH` before the first depth), ``level`` 0-3.
-OUTPUT_FIELDS = ('top_tension', 'depth', 'horizontal_tension', 'min_anchor_distance',
-                 'anchor_margin', 'uplift_force', 'tide_margin', 'load_margin', 'safety_factor',
-                 'anchor_angle_deg', 'suspended_length', 'status', 'level')
+OUTPUT_FIELDS = (
+    'top_tension',
+    'depth',
+    'horizontal_tension',
+    'min_anchor_distance',
+    'anchor_margin',
+    'uplift_force',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'anchor_angle_deg',
+    'suspended_length',
+    'status',
+    'level',
+)
 #: The solved quantities among them.
 VALUE_FIELDS = OUTPUT_FIELDS[:-2]
 #: Solver status of an update made before any depth sample arrived.
@@ -164,20 +210,28 @@ class LineState:
     alarm: LineAlarm
     hardware_id: str
     state: AlarmState
-    tension: float = _NAN          # N, newest sample
-    tension_s: float = _NAN        # s, its stamp (NaN: none yet)
+    tension: float = _NAN  # N, newest sample
+    tension_s: float = _NAN  # s, its stamp (NaN: none yet)
     values: tuple[float, ...] = _NAN_VALUES  # VALUE_FIELDS of the newest solve
-    status: int = NO_DEPTH         # solver status of the newest solve
+    status: int = NO_DEPTH  # solver status of the newest solve
     status_message: str = ''
-    model: str = NO_MODEL          # model of the newest solve
+    model: str = NO_MODEL  # model of the newest solve
 
     def inputs(self, depth_s: float, depth_stale: bool) -> AlarmInputs:
         """The alarm inputs of this line now (newest results, stamps, the tide's decision)."""
         v = self.values
-        return AlarmInputs(uplift_force=v[5], anchor_margin=v[4], tide_margin=v[6],
-                           load_margin=v[7], safety_factor=v[8], status=max(self.status, 0),
-                           status_message=self.status_message, tension_stamp=self.tension_s,
-                           depth_stamp=depth_s, depth_stale=depth_stale)
+        return AlarmInputs(
+            uplift_force=v[5],
+            anchor_margin=v[4],
+            tide_margin=v[6],
+            load_margin=v[7],
+            safety_factor=v[8],
+            status=max(self.status, 0),
+            status_message=self.status_message,
+            tension_stamp=self.tension_s,
+            depth_stamp=depth_s,
+            depth_stale=depth_stale,
+        )
 
 
 def _stamp_s(stamp_ns: int) -> float:
@@ -195,21 +249,31 @@ class MonitorCore:
         in the root namespace); ``depth_id`` the depth topic; ``logger_id`` the log directory.
     """
 
-    def __init__(self, config: MonitorConfig, start_ns: int,
-                 hardware_ids: Optional[dict[str, str]] = None, depth_id: Optional[str] = None,
-                 logger_id: str = '') -> None:
+    def __init__(
+        self,
+        config: MonitorConfig,
+        start_ns: int,
+        hardware_ids: Optional[dict[str, str]] = None,
+        depth_id: Optional[str] = None,
+        logger_id: str = '',
+    ) -> None:
         ids = hardware_ids or {}
         start = _stamp_s(start_ns)
         self.config = config
-        self.lines = [LineState(lc, LineAlarm.for_line(lc, config.alarm),
-                                ids.get(lc.name, resolve_topic(lc.tension_topic)),
-                                LineAlarm.for_line(lc, config.alarm).initial(start))
-                      for lc in config.lines]
+        self.lines = [
+            LineState(
+                lc,
+                LineAlarm.for_line(lc, config.alarm),
+                ids.get(lc.name, resolve_topic(lc.tension_topic)),
+                LineAlarm.for_line(lc, config.alarm).initial(start),
+            )
+            for lc in config.lines
+        ]
         self.index = {line.config.name: k for k, line in enumerate(self.lines)}
         self.depth_id = depth_id or resolve_topic(config.depth_topic)
         self.logger_id = logger_id
-        self.depth = _NAN      # m, newest sample
-        self.depth_s = _NAN    # s, its stamp
+        self.depth = _NAN  # m, newest sample
+        self.depth_s = _NAN  # s, its stamp
         self.depth_stale = False
         self.tide: tuple[Level, str] = tide_status(_NAN, _NAN, start, config.alarm.depth_timeout)
         self.tide_entered = start
@@ -274,8 +338,9 @@ class MonitorCore:
         now = _stamp_s(stamp_ns)
         timeout = self.config.alarm.depth_timeout
         self.depth_stale = self.depth_s == self.depth_s and now - self.depth_s > timeout
-        return self._set_component('tide', tide_status(self.depth, self.depth_s, now, timeout),
-                                   stamp_ns)
+        return self._set_component(
+            'tide', tide_status(self.depth, self.depth_s, now, timeout), stamp_ns
+        )
 
     def _set_component(self, name: str, new: tuple[Level, str], stamp_ns: int) -> list[Change]:
         """Set the tide's or the logger's (level, message); a Change if the level moved."""
@@ -294,13 +359,28 @@ class MonitorCore:
         h = self.depth + lc.hook_height
         if self.depth_s != self.depth_s:  # no depth yet: nothing to solve
             line.values, line.status, line.status_message, line.model = (
-                (t, h) + _NAN_VALUES[2:], NO_DEPTH, '', NO_MODEL)
+                (t, h) + _NAN_VALUES[2:],
+                NO_DEPTH,
+                '',
+                NO_MODEL,
+            )
             return
-        r = solve(lc.weight, h, tension=t, anchor_distance=lc.anchor_distance, mbl=lc.mbl,
-                  ea=lc.ea)
-        line.values = (t, h, r.horizontal_tension, r.min_anchor_distance, r.anchor_margin,
-                       r.uplift_force, r.tide_margin, r.load_margin, r.safety_factor,
-                       r.anchor_angle_deg, r.suspended_length)
+        r = solve(
+            lc.weight, h, tension=t, anchor_distance=lc.anchor_distance, mbl=lc.mbl, ea=lc.ea
+        )
+        line.values = (
+            t,
+            h,
+            r.horizontal_tension,
+            r.min_anchor_distance,
+            r.anchor_margin,
+            r.uplift_force,
+            r.tide_margin,
+            r.load_margin,
+            r.safety_factor,
+            r.anchor_angle_deg,
+            r.suspended_length,
+        )
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
 
     def _solve_many(self, which: Sequence[int]) -> None:
@@ -314,11 +394,17 @@ class MonitorCore:
         ea = None
         if any(c.ea is not None for c in cfgs):
             ea = np.array([math.inf if c.ea is None else c.ea for c in cfgs])
-        r = solve(np.array([c.weight for c in cfgs]), h, tension=tension,
-                  anchor_distance=np.array([c.anchor_distance for c in cfgs]),
-                  mbl=np.array([c.mbl for c in cfgs]), ea=ea)
-        columns = [tension.tolist(), h.tolist()] + [np.asarray(getattr(r, k)).tolist()
-                                                    for k in _SOLVED]
+        r = solve(
+            np.array([c.weight for c in cfgs]),
+            h,
+            tension=tension,
+            anchor_distance=np.array([c.anchor_distance for c in cfgs]),
+            mbl=np.array([c.mbl for c in cfgs]),
+            ea=ea,
+        )
+        columns = [tension.tolist(), h.tolist()] + [
+            np.asarray(getattr(r, k)).tolist() for k in _SOLVED
+        ]
         models = np.broadcast_to(np.asarray(r.model, dtype=object), tension.shape)
         messages, status = r.message, np.asarray(r.status).tolist()
         for i, line in enumerate(lines):
@@ -333,12 +419,14 @@ class MonitorCore:
         for k in which:
             line = self.lines[k]
             line.state, events = line.alarm.update(
-                line.state, line.inputs(self.depth_s, self.depth_stale), now)
+                line.state, line.inputs(self.depth_s, self.depth_stale), now
+            )
             changes += [Change(line.config.name, ev) for ev in events]
         return changes
 
-    def _finish(self, stamp_ns: int, kind: str, solved: Sequence[int],
-                changes: list[Change]) -> Step:
+    def _finish(
+        self, stamp_ns: int, kind: str, solved: Sequence[int], changes: list[Change]
+    ) -> Step:
         """The Step of an input event: outputs of the solved lines, a snapshot on a change."""
         outputs = tuple(self.output(k) for k in solved)
         snapshot = self.snapshot(stamp_ns) if changes else None
@@ -353,41 +441,71 @@ class MonitorCore:
     def snapshot(self, stamp_ns: int) -> Snapshot:
         """The diagnostic snapshot at ``stamp_ns``: every line, the tide, the logger."""
         now = _stamp_s(stamp_ns)
-        statuses = [line_status(line.config, line.hardware_id, line.state.level,
-                                line.state.message, line.values, line.status, line.model,
-                                now - line.tension_s) for line in self.lines]
+        statuses = [
+            line_status(
+                line.config,
+                line.hardware_id,
+                line.state.level,
+                line.state.message,
+                line.values,
+                line.status,
+                line.model,
+                now - line.tension_s,
+            )
+            for line in self.lines
+        ]
         statuses.append(tide_component(self.tide, self.depth_id, self.depth, now - self.depth_s))
         level, message = self.logger
-        statuses.append(ComponentStatus(f'{NODE_NAME}: logger', level, message, self.logger_id,
-                                        ()))
+        statuses.append(
+            ComponentStatus(f'{NODE_NAME}: logger', level, message, self.logger_id, ())
+        )
         return Snapshot(stamp_ns, tuple(statuses))
 
 
-def line_status(config: LineConfig, hardware_id: str, level: Level, message: str,
-                values: Sequence[float], status: int, model: str,
-                tension_age: float) -> ComponentStatus:
+def line_status(
+    config: LineConfig,
+    hardware_id: str,
+    level: Level,
+    message: str,
+    values: Sequence[float],
+    status: int,
+    model: str,
+    tension_age: float,
+) -> ComponentStatus:
     """One line's ``DiagnosticStatus``: the contract keys (SI strings ``float()`` reads back
     exactly), then ``measured_tension``, ``tension_age`` [s], ``anchor_distance``,
     ``allowed_uplift``, ``anchor_angle_deg``, ``solver_status`` and ``model``."""
     named = dict(zip(VALUE_FIELDS, values))
     pairs = diagnostic_values(named) + [
-        ('measured_tension', repr(float(values[0]))), ('tension_age', repr(float(tension_age))),
+        ('measured_tension', repr(float(values[0]))),
+        ('tension_age', repr(float(tension_age))),
         ('anchor_distance', repr(config.anchor_distance)),
         ('allowed_uplift', repr(config.allowed_uplift)),
-        ('anchor_angle_deg', repr(float(values[9]))), ('solver_status', str(int(status))),
-        ('model', model)]
-    return ComponentStatus(f'{NODE_NAME}: {config.name}', level, message, hardware_id,
-                           tuple(pairs))
+        ('anchor_angle_deg', repr(float(values[9]))),
+        ('solver_status', str(int(status))),
+        ('model', model),
+    ]
+    return ComponentStatus(
+        f'{NODE_NAME}: {config.name}', level, message, hardware_id, tuple(pairs)
+    )
 
 
-def tide_component(tide: tuple[Level, str], hardware_id: str, depth: float,
-                   depth_age: float) -> ComponentStatus:
+def tide_component(
+    tide: tuple[Level, str], hardware_id: str, depth: float, depth_age: float
+) -> ComponentStatus:
     """The tide's ``DiagnosticStatus``: values ``depth`` [m] and ``depth_age`` [s]."""
-    return ComponentStatus(f'{NODE_NAME}: tide', tide[0], tide[1], hardware_id,
-                           (('depth', repr(float(depth))), ('depth_age', repr(float(depth_age)))))
+    return ComponentStatus(
+        f'{NODE_NAME}: tide',
+        tide[0],
+        tide[1],
+        hardware_id,
+        (('depth', repr(float(depth))), ('depth_age', repr(float(depth_age)))),
+    )
 
 
-# --- the events channel ---------------------------------------------------------------------------
+# --- the events channel
+# ---------------------------------------------------------------------------
+
 
 def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
     """What the node records on :data:`EVENTS_TOPIC` for an event that is not an input message

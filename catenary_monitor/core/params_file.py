@@ -50,6 +50,7 @@ result below the smallest normal double, tininess after rounding) in Python, che
 C functions in the tests. Python rather than ctypes: the loader stays pure and deterministic on
 every platform (the host libc elsewhere is not the glibc the robot runs), and the rules are short.
 """
+
 from __future__ import annotations
 
 import math
@@ -60,8 +61,17 @@ from fractions import Fraction
 from pathlib import Path
 from typing import Any, Callable, Iterable, Iterator
 
-__all__ = ['ParamsFileError', 'c_strtol', 'c_strtod', 'rcl_scalar', 'check_section_name',
-           'parse_params', 'fully_qualified_name', 'parameters_for_node', 'read_params_file']
+__all__ = [
+    'ParamsFileError',
+    'c_strtol',
+    'c_strtod',
+    'rcl_scalar',
+    'check_section_name',
+    'parse_params',
+    'fully_qualified_name',
+    'parameters_for_node',
+    'read_params_file',
+]
 
 PARAMS_KEY = 'ros__parameters'
 _NODE_LEVEL, _PARAMS_LEVEL = 1, 2
@@ -69,17 +79,25 @@ _STR_TAG = 'tag:yaml.org,2002:str'
 _TYPES = ('bool', 'int', 'double', 'string')
 _TRUE = frozenset('Y y yes Yes YES true True TRUE on On ON'.split())
 _FALSE = frozenset('N n no No NO false False FALSE off Off OFF'.split())
-_YAML_FLOATS = {'.nan': math.nan, '.NaN': math.nan, '.NAN': math.nan,
-                **{f'{s}.{i}': (-math.inf if s == '-' else math.inf)
-                   for s in ('', '+', '-') for i in ('inf', 'Inf', 'INF')}}
+_YAML_FLOATS = {
+    '.nan': math.nan,
+    '.NaN': math.nan,
+    '.NAN': math.nan,
+    **{
+        f'{s}.{i}': (-math.inf if s == '-' else math.inf)
+        for s in ('', '+', '-')
+        for i in ('inf', 'Inf', 'INF')
+    },
+}
 _C_SPACE = ' \t\n\v\f\r'
-_INT64_MAX = 2 ** 63 - 1
-_DBL_MIN = Fraction(1, 2 ** 1022)
+_INT64_MAX = 2**63 - 1
+_DBL_MIN = Fraction(1, 2**1022)
 _NODE_NAME_MAX, _NAMESPACE_MAX = 255, 245
 _NAME_CHARS = re.compile(r'[A-Za-z0-9_]*\Z')
 _INFNAN = re.compile(r'infinity|inf|nan(?:\([A-Za-z0-9_]*\))?', re.IGNORECASE | re.ASCII)
-_HEXFLOAT = re.compile(r'0[xX](?P<m>[0-9a-fA-F]+\.?[0-9a-fA-F]*|\.[0-9a-fA-F]+)'
-                       r'(?:[pP](?P<e>[+-]?[0-9]+))?')
+_HEXFLOAT = re.compile(
+    r'0[xX](?P<m>[0-9a-fA-F]+\.?[0-9a-fA-F]*|\.[0-9a-fA-F]+)' r'(?:[pP](?P<e>[+-]?[0-9]+))?'
+)
 _DECFLOAT = re.compile(r'(?P<m>[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE](?P<e>[+-]?[0-9]+))?')
 _YAML_SPACE = ' \t\r\n#'
 _ANCHOR_CHARS = frozenset('ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789_-')
@@ -98,6 +116,7 @@ class ParamsFileError(ValueError):
 
 # --- glibc strtol / strtod ---------------------------------------------------------------------
 
+
 def _skip_space(text: str) -> int:
     i = 0
     while i < len(text) and text[i] in _C_SPACE:
@@ -107,7 +126,7 @@ def _skip_space(text: str) -> int:
 
 def _sign(text: str, i: int) -> tuple[int, int]:
     """(index after an optional sign, -1 or 1)."""
-    if text[i:i + 1] in ('+', '-'):
+    if text[i : i + 1] in ('+', '-'):
         return i + 1, -1 if text[i] == '-' else 1
     return i, 1
 
@@ -127,15 +146,19 @@ def c_strtol(text: str) -> tuple[int, int, bool]:
     """
     i, sign = _sign(text, _skip_space(text))
     base, start = 10, i
-    if text[i:i + 1] == '0':
+    if text[i : i + 1] == '0':
         base = 8
-        if text[i + 1:i + 2] in ('x', 'X') and text[i + 2:i + 3] and text[i + 2] in _DIGITS[16]:
+        if (
+            text[i + 1 : i + 2] in ('x', 'X')
+            and text[i + 2 : i + 3]
+            and text[i + 2] in _DIGITS[16]
+        ):
             base, start = 16, i + 2
     end = _run(text, start, _DIGITS[base])
     if end == start:
         return 0, 0, False
     digits = text[start:end].lstrip('0') or '0'
-    magnitude = int(digits, base) if len(digits) <= 40 else 2 ** 64
+    magnitude = int(digits, base) if len(digits) <= 40 else 2**64
     if magnitude > _INT64_MAX + (sign < 0):
         return (-_INT64_MAX - 1 if sign < 0 else _INT64_MAX), end, True
     return sign * magnitude, end, False
@@ -161,7 +184,7 @@ def _tiny_after_rounding(exact: Fraction) -> bool:
     if exp != -1023:
         return exp < -1022
     q, r = divmod(num << (52 - exp), den)
-    return q + (2 * r > den or (2 * r == den and q % 2 == 1)) < 2 ** 53
+    return q + (2 * r > den or (2 * r == den and q % 2 == 1)) < 2**53
 
 
 def _exponent(text: str | None) -> int:
@@ -169,7 +192,7 @@ def _exponent(text: str | None) -> int:
     if not text:
         return 0
     digits = text.lstrip('+-').lstrip('0') or '0'
-    value = int(digits) if len(digits) <= 9 else 10 ** 9
+    value = int(digits) if len(digits) <= 9 else 10**9
     return -value if text.startswith('-') else value
 
 
@@ -192,8 +215,9 @@ def _hex_double(match: re.Match[str]) -> tuple[float, bool]:
     if digits == 0:
         return _finish(None, 0.0)
     log2 = digits.bit_length() - 1 + exp
-    return _finish(Fraction(digits) * Fraction(2) ** exp if abs(log2) < 1300 else Fraction(1),
-                   log2)
+    return _finish(
+        Fraction(digits) * Fraction(2) ** exp if abs(log2) < 1300 else Fraction(1), log2
+    )
 
 
 def _dec_double(match: re.Match[str]) -> tuple[float, bool]:
@@ -230,6 +254,7 @@ def c_strtod(text: str) -> tuple[float, int, bool]:
 
 # --- scalar typing (parse.c get_value) ---------------------------------------------------------
 
+
 def _c_string(text: str) -> str:
     """The text as C sees it: up to the first NUL."""
     return text.split('\0', 1)[0]
@@ -264,12 +289,14 @@ def rcl_scalar(text: str, style: str | None = None, tag: str | None = None) -> t
 
 # --- node names (parse.c _validate_name, rmw validators) ---------------------------------------
 
+
 def _check_node_name(name: str) -> None:
     if not name:
         raise ParamsFileError('node name must not be empty')
     if not _NAME_CHARS.match(name):
-        raise ParamsFileError("node name must not contain characters other than alphanumerics "
-                              "or '_'")
+        raise ParamsFileError(
+            "node name must not contain characters other than alphanumerics " "or '_'"
+        )
     if name[0].isdigit():
         raise ParamsFileError('node name must not start with a number')
     if len(name) > _NODE_NAME_MAX:
@@ -279,8 +306,9 @@ def _check_node_name(name: str) -> None:
 def _check_namespace_token(token: str) -> None:
     """One ``/token`` of a namespace, as rmw_validate_namespace sees it."""
     if not _NAME_CHARS.match(token[1:]):
-        raise ParamsFileError("namespace must not contain characters other than alphanumerics, "
-                              "'_', or '/'")
+        raise ParamsFileError(
+            "namespace must not contain characters other than alphanumerics, " "'_', or '/'"
+        )
     if token[1:2].isdigit():
         raise ParamsFileError('namespace must not have a token that starts with a number')
     if len(token) > _NAMESPACE_MAX:
@@ -306,14 +334,15 @@ def check_section_name(name: str) -> None:
         return
     slash = name.rfind('/')
     if slash >= 0:
-        namespace = name[:slash + 1]
+        namespace = name[: slash + 1]
         _check_namespace(namespace if namespace.startswith('/') else '/' + namespace)
-    node = name[slash + 1:]
+    node = name[slash + 1 :]
     if node not in ('*', '**'):
         _check_node_name(node)
 
 
 # --- the event walk (parse.c parse_file_events) ------------------------------------------------
+
 
 @dataclass
 class _Slot:
@@ -376,7 +405,7 @@ class _Namespace:
         if self.count == 1:
             self.text = None
         elif self.count > 1 and self.text is not None and self.sep in self.text:
-            self.text = self.text[:self.text.rfind(self.sep)]
+            self.text = self.text[: self.text.rfind(self.sep)]
         self.count = max(0, self.count - 1)
 
     def replace(self, text: str, count: int) -> None:
@@ -461,8 +490,9 @@ class _Walk:
             self.seq_type = kind
             slot.arrays[kind] = []
         elif self.seq_type != kind:
-            raise ParamsFileError(f"Sequence should be of same type. Value type '{kind}' do not "
-                                  'belong', self.line)
+            raise ParamsFileError(
+                f"Sequence should be of same type. Value type '{kind}' do not " 'belong', self.line
+            )
         slot.arrays[kind].append(value)
 
     # collections
@@ -470,8 +500,7 @@ class _Walk:
         if self.is_key:
             raise ParamsFileError('Sequences cannot be key', self.line)
         if self.level < _PARAMS_LEVEL:
-            raise ParamsFileError('Sequences can only be values and not keys in params',
-                                  self.line)
+            raise ParamsFileError('Sequences can only be values and not keys in params', self.line)
         self.is_seq, self.seq_type = True, None
 
     def sequence_end(self, event: Any) -> None:
@@ -479,8 +508,9 @@ class _Walk:
 
     def mapping_start(self, event: Any) -> None:
         self.depth += 1
-        self.new_map = not (self.level == _PARAMS_LEVEL
-                            and self.depth - (self.node_ns.count + 1) == 2)
+        self.new_map = not (
+            self.level == _PARAMS_LEVEL and self.depth - (self.node_ns.count + 1) == 2
+        )
         self.is_key = True
 
     def mapping_end(self, event: Any) -> None:
@@ -498,20 +528,27 @@ class _Walk:
 
 
 _HANDLERS: dict[str, Callable[[_Walk, Any], None]] = {
-    'ScalarEvent': _Walk.scalar, 'SequenceStartEvent': _Walk.sequence_start,
-    'SequenceEndEvent': _Walk.sequence_end, 'MappingStartEvent': _Walk.mapping_start,
-    'MappingEndEvent': _Walk.mapping_end, 'AliasEvent': _Walk.alias,
+    'ScalarEvent': _Walk.scalar,
+    'SequenceStartEvent': _Walk.sequence_start,
+    'SequenceEndEvent': _Walk.sequence_end,
+    'MappingStartEvent': _Walk.mapping_start,
+    'MappingEndEvent': _Walk.mapping_end,
+    'AliasEvent': _Walk.alias,
 }
 
 
 # --- YAML events and the libyaml 0.1.7 / 0.2 differences ---------------------------------------
 
+
 def _decode(data: bytes) -> str:
     """The text libyaml reads (its BOM detection: UTF-16 LE/BE with BOM, else UTF-8)."""
-    for bom, codec in ((b'\xff\xfe', 'utf-16-le'), (b'\xfe\xff', 'utf-16-be'),
-                       (b'\xef\xbb\xbf', 'utf-8')):
+    for bom, codec in (
+        (b'\xff\xfe', 'utf-16-le'),
+        (b'\xfe\xff', 'utf-16-be'),
+        (b'\xef\xbb\xbf', 'utf-8'),
+    ):
         if data.startswith(bom):
-            return data[len(bom):].decode(codec, 'replace')
+            return data[len(bom) :].decode(codec, 'replace')
     return data.decode('utf-8', 'replace')
 
 
@@ -557,8 +594,7 @@ class _LibyamlCompat:
         name = type(event).__name__
         line = event.start_mark.line + 1
         if name == 'DocumentStartEvent' and getattr(event, 'version', None) not in (None, (1, 1)):
-            raise ParamsFileError('%YAML 1.2 is refused by libyaml 0.1.7 (ROS 2 pip wheels)',
-                                  line)
+            raise ParamsFileError('%YAML 1.2 is refused by libyaml 0.1.7 (ROS 2 pip wheels)', line)
         if getattr(event, 'tag', None) is not None:
             self.tag(event, line)
         if name in ('SequenceStartEvent', 'MappingStartEvent'):
@@ -570,9 +606,12 @@ class _LibyamlCompat:
 
     def tag(self, event: Any, line: int) -> None:
         end = _tag_end(self.decoded(), event.start_mark.index)
-        if end >= 0 and self.decoded()[end:end + 1] in (',', '[', ']'):
-            raise ParamsFileError("a tag directly followed by ',', '[' or ']' is read differently "
-                                  'by libyaml 0.1.7 (ROS 2 pip wheels) and 0.2', line)
+        if end >= 0 and self.decoded()[end : end + 1] in (',', '[', ']'):
+            raise ParamsFileError(
+                "a tag directly followed by ',', '[' or ']' is read differently "
+                'by libyaml 0.1.7 (ROS 2 pip wheels) and 0.2',
+                line,
+            )
 
     def decoded(self) -> str:
         if self.text is None:
@@ -581,13 +620,17 @@ class _LibyamlCompat:
 
     def scalar(self, event: Any, line: int) -> None:
         if self.flow and event.style in (None, '') and (':' in event.value or '?' in event.value):
-            raise ParamsFileError("':' or '?' inside a plain scalar in a flow collection is "
-                                  'refused by libyaml 0.1.7 (ROS 2 pip wheels)', line)
+            raise ParamsFileError(
+                "':' or '?' inside a plain scalar in a flow collection is "
+                'refused by libyaml 0.1.7 (ROS 2 pip wheels)',
+                line,
+            )
         if event.style == '"':
-            source = self.decoded()[event.start_mark.index:event.end_mark.index]
+            source = self.decoded()[event.start_mark.index : event.end_mark.index]
             if _has_slash_escape(source):
-                raise ParamsFileError("the escape '\\/' is refused by libyaml 0.1.7 (ROS 2 pip "
-                                      'wheels)', line)
+                raise ParamsFileError(
+                    "the escape '\\/' is refused by libyaml 0.1.7 (ROS 2 pip " 'wheels)', line
+                )
 
 
 def _events(data: bytes) -> Iterator[Any]:
@@ -617,6 +660,7 @@ def parse_params(data: bytes) -> list[tuple[str, dict[str, Any]]]:
 
 # --- rclpy: which entries a node gets ----------------------------------------------------------
 
+
 def _section_pattern(name: str) -> re.Pattern[str]:
     """rclpy's regex for a section name: ``/`` prepended, ``/*`` replaced by ``(/\\w+)``."""
     full = name if name.startswith('/') else '/' + name
@@ -629,8 +673,9 @@ def fully_qualified_name(node_name: str, node_namespace: str = '/') -> str:
     return namespace.rstrip('/') + '/' + node_name
 
 
-def parameters_for_node(entries: Iterable[tuple[str, dict[str, Any]]], node_name: str,
-                        node_namespace: str = '/') -> dict[str, Any]:
+def parameters_for_node(
+    entries: Iterable[tuple[str, dict[str, Any]]], node_name: str, node_namespace: str = '/'
+) -> dict[str, Any]:
     """The parameters rclpy hands node ``node_namespace/node_name``: matching entries merged."""
     fqn = fully_qualified_name(node_name, node_namespace)
     merged: dict[str, Any] = {}
@@ -640,8 +685,9 @@ def parameters_for_node(entries: Iterable[tuple[str, dict[str, Any]]], node_name
     return merged
 
 
-def read_params_file(path: str | Path, node_name: str,
-                     node_namespace: str = '/') -> dict[str, Any]:
+def read_params_file(
+    path: str | Path, node_name: str, node_namespace: str = '/'
+) -> dict[str, Any]:
     """Flat ``{dotted name: value}`` of a params file for one node, exactly as rclpy has them.
 
     Values are bool, int, float, str, lists of one of those, or None (NOT_SET). Raises

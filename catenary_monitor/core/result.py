@@ -1,4 +1,5 @@
 """The result of every catenary solve: :class:`SolveResult`, status codes and their messages."""
+
 from __future__ import annotations
 
 from enum import IntEnum
@@ -30,22 +31,37 @@ STATUS_MESSAGES: dict[int, str] = {
     Status.NON_FINITE: 'an input is NaN or infinite',
     Status.WEIGHT: 'weight must be > 0 N/m',
     Status.DEPTH: 'depth must be > 0 m',
-    Status.TENSION: 'hook tension must exceed weight x depth (T > w*h): the chain cannot reach the seabed',
+    Status.TENSION: (
+        'hook tension must exceed weight x depth (T > w*h): the chain cannot reach the seabed'
+    ),
     Status.HORIZONTAL: 'horizontal tension must be > 0 N',
     Status.DISTANCE: 'anchor distance must be > 0 m',
-    Status.CHAIN_TOO_SHORT: ('chain length must exceed the straight distance hook-anchor '
-                             'sqrt(x^2 + h^2): the chain cannot reach the anchor'),
-    Status.CHAIN_SLACK: ('chain length must be below anchor distance + depth (x + h): '
-                         'a longer chain is slack, with no horizontal tension'),
+    Status.CHAIN_TOO_SHORT: (
+        'chain length must exceed the straight distance hook-anchor '
+        'sqrt(x^2 + h^2): the chain cannot reach the anchor'
+    ),
+    Status.CHAIN_SLACK: (
+        'chain length must be below anchor distance + depth (x + h): '
+        'a longer chain is slack, with no horizontal tension'
+    ),
     Status.MBL: 'minimum breaking load must be > 0 N',
     Status.NO_CONVERGENCE: 'solver did not converge (please report these inputs)',
 }
 
 #: Every result key, in display order (the JSON keys of ``catenary-monitor solve --json``).
 ALL_KEYS = (
-    'horizontal_tension', 'top_tension', 'min_anchor_distance', 'suspended_length',
-    'top_angle_deg', 'anchor_angle_deg', 'uplift_force', 'anchor_margin', 'tide_margin',
-    'load_margin', 'grounded_length', 'safety_factor',
+    'horizontal_tension',
+    'top_tension',
+    'min_anchor_distance',
+    'suspended_length',
+    'top_angle_deg',
+    'anchor_angle_deg',
+    'uplift_force',
+    'anchor_margin',
+    'tide_margin',
+    'load_margin',
+    'grounded_length',
+    'safety_factor',
 )
 
 

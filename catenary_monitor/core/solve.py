@@ -14,6 +14,7 @@ Two tiers of errors: a mistake in the call itself raises ``ValueError`` naming t
 physically impossible element gets a non-zero ``status`` and NaN outputs
 (:data:`~catenary_monitor.core.result.STATUS_MESSAGES`).
 """
+
 from __future__ import annotations
 
 from typing import Any, Optional
@@ -25,10 +26,16 @@ from catenary_monitor.core.result import ALL_KEYS, STATUS_MESSAGES, SolveResult,
 __all__ = ['solve', 'SolveResult', 'Status', 'STATUS_MESSAGES', 'ALL_KEYS']
 
 
-def solve(weight: ArrayLike, depth: ArrayLike, tension: Optional[ArrayLike] = None,
-          horizontal: Optional[ArrayLike] = None, anchor_distance: Optional[ArrayLike] = None,
-          chain_length: Optional[ArrayLike] = None, mbl: Optional[ArrayLike] = None,
-          ea: Optional[Any] = None) -> SolveResult:
+def solve(
+    weight: ArrayLike,
+    depth: ArrayLike,
+    tension: Optional[ArrayLike] = None,
+    horizontal: Optional[ArrayLike] = None,
+    anchor_distance: Optional[ArrayLike] = None,
+    chain_length: Optional[ArrayLike] = None,
+    mbl: Optional[ArrayLike] = None,
+    ea: Optional[Any] = None,
+) -> SolveResult:
     """Solve the anchor-chain catenary for the minimum anchor distance, uplift and margins.
 
     Parameters
@@ -55,10 +62,14 @@ def solve(weight: ArrayLike, depth: ArrayLike, tension: Optional[ArrayLike] = No
     numbers to rounding, an order of magnitude faster.
     """
     if ea is None:
-        return solve_inextensible(weight, depth, tension, horizontal, anchor_distance,
-                                  chain_length, mbl)
+        return solve_inextensible(
+            weight, depth, tension, horizontal, anchor_distance, chain_length, mbl
+        )
     if tension is None or horizontal is not None or chain_length is not None:
-        raise ValueError('ea (an elastic chain) is solved for a measured hook tension: give '
-                         'tension (problems 3 and 4) and neither horizontal nor chain_length')
-    return elastic.solve_with_correction(weight, depth, tension, anchor_distance, ea=ea,
-                                         mbl=mbl)[0]
+        raise ValueError(
+            'ea (an elastic chain) is solved for a measured hook tension: give '
+            'tension (problems 3 and 4) and neither horizontal nor chain_length'
+        )
+    return elastic.solve_with_correction(weight, depth, tension, anchor_distance, ea=ea, mbl=mbl)[
+        0
+    ]

@@ -9,6 +9,7 @@ is encoded field by field (:func:`diagnostic_array`); the tests check every enco
 Alignment follows the CDR rule: a primitive of size n starts at an offset (counted after the
 4-byte encapsulation header) that is a multiple of n.
 """
+
 from __future__ import annotations
 
 import struct
@@ -16,9 +17,18 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-__all__ = ['ENCAPSULATION', 'float64_payloads', 'multiarray_prefix', 'multiarray_payloads',
-           'diagnostic_array', 'status_header', 'key_values', 'diagnostic_array_parts',
-           'string_message', 'string_text']
+__all__ = [
+    'ENCAPSULATION',
+    'float64_payloads',
+    'multiarray_prefix',
+    'multiarray_payloads',
+    'diagnostic_array',
+    'status_header',
+    'key_values',
+    'diagnostic_array_parts',
+    'string_message',
+    'string_text',
+]
 
 #: CDR little-endian encapsulation header.
 ENCAPSULATION = b'\x00\x01\x00\x00'
@@ -71,12 +81,12 @@ def multiarray_prefix(label: str, size: int) -> bytes:
     """CDR bytes of a ``Float64MultiArray`` with one dimension ``(label, size, size)``,
     ``data_offset`` 0 and ``size`` doubles, up to (not including) the first double."""
     b = _Buffer()
-    b.u32(1)              # layout.dim: one MultiArrayDimension
+    b.u32(1)  # layout.dim: one MultiArrayDimension
     b.string(label)
-    b.u32(size)           # size
-    b.u32(size)           # stride
-    b.u32(0)              # layout.data_offset
-    b.u32(size)           # data: sequence length
+    b.u32(size)  # size
+    b.u32(size)  # stride
+    b.u32(0)  # layout.data_offset
+    b.u32(size)  # data: sequence length
     b.align(8)
     return b.bytes()
 
@@ -87,8 +97,8 @@ def multiarray_payloads(label: str, data: np.ndarray) -> np.ndarray:
     n, k = data.shape
     prefix = np.frombuffer(multiarray_prefix(label, k), np.uint8)
     out = np.empty((n, len(prefix) + 8 * k), np.uint8)
-    out[:, :len(prefix)] = prefix
-    out[:, len(prefix):] = data.view(np.uint8).reshape(n, 8 * k)
+    out[:, : len(prefix)] = prefix
+    out[:, len(prefix) :] = data.view(np.uint8).reshape(n, 8 * k)
     return out
 
 
@@ -144,8 +154,10 @@ def diagnostic_array(stamp_ns: int, statuses: Sequence[Status], frame_id: str = 
 # header ends on a 4-byte boundary (the count), so the pairs' bytes never depend on where the
 # status starts; the header depends on it only through ``offset % 4``.
 
-def status_header(level: int, name: str, message: str, hardware_id: str, n_values: int,
-                  align: int) -> bytes:
+
+def status_header(
+    level: int, name: str, message: str, hardware_id: str, n_values: int, align: int
+) -> bytes:
     """Bytes of a DiagnosticStatus up to its ``values`` count, starting at ``offset % 4 ==
     align`` (the padding before each field included)."""
     buf = bytearray(b'\0' * (4 + align))  # a stand-in prefix with the same alignment
@@ -179,13 +191,17 @@ def key_values(pairs: Sequence[tuple[str, str]]) -> bytes:
     return b''.join(out)
 
 
-def diagnostic_array_parts(stamp_ns: int, statuses: Sequence[tuple[Callable[[int], bytes],
-                                                                   bytes]]) -> bytes:
+def diagnostic_array_parts(
+    stamp_ns: int, statuses: Sequence[tuple[Callable[[int], bytes], bytes]]
+) -> bytes:
     """CDR of a DiagnosticArray (empty ``frame_id``) from, per status, a function giving its
     header for an alignment (see :func:`status_header`) and its :func:`key_values` bytes."""
-    parts = [ENCAPSULATION, struct.pack('<iI', stamp_ns // 1_000_000_000,
-                                        stamp_ns % 1_000_000_000),
-             b'\x01\x00\x00\x00\x00\x00\x00\x00', _U32(len(statuses))]
+    parts = [
+        ENCAPSULATION,
+        struct.pack('<iI', stamp_ns // 1_000_000_000, stamp_ns % 1_000_000_000),
+        b'\x01\x00\x00\x00\x00\x00\x00\x00',
+        _U32(len(statuses)),
+    ]
     align = 0  # offset 20 after the encapsulation
     for header, pairs in statuses:
         parts.append(header(align))
@@ -195,6 +211,7 @@ def diagnostic_array_parts(stamp_ns: int, statuses: Sequence[tuple[Callable[[int
 
 
 # --- std_msgs/msg/String ------------------------------------------------------------------------
+
 
 def string_message(text: str) -> bytes:
     """CDR of a ``std_msgs/msg/String``."""
@@ -211,4 +228,4 @@ def string_text(data: bytes) -> str:
     (n,) = struct.unpack(order + 'I', data[4:8])
     if n < 1 or 8 + n > len(data) or data[8 + n - 1] != 0:
         raise ValueError('not a CDR std_msgs/String')
-    return data[8:8 + n - 1].decode('utf-8')
+    return data[8 : 8 + n - 1].decode('utf-8')

@@ -14,6 +14,7 @@ rounding of the product). Values whose magnitude reaches ``10**(15 - d)`` are wr
 field parses back with ``float()``. Integer columns (``int64`` nanoseconds, for instance) are
 exact.
 """
+
 from __future__ import annotations
 
 from typing import IO, Sequence, Union
@@ -29,11 +30,11 @@ def _table(texts: Sequence[str]) -> np.ndarray:
     return np.frombuffer(raw, '<u4').copy()
 
 
-_LUT4 = _table([f'{i:04d}' for i in range(10000)])                       # '0042'
+_LUT4 = _table([f'{i:04d}' for i in range(10000)])  # '0042'
 _LUT4NZ = _table(['\0' * (4 - len(str(i))) + str(i) for i in range(10000)])  # '\0\042'
-_LUT3DOT = _table([f'.{i:03d}' for i in range(1000)])                    # '.042'
-_LUT3 = _table([f'{i:03d}' for i in range(1000)])                        # '042\0'
-_POW10 = np.array([10 ** k for k in range(1, 19)], np.int64)
+_LUT3DOT = _table([f'.{i:03d}' for i in range(1000)])  # '.042'
+_LUT3 = _table([f'{i:03d}' for i in range(1000)])  # '042\0'
+_POW10 = np.array([10**k for k in range(1, 19)], np.int64)
 _COMMA, _MINUS = 44, 45
 _SEP = np.uint32(_COMMA)
 _SEP_NEG = np.uint32(_COMMA | _MINUS << 8)
@@ -54,7 +55,7 @@ class FloatColumn:
         a = np.abs(v)
         fine = a < 10.0 ** (15 - d)
         all_fine = bool(fine.all())
-        q = np.rint((a if all_fine else np.where(fine, a, 0.0)) * 10.0 ** d).astype(np.int64)
+        q = np.rint((a if all_fine else np.where(fine, a, 0.0)) * 10.0**d).astype(np.int64)
         neg = (v < 0) & (q != 0)
         if not all_fine:
             neg &= fine
@@ -116,7 +117,7 @@ def _number_words(q: np.ndarray, neg: np.ndarray, d: int, first: bool) -> list[n
     room for them there (its unused leading bytes), else into a word of their own.
     """
     if d:
-        scale = 10 ** d
+        scale = 10**d
         ip = q // scale
         frac = q - ip * scale
     else:
@@ -199,8 +200,14 @@ def _put_specials(words: list[np.ndarray], rows: np.ndarray, v: np.ndarray, firs
             words[k][row] = cells[k]
 
 
-def write_rows(stream: IO[bytes], columns: Sequence[Column], n: int, header: bool = True,
-               block: int = 32768, start: int = 0) -> int:
+def write_rows(
+    stream: IO[bytes],
+    columns: Sequence[Column],
+    n: int,
+    header: bool = True,
+    block: int = 32768,
+    start: int = 0,
+) -> int:
     """Write rows ``start`` to ``n - 1`` of ``columns`` as CSV to a binary stream (with the
     header line if ``header``); return the bytes written."""
     written = 0
@@ -219,7 +226,7 @@ def write_rows(stream: IO[bytes], columns: Sequence[Column], n: int, header: boo
             else:
                 cols.extend(c.words(lo, hi, i == 0))
         if not label_last:
-            cols.append(newline[:hi - lo])
+            cols.append(newline[: hi - lo])
         data = np.stack(cols, axis=1).tobytes().translate(None, b'\0')
         stream.write(data)
         written += len(data)

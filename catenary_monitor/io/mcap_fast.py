@@ -11,6 +11,7 @@ Foxglove expect.
 
 Schema and Channel records are written top-level before the first chunk that uses them.
 """
+
 from __future__ import annotations
 
 import zlib
@@ -20,8 +21,19 @@ from typing import IO, Any, Mapping, Optional, Sequence
 import numpy as np
 from mcap.data_stream import RecordBuilder
 from mcap.opcode import Opcode
-from mcap.records import (Channel, Chunk, ChunkIndex, DataEnd, Footer, Header, Metadata,
-                          MetadataIndex, Schema, Statistics, SummaryOffset)
+from mcap.records import (
+    Channel,
+    Chunk,
+    ChunkIndex,
+    DataEnd,
+    Footer,
+    Header,
+    Metadata,
+    MetadataIndex,
+    Schema,
+    Statistics,
+    SummaryOffset,
+)
 from mcap.writer import LIBRARY_IDENTIFIER
 
 __all__ = ['ColumnWriter']
@@ -31,9 +43,18 @@ _HEAD = 9 + 22  # opcode + length + channel, sequence, log time, publish time
 
 
 def _record_dtype(payload: int) -> np.dtype:
-    return np.dtype([('op', 'u1'), ('length', '<u8'), ('channel', '<u2'), ('sequence', '<u4'),
-                     ('log_time', '<u8'), ('publish_time', '<u8'),
-                     ('data', 'u1', (payload,))], align=False)
+    return np.dtype(
+        [
+            ('op', 'u1'),
+            ('length', '<u8'),
+            ('channel', '<u2'),
+            ('sequence', '<u4'),
+            ('log_time', '<u8'),
+            ('publish_time', '<u8'),
+            ('data', 'u1', (payload,)),
+        ],
+        align=False,
+    )
 
 
 _INDEX_ENTRY = np.dtype([('t', '<u8'), ('o', '<u8')])
@@ -50,15 +71,23 @@ class ColumnWriter:
     level : zstd compression level.
     """
 
-    def __init__(self, stream: IO[bytes], *, compression: str = 'zstd',
-                 chunk_bytes: int = 1 << 20, level: int = 1, profile: str = 'ros2',
-                 library: str = '') -> None:
+    def __init__(
+        self,
+        stream: IO[bytes],
+        *,
+        compression: str = 'zstd',
+        chunk_bytes: int = 1 << 20,
+        level: int = 1,
+        profile: str = 'ros2',
+        library: str = '',
+    ) -> None:
         if compression not in ('zstd', 'lz4', 'none'):
             raise ValueError(f"compression must be 'zstd', 'lz4' or 'none', got {compression!r}")
         self.stream = stream
         self.compression = '' if compression == 'none' else compression
         if self.compression == 'zstd':
             import zstandard
+
             self._zstd = zstandard.ZstdCompressor(level=level)
         self.chunk_bytes = int(chunk_bytes)
         self._schemas: OrderedDict[int, Schema] = OrderedDict()
@@ -72,8 +101,9 @@ class ColumnWriter:
         self._end = 0
         self.messages = 0
         stream.write(MAGIC)
-        self._record(Header(profile, library or f'catenary_monitor.mcap_fast; '
-                                                f'{LIBRARY_IDENTIFIER}'))
+        self._record(
+            Header(profile, library or f'catenary_monitor.mcap_fast; ' f'{LIBRARY_IDENTIFIER}')
+        )
 
     # ------------------------------------------------------------------ set-up records
     def _record(self, record: Any) -> int:
@@ -90,13 +120,22 @@ class ColumnWriter:
         self._schemas[schema_id] = Schema(id=schema_id, name=name, encoding=encoding, data=data)
         return schema_id
 
-    def register_channel(self, topic: str, message_encoding: str, schema_id: int,
-                         metadata: Optional[Mapping[str, str]] = None) -> int:
+    def register_channel(
+        self,
+        topic: str,
+        message_encoding: str,
+        schema_id: int,
+        metadata: Optional[Mapping[str, str]] = None,
+    ) -> int:
         """Add a Channel; returns its id (1, 2, ...)."""
         channel_id = len(self._channels) + 1
-        self._channels[channel_id] = Channel(id=channel_id, topic=topic,
-                                             message_encoding=message_encoding,
-                                             schema_id=schema_id, metadata=dict(metadata or {}))
+        self._channels[channel_id] = Channel(
+            id=channel_id,
+            topic=topic,
+            message_encoding=message_encoding,
+            schema_id=schema_id,
+            metadata=dict(metadata or {}),
+        )
         self._counts[channel_id] = 0
         self._sequence[channel_id] = 0
         return channel_id
@@ -122,8 +161,13 @@ class ColumnWriter:
                 self._written.add((1, cid))
 
     # ------------------------------------------------------------------ messages
-    def write_columns(self, channel: np.ndarray, log_time: np.ndarray, payload: np.ndarray,
-                      publish_time: Optional[np.ndarray] = None) -> None:
+    def write_columns(
+        self,
+        channel: np.ndarray,
+        log_time: np.ndarray,
+        payload: np.ndarray,
+        publish_time: Optional[np.ndarray] = None,
+    ) -> None:
         """Write ``n`` messages whose payloads have one size, in the order given.
 
         ``channel`` (n,) channel ids; ``log_time`` (n,) ns; ``payload`` (n, size) uint8;
@@ -159,8 +203,9 @@ class ColumnWriter:
             self._chunk(rec.tobytes(), channel[lo:hi], log_time[lo:hi], offsets)
         self.messages += n
 
-    def write_messages(self, channel_id: int, log_times: Sequence[int],
-                       payloads: Sequence[bytes]) -> None:
+    def write_messages(
+        self, channel_id: int, log_times: Sequence[int], payloads: Sequence[bytes]
+    ) -> None:
         """Write messages of one channel with payloads of any size (few messages)."""
         if not payloads:
             return
@@ -170,41 +215,57 @@ class ColumnWriter:
             seq = self._sequence[channel_id] % (1 << 32)
             self._sequence[channel_id] += 1
             head = np.zeros(1, _record_dtype(0))
-            head['op'], head['length'], head['channel'] = Opcode.MESSAGE, 22 + len(data), channel_id
+            head['op'], head['length'], head['channel'] = (
+                Opcode.MESSAGE,
+                22 + len(data),
+                channel_id,
+            )
             head['sequence'], head['log_time'], head['publish_time'] = seq, t, t
             parts += [head.tobytes(), data]
             offsets.append(pos)
             pos += _HEAD + len(data)
             if pos >= self.chunk_bytes:
                 self._flush_variable(parts, offsets, channel_id, log_times)
-                log_times = log_times[len(offsets):]
+                log_times = log_times[len(offsets) :]
                 parts, offsets, pos = [], [], 0
         if parts:
             self._flush_variable(parts, offsets, channel_id, log_times)
         self._counts[channel_id] += len(payloads)
         self.messages += len(payloads)
 
-    def _flush_variable(self, parts: list[bytes], offsets: list[int], channel_id: int,
-                        log_times: Sequence[int]) -> None:
+    def _flush_variable(
+        self, parts: list[bytes], offsets: list[int], channel_id: int, log_times: Sequence[int]
+    ) -> None:
         k = len(offsets)
-        self._chunk(b''.join(parts), np.full(k, channel_id, np.uint16),
-                    np.asarray(log_times[:k], np.int64), np.asarray(offsets, np.int64))
+        self._chunk(
+            b''.join(parts),
+            np.full(k, channel_id, np.uint16),
+            np.asarray(log_times[:k], np.int64),
+            np.asarray(offsets, np.int64),
+        )
 
-    def _chunk(self, data: bytes, channel: np.ndarray, log_time: np.ndarray,
-               offsets: np.ndarray) -> None:
+    def _chunk(
+        self, data: bytes, channel: np.ndarray, log_time: np.ndarray, offsets: np.ndarray
+    ) -> None:
         if self.compression == 'zstd':
             compressed = self._zstd.compress(data)
         elif self.compression == 'lz4':
             import lz4.frame
+
             compressed = lz4.frame.compress(data)
         else:
             compressed = data
         start, end = int(log_time.min()), int(log_time.max())
         self._start = start if self._start is None else min(self._start, start)
         self._end = max(self._end, end)
-        chunk = Chunk(compression=self.compression, data=compressed, message_start_time=start,
-                      message_end_time=end, uncompressed_crc=zlib.crc32(data),
-                      uncompressed_size=len(data))
+        chunk = Chunk(
+            compression=self.compression,
+            data=compressed,
+            message_start_time=start,
+            message_end_time=end,
+            uncompressed_crc=zlib.crc32(data),
+            uncompressed_size=len(data),
+        )
         chunk_start = self.stream.tell()
         self._record(chunk)
         chunk_length = self.stream.tell() - chunk_start
@@ -222,18 +283,30 @@ class ColumnWriter:
             entries['o'] = offsets[sel]
             body = entries.tobytes()
             head = np.zeros(1, [('op', 'u1'), ('len', '<u8'), ('ch', '<u2'), ('n', '<u4')])
-            head['op'], head['len'], head['ch'], head['n'] = (Opcode.MESSAGE_INDEX,
-                                                              6 + len(body), cid, len(body))
+            head['op'], head['len'], head['ch'], head['n'] = (
+                Opcode.MESSAGE_INDEX,
+                6 + len(body),
+                cid,
+                len(body),
+            )
             offsets_by_channel[cid] = pos
             raw = head.tobytes() + body
             pieces.append(raw)
             pos += len(raw)
         self.stream.write(b''.join(pieces))
-        self._chunk_indexes.append(ChunkIndex(
-            message_start_time=start, message_end_time=end, chunk_start_offset=chunk_start,
-            chunk_length=chunk_length, message_index_offsets=offsets_by_channel,
-            message_index_length=pos - index_start, compression=self.compression,
-            compressed_size=len(compressed), uncompressed_size=len(data)))
+        self._chunk_indexes.append(
+            ChunkIndex(
+                message_start_time=start,
+                message_end_time=end,
+                chunk_start_offset=chunk_start,
+                chunk_length=chunk_length,
+                message_index_offsets=offsets_by_channel,
+                message_index_length=pos - index_start,
+                compression=self.compression,
+                compressed_size=len(compressed),
+                uncompressed_size=len(data),
+            )
+        )
 
     # ------------------------------------------------------------------ summary
     def finish(self) -> None:
@@ -251,17 +324,32 @@ class ColumnWriter:
             start = builder.count
             for r in records:
                 r.write(builder)
-            offsets.append(SummaryOffset(group_opcode=opcode, group_start=summary_start + start,
-                                         group_length=builder.count - start))
+            offsets.append(
+                SummaryOffset(
+                    group_opcode=opcode,
+                    group_start=summary_start + start,
+                    group_length=builder.count - start,
+                )
+            )
 
         group(Opcode.SCHEMA, list(self._schemas.values()))
         group(Opcode.CHANNEL, list(self._channels.values()))
-        group(Opcode.STATISTICS, [Statistics(
-            message_count=self.messages, schema_count=len(self._schemas),
-            channel_count=len(self._channels), attachment_count=0,
-            metadata_count=len(self._metadata_indexes), chunk_count=len(self._chunk_indexes),
-            message_start_time=self._start or 0, message_end_time=self._end,
-            channel_message_counts=dict(self._counts))])
+        group(
+            Opcode.STATISTICS,
+            [
+                Statistics(
+                    message_count=self.messages,
+                    schema_count=len(self._schemas),
+                    channel_count=len(self._channels),
+                    attachment_count=0,
+                    metadata_count=len(self._metadata_indexes),
+                    chunk_count=len(self._chunk_indexes),
+                    message_start_time=self._start or 0,
+                    message_end_time=self._end,
+                    channel_message_counts=dict(self._counts),
+                )
+            ],
+        )
         group(Opcode.CHUNK_INDEX, self._chunk_indexes)
         group(Opcode.METADATA_INDEX, self._metadata_indexes)
         offset_start = summary_start + builder.count
@@ -270,7 +358,8 @@ class ColumnWriter:
         summary = builder.end()
         self.stream.write(summary)
         footer = RecordBuilder()
-        Footer(summary_start=summary_start, summary_offset_start=offset_start,
-               summary_crc=0).write(footer)
+        Footer(
+            summary_start=summary_start, summary_offset_start=offset_start, summary_crc=0
+        ).write(footer)
         self.stream.write(footer.end())
         self.stream.write(MAGIC)

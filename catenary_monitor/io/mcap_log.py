@@ -38,6 +38,7 @@ Example
 >>> log.tick()              # from a 1 Hz timer                     # doctest: +SKIP
 >>> log.close()             # in finally:                           # doctest: +SKIP
 """
+
 from __future__ import annotations
 
 import datetime as _dt
@@ -52,8 +53,13 @@ from typing import IO, Any, Callable, Mapping
 from mcap.well_known import MessageEncoding, SchemaEncoding
 from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, Writer
 
-from catenary_monitor.io.ros_schemas import (QOS_DEFAULT, QOS_LATCHED, QOS_SENSOR_DATA,
-                                             message_definition, type_description_hash)
+from catenary_monitor.io.ros_schemas import (
+    QOS_DEFAULT,
+    QOS_LATCHED,
+    QOS_SENSOR_DATA,
+    message_definition,
+    type_description_hash,
+)
 
 __all__ = ['McapLogger', 'QOS_PRESETS']
 
@@ -165,9 +171,13 @@ class McapLogger:
     ) -> None:
         if compression not in _COMPRESSION:
             raise ValueError(f"compression must be 'zstd', 'lz4' or 'none', got {compression!r}")
-        for name, value in (('max_bytes', max_bytes), ('max_seconds', max_seconds),
-                            ('flush_period', flush_period), ('chunk_size', chunk_size),
-                            ('retry_period', retry_period)):
+        for name, value in (
+            ('max_bytes', max_bytes),
+            ('max_seconds', max_seconds),
+            ('flush_period', flush_period),
+            ('chunk_size', chunk_size),
+            ('retry_period', retry_period),
+        ):
             if not value > 0:
                 raise ValueError(f'{name} must be > 0, got {value!r}')
         if not prefix or os.sep in prefix:
@@ -260,7 +270,8 @@ class McapLogger:
                 if known.type_name != type_name:
                     raise ValueError(
                         f'topic {topic!r} is already registered as {known.type_name!r}, '
-                        f'not {type_name!r}')
+                        f'not {type_name!r}'
+                    )
                 return
             metadata: dict[str, str] = {}
             if qos is not None:
@@ -332,8 +343,11 @@ class McapLogger:
         if not isinstance(data, (bytes, bytearray, memoryview)):
             raise TypeError(f'data must be bytes (serialized CDR), got {type(data).__name__}')
         log_time_ns = _check_time('log_time_ns', log_time_ns)
-        publish_time_ns = (log_time_ns if publish_time_ns is None
-                           else _check_time('publish_time_ns', publish_time_ns))
+        publish_time_ns = (
+            log_time_ns
+            if publish_time_ns is None
+            else _check_time('publish_time_ns', publish_time_ns)
+        )
         with self._lock:
             info = self._topics.get(topic)
             if info is None:
@@ -350,8 +364,12 @@ class McapLogger:
             payload = bytes(data)
             try:
                 self._file.writer.add_message(
-                    channel_id=info.channel_id, log_time=log_time_ns, data=payload,
-                    publish_time=publish_time_ns, sequence=sequence % (1 << 32))
+                    channel_id=info.channel_id,
+                    log_time=log_time_ns,
+                    data=payload,
+                    publish_time=publish_time_ns,
+                    sequence=sequence % (1 << 32),
+                )
             except Exception as exc:  # noqa: BLE001
                 self.dropped += 1  # this message was in the chunk that failed to write
                 self._fail('cannot write MCAP message', exc)
@@ -540,11 +558,15 @@ class McapLogger:
         schema_id = f.schema_ids.get(info.type_name)
         if schema_id is None:
             schema_id = f.writer.register_schema(
-                name=info.type_name, encoding=SchemaEncoding.ROS2, data=info.schema_text)
+                name=info.type_name, encoding=SchemaEncoding.ROS2, data=info.schema_text
+            )
             f.schema_ids[info.type_name] = schema_id
         info.channel_id = f.writer.register_channel(
-            topic=topic, message_encoding=MessageEncoding.CDR, schema_id=schema_id,
-            metadata=dict(info.metadata))
+            topic=topic,
+            message_encoding=MessageEncoding.CDR,
+            schema_id=schema_id,
+            metadata=dict(info.metadata),
+        )
 
     def _finish_current(self) -> None:
         f = self._file

@@ -31,6 +31,7 @@ record, which is why this module has its own scanner.
 
 Time stamps are MCAP ``log_time`` (ns; the receive time for rosbag2 and for the node's logger).
 """
+
 from __future__ import annotations
 
 import os
@@ -77,21 +78,23 @@ _OP_STATISTICS = 0x0B
 _OP_DATA_END = 0x0F
 _KNOWN_OPS = frozenset(range(0x01, 0x10))
 
-_RECORD_HEAD = struct.Struct('<BQ')        # opcode, length
-_MESSAGE_HEAD = struct.Struct('<HIQQ')     # channel id, sequence, log time, publish time
-_CHUNK_HEAD = struct.Struct('<QQQII')      # start, end, uncompressed size, crc, len(compression)
-_MESSAGE_MIN = 9 + 22                      # smallest Message record (empty payload), B
-_FLOAT64_RECORD = 9 + 22 + 12              # Message record of one CDR Float64, B
-_BATCH_BYTES = 8 << 20                     # decompressed chunk bytes handled per numpy pass
-_BATCH_PIECES = 4096                       # chunks handled per numpy pass
+_RECORD_HEAD = struct.Struct('<BQ')  # opcode, length
+_MESSAGE_HEAD = struct.Struct('<HIQQ')  # channel id, sequence, log time, publish time
+_CHUNK_HEAD = struct.Struct('<QQQII')  # start, end, uncompressed size, crc, len(compression)
+_MESSAGE_MIN = 9 + 22  # smallest Message record (empty payload), B
+_FLOAT64_RECORD = 9 + 22 + 12  # Message record of one CDR Float64, B
+_BATCH_BYTES = 8 << 20  # decompressed chunk bytes handled per numpy pass
+_BATCH_PIECES = 4096  # chunks handled per numpy pass
 _INDEX_ENTRY = np.dtype([('t', '<u8'), ('o', '<u8')])
 # One Float64 Message record seen as a struct (offsets within the record).
-_FLOAT64_ROW = np.dtype({
-    'names': ['op', 'length', 'channel', 'log_time', 'encaps', 'value_le', 'value_be'],
-    'formats': ['u1', '<u8', '<u2', '<u8', '>u2', '<f8', '>f8'],
-    'offsets': [0, 1, 9, 15, 31, 35, 35],
-    'itemsize': _FLOAT64_RECORD,
-})
+_FLOAT64_ROW = np.dtype(
+    {
+        'names': ['op', 'length', 'channel', 'log_time', 'encaps', 'value_le', 'value_be'],
+        'formats': ['u1', '<u8', '<u2', '<u8', '>u2', '<f8', '>f8'],
+        'offsets': [0, 1, 9, 15, 31, 35, 35],
+        'itemsize': _FLOAT64_RECORD,
+    }
+)
 _CDR_BE = 0x0000
 _CDR_LE = 0x0001
 
@@ -108,7 +111,8 @@ class TopicTypeError(McapReadError, TypeError):
 
     def __init__(self, topic: str, type_name: str, expected: str, path: str) -> None:
         super().__init__(
-            f'topic {topic!r} has type {type_name!r} in {path}, expected {expected!r}')
+            f'topic {topic!r} has type {type_name!r} in {path}, expected {expected!r}'
+        )
         self.topic = topic
         self.type_name = type_name
         self.expected = expected
@@ -121,7 +125,8 @@ class EmptyLogError(McapReadError, ValueError):
     def __init__(self, topics: list[str], report: 'ReadReport') -> None:
         detail = f'; {len(report.skips)} damaged part(s) skipped' if report.skips else ''
         super().__init__(
-            f'no messages on topics {topics} in {len(report.files)} MCAP file(s){detail}')
+            f'no messages on topics {topics} in {len(report.files)} MCAP file(s){detail}'
+        )
         self.topics = topics
         self.report = report
 
@@ -208,8 +213,10 @@ class ReadReport:
 
     def summary(self) -> str:
         """Multi-line human summary."""
-        lines = [f'{len(self.files)} file(s), '
-                 + ', '.join(f'{t}: {n}' for t, n in self.messages.items())]
+        lines = [
+            f'{len(self.files)} file(s), '
+            + ', '.join(f'{t}: {n}' for t, n in self.messages.items())
+        ]
         for f in self.files:
             if not f.finished:
                 lines.append(f'{f.path}: not finished by its writer (no summary)')
@@ -278,6 +285,7 @@ def read_float64_topics(
     values: dict[str, list[np.ndarray]] = {t: [] for t in wanted}
 
     for path in expand_paths(paths):
+
         def accept(channel: _Channel, path: str = str(path)) -> bool:
             if channel.topic not in wanted_set:
                 return False
@@ -292,8 +300,12 @@ def read_float64_topics(
         for block in scanner.blocks():
             t, v, topic_of_row, bad = _extract_float64(block, scanner.topic_lut)
             if bad:
-                scanner.skip(block.file_offset, 'bad_payload',
-                             f'{bad} message(s) not a 12-byte CDR Float64', bad)
+                scanner.skip(
+                    block.file_offset,
+                    'bad_payload',
+                    f'{bad} message(s) not a 12-byte CDR Float64',
+                    bad,
+                )
             scanner.file_report.messages += len(t)
             first = int(topic_of_row[0]) if len(t) else -1
             if len(t) and np.all(topic_of_row == first):
@@ -345,6 +357,7 @@ def iter_messages(
     wanted = None if topics is None else set(_unique(topics))
     report = ReadReport() if report is None else report
     for path in expand_paths(paths):
+
         def accept(channel: _Channel) -> bool:
             return wanted is None or channel.topic in wanted
 
@@ -357,9 +370,14 @@ def iter_messages(
                 channel = scanner.channels[channel_id]
                 scanner.file_report.messages += 1
                 report.messages[channel.topic] = report.messages.get(channel.topic, 0) + 1
-                yield RawMessage(channel.topic, log_time, channel.schema_name,
-                                 bytes(buf[off + _MESSAGE_MIN:off + 9 + length]),
-                                 publish_time, sequence)
+                yield RawMessage(
+                    channel.topic,
+                    log_time,
+                    channel.schema_name,
+                    bytes(buf[off + _MESSAGE_MIN : off + 9 + length]),
+                    publish_time,
+                    sequence,
+                )
         scanner.finish()
 
 
@@ -381,9 +399,9 @@ class _Piece:
     """A decompressed chunk waiting in a batch."""
 
     data: bytes | memoryview
-    file_offset: int                       # offset of the Chunk record in the file
-    indexes: list[tuple[int, int, int]]    # (channel id, file offset of 1st entry, entries)
-    partial: bool = False                  # cut by the end of the file
+    file_offset: int  # offset of the Chunk record in the file
+    indexes: list[tuple[int, int, int]]  # (channel id, file offset of 1st entry, entries)
+    partial: bool = False  # cut by the end of the file
 
 
 @dataclass
@@ -391,17 +409,16 @@ class _Block:
     """Message records of accepted channels in one buffer (a chunk or the file itself)."""
 
     buf: bytes | memoryview
-    offsets: np.ndarray   # int64, record starts in buf, file order
-    lengths: np.ndarray   # int64, record body lengths
+    offsets: np.ndarray  # int64, record starts in buf, file order
+    lengths: np.ndarray  # int64, record body lengths
     channels: np.ndarray  # uint16
-    file_offset: int      # where the buffer comes from in the file (for reports)
+    file_offset: int  # where the buffer comes from in the file (for reports)
 
 
 class _Scanner:
     """Walk one file's records, tolerate damage and yield :class:`_Block` s."""
 
-    def __init__(self, path: Path, accept: Callable[[_Channel], bool],
-                 report: ReadReport) -> None:
+    def __init__(self, path: Path, accept: Callable[[_Channel], bool], report: ReadReport) -> None:
         self.path = str(path)
         self.accept = accept
         self.report = report
@@ -409,15 +426,15 @@ class _Scanner:
         self.data_arr = np.frombuffer(self.data, np.uint8)
         self.file_report = FileReport(self.path, len(self.data))
         report.files.append(self.file_report)
-        self.schemas: dict[int, str] = {}                # schema id -> name (data section)
+        self.schemas: dict[int, str] = {}  # schema id -> name (data section)
         self.summary_schemas: dict[int, str] = {}
         self.summary_channels: dict[int, tuple[int, str, str]] = {}  # id -> schema, topic, enc
         self.channels: dict[int, _Channel] = {}
         self.accepted: set[int] = set()
-        self.topic_names: list[str] = []          # accepted channel -> topic index
+        self.topic_names: list[str] = []  # accepted channel -> topic index
         self.topic_index: dict[str, int] = {}
         self.topic_lut = np.full(1 << 16, -1, np.int64)  # accepted channel id -> topic index
-        self.known_lut = np.zeros(1 << 16, bool)         # channel id seen
+        self.known_lut = np.zeros(1 << 16, bool)  # channel id seen
         self.unknown: dict[int, tuple[int, int]] = {}  # channel id -> (count, first offset)
         self.stats_counts: dict[int, int] | None = None
         self._top_messages: list[int] = []
@@ -429,12 +446,16 @@ class _Scanner:
 
     def finish(self) -> None:
         for channel_id, (count, offset) in sorted(self.unknown.items()):
-            self.skip(offset, 'unknown_channel',
-                      f'{count} message(s) on channel id {channel_id} whose Channel record '
-                      'was lost', None)
+            self.skip(
+                offset,
+                'unknown_channel',
+                f'{count} message(s) on channel id {channel_id} whose Channel record ' 'was lost',
+                None,
+            )
         if self.stats_counts is not None:
             self.file_report.messages_expected = sum(
-                n for cid, n in self.stats_counts.items() if cid in self.accepted)
+                n for cid, n in self.stats_counts.items() if cid in self.accepted
+            )
 
     # -- channel bookkeeping
     def _add_schema(self, buf: bytes | memoryview, pos: int, end: int) -> None:
@@ -479,7 +500,7 @@ class _Scanner:
         data = self.data
         n = len(data)
         footer_at = n - len(MAGIC) - 9 - 20
-        if footer_at < len(MAGIC) or data[n - len(MAGIC):] != MAGIC:
+        if footer_at < len(MAGIC) or data[n - len(MAGIC) :] != MAGIC:
             return
         op, length = _RECORD_HEAD.unpack_from(data, footer_at)
         if op != _OP_FOOTER or length != 20:
@@ -488,9 +509,12 @@ class _Scanner:
         self.file_report.finished = True
         if summary_start == 0 or not len(MAGIC) <= summary_start <= footer_at:
             return
-        if summary_crc and zlib.crc32(data[summary_start:footer_at + 9 + 16]) != summary_crc:
-            self.skip(summary_start, 'corrupt_region', 'summary section CRC mismatch; '
-                      'channels are taken from the data section only')
+        if summary_crc and zlib.crc32(data[summary_start : footer_at + 9 + 16]) != summary_crc:
+            self.skip(
+                summary_start,
+                'corrupt_region',
+                'summary section CRC mismatch; ' 'channels are taken from the data section only',
+            )
             return
         pos = summary_start
         while pos + 9 <= footer_at:
@@ -516,8 +540,8 @@ class _Scanner:
         """Yield the accepted message records of the file in file order, batch by batch."""
         data = self.data
         n = len(data)
-        if n < len(MAGIC) or data[:len(MAGIC)] != MAGIC:
-            if MAGIC.startswith(data[:len(MAGIC)]):
+        if n < len(MAGIC) or data[: len(MAGIC)] != MAGIC:
+            if MAGIC.startswith(data[: len(MAGIC)]):
                 self.skip(0, 'truncated', f'file ends after {n} byte(s), inside the magic')
                 return
             if not _looks_like_header(data):
@@ -540,8 +564,11 @@ class _Scanner:
                 # Either the writer was killed inside this record (nothing valid follows) or
                 # its length field is damaged (a valid chunk follows somewhere).
                 if self.file_report.finished or _find_chunk(data, pos + 1) >= 0:
-                    pos = self._resync(pos, f'record (opcode 0x{op:02x}) of {length} B runs '
-                                            'past the end of the file')
+                    pos = self._resync(
+                        pos,
+                        f'record (opcode 0x{op:02x}) of {length} B runs '
+                        'past the end of the file',
+                    )
                     continue
                 recovered = ''
                 if op == _OP_CHUNK:
@@ -551,10 +578,16 @@ class _Scanner:
                         batch.append(piece)
                     yield from self._flush_batch(batch)
                     batch = []
-                    recovered = (f'; {self._recovered} message record(s) recovered from the cut '
-                                 'chunk without CRC check')
-                self.skip(pos, 'truncated', f'file ends inside a record (opcode 0x{op:02x}, '
-                          f'{length} B, {n - pos - 9} B present){recovered}')
+                    recovered = (
+                        f'; {self._recovered} message record(s) recovered from the cut '
+                        'chunk without CRC check'
+                    )
+                self.skip(
+                    pos,
+                    'truncated',
+                    f'file ends inside a record (opcode 0x{op:02x}, '
+                    f'{length} B, {n - pos - 9} B present){recovered}',
+                )
                 break
             body = pos + 9
             if op == _OP_CHUNK:
@@ -610,8 +643,11 @@ class _Scanner:
         """Skip a damaged region: continue at the next plausible Chunk record."""
         found = _find_chunk(self.data, pos + 1)
         if found < 0:
-            self.skip(pos, 'corrupt_region' if self.file_report.finished else 'truncated',
-                      f'{reason}; no readable chunk after it')
+            self.skip(
+                pos,
+                'corrupt_region' if self.file_report.finished else 'truncated',
+                f'{reason}; no readable chunk after it',
+            )
             return len(self.data)
         self.skip(pos, 'corrupt_region', f'{reason}; skipped {found - pos} B to the next chunk')
         return found
@@ -643,19 +679,31 @@ class _Scanner:
         after, indexes = self._message_indexes(end)
         header = _chunk_header(data, pos + 9, end)
         if header is None:
-            self.skip(pos, 'corrupt_chunk', 'chunk header is inconsistent with its length',
-                      self._lost_in(indexes))
+            self.skip(
+                pos,
+                'corrupt_chunk',
+                'chunk header is inconsistent with its length',
+                self._lost_in(indexes),
+            )
             return after, None
         usize, crc, compression, rec_start, rec_end = header
         try:
             records = _decompress(data, rec_start, rec_end, compression, usize)
         except Exception as exc:  # noqa: BLE001 - any decoder error means a corrupt chunk
-            self.skip(pos, 'corrupt_chunk', f'{compression} chunk cannot be decompressed: '
-                      f'{type(exc).__name__}: {exc}', self._lost_in(indexes))
+            self.skip(
+                pos,
+                'corrupt_chunk',
+                f'{compression} chunk cannot be decompressed: ' f'{type(exc).__name__}: {exc}',
+                self._lost_in(indexes),
+            )
             return after, None
         if len(records) != usize:
-            self.skip(pos, 'corrupt_chunk', f'chunk decompresses to {len(records)} B, header '
-                      f'says {usize} B', self._lost_in(indexes))
+            self.skip(
+                pos,
+                'corrupt_chunk',
+                f'chunk decompresses to {len(records)} B, header ' f'says {usize} B',
+                self._lost_in(indexes),
+            )
             return after, None
         if crc and zlib.crc32(records) != crc:
             self.skip(pos, 'corrupt_chunk', 'chunk CRC mismatch', self._lost_in(indexes))
@@ -672,8 +720,7 @@ class _Scanner:
             return None
         usize, _, compression, rec_start, rec_end = header
         try:
-            records = _decompress_partial(data, rec_start, min(rec_end, len(data)),
-                                          compression)
+            records = _decompress_partial(data, rec_start, min(rec_end, len(data)), compression)
         except Exception:  # noqa: BLE001 - whatever cannot be decoded is simply not recovered
             return None
         found: list[int] = []
@@ -728,8 +775,12 @@ class _Scanner:
         buf = pieces[0].data if k == 1 else b''.join(p.data for p in pieces)
         arr = np.frombuffer(buf, np.uint8)
         indexed = np.fromiter((bool(p.indexes) for p in pieces), bool, k)
-        entries = [(i, cid, at, count) for i, p in enumerate(pieces)
-                   for cid, at, count in p.indexes if count]
+        entries = [
+            (i, cid, at, count)
+            for i, p in enumerate(pieces)
+            for cid, at, count in p.indexes
+            if count
+        ]
         g = np.empty(0, np.int64)
         e = np.empty(0, np.int64)
         owner = np.empty(0, np.int64)
@@ -786,14 +837,12 @@ class _Scanner:
                 if indexed[piece]:
                     rewalk.add(piece)  # the index and the records disagree: trust neither
                 else:
-                    self._unreadable(pieces[piece], stop - int(starts[piece]),
-                                     int(sizes[piece]))
+                    self._unreadable(pieces[piece], stop - int(starts[piece]), int(sizes[piece]))
         if rewalk:
             drop = np.zeros(k, bool)
             drop[list(rewalk)] = True
             g = g[~drop[owner]]
-            found = [f for f in found
-                     if not drop[int(np.searchsorted(starts, f, 'right')) - 1]]
+            found = [f for f in found if not drop[int(np.searchsorted(starts, f, 'right')) - 1]]
             for piece in sorted(rewalk):
                 a, b = int(starts[piece]), int(piece_ends[piece])
                 stop = self._walk(buf, a, b, found)
@@ -807,11 +856,16 @@ class _Scanner:
     def _unreadable(self, piece: _Piece, stop: int, size: int) -> None:
         if piece.partial:
             return  # that is the cut itself, reported as 'truncated'
-        self.skip(piece.file_offset, 'corrupt_chunk', f'chunk records unreadable from byte '
-                  f'{stop} of {size}; the messages before it are used')
+        self.skip(
+            piece.file_offset,
+            'corrupt_chunk',
+            f'chunk records unreadable from byte '
+            f'{stop} of {size}; the messages before it are used',
+        )
 
-    def _select(self, buf: bytes | memoryview, offsets: np.ndarray,
-                file_offset: int) -> _Block | None:
+    def _select(
+        self, buf: bytes | memoryview, offsets: np.ndarray, file_offset: int
+    ) -> _Block | None:
         """Keep the message records of accepted channels; count unknown channels."""
         if len(offsets) == 0:
             return None
@@ -837,18 +891,18 @@ def _string(buf: bytes | memoryview, pos: int, end: int) -> tuple[str, int]:
     """Read a uint32-length-prefixed UTF-8 string; return it and the position after it."""
     if pos + 4 > end:
         raise _BadRecord('string length runs past its record')
-    length, = struct.unpack_from('<I', buf, pos)
+    (length,) = struct.unpack_from('<I', buf, pos)
     stop = pos + 4 + length
     if stop > end:
         raise _BadRecord(f'string of {length} B runs past its record')
-    return bytes(buf[pos + 4:stop]).decode('utf-8', 'replace'), stop
+    return bytes(buf[pos + 4 : stop]).decode('utf-8', 'replace'), stop
 
 
 def _parse_schema(buf: bytes | memoryview, pos: int, end: int) -> tuple[int, str]:
     """(schema id, name) of a Schema record body."""
     if end - pos < 2 + 4 + 4 + 4:
         raise _BadRecord(f'Schema record of {end - pos} B is too short')
-    schema_id, = struct.unpack_from('<H', buf, pos)
+    (schema_id,) = struct.unpack_from('<H', buf, pos)
     name, p = _string(buf, pos + 2, end)
     _string(buf, p, end)  # encoding
     return schema_id, name
@@ -886,15 +940,16 @@ def _statistics_counts(buf: bytes, pos: int, end: int) -> dict[int, int] | None:
     head = struct.calcsize('<QHIIIIQQ')
     if pos + head + 4 > end:
         return None
-    nbytes, = struct.unpack_from('<I', buf, pos + head)
+    (nbytes,) = struct.unpack_from('<I', buf, pos + head)
     p = pos + head + 4
     if p + nbytes > end or nbytes % 10:
         return None
-    return {cid: count for cid, count in struct.iter_unpack('<HQ', buf[p:p + nbytes])}
+    return {cid: count for cid, count in struct.iter_unpack('<HQ', buf[p : p + nbytes])}
 
 
-def _chunk_header(data: bytes, body: int, end: int, partial: bool = False
-                  ) -> tuple[int, int, str, int, int] | None:
+def _chunk_header(
+    data: bytes, body: int, end: int, partial: bool = False
+) -> tuple[int, int, str, int, int] | None:
     """Parse a Chunk body; return (uncompressed size, crc, compression, records start, end)."""
     if body + _CHUNK_HEAD.size > len(data):
         return None
@@ -902,9 +957,9 @@ def _chunk_header(data: bytes, body: int, end: int, partial: bool = False
     p = body + _CHUNK_HEAD.size
     if comp_len > 16 or p + comp_len + 8 > len(data):
         return None
-    compression = bytes(data[p:p + comp_len]).decode('ascii', 'replace')
+    compression = bytes(data[p : p + comp_len]).decode('ascii', 'replace')
     p += comp_len
-    rec_len, = struct.unpack_from('<Q', data, p)
+    (rec_len,) = struct.unpack_from('<Q', data, p)
     p += 8
     if not partial and p + rec_len != end:
         return None
@@ -928,14 +983,16 @@ def _find_chunk(data: bytes, start: int) -> int:
     return -1
 
 
-def _decompress(data: bytes, start: int, end: int, compression: str, usize: int
-                ) -> bytes | memoryview:
+def _decompress(
+    data: bytes, start: int, end: int, compression: str, usize: int
+) -> bytes | memoryview:
     if compression == '':
         return memoryview(data)[start:end]
     if compression == 'zstd':
         return _zstd().decompress(memoryview(data)[start:end], max_output_size=usize)
     if compression == 'lz4':
         import lz4.frame
+
         return lz4.frame.decompress(data[start:end])
     raise McapReadError(f'unsupported chunk compression {compression!r}')
 
@@ -948,19 +1005,21 @@ def _zstd() -> 'zstandard.ZstdDecompressor':
     decompressor = getattr(_ZSTD, 'decompressor', None)
     if decompressor is None:
         import zstandard
+
         decompressor = _ZSTD.decompressor = zstandard.ZstdDecompressor()
     return decompressor
 
 
-def _decompress_partial(data: bytes, start: int, end: int, compression: str
-                        ) -> bytes | memoryview:
+def _decompress_partial(data: bytes, start: int, end: int, compression: str) -> bytes | memoryview:
     """Decompress as much of a cut chunk as the decoder can produce."""
     if compression == '':
         return memoryview(data)[start:end]
     if compression == 'zstd':
         import zstandard
+
         return zstandard.ZstdDecompressor().decompressobj().decompress(data[start:end])
     import lz4.frame
+
     return lz4.frame.LZ4FrameDecompressor().decompress(data[start:end])
 
 
@@ -969,8 +1028,9 @@ def _gather(arr: np.ndarray, positions: np.ndarray, width: int) -> np.ndarray:
     return sliding_window_view(arr, width)[positions]
 
 
-def _extract_float64(block: _Block, topic_lut: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+def _extract_float64(
+    block: _Block, topic_lut: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """Log times, values and topic indexes of the Float64 records in a block.
 
     Returns ``(log_time_ns int64, value float64, topic index int64, number of bad records)``.

@@ -18,6 +18,7 @@ The ``.msg`` files are found under ``share/<pkg>/msg/`` through the ament index
 entries, ``sys.prefix`` and ``sys.base_prefix`` (a pip-installed venv puts them in
 ``<venv>/share``).
 """
+
 from __future__ import annotations
 
 import functools
@@ -44,10 +45,24 @@ DELIMITER = '=' * 80
 # Same pattern as rosbag2_cpp MSG_FIELD_TYPE_REGEX: a field type at the start of a line,
 # optionally followed by an array suffix, then whitespace.
 _MSG_FIELD_TYPE = re.compile(r'(?:^|\n)\s*([a-zA-Z0-9_/]+)(?:\[[^\]]*\])?\s+')
-_PRIMITIVES = frozenset({
-    'bool', 'byte', 'char', 'float32', 'float64', 'int8', 'uint8', 'int16', 'uint16',
-    'int32', 'uint32', 'int64', 'uint64', 'string',
-})
+_PRIMITIVES = frozenset(
+    {
+        'bool',
+        'byte',
+        'char',
+        'float32',
+        'float64',
+        'int8',
+        'uint8',
+        'int16',
+        'uint16',
+        'int32',
+        'uint32',
+        'int64',
+        'uint64',
+        'string',
+    }
+)
 _ROS_NAME = r'[a-zA-Z][a-zA-Z0-9_]*'
 _TYPE_NAME = re.compile(rf'^({_ROS_NAME})/(?:({_ROS_NAME})/)?({_ROS_NAME})$')
 
@@ -97,7 +112,8 @@ def _share_dir(package: str) -> Path:
             return candidate
     raise LookupError(
         f'share directory of package {package!r} not found via the ament index or under '
-        + ', '.join(str(p / 'share') for p in _candidate_prefixes()))
+        + ', '.join(str(p / 'share') for p in _candidate_prefixes())
+    )
 
 
 @functools.lru_cache(maxsize=None)

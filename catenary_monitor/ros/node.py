@@ -15,6 +15,7 @@ Run it as ``monitor --ros-args --params-file FILE`` (``ros2 run catenary_monitor
 ``python -m catenary_monitor.ros.node --ros-args --params-file FILE`` or
 ``catenary-monitor run --params-file FILE [--log-dir DIR]``.
 """
+
 from __future__ import annotations
 
 import json
@@ -40,24 +41,47 @@ from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension, String
 from catenary_monitor import __version__
 from catenary_monitor.core import elastic
 from catenary_monitor.core.alarms import Level
-from catenary_monitor.core.config import (ConfigError, MonitorConfig, ParamSpec,
-                                          config_from_params, config_hash, config_to_params,
-                                          expand_parameters)
-from catenary_monitor.core.monitor import (EVENTS_TOPIC, NODE_NAME, OUTPUT_FIELDS, Change,
-                                           Depth, Event, LoggerHealth, MonitorCore,
-                                           Reconfigure, Snapshot, Start, Step, Tension,
-                                           Tick, event_record)
+from catenary_monitor.core.config import (
+    ConfigError,
+    MonitorConfig,
+    ParamSpec,
+    config_from_params,
+    config_hash,
+    config_to_params,
+    expand_parameters,
+)
+from catenary_monitor.core.monitor import (
+    EVENTS_TOPIC,
+    NODE_NAME,
+    OUTPUT_FIELDS,
+    Change,
+    Depth,
+    Event,
+    LoggerHealth,
+    MonitorCore,
+    Reconfigure,
+    Snapshot,
+    Start,
+    Step,
+    Tension,
+    Tick,
+    event_record,
+)
 from catenary_monitor.io.mcap_log import McapLogger
 
 __all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'CatenaryMonitor', 'main']
 
-_PARAM_TYPES = {'double': Parameter.Type.DOUBLE, 'string': Parameter.Type.STRING,
-                'string_array': Parameter.Type.STRING_ARRAY}
+_PARAM_TYPES = {
+    'double': Parameter.Type.DOUBLE,
+    'string': Parameter.Type.STRING,
+    'string_array': Parameter.Type.STRING_ARRAY,
+}
 _RELIABLE = QoSProfile(depth=10)
 
 
 def _guarded(method: Any) -> Any:
     """Keep monitoring through an unexpected exception in a callback: log it and go on."""
+
     @wraps(method)
     def wrapper(self: 'CatenaryMonitor', *args: Any) -> Any:
         try:
@@ -65,9 +89,11 @@ def _guarded(method: Any) -> Any:
         except Exception:  # noqa: BLE001 - one bad sample must not stop the monitor
             self.callback_errors += 1
             if self.callback_errors <= 10:
-                self.get_logger().error(f'{method.__name__} failed (monitoring goes on): '
-                                        + traceback.format_exc())
+                self.get_logger().error(
+                    f'{method.__name__} failed (monitoring goes on): ' + traceback.format_exc()
+                )
             return None
+
     return wrapper
 
 
@@ -75,8 +101,12 @@ def _descriptor(spec: ParamSpec, name: str) -> ParameterDescriptor:
     """ParameterDescriptor (description, unit, range, read-only) from one PARAMETERS row."""
     unit = f' [{spec.unit}]' if spec.unit else ''
     constraints = [f'unit: {spec.unit}'] if spec.unit else []
-    desc = ParameterDescriptor(name=name, type=_PARAM_TYPES[spec.type].value,
-                               description=spec.description + unit, read_only=spec.read_only)
+    desc = ParameterDescriptor(
+        name=name,
+        type=_PARAM_TYPES[spec.type].value,
+        description=spec.description + unit,
+        read_only=spec.read_only,
+    )
     if spec.min is not None or spec.max is not None:
         low = -sys.float_info.max if spec.min is None else float(spec.min)
         high = sys.float_info.max if spec.max is None else float(spec.max)
@@ -91,8 +121,9 @@ class CatenaryMonitor(Node):
     diagnostics and alarms; logs every input and output message to MCAP."""
 
     def __init__(self, *, log_dir: Optional[str] = None, **kwargs: Any) -> None:
-        super().__init__(NODE_NAME, automatically_declare_parameters_from_overrides=False,
-                         **kwargs)
+        super().__init__(
+            NODE_NAME, automatically_declare_parameters_from_overrides=False, **kwargs
+        )
         self.config = self._declare_parameters(log_dir)
         self._clock = self.get_clock()
         self._last_ns = 0
@@ -103,16 +134,21 @@ class CatenaryMonitor(Node):
         self.log = self._open_log()
         self._create_interfaces()
         start = self._stamp()
-        self.core = MonitorCore(self.config, start,
-                                hardware_ids=dict(zip(self._names, self._tension_topics)),
-                                depth_id=self._depth_topic, logger_id=self._log_dir())
+        self.core = MonitorCore(
+            self.config,
+            start,
+            hardware_ids=dict(zip(self._names, self._tension_topics)),
+            depth_id=self._depth_topic,
+            logger_id=self._log_dir(),
+        )
         self._write_record(Start(start))
         self._check_logger()
         self.add_on_set_parameters_callback(self._validate_change)
         self.add_post_set_parameters_callback(self._apply_change)
         self.get_logger().info(
             f'monitoring {len(self._names)} lines ({", ".join(self._names)}), '
-            f'depth from {self.config.depth_topic}, log in {self._log_dir()}')
+            f'depth from {self.config.depth_topic}, log in {self._log_dir()}'
+        )
 
     # ------------------------------------------------------------------ set-up
     def _declare_parameters(self, log_dir: Optional[str]) -> MonitorConfig:
@@ -132,7 +168,8 @@ class CatenaryMonitor(Node):
             if line.ea is not None:
                 self.get_logger().info(
                     f'{line.name}: EA = {line.ea:g} N, elastic catenary wherever it changes '
-                    f'the answer by more than {elastic.ELASTIC_TOL:g} (diagnostics key "model")')
+                    f'the answer by more than {elastic.ELASTIC_TOL:g} (diagnostics key "model")'
+                )
         return config
 
     def _log_dir(self) -> str:
@@ -153,9 +190,13 @@ class CatenaryMonitor(Node):
     @staticmethod
     def _metadata(config: MonitorConfig) -> dict[str, str]:
         """MCAP metadata record: version, configuration and its hash, output layout."""
-        return {'version': __version__, 'config_hash': config_hash(config),
-                'parameters': json.dumps(config_to_params(config), sort_keys=True),
-                'output_fields': ','.join(OUTPUT_FIELDS), 'units': 'SI (N, m, s)'}
+        return {
+            'version': __version__,
+            'config_hash': config_hash(config),
+            'parameters': json.dumps(config_to_params(config), sort_keys=True),
+            'output_fields': ','.join(OUTPUT_FIELDS),
+            'units': 'SI (N, m, s)',
+        }
 
     def _register(self, topic: str, type_name: str, qos: str) -> None:
         if self.log is None:
@@ -174,24 +215,32 @@ class CatenaryMonitor(Node):
         self._output_pubs: list[Any] = []
         for k, line in enumerate(cfg.lines):
             sub = self.create_subscription(
-                Float64, line.tension_topic, partial(self._on_tension, k),
-                qos_profile_sensor_data, raw=True)
+                Float64,
+                line.tension_topic,
+                partial(self._on_tension, k),
+                qos_profile_sensor_data,
+                raw=True,
+            )
             self._tension_topics.append(sub.topic_name)
             self._register(sub.topic_name, 'std_msgs/msg/Float64', 'sensor_data')
             pub = self.create_publisher(Float64MultiArray, f'~/{line.name}/outputs', _RELIABLE)
             self._output_pubs.append(pub)
             self._output_topics.append(pub.topic_name)
             self._register(pub.topic_name, 'std_msgs/msg/Float64MultiArray', 'default')
-        sub = self.create_subscription(Float64, cfg.depth_topic, self._on_depth,
-                                       qos_profile_sensor_data, raw=True)
+        sub = self.create_subscription(
+            Float64, cfg.depth_topic, self._on_depth, qos_profile_sensor_data, raw=True
+        )
         self._depth_topic = sub.topic_name
         self._register(self._depth_topic, 'std_msgs/msg/Float64', 'sensor_data')
         self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', _RELIABLE)
         self._register('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', 'default')
         self._register(EVENTS_TOPIC, 'std_msgs/msg/String', 'default')
         self._output = Float64MultiArray()
-        self._output.layout.dim = [MultiArrayDimension(
-            label=','.join(OUTPUT_FIELDS), size=len(OUTPUT_FIELDS), stride=len(OUTPUT_FIELDS))]
+        self._output.layout.dim = [
+            MultiArrayDimension(
+                label=','.join(OUTPUT_FIELDS), size=len(OUTPUT_FIELDS), stride=len(OUTPUT_FIELDS)
+            )
+        ]
         self._diag_timer = self.create_timer(1.0 / cfg.alarm.diagnostic_rate, self._on_period)
         self._log_timer = self.create_timer(0.25, self._on_log_timer)
 
@@ -246,8 +295,9 @@ class CatenaryMonitor(Node):
         """Log a record of a non-input event (or the start) on the events channel."""
         record = event_record(event)
         if record is not None:
-            self._write(EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))),
-                        event.stamp_ns)
+            self._write(
+                EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), event.stamp_ns
+            )
 
     def _record(self, event: Event) -> None:
         """Record a non-input event, then run it through the core."""
@@ -295,10 +345,15 @@ class CatenaryMonitor(Node):
             values = st.values
             if st.name == f'{NODE_NAME}: logger' and self.log is not None:
                 values = tuple(self.log.diagnostic_values().items())
-            statuses.append(DiagnosticStatus(
-                level=bytes([int(st.level)]), name=st.name, message=st.message,
-                hardware_id=st.hardware_id,
-                values=[KeyValue(key=k, value=v) for k, v in values]))
+            statuses.append(
+                DiagnosticStatus(
+                    level=bytes([int(st.level)]),
+                    name=st.name,
+                    message=st.message,
+                    hardware_id=st.hardware_id,
+                    values=[KeyValue(key=k, value=v) for k, v in values],
+                )
+            )
         array.status = statuses
         data = serialize_message(array)
         self._diag_pub.publish(data)
@@ -326,8 +381,9 @@ class CatenaryMonitor(Node):
         self._diag_timer.timer_period_ns = int(1e9 / config.alarm.diagnostic_rate)
         if self.log is not None:
             self.log.add_metadata(NODE_NAME, self._metadata(config))
-        self.get_logger().info('parameters changed: ' + ', '.join(
-            f'{p.name}={p.value!r}' for p in params))
+        self.get_logger().info(
+            'parameters changed: ' + ', '.join(f'{p.name}={p.value!r}' for p in params)
+        )
 
     def close(self) -> None:
         """Finish the MCAP file (summary written)."""
@@ -341,6 +397,7 @@ def _make_executor() -> Any:
     if os.environ.get('CATENARY_MONITOR_EXECUTOR', 'events') != 'single':
         try:
             from rclpy.experimental import EventsExecutor
+
             return EventsExecutor()
         except ImportError:
             pass
@@ -349,8 +406,10 @@ def _make_executor() -> Any:
 
 def _install_signal_handlers(stop: threading.Event) -> None:
     """SIGINT/SIGTERM end the spin loop between callbacks (never inside a publish)."""
+
     def handler(signum: int, frame: Any) -> None:
         stop.set()
+
     signal.signal(signal.SIGINT, handler)
     signal.signal(signal.SIGTERM, handler)
 
@@ -373,8 +432,11 @@ def main(args: Optional[Sequence[str]] = None, log_dir: Optional[str] = None) ->
     node = None
     try:
         if extra:
-            print(f'{NODE_NAME}: unexpected argument {extra[0]!r} (use --ros-args --params-file '
-                  'FILE)', file=sys.stderr)
+            print(
+                f'{NODE_NAME}: unexpected argument {extra[0]!r} (use --ros-args --params-file '
+                'FILE)',
+                file=sys.stderr,
+            )
             return 2
         try:
             node = CatenaryMonitor(log_dir=log_dir)

@@ -12,6 +12,7 @@ message does not delay the following ones; the lateness is reported at the end (
 max). ``--loop`` starts the next pass one median message gap after the last message.
 SIGINT/SIGTERM stop playback between two messages; exit 0.
 """
+
 from __future__ import annotations
 
 import signal
@@ -33,6 +34,7 @@ __all__ = ['float64_topics', 'publish']
 def float64_topics(paths: Sequence[Path]) -> list[str]:
     """Every topic logged as ``std_msgs/msg/Float64`` (summary if present, else a scan)."""
     from mcap.reader import make_reader
+
     topics: list[str] = []
     for path in paths:
         summary = None
@@ -53,8 +55,15 @@ def float64_topics(paths: Sequence[Path]) -> list[str]:
     return topics
 
 
-def publish(paths: Sequence[Path], config: Optional[MonitorConfig], *, rate: float = 1.0,
-            loop: bool = False, wait: float = 0.0, quiet: bool = False) -> int:
+def publish(
+    paths: Sequence[Path],
+    config: Optional[MonitorConfig],
+    *,
+    rate: float = 1.0,
+    loop: bool = False,
+    wait: float = 0.0,
+    quiet: bool = False,
+) -> int:
     """Play the inputs; returns the exit status (see :mod:`catenary_monitor.replay`)."""
     from catenary_monitor.cli.replay import ReplayError, input_topics, read_inputs
 
@@ -65,6 +74,7 @@ def publish(paths: Sequence[Path], config: Optional[MonitorConfig], *, rate: flo
         columns[depth_topic] = depth
     else:
         from catenary_monitor.io.mcap_read import EmptyLogError, McapReadError, read_float64_topics
+
         topics = float64_topics(paths)
         if not topics:
             raise ReplayError('empty log: no std_msgs/msg/Float64 topic to publish', 3)
@@ -84,13 +94,23 @@ def publish(paths: Sequence[Path], config: Optional[MonitorConfig], *, rate: flo
     payloads = [bytes(row) for row in float64_payloads(values)]
     if not quiet:
         skipped = '' if report.complete else f'; damaged input, skipped: {len(report.skips)}'
-        print(f'replay --publish: {len(t_ns)} messages on {len(topics)} topic(s), '
-              f'{offsets[-1]:.1f} s at rate {rate:g}{skipped}', file=sys.stderr)
+        print(
+            f'replay --publish: {len(t_ns)} messages on {len(topics)} topic(s), '
+            f'{offsets[-1]:.1f} s at rate {rate:g}{skipped}',
+            file=sys.stderr,
+        )
     return _play(topics, which, offsets, payloads, loop, wait, quiet)
 
 
-def _play(topics: list[str], which: np.ndarray, offsets: np.ndarray, payloads: list[bytes],
-          loop: bool, wait: float, quiet: bool) -> int:
+def _play(
+    topics: list[str],
+    which: np.ndarray,
+    offsets: np.ndarray,
+    payloads: list[bytes],
+    loop: bool,
+    wait: float,
+    quiet: bool,
+) -> int:
     import rclpy
     from rclpy.qos import QoSProfile
     from rclpy.signals import SignalHandlerOptions
@@ -100,6 +120,7 @@ def _play(topics: list[str], which: np.ndarray, offsets: np.ndarray, payloads: l
 
     def handler(signum: int, frame: Any) -> None:
         stop.set()
+
     signal.signal(signal.SIGINT, handler)
     signal.signal(signal.SIGTERM, handler)
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
@@ -132,9 +153,12 @@ def _play(topics: list[str], which: np.ndarray, offsets: np.ndarray, payloads: l
             stop.wait(gap)
         if not quiet and late:
             lat = np.array(late) * 1e3
-            print(f'replay --publish: {passes} pass(es), {len(late)} messages published; '
-                  f'lateness median {np.median(lat):.2f} ms, p99 {np.percentile(lat, 99):.2f} '
-                  f'ms, max {lat.max():.2f} ms', file=sys.stderr)
+            print(
+                f'replay --publish: {passes} pass(es), {len(late)} messages published; '
+                f'lateness median {np.median(lat):.2f} ms, p99 {np.percentile(lat, 99):.2f} '
+                f'ms, max {lat.max():.2f} ms',
+                file=sys.stderr,
+            )
         # Give reliable transport a moment to deliver the last messages before tear-down.
         time.sleep(0.2)
     finally:

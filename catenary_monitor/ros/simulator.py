@@ -1,6 +1,7 @@
 """Dock simulator for the demo: the seed paper's floating dock through a compressed storm.
 
-Console script ``dock_simulator`` (or ``python -m catenary_monitor.ros.simulator``). It publishes, as
+Console script ``dock_simulator`` (or ``python -m catenary_monitor.ros.simulator``). It publishes,
+as
 a sensor driver would, ``std_msgs/Float64`` hook tensions (N) on every line's tension topic and
 the tide depth (m) on the depth topic, with sensor-data QoS, then exits by itself.
 
@@ -19,6 +20,7 @@ The episode (:class:`Scenario`, pure: no rclpy) is the paper's dock (config/floa
 The hook tension published is the catenary's top tension for that horizontal load at the
 current depth and installed anchor distance (``catenary_monitor.solve(horizontal=...)``).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -47,21 +49,30 @@ M2_PERIOD = 12.42 * 3600.0
 def default_config_path() -> str:
     """config/floating_dock.yaml, found without the ament index (source tree or pip install)."""
     from pathlib import Path
+
     here = Path(__file__).resolve().parent
     name = 'floating_dock.yaml'
-    candidates = [here / 'data' / name, here.parent / 'config' / name,
-                  Path(sys.prefix) / 'share' / 'catenary_monitor' / 'config' / name]
+    candidates = [
+        here / 'data' / name,
+        here.parent / 'config' / name,
+        Path(sys.prefix) / 'share' / 'catenary_monitor' / 'config' / name,
+    ]
     try:  # a colcon / ROS install
         from ament_index_python.packages import get_package_share_directory
-        candidates.append(Path(get_package_share_directory('catenary_monitor')) / 'config' /
-                          'floating_dock.yaml')
+
+        candidates.append(
+            Path(get_package_share_directory('catenary_monitor')) / 'config' / 'floating_dock.yaml'
+        )
     except Exception:  # noqa: BLE001 - no ament index on a pip install
         pass
     for path in candidates:
         if path.is_file():
             return str(path)
-    raise FileNotFoundError('config/floating_dock.yaml not found (looked in '
-                            + ', '.join(str(p) for p in candidates) + ')')
+    raise FileNotFoundError(
+        'config/floating_dock.yaml not found (looked in '
+        + ', '.join(str(p) for p in candidates)
+        + ')'
+    )
 
 
 def _smooth(u: float) -> float:
@@ -80,20 +91,21 @@ class Scenario:
 
     config: MonitorConfig
     duration: float = 55.0
-    wave_period: float = 4.0       # s (wall), wave-frequency tension swing
-    wave_calm: float = 0.01        # relative swing amplitude when calm
-    wave_storm: float = 0.05       # relative swing amplitude at the storm peak
-    noise: float = 0.003           # relative noise (std)
-    tide_amplitude: float = 1.0    # m
+    wave_period: float = 4.0  # s (wall), wave-frequency tension swing
+    wave_calm: float = 0.01  # relative swing amplitude when calm
+    wave_storm: float = 0.05  # relative swing amplitude at the storm peak
+    noise: float = 0.003  # relative noise (std)
+    tide_amplitude: float = 1.0  # m
     build: tuple[float, float] = (0.12, 0.45)  # storm build from/to (fraction of duration)
-    ease: tuple[float, float] = (0.60, 0.80)   # storm eases from/to
+    ease: tuple[float, float] = (0.60, 0.80)  # storm eases from/to
     seed: int = 11
 
     def storm(self, t: float) -> float:
         """Storm intensity 0..1 at time ``t``."""
         u = t / self.duration
         return _smooth((u - self.build[0]) / (self.build[1] - self.build[0])) * (
-            1.0 - _smooth((u - self.ease[0]) / (self.ease[1] - self.ease[0])))
+            1.0 - _smooth((u - self.ease[0]) / (self.ease[1] - self.ease[0]))
+        )
 
     def depth(self, t: float) -> float:
         """Tide depth [m]: one compressed M2 cycle, mean level at the storm peak."""
@@ -127,24 +139,30 @@ class Scenario:
     def tensions(self, t: float, rng: Optional[np.random.Generator] = None) -> np.ndarray:
         """Hook tension of every line [N] at ``t`` (catenary top tension for the load)."""
         lines = self.config.lines
-        r = solve(np.array([line.weight for line in lines]),
-                  self.depth(t) + np.array([line.hook_height for line in lines]),
-                  horizontal=self.horizontal(t, rng),
-                  anchor_distance=np.array([line.anchor_distance for line in lines]))
+        r = solve(
+            np.array([line.weight for line in lines]),
+            self.depth(t) + np.array([line.hook_height for line in lines]),
+            horizontal=self.horizontal(t, rng),
+            anchor_distance=np.array([line.anchor_distance for line in lines]),
+        )
         return np.asarray(r.top_tension, dtype=float)
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Publish the scenario in real time until ``--duration`` has passed, then exit 0."""
     parser = argparse.ArgumentParser(prog='dock_simulator', description=__doc__.splitlines()[0])
-    parser.add_argument('--params-file', default=None,
-                        help='monitor params YAML giving the lines (default: the paper dock)')
+    parser.add_argument(
+        '--params-file',
+        default=None,
+        help='monitor params YAML giving the lines (default: the paper dock)',
+    )
     parser.add_argument('--duration', type=float, default=55.0, help='episode length [s]')
     parser.add_argument('--rate', type=float, default=20.0, help='tension rate per line [Hz]')
     parser.add_argument('--depth-rate', type=float, default=2.0, help='depth rate [Hz]')
     argv = list(sys.argv[1:] if argv is None else argv)
     import rclpy
     from rclpy.utilities import remove_ros_args
+
     args = parser.parse_args(remove_ros_args(['dock_simulator', *argv])[1:])
     config = config_from_params(load_params_file(args.params_file or default_config_path()))
     scenario = Scenario(config, duration=args.duration)
@@ -155,8 +173,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
     rclpy.init(args=['dock_simulator', *argv])
     node = rclpy.create_node('dock_simulator')
-    pubs = [node.create_publisher(Float64, line.tension_topic, qos_profile_sensor_data)
-            for line in config.lines]
+    pubs = [
+        node.create_publisher(Float64, line.tension_topic, qos_profile_sensor_data)
+        for line in config.lines
+    ]
     depth_pub = node.create_publisher(Float64, config.depth_topic, qos_profile_sensor_data)
     rng = np.random.default_rng(scenario.seed)
     clock = node.get_clock()
@@ -175,8 +195,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             pub.publish(Float64(data=value))
 
     node.create_timer(1.0 / args.rate, tick)
-    node.get_logger().info(f'publishing {len(pubs)} lines at {args.rate:g} Hz for '
-                           f'{scenario.duration:g} s (tide x{scenario.time_scale():.0f})')
+    node.get_logger().info(
+        f'publishing {len(pubs)} lines at {args.rate:g} Hz for '
+        f'{scenario.duration:g} s (tide x{scenario.time_scale():.0f})'
+    )
     try:
         while rclpy.ok() and not state['done']:
             rclpy.spin_once(node, timeout_sec=0.1)

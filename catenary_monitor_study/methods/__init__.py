@@ -17,6 +17,7 @@ Modules, one per family: ``closed`` (closed forms and the project's default), ``
 iteration and 0.618 search), ``peers`` (MoorPy, pycatenary; optional), ``reference`` (the
 50-digit mpmath solution of the paper's own equations).
 """
+
 from .base import FAIL_RTOL, Method, NoConvergence, all_methods
 
 __all__ = ['Method', 'NoConvergence', 'FAIL_RTOL', 'all_methods']

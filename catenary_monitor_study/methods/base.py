@@ -1,4 +1,5 @@
 """The common interface of the alternative methods and the registry the benchmark walks."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -38,10 +39,12 @@ class Method:
 def all_methods(problem: Optional[int] = None, peers: bool = True) -> list[Method]:
     """Every registered method (optionally of one problem); peers only if importable."""
     from . import closed, hou, paper, roots
+
     out: list[Method] = []
     for mod in (closed, roots, hou, paper):
         out.extend(mod.METHODS)
     if peers:
         from . import peers as peer_mod
+
         out.extend(peer_mod.available_methods())
     return [m for m in out if problem is None or m.problem == problem]

@@ -5,9 +5,11 @@
   loses half the digits (a cancelling formula); ``T - w h`` cancels when ``h >> a``.
 * ``closed form (stable)``: the core's kernels (``catenary.grounded`` with the compensated
   ``T - w h``); this is the floor of the benchmark: one catenary evaluation.
-* ``default``: ``catenary_monitor.solve`` itself (scalar: its plain-float path; vectorized: arrays).
+* ``default``: ``catenary_monitor.solve`` itself (scalar: its plain-float path; vectorized:
+arrays).
 * ``default kernel``: the problem-4 kernel without the API around it (no validation, no margins).
 """
+
 from __future__ import annotations
 
 import math
@@ -111,21 +113,67 @@ def p2_default(w: float, h: float, r: float, x: float) -> tuple[float, float]:
 
 
 METHODS = [
-    Method('closed form (textbook)', 3, p3_textbook, p3_textbook_vec, 'closed',
-           why='cancelling formula: acosh(1 + h/a) loses half its digits for h/a << 1 and all of them '
-               'below 1e-16; T - w h cancels for h >> a'),
-    Method('closed form (stable)', 3, p3_stable, p3_stable_vec, 'closed',
-           why='never fails: acosh(1+z) as log1p(z + sqrt(z(2+z))), compensated T - w h'),
-    Method('default', 3, p3_default, p3_default_vec, 'closed', default=True,
-           why='solve(): the stable closed form behind validation and status codes'),
-    Method('default', 4, p4_default, p4_default_vec, 'closed', default=True,
-           why='never fails: Newton in log d with a bracket, no cancellation at either end'),
-    Method('default kernel', 4, p4_kernel, p4_kernel_vec, 'closed',
-           why='the default without the solve() API around it (no validation, no margins)'),
-    Method('closed form (textbook)', 2, p2_textbook, None, 'closed',
-           why='never fails: its subtraction asinh(...) - X/2 near x_min costs no more digits than '
-               'the problem itself loses there'),
-    Method('default', 2, p2_default, None, 'closed', default=True,
-           why='closed form with the subtraction rewritten as the depth deficit; solve() adds '
-               'validation and the margins (a second solve) around it'),
+    Method(
+        'closed form (textbook)',
+        3,
+        p3_textbook,
+        p3_textbook_vec,
+        'closed',
+        why='cancelling formula: acosh(1 + h/a) loses half its digits for h/a << 1 and all '
+        'of them '
+        'below 1e-16; T - w h cancels for h >> a',
+    ),
+    Method(
+        'closed form (stable)',
+        3,
+        p3_stable,
+        p3_stable_vec,
+        'closed',
+        why='never fails: acosh(1+z) as log1p(z + sqrt(z(2+z))), compensated T - w h',
+    ),
+    Method(
+        'default',
+        3,
+        p3_default,
+        p3_default_vec,
+        'closed',
+        default=True,
+        why='solve(): the stable closed form behind validation and status codes',
+    ),
+    Method(
+        'default',
+        4,
+        p4_default,
+        p4_default_vec,
+        'closed',
+        default=True,
+        why='never fails: Newton in log d with a bracket, no cancellation at either end',
+    ),
+    Method(
+        'default kernel',
+        4,
+        p4_kernel,
+        p4_kernel_vec,
+        'closed',
+        why='the default without the solve() API around it (no validation, no margins)',
+    ),
+    Method(
+        'closed form (textbook)',
+        2,
+        p2_textbook,
+        None,
+        'closed',
+        why='never fails: its subtraction asinh(...) - X/2 near x_min costs no more digits than '
+        'the problem itself loses there',
+    ),
+    Method(
+        'default',
+        2,
+        p2_default,
+        None,
+        'closed',
+        default=True,
+        why='closed form with the subtraction rewritten as the depth deficit; solve() adds '
+        'validation and the margins (a second solve) around it',
+    ),
 ]

@@ -10,6 +10,7 @@ started from the straight-line guess ``L0^2 = h^2 + d0^2``, ``Lm - L0 + d0 = dm`
 Adapted to problem 4 (the same idea on its equation): ``a <- x / (acosh(A/a) - acosh(B/a))``
 from ``a0 = B``, and the 0.618 search of ``|a (acosh(A/a) - acosh(B/a)) - x|`` on ``(0, B]``.
 """
+
 from __future__ import annotations
 
 import math
@@ -25,7 +26,9 @@ def _hou5_state(w: float, h: float, lm: float, a: float) -> tuple[float, float]:
     return w * a, lm - length
 
 
-def p5_fixed_point(w: float, h: float, lm: float, dm: float, eps: float = 1e-13) -> tuple[float, float]:
+def p5_fixed_point(
+    w: float, h: float, lm: float, dm: float, eps: float = 1e-13
+) -> tuple[float, float]:
     """Hou's iteration as printed (relative stop ``|a1 - a0| < eps a1``)."""
     c = dm - lm
     l0 = -(h * h + c * c) / (2.0 * c)
@@ -43,9 +46,11 @@ def p5_fixed_point(w: float, h: float, lm: float, dm: float, eps: float = 1e-13)
     raise NoConvergence('fixed point: iteration cap')
 
 
-def p5_golden(w: float, h: float, lm: float, dm: float, a_max: float, eps: float = 1e-13
-              ) -> tuple[float, float]:
+def p5_golden(
+    w: float, h: float, lm: float, dm: float, a_max: float, eps: float = 1e-13
+) -> tuple[float, float]:
     """Hou's 0.618 search on ``[0, a_max]`` (``a_max`` from the dragging-anchor load)."""
+
     def miss(a: float) -> float:
         length = math.sqrt(2.0 * a * h + h * h)
         d = a * math.log((a + h + length) / a)
@@ -80,7 +85,9 @@ def p4_fixed_point(w: float, h: float, t: float, x: float) -> tuple[float, float
         if abs(a1 - a0) <= 4e-16 * a1:
             return w * a1, w * math.sqrt((b - a1) * (b + a1))
         a0 = a1
-    raise NoConvergence('fixed point: iteration cap (|g\'(a)| close to 1: linear convergence stalls)')
+    raise NoConvergence(
+        'fixed point: iteration cap (|g\'(a)| close to 1: linear convergence stalls)'
+    )
 
 
 def p4_golden(w: float, h: float, t: float, x: float) -> tuple[float, float]:
@@ -108,10 +115,19 @@ def p4_golden(w: float, h: float, t: float, x: float) -> tuple[float, float]:
     raise NoConvergence('0.618 search: iteration cap')
 
 
-_WHY = ("wrong unknown: a <- x / (acosh(A/a) - acosh(B/a)) is not a contraction (|g'(a)| > 1) "
-        'except for steep chains (h >> B), so the iterates leave 0 < a <= B')
+_WHY = (
+    "wrong unknown: a <- x / (acosh(A/a) - acosh(B/a)) is not a contraction (|g'(a)| > 1) "
+    'except for steep chains (h >> B), so the iterates leave 0 < a <= B'
+)
 METHODS = [
     Method('Hou fixed point', 4, p4_fixed_point, None, 'hou', why=_WHY),
-    Method('Hou 0.618 search', 4, p4_golden, None, 'hou',
-           why='cancelling formula; the search compares |f| values that are rounding noise near the root'),
+    Method(
+        'Hou 0.618 search',
+        4,
+        p4_golden,
+        None,
+        'hou',
+        why='cancelling formula; the search compares |f| values that are rounding noise near '
+        'the root',
+    ),
 ]

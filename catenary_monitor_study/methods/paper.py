@@ -20,6 +20,7 @@ alpha > 44 deg, ``w h < 2 kN``: the search only goes down), where the absolute s
 than ``MAX_EVALS`` evaluations (R of many MN), and its answers carry the absolute tolerances
 above, far coarser than 1e-6 relative on small or large scenes.
 """
+
 from __future__ import annotations
 
 import math
@@ -45,9 +46,10 @@ class _Budget:
             raise NoConvergence(f'stepping search: more than {MAX_EVALS} evaluations')
 
 
-def _search_down(f: Callable[[float], float], v: float, step: float, tol: float,
-                 budget: _Budget, what: str) -> float:
-    """Step v down until ``|f(v)| <= tol``; f > 0 above the root.  Back up and step/10 on overshoot."""
+def _search_down(
+    f: Callable[[float], float], v: float, step: float, tol: float, budget: _Budget, what: str
+) -> float:
+    """Step v down until ``|f(v)| <= tol``; f > 0 above the root. Back up, step/10 on overshoot."""
     budget.spend()
     fv = f(v)
     if fv < -tol:
@@ -78,14 +80,21 @@ def _y_and_l(a: float, alpha: float, x: float) -> tuple[float, float]:
 
 def _span(w: float, h: float, r: float, budget: _Budget) -> float:
     a = r / w
-    return _search_down(lambda x: _y_and_l(a, 0.0, x)[0] - h, X_START, X_STEP, Y_TOL, budget,
-                        'x = 1000 m')
+    return _search_down(
+        lambda x: _y_and_l(a, 0.0, x)[0] - h, X_START, X_STEP, Y_TOL, budget, 'x = 1000 m'
+    )
 
 
 def _angle(w: float, h: float, r: float, x: float, budget: _Budget) -> float:
     a = r / w
-    return _search_down(lambda al: _y_and_l(a, al, x)[0] - h, ALPHA_START, ALPHA_STEP, Y_TOL, budget,
-                        'alpha = 44 deg')
+    return _search_down(
+        lambda al: _y_and_l(a, al, x)[0] - h,
+        ALPHA_START,
+        ALPHA_STEP,
+        Y_TOL,
+        budget,
+        'alpha = 44 deg',
+    )
 
 
 def p1_stepping(w: float, h: float, r: float) -> float:
@@ -129,8 +138,10 @@ def p4_stepping(w: float, h: float, t: float, x: float) -> tuple[float, float]:
     return r, r * math.tan(found[r])
 
 
-_WHY = ('bracket missing the root (it only steps down from x = 1000 m, alpha = 44 deg, R = T - 2 kN) '
-        'and absolute tolerances (1e-5 m in y, 1 N in T, 0.1 kN steps) where relative ones were needed')
+_WHY = (
+    'bracket missing the root (it only steps down from x = 1000 m, alpha = 44 deg, R = T - 2 kN) '
+    'and absolute tolerances (1e-5 m in y, 1 N in T, 0.1 kN steps) where relative ones were needed'
+)
 METHODS = [
     Method('paper stepping (Fig. 2)', 3, p3_stepping, None, 'paper', why=_WHY, slow=True),
     Method('paper stepping (Fig. 2)', 4, p4_stepping, None, 'paper', why=_WHY, slow=True),

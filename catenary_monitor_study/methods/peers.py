@@ -13,6 +13,7 @@ MoorPy needs a finite axial stiffness: we pass ``EA = 1e12 T`` (stretch ~1e-12, 
 comparison resolves; much stiffer lines make MoorPy return an all-zero profile).  MoorPy calls
 ``breakpoint()`` on some error paths, so the benchmark sets ``PYTHONBREAKPOINT=0``.
 """
+
 from __future__ import annotations
 
 import math
@@ -28,6 +29,7 @@ os.environ.setdefault('PYTHONBREAKPOINT', '0')
 
 def _moorpy() -> Any:
     from moorpy.Catenary import catenary
+
     return catenary
 
 
@@ -59,8 +61,10 @@ def moorpy_brentq(w: float, h: float, t: float, x: float) -> tuple[float, float]
 
 def pycatenary_given_length(w: float, h: float, x: float, length: float) -> tuple[float, float]:
     import pycatenary
-    line = pycatenary.MooringLine(fairlead=[x, h], anchor=[0.0, 0.0], L=length, w=w, EA=None,
-                                  floor=True)
+
+    line = pycatenary.MooringLine(
+        fairlead=[x, h], anchor=[0.0, 0.0], L=length, w=w, EA=None, floor=True
+    )
     line.compute_solution()
     fx, fz = line.get_anchor_force()
     return abs(float(fx)), abs(float(fz))
@@ -68,20 +72,42 @@ def pycatenary_given_length(w: float, h: float, x: float, length: float) -> tupl
 
 PEERS = {
     'moorpy': [
-        Method('MoorPy catenary (L given)', 4, moorpy_given_length, None, 'peers', given='length',
-               why='absolute tolerance: Tol = 1e-6 m on the line-end position, whatever the '
-                   'scale; no profile for very short or very long catenaries'),
-        Method('MoorPy + brentq on L', 4, moorpy_brentq, None, 'peers', slow=True,
-               why="bracket missing the root: our wrapper's [taut chord (1 + 1e-9), x + h] misses it "
-                   'where MoorPy\'s tension at 1e-9 stretch does not exceed the measured T (large a, '
-                   "and steep chains with h >> a); elsewhere MoorPy's absolute 1e-6 m tolerance, "
-                   'amplified by dT/dL'),
+        Method(
+            'MoorPy catenary (L given)',
+            4,
+            moorpy_given_length,
+            None,
+            'peers',
+            given='length',
+            why='absolute tolerance: Tol = 1e-6 m on the line-end position, whatever the '
+            'scale; no profile for very short or very long catenaries',
+        ),
+        Method(
+            'MoorPy + brentq on L',
+            4,
+            moorpy_brentq,
+            None,
+            'peers',
+            slow=True,
+            why="bracket missing the root: our wrapper's [taut chord (1 + 1e-9), x + h] misses it "
+            'where MoorPy\'s tension at 1e-9 stretch does not exceed the measured T (large a, '
+            "and steep chains with h >> a); elsewhere MoorPy's absolute 1e-6 m tolerance, "
+            'amplified by dT/dL',
+        ),
     ],
     'pycatenary': [
-        Method('pycatenary (L given)', 4, pycatenary_given_length, None, 'peers', given='length',
-               why='cancelling formulas (cosh(d/a) - 1, 2a sinh(d/2a) - chord) for a >> x: its profile '
-                   'test and bisection run on rounding noise ("Line is too stretched"); and a bracket '
-                   '[1e-2, 1e10] m that misses a < 1 cm, where it silently returns the bracket end'),
+        Method(
+            'pycatenary (L given)',
+            4,
+            pycatenary_given_length,
+            None,
+            'peers',
+            given='length',
+            why='cancelling formulas (cosh(d/a) - 1, 2a sinh(d/2a) - chord) for a >> x: '
+            'its profile '
+            'test and bisection run on rounding noise ("Line is too stretched"); and a bracket '
+            '[1e-2, 1e10] m that misses a < 1 cm, where it silently returns the bracket end',
+        ),
     ],
 }
 
@@ -89,6 +115,7 @@ PEERS = {
 def peer_versions() -> dict[str, str | None]:
     """Installed version of each peer, None if absent."""
     from importlib import metadata
+
     out: dict[str, str | None] = {}
     for name in PEERS:
         try:

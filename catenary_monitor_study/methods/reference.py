@@ -14,6 +14,7 @@ solution is ``R sec(alpha) = T - w y``, so problem 4 is a one-unknown bracketed 
 ``condition`` numbers (``|p/f df/dp|`` for the continuous input p: x for problem 4, L for the
 length-given problem) come from a 1e-25 relative perturbation of the same 50-digit solve.
 """
+
 from __future__ import annotations
 
 import math
@@ -49,6 +50,7 @@ def _p3(w: mp.mpf, h: mp.mpf, t: mp.mpf) -> tuple[mp.mpf, mp.mpf, mp.mpf]:
         x = a * mp.acosh(1 + h / a)  # equation (1) with alpha = 0, inverted
         length = a * mp.sinh(x / a)  # equation (2) with alpha = 0
         return mp.sqrt(r * r + (w * length) ** 2) - t
+
     r = mp.findroot(top, t - w * h, tol=mp.mpf(10) ** (-2 * DPS + 10), verify=False)
     a = r / w
     x = a * mp.acosh(1 + h / a)
@@ -58,7 +60,7 @@ def _p3(w: mp.mpf, h: mp.mpf, t: mp.mpf) -> tuple[mp.mpf, mp.mpf, mp.mpf]:
 
 
 def problem3(w: float, h: float, t: float) -> Ref:
-    """Problem 3: hook tension T, no uplift -> (R, x_min); condition numbers are 1 (closed form)."""
+    """Problem 3: hook tension T, no uplift -> (R, x_min); condition numbers 1 (closed form)."""
     with mp.workdps(DPS):
         r, x, length = _p3(mp.mpf(w), mp.mpf(h), mp.mpf(t))
         return Ref(float(r), float(x), 1.0, 1.0, float(length))
@@ -76,9 +78,17 @@ def _p4(w: mp.mpf, h: mp.mpf, t: mp.mpf, x: mp.mpf) -> tuple[mp.mpf, mp.mpf, mp.
         raise ValueError('x >= x_min: the anchor is not lifted')
     while resid(hi) <= 0:
         lo, hi = hi, 2 * hi
-    u = mp.findroot(resid, (lo, hi), solver='anderson', tol=mp.mpf(10) ** (-2 * DPS + 10), verify=False,
-                    maxsteps=400)
-    if not (lo <= u <= hi and abs(resid(u)) <= _CHECK * h):  # plain bisection, 2^-240 of the bracket
+    u = mp.findroot(
+        resid,
+        (lo, hi),
+        solver='anderson',
+        tol=mp.mpf(10) ** (-2 * DPS + 10),
+        verify=False,
+        maxsteps=400,
+    )
+    if not (
+        lo <= u <= hi and abs(resid(u)) <= _CHECK * h
+    ):  # plain bisection, 2^-240 of the bracket
         for _ in range(240):
             mid = (lo + hi) / 2
             if resid(mid) < 0:
@@ -96,14 +106,19 @@ def _p4(w: mp.mpf, h: mp.mpf, t: mp.mpf, x: mp.mpf) -> tuple[mp.mpf, mp.mpf, mp.
 
 
 def problem4(w: float, h: float, t: float, x: float) -> Ref:
-    """Problem 4: hook tension T and span x < x_min -> (R, uplift F) with their condition numbers."""
+    """Problem 4: hook tension T, span x < x_min -> (R, uplift F) with their condition numbers."""
     with mp.workdps(DPS):
         args = [mp.mpf(v) for v in (w, h, t, x)]
         r, f, length = _p4(*args)
         d = mp.mpf(10) ** -25
         r2, f2, _ = _p4(*args[:3], args[3] * (1 + d))
-        return Ref(float(r), float(f), float(abs((r2 - r) / r / d)), float(abs((f2 - f) / f / d)),
-                   float(length))
+        return Ref(
+            float(r),
+            float(f),
+            float(abs((r2 - r) / r / d)),
+            float(abs((f2 - f) / f / d)),
+            float(length),
+        )
 
 
 def _pl(w: mp.mpf, h: mp.mpf, x: mp.mpf, length: mp.mpf, a0: mp.mpf) -> tuple[mp.mpf, mp.mpf]:
@@ -115,8 +130,14 @@ def _pl(w: mp.mpf, h: mp.mpf, x: mp.mpf, length: mp.mpf, a0: mp.mpf) -> tuple[mp
     lo = max(lo, hi / 4) if lo == 0 else lo
     while mp.sinh(lo) - k * lo >= 0:
         lo /= 2
-    d = mp.findroot(lambda d: mp.sinh(d) - k * d, (lo, hi), solver='anderson',
-                    tol=mp.mpf(10) ** (-2 * DPS + 10), verify=False, maxsteps=400)
+    d = mp.findroot(
+        lambda d: mp.sinh(d) - k * d,
+        (lo, hi),
+        solver='anderson',
+        tol=mp.mpf(10) ** (-2 * DPS + 10),
+        verify=False,
+        maxsteps=400,
+    )
     a = x / (2 * d)
     u = mp.atanh(h / length) - x / (2 * a)
     if u < 0:
@@ -136,8 +157,9 @@ def given_length(w: float, h: float, x: float, length: float, a0: float) -> Ref:
         r, f = _pl(*args, mp.mpf(a0))
         d = mp.mpf(10) ** -25
         r2, f2 = _pl(*args[:3], args[3] * (1 + d), r / args[0])
-        return Ref(float(r), float(f), float(abs((r2 - r) / r / d)), float(abs((f2 - f) / f / d)),
-                   length)
+        return Ref(
+            float(r), float(f), float(abs((r2 - r) / r / d)), float(abs((f2 - f) / f / d)), length
+        )
 
 
 def _p2(w: mp.mpf, h: mp.mpf, r: mp.mpf, x: mp.mpf) -> tuple[mp.mpf, mp.mpf]:
@@ -151,8 +173,14 @@ def _p2(w: mp.mpf, h: mp.mpf, r: mp.mpf, x: mp.mpf) -> tuple[mp.mpf, mp.mpf]:
         raise ValueError('x >= x_min: the anchor is not lifted')
     while resid(hi) <= 0:
         lo, hi = hi, 2 * hi
-    u = mp.findroot(resid, (lo, hi), solver='anderson', tol=mp.mpf(10) ** (-2 * DPS + 10), verify=False,
-                    maxsteps=400)
+    u = mp.findroot(
+        resid,
+        (lo, hi),
+        solver='anderson',
+        tol=mp.mpf(10) ** (-2 * DPS + 10),
+        verify=False,
+        maxsteps=400,
+    )
     if not (lo <= u <= hi and abs(resid(u)) <= _CHECK * h):
         for _ in range(240):
             mid = (lo + hi) / 2
@@ -172,5 +200,10 @@ def problem2(w: float, h: float, r: float, x: float) -> Ref:
         alpha, f = _p2(*args)
         d = mp.mpf(10) ** -25
         alpha2, f2 = _p2(*args[:3], args[3] * (1 + d))
-        return Ref(float(alpha), float(f), float(abs((alpha2 - alpha) / alpha / d)),
-                   float(abs((f2 - f) / f / d)), math.nan)
+        return Ref(
+            float(alpha),
+            float(f),
+            float(abs((alpha2 - alpha) / alpha / d)),
+            float(abs((f2 - f) / f / d)),
+            math.nan,
+        )

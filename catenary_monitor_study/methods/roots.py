@@ -6,13 +6,15 @@ Problem 4 (T, x given) in the unknown ``a = R/w`` reads, with ``A = T/w`` and ``
 
     f(a) = a [acosh(A/a) - acosh(B/a)] - x = 0,      0 < a <= B,
 
-with f(0+) = -x < 0, f(B) = x_min - x > 0 and one root; f has an infinite slope at a = B.  ``acosh(B/a)`` near
+with f(0+) = -x < 0, f(B) = x_min - x > 0 and one root; f has an infinite slope at a = B.
+``acosh(B/a)`` near
 ``a = B`` is ``acosh`` of a number just above 1 (half the digits lost), and for ``h << B`` the
 two ``acosh`` are nearly equal and cancel: the formula, not the root finder, limits accuracy.
 Problem 3 in the unknown x: ``a (cosh(x/a) - 1) = h`` with ``a = (T - w h)/w``, root in
 ``(0, a + h]``; ``cosh(x/a) - 1`` cancels for ``x << a`` (``h << a``) and overflows for
 ``x/a > 710``.
 """
+
 from __future__ import annotations
 
 import math
@@ -36,8 +38,12 @@ def _f4(a: float, big_a: float, b: float, x: float) -> float:
 
 def _df4(a: float, big_a: float, b: float) -> float:
     # d/da [a acosh(c/a)] = acosh(c/a) - c / sqrt(c^2 - a^2)
-    return (math.acosh(big_a / a) - big_a / math.sqrt(big_a * big_a - a * a)
-            - math.acosh(b / a) + b / math.sqrt(b * b - a * a))
+    return (
+        math.acosh(big_a / a)
+        - big_a / math.sqrt(big_a * big_a - a * a)
+        - math.acosh(b / a)
+        + b / math.sqrt(b * b - a * a)
+    )
 
 
 def _state4(w: float, b: float, a: float) -> tuple[float, float]:
@@ -105,8 +111,12 @@ def p4_newton_vec(w, h, t, x):
     with np.errstate(all='ignore'):
         for _ in range(MAXITER):
             f = a * (np.arccosh(big_a / a) - np.arccosh(b / a)) - x
-            df = (np.arccosh(big_a / a) - big_a / np.sqrt(big_a ** 2 - a * a)
-                  - np.arccosh(b / a) + b / np.sqrt(b * b - a * a))
+            df = (
+                np.arccosh(big_a / a)
+                - big_a / np.sqrt(big_a**2 - a * a)
+                - np.arccosh(b / a)
+                + b / np.sqrt(b * b - a * a)
+            )
             step = f / df
             a = np.where((a - step > 0) & (a - step <= b), a - step, np.nan)
             if not np.any(np.abs(step) > 4.0 * EPS * a):  # NaN compares False: dropped
@@ -115,7 +125,7 @@ def p4_newton_vec(w, h, t, x):
 
 
 def p4_safe_newton(w: float, h: float, t: float, x: float) -> tuple[float, float]:
-    """Newton on a kept inside a bracket [lo, hi] that every residual tightens; bisection fallback."""
+    """Newton on a inside a bracket [lo, hi] that every residual tightens; bisection fallback."""
     big_a, b = _setup4(w, h, t)
     lo, hi = 0.0, b
     a = _newton_start(big_a, b, h, x)
@@ -136,8 +146,9 @@ def p4_safe_newton(w: float, h: float, t: float, x: float) -> tuple[float, float
 
 def _brentq4(w: float, h: float, t: float, x: float, **kw: float) -> tuple[float, float]:
     big_a, b = _setup4(w, h, t)
-    a, res = optimize.brentq(_f4, 1e-12 * b, b, args=(big_a, b, x), full_output=True,
-                             disp=False, **kw)
+    a, res = optimize.brentq(
+        _f4, 1e-12 * b, b, args=(big_a, b, x), full_output=True, disp=False, **kw
+    )
     if not res.converged:
         raise NoConvergence(res.flag)
     return _state4(w, b, a)
@@ -154,7 +165,7 @@ def p4_brentq_rel(w: float, h: float, t: float, x: float) -> tuple[float, float]
 
 
 def p4_brentq_logd(w: float, h: float, t: float, x: float) -> tuple[float, float]:
-    """brentq on the default's unknown and residual (eta = log d): right unknown, generic solver."""
+    """brentq on the default's unknown and residual (eta = log d): right unknown, generic."""
     b = cat.two_prod_diff(t, w, h) / w
     e, r02, xlo, m, eta0, eta_hi = cat._uplift_setup(b, h, x, cat._MATH)
 
@@ -173,6 +184,7 @@ def p4_brentq_logd(w: float, h: float, t: float, x: float) -> tuple[float, float
 
 def p4_fsolve(w: float, h: float, t: float, x: float) -> tuple[float, float]:
     """Two unknowns (R, alpha) on the paper's equations (1), (2) and T, ``scipy.optimize.root``."""
+
     def fun(v: np.ndarray) -> list[float]:
         r, alpha = v
         a = r / w
@@ -240,8 +252,9 @@ def p3_newton(w: float, h: float, t: float) -> tuple[float, float]:
 
 def p3_brentq(w: float, h: float, t: float) -> tuple[float, float]:
     a = _setup3(w, h, t)
-    x, res = optimize.brentq(lambda x: a * (math.cosh(x / a) - 1.0) - h, 0.0, a + h,
-                             full_output=True, disp=False)
+    x, res = optimize.brentq(
+        lambda x: a * (math.cosh(x / a) - 1.0) - h, 0.0, a + h, full_output=True, disp=False
+    )
     if not res.converged:
         raise NoConvergence(res.flag)
     return w * a, x
@@ -249,6 +262,7 @@ def p3_brentq(w: float, h: float, t: float) -> tuple[float, float]:
 
 def p3_fsolve(w: float, h: float, t: float) -> tuple[float, float]:
     """Two unknowns (x, R), equations (1) with alpha = 0 and T = sqrt(R^2 + (w L)^2)."""
+
     def fun(v: np.ndarray) -> list[float]:
         x, r = v
         a = r / w
@@ -262,33 +276,85 @@ def p3_fsolve(w: float, h: float, t: float) -> tuple[float, float]:
     return sol.x[1], sol.x[0]
 
 
-_CANCEL4 = ('cancelling formula: acosh(B/a) near a = B, and acosh(A/a) - acosh(B/a) for h << B, '
-            'lose digits whatever the root finder')
+_CANCEL4 = (
+    'cancelling formula: acosh(B/a) near a = B, and acosh(A/a) - acosh(B/a) for h << B, '
+    'lose digits whatever the root finder'
+)
 METHODS = [
     Method('bisection', 4, p4_bisect, p4_bisect_vec, 'roots', why=_CANCEL4),
-    Method('Newton', 4, p4_newton, p4_newton_vec, 'roots',
-           why='wrong unknown: f(a) is flat at small a and infinitely steep at a = B, so from below '
-               'the root Newton steps past B (out of the domain) or cycles; plus the cancelling '
-               'formula'),
+    Method(
+        'Newton',
+        4,
+        p4_newton,
+        p4_newton_vec,
+        'roots',
+        why='wrong unknown: f(a) is flat at small a and infinitely steep at a = B, so from below '
+        'the root Newton steps past B (out of the domain) or cycles; plus the cancelling '
+        'formula',
+    ),
     Method('safeguarded Newton', 4, p4_safe_newton, None, 'roots', why=_CANCEL4),
-    Method('brentq', 4, p4_brentq, None, 'roots',
-           why='absolute tolerance: xtol = 2e-12 m is coarse when a is micrometres (h >> B, x << x_min); '
-               'plus the cancelling formula'),
+    Method(
+        'brentq',
+        4,
+        p4_brentq,
+        None,
+        'roots',
+        why='absolute tolerance: xtol = 2e-12 m is coarse when a is micrometres '
+        '(h >> B, x << x_min); '
+        'plus the cancelling formula',
+    ),
     Method('brentq (xtol=5e-324)', 4, p4_brentq_rel, None, 'roots', why=_CANCEL4),
-    Method('brentq on log d', 4, p4_brentq_logd, None, 'roots',
-           why="the default's unknown and residual under a generic solver: accurate, slower"),
-    Method('root/fsolve (R, alpha)', 4, p4_fsolve, None, 'roots',
-           why='two badly scaled unknowns (N and rad) from a fixed start: hybr stalls ("not making '
-               'good progress") away from the dock scale, and stops at a relative xtol of 1.5e-8'),
-    Method('bisection', 3, p3_bisect, p3_bisect_vec, 'roots',
-           why='cancelling formula: cosh(x/a) - 1 for h << a; cosh(x/a) overflows at the bracket end '
-               'a + h when h/a > 710'),
-    Method('Newton', 3, p3_newton, None, 'roots',
-           why='cancelling formula: cosh(x/a) - 1 for h << a is rounding noise at the root, so the '
-               'relative step test is never met (iteration cap)'),
-    Method('brentq', 3, p3_brentq, None, 'roots',
-           why='cosh(x/a) overflows at the bracket end a + h when h >> a; cancelling formula for h << a'),
-    Method('root/fsolve (x, R)', 3, p3_fsolve, None, 'roots',
-           why='two badly scaled unknowns; hybr stops at a relative xtol of 1.5e-8; cosh overflows '
-               'on its trial steps for h >> a'),
+    Method(
+        'brentq on log d',
+        4,
+        p4_brentq_logd,
+        None,
+        'roots',
+        why="the default's unknown and residual under a generic solver: accurate, slower",
+    ),
+    Method(
+        'root/fsolve (R, alpha)',
+        4,
+        p4_fsolve,
+        None,
+        'roots',
+        why='two badly scaled unknowns (N and rad) from a fixed start: hybr stalls ("not making '
+        'good progress") away from the dock scale, and stops at a relative xtol of 1.5e-8',
+    ),
+    Method(
+        'bisection',
+        3,
+        p3_bisect,
+        p3_bisect_vec,
+        'roots',
+        why='cancelling formula: cosh(x/a) - 1 for h << a; cosh(x/a) overflows at the bracket end '
+        'a + h when h/a > 710',
+    ),
+    Method(
+        'Newton',
+        3,
+        p3_newton,
+        None,
+        'roots',
+        why='cancelling formula: cosh(x/a) - 1 for h << a is rounding noise at the root, so the '
+        'relative step test is never met (iteration cap)',
+    ),
+    Method(
+        'brentq',
+        3,
+        p3_brentq,
+        None,
+        'roots',
+        why='cosh(x/a) overflows at the bracket end a + h when h >> a; cancelling formula '
+        'for h << a',
+    ),
+    Method(
+        'root/fsolve (x, R)',
+        3,
+        p3_fsolve,
+        None,
+        'roots',
+        why='two badly scaled unknowns; hybr stops at a relative xtol of 1.5e-8; cosh overflows '
+        'on its trial steps for h >> a',
+    ),
 ]
