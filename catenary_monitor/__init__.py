@@ -5,5 +5,5 @@ The numerical core (this package's top level, ``catenary``, ``solve``) imports n
 
 from catenary_monitor.core.solve import ALL_KEYS, STATUS_MESSAGES, SolveResult, Status, solve
 
-__version__ = '0.1.0'
+__version__ = '0.2.0'
 __all__ = ['solve', 'SolveResult', 'Status', 'STATUS_MESSAGES', 'ALL_KEYS', '__version__']

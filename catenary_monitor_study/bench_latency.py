@@ -10,7 +10,7 @@ same QoS and the same load measure both, one after the other, in one run; the mo
 latency is the difference. CPU use is the process's user + system time over the wall time of its
 phase, read from /proc.
 
-``python -m catenary_monitor.bench_latency echo N`` runs the echo node alone.
+``python -m catenary_monitor_study.bench_latency echo N`` runs the echo node alone.
 """
 
 from __future__ import annotations
@@ -176,7 +176,7 @@ def run_bench(
             text.append(f'      ea: {float(ea)!r}')
     params.write_text('\n'.join(text) + '\n')
     echo = subprocess.Popen(
-        [sys.executable, '-m', 'catenary_monitor.bench_latency', 'echo', str(lines)], env=env
+        [sys.executable, '-m', 'catenary_monitor_study.bench_latency', 'echo', str(lines)], env=env
     )
     monitor = subprocess.Popen(
         [

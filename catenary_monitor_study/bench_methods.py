@@ -627,7 +627,7 @@ def run(
         'paper\'s equations '
         'computed in this run. Failure = exception, no convergence, NaN, or error > 1e-6.',
         '',
-        'Same-run ratios (targets of issue 5):',
+        'Same-run ratios (the speed targets):',
         '',
         f'* default problem-4 scalar solve (`solve()`): '
         f'{ratios["default_p4_scalar_us"]:.2f} µs median'

@@ -38,7 +38,7 @@ def child_env(domain_base: int = 1) -> dict[str, str]:
     (``domain_base + pid % 100`` unless ROS_DOMAIN_ID is set; the demo and the latency
     benchmark use different bases so that both can run at once)."""
     env = dict(os.environ)
-    root = str(Path(__file__).resolve().parent.parent)
+    root = str(Path(__file__).resolve().parents[2])  # the directory holding the package
     env['PYTHONPATH'] = os.pathsep.join(p for p in (root, env.get('PYTHONPATH')) if p)
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     env.setdefault('ROS_DOMAIN_ID', str(domain_base + os.getpid() % 100))
@@ -55,8 +55,21 @@ def _relay(
     ready: threading.Event,
     transcript: list,
 ) -> None:
-    """Print the monitor's alarm transitions as they arrive; keep everything it says."""
+    """Print the monitor's alarm transitions as they arrive; keep everything it says.
+
+    The lines and the tide start blind (STALE); their first STALE -> OK, when data arrives, is
+    shown as one line for all of them.
+    """
     assert proc.stdout is not None
+    seen: set[str] = set()
+    online: list[tuple[float, str]] = []
+
+    def flush_online() -> None:
+        if online:
+            names = ', '.join(name for _, name in online)
+            print(f'  t = {online[-1][0]:5.1f} s  receiving data (STALE -> OK): {names}')
+            online.clear()
+
     for raw in proc.stdout:
         line = raw.rstrip('\n')
         transcript.append(line)
@@ -67,12 +80,19 @@ def _relay(
             stamp, name, old, new, text = m.groups()
             t = time.time() - t0
             events.append((t, name, old, new, text))
+            first = name not in seen
+            seen.add(name)
+            if first and (old, new) == ('STALE', 'OK'):
+                online.append((t, name))
+                continue
+            flush_online()
             on, off = (_LEVEL_COLOURS.get(new, ''), '\033[0m') if colour else ('', '')
             print(
                 f'  t = {t:5.1f} s  {on}{name:8s} {old:>5s} -> {new:5s}{off}  {text}', flush=True
             )
         elif 'Traceback' in line or line.startswith('catenary_monitor:'):
             print(f'  monitor: {line}', file=sys.stderr, flush=True)
+    flush_online()
 
 
 def run_demo(

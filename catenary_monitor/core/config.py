@@ -606,19 +606,15 @@ def config_hash(config: MonitorConfig) -> str:
 
 
 def parameters_markdown() -> str:
-    """The parameter table as Markdown (name, type, default, unit, range, description)."""
-    rows = [
-        '| parameter | type | default | unit | min | max | description |',
-        '|---|---|---|---|---|---|---|',
-    ]
+    """The parameter table as Markdown: name, default (doubles unless noted), unit, range,
+    description."""
+    rows = ['| parameter | default | unit | range | description |', '|---|---|---|---|---|']
     for spec in PARAMETERS:
         name = spec.full_name('NAME')
         default = 'required' if spec.default is REQUIRED else f'`{spec.default_for("NAME")!r}`'
-        low = '' if spec.min is None else repr(spec.min)
-        high = '' if spec.max is None else repr(spec.max)
+        if spec.type != 'double':
+            default += f' ({spec.type.replace("_", " ")})'
+        span = '' if spec.min is None else f'{spec.min:g} – {spec.max:g}'
         ro = ' (read-only)' if spec.read_only else ''
-        rows.append(
-            f'| `{name}` | {spec.type} | {default} | {spec.unit} | {low} | {high} | '
-            f'{spec.description}{ro} |'
-        )
+        rows.append(f'| `{name}` | {default} | {spec.unit} | {span} | {spec.description}{ro} |')
     return '\n'.join(rows) + '\n'

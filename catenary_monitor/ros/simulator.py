@@ -54,7 +54,7 @@ def default_config_path() -> str:
     name = 'floating_dock.yaml'
     candidates = [
         here / 'data' / name,
-        here.parent / 'config' / name,
+        here.parents[1] / 'config' / name,
         Path(sys.prefix) / 'share' / 'catenary_monitor' / 'config' / name,
     ]
     try:  # a colcon / ROS install
