@@ -1,10 +1,28 @@
 """ament_python package that also installs with plain ``pip install .``."""
 
+import platform
+import sys
 from glob import glob
 
-from setuptools import find_packages, setup
+from setuptools import Extension, find_packages, setup
 
 package_name = 'catenary_monitor'
+
+# The fused problem-3/4 kernel (docs/benchmarks.md, "Where the time goes"). Vectorized with
+# glibc's libmvec on x86-64 Linux; elsewhere a plain C loop. Optional: without a C compiler the
+# package installs and solve() uses its numpy implementation (catenary_monitor.core.kernels).
+_mvec = sys.platform.startswith('linux') and platform.machine() in ('x86_64', 'AMD64')
+kernels = Extension(
+    'catenary_monitor.core._kernels',
+    sources=['catenary_monitor/core/_kernels.c'],
+    depends=['catenary_monitor/core/_kernels_body.h'],
+    extra_compile_args=['-O3', '-fopenmp-simd', '-fno-math-errno',
+        '-fno-trapping-math',
+        '-ffp-contract=off',
+    ],
+    libraries=(['mvec'] if _mvec else []) + ['m'],
+    optional=True,
+)
 
 setup(
     name=package_name,
@@ -41,7 +59,8 @@ setup(
         ],
         'peers': ['moorpy', 'pycatenary'],
     },
-    zip_safe=True,
+    ext_modules=[kernels],
+    zip_safe=False,
     maintainer='catenary_monitor developers',
     maintainer_email='catenary-monitor@example.org',
     description='Live anchor-uplift monitor for moored floating docks (ROS 2 Jazzy).',

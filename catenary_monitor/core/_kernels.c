@@ -1,0 +1,512 @@
+/* catenary_monitor.core._kernels: problems 3 and 4 (hook tension given) with their margins, in C.
+ *
+ * The same formulas as catenary.py (grounded, _uplift_setup, _uplift_residual, _lifted_from_d,
+ * critical_parameter) fused into one pass over blocks of BLK lanes, so that no intermediate leaves
+ * the L1 cache, and vectorized by GCC with glibc's vector math library (libmvec): every loop over
+ * lanes is straight-line code with selects.  The block function is compiled three times
+ * (x86-64-v4 with 512-bit vectors, x86-64-v3, and the baseline) and the best one the CPU runs is
+ * picked at import.  One code path serves one element (solve_one, the live node's case) and
+ * arrays (solve_tension).  Python keeps the numpy implementation as the reference and fallback
+ * (catenary_monitor.core.kernels). */
+
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__GLIBC__)
+#define CM_MVEC 1
+/* glibc declares its vector variants only under -ffast-math; declare them ourselves. */
+#pragma omp declare simd notinbranch
+double exp(double);
+#pragma omp declare simd notinbranch
+double expm1(double);
+#pragma omp declare simd notinbranch
+double log(double);
+#pragma omp declare simd notinbranch
+double log1p(double);
+#pragma omp declare simd notinbranch
+double atan2(double, double);
+#endif
+
+#define BLK 256
+#define KFAST 6 /* Newton steps on whole blocks before the bracketed per-lane loop */
+#define NOUT 12
+#define LOG_2 0.69314718055994530942
+#define RAD2DEG (180.0 / 3.14159265358979323846)
+
+/* result rows, in catenary_monitor.core.result.ALL_KEYS order */
+enum { O_R, O_T, O_XMIN, O_L, O_BETA, O_ALPHA, O_F, O_AM, O_TIDE, O_LOAD, O_GL, O_SF };
+/* catenary_monitor.core.result.Status */
+enum {
+    ST_NON_FINITE = 1,
+    ST_WEIGHT = 2,
+    ST_DEPTH = 3,
+    ST_TENSION = 4,
+    ST_DISTANCE = 6,
+    ST_MBL = 9,
+    ST_NO_CONVERGENCE = 10
+};
+
+typedef struct {
+    int has_x, has_mbl, maxiter;
+    double step_tol;
+} Params;
+
+typedef struct {
+    double w[BLK], h[BLK], t[BLK], x[BLK], mbl[BLK];
+    double b[BLK], e[BLK], r02[BLK], xmin[BLK], len[BLK];
+    double xlo[BLK], m[BLK], eta[BLK], start[BLK], eta_hi[BLK];
+    int status[BLK], lift[BLK], done[BLK], iters[BLK], cok[BLK];
+    double o[NOUT][BLK];
+} Block;
+
+/* the load-margin start table (catenary._CRIT_*), handed over by Python at import */
+static struct {
+    double *eta, *slope;
+    int n;
+    double y0, inv_dy;
+} TAB = {NULL, NULL, 0, 0.0, 0.0};
+
+/* exact error of the product w*h - p (Dekker/Veltkamp split, as catenary.two_prod_diff) */
+static inline __attribute__((always_inline)) double prod_err(double w, double h, double p)
+{
+    const double split = 134217729.0;
+    double cw = split * w, wh = cw - (cw - w), wl = w - wh;
+    double ch = split * h, hh = ch - (ch - h), hl = h - hh;
+    return ((wh * hh - p) + wh * hl + wl * hh) + wl * hl;
+}
+
+/* catenary._uplift_residual, one lane */
+static void uplift_residual(const Block *k, int i, double eta, double *f, double *fp)
+{
+    double e = k->e[i], r02 = k->r02[i];
+    double d = exp(eta);
+    double big_x = k->xlo[i] + d;
+    double em = expm1(d);
+    double ed = 1.0 + em;
+    double p = r02 + em / ed;
+    double e1 = e + em * (1.0 + e);
+    double g = 1.0 + e1;
+    double ig = 1.0 / g;
+    double sx = 0.5 * e1 * (1.0 + ig), cx = 0.5 * (g + ig);
+    double qq = big_x / (k->m[i] * sx);
+    *f = log(em * p * (qq * qq));
+    *fp = (ed / em + 1.0 / (ed * p) - 2.0 * (cx / sx - 1.0 / big_x)) * d;
+}
+
+/* catenary.lifted_from_tension's bracketed loop, for one lane that the fast steps left moving */
+static void uplift_safeguarded(Block *k, int i, int kfast, const Params *par)
+{
+    double eta = k->eta[i];
+    if (!isfinite(eta))
+        eta = k->start[i];
+    double lo = -INFINITY, hi = k->eta_hi[i];
+    for (int it = kfast + 1; it <= par->maxiter; it++) {
+        double f, fp;
+        uplift_residual(k, i, eta, &f, &fp);
+        if (f < 0.0 && eta > lo)
+            lo = eta;
+        if (f > 0.0 && eta < hi)
+            hi = eta;
+        double step = -f / fp, nxt = eta + step;
+        int conv = fabs(step) <= par->step_tol || f == 0.0;
+        if (!((nxt >= lo && nxt <= hi) || conv))
+            nxt = isfinite(lo) ? 0.5 * (lo + hi) : eta - 4.0;
+        if (f != 0.0)
+            eta = nxt;
+        k->iters[i] = it;
+        if (conv) {
+            k->done[i] = 1;
+            break;
+        }
+    }
+    k->eta[i] = eta;
+}
+
+/* catenary.critical_parameter_scalar: a of the no-uplift chain spanning (x, h); NaN if not
+ * converged within maxiter residuals */
+static double critical_scalar(double h, double x, const Params *par)
+{
+    double c = h / x, log_c = log(c), eta;
+    double pos = (log_c - TAB.y0) * TAB.inv_dy;
+    if (pos >= 0.0 && pos < TAB.n) {
+        int j = (int)pos;
+        double tt = pos - j, y0 = TAB.eta[j], y1 = TAB.eta[j + 1];
+        double s0 = TAB.slope[j], s1 = TAB.slope[j + 1];
+        eta = y0 + tt * (s0 + tt * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) +
+                                    tt * (2.0 * (y0 - y1) + s0 + s1)));
+    } else if (c < 0.5) {
+        double c2 = c * c;
+        eta = log(c * (1.0 - c2 * (1.0 / 3.0 - c2 * (13.0 / 45.0))));
+    } else {
+        double big = log(4.0 * c);
+        double half = 0.5 * big;
+        eta = log(0.5 * (big + log(half > 1.0 ? half : 1.0)));
+    }
+    for (int it = 0; it < par->maxiter; it++) {
+        double d = exp(eta);
+        double f = 2.0 * (d + log(-expm1(-2.0 * d)) - LOG_2) - eta - log_c;
+        double step = -f / (2.0 * d / tanh(d) - 1.0);
+        step = step > 4.0 ? 4.0 : (step < -4.0 ? -4.0 : step);
+        eta += step;
+        if (fabs(step) <= par->step_tol)
+            return x / (2.0 * exp(eta));
+    }
+    return NAN;
+}
+
+#ifdef CM_MVEC
+#define SFX(name) name##_v4
+#pragma GCC push_options
+#pragma GCC target("arch=x86-64-v4,prefer-vector-width=512")
+#include "_kernels_body.h"
+#pragma GCC pop_options
+#undef SFX
+#define SFX(name) name##_v3
+#pragma GCC push_options
+#pragma GCC target("arch=x86-64-v3")
+#include "_kernels_body.h"
+#pragma GCC pop_options
+#undef SFX
+#endif
+#define SFX(name) name##_base
+#include "_kernels_body.h"
+#undef SFX
+
+typedef void (*block_fn)(Block *restrict, int, const Params *restrict);
+static block_fn BLOCK_FN = block_base;
+static const char *ISA = "baseline";
+
+/* ---------------------------------------------------------------- Python interface */
+
+typedef struct {
+    Py_buffer view;
+    const double *p; /* NULL: constant */
+    double c;
+    int given, held;
+} In;
+
+static int in_from(PyObject *o, In *in, Py_ssize_t *n, const char *name)
+{
+    memset(in, 0, sizeof(*in));
+    in->c = 1.0;
+    if (o == Py_None)
+        return 0;
+    in->given = 1;
+    if (PyFloat_CheckExact(o)) {
+        in->c = PyFloat_AS_DOUBLE(o);
+        return 0;
+    }
+    if (PyObject_GetBuffer(o, &in->view, PyBUF_C_CONTIGUOUS | PyBUF_FORMAT) < 0)
+        return -1;
+    in->held = 1;
+    if (in->view.itemsize != 8 || !in->view.format || strcmp(in->view.format, "d") != 0) {
+        PyErr_Format(PyExc_TypeError, "%s: a float64 array or a float is needed", name);
+        return -1;
+    }
+    Py_ssize_t len = in->view.len / 8;
+    if (*n < 0)
+        *n = len;
+    else if (*n != len) {
+        PyErr_Format(PyExc_ValueError, "%s: length %zd, expected %zd", name, len, *n);
+        return -1;
+    }
+    in->p = (const double *)in->view.buf;
+    return 0;
+}
+
+static void in_release(In *in)
+{
+    if (in->held)
+        PyBuffer_Release(&in->view);
+}
+
+static inline void in_load(const In *in, double *dst, Py_ssize_t off, int nb)
+{
+    if (in->p)
+        memcpy(dst, in->p + off, (size_t)nb * sizeof(double));
+    else
+        for (int i = 0; i < nb; i++)
+            dst[i] = in->c;
+}
+
+static int params_from(PyObject *maxiter, PyObject *tol, Params *par)
+{
+    par->maxiter = (int)PyLong_AsLong(maxiter);
+    par->step_tol = PyFloat_AsDouble(tol);
+    return PyErr_Occurred() ? -1 : 0;
+}
+
+static void run(In in[5], Params *par, Py_ssize_t n, double *out, long long *status,
+                long long *iters)
+{
+    Block *k = PyMem_RawMalloc(sizeof(Block));
+    if (!k)
+        return;
+    for (Py_ssize_t off = 0; off < n; off += BLK) {
+        int nb = (int)(n - off < BLK ? n - off : BLK);
+        in_load(&in[0], k->w, off, nb);
+        in_load(&in[1], k->h, off, nb);
+        in_load(&in[2], k->t, off, nb);
+        in_load(&in[3], k->x, off, nb); /* 1.0 where not given */
+        in_load(&in[4], k->mbl, off, nb);
+        BLOCK_FN(k, nb, par);
+        for (int r = 0; r < NOUT; r++) {
+            double *dst = out + (Py_ssize_t)r * n + off;
+            const double *src = k->o[r];
+            for (int i = 0; i < nb; i++)
+                dst[i] = k->status[i] ? NAN : src[i];
+        }
+        for (int i = 0; i < nb; i++)
+            status[off + i] = k->status[i];
+        if (iters)
+            for (int i = 0; i < nb; i++)
+                iters[off + i] = k->iters[i];
+    }
+    PyMem_RawFree(k);
+}
+
+/* solve_tension(w, h, t, x, mbl, out, status, iters, maxiter, step_tol) -> None
+ * w, h, t: float or float64 arrays of one length n; x, mbl: the same or None; out: writable
+ * float64 buffer of NOUT * n (rows in ALL_KEYS order); status, iters: int64 buffers of n
+ * (iters may be None: the uplift residuals evaluated per element). */
+static PyObject *solve_tension(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 10) {
+        PyErr_SetString(PyExc_TypeError, "solve_tension takes 10 arguments");
+        return NULL;
+    }
+    if (!TAB.n) {
+        PyErr_SetString(PyExc_RuntimeError, "load-margin table not set");
+        return NULL;
+    }
+    static const char *names[5] = {"weight", "depth", "tension", "anchor_distance", "mbl"};
+    In in[5];
+    Py_buffer ob = {0}, sb = {0}, ib = {0};
+    int have_o = 0, have_s = 0, have_i = 0, ok = 0;
+    Py_ssize_t n = -1;
+    Params par;
+    memset(in, 0, sizeof(in));
+    for (int j = 0; j < 5; j++)
+        if (in_from(args[j], &in[j], &n, names[j]) < 0)
+            goto done;
+    if (n < 0)
+        n = 1;
+    if (params_from(args[8], args[9], &par) < 0)
+        goto done;
+    par.has_x = in[3].given;
+    par.has_mbl = in[4].given;
+    if (PyObject_GetBuffer(args[5], &ob, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0)
+        goto done;
+    have_o = 1;
+    if (PyObject_GetBuffer(args[6], &sb, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0)
+        goto done;
+    have_s = 1;
+    if (args[7] != Py_None) {
+        if (PyObject_GetBuffer(args[7], &ib, PyBUF_WRITABLE | PyBUF_C_CONTIGUOUS) < 0)
+            goto done;
+        have_i = 1;
+    }
+    if (ob.len != (Py_ssize_t)(NOUT * n * 8) || sb.len != n * 8 || (have_i && ib.len != n * 8)) {
+        PyErr_SetString(PyExc_ValueError, "output buffers of the wrong size");
+        goto done;
+    }
+    Py_BEGIN_ALLOW_THREADS;
+    run(in, &par, n, (double *)ob.buf, (long long *)sb.buf,
+        have_i ? (long long *)ib.buf : NULL);
+    Py_END_ALLOW_THREADS;
+    ok = 1;
+done:
+    for (int j = 0; j < 5; j++)
+        in_release(&in[j]);
+    if (have_o)
+        PyBuffer_Release(&ob);
+    if (have_s)
+        PyBuffer_Release(&sb);
+    if (have_i)
+        PyBuffer_Release(&ib);
+    if (!ok)
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+/* solve_one(w, h, t, x, mbl, maxiter, step_tol) -> (12 floats in ALL_KEYS order, status, iters)
+ * for plain floats (x and mbl may be None): the live node's call, no arrays. */
+static PyObject *solve_one(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
+{
+    if (nargs != 7) {
+        PyErr_SetString(PyExc_TypeError, "solve_one takes 7 arguments");
+        return NULL;
+    }
+    if (!TAB.n) {
+        PyErr_SetString(PyExc_RuntimeError, "load-margin table not set");
+        return NULL;
+    }
+    double v[5];
+    Params par;
+    par.has_x = args[3] != Py_None;
+    par.has_mbl = args[4] != Py_None;
+    for (int j = 0; j < 5; j++) {
+        v[j] = args[j] == Py_None ? 1.0 : PyFloat_AsDouble(args[j]);
+        if (v[j] == -1.0 && PyErr_Occurred())
+            return NULL;
+    }
+    if (params_from(args[5], args[6], &par) < 0)
+        return NULL;
+    /* one lane: a small block on the stack's worth of heap, reused between calls */
+    static Block *k = NULL;
+    if (!k && !(k = PyMem_RawMalloc(sizeof(Block))))
+        return PyErr_NoMemory();
+    k->w[0] = v[0];
+    k->h[0] = v[1];
+    k->t[0] = v[2];
+    k->x[0] = v[3];
+    k->mbl[0] = v[4];
+    BLOCK_FN(k, 1, &par);
+    PyObject *res = PyTuple_New(NOUT + 2);
+    if (!res)
+        return NULL;
+    int st = k->status[0];
+    for (int r = 0; r < NOUT; r++)
+        PyTuple_SET_ITEM(res, r, PyFloat_FromDouble(st ? NAN : k->o[r][0]));
+    PyTuple_SET_ITEM(res, NOUT, PyLong_FromLong(st));
+    PyTuple_SET_ITEM(res, NOUT + 1, PyLong_FromLong(k->iters[0]));
+    return res;
+}
+
+/* set_table(y0, dy, eta, slope): the load-margin start table (float64 buffers of n + 1) */
+static PyObject *set_table(PyObject *self, PyObject *args)
+{
+    double y0, dy;
+    Py_buffer eb, sb;
+    if (!PyArg_ParseTuple(args, "ddy*y*", &y0, &dy, &eb, &sb))
+        return NULL;
+    Py_ssize_t m = eb.len / 8;
+    if (m < 2 || sb.len != eb.len) {
+        PyBuffer_Release(&eb);
+        PyBuffer_Release(&sb);
+        PyErr_SetString(PyExc_ValueError, "table arrays of different or too small sizes");
+        return NULL;
+    }
+    double *e = PyMem_RawMalloc(eb.len), *s = PyMem_RawMalloc(sb.len);
+    if (!e || !s) {
+        PyMem_RawFree(e);
+        PyMem_RawFree(s);
+        PyBuffer_Release(&eb);
+        PyBuffer_Release(&sb);
+        return PyErr_NoMemory();
+    }
+    memcpy(e, eb.buf, eb.len);
+    memcpy(s, sb.buf, sb.len);
+    PyBuffer_Release(&eb);
+    PyBuffer_Release(&sb);
+    PyMem_RawFree(TAB.eta);
+    PyMem_RawFree(TAB.slope);
+    TAB.eta = e;
+    TAB.slope = s;
+    TAB.n = (int)(m - 1);
+    TAB.y0 = y0;
+    TAB.inv_dy = 1.0 / dy;
+    Py_RETURN_NONE;
+}
+
+static const char *isa_names[] = {"x86-64-v4", "x86-64-v3", "baseline"};
+
+static int isa_supported(int j)
+{
+#ifdef CM_MVEC
+    __builtin_cpu_init();
+    if (j == 0)
+        return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+               __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512bw") &&
+               __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+               __builtin_cpu_supports("bmi2");
+    if (j == 1)
+        return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+               __builtin_cpu_supports("bmi2");
+#endif
+    return j == 2;
+}
+
+static void isa_use(int j)
+{
+#ifdef CM_MVEC
+    BLOCK_FN = j == 0 ? block_v4 : (j == 1 ? block_v3 : block_base);
+#else
+    BLOCK_FN = block_base;
+#endif
+    ISA = isa_names[j];
+}
+
+/* isa() -> name in use; set_isa(name) picks another supported one; supported() -> names */
+static PyObject *isa(PyObject *self, PyObject *noargs) { return PyUnicode_FromString(ISA); }
+
+static PyObject *supported(PyObject *self, PyObject *noargs)
+{
+    PyObject *lst = PyList_New(0);
+    for (int j = 0; lst && j < 3; j++)
+        if (isa_supported(j)) {
+            PyObject *s = PyUnicode_FromString(isa_names[j]);
+            if (!s || PyList_Append(lst, s) < 0) {
+                Py_XDECREF(s);
+                Py_DECREF(lst);
+                return NULL;
+            }
+            Py_DECREF(s);
+        }
+    return lst;
+}
+
+static PyObject *set_isa(PyObject *self, PyObject *arg)
+{
+    const char *name = PyUnicode_AsUTF8(arg);
+    if (!name)
+        return NULL;
+    for (int j = 0; j < 3; j++)
+        if (!strcmp(name, isa_names[j])) {
+            if (!isa_supported(j)) {
+                PyErr_Format(PyExc_ValueError, "this CPU does not run %s", name);
+                return NULL;
+            }
+            isa_use(j);
+            Py_RETURN_NONE;
+        }
+    PyErr_Format(PyExc_ValueError, "unknown instruction set %s", name);
+    return NULL;
+}
+
+static PyMethodDef methods[] = {
+    {"solve_tension", (PyCFunction)(void (*)(void))solve_tension, METH_FASTCALL,
+     "Problems 3/4 with margins over arrays (see the C source)."},
+    {"solve_one", (PyCFunction)(void (*)(void))solve_one, METH_FASTCALL,
+     "Problems 3/4 with margins for plain floats."},
+    {"set_table", set_table, METH_VARARGS, "Set the load-margin start table."},
+    {"isa", isa, METH_NOARGS, "Instruction set in use."},
+    {"supported", supported, METH_NOARGS, "Instruction sets this CPU runs."},
+    {"set_isa", set_isa, METH_O, "Use another supported instruction set."},
+    {NULL, NULL, 0, NULL}};
+
+static struct PyModuleDef moduledef = {PyModuleDef_HEAD_INIT, "_kernels",
+                                       "Problems 3 and 4 with margins, fused and vectorized.",
+                                       -1, methods};
+
+PyMODINIT_FUNC PyInit__kernels(void)
+{
+    PyObject *mod = PyModule_Create(&moduledef);
+    if (!mod)
+        return NULL;
+    for (int j = 0; j < 3; j++)
+        if (isa_supported(j)) {
+            isa_use(j);
+            break;
+        }
+    if (PyModule_AddIntConstant(mod, "BLOCK", BLK) < 0 ||
+        PyModule_AddIntConstant(mod, "FAST_STEPS", KFAST) < 0 ||
+        PyModule_AddIntConstant(mod, "VERSION", 1) < 0) {
+        Py_DECREF(mod);
+        return NULL;
+    }
+    return mod;
+}

@@ -1,0 +1,82 @@
+"""The fused C kernel for problems 3 and 4 (hook tension given) with their margins, if built.
+
+``_kernels.c`` computes, in one pass over blocks of 256 elements, what
+:func:`catenary_monitor.core.inextensible.solve_inextensible` computes for a measured tension:
+validation and status, the grounded chain, the uplift solve, the uplift state and the three
+margins, with the formulas of :mod:`catenary_monitor.core.catenary` (same start, residual,
+stopping test and load-margin table).  Vectorized with glibc's vector math library on x86-64;
+the instruction set is picked at import (``isa()``).  It is optional: where it was not built
+(no C compiler at install time), ``AVAILABLE`` is False and ``solve()`` runs the numpy
+implementation, which gives the same numbers to rounding (test/test_kernels.py).
+
+Why it exists (docs/benchmarks.md, "Where the time goes"): numpy evaluates one operation over the
+whole array at a time, about 1 ns per element each, and problem 4 with its margins needs about
+130 of them; a plain-float Python solve costs ~10 us in interpreter overhead.  The fused kernel
+keeps every intermediate in registers or L1 cache.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Optional
+
+import numpy as np
+
+from catenary_monitor.core import catenary as cat
+
+try:  # the compiled module, next to this file
+    from catenary_monitor.core import _kernels as _k  # type: ignore[attr-defined]
+except ImportError:  # not built: solve() uses the numpy implementation
+    _k = None
+
+#: True where the compiled kernel is importable.
+AVAILABLE = _k is not None
+#: Number of result rows the kernel writes (``result.ALL_KEYS`` order).
+NOUT = 12
+
+if _k is not None:
+    _k.set_table(
+        cat._CRIT_Y0,
+        cat._CRIT_DY,
+        np.asarray(cat._CRIT_ETA, dtype=float).tobytes(),
+        np.asarray(cat._CRIT_SLOPE, dtype=float).tobytes(),
+    )
+
+
+def isa() -> str:
+    """Instruction set the kernel runs ('x86-64-v4', 'x86-64-v3', 'baseline'), or 'none'."""
+    return _k.isa() if _k is not None else 'none'
+
+
+def supported() -> list[str]:
+    """Instruction sets of the kernel this CPU runs (best first)."""
+    return list(_k.supported()) if _k is not None else []
+
+
+def set_isa(name: str) -> None:
+    """Use another supported instruction set (tests compare them)."""
+    if _k is None:
+        raise RuntimeError('the C kernel is not built')
+    _k.set_isa(name)
+
+
+def solve_one(w: float, h: float, t: float, x: Optional[float], mbl: Optional[float]) -> tuple:
+    """One element in plain floats: ``(12 values in ALL_KEYS order, status, uplift residuals)``.
+
+    Values are NaN where they do not apply (no x: the margins; no mbl: the safety factor) and
+    everywhere when ``status != 0``.
+    """
+    return _k.solve_one(w, h, t, x, mbl, cat.MAXITER, cat.STEP_TOL)
+
+
+def solve_arrays(
+    w: Any, h: Any, t: Any, x: Any, mbl: Any, n: int, iters: Optional[np.ndarray] = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Arrays (float64, C-contiguous, length n) or floats: ``(rows (12, n), status (n,))``.
+
+    ``x`` and ``mbl`` may be None.  ``iters``, if given (int64, n), receives the uplift
+    residuals evaluated per element (0 where the anchor is not lifted).
+    """
+    out = np.empty((NOUT, n))
+    status = np.empty(n, dtype=np.int64)
+    _k.solve_tension(w, h, t, x, mbl, out, status, iters, cat.MAXITER, cat.STEP_TOL)
+    return out, status
