@@ -56,10 +56,13 @@ typedef struct {
 
 typedef struct {
     double w[BLK], h[BLK], t[BLK], x[BLK], mbl[BLK];
-    double b[BLK], e[BLK], r02[BLK], xmin[BLK], len[BLK];
-    double xlo[BLK], m[BLK], eta[BLK], start[BLK], eta_hi[BLK];
-    int status[BLK], lift[BLK], done[BLK], iters[BLK], cok[BLK];
-    double o[NOUT][BLK];
+    double b[BLK], e[BLK], r02[BLK], len[BLK], x0[BLK];
+    double xlo[BLK], m[BLK], d[BLK], d0[BLK], d_max[BLK];
+    int status[BLK], lift[BLK], iters[BLK], cok[BLK];
+    /* the lifted lanes, gathered */
+    int idx[BLK], gdone[BLK], giters[BLK];
+    double ge[BLK], gr[BLK], gx0[BLK], gxlo[BLK], gm2[BLK], gd[BLK], gd0[BLK], gdmax[BLK];
+    double *o[NOUT]; /* where this block's results go (rows of the output) */
 } Block;
 
 /* the load-margin start table (catenary._CRIT_*), handed over by Python at import */
@@ -78,7 +81,7 @@ static inline __attribute__((always_inline)) double prod_err(double w, double h,
     return ((wh * hh - p) + wh * hl + wl * hh) + wl * hl;
 }
 
-/* catenary._uplift_residual, one lane */
+/* catenary._uplift_residual, one lane: f and df/deta at eta = log(d) */
 static void uplift_residual(const Block *k, int i, double eta, double *f, double *fp)
 {
     double e = k->e[i], r02 = k->r02[i];
@@ -96,13 +99,15 @@ static void uplift_residual(const Block *k, int i, double eta, double *f, double
     *fp = (ed / em + 1.0 / (ed * p) - 2.0 * (cx / sx - 1.0 / big_x)) * d;
 }
 
-/* catenary.lifted_from_tension's bracketed loop, for one lane that the fast steps left moving */
-static void uplift_safeguarded(Block *k, int i, int kfast, const Params *par)
+/* catenary.lifted_from_tension's bracketed loop, for one lane that the fast steps left moving;
+ * returns 1 if it converged (k->d[i], k->iters[i] updated) */
+static int uplift_safeguarded(Block *k, int i, int kfast, const Params *par)
 {
-    double eta = k->eta[i];
+    double eta = log(k->d[i]);
     if (!isfinite(eta))
-        eta = k->start[i];
-    double lo = -INFINITY, hi = k->eta_hi[i];
+        eta = log(k->d0[i]);
+    double lo = -INFINITY, hi = log(k->d_max[i]);
+    int conv = 0;
     for (int it = kfast + 1; it <= par->maxiter; it++) {
         double f, fp;
         uplift_residual(k, i, eta, &f, &fp);
@@ -111,18 +116,17 @@ static void uplift_safeguarded(Block *k, int i, int kfast, const Params *par)
         if (f > 0.0 && eta < hi)
             hi = eta;
         double step = -f / fp, nxt = eta + step;
-        int conv = fabs(step) <= par->step_tol || f == 0.0;
+        conv = fabs(step) <= par->step_tol || f == 0.0;
         if (!((nxt >= lo && nxt <= hi) || conv))
             nxt = isfinite(lo) ? 0.5 * (lo + hi) : eta - 4.0;
         if (f != 0.0)
             eta = nxt;
         k->iters[i] = it;
-        if (conv) {
-            k->done[i] = 1;
+        if (conv)
             break;
-        }
     }
-    k->eta[i] = eta;
+    k->d[i] = exp(eta);
+    return conv;
 }
 
 /* catenary.critical_parameter_scalar: a of the no-uplift chain spanning (x, h); NaN if not
@@ -157,6 +161,9 @@ static double critical_scalar(double h, double x, const Params *par)
     return NAN;
 }
 
+#define CM_PRAGMA(x) _Pragma(#x)
+#define CM_SIMD CM_PRAGMA(omp simd)
+#define CM_SIMD_REDUCTION(v) CM_PRAGMA(omp simd reduction(+ : v))
 #ifdef CM_MVEC
 #define SFX(name) name##_v4
 #pragma GCC push_options
@@ -174,6 +181,17 @@ static double critical_scalar(double h, double x, const Params *par)
 #define SFX(name) name##_base
 #include "_kernels_body.h"
 #undef SFX
+/* one element (solve_one): the same code without vectors, calling the scalar libm */
+#undef CM_SIMD
+#undef CM_SIMD_REDUCTION
+#define CM_SIMD
+#define CM_SIMD_REDUCTION(v)
+#pragma GCC push_options
+#pragma GCC optimize("no-tree-vectorize")
+#define SFX(name) name##_scalar
+#include "_kernels_body.h"
+#undef SFX
+#pragma GCC pop_options
 
 typedef void (*block_fn)(Block *restrict, int, const Params *restrict);
 static block_fn BLOCK_FN = block_base;
@@ -252,15 +270,15 @@ static void run(In in[5], Params *par, Py_ssize_t n, double *out, long long *sta
         in_load(&in[2], k->t, off, nb);
         in_load(&in[3], k->x, off, nb); /* 1.0 where not given */
         in_load(&in[4], k->mbl, off, nb);
+        for (int r = 0; r < NOUT; r++)
+            k->o[r] = out + (Py_ssize_t)r * n + off;
         BLOCK_FN(k, nb, par);
-        for (int r = 0; r < NOUT; r++) {
-            double *dst = out + (Py_ssize_t)r * n + off;
-            const double *src = k->o[r];
-            for (int i = 0; i < nb; i++)
-                dst[i] = k->status[i] ? NAN : src[i];
-        }
-        for (int i = 0; i < nb; i++)
+        for (int i = 0; i < nb; i++) {
             status[off + i] = k->status[i];
+            if (k->status[i])
+                for (int r = 0; r < NOUT; r++)
+                    k->o[r][i] = NAN;
+        }
         if (iters)
             for (int i = 0; i < nb; i++)
                 iters[off + i] = k->iters[i];
@@ -364,13 +382,16 @@ static PyObject *solve_one(PyObject *self, PyObject *const *args, Py_ssize_t nar
     k->t[0] = v[2];
     k->x[0] = v[3];
     k->mbl[0] = v[4];
-    BLOCK_FN(k, 1, &par);
+    double o[NOUT];
+    for (int r = 0; r < NOUT; r++)
+        k->o[r] = o + r;
+    block_scalar(k, 1, &par);
     PyObject *res = PyTuple_New(NOUT + 2);
     if (!res)
         return NULL;
     int st = k->status[0];
     for (int r = 0; r < NOUT; r++)
-        PyTuple_SET_ITEM(res, r, PyFloat_FromDouble(st ? NAN : k->o[r][0]));
+        PyTuple_SET_ITEM(res, r, PyFloat_FromDouble(st ? NAN : o[r]));
     PyTuple_SET_ITEM(res, NOUT, PyLong_FromLong(st));
     PyTuple_SET_ITEM(res, NOUT + 1, PyLong_FromLong(k->iters[0]));
     return res;

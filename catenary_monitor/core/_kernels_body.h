@@ -1,6 +1,6 @@
 /* One block of problem 3/4 lanes (see _kernels.c).  Included once per instruction set with
- * SFX(name) giving the suffixed name; every loop over lanes is a `#pragma omp simd` loop whose
- * body is straight-line code with selects, so GCC vectorizes it with glibc's libmvec. */
+ * SFX(name) giving the suffixed name and CM_SIMD the loop pragma; every loop over lanes is
+ * straight-line code with selects, so GCC vectorizes it with glibc's libmvec. */
 
 static void SFX(block)(Block *restrict k, int nb, const Params *restrict par)
 {
@@ -9,9 +9,15 @@ static void SFX(block)(Block *restrict k, int nb, const Params *restrict par)
     int kfast = par->maxiter < KFAST ? par->maxiter : KFAST;
     if (kfast < 0)
         kfast = 0;
+    double *restrict o_r = k->o[O_R], *restrict o_t = k->o[O_T], *restrict o_xmin = k->o[O_XMIN];
+    double *restrict o_l = k->o[O_L], *restrict o_beta = k->o[O_BETA];
+    double *restrict o_alpha = k->o[O_ALPHA], *restrict o_f = k->o[O_F];
+    double *restrict o_am = k->o[O_AM], *restrict o_tide = k->o[O_TIDE];
+    double *restrict o_load = k->o[O_LOAD], *restrict o_gl = k->o[O_GL];
+    double *restrict o_sf = k->o[O_SF];
 
     /* 1. validation, the grounded chain (problems 1 and 3), the uplift start */
-#pragma omp simd
+    CM_SIMD
     for (int i = 0; i < nb; i++) {
         double w = k->w[i], h = k->h[i], t = k->t[i];
         double x = k->x[i], mbl = k->mbl[i]; /* 1.0 when not given */
@@ -36,154 +42,182 @@ static void SFX(block)(Block *restrict k, int nb, const Params *restrict par)
         k->x[i] = x;
         double p = w * h;
         double b = ((t - p) - prod_err(w, h, p)) / w; /* anchor-end tension / w, compensated */
-        double e = h / b;
+        double ib = 1.0 / b;
+        double e = h * ib;
         double r02 = e * (2.0 + e);
         double sq = sqrt(r02);
         double x0 = log1p(e + sq); /* acosh(1 + e) */
         double xmin = b * x0;
+        double m = x * ib;
         k->b[i] = b;
         k->e[i] = e;
         k->r02[i] = r02;
-        k->xmin[i] = xmin;
-        k->len[i] = sqrt(h * (h + 2.0 * b));
-        int lift = (x < xmin) & has_x;
-        k->lift[i] = lift;
-        /* start of the uplift solve (catenary._uplift_setup) */
-        double xlo = log1p(e);
-        double m = x / b;
-        double d_max = x0 - xlo;
-        double c1 = x0 * x0 / (d_max * (r02 + d_max));
-        double q = m * m / c1;
-        double r02_sq = r02 * r02;
-        double d = 2.0 * q / (r02 + sqrt(r02_sq + 4.0 * q));
-        double frac = d / d_max;
-        frac = frac < 1.0 ? frac : 1.0;
-        double c0 = 2.0 * (1.0 + e) * xlo / r02;
-        double q2 = q * exp((frac - 1.0) * log(c0 * c0 / c1));
-        d = 2.0 * q2 / (r02 + sqrt(r02_sq + 4.0 * q2));
-        double eta_hi = log(d_max);
-        double eta = log(d > 1e-300 ? d : 1e-300);
-        eta = eta < eta_hi ? eta : eta_hi;
-        k->xlo[i] = xlo;
+        k->x0[i] = x0;
+        k->xlo[i] = 0.0; /* set for the lifted lanes below */
+        k->d[i] = 0.0;
         k->m[i] = m;
-        k->eta[i] = eta;
-        k->start[i] = eta;
-        k->eta_hi[i] = eta_hi;
-        k->done[i] = !lift;
-        k->iters[i] = 0;
+        k->len[i] = b * sq; /* sqrt(h (h + 2b)) */
+        k->lift[i] = (x < xmin) & has_x;
+        o_xmin[i] = xmin;
+        o_t[i] = t;
+        o_gl[i] = NAN;
+        o_sf[i] = has_mbl ? mbl / t : NAN;
+        o_am[i] = has_x ? x - xmin : NAN;
     }
 
-    /* 2. Newton in eta = log(d) on every lifted lane, frozen once its step is below tol */
+    /* 2. Newton in eta = log(d) on the lifted lanes, gathered densely, each frozen once its step
+     *    is below tol; the step is applied as d *= exp(step) (a degree-6 Taylor polynomial: exact
+     *    for the converging steps, positive for any step) */
+    int nl = 0;
     if (has_x) {
+        for (int i = 0; i < nb; i++) {
+            k->idx[nl] = i;
+            nl += k->lift[i];
+        }
+        for (int j = 0; j < nl; j++) {
+            int i = k->idx[j];
+            k->ge[j] = k->e[i];
+            k->gr[j] = k->r02[i];
+            k->gx0[j] = k->x0[i];
+            k->gm2[j] = k->m[i] * k->m[i];
+        }
+        /* start of the uplift solve (catenary._uplift_setup), in d = X - log1p(e) */
+        CM_SIMD
+        for (int j = 0; j < nl; j++) {
+            double e = k->ge[j], r02 = k->gr[j], x0 = k->gx0[j], m2 = k->gm2[j];
+            double xlo = log1p(e);
+            double d_max = x0 - xlo;
+            double ix0 = 1.0 / x0;
+            double ic1 = d_max * (r02 + d_max) * (ix0 * ix0); /* 1 / c1 */
+            double q = m2 * ic1;
+            double r02_sq = r02 * r02;
+            double d = 2.0 * q / (r02 + sqrt(r02_sq + 4.0 * q));
+            double frac = d / d_max;
+            frac = frac < 1.0 ? frac : 1.0;
+            double c0 = 2.0 * (1.0 + e) * xlo / r02;
+            double q2 = q * exp((frac - 1.0) * log(c0 * c0 * ic1));
+            d = 2.0 * q2 / (r02 + sqrt(r02_sq + 4.0 * q2));
+            d = d > 1e-300 ? d : 1e-300;
+            d = d < d_max ? d : d_max;
+            k->gxlo[j] = xlo;
+            k->gd[j] = d;
+            k->gd0[j] = d;
+            k->gdmax[j] = d_max;
+            k->gdone[j] = 0;
+            k->giters[j] = 0;
+        }
         for (int it = 1; it <= kfast; it++) {
             int left = 0;
-#pragma omp simd reduction(+ : left)
-            for (int i = 0; i < nb; i++) {
-                double eta = k->eta[i], e = k->e[i], r02 = k->r02[i];
-                double xlo = k->xlo[i], m = k->m[i];
-                double d = exp(eta);
-                double big_x = xlo + d;
+            CM_SIMD_REDUCTION(left)
+            for (int j = 0; j < nl; j++) {
+                double d = k->gd[j], e = k->ge[j], r02 = k->gr[j];
+                double big_x = k->gxlo[j] + d;
                 double em = expm1(d);
                 double ed = 1.0 + em;
-                double p = r02 + em / ed;
                 double e1 = e + em * (1.0 + e); /* expm1(X): exp(X) = (1 + e) exp(d) */
                 double g = 1.0 + e1;
-                double ig = 1.0 / g;
+                double rr = 1.0 / (ed * g);
+                double ied = g * rr, ig = ed * rr;
+                double p = r02 + em * ied;
                 double sx = 0.5 * e1 * (1.0 + ig); /* sinh X */
                 double cx = 0.5 * (g + ig);        /* cosh X */
-                double qq = big_x / (m * sx);
-                double f = log(em * p * (qq * qq));
-                double fp = (ed / em + 1.0 / (ed * p) - 2.0 * (cx / sx - 1.0 / big_x)) * d;
-                double step = -f / fp;
-                double nxt = eta + step;
-                nxt = nxt < k->eta_hi[i] ? nxt : k->eta_hi[i];
-                int was = k->done[i];
+                double f = log(em * p * (big_x * big_x) / (k->gm2[j] * (sx * sx)));
+                /* d/dd of the residual: exp(d)/expm1(d) + 1/(exp(d) p) - 2 (coth X - 1/X),
+                 * over one denominator; step = -f / (d * that) */
+                double den1 = em * ed * p, den2 = sx * big_x;
+                double num = (ed * ed * p + em) * den2 - 2.0 * (cx * big_x - sx) * den1;
+                double step = -f * den1 * den2 / (num * d);
+                double ex = 1.0 + step * (1.0 + step * (0.5 + step * (1.0 / 6.0 +
+                            step * (1.0 / 24.0 + step * (1.0 / 120.0 + step / 720.0)))));
+                double nxt = d * ex;
+                nxt = nxt < k->gdmax[j] ? nxt : k->gdmax[j];
+                int was = k->gdone[j];
                 int conv = (fabs(step) <= tol) | (f == 0.0);
-                double keep = f == 0.0 ? eta : nxt;
-                k->eta[i] = was ? eta : keep;
-                k->iters[i] = was ? k->iters[i] : it;
-                k->done[i] = was | conv;
+                double keep = f == 0.0 ? d : nxt;
+                k->gd[j] = was ? d : keep;
+                k->giters[j] = was ? k->giters[j] : it;
+                k->gdone[j] = was | conv;
                 left += !(was | conv);
             }
             if (!left)
                 break;
         }
-        /* 3. the few lanes still moving: bracketed Newton, one lane at a time */
-        for (int i = 0; i < nb; i++)
-            if (!k->done[i])
-                uplift_safeguarded(k, i, kfast, par);
+        for (int j = 0; j < nl; j++) {
+            int i = k->idx[j];
+            k->xlo[i] = k->gxlo[j];
+            k->d[i] = k->gd[j];
+            k->d0[i] = k->gd0[j];
+            k->d_max[i] = k->gdmax[j];
+        }
+    }
+    for (int i = 0; i < nb; i++)
+        k->iters[i] = 0;
+    for (int j = 0; j < nl; j++) {
+        int i = k->idx[j];
+        k->iters[i] = k->giters[j];
+        if (!k->gdone[j]) /* 3. the few lanes still moving: bracketed Newton, one at a time */
+            k->gdone[j] = uplift_safeguarded(k, i, kfast, par);
     }
 
     /* 4. uplift state, margins and the load-margin solve from its table start */
-#pragma omp simd
+    CM_SIMD
     for (int i = 0; i < nb; i++) {
-        double w = k->w[i], h = k->h[i], t = k->t[i], x = k->x[i], b = k->b[i];
-        double xmin = k->xmin[i], e = k->e[i];
+        double w = k->w[i], h = k->h[i], b = k->b[i], e = k->e[i], m = k->m[i];
         int lift = k->lift[i];
-        double big_x = k->xlo[i] + exp(k->eta[i]);
-        double xt = lift ? big_x : k->m[i];
+        double xt = lift ? k->xlo[i] + k->d[i] : m; /* X, or x / a for a grounded chain */
         double et = expm1(xt);
         double g = 1.0 + et;
-        double sx = 0.5 * et * (1.0 + 1.0 / g); /* sinh */
-        double cm1 = 0.5 * et * et / g;          /* cosh - 1 */
-        double s = lift ? k->m[i] / big_x : 1.0; /* sech u */
-        double tu = (e - cm1) / sx;              /* tanh u */
+        double rr = 1.0 / (g * xt * et * (g + 1.0));
+        double ig = et <= DBL_MAX ? xt * et * (g + 1.0) * rr : 0.0; /* 1 / g, overflow kept */
+        double isx = 2.0 * g * g * xt * rr;   /* 1 / sinh */
+        double sx = 0.5 * et * (1.0 + ig);    /* sinh */
+        double cm1 = et < 1.0 ? 0.5 * et * et * ig : 0.5 * et * (1.0 - ig); /* cosh - 1 */
+        double s = lift ? m * (g * et * (g + 1.0) * rr) : 1.0; /* sech u = m / X */
+        double tu = (e - cm1) * isx;          /* tanh u */
         tu = lift ? (tu > 0.0 ? tu : 0.0) : 0.0;
         double wb = w * b;
         double r = wb * s;
-        double len = lift ? b * (tu * cm1 + sx) : k->len[i];
-        double by = lift ? tu * (1.0 + cm1) + sx : k->len[i];
-        double bx = lift ? s : b;
-        k->o[O_R][i] = r;
-        k->o[O_T][i] = t;
-        k->o[O_XMIN][i] = xmin;
-        k->o[O_L][i] = len;
-        k->o[O_BETA][i] = atan2(by, bx) * RAD2DEG;
-        k->o[O_ALPHA][i] = atan2(tu, s) * RAD2DEG;
-        k->o[O_F][i] = wb * tu;
-        k->o[O_SF][i] = k->mbl[i] / t;
-        k->o[O_GL][i] = NAN;
-        /* load margin: a_crit from the Hermite table start and one Newton residual */
-        double c = h / x;
-        double log_c = log(c);
-        double pos = (log_c - TAB.y0) * TAB.inv_dy;
-        int inside = (pos >= 0.0) & (pos < (double)TAB.n);
-        int j = (int)(inside ? pos : 0.0);
-        double tt = pos - j;
-        double y0 = TAB.eta[j], y1 = TAB.eta[j + 1], s0 = TAB.slope[j], s1 = TAB.slope[j + 1];
-        double ce = y0 + tt * (s0 + tt * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) +
-                                          tt * (2.0 * (y0 - y1) + s0 + s1)));
-        double cd = exp(ce);
-        double em2 = expm1(-2.0 * cd);
-        double cf = 2.0 * (cd + log(-em2) - LOG_2) - ce - log_c;
-        double cfp = 2.0 * cd * (2.0 + em2) / (-em2) - 1.0; /* 2 D / tanh D - 1 */
-        double cstep = -cf / cfp;
-        cstep = cstep > 4.0 ? 4.0 : (cstep < -4.0 ? -4.0 : cstep);
-        ce += cstep;
-        double a_crit = x / (2.0 * exp(ce));
-        k->cok[i] = inside & (fabs(cstep) <= tol) & (par->maxiter >= 1);
-        k->o[O_AM][i] = x - xmin;
-        k->o[O_TIDE][i] = (r / w) * cm1 - h;
-        k->o[O_LOAD][i] = w * (a_crit + h) - t;
+        double len = k->len[i];
+        o_r[i] = r;
+        o_l[i] = lift ? b * (tu * cm1 + sx) : len;
+        o_beta[i] = atan2(lift ? tu * (1.0 + cm1) + sx : len, lift ? s : b) * RAD2DEG;
+        o_alpha[i] = atan2(tu, s) * RAD2DEG;
+        o_f[i] = wb * tu;
+        o_tide[i] = has_x ? b * s * cm1 - h : NAN; /* a (cosh(x/a) - 1) - h, a = R/w */
     }
-
-    if (!has_x)
-        for (int i = 0; i < nb; i++)
-            k->o[O_AM][i] = k->o[O_TIDE][i] = k->o[O_LOAD][i] = NAN;
-    if (!has_mbl)
-        for (int i = 0; i < nb; i++)
-            k->o[O_SF][i] = NAN;
-
-    /* 5. load-margin lanes outside the table or not converged: the scalar solve */
-    if (has_x)
+    if (has_x) {
+        CM_SIMD
+        for (int i = 0; i < nb; i++) {
+            /* load margin: a_crit from the fine table (exact to ~1e-14 inside it) */
+            double h = k->h[i], x = k->x[i];
+            double c = h / x;
+            double log_c = log(c);
+            double pos = (log_c - TAB.y0) * TAB.inv_dy;
+            int inside = (pos >= 0.0) & (pos < (double)TAB.n);
+            int j = (int)(inside ? pos : 0.0);
+            double tt = pos - j;
+            double y0 = TAB.eta[j], y1 = TAB.eta[j + 1];
+            double s0 = TAB.slope[j], s1 = TAB.slope[j + 1];
+            double ce = y0 + tt * (s0 + tt * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) +
+                                              tt * (2.0 * (y0 - y1) + s0 + s1)));
+            double a_crit = x / (2.0 * exp(ce));
+            k->cok[i] = inside & (par->maxiter >= 1);
+            o_load[i] = k->w[i] * (a_crit + h) - k->t[i];
+        }
+        /* 5. load-margin lanes outside the table or not converged: the scalar solve */
         for (int i = 0; i < nb; i++)
             if (!k->cok[i] && !k->status[i]) {
                 double a_crit = critical_scalar(k->h[i], k->x[i], par);
-                k->o[O_LOAD][i] = k->w[i] * (a_crit + k->h[i]) - k->t[i];
+                o_load[i] = k->w[i] * (a_crit + k->h[i]) - k->t[i];
                 if (a_crit != a_crit)
                     k->status[i] = ST_NO_CONVERGENCE;
             }
-    for (int i = 0; i < nb; i++)
-        if (has_x && !k->done[i] && !k->status[i])
-            k->status[i] = ST_NO_CONVERGENCE;
+        for (int j = 0; j < nl; j++) {
+            int i = k->idx[j];
+            if (!k->gdone[j] && !k->status[i])
+                k->status[i] = ST_NO_CONVERGENCE;
+        }
+    } else
+        for (int i = 0; i < nb; i++)
+            o_load[i] = NAN;
 }

@@ -526,11 +526,15 @@ _CRIT_INV_DY = 1.0 / _CRIT_DY
 _CRIT_N = 0  # no table while it is being built
 
 
-def _critical_table(n: int) -> tuple[list[float], list[float]]:
-    log_c = _CRIT_Y0 + _CRIT_DY * np.arange(n + 1)
+def _critical_table(
+    n: int, y0: float = _CRIT_Y0, dy: float = _CRIT_DY
+) -> tuple[list[float], list[float]]:
+    """``eta = log D`` at ``log c = y0 + k dy`` (k = 0..n), solved by Newton, and the slopes
+    ``d eta / dk`` of the Hermite interpolation."""
+    log_c = y0 + dy * np.arange(n + 1)
     eta = _critical_newton(_critical_series_start(np.exp(log_c)), log_c)
     d = np.exp(eta)
-    slope = _CRIT_DY / (2.0 * d / np.tanh(d) - 1.0)
+    slope = dy / (2.0 * d / np.tanh(d) - 1.0)
     return eta.tolist(), slope.tolist()
 
 

@@ -17,6 +17,7 @@ keeps every intermediate in registers or L1 cache.
 
 from __future__ import annotations
 
+import math
 from typing import Any, Optional
 
 import numpy as np
@@ -33,13 +34,22 @@ AVAILABLE = _k is not None
 #: Number of result rows the kernel writes (``result.ALL_KEYS`` order).
 NOUT = 12
 
+#: The kernel's load-margin table: ``log D`` against ``log(h/x)`` from h/x = 1e-6 to 7e9 in
+#: steps of 1/1024, solved at import by :func:`catenary._critical_table` (~3 ms).  Its cubic
+#: Hermite interpolation agrees with the Newton-converged value to 1e-14 (test/test_kernels.py),
+#: so inside it the kernel needs no residual; outside, the scalar Newton of catenary.py.
+TABLE_Y0, TABLE_DY = math.log(1e-6), 1.0 / 1024.0
+TABLE_N = int((math.log(7e9) - TABLE_Y0) / TABLE_DY)
+
 if _k is not None:
+    _eta, _slope = cat._critical_table(TABLE_N, TABLE_Y0, TABLE_DY)
     _k.set_table(
-        cat._CRIT_Y0,
-        cat._CRIT_DY,
-        np.asarray(cat._CRIT_ETA, dtype=float).tobytes(),
-        np.asarray(cat._CRIT_SLOPE, dtype=float).tobytes(),
+        TABLE_Y0,
+        TABLE_DY,
+        np.asarray(_eta, dtype=float).tobytes(),
+        np.asarray(_slope, dtype=float).tobytes(),
     )
+    del _eta, _slope
 
 
 def isa() -> str:
