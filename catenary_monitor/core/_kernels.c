@@ -350,7 +350,7 @@ done:
     Py_RETURN_NONE;
 }
 
-/* solve_one(w, h, t, x, mbl, maxiter, step_tol) -> (12 floats in ALL_KEYS order, status, iters)
+/* solve_one(w, h, t, x, mbl, maxiter, step_tol) -> (12 floats in ALL_KEYS order, status)
  * for plain floats (x and mbl may be None): the live node's call, no arrays. */
 static PyObject *solve_one(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
@@ -386,14 +386,13 @@ static PyObject *solve_one(PyObject *self, PyObject *const *args, Py_ssize_t nar
     for (int r = 0; r < NOUT; r++)
         k->o[r] = o + r;
     block_scalar(k, 1, &par);
-    PyObject *res = PyTuple_New(NOUT + 2);
+    PyObject *res = PyTuple_New(NOUT + 1);
     if (!res)
         return NULL;
     int st = k->status[0];
     for (int r = 0; r < NOUT; r++)
         PyTuple_SET_ITEM(res, r, PyFloat_FromDouble(st ? NAN : o[r]));
     PyTuple_SET_ITEM(res, NOUT, PyLong_FromLong(st));
-    PyTuple_SET_ITEM(res, NOUT + 1, PyLong_FromLong(k->iters[0]));
     return res;
 }
 

@@ -18,6 +18,7 @@ from typing import Any, Optional, Union
 import numpy as np
 
 from catenary_monitor.core import catenary as cat
+from catenary_monitor.core import kernels
 from catenary_monitor.core.result import ALL_KEYS, SolveResult, Status
 
 ArrayLike = Union[float, int, np.ndarray, list]
@@ -100,6 +101,8 @@ def solve_inextensible(
         except (OverflowError, ZeroDivisionError, ValueError):
             pass  # beyond float range in plain math (e.g. sinh overflow): numpy gives inf instead
     problem = _check_call(tension, horizontal, chain_length, anchor_distance)
+    if problem == 'tension' and kernels.AVAILABLE:
+        return _solve_tension_kernel(weight, depth, tension, anchor_distance, mbl)
     inputs = {
         'weight': weight,
         'depth': depth,
@@ -134,6 +137,43 @@ def solve_inextensible(
     except ValueError as exc:
         raise ValueError(f'inputs do not broadcast together: {exc}') from None
     return _solve_arrays(problem, arrays, scalar)
+
+
+def _solve_tension_kernel(
+    weight: ArrayLike,
+    depth: ArrayLike,
+    tension: ArrayLike,
+    anchor_distance: Optional[ArrayLike],
+    mbl: Optional[ArrayLike],
+) -> SolveResult:
+    """Problems 3 and 4 through the C kernel (:mod:`catenary_monitor.core.kernels`).
+
+    0-d inputs are passed as floats (no broadcast copy); arrays as flat float64 of the broadcast
+    shape.  The kernel writes the twelve result rows in place and the status per element.
+    """
+    given = [v for v in (weight, depth, tension, anchor_distance, mbl)]
+    try:
+        arrays = [None if v is None else np.asarray(v, dtype=float) for v in given]
+        shape = np.broadcast_shapes(*(a.shape for a in arrays if a is not None))
+    except ValueError as exc:
+        raise ValueError(f'inputs do not broadcast together: {exc}') from None
+    n = math.prod(shape)
+    args: list[Any] = []
+    for a in arrays:
+        if a is None or a.ndim == 0:
+            args.append(None if a is None else float(a))
+        elif a.shape == shape:
+            args.append(np.ascontiguousarray(a).reshape(n))
+        else:
+            args.append(np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(n))
+    rows, status = kernels.solve_arrays(*args, n)
+    keys = _keys('tension', anchor_distance is not None, mbl is not None)
+    if not shape:  # every input 0-d (but not all plain floats: e.g. float32 or 0-d arrays)
+        return SolveResult(
+            *(float(v) for v in rows[:, 0]), status=int(status[0]), problem='tension', keys=keys
+        )
+    rows = rows.reshape((len(ALL_KEYS),) + shape)
+    return SolveResult(*rows, status=status.reshape(shape), problem='tension', keys=keys)
 
 
 @functools.lru_cache(maxsize=None)

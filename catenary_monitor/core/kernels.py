@@ -70,7 +70,7 @@ def set_isa(name: str) -> None:
 
 
 def solve_one(w: float, h: float, t: float, x: Optional[float], mbl: Optional[float]) -> tuple:
-    """One element in plain floats: ``(12 values in ALL_KEYS order, status, uplift residuals)``.
+    """One element in plain floats: ``(12 values in ALL_KEYS order, status)``.
 
     Values are NaN where they do not apply (no x: the margins; no mbl: the safety factor) and
     everywhere when ``status != 0``.

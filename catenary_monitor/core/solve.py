@@ -19,8 +19,10 @@ from __future__ import annotations
 
 from typing import Any, Optional
 
-from catenary_monitor.core import elastic
-from catenary_monitor.core.inextensible import ArrayLike, solve_inextensible
+import numpy as np
+
+from catenary_monitor.core import elastic, kernels
+from catenary_monitor.core.inextensible import ArrayLike, _keys, solve_inextensible
 from catenary_monitor.core.result import ALL_KEYS, STATUS_MESSAGES, SolveResult, Status
 
 __all__ = ['solve', 'SolveResult', 'Status', 'STATUS_MESSAGES', 'ALL_KEYS']
@@ -61,6 +63,25 @@ def solve(
     well-conditioned (docs/solver.md).  With all-scalar inputs a plain-float path gives the same
     numbers to rounding, an order of magnitude faster.
     """
+    if (
+        ea is None
+        and horizontal is None
+        and chain_length is None
+        and _ONE is not None
+        and type(tension) in _PLAIN
+        and type(weight) in _PLAIN
+        and type(depth) in _PLAIN
+        and (anchor_distance is None or type(anchor_distance) in _PLAIN)
+        and (mbl is None or type(mbl) in _PLAIN)
+    ):  # one element of problem 3 or 4 (the live node's call): straight to the C kernel
+        try:
+            values = _ONE(weight, depth, tension, anchor_distance, mbl, _CAT.MAXITER, _TOL)
+        except OverflowError:  # an int beyond float range: the generic path says so
+            pass
+        else:
+            return _new_tuple(
+                SolveResult, values + _TAILS[anchor_distance is not None, mbl is not None]
+            )
     if ea is None:
         return solve_inextensible(
             weight, depth, tension, horizontal, anchor_distance, chain_length, mbl
@@ -73,3 +94,21 @@ def solve(
     return elastic.solve_with_correction(weight, depth, tension, anchor_distance, ea=ea, mbl=mbl)[
         0
     ]
+
+
+#: Input types that take the kernel's one-element path (``float()`` is exact for them).
+_PLAIN = (float, int, np.float64)
+_ONE = kernels._k.solve_one if kernels.AVAILABLE else None
+_CAT = kernels.cat
+_TOL = _CAT.STEP_TOL
+_new_tuple = tuple.__new__  # builds a SolveResult without its keyword-handling constructor
+_TAILS = {
+    (has_x, has_mbl): (
+        'tension',
+        _keys('tension', has_x, has_mbl),
+        SolveResult._field_defaults['model'],
+        SolveResult._field_defaults['method'],
+    )
+    for has_x in (False, True)
+    for has_mbl in (False, True)
+}
