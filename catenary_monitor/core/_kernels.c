@@ -199,6 +199,19 @@ static const char *ISA = "baseline";
 
 /* ---------------------------------------------------------------- Python interface */
 
+static PyTypeObject *RESULT_TYPE = NULL;
+static PyObject *RESULT_TAILS = NULL;
+static PyObject *NAN_OBJ = NULL; /* one NaN float shared by every result */
+
+static inline PyObject *value(double v)
+{
+    if (v != v && NAN_OBJ) {
+        Py_INCREF(NAN_OBJ);
+        return NAN_OBJ;
+    }
+    return PyFloat_FromDouble(v);
+}
+
 typedef struct {
     Py_buffer view;
     const double *p; /* NULL: constant */
@@ -350,29 +363,40 @@ done:
     Py_RETURN_NONE;
 }
 
-/* solve_one(w, h, t, x, mbl, maxiter, step_tol) -> (12 floats in ALL_KEYS order, status)
- * for plain floats (x and mbl may be None): the live node's call, no arrays. */
+static double ONE_TOL = 1e-9; /* STEP_TOL for solve_one, set with set_result */
+
+/* a plain number for the one-element path: float (or a subclass, numpy.float64) or int */
+static inline int plain(PyObject *o) { return PyFloat_Check(o) || PyLong_CheckExact(o); }
+
+/* solve_one(w, h, t, horizontal, x, chain_length, mbl, ea, maxiter)
+ * -> the registered result (set_result), else (12 floats in ALL_KEYS order, status);
+ * None when the call is not one element of problem 3 or 4 in plain numbers (then
+ * catenary_monitor.solve takes its general path).  The argument order is solve()'s. */
 static PyObject *solve_one(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 7) {
-        PyErr_SetString(PyExc_TypeError, "solve_one takes 7 arguments");
+    if (nargs != 9) {
+        PyErr_SetString(PyExc_TypeError, "solve_one takes 9 arguments");
         return NULL;
     }
-    if (!TAB.n) {
-        PyErr_SetString(PyExc_RuntimeError, "load-margin table not set");
-        return NULL;
-    }
+    PyObject *x_o = args[4], *mbl_o = args[6];
+    if (args[3] != Py_None || args[5] != Py_None || args[7] != Py_None || !plain(args[0]) ||
+        !plain(args[1]) || !plain(args[2]) || (x_o != Py_None && !plain(x_o)) ||
+        (mbl_o != Py_None && !plain(mbl_o)) || !TAB.n)
+        Py_RETURN_NONE;
+    PyObject *in_o[5] = {args[0], args[1], args[2], x_o, mbl_o};
     double v[5];
     Params par;
-    par.has_x = args[3] != Py_None;
-    par.has_mbl = args[4] != Py_None;
+    par.has_x = x_o != Py_None;
+    par.has_mbl = mbl_o != Py_None;
     for (int j = 0; j < 5; j++) {
-        v[j] = args[j] == Py_None ? 1.0 : PyFloat_AsDouble(args[j]);
+        v[j] = in_o[j] == Py_None ? 1.0 : PyFloat_AsDouble(in_o[j]);
         if (v[j] == -1.0 && PyErr_Occurred())
             return NULL;
     }
-    if (params_from(args[5], args[6], &par) < 0)
+    par.maxiter = (int)PyLong_AsLong(args[8]);
+    if (par.maxiter == -1 && PyErr_Occurred())
         return NULL;
+    par.step_tol = ONE_TOL;
     /* one lane: a small block on the stack's worth of heap, reused between calls */
     static Block *k = NULL;
     if (!k && !(k = PyMem_RawMalloc(sizeof(Block))))
@@ -386,14 +410,60 @@ static PyObject *solve_one(PyObject *self, PyObject *const *args, Py_ssize_t nar
     for (int r = 0; r < NOUT; r++)
         k->o[r] = o + r;
     block_scalar(k, 1, &par);
+    int st = k->status[0];
+    int tail = 2 * par.has_x + par.has_mbl;
+    if (RESULT_TYPE) { /* build the SolveResult itself: 12 values, status, then the tail */
+        PyObject *tl = PyTuple_GET_ITEM(RESULT_TAILS, tail);
+        Py_ssize_t nt = PyTuple_GET_SIZE(tl);
+        PyObject *res = RESULT_TYPE->tp_alloc(RESULT_TYPE, NOUT + 1 + nt);
+        if (!res)
+            return NULL;
+        for (int r = 0; r < NOUT; r++)
+            PyTuple_SET_ITEM(res, r, value(st ? NAN : o[r]));
+        PyTuple_SET_ITEM(res, NOUT, PyLong_FromLong(st));
+        for (Py_ssize_t j = 0; j < nt; j++) {
+            PyObject *item = PyTuple_GET_ITEM(tl, j);
+            Py_INCREF(item);
+            PyTuple_SET_ITEM(res, NOUT + 1 + j, item);
+        }
+        return res;
+    }
     PyObject *res = PyTuple_New(NOUT + 1);
     if (!res)
         return NULL;
-    int st = k->status[0];
     for (int r = 0; r < NOUT; r++)
-        PyTuple_SET_ITEM(res, r, PyFloat_FromDouble(st ? NAN : o[r]));
+        PyTuple_SET_ITEM(res, r, value(st ? NAN : o[r]));
     PyTuple_SET_ITEM(res, NOUT, PyLong_FromLong(st));
     return res;
+}
+
+/* set_result(cls, tails, step_tol): solve_one returns cls(12 values, status, *tails[2 has_x + has_mbl])
+ * (cls a tuple subclass without instance fields: the SolveResult named tuple) */
+static PyObject *set_result(PyObject *self, PyObject *args)
+{
+    PyObject *cls, *tails;
+    double tol;
+    if (!PyArg_ParseTuple(args, "O!O!d", &PyType_Type, &cls, &PyTuple_Type, &tails, &tol))
+        return NULL;
+    ONE_TOL = tol;
+    if (!PyType_IsSubtype((PyTypeObject *)cls, &PyTuple_Type) ||
+        ((PyTypeObject *)cls)->tp_basicsize != PyTuple_Type.tp_basicsize ||
+        PyTuple_GET_SIZE(tails) != 4) {
+        PyErr_SetString(PyExc_TypeError, "a tuple subclass without fields and 4 tails needed");
+        return NULL;
+    }
+    for (int j = 0; j < 4; j++)
+        if (!PyTuple_Check(PyTuple_GET_ITEM(tails, j))) {
+            PyErr_SetString(PyExc_TypeError, "each tail must be a tuple");
+            return NULL;
+        }
+    Py_INCREF(cls);
+    Py_INCREF(tails);
+    Py_XDECREF(RESULT_TYPE);
+    Py_XDECREF(RESULT_TAILS);
+    RESULT_TYPE = (PyTypeObject *)cls;
+    RESULT_TAILS = tails;
+    Py_RETURN_NONE;
 }
 
 /* set_table(y0, dy, eta, slope): the load-margin start table (float64 buffers of n + 1) */
@@ -503,6 +573,7 @@ static PyMethodDef methods[] = {
     {"solve_one", (PyCFunction)(void (*)(void))solve_one, METH_FASTCALL,
      "Problems 3/4 with margins for plain floats."},
     {"set_table", set_table, METH_VARARGS, "Set the load-margin start table."},
+    {"set_result", set_result, METH_VARARGS, "Make solve_one build this result type."},
     {"isa", isa, METH_NOARGS, "Instruction set in use."},
     {"supported", supported, METH_NOARGS, "Instruction sets this CPU runs."},
     {"set_isa", set_isa, METH_O, "Use another supported instruction set."},
@@ -522,7 +593,8 @@ PyMODINIT_FUNC PyInit__kernels(void)
             isa_use(j);
             break;
         }
-    if (PyModule_AddIntConstant(mod, "BLOCK", BLK) < 0 ||
+    NAN_OBJ = PyFloat_FromDouble(NAN);
+    if (!NAN_OBJ || PyModule_AddIntConstant(mod, "BLOCK", BLK) < 0 ||
         PyModule_AddIntConstant(mod, "FAST_STEPS", KFAST) < 0 ||
         PyModule_AddIntConstant(mod, "VERSION", 1) < 0) {
         Py_DECREF(mod);

@@ -69,13 +69,24 @@ def set_isa(name: str) -> None:
     _k.set_isa(name)
 
 
-def solve_one(w: float, h: float, t: float, x: Optional[float], mbl: Optional[float]) -> tuple:
-    """One element in plain floats: ``(12 values in ALL_KEYS order, status)``.
+def set_result(cls: type, tails: tuple) -> None:
+    """Make :func:`solve_one` return ``cls(12 values, status, *tails[2 has_x + has_mbl])``.
+
+    ``cls`` must be a tuple subclass without instance fields (``SolveResult``); ``solve.py``
+    registers it at import, so that the live node's call builds its result in C.
+    """
+    _k.set_result(cls, tails, cat.STEP_TOL)
+
+
+def solve_one(w: Any, h: Any, t: Any, x: Any = None, mbl: Any = None) -> Any:
+    """One element of problem 3 or 4 in plain numbers: the registered result (see
+    :func:`set_result`), else the tuple ``(12 values in ALL_KEYS order, status)``; None when the
+    inputs are not plain floats or ints.
 
     Values are NaN where they do not apply (no x: the margins; no mbl: the safety factor) and
     everywhere when ``status != 0``.
     """
-    return _k.solve_one(w, h, t, x, mbl, cat.MAXITER, cat.STEP_TOL)
+    return _k.solve_one(w, h, t, None, x, None, mbl, None, cat.MAXITER)
 
 
 def solve_arrays(

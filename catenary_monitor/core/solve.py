@@ -19,8 +19,6 @@ from __future__ import annotations
 
 from typing import Any, Optional
 
-import numpy as np
-
 from catenary_monitor.core import elastic, kernels
 from catenary_monitor.core.inextensible import ArrayLike, _keys, solve_inextensible
 from catenary_monitor.core.result import ALL_KEYS, STATUS_MESSAGES, SolveResult, Status
@@ -63,25 +61,16 @@ def solve(
     well-conditioned (docs/solver.md).  With all-scalar inputs a plain-float path gives the same
     numbers to rounding, an order of magnitude faster.
     """
-    if (
-        ea is None
-        and horizontal is None
-        and chain_length is None
-        and _ONE is not None
-        and type(tension) in _PLAIN
-        and type(weight) in _PLAIN
-        and type(depth) in _PLAIN
-        and (anchor_distance is None or type(anchor_distance) in _PLAIN)
-        and (mbl is None or type(mbl) in _PLAIN)
-    ):  # one element of problem 3 or 4 (the live node's call): straight to the C kernel
+    if _ONE is not None:  # one element of problem 3 or 4 in plain numbers: the C kernel
         try:
-            values = _ONE(weight, depth, tension, anchor_distance, mbl, _CAT.MAXITER, _TOL)
-        except OverflowError:  # an int beyond float range: the generic path says so
-            pass
-        else:
-            return _new_tuple(
-                SolveResult, values + _TAILS[anchor_distance is not None, mbl is not None]
+            one = _ONE(
+                weight, depth, tension, horizontal, anchor_distance, chain_length, mbl, ea,
+                _CAT.MAXITER,
             )
+        except OverflowError:  # an int beyond float range: the general path says so
+            one = None
+        if one is not None:
+            return one
     if ea is None:
         return solve_inextensible(
             weight, depth, tension, horizontal, anchor_distance, chain_length, mbl
@@ -96,19 +85,19 @@ def solve(
     ]
 
 
-#: Input types that take the kernel's one-element path (``float()`` is exact for them).
-_PLAIN = (float, int, np.float64)
 _ONE = kernels._k.solve_one if kernels.AVAILABLE else None
 _CAT = kernels.cat
-_TOL = _CAT.STEP_TOL
-_new_tuple = tuple.__new__  # builds a SolveResult without its keyword-handling constructor
-_TAILS = {
-    (has_x, has_mbl): (
-        'tension',
-        _keys('tension', has_x, has_mbl),
-        SolveResult._field_defaults['model'],
-        SolveResult._field_defaults['method'],
+if kernels.AVAILABLE:  # the kernel builds the SolveResult of a one-element call itself
+    kernels.set_result(
+        SolveResult,
+        tuple(
+            (
+                'tension',
+                _keys('tension', has_x, has_mbl),
+                SolveResult._field_defaults['model'],
+                SolveResult._field_defaults['method'],
+            )
+            for has_x in (False, True)
+            for has_mbl in (False, True)
+        ),
     )
-    for has_x in (False, True)
-    for has_mbl in (False, True)
-}
