@@ -1,11 +1,24 @@
-"""``catenary-monitor bench``: speed of the core's problems 3 and 4, against same-run baselines.
+"""``catenary-monitor bench``: the public ``solve()`` on the dock's scenes and on the sweep.
 
-Scalar: median microseconds per ``solve()`` call with plain floats, against the obvious way a
-newcomer would write it (problem 3: ``a * math.acosh(1 + h/a)``; problem 4: scipy ``brentq`` on
-the paper's equation in ``a``).  Vectorized: nanoseconds per element of one ``solve()`` call on
-arrays, against one naive numpy closed-form evaluation of problem 3 on the same arrays (the floor:
-the work a single catenary evaluation needs).  The machines are shared and noisy: compare the
-ratios, not the absolute numbers.
+Everything through ``catenary_monitor.solve`` as a library user calls it, each figure against its
+baseline measured in the same run, in interleaved rounds (medians over the rounds):
+
+* vectorized, 1e3, 1e5 and 1e6 elements: problem 4 with its margins (and problem 3) against one
+  numpy closed-form evaluation of problem 3 on the same arrays, ``a*np.log1p(e + np.sqrt(e*(2 +
+  e)))`` with ``e = h/a`` (the floor: one catenary evaluation);
+* scalar, each call a new scene (as the node sees them): ``solve()`` against one ``math``-based
+  closed-form evaluation of problem 3 (``a = T/w - h``, then the same formula) and one MoorPy
+  catenary call on the same scenes (with the chain length of our solution: its cost of one
+  catenary);
+* the crossover: the smallest array size at which one vectorized call beats a loop of scalar
+  calls per element.
+
+Dock scenes: w = 1300 N/m, h 2-60 m, T 0.2-4 MN, x 0.05-1.5 of the minimum distance (h/a 1e-4
+to 1, lifted and grounded mixed).  The sweep: the methods study's span, h/a 1e-9 to 1e4
+log-uniform, x/x_min 1e-3 to 1, w 10 N/m-10 kN/m, h 1-1000 m.  The process runs with glibc's
+allocator defaults, as a library user's does (``--keep-freed-memory`` applies the batch
+commands' setting, cli/allocator.py, for comparison).  The machines are shared and noisy: read
+the ratios.
 """
 
 from __future__ import annotations
@@ -13,156 +26,305 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 import time
-from typing import Callable
+from typing import Any, Callable, Optional
 
 import numpy as np
 
+from catenary_monitor.core import catenary as cat
+from catenary_monitor.core import kernels
 from catenary_monitor.core.solve import solve
 
-W, H = 1300.0, 20.85  # the paper's dock chain and mean depth
+W = 1300.0  # the paper's dock chain
+SIZES = (1_000, 100_000, 1_000_000)
+REGIMES = ('dock', 'sweep')
+#: Targets of issue 13, printed beside the figures (never asserted: benchmarks, not tests).
+TARGET_VECTOR, TARGET_SCALAR, TARGET_MOORPY = 8.0, 4.0, 30.0
 
 
-def _scenes(n: int, seed: int = 1) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Dock-like scenes: hook tension 0.3-3 MN, depth 15-26 m, anchor 20-100 % of x_min."""
+def scenes(regime: str, n: int, seed: int = 1) -> tuple[np.ndarray, ...]:
+    """``(w, h, t, x)`` arrays of n scenes of the regime ('dock' or 'sweep')."""
     rng = np.random.default_rng(seed)
-    t = rng.uniform(0.3e6, 3.0e6, n)
-    h = rng.uniform(15.0, 26.0, n)
-    x = rng.uniform(0.2, 1.0, n) * solve(W, h, tension=t).min_anchor_distance
-    return t, h, x
+    if regime == 'dock':
+        w = np.full(n, W)
+        h = rng.uniform(2.0, 60.0, n)
+        t = rng.uniform(0.2e6, 4e6, n)
+        xr = rng.uniform(0.05, 1.5, n)
+    else:
+        w = 10.0 ** rng.uniform(1, 4, n)
+        h = 10.0 ** rng.uniform(0, 3, n)
+        t = w * (h / 10.0 ** rng.uniform(-9, 4, n) + h)
+        xr = 10.0 ** rng.uniform(-3, 0, n)
+    b = cat.two_prod_diff(t, w, h) / w
+    x = xr * cat.grounded(b, h).min_anchor_distance
+    return w, h, t, x
 
 
-def _median_us(fn: Callable[[int], object], n: int, repeats: int = 5) -> float:
-    """Median over ``repeats`` runs of the mean time per call of ``fn(i)`` for i < n, in us."""
-    runs = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for i in range(n):
-            fn(i)
-        runs.append((time.perf_counter() - t0) / n * 1e6)
-    return float(np.median(runs))
-
-
-def _median_ns_per_elem(fn: Callable[[], object], n: int, repeats: int = 7) -> float:
-    runs = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        runs.append((time.perf_counter() - t0) / n * 1e9)
-    return float(np.median(runs))
-
-
-def run(n_scalar: int = 2000, n_vector: int = 200_000) -> dict[str, float]:
-    """Measure everything; returns a flat dict of figures (us, ns/element and ratios)."""
-    from scipy.optimize import brentq
-
-    t, h, x = _scenes(max(n_scalar, 1))
-    tl, hl, xl = t.tolist(), h.tolist(), x.tolist()
-
-    def naive3(i: int) -> float:
-        a = tl[i] / W - hl[i]
-        return a * math.acosh(1.0 + hl[i] / a)
-
-    def naive4(i: int) -> float:
-        big_a, b = tl[i] / W, tl[i] / W - hl[i]
-
-        def g(a: float) -> float:
-            return a * (math.acosh(big_a / a) - math.acosh(b / a)) - xl[i]
-
-        return brentq(g, 1e-12 * b, b, xtol=1e-300, rtol=8.9e-16)
-
-    out: dict[str, float] = {}
-    steps = [
-        ('p3_scalar_us', lambda: _median_us(lambda i: solve(W, hl[i], tension=tl[i]), n_scalar)),
-        ('p3_scalar_baseline_us', lambda: _median_us(naive3, n_scalar)),
-        (
-            'p4_scalar_us',
-            lambda: _median_us(
-                lambda i: solve(W, hl[i], tension=tl[i], anchor_distance=xl[i]), n_scalar
-            ),
-        ),
-        ('p4_scalar_baseline_us', lambda: _median_us(naive4, n_scalar // 4)),
-    ]
-    tv, hv, xv = _scenes(n_vector, seed=2)
-
-    def floor() -> np.ndarray:
-        a = tv / W - hv
-        return a * np.arccosh(1.0 + hv / a)
-
-    steps += [
-        ('p3_vector_ns', lambda: _median_ns_per_elem(lambda: solve(W, hv, tension=tv), n_vector)),
-        (
-            'p4_vector_ns',
-            lambda: _median_ns_per_elem(
-                lambda: solve(W, hv, tension=tv, anchor_distance=xv), n_vector
-            ),
-        ),
-        ('vector_floor_ns', lambda: _median_ns_per_elem(floor, n_vector)),
-    ]
-    for k, (name, step) in enumerate(steps, 1):
-        print(f'\r[{k}/{len(steps)}] {name:<24}', end='', file=sys.stderr, flush=True)
-        out[name] = step()
-    print('\r' + ' ' * 40 + '\r', end='', file=sys.stderr, flush=True)
-    out['p3_scalar_ratio'] = out['p3_scalar_us'] / out['p3_scalar_baseline_us']
-    out['p4_scalar_speedup_vs_brentq'] = out['p4_scalar_baseline_us'] / out['p4_scalar_us']
-    out['p3_vector_ratio_to_floor'] = out['p3_vector_ns'] / out['vector_floor_ns']
-    out['p4_vector_ratio_to_floor'] = out['p4_vector_ns'] / out['vector_floor_ns']
+def _rounds(
+    cases: dict[str, Callable[[], object]], rounds: int, base: Optional[str] = None
+) -> dict[str, float]:
+    """Median seconds per call of each case, the cases interleaved round by round; with
+    ``base``, also ``NAME/base``: the median over rounds of the ratio within each round (a burst
+    of load from elsewhere slows both sides of a round alike)."""
+    times: dict[str, list[float]] = {k: [] for k in cases}
+    for _ in range(rounds):
+        for name, fn in cases.items():
+            t0 = time.perf_counter()
+            fn()
+            times[name].append(time.perf_counter() - t0)
+    out = {k: float(np.median(v)) for k, v in times.items()}
+    if base is not None:
+        for k, v in times.items():
+            out[f'{k}/{base}'] = float(np.median(np.array(v) / np.array(times[base])))
     return out
 
 
-def report(r: dict[str, float]) -> str:
-    rows = [
-        (
-            'problem 3 (x_min from T)',
-            'scalar solve()',
-            f"{r['p3_scalar_us']:.2f} us",
-            f"naive math.acosh {r['p3_scalar_baseline_us']:.2f} us",
-            f"x{r['p3_scalar_ratio']:.1f} slower",
-        ),
-        (
-            'problem 4 (uplift from T, x)',
-            'scalar solve()',
-            f"{r['p4_scalar_us']:.2f} us",
-            f"scipy brentq {r['p4_scalar_baseline_us']:.2f} us",
-            f"x{r['p4_scalar_speedup_vs_brentq']:.1f} faster",
-        ),
-        (
-            'problem 3',
-            'vectorized solve()',
-            f"{r['p3_vector_ns']:.1f} ns/elem",
-            f"numpy closed form {r['vector_floor_ns']:.1f} ns/elem",
-            f"x{r['p3_vector_ratio_to_floor']:.1f} the floor",
-        ),
-        (
-            'problem 4',
-            'vectorized solve()',
-            f"{r['p4_vector_ns']:.1f} ns/elem",
-            f"numpy closed form {r['vector_floor_ns']:.1f} ns/elem",
-            f"x{r['p4_vector_ratio_to_floor']:.1f} the floor",
-        ),
-    ]
+def vector_figures(regime: str, n: int) -> dict[str, float]:
+    """ns per element of vectorized problem 4 (with margins), problem 3 and the floor."""
+    w, h, t, x = scenes(regime, n, seed=2)
+    a = t / w - h  # the floor's catenary parameter, outside its timing
+    wv: Any = W if regime == 'dock' else w  # the dock's chain: one weight, as a user passes it
+
+    def floor() -> object:
+        e = h / a
+        return a * np.log1p(e + np.sqrt(e * (2 + e)))
+
+    rounds = max(7, min(200, int(2e7 / n / 10)))
+    med = _rounds(
+        {
+            'floor': floor,
+            'p4': lambda: solve(wv, h, tension=t, anchor_distance=x),
+            'p3': lambda: solve(wv, h, tension=t),
+        },
+        rounds,
+        base='floor',
+    )
+    lifted = float(np.mean(solve(wv, h, tension=t, anchor_distance=x).uplift_force > 0))
+    out = {f'{k}_ns': med[k] / n * 1e9 for k in ('floor', 'p4', 'p3')}
+    out['p4_ratio'] = med['p4/floor']
+    out['p3_ratio'] = med['p3/floor']
+    out['lifted_fraction'] = lifted
+    return out
+
+
+def _moorpy() -> Optional[Callable[..., Any]]:
+    os.environ.setdefault('PYTHONBREAKPOINT', '0')  # MoorPy calls breakpoint() on some errors
+    try:
+        from moorpy.Catenary import catenary
+    except ImportError:
+        return None
+    return catenary  # type: ignore[no-any-return]
+
+
+def scalar_figures(regime: str, n: int = 2000, n_moorpy: int = 200) -> dict[str, float]:
+    """us per call of scalar solve() (each call a new scene), the math floor and MoorPy."""
+    w, h, t, x = scenes(regime, n, seed=3)
+    wl, hl, tl, xl = (v.tolist() for v in (w, h, t, x))
+    calls = list(zip(wl, hl, tl, xl))
+
+    def floor3(w_: float, h_: float, t_: float) -> float:
+        a = t_ / w_ - h_
+        e = h_ / a
+        return a * math.log1p(e + math.sqrt(e * (2.0 + e)))
+
+    def run_solve() -> None:
+        for w_, h_, t_, x_ in calls:
+            solve(w_, h_, tension=t_, anchor_distance=x_)
+
+    def run_floor() -> None:
+        for w_, h_, t_, _ in calls:
+            floor3(w_, h_, t_)
+
+    cases: dict[str, Callable[[], object]] = {'solve': run_solve, 'floor': run_floor}
+    catenary = _moorpy()
+    if catenary is not None:
+        # MoorPy solves a line of given length: the suspended length of our solution (the
+        # scenes where MoorPy returns a profile: lifted anchors, where L is the whole chain)
+        res = solve(w, h, tension=t, anchor_distance=x)
+        lift = np.flatnonzero(res.uplift_force > 0)[:n_moorpy]
+        mp = [
+            (float(x[i]), float(h[i]), float(res.suspended_length[i]), float(w[i]))
+            for i in lift
+        ]
+        ours = [(wl[i], hl[i], tl[i], xl[i]) for i in lift]
+
+        def run_moorpy() -> None:
+            for x_, h_, l_, w_ in mp:
+                catenary(x_, h_, l_, 1e12 * w_ * (x_ + h_ + l_), w_)
+
+        def run_solve_lifted() -> None:
+            for w_, h_, t_, x_ in ours:
+                solve(w_, h_, tension=t_, anchor_distance=x_)
+
+    med = _rounds(cases, 9, base='floor')
+    out = {
+        'solve_us': med['solve'] / n * 1e6,
+        'floor_us': med['floor'] / n * 1e6,
+        'scalar_ratio': med['solve/floor'],
+    }
+    if catenary is not None:
+        m = len(mp)
+        mr = _rounds({'solve_lifted': run_solve_lifted, 'moorpy': run_moorpy}, 7, 'solve_lifted')
+        out['moorpy_us'] = mr['moorpy'] / m * 1e6
+        out['solve_lifted_us'] = mr['solve_lifted'] / m * 1e6
+        out['moorpy_speedup'] = mr['moorpy/solve_lifted']
+    return out
+
+
+def crossover(regime: str) -> dict[str, float]:
+    """Smallest array size at which one vectorized solve() beats a scalar loop per element."""
+    w, h, t, x = scenes(regime, 256, seed=4)
+    found = math.nan
+    sizes = [1, 2, 4, 8, 16, 32, 64, 128, 256]
+    per: dict[str, float] = {}
+    for n in sizes:
+        args = [v[:n] for v in (w, h, t, x)]
+        lists = list(zip(*(a.tolist() for a in args)))
+        reps = max(20, 4000 // n)
+
+        def vec() -> None:
+            for _ in range(reps):
+                solve(args[0], args[1], tension=args[2], anchor_distance=args[3])
+
+        def loop() -> None:
+            for _ in range(reps):
+                for w_, h_, t_, x_ in lists:
+                    solve(w_, h_, tension=t_, anchor_distance=x_)
+
+        med = _rounds({'vector': vec, 'loop': loop}, 5)
+        per[f'vector_us_per_element_n{n}'] = med['vector'] / reps / n * 1e6
+        per[f'loop_us_per_element_n{n}'] = med['loop'] / reps / n * 1e6
+        if math.isnan(found) and med['vector'] < med['loop']:
+            found = n
+    per['crossover_n'] = found
+    return per
+
+
+def run(
+    sizes: tuple[int, ...] = SIZES,
+    regimes: tuple[str, ...] = REGIMES,
+    progress: Callable[[str], None] = lambda s: None,
+) -> dict[str, Any]:
+    """Measure everything; returns a JSON-ready dict."""
+    out: dict[str, Any] = {
+        'kernel': kernels.isa(),
+        'numpy': np.__version__,
+        'vector': {},
+        'scalar': {},
+        'crossover': {},
+    }
+    for regime in regimes:
+        for n in sizes:
+            progress(f'{regime}: vectorized, {n} elements')
+            out['vector'][f'{regime}_{n}'] = vector_figures(regime, n)
+        progress(f'{regime}: scalar')
+        out['scalar'][regime] = scalar_figures(regime)
+        progress(f'{regime}: crossover')
+        out['crossover'][regime] = crossover(regime)
+    return out
+
+
+def report(r: dict[str, Any]) -> str:
     from catenary_monitor.cli.main import format_table
 
-    return format_table(rows, ('problem', 'path', 'time', 'baseline (same run)', 'ratio'))
+    rows = []
+    for key, v in r['vector'].items():
+        regime, n = key.split('_')
+        rows.append(
+            (
+                regime,
+                f'{int(n):.0e}'.replace('e+0', 'e'),
+                f"{v['p4_ns']:.1f}",
+                f"{v['p3_ns']:.1f}",
+                f"{v['floor_ns']:.1f}",
+                f"{v['p4_ratio']:.1f}x",
+                f"{v['p3_ratio']:.1f}x",
+                f"{100 * v['lifted_fraction']:.0f} %",
+            )
+        )
+    text = [
+        f"vectorized solve(), ns per element (kernel {r['kernel']}; floor = one numpy closed-form "
+        f'evaluation of problem 3 on the same arrays; target problem 4 <= {TARGET_VECTOR:g}x)',
+        format_table(
+            rows,
+            ('scenes', 'n', 'problem 4', 'problem 3', 'floor', 'p4/floor', 'p3/floor', 'lifted'),
+        ),
+        '',
+    ]
+    rows = []
+    for regime, v in r['scalar'].items():
+        moorpy = (
+            (f"{v['moorpy_us']:.1f}", f"{v['solve_lifted_us']:.2f}", f"{v['moorpy_speedup']:.0f}x")
+            if 'moorpy_us' in v
+            else ('absent', '', '')
+        )
+        rows.append(
+            (
+                regime,
+                f"{v['solve_us']:.2f}",
+                f"{v['floor_us']:.3f}",
+                f"{v['scalar_ratio']:.1f}x",
+                *moorpy,
+                f"{r['crossover'][regime]['crossover_n']:.0f}",
+            )
+        )
+    text += [
+        'scalar solve(), us per call, each call a new scene (floor = one math closed-form '
+        f'evaluation of problem 3, target <= {TARGET_SCALAR:g}x; MoorPy catenary on the lifted '
+        f'scenes, target >= {TARGET_MOORPY:g}x); crossover = smallest n where one vectorized '
+        'call beats n scalar calls',
+        format_table(
+            rows,
+            (
+                'scenes',
+                'solve() us',
+                'floor us',
+                'ratio',
+                'MoorPy us',
+                'solve() lifted us',
+                'MoorPy/solve()',
+                'crossover n',
+            ),
+        ),
+    ]
+    return '\n'.join(text)
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
     """Run the core benchmark and print a table (or JSON)."""
-    r = run(n_scalar=args.n_scalar, n_vector=args.n_vector)
-    print(json.dumps(r) if args.json else report(r))
+    allocator = 'glibc defaults (as a library user)'
+    if args.keep_freed_memory:
+        from catenary_monitor.cli.allocator import keep_freed_memory
+
+        allocator = 'keep freed memory (cli/allocator.py)' if keep_freed_memory() else allocator
+    sizes = tuple(int(float(s)) for s in args.sizes.split(','))
+
+    def progress(msg: str) -> None:
+        print(f'\r[bench] {msg:<50}', end='', file=sys.stderr, flush=True)
+
+    r = run(sizes=sizes, regimes=tuple(args.regimes.split(',')), progress=progress)
+    print('\r' + ' ' * 60 + '\r', end='', file=sys.stderr, flush=True)
+    r['allocator'] = allocator
+    print(json.dumps(r) if args.json else f'allocator: {allocator}\n' + report(r))
     return 0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         'bench',
-        help='benchmark the core (problems 3 and 4, scalar and vectorized)',
+        help='benchmark solve() on dock scenes and the sweep (scalar, vectorized, crossover)',
         description=__doc__.split('\n\n')[0],
     )
     p.add_argument(
-        '--n-scalar', type=int, default=2000, help='scalar calls per timing (default 2000)'
+        '--sizes', default='1e3,1e5,1e6', help='vectorized sizes (default 1e3,1e5,1e6)'
     )
-    p.add_argument('--n-vector', type=int, default=200_000, help='elements per vectorized call')
+    p.add_argument('--regimes', default='dock,sweep', help='dock, sweep or both (default)')
+    p.add_argument(
+        '--keep-freed-memory',
+        action='store_true',
+        help="apply the batch commands' allocator setting first (default: glibc defaults)",
+    )
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench)

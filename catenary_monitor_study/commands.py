@@ -42,7 +42,8 @@ def register(sub: Any) -> None:
 
     for module in (bench_core, bench_methods, bench_replay):
         module.register(sub)
-    for name in ('bench', 'bench-methods', 'bench-replay'):
+    # bench runs as a library user's process (glibc defaults; --keep-freed-memory to compare)
+    for name in ('bench-methods', 'bench-replay'):
         parser = sub.choices[name]
         parser.set_defaults(func=_batch(parser.get_default('func')))
     p = sub.add_parser(

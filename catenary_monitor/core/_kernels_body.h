@@ -68,7 +68,7 @@ static void SFX(block)(Block *restrict k, int nb, const Params *restrict par)
     /* 2. Newton in eta = log(d) on the lifted lanes, gathered densely, each frozen once its step
      *    is below tol; the step is applied as d *= exp(step) (a degree-6 Taylor polynomial: exact
      *    for the converging steps, positive for any step) */
-    int nl = 0;
+    int nl = 0, ran = 0;
     if (has_x) {
         for (int i = 0; i < nb; i++) {
             k->idx[nl] = i;
@@ -139,8 +139,9 @@ static void SFX(block)(Block *restrict k, int nb, const Params *restrict par)
                 k->gdone[j] = was | conv;
                 left += !(was | conv);
             }
-            if (!left)
-                break;
+            ran = it;
+            if (left * 16 <= nl && (it >= 2 || !left))
+                break; /* the few lanes left are cheaper one at a time than as a block */
         }
         for (int j = 0; j < nl; j++) {
             int i = k->idx[j];
@@ -156,7 +157,7 @@ static void SFX(block)(Block *restrict k, int nb, const Params *restrict par)
         int i = k->idx[j];
         k->iters[i] = k->giters[j];
         if (!k->gdone[j]) /* 3. the few lanes still moving: bracketed Newton, one at a time */
-            k->gdone[j] = uplift_safeguarded(k, i, kfast, par);
+            k->gdone[j] = uplift_safeguarded(k, i, ran, par);
     }
 
     /* 4. uplift state, margins and the load-margin solve from its table start */
