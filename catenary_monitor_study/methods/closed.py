@@ -7,7 +7,8 @@
   ``T - w h``); this is the floor of the benchmark: one catenary evaluation.
 * ``default``: ``catenary_monitor.solve`` itself (scalar: its plain-float path; vectorized:
 arrays).
-* ``default kernel``: the problem-4 kernel without the API around it (no validation, no margins).
+* ``default kernel``: the numpy problem-4 kernel alone (``catenary.lifted_from_tension``): what
+  ``solve()`` falls back to where its C kernel is not built, without validation or margins.
 """
 
 from __future__ import annotations
@@ -155,7 +156,8 @@ METHODS = [
         p4_kernel,
         p4_kernel_vec,
         'closed',
-        why='the default without the solve() API around it (no validation, no margins)',
+        why="the numpy uplift kernel alone: solve()'s fallback where the C kernel is not built "
+        '(no validation, no margins)',
     ),
     Method(
         'closed form (textbook)',
