@@ -107,6 +107,7 @@ def test_without_the_kernel_solve_gives_the_numpy_answers(monkeypatch):
     one = solve(W, float(h[0]), tension=float(t[0]), anchor_distance=float(x[0]))
     monkeypatch.setattr(kernels, 'AVAILABLE', False)
     monkeypatch.setattr(solve_module, '_ONE', None)
+    monkeypatch.setattr(inextensible, '_ONE', None)
     slow = solve(w, h, tension=t, anchor_distance=x)
     one_slow = solve(W, float(h[0]), tension=float(t[0]), anchor_distance=float(x[0]))
     for k in fast.keys:

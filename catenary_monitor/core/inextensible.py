@@ -79,6 +79,16 @@ def solve_inextensible(
     well-conditioned (see README, "Accuracy").  With all-scalar ``tension`` or ``horizontal``
     inputs a plain-float path gives the same numbers to rounding, an order of magnitude faster.
     """
+    if _ONE is not None:  # one element of problem 3 or 4 in plain numbers: the C kernel
+        try:
+            one = _ONE(
+                weight, depth, tension, horizontal, anchor_distance, chain_length, mbl, None,
+                cat.MAXITER,
+            )
+        except OverflowError:  # an int beyond float range: the general path says so
+            one = None
+        if one is not None:
+            return one
     if (
         horizontal is None
         and chain_length is None
@@ -436,5 +446,22 @@ def _solve_scalar(
             keys,
             _MODEL,
             _METHOD,
+        ),
+    )
+
+
+_ONE = kernels._k.solve_one if kernels.AVAILABLE else None
+if kernels.AVAILABLE:  # the kernel builds the SolveResult of a one-element call itself
+    kernels.set_result(
+        SolveResult,
+        tuple(
+            (
+                'tension',
+                _keys('tension', has_x, has_mbl),
+                SolveResult._field_defaults['model'],
+                SolveResult._field_defaults['method'],
+            )
+            for has_x in (False, True)
+            for has_mbl in (False, True)
         ),
     )

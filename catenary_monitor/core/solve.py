@@ -20,7 +20,7 @@ from __future__ import annotations
 from typing import Any, Optional
 
 from catenary_monitor.core import elastic, kernels
-from catenary_monitor.core.inextensible import ArrayLike, _keys, solve_inextensible
+from catenary_monitor.core.inextensible import ArrayLike, solve_inextensible
 from catenary_monitor.core.result import ALL_KEYS, STATUS_MESSAGES, SolveResult, Status
 
 __all__ = ['solve', 'SolveResult', 'Status', 'STATUS_MESSAGES', 'ALL_KEYS']
@@ -86,18 +86,4 @@ def solve(
 
 
 _ONE = kernels._k.solve_one if kernels.AVAILABLE else None
-_CAT = kernels.cat
-if kernels.AVAILABLE:  # the kernel builds the SolveResult of a one-element call itself
-    kernels.set_result(
-        SolveResult,
-        tuple(
-            (
-                'tension',
-                _keys('tension', has_x, has_mbl),
-                SolveResult._field_defaults['model'],
-                SolveResult._field_defaults['method'],
-            )
-            for has_x in (False, True)
-            for has_mbl in (False, True)
-        ),
-    )
+_CAT = kernels.cat  # MAXITER is read per call (tests lower it)
