@@ -30,7 +30,7 @@ from typing import Any, NamedTuple, Optional
 
 import numpy as np
 
-from catenary_monitor.core import catenary as cat, elastic
+from catenary_monitor.core import catenary as cat, elastic, kernels
 from catenary_monitor.core.alarms import Level, LevelSeries, Transition, replay_levels
 from catenary_monitor.core.config import LineConfig, MonitorConfig
 from catenary_monitor.core.health import tide_status
@@ -48,7 +48,7 @@ from catenary_monitor.core.monitor import (
     line_status,
     tide_component,
 )
-from catenary_monitor.core.solve import STATUS_MESSAGES, Status
+from catenary_monitor.core.solve import ALL_KEYS, STATUS_MESSAGES, Status
 
 __all__ = [
     'OUTPUT_FIELDS',
@@ -224,6 +224,8 @@ def solve_updates(
     """
     if line.ea is not None:
         return _solve_updates_elastic(line, tension, depth)[:2]
+    if kernels.AVAILABLE:  # the C kernel, as the core's scalar solve() (a_crit unused)
+        return _solve_updates_kernel(line, tension, depth)
     n = len(tension)
     w, x, mbl = line.weight, line.anchor_distance, line.mbl
     out = {k: np.full(n, np.nan) for k in VALUE_FIELDS}
@@ -279,6 +281,24 @@ def solve_updates(
                 out[k] = v
             else:
                 out[k][ok] = v
+    return out, status
+
+
+_ROWS = {k: ALL_KEYS.index(k) for k in VALUE_FIELDS if k in ALL_KEYS}
+
+
+def _solve_updates_kernel(
+    line: LineConfig, tension: np.ndarray, depth: np.ndarray
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """:func:`solve_updates` through the C kernel (core/kernels.py): one pass, every value."""
+    t = np.ascontiguousarray(tension, dtype=float)
+    h = np.ascontiguousarray(depth, dtype=float)
+    rows, status = kernels.solve_arrays(
+        float(line.weight), h, t, float(line.anchor_distance), float(line.mbl), len(t)
+    )
+    status[np.isnan(h)] = NO_DEPTH
+    out = {k: rows[i] for k, i in _ROWS.items()}
+    out['depth'], out['top_tension'] = h.copy(), t.copy()
     return out, status
 
 
