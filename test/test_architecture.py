@@ -1,6 +1,6 @@
 """The layering of the package, checked from the source: who may import whom, and no cycles.
 
-Layers (docs/DESIGN.md): ``core`` (pure numpy) <- ``io`` (MCAP, CDR, CSV; today independent of
+Layers: ``core`` (pure numpy) <- ``io`` (MCAP, CDR, CSV; today independent of
 core) <- ``ros`` (rclpy) <- ``cli``; the methods study (``catenary_monitor_study``) sits on top
 and the monitor never imports it. Imports are read with ``ast``: module-level and
 function-level, absolute and relative; ``from pkg import name`` counts as an import of the
