@@ -53,6 +53,7 @@ setup(
             'hypothesis>=6',
             'mpmath>=1.3',
             'flake8>=6',
+            'mypy>=1.8',
             'pytest-timeout',
             'moorpy',
             'pycatenary',

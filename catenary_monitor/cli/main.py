@@ -253,7 +253,7 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
 
     from catenary_monitor.cli import live, replay
 
-    found = [live.register, replay.register]
+    found: list[Callable[[argparse._SubParsersAction], None]] = [live.register, replay.register]
     for ep in sorted(entry_points(group=COMMAND_GROUP), key=lambda e: e.name):
         try:
             found.append(ep.load())
