@@ -16,7 +16,10 @@ kernels = Extension(
     'catenary_monitor.core._kernels',
     sources=['catenary_monitor/core/_kernels.c'],
     depends=['catenary_monitor/core/_kernels_body.h'],
-    extra_compile_args=['-O3', '-fopenmp-simd', '-fno-math-errno',
+    extra_compile_args=[
+        '-O3',
+        '-fopenmp-simd',
+        '-fno-math-errno',
         '-fno-trapping-math',
         '-ffp-contract=off',
     ],

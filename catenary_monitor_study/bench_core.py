@@ -115,7 +115,7 @@ def _moorpy() -> Optional[Callable[..., Any]]:
         from moorpy.Catenary import catenary
     except ImportError:
         return None
-    return catenary  # type: ignore[no-any-return]
+    return catenary
 
 
 def scalar_figures(regime: str, n: int = 2000, n_moorpy: int = 200) -> dict[str, float]:
@@ -145,8 +145,7 @@ def scalar_figures(regime: str, n: int = 2000, n_moorpy: int = 200) -> dict[str,
         res = solve(w, h, tension=t, anchor_distance=x)
         lift = np.flatnonzero(res.uplift_force > 0)[:n_moorpy]
         mp = [
-            (float(x[i]), float(h[i]), float(res.suspended_length[i]), float(w[i]))
-            for i in lift
+            (float(x[i]), float(h[i]), float(res.suspended_length[i]), float(w[i])) for i in lift
         ]
         ours = [(wl[i], hl[i], tl[i], xl[i]) for i in lift]
 
@@ -317,9 +316,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help='benchmark solve() on dock scenes and the sweep (scalar, vectorized, crossover)',
         description=__doc__.split('\n\n')[0],
     )
-    p.add_argument(
-        '--sizes', default='1e3,1e5,1e6', help='vectorized sizes (default 1e3,1e5,1e6)'
-    )
+    p.add_argument('--sizes', default='1e3,1e5,1e6', help='vectorized sizes (default 1e3,1e5,1e6)')
     p.add_argument('--regimes', default='dock,sweep', help='dock, sweep or both (default)')
     p.add_argument(
         '--keep-freed-memory',

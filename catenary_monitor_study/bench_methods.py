@@ -200,9 +200,9 @@ class Outcome:
             'dock_scalar_us_median': self._dock(self.t_us, np.median),
             'dock_vector_ns_per_element': self.vec_ns_dock,
             'dock_error_worst': self._dock(np.maximum(self.err, TINY), np.max),
-            'dock_failures': int(np.sum(~(self.err[self.dock] <= FAIL)))
-            if self.dock is not None
-            else 0,
+            'dock_failures': (
+                int(np.sum(~(self.err[self.dock] <= FAIL))) if self.dock is not None else 0
+            ),
             'why': self.method.why,
         }
 
@@ -603,7 +603,10 @@ def run(
         methods = [
             m
             for m in methods
-            if only.lower() in m.name.lower() or m.default or m.name.startswith('closed form')
+            if only.lower() in m.name.lower()
+            or m.default
+            or m.name.startswith('closed form')
+            or m.name == 'default kernel'
         ]
     has_len = any(m.given == 'length' for m in methods)
     scenes = {p: build_scenes(p, quick) for p in (2, 3, 4)}
@@ -715,8 +718,7 @@ def run(
             f'`solve()` **{ratios[pre + "vector_p4_over_floor"]:.1f}×** (target ≤ 8×), numpy '
             f'fallback kernel alone {ratios[pre + "vector_kernel_p4_over_floor"]:.1f}×',
         ]
-    summary += [
-    ]
+    summary += []
     if out_dir:
         os.makedirs(out_dir, exist_ok=True)
         progress('writing tables and pictures')

@@ -94,7 +94,9 @@ def test_scalar_equals_numpy_scalar_path():
         got = solve(wi, hi, tension=ti, anchor_distance=xi, mbl=2.0 * ti)
         ref = inextensible._solve_scalar('tension', wi, hi, ti, xi, 2.0 * ti)
         assert got.status == ref.status == 0 and got.keys == ref.keys
-        sc = {k: float(v[0]) for k, v in _scales(*(np.array([v]) for v in (wi, hi, ti, xi))).items()}
+        sc = {
+            k: float(v[0]) for k, v in _scales(*(np.array([v]) for v in (wi, hi, ti, xi))).items()
+        }
         for k in ref.keys:
             a, b = getattr(got, k), getattr(ref, k)
             assert abs(a - b) <= 2e-14 * max(abs(b), sc.get(k, 0.0)), k

@@ -82,7 +82,14 @@ def solve_inextensible(
     if _ONE is not None:  # one element of problem 3 or 4 in plain numbers: the C kernel
         try:
             one = _ONE(
-                weight, depth, tension, horizontal, anchor_distance, chain_length, mbl, None,
+                weight,
+                depth,
+                tension,
+                horizontal,
+                anchor_distance,
+                chain_length,
+                mbl,
+                None,
                 cat.MAXITER,
             )
         except OverflowError:  # an int beyond float range: the general path says so
@@ -111,7 +118,7 @@ def solve_inextensible(
         except (OverflowError, ZeroDivisionError, ValueError):
             pass  # beyond float range in plain math (e.g. sinh overflow): numpy gives inf instead
     problem = _check_call(tension, horizontal, chain_length, anchor_distance)
-    if problem == 'tension' and kernels.AVAILABLE:
+    if problem == 'tension' and kernels.AVAILABLE and tension is not None:
         return _solve_tension_kernel(weight, depth, tension, anchor_distance, mbl)
     inputs: dict[str, Any] = {  # user values, checked below (np.ndim, float(), asarray)
         'weight': weight,
@@ -176,14 +183,13 @@ def _solve_tension_kernel(
             args.append(np.ascontiguousarray(a).reshape(n))
         else:
             args.append(np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(n))
-    rows, status = kernels.solve_arrays(*args, n)
+    rows, status = kernels.solve_arrays(args[0], args[1], args[2], args[3], args[4], n)
     keys = _keys('tension', anchor_distance is not None, mbl is not None)
     if not shape:  # every input 0-d (but not all plain floats: e.g. float32 or 0-d arrays)
-        return SolveResult(
-            *(float(v) for v in rows[:, 0]), status=int(status[0]), problem='tension', keys=keys
-        )
-    rows = rows.reshape((len(ALL_KEYS),) + shape)
-    return SolveResult(*rows, status=status.reshape(shape), problem='tension', keys=keys)
+        values = dict(zip(ALL_KEYS, (float(v) for v in rows[:, 0])))
+        return SolveResult(**values, status=int(status[0]), problem='tension', keys=keys)
+    columns = dict(zip(ALL_KEYS, rows.reshape((len(ALL_KEYS),) + shape)))
+    return SolveResult(**columns, status=status.reshape(shape), problem='tension', keys=keys)
 
 
 @functools.lru_cache(maxsize=None)

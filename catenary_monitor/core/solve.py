@@ -64,7 +64,14 @@ def solve(
     if _ONE is not None:  # one element of problem 3 or 4 in plain numbers: the C kernel
         try:
             one = _ONE(
-                weight, depth, tension, horizontal, anchor_distance, chain_length, mbl, ea,
+                weight,
+                depth,
+                tension,
+                horizontal,
+                anchor_distance,
+                chain_length,
+                mbl,
+                ea,
                 _CAT.MAXITER,
             )
         except OverflowError:  # an int beyond float range: the general path says so
