@@ -186,7 +186,7 @@ def _solve_tension_kernel(
     rows, status = kernels.solve_arrays(args[0], args[1], args[2], args[3], args[4], n)
     keys = _keys('tension', anchor_distance is not None, mbl is not None)
     if not shape:  # every input 0-d (but not all plain floats: e.g. float32 or 0-d arrays)
-        values = dict(zip(ALL_KEYS, (float(v) for v in rows[:, 0])))
+        values: dict[str, Any] = dict(zip(ALL_KEYS, (float(v) for v in rows[:, 0])))
         return SolveResult(**values, status=int(status[0]), problem='tension', keys=keys)
     columns = dict(zip(ALL_KEYS, rows.reshape((len(ALL_KEYS),) + shape)))
     return SolveResult(**columns, status=status.reshape(shape), problem='tension', keys=keys)
