@@ -13,6 +13,7 @@
 #include <Python.h>
 #include <float.h>
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__GLIBC__)
@@ -54,23 +55,27 @@ typedef struct {
     double step_tol;
 } Params;
 
-typedef struct {
-    double w[BLK], h[BLK], t[BLK], x[BLK], mbl[BLK];
-    double b[BLK], e[BLK], r02[BLK], len[BLK], x0[BLK];
-    double xlo[BLK], m[BLK], d[BLK], d0[BLK], d_max[BLK];
-    int status[BLK], lift[BLK], iters[BLK], cok[BLK];
-    /* the lifted lanes, gathered */
-    int idx[BLK], gdone[BLK], giters[BLK];
-    double ge[BLK], gr[BLK], gx0[BLK], gxlo[BLK], gm2[BLK], gd[BLK], gd0[BLK], gdmax[BLK];
-    double *o[NOUT]; /* where this block's results go (rows of the output) */
-} Block;
+/* the lanes of one block; Block1 (one lane, the node's call) keeps its few cache lines together */
+#define DEFINE_BLOCK(NAME, N)                                                                   \
+    typedef struct {                                                                           \
+        double w[N], h[N], t[N], x[N], mbl[N];                                                 \
+        double b[N], e[N], r02[N], len[N], x0[N];                                              \
+        double xlo[N], m[N], d[N], d0[N], d_max[N];                                            \
+        int status[N], lift[N], iters[N], cok[N];                                              \
+        /* the lifted lanes, gathered */                                                       \
+        int idx[N], gdone[N], giters[N];                                                       \
+        double ge[N], gr[N], gx0[N], gxlo[N], gm2[N], gd[N], gd0[N], gdmax[N];                 \
+        double *o[NOUT]; /* where this block's results go (rows of the output) */              \
+    } NAME;
+DEFINE_BLOCK(Block, BLK)
+DEFINE_BLOCK(Block1, 1)
 
 /* the load-margin start table (catenary._CRIT_*), handed over by Python at import */
 static struct {
-    double *eta, *slope;
+    double *data; /* eta[0], slope[0], eta[1], slope[1], ...: one cache line per lookup */
     int n;
     double y0, inv_dy;
-} TAB = {NULL, NULL, 0, 0.0, 0.0};
+} TAB = {NULL, 0, 0.0, 0.0};
 
 /* exact error of the product w*h - p (Dekker/Veltkamp split, as catenary.two_prod_diff) */
 static inline __attribute__((always_inline)) double prod_err(double w, double h, double p)
@@ -81,54 +86,6 @@ static inline __attribute__((always_inline)) double prod_err(double w, double h,
     return ((wh * hh - p) + wh * hl + wl * hh) + wl * hl;
 }
 
-/* catenary._uplift_residual, one lane: f and df/deta at eta = log(d) */
-static void uplift_residual(const Block *k, int i, double eta, double *f, double *fp)
-{
-    double e = k->e[i], r02 = k->r02[i];
-    double d = exp(eta);
-    double big_x = k->xlo[i] + d;
-    double em = expm1(d);
-    double ed = 1.0 + em;
-    double p = r02 + em / ed;
-    double e1 = e + em * (1.0 + e);
-    double g = 1.0 + e1;
-    double ig = 1.0 / g;
-    double sx = 0.5 * e1 * (1.0 + ig), cx = 0.5 * (g + ig);
-    double qq = big_x / (k->m[i] * sx);
-    *f = log(em * p * (qq * qq));
-    *fp = (ed / em + 1.0 / (ed * p) - 2.0 * (cx / sx - 1.0 / big_x)) * d;
-}
-
-/* catenary.lifted_from_tension's bracketed loop, for one lane that the fast steps left moving;
- * returns 1 if it converged (k->d[i], k->iters[i] updated) */
-static int uplift_safeguarded(Block *k, int i, int kfast, const Params *par)
-{
-    double eta = log(k->d[i]);
-    if (!isfinite(eta))
-        eta = log(k->d0[i]);
-    double lo = -INFINITY, hi = log(k->d_max[i]);
-    int conv = 0;
-    for (int it = kfast + 1; it <= par->maxiter; it++) {
-        double f, fp;
-        uplift_residual(k, i, eta, &f, &fp);
-        if (f < 0.0 && eta > lo)
-            lo = eta;
-        if (f > 0.0 && eta < hi)
-            hi = eta;
-        double step = -f / fp, nxt = eta + step;
-        conv = fabs(step) <= par->step_tol || f == 0.0;
-        if (!((nxt >= lo && nxt <= hi) || conv))
-            nxt = isfinite(lo) ? 0.5 * (lo + hi) : eta - 4.0;
-        if (f != 0.0)
-            eta = nxt;
-        k->iters[i] = it;
-        if (conv)
-            break;
-    }
-    k->d[i] = exp(eta);
-    return conv;
-}
-
 /* catenary.critical_parameter_scalar: a of the no-uplift chain spanning (x, h); NaN if not
  * converged within maxiter residuals */
 static double critical_scalar(double h, double x, const Params *par)
@@ -137,8 +94,8 @@ static double critical_scalar(double h, double x, const Params *par)
     double pos = (log_c - TAB.y0) * TAB.inv_dy;
     if (pos >= 0.0 && pos < TAB.n) {
         int j = (int)pos;
-        double tt = pos - j, y0 = TAB.eta[j], y1 = TAB.eta[j + 1];
-        double s0 = TAB.slope[j], s1 = TAB.slope[j + 1];
+        const double *tj = TAB.data + 2 * j;
+        double tt = pos - j, y0 = tj[0], s0 = tj[1], y1 = tj[2], s1 = tj[3];
         eta = y0 + tt * (s0 + tt * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) +
                                     tt * (2.0 * (y0 - y1) + s0 + s1)));
     } else if (c < 0.5) {
@@ -165,6 +122,7 @@ static double critical_scalar(double h, double x, const Params *par)
 #define CM_SIMD CM_PRAGMA(omp simd)
 #define CM_SIMD_REDUCTION(v) CM_PRAGMA(omp simd reduction(+ : v))
 #ifdef CM_MVEC
+#define BLOCK_T Block
 #define SFX(name) name##_v4
 #pragma GCC push_options
 #pragma GCC target("arch=x86-64-v4,prefer-vector-width=512")
@@ -188,6 +146,8 @@ static double critical_scalar(double h, double x, const Params *par)
 #define CM_SIMD_REDUCTION(v)
 #pragma GCC push_options
 #pragma GCC optimize("no-tree-vectorize")
+#undef BLOCK_T
+#define BLOCK_T Block1
 #define SFX(name) name##_scalar
 #include "_kernels_body.h"
 #undef SFX
@@ -398,9 +358,8 @@ static PyObject *solve_one(PyObject *self, PyObject *const *args, Py_ssize_t nar
         return NULL;
     par.step_tol = ONE_TOL;
     /* one lane: a small block on the stack's worth of heap, reused between calls */
-    static Block *k = NULL;
-    if (!k && !(k = PyMem_RawMalloc(sizeof(Block))))
-        return PyErr_NoMemory();
+    static Block1 one;
+    Block1 *k = &one;
     k->w[0] = v[0];
     k->h[0] = v[1];
     k->t[0] = v[2];
@@ -480,27 +439,139 @@ static PyObject *set_table(PyObject *self, PyObject *args)
         PyErr_SetString(PyExc_ValueError, "table arrays of different or too small sizes");
         return NULL;
     }
-    double *e = PyMem_RawMalloc(eb.len), *s = PyMem_RawMalloc(sb.len);
-    if (!e || !s) {
-        PyMem_RawFree(e);
-        PyMem_RawFree(s);
+    double *data = PyMem_RawMalloc(2 * eb.len);
+    if (!data) {
         PyBuffer_Release(&eb);
         PyBuffer_Release(&sb);
         return PyErr_NoMemory();
     }
-    memcpy(e, eb.buf, eb.len);
-    memcpy(s, sb.buf, sb.len);
+    for (Py_ssize_t j = 0; j < m; j++) {
+        data[2 * j] = ((const double *)eb.buf)[j];
+        data[2 * j + 1] = ((const double *)sb.buf)[j];
+    }
     PyBuffer_Release(&eb);
     PyBuffer_Release(&sb);
-    PyMem_RawFree(TAB.eta);
-    PyMem_RawFree(TAB.slope);
-    TAB.eta = e;
-    TAB.slope = s;
+    PyMem_RawFree(TAB.data);
+    TAB.data = data;
     TAB.n = (int)(m - 1);
     TAB.y0 = y0;
     TAB.inv_dy = 1.0 / dy;
     Py_RETURN_NONE;
 }
+
+/* ---------------------------------------------------------------- the solve() entry
+ * Entry(fallback, catenary_module): a callable with solve()'s signature.  A one-element call of
+ * problem 3 or 4 in plain numbers is solved here (solve_one's path, MAXITER read from the
+ * catenary module at each call); any other call, including every mistake in the call itself,
+ * goes to fallback (the Python solve()) unchanged. */
+
+typedef struct {
+    PyObject_HEAD
+    PyObject *fallback, *cat, *dict;
+    vectorcallfunc vectorcall;
+} Entry;
+
+static PyObject *ENTRY_NAMES[8], *MAXITER_NAME;
+
+static PyObject *entry_call(PyObject *self_o, PyObject *const *args, size_t nargsf,
+                            PyObject *kwnames)
+{
+    Entry *self = (Entry *)self_o;
+    Py_ssize_t npos = PyVectorcall_NARGS(nargsf), nkw = kwnames ? PyTuple_GET_SIZE(kwnames) : 0;
+    PyObject *slot[8] = {Py_None, Py_None, Py_None, Py_None, Py_None, Py_None, Py_None, Py_None};
+    int ok = npos <= 8;
+    for (Py_ssize_t j = 0; ok && j < npos; j++)
+        slot[j] = args[j];
+    for (Py_ssize_t j = 0; ok && j < nkw; j++) {
+        PyObject *name = PyTuple_GET_ITEM(kwnames, j);
+        int found = -1;
+        for (int q = 0; q < 8 && found < 0; q++)
+            if (name == ENTRY_NAMES[q])
+                found = q;
+        for (int q = 0; q < 8 && found < 0; q++)
+            if (PyUnicode_Compare(name, ENTRY_NAMES[q]) == 0)
+                found = q;
+        if (found < npos) /* unknown or given twice: the fallback raises the TypeError */
+            ok = 0;
+        else
+            slot[found] = args[npos + j];
+    }
+    if (ok && slot[2] != Py_None) {
+        PyObject *mi = PyObject_GetAttr(self->cat, MAXITER_NAME);
+        if (!mi)
+            return NULL;
+        PyObject *one_args[9] = {slot[0], slot[1], slot[2], slot[3], slot[4],
+                                 slot[5], slot[6], slot[7], mi};
+        PyObject *res = solve_one(NULL, one_args, 9);
+        Py_DECREF(mi);
+        if (res != Py_None || !res) {
+            if (res || !PyErr_ExceptionMatches(PyExc_OverflowError))
+                return res;
+            PyErr_Clear(); /* an int beyond float range: the general path says so */
+        } else
+            Py_DECREF(res);
+    }
+    return PyObject_Vectorcall(self->fallback, args, nargsf, kwnames);
+}
+
+static PyObject *entry_new(PyTypeObject *type, PyObject *args, PyObject *kw)
+{
+    PyObject *fallback, *cat;
+    if (!PyArg_ParseTuple(args, "OO:Entry", &fallback, &cat))
+        return NULL;
+    if (!PyCallable_Check(fallback)) {
+        PyErr_SetString(PyExc_TypeError, "Entry: fallback must be callable");
+        return NULL;
+    }
+    Entry *self = (Entry *)type->tp_alloc(type, 0);
+    if (!self)
+        return NULL;
+    Py_INCREF(fallback);
+    Py_INCREF(cat);
+    self->fallback = fallback;
+    self->cat = cat;
+    self->vectorcall = entry_call;
+    return (PyObject *)self;
+}
+
+static int entry_traverse(Entry *self, visitproc visit, void *arg)
+{
+    Py_VISIT(self->fallback);
+    Py_VISIT(self->cat);
+    Py_VISIT(self->dict);
+    return 0;
+}
+
+static int entry_clear(Entry *self)
+{
+    Py_CLEAR(self->fallback);
+    Py_CLEAR(self->cat);
+    Py_CLEAR(self->dict);
+    return 0;
+}
+
+static void entry_dealloc(Entry *self)
+{
+    PyObject_GC_UnTrack(self);
+    entry_clear(self);
+    Py_TYPE(self)->tp_free((PyObject *)self);
+}
+
+static PyTypeObject EntryType = {
+    PyVarObject_HEAD_INIT(NULL, 0).tp_name = "catenary_monitor.core._kernels.Entry",
+    .tp_basicsize = sizeof(Entry),
+    .tp_flags = Py_TPFLAGS_DEFAULT | Py_TPFLAGS_HAVE_GC | Py_TPFLAGS_HAVE_VECTORCALL,
+    .tp_doc = "solve()'s one-element fast path in C around the Python solve().",
+    .tp_new = entry_new,
+    .tp_traverse = (traverseproc)entry_traverse,
+    .tp_clear = (inquiry)entry_clear,
+    .tp_dealloc = (destructor)entry_dealloc,
+    .tp_call = PyVectorcall_Call,
+    .tp_vectorcall_offset = offsetof(Entry, vectorcall),
+    .tp_dictoffset = offsetof(Entry, dict),
+    .tp_getset = (PyGetSetDef[]){{"__dict__", PyObject_GenericGetDict, PyObject_GenericSetDict},
+                                 {NULL}},
+};
 
 static const char *isa_names[] = {"x86-64-v4", "x86-64-v3", "baseline"};
 
@@ -593,6 +664,18 @@ PyMODINIT_FUNC PyInit__kernels(void)
             isa_use(j);
             break;
         }
+    const char *names[8] = {"weight", "depth",        "tension", "horizontal",
+                            "anchor_distance", "chain_length", "mbl", "ea"};
+    for (int j = 0; j < 8; j++)
+        if (!(ENTRY_NAMES[j] = PyUnicode_InternFromString(names[j]))) {
+            Py_DECREF(mod);
+            return NULL;
+        }
+    if (!(MAXITER_NAME = PyUnicode_InternFromString("MAXITER")) || PyType_Ready(&EntryType) < 0 ||
+        PyModule_AddObjectRef(mod, "Entry", (PyObject *)&EntryType) < 0) {
+        Py_DECREF(mod);
+        return NULL;
+    }
     NAN_OBJ = PyFloat_FromDouble(NAN);
     if (!NAN_OBJ || PyModule_AddIntConstant(mod, "BLOCK", BLK) < 0 ||
         PyModule_AddIntConstant(mod, "FAST_STEPS", KFAST) < 0 ||

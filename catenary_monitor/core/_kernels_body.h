@@ -2,7 +2,55 @@
  * SFX(name) giving the suffixed name and CM_SIMD the loop pragma; every loop over lanes is
  * straight-line code with selects, so GCC vectorizes it with glibc's libmvec. */
 
-static void SFX(block)(Block *restrict k, int nb, const Params *restrict par)
+/* catenary._uplift_residual, one lane: f and df/deta at eta = log(d) */
+static void SFX(uplift_residual)(const BLOCK_T *k, int i, double eta, double *f, double *fp)
+{
+    double e = k->e[i], r02 = k->r02[i];
+    double d = exp(eta);
+    double big_x = k->xlo[i] + d;
+    double em = expm1(d);
+    double ed = 1.0 + em;
+    double p = r02 + em / ed;
+    double e1 = e + em * (1.0 + e);
+    double g = 1.0 + e1;
+    double ig = 1.0 / g;
+    double sx = 0.5 * e1 * (1.0 + ig), cx = 0.5 * (g + ig);
+    double qq = big_x / (k->m[i] * sx);
+    *f = log(em * p * (qq * qq));
+    *fp = (ed / em + 1.0 / (ed * p) - 2.0 * (cx / sx - 1.0 / big_x)) * d;
+}
+
+/* catenary.lifted_from_tension's bracketed loop, for one lane that the fast steps left moving;
+ * returns 1 if it converged (k->d[i], k->iters[i] updated) */
+static int SFX(uplift_safeguarded)(BLOCK_T *k, int i, int kfast, const Params *par)
+{
+    double eta = log(k->d[i]);
+    if (!isfinite(eta))
+        eta = log(k->d0[i]);
+    double lo = -INFINITY, hi = log(k->d_max[i]);
+    int conv = 0;
+    for (int it = kfast + 1; it <= par->maxiter; it++) {
+        double f, fp;
+        SFX(uplift_residual)(k, i, eta, &f, &fp);
+        if (f < 0.0 && eta > lo)
+            lo = eta;
+        if (f > 0.0 && eta < hi)
+            hi = eta;
+        double step = -f / fp, nxt = eta + step;
+        conv = fabs(step) <= par->step_tol || f == 0.0;
+        if (!((nxt >= lo && nxt <= hi) || conv))
+            nxt = isfinite(lo) ? 0.5 * (lo + hi) : eta - 4.0;
+        if (f != 0.0)
+            eta = nxt;
+        k->iters[i] = it;
+        if (conv)
+            break;
+    }
+    k->d[i] = exp(eta);
+    return conv;
+}
+
+static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
 {
     const int has_x = par->has_x, has_mbl = par->has_mbl;
     const double tol = par->step_tol;
@@ -157,7 +205,7 @@ static void SFX(block)(Block *restrict k, int nb, const Params *restrict par)
         int i = k->idx[j];
         k->iters[i] = k->giters[j];
         if (!k->gdone[j]) /* 3. the few lanes still moving: bracketed Newton, one at a time */
-            k->gdone[j] = uplift_safeguarded(k, i, ran, par);
+            k->gdone[j] = SFX(uplift_safeguarded)(k, i, ran, par);
     }
 
     /* 4. uplift state, margins and the load-margin solve from its table start */
@@ -197,8 +245,8 @@ static void SFX(block)(Block *restrict k, int nb, const Params *restrict par)
             int inside = (pos >= 0.0) & (pos < (double)TAB.n);
             int j = (int)(inside ? pos : 0.0);
             double tt = pos - j;
-            double y0 = TAB.eta[j], y1 = TAB.eta[j + 1];
-            double s0 = TAB.slope[j], s1 = TAB.slope[j + 1];
+            const double *tj = TAB.data + 2 * j;
+            double y0 = tj[0], s0 = tj[1], y1 = tj[2], s1 = tj[3];
             double ce = y0 + tt * (s0 + tt * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) +
                                               tt * (2.0 * (y0 - y1) + s0 + s1)));
             double a_crit = x / (2.0 * exp(ce));
