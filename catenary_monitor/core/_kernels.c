@@ -61,7 +61,7 @@ typedef struct {
         double w[N], h[N], t[N], x[N], mbl[N];                                                 \
         double b[N], e[N], r02[N], len[N], x0[N];                                              \
         double xlo[N], m[N], d[N], d0[N], d_max[N];                                            \
-        int status[N], lift[N], iters[N], cok[N];                                              \
+        int status[N], lift[N], iters[N], cok[N], ldone[N];                                              \
         /* the lifted lanes, gathered */                                                       \
         int idx[N], gdone[N], giters[N];                                                       \
         double ge[N], gr[N], gx0[N], gxlo[N], gm2[N], gd[N], gd0[N], gdmax[N];                 \

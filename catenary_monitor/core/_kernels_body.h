@@ -50,6 +50,18 @@ static int SFX(uplift_safeguarded)(BLOCK_T *k, int i, int kfast, const Params *p
     return conv;
 }
 
+/* a gathered lane's results back to its place in the block */
+static inline void SFX(lane_home)(BLOCK_T *k, int j)
+{
+    int i = k->idx[j];
+    k->xlo[i] = k->gxlo[j];
+    k->d[i] = k->gd[j];
+    k->d0[i] = k->gd0[j];
+    k->d_max[i] = k->gdmax[j];
+    k->iters[i] = k->giters[j];
+    k->ldone[i] = k->gdone[j];
+}
+
 static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
 {
     const int has_x = par->has_x, has_mbl = par->has_mbl;
@@ -105,7 +117,10 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
         k->d[i] = 0.0;
         k->m[i] = m;
         k->len[i] = b * sq; /* sqrt(h (h + 2b)) */
-        k->lift[i] = (x < xmin) & has_x;
+        int lift = (x < xmin) & has_x;
+        k->lift[i] = lift;
+        k->ldone[i] = !lift;
+        k->iters[i] = 0;
         o_xmin[i] = xmin;
         o_t[i] = t;
         o_gl[i] = NAN;
@@ -154,10 +169,11 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
             k->gdone[j] = 0;
             k->giters[j] = 0;
         }
+        int na = nl; /* the moving lanes: g entries [0, na) */
         for (int it = 1; it <= kfast; it++) {
             int left = 0;
             CM_SIMD_REDUCTION(left)
-            for (int j = 0; j < nl; j++) {
+            for (int j = 0; j < na; j++) {
                 double d = k->gd[j], e = k->ge[j], r02 = k->gr[j];
                 double big_x = k->gxlo[j] + d;
                 double em = expm1(d);
@@ -188,25 +204,38 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
                 left += !(was | conv);
             }
             ran = it;
-            if (left * 16 <= nl && (it >= 2 || !left))
-                break; /* the few lanes left are cheaper one at a time than as a block */
+            if (!left)
+                break;
+            if (left * 2 <= na) { /* compact: the done lanes go home, the moving ones first */
+                int q = 0;
+                for (int j = 0; j < na; j++) {
+                    if (k->gdone[j]) {
+                        SFX(lane_home)(k, j);
+                        continue;
+                    }
+                    k->idx[q] = k->idx[j];
+                    k->ge[q] = k->ge[j];
+                    k->gr[q] = k->gr[j];
+                    k->gx0[q] = k->gx0[j];
+                    k->gxlo[q] = k->gxlo[j];
+                    k->gm2[q] = k->gm2[j];
+                    k->gd[q] = k->gd[j];
+                    k->gd0[q] = k->gd0[j];
+                    k->gdmax[q] = k->gdmax[j];
+                    k->giters[q] = k->giters[j];
+                    k->gdone[q] = 0;
+                    q++;
+                }
+                na = q;
+            }
         }
-        for (int j = 0; j < nl; j++) {
-            int i = k->idx[j];
-            k->xlo[i] = k->gxlo[j];
-            k->d[i] = k->gd[j];
-            k->d0[i] = k->gd0[j];
-            k->d_max[i] = k->gdmax[j];
-        }
+        for (int j = 0; j < na; j++)
+            SFX(lane_home)(k, j);
     }
+    /* 3. the few lanes still moving: bracketed Newton, one at a time */
     for (int i = 0; i < nb; i++)
-        k->iters[i] = 0;
-    for (int j = 0; j < nl; j++) {
-        int i = k->idx[j];
-        k->iters[i] = k->giters[j];
-        if (!k->gdone[j]) /* 3. the few lanes still moving: bracketed Newton, one at a time */
-            k->gdone[j] = SFX(uplift_safeguarded)(k, i, ran, par);
-    }
+        if (!k->ldone[i])
+            k->ldone[i] = SFX(uplift_safeguarded)(k, i, ran, par);
 
     /* 4. uplift state, margins and the load-margin solve from its table start */
     CM_SIMD
@@ -261,11 +290,9 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
                 if (a_crit != a_crit)
                     k->status[i] = ST_NO_CONVERGENCE;
             }
-        for (int j = 0; j < nl; j++) {
-            int i = k->idx[j];
-            if (!k->gdone[j] && !k->status[i])
+        for (int i = 0; i < nb; i++)
+            if (!k->ldone[i] && !k->status[i])
                 k->status[i] = ST_NO_CONVERGENCE;
-        }
     } else
         for (int i = 0; i < nb; i++)
             o_load[i] = NAN;
