@@ -185,7 +185,10 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
                 double p = r02 + em * ied;
                 double sx = 0.5 * e1 * (1.0 + ig); /* sinh X */
                 double cx = 0.5 * (g + ig);        /* cosh X */
-                double f = log(em * p * (big_x * big_x) / (k->gm2[j] * (sx * sx)));
+                /* the residual log(A/B) of catenary._uplift_residual, as 2 (A - B)/(A + B) =
+                 * 2 tanh(log(A/B)/2): the same root and slope there, no log to evaluate */
+                double ra = em * p * (big_x * big_x), rb = k->gm2[j] * (sx * sx);
+                double f = 2.0 * (ra - rb) / (ra + rb);
                 /* d/dd of the residual: exp(d)/expm1(d) + 1/(exp(d) p) - 2 (coth X - 1/X),
                  * over one denominator; step = -f / (d * that) */
                 double den1 = em * ed * p, den2 = sx * big_x;
