@@ -277,8 +277,9 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
             int inside = (pos >= 0.0) & (pos < (double)TAB.n);
             int j = (int)(inside ? pos : 0.0);
             double tt = pos - j;
-            const double *tj = TAB.data + 2 * j;
-            double y0 = tj[0], s0 = tj[1], y1 = tj[2], s1 = tj[3];
+            const double *restrict tab = TAB.data;
+            int j2 = 2 * j;
+            double y0 = tab[j2], s0 = tab[j2 + 1], y1 = tab[j2 + 2], s1 = tab[j2 + 3];
             double ce = y0 + tt * (s0 + tt * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) +
                                               tt * (2.0 * (y0 - y1) + s0 + s1)));
             double a_crit = x / (2.0 * exp(ce));
