@@ -21,6 +21,7 @@ def _build_kernels() -> None:
     newest = max(p.stat().st_mtime for p in core.glob('_kernels*.[ch]'))
     if so.exists() and so.stat().st_mtime >= newest:
         return
+    so.unlink(missing_ok=True)  # a failed build must not leave a stale kernel behind
     done = subprocess.run(
         [sys.executable, 'setup.py', '-q', 'build_ext', '--inplace'],
         cwd=root,

@@ -150,16 +150,17 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
             double e = k->ge[j], r02 = k->gr[j], x0 = k->gx0[j], m2 = k->gm2[j];
             double xlo = log1p(e);
             double d_max = x0 - xlo;
-            double ix0 = 1.0 / x0;
+            double inv = 1.0 / (x0 * r02);                     /* one division for two */
+            double ix0 = r02 * inv, ir02 = x0 * inv;
             double ic1 = d_max * (r02 + d_max) * (ix0 * ix0); /* 1 / c1 */
             double q = m2 * ic1;
             double r02_sq = r02 * r02;
-            double d = 2.0 * q / (r02 + sqrt(r02_sq + 4.0 * q));
-            double frac = d / d_max;
+            /* d / d_max at the first root d = 2q / (r02 + sqrt(r02^2 + 4q)) */
+            double frac = 2.0 * q / ((r02 + sqrt(r02_sq + 4.0 * q)) * d_max);
             frac = frac < 1.0 ? frac : 1.0;
-            double c0 = 2.0 * (1.0 + e) * xlo / r02;
+            double c0 = 2.0 * (1.0 + e) * xlo * ir02;
             double q2 = q * exp((frac - 1.0) * log(c0 * c0 * ic1));
-            d = 2.0 * q2 / (r02 + sqrt(r02_sq + 4.0 * q2));
+            double d = 2.0 * q2 / (r02 + sqrt(r02_sq + 4.0 * q2));
             d = d > 1e-300 ? d : 1e-300;
             d = d < d_max ? d : d_max;
             k->gxlo[j] = xlo;
@@ -188,12 +189,12 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
                 /* the residual log(A/B) of catenary._uplift_residual, as 2 (A - B)/(A + B) =
                  * 2 tanh(log(A/B)/2): the same root and slope there, no log to evaluate */
                 double ra = em * p * (big_x * big_x), rb = k->gm2[j] * (sx * sx);
-                double f = 2.0 * (ra - rb) / (ra + rb);
                 /* d/dd of the residual: exp(d)/expm1(d) + 1/(exp(d) p) - 2 (coth X - 1/X),
-                 * over one denominator; step = -f / (d * that) */
+                 * over one denominator; step = -f / (d * that), one division for both */
                 double den1 = em * ed * p, den2 = sx * big_x;
                 double num = (ed * ed * p + em) * den2 - 2.0 * (cx * big_x - sx) * den1;
-                double step = -f * den1 * den2 / (num * d);
+                double step = -2.0 * (ra - rb) * den1 * den2 / ((ra + rb) * num * d);
+                double f = ra - rb; /* only its sign and zero matter below */
                 double ex = 1.0 + step * (1.0 + step * (0.5 + step * (1.0 / 6.0 +
                             step * (1.0 / 24.0 + step * (1.0 / 120.0 + step / 720.0)))));
                 double nxt = d * ex;
