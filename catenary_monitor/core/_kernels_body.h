@@ -196,7 +196,7 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
                 double step = -2.0 * (ra - rb) * den1 * den2 / ((ra + rb) * num * d);
                 double f = ra - rb; /* only its sign and zero matter below */
                 double ex = 1.0 + step * (1.0 + step * (0.5 + step * (1.0 / 6.0 +
-                            step * (1.0 / 24.0 + step * (1.0 / 120.0 + step / 720.0)))));
+                            step * (1.0 / 24.0 + step * (1.0 / 120.0 + step * (1.0 / 720.0))))));
                 double nxt = d * ex;
                 nxt = nxt < k->gdmax[j] ? nxt : k->gdmax[j];
                 int was = k->gdone[j];
