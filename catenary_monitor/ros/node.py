@@ -109,7 +109,8 @@ def _descriptor(spec: ParamSpec, name: str) -> ParameterDescriptor:
         description=spec.description + unit,
         read_only=spec.read_only,
     )
-    if spec.min is not None or spec.max is not None:
+    # An optional parameter (default NaN: not set) cannot carry a ROS range; config checks it.
+    if (spec.min is not None or spec.max is not None) and spec.default == spec.default:
         low = -sys.float_info.max if spec.min is None else float(spec.min)
         high = sys.float_info.max if spec.max is None else float(spec.max)
         desc.floating_point_range = [FloatingPointRange(from_value=low, to_value=high, step=0.0)]
