@@ -2,8 +2,9 @@
 
 One alarm per line. It is *active* while the line's level is not OK (WARN, STALE or ERROR),
 except during the start-up grace: a line still blind since the monitor started (STALE, never
-yet in another level) becomes an alarm only once that has lasted ``tension_timeout``, so a
-normal start is no alarm flood while a sensor that never reports still alarms.
+yet in another level) becomes an alarm only once that has lasted :func:`startup_grace` (the
+longer of ``tension_timeout`` and ``depth_timeout``), so a normal start, sensors coming up one
+by one, is no alarm flood, while a sensor that never reports still alarms.
 
 States (:data:`STATES`, the names the ``/diagnostics`` key ``alarm_state`` and the console use):
 
@@ -37,6 +38,7 @@ from typing import Optional, Sequence
 import numpy as np
 
 from catenary_monitor.core.alarms import CONDITIONS, RANK, Level
+from catenary_monitor.core.config import AlarmConfig
 
 __all__ = [
     'NORMAL',
@@ -48,6 +50,7 @@ __all__ = [
     'ACKNOWLEDGE_TOPIC',
     'AckState',
     'initial',
+    'startup_grace',
     'is_active',
     'step',
     'acknowledge',
@@ -92,6 +95,11 @@ def initial(start: float) -> AckState:
     return AckState(start=start)
 
 
+def startup_grace(alarm: AlarmConfig) -> float:
+    """Seconds a line may stay blind after the monitor starts before that is an alarm."""
+    return max(alarm.tension_timeout, alarm.depth_timeout)
+
+
 def is_active(ack: AckState, level: Level, now: float, grace: float) -> tuple[bool, bool]:
     """(active, still blind) for a line at ``level`` at ``now`` (s); ``grace`` in s."""
     blind = ack.blind and level == Level.STALE
@@ -100,7 +108,7 @@ def is_active(ack: AckState, level: Level, now: float, grace: float) -> tuple[bo
 
 def step(ack: AckState, level: Level, now: float, grace: float) -> AckState:
     """The alarm after the line was stepped to ``level`` at ``now`` (s); ``grace`` (s) is the
-    start-up grace (the monitor's ``tension_timeout``)."""
+    start-up grace (:func:`startup_grace`)."""
     active, blind = is_active(ack, level, now, grace)
     if blind != ack.blind:
         ack = replace(ack, blind=blind)

@@ -515,7 +515,7 @@ def _advance_line(
         steps.times * 1e-9, inputs, line.alarm, STATUS_MESSAGES, initial=line.state
     )
     acks = alarm_ack.replay_acks(
-        line.ack, steps.times * 1e-9, series.levels, core.config.alarm.tension_timeout
+        line.ack, steps.times * 1e-9, series.levels, alarm_ack.startup_grace(core.config.alarm)
     )
     line.ack = acks.final
     where = np.flatnonzero(steps.solved)

@@ -448,7 +448,7 @@ class MonitorCore:
             line.state, events = line.alarm.update(
                 line.state, line.inputs(self.depth_s, self.depth_stale), now
             )
-            grace = self.config.alarm.tension_timeout
+            grace = alarm_ack.startup_grace(self.config.alarm)
             line.ack = alarm_ack.step(line.ack, line.state.level, now, grace)
             changes += [Change(line.config.name, ev) for ev in events]
         return changes
