@@ -4,8 +4,9 @@ The monitor runs as its own process on a params file; this process publishes ten
 with rclpy: tension before the first depth (a late first depth), a storm that lifts line_02's
 anchor, a tension dropout and a NaN on line_01, a depth dropout longer than ``depth_timeout``,
 and line_03 an elastic chain (``ea`` set); an operator acknowledges line_02's alarm during the
-storm, then every alarm, over the node's acknowledgement topic. The node is stopped with SIGTERM and its MCAP log is
-replayed with the same params file. Compared with what the node logged itself:
+storm, then every alarm, over the node's acknowledgement topic. The node is stopped with
+SIGTERM and its MCAP log is replayed with the same params file. Compared with what the node
+logged itself:
 
 * every output message (``/catenary_monitor/NAME/outputs``): same times, solver status and
   level, values to 1e-12;
