@@ -18,6 +18,8 @@ import threading
 import time
 from typing import Any, Optional
 
+import numpy as np
+
 from catenary_monitor.console.model import (
     AckError,
     History,
@@ -190,9 +192,7 @@ class LiveSource:
         now = time.time()
         with self.cond:
             dt, dv = self.depth.t, self.depth.cols['depth_max']
-            import numpy as np
-
-            trend = tide_trend(np.asarray(dt), np.asarray(dv, float), now)
+            trend = tide_trend(np.array(dt), np.array(dv), now)
             return build_frame(
                 now,
                 list(self.names),
