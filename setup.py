@@ -36,6 +36,8 @@ setup(
             'mpmath>=1.3',
             'flake8>=6',
             'pytest-timeout',
+            # The console's browser tests drive Debian's chromium through /usr/bin/chromedriver.
+            'selenium>=4.10',
             'moorpy',
             'pycatenary',
         ],

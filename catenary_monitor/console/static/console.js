@@ -102,16 +102,21 @@ function togglePlay() {
   $('play').textContent = r.playing ? '❚❚' : '▶';
 }
 
-let framePending = false;
+let framePending = false, frameAgain = false;
 async function fetchFrame(withTrend) {
-  if (framePending) return;
+  // One request at a time; a position asked for meanwhile is fetched right after (the page
+  // always ends at the slider's last position).
+  if (framePending) { frameAgain = true; return; }
   framePending = true;
   try {
     const frame = await (await fetch(`/api/frame?t=${S.replay.t}`)).json();
     S.lastMessage = performance.now();
     render(frame);
     if (withTrend || performance.now() - S.trendAt > 1000) refreshTrend();
-  } finally { framePending = false; }
+  } finally {
+    framePending = false;
+    if (frameAgain) { frameAgain = false; fetchFrame(true); }
+  }
 }
 
 // ---------------------------------------------------------------- tiles
@@ -234,31 +239,45 @@ function renderAlarms(frame, lost) {
   $('flood').textContent = `ALARM FLOOD: ${raised} raised in 10 min`;
 }
 
+const rowsByLine = new Map();
+function setText(node, text) { if (node.textContent !== text) node.textContent = text; }
+
+function makeRow(line) {
+  const tr = el('tr', { 'data-line': line });
+  for (let k = 0; k < 7; k++) tr.appendChild(el('td'));
+  tr.children[0].className = 'when';
+  tr.children[4].className = 'msg-cell';
+  tr.children[4].appendChild(el('div'));
+  const b = el('button', { 'data-ack': line, title: `acknowledge ${line}` }, 'Ack');
+  b.addEventListener('click', () => acknowledge(line));
+  tr.children[6].appendChild(b);
+  return tr;
+}
+
 function renderActive(frame, lost, replay) {
+  // Rows are kept per line and updated in place: a button never moves under a click.
   const body = $('alarms').querySelector('tbody');
-  body.textContent = '';
-  for (const a of frame.alarms) {
-    const tr = el('tr', { 'data-line': a.line, 'data-alarm-state': a.state, class: `lvl-${a.level}` });
-    tr.appendChild(el('td', { class: 'when' }, clock(a.raised)));
-    tr.appendChild(el('td', {}, a.line));
-    tr.appendChild(el('td', {}, a.level));
-    tr.appendChild(el('td', {}, a.condition.replace('_', ' ')));
-    const msg = el('td', { class: 'msg-cell', title: a.message });
-    msg.appendChild(el('div', {}, a.message));
-    tr.appendChild(msg);
-    const st = el('td', {}, a.state.replace('-', ' '));
-    if (a.state === 'acknowledged' && a.acknowledged_by) st.title = `by ${a.acknowledged_by} at ${clock(a.acknowledged_at)}`;
-    tr.appendChild(st);
-    const cell = el('td');
-    if (a.state !== 'acknowledged') {
-      const b = el('button', { 'data-ack': a.line }, 'Acknowledge');
-      b.disabled = replay || lost;
-      b.addEventListener('click', () => acknowledge(a.line));
-      cell.appendChild(b);
-    }
-    tr.appendChild(cell);
-    body.appendChild(tr);
-  }
+  const want = new Set(frame.alarms.map((a) => a.line));
+  for (const [line, tr] of rowsByLine) if (!want.has(line)) { tr.remove(); rowsByLine.delete(line); }
+  frame.alarms.forEach((a, i) => {
+    let tr = rowsByLine.get(a.line);
+    if (!tr) { tr = makeRow(a.line); rowsByLine.set(a.line, tr); }
+    tr.dataset.alarmState = a.state;
+    tr.className = `lvl-${a.level}`;
+    const td = tr.children;
+    setText(td[0], clock(a.raised));
+    setText(td[1], a.line);
+    setText(td[2], a.level);
+    setText(td[3], a.condition.replace('_', ' '));
+    setText(td[4].firstChild, a.message);
+    td[4].title = a.message;
+    setText(td[5], a.state.replace('-', ' '));
+    td[5].title = a.state === 'acknowledged' && a.acknowledged_by ? `by ${a.acknowledged_by} at ${clock(a.acknowledged_at)}` : '';
+    const b = td[6].firstChild;
+    b.hidden = a.state === 'acknowledged';
+    b.disabled = replay || lost;
+    if (body.children[i] !== tr) body.insertBefore(tr, body.children[i] || null);
+  });
   $('n-active').textContent = `(${frame.alarms.length})`;
   $('ack-all').disabled = replay || lost || !frame.alarms.some((a) => a.state !== 'acknowledged');
   $('no-alarms').hidden = S.tab !== 'active' || frame.alarms.length > 0;
