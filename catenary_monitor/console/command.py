@@ -27,6 +27,8 @@ def cmd_console(args: argparse.Namespace) -> int:
     from catenary_monitor.console.server import ConsoleServer
     from catenary_monitor.core.config import ConfigError, config_from_params, load_params_file
 
+    if args.foxglove_layout:
+        return _write_layout(args)
     source: Any
     if args.log:
         from catenary_monitor.console.replay import LogError, ReplaySource, load_log
@@ -71,6 +73,29 @@ def cmd_console(args: argparse.Namespace) -> int:
     return 0
 
 
+def _write_layout(args: argparse.Namespace) -> int:
+    """Write the Foxglove / Lichtblick layout for the params file's lines."""
+    import json
+
+    from catenary_monitor.console.foxglove import layout
+    from catenary_monitor.core.config import ConfigError, config_from_params, load_params_file
+    from catenary_monitor.ros.simulator import default_config_path
+
+    path = args.params_file or default_config_path()
+    try:
+        config = config_from_params(load_params_file(path))
+    except ConfigError as err:
+        return _fail(f'{path}: {err}')
+    try:
+        with open(args.foxglove_layout, 'w', encoding='utf-8') as f:
+            json.dump(layout(config), f, indent=2)
+            f.write('\n')
+    except OSError as err:
+        return _fail(f'cannot write {args.foxglove_layout}: {err.strerror or err}')
+    print(f'Foxglove / Lichtblick layout for {len(config.lines)} lines: {args.foxglove_layout}')
+    return 0
+
+
 def register(sub: Any) -> None:
     """Add ``console`` to the ``catenary-monitor`` parser."""
     p = sub.add_parser(
@@ -95,6 +120,11 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         '--log', nargs='+', metavar='FILE|DIR', help='replay a recorded MCAP log (files or dirs)'
+    )
+    p.add_argument(
+        '--foxglove-layout',
+        metavar='OUT.json',
+        help='write a Foxglove / Lichtblick layout for the params file\'s lines and exit',
     )
     p.add_argument(
         '--ros-args',
