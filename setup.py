@@ -36,6 +36,7 @@ setup(
             'hypothesis>=6',
             'mpmath>=1.3',
             'flake8>=6',
+            'mypy>=1.8',
             'pytest-timeout',
             # The console's browser tests drive Debian's chromium through /usr/bin/chromedriver.
             'selenium>=4.10',

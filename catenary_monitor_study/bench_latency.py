@@ -24,7 +24,7 @@ import tempfile
 import threading
 import time
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any, Callable, Optional
 
 import numpy as np
 
@@ -53,7 +53,7 @@ def echo_main(lines: int) -> int:
         node.create_subscription(
             Float64,
             f'/bench_echo/l{k:02d}/in',
-            lambda msg, pub=pub: pub.publish(msg),
+            _republish(pub),
             qos_profile_sensor_data,
         )
     try:
@@ -65,6 +65,15 @@ def echo_main(lines: int) -> int:
         node.destroy_node()
         rclpy.try_shutdown()
     return 0
+
+
+def _republish(pub: Any) -> Callable[[Any], None]:
+    """Subscription callback publishing every message it gets on ``pub``."""
+
+    def echo(msg: Any) -> None:
+        pub.publish(msg)
+
+    return echo
 
 
 def _cpu_seconds(pid: int) -> float:

@@ -28,7 +28,7 @@ import re
 import sys
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable, Optional
+from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
 
@@ -51,11 +51,13 @@ class Scenes:
     ha: np.ndarray  # h / a (a = anchor-end parameter T/w - h)
     xr: np.ndarray  # x / x_min (1 for problem 3)
     seed: np.ndarray  # True for the seed-table scenes
-    ref: np.ndarray = field(default=None)  # (n, 2) reference values
-    cond: np.ndarray = field(default=None)  # (n, 2) condition numbers
-    length: np.ndarray = field(default=None)  # suspended length (problem 4)
-    ref_l: np.ndarray = field(default=None)  # (n, 2) reference of the length-given problem
-    cond_l: np.ndarray = field(default=None)
+    # Filled by compute_reference (empty until then):
+    ref: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))  # (n, 2) reference values
+    cond: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))  # (n, 2) condition numbers
+    length: np.ndarray = field(default_factory=lambda: np.empty(0))  # suspended length (problem 4)
+    # (n, 2) reference and condition numbers of the length-given problem
+    ref_l: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
+    cond_l: np.ndarray = field(default_factory=lambda: np.empty((0, 2)))
 
     @property
     def n(self) -> int:
@@ -74,7 +76,7 @@ def build_scenes(problem: int, quick: bool) -> Scenes:
     from catenary_monitor.core.catenary import grounded, two_prod_diff
 
     ha, xr = grid(quick)
-    rows = []
+    rows: list[tuple[float, float, float, float, float, float, bool]] = []
     for q in ha:
         t = W_DOCK * (H_DOCK / q + H_DOCK)
         if problem == 2:  # the load is R; x_min of a no-uplift chain with that R
@@ -102,12 +104,14 @@ def build_scenes(problem: int, quick: bool) -> Scenes:
         (1300.0, 20.85, 399.1048e3, 100.0),
     ]
     seeds2 = [(1300.0, 20.85, 1584.6e3, 121.06)]  # table 3
-    for s in {2: seeds2, 3: seeds3, 4: seeds4}[problem]:
+    seeds: dict[int, Sequence[tuple[float, ...]]] = {2: seeds2, 3: seeds3, 4: seeds4}
+    for s in seeds[problem]:
         w, h, t = s[:3]
         ha_s = h / (t / w) if problem == 2 else h / (t / w - h)
         rows.append((w, h, t, s[3] if problem != 3 else math.nan, ha_s, math.nan, True))
     cols = list(zip(*rows))
-    return Scenes(problem, *(np.array(c, dtype=float) for c in cols[:6]), np.array(cols[6], bool))
+    w_, h_, t_, x_, ha_, xr_ = (np.array(c, dtype=float) for c in cols[:6])
+    return Scenes(problem, w_, h_, t_, x_, ha_, xr_, np.array(cols[6], bool))
 
 
 def compute_reference(sc: Scenes, with_length: bool, progress: Callable[[str], None]) -> None:
@@ -583,8 +587,14 @@ def run(
     def pick(problem: int, name: str) -> Optional[dict]:
         return next((r for r in rows if r['problem'] == problem and r['method'] == name), None)
 
-    floor = pick(3, 'closed form (stable)')
-    default4, kernel4 = pick(4, 'default'), pick(4, 'default kernel')
+    def need(problem: int, name: str) -> dict:
+        row = pick(problem, name)
+        if row is None:  # the baselines are always run (see the method filter above)
+            raise LookupError(f'bench-methods: problem {problem} method {name!r} was not run')
+        return row
+
+    floor = need(3, 'closed form (stable)')
+    default4, kernel4 = need(4, 'default'), need(4, 'default kernel')
     moorpy = pick(4, 'MoorPy catenary (L given)')
     ratios = {
         'default_p4_scalar_us': default4['scalar_us_median'],
@@ -605,7 +615,7 @@ def run(
     for r in rows:
         r['vs_default_scalar'] = (
             r['scalar_us_median']
-            / (default4 if r['problem'] == 4 else pick(3, 'default'))['scalar_us_median']
+            / (default4 if r['problem'] == 4 else need(3, 'default'))['scalar_us_median']
         )
     summary = [
         f'Run: {time.strftime("%Y-%m-%d %H:%M")}, {platform.python_implementation()} '

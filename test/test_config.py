@@ -250,7 +250,7 @@ def test_expand_parameters_and_markdown():
     assert 'x.weight' in names and 'y.tension_topic' in names and 'clear_hold' in names
     assert len(names) == len(set(names))
     text = parameters_markdown()
-    assert '| `NAME.weight` | required | N/m |' in text
+    assert '| `NAME.weight` | required | N/m | 1 – 100000 |' in text
     assert "`'/mooring/NAME/tension'`" in text
 
 

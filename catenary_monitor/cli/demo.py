@@ -235,9 +235,10 @@ def run_demo(
     if not files:
         print('catenary_monitor demo: no MCAP log was written', file=sys.stderr)
         return 1
-    chart = out / 'demo.png'
+    chart_file = out / 'demo.png'
+    chart: Optional[Path] = chart_file  # None if it could not be drawn
     try:
-        plot_episode(files, chart, params)
+        plot_episode(files, chart_file, params)
     except Exception as exc:  # noqa: BLE001 - the log is the product; the chart is a bonus
         print(f'catenary_monitor demo: could not draw the chart: {exc}', file=sys.stderr)
         chart = None

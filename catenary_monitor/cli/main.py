@@ -254,7 +254,11 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
     from catenary_monitor.cli import live, replay
     from catenary_monitor.console import command as console
 
-    found = [live.register, replay.register, console.register]
+    found: list[Callable[[argparse._SubParsersAction], None]] = [
+        live.register,
+        replay.register,
+        console.register,
+    ]
     for ep in sorted(entry_points(group=COMMAND_GROUP), key=lambda e: e.name):
         try:
             found.append(ep.load())

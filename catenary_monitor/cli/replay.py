@@ -274,6 +274,30 @@ def run_replay(
     return result, tensions, depth, report, timing
 
 
+def _publish_columns(
+    paths: Sequence[Path], config: Optional[MonitorConfig]
+) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], ReadReport]:
+    """What ``--publish`` plays (topic -> column) and the read report: the params file's
+    tension and depth topics, or every Float64 topic of the log without a params file."""
+    from catenary_monitor.ros.playback import float64_topics
+
+    if config is not None:
+        tensions, depth, report = read_inputs(paths, config)
+        names, depth_topic = input_topics(config)
+        columns = {names[n]: tensions[n] for n in names}
+        columns[depth_topic] = depth
+        return columns, report
+    topics = float64_topics(paths)
+    if not topics:
+        raise ReplayError('empty log: no std_msgs/msg/Float64 topic to publish', EXIT_EMPTY)
+    try:
+        return read_float64_topics(paths, topics)
+    except EmptyLogError as err:
+        raise ReplayError(f'empty log: {err}', EXIT_EMPTY) from err
+    except McapReadError as err:
+        raise ReplayError(str(err)) from err
+
+
 def cmd_replay(args: argparse.Namespace) -> int:
     """Entry point of ``catenary-monitor replay``."""
     try:
@@ -282,9 +306,10 @@ def cmd_replay(args: argparse.Namespace) -> int:
 
             paths = _expand(args.logs)
             config = load_config(args.params_file) if args.params_file else None
+            columns, report = _publish_columns(paths, config)
             return publish(
-                paths,
-                config,
+                columns,
+                report,
                 rate=args.rate,
                 loop=args.loop,
                 wait=args.wait_subscribers,

@@ -26,7 +26,14 @@ from catenary_monitor.core.batch import (
     ReplayResult,
     worst,
 )
-from catenary_monitor.core.monitor import EVENTS_TOPIC, NODE_NAME, Start, Tick, event_record
+from catenary_monitor.core.monitor import (
+    EVENTS_TOPIC,
+    NODE_NAME,
+    Event,
+    Start,
+    Tick,
+    event_record,
+)
 from catenary_monitor.core.config import MonitorConfig, config_hash, config_to_params
 from catenary_monitor.io.cdr import (
     diagnostic_array_parts,
@@ -173,7 +180,7 @@ def write_csv(
 def _event_payloads(result: ReplayResult) -> tuple[list[int], list[bytes]]:
     """The events channel of the results log (start, ticks, the other records), so that a
     replay of the results redoes the same steps."""
-    records = [(result.started_ns, Start(result.started_ns))]
+    records: list[tuple[int, Event | Start]] = [(result.started_ns, Start(result.started_ns))]
     records += [(int(t), Tick(int(t))) for t in result.tick_ns.tolist()]
     records += [(e.stamp_ns, e) for e in result.events]
     records.sort(key=lambda r: r[0])

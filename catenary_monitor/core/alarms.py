@@ -444,9 +444,8 @@ class LevelSeries:
         """The line's message after update ``i`` (as ``AlarmState.message``)."""
         if self.levels[i] == Level.OK:
             return 'OK'
-        sample = AlarmInputs(
-            **{k: float(self._x[k][i]) for k in _INPUT_FIELDS}, status=int(self._status[i])
-        )
+        floats: dict[str, Any] = {k: float(self._x[k][i]) for k in _INPUT_FIELDS}
+        sample = AlarmInputs(**floats, status=int(self._status[i]))
         flags = [bool(self._active[cond][i]) for cond in CONDITIONS]
         return self.alarm._message(
             flags,

@@ -38,7 +38,7 @@ even stiff chains need the elastic model there.
 from __future__ import annotations
 
 import math
-from typing import Any, Optional
+from typing import Any, Optional, Protocol
 
 import numpy as np
 
@@ -467,7 +467,27 @@ def _elastic_depth_reach_scalar(w: float, r: float, x: float, ea: float) -> floa
     return 2.0 * a * (s * s) + a * k * (sn * sn) / 2.0
 
 
-def elastic_correction(rigid: SolveResult, el: dict[str, np.ndarray]) -> np.ndarray:
+class RigidValues(Protocol):
+    """What :func:`elastic_correction` reads of the inextensible answer (a
+    :class:`SolveResult` or a :class:`SimpleRigid`)."""
+
+    @property
+    def min_anchor_distance(self) -> Any: ...
+
+    @property
+    def horizontal_tension(self) -> Any: ...
+
+    @property
+    def uplift_force(self) -> Any: ...
+
+    @property
+    def suspended_length(self) -> Any: ...
+
+    @property
+    def top_tension(self) -> Any: ...
+
+
+def elastic_correction(rigid: RigidValues, el: dict[str, np.ndarray]) -> np.ndarray:
     """Largest relative change the elastic model makes to the reported quantities."""
     t = np.asarray(rigid.top_tension, dtype=float)
     parts = [
@@ -604,7 +624,7 @@ def _solve_scalar(
     corr = math.nan if any(p != p for p in parts) else max(parts)  # NaN propagates, as np.max
     if not corr > tol:
         return rigid, corr
-    new = {
+    new: dict[str, Any] = {  # float fields of SolveResult
         'min_anchor_distance': x_min,
         'horizontal_tension': r,
         'uplift_force': va,
@@ -622,6 +642,13 @@ def _solve_scalar(
 
 class SimpleRigid:
     """Attribute view of a dict (the rigid values of the valid elements)."""
+
+    # The attributes elastic_correction reads (RigidValues); the dict has them all.
+    min_anchor_distance: np.ndarray
+    horizontal_tension: np.ndarray
+    uplift_force: np.ndarray
+    suspended_length: np.ndarray
+    top_tension: np.ndarray
 
     def __init__(self, d: dict[str, np.ndarray]) -> None:
         self.__dict__.update(d)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Any, Optional, Union
+from typing import Any, Optional, TypeGuard, Union
 
 import numpy as np
 
@@ -82,11 +82,11 @@ def solve_inextensible(
         horizontal is None
         and chain_length is None
         and tension is not None
-        and type(weight) in _PLAIN
-        and type(depth) in _PLAIN
-        and type(tension) in _PLAIN
-        and (anchor_distance is None or type(anchor_distance) in _PLAIN)
-        and (mbl is None or type(mbl) in _PLAIN)
+        and _plain(weight)
+        and _plain(depth)
+        and _plain(tension)
+        and (anchor_distance is None or _plain(anchor_distance))
+        and (mbl is None or _plain(mbl))
     ):  # the node's case: skip the generic dispatch
         try:
             return _solve_scalar(
@@ -100,7 +100,7 @@ def solve_inextensible(
         except (OverflowError, ZeroDivisionError, ValueError):
             pass  # beyond float range in plain math (e.g. sinh overflow): numpy gives inf instead
     problem = _check_call(tension, horizontal, chain_length, anchor_distance)
-    inputs = {
+    inputs: dict[str, Any] = {  # user values, checked below (np.ndim, float(), asarray)
         'weight': weight,
         'depth': depth,
         'tension': tension,
@@ -216,6 +216,7 @@ def _solve_valid(problem: str, full: dict[str, np.ndarray], scalar: bool) -> Sol
                     cat.lifted_from_horizontal(w[lift], h[lift], r[lift] / w[lift], x[lift]),
                 )
     else:
+        x = a['anchor_distance']  # chain_length needs anchor_distance (_check_call)
         lm = a['chain_length']
         am, c = cat.grounded_parameter_from_length(h, lm - x)
         conv &= c
@@ -293,6 +294,13 @@ def _fill_margins(
 _NAN = math.nan
 #: Input types that take the plain-float path straight away (``float()`` is exact for them).
 _PLAIN = (float, int, np.float64)
+
+
+def _plain(v: object) -> TypeGuard[float]:
+    """True for the exact types of :data:`_PLAIN` (subclasses take the generic path)."""
+    return type(v) in _PLAIN
+
+
 _new_tuple = tuple.__new__  # builds a SolveResult without its keyword-handling constructor
 _MODEL, _METHOD = SolveResult._field_defaults['model'], SolveResult._field_defaults['method']
 _TAIL = (_MODEL, _METHOD)
@@ -336,7 +344,7 @@ def _solve_scalar(
     elif mbl is not None and not mbl > 0:
         status = Status.MBL
     else:
-        status = 0
+        status = Status.OK
     keys = _keys(problem, x is not None, mbl is not None)
     if status:
         return _new_tuple(SolveResult, _NAN12 + (int(status), problem, keys) + _TAIL)

@@ -89,7 +89,7 @@ class SolveResult(NamedTuple):
     status: Any  # int codes, see Status
     problem: str  # 'tension', 'horizontal' or 'chain_length'
     keys: tuple[str, ...] = ()
-    model: str = 'inextensible catenary'
+    model: Any = 'inextensible catenary'  # str; per element (object array) for arrays
     method: str = 'closed form + safeguarded Newton (catenary_monitor.catenary)'
 
     @property

@@ -216,16 +216,18 @@ def write_rows(
         stream.write(text)
         written += len(text)
     newline = np.full(block, 10, np.uint32)
-    label_last = len(columns) > 1 and isinstance(columns[-1], LabelColumn)
+    # A label column written last carries the newline in its words.
+    last = columns[-1] if len(columns) > 1 else None
+    label_last = last if isinstance(last, LabelColumn) else None
     for lo in range(start, n, block):
         hi = min(lo + block, n)
         cols: list[np.ndarray] = []
         for i, c in enumerate(columns):
-            if label_last and i == len(columns) - 1:
-                cols.extend(c.words(lo, hi, False, True))
+            if label_last is not None and i == len(columns) - 1:
+                cols.extend(label_last.words(lo, hi, False, True))
             else:
                 cols.extend(c.words(lo, hi, i == 0))
-        if not label_last:
+        if label_last is None:
             cols.append(newline[: hi - lo])
         data = np.stack(cols, axis=1).tobytes().translate(None, b'\0')
         stream.write(data)

@@ -27,6 +27,7 @@ import os
 import re
 import sys
 from pathlib import Path
+from typing import Callable, Optional
 
 __all__ = [
     'SchemaNotFoundError',
@@ -97,13 +98,16 @@ def _candidate_prefixes() -> list[Path]:
 @functools.lru_cache(maxsize=None)
 def _share_dir(package: str) -> Path:
     """Return the ``share/<package>`` directory of an installed ROS package."""
+    lookup: Optional[Callable[[str], str]]
     try:
         from ament_index_python.packages import get_package_share_directory
     except ImportError:  # pragma: no cover - the ROS wheels ship ament_index_python
-        get_package_share_directory = None
-    if get_package_share_directory is not None:
+        lookup = None
+    else:
+        lookup = get_package_share_directory
+    if lookup is not None:
         try:
-            return Path(get_package_share_directory(package))
+            return Path(lookup(package))
         except (LookupError, OSError, ValueError):
             pass  # no AMENT_PREFIX_PATH or package not indexed: fall back to a file search
     for prefix in _candidate_prefixes():

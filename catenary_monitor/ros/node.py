@@ -128,7 +128,7 @@ class CatenaryMonitor(Node):
             NODE_NAME, automatically_declare_parameters_from_overrides=False, **kwargs
         )
         self.config = self._declare_parameters(log_dir)
-        self._clock = self.get_clock()
+        self._node_clock = self.get_clock()  # not _clock: rclpy's Node owns that name
         self._last_ns = 0
         self._log_setup_error = ''
         self._logger_known = False
@@ -253,7 +253,7 @@ class CatenaryMonitor(Node):
     # ------------------------------------------------------------------ callbacks
     def _stamp(self) -> int:
         """A distinct, increasing event stamp (ns): the node clock, or 1 ns after the last one."""
-        now = self._clock.now().nanoseconds
+        now = self._node_clock.now().nanoseconds
         self._last_ns = now if now > self._last_ns else self._last_ns + 1
         return self._last_ns
 
@@ -301,6 +301,8 @@ class CatenaryMonitor(Node):
 
     def _check_logger(self) -> None:
         """A LoggerHealth event whenever the logger's error changes (and once at start)."""
+        error: Optional[str]
+        path: Optional[str]
         if self.log is None:
             error, path = self._log_setup_error or 'no logger', None
         else:
@@ -436,7 +438,7 @@ def _install_signal_handlers(stop: threading.Event) -> None:
     signal.signal(signal.SIGTERM, handler)
 
 
-def _one_line(text: str) -> str:
+def _one_line(text: object) -> str:
     return ' '.join(str(text).split())
 
 

@@ -11,6 +11,9 @@ Timing: a wall-clock schedule (``time.monotonic``) fixed at the start of each pa
 message does not delay the following ones; the lateness is reported at the end (median, p99,
 max). ``--loop`` starts the next pass one median message gap after the last message.
 SIGINT/SIGTERM stop playback between two messages; exit 0.
+
+The command line (:mod:`catenary_monitor.cli.replay`) picks and reads the columns; this module
+only plays them (the ROS layer imports nothing from the command line).
 """
 
 from __future__ import annotations
@@ -20,11 +23,10 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any, Optional, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
-from catenary_monitor.core.config import MonitorConfig
 from catenary_monitor.io.cdr import float64_payloads
 from catenary_monitor.io.mcap_read import FLOAT64_TYPE, ReadReport, iter_messages
 
@@ -56,34 +58,16 @@ def float64_topics(paths: Sequence[Path]) -> list[str]:
 
 
 def publish(
-    paths: Sequence[Path],
-    config: Optional[MonitorConfig],
+    columns: dict[str, tuple[np.ndarray, np.ndarray]],
+    report: ReadReport,
     *,
     rate: float = 1.0,
     loop: bool = False,
     wait: float = 0.0,
     quiet: bool = False,
 ) -> int:
-    """Play the inputs; returns the exit status (see :mod:`catenary_monitor.replay`)."""
-    from catenary_monitor.cli.replay import ReplayError, input_topics, read_inputs
-
-    if config is not None:
-        tensions, depth, report = read_inputs(paths, config)
-        names, depth_topic = input_topics(config)
-        columns = {names[n]: tensions[n] for n in names}
-        columns[depth_topic] = depth
-    else:
-        from catenary_monitor.io.mcap_read import EmptyLogError, McapReadError, read_float64_topics
-
-        topics = float64_topics(paths)
-        if not topics:
-            raise ReplayError('empty log: no std_msgs/msg/Float64 topic to publish', 3)
-        try:
-            columns, report = read_float64_topics(paths, topics)
-        except EmptyLogError as err:
-            raise ReplayError(f'empty log: {err}', 3) from err
-        except McapReadError as err:
-            raise ReplayError(str(err)) from err
+    """Play the input ``columns`` (topic -> (log times ns, values)) read with ``report``;
+    returns the exit status (see :mod:`catenary_monitor.cli.replay`)."""
     topics = [t for t, (ts, _) in columns.items() if len(ts)]
     t_ns = np.concatenate([columns[t][0] for t in topics])
     which = np.concatenate([np.full(len(columns[t][0]), k) for k, t in enumerate(topics)])

@@ -30,7 +30,7 @@ def p3_textbook(w: float, h: float, t: float) -> tuple[float, float]:
     return r, a * math.acosh(1.0 + h / a)
 
 
-def p3_textbook_vec(w, h, t):
+def p3_textbook_vec(w: np.ndarray, h: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     r = t - w * h
     a = r / w
     return r, a * np.arccosh(1.0 + h / a)
@@ -41,7 +41,7 @@ def p3_stable(w: float, h: float, t: float) -> tuple[float, float]:
     return w * b, cat.grounded(b, h, cat._MATH).min_anchor_distance
 
 
-def p3_stable_vec(w, h, t):
+def p3_stable_vec(w: np.ndarray, h: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     b = cat.two_prod_diff(t, w, h) / w
     return w * b, cat.grounded(b, h).min_anchor_distance
 
@@ -51,7 +51,7 @@ def p3_default(w: float, h: float, t: float) -> tuple[float, float]:
     return r.horizontal_tension, r.min_anchor_distance
 
 
-def p3_default_vec(w, h, t):
+def p3_default_vec(w: np.ndarray, h: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     r = solve(w, h, tension=t)
     return r.horizontal_tension, r.min_anchor_distance
 
@@ -64,7 +64,9 @@ def p4_default(w: float, h: float, t: float, x: float) -> tuple[float, float]:
     return r.horizontal_tension, r.uplift_force
 
 
-def p4_default_vec(w, h, t, x):
+def p4_default_vec(
+    w: np.ndarray, h: np.ndarray, t: np.ndarray, x: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     r = solve(w, h, tension=t, anchor_distance=x)
     return r.horizontal_tension, r.uplift_force
 
@@ -78,7 +80,9 @@ def p4_kernel(w: float, h: float, t: float, x: float) -> tuple[float, float]:
     return (s.horizontal_tension, s.uplift_force) if ok else (math.nan, math.nan)
 
 
-def p4_kernel_vec(w, h, t, x):
+def p4_kernel_vec(
+    w: np.ndarray, h: np.ndarray, t: np.ndarray, x: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     b = cat.two_prod_diff(t, w, h) / w
     r = w * b
     f = np.zeros_like(r)

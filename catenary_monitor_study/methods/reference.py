@@ -108,10 +108,10 @@ def _p4(w: mp.mpf, h: mp.mpf, t: mp.mpf, x: mp.mpf) -> tuple[mp.mpf, mp.mpf, mp.
 def problem4(w: float, h: float, t: float, x: float) -> Ref:
     """Problem 4: hook tension T, span x < x_min -> (R, uplift F) with their condition numbers."""
     with mp.workdps(DPS):
-        args = [mp.mpf(v) for v in (w, h, t, x)]
-        r, f, length = _p4(*args)
+        wm, hm, tm, xm = (mp.mpf(v) for v in (w, h, t, x))
+        r, f, length = _p4(wm, hm, tm, xm)
         d = mp.mpf(10) ** -25
-        r2, f2, _ = _p4(*args[:3], args[3] * (1 + d))
+        r2, f2, _ = _p4(wm, hm, tm, xm * (1 + d))
         return Ref(
             float(r),
             float(f),
@@ -153,10 +153,10 @@ def given_length(w: float, h: float, x: float, length: float, a0: float) -> Ref:
     The form in which MoorPy and pycatenary state the problem; ``a0`` is a start for the root.
     """
     with mp.workdps(DPS):
-        args = [mp.mpf(v) for v in (w, h, x, length)]
-        r, f = _pl(*args, mp.mpf(a0))
+        wm, hm, xm, lm = (mp.mpf(v) for v in (w, h, x, length))
+        r, f = _pl(wm, hm, xm, lm, mp.mpf(a0))
         d = mp.mpf(10) ** -25
-        r2, f2 = _pl(*args[:3], args[3] * (1 + d), r / args[0])
+        r2, f2 = _pl(wm, hm, xm, lm * (1 + d), r / wm)
         return Ref(
             float(r), float(f), float(abs((r2 - r) / r / d)), float(abs((f2 - f) / f / d)), length
         )
@@ -196,10 +196,10 @@ def _p2(w: mp.mpf, h: mp.mpf, r: mp.mpf, x: mp.mpf) -> tuple[mp.mpf, mp.mpf]:
 def problem2(w: float, h: float, r: float, x: float) -> Ref:
     """Problem 2 (table 3): horizontal tension R and span x < x_min -> (anchor angle [rad], F)."""
     with mp.workdps(DPS):
-        args = [mp.mpf(v) for v in (w, h, r, x)]
-        alpha, f = _p2(*args)
+        wm, hm, rm, xm = (mp.mpf(v) for v in (w, h, r, x))
+        alpha, f = _p2(wm, hm, rm, xm)
         d = mp.mpf(10) ** -25
-        alpha2, f2 = _p2(*args[:3], args[3] * (1 + d))
+        alpha2, f2 = _p2(wm, hm, rm, xm * (1 + d))
         return Ref(
             float(alpha),
             float(f),

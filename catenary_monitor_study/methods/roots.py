@@ -70,7 +70,9 @@ def p4_bisect(w: float, h: float, t: float, x: float) -> tuple[float, float]:
     raise NoConvergence('bisection: iteration cap')
 
 
-def p4_bisect_vec(w, h, t, x):
+def p4_bisect_vec(
+    w: np.ndarray, h: np.ndarray, t: np.ndarray, x: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     big_a = t / w
     b = big_a - h
     lo, hi = np.zeros_like(b), b.copy()
@@ -104,7 +106,9 @@ def p4_newton(w: float, h: float, t: float, x: float) -> tuple[float, float]:
     raise NoConvergence('Newton: iteration cap')
 
 
-def p4_newton_vec(w, h, t, x):
+def p4_newton_vec(
+    w: np.ndarray, h: np.ndarray, t: np.ndarray, x: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     big_a = t / w
     b = big_a - h
     a = x / np.arccosh(big_a / b)
@@ -223,7 +227,7 @@ def p3_bisect(w: float, h: float, t: float) -> tuple[float, float]:
     raise NoConvergence('bisection: iteration cap')
 
 
-def p3_bisect_vec(w, h, t):
+def p3_bisect_vec(w: np.ndarray, h: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     a = (t - w * h) / w
     lo, hi = np.zeros_like(a), a + h
     with np.errstate(all='ignore'):

@@ -1,0 +1,243 @@
+"""The layering of the package, checked from the source: who may import whom, and no cycles.
+
+Layers: ``core`` (pure numpy) <- ``io`` (MCAP, CDR, CSV; today independent of
+core) <- ``ros`` (rclpy) <- ``cli``; the methods study (``catenary_monitor_study``) sits on top
+and the monitor never imports it. Imports are read with ``ast``: module-level and
+function-level, absolute and relative; ``from pkg import name`` counts as an import of the
+submodule ``pkg.name`` when there is one, else of ``pkg`` (a package ``__init__`` is a module of
+the graph under the package's name).
+"""
+
+import ast
+import json
+import subprocess
+import sys
+from functools import lru_cache
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ('catenary_monitor', 'catenary_monitor_study')
+#: rclpy and the ROS message packages: core and io must work without any of them.
+ROS_PACKAGES = ('rclpy', 'std_msgs', 'diagnostic_msgs', 'rcl_interfaces', 'builtin_interfaces')
+
+
+def _find_modules() -> dict[str, Path]:
+    """Module name -> source file, for every module of both packages."""
+    out: dict[str, Path] = {}
+    for package in PACKAGES:
+        for path in sorted((ROOT / package).rglob('*.py')):
+            parts = list(path.relative_to(ROOT).with_suffix('').parts)
+            if parts[-1] == '__init__':
+                parts.pop()
+            out['.'.join(parts)] = path
+    return out
+
+
+MODULES = _find_modules()
+
+
+def _is_package(name: str) -> bool:
+    return MODULES[name].name == '__init__.py'
+
+
+def _within(name: str, prefix: str) -> bool:
+    return name == prefix or name.startswith(prefix + '.')
+
+
+@lru_cache(maxsize=None)
+def imports_of(name: str) -> frozenset[str]:
+    """Every module ``name`` imports anywhere in its source (any package, resolved)."""
+    tree = ast.parse(MODULES[name].read_text(encoding='utf-8'), str(MODULES[name]))
+    found: set[str] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            found.update(alias.name for alias in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = name.split('.') if _is_package(name) else name.split('.')[:-1]
+                if node.level - 1 > 0:
+                    base = base[: -(node.level - 1)]
+                target = '.'.join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ''
+            for alias in node.names:
+                sub = f'{target}.{alias.name}'
+                found.add(sub if sub in MODULES else target)
+    return frozenset(found)
+
+
+def _layer(name: str) -> str:
+    """``top`` (the package __init__), ``core``, ``io``, ``ros``, ``cli`` or ``study``."""
+    if _within(name, 'catenary_monitor_study'):
+        return 'study'
+    if name == 'catenary_monitor':
+        return 'top'
+    if name == 'catenary_monitor.__main__':
+        return 'cli'  # ``python -m catenary_monitor``: the command line
+    for layer in ('core', 'io', 'ros', 'cli'):
+        if _within(name, f'catenary_monitor.{layer}'):
+            return layer
+    raise AssertionError(f'{name}: module outside the known layers')
+
+
+#: What each layer may import of the project. The top level is the numerical core's face
+#: (``catenary_monitor.solve``); io imports nothing from core today, and that is kept.
+ALLOWED = {
+    'top': {'top', 'core'},
+    'core': {'core'},
+    'io': {'io'},
+    'ros': {'top', 'core', 'io', 'ros'},
+    'cli': {'top', 'core', 'io', 'ros', 'cli'},
+    'study': {'top', 'core', 'io', 'ros', 'cli', 'study'},
+}
+
+
+def _project_imports(name: str) -> list[str]:
+    return sorted(t for t in imports_of(name) if t.split('.')[0] in PACKAGES)
+
+
+def test_modules_found_and_imports_resolved():
+    """Guards the parser itself: known edges of each kind are seen."""
+    assert {'catenary_monitor', 'catenary_monitor.core.solve', 'catenary_monitor.io.cdr'} <= set(
+        MODULES
+    )
+    # the package __init__ (package-level edge)
+    assert 'catenary_monitor.core.solve' in imports_of('catenary_monitor')
+    # ``from catenary_monitor.core import catenary as cat``: the submodule
+    assert 'catenary_monitor.core.catenary' in imports_of('catenary_monitor.core.elastic')
+    # function-level import
+    assert 'catenary_monitor.core.params_file' in imports_of('catenary_monitor.core.config')
+    # relative imports, ``from .base import Method`` and ``from . import closed``
+    assert 'catenary_monitor_study.methods.base' in imports_of(
+        'catenary_monitor_study.methods.closed'
+    )
+    assert 'catenary_monitor_study.methods.closed' in imports_of(
+        'catenary_monitor_study.methods.base'
+    )
+
+
+def test_layering():
+    bad = []
+    for name in MODULES:
+        layer = _layer(name)
+        for target in _project_imports(name):
+            if _layer(target) not in ALLOWED[layer]:
+                bad.append(f'{name} ({layer}) imports {target} ({_layer(target)})')
+    assert not bad, 'layering violated:\n' + '\n'.join(bad)
+
+
+def test_core_and_io_import_no_ros_package_anywhere():
+    """Not even inside a function (the import test below sees module-level imports only)."""
+    bad = [
+        f'{name} imports {target}'
+        for name in MODULES
+        if _layer(name) in ('core', 'io')
+        for target in sorted(imports_of(name))
+        if target.split('.')[0] in ROS_PACKAGES
+    ]
+    assert not bad, '\n'.join(bad)
+
+
+_IMPORT_ALL = """
+import importlib, json, sys
+for blocked in sys.argv[1].split(','):
+    sys.modules[blocked] = None  # ``import blocked`` (and its submodules) raises ImportError
+failed = {}
+for name in sys.argv[2:]:
+    try:
+        importlib.import_module(name)
+    except BaseException as exc:
+        failed[name] = f'{type(exc).__name__}: {exc}'
+print(json.dumps({'failed': failed, 'file': sys.modules['catenary_monitor'].__file__}))
+"""
+
+
+def test_core_and_io_import_without_ros():
+    names = [n for n in MODULES if _layer(n) in ('core', 'io')]
+    assert len(names) > 10
+    p = subprocess.run(
+        [sys.executable, '-c', _IMPORT_ALL, ','.join(ROS_PACKAGES), *names],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert p.returncode == 0, p.stdout + p.stderr
+    out = json.loads(p.stdout.splitlines()[-1])
+    assert Path(out['file']).resolve() == ROOT / 'catenary_monitor' / '__init__.py'
+    assert not out['failed'], '\n'.join(f'{k}: {v}' for k, v in out['failed'].items())
+
+
+def find_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """One cycle (``[a, b, ..., a]``) per strongly connected component that has one."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    components: list[set[str]] = []
+
+    def visit(v: str) -> None:  # Tarjan
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = set()
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.add(w)
+                if w == v:
+                    break
+            components.append(component)
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    cycles = []
+    for component in components:
+        start = min(component)
+        if len(component) == 1 and start not in graph.get(start, ()):
+            continue
+        # shortest way back to ``start`` inside the component (breadth first)
+        parent: dict[str, str] = {}
+        frontier = [start]
+        while frontier and start not in parent:
+            nxt = []
+            for v in frontier:
+                for w in sorted(graph.get(v, ())):
+                    if w in component and w not in parent:
+                        parent[w] = v
+                        nxt.append(w)
+            frontier = nxt
+        path = [start]
+        v = parent[start]
+        while v != start:
+            path.append(v)
+            v = parent[v]
+        path.append(start)
+        cycles.append(path[:1] + path[1:-1][::-1] + path[-1:])
+    return sorted(cycles)
+
+
+def test_cycle_finder():
+    assert find_cycles({'a': {'b'}, 'b': {'c'}, 'c': set()}) == []
+    assert find_cycles({'a': {'b'}, 'b': {'c'}, 'c': {'a'}, 'd': {'a'}}) == [['a', 'b', 'c', 'a']]
+    assert find_cycles({'a': {'a'}}) == [['a', 'a']]
+    assert find_cycles({'a': {'b'}, 'b': {'a'}, 'c': {'d'}, 'd': {'c'}}) == [
+        ['a', 'b', 'a'],
+        ['c', 'd', 'c'],
+    ]
+
+
+def test_no_import_cycles():
+    """Between the modules of ``catenary_monitor``, function-level imports included."""
+    names = [n for n in MODULES if _within(n, 'catenary_monitor')]
+    graph = {n: {t for t in imports_of(n) if t in names} for n in names}
+    cycles = find_cycles(graph)
+    assert not cycles, 'import cycles:\n' + '\n'.join(' -> '.join(c) for c in cycles)
