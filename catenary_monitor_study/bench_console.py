@@ -13,6 +13,7 @@ Reports median and p99 of both latencies.
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import signal
@@ -121,14 +122,16 @@ def run_bench(rate: float = 10.0, duration: float = 20.0, json_out: bool = False
         node.create_subscription(
             Float64MultiArray,
             f'/catenary_monitor/{name}/outputs',
-            lambda msg, k=k: on_output(k, msg),
+            functools.partial(on_output, k),
             QoSProfile(depth=100),
         )
     stop = threading.Event()
-    spinner = threading.Thread(
-        target=lambda: [rclpy.spin_once(node, timeout_sec=0.05) for _ in iter(stop.is_set, True)],
-        daemon=True,
-    )
+
+    def spin() -> None:
+        while not stop.is_set():
+            rclpy.spin_once(node, timeout_sec=0.05)
+
+    spinner = threading.Thread(target=spin, daemon=True)
     spinner.start()
     driver = _browser(f'{tmp}/profile')
     try:
@@ -173,7 +176,7 @@ def run_bench(rate: float = 10.0, duration: float = 20.0, json_out: bool = False
                 shown.setdefault((k, float(value)), stamp_ms / 1e3)
     page = [1e3 * (shown[key] - t) for key, t in sent.items() if key in shown]
     monitor_ms = [1e3 * (got[key] - t) for key, t in sent.items() if key in got]
-    result = {
+    result: dict[str, Any] = {
         'published': len(sent),
         'rate_per_line_hz': rate,
         'lines': len(names),

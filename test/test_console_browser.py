@@ -215,9 +215,7 @@ def live_run(tmp_path_factory: Any) -> Any:
             'an audible alert', lambda: driver.execute_script('return cmConsole.beeps'), 15.0
         )
         SHOTS.mkdir(parents=True, exist_ok=True)
-        uplift = (
-            "return cmConsole.frame.lines.find(l => l.name === 'line_11').uplift_force > 1e5"
-        )
+        uplift = "return cmConsole.frame.lines.find(l => l.name === 'line_11').uplift_force > 1e5"
         try:  # the picture for docs/console.md: well into the storm (not a condition)
             wait_for('uplift above 100 kN', lambda: driver.execute_script(uplift), 15.0)
         except AssertionError:

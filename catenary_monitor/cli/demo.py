@@ -113,13 +113,15 @@ def start_console(
             env=env,
         )
         found: list[str] = []
-        reader = threading.Thread(target=lambda: found.append(proc.stdout.readline()), daemon=True)
+        out = proc.stdout
+        assert out is not None
+        reader = threading.Thread(target=lambda: found.append(out.readline()), daemon=True)
         reader.start()
         reader.join(timeout)
         line = found[0] if found else ''
         match = re.search(r'console: (http://\S+)', line)
         if match:
-            threading.Thread(target=proc.stdout.read, daemon=True).start()  # drain
+            threading.Thread(target=out.read, daemon=True).start()  # drain
             return proc, match.group(1)
         why = line.strip() or f'no URL within {timeout:g} s'
         if proc.poll() is None:
