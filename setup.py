@@ -31,11 +31,12 @@ setup(
     name=package_name,
     version='0.2.0',
     packages=find_packages(exclude=['test']),
-    package_data={package_name: ['py.typed', 'data/*']},
+    package_data={package_name: ['py.typed', 'data/*', 'console/static/*']},
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config', glob('config/*.yaml')),
+        ('share/' + package_name + '/foxglove', glob('foxglove/*.json')),
     ],
     python_requires='>=3.10',
     install_requires=[
@@ -58,6 +59,8 @@ setup(
             'flake8>=6',
             'mypy>=1.8',
             'pytest-timeout',
+            # The console's browser tests drive Debian's chromium through /usr/bin/chromedriver.
+            'selenium>=4.10',
             'moorpy',
             'pycatenary',
         ],

@@ -38,8 +38,9 @@ def _batch(func: Any) -> Any:
 
 def register(sub: Any) -> None:
     """Add the benchmark sub-commands to the ``catenary-monitor`` parser."""
-    from catenary_monitor_study import bench_core, bench_methods, bench_replay
+    from catenary_monitor_study import bench_console, bench_core, bench_methods, bench_replay
 
+    bench_console.register(sub)
     for module in (bench_core, bench_methods, bench_replay):
         module.register(sub)
     # bench runs as a library user's process (glibc defaults; --keep-freed-memory to compare)

@@ -74,6 +74,8 @@ def _layer(name: str) -> str:
         return 'top'
     if name == 'catenary_monitor.__main__':
         return 'cli'  # ``python -m catenary_monitor``: the command line
+    if _within(name, 'catenary_monitor.console'):
+        return 'cli'  # the operator's console: a shell beside the command line
     for layer in ('core', 'io', 'ros', 'cli'):
         if _within(name, f'catenary_monitor.{layer}'):
             return layer

@@ -12,11 +12,25 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
-from catenary_monitor.core.batch import KIND_TENSION, Window, advance, recompute, tick_grid
+from catenary_monitor.core.batch import (
+    KIND_TENSION,
+    Window,
+    advance,
+    recompute,
+    run_log,
+    tick_grid,
+)
 from catenary_monitor.core.config import LineConfig, MonitorConfig
-from catenary_monitor.core.monitor import VALUE_FIELDS, Depth, MonitorCore, Tension, Tick
+from catenary_monitor.core.monitor import (
+    VALUE_FIELDS,
+    Acknowledge,
+    Depth,
+    MonitorCore,
+    Tension,
+    Tick,
+)
 
-from replay_data import T0_NS, core_steps, dock_config, generate
+from replay_data import T0_NS, core_steps, dock_config, events_of, generate
 
 
 def window_of(config, tensions, depth, ticks, lo=None, hi=None):
@@ -61,6 +75,7 @@ def core_state(core):
             line.status,
             line.status_message,
             line.model,
+            _nan_free(tuple(vars(line.ack).values())),
         )
         for line in core.lines
     ]
@@ -321,3 +336,43 @@ def test_random_schedules_with_distinct_stamps(case):
 @given(schedules(distinct=False))
 def test_random_schedules_with_equal_stamps(case):
     compare(*case, check_snapshots=False)
+
+
+def test_run_log_steps_acknowledgements_as_the_core_does():
+    """Acknowledgements (one line, all, an unknown name, a repeated one) between vectorized
+    stretches: the same snapshots, acknowledgement keys and final state as the core."""
+    config = dock_config(3, tension_timeout=1.5)
+    tensions, depth = generate(config, seconds=90.0, seed=2)
+    ticks = ticks_for(tensions, depth)
+    acks = [
+        Acknowledge(T0_NS + int(s * 1e9) + 7, line, f'op {k}')
+        for k, (s, line) in enumerate(
+            [
+                (3.1, None),
+                (30.2, 'line_01'),
+                (46.0, 'line_02'),
+                (46.5, 'line_02'),
+                (55.3, 'nope'),
+                (61.7, None),
+                (80.9, 'line_03'),
+            ]
+        )
+    ]
+    core = MonitorCore(config, T0_NS)
+    merged = sorted(events_of(config, tensions, depth, ticks) + acks, key=lambda e: e.stamp_ns)
+    steps = [core.step(ev) for ev in merged]
+    twin = MonitorCore(config, T0_NS)
+    empty = (np.zeros(0, np.int64), np.zeros(0))
+    window = Window([tensions.get(line.name, empty) for line in config.lines], depth, ticks)
+    result, twin = run_log(twin, window, acks, snapshots=True)
+    want = [s.snapshot for s in steps if s.snapshot is not None]
+    assert [s.stamp_ns for s in result.snapshots] == [s.stamp_ns for s in want]
+    for g, w in zip(result.snapshots, want):
+        assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
+    states = {dict(st.values).get('alarm_state') for s in want for st in s.statuses[:3]}
+    assert {'unacknowledged', 'acknowledged', 'returned-unacknowledged', 'normal'} <= states
+    got_lines, got_rest = core_state(twin)
+    want_lines, want_rest = core_state(core)
+    assert got_rest == want_rest
+    for g, w in zip(got_lines, want_lines):
+        assert g[:2] == w[:2] and g[3:] == w[3:]

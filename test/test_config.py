@@ -241,7 +241,7 @@ def test_every_parameter_is_described_with_a_valid_range():
         assert spec.description and spec.type in {'double', 'string', 'string_array'}
         if spec.type == 'double':
             assert spec.min is not None and spec.max is not None and spec.min < spec.max
-            if spec.default is not REQUIRED:
+            if spec.default is not REQUIRED and spec.default == spec.default:  # NaN: optional
                 assert spec.min <= spec.default <= spec.max
 
 
@@ -261,3 +261,38 @@ def test_dataclasses_validate_when_built_directly():
         AlarmConfig(clear_hold=-3.0)
     with pytest.raises(ConfigError, match='duplicate'):
         MonitorConfig(lines=(LineConfig('a', 1.0, 1.0, 1.0), LineConfig('a', 1.0, 1.0, 1.0)))
+
+
+def test_heading_is_optional_and_checked():
+    """NAME.heading (deg, clockwise from the bow): not set -> evenly spread; out of range
+    refused in one line; the same value through config_to_params."""
+    import math
+
+    from catenary_monitor.core.config import ConfigError, config_from_params, config_to_params
+
+    flat = {
+        'lines': ['a', 'b', 'c', 'd'],
+        **{
+            f'{n}.{k}': v
+            for n in 'abcd'
+            for k, v in (('weight', 1300.0), ('anchor_distance', 120.0), ('mbl', 4.8e6))
+        },
+    }
+    config = config_from_params(flat)
+    assert math.isnan(config.line('a').heading)
+    assert config.headings() == [45.0, 135.0, 225.0, 315.0]
+    config = config_from_params({**flat, 'b.heading': -90, 'c.heading': 360.0})
+    assert config.headings() == [45.0, 270.0, 0.0, 315.0]
+    assert config_from_params(config_to_params(config)) == config
+    try:
+        config_from_params({**flat, 'a.heading': 400.0})
+    except ConfigError as err:
+        assert str(err).startswith("parameter 'a.heading': 400.0 out of range")
+    else:
+        raise AssertionError('heading 400 must be refused')
+    try:
+        config_from_params({**flat, 'a.heading': float('inf')})
+    except ConfigError as err:
+        assert 'finite' in str(err)
+    else:
+        raise AssertionError('an infinite heading must be refused')

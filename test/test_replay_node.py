@@ -3,14 +3,18 @@
 The monitor runs as its own process on a params file; this process publishes tension and depth
 with rclpy: tension before the first depth (a late first depth), a storm that lifts line_02's
 anchor, a tension dropout and a NaN on line_01, a depth dropout longer than ``depth_timeout``,
-and line_03 an elastic chain (``ea`` set). The node is stopped with SIGTERM and its MCAP log is
-replayed with the same params file. Compared with what the node logged itself:
+and line_03 an elastic chain (``ea`` set); an operator acknowledges line_02's alarm during the
+storm, then every alarm, over the node's acknowledgement topic. The node is stopped with
+SIGTERM and its MCAP log is replayed with the same params file. Compared with what the node
+logged itself:
 
 * every output message (``/catenary_monitor/NAME/outputs``): same times, solver status and
   level, values to 1e-12;
 * every ``/diagnostics`` message: the same stamps, and for every line and the tide the same
   level, message and values (numbers to 1e-12);
-* every alarm transition the node printed, with its message.
+* every alarm transition the node printed, with its message;
+* the acknowledgement states (``acknowledged``, ``alarm_state``, ...): replay steps the
+  acknowledgements the node recorded on its events channel.
 
 The params files are written in the forms rcl accepts and PyYAML reads differently (``5.17e6``,
 ``1e6``, integers for doubles, the ``/**`` key, dotted and nested names): the node and replay
@@ -89,9 +93,11 @@ catenary_monitor:
 }
 
 
-def _publish_scenario(pubs, depth_pub):
+def _publish_scenario(pubs, depth_pub, ack_pub):
     """About 9 s of inputs: see the module docstring."""
-    from std_msgs.msg import Float64
+    from std_msgs.msg import Float64, String
+
+    acks = {78: 'line_02 replay test', 50: 'nope', 150: 'all replay test'}
 
     rng = np.random.default_rng(5)
     start = time.monotonic()
@@ -107,6 +113,8 @@ def _publish_scenario(pubs, depth_pub):
         # First depth at 1.2 s; none from 5 to 8.6 s (longer than depth_timeout 3 s).
         if now > 1.2 and not 5.0 < now < 8.6 and k % 10 == 0:
             depth_pub.publish(Float64(data=20.85 + 0.3 * np.sin(now / 3)))
+        if k in acks:
+            ack_pub.publish(String(data=acks[k]))
         k += 1
         time.sleep(0.05)
 
@@ -114,7 +122,7 @@ def _publish_scenario(pubs, depth_pub):
 def _run_node(params: Path, out_path: Path) -> tuple[int, str]:
     import rclpy
     from rclpy.qos import QoSProfile
-    from std_msgs.msg import Float64
+    from std_msgs.msg import Float64, String
 
     env = dict(
         os.environ,
@@ -145,6 +153,7 @@ def _run_node(params: Path, out_path: Path) -> tuple[int, str]:
             for name in ('line_01', 'line_02', 'line_03')
         }
         depth_pub = client.create_publisher(Float64, '/tide/depth', qos)
+        ack_pub = client.create_publisher(String, '/catenary_monitor/acknowledge', qos)
         deadline = time.monotonic() + 60.0
         while (
             time.monotonic() < deadline
@@ -152,12 +161,13 @@ def _run_node(params: Path, out_path: Path) -> tuple[int, str]:
             and not (
                 all(p.get_subscription_count() for p in pubs.values())
                 and depth_pub.get_subscription_count()
+                and ack_pub.get_subscription_count()
             )
         ):
             time.sleep(0.05)
         assert proc.poll() is None, out_path.read_text()
         assert depth_pub.get_subscription_count(), 'the node did not subscribe in 60 s'
-        _publish_scenario(pubs, depth_pub)
+        _publish_scenario(pubs, depth_pub, ack_pub)
         time.sleep(1.0)
         client.destroy_node()
     finally:
@@ -197,10 +207,14 @@ def _assert_status_equal(node_status, replay_status, what):
     want = dict(replay_status.values)
     assert list(got) == list(want), what
     for key, value in want.items():
-        if key == 'model':
-            assert got[key] == value, what
+        if key in TEXT_KEYS:
+            assert got[key] == value, (what, key)
         else:
             _assert_values_equal(float(got[key]), float(value), f'{what} {key}')
+
+
+#: The /diagnostics keys whose values are words, not numbers.
+TEXT_KEYS = {'model', 'acknowledged', 'alarm_state', 'alarm_condition', 'acknowledged_by'}
 
 
 @pytest.mark.parametrize('form', sorted(PARAMS))
@@ -250,6 +264,23 @@ def test_replay_of_a_live_node_log_redoes_every_step(tmp_path, form):
         assert len(array.status) == len(snap.statuses)
         for got, want in zip(array.status, snap.statuses):
             _assert_status_equal(got, want, f'{stamp} {got.name}')
+    # The acknowledgements: recorded (the unknown line refused), replayed, seen on /diagnostics.
+    from catenary_monitor.core.monitor import Acknowledge
+
+    acks = [e for e in result.events if isinstance(e, Acknowledge)]
+    assert [(e.line, e.origin) for e in acks] == [
+        ('line_02', 'replay test'),
+        (None, 'replay test'),
+    ], text
+    states = {
+        (st.name, kv.value)
+        for _, array in arrays
+        for st in array.status
+        for kv in st.values
+        if kv.key == 'alarm_state'
+    }
+    assert ('catenary_monitor: line_02', 'acknowledged') in states
+    assert "unknown line 'nope'" in text
     # The scenario reached what it was written for.
     assert {0, 2, 3} <= levels_seen  # OK, ERROR (uplift, NaN), STALE (dropouts, start)
     tide = [(tr.old.name, tr.new.name) for tr in result.tide]

@@ -1,9 +1,11 @@
 """``catenary-monitor demo``: the paper's dock through a storm, simulator and monitor as processes.
 
-Starts the monitor (``python -m catenary_monitor.ros.node``) on config/floating_dock.yaml, then the
-dock simulator (``python -m catenary_monitor.ros.simulator``); prints each alarm transition the
-monitor reports as it happens; after the episode stops the monitor with SIGINT (the MCAP file
-gets its summary), reads the log back and draws a PNG chart (matplotlib, Agg backend).
+Starts the monitor (``python -m catenary_monitor.ros.node``) on config/floating_dock.yaml, the
+operator's console (``catenary-monitor console``, its URL printed; :func:`start_console`), then
+the dock simulator (``python -m catenary_monitor.ros.simulator``); prints each alarm transition
+the monitor reports as it happens; after the episode stops the console and the monitor with
+SIGINT (the MCAP file gets its summary), reads the log back and draws a PNG chart (matplotlib,
+Agg backend).
 The demo itself imports no rclpy except to decode the logged outputs for the chart.
 """
 
@@ -23,7 +25,7 @@ import numpy as np
 
 from catenary_monitor.ros.simulator import default_config_path
 
-__all__ = ['run_demo', 'DEMO_OVERRIDES']
+__all__ = ['run_demo', 'start_console', 'DEMO_OVERRIDES']
 
 #: Alarm timings for the compressed episode (the storm and a tide cycle in under a minute):
 #: clear holds longer than the simulator's 4 s wave period, shorter than the episode.
@@ -95,10 +97,44 @@ def _relay(
     flush_online()
 
 
+def start_console(
+    params: str, env: dict[str, str], port: int = 8080, timeout: float = 30.0
+) -> tuple[Optional[subprocess.Popen], str]:
+    """Start ``catenary-monitor console`` as its own process; (process, URL) once it listens,
+    (None, why) if it did not. A busy ``port`` falls back to any free port."""
+    why = ''
+    for p in dict.fromkeys([port, 0]):
+        proc = subprocess.Popen(
+            [sys.executable, '-m', 'catenary_monitor.cli.main', 'console', '--params-file']
+            + [params, '--port', str(p)],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            env=env,
+        )
+        found: list[str] = []
+        out = proc.stdout
+        assert out is not None
+        reader = threading.Thread(target=lambda: found.append(out.readline()), daemon=True)
+        reader.start()
+        reader.join(timeout)
+        line = found[0] if found else ''
+        match = re.search(r'console: (http://\S+)', line)
+        if match:
+            threading.Thread(target=out.read, daemon=True).start()  # drain
+            return proc, match.group(1)
+        why = line.strip() or f'no URL within {timeout:g} s'
+        if proc.poll() is None:
+            proc.kill()
+        proc.wait(5)
+    return None, why
+
+
 def run_demo(
     out_dir: str = 'catenary_monitor_demo',
     duration: float = 55.0,
     params_file: Optional[str] = None,
+    console_port: Optional[int] = 8080,
 ) -> int:
     """Run the demo; return 0 on success. Leaves the MCAP log and ``demo.png`` in ``out_dir``."""
     params = params_file or default_config_path()
@@ -140,6 +176,7 @@ def run_demo(
     )
     relay.start()
     sim: Optional[subprocess.Popen] = None
+    console: Optional[subprocess.Popen] = None
     try:
         if not ready.wait(30.0) or monitor.poll() is not None:
             print(
@@ -147,6 +184,12 @@ def run_demo(
                 file=sys.stderr,
             )
             return 1
+        if console_port is not None:
+            console, url = start_console(params, env, console_port)
+            if console is None:
+                print(f'  the console did not start ({url}); the demo goes on without it')
+            else:
+                print(f'  console: {url}  (open it in a browser on this machine)')
         print('  monitor running; starting the dock simulator (alarm transitions follow)\n')
         sim = subprocess.Popen(
             [
@@ -173,6 +216,12 @@ def run_demo(
         if sim is not None and sim.poll() is None:
             sim.send_signal(signal.SIGINT)
             sim.wait(10)
+        if console is not None and console.poll() is None:
+            console.send_signal(signal.SIGINT)
+            try:
+                console.wait(10)
+            except subprocess.TimeoutExpired:
+                console.kill()
         if monitor.poll() is None:
             monitor.send_signal(signal.SIGINT)
         try:

@@ -35,7 +35,8 @@ def cmd_demo(args: argparse.Namespace) -> int:
     """Simulator + monitor as processes through a storm; leaves an MCAP log and a PNG chart."""
     from catenary_monitor.cli.demo import run_demo
 
-    return run_demo(args.out_dir, duration=args.duration)
+    port = None if args.no_console else args.console_port
+    return run_demo(args.out_dir, duration=args.duration, console_port=port)
 
 
 def register(sub: Any) -> None:
@@ -83,4 +84,12 @@ def register(sub: Any) -> None:
         metavar='S',
         help='episode length in wall seconds (default: %(default)s)',
     )
+    p.add_argument(
+        '--console-port',
+        type=int,
+        default=8080,
+        metavar='N',
+        help='port of the operator\'s console (default %(default)s; busy or 0: any free port)',
+    )
+    p.add_argument('--no-console', action='store_true', help='do not start the console')
     p.set_defaults(func=cmd_demo)

@@ -252,8 +252,13 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
     from importlib.metadata import entry_points
 
     from catenary_monitor.cli import live, replay
+    from catenary_monitor.console import command as console
 
-    found: list[Callable[[argparse._SubParsersAction], None]] = [live.register, replay.register]
+    found: list[Callable[[argparse._SubParsersAction], None]] = [
+        live.register,
+        replay.register,
+        console.register,
+    ]
     for ep in sorted(entry_points(group=COMMAND_GROUP), key=lambda e: e.name):
         try:
             found.append(ep.load())

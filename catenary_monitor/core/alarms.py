@@ -436,6 +436,10 @@ class LevelSeries:
         text = str(self._texts[j]) if self._texts is not None else self._table.get(code, '')
         return _status_text(code, text)
 
+    def active_at(self, i: int) -> list[bool]:
+        """The latches' active flags (:data:`CONDITIONS` order) after update ``i``."""
+        return [bool(self._active[cond][i]) for cond in CONDITIONS]
+
     def message_at(self, i: int) -> str:
         """The line's message after update ``i`` (as ``AlarmState.message``)."""
         if self.levels[i] == Level.OK:

@@ -30,7 +30,7 @@ from typing import Any, NamedTuple, Optional
 
 import numpy as np
 
-from catenary_monitor.core import catenary as cat, elastic, kernels
+from catenary_monitor.core import acknowledge as alarm_ack, catenary as cat, elastic, kernels
 from catenary_monitor.core.alarms import Level, LevelSeries, Transition, replay_levels
 from catenary_monitor.core.config import LineConfig, MonitorConfig
 from catenary_monitor.core.health import tide_status
@@ -523,7 +523,7 @@ def _line_inputs(
 
 def _advance_line(
     core: MonitorCore, k: int, window: Window, tide: _Tide
-) -> tuple[LineResult, LevelSeries, _Steps]:
+) -> tuple[LineResult, LevelSeries, _Steps, alarm_ack.AckSeries]:
     """One line through the window; leaves the line's state in the core as after the steps
     (the core's depth and tide still as before the window)."""
     line = core.lines[k]
@@ -534,6 +534,10 @@ def _advance_line(
     series = replay_levels(
         steps.times * 1e-9, inputs, line.alarm, STATUS_MESSAGES, initial=line.state
     )
+    acks = alarm_ack.replay_acks(
+        line.ack, steps.times * 1e-9, series.levels, alarm_ack.startup_grace(core.config.alarm)
+    )
+    line.ack = acks.final
     where = np.flatnonzero(steps.solved)
     result = LineResult(
         line.config.name,
@@ -549,7 +553,7 @@ def _advance_line(
         used,
     )
     _write_back(line, series, values, status, used, tt, tv)
-    return result, series, steps
+    return result, series, steps, acks
 
 
 def _write_back(
@@ -594,23 +598,34 @@ def advance(core: MonitorCore, window: Window, snapshots: bool = False) -> Windo
             line.status,
             line.model,
             line.tension_s,
+            [latch.active for latch in line.state.latches],
         )
         for line in core.lines
     ]
     tide, tide_transitions = _decide_tide(core, window)
-    results, series, steps = [], [], []
+    results, series, steps, acks = [], [], [], []
     for k in range(len(core.lines)):
-        r, s, st = _advance_line(core, k, window, tide)
+        r, s, st, a = _advance_line(core, k, window, tide)
         results.append(r)
         series.append(s)
         steps.append(st)
+        acks.append(a)
     times = [c[0] for c in (*window.tensions, window.depth, (window.ticks, None)) if len(c[0])]
     start = int(min(t[0] for t in times)) if times else core.last_ns
     end = int(max(t[-1] for t in times)) if times else core.last_ns
     snaps: list[Snapshot] = []
     if snapshots:
         snaps = _snapshots(
-            core, window, tide, results, series, steps, depth_before, tide_before, lines_before
+            core,
+            window,
+            tide,
+            results,
+            series,
+            steps,
+            depth_before,
+            tide_before,
+            lines_before,
+            acks,
         )
     _write_tide(core, window, tide, tide_transitions)
     core.last_ns = max(core.last_ns, end)
@@ -629,6 +644,7 @@ class _Before(NamedTuple):
     status: int
     model: str
     tension_s: float
+    latches: list[bool]
 
 
 def _changed(levels: np.ndarray, before: Level) -> np.ndarray:
@@ -646,6 +662,7 @@ def _snapshots(
     depth_before: tuple[float, float, bool],
     tide_before: tuple[Level, str],
     lines_before: list[_Before],
+    acks: list[alarm_ack.AckSeries],
 ) -> list[Snapshot]:
     """Every snapshot the core made in the window (ticks and level changes), built from the
     vectorized results."""
@@ -665,6 +682,7 @@ def _snapshots(
             stamps,
             window.tensions[k][0],
             lines_before[k],
+            acks[k],
         )
         for k in range(len(results))
     ]
@@ -698,6 +716,7 @@ def _line_statuses(
     stamps: np.ndarray,
     tt: np.ndarray,
     before: _Before,
+    acks: alarm_ack.AckSeries,
 ) -> list[ComponentStatus]:
     """The line's status in each snapshot (as after its newest step at or before the stamp)."""
     at = np.searchsorted(steps.times, stamps, 'right') - 1
@@ -705,8 +724,10 @@ def _line_statuses(
     for n, i in enumerate(at.tolist()):
         level, message = before.level, before.message
         values, status, model, ts = before.values, before.status, before.model, before.tension_s
+        latches = before.latches
         if i >= 0:
             level, message = Level(int(series.levels[i])), series.message_at(i)
+            latches = series.active_at(i)
             s, t = int(steps.s_idx[i]), int(steps.t_idx[i])
             if s >= 0:
                 values = tuple(float(r.values[key][s]) for key in VALUE_FIELDS)
@@ -723,6 +744,7 @@ def _line_statuses(
                 status,
                 model,
                 stamps[n] * 1e-9 - ts,
+                alarm_ack.diagnostic_values(acks.at(i), level, latches),
             )
         )
     return out

@@ -178,6 +178,16 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         1.0e12,
         _L,
     ),
+    ParamSpec(
+        'heading',
+        'double',
+        math.nan,
+        'Direction hook to anchor, clockwise from the dock\'s bow; not set (nan): evenly spread',
+        'deg',
+        -360.0,
+        360.0,
+        _L,
+    ),
     # Alarm thresholds (WARN).
     ParamSpec(
         'anchor_margin_warn',
@@ -360,6 +370,8 @@ def _check(full_name: str, spec: ParamSpec, value: Any) -> Any:
                 f'got {type(value).__name__} {value!r}',
             )
         value = float(value)
+        if value != value and spec.default != spec.default:
+            return value  # an optional parameter (default NaN) left unset
         if not math.isfinite(value):
             raise ConfigError(full_name, f'must be finite, got {value!r}')
         if spec.min is not None and value < spec.min or spec.max is not None and value > spec.max:
@@ -402,6 +414,7 @@ class LineConfig:
     hook_height: float = 0.0
     tension_topic: str = ''
     ea: float | None = None
+    heading: float = math.nan  # deg, clockwise from the bow toward the anchor; NaN: not set
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not _LINE_NAME.match(self.name):
@@ -487,6 +500,15 @@ class MonitorConfig:
                     f'{line.name}.tension_topic',
                     f'topic {line.tension_topic!r} is already used by {other}',
                 )
+
+    def headings(self) -> list[float]:
+        """Each line's heading (deg, clockwise from the bow, in [0, 360)): ``NAME.heading``
+        where set, else evenly spread, line k of n at ``(k + 0.5) * 360 / n``."""
+        n = len(self.lines)
+        return [
+            (((k + 0.5) * 360.0 / n) if line.heading != line.heading else line.heading) % 360.0
+            for k, line in enumerate(self.lines)
+        ]
 
     def line(self, name: str) -> LineConfig:
         """The line called ``name`` (KeyError if there is none)."""

@@ -5,8 +5,10 @@ tide and logger statuses, and turns each event into one :class:`Step`:
 
 * :class:`Tension` (a hook tension sample of one line), :class:`Depth` (a tide depth sample),
   :class:`Tick` (the periodic step, at ``diagnostic_rate``), :class:`LoggerHealth` (the MCAP
-  logger's state changed) and :class:`Reconfigure` (accepted parameter change), each with its
-  time ``stamp_ns`` (ns on the monitor's clock; events come in time order).
+  logger's state changed), :class:`Reconfigure` (accepted parameter change) and
+  :class:`Acknowledge` (an operator acknowledged a line's alarm, or all:
+  :mod:`catenary_monitor.core.acknowledge`), each with its time ``stamp_ns`` (ns on the
+  monitor's clock; events come in time order).
 
 What an event does, in this order (the one schedule the node, replay and the tests share):
 
@@ -16,7 +18,8 @@ What an event does, in this order (the one schedule the node, replay and the tes
 3. lines are solved (``solve(..., ea=line.ea)``): a tension event solves its line at the newest
    depth (``depth + hook_height``); a depth event solves every line that has a tension;
 4. alarms are stepped (:class:`~catenary_monitor.core.alarms.LineAlarm`): the solved line at a
-   tension event, every line at a depth event or a tick;
+   tension event, every line at a depth event or a tick; each stepped line's acknowledgement
+   state follows its level (:func:`catenary_monitor.core.acknowledge.step`);
 5. a diagnostic snapshot is taken when the event is a tick or when any level changed: never two
    per event, so the statuses of one snapshot always agree.
 
@@ -35,6 +38,7 @@ from typing import Any, NamedTuple, Optional, Sequence, Union
 
 import numpy as np
 
+from catenary_monitor.core import acknowledge as alarm_ack
 from catenary_monitor.core.alarms import (
     AlarmInputs,
     AlarmState,
@@ -66,6 +70,7 @@ __all__ = [
     'LoggerHealth',
     'Reconfigure',
     'Start',
+    'Acknowledge',
     'Event',
     'LineOutput',
     'ComponentStatus',
@@ -157,7 +162,15 @@ class Reconfigure(NamedTuple):
     config: MonitorConfig
 
 
-Event = Union[Tension, Depth, Tick, LoggerHealth, Reconfigure]
+class Acknowledge(NamedTuple):
+    """An operator acknowledged line ``line``'s alarm (None: every line) from ``origin``."""
+
+    stamp_ns: int
+    line: Optional[str]
+    origin: str
+
+
+Event = Union[Tension, Depth, Tick, LoggerHealth, Reconfigure, Acknowledge]
 
 
 class LineOutput(NamedTuple):
@@ -193,7 +206,8 @@ class Change(NamedTuple):
 
 class Step(NamedTuple):
     """What one event did: the outputs of the lines solved, the snapshot (or None), the
-    transitions; ``kind`` is ``tension``, ``depth``, ``tick``, ``logger`` or ``configure``."""
+    transitions; ``kind`` is ``tension``, ``depth``, ``tick``, ``logger``, ``configure`` or
+    ``acknowledge``."""
 
     stamp_ns: int
     kind: str
@@ -216,6 +230,7 @@ class LineState:
     status: int = NO_DEPTH  # solver status of the newest solve
     status_message: str = ''
     model: str = NO_MODEL  # model of the newest solve
+    ack: alarm_ack.AckState = alarm_ack.AckState()  # the line's alarm in ISA-18.2 states
 
     def inputs(self, depth_s: float, depth_stale: bool) -> AlarmInputs:
         """The alarm inputs of this line now (newest results, stamps, the tide's decision)."""
@@ -266,6 +281,7 @@ class MonitorCore:
                 LineAlarm.for_line(lc, config.alarm),
                 ids.get(lc.name, resolve_topic(lc.tension_topic)),
                 LineAlarm.for_line(lc, config.alarm).initial(start),
+                ack=alarm_ack.initial(start),
             )
             for lc in config.lines
         ]
@@ -296,6 +312,8 @@ class MonitorCore:
         if isinstance(event, Reconfigure):
             self.reconfigure(event.config)
             return Step(event.stamp_ns, 'configure', (), None, ())
+        if isinstance(event, Acknowledge):
+            return self._on_acknowledge(event)
         raise TypeError(f'not a monitor event: {event!r}')
 
     def _on_tension(self, ev: Tension) -> Step:
@@ -322,6 +340,15 @@ class MonitorCore:
         new = logger_status(ev.error, ev.path)
         changes = self._set_component('logger', new, ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'logger', [], changes)
+
+    def _on_acknowledge(self, ev: Acknowledge) -> Step:
+        """Acknowledge one line's alarm (or every line's; an unknown name changes nothing);
+        the snapshot shows it at once."""
+        now = _stamp_s(ev.stamp_ns)
+        for line in self.lines:
+            if ev.line is None or ev.line == line.config.name:
+                line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin)
+        return Step(ev.stamp_ns, 'acknowledge', (), self.snapshot(ev.stamp_ns), ())
 
     def reconfigure(self, config: MonitorConfig) -> None:
         """Take new line constants and alarm rules (same line names); alarm states are kept."""
@@ -421,6 +448,8 @@ class MonitorCore:
             line.state, events = line.alarm.update(
                 line.state, line.inputs(self.depth_s, self.depth_stale), now
             )
+            grace = alarm_ack.startup_grace(self.config.alarm)
+            line.ack = alarm_ack.step(line.ack, line.state.level, now, grace)
             changes += [Change(line.config.name, ev) for ev in events]
         return changes
 
@@ -451,6 +480,9 @@ class MonitorCore:
                 line.status,
                 line.model,
                 now - line.tension_s,
+                alarm_ack.diagnostic_values(
+                    line.ack, line.state.level, [latch.active for latch in line.state.latches]
+                ),
             )
             for line in self.lines
         ]
@@ -471,10 +503,12 @@ def line_status(
     status: int,
     model: str,
     tension_age: float,
+    extra: Sequence[tuple[str, str]] = (),
 ) -> ComponentStatus:
     """One line's ``DiagnosticStatus``: the contract keys (SI strings ``float()`` reads back
     exactly), then ``measured_tension``, ``tension_age`` [s], ``anchor_distance``,
-    ``allowed_uplift``, ``anchor_angle_deg``, ``solver_status`` and ``model``."""
+    ``allowed_uplift``, ``anchor_angle_deg``, ``solver_status``, ``model``, then ``extra``
+    (the alarm's acknowledgement keys: :func:`.acknowledge.diagnostic_values`)."""
     named = dict(zip(VALUE_FIELDS, values))
     pairs = diagnostic_values(named) + [
         ('measured_tension', repr(float(values[0]))),
@@ -484,6 +518,7 @@ def line_status(
         ('anchor_angle_deg', repr(float(values[9]))),
         ('solver_status', str(int(status))),
         ('model', model),
+        *extra,
     ]
     return ComponentStatus(
         f'{NODE_NAME}: {config.name}', level, message, hardware_id, tuple(pairs)
@@ -518,6 +553,9 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
         return {'kind': 'logger', 'error': event.error, 'path': event.path}
     if isinstance(event, Reconfigure):
         return {'kind': 'configure', 'parameters': config_to_params(event.config)}
+    if isinstance(event, Acknowledge):
+        line = alarm_ack.ALL_LINES if event.line is None else event.line
+        return {'kind': 'acknowledge', 'line': line, 'origin': event.origin}
     return None
 
 
@@ -535,6 +573,13 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
             return LoggerHealth(stamp_ns, record.get('error'), record.get('path'))
         if kind == 'configure':
             return Reconfigure(stamp_ns, config_from_params(record['parameters']))
+        if kind == 'acknowledge':
+            line = str(record['line'])
+            return Acknowledge(
+                stamp_ns,
+                None if line == alarm_ack.ALL_LINES else line,
+                str(record.get('origin', '')),
+            )
     except (ValueError, KeyError, TypeError):
         return None
     return None

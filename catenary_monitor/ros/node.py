@@ -40,6 +40,7 @@ from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension, String
 
 from catenary_monitor import __version__
 from catenary_monitor.core import elastic
+from catenary_monitor.core.acknowledge import ACKNOWLEDGE_TOPIC, parse_request
 from catenary_monitor.core.alarms import Level
 from catenary_monitor.core.config import (
     ConfigError,
@@ -54,6 +55,7 @@ from catenary_monitor.core.monitor import (
     EVENTS_TOPIC,
     NODE_NAME,
     OUTPUT_FIELDS,
+    Acknowledge,
     Change,
     Depth,
     Event,
@@ -107,7 +109,8 @@ def _descriptor(spec: ParamSpec, name: str) -> ParameterDescriptor:
         description=spec.description + unit,
         read_only=spec.read_only,
     )
-    if spec.min is not None or spec.max is not None:
+    # An optional parameter (default NaN: not set) cannot carry a ROS range; config checks it.
+    if (spec.min is not None or spec.max is not None) and spec.default == spec.default:
         low = -sys.float_info.max if spec.min is None else float(spec.min)
         high = sys.float_info.max if spec.max is None else float(spec.max)
         desc.floating_point_range = [FloatingPointRange(from_value=low, to_value=high, step=0.0)]
@@ -241,6 +244,9 @@ class CatenaryMonitor(Node):
                 label=','.join(OUTPUT_FIELDS), size=len(OUTPUT_FIELDS), stride=len(OUTPUT_FIELDS)
             )
         ]
+        self._ack_sub = self.create_subscription(
+            String, ACKNOWLEDGE_TOPIC, self._on_acknowledge, _RELIABLE
+        )
         self._diag_timer = self.create_timer(1.0 / cfg.alarm.diagnostic_rate, self._on_period)
         self._log_timer = self.create_timer(0.25, self._on_log_timer)
 
@@ -269,6 +275,22 @@ class CatenaryMonitor(Node):
     def _on_period(self) -> None:
         """The periodic tick: staleness and hold-time clears; /diagnostics at a steady rate."""
         self._record(Tick(self._stamp()))
+
+    @_guarded
+    def _on_acknowledge(self, msg: String) -> None:
+        """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event."""
+        try:
+            line, origin = parse_request(msg.data)
+        except ValueError as err:
+            self.get_logger().warning(f'acknowledge refused: {err}')
+            return
+        if line is not None and line not in self.core.index:
+            self.get_logger().warning(
+                f'acknowledge refused: unknown line {line!r} (lines: {", ".join(self._names)})'
+            )
+            return
+        self._record(Acknowledge(self._stamp(), line, origin))
+        self.get_logger().info(f'ACKNOWLEDGED {line or "all"} by {origin}')
 
     @_guarded
     def _on_log_timer(self) -> None:

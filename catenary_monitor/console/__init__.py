@@ -1,0 +1,10 @@
+"""The operator's console: the dock at a glance in a browser (``catenary-monitor console``).
+
+Its own process, a ROS client of the monitor (:mod:`.live`: it subscribes to ``/diagnostics``
+and the per-line outputs, and publishes acknowledgements, which the monitor's core decides and
+records), or a viewer of a recorded log (:mod:`.replay`). :mod:`.model` turns what the monitor
+published into the page's frames; :mod:`.server` serves the page (plain HTML, CSS and JS shipped
+in ``static/``: no CDN, no web fonts) with the standard library's ``http.server``, live updates
+as Server-Sent Events. :mod:`.foxglove` writes a Foxglove / Lichtblick layout for the same
+topics. See docs/console.md.
+"""

@@ -1,0 +1,137 @@
+"""``catenary-monitor console``: serve the operator's page, live or over a recorded log.
+
+Live: ``catenary-monitor console [--params-file F] [--port 8080] [--bind 127.0.0.1]``.
+Replay: ``catenary-monitor console --log FILE|DIR [--params-file F]``. Prints the URL on one line
+(``console: http://HOST:PORT/ ...``) and serves until Ctrl-C or SIGTERM. Exit 2 with one line on a
+bad params file, an unreadable log or a port in use.
+"""
+
+from __future__ import annotations
+
+import argparse
+import signal
+import sys
+import threading
+from typing import Any
+
+__all__ = ['register', 'cmd_console']
+
+
+def _fail(message: str, code: int = 2) -> int:
+    print(f'catenary-monitor console: {message}', file=sys.stderr)
+    return code
+
+
+def cmd_console(args: argparse.Namespace) -> int:
+    """Start the console's source and HTTP server; serve until a signal."""
+    from catenary_monitor.console.server import ConsoleServer
+    from catenary_monitor.core.config import ConfigError, config_from_params, load_params_file
+
+    if args.foxglove_layout:
+        return _write_layout(args)
+    source: Any
+    if args.log:
+        from catenary_monitor.console.replay import LogError, ReplaySource, load_log
+
+        try:
+            config, result, depth, files = load_log(args.log, args.params_file)
+        except LogError as err:
+            return _fail(str(err), err.code)
+        source = ReplaySource(config, result, depth, files)
+    else:
+        config = None
+        if args.params_file:
+            try:
+                config = config_from_params(load_params_file(args.params_file))
+            except ConfigError as err:
+                return _fail(f'{args.params_file}: {err}')
+        from catenary_monitor.console.live import LiveSource
+
+        source = LiveSource(config, args.ros_args)
+    try:
+        server = ConsoleServer(source, args.bind, args.port)
+    except OSError as err:
+        return _fail(
+            f'cannot listen on {args.bind}:{args.port}: {err.strerror or err} '
+            '(choose --port N, or --port 0 for any free port)'
+        )
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    if source.mode == 'live':
+        source.start()
+    server.start()
+    what = 'live' if source.mode == 'live' else f'replay of {", ".join(args.log)}'
+    print(f'console: {server.url} ({what}; Ctrl-C stops)', flush=True)
+    try:
+        while not stop.wait(0.5):
+            pass
+    finally:
+        server.shutdown()
+        if source.mode == 'live':
+            source.stop()
+    return 0
+
+
+def _write_layout(args: argparse.Namespace) -> int:
+    """Write the Foxglove / Lichtblick layout for the params file's lines."""
+    import json
+
+    from catenary_monitor.console.foxglove import layout
+    from catenary_monitor.core.config import ConfigError, config_from_params, load_params_file
+    from catenary_monitor.ros.simulator import default_config_path
+
+    path = args.params_file or default_config_path()
+    try:
+        config = config_from_params(load_params_file(path))
+    except ConfigError as err:
+        return _fail(f'{path}: {err}')
+    try:
+        with open(args.foxglove_layout, 'w', encoding='utf-8') as f:
+            json.dump(layout(config), f, indent=2)
+            f.write('\n')
+    except OSError as err:
+        return _fail(f'cannot write {args.foxglove_layout}: {err.strerror or err}')
+    print(f'Foxglove / Lichtblick layout for {len(config.lines)} lines: {args.foxglove_layout}')
+    return 0
+
+
+def register(sub: Any) -> None:
+    """Add ``console`` to the ``catenary-monitor`` parser."""
+    p = sub.add_parser(
+        'console',
+        help="the operator's page in a browser: live, or over a recorded log",
+        description="Serve the operator's console: dock plan, a tile per line, tide, trends, "
+        'alarm list with acknowledgement and history. Live it is a ROS client of the monitor; '
+        'with --log it replays a recorded log with a time slider.',
+    )
+    p.add_argument(
+        '--params-file',
+        metavar='FILE',
+        help='the monitor\'s params YAML (lines, headings, MBL); live default: the lines the '
+        'monitor names on /diagnostics; replay default: the parameters recorded in the log',
+    )
+    p.add_argument('--port', type=int, default=8080, help='TCP port (0: any free port)')
+    p.add_argument(
+        '--bind',
+        default='127.0.0.1',
+        metavar='ADDR',
+        help='address to listen on (default %(default)s: this PC only; 0.0.0.0 for the network)',
+    )
+    p.add_argument(
+        '--log', nargs='+', metavar='FILE|DIR', help='replay a recorded MCAP log (files or dirs)'
+    )
+    p.add_argument(
+        '--foxglove-layout',
+        metavar='OUT.json',
+        help='write a Foxglove / Lichtblick layout for the params file\'s lines and exit',
+    )
+    p.add_argument(
+        '--ros-args',
+        dest='ros_args',
+        nargs=argparse.REMAINDER,
+        default=[],
+        metavar='ARG',
+        help='the rest is passed to ROS',
+    )
+    p.set_defaults(func=cmd_console)

@@ -1,0 +1,510 @@
+// catenary_monitor console: the page. Plain JS, no library. It shows what the monitor published
+// (levels, messages, alarm states are the monitor's decisions); it only formats and draws.
+'use strict';
+
+const SVGNS = 'http://www.w3.org/2000/svg';
+const KN = 1e-3;
+const SILENCE_S = 30;        // a silenced alarm sounds again after this (IMO MSC.302(87))
+const REPEAT_S = 5;          // an unacknowledged ERROR beeps again every REPEAT_S
+const SERVER_TIMEOUT_S = 2.5;  // no stream message for this long: the console server is gone
+
+const S = {
+  config: null, frame: null, line: null, span: 3600, tab: 'active',
+  audio: null, mutedUntil: 0, lastBeep: 0, knownErrors: new Set(), beeps: 0,
+  lastMessage: 0, serverLost: false, replay: { t: 0, playing: false, speed: 10, last: 0 },
+  trendAt: 0, bench: location.search.includes('bench=1') ? [] : null,
+};
+window.cmConsole = S;  // for the tests and the latency benchmark
+
+const $ = (id) => document.getElementById(id);
+function el(tag, attrs, text) {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs || {})) e.setAttribute(k, v);
+  if (text !== undefined) e.textContent = text;
+  return e;
+}
+function svg(tag, attrs, text) {
+  const e = document.createElementNS(SVGNS, tag);
+  for (const [k, v] of Object.entries(attrs || {})) e.setAttribute(k, v);
+  if (text !== undefined) e.textContent = text;
+  return e;
+}
+const num = (v, digits, scale) => (v === null || v === undefined ? '—' : (v * (scale || 1)).toFixed(digits));
+function clock(t, withDate) {
+  if (t === null || t === undefined) return '—';
+  const d = new Date(t * 1000);
+  const p = (n) => String(n).padStart(2, '0');
+  const hms = `${p(d.getHours())}:${p(d.getMinutes())}:${p(d.getSeconds())}`;
+  return withDate ? `${d.getFullYear()}-${p(d.getMonth() + 1)}-${p(d.getDate())} ${hms}` : hms;
+}
+function ago(s) {
+  if (s === null || s === undefined) return 'never';
+  if (s < 60) return `${s.toFixed(1)} s`;
+  if (s < 3600) return `${Math.floor(s / 60)} min ${Math.floor(s % 60)} s`;
+  return `${(s / 3600).toFixed(1)} h`;
+}
+
+// ---------------------------------------------------------------- start
+async function start() {
+  S.config = await (await fetch('/api/config')).json();
+  S.line = (S.config.lines.find((l) => l.name === 'line_11') || S.config.lines[0] || {}).name;
+  $('mode').textContent = S.config.mode === 'live' ? 'LIVE' : 'REPLAY';
+  buildTiles();
+  buildPlan();
+  buildPickers();
+  $('ack-all').addEventListener('click', () => acknowledge('all'));
+  $('tab-active').addEventListener('click', () => showTab('active'));
+  $('tab-history').addEventListener('click', () => showTab('history'));
+  $('sound').addEventListener('click', soundButton);
+  unlockAudio();
+  document.addEventListener('click', () => { if (S.audio) S.audio.resume().then(updateSoundButton); }, { once: true });
+  if (S.config.mode === 'live') startLive(); else startReplay();
+  setInterval(watchdog, 250);
+  setInterval(refreshTrend, 2000);
+}
+
+function startLive() {
+  const source = new EventSource('/api/stream');
+  source.onmessage = (ev) => { S.lastMessage = performance.now(); S.serverLost = false; render(JSON.parse(ev.data)); };
+  source.onerror = () => {};  // the browser reconnects by itself; the watchdog shows the banner
+}
+
+function startReplay() {
+  const r = S.replay, c = S.config;
+  $('replay-bar').hidden = false;
+  $('ack-all').disabled = true;
+  $('sound').hidden = true;
+  const slider = $('slider');
+  slider.min = c.t_start; slider.max = c.t_end; slider.value = c.t_start;
+  r.t = c.t_start;
+  $('replay-files').textContent = (c.files || []).map((f) => f.split('/').pop()).join(', ');
+  slider.addEventListener('input', () => { r.t = parseFloat(slider.value); fetchFrame(true); });
+  $('play').addEventListener('click', togglePlay);
+  $('speed').addEventListener('change', () => { r.speed = parseFloat($('speed').value); });
+  document.addEventListener('keydown', (e) => { if (e.code === 'Space') { e.preventDefault(); togglePlay(); } });
+  setInterval(() => {
+    if (!r.playing) return;
+    const now = performance.now();
+    r.t = Math.min(r.t + (now - r.last) / 1000 * r.speed, c.t_end);
+    r.last = now;
+    if (r.t >= c.t_end) togglePlay();
+    slider.value = r.t;
+    fetchFrame(false);
+  }, 250);
+  fetchFrame(true);
+}
+
+function togglePlay() {
+  const r = S.replay;
+  r.playing = !r.playing;
+  r.last = performance.now();
+  if (r.playing && r.t >= S.config.t_end) r.t = S.config.t_start;
+  $('play').textContent = r.playing ? '❚❚' : '▶';
+}
+
+let framePending = false, frameAgain = false;
+async function fetchFrame(withTrend) {
+  // One request at a time; a position asked for meanwhile is fetched right after (the page
+  // always ends at the slider's last position).
+  if (framePending) { frameAgain = true; return; }
+  framePending = true;
+  try {
+    const frame = await (await fetch(`/api/frame?t=${S.replay.t}`)).json();
+    S.lastMessage = performance.now();
+    render(frame);
+    if (withTrend || performance.now() - S.trendAt > 1000) refreshTrend();
+  } finally {
+    framePending = false;
+    if (frameAgain) { frameAgain = false; fetchFrame(true); }
+  }
+}
+
+// ---------------------------------------------------------------- tiles
+function buildTiles() {
+  const box = $('tiles');
+  box.textContent = '';
+  for (const line of S.config.lines) {
+    const t = el('div', { class: 'tile', 'data-line': line.name, 'data-level': 'STALE' });
+    t.innerHTML = `<div class="tile-head"><span class="name"></span><span class="badge"></span></div>
+      <div class="bar"><div class="fill"></div><div class="mark"></div></div>
+      <div class="bar-label"></div>
+      <dl class="vals"><dt>anchor margin</dt><dd class="v-margin"></dd><dt>uplift</dt><dd class="v-uplift"></dd>
+      <dt>safety factor</dt><dd class="v-sf"></dd><dt>model</dt><dd class="v-model"></dd></dl>
+      <div class="msg"></div><div class="foot"></div>`;
+    t.querySelector('.name').textContent = line.name;
+    const warn = line.mbl ? 1 / S.config.safety_factor_warn : null;
+    const mark = t.querySelector('.mark');
+    if (warn !== null) mark.style.left = `${100 * warn}%`; else mark.hidden = true;
+    t.addEventListener('click', () => selectLine(line.name));
+    box.appendChild(t);
+  }
+}
+
+function renderTile(view, lost, frame) {
+  const t = document.querySelector(`.tile[data-line="${view.name}"]`);
+  if (!t) return;
+  const cfg = S.config.lines.find((l) => l.name === view.name) || {};
+  const level = lost ? 'STALE' : view.level;
+  t.dataset.level = level;
+  t.classList.toggle('lost', lost);
+  t.classList.toggle('unack', !lost && view.alarm_state === 'unacknowledged');
+  t.classList.toggle('selected', view.name === S.line);
+  const badge = t.querySelector('.badge');
+  badge.textContent = level; badge.className = `badge ${level}`;
+  const T = view.top_tension;
+  const mbl = cfg.mbl || (view.safety_factor && T ? view.safety_factor * T : null);
+  const frac = T !== null && T !== undefined && mbl ? T / mbl : null;
+  const fill = t.querySelector('.fill');
+  fill.style.width = `${frac === null ? 0 : Math.min(100, 100 * frac)}%`;
+  fill.classList.toggle('over', frac !== null && frac > 1 / S.config.safety_factor_warn);
+  t.querySelector('.bar-label').textContent = T === null || T === undefined ? 'no tension' :
+    `${num(T, 0, KN)} kN` + (frac === null ? '' : ` · ${(100 * frac).toFixed(0)} % MBL`);
+  const m = t.querySelector('.v-margin');
+  m.textContent = `${num(view.anchor_margin, 2)} m`;
+  m.className = 'v-margin ' + (view.anchor_margin !== null && view.anchor_margin < 0 ? 'bad' :
+    (view.anchor_margin !== null && view.anchor_margin < S.config.anchor_margin_warn ? 'warn' : ''));
+  const u = t.querySelector('.v-uplift');
+  u.textContent = `${num(view.uplift_force, 1, KN)} kN`;
+  u.className = 'v-uplift ' + (view.uplift_force > (cfg.allowed_uplift || 0) ? 'bad' : '');
+  const sf = t.querySelector('.v-sf');
+  sf.textContent = num(view.safety_factor, 2);
+  sf.className = 'v-sf ' + (view.safety_factor !== null && view.safety_factor < S.config.safety_factor_warn ? 'warn' : '');
+  t.querySelector('.v-model').textContent = (view.model || '—').replace(' catenary', '');
+  const msg = lost ? `monitor silent: last known ${view.level} at ${clock(frame.snapshot_t)}` : view.message;
+  t.querySelector('.msg').textContent = msg;
+  t.querySelector('.msg').title = msg;
+  const old = view.age_s !== null && view.age_s > S.config.tension_timeout;
+  const foot = t.querySelector('.foot');
+  foot.innerHTML = '';
+  foot.appendChild(el('span', { class: old ? 'old' : '' }, `newest sample ${ago(view.age_s)} ago`));
+  if (view.alarm_state && view.alarm_state !== 'normal') foot.append(` · alarm ${view.alarm_state}`);
+}
+
+// ---------------------------------------------------------------- plan
+function buildPlan() {
+  const plan = $('plan');
+  plan.textContent = '';
+  const A = 24, B = 95;  // dock half beam, half length (plan units; bow up)
+  plan.appendChild(svg('path', { class: 'plan-dock',
+    d: `M ${-A} ${-B + 14} L 0 ${-B - 8} L ${A} ${-B + 14} L ${A} ${B} L ${-A} ${B} Z` }));
+  plan.appendChild(svg('text', { x: 0, y: -B + 30, 'text-anchor': 'middle', class: 'muted' }, 'BOW'));
+  const far = Math.max(...S.config.lines.map((l) => l.anchor_distance || 120));
+  for (const line of S.config.lines) {
+    const th = line.heading * Math.PI / 180;
+    const dx = Math.sin(th), dy = -Math.cos(th);
+    const k = Math.min(Math.abs(dx) > 1e-9 ? A / Math.abs(dx) : 1e9, Math.abs(dy) > 1e-9 ? B / Math.abs(dy) : 1e9);
+    const hx = dx * k, hy = dy * k;
+    const len = 95 * (line.anchor_distance || 120) / far;
+    const ax = hx + dx * len, ay = hy + dy * len;
+    const g = svg('g', { 'data-plan-line': line.name });
+    g.appendChild(svg('line', { class: 'plan-chain c-STALE', x1: hx, y1: hy, x2: ax, y2: ay }));
+    g.appendChild(svg('circle', { class: 'plan-anchor c-STALE', cx: ax, cy: ay, r: 6 }));
+    const lift = svg('circle', { class: 'plan-lift', cx: ax, cy: ay, r: 12 });
+    lift.style.display = 'none';
+    g.appendChild(lift);
+    const lx = ax + dx * 16, ly = ay + dy * 16 + 4;
+    g.appendChild(svg('text', { class: 'plan-label', x: lx, y: ly, 'text-anchor': dx > 0.3 ? 'start' : dx < -0.3 ? 'end' : 'middle' },
+      line.name.replace('line_', '')));
+    g.appendChild(svg('title', {}, `${line.name}: heading ${line.heading.toFixed(0)}°`));
+    g.addEventListener('click', () => selectLine(line.name));
+    plan.appendChild(g);
+  }
+}
+
+function renderPlan(frame, lost) {
+  for (const view of frame.lines) {
+    const g = document.querySelector(`[data-plan-line="${view.name}"]`);
+    if (!g) continue;
+    const level = lost ? 'STALE' : view.level;
+    g.querySelector('.plan-chain').setAttribute('class', `plan-chain c-${level}`);
+    g.querySelector('.plan-anchor').setAttribute('class', `plan-anchor c-${level}`);
+    g.querySelector('.plan-lift').style.display = !lost && view.uplift_force > 0 ? '' : 'none';
+    g.classList.toggle('sel', view.name === S.line);
+  }
+}
+
+// ---------------------------------------------------------------- alarms
+let alarmKey = '', historyKey = '';
+function renderAlarms(frame, lost) {
+  // Rebuilt only when something in the list changed (a button must not move under a click).
+  const replay = S.config.mode !== 'live';
+  const key = JSON.stringify([lost, S.tab, frame.alarms]);
+  if (key !== alarmKey) { alarmKey = key; renderActive(frame, lost, replay); }
+  const last = frame.history[frame.history.length - 1];
+  const hkey = JSON.stringify([frame.history.length, last]);
+  if (hkey !== historyKey) { historyKey = hkey; renderHistory(frame); }
+  // EEMUA 191: 10 or more alarms raised in 10 minutes is a flood.
+  const raised = frame.history.filter((h) => h.event.startsWith('raised') && h.time > frame.now - 600).length;
+  $('flood').hidden = raised < 10;
+  $('flood').textContent = `ALARM FLOOD: ${raised} raised in 10 min`;
+}
+
+const rowsByLine = new Map();
+function setText(node, text) { if (node.textContent !== text) node.textContent = text; }
+
+function makeRow(line) {
+  const tr = el('tr', { 'data-line': line });
+  for (let k = 0; k < 7; k++) tr.appendChild(el('td'));
+  tr.children[0].className = 'when';
+  tr.children[4].className = 'msg-cell';
+  tr.children[4].appendChild(el('div'));
+  const b = el('button', { 'data-ack': line, title: `acknowledge ${line}` }, 'Ack');
+  b.addEventListener('click', () => acknowledge(line));
+  tr.children[6].appendChild(b);
+  return tr;
+}
+
+function renderActive(frame, lost, replay) {
+  // Rows are kept per line and updated in place: a button never moves under a click.
+  const body = $('alarms').querySelector('tbody');
+  const want = new Set(frame.alarms.map((a) => a.line));
+  for (const [line, tr] of rowsByLine) if (!want.has(line)) { tr.remove(); rowsByLine.delete(line); }
+  frame.alarms.forEach((a, i) => {
+    let tr = rowsByLine.get(a.line);
+    if (!tr) { tr = makeRow(a.line); rowsByLine.set(a.line, tr); }
+    tr.dataset.alarmState = a.state;
+    tr.className = `lvl-${a.level}`;
+    const td = tr.children;
+    setText(td[0], clock(a.raised));
+    setText(td[1], a.line);
+    setText(td[2], a.level);
+    setText(td[3], a.condition.replace('_', ' '));
+    setText(td[4].firstChild, a.message);
+    td[4].title = a.message;
+    setText(td[5], a.state.replace('-', ' '));
+    td[5].title = a.state === 'acknowledged' && a.acknowledged_by ? `by ${a.acknowledged_by} at ${clock(a.acknowledged_at)}` : '';
+    const b = td[6].firstChild;
+    b.hidden = a.state === 'acknowledged';
+    b.disabled = replay || lost;
+    if (body.children[i] !== tr) body.insertBefore(tr, body.children[i] || null);
+  });
+  $('n-active').textContent = `(${frame.alarms.length})`;
+  $('ack-all').disabled = replay || lost || !frame.alarms.some((a) => a.state !== 'acknowledged');
+  $('no-alarms').hidden = S.tab !== 'active' || frame.alarms.length > 0;
+}
+
+function renderHistory(frame) {
+  const hist = $('history').querySelector('tbody');
+  hist.textContent = '';
+  for (const h of frame.history.slice().reverse()) {
+    const tr = el('tr', { 'data-history-line': h.line, class: `lvl-${h.level}` });
+    tr.appendChild(el('td', { class: 'when' }, clock(h.time)));
+    tr.appendChild(el('td', {}, h.line));
+    tr.appendChild(el('td', {}, h.event));
+    tr.appendChild(el('td', {}, h.level));
+    const msg = el('td', { class: 'msg-cell', title: h.message });
+    msg.appendChild(el('div', {}, `${h.condition.replace('_', ' ')}: ${h.message}`));
+    tr.appendChild(msg);
+    tr.appendChild(el('td', {}, h.by));
+    hist.appendChild(tr);
+  }
+  $('n-history').textContent = `(${frame.history.length})`;
+}
+
+function showTab(tab) {
+  S.tab = tab;
+  $('tab-active').classList.toggle('on', tab === 'active');
+  $('tab-history').classList.toggle('on', tab === 'history');
+  $('alarms').hidden = tab !== 'active';
+  $('history').hidden = tab !== 'history';
+  if (S.frame) renderAlarms(S.frame, isLost(S.frame));
+}
+
+async function acknowledge(line) {
+  const box = $('ack-error');
+  const res = await fetch('/api/ack', { method: 'POST', headers: { 'Content-Type': 'application/json' },
+    body: JSON.stringify({ line }) });
+  if (res.ok) { box.hidden = true; return; }
+  let text = `acknowledge failed (${res.status})`;
+  try { text += `: ${(await res.json()).error}`; } catch (e) { /* not JSON */ }
+  box.textContent = text;
+  box.hidden = false;
+}
+
+// ---------------------------------------------------------------- tide
+function renderTide(frame, lost) {
+  const t = frame.tide;
+  const box = $('tide');
+  const arrow = { rising: '↑ rising', falling: '↓ falling', steady: '→ steady', unknown: '' }[t.trend || 'unknown'];
+  const rate = t.rate_m_per_h === null || t.rate_m_per_h === undefined ? '' : ` ${t.rate_m_per_h >= 0 ? '+' : ''}${t.rate_m_per_h.toFixed(2)} m/h`;
+  box.innerHTML = '';
+  box.appendChild(el('div', { class: 'tide-big' }, t.depth === null ? '— m' : `${t.depth.toFixed(2)} m`));
+  box.appendChild(el('div', { class: 'tide-trend' }, `${arrow}${rate}`));
+  box.appendChild(el('div', { class: `badge ${lost ? 'STALE' : t.level}` }, `${lost ? 'STALE' : t.level}: ${t.message}`));
+  box.appendChild(el('div', { class: 'muted' }, `logger: ${frame.logger.level} ${frame.logger.message}`));
+}
+
+// ---------------------------------------------------------------- trend
+function buildPickers() {
+  const pick = $('trend-line');
+  for (const line of S.config.lines) pick.appendChild(el('option', { value: line.name }, line.name));
+  pick.value = S.line;
+  pick.addEventListener('change', () => selectLine(pick.value));
+  $('trend-span').addEventListener('change', () => { S.span = parseFloat($('trend-span').value); refreshTrend(); });
+}
+
+function selectLine(name) {
+  S.line = name;
+  $('trend-line').value = name;
+  if (S.frame) render(S.frame);
+  refreshTrend();
+}
+
+async function refreshTrend() {
+  if (!S.line) return;
+  S.trendAt = performance.now();
+  const t = S.config.mode === 'live' ? '' : `&t=${S.replay.t}`;
+  try {
+    const data = await (await fetch(`/api/trend?line=${encodeURIComponent(S.line)}&span=${S.span}${t}`)).json();
+    drawTrend(data);
+  } catch (e) { /* the server is gone: the banner says so */ }
+}
+
+function niceRange(values, refs) {
+  let lo = Infinity, hi = -Infinity;
+  for (const v of values.concat(refs)) if (v !== null && v !== undefined && isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
+  if (!isFinite(lo)) { lo = 0; hi = 1; }
+  if (hi - lo < 1e-9) { hi += 1; lo -= 1; }
+  const pad = (hi - lo) * 0.08;
+  return [lo - pad, hi + pad];
+}
+
+function drawTrend(data) {
+  const box = $('trend');
+  const W = box.clientWidth || 1000, H = box.clientHeight || 240;
+  box.setAttribute('viewBox', `0 0 ${W} ${H}`);
+  box.textContent = '';
+  const cfg = S.config.lines.find((l) => l.name === data.line) || {};
+  const s = data.series || {}, d = data.depth || {};
+  const warnT = cfg.mbl ? cfg.mbl / S.config.safety_factor_warn * KN : null;
+  const panels = [
+    { label: `${data.line} tension kN`, cls: 's-tension', t: s.t, v: (s.tension_max || []).map((x) => x === null ? null : x * KN), refs: [], warn: warnT },
+    { label: 'uplift kN', cls: 's-uplift', t: s.t, v: (s.uplift_max || []).map((x) => x === null ? null : x * KN), refs: [0], warn: cfg.allowed_uplift ? cfg.allowed_uplift * KN : null },
+    { label: 'anchor margin m', cls: 's-margin', t: s.t, v: s.margin_min || [], refs: [0, S.config.anchor_margin_warn], warn: S.config.anchor_margin_warn, zero: true },
+    { label: 'depth m', cls: 's-depth', t: d.t, v: d.depth_max || [], refs: [] },
+  ];
+  const left = 62, right = 8, gap = 6, ph = (H - 18 - gap * 3) / 4;
+  // A console younger than the span: the axis starts at the first sample (the label says so).
+  const first = Math.min(...[s.t, d.t].filter((a) => a && a.length).map((a) => a[0]));
+  if (isFinite(first) && first > data.lo) data.lo = Math.max(data.lo, first - 0.02 * (data.hi - first));
+  const x = (t) => left + (W - left - right) * (t - data.lo) / Math.max(data.hi - data.lo, 1e-9);
+  panels.forEach((p, i) => {
+    const top = i * (ph + gap);
+    const vis = p.warn !== null && p.warn !== undefined && p.v.some((v) => v !== null && v > 0.6 * p.warn) ? [p.warn] : [];
+    const [lo, hi] = niceRange(p.v.filter((v, k) => p.t && p.t[k] >= data.lo), p.refs.concat(vis));
+    const y = (v) => top + ph - ph * (v - lo) / (hi - lo);
+    box.appendChild(svg('rect', { x: left, y: top, width: W - left - right, height: ph, fill: '#22272c' }));
+    box.appendChild(svg('text', { x: left + 6, y: top + 13 }, p.label));
+    box.appendChild(svg('text', { x: left - 4, y: top + 10, 'text-anchor': 'end' }, hi.toPrecision(4)));
+    box.appendChild(svg('text', { x: left - 4, y: top + ph, 'text-anchor': 'end' }, lo.toPrecision(4)));
+    if (p.warn !== null && p.warn !== undefined) {
+      if (p.warn >= lo && p.warn <= hi) box.appendChild(svg('line', { class: 'ref', x1: left, x2: W - right, y1: y(p.warn), y2: y(p.warn) }));
+      else box.appendChild(svg('text', { x: W - right - 4, y: top + 13, 'text-anchor': 'end', class: 'muted' }, `warning ${p.warn.toFixed(0)} (off scale)`));
+    }
+    if (p.zero && lo < 0 && hi > 0) box.appendChild(svg('line', { class: 'ref zero', x1: left, x2: W - right, y1: y(0), y2: y(0) }));
+    let path = '', pen = false;
+    (p.t || []).forEach((t, k) => {
+      const v = p.v[k];
+      if (v === null || v === undefined) { pen = false; return; }
+      path += `${pen ? 'L' : 'M'}${x(t).toFixed(1)} ${y(v).toFixed(1)} `;
+      pen = true;
+    });
+    if (path) box.appendChild(svg('path', { class: `series ${p.cls}`, d: path }));
+  });
+  const bottom = 4 * ph + 3 * gap + 14;
+  for (let k = 0; k <= 6; k++) {
+    const t = data.lo + (data.hi - data.lo) * k / 6;
+    box.appendChild(svg('text', { x: x(t), y: bottom, 'text-anchor': k === 0 ? 'start' : k === 6 ? 'end' : 'middle' }, clock(t)));
+  }
+}
+
+// ---------------------------------------------------------------- frame, banner, sound
+function isLost(frame) { return S.serverLost || frame.connection === 'lost'; }
+
+function render(frame) {
+  S.frame = frame;
+  const lost = isLost(frame);
+  for (const view of frame.lines) renderTile(view, lost, frame);
+  renderPlan(frame, lost);
+  renderAlarms(frame, lost);
+  renderTide(frame, lost);
+  renderBanner(frame);
+  $('clock').textContent = clock(frame.now, S.config.mode !== 'live');
+  if (S.config.mode !== 'live') $('replay-time').textContent = `log time ${clock(frame.now, true)}`;
+  if (S.config.mode === 'live') sound(frame, lost);
+  if (S.bench) S.bench.push([performance.timeOrigin + performance.now(), frame.lines.map((l) => l.top_tension)]);
+}
+
+function renderBanner(frame) {
+  const b = $('banner'), pill = $('status-pill');
+  let text = null, kind = null;
+  if (S.serverLost) {
+    kind = 'lost';
+    text = `CONSOLE SERVER UNREACHABLE — nothing shown is current (last update ${clock(frame.now)})`;
+  } else if (frame.connection === 'lost') {
+    kind = 'lost';
+    text = frame.snapshot_t === null ? `NO DATA FROM THE MONITOR: nothing on /diagnostics for ${ago(frame.silent_s)} since the console started` :
+      `MONITOR SILENT for ${ago(frame.silent_s)} (period ${S.config.period_s} s) — values shown are the last received, at ${clock(frame.snapshot_t)}`;
+  } else if (frame.connection === 'waiting') {
+    kind = 'waiting';
+    text = 'waiting for the monitor on /diagnostics…';
+  }
+  if (kind) { b.hidden = false; b.dataset.connection = kind; b.textContent = text; } else { b.hidden = true; delete b.dataset.connection; }
+  pill.className = `pill ${kind === 'lost' ? 'lost' : 'ok'}`;
+  pill.textContent = kind === 'lost' ? 'CONNECTION LOST' : kind === 'waiting' ? 'waiting' : `monitor ok · ${ago(frame.silent_s)}`;
+}
+
+function watchdog() {
+  if (!S.config || S.config.mode !== 'live' || !S.lastMessage) return;
+  const lost = (performance.now() - S.lastMessage) / 1000 > SERVER_TIMEOUT_S;
+  if (lost !== S.serverLost) { S.serverLost = lost; if (S.frame) render(S.frame); }
+  updateSoundButton();
+}
+
+function unlockAudio() {
+  if (S.audio) return;
+  try { S.audio = new (window.AudioContext || window.webkitAudioContext)(); } catch (e) { S.audio = null; }
+  updateSoundButton();
+}
+
+function soundButton(ev) {
+  ev.stopPropagation();
+  if (!S.audio || S.audio.state !== 'running') { unlockAudio(); if (S.audio) S.audio.resume(); updateSoundButton(); return; }
+  S.mutedUntil = performance.now() + SILENCE_S * 1000;
+  updateSoundButton();
+}
+
+function updateSoundButton() {
+  const b = $('sound');
+  const left = (S.mutedUntil - performance.now()) / 1000;
+  if (!S.audio || S.audio.state !== 'running') { b.textContent = 'sound off: click to enable'; b.className = 'sound'; }
+  else if (left > 0) { b.textContent = `silenced ${Math.ceil(left)} s`; b.className = 'sound muted'; }
+  else { b.textContent = `sound on (silence ${SILENCE_S} s)`; b.className = 'sound on'; }
+}
+
+function sound(frame, lost) {
+  const errors = frame.alarms.filter((a) => a.state === 'unacknowledged' && a.level === 'ERROR');
+  const keys = new Set(errors.map((a) => `${a.line}@${a.raised}`));
+  const fresh = [...keys].some((k) => !S.knownErrors.has(k));
+  S.knownErrors = keys;
+  const now = performance.now();
+  if (lost || !errors.length || now < S.mutedUntil) return;
+  if (fresh || now - S.lastBeep > REPEAT_S * 1000) beep();
+}
+
+function beep() {
+  S.lastBeep = performance.now();
+  S.beeps += 1;
+  const ctx = S.audio;
+  if (!ctx || ctx.state !== 'running') return;
+  for (let k = 0; k < 3; k++) {
+    const osc = ctx.createOscillator(), gain = ctx.createGain();
+    osc.frequency.value = k % 2 ? 660 : 880;
+    gain.gain.value = 0.15;
+    osc.connect(gain).connect(ctx.destination);
+    osc.start(ctx.currentTime + k * 0.22);
+    osc.stop(ctx.currentTime + k * 0.22 + 0.18);
+  }
+}
+
+document.addEventListener('DOMContentLoaded', start);

@@ -1,0 +1,220 @@
+"""Alarm acknowledgement: each line's alarm in ISA-18.2 / IEC 62682 states (no rclpy, no clock).
+
+One alarm per line. It is *active* while the line's level is not OK (WARN, STALE or ERROR),
+except during the start-up grace: a line still blind since the monitor started (STALE, never
+yet in another level) becomes an alarm only once that has lasted :func:`startup_grace` (the
+longer of ``tension_timeout`` and ``depth_timeout``), so a normal start, sensors coming up one
+by one, is no alarm flood, while a sensor that never reports still alarms.
+
+States (:data:`STATES`, the names the ``/diagnostics`` key ``alarm_state`` and the console use):
+
+``normal``
+    not active, nothing to acknowledge;
+``unacknowledged``
+    active and not yet acknowledged (an operator has not seen it);
+``acknowledged``
+    active and acknowledged: it stays until the condition clears;
+``returned-unacknowledged``
+    the condition cleared before anyone acknowledged it: it stays listed until acknowledged.
+
+Rules: an alarm is raised (``unacknowledged``, ``raised`` = now) when it becomes active from
+``normal`` or ``returned-unacknowledged``, and raised again when its severity rises while active
+(WARN < STALE < ERROR: an acknowledged warning that becomes a lifted anchor is news). When it
+stops being active, ``unacknowledged`` becomes ``returned-unacknowledged`` and ``acknowledged``
+becomes ``normal``. An acknowledgement turns ``unacknowledged`` into ``acknowledged`` and
+``returned-unacknowledged`` into ``normal``; it never clears an active alarm: only the condition
+does. :func:`step` is idempotent (same level, same activity: no change), which is what lets the
+vectorized twin (:mod:`catenary_monitor.core.batch`) apply it only where its inputs change.
+
+Times are seconds on the monitor's clock.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Optional, Sequence
+
+import numpy as np
+
+from catenary_monitor.core.alarms import CONDITIONS, RANK, Level
+from catenary_monitor.core.config import AlarmConfig
+
+__all__ = [
+    'NORMAL',
+    'UNACKNOWLEDGED',
+    'ACKNOWLEDGED',
+    'RETURNED_UNACKNOWLEDGED',
+    'STATES',
+    'ALL_LINES',
+    'ACKNOWLEDGE_TOPIC',
+    'AckState',
+    'initial',
+    'startup_grace',
+    'is_active',
+    'step',
+    'acknowledge',
+    'condition',
+    'diagnostic_values',
+    'parse_request',
+    'AckSeries',
+    'replay_acks',
+]
+
+NORMAL = 'normal'
+UNACKNOWLEDGED = 'unacknowledged'
+ACKNOWLEDGED = 'acknowledged'
+RETURNED_UNACKNOWLEDGED = 'returned-unacknowledged'
+#: Every alarm state, in display order of urgency.
+STATES = (UNACKNOWLEDGED, RETURNED_UNACKNOWLEDGED, ACKNOWLEDGED, NORMAL)
+#: The line "name" of an acknowledgement of every line.
+ALL_LINES = 'all'
+#: The node's acknowledgement topic (std_msgs/msg/String: ``LINE|all [ORIGIN...]``).
+ACKNOWLEDGE_TOPIC = '/catenary_monitor/acknowledge'
+
+
+@dataclass(frozen=True)
+class AckState:
+    """One line's alarm: its state, severity, when raised, the last acknowledgement (s).
+
+    ``level`` is the alarm's current severity while active, its last one after it returned;
+    ``blind`` is True while the line has been STALE ever since ``start`` (the start-up grace).
+    """
+
+    state: str = NORMAL
+    level: Level = Level.OK
+    raised: float = math.nan
+    acknowledged_at: float = math.nan
+    acknowledged_by: str = ''
+    blind: bool = True
+    start: float = math.nan
+
+
+def initial(start: float) -> AckState:
+    """A line's alarm when the monitor starts at ``start`` (s): normal, blind."""
+    return AckState(start=start)
+
+
+def startup_grace(alarm: AlarmConfig) -> float:
+    """Seconds a line may stay blind after the monitor starts before that is an alarm."""
+    return max(alarm.tension_timeout, alarm.depth_timeout)
+
+
+def is_active(ack: AckState, level: Level, now: float, grace: float) -> tuple[bool, bool]:
+    """(active, still blind) for a line at ``level`` at ``now`` (s); ``grace`` in s."""
+    blind = ack.blind and level == Level.STALE
+    return level != Level.OK and not (blind and now - ack.start < grace), blind
+
+
+def step(ack: AckState, level: Level, now: float, grace: float) -> AckState:
+    """The alarm after the line was stepped to ``level`` at ``now`` (s); ``grace`` (s) is the
+    start-up grace (:func:`startup_grace`)."""
+    active, blind = is_active(ack, level, now, grace)
+    if blind != ack.blind:
+        ack = replace(ack, blind=blind)
+    if active:
+        if ack.state in (NORMAL, RETURNED_UNACKNOWLEDGED) or RANK[level] > RANK[ack.level]:
+            return replace(ack, state=UNACKNOWLEDGED, level=level, raised=now)
+        return ack if level == ack.level else replace(ack, level=level)
+    if ack.state == UNACKNOWLEDGED:
+        return replace(ack, state=RETURNED_UNACKNOWLEDGED)
+    if ack.state == ACKNOWLEDGED:
+        return replace(ack, state=NORMAL)
+    return ack
+
+
+def acknowledge(ack: AckState, now: float, origin: str) -> AckState:
+    """The alarm after an operator acknowledged it at ``now`` (s) from ``origin``."""
+    if ack.state == UNACKNOWLEDGED:
+        return replace(ack, state=ACKNOWLEDGED, acknowledged_at=now, acknowledged_by=origin)
+    if ack.state == RETURNED_UNACKNOWLEDGED:
+        return replace(ack, state=NORMAL, acknowledged_at=now, acknowledged_by=origin)
+    return ack
+
+
+def condition(level: Level, latches: Sequence[bool]) -> str:
+    """The condition that sets the line's level: ``uplift``, ``input`` (impossible input),
+    ``stale``, a warning's name (``anchor_margin``, ...) or ``none`` when OK.
+
+    ``latches`` are the active flags of :data:`~catenary_monitor.core.alarms.CONDITIONS`."""
+    if level == Level.ERROR:
+        return 'uplift' if latches[0] else 'input'
+    if level == Level.STALE:
+        return 'stale'
+    if level == Level.WARN:
+        for name, up in zip(CONDITIONS[2:], latches[2:]):
+            if up:
+                return name
+    return 'none'
+
+
+def diagnostic_values(
+    ack: AckState, level: Level, latches: Sequence[bool]
+) -> list[tuple[str, str]]:
+    """The ``/diagnostics`` keys of a line's alarm: ``acknowledged`` (``true`` unless something
+    waits for an acknowledgement), ``alarm_state``, ``alarm_raised`` [s, NaN when normal],
+    ``alarm_condition``, ``acknowledged_at`` [s] and ``acknowledged_by`` (the last one)."""
+    pending = ack.state in (UNACKNOWLEDGED, RETURNED_UNACKNOWLEDGED)
+    raised = math.nan if ack.state == NORMAL else ack.raised
+    return [
+        ('acknowledged', 'false' if pending else 'true'),
+        ('alarm_state', ack.state),
+        ('alarm_raised', repr(float(raised))),
+        ('alarm_condition', condition(level, latches)),
+        ('acknowledged_at', repr(float(ack.acknowledged_at))),
+        ('acknowledged_by', ack.acknowledged_by),
+    ]
+
+
+def parse_request(text: str) -> tuple[Optional[str], str]:
+    """(line name, or None for every line; origin) of an acknowledgement message's text:
+    ``LINE [ORIGIN...]`` or ``all [ORIGIN...]``; the origin defaults to ``ros``.
+
+    Raises ValueError for an empty text."""
+    parts = text.strip().split(None, 1)
+    if not parts:
+        raise ValueError('empty acknowledgement (expected "LINE [ORIGIN]" or "all [ORIGIN]")')
+    origin = parts[1].strip() if len(parts) > 1 else 'ros'
+    return (None if parts[0] == ALL_LINES else parts[0]), origin
+
+
+class AckSeries:
+    """A line's alarm over a sequence of steps, as :func:`step` at every one of them gives.
+
+    ``changes`` are the step indexes where :func:`step` was applied (where the level or the
+    activity changes; elsewhere it would change nothing) and ``states`` the alarm after each.
+    """
+
+    def __init__(self, before: AckState, changes: np.ndarray, states: list[AckState]) -> None:
+        self.before, self.changes, self.states = before, changes, states
+
+    def at(self, i: int) -> AckState:
+        """The alarm after step ``i`` (``before`` for ``i < 0``)."""
+        j = int(np.searchsorted(self.changes, i, 'right')) - 1 if i >= 0 else -1
+        return self.before if j < 0 else self.states[j]
+
+    @property
+    def final(self) -> AckState:
+        """The alarm after the last step."""
+        return self.states[-1] if self.states else self.before
+
+
+def replay_acks(
+    before: AckState, times: np.ndarray, levels: np.ndarray, grace: float
+) -> AckSeries:
+    """The alarm over steps at ``times`` (s) with the line's ``levels`` (int Level per step),
+    from ``before``, with no acknowledgement among them: :func:`step` applied where its inputs
+    change (it is idempotent elsewhere), so equal to stepping every one."""
+    n = len(times)
+    if n == 0:
+        return AckSeries(before, np.zeros(0, np.int64), [])
+    blind = before.blind & (np.cumsum(levels != Level.STALE) == 0)
+    active = (levels != Level.OK) & ~(blind & (times - before.start < grace))
+    change = np.ones(n, dtype=bool)
+    change[1:] = (active[1:] != active[:-1]) | (levels[1:] != levels[:-1])
+    idx = np.flatnonzero(change)
+    states, state = [], before
+    for i in idx.tolist():
+        state = step(state, Level(int(levels[i])), float(times[i]), grace)
+        states.append(state)
+    return AckSeries(before, idx, states)

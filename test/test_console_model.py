@@ -1,0 +1,108 @@
+"""The console's model (no browser, no ROS): frames, alarm rows, history, trends, the layout."""
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from catenary_monitor.console.foxglove import layout
+from catenary_monitor.console.model import (
+    History,
+    Status,
+    Trend,
+    alarm_rows,
+    bucket,
+    build_frame,
+    tide_trend,
+)
+from catenary_monitor.core.config import config_from_params, load_params_file
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def st(level, state, raised=100.0, message='m', **values):
+    v = {'alarm_state': state, 'alarm_raised': repr(raised), 'alarm_condition': 'uplift'}
+    v.update(values)
+    return Status(level, message, v)
+
+
+def test_alarm_rows_most_urgent_first_and_normal_left_out():
+    statuses = {
+        'a': st('WARN', 'unacknowledged', 50.0),
+        'b': st('ERROR', 'acknowledged', 60.0),
+        'c': st('OK', 'returned-unacknowledged', 40.0),
+        'd': st('ERROR', 'unacknowledged', 30.0),
+        'e': st('OK', 'normal'),
+    }
+    rows = alarm_rows(statuses, list('abcde'))
+    assert [r['line'] for r in rows] == ['d', 'a', 'c', 'b']
+    assert rows[0]['raised'] == 30.0 and rows[0]['condition'] == 'uplift'
+
+
+def test_history_records_the_audit_trail():
+    h = History()
+    seq = [
+        (1.0, st('OK', 'normal', math.nan)),
+        (2.0, st('WARN', 'unacknowledged', 2.0)),
+        (3.0, st('ERROR', 'unacknowledged', 3.0)),
+        (4.0, st('ERROR', 'acknowledged', 3.0, acknowledged_by='op', acknowledged_at='3.5')),
+        (5.0, st('OK', 'normal', 3.0)),
+        (6.0, st('WARN', 'unacknowledged', 6.0)),
+        (7.0, st('OK', 'returned-unacknowledged', 6.0)),
+        (8.0, st('OK', 'normal', 6.0, acknowledged_by='op2', acknowledged_at='7.9')),
+    ]
+    for t, s in seq:
+        h.feed(t, {'x': s}, ['x'])
+    events = [(e['time'], e['event'], e['by']) for e in h.entries]
+    assert events == [
+        (2.0, 'raised', ''),
+        (3.0, 'raised again', ''),
+        (3.5, 'acknowledged', 'op'),
+        (5.0, 'cleared', ''),
+        (6.0, 'raised', ''),
+        (7.0, 'returned to normal (unacknowledged)', ''),
+        (7.9, 'acknowledged', 'op2'),
+    ]
+
+
+def test_bucket_keeps_every_peak():
+    t = np.linspace(0.0, 100.0, 10001)
+    v = np.sin(t)
+    v[5000] = 9.0
+    out = bucket(t, {'v_max': v, 'w_min': -v}, 0.0, 100.0, n=50)
+    assert len(out['t']) == 50 and max(out['v_max']) == 9.0 and min(out['w_min']) == -9.0
+    empty = bucket(t, {'v_max': v}, 200.0, 300.0)
+    assert empty == {'t': [], 'v_max': []}
+
+
+def test_live_trend_buckets_and_forgets():
+    tr = Trend(('a_max', 'b_min'), keep_s=100.0, resolution=1.0)
+    for k in range(1000):
+        tr.add(k * 0.5, {'a_max': float(k), 'b_min': float(-k)})
+    assert tr.t[-1] == 499.5 and len(tr.t) <= 161
+    s = tr.series(400.0, 500.0)
+    assert s['a_max'][-1] == 999.0 and s['b_min'][-1] == -999.0
+
+
+def test_tide_trend_rate():
+    t = np.arange(0.0, 600.0, 1.0)
+    out = tide_trend(t, 20.0 + t * (0.5 / 3600.0), 599.0)
+    assert out['trend'] == 'rising' and abs(out['rate_m_per_h'] - 0.5) < 1e-9
+    assert tide_trend(t[:2], t[:2], 1.0)['trend'] == 'unknown'
+
+
+def test_frame_says_lost_after_the_silence_limit():
+    kw = dict(outputs={}, sample_t={}, depth=None, history=[], silence_limit_s=3.0)
+    assert build_frame(10.0, ['x'], 8.0, {}, **kw)['connection'] == 'ok'
+    assert build_frame(10.0, ['x'], 6.5, {}, **kw)['connection'] == 'lost'
+    assert build_frame(10.0, ['x'], None, {}, started=9.0, **kw)['connection'] == 'waiting'
+    assert build_frame(10.0, ['x'], None, {}, started=5.0, **kw)['connection'] == 'lost'
+
+
+def test_shipped_foxglove_layout_is_the_generated_one():
+    config = config_from_params(load_params_file(ROOT / 'config' / 'floating_dock.yaml'))
+    shipped = json.loads((ROOT / 'foxglove' / 'catenary_monitor.json').read_text())
+    assert shipped == layout(config)
+    paths = [p['value'] for p in shipped['configById']['StateTransitions!cm4']['paths']]
+    assert len(paths) == 12 and paths[10].endswith('{name=="catenary_monitor: line_11"}.level')
