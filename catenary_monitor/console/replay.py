@@ -108,7 +108,9 @@ class ReplaySource:
         self.sample_times = {r.name: r.t_ns[r.tension_rows] * 1e-9 for r in result.lines}
         self.depth_t, self.depth_v = depth[0] * 1e-9, depth[1]
         self.t_start = result.start_ns * 1e-9
-        self.t_end = result.end_ns * 1e-9
+        # The slider reaches the newest snapshot too: an acknowledgement recorded after the last
+        # input (the monitor stopped before its next tick) is still shown.
+        self.t_end = max(result.end_ns * 1e-9, float(self.snap_t[-1]) if len(self.snap_t) else 0)
         self.version = 0
 
     def config_json(self) -> dict[str, Any]:
