@@ -38,9 +38,16 @@ def _batch(func: Any) -> Any:
 
 def register(sub: Any) -> None:
     """Add the benchmark sub-commands to the ``catenary-monitor`` parser."""
-    from catenary_monitor_study import bench_console, bench_core, bench_methods, bench_replay
+    from catenary_monitor_study import (
+        bench_body,
+        bench_console,
+        bench_core,
+        bench_methods,
+        bench_replay,
+    )
 
     bench_console.register(sub)
+    bench_body.register(sub)
     for module in (bench_core, bench_methods, bench_replay):
         module.register(sub)
     # bench runs as a library user's process (glibc defaults; --keep-freed-memory to compare)

@@ -241,7 +241,9 @@ def test_every_parameter_is_described_with_a_valid_range():
         assert spec.description and spec.type in {'double', 'string', 'string_array'}
         if spec.type == 'double':
             assert spec.min is not None and spec.max is not None and spec.min < spec.max
-            if spec.default is not REQUIRED and spec.default == spec.default:  # NaN: optional
+            if spec.optional:  # NaN: not given
+                assert spec.default != spec.default
+            elif spec.default is not REQUIRED:
                 assert spec.min <= spec.default <= spec.max
 
 

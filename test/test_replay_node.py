@@ -214,7 +214,14 @@ def _assert_status_equal(node_status, replay_status, what):
 
 
 #: The /diagnostics keys whose values are words, not numbers.
-TEXT_KEYS = {'model', 'acknowledged', 'alarm_state', 'alarm_condition', 'acknowledged_by'}
+TEXT_KEYS = {
+    'model',
+    'acknowledged',
+    'alarm_state',
+    'alarm_condition',
+    'acknowledged_by',
+    'sensor_state',
+}
 
 
 @pytest.mark.parametrize('form', sorted(PARAMS))

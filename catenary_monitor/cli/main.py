@@ -17,6 +17,7 @@ from typing import Callable, Optional, Sequence
 
 import numpy as np
 
+from catenary_monitor.cli.table import format_table
 from catenary_monitor.core.solve import STATUS_MESSAGES, SolveResult, Status, solve
 
 #: Display unit, scale from SI and format for each key of the human-readable table.
@@ -45,20 +46,6 @@ class OneLineParser(argparse.ArgumentParser):
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
-
-
-def format_table(rows: Sequence[Sequence[str]], header: Sequence[str]) -> str:
-    """Plain-text table with right-aligned columns (first column left-aligned)."""
-    widths = [max(len(str(r[i])) for r in [header, *rows]) for i in range(len(header))]
-
-    def line(r: Sequence[str]) -> str:
-        cells = [
-            str(c).ljust(widths[0]) if i == 0 else str(c).rjust(widths[i]) for i, c in enumerate(r)
-        ]
-        return '  '.join(cells).rstrip()
-
-    rule = '  '.join('-' * w for w in widths)
-    return '\n'.join([line(header), rule, *(line(r) for r in rows)])
 
 
 def result_table(result: SolveResult) -> str:
@@ -251,13 +238,14 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
     those installed under the :data:`COMMAND_GROUP` entry points."""
     from importlib.metadata import entry_points
 
-    from catenary_monitor.cli import live, replay
+    from catenary_monitor.cli import dock, live, replay
     from catenary_monitor.console import command as console
 
     found: list[Callable[[argparse._SubParsersAction], None]] = [
         live.register,
         replay.register,
         console.register,
+        dock.register,
     ]
     for ep in sorted(entry_points(group=COMMAND_GROUP), key=lambda e: e.name):
         try:

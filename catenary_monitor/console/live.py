@@ -135,9 +135,9 @@ class LiveSource:
             for st in msg.status
         ]
         statuses = statuses_by_name(items)
-        if not any(name not in ('tide', 'logger') for name in statuses):
+        if not any(name not in ('tide', 'logger', 'dock') for name in statuses):
             return  # not the monitor's array (another node on /diagnostics)
-        new = [n for n in statuses if n not in ('tide', 'logger') and n not in self.names]
+        new = [n for n in statuses if n not in ('tide', 'logger', 'dock') and n not in self.names]
         if new and self.config is None:
             self.names.extend(new)
             for name in new:

@@ -16,6 +16,10 @@ Conditions, each with its own latch:
 ``anchor_margin``, ``tide_margin``, ``load_margin``, ``safety_factor`` (WARN)
     raised when the value ``< *_warn`` has lasted ``on_delay``; cleared when ``>= *_warn +
     *_deadband`` has held for ``warn_clear_hold``.
+``inconsistent`` (WARN; the dock model only, :mod:`catenary_monitor.core.body.live`)
+    raised when the dock estimate flags the line's tension as irreconcilable with the other
+    lines (its smoothed normalized residual beyond ``dock_residual_limit``) for ``on_delay``;
+    cleared after ``warn_clear_hold`` of consistency; held while the line is not tested.
 stale (STALE, no latch)
     no tension or no depth received yet (the line is blind: its results cannot be computed), the
     newest tension older than ``tension_timeout``, or the depth stale (older than
@@ -76,9 +80,18 @@ class Level(IntEnum):
 RANK = {Level.OK: 0, Level.WARN: 1, Level.STALE: 2, Level.ERROR: 3}
 
 #: Latched conditions, in message order: ERRORs, then WARNs.
-CONDITIONS = ('uplift', 'input', 'anchor_margin', 'tide_margin', 'load_margin', 'safety_factor')
+CONDITIONS = (
+    'uplift',
+    'input',
+    'anchor_margin',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'inconsistent',
+)
 _ERRORS = CONDITIONS[:2]
 _WARNS = CONDITIONS[2:]
+_MARGINS = CONDITIONS[2:6]  # the warnings with a *_warn threshold and *_deadband
 _HOLD, _BREACH, _CLEAR = 0, 1, 2  # classification of one update for one condition
 
 
@@ -103,6 +116,10 @@ class AlarmInputs:
     tension_stamp: float = math.nan  # s
     depth_stamp: float = math.nan  # s
     depth_stale: bool | None = None
+    inconsistent: float = math.nan  # 1 flagged by the dock estimate, 0 consistent, NaN untested
+    dock_residual: float = math.nan  # N, measured - expected tension
+    dock_expected: float = math.nan  # N, the tension the dock estimate expects
+    dock_sigma: float = math.nan  # normalized residual
 
 
 class Latch(NamedTuple):
@@ -230,6 +247,8 @@ class LineAlarm:
             clear = x.uplift_force <= level and (
                 level > 0.0 or x.anchor_margin >= self.config.uplift_clear_margin
             )
+        elif cond == 'inconsistent':
+            breach, clear = x.inconsistent == 1.0, x.inconsistent == 0.0
         else:
             low, high = self._warn_limits(cond)
             value = getattr(x, cond)
@@ -284,7 +303,9 @@ class LineAlarm:
                     f'(timeout {timeout:g} s)'
                 )
         for cond, up in zip(_WARNS, active[2:]):
-            if up:
+            if up and cond == 'inconsistent':
+                parts.append(_inconsistent_text(x, hold_w))
+            elif up:
                 parts.append(self._warn_text(cond, getattr(x, cond), hold_w))
         return '; '.join(parts) if parts else 'OK'
 
@@ -298,6 +319,26 @@ class LineAlarm:
         if value < low:
             return f'{label} {v}{unit} < {lo}{unit}'
         return f'{label} {v}{unit}, warning held (clears after {hold:g} s at >= {hi}{unit})'
+
+
+def _inconsistent_text(x: AlarmInputs, hold: float) -> str:
+    """The message of the ``inconsistent`` condition (what to check)."""
+    expected, residual = x.dock_expected, x.dock_residual
+    if math.isinf(expected):
+        gap = 'the other lines put the hook beyond its chain\'s reach'
+    else:
+        gap = (
+            f'measured {_fmt(expected + residual, 1e3)} kN, the dock position the other lines '
+            f'agree on gives {_fmt(expected, 1e3)} kN ({residual / 1e3:+.1f} kN, '
+            f'{x.dock_sigma:+.1f} sigma)'
+        )
+    check = (
+        'check the tension sensor (calibration, drift, cable), the chain (slipped stopper, '
+        'broken link) and the anchor (dragging)'
+    )
+    if x.inconsistent == 1.0:
+        return f'tension inconsistent with the other lines: {gap}: {check}'
+    return f'tension inconsistency held (clears after {hold:g} s consistent): {check}'
 
 
 def _status_text(status: int, message: str) -> str:
@@ -344,6 +385,10 @@ _INPUT_FIELDS = (
     'safety_factor',
     'tension_stamp',
     'depth_stamp',
+    'inconsistent',
+    'dock_residual',
+    'dock_expected',
+    'dock_sigma',
 )
 
 
@@ -435,6 +480,10 @@ class LevelSeries:
         code = int(self._status[j])
         text = str(self._texts[j]) if self._texts is not None else self._table.get(code, '')
         return _status_text(code, text)
+
+    def active(self, cond: str) -> np.ndarray:
+        """Per update: whether condition ``cond``'s latch is up after it."""
+        return self._active[cond]
 
     def active_at(self, i: int) -> list[bool]:
         """The latches' active flags (:data:`CONDITIONS` order) after update ``i``."""
@@ -588,9 +637,11 @@ def _classify_columns(
         'uplift': codes(f > alarm.allowed_uplift, up_clear),
         'input': codes(status != 0, status == 0),
     }
-    for cond in _WARNS:
+    for cond in _MARGINS:
         low, high = alarm._warn_limits(cond)
         out[cond] = codes(x[cond] < low, x[cond] >= high)
+    flag = x['inconsistent']
+    out['inconsistent'] = codes(flag == 1.0, flag == 0.0)
     return out
 
 

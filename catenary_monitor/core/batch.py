@@ -33,6 +33,7 @@ import numpy as np
 from catenary_monitor.core import acknowledge as alarm_ack, catenary as cat, elastic, kernels
 from catenary_monitor.core.alarms import Level, LevelSeries, Transition, replay_levels
 from catenary_monitor.core.config import LineConfig, MonitorConfig
+from catenary_monitor.core.body import live as dock_live
 from catenary_monitor.core.health import tide_status
 from catenary_monitor.core.monitor import (
     NO_DEPTH,
@@ -45,6 +46,8 @@ from catenary_monitor.core.monitor import (
     MonitorCore,
     Snapshot,
     Start,
+    dock_component,
+    line_dock_values,
     line_status,
     tide_component,
 )
@@ -440,6 +443,61 @@ def _write_tide(
 
 
 @dataclass
+class _Dock:
+    """The dock decisions at the window's ticks (the dock model only)."""
+
+    decision: dock_live.DockDecision
+    levels: np.ndarray  # int8 per tick
+    before: tuple[tuple[Level, str], tuple[tuple[str, str], ...], list[tuple[float, ...]]]
+    transitions: list[Transition]
+
+
+def _decide_dock_window(core: MonitorCore, window: Window, tide: _Tide) -> Optional[_Dock]:
+    """Every tick's dock estimate from each line's newest tension and the tide's decision
+    there (the same arrays the core hands :func:`dock_live.decide_dock` one tick at a time);
+    leaves the core's dock state as after the last tick."""
+    model = core.dock_model
+    if model is None:
+        return None
+    before = (core.dock, core.dock_values, [line.dock for line in core.lines])
+    ticks = window.ticks
+    n = len(ticks)
+    if n == 0:
+        return _Dock(
+            dock_live.DockDecision(*([None] * 4)), np.zeros(0, np.int8), before, []  # type: ignore
+        )
+    now = ticks * 1e-9
+    at = np.searchsorted(tide.times, ticks, 'right') - 1  # the tick's own tide decision
+    depth = tide.depth[at]
+    depth_ok = ~np.isnan(tide.depth_s[at]) & ~tide.stale[at]
+    tension = np.empty((n, len(core.lines)))
+    tension_s = np.empty((n, len(core.lines)))
+    for k, line in enumerate(core.lines):
+        tt, tv = window.tensions[k]
+        j = np.searchsorted(tt, ticks, 'right') - 1  # tensions go before a tick at one stamp
+        tension[:, k] = _pick(j, tv, line.tension)
+        tension_s[:, k] = _pick(j, tt * 1e-9, line.tension_s)
+    decision, core.dock_smoothing = dock_live.decide_dock(
+        model, core.config, now, depth, depth_ok, tension, tension_s, core.dock_smoothing
+    )
+    levels = decision.level
+    transitions = []
+    old, entered = core.dock[0], core.dock_entered
+    for i in _changed(levels, old).tolist():
+        new = Level(int(levels[i]))
+        t = float(now[i])
+        message = dock_live.dock_message(model, decision, i)
+        transitions.append(Transition(t, old, new, message, t - entered))
+        old, entered = new, t
+    core.dock = (Level(int(levels[-1])), dock_live.dock_message(model, decision, n - 1))
+    core.dock_entered = entered
+    core.dock_values = dock_live.dock_values(decision, n - 1)
+    for k, line in enumerate(core.lines):
+        line.dock = tuple(decision.line_inputs[-1, k].tolist())
+    return _Dock(decision, levels, before, transitions)
+
+
+@dataclass
 class _Steps:
     """One line's steps in a window and what each step sees."""
 
@@ -450,6 +508,7 @@ class _Steps:
     dk_idx: np.ndarray  # newest tide decision in the window (-1: the core's)
     solved: np.ndarray  # bool: the line is solved at this step
     s_idx: np.ndarray  # newest solve in the window (-1: the core's)
+    k_idx: np.ndarray  # newest tick in the window (-1: the core's)
 
 
 def _line_steps(line: LineState, tt: np.ndarray, window: Window) -> _Steps:
@@ -465,6 +524,7 @@ def _line_steps(line: LineState, tt: np.ndarray, window: Window) -> _Steps:
         _newest(kinds != KIND_TENSION),
         solved,
         _newest(solved),
+        _newest(kinds == KIND_TICK),
     )
 
 
@@ -502,8 +562,11 @@ def _line_inputs(
     status: np.ndarray,
     window: Window,
     tt: np.ndarray,
+    dock: Optional[_Dock] = None,
+    k: int = 0,
 ) -> dict[str, Any]:
-    """The alarm inputs at every step of the line (newest solve, stamps, tide decision)."""
+    """The alarm inputs at every step of the line (newest solve, stamps, tide decision, the
+    newest tick's dock estimate)."""
     s = steps.s_idx
     before = dict(zip(VALUE_FIELDS, line.values))
     inputs: dict[str, Any] = {
@@ -518,11 +581,17 @@ def _line_inputs(
     inputs['depth_stale'] = _pick(
         steps.dk_idx, tide.stale.astype(np.float64), float(core.depth_stale)
     ).astype(bool)
+    if dock is not None:
+        before_dock = dock.before[2][k]
+        columns = dock.decision.line_inputs
+        for j, key in enumerate(dock_live.LINE_INPUTS):
+            col = columns[:, k, j] if columns is not None else np.zeros(0)
+            inputs[key] = _pick(steps.k_idx, col, before_dock[j])
     return inputs
 
 
 def _advance_line(
-    core: MonitorCore, k: int, window: Window, tide: _Tide
+    core: MonitorCore, k: int, window: Window, tide: _Tide, dock: Optional[_Dock] = None
 ) -> tuple[LineResult, LevelSeries, _Steps, alarm_ack.AckSeries]:
     """One line through the window; leaves the line's state in the core as after the steps
     (the core's depth and tide still as before the window)."""
@@ -530,7 +599,7 @@ def _advance_line(
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
     values, status, used = _solve_line(core, line, steps, tv, window)
-    inputs = _line_inputs(core, line, steps, tide, values, status, window, tt)
+    inputs = _line_inputs(core, line, steps, tide, values, status, window, tt, dock, k)
     series = replay_levels(
         steps.times * 1e-9, inputs, line.alarm, STATUS_MESSAGES, initial=line.state
     )
@@ -599,13 +668,19 @@ def advance(core: MonitorCore, window: Window, snapshots: bool = False) -> Windo
             line.model,
             line.tension_s,
             [latch.active for latch in line.state.latches],
+            (
+                line_dock_values(line.state.latches[-1].active, line.dock)
+                if core.dock_model is not None
+                else ()
+            ),
         )
         for line in core.lines
     ]
     tide, tide_transitions = _decide_tide(core, window)
+    dock = _decide_dock_window(core, window, tide)
     results, series, steps, acks = [], [], [], []
     for k in range(len(core.lines)):
-        r, s, st, a = _advance_line(core, k, window, tide)
+        r, s, st, a = _advance_line(core, k, window, tide, dock)
         results.append(r)
         series.append(s)
         steps.append(st)
@@ -626,10 +701,12 @@ def advance(core: MonitorCore, window: Window, snapshots: bool = False) -> Windo
             tide_before,
             lines_before,
             acks,
+            dock,
         )
     _write_tide(core, window, tide, tide_transitions)
     core.last_ns = max(core.last_ns, end)
-    return WindowResult(results, tide_transitions, snaps, start, end)
+    others = [] if dock is None else [Change('dock', tr) for tr in dock.transitions]
+    return WindowResult(results, tide_transitions, snaps, start, end, others)
 
 
 # --- snapshots -----------------------------------------------------------------------------------
@@ -645,6 +722,7 @@ class _Before(NamedTuple):
     model: str
     tension_s: float
     latches: list[bool]
+    extra: tuple[tuple[str, str], ...] = ()  # the dock model's line values
 
 
 def _changed(levels: np.ndarray, before: Level) -> np.ndarray:
@@ -663,6 +741,7 @@ def _snapshots(
     tide_before: tuple[Level, str],
     lines_before: list[_Before],
     acks: list[alarm_ack.AckSeries],
+    dock: Optional[_Dock] = None,
 ) -> list[Snapshot]:
     """Every snapshot the core made in the window (ticks and level changes), built from the
     vectorized results."""
@@ -683,9 +762,12 @@ def _snapshots(
             window.tensions[k][0],
             lines_before[k],
             acks[k],
+            dock,
+            k,
         )
         for k in range(len(results))
     ]
+    tick_at = np.searchsorted(window.ticks, stamps, 'right') - 1
     logger = ComponentStatus(
         'catenary_monitor: logger', core.logger[0], core.logger[1], core.logger_id, ()
     )
@@ -704,8 +786,20 @@ def _snapshots(
         statuses = [col[n] for col in columns]
         statuses.append(tide_component(state, core.depth_id, depth, stamp * 1e-9 - depth_s))
         statuses.append(logger)
+        if dock is not None:
+            statuses.append(_dock_status(core, dock, int(tick_at[n])))
         out.append(Snapshot(stamp, tuple(statuses)))
     return out
+
+
+def _dock_status(core: MonitorCore, dock: _Dock, i: int) -> ComponentStatus:
+    """The dock status as after tick ``i`` of the window (-1: as before the window)."""
+    if i < 0:
+        return dock_component(dock.before[0], dock.before[1])
+    assert core.dock_model is not None
+    level = Level(int(dock.levels[i]))
+    message = dock_live.dock_message(core.dock_model, dock.decision, i)
+    return dock_component((level, message), dock_live.dock_values(dock.decision, i))
 
 
 def _line_statuses(
@@ -717,6 +811,8 @@ def _line_statuses(
     tt: np.ndarray,
     before: _Before,
     acks: alarm_ack.AckSeries,
+    dock: Optional[_Dock] = None,
+    k: int = 0,
 ) -> list[ComponentStatus]:
     """The line's status in each snapshot (as after its newest step at or before the stamp)."""
     at = np.searchsorted(steps.times, stamps, 'right') - 1
@@ -725,6 +821,11 @@ def _line_statuses(
         level, message = before.level, before.message
         values, status, model, ts = before.values, before.status, before.model, before.tension_s
         latches = before.latches
+        extra = before.extra
+        if i >= 0 and dock is not None:
+            j = int(steps.k_idx[i])
+            inputs = dock.before[2][k] if j < 0 else tuple(dock.decision.line_inputs[j, k])
+            extra = line_dock_values(bool(series.active('inconsistent')[i]), inputs)
         if i >= 0:
             level, message = Level(int(series.levels[i])), series.message_at(i)
             latches = series.active_at(i)
@@ -744,7 +845,7 @@ def _line_statuses(
                 status,
                 model,
                 stamps[n] * 1e-9 - ts,
-                alarm_ack.diagnostic_values(acks.at(i), level, latches),
+                tuple(alarm_ack.diagnostic_values(acks.at(i), level, latches)) + extra,
             )
         )
     return out
@@ -845,6 +946,9 @@ def run_log(
         lo = hi
     lines = [_concat([p.lines[k] for p in pieces]) for k in range(len(core.lines))]
     tide = [tr for p in pieces for tr in p.tide]
+    others = sorted(
+        others + [c for p in pieces for c in p.others], key=lambda c: c.transition.time
+    )
     snaps = sorted([s for p in pieces for s in p.snapshots] + extra, key=lambda s: s.stamp_ns)
     return (
         WindowResult(

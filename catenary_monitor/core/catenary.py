@@ -629,21 +629,52 @@ def taut_parameter_from_length(
     """Catenary parameter of a fully suspended chain of given length between two points.
 
     Solves ``sqrt(L^2 - h^2) = 2 a sinh(x / 2a)`` (requires ``L^2 > x^2 + h^2``), i.e.
-    ``sinh(D)/D = sqrt(L^2 - h^2)/x`` with ``D = x/(2a)``, by Newton in D from an upper start
-    (the left side is convex, so Newton from above decreases monotonically).
+    ``sinh(D)/D - 1 = k - 1`` with ``D = x/(2a)`` and ``k - 1 = (sqrt(L^2 - h^2) - x) / x``, by
+    Newton in D from an upper start (the left side is convex, so Newton from above decreases
+    monotonically).  ``sinh(D)/D - 1`` and ``D cosh D - sinh D`` use their series for small D,
+    so a nearly straight chain (D -> 0, the high tensions of a lifted anchor) keeps full
+    relative accuracy.  Stops after a step below ``4 eps D`` or once a step no longer decreases
+    D (rounding level: the iterates can only fall while above the root).
     """
-    k = np.sqrt((length - h) * (length + h)) / x
+    chord = np.sqrt((length - h) * (length + h))
+    km1 = (chord - x) / x
+    k = 1.0 + km1
     d = np.maximum(
-        np.sqrt(6.0 * np.maximum(k - 1.0, 0.0)), np.log(2.0 * k) + np.log(np.log(2.0 * k) + 1.0)
+        np.sqrt(6.0 * np.maximum(km1, 0.0)), np.log(2.0 * k) + np.log(np.log(2.0 * k) + 1.0)
     )
     done = np.zeros(d.shape, dtype=bool)
+    eps4 = 4.0 * np.finfo(float).eps
     for _ in range(4 * MAXITER):
-        sh = np.sinh(d)
-        f = sh / d - k
-        fp = (np.cosh(d) - sh / d) / d
-        new = np.where(done, d, d - f / fp)
-        done |= np.abs(new - d) <= 4.0 * np.finfo(float).eps * d
+        f = _sinh_minus_x(d) / d - km1  # sinh(D)/D - k
+        fp = _d_cosh_minus_sinh(d) / (d * d)  # d/dD sinh(D)/D
+        new = d - f / fp
+        stop = (np.abs(new - d) <= eps4 * d) | ~(new < d)
+        new = np.where(done | (~(new < d) & ~done), d, new)
+        done |= stop
         d = new
         if done.all():
             break
     return x / (2.0 * d), done
+
+
+def _d_cosh_minus_sinh(z: np.ndarray) -> np.ndarray:
+    """``z cosh(z) - sinh(z)`` without cancellation (series ``sum 2n z^(2n+1)/(2n+1)!`` below
+    0.5)."""
+    z2 = z * z
+    series = (
+        z
+        * z2
+        / 3.0
+        * (
+            1.0
+            + z2
+            / 10.0
+            * (
+                1.0
+                + z2
+                / 28.0
+                * (1.0 + z2 / 54.0 * (1.0 + z2 / 88.0 * (1.0 + z2 / 130.0 * (1.0 + z2 / 180.0))))
+            )
+        )
+    )
+    return np.where(np.abs(z) < 0.5, series, z * np.cosh(z) - np.sinh(z))

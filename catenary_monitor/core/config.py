@@ -30,6 +30,9 @@ __all__ = [
     'LineConfig',
     'AlarmConfig',
     'MonitorConfig',
+    'DockConfig',
+    'GEOMETRY',
+    'all_parameters',
     'expand_parameters',
     'load_params_file',
     'config_from_params',
@@ -56,7 +59,8 @@ class ParamSpec(NamedTuple):
     ``name`` is the full name for ``scope == 'global'`` and the suffix after ``NAME.`` for
     ``scope == 'line'``. ``type`` is one of ``double``, ``string``, ``string_array``. ``default``
     is a value or :data:`REQUIRED`; a string default may contain ``{line}``. ``min`` / ``max`` are
-    inclusive (ROS ``FloatingPointRange`` semantics) or ``None``.
+    inclusive (ROS ``FloatingPointRange`` semantics) or ``None``. ``optional`` doubles default
+    to NaN, which means "not given" (the dataclasses hold None); a given value is range-checked.
     """
 
     name: str
@@ -68,6 +72,8 @@ class ParamSpec(NamedTuple):
     max: float | None
     scope: str = 'global'
     read_only: bool = False
+    optional: bool = False
+    group: str = ''  # '' the monitor's table (README); 'dock' the dock model's (docs/dock_body.md)
 
     def full_name(self, line: str | None = None) -> str:
         """Parameter name as declared on the node (``NAME.weight`` for per-line rows)."""
@@ -81,6 +87,7 @@ class ParamSpec(NamedTuple):
 
 
 _L = 'line'
+_NOT_GIVEN = math.nan
 #: The one source of truth for every parameter: the node declares these, the README renders them.
 PARAMETERS: tuple[ParamSpec, ...] = (
     ParamSpec(
@@ -178,6 +185,31 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         1.0e12,
         _L,
     ),
+    # Dock geometry (the dock model, core/body): optional; NaN means not given.
+    ParamSpec(
+        'hook_x',
+        'double',
+        _NOT_GIVEN,
+        'Hook position on the dock: x toward the bow from the dock reference point (REP 103)',
+        'm',
+        -1.0e4,
+        1.0e4,
+        _L,
+        optional=True,
+        group='dock',
+    ),
+    ParamSpec(
+        'hook_y',
+        'double',
+        _NOT_GIVEN,
+        'Hook position on the dock: y to port from the dock reference point (REP 103)',
+        'm',
+        -1.0e4,
+        1.0e4,
+        _L,
+        optional=True,
+        group='dock',
+    ),
     ParamSpec(
         'heading',
         'double',
@@ -187,6 +219,29 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         -360.0,
         360.0,
         _L,
+        optional=True,
+    ),
+    ParamSpec(
+        'chain_length',
+        'double',
+        _NOT_GIVEN,
+        'Unstretched chain length hook -> anchor',
+        'm',
+        0.1,
+        1.0e4,
+        _L,
+        optional=True,
+    ),
+    ParamSpec(
+        'tension_accuracy',
+        'double',
+        _NOT_GIVEN,
+        'Accuracy of the tension sensor: standard uncertainty (1 sigma) of a reading',
+        'N',
+        1.0,
+        1.0e9,
+        _L,
+        optional=True,
     ),
     # Alarm thresholds (WARN).
     ParamSpec(
@@ -335,6 +390,99 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.01,
         100.0,
     ),
+    # The dock as one body (core/body): loads by the seed paper's formulas (docs/dock_body.md).
+    *(
+        ParamSpec(
+            name,
+            'double',
+            _NOT_GIVEN,
+            text,
+            'm' if 'area' not in name else 'm^2',
+            0.0,
+            1.0e6,
+            optional=True,
+            group='dock',
+        )
+        for name, text in (
+            ('dock_length', 'Dock length along x (wave drift of beam seas; paper: 246.4 m)'),
+            ('dock_beam', 'Dock beam along y (wave drift of head seas; paper: 51 m)'),
+            ('dock_wind_area_x', "Superstructure area F' projected on the midship section"),
+            ('dock_hull_area_x', 'Hull freeboard area F projected on the midship section'),
+            ('dock_wind_area_y', "Superstructure area F' projected on the centreline plane"),
+            ('dock_hull_area_y', 'Hull freeboard area F projected on the centreline plane'),
+            ('dock_wetted_area', 'Wetted hull area Omega (current drag)'),
+        )
+    ),
+    ParamSpec(
+        'dock_wind_coefficient',
+        'double',
+        0.744,
+        "Wind load R1 = c V^2 (F' + k F): c (paper: 0.006 x rho 0.124 kgf s^2/m^4, in N)",
+        'N s^2/m^4',
+        0.0,
+        100.0,
+        group='dock',
+    ),
+    ParamSpec(
+        'dock_hull_wind_factor',
+        'double',
+        0.31,
+        "Wind load R1 = c V^2 (F' + k F): k, the hull freeboard's share (paper: 0.31)",
+        '',
+        0.0,
+        10.0,
+        group='dock',
+    ),
+    ParamSpec(
+        'dock_current_coefficient',
+        'double',
+        1.8,
+        'Current load R2 = c Omega v^n: c (paper: 0.01 x f, f = 0.18, in N)',
+        'N s^n/m^(n+2)',
+        0.0,
+        1.0e4,
+        group='dock',
+    ),
+    ParamSpec(
+        'dock_current_exponent',
+        'double',
+        1.83,
+        'Current load R2 = c Omega v^n: n (paper: 1.83)',
+        '',
+        1.0,
+        3.0,
+        group='dock',
+    ),
+    ParamSpec(
+        'dock_wave_drift_coefficient',
+        'double',
+        5382.1845,
+        'Wave drift R3 = c B (Hs/4)^2: c (paper: 3/4 k rho g, k = 0.7, 104.61 x 9.8, in N)',
+        'N/m^3',
+        0.0,
+        1.0e6,
+        group='dock',
+    ),
+    ParamSpec(
+        'dock_residual_time',
+        'double',
+        10.0,
+        "Time constant of the smoothing of each line's normalized residual over the ticks",
+        's',
+        0.1,
+        3600.0,
+        group='dock',
+    ),
+    ParamSpec(
+        'dock_residual_limit',
+        'double',
+        5.0,
+        'A line is inconsistent when its smoothed normalized residual exceeds this',
+        'sigma',
+        1.0,
+        100.0,
+        group='dock',
+    ),
 )
 
 _GLOBAL = {p.name: p for p in PARAMETERS if p.scope == 'global'}
@@ -370,7 +518,7 @@ def _check(full_name: str, spec: ParamSpec, value: Any) -> Any:
                 f'got {type(value).__name__} {value!r}',
             )
         value = float(value)
-        if value != value and spec.default != spec.default:
+        if value != value and (spec.optional or spec.default != spec.default):
             return value  # an optional parameter (default NaN) left unset
         if not math.isfinite(value):
             raise ConfigError(full_name, f'must be finite, got {value!r}')
@@ -403,7 +551,9 @@ class LineConfig:
     """One anchor chain. SI units: weight N/m (submerged), distances m, forces N.
 
     ``tension_topic`` ``''`` means ``/mooring/NAME/tension``; ``ea`` ``None`` (or 0) means an
-    inextensible chain. Values are validated against :data:`PARAMETERS` on construction.
+    inextensible chain. The dock geometry (``hook_x``, ``hook_y`` m, ``heading`` deg,
+    ``chain_length`` m) and ``tension_accuracy`` (N) are None when not given. Values are
+    validated against :data:`PARAMETERS` on construction.
     """
 
     name: str
@@ -415,6 +565,10 @@ class LineConfig:
     tension_topic: str = ''
     ea: float | None = None
     heading: float = math.nan  # deg, clockwise from the bow toward the anchor; NaN: not set
+    hook_x: float | None = None
+    hook_y: float | None = None
+    chain_length: float | None = None
+    tension_accuracy: float | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not _LINE_NAME.match(self.name):
@@ -428,8 +582,15 @@ class LineConfig:
             values['tension_topic'] = _PER_LINE['tension_topic'].default_for(self.name)
         if values['ea'] is None:
             values['ea'] = 0.0
+        none_default = {f.name for f in dataclasses.fields(self) if f.default is None}
         for key, spec in _PER_LINE.items():
-            object.__setattr__(self, key, _check(spec.full_name(self.name), spec, values[key]))
+            value = values[key]
+            if spec.optional:
+                value = _NOT_GIVEN if value is None else value
+            value = _check(spec.full_name(self.name), spec, value)
+            if spec.optional and math.isnan(value) and key in none_default:
+                value = None  # (heading keeps NaN for "not set", as the console reads it)
+            object.__setattr__(self, key, value)
         _check_topic(f'{self.name}.tension_topic', self.tension_topic)
         if self.ea == 0.0:
             object.__setattr__(self, 'ea', None)
@@ -471,13 +632,55 @@ class AlarmConfig:
 
 
 @dataclass(frozen=True)
+class DockConfig:
+    """The dock as one body: its size, projected areas (None: not given) and the load-formula
+    coefficients of the seed paper (field names are the ``dock_*`` parameters without the
+    prefix; units and sources in :data:`PARAMETERS` and docs/dock_body.md)."""
+
+    length: float | None = None
+    beam: float | None = None
+    wind_area_x: float | None = None
+    hull_area_x: float | None = None
+    wind_area_y: float | None = None
+    hull_area_y: float | None = None
+    wetted_area: float | None = None
+    wind_coefficient: float = _default('dock_wind_coefficient')
+    hull_wind_factor: float = _default('dock_hull_wind_factor')
+    current_coefficient: float = _default('dock_current_coefficient')
+    current_exponent: float = _default('dock_current_exponent')
+    wave_drift_coefficient: float = _default('dock_wave_drift_coefficient')
+    residual_limit: float = _default('dock_residual_limit')
+    residual_time: float = _default('dock_residual_time')
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):
+            spec = _GLOBAL[f'dock_{f.name}']
+            value = getattr(self, f.name)
+            if spec.optional and value is None:
+                continue
+            value = _check(spec.name, spec, value)
+            object.__setattr__(self, f.name, None if math.isnan(value) else value)
+
+
+#: Per-line parameters that place a line on the dock (all given on every line, or none).
+GEOMETRY = ('hook_x', 'hook_y', 'heading', 'chain_length')
+
+
+@dataclass(frozen=True)
 class MonitorConfig:
-    """The whole monitor: its lines (at least one, unique names and topics) and alarm settings."""
+    """The whole monitor: its lines (at least one, unique names and topics), alarm settings
+    and the dock's data."""
 
     lines: tuple[LineConfig, ...]
     depth_topic: str = _default('depth_topic')
     log_dir: str = _default('log_dir')
     alarm: AlarmConfig = field(default_factory=AlarmConfig)
+    dock: DockConfig = field(default_factory=DockConfig)
+
+    @property
+    def has_dock_model(self) -> bool:
+        """True when every line is placed on the dock (hook, heading, chain length)."""
+        return all(_set(getattr(line, key)) for line in self.lines for key in GEOMETRY)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, 'lines', tuple(self.lines))
@@ -492,6 +695,7 @@ class MonitorConfig:
         _check_topic('depth_topic', self.depth_topic)
         if not self.log_dir:
             raise ConfigError('log_dir', 'must not be empty')
+        _check_geometry(self.lines)
         seen = {self.depth_topic: 'depth_topic'}
         for line in self.lines:
             other = seen.setdefault(line.tension_topic, f'{line.name}.tension_topic')
@@ -516,6 +720,26 @@ class MonitorConfig:
             if line.name == name:
                 return line
         raise KeyError(name)
+
+
+def _set(value: Any) -> bool:
+    """A parameter value that is given (neither None nor NaN)."""
+    return value is not None and value == value
+
+
+def _check_geometry(lines: tuple[LineConfig, ...]) -> None:
+    """A line with a hook position asks for the dock model: every line then needs all of
+    :data:`GEOMETRY` (``heading`` or ``chain_length`` alone are other features' business)."""
+    if not any(line.hook_x is not None or line.hook_y is not None for line in lines):
+        return
+    for line in lines:
+        for key in GEOMETRY:
+            if not _set(getattr(line, key)):
+                raise ConfigError(
+                    f'{line.name}.{key}',
+                    'missing: the dock model (hook_x, hook_y given) needs hook_x, hook_y, '
+                    'heading and chain_length on every line',
+                )
 
 
 def expand_parameters(lines: tuple[str, ...] | list[str]) -> Iterator[tuple[str, ParamSpec]]:
@@ -591,27 +815,53 @@ def config_from_params(flat: Mapping[str, Any]) -> MonitorConfig:
         for line in lines
     )
     alarm = AlarmConfig(**{f.name: values[f.name] for f in dataclasses.fields(AlarmConfig)})
+    dock = DockConfig(
+        **{f.name: _given(values[f'dock_{f.name}']) for f in dataclasses.fields(DockConfig)}
+    )
     return MonitorConfig(
         lines=line_configs,
         depth_topic=values['depth_topic'],
         log_dir=values['log_dir'],
         alarm=alarm,
+        dock=dock,
     )
 
 
+def _given(value: Any) -> Any:
+    """None for a NaN (an optional parameter not given), else the value."""
+    return None if isinstance(value, float) and math.isnan(value) else value
+
+
 def config_to_params(config: MonitorConfig) -> dict[str, Any]:
-    """Flat parameters that :func:`config_from_params` turns back into ``config``."""
+    """Flat parameters that :func:`config_from_params` turns back into ``config``.
+
+    Optional parameters that are not given are left out (so configurations that do not use
+    them keep their hash, and the JSON of logs stays free of NaN); see :func:`all_parameters`.
+    """
     flat: dict[str, Any] = {
         'lines': [line.name for line in config.lines],
         'depth_topic': config.depth_topic,
         'log_dir': config.log_dir,
     }
     flat.update(dataclasses.asdict(config.alarm))
+    for key, value in dataclasses.asdict(config.dock).items():
+        if value is not None:
+            flat[f'dock_{key}'] = value
     for line in config.lines:
         for key in _PER_LINE:
             value = getattr(line, key)
+            if _PER_LINE[key].optional and (value is None or value != value):
+                continue  # not given
             flat[f'{line.name}.{key}'] = 0.0 if key == 'ea' and value is None else value
     return flat
+
+
+def all_parameters(config: MonitorConfig) -> dict[str, Any]:
+    """Every parameter's value (what the node declares): :func:`config_to_params` with the
+    optional parameters not given as NaN."""
+    flat = config_to_params(config)
+    names = [line.name for line in config.lines]
+    return {name: flat.get(name, math.nan) for name, _ in expand_parameters(names)}
 
 
 def resolve_topic(topic: str, node_name: str = 'catenary_monitor') -> str:
@@ -627,13 +877,20 @@ def config_hash(config: MonitorConfig) -> str:
     return hashlib.sha256(text.encode('utf-8')).hexdigest()
 
 
-def parameters_markdown() -> str:
+def parameters_markdown(group: str = '') -> str:
     """The parameter table as Markdown: name, default (doubles unless noted), unit, range,
-    description."""
+    description; ``group`` ``''`` the monitor's (README), ``'dock'`` the dock model's."""
     rows = ['| parameter | default | unit | range | description |', '|---|---|---|---|---|']
     for spec in PARAMETERS:
+        if spec.group != group:
+            continue
         name = spec.full_name('NAME')
-        default = 'required' if spec.default is REQUIRED else f'`{spec.default_for("NAME")!r}`'
+        if spec.default is REQUIRED:
+            default = 'required'
+        elif spec.optional:
+            default = 'not set (NaN)'
+        else:
+            default = f'`{spec.default_for("NAME")!r}`'
         if spec.type != 'double':
             default += f' ({spec.type.replace("_", " ")})'
         span = '' if spec.min is None else f'{spec.min:g} – {spec.max:g}'

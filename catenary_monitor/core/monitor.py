@@ -54,6 +54,8 @@ from catenary_monitor.core.config import (
     config_to_params,
     resolve_topic,
 )
+from catenary_monitor.core.body import live as dock_live
+from catenary_monitor.core.body.model import DockModel
 from catenary_monitor.core.health import logger_status, tide_status
 from catenary_monitor.core.solve import solve
 
@@ -81,6 +83,7 @@ __all__ = [
     'MonitorCore',
     'line_status',
     'tide_component',
+    'dock_component',
     'event_record',
     'parse_event_record',
 ]
@@ -231,10 +234,11 @@ class LineState:
     status_message: str = ''
     model: str = NO_MODEL  # model of the newest solve
     ack: alarm_ack.AckState = alarm_ack.AckState()  # the line's alarm in ISA-18.2 states
+    dock: tuple[float, ...] = (_NAN,) * 4  # dock_live.LINE_INPUTS of the newest dock estimate
 
     def inputs(self, depth_s: float, depth_stale: bool) -> AlarmInputs:
         """The alarm inputs of this line now (newest results, stamps, the tide's decision)."""
-        v = self.values
+        v, d = self.values, self.dock
         return AlarmInputs(
             uplift_force=v[5],
             anchor_margin=v[4],
@@ -246,6 +250,10 @@ class LineState:
             tension_stamp=self.tension_s,
             depth_stamp=depth_s,
             depth_stale=depth_stale,
+            inconsistent=d[0],
+            dock_residual=d[1],
+            dock_expected=d[2],
+            dock_sigma=d[3],
         )
 
 
@@ -296,6 +304,12 @@ class MonitorCore:
         self.logger: tuple[Level, str] = (Level.OK, 'logging')
         self.logger_entered = start
         self.last_ns = start_ns
+        # The dock as one body (configs placing every line on the dock): estimated at ticks.
+        self.dock_model = DockModel.from_config(config) if config.has_dock_model else None
+        self.dock: tuple[Level, str] = (Level.STALE, 'no dock estimate yet')
+        self.dock_entered = start
+        self.dock_values: tuple[tuple[str, str], ...] = ()
+        self.dock_smoothing = dock_live.Smoothing.initial(len(self.lines))
 
     # ------------------------------------------------------------------ events
     def step(self, event: Event) -> Step:
@@ -333,6 +347,8 @@ class MonitorCore:
 
     def _on_tick(self, ev: Tick) -> Step:
         changes = self._decide_tide(ev.stamp_ns)
+        if self.dock_model is not None:
+            changes += self._decide_dock(ev.stamp_ns)
         changes += self._step_lines(range(len(self.lines)), ev.stamp_ns)
         return Step(ev.stamp_ns, 'tick', (), self.snapshot(ev.stamp_ns), tuple(changes))
 
@@ -358,6 +374,7 @@ class MonitorCore:
         self.config = config
         for line, lc in zip(self.lines, config.lines):
             line.config, line.alarm = lc, LineAlarm.for_line(lc, config.alarm)
+        self.dock_model = DockModel.from_config(config) if config.has_dock_model else None
 
     # ------------------------------------------------------------------ decisions
     def _decide_tide(self, stamp_ns: int) -> list[Change]:
@@ -368,6 +385,28 @@ class MonitorCore:
         return self._set_component(
             'tide', tide_status(self.depth, self.depth_s, now, timeout), stamp_ns
         )
+
+    def _decide_dock(self, stamp_ns: int) -> list[Change]:
+        """The dock estimate from every line's newest tension (core.body.live): the dock
+        status, and what each line's ``inconsistent`` alarm condition sees."""
+        assert self.dock_model is not None
+        now = _stamp_s(stamp_ns)
+        depth_ok = self.depth_s == self.depth_s and not self.depth_stale
+        decision, self.dock_smoothing = dock_live.decide_dock(
+            self.dock_model,
+            self.config,
+            np.array([now]),
+            np.array([self.depth]),
+            np.array([depth_ok]),
+            np.array([[line.tension for line in self.lines]]),
+            np.array([[line.tension_s for line in self.lines]]),
+            self.dock_smoothing,
+        )
+        for k, line in enumerate(self.lines):
+            line.dock = tuple(decision.line_inputs[0, k].tolist())
+        self.dock_values = dock_live.dock_values(decision, 0)
+        new = (Level(int(decision.level[0])), dock_live.dock_message(self.dock_model, decision, 0))
+        return self._set_component('dock', new, stamp_ns)
 
     def _set_component(self, name: str, new: tuple[Level, str], stamp_ns: int) -> list[Change]:
         """Set the tide's or the logger's (level, message); a Change if the level moved."""
@@ -470,6 +509,7 @@ class MonitorCore:
     def snapshot(self, stamp_ns: int) -> Snapshot:
         """The diagnostic snapshot at ``stamp_ns``: every line, the tide, the logger."""
         now = _stamp_s(stamp_ns)
+        dock = self.dock_model is not None
         statuses = [
             line_status(
                 line.config,
@@ -480,9 +520,12 @@ class MonitorCore:
                 line.status,
                 line.model,
                 now - line.tension_s,
-                alarm_ack.diagnostic_values(
-                    line.ack, line.state.level, [latch.active for latch in line.state.latches]
-                ),
+                tuple(
+                    alarm_ack.diagnostic_values(
+                        line.ack, line.state.level, [latch.active for latch in line.state.latches]
+                    )
+                )
+                + (line_dock_values(line.state.latches[-1].active, line.dock) if dock else ()),
             )
             for line in self.lines
         ]
@@ -491,6 +534,8 @@ class MonitorCore:
         statuses.append(
             ComponentStatus(f'{NODE_NAME}: logger', level, message, self.logger_id, ())
         )
+        if dock:
+            statuses.append(dock_component(self.dock, self.dock_values))
         return Snapshot(stamp_ns, tuple(statuses))
 
 
@@ -508,7 +553,8 @@ def line_status(
     """One line's ``DiagnosticStatus``: the contract keys (SI strings ``float()`` reads back
     exactly), then ``measured_tension``, ``tension_age`` [s], ``anchor_distance``,
     ``allowed_uplift``, ``anchor_angle_deg``, ``solver_status``, ``model``, then ``extra``
-    (the alarm's acknowledgement keys: :func:`.acknowledge.diagnostic_values`)."""
+    (the alarm's acknowledgement keys: :func:`.acknowledge.diagnostic_values`; with the dock
+    model, :func:`line_dock_values`)."""
     named = dict(zip(VALUE_FIELDS, values))
     pairs = diagnostic_values(named) + [
         ('measured_tension', repr(float(values[0]))),
@@ -523,6 +569,29 @@ def line_status(
     return ComponentStatus(
         f'{NODE_NAME}: {config.name}', level, message, hardware_id, tuple(pairs)
     )
+
+
+def line_dock_values(latched: bool, dock: Sequence[float]) -> tuple[tuple[str, str], ...]:
+    """A line's dock-model values: ``sensor_state``, ``residual`` (measured - expected, N),
+    ``expected_tension`` (N) and ``residual_sigma`` (normalized residual)."""
+    flag, residual, expected, sigma = dock
+    return (
+        ('sensor_state', dock_live.sensor_state(latched, flag)),
+        ('residual', repr(float(residual))),
+        ('expected_tension', repr(float(expected))),
+        ('residual_sigma', repr(float(sigma))),
+    )
+
+
+def dock_component(
+    dock: tuple[Level, str], values: tuple[tuple[str, str], ...]
+) -> ComponentStatus:
+    """The ``catenary_monitor: dock`` status: the estimate's level and message, values
+    ``offset_x``, ``offset_y`` [m], ``yaw_deg``, ``load_x``, ``load_y`` [N], ``load_mz`` [N m],
+    ``readings`` (NaN strings before the first estimate)."""
+    if not values:
+        values = tuple((k, 'nan') for k in dock_live.DOCK_KEYS[:-1]) + (('readings', '0'),)
+    return ComponentStatus(f'{NODE_NAME}: dock', dock[0], dock[1], 'dock model', values)
 
 
 def tide_component(

@@ -8,7 +8,8 @@ ea=EA)`` returns a :class:`~catenary_monitor.core.result.SolveResult` whatever t
 * with ``ea`` [N], the axial stiffness: the elastic catenary where it changes the answer by more
   than ``elastic.ELASTIC_TOL`` (1e-6), else the inextensible one
   (:mod:`catenary_monitor.core.elastic`); ``result.model`` names the model that answered, per
-  element for arrays. The elastic chain is solved for a measured hook tension (problems 3 and 4).
+  element for arrays. The elastic chain is solved for a measured hook tension (problems 3 and 4)
+  or a chain length (problem 5, :mod:`catenary_monitor.core.fixed_length`).
 
 Two tiers of errors: a mistake in the call itself raises ``ValueError`` naming the rule; a
 physically impossible element gets a non-zero ``status`` and NaN outputs
@@ -20,7 +21,7 @@ from __future__ import annotations
 import functools
 from typing import TYPE_CHECKING, Any, Optional
 
-from catenary_monitor.core import elastic, kernels
+from catenary_monitor.core import elastic, fixed_length, kernels
 from catenary_monitor.core.inextensible import ArrayLike, solve_inextensible
 from catenary_monitor.core.result import ALL_KEYS, STATUS_MESSAGES, SolveResult, Status
 
@@ -48,7 +49,8 @@ def solve(
     chain_length : paid-out chain length Lm [m] (problem 5; needs ``anchor_distance``).
     anchor_distance : horizontal distance hook -> anchor x [m]; adds the uplift state and margins.
     mbl : minimum breaking load [N]; adds ``safety_factor = mbl / top_tension``.
-    ea : axial stiffness EA [N] (> 0; ``inf`` is the inextensible chain); with ``tension`` only.
+    ea : axial stiffness EA [N] (> 0; ``inf`` is the inextensible chain); with ``tension`` or
+        ``chain_length``.
 
     Returns
     -------
@@ -83,10 +85,19 @@ def solve(
         return solve_inextensible(
             weight, depth, tension, horizontal, anchor_distance, chain_length, mbl
         )
+    if chain_length is not None and tension is None and horizontal is None:
+        if anchor_distance is None:
+            raise ValueError(
+                'chain_length needs anchor_distance (the chain lies on the seabed '
+                'between hook and anchor)'
+            )
+        return fixed_length.solve_chain_length(
+            weight, depth, chain_length, anchor_distance, ea, mbl
+        )
     if tension is None or horizontal is not None or chain_length is not None:
         raise ValueError(
-            'ea (an elastic chain) is solved for a measured hook tension: give '
-            'tension (problems 3 and 4) and neither horizontal nor chain_length'
+            'ea (an elastic chain) is solved for a measured hook tension (problems 3 and 4) '
+            'or a chain length (problem 5): give tension or chain_length, not horizontal'
         )
     return elastic.solve_with_correction(weight, depth, tension, anchor_distance, ea=ea, mbl=mbl)[
         0

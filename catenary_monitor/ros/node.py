@@ -46,6 +46,7 @@ from catenary_monitor.core.config import (
     ConfigError,
     MonitorConfig,
     ParamSpec,
+    all_parameters,
     config_from_params,
     config_hash,
     config_to_params,
@@ -113,8 +114,11 @@ def _descriptor(spec: ParamSpec, name: str) -> ParameterDescriptor:
     if (spec.min is not None or spec.max is not None) and spec.default == spec.default:
         low = -sys.float_info.max if spec.min is None else float(spec.min)
         high = sys.float_info.max if spec.max is None else float(spec.max)
-        desc.floating_point_range = [FloatingPointRange(from_value=low, to_value=high, step=0.0)]
-        constraints.append(f'range: [{low:g}, {high:g}]')
+        if not spec.optional:  # rclpy's range check refuses NaN, an optional's "not given"
+            desc.floating_point_range = [
+                FloatingPointRange(from_value=low, to_value=high, step=0.0)
+            ]
+        constraints.append(f'range: [{low:g}, {high:g}]' + (' or NaN (not given)' * spec.optional))
     desc.additional_constraints = '; '.join(constraints)
     return desc
 
@@ -161,7 +165,7 @@ class CatenaryMonitor(Node):
         if log_dir is not None:
             flat['log_dir'] = log_dir
         config = config_from_params(flat)
-        values = config_to_params(config)
+        values = all_parameters(config)
         for name, spec in expand_parameters([line.name for line in config.lines]):
             value = values[name]
             if spec.type == 'string_array':
