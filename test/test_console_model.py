@@ -14,6 +14,7 @@ from catenary_monitor.console.model import (
     alarm_rows,
     bucket,
     build_frame,
+    console_config,
     tide_trend,
 )
 from catenary_monitor.core.config import config_from_params, load_params_file
@@ -106,3 +107,15 @@ def test_shipped_foxglove_layout_is_the_generated_one():
     assert shipped == layout(config)
     paths = [p['value'] for p in shipped['configById']['StateTransitions!cm4']['paths']]
     assert len(paths) == 12 and paths[10].endswith('{name=="catenary_monitor: line_11"}.level')
+
+
+def test_page_config_places_hooks_where_the_params_file_puts_them():
+    """The plan draws each chain from its hook (hook_x, hook_y) along its heading."""
+    config = config_from_params(load_params_file(str(ROOT / 'config' / 'floating_dock.yaml')))
+    page = console_config(config, [], 'live')
+    by_name = {line['name']: line for line in page['lines']}
+    assert (by_name['line_01']['hook_x'], by_name['line_01']['hook_y']) == (110.0, -25.5)
+    assert by_name['line_01']['heading'] == 45.0
+    assert page['dock_length'] == 246.4 and page['dock_beam'] == 51.0
+    bare = console_config(None, ['a', 'b'], 'live')
+    assert bare['lines'][0]['hook_x'] is None and bare['dock_length'] is None

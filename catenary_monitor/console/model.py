@@ -97,8 +97,9 @@ def silence_limit(diagnostic_rate: float) -> float:
 def console_config(
     config: Optional[MonitorConfig], names: Sequence[str], mode: str, **extra: Any
 ) -> dict[str, Any]:
-    """The page's static facts: lines (heading, MBL, anchor distance, allowed uplift), the
-    warning thresholds, the monitor's period and the silence limit. Without a configuration
+    """The page's static facts: lines (heading, hook on the dock, MBL, anchor distance, allowed
+    uplift), the dock's size, the warning thresholds, the monitor's period and the silence
+    limit. Without a configuration
     (a console started without ``--params-file``) the lines are those seen on /diagnostics."""
     rate = config.alarm.diagnostic_rate if config else 1.0
     lines = []
@@ -111,6 +112,8 @@ def console_config(
                     'mbl': line.mbl,
                     'anchor_distance': line.anchor_distance,
                     'allowed_uplift': line.allowed_uplift,
+                    'hook_x': line.hook_x,
+                    'hook_y': line.hook_y,
                 }
             )
     else:
@@ -123,12 +126,17 @@ def console_config(
                     'mbl': None,
                     'anchor_distance': None,
                     'allowed_uplift': None,
+                    'hook_x': None,
+                    'hook_y': None,
                 }
             )
     alarm = config.alarm if config else None
+    dock = config.dock if config else None
     return {
         'mode': mode,
         'lines': lines,
+        'dock_length': dock.length if dock else None,
+        'dock_beam': dock.beam if dock else None,
         'safety_factor_warn': alarm.safety_factor_warn if alarm else 2.0,
         'anchor_margin_warn': alarm.anchor_margin_warn if alarm else 5.0,
         'tension_timeout': alarm.tension_timeout if alarm else 5.0,

@@ -189,11 +189,16 @@ function buildPlan() {
     d: `M ${-A} ${-B + 14} L 0 ${-B - 8} L ${A} ${-B + 14} L ${A} ${B} L ${-A} ${B} Z` }));
   plan.appendChild(svg('text', { x: 0, y: -B + 30, 'text-anchor': 'middle', class: 'muted' }, 'BOW'));
   const far = Math.max(...S.config.lines.map((l) => l.anchor_distance || 120));
+  // Hooks where the params file puts them (x to the bow is up, y to port is left; REP 103),
+  // else where the chain's direction leaves the outline.
+  const placed = S.config.lines.every((l) => l.hook_x !== null && l.hook_x !== undefined && l.hook_y !== null && l.hook_y !== undefined);
+  const halfL = Math.max(S.config.dock_length ? S.config.dock_length / 2 : 0, ...S.config.lines.map((l) => Math.abs(l.hook_x || 0)), 1e-9);
+  const halfB = Math.max(S.config.dock_beam ? S.config.dock_beam / 2 : 0, ...S.config.lines.map((l) => Math.abs(l.hook_y || 0)), 1e-9);
   for (const line of S.config.lines) {
     const th = line.heading * Math.PI / 180;
     const dx = Math.sin(th), dy = -Math.cos(th);
     const k = Math.min(Math.abs(dx) > 1e-9 ? A / Math.abs(dx) : 1e9, Math.abs(dy) > 1e-9 ? B / Math.abs(dy) : 1e9);
-    const hx = dx * k, hy = dy * k;
+    const hx = placed ? -A * line.hook_y / halfB : dx * k, hy = placed ? -B * line.hook_x / halfL : dy * k;
     const len = 95 * (line.anchor_distance || 120) / far;
     const ax = hx + dx * len, ay = hy + dy * len;
     const g = svg('g', { 'data-plan-line': line.name });
