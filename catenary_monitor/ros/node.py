@@ -51,6 +51,7 @@ from catenary_monitor.core.config import (
     config_hash,
     config_to_params,
     expand_parameters,
+    load_params_file,
 )
 from catenary_monitor.core.monitor import (
     EVENTS_TOPIC,
@@ -446,9 +447,42 @@ def _one_line(text: object) -> str:
     return ' '.join(str(text).split())
 
 
+def _params_files(argv: Sequence[str]) -> list[str]:
+    """The ``--params-file FILE`` values among the ``--ros-args`` of ``argv``."""
+    files, in_ros = [], False
+    for k, arg in enumerate(argv):
+        if arg == '--ros-args':
+            in_ros = True
+        elif arg == '--':
+            in_ros = False
+        elif in_ros and arg == '--params-file' and k + 1 < len(argv):
+            files.append(argv[k + 1])
+    return files
+
+
+def _check_params_files(argv: Sequence[str]) -> Optional[str]:
+    """One line naming the problem of the first bad params file (before rcl sees it), or None.
+
+    The project's loader follows rcl's YAML rules, so a file refused here is one rcl refuses
+    (with a two-line log and a vaguer reason); any bytes, a directory or an unreadable path
+    give a :class:`ConfigError` line, never a traceback.
+    """
+    for path in _params_files(argv):
+        try:
+            load_params_file(path)
+        except ConfigError as err:
+            return str(err)
+    return None
+
+
 def main(args: Optional[Sequence[str]] = None, log_dir: Optional[str] = None) -> int:
-    """Run the node until SIGINT/SIGTERM; exit 2 with one line on a bad parameter."""
+    """Run the node until SIGINT/SIGTERM; exit 2 with one line on a bad parameter or a bad
+    params file."""
     argv = list(sys.argv if args is None else args)
+    problem = _check_params_files(argv)
+    if problem is not None:
+        print(f'{NODE_NAME}: {problem}', file=sys.stderr)
+        return 2
     stop = threading.Event()
     _install_signal_handlers(stop)
     try:
