@@ -250,6 +250,7 @@ def test_uplift_raises_error_and_clears_with_hysteresis(client, monitor):
         (math.nan, 'NaN'),
         (-5e3, 'hook tension must exceed'),
         (20e3, 'hook tension must exceed'),  # T < w h = 27.1 kN: the chain cannot reach the seabed
+        (1e300, 'above 10 x MBL'),  # an implausible reading, not a solver failure
     ],
 )
 def test_impossible_inputs_give_error_and_node_keeps_running(client, monitor, value, words):
