@@ -324,7 +324,9 @@ def test_parameter_change_is_validated_by_config(client, monitor):
     bad = set_('val.mbl', -1.0)
     assert not bad.successful and 'val.mbl' in bad.reason
     assert not set_('lines', ['x']).successful  # structural: read-only
-    assert set_('tension_timeout', TENSION_TIMEOUT).successful
+    same = set_('tension_timeout', TENSION_TIMEOUT)  # decides alarms: refused at runtime
+    assert not same.successful and 'allow_runtime_changes' in same.reason
+    assert not set_('allow_runtime_changes', True).successful  # read-only
     assert monitor.poll() is None
 
 

@@ -51,7 +51,9 @@ from catenary_monitor.core.config import (
     config_hash,
     config_to_params,
     expand_parameters,
+    change_message,
     load_params_file,
+    runtime_change_refusal,
 )
 from catenary_monitor.core.monitor import (
     EVENTS_TOPIC,
@@ -77,6 +79,7 @@ __all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'CatenaryMonitor', 'main']
 
 _PARAM_TYPES = {
     'double': Parameter.Type.DOUBLE,
+    'bool': Parameter.Type.BOOL,
     'string': Parameter.Type.STRING,
     'string_array': Parameter.Type.STRING_ARRAY,
 }
@@ -393,7 +396,12 @@ class CatenaryMonitor(Node):
         return {name: p.value for name, p in self._parameters.items()}
 
     def _validate_change(self, params: list[Parameter]) -> SetParametersResult:
-        """Reject a change that ``config`` rejects, with its one-line reason; no side effects."""
+        """Reject a change the runtime-change policy or ``config`` rejects, with its one-line
+        reason (core.config.runtime_change_refusal); no side effects."""
+        refused = runtime_change_refusal(self.config, [p.name for p in params])
+        if refused is not None:
+            self.get_logger().warning(f'set_parameters refused: {refused}')
+            return SetParametersResult(successful=False, reason=refused)
         flat = self._current_params()
         flat.update({p.name: p.value for p in params})
         try:
@@ -403,16 +411,17 @@ class CatenaryMonitor(Node):
         return SetParametersResult(successful=True)
 
     def _apply_change(self, params: list[Parameter]) -> None:
-        """Apply an accepted change: a Reconfigure event (states kept), recorded in the log."""
+        """Apply an accepted change: a Reconfigure event (states kept), recorded in the log,
+        and one warning line per changed parameter (old -> new, with its unit)."""
+        old = all_parameters(self.config)
+        for p in params:
+            self.get_logger().warning(change_message(p.name, old.get(p.name), p.value))
         config = config_from_params(self._current_params())
         self.config = config
         self._record(Reconfigure(self._stamp(), config))
         self._diag_timer.timer_period_ns = int(1e9 / config.alarm.diagnostic_rate)
         if self.log is not None:
             self.log.add_metadata(NODE_NAME, self._metadata(config))
-        self.get_logger().info(
-            'parameters changed: ' + ', '.join(f'{p.name}={p.value!r}' for p in params)
-        )
 
     def close(self) -> None:
         """Finish the MCAP file (summary written)."""

@@ -1,0 +1,77 @@
+"""The recorded config hash depends only on what decides results.
+
+``catenary-monitor run`` with the params file's ``log_dir`` and with ``--log-dir`` records the
+same hash, the hash of the file as replay reads it; replaying with that file does not warn that
+the log was recorded with other parameters. Subprocesses; every wait is for an event.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from ros_harness import Client, child_env, stop, write_params
+
+from catenary_monitor.cli.replay import load_config, log_parameters
+from catenary_monitor.core.config import config_hash
+
+pytestmark = pytest.mark.ros
+
+LINES = {'h1': dict(weight=1300.0, anchor_distance=120.0, mbl=4.827e6)}
+
+
+@pytest.fixture(scope='module')
+def client():
+    c = Client('config_hash_client')
+    yield c
+    c.close()
+
+
+def _run(client: Client, params: Path, out: Path, *extra: str) -> None:
+    """``catenary-monitor run`` until it has handled a depth and a tension, then SIGTERM."""
+    cmd = [sys.executable, '-m', 'catenary_monitor', 'run', '--params-file', str(params), *extra]
+    with open(out, 'w') as f:
+        proc = subprocess.Popen(cmd, stdout=f, stderr=subprocess.STDOUT, env=child_env())
+    try:
+        client.wait_matched(['/tide/depth', '/mooring/h1/tension'], 30.0)
+        t0 = time.monotonic()
+        client.feed('/tide/depth', 20.85)
+        client.feed('/mooring/h1/tension', 400e3)
+        client.wait_status('catenary_monitor: h1', 15.0, 0, since=t0)
+    finally:
+        client.feed('/mooring/h1/tension', None)
+        client.feed('/tide/depth', None)
+        assert stop(proc) == 0, out.read_text()
+
+
+def test_hash_is_the_same_with_and_without_log_dir_and_replay_does_not_warn(client, tmp_path):
+    params = write_params(tmp_path / 'p.yaml', LINES, log_dir=str(tmp_path / 'a'))
+    config = load_config(str(params))
+    assert config_hash(config) == config_hash(
+        dataclasses.replace(config, log_dir='/elsewhere', allow_runtime_changes=True)
+    )
+    _run(client, params, tmp_path / 'a.out')
+    _run(client, params, tmp_path / 'b.out', '--log-dir', str(tmp_path / 'b'))
+    hashes = {}
+    for d in ('a', 'b'):
+        files = sorted((tmp_path / d).glob('*.mcap'))
+        recorded = log_parameters(files)
+        assert recorded is not None, d
+        hashes[d] = recorded[0]
+        assert recorded[1]['log_dir'] == str(tmp_path / d)  # the parameters still say where
+    assert hashes['a'] == hashes['b'] == config_hash(config)
+    files = [str(f) for f in sorted((tmp_path / 'b').glob('*.mcap'))]
+    r = subprocess.run(
+        [sys.executable, '-m', 'catenary_monitor', 'replay', *files, '--params-file', str(params)],
+        capture_output=True,
+        text=True,
+        env=child_env(),
+        timeout=120,
+    )
+    assert r.returncode == 0, r.stderr
+    assert 'the same as recorded in the log' in r.stdout + r.stderr, r.stdout + r.stderr
+    assert 'other parameters' not in r.stdout + r.stderr
