@@ -75,3 +75,38 @@ def test_hash_is_the_same_with_and_without_log_dir_and_replay_does_not_warn(clie
     assert r.returncode == 0, r.stderr
     assert 'the same as recorded in the log' in r.stdout + r.stderr, r.stdout + r.stderr
     assert 'other parameters' not in r.stdout + r.stderr
+
+
+@pytest.mark.parametrize('given', [None, 'LOCALHOST', 'SUBNET'])
+def test_run_limits_discovery_to_localhost_unless_told(tmp_path, given):
+    """The start line says which range the node runs with; a range the user set is kept."""
+    env = child_env()
+    env.pop('ROS_AUTOMATIC_DISCOVERY_RANGE', None)
+    if given:
+        env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = given
+    probe = (
+        'import os, sys; from catenary_monitor.cli.live import limit_discovery; '
+        'print(limit_discovery(os.environ)); print(os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"])'
+    )
+    r = subprocess.run(
+        [sys.executable, '-c', probe], capture_output=True, text=True, env=env, timeout=30
+    )
+    line, value = r.stdout.splitlines()
+    assert value == (given or 'LOCALHOST')
+    assert (given or 'LOCALHOST') in line and ('limited to this host' in line) == (not given)
+
+
+def test_run_prints_the_discovery_line_before_the_node_starts(client, tmp_path):
+    env = child_env()
+    env.pop('ROS_AUTOMATIC_DISCOVERY_RANGE', None)
+    params = write_params(tmp_path / 'p.yaml', LINES, log_dir=str(tmp_path / 'a'))
+    out = tmp_path / 'run.out'
+    cmd = [sys.executable, '-m', 'catenary_monitor', 'run', '--params-file', str(params)]
+    with open(out, 'w') as f:
+        proc = subprocess.Popen(cmd, stdout=f, stderr=subprocess.STDOUT, env=env)
+    try:
+        client.wait_for(lambda: 'monitoring 1 lines' in out.read_text(), 30.0, 'node start')
+    finally:
+        assert stop(proc) == 0
+    first = out.read_text().splitlines()[0]
+    assert first.startswith('catenary-monitor run: DDS discovery limited to this host'), first
