@@ -110,3 +110,26 @@ def test_run_prints_the_discovery_line_before_the_node_starts(client, tmp_path):
         assert stop(proc) == 0
     first = out.read_text().splitlines()[0]
     assert first.startswith('catenary-monitor run: DDS discovery limited to this host'), first
+
+
+def test_log_rotation_duration_is_a_parameter(client, tmp_path):
+    """``log_rotate_duration: 1.0``: the node starts new files every second, each finished
+    (summary written) once closed; the rotation settings leave the config hash alone."""
+    from mcap.reader import make_reader
+    from ros_harness import start_monitor
+
+    params = write_params(tmp_path / 'p.yaml', LINES, log_rotate_duration=1.0)
+    log = tmp_path / 'log'
+    proc = start_monitor(params, log)
+    try:
+        client.wait_for(lambda: len(list(log.glob('*.mcap'))) >= 3, 20.0, 'three log files')
+    finally:
+        assert stop(proc) == 0
+    files = sorted(log.glob('*.mcap'))
+    for path in files:
+        with open(path, 'rb') as f:
+            assert make_reader(f).get_summary() is not None, path
+    recorded = log_parameters(files)
+    assert recorded is not None and recorded[1]['log_rotate_duration'] == 1.0
+    plain = write_params(tmp_path / 'plain.yaml', LINES)
+    assert recorded[0] == config_hash(load_config(str(plain)))

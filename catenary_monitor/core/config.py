@@ -125,6 +125,26 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         read_only=True,
     ),
     ParamSpec(
+        'log_rotate_size',
+        'double',
+        256.0,
+        'An MCAP log file is closed and a new one started at this size',
+        'MiB',
+        0.1,
+        1048576.0,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_rotate_duration',
+        'double',
+        3600.0,
+        'An MCAP log file is closed and a new one started after this long',
+        's',
+        1.0,
+        604800.0,
+        read_only=True,
+    ),
+    ParamSpec(
         'allow_runtime_changes',
         'bool',
         False,
@@ -683,6 +703,15 @@ class DockConfig:
             object.__setattr__(self, f.name, None if math.isnan(value) else value)
 
 
+#: Global parameters held by MonitorConfig itself (not by its alarm or dock parts).
+_TOP_LEVEL = (
+    'depth_topic',
+    'log_dir',
+    'log_rotate_size',
+    'log_rotate_duration',
+    'allow_runtime_changes',
+)
+
 #: Per-line parameters that place a line on the dock (all given on every line, or none).
 GEOMETRY = ('hook_x', 'hook_y', 'heading', 'chain_length')
 
@@ -696,6 +725,8 @@ class MonitorConfig:
     depth_topic: str = _default('depth_topic')
     log_dir: str = _default('log_dir')
     allow_runtime_changes: bool = _default('allow_runtime_changes')
+    log_rotate_size: float = _default('log_rotate_size')  # MiB
+    log_rotate_duration: float = _default('log_rotate_duration')  # s
     alarm: AlarmConfig = field(default_factory=AlarmConfig)
     dock: DockConfig = field(default_factory=DockConfig)
 
@@ -712,7 +743,7 @@ class MonitorConfig:
         for name in names:
             if names.count(name) > 1:
                 raise ConfigError('lines', f'duplicate line name {name!r}')
-        for key in ('depth_topic', 'log_dir', 'allow_runtime_changes'):
+        for key in _TOP_LEVEL:
             object.__setattr__(self, key, _check(key, _GLOBAL[key], getattr(self, key)))
         _check_topic('depth_topic', self.depth_topic)
         if not self.log_dir:
@@ -842,9 +873,7 @@ def config_from_params(flat: Mapping[str, Any]) -> MonitorConfig:
     )
     return MonitorConfig(
         lines=line_configs,
-        depth_topic=values['depth_topic'],
-        log_dir=values['log_dir'],
-        allow_runtime_changes=values['allow_runtime_changes'],
+        **{key: values[key] for key in _TOP_LEVEL},
         alarm=alarm,
         dock=dock,
     )
@@ -863,9 +892,7 @@ def config_to_params(config: MonitorConfig) -> dict[str, Any]:
     """
     flat: dict[str, Any] = {
         'lines': [line.name for line in config.lines],
-        'depth_topic': config.depth_topic,
-        'log_dir': config.log_dir,
-        'allow_runtime_changes': config.allow_runtime_changes,
+        **{key: getattr(config, key) for key in _TOP_LEVEL},
     }
     flat.update(dataclasses.asdict(config.alarm))
     for key, value in dataclasses.asdict(config.dock).items():
@@ -895,10 +922,12 @@ def resolve_topic(topic: str, node_name: str = 'catenary_monitor') -> str:
     return topic if topic.startswith('/') else '/' + topic
 
 
-#: Parameters that decide no result (where logs go, whether changes are accepted): left out
-#: of :func:`config_hash`, so ``--log-dir`` or a runtime-change policy does not make replay
-#: think a log was recorded with other parameters.
-NON_DECIDING = frozenset({'log_dir', 'allow_runtime_changes'})
+#: Parameters that decide no result (where logs go and how they rotate, whether changes are
+#: accepted): left out of :func:`config_hash`, so ``--log-dir`` or a runtime-change policy
+#: does not make replay think a log was recorded with other parameters.
+NON_DECIDING = frozenset(
+    {'log_dir', 'log_rotate_size', 'log_rotate_duration', 'allow_runtime_changes'}
+)
 
 
 def config_hash(config: MonitorConfig) -> str:

@@ -190,7 +190,13 @@ class CatenaryMonitor(Node):
         """The MCAP logger (never raises on disk errors: those become its ``error``)."""
         try:
             # Flushed at 0.75 s age, checked every 0.25 s: a SIGKILL loses at most the last second.
-            log = McapLogger(self._log_dir(), prefix=NODE_NAME, flush_period=0.75)
+            log = McapLogger(
+                self._log_dir(),
+                prefix=NODE_NAME,
+                flush_period=0.75,
+                max_bytes=int(self.config.log_rotate_size * 1024 * 1024),
+                max_seconds=self.config.log_rotate_duration,
+            )
             log.add_metadata(NODE_NAME, self._metadata(self.config))
             return log
         except Exception as exc:  # noqa: BLE001 - logging must never stop the monitoring
