@@ -27,6 +27,8 @@ NEEDLE = {
     'missing': 'No such file',
     'unreadable': 'Not a directory',
     'dangling_link': 'No such file',
+    'pipe': 'not a regular file',
+    'huge': 'more than a params file holds',
 }
 
 
@@ -51,6 +53,11 @@ def bad_file(tmp: Path, case: str) -> Path:
         path = tmp / 'plain' / 'p.yaml'
     elif case == 'dangling_link':
         os.symlink(tmp / 'nowhere', path)
+    elif case == 'pipe':  # nobody writes: reading it would block
+        os.mkfifo(path)
+    elif case == 'huge':  # sparse: 17 MiB of zeros, no disk used
+        with open(path, 'wb') as f:
+            f.truncate(17 * 1024 * 1024)
     return path
 
 
