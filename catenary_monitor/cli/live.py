@@ -40,12 +40,13 @@ def cmd_run(args: argparse.Namespace) -> int:
     except ConfigError as err:
         print(f'catenary-monitor: {err}', file=sys.stderr)
         return 2
-    print(f'catenary-monitor run: {limit_discovery(os.environ)}', flush=True)
+    note = limit_discovery(os.environ)  # before rclpy.init: the middleware reads it there
     from catenary_monitor.ros.node import main
 
     return main(
         ['catenary-monitor', '--ros-args', '--params-file', args.params_file, *args.ros_args],
         log_dir=args.log_dir,
+        start_note=note,
     )  # later -p values win
 
 

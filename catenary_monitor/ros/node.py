@@ -475,26 +475,42 @@ def _params_files(argv: Sequence[str]) -> list[str]:
     return files
 
 
-def _check_params_files(argv: Sequence[str]) -> Optional[str]:
-    """One line naming the problem of the first bad params file (before rcl sees it), or None.
+def _check_params_files(argv: Sequence[str]) -> tuple[Optional[str], list[str]]:
+    """One line naming the problem of the first bad params file (before rcl sees it), or None;
+    and the files that hold no section for this node (empty, or not a params mapping).
 
     The project's loader follows rcl's YAML rules, so a file refused here is one rcl refuses
     (with a two-line log and a vaguer reason); any bytes, a directory or an unreadable path
     give a :class:`ConfigError` line, never a traceback.
     """
+    empty = []
     for path in _params_files(argv):
         try:
-            load_params_file(path)
+            if not load_params_file(path):
+                empty.append(path)
         except ConfigError as err:
-            return str(err)
-    return None
+            return str(err), empty
+    return None, empty
 
 
-def main(args: Optional[Sequence[str]] = None, log_dir: Optional[str] = None) -> int:
+def _hint(err: ConfigError, empty: list[str]) -> str:
+    """The start error, naming the params files that gave this node nothing."""
+    if err.parameter != 'lines' or not empty:
+        return str(err)
+    files = ', '.join(repr(f) for f in empty)
+    return f'{err} ({files}: no {NODE_NAME} or /** section with ros__parameters)'
+
+
+def main(
+    args: Optional[Sequence[str]] = None,
+    log_dir: Optional[str] = None,
+    start_note: Optional[str] = None,
+) -> int:
     """Run the node until SIGINT/SIGTERM; exit 2 with one line on a bad parameter or a bad
-    params file."""
+    params file. ``start_note`` is logged once the node has started (``run``'s discovery
+    line)."""
     argv = list(sys.argv if args is None else args)
-    problem = _check_params_files(argv)
+    problem, empty = _check_params_files(argv)
     if problem is not None:
         print(f'{NODE_NAME}: {problem}', file=sys.stderr)
         return 2
@@ -518,8 +534,10 @@ def main(args: Optional[Sequence[str]] = None, log_dir: Optional[str] = None) ->
         try:
             node = CatenaryMonitor(log_dir=log_dir)
         except ConfigError as err:
-            print(f'{NODE_NAME}: {err}', file=sys.stderr)
+            print(f'{NODE_NAME}: {_hint(err, empty)}', file=sys.stderr)
             return 2
+        if start_note:
+            node.get_logger().info(start_note)
         executor = _make_executor()
         executor.add_node(node)
         # The signal handler only sets ``stop``, seen within 0.2 s, so a signal never lands
