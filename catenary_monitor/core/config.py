@@ -148,8 +148,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'allow_runtime_changes',
         'bool',
         False,
-        'Accept set_parameters changes at runtime (each one logged); false: every change of a '
-        'parameter that decides alarms, and of use_sim_time, is refused',
+        'Accept runtime set_parameters changes (each one logged); false: all are refused '
+        '(use_sim_time is refused at runtime either way)',
         '',
         None,
         None,
