@@ -76,6 +76,7 @@ COMMANDS = {
     'equilibrium': ['-m', 'catenary_monitor', 'equilibrium', '--params-file', '{f}', '--depth=20'],
     'envelope': ['-m', 'catenary_monitor', 'envelope', '--params-file', '{f}', '--depth=20'],
     'simulator': ['-m', 'catenary_monitor.ros.simulator', '--params-file', '{f}'],
+    'console': ['-m', 'catenary_monitor', 'console', '--params-file', '{f}', '--port', '0'],
 }
 
 
