@@ -21,6 +21,7 @@ from catenary_monitor.core.batch import (
     tick_grid,
 )
 from catenary_monitor.core.config import LineConfig, MonitorConfig
+from catenary_monitor.core.result import Status
 from catenary_monitor.core.monitor import (
     VALUE_FIELDS,
     Acknowledge,
@@ -212,6 +213,32 @@ def test_elastic_line_and_depth_loss():
     assert 0.0 in models
 
 
+@pytest.mark.parametrize('elastic', [False, True])
+def test_implausible_readings_are_impossible_inputs_in_both(elastic):
+    """1e300 N, inf, 20 x MBL and a 1e6 m depth: the same status, sentence and levels in the
+    core and its twin; the tide is not OK at 1e6 m."""
+    base = dock_config(2, depth_timeout=3.0)
+    ea = 6.6e8 if elastic else None
+    lines = base.lines + (LineConfig('line_03', 1300.0, 121.06, 4827000.0, ea=ea),)
+    config = MonitorConfig(lines=lines, alarm=base.alarm)
+    tensions, depth = generate(config, seconds=30.0, seed=8, storm_line=2)
+    t, v = tensions['line_03']
+    v = v.copy()
+    v[40:45], v[80], v[120:123] = 1e300, math.inf, 20 * 4827000.0
+    tensions['line_03'] = (t, v)
+    dv = depth[1].copy()
+    dv[10] = 1e6
+    depth = (depth[0], dv)
+    steps = compare(config, tensions, depth, ticks_for(tensions, depth, rate=4.0))
+    codes = {int(o.values[11]) for s in steps for o in s.outputs if o.line == 2}
+    assert {Status.IMPLAUSIBLE_TENSION, Status.IMPLAUSIBLE_DEPTH, Status.NON_FINITE} <= codes
+    assert Status.NO_CONVERGENCE not in codes
+    tide = [c.transition for s in steps for c in s.transitions if c.component == 'tide']
+    assert any(tr.new.name == 'ERROR' and '1e+06 m' in tr.message for tr in tide), tide
+    messages = {c.transition.message for s in steps for c in s.transitions}
+    assert any('above 10 x MBL' in m for m in messages), messages
+
+
 def test_before_any_input_every_line_is_stale_and_says_why():
     config = dock_config(2)
     core = MonitorCore(config, T0_NS)
@@ -295,7 +322,9 @@ def schedules(draw, distinct):
             times = sorted(out)
         return np.array(times, np.int64)
 
-    value = st.one_of(st.floats(3.0e5, 2.0e6), st.sampled_from([math.nan, -1.0, 0.0]))
+    value = st.one_of(
+        st.floats(3.0e5, 2.0e6), st.sampled_from([math.nan, -1.0, 0.0, 1e300, math.inf, 1e9])
+    )
     tensions = {}
     for line in config.lines:
         t = stamps(25)
@@ -309,7 +338,7 @@ def schedules(draw, distinct):
         np.array(
             draw(
                 st.lists(
-                    st.one_of(st.floats(15.0, 26.0), st.just(-1.0)),
+                    st.one_of(st.floats(15.0, 26.0), st.sampled_from([-1.0, 1e6])),
                     min_size=len(d),
                     max_size=len(d),
                 )

@@ -238,7 +238,7 @@ def test_table_covers_every_config_field_and_contract_names():
 
 def test_every_parameter_is_described_with_a_valid_range():
     for spec in PARAMETERS:
-        assert spec.description and spec.type in {'double', 'string', 'string_array'}
+        assert spec.description and spec.type in {'double', 'bool', 'string', 'string_array'}
         if spec.type == 'double':
             assert spec.min is not None and spec.max is not None and spec.min < spec.max
             if spec.optional:  # NaN: not given

@@ -250,6 +250,7 @@ def test_uplift_raises_error_and_clears_with_hysteresis(client, monitor):
         (math.nan, 'NaN'),
         (-5e3, 'hook tension must exceed'),
         (20e3, 'hook tension must exceed'),  # T < w h = 27.1 kN: the chain cannot reach the seabed
+        (1e300, 'above 10 x MBL'),  # an implausible reading, not a solver failure
     ],
 )
 def test_impossible_inputs_give_error_and_node_keeps_running(client, monitor, value, words):
@@ -323,7 +324,9 @@ def test_parameter_change_is_validated_by_config(client, monitor):
     bad = set_('val.mbl', -1.0)
     assert not bad.successful and 'val.mbl' in bad.reason
     assert not set_('lines', ['x']).successful  # structural: read-only
-    assert set_('tension_timeout', TENSION_TIMEOUT).successful
+    same = set_('tension_timeout', TENSION_TIMEOUT)  # decides alarms: refused at runtime
+    assert not same.successful and 'allow_runtime_changes' in same.reason
+    assert not set_('allow_runtime_changes', True).successful  # read-only
     assert monitor.poll() is None
 
 

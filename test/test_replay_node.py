@@ -35,6 +35,7 @@ import pytest
 from catenary_monitor.cli.replay import load_config, log_parameters, run_replay
 from catenary_monitor.core.config import config_hash
 from catenary_monitor.core.monitor import OUTPUT_FIELDS, VALUE_FIELDS
+from catenary_monitor.core.result import Status
 from catenary_monitor.io.mcap_read import iter_messages
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -93,6 +94,10 @@ catenary_monitor:
 }
 
 
+#: line_01's impossible samples by message index: NaN, 1e300 N, inf, 100 MN (> 10 x MBL).
+IMPOSSIBLE = {30: float('nan'), 32: 1e300, 34: float('inf'), 36: 1e8}
+
+
 def _publish_scenario(pubs, depth_pub, ack_pub):
     """About 9 s of inputs: see the module docstring."""
     from std_msgs.msg import Float64, String
@@ -106,13 +111,14 @@ def _publish_scenario(pubs, depth_pub, ack_pub):
         storm = 1.3e6 * max(0.0, 1.0 - abs(now - 4.0) / 1.5)
         wave = 40e3 * np.sin(2 * np.pi * now / 1.3)
         if not 4.5 < now < 6.0:
-            value = float('nan') if k == 30 else 372e3 + wave + rng.normal(0, 3e3)
+            value = IMPOSSIBLE.get(k, 372e3 + wave + rng.normal(0, 3e3))
             pubs['line_01'].publish(Float64(data=value))
         pubs['line_02'].publish(Float64(data=372e3 + storm - wave))
-        pubs['line_03'].publish(Float64(data=372e3 + 0.9 * storm + wave))
+        line_03 = 1e300 if k == 40 else 372e3 + 0.9 * storm + wave  # elastic line
+        pubs['line_03'].publish(Float64(data=line_03))
         # First depth at 1.2 s; none from 5 to 8.6 s (longer than depth_timeout 3 s).
         if now > 1.2 and not 5.0 < now < 8.6 and k % 10 == 0:
-            depth_pub.publish(Float64(data=20.85 + 0.3 * np.sin(now / 3)))
+            depth_pub.publish(Float64(data=1e6 if k == 60 else 20.85 + 0.3 * np.sin(now / 3)))
         if k in acks:
             ack_pub.publish(String(data=acks[k]))
         k += 1
@@ -290,6 +296,10 @@ def test_replay_of_a_live_node_log_redoes_every_step(tmp_path, form):
     assert "unknown line 'nope'" in text
     # The scenario reached what it was written for.
     assert {0, 2, 3} <= levels_seen  # OK, ERROR (uplift, NaN), STALE (dropouts, start)
+    codes = {c for r in result.lines for c in r.status.tolist()}
+    assert {Status.IMPLAUSIBLE_TENSION, Status.IMPLAUSIBLE_DEPTH} <= codes, codes
+    assert Status.NO_CONVERGENCE not in codes
+    assert any(tr.new.name == 'ERROR' and 'deeper than any' in tr.message for tr in result.tide)
     tide = [(tr.old.name, tr.new.name) for tr in result.tide]
     assert tide[0] == ('STALE', 'OK') and ('OK', 'STALE') in tide
     models = {r.name: set(r.model_codes.tolist()) for r in result.lines}

@@ -7,13 +7,30 @@ commands (solve, paper) keep working without ROS.
 from __future__ import annotations
 
 import argparse
-from typing import Any
+import os
+from typing import Any, MutableMapping
 
 __all__ = ['register']
 
 
+DISCOVERY = 'ROS_AUTOMATIC_DISCOVERY_RANGE'
+
+
+def limit_discovery(environ: MutableMapping[str, str]) -> str:
+    """Set ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` unless the user set it; the start line
+    that says which range the node runs with (docs/node.md, Security)."""
+    if environ.get(DISCOVERY):
+        return f'DDS discovery range {environ[DISCOVERY]} (from {DISCOVERY})'
+    environ[DISCOVERY] = 'LOCALHOST'
+    return (
+        f'DDS discovery limited to this host ({DISCOVERY}=LOCALHOST; set it, e.g. to SUBNET, '
+        'to reach other machines)'
+    )
+
+
 def cmd_run(args: argparse.Namespace) -> int:
-    """Start the monitor node on a params file (Ctrl-C or SIGTERM stop it cleanly)."""
+    """Start the monitor node on a params file (Ctrl-C or SIGTERM stop it cleanly); DDS
+    discovery stays on this host unless ROS_AUTOMATIC_DISCOVERY_RANGE says otherwise."""
     import sys
 
     from catenary_monitor.core.config import ConfigError, load_params_file
@@ -23,11 +40,13 @@ def cmd_run(args: argparse.Namespace) -> int:
     except ConfigError as err:
         print(f'catenary-monitor: {err}', file=sys.stderr)
         return 2
+    note = limit_discovery(os.environ)  # before rclpy.init: the middleware reads it there
     from catenary_monitor.ros.node import main
 
     return main(
         ['catenary-monitor', '--ros-args', '--params-file', args.params_file, *args.ros_args],
         log_dir=args.log_dir,
+        start_note=note,
     )  # later -p values win
 
 

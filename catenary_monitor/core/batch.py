@@ -35,6 +35,7 @@ from catenary_monitor.core.alarms import Level, LevelSeries, Transition, replay_
 from catenary_monitor.core.config import LineConfig, MonitorConfig
 from catenary_monitor.core.body import live as dock_live
 from catenary_monitor.core.health import tide_status
+from catenary_monitor.core.plausible import MAX_DEPTH, reading_status_array
 from catenary_monitor.core.monitor import (
     NO_DEPTH,
     NO_MODEL,
@@ -409,7 +410,7 @@ def _decide_tide(core: MonitorCore, window: Window) -> tuple[_Tide, list[Transit
     with np.errstate(invalid='ignore'):
         blind = np.isnan(depth_s)
         stale = ~blind & (now - depth_s > timeout)
-        bad = ~(np.isfinite(depth) & (depth > 0))
+        bad = ~(np.isfinite(depth) & (depth > 0) & (depth <= MAX_DEPTH))
     level = np.where(blind | stale, Level.STALE, np.where(bad, Level.ERROR, Level.OK))
     level = level.astype(np.int8)
     tide = _Tide(times, depth, depth_s, level, stale)
@@ -545,12 +546,31 @@ def _solve_line(
     d_idx = steps.d_idx[where]
     dv = window.depth[1]
     h = _pick(d_idx, dv + lc.hook_height, core.depth + lc.hook_height)  # NaN: no depth yet
+    used: Optional[np.ndarray] = None
     if lc.ea is not None:
-        return _solve_updates_elastic(lc, tension, h)
-    a_depth = critical_parameters(lc, dv + lc.hook_height)
-    a_before = critical_parameters(lc, np.array([core.depth + lc.hook_height]))[0]
-    values, status = solve_updates(lc, tension, h, _pick(d_idx, a_depth, a_before))
-    return values, status, None
+        values, status, used = _solve_updates_elastic(lc, tension, h)
+    else:
+        a_depth = critical_parameters(lc, dv + lc.hook_height)
+        a_before = critical_parameters(lc, np.array([core.depth + lc.hook_height]))[0]
+        values, status = solve_updates(lc, tension, h, _pick(d_idx, a_depth, a_before))
+    _mark_implausible(values, status, used, reading_status_array(tension, h, lc.mbl))
+    return values, status, used
+
+
+def _mark_implausible(
+    values: dict[str, np.ndarray], status: np.ndarray, used: Optional[np.ndarray], code: np.ndarray
+) -> None:
+    """Implausible readings (core.plausible), as the core marks them: their status, no solved
+    values (the measured tension and depth kept), the inextensible model named."""
+    hit = code != 0
+    if not hit.any():
+        return
+    status[hit] = code[hit]
+    for key, column in values.items():
+        if key not in ('depth', 'top_tension'):
+            column[hit] = np.nan
+    if used is not None:
+        used[hit] = False
 
 
 def _line_inputs(

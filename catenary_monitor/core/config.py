@@ -19,7 +19,7 @@ import math
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterator, Mapping, NamedTuple
+from typing import Any, Iterable, Iterator, Mapping, NamedTuple, Optional
 
 __all__ = [
     'REQUIRED',
@@ -38,6 +38,9 @@ __all__ = [
     'config_from_params',
     'config_to_params',
     'config_hash',
+    'NON_DECIDING',
+    'runtime_change_refusal',
+    'change_message',
     'parameters_markdown',
     'resolve_topic',
 ]
@@ -57,10 +60,11 @@ class ParamSpec(NamedTuple):
     """One row of the parameter table.
 
     ``name`` is the full name for ``scope == 'global'`` and the suffix after ``NAME.`` for
-    ``scope == 'line'``. ``type`` is one of ``double``, ``string``, ``string_array``. ``default``
-    is a value or :data:`REQUIRED`; a string default may contain ``{line}``. ``min`` / ``max`` are
-    inclusive (ROS ``FloatingPointRange`` semantics) or ``None``. ``optional`` doubles default
-    to NaN, which means "not given" (the dataclasses hold None); a given value is range-checked.
+    ``scope == 'line'``. ``type`` is one of ``double``, ``bool``, ``string``, ``string_array``;
+    ``default`` is a value or :data:`REQUIRED`; a string default may contain ``{line}``.
+    ``min`` / ``max`` are inclusive (ROS ``FloatingPointRange`` semantics) or ``None``.
+    ``optional`` doubles default to NaN, which means "not given" (the dataclasses hold None);
+    a given value is range-checked.
     """
 
     name: str
@@ -115,6 +119,37 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'string',
         '~/.ros/catenary_monitor',
         'Directory for the MCAP logs (~ is expanded by the logger)',
+        '',
+        None,
+        None,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_rotate_size',
+        'double',
+        256.0,
+        'An MCAP log file is closed and a new one started at this size',
+        'MiB',
+        0.1,
+        1048576.0,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_rotate_duration',
+        'double',
+        3600.0,
+        'An MCAP log file is closed and a new one started after this long',
+        's',
+        1.0,
+        604800.0,
+        read_only=True,
+    ),
+    ParamSpec(
+        'allow_runtime_changes',
+        'bool',
+        False,
+        'Accept runtime set_parameters changes (each one logged); false: all are refused '
+        '(use_sim_time is refused at runtime either way)',
         '',
         None,
         None,
@@ -528,6 +563,12 @@ def _check(full_name: str, spec: ParamSpec, value: Any) -> Any:
                 f'{value!r} out of range [{spec.min!r}, {spec.max!r}]' f' {spec.unit}'.rstrip(),
             )
         return value
+    if spec.type == 'bool':
+        if not isinstance(value, bool):
+            raise ConfigError(
+                full_name, f'expected true or false, got {type(value).__name__} {value!r}'
+            )
+        return value
     if spec.type == 'string':
         if not isinstance(value, str):
             raise ConfigError(
@@ -662,6 +703,15 @@ class DockConfig:
             object.__setattr__(self, f.name, None if math.isnan(value) else value)
 
 
+#: Global parameters held by MonitorConfig itself (not by its alarm or dock parts).
+_TOP_LEVEL = (
+    'depth_topic',
+    'log_dir',
+    'log_rotate_size',
+    'log_rotate_duration',
+    'allow_runtime_changes',
+)
+
 #: Per-line parameters that place a line on the dock (all given on every line, or none).
 GEOMETRY = ('hook_x', 'hook_y', 'heading', 'chain_length')
 
@@ -674,6 +724,9 @@ class MonitorConfig:
     lines: tuple[LineConfig, ...]
     depth_topic: str = _default('depth_topic')
     log_dir: str = _default('log_dir')
+    allow_runtime_changes: bool = _default('allow_runtime_changes')
+    log_rotate_size: float = _default('log_rotate_size')  # MiB
+    log_rotate_duration: float = _default('log_rotate_duration')  # s
     alarm: AlarmConfig = field(default_factory=AlarmConfig)
     dock: DockConfig = field(default_factory=DockConfig)
 
@@ -690,7 +743,7 @@ class MonitorConfig:
         for name in names:
             if names.count(name) > 1:
                 raise ConfigError('lines', f'duplicate line name {name!r}')
-        for key in ('depth_topic', 'log_dir'):
+        for key in _TOP_LEVEL:
             object.__setattr__(self, key, _check(key, _GLOBAL[key], getattr(self, key)))
         _check_topic('depth_topic', self.depth_topic)
         if not self.log_dir:
@@ -820,8 +873,7 @@ def config_from_params(flat: Mapping[str, Any]) -> MonitorConfig:
     )
     return MonitorConfig(
         lines=line_configs,
-        depth_topic=values['depth_topic'],
-        log_dir=values['log_dir'],
+        **{key: values[key] for key in _TOP_LEVEL},
         alarm=alarm,
         dock=dock,
     )
@@ -840,8 +892,7 @@ def config_to_params(config: MonitorConfig) -> dict[str, Any]:
     """
     flat: dict[str, Any] = {
         'lines': [line.name for line in config.lines],
-        'depth_topic': config.depth_topic,
-        'log_dir': config.log_dir,
+        **{key: getattr(config, key) for key in _TOP_LEVEL},
     }
     flat.update(dataclasses.asdict(config.alarm))
     for key, value in dataclasses.asdict(config.dock).items():
@@ -871,9 +922,19 @@ def resolve_topic(topic: str, node_name: str = 'catenary_monitor') -> str:
     return topic if topic.startswith('/') else '/' + topic
 
 
+#: Parameters that decide no result (where logs go and how they rotate, whether changes are
+#: accepted): left out of :func:`config_hash`, so ``--log-dir`` or a runtime-change policy
+#: does not make replay think a log was recorded with other parameters.
+NON_DECIDING = frozenset(
+    {'log_dir', 'log_rotate_size', 'log_rotate_duration', 'allow_runtime_changes'}
+)
+
+
 def config_hash(config: MonitorConfig) -> str:
-    """SHA-256 hex digest of the canonical parameters, for logs and MCAP metadata."""
-    text = json.dumps(config_to_params(config), sort_keys=True, separators=(',', ':'))
+    """SHA-256 hex digest of the parameters that decide results (all but
+    :data:`NON_DECIDING`), for logs and MCAP metadata."""
+    flat = {k: v for k, v in config_to_params(config).items() if k not in NON_DECIDING}
+    text = json.dumps(flat, sort_keys=True, separators=(',', ':'))
     return hashlib.sha256(text.encode('utf-8')).hexdigest()
 
 
@@ -897,3 +958,41 @@ def parameters_markdown(group: str = '') -> str:
         ro = ' (read-only)' if spec.read_only else ''
         rows.append(f'| `{name}` | {default} | {spec.unit} | {span} | {spec.description}{ro} |')
     return '\n'.join(rows) + '\n'
+
+
+def runtime_change_refusal(config: MonitorConfig, names: Iterable[str]) -> Optional[str]:
+    """Why a runtime change of ``names`` is refused (one line), or None when it may go ahead.
+
+    Every declared monitor parameter decides alarms or their schedule (line constants, MBL,
+    allowed uplift, thresholds, holds, timeouts, rates) and ``use_sim_time`` can stop the
+    clock: unless the params file sets ``allow_runtime_changes: true``, changing any of them
+    at runtime is refused. ``use_sim_time`` is refused even then (no watchdog yet reports a
+    stopped ``/clock``).
+    """
+    names = list(names)
+    if 'use_sim_time' in names:
+        return 'use_sim_time cannot change at runtime (a stopped /clock would silence the monitor)'
+    if config.allow_runtime_changes or not names:
+        return None
+    return (
+        f"{', '.join(names)}: runtime changes are refused (they decide alarms); set "
+        'allow_runtime_changes: true in the params file to allow them'
+    )
+
+
+def _shown(value: Any, unit: str) -> str:
+    """A parameter value for a log line: numbers as ``%g`` with their unit."""
+    if isinstance(value, float) and not isinstance(value, bool):
+        return f'{value:g} {unit}'.rstrip()
+    return repr(value)
+
+
+def change_message(name: str, old: Any, new: Any) -> str:
+    """One log line for an accepted runtime change, e.g. ``allowed_uplift of line_11 changed
+    0 N -> 1e+09 N at runtime`` (units from :data:`PARAMETERS`)."""
+    line, _, key = name.rpartition('.')
+    if line and key in _PER_LINE:
+        what, unit = f'{key} of {line}', _PER_LINE[key].unit
+    else:
+        what, unit = name, _GLOBAL[name].unit if name in _GLOBAL else ''
+    return f'{what} changed {_shown(old, unit)} -> {_shown(new, unit)} at runtime'

@@ -11,6 +11,7 @@ import math
 from typing import Optional
 
 from catenary_monitor.core.alarms import Level
+from catenary_monitor.core.plausible import MAX_DEPTH
 
 __all__ = ['tide_status', 'logger_status']
 
@@ -28,7 +29,8 @@ def tide_status(depth: float, stamp: float, now: float, timeout: float) -> tuple
     Returns
     -------
     (Level.STALE, ...) before the first sample and when the newest one is older than
-    ``timeout``; (Level.ERROR, ...) when the sample is not a positive finite number; else
+    ``timeout``; (Level.ERROR, ...) when the sample is not a positive finite number or is above
+    :data:`~catenary_monitor.core.plausible.MAX_DEPTH` (12 000 m); else
     (Level.OK, ...).
     """
     if math.isnan(stamp):
@@ -38,6 +40,11 @@ def tide_status(depth: float, stamp: float, now: float, timeout: float) -> tuple
         return Level.STALE, f'depth stale: last sample {age:.1f} s ago (timeout {timeout:g} s)'
     if not (math.isfinite(depth) and depth > 0.0):
         return Level.ERROR, f'impossible depth {depth!r} m (must be a positive number)'
+    if depth > MAX_DEPTH:
+        return Level.ERROR, (
+            f'impossible depth {depth:g} m (above {MAX_DEPTH:g} m, deeper than any sea: '
+            'a sensor or scaling fault)'
+        )
     return Level.OK, f'depth {depth:.3f} m'
 
 

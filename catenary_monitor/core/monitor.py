@@ -39,6 +39,7 @@ from typing import Any, NamedTuple, Optional, Sequence, Union
 import numpy as np
 
 from catenary_monitor.core import acknowledge as alarm_ack
+from catenary_monitor.core import elastic
 from catenary_monitor.core.alarms import (
     AlarmInputs,
     AlarmState,
@@ -57,6 +58,8 @@ from catenary_monitor.core.config import (
 from catenary_monitor.core.body import live as dock_live
 from catenary_monitor.core.body.model import DockModel
 from catenary_monitor.core.health import logger_status, tide_status
+from catenary_monitor.core.plausible import reading_status, reading_status_array
+from catenary_monitor.core.result import STATUS_MESSAGES
 from catenary_monitor.core.solve import solve
 
 __all__ = [
@@ -448,6 +451,9 @@ class MonitorCore:
             r.suspended_length,
         )
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
+        code = reading_status(t, h, lc.mbl)
+        if code:
+            _implausible(line, code)
 
     def _solve_many(self, which: Sequence[int]) -> None:
         """Solve several lines at the newest depth in one vectorized call."""
@@ -477,6 +483,10 @@ class MonitorCore:
             line.values = tuple(col[i] for col in columns)
             line.status, line.status_message = int(status[i]), str(messages[i])
             line.model = str(models[i])
+        codes = reading_status_array(tension, h, [c.mbl for c in cfgs]).tolist()
+        for line, code in zip(lines, codes):
+            if code:
+                _implausible(line, code)
 
     def _step_lines(self, which: Any, stamp_ns: int) -> list[Change]:
         """Step the alarms of the given lines at ``stamp_ns``; their transitions."""
@@ -537,6 +547,14 @@ class MonitorCore:
         if dock:
             statuses.append(dock_component(self.dock, self.dock_values))
         return Snapshot(stamp_ns, tuple(statuses))
+
+
+def _implausible(line: LineState, code: int) -> None:
+    """An implausible reading (core.plausible): its status and sentence, no solved values
+    (the measured tension and depth kept, as for every impossible input)."""
+    line.values = line.values[:2] + _NAN_VALUES[2:]
+    line.status, line.status_message = code, STATUS_MESSAGES[code]
+    line.model = elastic.INEXTENSIBLE
 
 
 def line_status(

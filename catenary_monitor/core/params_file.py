@@ -55,6 +55,7 @@ from __future__ import annotations
 
 import math
 import re
+import stat
 from dataclasses import dataclass, field
 from decimal import Decimal
 from fractions import Fraction
@@ -685,6 +686,28 @@ def parameters_for_node(
     return merged
 
 
+#: Larger than any params file (the 12-line dock's is 4 KiB): refused rather than parsed.
+MAX_PARAMS_BYTES = 16 * 1024 * 1024
+
+
+def _read_bytes(path: Path) -> bytes:
+    """The file's bytes; ParamsFileError (one line) for an unreadable path, a pipe or device
+    (it could not be read twice, once here and once by rcl) or an implausibly large file."""
+    where = repr(str(path))
+    try:
+        info = path.stat()
+        if not stat.S_ISDIR(info.st_mode) and not stat.S_ISREG(info.st_mode):
+            raise ParamsFileError(f'cannot read {where}: not a regular file (a pipe or device)')
+        if info.st_size > MAX_PARAMS_BYTES:
+            raise ParamsFileError(
+                f'cannot read {where}: {info.st_size} bytes, more than a params file holds '
+                f'({MAX_PARAMS_BYTES} at most)'
+            )
+        return path.read_bytes()
+    except OSError as err:
+        raise ParamsFileError(f'cannot read {where}: {err.strerror or err}') from None
+
+
 def read_params_file(
     path: str | Path, node_name: str, node_namespace: str = '/'
 ) -> dict[str, Any]:
@@ -693,10 +716,7 @@ def read_params_file(
     Values are bool, int, float, str, lists of one of those, or None (NOT_SET). Raises
     ParamsFileError (one line) for an unreadable file or one rcl refuses.
     """
-    try:
-        data = Path(path).read_bytes()
-    except OSError as err:
-        raise ParamsFileError(f'cannot read {str(path)!r}: {err.strerror or err}') from None
+    data = _read_bytes(Path(path))
     try:
         entries = parse_params(data)
     except ParamsFileError as err:

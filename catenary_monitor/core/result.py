@@ -24,6 +24,8 @@ class Status(IntEnum):
     CHAIN_SLACK = 8
     MBL = 9
     NO_CONVERGENCE = 10
+    IMPLAUSIBLE_TENSION = 11  # a reading, see core/plausible.py
+    IMPLAUSIBLE_DEPTH = 12
 
 
 STATUS_MESSAGES: dict[int, str] = {
@@ -46,6 +48,12 @@ STATUS_MESSAGES: dict[int, str] = {
     ),
     Status.MBL: 'minimum breaking load must be > 0 N',
     Status.NO_CONVERGENCE: 'solver did not converge (please report these inputs)',
+    Status.IMPLAUSIBLE_TENSION: (
+        'hook tension above 10 x MBL: no chain carries that, a sensor or scaling fault'
+    ),
+    Status.IMPLAUSIBLE_DEPTH: (
+        'depth above 12000 m, deeper than any sea: a sensor or scaling fault'
+    ),
 }
 
 #: Every result key, in display order (the JSON keys of ``catenary-monitor solve --json``).

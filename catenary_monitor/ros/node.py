@@ -51,6 +51,9 @@ from catenary_monitor.core.config import (
     config_hash,
     config_to_params,
     expand_parameters,
+    change_message,
+    load_params_file,
+    runtime_change_refusal,
 )
 from catenary_monitor.core.monitor import (
     EVENTS_TOPIC,
@@ -76,6 +79,7 @@ __all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'CatenaryMonitor', 'main']
 
 _PARAM_TYPES = {
     'double': Parameter.Type.DOUBLE,
+    'bool': Parameter.Type.BOOL,
     'string': Parameter.Type.STRING,
     'string_array': Parameter.Type.STRING_ARRAY,
 }
@@ -186,7 +190,13 @@ class CatenaryMonitor(Node):
         """The MCAP logger (never raises on disk errors: those become its ``error``)."""
         try:
             # Flushed at 0.75 s age, checked every 0.25 s: a SIGKILL loses at most the last second.
-            log = McapLogger(self._log_dir(), prefix=NODE_NAME, flush_period=0.75)
+            log = McapLogger(
+                self._log_dir(),
+                prefix=NODE_NAME,
+                flush_period=0.75,
+                max_bytes=int(self.config.log_rotate_size * 1024 * 1024),
+                max_seconds=self.config.log_rotate_duration,
+            )
             log.add_metadata(NODE_NAME, self._metadata(self.config))
             return log
         except Exception as exc:  # noqa: BLE001 - logging must never stop the monitoring
@@ -392,7 +402,12 @@ class CatenaryMonitor(Node):
         return {name: p.value for name, p in self._parameters.items()}
 
     def _validate_change(self, params: list[Parameter]) -> SetParametersResult:
-        """Reject a change that ``config`` rejects, with its one-line reason; no side effects."""
+        """Reject a change the runtime-change policy or ``config`` rejects, with its one-line
+        reason (core.config.runtime_change_refusal); no side effects."""
+        refused = runtime_change_refusal(self.config, [p.name for p in params])
+        if refused is not None:
+            self.get_logger().warning(f'set_parameters refused: {refused}')
+            return SetParametersResult(successful=False, reason=refused)
         flat = self._current_params()
         flat.update({p.name: p.value for p in params})
         try:
@@ -402,16 +417,17 @@ class CatenaryMonitor(Node):
         return SetParametersResult(successful=True)
 
     def _apply_change(self, params: list[Parameter]) -> None:
-        """Apply an accepted change: a Reconfigure event (states kept), recorded in the log."""
+        """Apply an accepted change: a Reconfigure event (states kept), recorded in the log,
+        and one warning line per changed parameter (old -> new, with its unit)."""
+        old = all_parameters(self.config)
+        for p in params:
+            self.get_logger().warning(change_message(p.name, old.get(p.name), p.value))
         config = config_from_params(self._current_params())
         self.config = config
         self._record(Reconfigure(self._stamp(), config))
         self._diag_timer.timer_period_ns = int(1e9 / config.alarm.diagnostic_rate)
         if self.log is not None:
             self.log.add_metadata(NODE_NAME, self._metadata(config))
-        self.get_logger().info(
-            'parameters changed: ' + ', '.join(f'{p.name}={p.value!r}' for p in params)
-        )
 
     def close(self) -> None:
         """Finish the MCAP file (summary written)."""
@@ -446,9 +462,58 @@ def _one_line(text: object) -> str:
     return ' '.join(str(text).split())
 
 
-def main(args: Optional[Sequence[str]] = None, log_dir: Optional[str] = None) -> int:
-    """Run the node until SIGINT/SIGTERM; exit 2 with one line on a bad parameter."""
+def _params_files(argv: Sequence[str]) -> list[str]:
+    """The ``--params-file FILE`` values among the ``--ros-args`` of ``argv``."""
+    files, in_ros = [], False
+    for k, arg in enumerate(argv):
+        if arg == '--ros-args':
+            in_ros = True
+        elif arg == '--':
+            in_ros = False
+        elif in_ros and arg == '--params-file' and k + 1 < len(argv):
+            files.append(argv[k + 1])
+    return files
+
+
+def _check_params_files(argv: Sequence[str]) -> tuple[Optional[str], list[str]]:
+    """One line naming the problem of the first bad params file (before rcl sees it), or None;
+    and the files that hold no section for this node (empty, or not a params mapping).
+
+    The project's loader follows rcl's YAML rules, so a file refused here is one rcl refuses
+    (with a two-line log and a vaguer reason); any bytes, a directory or an unreadable path
+    give a :class:`ConfigError` line, never a traceback.
+    """
+    empty = []
+    for path in _params_files(argv):
+        try:
+            if not load_params_file(path):
+                empty.append(path)
+        except ConfigError as err:
+            return str(err), empty
+    return None, empty
+
+
+def _hint(err: ConfigError, empty: list[str]) -> str:
+    """The start error, naming the params files that gave this node nothing."""
+    if err.parameter != 'lines' or not empty:
+        return str(err)
+    files = ', '.join(repr(f) for f in empty)
+    return f'{err} ({files}: no {NODE_NAME} or /** section with ros__parameters)'
+
+
+def main(
+    args: Optional[Sequence[str]] = None,
+    log_dir: Optional[str] = None,
+    start_note: Optional[str] = None,
+) -> int:
+    """Run the node until SIGINT/SIGTERM; exit 2 with one line on a bad parameter or a bad
+    params file. ``start_note`` is logged once the node has started (``run``'s discovery
+    line)."""
     argv = list(sys.argv if args is None else args)
+    problem, empty = _check_params_files(argv)
+    if problem is not None:
+        print(f'{NODE_NAME}: {problem}', file=sys.stderr)
+        return 2
     stop = threading.Event()
     _install_signal_handlers(stop)
     try:
@@ -469,8 +534,10 @@ def main(args: Optional[Sequence[str]] = None, log_dir: Optional[str] = None) ->
         try:
             node = CatenaryMonitor(log_dir=log_dir)
         except ConfigError as err:
-            print(f'{NODE_NAME}: {err}', file=sys.stderr)
+            print(f'{NODE_NAME}: {_hint(err, empty)}', file=sys.stderr)
             return 2
+        if start_note:
+            node.get_logger().info(start_note)
         executor = _make_executor()
         executor.add_node(node)
         # The signal handler only sets ``stop``, seen within 0.2 s, so a signal never lands

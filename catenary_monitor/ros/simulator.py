@@ -31,7 +31,12 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from catenary_monitor.core.config import MonitorConfig, config_from_params, load_params_file
+from catenary_monitor.core.config import (
+    ConfigError,
+    MonitorConfig,
+    config_from_params,
+    load_params_file,
+)
 from catenary_monitor.core.solve import solve
 
 __all__ = ['Scenario', 'default_config_path', 'main']
@@ -164,7 +169,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     from rclpy.utilities import remove_ros_args
 
     args = parser.parse_args(remove_ros_args(['dock_simulator', *argv])[1:])
-    config = config_from_params(load_params_file(args.params_file or default_config_path()))
+    try:
+        config = config_from_params(load_params_file(args.params_file or default_config_path()))
+    except ConfigError as err:
+        print(f'dock_simulator: {err}', file=sys.stderr)
+        return 2
     scenario = Scenario(config, duration=args.duration)
 
     from rclpy.executors import ExternalShutdownException

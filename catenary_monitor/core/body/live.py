@@ -5,9 +5,9 @@ arrays over ticks; the core passes one): which readings count (:func:`readings`)
 (:func:`~catenary_monitor.core.body.estimate.estimate_dock`), the ``dock`` status, and what
 each line's alarm sees (:data:`LINE_INPUTS`).
 
-A reading counts when its line has a tension no older than ``tension_timeout``, finite and above
-``w h`` (below, the line's own status is an impossible input), and the depth is known, not stale
-and positive.
+A reading counts when its line has a tension no older than ``tension_timeout``, finite, above
+``w h`` and plausible (:mod:`catenary_monitor.core.plausible`; otherwise the line's own status
+is an impossible input), and the depth is known, not stale, positive and plausible.
 
 A line flagged at one tick is left out of the next tick's fit, until it agrees again.
 
@@ -37,6 +37,7 @@ from catenary_monitor.core.alarms import Level
 from catenary_monitor.core.body.estimate import MIN_LINES, DockEstimate, estimate_dock
 from catenary_monitor.core.body.model import DockModel
 from catenary_monitor.core.config import MonitorConfig
+from catenary_monitor.core.plausible import MAX_DEPTH, reading_status_array
 
 __all__ = [
     'LINE_INPUTS',
@@ -116,7 +117,8 @@ def readings(
         h = depth[:, None] + model.hook_height[None, :]
         fresh = ~np.isnan(tension_s) & (now[:, None] - tension_s <= timeout)
         good = np.isfinite(tension) & (tension > model.weight[None, :] * h)
-        depth_good = depth_ok & np.isfinite(depth) & (depth > 0)
+        good &= reading_status_array(tension, h, model.mbl[None, :]) == 0
+        depth_good = depth_ok & np.isfinite(depth) & (depth > 0) & (depth <= MAX_DEPTH)
     return fresh & good & depth_good[:, None]
 
 
