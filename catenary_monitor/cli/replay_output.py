@@ -291,9 +291,10 @@ def write_mcap(
     c_out = np.concatenate([np.full(len(r.t_ns), cid) for r, cid in zip(result.lines, out_ids)])
     order = np.argsort(t_out, kind='stable')
     label = ','.join(OUTPUT_FIELDS)
-    columns = [np.concatenate([r.values[key] for r in result.lines]) for key in VALUE_FIELDS]
-    columns.append(np.concatenate([r.status for r in result.lines]).astype(np.float64))
-    columns.append(np.concatenate([r.level for r in result.lines]).astype(np.float64))
+    named = {key: np.concatenate([r.values[key] for r in result.lines]) for key in VALUE_FIELDS}
+    named['status'] = np.concatenate([r.status for r in result.lines]).astype(np.float64)
+    named['level'] = np.concatenate([r.level for r in result.lines]).astype(np.float64)
+    columns = [named[key] for key in OUTPUT_FIELDS]
     stamps, payloads = _snapshot_payloads(result)
     diag_t = np.asarray(stamps, np.int64)
     ev_stamps, ev_payloads = _event_payloads(result)
