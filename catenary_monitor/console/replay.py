@@ -157,7 +157,7 @@ class ReplaySource:
             statuses,
             outputs,
             sample_t,
-            tide_trend(self.depth_t, self.depth_v, now),
+            tide_trend(statuses),
             self.history.entries[:h],
             self.limit,
             t_start=self.t_start,
