@@ -65,7 +65,8 @@ __all__ = [
 ]
 
 #: Every CSV column, in order, with its decimals (None: a label). Units: s, N, m, -.
-#: ``time`` is exact (ns); forces have 3 decimals (1 mN), lengths 3 (1 mm), the safety factor 3.
+#: ``time`` is exact (ns); forces have 3 decimals (1 mN), lengths 3 (1 mm), the safety factor 3,
+#: ``time_to_uplift`` 3 (s; ``inf`` when no uplift is coming).
 CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('time', 9),
     ('line', None),
@@ -78,6 +79,7 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('tide_margin', 3),
     ('load_margin', 3),
     ('safety_factor', 3),
+    ('time_to_uplift', 3),  # s
     ('status', None),
     ('level', None),
     ('model', None),
