@@ -153,3 +153,16 @@ def test_the_core_and_its_twin_agree_on_a_rising_tide():
     ahead = error[0].time - warn[0].time
     assert 600.0 < ahead < 1900.0, ahead  # 30 min before the tide's crossing, wave crests first
     assert ' m/h' in warn[0].message
+
+
+def test_a_spiked_bin_does_not_move_the_rate():
+    t_ns = T0_NS + np.arange(0, 1800) * 1_000_000_000
+    depth = 20.0 + RATE * np.arange(1800.0)
+    spiked = depth.copy()
+    spiked[1300:1310] += 5.0  # a gauge spike of 10 s: one bin's mean off by 0.8 m
+    clean, _, _ = tide_trend.series(tide_trend.TrendState(), t_ns, depth, 1200.0)
+    rates, _, _ = tide_trend.series(tide_trend.TrendState(), t_ns, spiked, 1200.0)
+    np.testing.assert_allclose(clean[-300:], RATE, rtol=1e-9)
+    np.testing.assert_allclose(rates[-300:], RATE, rtol=1e-6)  # the median ignores the bin
+    s = np.arange(600.0, 1800.0)  # a least-squares line over the samples would not
+    assert abs(np.polyfit(s, spiked[600:], 1)[0] / RATE - 1) > 0.3

@@ -21,6 +21,10 @@ bin). Only complete bins enter, so the rate moves once per bin, and the per-bin 
 in sample order in both paths (``numpy.bincount`` adds sequentially), so the core and its twin
 give the same bits: no running sums over the whole log, whose rounding grows with its length.
 Non-finite depth samples do not enter the bins (they still decide the tide's level).
+
+Each line's time to uplift (:func:`time_to_uplift`) is then ``(tide_margin + excess) / rate``:
+the margin counted from the tide's level, not from this sample's wave crest or trough, at the
+horizontal tension of the newest solve (the assumption of ``tide_margin``).
 """
 
 from __future__ import annotations
