@@ -540,6 +540,7 @@ def test_diagnostic_values_keys_and_exact_strings():
         'tide_margin',
         'load_margin',
         'safety_factor',
+        'time_to_uplift',
     ]
     assert all(isinstance(v, str) and float(v) == float(fields_[k]) for k, v in values)
     from_object = dict(diagnostic_values(SimpleNamespace(depth=20.85)))

@@ -23,6 +23,7 @@ from catenary_monitor.core.batch import (
 from catenary_monitor.core.config import LineConfig, MonitorConfig
 from catenary_monitor.core.result import Status
 from catenary_monitor.core.monitor import (
+    OUTPUT_FIELDS,
     VALUE_FIELDS,
     Acknowledge,
     Depth,
@@ -80,7 +81,7 @@ def core_state(core):
         )
         for line in core.lines
     ]
-    rest = (core.depth, core.depth_s, core.depth_stale, core.tide, core.tide_entered)
+    rest = (core.depth, core.depth_s, core.depth_stale, core.tide, core.tide_entered, core.trend)
     return lines, _nan_free(rest)
 
 
@@ -133,10 +134,10 @@ def compare(config, tensions, depth, ticks, cuts=(), check_snapshots=True):
         assert [('tension' if x == KIND_TENSION else 'depth') for x in kinds] == [
             w[1] for w in want
         ], line.name
-        data = np.array([w[2] for w in want]).reshape(-1, 13)
-        for j, key in enumerate(VALUE_FIELDS):
+        data = np.array([w[2] for w in want]).reshape(-1, len(OUTPUT_FIELDS))
+        for key in VALUE_FIELDS:
             got = np.concatenate([r.lines[k].values[key] for r in results])
-            assert_same_float(got, data[:, j], f'{line.name} {key}')
+            assert_same_float(got, data[:, OUTPUT_FIELDS.index(key)], f'{line.name} {key}')
         status = np.concatenate([r.lines[k].status for r in results])
         level = np.concatenate([r.lines[k].level for r in results])
         assert status.tolist() == data[:, 11].astype(int).tolist(), line.name

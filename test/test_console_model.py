@@ -15,6 +15,7 @@ from catenary_monitor.console.model import (
     bucket,
     build_frame,
     console_config,
+    statuses_by_name,
     tide_trend,
 )
 from catenary_monitor.core.config import config_from_params, load_params_file
@@ -86,11 +87,15 @@ def test_live_trend_buckets_and_forgets():
     assert s['a_max'][-1] == 999.0 and s['b_min'][-1] == -999.0
 
 
-def test_tide_trend_rate():
-    t = np.arange(0.0, 600.0, 1.0)
-    out = tide_trend(t, 20.0 + t * (0.5 / 3600.0), 599.0)
+def test_tide_trend_is_the_monitors():
+    def statuses(rate):
+        return statuses_by_name([('catenary_monitor: tide', 0, 'ok', {'rate': rate})])
+
+    out = tide_trend(statuses(repr(0.5 / 3600.0)))
     assert out['trend'] == 'rising' and abs(out['rate_m_per_h'] - 0.5) < 1e-9
-    assert tide_trend(t[:2], t[:2], 1.0)['trend'] == 'unknown'
+    assert tide_trend(statuses('-0.0001'))['trend'] == 'falling'
+    assert tide_trend(statuses('nan'))['trend'] == 'unknown'
+    assert tide_trend({})['trend'] == 'unknown'
 
 
 def test_frame_says_lost_after_the_silence_limit():

@@ -143,8 +143,11 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
     r = ref.lines[1]
     assert [t for t, _ in outputs] == r.t_ns.tolist()
     fields = outputs[0][1].layout.dim[0].label.split(',')
-    assert fields[-2:] == ['status', 'level']
+    assert fields[-3:] == ['status', 'level', 'time_to_uplift']  # appended last
     got = np.array([m.data for _, m in outputs])
+    np.testing.assert_array_equal(
+        got[:, fields.index('time_to_uplift')], r.values['time_to_uplift']
+    )
     np.testing.assert_array_equal(got[:, fields.index('level')], r.level)
     np.testing.assert_array_equal(got[:, fields.index('uplift_force')], r.values['uplift_force'])
     assert len(diags) >= len(ref.tick_ns)
@@ -187,6 +190,7 @@ def test_csv_all_columns_and_stdout_summary(scene, capsys):
         models = {row[-1] for row in csv.reader(f)}
     assert header[:2] == ['time', 'line'] and header[-3:] == ['status', 'level', 'model']
     assert {'tide_margin', 'load_margin', 'safety_factor', 'horizontal_tension'} <= set(header)
+    assert 'time_to_uplift' in header
     assert 'inextensible catenary' in models and models <= {'none', 'inextensible catenary'}
     text = out.out
     assert 'line_02:' in text and 'worst anchor margin' in text and 'ERROR from' in text

@@ -263,7 +263,8 @@ def test_replay_of_a_live_node_log_redoes_every_step(tmp_path, form):
         assert [t for t, _ in logged] == r.t_ns.tolist(), r.name
         assert data[:, 11].tolist() == r.status.tolist(), r.name
         assert data[:, 12].tolist() == r.level.tolist(), r.name
-        for j, key in enumerate(VALUE_FIELDS):
+        for key in VALUE_FIELDS:
+            j = OUTPUT_FIELDS.index(key)
             _assert_values_equal(data[:, j], r.values[key], f'{r.name} {key}')
         levels_seen |= set(r.step_level.tolist())
     # Every /diagnostics array: the same stamps, the same statuses, one array per stamp.

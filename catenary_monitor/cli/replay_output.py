@@ -65,7 +65,8 @@ __all__ = [
 ]
 
 #: Every CSV column, in order, with its decimals (None: a label). Units: s, N, m, -.
-#: ``time`` is exact (ns); forces have 3 decimals (1 mN), lengths 3 (1 mm), the safety factor 3.
+#: ``time`` is exact (ns); forces have 3 decimals (1 mN), lengths 3 (1 mm), the safety factor 3,
+#: ``time_to_uplift`` 3 (s; ``inf`` when no uplift is coming).
 CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('time', 9),
     ('line', None),
@@ -78,6 +79,7 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('tide_margin', 3),
     ('load_margin', 3),
     ('safety_factor', 3),
+    ('time_to_uplift', 3),  # s
     ('status', None),
     ('level', None),
     ('model', None),
@@ -291,9 +293,10 @@ def write_mcap(
     c_out = np.concatenate([np.full(len(r.t_ns), cid) for r, cid in zip(result.lines, out_ids)])
     order = np.argsort(t_out, kind='stable')
     label = ','.join(OUTPUT_FIELDS)
-    columns = [np.concatenate([r.values[key] for r in result.lines]) for key in VALUE_FIELDS]
-    columns.append(np.concatenate([r.status for r in result.lines]).astype(np.float64))
-    columns.append(np.concatenate([r.level for r in result.lines]).astype(np.float64))
+    named = {key: np.concatenate([r.values[key] for r in result.lines]) for key in VALUE_FIELDS}
+    named['status'] = np.concatenate([r.status for r in result.lines]).astype(np.float64)
+    named['level'] = np.concatenate([r.level for r in result.lines]).astype(np.float64)
+    columns = [named[key] for key in OUTPUT_FIELDS]
     stamps, payloads = _snapshot_payloads(result)
     diag_t = np.asarray(stamps, np.int64)
     ev_stamps, ev_payloads = _event_payloads(result)

@@ -18,8 +18,6 @@ import threading
 import time
 from typing import Any, Optional
 
-import numpy as np
-
 from catenary_monitor.console.model import (
     AckError,
     History,
@@ -191,8 +189,7 @@ class LiveSource:
     def frame(self, t: Optional[float] = None) -> dict[str, Any]:
         now = time.time()
         with self.cond:
-            dt, dv = self.depth.t, self.depth.cols['depth_max']
-            trend = tide_trend(np.array(dt), np.array(dv), now)
+            trend = tide_trend(self.statuses)
             return build_frame(
                 now,
                 list(self.names),

@@ -303,13 +303,15 @@ class Trend:
         return bucket(np.array(self.t), {k: np.array(v) for k, v in self.cols.items()}, lo, hi, n)
 
 
-def tide_trend(t: np.ndarray, depth: np.ndarray, now: float, span: float = 600.0) -> dict:
-    """The tide's trend: rate (m/h, least squares over the last ``span`` s up to ``now``),
-    and whether it is rising, falling or steady (|rate| < 0.05 m/h)."""
-    keep = (t <= now) & (t >= now - span) & np.isfinite(depth)
-    if keep.sum() < 3 or np.ptp(t[keep]) <= 0:
+def tide_trend(statuses: Mapping[str, Status]) -> dict:
+    """The tide's trend as the monitor decided it (the ``rate`` value [m/s] of the tide's
+    ``/diagnostics`` status, :mod:`catenary_monitor.core.tide_trend`): rate in m/h and whether
+    it is rising, falling or steady (|rate| < 0.05 m/h); unknown while the monitor says nan."""
+    tide = statuses.get('tide')
+    rate = _num(tide.values.get('rate')) if tide is not None else None
+    if rate is None:
         return {'rate_m_per_h': None, 'trend': 'unknown'}
-    slope = float(np.polyfit(t[keep] - now, depth[keep], 1)[0]) * 3600.0
+    slope = rate * 3600.0
     word = 'steady' if abs(slope) < 0.05 else ('rising' if slope > 0 else 'falling')
     return {'rate_m_per_h': slope, 'trend': word}
 
@@ -341,6 +343,7 @@ def _line_view(
             'safety_factor',
             'tide_margin',
             'min_anchor_distance',
+            'time_to_uplift',  # s; None when not coming (inf) or unknown
         ):
             view[key] = _num(v.get(key))
     if output is not None:

@@ -29,7 +29,7 @@ from catenary_monitor.console.model import (
 )
 from catenary_monitor.core.batch import ReplayResult
 from catenary_monitor.core.config import MonitorConfig
-from catenary_monitor.core.monitor import VALUE_FIELDS, Snapshot
+from catenary_monitor.core.monitor import VALUE_FIELDS, Snapshot, output_values
 
 __all__ = ['LogError', 'load_log', 'ReplaySource']
 
@@ -143,7 +143,7 @@ class ReplaySource:
                 values = [float(r.values[k][j]) for k in VALUE_FIELDS]
                 outputs[name] = (
                     float(self.line_t[name][j]),
-                    values + [float(r.status[j]), float(r.level[j])],
+                    list(output_values(values, float(r.status[j]), float(r.level[j]))),
                 )
             times = self.sample_times[name]
             m = int(np.searchsorted(times, now, 'right')) - 1
@@ -157,7 +157,7 @@ class ReplaySource:
             statuses,
             outputs,
             sample_t,
-            tide_trend(self.depth_t, self.depth_v, now),
+            tide_trend(statuses),
             self.history.entries[:h],
             self.limit,
             t_start=self.t_start,

@@ -16,6 +16,10 @@ Conditions, each with its own latch:
 ``anchor_margin``, ``tide_margin``, ``load_margin``, ``safety_factor`` (WARN)
     raised when the value ``< *_warn`` has lasted ``on_delay``; cleared when ``>= *_warn +
     *_deadband`` has held for ``warn_clear_hold``.
+``time_to_uplift`` (WARN)
+    the same with ``uplift_time_warn`` and ``uplift_time_deadband`` (s): the anchor lifts within
+    that time if the tide keeps its trend (:mod:`catenary_monitor.core.tide_trend`); inf (no
+    uplift coming) clears, NaN holds.
 ``inconsistent`` (WARN; the dock model only, :mod:`catenary_monitor.core.body.live`)
     raised when the dock estimate flags the line's tension as irreconcilable with the other
     lines (its smoothed normalized residual beyond ``dock_residual_limit``) for ``on_delay``;
@@ -87,11 +91,13 @@ CONDITIONS = (
     'tide_margin',
     'load_margin',
     'safety_factor',
+    'time_to_uplift',
     'inconsistent',
 )
 _ERRORS = CONDITIONS[:2]
 _WARNS = CONDITIONS[2:]
-_MARGINS = CONDITIONS[2:6]  # the warnings with a *_warn threshold and *_deadband
+_MARGINS = CONDITIONS[2:7]  # the warnings with a threshold and a deadband
+_LIMITS = {'time_to_uplift': 'uplift_time'}  # parameter prefix where it is not the name
 _HOLD, _BREACH, _CLEAR = 0, 1, 2  # classification of one update for one condition
 
 
@@ -111,6 +117,8 @@ class AlarmInputs:
     tide_margin: float = math.nan  # m, depth rise the chain takes before uplift
     load_margin: float = math.nan  # N, as reported by the solver
     safety_factor: float = math.nan  # -, MBL / top tension
+    time_to_uplift: float = math.nan  # s, until uplift at the tide's trend (inf: not coming)
+    tide_rate: float = math.nan  # m/s, the tide's trend (for the message)
     status: int = 0
     status_message: str = ''
     tension_stamp: float = math.nan  # s
@@ -184,8 +192,9 @@ class LineAlarm:
 
     def _warn_limits(self, cond: str) -> tuple[float, float]:
         """(raise below, clear at or above) for a warning condition."""
-        warn = getattr(self.config, f'{cond}_warn')
-        return warn, warn + getattr(self.config, f'{cond}_deadband')
+        prefix = _LIMITS.get(cond, cond)
+        warn = getattr(self.config, f'{prefix}_warn')
+        return warn, warn + getattr(self.config, f'{prefix}_deadband')
 
     def initial(self, now: float) -> AlarmState:
         """State of a line that has received nothing yet, at time ``now`` (s): blind, STALE."""
@@ -305,6 +314,8 @@ class LineAlarm:
         for cond, up in zip(_WARNS, active[2:]):
             if up and cond == 'inconsistent':
                 parts.append(_inconsistent_text(x, hold_w))
+            elif up and cond == 'time_to_uplift':
+                parts.append(self._uplift_time_text(x, hold_w))
             elif up:
                 parts.append(self._warn_text(cond, getattr(x, cond), hold_w))
         return '; '.join(parts) if parts else 'OK'
@@ -319,6 +330,23 @@ class LineAlarm:
         if value < low:
             return f'{label} {v}{unit} < {lo}{unit}'
         return f'{label} {v}{unit}, warning held (clears after {hold:g} s at >= {hi}{unit})'
+
+    def _uplift_time_text(self, x: AlarmInputs, hold: float) -> str:
+        """The message of the ``time_to_uplift`` condition (minutes, the tide's rate in m/h)."""
+        low, high = self._warn_limits('time_to_uplift')
+        value = x.time_to_uplift
+        if value < low:
+            if not value > 0.0:
+                return 'anchor lifted: time to uplift 0 min'
+            rate = x.tide_rate * 3600.0
+            return (
+                f'anchor uplift in {_fmt(value, 60.0, 0)} min if the tide keeps rising '
+                f'{rate:.2f} m/h'
+            )
+        return (
+            f'time to uplift {_fmt(value, 60.0, 0)} min, warning held (clears after {hold:g} s '
+            f'at >= {_fmt(high, 60.0, 0)} min)'
+        )
 
 
 def _inconsistent_text(x: AlarmInputs, hold: float) -> str:
@@ -383,6 +411,8 @@ _INPUT_FIELDS = (
     'tide_margin',
     'load_margin',
     'safety_factor',
+    'time_to_uplift',
+    'tide_rate',
     'tension_stamp',
     'depth_stamp',
     'inconsistent',
@@ -658,6 +688,7 @@ DIAGNOSTIC_KEYS = (
     'tide_margin',
     'load_margin',
     'safety_factor',
+    'time_to_uplift',
 )
 
 

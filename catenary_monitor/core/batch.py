@@ -31,6 +31,7 @@ from typing import Any, NamedTuple, Optional
 import numpy as np
 
 from catenary_monitor.core import acknowledge as alarm_ack, catenary as cat, elastic, kernels
+from catenary_monitor.core import tide_trend
 from catenary_monitor.core.alarms import Level, LevelSeries, Transition, replay_levels
 from catenary_monitor.core.config import LineConfig, MonitorConfig
 from catenary_monitor.core.body import live as dock_live
@@ -303,6 +304,7 @@ def _solve_updates_kernel(
     status[np.isnan(h)] = NO_DEPTH
     out = {k: rows[i] for k, i in _ROWS.items()}
     out['depth'], out['top_tension'] = h.copy(), t.copy()
+    out['time_to_uplift'] = np.full(len(t), np.nan)  # set by the caller, from the tide's trend
     return out, status
 
 
@@ -332,7 +334,7 @@ def _solve_updates_elastic(
         status[has] = res.status
         used[has] = np.asarray(res.model) == elastic.ELASTIC
         for k in VALUE_FIELDS:
-            if k not in ('depth', 'top_tension'):
+            if k not in ('depth', 'top_tension', 'time_to_uplift'):
                 out[k][has] = getattr(res, k)
     return out, status, used
 
@@ -394,6 +396,9 @@ class _Tide:
     depth_s: np.ndarray  # s, its stamp (NaN: none)
     level: np.ndarray  # int8 Level
     stale: np.ndarray  # bool, the depth-stale decision the lines take
+    rates: np.ndarray  # m/s, the tide's trend after each depth sample of the window
+    excess: np.ndarray  # m, each depth sample's excess over the trend's level
+    trend: tide_trend.TrendState  # the trend after the window's last depth sample
 
 
 def _decide_tide(core: MonitorCore, window: Window) -> tuple[_Tide, list[Transition]]:
@@ -413,7 +418,9 @@ def _decide_tide(core: MonitorCore, window: Window) -> tuple[_Tide, list[Transit
         bad = ~(np.isfinite(depth) & (depth > 0) & (depth <= MAX_DEPTH))
     level = np.where(blind | stale, Level.STALE, np.where(bad, Level.ERROR, Level.OK))
     level = level.astype(np.int8)
-    tide = _Tide(times, depth, depth_s, level, stale)
+    window_s = core.config.alarm.tide_trend_window
+    rates, excess, trend = tide_trend.series(core.trend, dd, dv, window_s)
+    tide = _Tide(times, depth, depth_s, level, stale, rates, excess, trend)
     transitions = []
     old, entered = core.tide[0], core.tide_entered
     for i in _changed(level, old).tolist():
@@ -438,6 +445,7 @@ def _write_tide(
         core.depth_stale = bool(tide.stale[i])
     if transitions:
         core.tide_entered = transitions[-1].time
+    core.trend = tide.trend
     dd, dv = window.depth
     if len(dd):
         core.depth, core.depth_s = float(dv[-1]), float(dd[-1] * 1e-9)
@@ -537,9 +545,24 @@ def _pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
 
 
 def _solve_line(
+    core: MonitorCore, line: LineState, steps: _Steps, tv: np.ndarray, window: Window, tide: _Tide
+) -> tuple[dict[str, np.ndarray], np.ndarray, Optional[np.ndarray]]:
+    """Values, status and elastic flags at the line's solved steps, with the time to uplift
+    at the tide's trend of the newest depth sample."""
+    values, status, used = _solve_at(core, line, steps, tv, window)
+    d_idx = steps.d_idx[steps.solved]
+    rate = _pick(d_idx, tide.rates, core.trend.rate)
+    excess = _pick(d_idx, tide.excess, core.trend.excess)
+    values['time_to_uplift'] = tide_trend.uplift_times(
+        values['tide_margin'], values['uplift_force'], rate, excess
+    )
+    return values, status, used
+
+
+def _solve_at(
     core: MonitorCore, line: LineState, steps: _Steps, tv: np.ndarray, window: Window
 ) -> tuple[dict[str, np.ndarray], np.ndarray, Optional[np.ndarray]]:
-    """Values, status and elastic flags at the line's solved steps."""
+    """Values, status and elastic flags at the line's solved steps (the solver's part)."""
     lc = line.config
     where = np.flatnonzero(steps.solved)
     tension = _pick(steps.t_idx[where], tv, line.tension)
@@ -591,11 +614,19 @@ def _line_inputs(
     before = dict(zip(VALUE_FIELDS, line.values))
     inputs: dict[str, Any] = {
         k: _pick(s, values[k], before[k])
-        for k in ('uplift_force', 'anchor_margin', 'tide_margin', 'load_margin', 'safety_factor')
+        for k in (
+            'uplift_force',
+            'anchor_margin',
+            'tide_margin',
+            'load_margin',
+            'safety_factor',
+            'time_to_uplift',
+        )
     }
     inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
         np.int64
     )
+    inputs['tide_rate'] = _pick(steps.d_idx, tide.rates, core.trend.rate)
     inputs['tension_stamp'] = _pick(steps.t_idx, tt * 1e-9, line.tension_s)
     inputs['depth_stamp'] = _pick(steps.d_idx, window.depth[0] * 1e-9, core.depth_s)
     inputs['depth_stale'] = _pick(
@@ -618,7 +649,7 @@ def _advance_line(
     line = core.lines[k]
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
-    values, status, used = _solve_line(core, line, steps, tv, window)
+    values, status, used = _solve_line(core, line, steps, tv, window, tide)
     inputs = _line_inputs(core, line, steps, tide, values, status, window, tt, dock, k)
     series = replay_levels(
         steps.times * 1e-9, inputs, line.alarm, STATUS_MESSAGES, initial=line.state
@@ -677,7 +708,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool = False) -> Windo
         raise ValueError(
             f'window has {len(window.tensions)} tension columns for ' f'{len(core.lines)} lines'
         )
-    depth_before = (core.depth, core.depth_s, core.depth_stale)
+    depth_before = (core.depth, core.depth_s, core.depth_stale, core.trend.rate)
     tide_before = core.tide
     lines_before = [
         _Before(
@@ -757,7 +788,7 @@ def _snapshots(
     results: list[LineResult],
     series: list[LevelSeries],
     steps: list[_Steps],
-    depth_before: tuple[float, float, bool],
+    depth_before: tuple[float, float, bool, float],
     tide_before: tuple[Level, str],
     lines_before: list[_Before],
     acks: list[alarm_ack.AckSeries],
@@ -796,6 +827,7 @@ def _snapshots(
         i, j = int(tide_at[n]), int(depth_at[n])
         depth = float(dv[j]) if j >= 0 else depth_before[0]
         depth_s = float(dd[j] * 1e-9) if j >= 0 else depth_before[1]
+        rate = float(tide.rates[j]) if j >= 0 else depth_before[3]
         state = (
             tide_before
             if i < 0
@@ -804,7 +836,8 @@ def _snapshots(
             )
         )
         statuses = [col[n] for col in columns]
-        statuses.append(tide_component(state, core.depth_id, depth, stamp * 1e-9 - depth_s))
+        age = stamp * 1e-9 - depth_s
+        statuses.append(tide_component(state, core.depth_id, depth, age, rate))
         statuses.append(logger)
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))

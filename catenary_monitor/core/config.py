@@ -316,6 +316,33 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         10.0,
     ),
     ParamSpec(
+        'tide_trend_window',
+        'double',
+        1200.0,
+        'Tide trend: Theil-Sen rate of 20 bin means over this window (known after half of it)',
+        's',
+        60.0,
+        86400.0,
+    ),
+    ParamSpec(
+        'uplift_time_warn',
+        'double',
+        1800.0,
+        'WARN when the time to uplift at the tide\'s trend falls below this',
+        's',
+        0.0,
+        86400.0,
+    ),
+    ParamSpec(
+        'uplift_time_deadband',
+        'double',
+        300.0,
+        'Time-to-uplift warning clears only at warn + deadband or more',
+        's',
+        0.0,
+        86400.0,
+    ),
+    ParamSpec(
         'load_margin_warn',
         'double',
         0.0,
@@ -653,6 +680,9 @@ class AlarmConfig:
     anchor_margin_deadband: float = _default('anchor_margin_deadband')
     tide_margin_warn: float = _default('tide_margin_warn')
     tide_margin_deadband: float = _default('tide_margin_deadband')
+    tide_trend_window: float = _default('tide_trend_window')
+    uplift_time_warn: float = _default('uplift_time_warn')
+    uplift_time_deadband: float = _default('uplift_time_deadband')
     load_margin_warn: float = _default('load_margin_warn')
     load_margin_deadband: float = _default('load_margin_deadband')
     safety_factor_warn: float = _default('safety_factor_warn')

@@ -61,6 +61,7 @@ from catenary_monitor.core.health import logger_status, tide_status
 from catenary_monitor.core.plausible import reading_status, reading_status_array
 from catenary_monitor.core.result import STATUS_MESSAGES
 from catenary_monitor.core.solve import solve
+from catenary_monitor.core import tide_trend
 
 __all__ = [
     'NODE_NAME',
@@ -85,6 +86,7 @@ __all__ = [
     'LineState',
     'MonitorCore',
     'line_status',
+    'output_values',
     'tide_component',
     'dock_component',
     'event_record',
@@ -94,7 +96,9 @@ __all__ = [
 #: Node name: the ``/diagnostics`` status names start with it; params files use it as top key.
 NODE_NAME = 'catenary_monitor'
 #: Element order of each line's outputs (``/catenary_monitor/NAME/outputs``), SI units;
-#: ``status`` is the solver code (:data:`NO_DEPTH` before the first depth), ``level`` 0-3.
+#: ``status`` is the solver code (:data:`NO_DEPTH` before the first depth), ``level`` 0-3;
+#: ``time_to_uplift`` [s] (:mod:`~catenary_monitor.core.tide_trend`) was appended last so the
+#: older indexes stay.
 OUTPUT_FIELDS = (
     'top_tension',
     'depth',
@@ -109,9 +113,10 @@ OUTPUT_FIELDS = (
     'suspended_length',
     'status',
     'level',
+    'time_to_uplift',
 )
-#: The solved quantities among them.
-VALUE_FIELDS = OUTPUT_FIELDS[:-2]
+#: The solved quantities among them (every field but ``status`` and ``level``).
+VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
 #: Solver status of an update made before any depth sample arrived.
 NO_DEPTH = -1
 #: ``model`` of a line that has not been solved yet.
@@ -121,7 +126,7 @@ NO_MODEL = 'none'
 EVENTS_TOPIC = f'/{NODE_NAME}/events'
 
 _NAN = math.nan
-_SOLVED = VALUE_FIELDS[2:]  # taken from the solve result (the first two are the inputs)
+_SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
 
 
@@ -239,8 +244,9 @@ class LineState:
     ack: alarm_ack.AckState = alarm_ack.AckState()  # the line's alarm in ISA-18.2 states
     dock: tuple[float, ...] = (_NAN,) * 4  # dock_live.LINE_INPUTS of the newest dock estimate
 
-    def inputs(self, depth_s: float, depth_stale: bool) -> AlarmInputs:
-        """The alarm inputs of this line now (newest results, stamps, the tide's decision)."""
+    def inputs(self, depth_s: float, depth_stale: bool, rate: float = _NAN) -> AlarmInputs:
+        """The alarm inputs of this line now (newest results, stamps, the tide's decision and
+        its trend ``rate`` [m/s])."""
         v, d = self.values, self.dock
         return AlarmInputs(
             uplift_force=v[5],
@@ -248,6 +254,8 @@ class LineState:
             tide_margin=v[6],
             load_margin=v[7],
             safety_factor=v[8],
+            time_to_uplift=v[11],
+            tide_rate=rate,
             status=max(self.status, 0),
             status_message=self.status_message,
             tension_stamp=self.tension_s,
@@ -302,6 +310,7 @@ class MonitorCore:
         self.depth = _NAN  # m, newest sample
         self.depth_s = _NAN  # s, its stamp
         self.depth_stale = False
+        self.trend = tide_trend.TrendState()  # the tide's rate (m/s) from the depth samples
         self.tide: tuple[Level, str] = tide_status(_NAN, _NAN, start, config.alarm.depth_timeout)
         self.tide_entered = start
         self.logger: tuple[Level, str] = (Level.OK, 'logging')
@@ -342,6 +351,8 @@ class MonitorCore:
 
     def _on_depth(self, ev: Depth) -> Step:
         self.depth, self.depth_s = float(ev.value), _stamp_s(ev.stamp_ns)
+        window = self.config.alarm.tide_trend_window
+        self.trend = tide_trend.step(self.trend, ev.stamp_ns, self.depth, window)
         changes = self._decide_tide(ev.stamp_ns)
         solved = [k for k, line in enumerate(self.lines) if line.tension_s == line.tension_s]
         self._solve_many(solved)
@@ -374,6 +385,8 @@ class MonitorCore:
         names = [lc.name for lc in config.lines]
         if names != [line.config.name for line in self.lines]:
             raise ValueError(f'reconfigure: the lines must stay {list(self.index)}, got {names}')
+        if config.alarm.tide_trend_window != self.config.alarm.tide_trend_window:
+            self.trend = tide_trend.TrendState()  # other bins: the trend starts again
         self.config = config
         for line, lc in zip(self.lines, config.lines):
             line.config, line.alarm = lc, LineAlarm.for_line(lc, config.alarm)
@@ -449,6 +462,9 @@ class MonitorCore:
             r.safety_factor,
             r.anchor_angle_deg,
             r.suspended_length,
+            tide_trend.time_to_uplift(
+                r.tide_margin, r.uplift_force, self.trend.rate, self.trend.excess
+            ),
         )
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
         code = reading_status(t, h, lc.mbl)
@@ -477,6 +493,13 @@ class MonitorCore:
         columns = [tension.tolist(), h.tolist()] + [
             np.asarray(getattr(r, k)).tolist() for k in _SOLVED
         ]
+        rate, excess = self.trend.rate, self.trend.excess
+        columns.append(
+            [
+                tide_trend.time_to_uplift(m, f, rate, excess)
+                for m, f in zip(columns[6], columns[5])
+            ]
+        )
         models = np.broadcast_to(np.asarray(r.model, dtype=object), tension.shape)
         messages, status = r.message, np.asarray(r.status).tolist()
         for i, line in enumerate(lines):
@@ -495,7 +518,7 @@ class MonitorCore:
         for k in which:
             line = self.lines[k]
             line.state, events = line.alarm.update(
-                line.state, line.inputs(self.depth_s, self.depth_stale), now
+                line.state, line.inputs(self.depth_s, self.depth_stale, self.trend.rate), now
             )
             grace = alarm_ack.startup_grace(self.config.alarm)
             line.ack = alarm_ack.step(line.ack, line.state.level, now, grace)
@@ -514,7 +537,7 @@ class MonitorCore:
     def output(self, k: int) -> LineOutput:
         """Line ``k``'s outputs now (:data:`OUTPUT_FIELDS`)."""
         line = self.lines[k]
-        return LineOutput(k, line.values + (float(line.status), float(int(line.state.level))))
+        return LineOutput(k, output_values(line.values, line.status, line.state.level))
 
     def snapshot(self, stamp_ns: int) -> Snapshot:
         """The diagnostic snapshot at ``stamp_ns``: every line, the tide, the logger."""
@@ -539,7 +562,11 @@ class MonitorCore:
             )
             for line in self.lines
         ]
-        statuses.append(tide_component(self.tide, self.depth_id, self.depth, now - self.depth_s))
+        statuses.append(
+            tide_component(
+                self.tide, self.depth_id, self.depth, now - self.depth_s, self.trend.rate
+            )
+        )
         level, message = self.logger
         statuses.append(
             ComponentStatus(f'{NODE_NAME}: logger', level, message, self.logger_id, ())
@@ -555,6 +582,13 @@ def _implausible(line: LineState, code: int) -> None:
     line.values = line.values[:2] + _NAN_VALUES[2:]
     line.status, line.status_message = code, STATUS_MESSAGES[code]
     line.model = elastic.INEXTENSIBLE
+
+
+def output_values(values: Sequence[float], status: float, level: float) -> tuple[float, ...]:
+    """One output message's elements (:data:`OUTPUT_FIELDS` order) from the
+    :data:`VALUE_FIELDS` values, the solver status and the level."""
+    v = tuple(float(x) for x in values)
+    return v[:11] + (float(status), float(int(level))) + v[11:]
 
 
 def line_status(
@@ -613,15 +647,24 @@ def dock_component(
 
 
 def tide_component(
-    tide: tuple[Level, str], hardware_id: str, depth: float, depth_age: float
+    tide: tuple[Level, str],
+    hardware_id: str,
+    depth: float,
+    depth_age: float,
+    rate: float = math.nan,
 ) -> ComponentStatus:
-    """The tide's ``DiagnosticStatus``: values ``depth`` [m] and ``depth_age`` [s]."""
+    """The tide's ``DiagnosticStatus``: values ``depth`` [m], ``depth_age`` [s] and ``rate``
+    [m/s], the trend (:mod:`~catenary_monitor.core.tide_trend`; nan while unknown)."""
     return ComponentStatus(
         f'{NODE_NAME}: tide',
         tide[0],
         tide[1],
         hardware_id,
-        (('depth', repr(float(depth))), ('depth_age', repr(float(depth_age)))),
+        (
+            ('depth', repr(float(depth))),
+            ('depth_age', repr(float(depth_age))),
+            ('rate', repr(float(rate))),
+        ),
     )
 
 
