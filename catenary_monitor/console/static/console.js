@@ -129,7 +129,8 @@ function buildTiles() {
       <div class="bar"><div class="fill"></div><div class="mark"></div></div>
       <div class="bar-label"></div>
       <dl class="vals"><dt>anchor margin</dt><dd class="v-margin"></dd><dt>uplift</dt><dd class="v-uplift"></dd>
-      <dt>safety factor</dt><dd class="v-sf"></dd><dt>model</dt><dd class="v-model"></dd></dl>
+      <dt>safety factor</dt><dd class="v-sf"></dd><dt>uplift in</dt><dd class="v-ttu"></dd>
+      <dt>model</dt><dd class="v-model"></dd></dl>
       <div class="msg"></div><div class="foot"></div>`;
     t.querySelector('.name').textContent = line.name;
     const warn = line.mbl ? 1 / S.config.safety_factor_warn : null;
@@ -169,6 +170,11 @@ function renderTile(view, lost, frame) {
   const sf = t.querySelector('.v-sf');
   sf.textContent = num(view.safety_factor, 2);
   sf.className = 'v-sf ' + (view.safety_factor !== null && view.safety_factor < S.config.safety_factor_warn ? 'warn' : '');
+  // Time to uplift at the tide's trend (null: the tide is not bringing uplift closer).
+  const ttu = view.time_to_uplift;
+  const tt = t.querySelector('.v-ttu');
+  tt.textContent = ttu === null || ttu === undefined ? '—' : ttu <= 0 ? 'lifted' : ago(ttu);
+  tt.className = 'v-ttu ' + (ttu !== null && ttu !== undefined && ttu < S.config.uplift_time_warn ? 'warn' : '');
   t.querySelector('.v-model').textContent = (view.model || '—').replace(' catenary', '');
   const msg = lost ? `monitor silent: last known ${view.level} at ${clock(frame.snapshot_t)}` : view.message;
   t.querySelector('.msg').textContent = msg;
@@ -330,7 +336,7 @@ async function acknowledge(line) {
 function renderTide(frame, lost) {
   const t = frame.tide;
   const box = $('tide');
-  const arrow = { rising: '↑ rising', falling: '↓ falling', steady: '→ steady', unknown: '' }[t.trend || 'unknown'];
+  const arrow = { rising: '↑ rising', falling: '↓ falling', steady: '→ steady', unknown: 'trend not known yet (needs half the trend window of depth)' }[t.trend || 'unknown'];
   const rate = t.rate_m_per_h === null || t.rate_m_per_h === undefined ? '' : ` ${t.rate_m_per_h >= 0 ? '+' : ''}${t.rate_m_per_h.toFixed(2)} m/h`;
   box.innerHTML = '';
   box.appendChild(el('div', { class: 'tide-big' }, t.depth === null ? '— m' : `${t.depth.toFixed(2)} m`));
