@@ -92,7 +92,8 @@ def test_node_logger_files(js_reader, tmp_path, compression) -> None:
                 '/mooring/line_11/tension', serialize_message(Float64(data=372e3 + i)), stamp
             )
             if i % 20 == 0:
-                log.write('/diagnostics', serialize_message(DiagnosticArray(status=[status])), stamp)
+                diag = serialize_message(DiagnosticArray(status=[status]))
+                log.write('/diagnostics', diag, stamp)
                 out = Float64MultiArray(data=[float(i), 2.5, -1.0])
                 log.write('/catenary_monitor/line_11', serialize_message(out), stamp)
     [path] = log.files
@@ -112,7 +113,8 @@ def test_replay_results_file(js_reader, tmp_path, capsys) -> None:
     log = write_log(tmp_path / 'dock.mcap', config, tensions, depth)
     params = params_yaml(config, tmp_path / 'params.yaml')
     results = tmp_path / 'results.mcap'
-    code = main(['replay', str(log), '--params-file', str(params), '--out', str(results), '--quiet'])
+    args = ['replay', str(log), '--params-file', str(params), '--out', str(results), '--quiet']
+    code = main(args)
     capsys.readouterr()
     assert code in (0, 1)  # 1: the storm raised an alarm
     for result, path in zip(read_js(js_reader, [log, results]), [log, results]):
