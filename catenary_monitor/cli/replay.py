@@ -116,8 +116,38 @@ class Progress:
             sys.stderr.write(text + '\n')
         sys.stderr.flush()
 
+    def stream(self, state: Any) -> None:
+        """A streamed replay's progress: share of the files' bytes walked, with an ETA."""
+        if not self.enabled:
+            return
+        now = time.monotonic()
+        if now - self.last < (0.2 if self.tty else 2.0):
+            return
+        self.last = now
+        total = max(state.bytes_total, 1)
+        fraction = min(state.bytes_done / total, 1.0)
+        elapsed = now - self.start
+        eta = f', ETA {elapsed * (1 - fraction) / fraction:.0f} s' if fraction > 0 else ''
+        text = (
+            f'replay: {100 * fraction:3.0f}% of {total / 1e6:.0f} MB, '
+            f'{state.messages / 1e6:.1f} M messages ({elapsed:.0f} s{eta})'
+        )
+        self._write(text)
+        self.shown = True
+
+    def _write(self, text: str) -> None:
+        if self.tty:
+            sys.stderr.write('\r' + text.ljust(70))
+        else:
+            sys.stderr.write(text + '\n')
+        sys.stderr.flush()
+
     def done(self) -> None:
-        if self.enabled and self.tty:
+        if not self.enabled:
+            return
+        if getattr(self, 'shown', False) or not self.tty:
+            self._write(f'replay: done ({time.monotonic() - self.start:.1f} s)')
+        if self.tty:
             sys.stderr.write('\n')
 
 
@@ -353,56 +383,26 @@ def _offline(args: argparse.Namespace) -> int:
     csv_columns = _csv_columns(args.csv_columns)
     size = sum(p.stat().st_size for p in paths)
     progress = Progress(args.progress or (not args.quiet and size > 8_000_000))
-    t_start = time.perf_counter()
     follow = params['same_as_recorded'] is not False
     params['follows_recorded_changes'] = follow
-    result, tensions, depth, report, timing = run_replay(
-        paths,
-        config,
-        ticks=args.ticks,
-        follow_log=follow,
-        snapshots=bool(args.out),
-        progress=progress,
-    )
-    outputs: dict[str, Any] = {}
-    if args.csv:
-        t1 = time.perf_counter()
-        with _OutputFile(args.csv) as f:
-            rows = out.write_csv(f, result, progress, csv_columns)
-        timing['csv_s'] = time.perf_counter() - t1
-        outputs['csv'] = f'{args.csv} ({rows} rows)'
-    if args.out:
-        t1 = time.perf_counter()
-        topics, depth_topic = input_topics(config)
-        with _OutputFile(args.out) as f:
-            n = out.write_mcap(
-                f,
-                result,
-                config,
-                tensions,
-                depth,
-                topics,
-                depth_topic,
-                [str(p) for p in paths],
-                progress,
-            )
-        timing['mcap_s'] = time.perf_counter() - t1
-        outputs['mcap'] = f'{args.out} ({n} messages)'
-    if args.plot:
-        t1 = time.perf_counter()
-        progress('plotting', 0.0)
-        files = out.write_plots(Path(args.plot), result, config, depth)
-        timing['plot_s'] = time.perf_counter() - t1
-        outputs['plots'] = ' '.join(str(p) for p in files)
-        progress('plotting', 1.0)
+    t_start = time.perf_counter()
+    sinks, state, report = _stream_outputs(args, config, paths, csv_columns, follow, progress)
+    outputs = sinks.close()
     progress.done()
+    timing = dict(sinks.timing)
     timing['total_s'] = time.perf_counter() - t_start
     summary = out.summary_dict(
-        result,
+        sinks.tally,
         report,
         {
             'parameters': params,
             'outputs': outputs,
+            'streaming': {
+                'streamed': sinks.window_messages is not None,
+                'windows': state.windows,
+                'window_messages': sinks.window_messages,
+                'jobs': args.jobs,
+            },
             'timing': {k: round(v, 3) for k, v in timing.items()},
         },
     )
@@ -417,6 +417,168 @@ def _offline(args: argparse.Namespace) -> int:
     except BrokenPipeError:  # e.g. piped into head: the reader has what it wanted
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0
+
+
+def _stream_outputs(
+    args: argparse.Namespace,
+    config: MonitorConfig,
+    paths: Sequence[Path],
+    csv_columns: Sequence[str],
+    follow: bool,
+    progress: Progress,
+) -> tuple['_Sinks', Any, ReadReport]:
+    """Stream the replay into the outputs; a log that cannot be streamed is replayed again
+    as one window (one line on stderr says so)."""
+    from catenary_monitor.cli.replay_stream import WINDOW_MESSAGES, NoEventsChannel, Restart, stream
+
+    window: Optional[int] = args.window_messages or WINDOW_MESSAGES
+    while True:
+        report = ReadReport()
+        sinks = _Sinks(args, config, paths, csv_columns, window)
+        try:
+            state = stream(
+                paths,
+                config,
+                sinks,
+                ticks=args.ticks,
+                follow_log=follow,
+                snapshots=bool(args.out),
+                window_messages=window,
+                jobs=args.jobs,
+                report=report,
+                progress=progress.stream,
+            )
+            return sinks, state, report
+        except Restart as err:
+            sinks.abandon()
+            if window is None:
+                raise ReplayError(f'cannot replay: {err}') from err
+            if not args.quiet:
+                print(
+                    f'catenary-monitor replay: cannot stream this log ({err}); replaying it '
+                    'as one window (memory grows with the log)',
+                    file=sys.stderr,
+                )
+            window = None
+        except NoEventsChannel as err:
+            sinks.abandon()
+            raise ReplayError(
+                '--ticks log: the log has no catenary_monitor events channel '
+                f'({EVENTS_TOPIC}); it was not recorded by the node'
+            ) from err
+        except TopicTypeError as err:
+            sinks.abandon()
+            raise ReplayError(f'unexpected message type: {err} (check the params file topics)')
+        except EmptyLogError as err:
+            sinks.abandon()
+            raise ReplayError(f'empty log: {err}; nothing to replay', EXIT_EMPTY) from err
+        except McapReadError as err:
+            sinks.abandon()
+            raise ReplayError(str(err)) from err
+
+
+class _Sinks:
+    """The outputs of a streamed replay, written window by window: the summary tally, CSV
+    rows, the results MCAP and the plot envelopes (files opened with the first window)."""
+
+    def __init__(
+        self,
+        args: argparse.Namespace,
+        config: MonitorConfig,
+        paths: Sequence[Path],
+        csv_columns: Sequence[str],
+        window_messages: Optional[int],
+    ) -> None:
+        from catenary_monitor.cli import replay_output as out
+
+        self.out = out
+        self.args, self.config, self.paths = args, config, paths
+        self.csv_columns = csv_columns
+        self.window_messages = window_messages
+        names = [line.name for line in config.lines]
+        self.names = names
+        self.tally = out.Tally(names)
+        self.plot = out.PlotData(names) if args.plot else None
+        self.files: list[_OutputFile] = []
+        self.csv: Any = None
+        self.mcap: Any = None
+        self.rows = 0
+        self.header_done = False
+        self.timing: dict[str, float] = {}
+        if args.csv:
+            self.timing['csv_s'] = 0.0
+        if args.out:
+            self.timing['mcap_s'] = 0.0
+        self.opened = False
+
+    def _open(self) -> None:
+        self.opened = True
+        if self.args.csv:
+            f = _OutputFile(self.args.csv)
+            self.csv = f.__enter__()
+            self.files.append(f)
+        if self.args.out:
+            f = _OutputFile(self.args.out)
+            self.files.append(f)
+            topics, depth_topic = input_topics(self.config)
+            self.mcap = self.out.McapSink(
+                f.__enter__(),
+                self.config,
+                self.names,
+                topics,
+                depth_topic,
+                [str(p) for p in self.paths],
+            )
+
+    def __call__(self, result: Any, window: Any) -> None:
+        if not self.opened:
+            self._open()
+        self.tally.add(result)
+        if self.csv is not None:
+            t0 = time.perf_counter()
+            self.rows += self.out.write_csv(
+                self.csv, result, None, self.csv_columns, header=not self.header_done
+            )
+            self.header_done = True
+            self.timing['csv_s'] += time.perf_counter() - t0
+        if self.mcap is not None:
+            t0 = time.perf_counter()
+            tensions = {name: col for name, col in zip(self.names, window.tensions)}
+            self.mcap.write(result, tensions, window.depth)
+            self.timing['mcap_s'] += time.perf_counter() - t0
+        if self.plot is not None:
+            self.plot.add(result, window.depth)
+
+    def close(self) -> dict[str, Any]:
+        """Finish the files and draw the charts; returns the summary's ``outputs``."""
+        outputs: dict[str, Any] = {}
+        if not self.opened:
+            self._open()
+        if self.csv is not None:
+            outputs['csv'] = f'{self.args.csv} ({self.rows} rows)'
+        if self.mcap is not None:
+            t0 = time.perf_counter()
+            n = self.mcap.finish()
+            self.timing['mcap_s'] += time.perf_counter() - t0
+            outputs['mcap'] = f'{self.args.out} ({n} messages)'
+        for f in self.files:
+            f.__exit__(None, None, None)
+        if self.plot is not None:
+            t0 = time.perf_counter()
+            files = self.out.draw_plots(Path(self.args.plot), self.config, self.plot)
+            self.timing['plot_s'] = time.perf_counter() - t0
+            outputs['plots'] = ' '.join(str(p) for p in files)
+        return outputs
+
+    def abandon(self) -> None:
+        """Close and remove what was written (the replay is redone or failed)."""
+        for f in self.files:
+            f.__exit__(None, None, None)
+            try:
+                os.unlink(f.path)
+            except OSError:
+                pass
+        self.files = []
 
 
 def _csv_columns(text: str) -> Sequence[str]:
@@ -483,6 +645,16 @@ def _positive(text: str) -> float:
     return value
 
 
+def _jobs(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'not an integer: {text!r}') from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f'must be at least 1, got {text!r}')
+    return value
+
+
 def register(sub: Any) -> None:
     """Add the ``replay`` sub-command to the ``catenary-monitor`` parser."""
     p = sub.add_parser(
@@ -525,6 +697,21 @@ def register(sub: Any) -> None:
         'top_tension, depth, min_anchor_distance, anchor_margin, uplift_force, '
         'level); also horizontal_tension, tide_margin, load_margin, '
         'safety_factor, status',
+    )
+    p.add_argument(
+        '--jobs',
+        type=_jobs,
+        default=1,
+        metavar='N',
+        help='decode the files of a rotated set or directory in N processes (the alarm '
+        'logic stays serial: results are those of a serial run; default 1)',
+    )
+    p.add_argument(
+        '--window-messages',
+        type=_jobs,
+        default=None,
+        metavar='M',
+        help='input messages per replay window (bounded memory; default about 262 000)',
     )
     p.add_argument('--json', action='store_true', help='print the summary as one JSON object')
     p.add_argument('--quiet', action='store_true', help='no progress on stderr')

@@ -136,8 +136,10 @@ def write_csv(
     result: ReplayResult,
     progress: Progress = None,
     columns: Sequence[str] = CSV_COLUMNS,
+    header: bool = True,
 ) -> int:
-    """One row per tension message, in time order; returns the number of rows.
+    """One row per tension message, in time order; returns the number of rows (``header``:
+    the header line first; a streamed replay writes it with its first window only).
 
     ``columns`` are names from :data:`CSV_ALL` (written in that order): ``time`` is the
     receive time in s (exact ns), forces in N and lengths in m with 3 decimals, ``status`` the
@@ -170,19 +172,23 @@ def write_csv(
             out_columns.append(FloatColumn(name, values[name], decimals or 0))
     n = len(t)
     step = max(1 << 18, n // 10)
-    for lo in range(0, max(n, 1), step):
+    for lo in range(0, max(n, 1 if header else 0), step):
         hi = min(n, lo + step)
-        write_rows(stream, out_columns, hi, header=lo == 0, start=lo)
+        write_rows(stream, out_columns, hi, header=header and lo == 0, start=lo)
         if progress is not None:
             progress('writing CSV', hi / max(n, 1))
     return n
 
 
 # ---------------------------------------------------------------------------- MCAP
-def _event_payloads(result: ReplayResult) -> tuple[list[int], list[bytes]]:
+def _event_payloads(
+    result: ReplayResult, start: bool = True
+) -> tuple[list[int], list[bytes]]:
     """The events channel of the results log (start, ticks, the other records), so that a
-    replay of the results redoes the same steps."""
-    records: list[tuple[int, Event | Start]] = [(result.started_ns, Start(result.started_ns))]
+    replay of the results redoes the same steps (``start``: with the Start record)."""
+    records: list[tuple[int, Event | Start]] = (
+        [(result.started_ns, Start(result.started_ns))] if start else []
+    )
     records += [(int(t), Tick(int(t))) for t in result.tick_ns.tolist()]
     records += [(e.stamp_ns, e) for e in result.events]
     records.sort(key=lambda r: r[0])
@@ -233,106 +239,146 @@ def write_mcap(
     :func:`output_topic` as ``std_msgs/msg/Float64MultiArray`` (:data:`OUTPUT_FIELDS`, label =
     the field names joined by commas); ``/diagnostics`` holds a ``DiagnosticArray`` at every
     snapshot the monitor made (``result`` recomputed with ``snapshots=True``). Returns the number
-    of messages written.
+    of messages written. A streamed replay writes the same log window by window
+    (:class:`McapSink`).
     """
-    w = ColumnWriter(stream)
-    schemas = {}
-    for type_name in (
-        'std_msgs/msg/Float64',
-        'std_msgs/msg/Float64MultiArray',
-        'diagnostic_msgs/msg/DiagnosticArray',
-        'std_msgs/msg/String',
-    ):
-        schemas[type_name] = w.register_schema(
-            type_name, 'ros2msg', message_definition(type_name).encode()
+    sink = McapSink(stream, config, [r.name for r in result.lines], topics, depth_topic, sources)
+    sink.write(result, tensions, depth, progress)
+    return sink.finish(progress)
+
+
+class McapSink:
+    """The results log written as the replay goes: :meth:`write` each window's results (in
+    time order), then :meth:`finish`."""
+
+    def __init__(
+        self,
+        stream: IO[bytes],
+        config: MonitorConfig,
+        lines: Sequence[str],
+        topics: dict[str, str],
+        depth_topic: str,
+        sources: Sequence[str] = (),
+    ) -> None:
+        self.w = w = ColumnWriter(stream)
+        self.topics = topics
+        schemas = {}
+        for type_name in (
+            'std_msgs/msg/Float64',
+            'std_msgs/msg/Float64MultiArray',
+            'diagnostic_msgs/msg/DiagnosticArray',
+            'std_msgs/msg/String',
+        ):
+            schemas[type_name] = w.register_schema(
+                type_name, 'ros2msg', message_definition(type_name).encode()
+            )
+
+        def channel(topic: str, type_name: str, qos: str) -> int:
+            meta = {'offered_qos_profiles': qos}
+            type_hash = type_description_hash(type_name)
+            if type_hash:
+                meta['topic_type_hash'] = type_hash
+            return w.register_channel(topic, 'cdr', schemas[type_name], meta)
+
+        self.in_ids = {
+            name: channel(topics[name], 'std_msgs/msg/Float64', QOS_SENSOR_DATA)
+            for name in topics
+        }
+        self.depth_id = channel(depth_topic, 'std_msgs/msg/Float64', QOS_SENSOR_DATA)
+        self.out_ids = [
+            channel(output_topic(name), 'std_msgs/msg/Float64MultiArray', QOS_DEFAULT)
+            for name in lines
+        ]
+        self.diag_id = channel(
+            '/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', QOS_DEFAULT
+        )
+        self.event_id = channel(EVENTS_TOPIC, 'std_msgs/msg/String', QOS_DEFAULT)
+        self.started = False
+        w.add_metadata(
+            NODE_NAME,
+            {
+                'version': __version__,
+                'config_hash': config_hash(config),
+                'parameters': json.dumps(config_to_params(config), sort_keys=True),
+                'output_fields': ','.join(OUTPUT_FIELDS),
+                'units': 'SI (N, m, s)',
+                'source': 'catenary-monitor replay',
+                'replayed_files': ','.join(sources),
+            },
         )
 
-    def channel(topic: str, type_name: str, qos: str) -> int:
-        meta = {'offered_qos_profiles': qos}
-        type_hash = type_description_hash(type_name)
-        if type_hash:
-            meta['topic_type_hash'] = type_hash
-        return w.register_channel(topic, 'cdr', schemas[type_name], meta)
+    def write(
+        self,
+        result: ReplayResult,
+        tensions: dict[str, tuple[np.ndarray, np.ndarray]],
+        depth: tuple[np.ndarray, np.ndarray],
+        progress: Progress = None,
+    ) -> None:
+        """Write one window: its inputs, outputs, snapshots and events (the Start record with
+        the first window)."""
+        w, topics = self.w, self.topics
+        t_in = [depth[0]] + [tensions[n][0] for n in topics if n in tensions]
+        v_in = [depth[1]] + [tensions[n][1] for n in topics if n in tensions]
+        c_in = [np.full(len(depth[0]), self.depth_id)] + [
+            np.full(len(tensions[n][0]), self.in_ids[n]) for n in topics if n in tensions
+        ]
+        t_in_all = np.concatenate(t_in)
+        order = np.argsort(t_in_all, kind='stable')
+        t_in_all = t_in_all[order]
+        c_in_all = np.concatenate(c_in)[order]
+        v_in_all = np.concatenate(v_in)[order]
+        t_out = np.concatenate([r.t_ns for r in result.lines])
+        c_out = np.concatenate(
+            [np.full(len(r.t_ns), cid) for r, cid in zip(result.lines, self.out_ids)]
+        )
+        order = np.argsort(t_out, kind='stable')
+        label = ','.join(OUTPUT_FIELDS)
+        named = {
+            key: np.concatenate([r.values[key] for r in result.lines]) for key in VALUE_FIELDS
+        }
+        named['status'] = np.concatenate([r.status for r in result.lines]).astype(np.float64)
+        named['level'] = np.concatenate([r.level for r in result.lines]).astype(np.float64)
+        columns = [named[key] for key in OUTPUT_FIELDS]
+        stamps, payloads = _snapshot_payloads(result)
+        diag_t = np.asarray(stamps, np.int64)
+        ev_stamps, ev_payloads = _event_payloads(result, start=not self.started)
+        self.started = True
+        ev_t = np.asarray(ev_stamps, np.int64)
+        # Written in stretches of time (inputs, outputs, diagnostics of each), so that the
+        # chunks of the streams overlap only within a stretch.
+        n_out = len(t_out)
+        step = 1 << 14  # about two minutes of a 12-line dock at 10 Hz
+        t_sorted = t_out[order]
+        edges = [t_sorted[k] for k in range(step, n_out, step)]
+        bounds = [None, *edges, None]
+        for k in range(len(bounds) - 1):
+            lo_t, hi_t = bounds[k], bounds[k + 1]
 
-    in_ids = {
-        name: channel(topics[name], 'std_msgs/msg/Float64', QOS_SENSOR_DATA) for name in topics
-    }
-    depth_id = channel(depth_topic, 'std_msgs/msg/Float64', QOS_SENSOR_DATA)
-    out_ids = [
-        channel(output_topic(r.name), 'std_msgs/msg/Float64MultiArray', QOS_DEFAULT)
-        for r in result.lines
-    ]
-    diag_id = channel('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', QOS_DEFAULT)
-    event_id = channel(EVENTS_TOPIC, 'std_msgs/msg/String', QOS_DEFAULT)
-    w.add_metadata(
-        NODE_NAME,
-        {
-            'version': __version__,
-            'config_hash': config_hash(config),
-            'parameters': json.dumps(config_to_params(config), sort_keys=True),
-            'output_fields': ','.join(OUTPUT_FIELDS),
-            'units': 'SI (N, m, s)',
-            'source': 'catenary-monitor replay',
-            'replayed_files': ','.join(sources),
-        },
-    )
+            def part(times: np.ndarray) -> slice:
+                a = 0 if lo_t is None else int(np.searchsorted(times, lo_t, 'left'))
+                b = len(times) if hi_t is None else int(np.searchsorted(times, hi_t, 'left'))
+                return slice(a, b)
 
-    # Inputs, merged in time order.
-    t_in = [depth[0]] + [tensions[n][0] for n in topics if n in tensions]
-    v_in = [depth[1]] + [tensions[n][1] for n in topics if n in tensions]
-    c_in = [np.full(len(depth[0]), depth_id)] + [
-        np.full(len(tensions[n][0]), in_ids[n]) for n in topics if n in tensions
-    ]
-    t_in_all = np.concatenate(t_in)
-    order = np.argsort(t_in_all, kind='stable')
-    t_in_all = t_in_all[order]
-    c_in_all = np.concatenate(c_in)[order]
-    v_in_all = np.concatenate(v_in)[order]
-    # Outputs, merged in time order.
-    t_out = np.concatenate([r.t_ns for r in result.lines])
-    c_out = np.concatenate([np.full(len(r.t_ns), cid) for r, cid in zip(result.lines, out_ids)])
-    order = np.argsort(t_out, kind='stable')
-    label = ','.join(OUTPUT_FIELDS)
-    named = {key: np.concatenate([r.values[key] for r in result.lines]) for key in VALUE_FIELDS}
-    named['status'] = np.concatenate([r.status for r in result.lines]).astype(np.float64)
-    named['level'] = np.concatenate([r.level for r in result.lines]).astype(np.float64)
-    columns = [named[key] for key in OUTPUT_FIELDS]
-    stamps, payloads = _snapshot_payloads(result)
-    diag_t = np.asarray(stamps, np.int64)
-    ev_stamps, ev_payloads = _event_payloads(result)
-    ev_t = np.asarray(ev_stamps, np.int64)
-    # Written window by window (inputs, outputs, diagnostics of each time window), so that the
-    # chunks of the three streams overlap only within a window.
-    n_out = len(t_out)
-    step = 1 << 14  # about two minutes of a 12-line dock at 10 Hz
-    t_sorted = t_out[order]
-    edges = [t_sorted[k] for k in range(step, n_out, step)]
-    bounds = [None, *edges, None]
-    for k in range(len(bounds) - 1):
-        lo_t, hi_t = bounds[k], bounds[k + 1]
+            s_in = part(t_in_all)
+            w.write_columns(c_in_all[s_in], t_in_all[s_in], float64_payloads(v_in_all[s_in]))
+            sel = order[part(t_sorted)]
+            data = np.empty((len(sel), len(OUTPUT_FIELDS)))
+            for j, col in enumerate(columns):
+                data[:, j] = col[sel]
+            w.write_columns(c_out[sel], t_out[sel], multiarray_payloads(label, data))
+            s_d = part(diag_t)
+            w.write_messages(self.diag_id, stamps[s_d], payloads[s_d])
+            s_e = part(ev_t)
+            w.write_messages(self.event_id, ev_stamps[s_e], ev_payloads[s_e])
+            if progress is not None:
+                progress('writing MCAP', (k + 1) / (len(bounds) - 1))
 
-        def part(times: np.ndarray) -> slice:
-            a = 0 if lo_t is None else int(np.searchsorted(times, lo_t, 'left'))
-            b = len(times) if hi_t is None else int(np.searchsorted(times, hi_t, 'left'))
-            return slice(a, b)
-
-        s_in = part(t_in_all)
-        w.write_columns(c_in_all[s_in], t_in_all[s_in], float64_payloads(v_in_all[s_in]))
-        sel = order[part(t_sorted)]
-        data = np.empty((len(sel), len(OUTPUT_FIELDS)))
-        for j, col in enumerate(columns):
-            data[:, j] = col[sel]
-        w.write_columns(c_out[sel], t_out[sel], multiarray_payloads(label, data))
-        s_d = part(diag_t)
-        w.write_messages(diag_id, stamps[s_d], payloads[s_d])
-        s_e = part(ev_t)
-        w.write_messages(event_id, ev_stamps[s_e], ev_payloads[s_e])
+    def finish(self, progress: Progress = None) -> int:
+        """Write the summary; return the number of messages written."""
+        self.w.finish()
         if progress is not None:
-            progress('writing MCAP', (k + 1) / (len(bounds) - 1))
-    w.finish()
-    if progress is not None:
-        progress('writing MCAP', 1.0)
-    return w.messages
+            progress('writing MCAP', 1.0)
+        return self.w.messages
 
 
 # ---------------------------------------------------------------------------- charts
@@ -343,28 +389,87 @@ _SHADE = {
 }
 
 
-def _envelope(t: np.ndarray, v: np.ndarray, bins: int = 1000) -> tuple[np.ndarray, np.ndarray]:
-    """Min/max decimation keeping peaks: at most ``2 * bins`` points."""
-    n = len(t)
-    if n <= 2 * bins:
-        return t, v
-    edges = np.linspace(0, n, bins + 1).astype(np.int64)
-    starts = edges[:-1]
-    vv = np.where(np.isnan(v), np.inf, v)
-    lo = np.minimum.reduceat(vv, starts)
-    vv = np.where(np.isnan(v), -np.inf, v)
-    hi = np.maximum.reduceat(vv, starts)
-    tt = t[starts]
-    lo = np.where(np.isinf(lo), np.nan, lo)
-    hi = np.where(np.isinf(hi), np.nan, hi)
-    return np.repeat(tt, 2), np.column_stack((lo, hi)).ravel()
+class Envelope:
+    """A series decimated into at most ``bins`` time bins (min and max of each: peaks kept),
+    fed window by window in time order, so its memory does not grow with the series. Bins
+    start 1 ms wide and double (neighbours merged) whenever the series outgrows them."""
+
+    def __init__(self, bins: int = 1000) -> None:
+        self.bins = bins
+        self.origin: Optional[int] = None
+        self.width = 1_000_000  # ns
+        self.lo = np.full(bins, np.inf)
+        self.hi = np.full(bins, -np.inf)
+        self.seen = np.zeros(bins, bool)
+
+    def add(self, t_ns: np.ndarray, v: np.ndarray) -> None:
+        """Take samples (times ns, sorted; a NaN value marks its bin without a value)."""
+        if len(t_ns) == 0:
+            return
+        if self.origin is None:
+            self.origin = int(t_ns[0])
+        while (int(t_ns[-1]) - self.origin) // self.width >= self.bins:
+            self._coarsen()
+        k = (np.asarray(t_ns, np.int64) - self.origin) // self.width
+        starts = np.flatnonzero(np.diff(k, prepend=-1))
+        idx = k[starts]
+        lo = np.minimum.reduceat(np.where(np.isnan(v), np.inf, v), starts)
+        hi = np.maximum.reduceat(np.where(np.isnan(v), -np.inf, v), starts)
+        self.lo[idx] = np.minimum(self.lo[idx], lo)
+        self.hi[idx] = np.maximum(self.hi[idx], hi)
+        self.seen[idx] = True
+
+    def _coarsen(self) -> None:
+        """Double the bin width: bins 2i and 2i + 1 become bin i."""
+        pad = self.bins % 2
+        lo = np.append(self.lo, [np.inf] * pad).reshape(-1, 2).min(axis=1)
+        hi = np.append(self.hi, [-np.inf] * pad).reshape(-1, 2).max(axis=1)
+        seen = np.append(self.seen, [False] * pad).reshape(-1, 2).any(axis=1)
+        n = len(lo)
+        self.lo[:] = np.inf
+        self.hi[:] = -np.inf
+        self.seen[:] = False
+        self.lo[:n], self.hi[:n], self.seen[:n] = lo, hi, seen
+        self.width *= 2
+
+    def points(self) -> tuple[np.ndarray, np.ndarray]:
+        """(times s, values): each bin's min and max at its start (NaN where it had none)."""
+        k = np.flatnonzero(self.seen)
+        t = ((self.origin or 0) + k * self.width) * 1e-9
+        lo = np.where(np.isinf(self.lo[k]), np.nan, self.lo[k])
+        hi = np.where(np.isinf(self.hi[k]), np.nan, self.hi[k])
+        return np.repeat(t, 2), np.column_stack((lo, hi)).ravel()
 
 
-def _periods(r: LineResult, end_ns: int) -> list[tuple[float, float, Level]]:
+class PlotData:
+    """What the charts show, gathered window by window in bounded memory: per line the
+    envelopes of hook tension (kN), minimum anchor distance (m), uplift force (kN) and the
+    level transitions; the tide's envelope (m)."""
+
+    SERIES = (('top_tension', 1e3), ('min_anchor_distance', 1.0), ('uplift_force', 1e3))
+
+    def __init__(self, lines: Sequence[str]) -> None:
+        self.lines = list(lines)
+        self.series = [{key: Envelope() for key, _ in self.SERIES} for _ in self.lines]
+        self.transitions: list[list[Any]] = [[] for _ in self.lines]
+        self.depth = Envelope()
+        self.end_ns = 0
+
+    def add(self, result: Any, depth: tuple[np.ndarray, np.ndarray]) -> None:
+        """Take one window's results (a :class:`WindowResult`) and its depth column."""
+        for k, r in enumerate(result.lines):
+            for key, scale in self.SERIES:
+                self.series[k][key].add(r.t_ns, r.values[key] / scale)
+            self.transitions[k] += r.transitions
+        self.depth.add(depth[0], depth[1])
+        self.end_ns = max(self.end_ns, int(result.end_ns))
+
+
+def _periods(transitions: Sequence[Any], end_ns: int) -> list[tuple[float, float, Level]]:
     """(start s, end s, level) of every non-OK period from the transitions."""
     out = []
     cur: Optional[tuple[float, Level]] = None
-    for tr in r.transitions:
+    for tr in transitions:
         if cur is not None:
             out.append((cur[0], tr.time, cur[1]))
         cur = (tr.time, tr.new) if tr.new != Level.OK else None
@@ -388,9 +493,18 @@ def _shade(ax: Any, periods: list[tuple[float, float, Level]]) -> None:
 def write_plots(
     path: Path, result: ReplayResult, config: MonitorConfig, depth: tuple[np.ndarray, np.ndarray]
 ) -> list[Path]:
+    """PNG charts of a whole result (:func:`draw_plots`)."""
+    data = PlotData([r.name for r in result.lines])
+    data.add(result, depth)
+    data.end_ns = int(result.end_ns)
+    return draw_plots(path, config, data)
+
+
+def draw_plots(path: Path, config: MonitorConfig, data: PlotData) -> list[Path]:
     """PNG charts: ``path`` (overview: every line's tension, alarms shaded, and the tide) and
     ``<stem>_<line><suffix>`` per line (hook tension; minimum vs installed anchor distance;
     uplift force vs allowed; tide), alarm periods shaded (WARN yellow, STALE grey, ERROR red).
+    Series are drawn as min/max envelopes over at most 1000 time bins (:class:`PlotData`).
     """
     import matplotlib
 
@@ -401,27 +515,22 @@ def write_plots(
     path = Path(path)
     written = []
     legend = [Patch(color=c, alpha=0.3, label=name) for c, name in _SHADE.values()]
-    td, dv = _envelope(depth[0] * 1e-9, depth[1])
-    for r in result.lines:
-        lc = config.line(r.name)
+    td, dv = data.depth.points()
+    for k, name in enumerate(data.lines):
+        lc = config.line(name)
         fig, axes = plt.subplots(4, 1, figsize=(11, 9), sharex=True)
-        t = r.t_ns * 1e-9
-        periods = _periods(r, result.end_ns)
+        periods = _periods(data.transitions[k], data.end_ns)
         series = [
-            ('hook tension [kN]', r.values['top_tension'] / 1e3, None),
+            ('hook tension [kN]', 'top_tension', None),
             (
                 'minimum anchor distance [m]',
-                r.values['min_anchor_distance'],
+                'min_anchor_distance',
                 (lc.anchor_distance, 'installed'),
             ),
-            (
-                'uplift force [kN]',
-                r.values['uplift_force'] / 1e3,
-                (lc.allowed_uplift / 1e3, 'allowed'),
-            ),
+            ('uplift force [kN]', 'uplift_force', (lc.allowed_uplift / 1e3, 'allowed')),
         ]
-        for ax, (label, v, ref) in zip(axes, series):
-            x, y = _envelope(t, v)
+        for ax, (label, key, ref) in zip(axes, series):
+            x, y = data.series[k][key].points()
             ax.plot(_dates(x), y, lw=0.7)
             if ref is not None:
                 ax.axhline(ref[0], color='k', ls='--', lw=0.8, label=ref[1])
@@ -435,19 +544,19 @@ def write_plots(
         _shade(axes[3], periods)
         axes[3].set_xlabel('time (UTC)')
         axes[0].legend(handles=legend, loc='upper left', fontsize=8, ncol=3)
-        fig.suptitle(f'{r.name}: replay ({len(r.transitions)} alarm transitions)')
+        fig.suptitle(f'{name}: replay ({len(data.transitions[k])} alarm transitions)')
         fig.subplots_adjust(left=0.08, right=0.98, top=0.94, bottom=0.07, hspace=0.12)
-        out = path.with_name(f'{path.stem}_{r.name}{path.suffix or ".png"}')
+        out = path.with_name(f'{path.stem}_{name}{path.suffix or ".png"}')
         fig.savefig(out, dpi=72)
         plt.close(fig)
         written.append(out)
-    n = len(result.lines)
+    n = len(data.lines)
     fig, axes = plt.subplots(n + 1, 1, figsize=(11, 1.6 * (n + 1) + 1), sharex=True, squeeze=False)
-    for ax, r in zip(axes[:, 0], result.lines):
-        x, y = _envelope(r.t_ns * 1e-9, r.values['top_tension'] / 1e3)
+    for k, (ax, name) in enumerate(zip(axes[:, 0], data.lines)):
+        x, y = data.series[k]['top_tension'].points()
         ax.plot(_dates(x), y, lw=0.6)
-        _shade(ax, _periods(r, result.end_ns))
-        ax.set_ylabel(f'{r.name}\nT [kN]', fontsize=8)
+        _shade(ax, _periods(data.transitions[k], data.end_ns))
+        ax.set_ylabel(f'{name}\nT [kN]', fontsize=8)
         ax.grid(alpha=0.3)
     ax = axes[n, 0]
     ax.plot(_dates(td), dv, lw=0.7)
@@ -474,28 +583,90 @@ def _utc(t: Optional[float]) -> str:
     return _dt.datetime.fromtimestamp(t, _dt.timezone.utc).strftime('%Y-%m-%d %H:%M:%S.%f')[:-3]
 
 
-def _final_level(r: LineResult) -> Level:
-    """Level after the line's last step (update or tick); blind (STALE) if it made none."""
-    if len(r.step_level):
-        return Level(int(r.step_level[-1]))
-    return Level.STALE
+def _better(new: Optional[dict[str, float]], cur: Optional[dict[str, float]], low: bool) -> bool:
+    """True when ``new`` is strictly worse than ``cur`` (the earlier one wins a tie)."""
+    if new is None:
+        return False
+    if cur is None:
+        return True
+    return new['value'] < cur['value'] if low else new['value'] > cur['value']
+
+
+class LineTally:
+    """One line's part of the summary, gathered window by window (the same figures as over
+    the whole log at once)."""
+
+    LOW = ('anchor_margin', 'tide_margin', 'load_margin', 'safety_factor')
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.tension_messages = 0
+        self.updates = 0
+        self.unsolved = 0
+        self.worst: dict[str, Optional[dict[str, float]]] = {}
+        self.transitions: list[Any] = []
+        self.final: Optional[Level] = None
+
+    def add(self, r: LineResult) -> None:
+        """Take the line's results of the next window."""
+        self.tension_messages += int(len(r.tension_rows))
+        self.updates += int(len(r.t_ns))
+        self.unsolved += int(np.count_nonzero(r.status != 0))
+        for key, value in worst(r).items():
+            if key not in self.worst or _better(value, self.worst[key], key in self.LOW):
+                self.worst[key] = value
+        self.transitions += r.transitions
+        if len(r.step_level):
+            self.final = Level(int(r.step_level[-1]))
+
+    def as_dict(self, end_ns: int) -> dict[str, Any]:
+        """The summary's entry (final level: after the last step; STALE, blind, without)."""
+        empty = np.zeros(0)
+        episodes = LineResult(
+            self.name, empty, empty, {}, empty, empty, empty, empty, empty, self.transitions
+        ).episodes(end_ns)
+        return {
+            'tension_messages': self.tension_messages,
+            'updates': self.updates,
+            'unsolved_updates': self.unsolved,
+            'worst': self.worst,
+            'transitions': len(self.transitions),
+            'final_level': (self.final or Level.STALE).name,
+            'episodes': episodes,
+        }
+
+
+class Tally:
+    """The summary of a replay gathered window by window: :meth:`add` each window's
+    :class:`ReplayResult`, then :func:`summary_dict` of the tally."""
+
+    def __init__(self, lines: Sequence[str]) -> None:
+        self.lines = [LineTally(name) for name in lines]
+        self.start_ns: Optional[int] = None
+        self.end_ns: Optional[int] = None
+        self.ticks = 0
+        self.ticks_from_log = False
+
+    def add(self, result: ReplayResult) -> None:
+        """Take the next window's results."""
+        for tally, r in zip(self.lines, result.lines):
+            tally.add(r)
+        start, end = int(result.start_ns), int(result.end_ns)
+        self.start_ns = start if self.start_ns is None else min(self.start_ns, start)
+        self.end_ns = end if self.end_ns is None else max(self.end_ns, end)
+        self.ticks += int(len(result.tick_ns))
+        self.ticks_from_log = bool(result.ticks_from_log)
 
 
 def summary_dict(
-    result: ReplayResult, report: Any, extra: Optional[dict[str, Any]] = None
+    result: ReplayResult | Tally, report: Any, extra: Optional[dict[str, Any]] = None
 ) -> dict[str, Any]:
     """Machine-readable summary (``--json``): SI units, times in s since the Unix epoch."""
-    lines = {}
-    for r in result.lines:
-        lines[r.name] = {
-            'tension_messages': int(len(r.tension_rows)),
-            'updates': int(len(r.t_ns)),
-            'unsolved_updates': int(np.count_nonzero(r.status != 0)),
-            'worst': worst(r),
-            'transitions': len(r.transitions),
-            'final_level': _final_level(r).name,
-            'episodes': r.episodes(result.end_ns),
-        }
+    if not isinstance(result, Tally):
+        tally = Tally([r.name for r in result.lines])
+        tally.add(result)
+        result = tally
+    start, end = result.start_ns or 0, result.end_ns or 0
     out: dict[str, Any] = {
         'files': [f.path for f in report.files],
         'complete': bool(report.complete),
@@ -512,14 +683,14 @@ def summary_dict(
             for s in report.skips
         ],
         'unfinished_files': [f.path for f in report.files if not f.finished],
-        'start': result.start_ns * 1e-9,
-        'end': result.end_ns * 1e-9,
-        'duration': (result.end_ns - result.start_ns) * 1e-9,
+        'start': start * 1e-9,
+        'end': end * 1e-9,
+        'duration': (end - start) * 1e-9,
         'ticks': {
-            'count': int(len(result.tick_ns)),
+            'count': result.ticks,
             'source': 'recorded by the node' if result.ticks_from_log else 'synthetic grid',
         },
-        'lines': lines,
+        'lines': {t.name: t.as_dict(end) for t in result.lines},
     }
     if extra:
         out.update(extra)

@@ -34,13 +34,14 @@ Time stamps are MCAP ``log_time`` (ns; the receive time for rosbag2 and for the 
 
 from __future__ import annotations
 
+import mmap
 import os
 import struct
 import threading
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, Iterable, Iterator, NamedTuple, Union
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, NamedTuple, Union
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
@@ -418,12 +419,20 @@ class _Block:
 class _Scanner:
     """Walk one file's records, tolerate damage and yield :class:`_Block` s."""
 
-    def __init__(self, path: Path, accept: Callable[[_Channel], bool], report: ReadReport) -> None:
+    def __init__(
+        self,
+        path: Path,
+        accept: Callable[[_Channel], bool],
+        report: ReadReport,
+        uncounted: frozenset[str] = frozenset(),
+    ) -> None:
         self.path = str(path)
+        self.uncounted = uncounted  # accepted topics left out of the counts of the report
         self.accept = accept
         self.report = report
-        self.data = path.read_bytes()
+        self.data = _map_file(path)
         self.data_arr = np.frombuffer(self.data, np.uint8)
+        self.position = 0  # where the walk is in the file (B), for progress
         self.file_report = FileReport(self.path, len(self.data))
         report.files.append(self.file_report)
         self.schemas: dict[int, str] = {}  # schema id -> name (data section)
@@ -454,8 +463,13 @@ class _Scanner:
             )
         if self.stats_counts is not None:
             self.file_report.messages_expected = sum(
-                n for cid, n in self.stats_counts.items() if cid in self.accepted
+                n for cid, n in self.stats_counts.items() if self._counted(cid)
             )
+
+    def _counted(self, channel_id: int) -> bool:
+        if channel_id not in self.accepted:
+            return False
+        return not self.uncounted or self.channels[channel_id].topic not in self.uncounted
 
     # -- channel bookkeeping
     def _add_schema(self, buf: bytes | memoryview, pos: int, end: int) -> None:
@@ -552,6 +566,7 @@ class _Scanner:
         batch_bytes = 0
         pos = len(MAGIC)
         while pos < n:
+            self.position = pos
             if pos + 9 > n:
                 self.skip(pos, 'truncated', f'file ends inside a record header ({n - pos} B)')
                 break
@@ -638,6 +653,7 @@ class _Scanner:
         block = self._select(buf, offsets, pieces[0].file_offset)
         if block is not None:
             yield block
+        _release(self.data, pieces[0].file_offset)
 
     def _resync(self, pos: int, reason: str) -> int:
         """Skip a damaged region: continue at the next plausible Chunk record."""
@@ -672,7 +688,7 @@ class _Scanner:
         self._resolve(cid for cid, _, _ in indexes)
         if not indexes or any(cid not in self.channels for cid, _, _ in indexes):
             return None
-        return sum(count for cid, _, count in indexes if cid in self.accepted)
+        return sum(count for cid, _, count in indexes if self._counted(cid))
 
     def _chunk(self, pos: int, end: int) -> tuple[int, _Piece | None]:
         data = self.data
@@ -1023,6 +1039,25 @@ def _decompress_partial(data: bytes, start: int, end: int, compression: str) -> 
     return lz4.frame.LZ4FrameDecompressor().decompress(data[start:end])
 
 
+def _map_file(path: Path) -> bytes | mmap.mmap:
+    """The file's bytes, memory-mapped (read-only) so that a large file is paged in as it is
+    walked and released behind the walk (:func:`_release`), not held whole in memory."""
+    with open(path, 'rb') as f:
+        size = os.fstat(f.fileno()).st_size
+        if size == 0:
+            return b''
+        return mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ)
+
+
+def _release(data: bytes | mmap.mmap, upto: int) -> None:
+    """Drop the mapped pages before ``upto`` from the process (they are read again from the
+    page cache if a later step needs them): the reader's memory stays one batch deep."""
+    if isinstance(data, mmap.mmap) and hasattr(mmap, 'MADV_DONTNEED'):
+        end = upto - upto % mmap.PAGESIZE
+        if end > 0:
+            data.madvise(mmap.MADV_DONTNEED, 0, end)
+
+
 def _gather(arr: np.ndarray, positions: np.ndarray, width: int) -> np.ndarray:
     """Copy ``width`` bytes at each position into a contiguous (n, width) uint8 array."""
     return sliding_window_view(arr, width)[positions]
@@ -1081,3 +1116,322 @@ def expand_paths(paths: PathLike | Iterable[PathLike]) -> list[Path]:
         else:
             raise FileNotFoundError(f'no such MCAP file or directory: {path}')
     return out
+
+
+# ---------------------------------------------------------------------------- streaming
+class UnorderedLogError(McapReadError):
+    """A message arrived with a log time before a window already handed out (the files, or
+    the chunks of a file, overlap in time): the log cannot be streamed in windows."""
+
+
+@dataclass
+class FileBlocks:
+    """One batch of a file as columns: ``columns`` (Float64 topic -> (log_time_ns, value), file
+    order), ``raw`` (raw topic -> list of (log_time_ns, CDR bytes)), where the file's walk is
+    (``position``, B) and the file's index in the set."""
+
+    columns: dict[str, tuple[np.ndarray, np.ndarray]]
+    raw: dict[str, list[tuple[int, bytes]]]
+    position: int
+    file: int
+
+
+def _float64_accept(wanted: set[str], raw: set[str], path: str) -> Callable[[_Channel], bool]:
+    def accept(channel: _Channel) -> bool:
+        if channel.topic in raw:
+            return True
+        if channel.topic not in wanted:
+            return False
+        if channel.schema_name != FLOAT64_TYPE or channel.encoding != 'cdr':
+            shown = channel.schema_name or '<no schema>'
+            if channel.encoding != 'cdr':
+                shown += f' (message encoding {channel.encoding!r})'
+            raise TopicTypeError(channel.topic, shown, FLOAT64_TYPE, path)
+        return True
+
+    return accept
+
+
+def iter_file_blocks(
+    path: Path, index: int, topics: list[str], raw_topics: list[str], report: ReadReport
+) -> Iterator[FileBlocks]:
+    """The batches of one file (file order) as :class:`FileBlocks`: the Float64 ``topics``
+    decoded into columns, the ``raw_topics`` (any type) as bytes; damage goes to ``report``
+    exactly as :func:`read_float64_topics` reports it."""
+    raw_set = set(raw_topics)
+    accept = _float64_accept(set(topics), raw_set, str(path))
+    scanner = _Scanner(path, accept, report, frozenset(raw_set))
+    for block in scanner.blocks():
+        names = scanner.topic_names
+        raw_ids = [i for i, name in enumerate(names) if name in raw_set]
+        raw: dict[str, list[tuple[int, bytes]]] = {}
+        if raw_ids:
+            rows = scanner.topic_lut[block.channels]
+            is_raw = np.isin(rows, raw_ids)
+            if is_raw.any():
+                buf = block.buf
+                for off, length in zip(
+                    block.offsets[is_raw].tolist(), block.lengths[is_raw].tolist()
+                ):
+                    channel_id, _, log_time, _ = _MESSAGE_HEAD.unpack_from(buf, off + 9)
+                    topic = scanner.channels[channel_id].topic
+                    raw.setdefault(topic, []).append(
+                        (log_time, bytes(buf[off + _MESSAGE_MIN : off + 9 + length]))
+                    )
+                keep = ~is_raw
+                block = _Block(
+                    block.buf,
+                    block.offsets[keep],
+                    block.lengths[keep],
+                    block.channels[keep],
+                    block.file_offset,
+                )
+        columns: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        if len(block.offsets):
+            t, v, topic_of_row, bad = _extract_float64(block, scanner.topic_lut)
+            if bad:
+                scanner.skip(
+                    block.file_offset,
+                    'bad_payload',
+                    f'{bad} message(s) not a 12-byte CDR Float64',
+                    bad,
+                )
+            scanner.file_report.messages += len(t)
+            first = int(topic_of_row[0]) if len(t) else -1
+            if len(t) and np.all(topic_of_row == first):
+                columns[names[first]] = (t, v)
+            else:
+                for topic in np.unique(topic_of_row).tolist():
+                    mask = topic_of_row == topic
+                    columns[names[topic]] = (t[mask], v[mask])
+        yield FileBlocks(columns, raw, scanner.position, index)
+    scanner.finish()
+
+
+def _decode_file(
+    args: tuple[str, int, list[str], list[str]]
+) -> tuple[list[FileBlocks], ReadReport, tuple[str, tuple[Any, ...]] | None]:
+    """Worker of ``jobs > 1``: a whole file's batches, its report, or the error it raised."""
+    path, index, topics, raw_topics = args
+    report = ReadReport()
+    try:
+        blocks = list(iter_file_blocks(Path(path), index, topics, raw_topics, report))
+    except TopicTypeError as err:
+        return [], report, ('type', (err.topic, err.type_name, err.expected, err.path))
+    except McapReadError as err:
+        return [], report, ('read', (str(err),))
+    return blocks, report, None
+
+
+def _merge_report(into: ReadReport, part: ReadReport) -> None:
+    into.files += part.files
+    into.skips += part.skips
+    for topic, n in part.messages.items():
+        into.messages[topic] = into.messages.get(topic, 0) + n
+
+
+def _parallel_blocks(
+    paths: list[Path], topics: list[str], raw_topics: list[str], report: ReadReport, jobs: int
+) -> Iterator[FileBlocks]:
+    """:func:`iter_file_blocks` of every file, decoded by ``jobs`` worker processes (at most
+    ``jobs + 1`` files in flight), handed on in file order."""
+    import multiprocessing
+
+    ctx = multiprocessing.get_context('spawn' if os.name != 'posix' else 'forkserver')
+    with ctx.Pool(jobs) as pool:
+        pending: list[Any] = []
+        todo = iter(enumerate(paths))
+        for _ in range(jobs + 1):
+            nxt = next(todo, None)
+            if nxt is not None:
+                pending.append(pool.apply_async(_decode_file, ((str(nxt[1]), nxt[0], topics, raw_topics),)))
+        while pending:
+            blocks, part, error = pending.pop(0).get()
+            nxt = next(todo, None)
+            if nxt is not None:
+                pending.append(pool.apply_async(_decode_file, ((str(nxt[1]), nxt[0], topics, raw_topics),)))
+            _merge_report(report, part)
+            if error is not None:
+                if error[0] == 'type':
+                    raise TopicTypeError(*error[1])
+                raise McapReadError(*error[1])
+            yield from blocks
+
+
+@dataclass
+class LogWindow:
+    """A stretch of the log in time: every message with ``lo <= log time < hi`` of all the
+    files (``hi`` None: up to the end; ``final`` for the last window). ``columns``: Float64
+    topic -> (log_time_ns, value) sorted (stable: file order at equal stamps); ``raw``: raw
+    topic -> (log_time_ns array, list of CDR bytes), sorted alike; ``bytes_done``: bytes of the
+    files walked so far (for progress)."""
+
+    columns: dict[str, tuple[np.ndarray, np.ndarray]]
+    raw: dict[str, tuple[np.ndarray, list[bytes]]]
+    hi: int | None
+    final: bool
+    bytes_done: int
+    messages: int
+
+
+class _Pending:
+    """Messages read but not handed out yet, per topic, in read order."""
+
+    def __init__(self, topics: list[str], raw_topics: list[str]) -> None:
+        self.times: dict[str, list[np.ndarray]] = {t: [] for t in topics}
+        self.values: dict[str, list[np.ndarray]] = {t: [] for t in topics}
+        self.raw: dict[str, list[tuple[int, bytes]]] = {t: [] for t in raw_topics}
+        self.count = 0
+
+    def add(self, blocks: FileBlocks) -> int | None:
+        """Take a batch; return its earliest log time (None: empty)."""
+        low = None
+        for topic, (t, v) in blocks.columns.items():
+            if len(t):
+                self.times[topic].append(t)
+                self.values[topic].append(v)
+                self.count += len(t)
+                m = int(t.min())
+                low = m if low is None else min(low, m)
+        for topic, items in blocks.raw.items():
+            if items:
+                self.raw[topic] += items
+                self.count += len(items)
+                m = min(t for t, _ in items)
+                low = m if low is None else min(low, m)
+        return low
+
+    def take(self, hi: int | None) -> tuple[dict[str, Any], dict[str, Any], int]:
+        """Hand out every message before ``hi`` (all with None), sorted by time (stable)."""
+        columns: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        taken = 0
+        for topic in self.times:
+            parts_t, parts_v = self.times[topic], self.values[topic]
+            t = np.concatenate(parts_t) if parts_t else np.empty(0, np.int64)
+            v = np.concatenate(parts_v) if parts_v else np.empty(0, np.float64)
+            if len(t) > 1 and not np.all(t[1:] >= t[:-1]):
+                order = np.argsort(t, kind='stable')
+                t, v = t[order], v[order]
+            cut = len(t) if hi is None else int(np.searchsorted(t, hi, 'left'))
+            columns[topic] = (t[:cut], v[:cut])
+            self.times[topic] = [t[cut:]] if cut < len(t) else []
+            self.values[topic] = [v[cut:]] if cut < len(t) else []
+            taken += cut
+        raw: dict[str, tuple[np.ndarray, list[bytes]]] = {}
+        for topic, items in self.raw.items():
+            items.sort(key=lambda item: item[0])  # stable: file order at equal stamps
+            cut = len(items) if hi is None else next(
+                (i for i, (t, _) in enumerate(items) if t >= hi), len(items)
+            )
+            raw[topic] = (np.array([t for t, _ in items[:cut]], np.int64), [d for _, d in items[:cut]])
+            self.raw[topic] = items[cut:]
+            taken += cut
+        self.count -= taken
+        return columns, raw, taken
+
+
+def iter_windows(
+    paths: PathLike | Iterable[PathLike],
+    topics: Iterable[str],
+    raw_topics: Iterable[str] = (),
+    window_messages: int | None = 1 << 18,
+    report: ReadReport | None = None,
+    jobs: int = 1,
+) -> Iterator[LogWindow]:
+    """Stream a log (one file, a rotated set, directories) as :class:`LogWindow` s in time
+    order, merged across topics and files, each of about ``window_messages`` messages (None:
+    one window, the whole log).
+
+    Files are walked in the order of their first message (a rotated set in any order); a
+    window ends at the earliest log time of the newest batch read, so every message of a
+    window precedes every later one. Messages come out exactly as :func:`read_float64_topics`
+    sorts them (stable on time, file order at equal stamps); a log whose files or chunks overlap
+    in time so much that a message comes after its window was handed out raises
+    :class:`UnorderedLogError` (read it with ``window_messages=None``). ``jobs > 1`` decodes
+    files in that many worker processes (the hand-out stays in order). Raises as
+    :func:`read_float64_topics` (TopicTypeError, EmptyLogError at the end, McapReadError).
+    """
+    wanted = _unique(topics)
+    raw_wanted = [t for t in _unique(raw_topics) if t not in wanted]
+    if not wanted:
+        raise ValueError('topics must name at least one topic')
+    report = ReadReport() if report is None else report
+    files = order_by_start(expand_paths(paths))
+    sizes = [p.stat().st_size for p in files]
+    done_before = [sum(sizes[:i]) for i in range(len(files))]
+    pending = _Pending(wanted, raw_wanted)
+    handed: int | None = None  # every message before this was handed out
+    counts = {t: 0 for t in wanted}
+    if jobs > 1 and len(files) > 1:
+        source: Iterator[FileBlocks] = _parallel_blocks(files, wanted, raw_wanted, report, jobs)
+    else:
+        source = (
+            b
+            for i, p in enumerate(files)
+            for b in iter_file_blocks(p, i, wanted, raw_wanted, report)
+        )
+    for blocks in source:
+        low = pending.add(blocks)
+        if low is None:
+            continue
+        if handed is not None and low < handed:
+            raise UnorderedLogError(
+                f'{files[blocks.file]}: a message at {low} ns comes after the window that '
+                f'ended at {handed} ns was handed out (files or chunks overlap in time)'
+            )
+        if window_messages is not None and pending.count >= window_messages:
+            columns, raw, n = pending.take(low)
+            handed = low
+            for t in wanted:
+                counts[t] += len(columns[t][0])
+            yield LogWindow(columns, raw, low, False, done_before[blocks.file] + blocks.position, n)
+    columns, raw, n = pending.take(None)
+    for t in wanted:
+        counts[t] += len(columns[t][0])
+    _reorder_report(report, [str(p) for p in expand_paths(paths)])
+    for topic in wanted:
+        report.messages[topic] = counts[topic]
+        if counts[topic] == 0:
+            report.missing_topics.append(topic)
+    if all(counts[t] == 0 for t in wanted):
+        raise EmptyLogError(wanted, report)
+    yield LogWindow(columns, raw, None, True, sum(sizes), n)
+
+
+def _reorder_report(report: ReadReport, given: list[str]) -> None:
+    """Files and skips in the order the paths were given (as :func:`read_float64_topics`)."""
+    rank = {p: i for i, p in enumerate(given)}
+    report.files.sort(key=lambda f: rank.get(f.path, len(rank)))
+    report.skips.sort(key=lambda s: rank.get(s.path, len(rank)))
+
+
+def first_log_time(path: Path) -> int | None:
+    """The earliest log time a file declares (its Statistics, else its first Chunk or Message
+    record in the first MiB), None if none is found: for ordering a rotated set."""
+    try:
+        with open(path, 'rb') as f:
+            head = f.read(1 << 20)
+    except OSError:
+        return None
+    pos = len(MAGIC)
+    while pos + 9 <= len(head):
+        op, length = _RECORD_HEAD.unpack_from(head, pos)
+        if op == _OP_CHUNK and pos + 9 + 16 <= len(head):
+            start, end = struct.unpack_from('<QQ', head, pos + 9)
+            if start or end:
+                return int(start)
+        if op == _OP_MESSAGE and pos + 9 + 22 <= len(head):
+            return int(struct.unpack_from('<Q', head, pos + 9 + 6)[0])
+        if op not in _KNOWN_OPS or length > len(head):
+            return None
+        pos += 9 + length
+    return None
+
+
+def order_by_start(paths: list[Path]) -> list[Path]:
+    """Files in the order of their first log time (stable; files without one keep their
+    place after the others): a rotated set given in any order is read in time order."""
+    keyed = [(first_log_time(p), i, p) for i, p in enumerate(paths)]
+    if all(k is not None for k, _, _ in keyed):
+        return [p for _, _, p in sorted(keyed, key=lambda k: (k[0], k[1]))]
+    return list(paths)
