@@ -66,6 +66,7 @@ typedef struct {
         int idx[N], gdone[N], giters[N];                                                       \
         double ge[N], gr[N], gx0[N], gxlo[N], gm2[N], gd[N], gd0[N], gdmax[N];                 \
         double *o[NOUT]; /* where this block's results go (rows of the output) */              \
+        double spill[NOUT][N]; /* the results of a last, partial block (padded lanes) */     \
     } NAME;
 DEFINE_BLOCK(Block, BLK)
 DEFINE_BLOCK(Block1, 1)
@@ -123,6 +124,13 @@ static double critical_scalar(double h, double x, const Params *par)
 #define CM_SIMD_REDUCTION(v) CM_PRAGMA(omp simd reduction(+ : v))
 #ifdef CM_MVEC
 #define BLOCK_T Block
+/* Every vector loop runs over a multiple of 16 lanes (stand-in lanes fill the rest: AVX-512
+ * runs the loops that mix int and double lanes 16 at a time), so that no element is ever left
+ * to a loop's scalar remainder: each element takes the same vector code
+ * (libmvec) wherever it falls in its block, and a replay cut into windows gives the very bits
+ * of the whole log at once (test/test_replay_stream.py). */
+#define PADDED(n) (((n) + 15) / 16 * 16)
+#define LANES(n) PADDED(n)
 #define SFX(name) name##_v4
 #pragma GCC push_options
 #pragma GCC target("arch=x86-64-v4,prefer-vector-width=512")
@@ -148,6 +156,8 @@ static double critical_scalar(double h, double x, const Params *par)
 #pragma GCC optimize("no-tree-vectorize")
 #undef BLOCK_T
 #define BLOCK_T Block1
+#undef LANES
+#define LANES(n) (n)
 #define SFX(name) name##_scalar
 #include "_kernels_body.h"
 #undef SFX
@@ -238,14 +248,27 @@ static void run(In in[5], Params *par, Py_ssize_t n, double *out, long long *sta
         return;
     for (Py_ssize_t off = 0; off < n; off += BLK) {
         int nb = (int)(n - off < BLK ? n - off : BLK);
+        int np = PADDED(nb);
         in_load(&in[0], k->w, off, nb);
         in_load(&in[1], k->h, off, nb);
         in_load(&in[2], k->t, off, nb);
         in_load(&in[3], k->x, off, nb); /* 1.0 where not given */
         in_load(&in[4], k->mbl, off, nb);
+        for (int i = nb; i < np; i++) { /* stand-ins: copies of the block's first element */
+            k->w[i] = k->w[0];
+            k->h[i] = k->h[0];
+            k->t[i] = k->t[0];
+            k->x[i] = k->x[0];
+            k->mbl[i] = k->mbl[0];
+        }
+        for (int r = 0; r < NOUT; r++)
+            k->o[r] = np == nb ? out + (Py_ssize_t)r * n + off : k->spill[r];
+        BLOCK_FN(k, np, par);
+        if (np != nb)
+            for (int r = 0; r < NOUT; r++)
+                memcpy(out + (Py_ssize_t)r * n + off, k->spill[r], (size_t)nb * sizeof(double));
         for (int r = 0; r < NOUT; r++)
             k->o[r] = out + (Py_ssize_t)r * n + off;
-        BLOCK_FN(k, nb, par);
         for (int i = 0; i < nb; i++) {
             status[off + i] = k->status[i];
             if (k->status[i])

@@ -144,9 +144,17 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
             k->gx0[j] = k->x0[i];
             k->gm2[j] = k->m[i] * k->m[i];
         }
+        int nlp = LANES(nl); /* stand-in lanes up to a whole vector: copies of lane 0 */
+        for (int j = nl; j < nlp; j++) {
+            k->idx[j] = k->idx[0];
+            k->ge[j] = k->ge[0];
+            k->gr[j] = k->gr[0];
+            k->gx0[j] = k->gx0[0];
+            k->gm2[j] = k->gm2[0];
+        }
         /* start of the uplift solve (catenary._uplift_setup), in d = X - log1p(e) */
         CM_SIMD
-        for (int j = 0; j < nl; j++) {
+        for (int j = 0; j < nlp; j++) {
             double e = k->ge[j], r02 = k->gr[j], x0 = k->gx0[j], m2 = k->gm2[j];
             double xlo = log1p(e);
             double d_max = x0 - xlo;
@@ -170,11 +178,14 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
             k->gdone[j] = 0;
             k->giters[j] = 0;
         }
+        for (int j = nl; j < nlp; j++)
+            k->gdone[j] = 1; /* the stand-ins never move */
         int na = nl; /* the moving lanes: g entries [0, na) */
         for (int it = 1; it <= kfast; it++) {
             int left = 0;
+            int nap = LANES(na);
             CM_SIMD_REDUCTION(left)
-            for (int j = 0; j < na; j++) {
+            for (int j = 0; j < nap; j++) {
                 double d = k->gd[j], e = k->ge[j], r02 = k->gr[j];
                 double big_x = k->gxlo[j] + d;
                 double em = expm1(d);
@@ -231,6 +242,8 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
                     q++;
                 }
                 na = q;
+                for (int j = na; j < LANES(na); j++)
+                    k->gdone[j] = 1; /* stand-ins again (stale but finite lanes) */
             }
         }
         for (int j = 0; j < na; j++)

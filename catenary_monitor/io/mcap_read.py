@@ -1382,6 +1382,8 @@ def iter_windows(
         if window_messages is not None and pending.count >= window_messages:
             columns, raw, n = pending.take(low)
             handed = low
+            if not n:
+                continue
             for t in wanted:
                 counts[t] += len(columns[t][0])
             yield LogWindow(columns, raw, low, False, done_before[blocks.file] + blocks.position, n)
