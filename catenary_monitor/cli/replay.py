@@ -429,7 +429,12 @@ def _stream_outputs(
 ) -> tuple['_Sinks', Any, ReadReport]:
     """Stream the replay into the outputs; a log that cannot be streamed is replayed again
     as one window (one line on stderr says so)."""
-    from catenary_monitor.cli.replay_stream import WINDOW_MESSAGES, NoEventsChannel, Restart, stream
+    from catenary_monitor.cli.replay_stream import (
+        WINDOW_MESSAGES,
+        NoEventsChannel,
+        Restart,
+        stream,
+    )
 
     window: Optional[int] = args.window_messages or WINDOW_MESSAGES
     while True:

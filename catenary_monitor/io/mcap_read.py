@@ -41,7 +41,7 @@ import threading
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, NamedTuple, Union
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, NamedTuple, Union, cast
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
@@ -1039,17 +1039,18 @@ def _decompress_partial(data: bytes, start: int, end: int, compression: str) -> 
     return lz4.frame.LZ4FrameDecompressor().decompress(data[start:end])
 
 
-def _map_file(path: Path) -> bytes | mmap.mmap:
+def _map_file(path: Path) -> bytes:
     """The file's bytes, memory-mapped (read-only) so that a large file is paged in as it is
     walked and released behind the walk (:func:`_release`), not held whole in memory."""
     with open(path, 'rb') as f:
         size = os.fstat(f.fileno()).st_size
         if size == 0:
             return b''
-        return mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ)
+        # an mmap reads like bytes (slices, find, struct, numpy) for everything done here
+        return cast(bytes, mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ))
 
 
-def _release(data: bytes | mmap.mmap, upto: int) -> None:
+def _release(data: bytes, upto: int) -> None:
     """Drop the mapped pages before ``upto`` from the process (they are read again from the
     page cache if a later step needs them): the reader's memory stays one batch deep."""
     if isinstance(data, mmap.mmap) and hasattr(mmap, 'MADV_DONTNEED'):
@@ -1241,15 +1242,18 @@ def _parallel_blocks(
     with ctx.Pool(jobs) as pool:
         pending: list[Any] = []
         todo = iter(enumerate(paths))
-        for _ in range(jobs + 1):
+
+        def submit() -> None:
             nxt = next(todo, None)
             if nxt is not None:
-                pending.append(pool.apply_async(_decode_file, ((str(nxt[1]), nxt[0], topics, raw_topics),)))
+                task = (str(nxt[1]), nxt[0], topics, raw_topics)
+                pending.append(pool.apply_async(_decode_file, (task,)))
+
+        for _ in range(jobs + 1):
+            submit()
         while pending:
             blocks, part, error = pending.pop(0).get()
-            nxt = next(todo, None)
-            if nxt is not None:
-                pending.append(pool.apply_async(_decode_file, ((str(nxt[1]), nxt[0], topics, raw_topics),)))
+            submit()
             _merge_report(report, part)
             if error is not None:
                 if error[0] == 'type':
@@ -1323,7 +1327,10 @@ class _Pending:
             cut = len(items) if hi is None else next(
                 (i for i, (t, _) in enumerate(items) if t >= hi), len(items)
             )
-            raw[topic] = (np.array([t for t, _ in items[:cut]], np.int64), [d for _, d in items[:cut]])
+            raw[topic] = (
+                np.array([t for t, _ in items[:cut]], np.int64),
+                [d for _, d in items[:cut]],
+            )
             self.raw[topic] = items[cut:]
             taken += cut
         self.count -= taken
@@ -1386,7 +1393,8 @@ def iter_windows(
                 continue
             for t in wanted:
                 counts[t] += len(columns[t][0])
-            yield LogWindow(columns, raw, low, False, done_before[blocks.file] + blocks.position, n)
+            done = done_before[blocks.file] + blocks.position
+            yield LogWindow(columns, raw, low, False, done, n)
     columns, raw, n = pending.take(None)
     for t in wanted:
         counts[t] += len(columns[t][0])
