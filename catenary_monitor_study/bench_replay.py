@@ -16,6 +16,11 @@ at 1 Hz, a storm that lifts line 11's anchor, zstd chunks of 512 KiB; ``--messag
   Each round times replay and both baselines one after the other, and each is reported as its
   median over the rounds, so a burst of load elsewhere slows them alike.
 
+Replay is the command's streamed path (:mod:`catenary_monitor.cli.replay_stream`, ticks on a
+grid); ``read_s`` is a read-only pass of the same log and ``solve_alarm_s`` the rest of the
+summary run. The peak RSS of the command itself (summary, ``--csv``, ``--out``) is measured in
+child processes (``os.wait4``); ``--no-rss`` skips it.
+
 Targets (issue 4): replay >= 1e6 messages/s and >= 20 times the baseline (checked against the
 minimal one, the conservative choice). The machines are shared: read the ratios first.
 """
@@ -71,44 +76,101 @@ def generate_log(
     rate: float = 10.0,
     depth_rate: float = 1.0,
     chunk_bytes: int = 512 * 1024,
+    start_ns: int = T0_NS,
+    storm_at: Optional[float] = None,
+    storm_width: Optional[float] = None,
 ) -> dict[str, Any]:
-    """Write a seeded dock log of about ``messages`` Float64 messages; returns its facts."""
+    """Write a seeded dock log of about ``messages`` Float64 messages; returns its facts.
+
+    Written in stretches of about a million messages, so that a log of 1e7 or more takes
+    bounded memory. The storm (line_11 lifted) peaks ``storm_at`` s after ``T0_NS`` (default:
+    mid-log) with a width of ``storm_width`` s (default a tenth of the log).
+    """
     rng = np.random.default_rng(seed)
     n_lines = len(config.lines)
     per_second = n_lines * rate + depth_rate
     seconds = messages / per_second
-    n_t = int(seconds * rate)
-    n_d = messages - n_t * n_lines
-    t_all, v_all, c_all = [], [], []
+    mid = seconds / 2 if storm_at is None else storm_at
+    width = seconds / 10 if storm_width is None else storm_width
+    stretch = max(1.0, 1e6 / per_second)  # s of log per stretch
+    n_line = int(seconds * rate)  # per line; the depth takes the rest of ``messages``
+    n_depth = messages - n_line * n_lines
+    total = 0
     with open(path, 'wb') as f:
         w = ColumnWriter(f, chunk_bytes=chunk_bytes, level=3)
         sid = w.register_schema(
             'std_msgs/msg/Float64', 'ros2msg', message_definition('std_msgs/msg/Float64').encode()
         )
         meta = {'offered_qos_profiles': QOS_SENSOR_DATA}
-        for k, line in enumerate(config.lines):
-            cid = w.register_channel(line.tension_topic, 'cdr', sid, meta)
-            t = T0_NS + np.sort(rng.integers(0, int(seconds * 1e9), n_t))
-            s = (t - T0_NS) * 1e-9
-            storm = (1.25e6 if line.name == 'line_11' else 0.05e6) * np.exp(
-                -(((s - seconds / 2) / (seconds / 10)) ** 2)
+        ids = [w.register_channel(line.tension_topic, 'cdr', sid, meta) for line in config.lines]
+        depth_id = w.register_channel(config.depth_topic, 'cdr', sid, meta)
+        lo = 0.0
+        while lo < seconds:
+            hi = min(seconds, lo + stretch)
+            t_all, v_all, c_all = [], [], []
+            base = start_ns + int(lo * 1e9)
+            span = max(1, int((hi - lo) * 1e9))
+            for k, line in enumerate(config.lines):
+                n_t = int(n_line * hi / seconds) - int(n_line * lo / seconds)
+                t = base + np.sort(rng.integers(0, span, n_t))
+                s = (t - start_ns) * 1e-9
+                storm = (1.25e6 if line.name == 'line_11' else 0.05e6) * np.exp(
+                    -(((s - mid) / width) ** 2)
+                )
+                v = 372e3 + storm + 40e3 * np.sin(2 * np.pi * s / 9.0 + k)
+                t_all.append(t)
+                v_all.append(v + rng.normal(0, 4e3, n_t))
+                c_all.append(np.full(n_t, ids[k]))
+            n_d = int(n_depth * hi / seconds) - int(n_depth * lo / seconds)
+            td = base + np.sort(rng.integers(0, span, n_d))
+            t_all.append(td)
+            v_all.append(20.85 + 1.2 * np.sin(2 * np.pi * (td - T0_NS) * 1e-9 / 44700.0))
+            c_all.append(np.full(n_d, depth_id))
+            t = np.concatenate(t_all)
+            order = np.argsort(t, kind='stable')
+            w.write_columns(
+                np.concatenate(c_all)[order],
+                t[order],
+                float64_payloads(np.concatenate(v_all)[order]),
             )
-            v = 372e3 + storm + 40e3 * np.sin(2 * np.pi * s / 9.0 + k) + rng.normal(0, 4e3, n_t)
-            t_all.append(t)
-            v_all.append(v)
-            c_all.append(np.full(n_t, cid))
-        cid = w.register_channel(config.depth_topic, 'cdr', sid, meta)
-        td = T0_NS + np.sort(rng.integers(0, int(seconds * 1e9), n_d))
-        t_all.append(td)
-        v_all.append(20.85 + 1.2 * np.sin(2 * np.pi * (td - T0_NS) * 1e-9 / 44700.0))
-        c_all.append(np.full(n_d, cid))
-        t = np.concatenate(t_all)
-        order = np.argsort(t, kind='stable')
-        w.write_columns(
-            np.concatenate(c_all)[order], t[order], float64_payloads(np.concatenate(v_all)[order])
-        )
+            total += len(t)
+            lo = hi
         w.finish()
-    return {'messages': int(len(t)), 'seconds': seconds, 'bytes': path.stat().st_size}
+    return {'messages': total, 'seconds': seconds, 'bytes': path.stat().st_size}
+
+
+def generate_month(
+    folder: Path,
+    config: MonitorConfig,
+    days: float = 30.0,
+    rate: float = 1.0,
+    depth_rate: float = 0.2,
+    file_hours: float = 24.0,
+) -> dict[str, Any]:
+    """A rotated set: ``days`` of dock log, one file per ``file_hours`` (``rate`` Hz per line,
+    a storm in the middle of the month); returns its facts."""
+    folder.mkdir(parents=True, exist_ok=True)
+    per_second = len(config.lines) * rate + depth_rate
+    seconds = days * 86400.0
+    n_files = int(math.ceil(days * 24.0 / file_hours))
+    facts = {'files': n_files, 'messages': 0, 'bytes': 0, 'seconds': seconds}
+    for k in range(n_files):
+        lo = k * file_hours * 3600.0
+        hi = min(seconds, lo + file_hours * 3600.0)
+        part = generate_log(
+            folder / f'catenary_monitor_{k:04d}.mcap',
+            int((hi - lo) * per_second),
+            config,
+            seed=k + 1,
+            rate=rate,
+            depth_rate=depth_rate,
+            start_ns=T0_NS + int(lo * 1e9),
+            storm_at=seconds / 2 - lo,
+            storm_width=3 * 3600.0,
+        )
+        facts['messages'] += part['messages']
+        facts['bytes'] += part['bytes']
+    return facts
 
 
 def baseline(
@@ -207,11 +269,10 @@ def run(
     workdir: str | None = None,
     chunk_bytes: int = 512 * 1024,
     repeat: int = 3,
+    measure_rss: bool = True,
 ) -> dict[str, Any]:
     """Generate the log, time replay and the two baselines (``repeat`` interleaved rounds, the
     median of each) and the MCAP output; returns the figures."""
-    from catenary_monitor.cli.replay import input_topics, run_replay
-    from catenary_monitor.cli.replay_output import write_csv, write_mcap
 
     config = dock_config()
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:
@@ -222,13 +283,14 @@ def run(
         log.read_bytes()  # warm the page cache: time the work, not the disk
         runs, base_runs, base_min_runs = [], [], []
         for _ in range(max(1, repeat)):  # rounds: a burst of load slows replay and baselines alike
+            read_s = _time_read(log, config)
             t0 = time.perf_counter()
-            result, tensions, depth, report, timing = run_replay([log], config, ticks='grid')
+            tally, _ = _streamed(log, config)
             t1 = time.perf_counter()
             with open(Path(tmp) / 'out.csv', 'wb', buffering=1 << 20) as f:
-                rows = write_csv(f, result)
+                _, rows = _streamed(log, config, csv=f)
             t2 = time.perf_counter()
-            runs.append((t2 - t0, timing['read_s'], timing['solve_s'], t2 - t1, t1 - t0))
+            runs.append((t2 - t1, read_s, (t1 - t0) - read_s, (t2 - t1) - (t1 - t0), t1 - t0))
             t4 = time.perf_counter()
             done = baseline(log, config, baseline_messages, io.StringIO())
             base_runs.append(time.perf_counter() - t4)
@@ -241,12 +303,14 @@ def run(
         replay_s, read_s, solve_s, csv_s, summary_s = runs[len(runs) // 2]  # the median run
         best_s = runs[0][0]
         csv_bytes = (Path(tmp) / 'out.csv').stat().st_size
-        topics, depth_topic = input_topics(config)
         t2 = time.perf_counter()
         with open(Path(tmp) / 'out.mcap', 'wb', buffering=1 << 20) as f:
-            written = write_mcap(f, result, config, tensions, depth, topics, depth_topic)
+            _, written = _streamed(log, config, mcap=f)
         t3 = time.perf_counter()
         out_bytes = (Path(tmp) / 'out.mcap').stat().st_size
+        rss = peak_rss(log, config, Path(tmp)) if measure_rss else {}
+        updates = sum(t.updates for t in tally.lines)
+        transitions = sum(len(t.transitions) for t in tally.lines)
     n = facts['messages']
     rate = n / replay_s
     base_rate = done / base_s
@@ -271,8 +335,9 @@ def run(
         'replay_summary_s': round(summary_s, 3),
         'replay_summary_msg_per_s': round(n / summary_s),
         'target_summary_rate_met': n / summary_s >= 2e6,
-        'updates': result.updates,
-        'transitions': sum(len(r.transitions) for r in result.lines),
+        'updates': updates,
+        'transitions': transitions,
+        'peak_rss_mb': rss,
         'mcap_out_s': round(t3 - t2, 3),
         'mcap_out_messages': written,
         'mcap_out_msg_per_s': round(written / (t3 - t2)),
@@ -288,9 +353,98 @@ def run(
     }
 
 
+def _streamed(log: Path, config: MonitorConfig, csv: Any = None, mcap: Any = None) -> Any:
+    """The streamed replay of the command (ticks on a grid) into a summary tally and, if
+    given, a CSV or a results MCAP; returns (tally, CSV rows or MCAP messages)."""
+    from catenary_monitor.cli import replay_output as out
+    from catenary_monitor.cli.replay import input_topics
+    from catenary_monitor.cli.replay_stream import stream
+
+    names = [line.name for line in config.lines]
+    tally = out.Tally(names)
+    topics, depth_topic = input_topics(config)
+    sink = out.McapSink(mcap, config, names, topics, depth_topic) if mcap is not None else None
+    rows = [0]
+
+    def take(result: Any, window: Any) -> None:
+        tally.add(result)
+        if csv is not None:
+            rows[0] += out.write_csv(csv, result, None, out.CSV_COLUMNS, header=not rows[0])
+        if sink is not None:
+            sink.write(result, dict(zip(names, window.tensions)), window.depth)
+
+    stream([log], config, take, ticks='grid', snapshots=sink is not None)
+    return tally, (sink.finish() if sink is not None else rows[0])
+
+
+def _time_read(log: Path, config: MonitorConfig) -> float:
+    """Seconds to read the log's input columns window by window (no recompute)."""
+    from catenary_monitor.cli.replay import input_topics
+    from catenary_monitor.io.mcap_read import iter_windows
+
+    topics, depth_topic = input_topics(config)
+    t0 = time.perf_counter()
+    for _ in iter_windows([log], [depth_topic, *topics.values()]):
+        pass
+    return time.perf_counter() - t0
+
+
+def peak_rss(
+    logs: Any, config: MonitorConfig, tmp: Path, extra: tuple[str, ...] = ()
+) -> dict[str, Any]:
+    """Peak RSS (MB) and wall time (s) of ``catenary-monitor replay`` in a child process, for
+    the summary only, ``--csv`` and ``--out`` (``os.wait4``'s ``ru_maxrss``; Linux)."""
+    import subprocess
+
+    params = tmp / 'bench_params.yaml'
+    _params_file(config, params)
+    logs = [str(p) for p in (logs if isinstance(logs, (list, tuple)) else [logs])]
+    out: dict[str, Any] = {}
+    for mode, args in (
+        ('summary', []),
+        ('csv', ['--csv', str(tmp / 'rss.csv')]),
+        ('out', ['--out', str(tmp / 'rss.mcap')]),
+    ):
+        cmd = [sys.executable, '-m', 'catenary_monitor.cli', 'replay', *logs]
+        cmd += ['--params-file', str(params), '--quiet', '--json', *args, *extra]
+        t0 = time.perf_counter()
+        child = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+        assert child.stdout is not None
+        text = child.stdout.read()
+        _, status, usage = os.wait4(child.pid, 0)
+        child.returncode = os.waitstatus_to_exitcode(status)
+        wall = time.perf_counter() - t0
+        summary = json.loads(text) if child.returncode == 0 else {}
+        out[mode] = {
+            'rss_mb': round(usage.ru_maxrss / 1024, 1),
+            'wall_s': round(wall, 2),
+            'replay_s': summary.get('timing', {}).get('total_s'),
+            'exit': child.returncode,
+        }
+        for f in (tmp / 'rss.csv', tmp / 'rss.mcap'):
+            f.unlink(missing_ok=True)
+    return out
+
+
+def _params_file(config: MonitorConfig, path: Path) -> None:
+    import yaml
+
+    from catenary_monitor.core.config import config_to_params
+
+    body = {'catenary_monitor': {'ros__parameters': config_to_params(config)}}
+    path.write_text(yaml.safe_dump(body))
+
+
 def cmd_bench_replay(args: argparse.Namespace) -> int:
     """Print the benchmark figures (table or JSON)."""
-    r = run(args.messages, args.baseline_messages, args.workdir, args.chunk_bytes, args.repeat)
+    r = run(
+        args.messages,
+        args.baseline_messages,
+        args.workdir,
+        args.chunk_bytes,
+        args.repeat,
+        not args.no_rss,
+    )
     if args.json:
         print(json.dumps(r))
         return 0
@@ -329,6 +483,11 @@ def cmd_bench_replay(args: argparse.Namespace) -> int:
         f'targets: >= 1e6 msg/s {"met" if r["target_rate_met"] else "NOT met"}; >= 20x the '
         f'minimal baseline {"met" if r["target_speedup_met"] else "NOT met"}'
     )
+    for mode, m in r['peak_rss_mb'].items():
+        print(
+            f'peak RSS, catenary-monitor replay ({mode}, a child process): {m["rss_mb"]:.0f} MB, '
+            f'{m["wall_s"]:.2f} s wall ({m["replay_s"]} s in replay)'
+        )
     return 0
 
 
@@ -367,6 +526,11 @@ def register(sub: Any) -> None:
     p.add_argument(
         '--workdir', default=os.environ.get('TMPDIR'), help='directory for the temporary files'
     )
+    p.add_argument(
+        '--no-rss',
+        action='store_true',
+        help='skip the peak-RSS runs (the command in a child process: summary, --csv, --out)',
+    )
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench_replay)
 
@@ -384,3 +548,35 @@ if __name__ == '__main__':  # pragma: no cover
             )
         )
     )
+
+
+def main(argv: Optional[list[str]] = None) -> int:
+    """``python -m catenary_monitor_study.bench_replay log PATH --messages N`` or ``month DIR
+    [--days D] [--rate HZ] [--file-hours H]``: write the benchmark's logs (and a params file
+    beside them, ``bench_params.yaml``) for measuring the command by hand."""
+    parser = argparse.ArgumentParser(prog='python -m catenary_monitor_study.bench_replay')
+    sub = parser.add_subparsers(dest='what', required=True)
+    one = sub.add_parser('log', help='one log file')
+    one.add_argument('path', type=Path)
+    one.add_argument('--messages', type=int, default=1_000_000)
+    month = sub.add_parser('month', help='a folder of daily files')
+    month.add_argument('path', type=Path)
+    month.add_argument('--days', type=float, default=30.0)
+    month.add_argument('--rate', type=float, default=1.0, help='Hz per line (default 1)')
+    month.add_argument('--file-hours', type=float, default=24.0)
+    args = parser.parse_args(argv)
+    config = dock_config()
+    t0 = time.perf_counter()
+    if args.what == 'log':
+        facts = generate_log(args.path, args.messages, config)
+        _params_file(config, args.path.parent / 'bench_params.yaml')
+    else:
+        facts = generate_month(args.path, config, args.days, args.rate, 0.2, args.file_hours)
+        _params_file(config, args.path.parent / 'bench_params.yaml')
+    facts['generate_s'] = round(time.perf_counter() - t0, 1)
+    print(json.dumps(facts))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
