@@ -393,7 +393,8 @@ def peak_rss(
     logs: Any, config: MonitorConfig, tmp: Path, extra: tuple[str, ...] = ()
 ) -> dict[str, Any]:
     """Peak RSS (MB) and wall time (s) of ``catenary-monitor replay`` in a child process, for
-    the summary only, ``--csv`` and ``--out`` (``os.wait4``'s ``ru_maxrss``; Linux)."""
+    the summary only, ``--csv`` and ``--out``: the child's ``VmHWM`` (Linux), which starts
+    afresh at ``exec`` (``ru_maxrss`` of a forked child keeps the parent's high-water mark)."""
     import subprocess
 
     params = tmp / 'bench_params.yaml'
@@ -405,25 +406,34 @@ def peak_rss(
         ('csv', ['--csv', str(tmp / 'rss.csv')]),
         ('out', ['--out', str(tmp / 'rss.mcap')]),
     ):
-        cmd = [sys.executable, '-m', 'catenary_monitor.cli', 'replay', *logs]
+        cmd = [sys.executable, '-c', _CHILD, 'replay', *logs]
         cmd += ['--params-file', str(params), '--quiet', '--json', *args, *extra]
         t0 = time.perf_counter()
-        child = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
-        assert child.stdout is not None
-        text = child.stdout.read()
-        _, status, usage = os.wait4(child.pid, 0)
-        child.returncode = os.waitstatus_to_exitcode(status)
+        done = subprocess.run(cmd, capture_output=True, text=True)
         wall = time.perf_counter() - t0
-        summary = json.loads(text) if child.returncode == 0 else {}
+        summary = json.loads(done.stdout) if done.returncode == 0 else {}
+        hwm = [ln for ln in done.stderr.splitlines() if ln.startswith('VmHWM:')]
         out[mode] = {
-            'rss_mb': round(usage.ru_maxrss / 1024, 1),
+            'rss_mb': round(int(hwm[-1].split()[1]) / 1024, 1) if hwm else None,
             'wall_s': round(wall, 2),
             'replay_s': summary.get('timing', {}).get('total_s'),
-            'exit': child.returncode,
+            'exit': done.returncode,
         }
         for f in (tmp / 'rss.csv', tmp / 'rss.mcap'):
             f.unlink(missing_ok=True)
     return out
+
+
+#: The child of :func:`peak_rss`: the command, then its peak RSS on stderr.
+_CHILD = (
+    'import sys\n'
+    'from catenary_monitor.cli.main import main\n'
+    'code = main(sys.argv[1:])\n'
+    'sys.stdout.flush()\n'
+    'hwm = [l for l in open("/proc/self/status") if l.startswith("VmHWM:")]\n'
+    'sys.stderr.write(hwm[0] if hwm else "")\n'
+    'sys.exit(code)\n'
+)
 
 
 def _params_file(config: MonitorConfig, path: Path) -> None:
@@ -533,21 +543,6 @@ def register(sub: Any) -> None:
     )
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench_replay)
-
-
-if __name__ == '__main__':  # pragma: no cover
-    sys.exit(
-        cmd_bench_replay(
-            argparse.Namespace(
-                messages=1_000_000,
-                baseline_messages=50_000,
-                workdir=None,
-                json=False,
-                repeat=3,
-                chunk_bytes=512 * 1024,
-            )
-        )
-    )
 
 
 def main(argv: Optional[list[str]] = None) -> int:

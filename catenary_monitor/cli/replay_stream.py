@@ -42,8 +42,9 @@ from catenary_monitor.io.mcap_read import LogWindow, ReadReport, UnorderedLogErr
 
 __all__ = ['NoEventsChannel', 'Restart', 'StreamState', 'WINDOW_MESSAGES', 'stream']
 
-#: Input messages per window by default: about 60 MB of columns and results at a time.
-WINDOW_MESSAGES = 1 << 18
+#: Input messages per window by default (about 300 B each in flight for a summary, 750 B with
+#: the diagnostics of ``--out``): the bound of replay's memory beyond the interpreter's.
+WINDOW_MESSAGES = 1 << 17
 
 _TICK_PAYLOAD = string_message('{"kind": "tick"}')
 

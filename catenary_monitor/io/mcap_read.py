@@ -433,6 +433,7 @@ class _Scanner:
         self.data = _map_file(path)
         self.data_arr = np.frombuffer(self.data, np.uint8)
         self.position = 0  # where the walk is in the file (B), for progress
+        self.batch_bytes = _BATCH_BYTES  # decompressed bytes per batch (a streamed read: less)
         self.file_report = FileReport(self.path, len(self.data))
         report.files.append(self.file_report)
         self.schemas: dict[int, str] = {}  # schema id -> name (data section)
@@ -611,7 +612,7 @@ class _Scanner:
                 if piece is not None:
                     batch.append(piece)
                     batch_bytes += len(piece.data)
-                    if batch_bytes >= _BATCH_BYTES or len(batch) >= _BATCH_PIECES:
+                    if batch_bytes >= self.batch_bytes or len(batch) >= _BATCH_PIECES:
                         yield from self._flush_batch(batch)
                         batch, batch_bytes = [], 0
                 continue
@@ -1154,7 +1155,12 @@ def _float64_accept(wanted: set[str], raw: set[str], path: str) -> Callable[[_Ch
 
 
 def iter_file_blocks(
-    path: Path, index: int, topics: list[str], raw_topics: list[str], report: ReadReport
+    path: Path,
+    index: int,
+    topics: list[str],
+    raw_topics: list[str],
+    report: ReadReport,
+    batch_bytes: int | None = None,
 ) -> Iterator[FileBlocks]:
     """The batches of one file (file order) as :class:`FileBlocks`: the Float64 ``topics``
     decoded into columns, the ``raw_topics`` (any type) as bytes; damage goes to ``report``
@@ -1162,6 +1168,8 @@ def iter_file_blocks(
     raw_set = set(raw_topics)
     accept = _float64_accept(set(topics), raw_set, str(path))
     scanner = _Scanner(path, accept, report, frozenset(raw_set))
+    if batch_bytes is not None:
+        scanner.batch_bytes = min(scanner.batch_bytes, batch_bytes)
     for block in scanner.blocks():
         names = scanner.topic_names
         raw_ids = [i for i, name in enumerate(names) if name in raw_set]
@@ -1210,13 +1218,13 @@ def iter_file_blocks(
 
 
 def _decode_file(
-    args: tuple[str, int, list[str], list[str]]
+    args: tuple[str, int, list[str], list[str], int | None]
 ) -> tuple[list[FileBlocks], ReadReport, tuple[str, tuple[Any, ...]] | None]:
     """Worker of ``jobs > 1``: a whole file's batches, its report, or the error it raised."""
-    path, index, topics, raw_topics = args
+    path, index, topics, raw_topics, batch = args
     report = ReadReport()
     try:
-        blocks = list(iter_file_blocks(Path(path), index, topics, raw_topics, report))
+        blocks = list(iter_file_blocks(Path(path), index, topics, raw_topics, report, batch))
     except TopicTypeError as err:
         return [], report, ('type', (err.topic, err.type_name, err.expected, err.path))
     except McapReadError as err:
@@ -1232,7 +1240,12 @@ def _merge_report(into: ReadReport, part: ReadReport) -> None:
 
 
 def _parallel_blocks(
-    paths: list[Path], topics: list[str], raw_topics: list[str], report: ReadReport, jobs: int
+    paths: list[Path],
+    topics: list[str],
+    raw_topics: list[str],
+    report: ReadReport,
+    jobs: int,
+    batch: int | None,
 ) -> Iterator[FileBlocks]:
     """:func:`iter_file_blocks` of every file, decoded by ``jobs`` worker processes (at most
     ``jobs + 1`` files in flight), handed on in file order."""
@@ -1246,7 +1259,7 @@ def _parallel_blocks(
         def submit() -> None:
             nxt = next(todo, None)
             if nxt is not None:
-                task = (str(nxt[1]), nxt[0], topics, raw_topics)
+                task = (str(nxt[1]), nxt[0], topics, raw_topics, batch)
                 pending.append(pool.apply_async(_decode_file, (task,)))
 
         for _ in range(jobs + 1):
@@ -1369,13 +1382,17 @@ def iter_windows(
     pending = _Pending(wanted, raw_wanted)
     handed: int | None = None  # every message before this was handed out
     counts = {t: 0 for t in wanted}
+    # reader batches of about a window (43 B per Float64 record decompressed)
+    batch = None if window_messages is None else max(1 << 16, 40 * window_messages)
     if jobs > 1 and len(files) > 1:
-        source: Iterator[FileBlocks] = _parallel_blocks(files, wanted, raw_wanted, report, jobs)
+        source: Iterator[FileBlocks] = _parallel_blocks(
+            files, wanted, raw_wanted, report, jobs, batch
+        )
     else:
         source = (
             b
             for i, p in enumerate(files)
-            for b in iter_file_blocks(p, i, wanted, raw_wanted, report)
+            for b in iter_file_blocks(p, i, wanted, raw_wanted, report, batch)
         )
     for blocks in source:
         low = pending.add(blocks)
