@@ -390,7 +390,11 @@ def _time_read(log: Path, config: MonitorConfig) -> float:
 
 
 def peak_rss(
-    logs: Any, config: MonitorConfig, tmp: Path, extra: tuple[str, ...] = ()
+    logs: Any,
+    config: MonitorConfig,
+    tmp: Path,
+    extra: tuple[str, ...] = (),
+    modes: tuple[str, ...] = ('summary', 'csv', 'out'),
 ) -> dict[str, Any]:
     """Peak RSS (MB) and wall time (s) of ``catenary-monitor replay`` in a child process, for
     the summary only, ``--csv`` and ``--out``: the child's ``VmHWM`` (Linux), which starts
@@ -406,6 +410,8 @@ def peak_rss(
         ('csv', ['--csv', str(tmp / 'rss.csv')]),
         ('out', ['--out', str(tmp / 'rss.mcap')]),
     ):
+        if mode not in modes:
+            continue
         cmd = [sys.executable, '-c', _CHILD, 'replay', *logs]
         cmd += ['--params-file', str(params), '--quiet', '--json', *args, *extra]
         t0 = time.perf_counter()

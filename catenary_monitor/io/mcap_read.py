@@ -11,6 +11,9 @@ Two entry points:
   wrong index only costs speed, never data.
 * :func:`iter_messages` yields every message of the chosen topics as raw CDR bytes
   (:class:`RawMessage`), in file order, through the same tolerant scanner.
+* :func:`iter_windows` streams the same columns (plus raw topics, e.g. the node's events) as
+  windows of log time across all the files, in bounded memory: files are memory-mapped and
+  the pages behind the walk dropped; ``jobs > 1`` decodes files in worker processes.
 
 Both accept the node's own logs (:mod:`catenary_monitor.mcap_log`), rotated sets and files
 written by rosbag2's MCAP storage plugin (zstd, lz4 or uncompressed chunks, chunk CRCs on or
