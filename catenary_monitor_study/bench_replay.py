@@ -112,7 +112,10 @@ def generate_log(
             span = max(1, int((hi - lo) * 1e9))
             for k, line in enumerate(config.lines):
                 n_t = int(n_line * hi / seconds) - int(n_line * lo / seconds)
-                t = base + np.sort(rng.integers(0, span, n_t))
+                # a sensor's regular samples with receive jitter (a quarter period)
+                slot = span / max(n_t, 1)
+                jitter = rng.uniform(0.25, 0.75, n_t)
+                t = base + ((np.arange(n_t) + jitter) * slot).astype(np.int64)
                 s = (t - start_ns) * 1e-9
                 storm = (1.25e6 if line.name == 'line_11' else 0.05e6) * np.exp(
                     -(((s - mid) / width) ** 2)
@@ -122,7 +125,8 @@ def generate_log(
                 v_all.append(v + rng.normal(0, 4e3, n_t))
                 c_all.append(np.full(n_t, ids[k]))
             n_d = int(n_depth * hi / seconds) - int(n_depth * lo / seconds)
-            td = base + np.sort(rng.integers(0, span, n_d))
+            slot = span / max(n_d, 1)
+            td = base + ((np.arange(n_d) + rng.uniform(0.25, 0.75, n_d)) * slot).astype(np.int64)
             t_all.append(td)
             v_all.append(20.85 + 1.2 * np.sin(2 * np.pi * (td - T0_NS) * 1e-9 / 44700.0))
             c_all.append(np.full(n_d, depth_id))
