@@ -164,13 +164,19 @@ def tiny_batches(monkeypatch):
     monkeypatch.setattr(mcap_read, '_BATCH_BYTES', 1)
 
 
-@pytest.mark.parametrize('window', ['1', '23', '400'])
-def test_windows_give_the_whole_log_result(node_log, tmp_path, capsys, tiny_batches, window):
+@pytest.mark.parametrize('window', ['1', '23', '400', '5000'])
+def test_windows_give_the_whole_log_result(
+    node_log, tmp_path, capsys, tiny_batches, window, monkeypatch
+):
+    if window == '5000':  # one window, recomputed in parts of 3 ticks (the snapshots' bound)
+        from catenary_monitor.cli import replay_stream
+
+        monkeypatch.setattr(replay_stream, 'TICKS_PER_PART', 3)
     ref = _reference([node_log['log']], node_log['config'], tmp_path)
     got = _streamed(
         [node_log['log']], node_log['params'], tmp_path, capsys, '--window-messages', window
     )
-    assert got[2]['streaming']['windows'] > (10 if window != '400' else 2)
+    assert got[2]['streaming']['windows'] > {'1': 10, '23': 10, '400': 2, '5000': 0}[window]
     assert got[2]['streaming']['streamed']
     # the log has what the windows must carry across: episodes, a restart, logger events
     assert any(ln['episodes'] for ln in ref[2]['lines'].values())

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Optional, Sequence
+from typing import Any, Callable, Iterator, Optional, Sequence
 
 import numpy as np
 
@@ -45,6 +45,10 @@ __all__ = ['NoEventsChannel', 'Restart', 'StreamState', 'WINDOW_MESSAGES', 'stre
 #: Input messages per window by default (about 300 B each in flight for a summary, 750 B with
 #: the diagnostics of ``--out``): the bound of replay's memory beyond the interpreter's.
 WINDOW_MESSAGES = 1 << 17
+
+#: With snapshots (``--out``), a window is recomputed in parts of at most this many ticks:
+#: each tick's diagnostic snapshot is a few dozen Python objects (about 20 kB).
+TICKS_PER_PART = 2048
 
 _TICK_PAYLOAD = string_message('{"kind": "tick"}')
 
@@ -155,29 +159,56 @@ def stream(
                 raise Restart('events records after a first window without any')
             if not state.ticks_from_log:
                 tick_ns, grid_k = _grid(state, window, tensions, depth, grid_k, period)
-            inputs = Window(tensions, depth, tick_ns)
-            result, core = run_log(core, inputs, others, snapshots)
-            replay = ReplayResult(
-                result.lines,
-                result.tide,
-                result.snapshots,
-                min(state.start_ns or 0, result.start_ns),
-                result.end_ns,
-                result.others,
-                tick_ns,
-                bool(state.ticks_from_log),
-                state.start_ns or 0,
-                others,
-            )
+            whole = Window(tensions, depth, tick_ns)
+            for part, part_events in _parts(whole, others, TICKS_PER_PART if snapshots else 0):
+                result, core = run_log(core, part, part_events, snapshots)
+                replay = ReplayResult(
+                    result.lines,
+                    result.tide,
+                    result.snapshots,
+                    min(state.start_ns or 0, result.start_ns),
+                    result.end_ns,
+                    result.others,
+                    part.ticks,
+                    bool(state.ticks_from_log),
+                    state.start_ns or 0,
+                    part_events,
+                )
+                sink(replay, part)
             state.windows += 1
             state.messages += window.messages
             state.bytes_done = window.bytes_done
-            sink(replay, inputs)
             if progress is not None:
                 progress(state)
     except UnorderedLogError as err:
         raise Restart(str(err)) from err
     return state
+
+
+def _parts(
+    window: Window, events: list[Any], ticks: int
+) -> Iterator[tuple[Window, list[Any]]]:
+    """The window cut in time before every ``ticks``-th tick (all of it when ``ticks`` is 0
+    or it has no more): each part is itself a legal window (every column cut at the same
+    time), with the events of its stretch."""
+    if not ticks or len(window.ticks) <= ticks:
+        yield window, events
+        return
+    cuts = [int(t) for t in window.ticks[ticks::ticks]]
+    lo: Optional[int] = None
+    for hi in [*cuts, None]:
+
+        def cut(times: np.ndarray) -> slice:
+            a = 0 if lo is None else int(np.searchsorted(times, lo, 'left'))
+            b = len(times) if hi is None else int(np.searchsorted(times, hi, 'left'))
+            return slice(a, b)
+
+        tensions = [(t[cut(t)], v[cut(t)]) for t, v in window.tensions]
+        dt, dv = window.depth
+        part = Window(tensions, (dt[cut(dt)], dv[cut(dt)]), window.ticks[cut(window.ticks)])
+        inside = [e for e in events if (lo is None or e.stamp_ns >= lo)]
+        yield part, [e for e in inside if hi is None or e.stamp_ns < hi]
+        lo = hi
 
 
 def _grid(
