@@ -47,8 +47,8 @@ __all__ = ['NoEventsChannel', 'Restart', 'StreamState', 'WINDOW_MESSAGES', 'stre
 WINDOW_MESSAGES = 1 << 17
 
 #: With snapshots (``--out``), a window is recomputed in parts of at most this many ticks:
-#: each tick's diagnostic snapshot is a few dozen Python objects (about 20 kB).
-TICKS_PER_PART = 2048
+#: each tick's diagnostic snapshot and its payload take about 60 kB until written.
+TICKS_PER_PART = 512
 
 _TICK_PAYLOAD = string_message('{"kind": "tick"}')
 
