@@ -74,7 +74,7 @@ def holding(
         sinker = a_hold * np.maximum(1.0 - v / a_weight, 0.0)
         anchor = np.where(lifted, np.where(np.isnan(a_weight), 0.0, sinker), a_hold)
         chain = np.where(np.isnan(mu) | np.isnan(grounded), 0.0, w * mu * grounded)
-        capacity = np.where(solved, anchor + chain, np.nan)
+        capacity = np.where(solved & ~np.isnan(a_hold), anchor + chain, np.nan)
         implied = fixed_length.span_from_tension(w, h, length, t, ea)
     implied = np.where(solved & ~np.isnan(length), implied, np.nan)
     return {
