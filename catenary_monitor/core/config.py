@@ -77,7 +77,8 @@ class ParamSpec(NamedTuple):
     scope: str = 'global'
     read_only: bool = False
     optional: bool = False
-    group: str = ''  # '' the monitor's table (README); 'dock' the dock model's (docs/dock_body.md)
+    group: str = ''  # '' the monitor's table (README); 'dock' docs/dock_body.md's; 'holding'
+    # docs/holding.md's
 
     def full_name(self, line: str | None = None) -> str:
         """Parameter name as declared on the node (``NAME.weight`` for per-line rows)."""
@@ -271,8 +272,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'tension_accuracy',
         'double',
         _NOT_GIVEN,
-        'Accuracy of the tension sensor: a reading is within +- this of the true tension (the '
-        'margin bounds use it as that bound, the dock estimate as its residuals\' scale)',
+        'Accuracy of the tension sensor: a reading is within +- this of the true tension',
         'N',
         1.0,
         1.0e9,
@@ -290,6 +290,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         1.0e9,
         _L,
         optional=True,
+        group='holding',
     ),
     ParamSpec(
         'anchor_weight',
@@ -302,6 +303,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         1.0e9,
         _L,
         optional=True,
+        group='holding',
     ),
     ParamSpec(
         'chain_friction',
@@ -314,6 +316,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         10.0,
         _L,
         optional=True,
+        group='holding',
     ),
     # Alarm thresholds (WARN).
     ParamSpec(
@@ -383,8 +386,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'depth_accuracy',
         'double',
         0.0,
-        'Accuracy of the depth sensor: a reading is within +- this of the true depth (margin '
-        'bounds; 0 with no tension_accuracy: no bounds)',
+        'Accuracy of the depth sensor: a reading is within +- this of the true depth',
         'm',
         0.0,
         100.0,
@@ -398,6 +400,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'N',
         0.0,
         1.0e9,
+        group='holding',
     ),
     ParamSpec(
         'drag_margin_deadband',
@@ -407,6 +410,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'N',
         0.0,
         1.0e8,
+        group='holding',
     ),
     ParamSpec(
         'load_margin_warn',
@@ -1043,7 +1047,8 @@ def config_hash(config: MonitorConfig) -> str:
 
 def parameters_markdown(group: str = '') -> str:
     """The parameter table as Markdown: name, default (doubles unless noted), unit, range,
-    description; ``group`` ``''`` the monitor's (README), ``'dock'`` the dock model's."""
+    description; ``group`` ``''`` the monitor's (README), ``'dock'`` the dock model's,
+    ``'holding'`` the holding's (docs/holding.md)."""
     rows = ['| parameter | default | unit | range | description |', '|---|---|---|---|---|']
     for spec in PARAMETERS:
         if spec.group != group:
