@@ -85,11 +85,12 @@ def test_a_lifted_sinker_holds_by_its_remaining_weight():
 
 
 def test_without_holding_data_the_values_are_nan():
+    """No chain length, no anchor holding: NaN, grounded or lifted."""
     line = LineConfig(name='plain', weight=1300.0, anchor_distance=120.0, mbl=4.8e6)
-    core, (out,) = run(line, 20.85, [3.7e5])
+    core, (out, lifted) = run(line, 20.85, [3.7e5, 8e5])
+    assert lifted['uplift_force'] > 0
     for key in ('grounded_length', 'holding_capacity', 'drag_margin', 'implied_anchor_distance'):
-        assert math.isnan(out[key]), key
-    assert core.lines[0].state.level == Level.OK
+        assert math.isnan(out[key]) and math.isnan(lifted[key]), key
 
 
 def test_drag_warning_with_deadband():

@@ -6,7 +6,8 @@ otherwise the newest tension sample of that line in ``--log`` (the last one reco
 installed ``NAME.anchor_distance`` from the params file. A params file holds no tension, so
 a line given neither by ``--tension`` nor by a sample in ``--log`` is an error naming it. The
 tide's rate is ``--tide-rate`` (m/s) or, with ``--log``, the monitor's trend at the log's last
-depth sample; without either, ``time_to_uplift`` is unknown. Exit 2 with one line on bad input.
+depth sample; without either the trend is unknown (``time_to_uplift`` inf, as the core has
+it then). Exit 2 with one line on bad input.
 """
 
 from __future__ import annotations
@@ -163,7 +164,7 @@ def register(sub: Any) -> None:
         '--tide-rate',
         type=float,
         metavar='R',
-        help='tide rising at R [m/s] (default: the trend of --log; none: time to uplift unknown)',
+        help='tide rising at R [m/s] (default: the trend of --log, else unknown)',
     )
     p.add_argument(
         '--log',

@@ -70,7 +70,7 @@ def holding(
         solved = ~np.isnan(r)
         lifted = v > 0.0
         grounded = np.where(lifted, 0.0, np.maximum(length - s, 0.0))
-        grounded = np.where(solved, grounded, np.nan)
+        grounded = np.where(solved & ~np.isnan(length), grounded, np.nan)
         sinker = a_hold * np.maximum(1.0 - v / a_weight, 0.0)
         anchor = np.where(lifted, np.where(np.isnan(a_weight), 0.0, sinker), a_hold)
         chain = np.where(np.isnan(mu) | np.isnan(grounded), 0.0, w * mu * grounded)

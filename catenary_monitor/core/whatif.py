@@ -8,7 +8,8 @@ on that scene, so a what-if answer is the live monitor's decision for those read
 * the depth ``depth`` (m, the tide at the hooks; each line adds its ``hook_height``); with a
   ``tide_rate`` (m/s) the depth samples of one ``tide_trend_window`` before the scene rise at
   that rate and reach ``depth`` at the scene, so the core's tide trend is that rate and
-  ``time_to_uplift`` is known (without it the trend is unknown: NaN);
+  ``time_to_uplift`` follows it (without it the trend is unknown and ``time_to_uplift`` is
+  inf, the core's rule for an unknown trend);
 * each line's hook tension (N) at the scene, and again ``on_delay`` before it (the scene has
   held long enough for a condition to raise);
 * a tick at the scene: the levels and messages are the core's after it.
@@ -156,7 +157,7 @@ def scene_dict(scene: Scene) -> dict[str, Any]:
                 'uplift_coming': None
                 if math.isnan(ls.values['time_to_uplift'])
                 else not math.isinf(ls.values['time_to_uplift']),
-                **{key: finite(v) for key, v in ls.values.items()},
+                **{key: finite(v) for key, v in ls.values.items() if key != 'level'},
             }
             for ls in scene.lines
         ],
