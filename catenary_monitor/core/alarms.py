@@ -347,7 +347,8 @@ class LineAlarm:
                 parts.append(self._uplift_possible_text(x, hold_w))
             elif up and cond == 'drag_margin':
                 text = self._warn_text(cond, x.drag_margin, hold_w)
-                parts.append(f'{text} (holding {_fmt(x.holding_capacity, 1e3)} kN): anchor may drag')
+                holding = _fmt(x.holding_capacity, 1e3)
+                parts.append(f'{text} (holding {holding} kN): anchor may drag')
             elif up:
                 parts.append(self._warn_text(cond, getattr(x, cond), hold_w))
         return '; '.join(parts) if parts else 'OK'
@@ -381,7 +382,6 @@ class LineAlarm:
             f'time to uplift {_fmt(value, 60.0, 0)} min, warning held (clears after {hold:g} s '
             f'at >= {_fmt(high, 60.0, 0)} min)'
         )
-
 
     def _uplift_possible_text(self, x: AlarmInputs, hold: float) -> str:
         """The message of the ``uplift_possible`` condition (bound and nominal in kN)."""

@@ -50,8 +50,8 @@ def depth_candidates(w: Any, x: Any, tension: Any, depth: Any, d_h: Any) -> np.n
     """The five depths (m, shape ``(5, n)``) the bounds are evaluated at for hook tension
     ``tension`` (N, already ``T + dT``): ``h - dh``, ``h``, ``h + dh`` and the two critical
     depths (module docstring) clipped to ``[h - dh, h + dh]``."""
-    w, x, t, h, dh = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in
-                                           (w, x, tension, depth, d_h)))
+    given = (w, x, tension, depth, d_h)
+    w, x, t, h, dh = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in given))
     lo, hi = h - dh, h + dh
     h_anchor = np.clip(_K * t / (w * (1.0 + _K)), lo, hi)
     h_tide = np.clip(t / w - x / T_STAR, lo, hi)
@@ -73,10 +73,8 @@ def bounds(
     added), per-element line constants (``ea`` inf: inextensible) and accuracies ``d_t`` (N,
     NaN: not given) and ``d_h`` (m, 0: exact); ``nominal_uplift`` (N) is the nominal solve's
     uplift force (NaN: no solve, no bounds)."""
-    arrays = np.broadcast_arrays(
-        *(np.asarray(v, dtype=float) for v in (w, x, mbl, ea, tension, depth, d_t, d_h,
-                                                nominal_uplift))
-    )
+    given = (w, x, mbl, ea, tension, depth, d_t, d_h, nominal_uplift)
+    arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in given))
     w, x, mbl, ea, t, h, dt, dh, f0 = (a.ravel() for a in arrays)
     keep = (~np.isnan(dt) | (dh > 0.0)) & ~np.isnan(f0)
     shape = arrays[0].shape
