@@ -107,3 +107,13 @@ def test_drag_warning_with_deadband():
     assert 'anchor may drag' in state.message
     core2, _ = run(line, 15.0, [900.0 + 375], drag_margin_warn=7440.0)
     assert 'drag margin' in core2.lines[0].state.message and 'kN <' in core2.lines[0].state.message
+
+
+def test_holding_doc_parameter_table_is_generated():
+    from pathlib import Path
+
+    from catenary_monitor.core.config import parameters_markdown
+
+    page = (Path(__file__).resolve().parent.parent / 'docs' / 'holding.md').read_text()
+    begin, end = '<!-- holding-parameters:begin -->\n', '<!-- holding-parameters:end -->'
+    assert page.split(begin, 1)[1].split(end, 1)[0] == parameters_markdown('holding')
