@@ -345,6 +345,9 @@ def _line_view(
             'tide_margin',
             'min_anchor_distance',
             'time_to_uplift',  # s; None when not coming (inf) or unknown
+            'uplift_force_upper',  # N, within sensor accuracy; None when not configured
+            'drag_margin',  # N, holding minus horizontal load; None without anchor_holding
+            'implied_anchor_distance',  # m, from the chain length; None without it
         ):
             view[key] = _num(v.get(key))
     if output is not None:
