@@ -530,16 +530,23 @@ class MonitorCore:
         self._add_derived(lines)
 
     def _add_derived(self, lines: Sequence[LineState]) -> None:
-        """The bounds and the holding values of freshly solved lines (from their values)."""
-        cfgs = [line.config for line in lines]
-        named = {k: np.array([line.values[i] for line in lines]) for k, i in _AT.items()}
-        derived = bound_values(cfgs, self.config.alarm.depth_accuracy, named)
-        derived.update(holding_values(cfgs, named))
-        for j, line in enumerate(lines):
-            v = list(line.values)
-            for key in _LOOK:
-                v[_AT[key]] = float(derived[key][j])
-            line.values = tuple(v)
+        """The bounds and the holding values of freshly solved lines (from their values);
+        lines without accuracies or holding data keep NaN (what the functions give them)."""
+        accuracy = self.config.alarm.depth_accuracy
+        for fields, compute, wanted in (
+            (uncertainty.FIELDS, _bounds_of(accuracy), _wants_bounds(accuracy)),
+            (holding_rule.FIELDS, holding_values, _wants_holding),
+        ):
+            some = [line for line in lines if wanted(line.config)]
+            if not some:
+                continue
+            named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
+            derived = compute([line.config for line in some], named)
+            for j, line in enumerate(some):
+                v = list(line.values)
+                for key in fields:
+                    v[_AT[key]] = float(derived[key][j])
+                line.values = tuple(v)
 
     def _step_lines(self, which: Any, stamp_ns: int) -> list[Change]:
         """Step the alarms of the given lines at ``stamp_ns``; their transitions."""
@@ -619,6 +626,20 @@ def _column(cfgs: Sequence[LineConfig], key: str) -> np.ndarray:
     """One line constant per config as floats (None: NaN, ``ea`` None: inf)."""
     none = math.inf if key == 'ea' else math.nan
     return np.array([none if getattr(c, key) is None else getattr(c, key) for c in cfgs])
+
+
+def _wants_bounds(depth_accuracy: float) -> Any:
+    """Whether a line has bounds: a tension accuracy, or a depth accuracy for all."""
+    return lambda c: depth_accuracy > 0.0 or c.tension_accuracy is not None
+
+
+def _wants_holding(c: LineConfig) -> bool:
+    """Whether a line has holding values: a chain length or an anchor holding."""
+    return c.chain_length is not None or c.anchor_holding is not None
+
+
+def _bounds_of(depth_accuracy: float) -> Any:
+    return lambda cfgs, named: bound_values(cfgs, depth_accuracy, named)
 
 
 def bound_values(
