@@ -149,3 +149,23 @@ def test_without_accuracy_no_bounds_and_no_warning():
     out = dict(zip(OUTPUT_FIELDS, step.outputs[0].values))
     assert math.isnan(out['uplift_force_upper']) and math.isnan(out['anchor_margin_lower'])
     assert core.lines[0].state.level == Level.OK
+
+
+@pytest.mark.parametrize('t', [2.5e5, 8e5])
+def test_uplift_bound_finds_a_peak_inside_the_depth_interval(t):
+    """The uplift force peaks in depth (fixed T): with the reading anywhere within 0.9 dh of
+    the peak the bound is the true maximum over the interval to 1e-6 relative, and never
+    far below it (a 20001-point grid as the reference)."""
+    w, x = 1000.0, 100.0
+    hs = np.linspace(1.0, t / w * 0.999, 400001)
+    v = np.asarray(solve(w, hs, tension=t, anchor_distance=x).uplift_force)
+    peak = hs[np.nanargmax(v)]
+    for dh in (0.2, 3.0):
+        for off in np.linspace(-0.9, 0.9, 7):
+            h = peak + off * dh
+            f0 = solve(w, h, tension=t, anchor_distance=x).uplift_force
+            b = bounds(w, x, 1e12, math.inf, t, h, math.nan, dh, f0)['uplift_force_upper']
+            grid = np.linspace(h - dh, h + dh, 20001)
+            true = np.nanmax(solve(w, grid, tension=t, anchor_distance=x).uplift_force)
+            assert b >= true * (1 - 1e-6), (dh, off)
+            assert b <= true * (1 + 1e-9)
