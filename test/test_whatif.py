@@ -104,6 +104,16 @@ def test_cli_bad_input_is_one_line(params):
     assert out.stderr.strip().count('\n') == 0 and 'line line_02: no tension' in out.stderr
     bad = run('--params-file', str(params), '--depth', '20.85', '--tension', 'line_01')
     assert bad.returncode == 2 and 'expected NAME=NUMBER' in bad.stderr
+    for depth in ('deep', '-3'):
+        out = run('--params-file', str(params), '--depth', depth)
+        assert out.returncode == 2 and 'must be a positive number' in out.stderr, out.stderr
+    far = run('--params-file', str(params), '--depth', '20', '--tension', 'line_01=4e5',
+              '--tension', 'line_02=4e5', '--tension', 'line_03=4e5',
+              '--anchor-distance', 'line_01=-5')
+    assert far.returncode == 2 and 'anchor_distance' in far.stderr, far.stderr
+    assert 'Traceback' not in far.stderr
+    nolog = run('--params-file', str(params), '--depth', '20', '--log', str(params.parent / 'x'))
+    assert nolog.returncode == 2 and nolog.stderr.startswith('catenary-monitor whatif: --log')
 
 
 def test_cli_lines_not_given_take_the_logs_newest_sample(params, tmp_path):

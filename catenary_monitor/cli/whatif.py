@@ -105,7 +105,10 @@ def cmd_whatif(args: argparse.Namespace) -> int:
         config = config_from_params(load_params_file(args.params_file))
     except ConfigError as err:
         raise WhatIfError(f'{args.params_file}: {err}') from None
-    depth = float(args.depth)
+    try:
+        depth = float(args.depth)
+    except ValueError:
+        depth = math.nan
     if not (math.isfinite(depth) and depth > 0):
         raise WhatIfError(f'--depth {args.depth!r}: must be a positive number of metres')
     tensions = _pairs(args.tension, 'tension')
