@@ -129,3 +129,26 @@ def test_cli_lines_not_given_take_the_logs_newest_sample(params, tmp_path):
     assert got['line_01'] == float(tensions['line_01'][1][-1])
     assert got['line_03'] == float(tensions['line_03'][1][-1])
     assert np.isfinite(depth[1]).all() and T0_NS > 0
+
+
+def test_a_scene_held_for_on_delay_raises_its_alarm():
+    """With on_delay the scene is held that long: the uplift ERROR is raised, as live."""
+    config = dock_config(3, on_delay=10.0)
+    scene = catenary_monitor.whatif(
+        config, 20.85, {'line_01': 6e5, 'line_02': 3.9e5, 'line_03': 4.3e5}, tide_rate=8.6e-5
+    )
+    assert [ls.level for ls in scene.lines] == ['ERROR', 'OK', 'OK']
+    assert scene.lines[0].values['time_to_uplift'] == 0.0
+    assert 0 < scene.lines[2].values['time_to_uplift'] < scene.lines[1].values['time_to_uplift']
+
+
+def test_cli_on_the_shipped_dock():
+    """The shipped params file (dock model, chain lengths): every line, implied distances."""
+    names = [f'line_{k:02d}' for k in range(1, 13)]
+    args = [a for n in names for a in ('--tension', f'{n}=3.9e5')]
+    out = run('--params-file', 'config/floating_dock.yaml', '--depth', '20.85', *args, '--json')
+    assert out.returncode == 0, out.stderr
+    data = json.loads(out.stdout)
+    assert [ls['line'] for ls in data['lines']] == names
+    assert all(abs(ls['implied_anchor_distance'] - ls['anchor_distance']) < 1.0
+               for ls in data['lines'])
