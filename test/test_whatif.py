@@ -56,7 +56,7 @@ def test_anchor_distance_and_tide_rate_of_the_scene():
 
 def test_whatif_names_unknown_and_missing_lines():
     config = dock_config(2)
-    with pytest.raises(ValueError, match="no tension for line 'line_02'"):
+    with pytest.raises(ValueError, match="no tension for line 'line_02' .and no chain_length"):
         catenary_monitor.whatif(config, 20.0, {'line_01': 4e5})
     with pytest.raises(ValueError, match="unknown line 'line_9'"):
         catenary_monitor.whatif(config, 20.0, {'line_01': 4e5, 'line_02': 4e5},
@@ -152,3 +152,24 @@ def test_cli_on_the_shipped_dock():
     assert [ls['line'] for ls in data['lines']] == names
     assert all(abs(ls['implied_anchor_distance'] - ls['anchor_distance']) < 1.0
                for ls in data['lines'])
+
+
+def test_lines_not_given_hang_as_installed():
+    """A line without a tension but with a chain_length hangs at its anchor distance in still
+    water: its tension is problem 5's (the catenary's chain length equals the one paid out),
+    and the command says where each tension came from."""
+    out = run('--params-file', 'config/floating_dock.yaml', '--depth', '20.85',
+              '--tension', 'line_11=1.6e6', '--json')
+    assert out.returncode == 0, out.stderr
+    lines = {ls['line']: ls for ls in json.loads(out.stdout)['lines']}
+    assert lines['line_11']['tension_source'] == 'given'
+    assert lines['line_11']['tension'] == 1.6e6
+    hung = lines['line_01']
+    assert hung['tension_source'] == 'hanging'
+    # Independent check: the installed chain's length from the catenary at that tension.
+    r = solve(weight=1300.0, depth=20.85, tension=hung['tension'], anchor_distance=120.0)
+    length = r.suspended_length + (120.0 - r.min_anchor_distance)
+    assert math.isclose(length, 122.6247, rel_tol=1e-9)
+    table = run('--params-file', 'config/floating_dock.yaml', '--depth', '20.85',
+                '--tension', 'line_11=1.6e6')
+    assert table.returncode == 0 and 'hanging' in table.stdout and 'given' in table.stdout

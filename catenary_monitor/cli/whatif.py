@@ -3,8 +3,9 @@ scene, as the monitor core decides them (:func:`catenary_monitor.core.whatif.wha
 
 Which values a line takes: ``--tension NAME=N`` and ``--anchor-distance NAME=X`` where given;
 otherwise the newest tension sample of that line in ``--log`` (the last one recorded) and its
-installed ``NAME.anchor_distance`` from the params file. A params file holds no tension, so
-a line given neither by ``--tension`` nor by a sample in ``--log`` is an error naming it. The
+installed ``NAME.anchor_distance`` from the params file; a line with neither hangs as installed
+(its ``NAME.chain_length`` at its anchor distance and this depth, in still water), and a line
+without a chain length either is an error naming it. The table's ``from`` column says which. The
 tide's rate is ``--tide-rate`` (m/s) or, with ``--log``, the monitor's trend at the log's last
 depth sample; without either the trend is unknown (``time_to_uplift`` inf, as the core has
 it then). Exit 2 with one line on bad input.
@@ -76,14 +77,15 @@ def _time(value: float) -> str:
 def scene_table(scene: Any) -> str:
     """The scene as a readable table (kN, m, minutes) and the message of every line not OK."""
     header = [
-        'line', 'level', 'T kN', 'x m', 'uplift kN', 'upper kN', 'anchor m', 'tide m',
+        'line', 'level', 'T kN', 'from', 'x m', 'uplift kN', 'upper kN', 'anchor m', 'tide m',
         'drag kN', 'implied x m', 'to uplift',
     ]
     rows = []
     for ls in scene.lines:
         v = ls.values
         rows.append([
-            ls.line, ls.level, _cell(ls.tension, 1e-3), _cell(ls.anchor_distance, 1.0, 2),
+            ls.line, ls.level, _cell(ls.tension, 1e-3), ls.source,
+            _cell(ls.anchor_distance, 1.0, 2),
             _cell(v['uplift_force'], 1e-3), _cell(v['uplift_force_upper'], 1e-3),
             _cell(v['anchor_margin'], 1.0, 2), _cell(v['tide_margin'], 1.0, 2),
             _cell(v['drag_margin'], 1e-3), _cell(v['implied_anchor_distance'], 1.0, 2),
@@ -99,7 +101,7 @@ def scene_table(scene: Any) -> str:
 def cmd_whatif(args: argparse.Namespace) -> int:
     """Run the scene; print the table or the JSON."""
     from catenary_monitor.core.config import ConfigError, config_from_params, load_params_file
-    from catenary_monitor.core.whatif import scene_dict, whatif
+    from catenary_monitor.core.whatif import hanging_tensions, scene_dict, whatif
 
     try:
         config = config_from_params(load_params_file(args.params_file))
@@ -119,14 +121,25 @@ def cmd_whatif(args: argparse.Namespace) -> int:
         tensions = {**{k: v for k, v in logged.items()}, **tensions}
         rate = log_rate if args.tide_rate is None else rate
     names = [line.name for line in config.lines]
-    missing = [n for n in names if n not in tensions]
+    hanging = hanging_tensions(config, depth, [n for n in names if n not in tensions])
+    missing = [n for n in names if n not in tensions and n not in hanging]
     if missing:
         where = ' or a sample in --log' if not args.log else ' (the log has no sample of it)'
-        raise WhatIfError(f'line {missing[0]}: no tension: give --tension {missing[0]}=N{where}')
+        raise WhatIfError(
+            f'line {missing[0]}: no tension and no chain_length to hang it as installed: '
+            f'give --tension {missing[0]}=N{where}'
+        )
     try:
         scene = whatif(config, depth, tensions, distances, rate)
     except ValueError as err:
         raise WhatIfError(str(err)) from None
+    given = set(_pairs(args.tension, 'tension'))
+    scene = scene._replace(
+        lines=tuple(
+            ls._replace(source='log') if ls.source == 'given' and ls.line not in given else ls
+            for ls in scene.lines
+        )
+    )
     if args.json:
         print(json.dumps(scene_dict(scene), indent=1, allow_nan=False))
     else:

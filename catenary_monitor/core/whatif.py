@@ -14,7 +14,11 @@ on that scene, so a what-if answer is the live monitor's decision for those read
   held long enough for a condition to raise);
 * a tick at the scene: the levels and messages are the core's after it.
 
-Every line needs a tension (the caller fills the lines it was not given, e.g. from a log).
+A line not given a tension hangs as installed, where the params file says how: with its
+``NAME.chain_length`` its tension is that chain's at its anchor distance and this depth in still
+water (problem 5, :func:`~catenary_monitor.core.fixed_length.statics_at_span`, EA included);
+each line says where its tension came from (``source``: ``given`` or ``hanging``; the command
+adds ``log``). A line with neither is a ValueError naming it.
 """
 
 from __future__ import annotations
@@ -33,7 +37,7 @@ from catenary_monitor.core.monitor import (
     Tick,
 )
 
-__all__ = ['LineScene', 'Scene', 'whatif', 'scene_dict']
+__all__ = ['LineScene', 'Scene', 'whatif', 'hanging_tensions', 'scene_dict']
 
 
 class LineScene(NamedTuple):
@@ -46,6 +50,7 @@ class LineScene(NamedTuple):
     level: str
     message: str
     values: dict[str, float]
+    source: str = 'given'
 
 
 class Scene(NamedTuple):
@@ -113,10 +118,13 @@ def whatif(
     unknown = sorted(set(tensions) - set(names))
     if unknown:
         raise ValueError(f'unknown line {unknown[0]!r} (lines: {", ".join(names)})')
-    missing = [n for n in names if n not in tensions]
+    hanging = hanging_tensions(cfg, float(depth), [n for n in names if n not in tensions])
+    missing = [n for n in names if n not in tensions and n not in hanging]
     if missing:
-        raise ValueError(f'no tension for line {missing[0]!r}')
-    values = [float(tensions[n]) for n in names]
+        raise ValueError(
+            f'no tension for line {missing[0]!r} (and no chain_length to hang it as installed)'
+        )
+    values = [float(tensions[n]) if n in tensions else hanging[n] for n in names]
     events, _ = _events(cfg, float(depth), values, float(tide_rate))
     core = MonitorCore(cfg, 0)
     for event in events:
@@ -132,9 +140,30 @@ def whatif(
                 line.state.level.name,
                 line.state.message,
                 out,
+                'given' if line.config.name in tensions else 'hanging',
             )
         )
     return Scene(float(depth), float(tide_rate), tuple(lines))
+
+
+def hanging_tensions(config: MonitorConfig, depth: float, names: list[str]) -> dict[str, float]:
+    """Hook tension (N) of each named line with a ``chain_length`` hanging at its anchor
+    distance in still water at ``depth`` (m, plus its ``hook_height``); lines without one, or
+    whose chain cannot reach (taut), are left out."""
+    from catenary_monitor.core.fixed_length import statics_at_span
+
+    out: dict[str, float] = {}
+    for line in config.lines:
+        if line.name not in names or line.chain_length is None:
+            continue
+        ea = math.inf if line.ea is None else line.ea
+        state = statics_at_span(
+            line.weight, depth + line.hook_height, line.chain_length, line.anchor_distance, ea
+        )
+        tension = float(state.top_tension)
+        if math.isfinite(tension):
+            out[line.name] = tension
+    return out
 
 
 def scene_dict(scene: Scene) -> dict[str, Any]:
@@ -151,6 +180,7 @@ def scene_dict(scene: Scene) -> dict[str, Any]:
             {
                 'line': ls.line,
                 'tension': ls.tension,
+                'tension_source': ls.source,
                 'anchor_distance': ls.anchor_distance,
                 'level': ls.level,
                 'message': ls.message,
