@@ -8,6 +8,7 @@ read. The child's timeout is a hang guard, not a timing assertion.
 from __future__ import annotations
 
 import json
+import struct
 import subprocess
 import sys
 from pathlib import Path
@@ -71,3 +72,16 @@ def test_hostile_chunk_is_skipped_in_bounded_memory_and_the_rest_read(hostile):
     kinds = {k for k, _ in out['skips']}
     assert kinds == ({'truncated'} if kind == 'cut' else {'corrupt_chunk'}), out['skips']
     assert out['rss_kb'] < RSS_LIMIT_KB, f'{kind}: peak RSS {out["rss_kb"] / 1024:.0f} MB'
+
+
+def test_recover_skips_the_hostile_chunk_in_bounded_memory_and_keeps_the_rest(hostile):
+    from mcap_readers import mcap_messages
+
+    kind, path = hostile
+    out = run_child(path, 'recover')
+    assert out['recover']['status'] == 'recovered', out
+    assert out['recover']['messages'] == len(VALUES)
+    assert out['recover']['damaged'], out
+    assert out['rss_kb'] < RSS_LIMIT_KB, f'{kind}: peak RSS {out["rss_kb"] / 1024:.0f} MB'
+    values = [struct.unpack('<d', data[4:])[0] for _, _, data in mcap_messages(path)]
+    assert values == VALUES

@@ -51,7 +51,7 @@ from types import TracebackType
 from typing import IO, Any, Callable, Mapping
 
 from mcap.well_known import MessageEncoding, SchemaEncoding
-from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, Writer
+from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, IndexType, Writer
 
 from catenary_monitor.io.ros_schemas import (
     QOS_DEFAULT,
@@ -77,6 +77,9 @@ _COMPRESSION = {
     '': CompressionType.NONE,
     None: CompressionType.NONE,
 }
+# No Attachment Index group (the logger writes no attachments): an empty group's Summary Offset
+# is reported by pymcap-cli's doctor as pointing to a missing group.
+_INDEX_TYPES = IndexType.CHUNK | IndexType.MESSAGE | IndexType.METADATA
 _U64 = 1 << 64
 _LIBRARY = f'catenary_monitor.mcap_log; {LIBRARY_IDENTIFIER}'
 # Record overhead of one Message record in a chunk: opcode 1 + length 8 + header 22 bytes.
@@ -512,7 +515,12 @@ class McapLogger:
             path, stream = self._create_file()
             # The logger ends chunks itself (size or age) so that each end is flushed at once;
             # the writer's own limit is only a backstop.
-            writer = Writer(stream, chunk_size=4 * self.chunk_size, compression=self.compression)
+            writer = Writer(
+                stream,
+                chunk_size=4 * self.chunk_size,
+                compression=self.compression,
+                index_types=_INDEX_TYPES,
+            )
             writer.start(profile='ros2', library=_LIBRARY)
             opened = _OpenFile(path, stream, writer, now)
             for topic, info in self._topics.items():
