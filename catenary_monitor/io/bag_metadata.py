@@ -28,7 +28,7 @@ from typing import Any, Iterable
 import yaml
 
 __all__ = ['FileInfo', 'TopicInfo', 'METADATA_NAME', 'file_info', 'render', 'write_metadata',
-           'write_folder_metadata']
+           'write_folder_metadata', 'qos_list', 'folder_files']
 
 METADATA_NAME = 'metadata.yaml'
 #: rosbag2's bag format version in Jazzy.
@@ -59,7 +59,7 @@ class FileInfo:
     topics: dict[str, TopicInfo] = field(default_factory=dict)
 
 
-def _qos_list(text: str | None) -> list[Any]:
+def qos_list(text: str | None) -> list[Any]:
     """The channel's ``offered_qos_profiles`` YAML string as a list ([] if absent or bad)."""
     if not text:
         return []
@@ -95,7 +95,7 @@ def file_info(path: str | os.PathLike[str]) -> FileInfo | None:
                 channel.topic,
                 schema.name if schema is not None else '',
                 channel.message_encoding,
-                _qos_list(channel.metadata.get('offered_qos_profiles')),
+                qos_list(channel.metadata.get('offered_qos_profiles')),
                 channel.metadata.get('topic_type_hash', ''),
             ),
         )
