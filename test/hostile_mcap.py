@@ -45,8 +45,15 @@ def message(value: float, t: int, channel_id: int = 1, seq: int = 0) -> bytes:
     return record(0x05, struct.pack('<HIQQ', channel_id, seq, t, t) + cdr)
 
 
-def chunk(records: bytes, compression: str, compressed: bytes, usize: int, t0: int, t1: int,
-          crc: bool = True) -> bytes:
+def chunk(
+    records: bytes,
+    compression: str,
+    compressed: bytes,
+    usize: int,
+    t0: int,
+    t1: int,
+    crc: bool = True,
+) -> bytes:
     head = struct.pack('<QQQI', t0, t1, usize, zlib.crc32(records) if crc else 0)
     body = head + string(compression) + struct.pack('<Q', len(compressed)) + compressed
     return record(0x06, body)
@@ -111,7 +118,10 @@ def hostile_file(path: Path, kind: str, values: list[float], finished: bool = Fa
     else:
         parts += [bad, good]
     if finished:
-        parts += [record(0x0F, struct.pack('<I', 0)), record(0x02, struct.pack('<QQI', 0, 0, 0)),
-                  MAGIC]
+        parts += [
+            record(0x0F, struct.pack('<I', 0)),
+            record(0x02, struct.pack('<QQI', 0, 0, 0)),
+            MAGIC,
+        ]
     path.write_bytes(b''.join(parts))
     return path

@@ -136,8 +136,7 @@ def test_deleted_directory_is_an_error_then_a_new_file(tmp_path):
     assert log.diagnostic_values()['files_vanished'] == '1'
     assert 'vanished' in (log.last_error or '')
     log.close()
-    got = [struct.unpack('<d', d[4:])[0] for _, _, d in mcap_messages(log.current_path or
-                                                                       log.files[-1])]
+    got = [struct.unpack('<d', d[4:])[0] for _, _, d in mcap_messages(log.files[-1])]
     assert got == list(map(float, range(50, 80)))
     assert check_folder(folder) == 30
 

@@ -179,3 +179,17 @@ def test_a_file_cut_inside_the_magic_or_header_gives_an_empty_finished_file(tmp_
     result = recover_file(path)
     assert result.status == 'recovered' and result.messages == 0
     assert mcap_messages(path) == []
+
+
+def test_a_file_a_running_logger_writes_is_left_alone(tmp_path):
+    log = McapLogger(tmp_path, fsync=False)
+    log.register('/a', 'std_msgs/msg/Float64')
+    log.write('/a', cdr(1.0), 1)
+    log.flush()
+    path = log.current_path
+    before = path.read_bytes()
+    result = recover_file(path)
+    assert result.status == 'in_use' and 'running logger' in result.error
+    assert path.read_bytes() == before
+    log.close()
+    assert recover_file(path).status == 'already_finished'

@@ -6,7 +6,11 @@ rewritten). Each unfinished file gets a summary, chunk and message indexes, stat
 ``--discard-original``. Finished files are left alone ("already finished"), so running it
 twice changes nothing.
 
-Exit status: 0 every file is finished now (damaged parts that were skipped are listed);
+A file that a running logger is writing (it holds a lock on it) is left alone ("being
+written").
+
+Exit status: 0 every file is finished now, or being written by a running logger (damaged parts
+that were skipped are listed);
 2 PATH does not exist, or a folder without ``*.mcap`` files; 3 at least one file could not be
 finished (not MCAP, unreadable or unwritable: its line says why); 1 unexpected failure.
 """
@@ -29,6 +33,7 @@ EXIT_NOT_FINISHED = 3
 _STATUS_TEXT = {
     'recovered': 'recovered',
     'already_finished': 'already finished',
+    'in_use': 'being written',
     'not_mcap': 'NOT MCAP',
     'failed': 'FAILED',
 }

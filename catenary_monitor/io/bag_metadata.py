@@ -27,8 +27,17 @@ from typing import Any, Iterable
 
 import yaml
 
-__all__ = ['FileInfo', 'TopicInfo', 'METADATA_NAME', 'file_info', 'render', 'write_metadata',
-           'write_folder_metadata', 'qos_list', 'folder_files']
+__all__ = [
+    'FileInfo',
+    'TopicInfo',
+    'METADATA_NAME',
+    'file_info',
+    'folder_files',
+    'qos_list',
+    'render',
+    'write_folder_metadata',
+    'write_metadata',
+]
 
 METADATA_NAME = 'metadata.yaml'
 #: rosbag2's bag format version in Jazzy.
@@ -240,7 +249,8 @@ def folder_files(
 
 
 def write_folder_metadata(
-    folder: str | os.PathLike[str], extra: Iterable[FileInfo] = (),
+    folder: str | os.PathLike[str],
+    extra: Iterable[FileInfo] = (),
     cache: dict[str, FileInfo | None] | None = None,
 ) -> Path:
     """Write ``metadata.yaml`` for the finished files of ``folder`` plus ``extra`` (e.g. the

@@ -69,7 +69,7 @@ from typing import IO, Any, Callable, Mapping
 from mcap.well_known import MessageEncoding, SchemaEncoding
 from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, IndexType, Writer
 
-from catenary_monitor.io import bag_metadata
+from catenary_monitor.io import bag_metadata as _bag
 from catenary_monitor.io.ros_schemas import (
     QOS_DEFAULT,
     QOS_LATCHED,
@@ -237,7 +237,7 @@ class McapLogger:
         self.metadata_error: str | None = None
         #: Files lost or displaced under the logger (deleted, moved or replaced).
         self.vanished = 0
-        self._bag_cache: dict[str, bag_metadata.FileInfo | None] = {}
+        self._bag_cache: dict[str, _bag.FileInfo | None] = {}
         self._sticky_until = float('-inf')
 
         self.error: str | None = None
@@ -585,6 +585,7 @@ class McapLogger:
                     'the directory is missing (create_dir is off: waiting for it to reappear)'
                 )
             path, stream = self._create_file()
+            _lock_quietly(stream)
             # The logger ends chunks itself (size or age) so that each end is flushed at once;
             # the writer's own limit is only a backstop.
             writer = Writer(
@@ -690,20 +691,20 @@ class McapLogger:
         self._sticky_until = now + self.error_hold
         self._next_retry = now
 
-    def _current_info(self) -> bag_metadata.FileInfo | None:
+    def _current_info(self) -> _bag.FileInfo | None:
         """The file being written as a bag entry (counts as of now)."""
         f = self._file
         if f is None:
             return None
-        info = bag_metadata.FileInfo(f.path.name, f.opened_ns, 0, f.messages)
+        info = _bag.FileInfo(f.path.name, f.opened_ns, 0, f.messages)
         if f.first_ns >= 0:
             info.starting_time_ns, info.duration_ns = f.first_ns, f.last_ns - f.first_ns
         for topic, t in self._topics.items():
-            info.topics[topic] = bag_metadata.TopicInfo(
+            info.topics[topic] = _bag.TopicInfo(
                 topic,
                 t.type_name,
                 'cdr',
-                bag_metadata.qos_list(t.metadata.get('offered_qos_profiles')),
+                _bag.qos_list(t.metadata.get('offered_qos_profiles')),
                 t.metadata.get('topic_type_hash', ''),
                 f.counts.get(topic, [0, 0])[0],
             )
@@ -715,12 +716,12 @@ class McapLogger:
             return
         current = self._current_info()
         try:
-            bag_metadata.write_folder_metadata(
+            _bag.write_folder_metadata(
                 self.log_dir, [] if current is None else [current], self._bag_cache
             )
             self.metadata_error = None
         except Exception as exc:  # noqa: BLE001 - never stops the logging
-            self.metadata_error = f'cannot write {self.log_dir / bag_metadata.METADATA_NAME}: {exc}'
+            self.metadata_error = f'cannot write {self.log_dir / _bag.METADATA_NAME}: {exc}'
 
     def _create_file(self) -> tuple[Path, IO[bytes]]:
         stamp = _dt.datetime.fromtimestamp(self._wall_clock(), _dt.timezone.utc)
@@ -807,6 +808,17 @@ def _check_time(name: str, value: int) -> int:
     if not 0 <= value < _U64:
         raise ValueError(f'{name} must be in [0, 2**64) ns, got {value}')
     return value
+
+
+def _lock_quietly(stream: IO[bytes]) -> None:
+    """Hold an advisory lock on the file being written (released when the process dies), so
+    that recovery (:mod:`catenary_monitor.io.mcap_recover`) leaves a live file alone."""
+    try:
+        import fcntl
+
+        fcntl.flock(stream.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except (ImportError, OSError):
+        pass
 
 
 def _close_quietly(stream: IO[bytes]) -> None:

@@ -45,7 +45,14 @@ from catenary_monitor.io.mcap_read import (
     chunk_size_problem,
 )
 
-__all__ = ['RecoverResult', 'is_finished', 'recover_file', 'recover_path', 'BACKUP_SUFFIX']
+__all__ = [
+    'RecoverResult',
+    'is_finished',
+    'recover_file',
+    'recover_path',
+    'unfinished_files',
+    'BACKUP_SUFFIX',
+]
 
 #: Suffix of the kept original of a recovered file (not ``*.mcap``: no reader picks it up).
 BACKUP_SUFFIX = '.unfinished'
@@ -68,7 +75,8 @@ class _Bad(Exception):
 class RecoverResult:
     """What :func:`recover_file` did with one file.
 
-    status: ``recovered``, ``already_finished``, ``not_mcap`` or ``failed`` (``error`` says why).
+    status: ``recovered``, ``already_finished``, ``in_use`` (a running logger holds its lock:
+    left alone), ``not_mcap`` or ``failed`` (``error`` says why).
     messages: messages in the finished file; chunks: chunks read from the original;
     damaged: one sentence per damaged part skipped (a cut tail included); lost: messages
     known lost in them (a lower bound: a cut tail's count is unknown); backup: the kept
@@ -104,6 +112,14 @@ def is_finished(path: str | os.PathLike[str]) -> bool:
         return False
     op, length = _HEAD.unpack_from(tail, 0)
     return tail[-len(MAGIC):] == MAGIC and op == _OP_FOOTER and length == 20
+
+
+def unfinished_files(folder: str | os.PathLike[str]) -> list[Path]:
+    """The ``*.mcap`` files of ``folder`` without a footer, by name ([] if no folder)."""
+    try:
+        return [p for p in sorted(Path(folder).glob('*.mcap')) if not is_finished(p)]
+    except OSError:
+        return []
 
 
 def recover_path(
@@ -147,6 +163,10 @@ def recover_file(path: str | os.PathLike[str], keep_original: bool = True) -> Re
             if head != MAGIC and not (MAGIC.startswith(head)):
                 result.status, result.error = 'not_mcap', 'does not start with the MCAP magic'
                 return result
+            if _locked(src):
+                result.status = 'in_use'
+                result.error = 'being written by a running logger (locked): left alone'
+                return result
             with open(tmp, 'wb') as out:
                 _rewrite(src, out, result, path.name)
                 out.flush()
@@ -165,6 +185,21 @@ def recover_file(path: str | os.PathLike[str], keep_original: bool = True) -> Re
         except OSError:
             pass
     return result
+
+
+def _locked(src: IO[bytes]) -> bool:
+    """True if a running logger holds the file's lock (:mod:`catenary_monitor.io.mcap_log`)."""
+    try:
+        import fcntl
+    except ImportError:
+        return False
+    try:
+        fcntl.flock(src.fileno(), fcntl.LOCK_SH | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return True
+    except OSError:
+        return False
+    return False
 
 
 def _keep(path: Path, backup: Path) -> None:
