@@ -35,8 +35,8 @@ rosbag2 bag
 -----------
 With ``bag_metadata`` (the default) the folder is a rosbag2 bag: ``metadata.yaml``
 (:mod:`catenary_monitor.io.bag_metadata`) is rewritten atomically whenever a file opens (so at
-each rotation) and on :meth:`close`; it lists the folder's finished files and the file being
-written (with its counts as of that moment).
+each rotation) and on :meth:`close`. It lists the folder's finished files only, so bag readers
+open the folder at any time; the file being written joins it when it is finished.
 
 Disk errors
 -----------
@@ -118,14 +118,11 @@ class _OpenFile:
     stream: IO[bytes]
     writer: Writer
     opened_at: float  # monotonic s
-    opened_ns: int = 0  # wall clock, ns since the epoch
     dir_id: tuple[int, int] = (0, 0)  # (st_dev, st_ino) of log_dir when opened
     file_id: tuple[int, int] = (0, 0)  # (st_dev, st_ino) of the file
     schema_ids: dict[str, int] = field(default_factory=dict)
     messages: int = 0
     counts: dict[str, list[int]] = field(default_factory=dict)  # topic -> [messages, bytes]
-    first_ns: int = -1  # smallest log time written (ns), -1 before the first message
-    last_ns: int = 0
 
 
 class McapLogger:
@@ -425,10 +422,6 @@ class McapLogger:
             counts = f.counts.setdefault(topic, [0, 0])
             counts[0] += 1
             counts[1] += len(payload)
-            if f.first_ns < 0 or log_time_ns < f.first_ns:
-                f.first_ns = log_time_ns
-            if log_time_ns > f.last_ns:
-                f.last_ns = log_time_ns
             self.messages_written[topic] += 1
             self.bytes_written[topic] += len(payload)
             slot = self._pending.setdefault(topic, [0, 0])
@@ -595,7 +588,7 @@ class McapLogger:
                 index_types=_INDEX_TYPES,
             )
             writer.start(profile='ros2', library=_LIBRARY)
-            opened = _OpenFile(path, stream, writer, now, int(self._wall_clock() * 1e9))
+            opened = _OpenFile(path, stream, writer, now)
             dir_stat, file_stat = os.stat(self.log_dir), os.fstat(stream.fileno())
             opened.dir_id = (dir_stat.st_dev, dir_stat.st_ino)
             opened.file_id = (file_stat.st_dev, file_stat.st_ino)
@@ -691,34 +684,12 @@ class McapLogger:
         self._sticky_until = now + self.error_hold
         self._next_retry = now
 
-    def _current_info(self) -> _bag.FileInfo | None:
-        """The file being written as a bag entry (counts as of now)."""
-        f = self._file
-        if f is None:
-            return None
-        info = _bag.FileInfo(f.path.name, f.opened_ns, 0, f.messages)
-        if f.first_ns >= 0:
-            info.starting_time_ns, info.duration_ns = f.first_ns, f.last_ns - f.first_ns
-        for topic, t in self._topics.items():
-            info.topics[topic] = _bag.TopicInfo(
-                topic,
-                t.type_name,
-                'cdr',
-                _bag.qos_list(t.metadata.get('offered_qos_profiles')),
-                t.metadata.get('topic_type_hash', ''),
-                f.counts.get(topic, [0, 0])[0],
-            )
-        return info
-
     def _write_bag_metadata(self) -> None:
         """Rewrite ``metadata.yaml``; a failure is kept in :attr:`metadata_error`."""
         if not self.bag_metadata:
             return
-        current = self._current_info()
         try:
-            _bag.write_folder_metadata(
-                self.log_dir, [] if current is None else [current], self._bag_cache
-            )
+            _bag.write_folder_metadata(self.log_dir, (), self._bag_cache)
             self.metadata_error = None
         except Exception as exc:  # noqa: BLE001 - never stops the logging
             self.metadata_error = f'cannot write {self.log_dir / _bag.METADATA_NAME}: {exc}'
