@@ -723,8 +723,8 @@ class _Scanner:
         if header is None:
             return None
         usize, _, compression, rec_start, rec_end = header
-        if usize > MAX_CHUNK_BYTES:
-            return None  # implausible: nothing is decompressed
+        if chunk_size_problem(usize, rec_end - rec_start, compression) is not None:
+            return None  # implausible: nothing is decompressed (reported as the cut)
         try:
             records = _decompress_partial(
                 data, rec_start, min(rec_end, len(data)), compression, usize
