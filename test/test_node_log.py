@@ -137,3 +137,37 @@ def test_deleted_log_dir_is_an_error_within_seconds_then_a_new_file(client, tmp_
         client.feed(topic, None)
         assert stop(proc) == 0
     assert check_folder(log_dir) > 0
+
+
+def test_rotating_node_keeps_the_bag_openable_while_it_writes(client, tmp_path):
+    """Files every second: metadata.yaml follows each rotation, the folder opens as a bag
+    while the node runs, and after SIGTERM every file is finished and opens everywhere."""
+    from mcap_readers import rosbags_count
+
+    lines = {'rot': dict(weight=W, anchor_distance=120.0, mbl=MBL)}
+    params = write_params(tmp_path / 'params.yaml', lines, log_rotate_duration=1.0)
+    log_dir = tmp_path / 'log'
+    topic = '/mooring/rot/tension'
+    proc = start_monitor(params, log_dir)
+    try:
+        client.wait_matched([topic], 30.0)
+        client.feed(topic, 400e3)
+
+        def listed() -> list:
+            path = log_dir / 'metadata.yaml'
+            if not path.exists():
+                return []
+            import yaml
+
+            info = yaml.safe_load(path.read_text())['rosbag2_bagfile_information']
+            return info['relative_file_paths']
+
+        client.wait_for(lambda: len(listed()) >= 3, 30.0, 'three rotated files in the bag')
+        assert rosbags_count([log_dir]) > 0  # opens while the node writes its next file
+    finally:
+        client.feed(topic, None)
+        assert stop(proc) == 0
+    files = sorted(log_dir.glob('*.mcap'))
+    assert all(is_finished(p) for p in files)
+    assert listed() == [p.name for p in files]
+    assert check_folder(log_dir) > 0
