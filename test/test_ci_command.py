@@ -13,4 +13,5 @@ def test_ci_runs_the_readme_test_command():
     command = block.group(2).strip()
     run = ROOT.joinpath('.ci', 'run').read_text(encoding='utf-8').strip().splitlines()
     assert run[-1].strip() == command
-    assert 'chromium chromium-driver' in command  # the browser tests' needs
+    # the browser tests' and the JS reader tests' needs
+    assert 'chromium chromium-driver nodejs npm' in command

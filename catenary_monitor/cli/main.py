@@ -53,8 +53,16 @@ def result_table(result: SolveResult) -> str:
     rows = []
     for key in result.keys:
         label, unit, scale, fmt = DISPLAY[key]
-        rows.append((label, fmt.format(getattr(result, key) * scale), unit, key))
+        rows.append((label, _shown(fmt, getattr(result, key) * scale), unit, key))
     return format_table(rows, ('quantity', 'value', 'unit', 'json key'))
+
+
+def _shown(fmt: str, value: float) -> str:
+    """``value`` in its column format, or in 7 significant digits where that would be longer
+    than a column (a 1e300 N reading stays one readable cell)."""
+    if abs(value) >= 1e9:
+        return f'{value:+.7g}' if fmt.startswith('{:+') else f'{value:.7g}'
+    return fmt.format(value)
 
 
 def _positive_or_any(text: str) -> float:
