@@ -99,6 +99,16 @@ def test_metadata_yaml_is_rosbag2_v9_and_follows_rotation(tmp_path):
         assert meta['type_description_hash'].startswith('RIHS01_')
         assert t['message_count'] == 1500
     assert check_folder(tmp_path) == 3000
+    # rosbags' own rosbag2 reader parses every field of the metadata (v9 QoS lists included).
+    from rosbags.rosbag2 import Reader
+
+    with Reader(tmp_path) as bag:
+        assert bag.message_count == 3000 and bag.duration == 1000 * 2999 + 1
+        assert not bag.compression_mode and bag.ros_distro == 'jazzy'
+        for c in bag.connections:
+            assert c.msgcount == 1500 and c.digest.startswith('RIHS01_')
+            [qos] = c.ext.offered_qos_profiles
+            assert qos.depth == 5 and qos.reliability.name == 'BEST_EFFORT'
 
 
 def test_rosbags_opens_the_folder_of_a_closed_logger_with_previous_runs(tmp_path):

@@ -42,6 +42,8 @@ __all__ = [
 METADATA_NAME = 'metadata.yaml'
 #: rosbag2's bag format version in Jazzy.
 VERSION = 9
+#: The distribution the node's message types come from (the ``ros-jazzy-*`` wheels).
+ROS_DISTRO = 'jazzy'
 _PLAIN = re.compile(r'^[A-Za-z0-9_/.][A-Za-z0-9_/.:-]*$')
 
 
@@ -150,7 +152,7 @@ def _block(value: Any, indent: int) -> list[str]:
     return lines
 
 
-def render(files: Iterable[FileInfo], ros_distro: str | None = None) -> str:
+def render(files: Iterable[FileInfo], ros_distro: str = ROS_DISTRO) -> str:
     """The ``metadata.yaml`` text of a bag made of ``files`` (in the order given)."""
     files = list(files)
     topics: dict[tuple[str, str], TopicInfo] = {}
@@ -203,7 +205,7 @@ def render(files: Iterable[FileInfo], ros_distro: str | None = None) -> str:
             for f in files
         ],
         'custom_data': None,
-        'ros_distro': ros_distro or os.environ.get('ROS_DISTRO') or 'jazzy',
+        'ros_distro': ros_distro,
     }
     lines = ['rosbag2_bagfile_information:'] + _block(info, 2)
     # yaml-cpp writes empty strings as "" (json.dumps gives the same).
