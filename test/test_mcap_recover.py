@@ -154,3 +154,13 @@ def test_a_file_a_running_logger_writes_is_left_alone(tmp_path):
     assert path.read_bytes() == before
     log.close()
     assert recover_file(path).status == 'already_finished'
+
+
+def test_recover_in_child_gives_the_same_result(tmp_path):
+    from catenary_monitor.io.mcap_recover import recover_in_child
+
+    path = write_log(tmp_path / 'log', 'zstd')
+    result = recover_in_child(path)
+    assert result.status == 'recovered' and result.messages == 3000
+    assert len(check_file(path)) == 3000
+    assert recover_in_child(path).status == 'already_finished'

@@ -75,7 +75,7 @@ from catenary_monitor.core.monitor import (
     event_record,
 )
 from catenary_monitor.io.mcap_log import McapLogger
-from catenary_monitor.io.mcap_recover import RecoverResult, recover_file, unfinished_files
+from catenary_monitor.io.mcap_recover import RecoverResult, recover_in_child, unfinished_files
 
 __all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'CatenaryMonitor', 'main']
 
@@ -216,8 +216,9 @@ class CatenaryMonitor(Node):
             return None
 
     def _start_recovery(self, files: list[Any]) -> None:
-        """Finish the unfinished files in a background thread (monitoring starts at once);
-        the log timer reports each result (:meth:`_report_recovery`)."""
+        """Finish the unfinished files in a niced child process, one at a time, waited for by
+        a thread (monitoring starts at once, its interpreter not shared); the log timer reports
+        each result (:meth:`_report_recovery`)."""
         self.get_logger().warning(
             f'{len(files)} unfinished MCAP log(s) in {self._log_dir()} (left by a crash): '
             'finishing them in the background'
@@ -225,7 +226,7 @@ class CatenaryMonitor(Node):
 
         def work() -> None:
             for path in files:
-                self._recovered.put(recover_file(path))
+                self._recovered.put(recover_in_child(path))
 
         threading.Thread(target=work, name='mcap-recover', daemon=True).start()
 
