@@ -9,6 +9,7 @@ bag, and no message that the project's tolerant reader finds in the cut file is 
 from __future__ import annotations
 
 import json
+import struct
 import subprocess
 import sys
 from pathlib import Path
@@ -164,3 +165,22 @@ def test_recover_in_child_gives_the_same_result(tmp_path):
     assert result.status == 'recovered' and result.messages == 3000
     assert len(check_file(path)) == 3000
     assert recover_in_child(path).status == 'already_finished'
+
+
+def test_a_damaged_region_is_skipped_to_the_next_chunk(tmp_path):
+    path = write_log(tmp_path / 'log', 'zstd')
+    data = bytearray(path.read_bytes())
+    # Overwrite the opcode and length of the 5th chunk with garbage: walked past, reported.
+    pos, chunks = 8, []
+    while pos + 9 <= len(data):
+        op, length = struct.unpack_from('<BQ', data, pos)
+        chunks += [pos] if op == 0x06 else []
+        pos += 9 + length
+    data[chunks[4] : chunks[4] + 9] = b'\xee' * 9
+    path.write_bytes(bytes(data))
+    before = readable(path)
+    result = recover_file(path)
+    assert result.status == 'recovered'
+    assert any('skipped' in d and 'next chunk' in d for d in result.damaged), result.damaged
+    assert set(check_file(path)) >= before
+    assert 0 < result.messages < 3000

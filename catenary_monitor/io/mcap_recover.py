@@ -445,6 +445,13 @@ def _records(
         if op in (_OP_DATA_END, _OP_FOOTER):
             return
         if end > size:
+            # Cut by the end of the file (the writer died in it), or a damaged length: then a
+            # valid chunk follows somewhere (the reader's rule, io/mcap_read.py).
+            found = _next_chunk(src, pos, size)
+            if found >= 0:
+                reason = f'record (opcode 0x{op:02x}) runs past the end'
+                pos = _resync(src, pos, size, reason, result)
+                continue
             if op != _OP_CHUNK:
                 what = 'a Message Index (no message lost)' if op == 0x07 else 'a record'
                 result.damaged.append(
@@ -468,11 +475,18 @@ def _records(
         result.damaged.append(f'@{pos}: file ends inside a record header ({size - pos} B)')
 
 
+def _next_chunk(src: IO[bytes], pos: int, size: int) -> int:
+    """Offset of the next plausible Chunk record after ``pos``, or -1. The file is searched
+    through a read-only memory map (page cache, not a copy)."""
+    import mmap
+
+    with mmap.mmap(src.fileno(), size, access=mmap.ACCESS_READ) as data:
+        return _find_chunk(data, pos + 1)  # type: ignore[arg-type]
+
+
 def _resync(src: IO[bytes], pos: int, size: int, reason: str, result: RecoverResult) -> int:
     """Offset of the next plausible Chunk record after ``pos`` (or ``size``); reported."""
-    src.seek(0)
-    data = src.read(size)
-    found = _find_chunk(data, pos + 1)
+    found = _next_chunk(src, pos, size)
     if found < 0:
         result.damaged.append(f'@{pos}: {reason}; nothing readable after it')
         return size
