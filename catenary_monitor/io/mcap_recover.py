@@ -273,7 +273,6 @@ class _Rewriter:
         self.schema_ids: dict[int, int] = {}
         self.channels: dict[int, int] = {}
         self.unknown = 0
-        self.pending: list[tuple[str, object]] = []  # records before the first chunk is seen
 
     def start(self) -> Writer:
         if self.writer is None:
