@@ -146,6 +146,17 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         read_only=True,
     ),
     ParamSpec(
+        'log_create_dir',
+        'bool',
+        True,
+        'Create log_dir when it is missing (at start, or after it vanished); false: wait for '
+        'it to reappear (e.g. a mount point), the logger status ERROR meanwhile',
+        '',
+        None,
+        None,
+        read_only=True,
+    ),
+    ParamSpec(
         'allow_runtime_changes',
         'bool',
         False,
@@ -816,6 +827,7 @@ _TOP_LEVEL = (
     'log_dir',
     'log_rotate_size',
     'log_rotate_duration',
+    'log_create_dir',
     'allow_runtime_changes',
 )
 
@@ -834,6 +846,7 @@ class MonitorConfig:
     allow_runtime_changes: bool = _default('allow_runtime_changes')
     log_rotate_size: float = _default('log_rotate_size')  # MiB
     log_rotate_duration: float = _default('log_rotate_duration')  # s
+    log_create_dir: bool = _default('log_create_dir')
     alarm: AlarmConfig = field(default_factory=AlarmConfig)
     dock: DockConfig = field(default_factory=DockConfig)
 
@@ -1033,7 +1046,13 @@ def resolve_topic(topic: str, node_name: str = 'catenary_monitor') -> str:
 #: accepted): left out of :func:`config_hash`, so ``--log-dir`` or a runtime-change policy
 #: does not make replay think a log was recorded with other parameters.
 NON_DECIDING = frozenset(
-    {'log_dir', 'log_rotate_size', 'log_rotate_duration', 'allow_runtime_changes'}
+    {
+        'log_dir',
+        'log_rotate_size',
+        'log_rotate_duration',
+        'log_create_dir',
+        'allow_runtime_changes',
+    }
 )
 
 
