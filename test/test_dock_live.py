@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from catenary_monitor.core.alarms import CONDITIONS
 from catenary_monitor.core.batch import recompute
 from catenary_monitor.core.body.estimate import estimate_dock
 from catenary_monitor.core.body.model import DockModel
@@ -29,7 +30,8 @@ def _inconsistent(step_list, config):
 
 
 def _latched(core):
-    return [line.config.name for line in core.lines if line.state.latches[-1].active]
+    k = CONDITIONS.index('inconsistent')
+    return [line.config.name for line in core.lines if line.state.latches[k].active]
 
 
 @pytest.mark.parametrize('drifting', [DRIFTING, 4])  # line_09 windward, line_05 lee

@@ -163,6 +163,15 @@ def test_cli_table_default():
     assert 'minimum anchor distance' in p.stdout and '225.9716' in p.stdout
 
 
+def test_cli_table_keeps_huge_values_readable():
+    """A 1e300 N tension (no MBL given: the solver cannot call it implausible) prints in
+    significant digits, not as a 300-digit fixed-point number."""
+    p = cli('solve', '--weight', '1300', '--depth', '20', '--tension', '1e300')
+    assert p.returncode == 0
+    assert max(len(line) for line in p.stdout.splitlines()) < 80, p.stdout
+    assert '1e+297' in p.stdout and '1.754116e+149' in p.stdout
+
+
 @pytest.mark.parametrize(
     'args,needle',
     [

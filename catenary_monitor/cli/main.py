@@ -53,8 +53,16 @@ def result_table(result: SolveResult) -> str:
     rows = []
     for key in result.keys:
         label, unit, scale, fmt = DISPLAY[key]
-        rows.append((label, fmt.format(getattr(result, key) * scale), unit, key))
+        rows.append((label, _shown(fmt, getattr(result, key) * scale), unit, key))
     return format_table(rows, ('quantity', 'value', 'unit', 'json key'))
+
+
+def _shown(fmt: str, value: float) -> str:
+    """``value`` in its column format, or in 7 significant digits where that would be longer
+    than a column (a 1e300 N reading stays one readable cell)."""
+    if abs(value) >= 1e9:
+        return f'{value:+.7g}' if fmt.startswith('{:+') else f'{value:.7g}'
+    return fmt.format(value)
 
 
 def _positive_or_any(text: str) -> float:
@@ -238,7 +246,7 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
     those installed under the :data:`COMMAND_GROUP` entry points."""
     from importlib.metadata import entry_points
 
-    from catenary_monitor.cli import dock, live, replay
+    from catenary_monitor.cli import dock, live, log, replay, whatif
     from catenary_monitor.console import command as console
 
     found: list[Callable[[argparse._SubParsersAction], None]] = [
@@ -246,6 +254,8 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
         replay.register,
         console.register,
         dock.register,
+        whatif.register,
+        log.register,
     ]
     for ep in sorted(entry_points(group=COMMAND_GROUP), key=lambda e: e.name):
         try:

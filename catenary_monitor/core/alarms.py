@@ -24,6 +24,14 @@ Conditions, each with its own latch:
     raised when the dock estimate flags the line's tension as irreconcilable with the other
     lines (its smoothed normalized residual beyond ``dock_residual_limit``) for ``on_delay``;
     cleared after ``warn_clear_hold`` of consistency; held while the line is not tested.
+``uplift_possible`` (WARN; with ``tension_accuracy`` or ``depth_accuracy``,
+:mod:`catenary_monitor.core.uncertainty`)
+    raised when ``uplift_force_upper > allowed_uplift`` while the nominal ``uplift_force`` is
+    not (uplift possible within sensor accuracy) for ``on_delay``; cleared when the bound is
+    back at or below ``allowed_uplift``, or when the nominal value itself is above it (the
+    ``uplift`` ERROR then says so), held for ``warn_clear_hold``; NaN holds.
+``drag_margin`` (WARN; with ``anchor_holding``, :mod:`catenary_monitor.core.holding`)
+    as the margins above with ``drag_margin_warn`` and ``drag_margin_deadband`` (N).
 stale (STALE, no latch)
     no tension or no depth received yet (the line is blind: its results cannot be computed), the
     newest tension older than ``tension_timeout``, or the depth stale (older than
@@ -93,10 +101,21 @@ CONDITIONS = (
     'safety_factor',
     'time_to_uplift',
     'inconsistent',
+    # Margins with uncertainty and holding (issue 12, items 3 and 4).
+    'uplift_possible',
+    'drag_margin',
 )
 _ERRORS = CONDITIONS[:2]
 _WARNS = CONDITIONS[2:]
-_MARGINS = CONDITIONS[2:7]  # the warnings with a threshold and a deadband
+# The warnings with a threshold and a deadband.
+_MARGINS = (
+    'anchor_margin',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'time_to_uplift',
+    'drag_margin',
+)
 _LIMITS = {'time_to_uplift': 'uplift_time'}  # parameter prefix where it is not the name
 _HOLD, _BREACH, _CLEAR = 0, 1, 2  # classification of one update for one condition
 
@@ -128,6 +147,9 @@ class AlarmInputs:
     dock_residual: float = math.nan  # N, measured - expected tension
     dock_expected: float = math.nan  # N, the tension the dock estimate expects
     dock_sigma: float = math.nan  # normalized residual
+    uplift_force_upper: float = math.nan  # N, the uplift force's bound within sensor accuracy
+    drag_margin: float = math.nan  # N, holding capacity minus horizontal load
+    holding_capacity: float = math.nan  # N, anchor and grounded chain (for the message)
 
 
 class Latch(NamedTuple):
@@ -258,6 +280,11 @@ class LineAlarm:
             )
         elif cond == 'inconsistent':
             breach, clear = x.inconsistent == 1.0, x.inconsistent == 0.0
+        elif cond == 'uplift_possible':
+            nominal = x.uplift_force > self.allowed_uplift
+            upper = x.uplift_force_upper
+            breach = upper > self.allowed_uplift and not nominal
+            clear = upper <= self.allowed_uplift or nominal
         else:
             low, high = self._warn_limits(cond)
             value = getattr(x, cond)
@@ -316,6 +343,12 @@ class LineAlarm:
                 parts.append(_inconsistent_text(x, hold_w))
             elif up and cond == 'time_to_uplift':
                 parts.append(self._uplift_time_text(x, hold_w))
+            elif up and cond == 'uplift_possible':
+                parts.append(self._uplift_possible_text(x, hold_w))
+            elif up and cond == 'drag_margin':
+                text = self._warn_text(cond, x.drag_margin, hold_w)
+                holding = _fmt(x.holding_capacity, 1e3)
+                parts.append(f'{text} (holding {holding} kN): anchor may drag')
             elif up:
                 parts.append(self._warn_text(cond, getattr(x, cond), hold_w))
         return '; '.join(parts) if parts else 'OK'
@@ -323,9 +356,11 @@ class LineAlarm:
     def _warn_text(self, cond: str, value: float, hold: float) -> str:
         low, high = self._warn_limits(cond)
         label = cond.replace('_', ' ')
-        scale, unit, digits = {'load_margin': (1e3, ' kN', 1), 'safety_factor': (1.0, '', 2)}.get(
-            cond, (1.0, ' m', 2)
-        )
+        scale, unit, digits = {
+            'load_margin': (1e3, ' kN', 1),
+            'drag_margin': (1e3, ' kN', 1),
+            'safety_factor': (1.0, '', 2),
+        }.get(cond, (1.0, ' m', 2))
         v, lo, hi = (_fmt(a, scale, digits) for a in (value, low, high))
         if value < low:
             return f'{label} {v}{unit} < {lo}{unit}'
@@ -346,6 +381,19 @@ class LineAlarm:
         return (
             f'time to uplift {_fmt(value, 60.0, 0)} min, warning held (clears after {hold:g} s '
             f'at >= {_fmt(high, 60.0, 0)} min)'
+        )
+
+    def _uplift_possible_text(self, x: AlarmInputs, hold: float) -> str:
+        """The message of the ``uplift_possible`` condition (bound and nominal in kN)."""
+        upper, allowed = x.uplift_force_upper, self.allowed_uplift
+        if upper > allowed:
+            return (
+                f'uplift possible within sensor accuracy: up to {_fmt(upper, 1e3)} kN > allowed '
+                f'{_fmt(allowed, 1e3)} kN (nominal {_fmt(x.uplift_force, 1e3)} kN)'
+            )
+        return (
+            f'uplift-within-accuracy warning held: bound {_fmt(upper, 1e3)} kN (clears after '
+            f'{hold:g} s at <= {_fmt(allowed, 1e3)} kN)'
         )
 
 
@@ -419,6 +467,9 @@ _INPUT_FIELDS = (
     'dock_residual',
     'dock_expected',
     'dock_sigma',
+    'uplift_force_upper',
+    'drag_margin',
+    'holding_capacity',
 )
 
 
@@ -672,6 +723,11 @@ def _classify_columns(
         out[cond] = codes(x[cond] < low, x[cond] >= high)
     flag = x['inconsistent']
     out['inconsistent'] = codes(flag == 1.0, flag == 0.0)
+    nominal = f > alarm.allowed_uplift
+    upper = x['uplift_force_upper']
+    out['uplift_possible'] = codes(
+        (upper > alarm.allowed_uplift) & ~nominal, (upper <= alarm.allowed_uplift) | nominal
+    )
     return out
 
 
@@ -689,6 +745,14 @@ DIAGNOSTIC_KEYS = (
     'load_margin',
     'safety_factor',
     'time_to_uplift',
+    # Margins with uncertainty (core/uncertainty.py) and holding (core/holding.py).
+    'uplift_force_upper',
+    'anchor_margin_lower',
+    'tide_margin_lower',
+    'grounded_length',
+    'holding_capacity',
+    'drag_margin',
+    'implied_anchor_distance',
 )
 
 

@@ -380,13 +380,11 @@ def _elastic_critical_tension(
         new = cur + step
         converged = (np.abs(step) <= cat.STEP_TOL) | (f == 0.0)
         bad = ~((new >= lo_i) & (new <= hi_i) | converged)  # also catches NaN
+        bracketed = np.isfinite(lo_i) & np.isfinite(hi_i)
+        middle = 0.5 * (np.where(bracketed, lo_i, 0.0) + np.where(bracketed, hi_i, 0.0))
         new = np.where(
             bad,
-            np.where(
-                np.isfinite(lo_i) & np.isfinite(hi_i),
-                0.5 * (lo_i + hi_i),
-                np.where(f > 0.0, cur - 4.0, cur + 4.0),
-            ),
+            np.where(bracketed, middle, np.where(f > 0.0, cur - 4.0, cur + 4.0)),
             new,
         )
         rho[idx], lo[idx], hi[idx] = np.where(f == 0.0, cur, new), lo_i, hi_i

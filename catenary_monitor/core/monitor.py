@@ -41,6 +41,7 @@ import numpy as np
 from catenary_monitor.core import acknowledge as alarm_ack
 from catenary_monitor.core import elastic
 from catenary_monitor.core.alarms import (
+    CONDITIONS,
     AlarmInputs,
     AlarmState,
     Level,
@@ -62,6 +63,7 @@ from catenary_monitor.core.plausible import reading_status, reading_status_array
 from catenary_monitor.core.result import STATUS_MESSAGES
 from catenary_monitor.core.solve import solve
 from catenary_monitor.core import tide_trend
+from catenary_monitor.core import holding as holding_rule, uncertainty
 
 __all__ = [
     'NODE_NAME',
@@ -86,6 +88,8 @@ __all__ = [
     'LineState',
     'MonitorCore',
     'line_status',
+    'bound_values',
+    'holding_values',
     'output_values',
     'tide_component',
     'dock_component',
@@ -97,8 +101,9 @@ __all__ = [
 NODE_NAME = 'catenary_monitor'
 #: Element order of each line's outputs (``/catenary_monitor/NAME/outputs``), SI units;
 #: ``status`` is the solver code (:data:`NO_DEPTH` before the first depth), ``level`` 0-3;
-#: ``time_to_uplift`` [s] (:mod:`~catenary_monitor.core.tide_trend`) was appended last so the
-#: older indexes stay.
+#: ``time_to_uplift`` [s] (:mod:`~catenary_monitor.core.tide_trend`) was appended after them
+#: so the older indexes stay, then the bounds (:mod:`~catenary_monitor.core.uncertainty`) and
+#: the holding values (:mod:`~catenary_monitor.core.holding`).
 OUTPUT_FIELDS = (
     'top_tension',
     'depth',
@@ -114,6 +119,10 @@ OUTPUT_FIELDS = (
     'status',
     'level',
     'time_to_uplift',
+    # Margins with the sensors' accuracy (issue 12, item 3): core/uncertainty.py.
+    *uncertainty.FIELDS,
+    # Holding and the anchor distance the chain implies (issue 12, item 4): core/holding.py.
+    *holding_rule.FIELDS,
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -128,6 +137,9 @@ EVENTS_TOPIC = f'/{NODE_NAME}/events'
 _NAN = math.nan
 _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
+_INCONSISTENT = CONDITIONS.index('inconsistent')
+_AT = {key: i for i, key in enumerate(VALUE_FIELDS)}
+_LOOK = uncertainty.FIELDS + holding_rule.FIELDS  # computed from the nominal solve's values
 
 
 class Tension(NamedTuple):
@@ -255,6 +267,9 @@ class LineState:
             load_margin=v[7],
             safety_factor=v[8],
             time_to_uplift=v[11],
+            uplift_force_upper=v[_AT['uplift_force_upper']],
+            drag_margin=v[_AT['drag_margin']],
+            holding_capacity=v[_AT['holding_capacity']],
             tide_rate=rate,
             status=max(self.status, 0),
             status_message=self.status_message,
@@ -466,10 +481,12 @@ class MonitorCore:
                 r.tide_margin, r.uplift_force, self.trend.rate, self.trend.excess
             ),
         )
+        line.values += _NAN_VALUES[len(line.values):]
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
         code = reading_status(t, h, lc.mbl)
         if code:
             _implausible(line, code)
+        self._add_derived([line])
 
     def _solve_many(self, which: Sequence[int]) -> None:
         """Solve several lines at the newest depth in one vectorized call."""
@@ -503,13 +520,33 @@ class MonitorCore:
         models = np.broadcast_to(np.asarray(r.model, dtype=object), tension.shape)
         messages, status = r.message, np.asarray(r.status).tolist()
         for i, line in enumerate(lines):
-            line.values = tuple(col[i] for col in columns)
+            line.values = tuple(col[i] for col in columns) + _NAN_VALUES[len(columns):]
             line.status, line.status_message = int(status[i]), str(messages[i])
             line.model = str(models[i])
         codes = reading_status_array(tension, h, [c.mbl for c in cfgs]).tolist()
         for line, code in zip(lines, codes):
             if code:
                 _implausible(line, code)
+        self._add_derived(lines)
+
+    def _add_derived(self, lines: Sequence[LineState]) -> None:
+        """The bounds and the holding values of freshly solved lines (from their values);
+        lines without accuracies or holding data keep NaN (what the functions give them)."""
+        accuracy = self.config.alarm.depth_accuracy
+        for fields, compute, wanted in (
+            (uncertainty.FIELDS, _bounds_of(accuracy), _wants_bounds(accuracy)),
+            (holding_rule.FIELDS, holding_values, _wants_holding),
+        ):
+            some = [line for line in lines if wanted(line.config)]
+            if not some:
+                continue
+            named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
+            derived = compute([line.config for line in some], named)
+            for j, line in enumerate(some):
+                v = list(line.values)
+                for key in fields:
+                    v[_AT[key]] = float(derived[key][j])
+                line.values = tuple(v)
 
     def _step_lines(self, which: Any, stamp_ns: int) -> list[Change]:
         """Step the alarms of the given lines at ``stamp_ns``; their transitions."""
@@ -558,7 +595,8 @@ class MonitorCore:
                         line.ack, line.state.level, [latch.active for latch in line.state.latches]
                     )
                 )
-                + (line_dock_values(line.state.latches[-1].active, line.dock) if dock else ()),
+                + (line_dock_values(line.state.latches[_INCONSISTENT].active, line.dock)
+                   if dock else ()),
             )
             for line in self.lines
         ]
@@ -582,6 +620,65 @@ def _implausible(line: LineState, code: int) -> None:
     line.values = line.values[:2] + _NAN_VALUES[2:]
     line.status, line.status_message = code, STATUS_MESSAGES[code]
     line.model = elastic.INEXTENSIBLE
+
+
+def _column(cfgs: Sequence[LineConfig], key: str) -> np.ndarray:
+    """One line constant per config as floats (None: NaN, ``ea`` None: inf)."""
+    none = math.inf if key == 'ea' else math.nan
+    return np.array([none if getattr(c, key) is None else getattr(c, key) for c in cfgs])
+
+
+def _wants_bounds(depth_accuracy: float) -> Any:
+    """Whether a line has bounds: a tension accuracy, or a depth accuracy for all."""
+    return lambda c: depth_accuracy > 0.0 or c.tension_accuracy is not None
+
+
+def _wants_holding(c: LineConfig) -> bool:
+    """Whether a line has holding values: a chain length or an anchor holding."""
+    return c.chain_length is not None or c.anchor_holding is not None
+
+
+def _bounds_of(depth_accuracy: float) -> Any:
+    return lambda cfgs, named: bound_values(cfgs, depth_accuracy, named)
+
+
+def bound_values(
+    cfgs: Sequence[LineConfig], depth_accuracy: float, named: dict[str, np.ndarray]
+) -> dict[str, np.ndarray]:
+    """The bounds (:data:`catenary_monitor.core.uncertainty.FIELDS`) per element of the
+    nominal values ``named`` (VALUE_FIELDS -> arrays), each element's line in ``cfgs`` (one
+    config, or one per element); the core and its batch twin both call this."""
+    return uncertainty.bounds(
+        _column(cfgs, 'weight'),
+        _column(cfgs, 'anchor_distance'),
+        _column(cfgs, 'mbl'),
+        _column(cfgs, 'ea'),
+        named['top_tension'],
+        named['depth'],
+        _column(cfgs, 'tension_accuracy'),
+        depth_accuracy,
+        named['uplift_force'],
+    )
+
+
+def holding_values(
+    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray]
+) -> dict[str, np.ndarray]:
+    """The holding values (:data:`catenary_monitor.core.holding.FIELDS`), as
+    :func:`bound_values`."""
+    return holding_rule.holding(
+        _column(cfgs, 'weight'),
+        _column(cfgs, 'ea'),
+        _column(cfgs, 'chain_length'),
+        _column(cfgs, 'anchor_holding'),
+        _column(cfgs, 'anchor_weight'),
+        _column(cfgs, 'chain_friction'),
+        named['top_tension'],
+        named['depth'],
+        named['horizontal_tension'],
+        named['suspended_length'],
+        named['uplift_force'],
+    )
 
 
 def output_values(values: Sequence[float], status: float, level: float) -> tuple[float, ...]:
