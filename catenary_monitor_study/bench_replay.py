@@ -274,6 +274,7 @@ def run(
     chunk_bytes: int = 512 * 1024,
     repeat: int = 3,
     measure_rss: bool = True,
+    measure_mcap: bool = True,
 ) -> dict[str, Any]:
     """Generate the log, time replay and the two baselines (``repeat`` interleaved rounds, the
     median of each) and the MCAP output; returns the figures."""
@@ -308,10 +309,12 @@ def run(
         best_s = runs[0][0]
         csv_bytes = (Path(tmp) / 'out.csv').stat().st_size
         t2 = time.perf_counter()
-        with open(Path(tmp) / 'out.mcap', 'wb', buffering=1 << 20) as f:
-            _, written = _streamed(log, config, mcap=f)
+        written, out_bytes = 0, 0
+        if measure_mcap:
+            with open(Path(tmp) / 'out.mcap', 'wb', buffering=1 << 20) as f:
+                _, written = _streamed(log, config, mcap=f)
+            out_bytes = (Path(tmp) / 'out.mcap').stat().st_size
         t3 = time.perf_counter()
-        out_bytes = (Path(tmp) / 'out.mcap').stat().st_size
         rss = peak_rss(log, config, Path(tmp)) if measure_rss else {}
         updates = sum(t.updates for t in tally.lines)
         transitions = sum(len(t.transitions) for t in tally.lines)
@@ -344,7 +347,7 @@ def run(
         'peak_rss_mb': rss,
         'mcap_out_s': round(t3 - t2, 3),
         'mcap_out_messages': written,
-        'mcap_out_msg_per_s': round(written / (t3 - t2)),
+        'mcap_out_msg_per_s': round(written / max(t3 - t2, 1e-9)),
         'mcap_out_bytes': out_bytes,
         'baseline_messages': done,
         'baseline_s': round(base_s, 3),
@@ -464,6 +467,7 @@ def cmd_bench_replay(args: argparse.Namespace) -> int:
         args.chunk_bytes,
         args.repeat,
         not args.no_rss,
+        not args.no_mcap,
     )
     if args.json:
         print(json.dumps(r))
@@ -485,10 +489,11 @@ def cmd_bench_replay(args: argparse.Namespace) -> int:
         f'{r["replay_summary_s"]:.3f} s = {r["replay_summary_msg_per_s"] / 1e6:.2f} M msg/s '
         f'(target >= 2 M msg/s: {"met" if r["target_summary_rate_met"] else "NOT met"})'
     )
-    print(
-        f'MCAP output: {r["mcap_out_messages"]} messages in {r["mcap_out_s"]:.3f} s = '
-        f'{r["mcap_out_msg_per_s"] / 1e6:.2f} M msg/s ({r["mcap_out_bytes"] / 1e6:.0f} MB)'
-    )
+    if r['mcap_out_messages']:
+        print(
+            f'MCAP output: {r["mcap_out_messages"]} messages in {r["mcap_out_s"]:.3f} s = '
+            f'{r["mcap_out_msg_per_s"] / 1e6:.2f} M msg/s ({r["mcap_out_bytes"] / 1e6:.0f} MB)'
+        )
     print(
         f'baseline, same work (mcap_ros2 decode, node schedule with scalar solve and alarm, '
         f'csv.writer; first {r["baseline_messages"]} messages): '
@@ -550,6 +555,9 @@ def register(sub: Any) -> None:
         '--no-rss',
         action='store_true',
         help='skip the peak-RSS runs (the command in a child process: summary, --csv, --out)',
+    )
+    p.add_argument(
+        '--no-mcap', action='store_true', help='skip the MCAP output (slow: every snapshot)'
     )
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench_replay)
