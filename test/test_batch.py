@@ -26,6 +26,7 @@ from catenary_monitor.core.monitor import (
     OUTPUT_FIELDS,
     VALUE_FIELDS,
     Acknowledge,
+    Reconfigure,
     Depth,
     MonitorCore,
     Tension,
@@ -406,3 +407,49 @@ def test_run_log_steps_acknowledgements_as_the_core_does():
     assert got_rest == want_rest
     for g, w in zip(got_lines, want_lines):
         assert g[:2] == w[:2] and g[3:] == w[3:]
+
+
+def test_run_log_flags_runtime_changes_as_the_core_does():
+    """Accepted runtime changes (logged Reconfigure events) between vectorized stretches: the
+    same ``parameters`` WARN, naming old and new values, until runtime_change_warn_time, then
+    OK; the same snapshots and transitions as the core."""
+    import dataclasses
+
+    base = dock_config(3)
+    config = dataclasses.replace(base, allow_runtime_changes=True, runtime_change_warn_time=20.0)
+    tensions, depth = generate(config, seconds=90.0, seed=3)
+    ticks = ticks_for(tensions, depth)
+
+    def raised(cfg, uplift):
+        lines = list(cfg.lines)
+        lines[0] = dataclasses.replace(lines[0], allowed_uplift=uplift)
+        return dataclasses.replace(cfg, lines=tuple(lines))
+
+    first = raised(config, 1e9)
+    changes = [
+        Reconfigure(T0_NS + int(10.3e9) + 7, first),
+        Reconfigure(T0_NS + int(20.1e9) + 7, first),  # nothing changed: no flag
+        Reconfigure(T0_NS + int(55.7e9) + 7, raised(first, 0.0)),
+    ]
+    core = MonitorCore(config, T0_NS)
+    merged = sorted(events_of(config, tensions, depth, ticks) + changes, key=lambda e: e.stamp_ns)
+    steps = [core.step(ev) for ev in merged]
+    twin = MonitorCore(config, T0_NS)
+    empty = (np.zeros(0, np.int64), np.zeros(0))
+    window = Window([tensions.get(line.name, empty) for line in config.lines], depth, ticks)
+    result, twin = run_log(twin, window, changes, snapshots=True)
+    want = [s.snapshot for s in steps if s.snapshot is not None]
+    assert [s.stamp_ns for s in result.snapshots] == [s.stamp_ns for s in want]
+    for g, w in zip(result.snapshots, want):
+        assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
+    flags = [(s.stamp_ns, s.statuses[-1]) for s in want]
+    assert all(st.name == 'catenary_monitor: parameters' for _, st in flags)
+    text = 'allowed_uplift of line_01 changed 0 N -> 1e+09 N at runtime'
+    at = {round((t - T0_NS) * 1e-9): (int(st.level), st.message) for t, st in flags}
+    assert at[5] == (0, 'runtime changes allowed; none made')
+    assert at[15] == (1, text) and at[29] == (1, text)
+    assert at[35][0] == 0 and at[70] == (1, text.replace('0 N -> 1e+09', '1e+09 N -> 0'))
+    assert at[75][0] == 1 and at[80][0] == 0
+    want_tr = [c for s in steps for c in s.transitions if c.component == 'parameters']
+    got_tr = [c for c in result.others if c.component == 'parameters']
+    assert got_tr == want_tr and [c.transition.new for c in got_tr] == [1, 1]

@@ -841,6 +841,9 @@ def _snapshots(
         statuses.append(logger)
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))
+        flag = core.parameters_component(stamp * 1e-9)
+        if flag is not None:
+            statuses.append(flag)
         out.append(Snapshot(stamp, tuple(statuses)))
     return out
 

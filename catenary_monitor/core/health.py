@@ -13,7 +13,7 @@ from typing import Optional
 from catenary_monitor.core.alarms import Level
 from catenary_monitor.core.plausible import MAX_DEPTH
 
-__all__ = ['tide_status', 'logger_status']
+__all__ = ['tide_status', 'logger_status', 'parameters_status']
 
 
 def tide_status(depth: float, stamp: float, now: float, timeout: float) -> tuple[Level, str]:
@@ -53,3 +53,19 @@ def logger_status(error: Optional[str], path: Optional[str]) -> tuple[Level, str
     if error:
         return Level.ERROR, f'MCAP log not written: {error}'
     return Level.OK, f'logging to {path}' if path else 'logging'
+
+
+def parameters_status(
+    messages: tuple[str, ...], until: float, now: float
+) -> tuple[Level, str]:
+    """Level and message of the runtime-change flag: WARN, naming the accepted runtime
+    changes, until ``until`` [s] (``runtime_change_warn_time`` after the newest one), else OK.
+
+    ``messages`` are the :func:`~catenary_monitor.core.config.change_message` lines of the
+    changes accepted while the flag was up (empty: none yet).
+    """
+    if messages and now < until:
+        return Level.WARN, '; '.join(messages)
+    if messages:
+        return Level.OK, 'runtime changes allowed; the flag of the last one has expired'
+    return Level.OK, 'runtime changes allowed; none made'

@@ -54,10 +54,11 @@ from catenary_monitor.core.config import (
     config_from_params,
     config_to_params,
     resolve_topic,
+    runtime_change_messages,
 )
 from catenary_monitor.core.body import live as dock_live
 from catenary_monitor.core.body.model import DockModel
-from catenary_monitor.core.health import logger_status, tide_status
+from catenary_monitor.core.health import logger_status, parameters_status, tide_status
 from catenary_monitor.core.plausible import reading_status, reading_status_array
 from catenary_monitor.core.result import STATUS_MESSAGES
 from catenary_monitor.core.solve import solve
@@ -322,6 +323,11 @@ class MonitorCore:
         self.dock_entered = start
         self.dock_values: tuple[tuple[str, str], ...] = ()
         self.dock_smoothing = dock_live.Smoothing.initial(len(self.lines))
+        # Accepted runtime changes: their lines, flagged (WARN) until changes_until [s].
+        self.changes: tuple[str, ...] = ()
+        self.changes_until = -math.inf
+        self.parameters: tuple[Level, str] = parameters_status((), -math.inf, start)
+        self.parameters_entered = start
 
     # ------------------------------------------------------------------ events
     def step(self, event: Event) -> Step:
@@ -336,8 +342,7 @@ class MonitorCore:
         if isinstance(event, LoggerHealth):
             return self._on_logger(event)
         if isinstance(event, Reconfigure):
-            self.reconfigure(event.config)
-            return Step(event.stamp_ns, 'configure', (), None, ())
+            return self._on_reconfigure(event)
         if isinstance(event, Acknowledge):
             return self._on_acknowledge(event)
         raise TypeError(f'not a monitor event: {event!r}')
@@ -379,6 +384,24 @@ class MonitorCore:
             if ev.line is None or ev.line == line.config.name:
                 line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin)
         return Step(ev.stamp_ns, 'acknowledge', (), self.snapshot(ev.stamp_ns), ())
+
+    def _on_reconfigure(self, ev: Reconfigure) -> Step:
+        """Take the new configuration; flag what changed (WARN on the ``parameters`` status
+        for ``runtime_change_warn_time``), shown at once."""
+        now = _stamp_s(ev.stamp_ns)
+        messages = runtime_change_messages(self.config, ev.config)
+        self.reconfigure(ev.config)
+        if not messages:
+            return Step(ev.stamp_ns, 'configure', (), None, ())
+        held = self.changes if now < self.changes_until else ()
+        if self.changes and not held and self.parameters[0] != Level.OK:  # the flag expired
+            self.parameters = parameters_status(self.changes, self.changes_until, now)
+            self.parameters_entered = self.changes_until
+        self.changes = held + tuple(messages)
+        self.changes_until = now + ev.config.runtime_change_warn_time
+        new = parameters_status(self.changes, self.changes_until, now)
+        changes = self._set_component('parameters', new, ev.stamp_ns)
+        return Step(ev.stamp_ns, 'configure', (), self.snapshot(ev.stamp_ns), tuple(changes))
 
     def reconfigure(self, config: MonitorConfig) -> None:
         """Take new line constants and alarm rules (same line names); alarm states are kept."""
@@ -573,7 +596,20 @@ class MonitorCore:
         )
         if dock:
             statuses.append(dock_component(self.dock, self.dock_values))
+        flag = self.parameters_component(now)
+        if flag is not None:
+            statuses.append(flag)
         return Snapshot(stamp_ns, tuple(statuses))
+
+    def parameters_component(self, now: float) -> Optional[ComponentStatus]:
+        """The runtime-change status at ``now`` [s] (None when runtime changes are not
+        allowed and none was made): WARN naming the changes until their flag expires."""
+        if not (self.config.allow_runtime_changes or self.changes):
+            return None
+        level, message = parameters_status(self.changes, self.changes_until, now)
+        until = repr(float(self.changes_until)) if self.changes else 'nan'
+        values = (('changes', str(len(self.changes))), ('flagged_until', until))
+        return ComponentStatus(f'{NODE_NAME}: parameters', level, message, NODE_NAME, values)
 
 
 def _implausible(line: LineState, code: int) -> None:
