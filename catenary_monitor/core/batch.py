@@ -841,9 +841,7 @@ def _snapshots(
         statuses.append(logger)
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))
-        flag = core.parameters_component(stamp * 1e-9)
-        if flag is not None:
-            statuses.append(flag)
+        statuses += core.guard_components(stamp * 1e-9)
         out.append(Snapshot(stamp, tuple(statuses)))
     return out
 

@@ -23,6 +23,7 @@ import os
 import signal
 import sys
 import threading
+import time
 import traceback
 from functools import partial, wraps
 from typing import Any, Optional, Sequence
@@ -30,6 +31,8 @@ from typing import Any, Optional, Sequence
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
+from rclpy.clock import Clock, ClockType
+from rclpy.event_handler import SubscriptionEventCallbacks
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -42,6 +45,7 @@ from catenary_monitor import __version__
 from catenary_monitor.core import elastic
 from catenary_monitor.core.acknowledge import ACKNOWLEDGE_TOPIC, parse_request
 from catenary_monitor.core.alarms import Level
+from catenary_monitor.core.health import clock_stopped
 from catenary_monitor.core.config import (
     ConfigError,
     MonitorConfig,
@@ -61,8 +65,10 @@ from catenary_monitor.core.monitor import (
     OUTPUT_FIELDS,
     Acknowledge,
     Change,
+    ClockHealth,
     Depth,
     Event,
+    Intake,
     LoggerHealth,
     MonitorCore,
     Reconfigure,
@@ -84,6 +90,13 @@ _PARAM_TYPES = {
     'string_array': Parameter.Type.STRING_ARRAY,
 }
 _RELIABLE = QoSProfile(depth=10)
+#: Period of the wall-clock watchdog (ROS clock, intake counts) [s].
+WATCHDOG_PERIOD = 1.0
+
+
+def _events_executor_wanted() -> bool:
+    """True unless ``CATENARY_MONITOR_EXECUTOR=single`` asks for the SingleThreadedExecutor."""
+    return os.environ.get('CATENARY_MONITOR_EXECUTOR', 'events') != 'single'
 
 
 def _guarded(method: Any) -> Any:
@@ -143,6 +156,7 @@ class CatenaryMonitor(Node):
         self._logger_error: Optional[str] = None
         self.callback_errors = 0
         self.log = self._open_log()
+        self._init_intake()
         self._create_interfaces()
         start = self._stamp()
         self.core = MonitorCore(
@@ -154,6 +168,9 @@ class CatenaryMonitor(Node):
         )
         self._write_record(Start(start))
         self._check_logger()
+        self._clock_ros, self._clock_wall = start, time.monotonic()
+        self._clock_state: Optional[bool] = None  # stopped? (None: not reported yet)
+        self._check_clock(self._clock_wall)
         self.add_on_set_parameters_callback(self._validate_change)
         self.add_post_set_parameters_callback(self._apply_change)
         self.get_logger().info(
@@ -223,6 +240,27 @@ class CatenaryMonitor(Node):
         except Exception as exc:  # noqa: BLE001
             self.get_logger().error(f'cannot log {topic} to MCAP: {exc}')
 
+    def _init_intake(self) -> None:
+        """Intake counters (per line, then the depth) since the last Intake event."""
+        n = len(self.config.lines) + 1
+        self._received = [0] * n
+        self._dropped = [0] * n
+        self._last_seq: list[Optional[int]] = [None] * n
+        self._busy = 0.0  # s of wall time in the sample callbacks
+        self._intake_wall = time.monotonic()
+        # rclpy's EventsExecutor (7.1) cannot call a callback taking MessageInfo: the
+        # publisher's sequence numbers (gaps = samples lost) only with the other executor.
+        self._with_info = not (_events_executor_wanted() and _has_events_executor())
+
+    def _sample_callback(self, handler: Any, k: int) -> Any:
+        """The subscription callback for input ``k`` (sequence-checked where possible)."""
+        if self._with_info:
+            return partial(self._on_sample_info, handler, k)
+        return handler
+
+    def _sample_events(self, k: int) -> SubscriptionEventCallbacks:
+        return SubscriptionEventCallbacks(message_lost=partial(self._on_lost, k))
+
     def _create_interfaces(self) -> None:
         """Subscriptions (sensor-data QoS, raw CDR), publishers and timers."""
         cfg = self.config
@@ -234,8 +272,9 @@ class CatenaryMonitor(Node):
             sub = self.create_subscription(
                 Float64,
                 line.tension_topic,
-                partial(self._on_tension, k),
+                self._sample_callback(partial(self._on_tension, k), k),
                 qos_profile_sensor_data,
+                event_callbacks=self._sample_events(k),
                 raw=True,
             )
             self._tension_topics.append(sub.topic_name)
@@ -244,8 +283,14 @@ class CatenaryMonitor(Node):
             self._output_pubs.append(pub)
             self._output_topics.append(pub.topic_name)
             self._register(pub.topic_name, 'std_msgs/msg/Float64MultiArray', 'default')
+        n = len(cfg.lines)
         sub = self.create_subscription(
-            Float64, cfg.depth_topic, self._on_depth, qos_profile_sensor_data, raw=True
+            Float64,
+            cfg.depth_topic,
+            self._sample_callback(self._on_depth, n),
+            qos_profile_sensor_data,
+            event_callbacks=self._sample_events(n),
+            raw=True,
         )
         self._depth_topic = sub.topic_name
         self._register(self._depth_topic, 'std_msgs/msg/Float64', 'sensor_data')
@@ -262,7 +307,10 @@ class CatenaryMonitor(Node):
             String, ACKNOWLEDGE_TOPIC, self._on_acknowledge, _RELIABLE
         )
         self._diag_timer = self.create_timer(1.0 / cfg.alarm.diagnostic_rate, self._on_period)
-        self._log_timer = self.create_timer(0.25, self._on_log_timer)
+        # Wall-clock timers: they run while a simulated ROS clock stands still.
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self._log_timer = self.create_timer(0.25, self._on_log_timer, clock=steady)
+        self._watchdog = self.create_timer(WATCHDOG_PERIOD, self._on_watchdog, clock=steady)
 
     # ------------------------------------------------------------------ callbacks
     def _stamp(self) -> int:
@@ -274,16 +322,77 @@ class CatenaryMonitor(Node):
     @_guarded
     def _on_tension(self, line: int, data: bytes) -> None:
         """A hook tension sample (N): log it, one core event, publish what it says."""
+        t0 = time.perf_counter()
+        self._received[line] += 1
         stamp = self._stamp()
         self._write(self._tension_topics[line], data, stamp)
         self._run(Tension(stamp, line, deserialize_message(data, Float64).data))
+        self._busy += time.perf_counter() - t0
 
     @_guarded
     def _on_depth(self, data: bytes) -> None:
         """A depth sample (m): log it, one core event, publish what it says."""
+        t0 = time.perf_counter()
+        self._received[-1] += 1
         stamp = self._stamp()
         self._write(self._depth_topic, data, stamp)
         self._run(Depth(stamp, deserialize_message(data, Float64).data))
+        self._busy += time.perf_counter() - t0
+
+    def _on_sample_info(self, handler: Any, k: int, data: bytes, info: Any) -> None:
+        """A sample with its MessageInfo: a gap in the publisher's sequence numbers counts
+        the samples lost before the node took them (a restarted publisher starts again)."""
+        seq = info.get('publication_sequence_number')
+        last = self._last_seq[k]
+        if isinstance(seq, int):
+            if last is not None and seq > last + 1:
+                self._dropped[k] += seq - last - 1
+            self._last_seq[k] = seq
+        handler(data)
+
+    def _on_lost(self, k: int, info: Any) -> None:
+        """A QoS message-lost event of input ``k`` (what DDS reports lost)."""
+        self._dropped[k] += int(info.total_count_change)
+
+    @_guarded
+    def _on_watchdog(self) -> None:
+        """Wall-clock checks: the ROS clock advances, and the intake counts."""
+        wall = time.monotonic()
+        self._check_clock(wall)
+        self._report_intake(wall)
+
+    def _check_clock(self, wall: float) -> None:
+        """With ``use_sim_time``: a ClockHealth event (and /diagnostics) every watchdog
+        period while the ROS clock stands still, one when it moves again (and one at start)."""
+        if not self.get_parameter('use_sim_time').value:
+            return
+        ros = self._node_clock.now().nanoseconds
+        if ros != self._clock_ros:
+            self._clock_ros, self._clock_wall = ros, wall
+        frozen = wall - self._clock_wall
+        if clock_stopped(frozen):
+            if self._clock_state is not True:
+                self.get_logger().error(
+                    f'ROS clock stopped: /clock not advancing for {frozen:.0f} s'
+                )
+            self._clock_state = True
+            self._record(ClockHealth(self._stamp(), round(frozen, 3)))
+        elif self._clock_state is not False:
+            if self._clock_state:
+                self.get_logger().info('ROS clock advancing again')
+            self._clock_state = False
+            self._record(ClockHealth(self._stamp(), None))
+
+    def _report_intake(self, wall: float) -> None:
+        """One Intake event: samples received and dropped, and callback time, since the last."""
+        period = wall - self._intake_wall
+        event = Intake(
+            self._stamp(), tuple(self._received), tuple(self._dropped), self._busy, period
+        )
+        n = len(self._received)
+        self._received, self._dropped, self._busy = [0] * n, [0] * n, 0.0
+        self._intake_wall = wall
+        self._record(event)
 
     @_guarded
     def _on_period(self) -> None:
@@ -435,10 +544,18 @@ class CatenaryMonitor(Node):
             self.log.close()
 
 
+def _has_events_executor() -> bool:
+    try:
+        from rclpy.experimental import EventsExecutor  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
 def _make_executor() -> Any:
     """rclpy's EventsExecutor where available (several times cheaper per message), else the
     SingleThreadedExecutor; ``CATENARY_MONITOR_EXECUTOR=single`` forces the latter."""
-    if os.environ.get('CATENARY_MONITOR_EXECUTOR', 'events') != 'single':
+    if _events_executor_wanted():
         try:
             from rclpy.experimental import EventsExecutor
 
