@@ -84,8 +84,10 @@ CLOCK_STOPPED_AFTER = 3.0
 INTAKE_WINDOW = 60.0
 #: Intake: dropped share of the samples at or above which the status is ERROR (any drop: WARN).
 DROPPED_ERROR_SHARE = 0.05
-#: Intake: share of wall time spent in callbacks at or above which the node cannot keep up.
-BUSY_WARN_SHARE = 0.9
+#: Intake: share of wall time spent in callbacks (over the last BUSY_WINDOW [s]) at or above
+#: which the node cannot keep up.
+BUSY_WARN_SHARE = 0.8
+BUSY_WINDOW = 5.0
 
 
 def clock_stopped(frozen_for: float) -> bool:
@@ -112,7 +114,7 @@ def intake_status(
 
     ``received`` / ``dropped``: tension and depth samples handled / lost before the node
     handled them (publisher sequence gaps, QoS message-lost events); ``busy``: share of wall
-    time spent in callbacks (NaN: unknown). ERROR when at least
+    time spent in callbacks over the last :data:`BUSY_WINDOW` (NaN: unknown). ERROR when at least
     :data:`DROPPED_ERROR_SHARE` of the samples were dropped, WARN on any drop or when the node
     is busy :data:`BUSY_WARN_SHARE` of the time, else OK.
     """
@@ -131,7 +133,7 @@ def intake_status(
         )
     if busy == busy and busy >= BUSY_WARN_SHARE:
         return Level.WARN, (
-            f'node cannot keep up: busy {100.0 * busy:.0f} % of the last {window:g} s in '
+            f'node cannot keep up: busy {100.0 * busy:.0f} % of the last {BUSY_WINDOW:g} s in '
             'callbacks (samples may be lost)'
         )
     return Level.OK, f'{received} samples in the last {window:g} s, none dropped{busy_text}'

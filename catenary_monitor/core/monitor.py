@@ -59,6 +59,7 @@ from catenary_monitor.core.config import (
 from catenary_monitor.core.body import live as dock_live
 from catenary_monitor.core.body.model import DockModel
 from catenary_monitor.core.health import (
+    BUSY_WINDOW,
     INTAKE_WINDOW,
     clock_status,
     intake_status,
@@ -439,8 +440,9 @@ class MonitorCore:
         self.intake_counts = counts
         received = sum(sum(c.received) for c in counts)
         dropped = sum(sum(c.dropped) for c in counts)
-        period = sum(c.period for c in counts)
-        busy = sum(c.busy for c in counts) / period if period > 0 else _NAN
+        recent = [c for c in counts if ev.stamp_ns - c.stamp_ns < int(BUSY_WINDOW * 1e9)]
+        period = sum(c.period for c in recent)
+        busy = sum(c.busy for c in recent) / period if period > 0 else _NAN
         new = intake_status(received, dropped, busy, INTAKE_WINDOW)
         changes = self._set_component('intake', new, ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'intake', [], changes)

@@ -1,0 +1,136 @@
+"""Nobody silences the monitor, and it loses nothing silently: against a monitor process.
+
+* ``use_sim_time`` with no ``/clock`` (or a ``/clock`` that stops): the wall-clock watchdog
+  keeps ``/diagnostics`` coming with the ``clock`` status ERROR.
+* Samples lost before the node handles them are counted on the ``intake`` status
+  (``messages_dropped``) and make it WARN or ERROR; a normal rate leaves it OK with 0.
+
+Every wait is bounded and waits for the event it needs.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+from ros_harness import Client, child_env, output_of, start_monitor, stop, write_params
+
+pytestmark = pytest.mark.ros
+
+W, DEPTH, MBL = 1300.0, 20.85, 4.827e6
+CLOCK, INTAKE = 'catenary_monitor: clock', 'catenary_monitor: intake'
+OK, ERROR = 0, 2
+
+
+@pytest.fixture(scope='module')
+def client():
+    c = Client('node_guard_client')
+    yield c
+    c.close()
+
+
+def _lines(n):
+    return {f'l{k:02d}': dict(weight=W, anchor_distance=121.06, mbl=MBL) for k in range(n)}
+
+
+def test_use_sim_time_without_clock_still_publishes_a_clock_error(client, tmp_path):
+    params = write_params(tmp_path / 'params.yaml', _lines(1))
+    proc = start_monitor(params, tmp_path / 'log', '-p', 'use_sim_time:=true')
+    try:
+        s = client.wait_status(CLOCK, 30.0, ERROR)
+        assert s['message'].startswith('ROS clock stopped: /clock not advancing for '), s
+        t0 = time.monotonic()
+        client.wait_for(lambda: len(client.levels(CLOCK, t0)) >= 2, 10.0, 'more /diagnostics')
+        assert 'ROS clock stopped' in output_of(proc)
+    finally:
+        assert stop(proc) == 0
+
+
+def test_a_clock_that_stops_is_reported(client, tmp_path):
+    from rosgraph_msgs.msg import Clock
+
+    pub = client.node.create_publisher(Clock, '/clock', 10)
+    running = threading.Event()
+    running.set()
+
+    def tick():
+        t = 1000.0
+        while running.is_set():
+            msg = Clock()
+            msg.clock.sec, msg.clock.nanosec = int(t), int((t % 1) * 1e9)
+            pub.publish(msg)
+            t += 0.05
+            time.sleep(0.05)
+
+    params = write_params(tmp_path / 'params.yaml', _lines(1))
+    proc = start_monitor(params, tmp_path / 'log', '-p', 'use_sim_time:=true')
+    thread = threading.Thread(target=tick, daemon=True)
+    thread.start()
+    try:
+        s = client.wait_status(CLOCK, 30.0, OK)
+        assert s['message'] == 'ROS clock advancing (use_sim_time)', s
+        running.clear()
+        thread.join(5.0)
+        t0 = time.monotonic()
+        s = client.wait_status(CLOCK, 30.0, ERROR, since=t0)
+        assert 'ROS clock stopped: /clock not advancing for' in s['message'], s
+    finally:
+        running.clear()
+        assert stop(proc) == 0
+        client.node.destroy_publisher(pub)
+
+
+def _flood(names, rate, duration):
+    script = str(Path(__file__).with_name('flood_publisher.py'))
+    return subprocess.Popen(
+        [sys.executable, script, ','.join(names), str(rate), str(duration)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=child_env(),
+    )
+
+
+def _dropped(status):
+    return int(status['values']['messages_dropped'])
+
+
+@pytest.mark.parametrize('executor', ['single', 'events'])
+def test_an_overflowing_intake_is_counted_and_reported(client, tmp_path, monkeypatch, executor):
+    """12 lines at 400 Hz into the node: it cannot keep up, and says so."""
+    monkeypatch.setenv('CATENARY_MONITOR_EXECUTOR', executor)
+    lines = _lines(12)
+    params = write_params(tmp_path / 'params.yaml', lines)
+    proc = start_monitor(params, tmp_path / 'log')
+    flood = _flood(list(lines), 400.0, 60.0)
+    try:
+        s = client.wait_status(INTAKE, 60.0, check=lambda s: s['level'] != OK)
+        if executor == 'single':  # the publisher's sequence numbers: samples lost, counted
+            s = client.wait_status(INTAKE, 60.0, check=lambda s: _dropped(s) > 0)
+            assert 'dropped' in s['message'], s
+        else:
+            assert 'cannot keep up' in s['message'] or _dropped(s) > 0, s
+    finally:
+        flood.kill()
+        flood.wait(10)
+        assert stop(proc) == 0
+
+
+def test_a_normal_rate_drops_nothing(client, tmp_path, monkeypatch):
+    monkeypatch.setenv('CATENARY_MONITOR_EXECUTOR', 'single')
+    params = write_params(tmp_path / 'params.yaml', _lines(2))
+    proc = start_monitor(params, tmp_path / 'log')
+    flood = _flood(['l00', 'l01'], 20.0, 60.0)
+    try:
+        # Two full diagnostic periods after samples arrive: counted, none dropped.
+        s = client.wait_status(INTAKE, 60.0, check=lambda s: int(s['message'].split()[0]) > 50)
+        assert s['level'] == OK and _dropped(s) == 0, s
+        assert s['values']['l00.messages_dropped'] == '0', s
+    finally:
+        flood.kill()
+        flood.wait(10)
+        assert stop(proc) == 0
