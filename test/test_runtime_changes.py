@@ -88,7 +88,8 @@ def test_alarm_parameters_and_use_sim_time_are_refused_by_default(client, tmp_pa
 def test_allowed_changes_are_logged_and_recorded(client, tmp_path):
     proc = _start(client, tmp_path, allow_runtime_changes=True)
     try:
-        assert client.wait_status(FLAG, 10.0, OK)['message'] == 'runtime changes allowed; none made'
+        before = client.wait_status(FLAG, 10.0, OK)
+        assert before['message'] == 'runtime changes allowed; none made', before
         r = _set(client, 'up.allowed_uplift', 1e9)
         assert r.successful, r.reason
         line = 'allowed_uplift of up changed 0 N -> 1e+09 N at runtime'
