@@ -364,6 +364,7 @@ class MonitorCore:
         self.intake: tuple[Level, str] = (Level.OK, 'no sample counts yet')
         self.intake_entered = start
         self.intake_counts: list[Intake] = []  # the Intake events of the last INTAKE_WINDOW
+        self.intake_seen = False
 
     # ------------------------------------------------------------------ events
     def step(self, event: Event) -> Step:
@@ -434,6 +435,7 @@ class MonitorCore:
 
     def _on_intake(self, ev: Intake) -> Step:
         """Sample counts: the intake status over the last :data:`INTAKE_WINDOW` of them."""
+        self.intake_seen = True
         counts = self.intake_counts + [ev]
         while counts and ev.stamp_ns - counts[0].stamp_ns >= int(INTAKE_WINDOW * 1e9):
             counts.pop(0)
@@ -676,7 +678,7 @@ class MonitorCore:
             out.append(flag)
         if self.clock_seen:
             out.append(ComponentStatus(f'{NODE_NAME}: clock', *self.clock, NODE_NAME, ()))
-        if self.intake_counts:
+        if self.intake_seen:
             dropped = self.intake_dropped()
             names = [line.config.name for line in self.lines] + ['depth']
             values = (('messages_dropped', str(sum(dropped))),) + tuple(

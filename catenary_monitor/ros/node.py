@@ -92,6 +92,8 @@ _PARAM_TYPES = {
 _RELIABLE = QoSProfile(depth=10)
 #: Period of the wall-clock watchdog (ROS clock, intake counts) [s].
 WATCHDOG_PERIOD = 1.0
+#: The longest time without an Intake event [s] (while nothing is lost, only these are sent).
+INTAKE_HEARTBEAT = 60.0
 
 
 def _events_executor_wanted() -> bool:
@@ -246,8 +248,10 @@ class CatenaryMonitor(Node):
         self._received = [0] * n
         self._dropped = [0] * n
         self._last_seq: list[Optional[int]] = [None] * n
-        self._busy = 0.0  # s of wall time in the sample callbacks
+        self._busy = 0.0  # s of wall time in the sample callbacks since the last Intake event
+        self._busy_tick = 0.0  # the same since the last watchdog period
         self._intake_wall = time.monotonic()
+        self._intake_sent = False
         # rclpy's EventsExecutor (7.1) cannot call a callback taking MessageInfo: the
         # publisher's sequence numbers (gaps = samples lost) only with the other executor.
         self._with_info = not (_events_executor_wanted() and _has_events_executor())
@@ -327,7 +331,9 @@ class CatenaryMonitor(Node):
         stamp = self._stamp()
         self._write(self._tension_topics[line], data, stamp)
         self._run(Tension(stamp, line, deserialize_message(data, Float64).data))
-        self._busy += time.perf_counter() - t0
+        took = time.perf_counter() - t0
+        self._busy += took
+        self._busy_tick += took
 
     @_guarded
     def _on_depth(self, data: bytes) -> None:
@@ -337,7 +343,9 @@ class CatenaryMonitor(Node):
         stamp = self._stamp()
         self._write(self._depth_topic, data, stamp)
         self._run(Depth(stamp, deserialize_message(data, Float64).data))
-        self._busy += time.perf_counter() - t0
+        took = time.perf_counter() - t0
+        self._busy += took
+        self._busy_tick += took
 
     def _on_sample_info(self, handler: Any, k: int, data: bytes, info: Any) -> None:
         """A sample with its MessageInfo: a gap in the publisher's sequence numbers counts
@@ -383,15 +391,27 @@ class CatenaryMonitor(Node):
             self._clock_state = False
             self._record(ClockHealth(self._stamp(), None))
 
-    def _report_intake(self, wall: float) -> None:
-        """One Intake event: samples received and dropped, and callback time, since the last."""
+    def _report_intake(self, wall: float, force: bool = False) -> None:
+        """An Intake event (samples received and dropped, callback time, since the last one)
+        when something is to be said: a drop, a busy second, the intake not OK, or
+        :data:`INTAKE_HEARTBEAT` without one (few events: replay steps each one)."""
+        busy_share = self._busy_tick / WATCHDOG_PERIOD
+        self._busy_tick = 0.0
+        quiet = (
+            not any(self._dropped)
+            and busy_share < 0.5
+            and self.core.intake[0] == Level.OK
+            and wall - self._intake_wall < INTAKE_HEARTBEAT
+        )
+        if quiet and self._intake_sent and not force:
+            return
         period = wall - self._intake_wall
         event = Intake(
             self._stamp(), tuple(self._received), tuple(self._dropped), self._busy, period
         )
         n = len(self._received)
         self._received, self._dropped, self._busy = [0] * n, [0] * n, 0.0
-        self._intake_wall = wall
+        self._intake_wall, self._intake_sent = wall, True
         self._record(event)
 
     @_guarded
@@ -539,7 +559,11 @@ class CatenaryMonitor(Node):
             self.log.add_metadata(NODE_NAME, self._metadata(config))
 
     def close(self) -> None:
-        """Finish the MCAP file (summary written)."""
+        """Record the last intake counts, then finish the MCAP file (summary written)."""
+        try:
+            self._report_intake(time.monotonic(), force=True)
+        except Exception as exc:  # noqa: BLE001 - closing the log matters more
+            self.get_logger().error(f'last intake counts not recorded: {exc}')
         if self.log is not None:
             self.log.close()
 
