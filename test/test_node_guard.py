@@ -39,9 +39,10 @@ def _lines(n):
 
 def test_use_sim_time_without_clock_still_publishes_a_clock_error(client, tmp_path):
     params = write_params(tmp_path / 'params.yaml', _lines(1))
+    t0 = time.monotonic()
     proc = start_monitor(params, tmp_path / 'log', '-p', 'use_sim_time:=true')
     try:
-        s = client.wait_status(CLOCK, 30.0, ERROR)
+        s = client.wait_status(CLOCK, 30.0, ERROR, since=t0)
         assert s['message'].startswith('ROS clock stopped: /clock not advancing for '), s
         t0 = time.monotonic()
         client.wait_for(lambda: len(client.levels(CLOCK, t0)) >= 2, 10.0, 'more /diagnostics')
@@ -67,11 +68,12 @@ def test_a_clock_that_stops_is_reported(client, tmp_path):
             time.sleep(0.05)
 
     params = write_params(tmp_path / 'params.yaml', _lines(1))
+    t_start = time.monotonic()
     proc = start_monitor(params, tmp_path / 'log', '-p', 'use_sim_time:=true')
     thread = threading.Thread(target=tick, daemon=True)
     thread.start()
     try:
-        s = client.wait_status(CLOCK, 30.0, OK)
+        s = client.wait_status(CLOCK, 30.0, OK, since=t_start)
         assert s['message'] == 'ROS clock advancing (use_sim_time)', s
         running.clear()
         thread.join(5.0)
@@ -105,12 +107,13 @@ def test_an_overflowing_intake_is_counted_and_reported(client, tmp_path, monkeyp
     monkeypatch.setenv('CATENARY_MONITOR_EXECUTOR', executor)
     lines = _lines(12)
     params = write_params(tmp_path / 'params.yaml', lines)
+    t0 = time.monotonic()  # the client keeps what earlier tests' monitors published
     proc = start_monitor(params, tmp_path / 'log')
     flood = _flood(list(lines), 400.0, 60.0)
     try:
-        s = client.wait_status(INTAKE, 60.0, check=lambda s: s['level'] != OK)
+        s = client.wait_status(INTAKE, 60.0, since=t0, check=lambda s: s['level'] != OK)
         if executor == 'single':  # the publisher's sequence numbers: samples lost, counted
-            s = client.wait_status(INTAKE, 60.0, check=lambda s: _dropped(s) > 0)
+            s = client.wait_status(INTAKE, 60.0, since=t0, check=lambda s: _dropped(s) > 0)
             assert 'dropped' in s['message'], s
         else:
             assert 'cannot keep up' in s['message'] or _dropped(s) > 0, s
@@ -137,7 +140,7 @@ def test_a_normal_rate_drops_nothing(client, tmp_path, monkeypatch):
     flood = _flood(['l00', 'l01'], 20.0, 5.0)
     try:
         assert 'sent' in flood.communicate(timeout=60)[0]
-        t0 = time.monotonic()
+        t0 = time.monotonic()  # statuses published after every sample was sent
         client.wait_for(lambda: len(client.levels(INTAKE, t0)) >= 2, 20.0, 'intake status')
         s = client.latest_status(INTAKE, t0)
         assert s['level'] == OK and _dropped(s) == 0, s

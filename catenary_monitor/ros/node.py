@@ -90,6 +90,15 @@ _PARAM_TYPES = {
     'string_array': Parameter.Type.STRING_ARRAY,
 }
 _RELIABLE = QoSProfile(depth=10)
+#: The input subscriptions: sensor-data QoS (best effort) with a deeper queue than its 5, so a
+#: node held off the CPU for up to about 2 s at 50 Hz loses no sample (bench-soak measured
+#: 0.7 % lost with depth 5 on a loaded machine).
+_SAMPLES = QoSProfile(
+    history=qos_profile_sensor_data.history,
+    depth=100,
+    reliability=qos_profile_sensor_data.reliability,
+    durability=qos_profile_sensor_data.durability,
+)
 #: Period of the wall-clock watchdog (ROS clock, intake counts) [s].
 WATCHDOG_PERIOD = 1.0
 #: The longest time without an Intake event [s] (while nothing is lost, only these are sent).
@@ -277,7 +286,7 @@ class CatenaryMonitor(Node):
                 Float64,
                 line.tension_topic,
                 self._sample_callback(partial(self._on_tension, k), k),
-                qos_profile_sensor_data,
+                _SAMPLES,
                 event_callbacks=self._sample_events(k),
                 raw=True,
             )
@@ -292,7 +301,7 @@ class CatenaryMonitor(Node):
             Float64,
             cfg.depth_topic,
             self._sample_callback(self._on_depth, n),
-            qos_profile_sensor_data,
+            _SAMPLES,
             event_callbacks=self._sample_events(n),
             raw=True,
         )
