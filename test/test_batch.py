@@ -453,3 +453,70 @@ def test_run_log_flags_runtime_changes_as_the_core_does():
     want_tr = [c for s in steps for c in s.transitions if c.component == 'parameters']
     got_tr = [c for c in result.others if c.component == 'parameters']
     assert got_tr == want_tr and [c.transition.new for c in got_tr] == [1, 1]
+
+
+def test_run_log_steps_clock_and_intake_events_as_the_core_does():
+    """The node's clock-watchdog and intake records (through their JSON record and back)
+    between vectorized stretches: the same clock and intake statuses, snapshots and
+    transitions as the core; drops age out of the 60 s window."""
+    from catenary_monitor.core.monitor import (
+        ClockHealth,
+        Intake,
+        event_record,
+        parse_event_record,
+    )
+    import json
+
+    config = dock_config(3)
+    tensions, depth = generate(config, seconds=150.0, seed=4)
+    ticks = ticks_for(tensions, depth)
+
+    def at(s):
+        return T0_NS + int(s * 1e9) + 11
+
+    raw = [
+        ClockHealth(at(1.0), None),
+        Intake(at(2.0), (20, 20, 20, 2), (0, 0, 0, 0), 0.01, 1.0),
+        Intake(at(30.0), (500, 480, 500, 28), (0, 40, 0, 0), 0.2, 28.0),  # 2.5 % dropped: WARN
+        Intake(at(31.0), (20, 0, 20, 1), (0, 50, 0, 0), 0.1, 1.0),  # now 5.3 %: ERROR
+        ClockHealth(at(40.0), 4.0),
+        ClockHealth(at(41.0), 5.0),
+        ClockHealth(at(42.0), None),
+        Intake(at(95.0), (600, 600, 600, 60), (0, 0, 0, 0), 0.5, 64.0),  # drops aged out
+        Intake(at(100.5), (20, 20, 20, 1), (0, 0, 0, 0), 0.9, 1.0),  # busy: WARN
+    ]
+    events = [parse_event_record(e.stamp_ns, json.dumps(event_record(e))) for e in raw]
+    assert events == raw
+    core = MonitorCore(config, T0_NS)
+    merged = sorted(events_of(config, tensions, depth, ticks) + events, key=lambda e: e.stamp_ns)
+    steps = [core.step(ev) for ev in merged]
+    twin = MonitorCore(config, T0_NS)
+    empty = (np.zeros(0, np.int64), np.zeros(0))
+    window = Window([tensions.get(line.name, empty) for line in config.lines], depth, ticks)
+    result, twin = run_log(twin, window, events, snapshots=True)
+    want = [s.snapshot for s in steps if s.snapshot is not None]
+    assert [s.stamp_ns for s in result.snapshots] == [s.stamp_ns for s in want]
+    for g, w in zip(result.snapshots, want):
+        assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
+    got = [(c.component, int(c.transition.new)) for c in result.others]
+    assert got == [c for c in ((c.component, int(c.transition.new))
+                               for s in steps for c in s.transitions)
+                   if c[0] in ('clock', 'intake')]
+    assert got == [
+        ('intake', 1), ('intake', 2), ('clock', 2), ('clock', 0), ('intake', 0), ('intake', 1)
+    ]
+    last = {st.name: st for st in want[-1].statuses}
+    assert last['catenary_monitor: clock'].level == 0
+    intake = last['catenary_monitor: intake']
+    assert dict(intake.values)['messages_dropped'] == '0' and 'busy' in intake.message
+    error = next(
+        st for s in want for st in s.statuses
+        if st.name == 'catenary_monitor: intake' and st.level == 2
+    )
+    assert error.message.startswith('node cannot keep up: 5 % of tension and depth samples')
+    assert dict(error.values)['line_02.messages_dropped'] == '90'
+    stopped = next(
+        st for s in want for st in s.statuses
+        if st.name == 'catenary_monitor: clock' and st.level == 2
+    )
+    assert stopped.message.startswith('ROS clock stopped: /clock not advancing for 4 s')

@@ -85,8 +85,9 @@ INTAKE_WINDOW = 60.0
 #: Intake: dropped share of the samples at or above which the status is ERROR (any drop: WARN).
 DROPPED_ERROR_SHARE = 0.05
 #: Intake: share of wall time spent in callbacks (over the last BUSY_WINDOW [s]) at or above
-#: which the node cannot keep up.
-BUSY_WARN_SHARE = 0.8
+#: which the node cannot keep up, and below which that WARN clears (hysteresis: no flicker).
+BUSY_WARN_SHARE = 0.7
+BUSY_CLEAR_SHARE = 0.4
 BUSY_WINDOW = 5.0
 
 
@@ -108,7 +109,7 @@ def clock_status(stopped_for: Optional[float]) -> tuple[Level, str]:
 
 
 def intake_status(
-    received: int, dropped: int, busy: float, window: float
+    received: int, dropped: int, busy: float, window: float, was_ok: bool = True
 ) -> tuple[Level, str]:
     """Level and message of the sample intake over the last ``window`` [s].
 
@@ -116,7 +117,8 @@ def intake_status(
     handled them (publisher sequence gaps, QoS message-lost events); ``busy``: share of wall
     time spent in callbacks over the last :data:`BUSY_WINDOW` (NaN: unknown). ERROR when at least
     :data:`DROPPED_ERROR_SHARE` of the samples were dropped, WARN on any drop or when the node
-    is busy :data:`BUSY_WARN_SHARE` of the time, else OK.
+    is busy :data:`BUSY_WARN_SHARE` of the time (:data:`BUSY_CLEAR_SHARE` while the status
+    is not OK, ``was_ok`` False), else OK.
     """
     total = received + dropped
     share = dropped / total if total else 0.0
@@ -131,7 +133,7 @@ def intake_status(
             f'{dropped} of {total} tension and depth samples dropped in the last {window:g} s '
             f'({100.0 * share:.1f} %){busy_text}'
         )
-    if busy == busy and busy >= BUSY_WARN_SHARE:
+    if busy == busy and busy >= (BUSY_WARN_SHARE if was_ok else BUSY_CLEAR_SHARE):
         return Level.WARN, (
             f'node cannot keep up: busy {100.0 * busy:.0f} % of the last {BUSY_WINDOW:g} s in '
             'callbacks (samples may be lost)'

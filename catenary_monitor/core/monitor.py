@@ -445,7 +445,9 @@ class MonitorCore:
         recent = [c for c in counts if ev.stamp_ns - c.stamp_ns < int(BUSY_WINDOW * 1e9)]
         period = sum(c.period for c in recent)
         busy = sum(c.busy for c in recent) / period if period > 0 else _NAN
-        new = intake_status(received, dropped, busy, INTAKE_WINDOW)
+        new = intake_status(
+            received, dropped, busy, INTAKE_WINDOW, self.intake[0] == Level.OK
+        )
         changes = self._set_component('intake', new, ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'intake', [], changes)
 
