@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -90,9 +91,11 @@ def run_soak(
     sample: float = 5.0,
     warmup: float = 20.0,
     json_out: bool = False,
+    keep_logs: bool = False,
 ) -> int:
-    """Run the soak; print the figures; 0 when RSS stayed flat (end - start < 20 MB), nothing
-    was lost and every file is finished, else 1."""
+    """Run the soak; print the figures (the log folder removed unless ``keep_logs``); 0 when
+    RSS stayed flat (end - start < 20 MB), nothing was lost and every file is finished, else
+    1."""
     import rclpy
     from diagnostic_msgs.msg import DiagnosticArray
     from rclpy.executors import SingleThreadedExecutor
@@ -200,6 +203,9 @@ def run_soak(
         and monitor.returncode == 0
     )
     result['ok'] = ok
+    if not keep_logs:
+        shutil.rmtree(tmp, ignore_errors=True)
+        result['log_dir'] = None
     if json_out:
         print(json.dumps(result))
     else:
@@ -241,8 +247,15 @@ def register(sub: Any) -> None:
     )
     p.add_argument('--sample', type=float, default=5.0, help='RSS sampling period [s]')
     p.add_argument('--json', action='store_true', help='print one JSON object')
+    p.add_argument('--keep-logs', action='store_true', help='keep the node\'s log folder')
     p.set_defaults(
         func=lambda a: run_soak(
-            a.lines, a.rate, a.duration, a.rotate_duration, a.sample, json_out=a.json
+            a.lines,
+            a.rate,
+            a.duration,
+            a.rotate_duration,
+            a.sample,
+            json_out=a.json,
+            keep_logs=a.keep_logs,
         )
     )

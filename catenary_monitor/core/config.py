@@ -1010,8 +1010,9 @@ def runtime_change_refusal(config: MonitorConfig, names: Iterable[str]) -> Optio
     Every declared monitor parameter decides alarms or their schedule (line constants, MBL,
     allowed uplift, thresholds, holds, timeouts, rates) and ``use_sim_time`` can stop the
     clock: unless the params file sets ``allow_runtime_changes: true``, changing any of them
-    at runtime is refused. ``use_sim_time`` is refused even then (no watchdog yet reports a
-    stopped ``/clock``).
+    at runtime is refused. ``use_sim_time`` is refused even then (switching clocks mid-run
+    would jump every stamp; a stopped ``/clock`` set at start is reported by the node's
+    wall-clock watchdog).
     """
     names = list(names)
     if 'use_sim_time' in names:
