@@ -11,6 +11,11 @@ would share a reading), used as the MCAP log time of everything the event produc
 that are not input messages (ticks, logger changes, parameter changes) are recorded on the
 MCAP-only channel ``/catenary_monitor/events``, so replay redoes every step exactly.
 
+A wall-clock (steady) watchdog runs once a second whatever the ROS clock does: with
+``use_sim_time`` it reports a ROS clock that stopped (ClockHealth events, each with a
+``/diagnostics`` array), and it hands the core the intake counts (Intake events: samples
+received, samples lost before the node took them, time spent in the sample callbacks).
+
 Run it as ``monitor --ros-args --params-file FILE`` (``ros2 run catenary_monitor monitor ...``),
 ``python -m catenary_monitor.ros.node --ros-args --params-file FILE`` or
 ``catenary-monitor run --params-file FILE [--log-dir DIR]``.
