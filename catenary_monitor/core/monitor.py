@@ -79,6 +79,7 @@ __all__ = [
     'NO_DEPTH',
     'NO_MODEL',
     'EVENTS_TOPIC',
+    'COMPONENTS',
     'Tension',
     'Depth',
     'Tick',
@@ -138,6 +139,8 @@ EVENTS_TOPIC = f'/{NODE_NAME}/events'
 
 _NAN = math.nan
 _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
+#: The statuses on /diagnostics that are not lines (``catenary_monitor: NAME``).
+COMPONENTS = ('tide', 'logger', 'dock', 'parameters', 'clock', 'intake')
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
 
 
