@@ -86,8 +86,8 @@ INTAKE_WINDOW = 60.0
 DROPPED_ERROR_SHARE = 0.05
 #: Intake: share of wall time spent in callbacks (over the last BUSY_WINDOW [s]) at or above
 #: which the node cannot keep up, and below which that WARN clears (hysteresis: no flicker).
-BUSY_WARN_SHARE = 0.7
-BUSY_CLEAR_SHARE = 0.4
+BUSY_WARN_SHARE = 0.6
+BUSY_CLEAR_SHARE = 0.35
 BUSY_WINDOW = 5.0
 
 
