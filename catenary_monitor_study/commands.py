@@ -44,10 +44,12 @@ def register(sub: Any) -> None:
         bench_core,
         bench_methods,
         bench_replay,
+        bench_soak,
     )
 
     bench_console.register(sub)
     bench_body.register(sub)
+    bench_soak.register(sub)
     for module in (bench_core, bench_methods, bench_replay):
         module.register(sub)
     # bench runs as a library user's process (glibc defaults; --keep-freed-memory to compare)

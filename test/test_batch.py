@@ -26,6 +26,7 @@ from catenary_monitor.core.monitor import (
     OUTPUT_FIELDS,
     VALUE_FIELDS,
     Acknowledge,
+    Reconfigure,
     Depth,
     MonitorCore,
     Tension,
@@ -438,3 +439,116 @@ def test_bounds_and_holding_twin_equals_the_core(seed):
     for key in ('uplift_force_upper', 'anchor_margin_lower', 'grounded_length', 'drag_margin',
                 'implied_anchor_distance'):
         assert np.isfinite(outs[:, OUTPUT_FIELDS.index(key)]).any(), key
+
+
+def test_run_log_flags_runtime_changes_as_the_core_does():
+    """Accepted runtime changes (logged Reconfigure events) between vectorized stretches: the
+    same ``parameters`` WARN, naming old and new values, until runtime_change_warn_time, then
+    OK; the same snapshots and transitions as the core."""
+    import dataclasses
+
+    base = dock_config(3)
+    config = dataclasses.replace(base, allow_runtime_changes=True, runtime_change_warn_time=20.0)
+    tensions, depth = generate(config, seconds=90.0, seed=3)
+    ticks = ticks_for(tensions, depth)
+
+    def raised(cfg, uplift):
+        lines = list(cfg.lines)
+        lines[0] = dataclasses.replace(lines[0], allowed_uplift=uplift)
+        return dataclasses.replace(cfg, lines=tuple(lines))
+
+    first = raised(config, 1e9)
+    changes = [
+        Reconfigure(T0_NS + int(10.3e9) + 7, first),
+        Reconfigure(T0_NS + int(20.1e9) + 7, first),  # nothing changed: no flag
+        Reconfigure(T0_NS + int(55.7e9) + 7, raised(first, 0.0)),
+    ]
+    core = MonitorCore(config, T0_NS)
+    merged = sorted(events_of(config, tensions, depth, ticks) + changes, key=lambda e: e.stamp_ns)
+    steps = [core.step(ev) for ev in merged]
+    twin = MonitorCore(config, T0_NS)
+    empty = (np.zeros(0, np.int64), np.zeros(0))
+    window = Window([tensions.get(line.name, empty) for line in config.lines], depth, ticks)
+    result, twin = run_log(twin, window, changes, snapshots=True)
+    want = [s.snapshot for s in steps if s.snapshot is not None]
+    assert [s.stamp_ns for s in result.snapshots] == [s.stamp_ns for s in want]
+    for g, w in zip(result.snapshots, want):
+        assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
+    flags = [(s.stamp_ns, s.statuses[-1]) for s in want]
+    assert all(st.name == 'catenary_monitor: parameters' for _, st in flags)
+    text = 'allowed_uplift of line_01 changed 0 N -> 1e+09 N at runtime'
+    at = {round((t - T0_NS) * 1e-9): (int(st.level), st.message) for t, st in flags}
+    assert at[5] == (0, 'runtime changes allowed; none made')
+    assert at[15] == (1, text) and at[29] == (1, text)
+    assert at[35][0] == 0 and at[70] == (1, text.replace('0 N -> 1e+09', '1e+09 N -> 0'))
+    assert at[75][0] == 1 and at[80][0] == 0
+    want_tr = [c for s in steps for c in s.transitions if c.component == 'parameters']
+    got_tr = [c for c in result.others if c.component == 'parameters']
+    assert got_tr == want_tr and [c.transition.new for c in got_tr] == [1, 1]
+
+
+def test_run_log_steps_clock_and_intake_events_as_the_core_does():
+    """The node's clock-watchdog and intake records (through their JSON record and back)
+    between vectorized stretches: the same clock and intake statuses, snapshots and
+    transitions as the core; drops age out of the 60 s window."""
+    from catenary_monitor.core.monitor import (
+        ClockHealth,
+        Intake,
+        event_record,
+        parse_event_record,
+    )
+    import json
+
+    config = dock_config(3)
+    tensions, depth = generate(config, seconds=150.0, seed=4)
+    ticks = ticks_for(tensions, depth)
+
+    def at(s):
+        return T0_NS + int(s * 1e9) + 11
+
+    raw = [
+        ClockHealth(at(1.0), None),
+        Intake(at(2.0), (20, 20, 20, 2), (0, 0, 0, 0), 0.01, 1.0),
+        Intake(at(30.0), (500, 480, 500, 28), (0, 40, 0, 0), 0.2, 28.0),  # 2.5 % dropped: WARN
+        Intake(at(31.0), (20, 0, 20, 1), (0, 50, 0, 0), 0.1, 1.0),  # now 5.3 %: ERROR
+        ClockHealth(at(40.0), 4.0),
+        ClockHealth(at(41.0), 5.0),
+        ClockHealth(at(42.0), None),
+        Intake(at(95.0), (600, 600, 600, 60), (0, 0, 0, 0), 0.5, 64.0),  # drops aged out
+        Intake(at(100.5), (20, 20, 20, 1), (0, 0, 0, 0), 0.9, 1.0),  # busy: WARN
+    ]
+    events = [parse_event_record(e.stamp_ns, json.dumps(event_record(e))) for e in raw]
+    assert events == raw
+    core = MonitorCore(config, T0_NS)
+    merged = sorted(events_of(config, tensions, depth, ticks) + events, key=lambda e: e.stamp_ns)
+    steps = [core.step(ev) for ev in merged]
+    twin = MonitorCore(config, T0_NS)
+    empty = (np.zeros(0, np.int64), np.zeros(0))
+    window = Window([tensions.get(line.name, empty) for line in config.lines], depth, ticks)
+    result, twin = run_log(twin, window, events, snapshots=True)
+    want = [s.snapshot for s in steps if s.snapshot is not None]
+    assert [s.stamp_ns for s in result.snapshots] == [s.stamp_ns for s in want]
+    for g, w in zip(result.snapshots, want):
+        assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
+    got = [(c.component, int(c.transition.new)) for c in result.others]
+    assert got == [c for c in ((c.component, int(c.transition.new))
+                               for s in steps for c in s.transitions)
+                   if c[0] in ('clock', 'intake')]
+    assert got == [
+        ('intake', 1), ('intake', 2), ('clock', 2), ('clock', 0), ('intake', 0), ('intake', 1)
+    ]
+    last = {st.name: st for st in want[-1].statuses}
+    assert last['catenary_monitor: clock'].level == 0
+    intake = last['catenary_monitor: intake']
+    assert dict(intake.values)['messages_dropped'] == '0' and 'busy' in intake.message
+    error = next(
+        st for s in want for st in s.statuses
+        if st.name == 'catenary_monitor: intake' and st.level == 2
+    )
+    assert error.message.startswith('node cannot keep up: 5 % of tension and depth samples')
+    assert dict(error.values)['line_02.messages_dropped'] == '90'
+    stopped = next(
+        st for s in want for st in s.statuses
+        if st.name == 'catenary_monitor: clock' and st.level == 2
+    )
+    assert stopped.message.startswith('ROS clock stopped: /clock not advancing for 4 s')

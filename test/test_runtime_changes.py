@@ -4,7 +4,8 @@ A monitor started without ``allow_runtime_changes`` refuses (successful=False, a
 line's ``allowed_uplift`` raised to 1e9 N and ``use_sim_time`` set to true; ``/diagnostics``
 keeps coming and an active uplift stays ERROR. With ``allow_runtime_changes: true`` the same
 change is accepted, logged as one line with old and new values and recorded on the events
-channel of the MCAP log. Every wait is bounded and waits for the event it needs.
+channel of the MCAP log, and shown as a WARN on the ``parameters`` status (the uplift ERROR
+held meanwhile). Every wait is bounded and waits for the event it needs.
 """
 
 from __future__ import annotations
@@ -23,7 +24,8 @@ pytestmark = pytest.mark.ros
 W, DEPTH, MBL = 1300.0, 20.85, 4.827e6
 LINES = {'up': dict(weight=W, anchor_distance=121.06, mbl=MBL)}
 UP, TIDE = 'catenary_monitor: up', 'catenary_monitor: tide'
-OK, ERROR = 0, 2
+FLAG = 'catenary_monitor: parameters'
+OK, WARN, ERROR = 0, 1, 2
 
 
 @pytest.fixture(scope='module')
@@ -86,10 +88,20 @@ def test_alarm_parameters_and_use_sim_time_are_refused_by_default(client, tmp_pa
 def test_allowed_changes_are_logged_and_recorded(client, tmp_path):
     proc = _start(client, tmp_path, allow_runtime_changes=True)
     try:
+        before = client.wait_status(FLAG, 10.0, OK)
+        assert before['message'] == 'runtime changes allowed; none made', before
         r = _set(client, 'up.allowed_uplift', 1e9)
         assert r.successful, r.reason
         line = 'allowed_uplift of up changed 0 N -> 1e+09 N at runtime'
         client.wait_for(lambda: line in output_of(proc), 10.0, 'the change log line')
+        # The flag: a WARN naming old and new values, in the very array that first shows it
+        # the active uplift still ERROR (it clears only after clear_hold of clear input).
+        flagged = client.wait_status(FLAG, 10.0, WARN)
+        assert flagged['message'] == line and flagged['values']['changes'] == '1', flagged
+        with client.lock:
+            first = next(e for _, e in client.diagnostics if e.get(FLAG, {}).get('level') == WARN)
+        assert first[UP]['level'] == ERROR, first[UP]
+        assert f'ALARM parameters: OK -> WARN: {line}' in output_of(proc)
         r = _set(client, 'use_sim_time', True)  # never: a stopped /clock would silence it
         assert not r.successful and 'use_sim_time' in r.reason
         t0 = time.monotonic()

@@ -31,7 +31,7 @@ from catenary_monitor.console.model import (
 )
 from catenary_monitor.core.acknowledge import ACKNOWLEDGE_TOPIC, ALL_LINES
 from catenary_monitor.core.config import MonitorConfig
-from catenary_monitor.core.monitor import NODE_NAME, OUTPUT_FIELDS
+from catenary_monitor.core.monitor import COMPONENTS, NODE_NAME, OUTPUT_FIELDS
 
 __all__ = ['LiveSource', 'AckError']
 
@@ -133,9 +133,9 @@ class LiveSource:
             for st in msg.status
         ]
         statuses = statuses_by_name(items)
-        if not any(name not in ('tide', 'logger', 'dock') for name in statuses):
+        if not any(name not in COMPONENTS for name in statuses):
             return  # not the monitor's array (another node on /diagnostics)
-        new = [n for n in statuses if n not in ('tide', 'logger', 'dock') and n not in self.names]
+        new = [n for n in statuses if n not in COMPONENTS and n not in self.names]
         if new and self.config is None:
             self.names.extend(new)
             for name in new:

@@ -864,6 +864,7 @@ def _snapshots(
         statuses.append(logger)
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))
+        statuses += core.guard_components(stamp * 1e-9)
         out.append(Snapshot(stamp, tuple(statuses)))
     return out
 

@@ -40,6 +40,7 @@ __all__ = [
     'config_hash',
     'NON_DECIDING',
     'runtime_change_refusal',
+    'runtime_change_messages',
     'change_message',
     'parameters_markdown',
     'resolve_topic',
@@ -165,6 +166,17 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         '',
         None,
         None,
+        read_only=True,
+    ),
+    ParamSpec(
+        'runtime_change_warn_time',
+        'double',
+        3600.0,
+        'An accepted runtime change is shown as a WARN (status "parameters" on /diagnostics) '
+        'for this long',
+        's',
+        0.0,
+        31536000.0,
         read_only=True,
     ),
     # Per line.
@@ -829,6 +841,7 @@ _TOP_LEVEL = (
     'log_rotate_duration',
     'log_create_dir',
     'allow_runtime_changes',
+    'runtime_change_warn_time',
 )
 
 #: Per-line parameters that place a line on the dock (all given on every line, or none).
@@ -844,6 +857,7 @@ class MonitorConfig:
     depth_topic: str = _default('depth_topic')
     log_dir: str = _default('log_dir')
     allow_runtime_changes: bool = _default('allow_runtime_changes')
+    runtime_change_warn_time: float = _default('runtime_change_warn_time')  # s
     log_rotate_size: float = _default('log_rotate_size')  # MiB
     log_rotate_duration: float = _default('log_rotate_duration')  # s
     log_create_dir: bool = _default('log_create_dir')
@@ -1093,8 +1107,9 @@ def runtime_change_refusal(config: MonitorConfig, names: Iterable[str]) -> Optio
     Every declared monitor parameter decides alarms or their schedule (line constants, MBL,
     allowed uplift, thresholds, holds, timeouts, rates) and ``use_sim_time`` can stop the
     clock: unless the params file sets ``allow_runtime_changes: true``, changing any of them
-    at runtime is refused. ``use_sim_time`` is refused even then (no watchdog yet reports a
-    stopped ``/clock``).
+    at runtime is refused. ``use_sim_time`` is refused even then (switching clocks mid-run
+    would jump every stamp; a stopped ``/clock`` set at start is reported by the node's
+    wall-clock watchdog).
     """
     names = list(names)
     if 'use_sim_time' in names:
@@ -1123,3 +1138,21 @@ def change_message(name: str, old: Any, new: Any) -> str:
     else:
         what, unit = name, _GLOBAL[name].unit if name in _GLOBAL else ''
     return f'{what} changed {_shown(old, unit)} -> {_shown(new, unit)} at runtime'
+
+
+def runtime_change_messages(old: MonitorConfig, new: MonitorConfig) -> list[str]:
+    """One :func:`change_message` per parameter that differs between ``old`` and ``new``
+    (sorted by name; NaN for an optional parameter not given)."""
+    before, after = all_parameters(old), all_parameters(new)
+    out = []
+    for name in sorted(set(before) | set(after)):
+        a, b = before.get(name, math.nan), after.get(name, math.nan)
+        if isinstance(a, tuple) or isinstance(b, tuple):
+            a, b = list(a), list(b)
+        if a != b and not (_is_nan(a) and _is_nan(b)):
+            out.append(change_message(name, a, b))
+    return out
+
+
+def _is_nan(value: Any) -> bool:
+    return isinstance(value, float) and value != value

@@ -13,7 +13,14 @@ from typing import Optional
 from catenary_monitor.core.alarms import Level
 from catenary_monitor.core.plausible import MAX_DEPTH
 
-__all__ = ['tide_status', 'logger_status']
+__all__ = [
+    'tide_status',
+    'logger_status',
+    'parameters_status',
+    'clock_stopped',
+    'clock_status',
+    'intake_status',
+]
 
 
 def tide_status(depth: float, stamp: float, now: float, timeout: float) -> tuple[Level, str]:
@@ -53,3 +60,82 @@ def logger_status(error: Optional[str], path: Optional[str]) -> tuple[Level, str
     if error:
         return Level.ERROR, f'MCAP log not written: {error}'
     return Level.OK, f'logging to {path}' if path else 'logging'
+
+
+def parameters_status(
+    messages: tuple[str, ...], until: float, now: float
+) -> tuple[Level, str]:
+    """Level and message of the runtime-change flag: WARN, naming the accepted runtime
+    changes, until ``until`` [s] (``runtime_change_warn_time`` after the newest one), else OK.
+
+    ``messages`` are the :func:`~catenary_monitor.core.config.change_message` lines of the
+    changes accepted while the flag was up (empty: none yet).
+    """
+    if messages and now < until:
+        return Level.WARN, '; '.join(messages)
+    if messages:
+        return Level.OK, 'runtime changes allowed; the flag of the last one has expired'
+    return Level.OK, 'runtime changes allowed; none made'
+
+
+#: The ROS clock is reported stopped once it has not advanced for this long of wall time [s].
+CLOCK_STOPPED_AFTER = 3.0
+#: Intake: the counts are summed over this long [s].
+INTAKE_WINDOW = 60.0
+#: Intake: dropped share of the samples at or above which the status is ERROR (any drop: WARN).
+DROPPED_ERROR_SHARE = 0.05
+#: Intake: share of wall time spent in callbacks (over the last BUSY_WINDOW [s]) at or above
+#: which the node cannot keep up, and below which that WARN clears (hysteresis: no flicker).
+BUSY_WARN_SHARE = 0.6
+BUSY_CLEAR_SHARE = 0.35
+BUSY_WINDOW = 5.0
+
+
+def clock_stopped(frozen_for: float) -> bool:
+    """True when the ROS clock has not advanced for ``frozen_for`` [s] of wall time, long
+    enough (:data:`CLOCK_STOPPED_AFTER`) to say it stopped."""
+    return frozen_for >= CLOCK_STOPPED_AFTER
+
+
+def clock_status(stopped_for: Optional[float]) -> tuple[Level, str]:
+    """Level and message of the ROS clock (``use_sim_time``): ERROR while it has not advanced
+    for ``stopped_for`` [s] of wall time (None: it advances)."""
+    if stopped_for is None:
+        return Level.OK, 'ROS clock advancing (use_sim_time)'
+    return Level.ERROR, (
+        f'ROS clock stopped: /clock not advancing for {stopped_for:.0f} s '
+        '(use_sim_time: alarms and staleness are frozen)'
+    )
+
+
+def intake_status(
+    received: int, dropped: int, busy: float, window: float, was_ok: bool = True
+) -> tuple[Level, str]:
+    """Level and message of the sample intake over the last ``window`` [s].
+
+    ``received`` / ``dropped``: tension and depth samples handled / lost before the node
+    handled them (publisher sequence gaps, QoS message-lost events); ``busy``: share of wall
+    time spent in callbacks over the last :data:`BUSY_WINDOW` (NaN: unknown). ERROR when at least
+    :data:`DROPPED_ERROR_SHARE` of the samples were dropped, WARN on any drop or when the node
+    is busy :data:`BUSY_WARN_SHARE` of the time (:data:`BUSY_CLEAR_SHARE` while the status
+    is not OK, ``was_ok`` False), else OK.
+    """
+    total = received + dropped
+    share = dropped / total if total else 0.0
+    busy_text = '' if busy != busy else f'; busy {100.0 * busy:.0f} % of the time'
+    if dropped and share >= DROPPED_ERROR_SHARE:
+        return Level.ERROR, (
+            f'node cannot keep up: {100.0 * share:.0f} % of tension and depth samples '
+            f'dropped in the last {window:g} s ({dropped} of {total}){busy_text}'
+        )
+    if dropped:
+        return Level.WARN, (
+            f'{dropped} of {total} tension and depth samples dropped in the last {window:g} s '
+            f'({100.0 * share:.1f} %){busy_text}'
+        )
+    if busy == busy and busy >= (BUSY_WARN_SHARE if was_ok else BUSY_CLEAR_SHARE):
+        return Level.WARN, (
+            f'node cannot keep up: busy {100.0 * busy:.0f} % of the last {BUSY_WINDOW:g} s in '
+            'callbacks (samples may be lost)'
+        )
+    return Level.OK, f'{received} samples counted in the last {window:g} s, none dropped'

@@ -55,10 +55,19 @@ from catenary_monitor.core.config import (
     config_from_params,
     config_to_params,
     resolve_topic,
+    runtime_change_messages,
 )
 from catenary_monitor.core.body import live as dock_live
 from catenary_monitor.core.body.model import DockModel
-from catenary_monitor.core.health import logger_status, tide_status
+from catenary_monitor.core.health import (
+    BUSY_WINDOW,
+    INTAKE_WINDOW,
+    clock_status,
+    intake_status,
+    logger_status,
+    parameters_status,
+    tide_status,
+)
 from catenary_monitor.core.plausible import reading_status, reading_status_array
 from catenary_monitor.core.result import STATUS_MESSAGES
 from catenary_monitor.core.solve import solve
@@ -72,6 +81,7 @@ __all__ = [
     'NO_DEPTH',
     'NO_MODEL',
     'EVENTS_TOPIC',
+    'COMPONENTS',
     'Tension',
     'Depth',
     'Tick',
@@ -79,6 +89,8 @@ __all__ = [
     'Reconfigure',
     'Start',
     'Acknowledge',
+    'ClockHealth',
+    'Intake',
     'Event',
     'LineOutput',
     'ComponentStatus',
@@ -136,6 +148,8 @@ EVENTS_TOPIC = f'/{NODE_NAME}/events'
 
 _NAN = math.nan
 _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
+#: The statuses on /diagnostics that are not lines (``catenary_monitor: NAME``).
+COMPONENTS = ('tide', 'logger', 'dock', 'parameters', 'clock', 'intake')
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
 _INCONSISTENT = CONDITIONS.index('inconsistent')
 _AT = {key: i for i, key in enumerate(VALUE_FIELDS)}
@@ -193,7 +207,27 @@ class Acknowledge(NamedTuple):
     origin: str
 
 
-Event = Union[Tension, Depth, Tick, LoggerHealth, Reconfigure, Acknowledge]
+class ClockHealth(NamedTuple):
+    """The ROS clock (``use_sim_time``) at ``stamp_ns``: ``stopped_for`` [s] of wall time
+    without advancing (None: it advances)."""
+
+    stamp_ns: int
+    stopped_for: Optional[float]
+
+
+class Intake(NamedTuple):
+    """Samples since the previous Intake event: per line, then the depth, ``received``
+    (handled) and ``dropped`` (lost before the node handled them); ``busy`` [s] of wall time
+    spent in callbacks over ``period`` [s] of wall time."""
+
+    stamp_ns: int
+    received: tuple[int, ...]
+    dropped: tuple[int, ...]
+    busy: float
+    period: float
+
+
+Event = Union[Tension, Depth, Tick, LoggerHealth, Reconfigure, Acknowledge, ClockHealth, Intake]
 
 
 class LineOutput(NamedTuple):
@@ -337,6 +371,18 @@ class MonitorCore:
         self.dock_entered = start
         self.dock_values: tuple[tuple[str, str], ...] = ()
         self.dock_smoothing = dock_live.Smoothing.initial(len(self.lines))
+        # Accepted runtime changes: their lines, flagged (WARN) until changes_until [s].
+        self.changes: tuple[str, ...] = ()
+        self.changes_until = -math.inf
+        self.parameters: tuple[Level, str] = parameters_status((), -math.inf, start)
+        self.parameters_entered = start
+        self.clock: tuple[Level, str] = clock_status(None)
+        self.clock_entered = start
+        self.clock_seen = False
+        self.intake: tuple[Level, str] = (Level.OK, 'no sample counts yet')
+        self.intake_entered = start
+        self.intake_counts: list[Intake] = []  # the Intake events of the last INTAKE_WINDOW
+        self.intake_seen = False
 
     # ------------------------------------------------------------------ events
     def step(self, event: Event) -> Step:
@@ -351,10 +397,13 @@ class MonitorCore:
         if isinstance(event, LoggerHealth):
             return self._on_logger(event)
         if isinstance(event, Reconfigure):
-            self.reconfigure(event.config)
-            return Step(event.stamp_ns, 'configure', (), None, ())
+            return self._on_reconfigure(event)
         if isinstance(event, Acknowledge):
             return self._on_acknowledge(event)
+        if isinstance(event, ClockHealth):
+            return self._on_clock(event)
+        if isinstance(event, Intake):
+            return self._on_intake(event)
         raise TypeError(f'not a monitor event: {event!r}')
 
     def _on_tension(self, ev: Tension) -> Step:
@@ -394,6 +443,55 @@ class MonitorCore:
             if ev.line is None or ev.line == line.config.name:
                 line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin)
         return Step(ev.stamp_ns, 'acknowledge', (), self.snapshot(ev.stamp_ns), ())
+
+    def _on_clock(self, ev: ClockHealth) -> Step:
+        """The ROS clock's state; always a snapshot (the node sends these on a wall-clock
+        timer while the ROS clock stands still, so /diagnostics keeps coming)."""
+        self.clock_seen = True
+        changes = self._set_component('clock', clock_status(ev.stopped_for), ev.stamp_ns)
+        return Step(ev.stamp_ns, 'clock', (), self.snapshot(ev.stamp_ns), tuple(changes))
+
+    def _on_intake(self, ev: Intake) -> Step:
+        """Sample counts: the intake status over the last :data:`INTAKE_WINDOW` of them."""
+        self.intake_seen = True
+        counts = self.intake_counts + [ev]
+        while counts and ev.stamp_ns - counts[0].stamp_ns >= int(INTAKE_WINDOW * 1e9):
+            counts.pop(0)
+        self.intake_counts = counts
+        received = sum(sum(c.received) for c in counts)
+        dropped = sum(sum(c.dropped) for c in counts)
+        recent = [c for c in counts if ev.stamp_ns - c.stamp_ns < int(BUSY_WINDOW * 1e9)]
+        period = sum(c.period for c in recent)
+        busy = sum(c.busy for c in recent) / period if period > 0 else _NAN
+        new = intake_status(
+            received, dropped, busy, INTAKE_WINDOW, self.intake[0] == Level.OK
+        )
+        changes = self._set_component('intake', new, ev.stamp_ns)
+        return self._finish(ev.stamp_ns, 'intake', [], changes)
+
+    def intake_dropped(self) -> list[int]:
+        """Samples dropped per line, then the depth, in the last :data:`INTAKE_WINDOW`."""
+        n = len(self.lines) + 1
+        return [sum(c.dropped[k] for c in self.intake_counts if len(c.dropped) == n)
+                for k in range(n)]
+
+    def _on_reconfigure(self, ev: Reconfigure) -> Step:
+        """Take the new configuration; flag what changed (WARN on the ``parameters`` status
+        for ``runtime_change_warn_time``), shown at once."""
+        now = _stamp_s(ev.stamp_ns)
+        messages = runtime_change_messages(self.config, ev.config)
+        self.reconfigure(ev.config)
+        if not messages:
+            return Step(ev.stamp_ns, 'configure', (), None, ())
+        held = self.changes if now < self.changes_until else ()
+        if self.changes and not held and self.parameters[0] != Level.OK:  # the flag expired
+            self.parameters = parameters_status(self.changes, self.changes_until, now)
+            self.parameters_entered = self.changes_until
+        self.changes = held + tuple(messages)
+        self.changes_until = now + ev.config.runtime_change_warn_time
+        new = parameters_status(self.changes, self.changes_until, now)
+        changes = self._set_component('parameters', new, ev.stamp_ns)
+        return Step(ev.stamp_ns, 'configure', (), self.snapshot(ev.stamp_ns), tuple(changes))
 
     def reconfigure(self, config: MonitorConfig) -> None:
         """Take new line constants and alarm rules (same line names); alarm states are kept."""
@@ -611,7 +709,36 @@ class MonitorCore:
         )
         if dock:
             statuses.append(dock_component(self.dock, self.dock_values))
+        statuses += self.guard_components(now)
         return Snapshot(stamp_ns, tuple(statuses))
+
+    def guard_components(self, now: float) -> list[ComponentStatus]:
+        """The statuses after the logger and the dock: the runtime-change flag, the ROS clock
+        and the intake, each once it applies (events only change them)."""
+        out = []
+        flag = self.parameters_component(now)
+        if flag is not None:
+            out.append(flag)
+        if self.clock_seen:
+            out.append(ComponentStatus(f'{NODE_NAME}: clock', *self.clock, NODE_NAME, ()))
+        if self.intake_seen:
+            dropped = self.intake_dropped()
+            names = [line.config.name for line in self.lines] + ['depth']
+            values = (('messages_dropped', str(sum(dropped))),) + tuple(
+                (f'{name}.messages_dropped', str(d)) for name, d in zip(names, dropped)
+            )
+            out.append(ComponentStatus(f'{NODE_NAME}: intake', *self.intake, NODE_NAME, values))
+        return out
+
+    def parameters_component(self, now: float) -> Optional[ComponentStatus]:
+        """The runtime-change status at ``now`` [s] (None when runtime changes are not
+        allowed and none was made): WARN naming the changes until their flag expires."""
+        if not (self.config.allow_runtime_changes or self.changes):
+            return None
+        level, message = parameters_status(self.changes, self.changes_until, now)
+        until = repr(float(self.changes_until)) if self.changes else 'nan'
+        values = (('changes', str(len(self.changes))), ('flagged_until', until))
+        return ComponentStatus(f'{NODE_NAME}: parameters', level, message, NODE_NAME, values)
 
 
 def _implausible(line: LineState, code: int) -> None:
@@ -783,6 +910,16 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
     if isinstance(event, Acknowledge):
         line = alarm_ack.ALL_LINES if event.line is None else event.line
         return {'kind': 'acknowledge', 'line': line, 'origin': event.origin}
+    if isinstance(event, ClockHealth):
+        return {'kind': 'clock', 'stopped_for': event.stopped_for}
+    if isinstance(event, Intake):
+        return {
+            'kind': 'intake',
+            'received': list(event.received),
+            'dropped': list(event.dropped),
+            'busy': event.busy,
+            'period': event.period,
+        }
     return None
 
 
@@ -800,6 +937,17 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
             return LoggerHealth(stamp_ns, record.get('error'), record.get('path'))
         if kind == 'configure':
             return Reconfigure(stamp_ns, config_from_params(record['parameters']))
+        if kind == 'clock':
+            stopped = record.get('stopped_for')
+            return ClockHealth(stamp_ns, None if stopped is None else float(stopped))
+        if kind == 'intake':
+            return Intake(
+                stamp_ns,
+                tuple(int(x) for x in record['received']),
+                tuple(int(x) for x in record['dropped']),
+                float(record['busy']),
+                float(record['period']),
+            )
         if kind == 'acknowledge':
             line = str(record['line'])
             return Acknowledge(

@@ -1,0 +1,42 @@
+"""Publish std_msgs/Float64 tensions on /mooring/NAME/tension for NAME in argv[1] (comma
+separated) at argv[2] Hz each, and a depth at 10 Hz, for argv[3] s (sensor-data QoS): a
+node-intake load for test_node_guard. Prints ``sent N`` at the end."""
+
+import sys
+import time
+
+import rclpy
+from rclpy.qos import qos_profile_sensor_data
+from std_msgs.msg import Float64
+
+
+def main() -> None:
+    names, rate, duration = sys.argv[1].split(','), float(sys.argv[2]), float(sys.argv[3])
+    rclpy.init()
+    node = rclpy.create_node('flood_publisher')
+    pubs = [
+        node.create_publisher(Float64, f'/mooring/{n}/tension', qos_profile_sensor_data)
+        for n in names
+    ]
+    depth = node.create_publisher(Float64, '/tide/depth', qos_profile_sensor_data)
+    deadline = time.monotonic() + 30.0
+    while any(p.get_subscription_count() == 0 for p in pubs) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    tension, level = Float64(data=1500e3), Float64(data=20.85)
+    t0, sent, k, d = time.monotonic(), 0, 0, 0
+    while (now := time.monotonic() - t0) < duration:
+        while k < int(now * rate):
+            for p in pubs:
+                p.publish(tension)
+            sent, k = sent + len(pubs), k + 1
+        while d < int(now * 10.0):
+            depth.publish(level)
+            sent, d = sent + 1, d + 1
+        time.sleep(0.0005)
+    print(f'sent {sent}', flush=True)
+    node.destroy_node()
+    rclpy.shutdown()
+
+
+if __name__ == '__main__':
+    main()
