@@ -205,6 +205,10 @@ def live_run(tmp_path_factory: Any) -> Any:
             env=env,
         )
         wait_for('every tile OK', lambda: set(tiles(driver).values()) == {'OK'}, 90.0)
+        seen['monitor_statuses'] = driver.execute_script(
+            "return [...document.querySelectorAll('[data-monitor-status]')]"
+            ".map(e => e.dataset.monitorStatus + ':' + e.dataset.level)"
+        )
         wait_for('line_11 ERROR', lambda: tiles(driver)['line_11'] == 'ERROR', 90.0)
         seen['row_before'] = wait_for(
             'line_11 alarm row unacknowledged',
@@ -251,6 +255,7 @@ def live_run(tmp_path_factory: Any) -> Any:
 def test_live_page_storm_acknowledge_and_monitor_loss(live_run: Any) -> None:
     seen = live_run
     assert len(seen['tiles_at_load']) == 12
+    assert 'logger:OK' in seen['monitor_statuses']  # the monitor's own health is on the page
     assert seen['row_before']['line_11'] == 'unacknowledged'
     assert seen['beeps'] >= 1
     assert seen['row_after']['line_11'] == 'acknowledged'

@@ -124,3 +124,20 @@ def test_page_config_places_hooks_where_the_params_file_puts_them():
     assert page['dock_length'] == 246.4 and page['dock_beam'] == 51.0
     bare = console_config(None, ['a', 'b'], 'live')
     assert bare['lines'][0]['hook_x'] is None and bare['dock_length'] is None
+
+
+def test_frame_shows_the_monitors_own_statuses():
+    """The clock watchdog, intake and runtime-change statuses reach the page beside the logger
+    (in the monitor's order), so a stopped clock or an overloaded node is on screen."""
+    statuses = {
+        'clock': Status('ERROR', 'ROS clock stopped: /clock not advancing for 12 s', {}),
+        'logger': Status('OK', 'writing', {}),
+        'line_01': st('OK', 'normal'),
+        'intake': Status('WARN', 'node cannot keep up', {}),
+    }
+    kw = dict(outputs={}, sample_t={}, depth=None, history=[], silence_limit_s=3.0)
+    frame = build_frame(10.0, ['line_01'], 9.5, statuses, **kw)
+    assert [(r['name'], r['level']) for r in frame['monitor']] == [
+        ('logger', 'OK'), ('clock', 'ERROR'), ('intake', 'WARN')
+    ]
+    assert frame['monitor'][1]['message'].startswith('ROS clock stopped')

@@ -148,6 +148,21 @@ def console_config(
     }
 
 
+#: The monitor's own statuses shown under the tide (the node publishes the last three only
+#: when they have something to say: allowed runtime changes, a sim clock, intake counts).
+MONITOR_STATUSES = ('logger', 'parameters', 'clock', 'intake')
+
+
+def monitor_rows(statuses: Mapping[str, Status]) -> list[dict[str, str]]:
+    """The monitor's own statuses present in the array (logger, parameters, clock, intake):
+    name, level and message, in that order."""
+    return [
+        {'name': name, 'level': statuses[name].level, 'message': statuses[name].message}
+        for name in MONITOR_STATUSES
+        if name in statuses
+    ]
+
+
 def alarm_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dict[str, Any]]:
     """The alarm list: one row per line whose alarm is not ``normal``, most urgent first
     (unacknowledged, then returned-unacknowledged, then acknowledged; ERROR before STALE before
@@ -409,6 +424,7 @@ def build_frame(
             'level': logger.level if logger else 'STALE',
             'message': logger.message if logger else '',
         },
+        'monitor': monitor_rows(statuses),
         'alarms': alarm_rows(statuses, config_lines),
         'history': list(history[-200:]),
         **extra,

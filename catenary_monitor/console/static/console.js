@@ -355,7 +355,12 @@ function renderTide(frame, lost) {
   box.appendChild(el('div', { class: 'tide-big' }, t.depth === null ? '— m' : `${t.depth.toFixed(2)} m`));
   box.appendChild(el('div', { class: 'tide-trend' }, `${arrow}${rate}`));
   box.appendChild(el('div', { class: `badge ${lost ? 'STALE' : t.level}` }, `${lost ? 'STALE' : t.level}: ${t.message}`));
-  box.appendChild(el('div', { class: 'muted' }, `logger: ${frame.logger.level} ${frame.logger.message}`));
+  for (const st of frame.monitor || []) {
+    // The monitor's own health: quiet while OK, a coloured badge otherwise.
+    const cls = st.level === 'OK' ? 'muted' : `badge ${st.level}`;
+    box.appendChild(el('div', { class: cls, 'data-monitor-status': st.name, 'data-level': st.level },
+      `${st.name}: ${st.level} ${st.message}`));
+  }
 }
 
 // ---------------------------------------------------------------- trend
