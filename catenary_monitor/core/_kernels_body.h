@@ -296,7 +296,7 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
             double y0 = tab[j2], s0 = tab[j2 + 1], y1 = tab[j2 + 2], s1 = tab[j2 + 3];
             double ce = y0 + tt * (s0 + tt * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) +
                                               tt * (2.0 * (y0 - y1) + s0 + s1)));
-            double a_crit = x / (2.0 * exp(ce));
+            double a_crit = 0.5 * x * exp(-ce); /* no division */
             k->cok[i] = inside & (par->maxiter >= 1);
             o_load[i] = k->w[i] * (a_crit + h) - k->t[i];
         }
