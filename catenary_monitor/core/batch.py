@@ -552,9 +552,8 @@ def _line_steps(line: LineState, tt: np.ndarray, window: Window) -> _Steps:
 
 def _pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
     """``column[idx]`` where ``idx >= 0``, else ``before`` (the core's value before the window)."""
-    if not len(column):
-        return np.full(len(idx), before)
-    return np.where(idx >= 0, column[np.maximum(idx, 0)], before)
+    # ``before`` appended last: index -1 (``_newest``'s "none yet") picks it, one gather
+    return np.append(column, before)[idx]
 
 
 def _solve_line(
@@ -893,6 +892,8 @@ def _line_statuses(
 ) -> list[ComponentStatus]:
     """The line's status in each snapshot (as after its newest step at or before the stamp)."""
     at = np.searchsorted(steps.times, stamps, 'right') - 1
+    codes = r.model_codes  # once per window, not once per snapshot
+    inconsistent = series.active('inconsistent') if dock is not None else None
     out = []
     for n, i in enumerate(at.tolist()):
         level, message = before.level, before.message
@@ -902,14 +903,15 @@ def _line_statuses(
         if i >= 0 and dock is not None:
             j = int(steps.k_idx[i])
             inputs = dock.before[2][k] if j < 0 else tuple(dock.decision.line_inputs[j, k])
-            extra = line_dock_values(bool(series.active('inconsistent')[i]), inputs)
+            assert inconsistent is not None
+            extra = line_dock_values(bool(inconsistent[i]), inputs)
         if i >= 0:
             level, message = Level(int(series.levels[i])), series.message_at(i)
             latches = series.active_at(i)
             s, t = int(steps.s_idx[i]), int(steps.t_idx[i])
             if s >= 0:
                 values = tuple(float(r.values[key][s]) for key in VALUE_FIELDS)
-                status, model = int(r.status[s]), MODEL_NAMES[int(r.model_codes[s])]
+                status, model = int(r.status[s]), MODEL_NAMES[int(codes[s])]
             if t >= 0:
                 ts = float(tt[t] * 1e-9)
         out.append(

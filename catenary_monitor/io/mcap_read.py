@@ -47,7 +47,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, NamedTuple, Union, cast
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
+from numpy.lib.stride_tricks import as_strided, sliding_window_view
 
 if TYPE_CHECKING:
     import zstandard
@@ -1149,7 +1149,14 @@ def _release(data: bytes, upto: int) -> None:
 
 
 def _gather(arr: np.ndarray, positions: np.ndarray, width: int) -> np.ndarray:
-    """Copy ``width`` bytes at each position into a contiguous (n, width) uint8 array."""
+    """The ``width`` bytes at each position as an (n, width) uint8 array: a strided view (no
+    copy) when the positions are evenly spaced (one topic type, one chunk run), else a copy."""
+    n = len(positions)
+    if n > 1:
+        first, step = int(positions[0]), int(positions[1] - positions[0])
+        if step >= width and int(positions[-1]) == first + step * (n - 1):
+            if np.array_equal(np.diff(positions), np.full(n - 1, step, positions.dtype)):
+                return as_strided(arr[first:], (n, width), (step, 1), writeable=False)
     return sliding_window_view(arr, width)[positions]
 
 
