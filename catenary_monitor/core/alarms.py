@@ -24,6 +24,12 @@ Conditions, each with its own latch:
     raised when the dock estimate flags the line's tension as irreconcilable with the other
     lines (its smoothed normalized residual beyond ``dock_residual_limit``) for ``on_delay``;
     cleared after ``warn_clear_hold`` of consistency; held while the line is not tested.
+``sensor_error`` (ERROR), ``sensor_warn`` (WARN; :mod:`catenary_monitor.core.sensor`)
+    raised when the line's ``sensor_state`` (decided at ticks) is an ERROR state (``over_mbl``,
+    ``slack``, ``suspected_parted``), resp. a WARN state (``stuck``, ``spike``), for
+    ``on_delay``; cleared after ``clear_hold`` (resp. ``warn_clear_hold``) of any other state.
+    They are conditions of the line beside the load alarms: the line's level is the worst of
+    all, by the rule below.
 stale (STALE, no latch)
     no tension or no depth received yet (the line is blind: its results cannot be computed), the
     newest tension older than ``tension_timeout``, or the depth stale (older than
@@ -53,6 +59,7 @@ from typing import Any, Mapping, NamedTuple, Sequence
 
 import numpy as np
 
+from catenary_monitor.core import sensor
 from catenary_monitor.core.config import AlarmConfig, LineConfig
 
 __all__ = [
@@ -93,9 +100,12 @@ CONDITIONS = (
     'safety_factor',
     'time_to_uplift',
     'inconsistent',
+    'sensor_error',
+    'sensor_warn',
 )
-_ERRORS = CONDITIONS[:2]
-_WARNS = CONDITIONS[2:]
+_ERRORS = ('uplift', 'input', 'sensor_error')
+_WARNS = tuple(c for c in CONDITIONS if c not in _ERRORS)
+_ERROR_AT = tuple(CONDITIONS.index(c) for c in _ERRORS)
 _MARGINS = CONDITIONS[2:7]  # the warnings with a threshold and a deadband
 _LIMITS = {'time_to_uplift': 'uplift_time'}  # parameter prefix where it is not the name
 _HOLD, _BREACH, _CLEAR = 0, 1, 2  # classification of one update for one condition
@@ -128,6 +138,9 @@ class AlarmInputs:
     dock_residual: float = math.nan  # N, measured - expected tension
     dock_expected: float = math.nan  # N, the tension the dock estimate expects
     dock_sigma: float = math.nan  # normalized residual
+    sensor_state: float = 0.0  # core.sensor line state code (0 ok)
+    sensor_tension: float = math.nan  # N, the newest tension the state was decided on
+    mbl: float = math.nan  # N, the line's MBL (for the message)
 
 
 class Latch(NamedTuple):
@@ -188,7 +201,7 @@ class LineAlarm:
         c = self.config
         if cond == 'input':
             return 0.0, c.clear_hold
-        return c.on_delay, (c.clear_hold if cond == 'uplift' else c.warn_clear_hold)
+        return c.on_delay, (c.clear_hold if cond in _ERRORS else c.warn_clear_hold)
 
     def _warn_limits(self, cond: str) -> tuple[float, float]:
         """(raise below, clear at or above) for a warning condition."""
@@ -258,6 +271,9 @@ class LineAlarm:
             )
         elif cond == 'inconsistent':
             breach, clear = x.inconsistent == 1.0, x.inconsistent == 0.0
+        elif cond in _SENSOR:
+            breach, clear = _sensor_codes(cond, np.asarray(x.sensor_state))
+            breach, clear = bool(breach), bool(clear)
         else:
             low, high = self._warn_limits(cond)
             value = getattr(x, cond)
@@ -298,6 +314,8 @@ class LineAlarm:
                     f'impossible input alarm held: last was "{input_message}" '
                     f'(clears after {hold_e:g} s of valid input)'
                 )
+        if active[CONDITIONS.index('sensor_error')]:
+            parts.append(_sensor_text(x, 'sensor_error', hold_e))
         for name, is_stale, stamp, timeout in (
             ('tension', stale_t, x.tension_stamp, self.config.tension_timeout),
             ('depth', stale_d, x.depth_stamp, self.config.depth_timeout),
@@ -311,9 +329,13 @@ class LineAlarm:
                     f'{name} stale: last sample {_fmt(now - stamp)} s ago '
                     f'(timeout {timeout:g} s)'
                 )
-        for cond, up in zip(_WARNS, active[2:]):
+        for cond, up in zip(CONDITIONS, active):
+            if cond in _ERRORS:
+                continue
             if up and cond == 'inconsistent':
                 parts.append(_inconsistent_text(x, hold_w))
+            elif up and cond == 'sensor_warn':
+                parts.append(_sensor_text(x, cond, hold_w))
             elif up and cond == 'time_to_uplift':
                 parts.append(self._uplift_time_text(x, hold_w))
             elif up:
@@ -347,6 +369,25 @@ class LineAlarm:
             f'time to uplift {_fmt(value, 60.0, 0)} min, warning held (clears after {hold:g} s '
             f'at >= {_fmt(high, 60.0, 0)} min)'
         )
+
+
+_SENSOR = ('sensor_error', 'sensor_warn')
+
+
+def _sensor_codes(cond: str, code: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(breach, clear) of a sensor condition from line state codes (NaN: hold)."""
+    errors = np.isin(code, sensor.ERROR_STATES)
+    breach = errors if cond == 'sensor_error' else ~errors & (code > 0)
+    return breach, ~breach & np.isfinite(code)
+
+
+def _sensor_text(x: AlarmInputs, cond: str, hold: float) -> str:
+    """The message of a sensor condition (what to check), or that it is held."""
+    code = x.sensor_state
+    breach, _ = _sensor_codes(cond, np.asarray(code))
+    if bool(breach):
+        return sensor.line_message(int(code), x.sensor_tension, x.mbl)
+    return f'sensor alarm held (clears after {hold:g} s of sane readings)'
 
 
 def _inconsistent_text(x: AlarmInputs, hold: float) -> str:
@@ -386,11 +427,11 @@ def _step(latch: Latch, code: int, now: float, on_delay: float, hold: float) -> 
 
 def _combine(active: Sequence[bool], stale: bool) -> Level:
     """Explicit precedence ERROR > STALE > WARN > OK (not a max over level numbers)."""
-    if any(active[:2]):
+    if any(active[i] for i in _ERROR_AT):
         return Level.ERROR
     if stale:
         return Level.STALE
-    return Level.WARN if any(active[2:]) else Level.OK
+    return Level.WARN if any(a for i, a in enumerate(active) if i not in _ERROR_AT) else Level.OK
 
 
 def _episode(
@@ -419,6 +460,9 @@ _INPUT_FIELDS = (
     'dock_residual',
     'dock_expected',
     'dock_sigma',
+    'sensor_state',
+    'sensor_tension',
+    'mbl',
 )
 
 
@@ -487,7 +531,7 @@ class LevelSeries:
         self._stale_t, self._stale_d, self._active = stale_t, stale_d, active
         self._latches, self._initial = latches, initial
         n = times.size
-        err = active['uplift'] | active['input']
+        err = active['uplift'] | active['input'] | active['sensor_error']
         warn = np.zeros(n, dtype=bool)
         for cond in _WARNS:
             warn |= active[cond]
@@ -672,6 +716,8 @@ def _classify_columns(
         out[cond] = codes(x[cond] < low, x[cond] >= high)
     flag = x['inconsistent']
     out['inconsistent'] = codes(flag == 1.0, flag == 0.0)
+    for cond in _SENSOR:
+        out[cond] = codes(*_sensor_codes(cond, x['sensor_state']))
     return out
 
 

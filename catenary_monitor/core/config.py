@@ -321,7 +321,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         1200.0,
         'Tide trend: Theil-Sen rate of 20 bin means over this window (known after half of it)',
         's',
-        60.0,
+        5.0,
         86400.0,
     ),
     ParamSpec(
@@ -341,6 +341,92 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         's',
         0.0,
         86400.0,
+    ),
+    # Sensor sanity (core/sensor.py; table in docs/node.md).
+    *(
+        ParamSpec(name, 'double', default, text, unit, lo, hi, group='sensor')
+        for name, default, text, unit, lo, hi in (
+            (
+                'tension_resolution',
+                100.0,
+                'A tension change up to this is no change (stuck sensor test)',
+                'N',
+                0.0,
+                1.0e7,
+            ),
+            (
+                'depth_resolution',
+                0.005,
+                'A depth change up to this is no change (stuck sensor test)',
+                'm',
+                0.0,
+                10.0,
+            ),
+            (
+                'stuck_time',
+                60.0,
+                'stuck: no change beyond the resolution this long while the dock moves',
+                's',
+                1.0,
+                86400.0,
+            ),
+            (
+                'tension_rate_max',
+                0.5,
+                'spike: a tension step above this x MBL per second (+ the resolution)',
+                'MBL/s',
+                0.001,
+                1000.0,
+            ),
+            (
+                'depth_rate_max',
+                1.0,
+                'spike: a depth step above this rate (+ the resolution)',
+                'm/s',
+                0.001,
+                1000.0,
+            ),
+            (
+                'sensor_hold',
+                30.0,
+                'spike and suspected_parted stay this long after their pattern was last seen',
+                's',
+                0.0,
+                3600.0,
+            ),
+            (
+                'parted_drop',
+                0.5,
+                'suspected_parted: the tension fell by this fraction in parted_window',
+                '',
+                0.05,
+                1.0,
+            ),
+            (
+                'parted_window',
+                30.0,
+                'suspected_parted: the tension is compared with its value this long ago',
+                's',
+                1.0,
+                3600.0,
+            ),
+            (
+                'depth_min',
+                0.0,
+                'Chart range of the depth sensor: a depth below this is out_of_range',
+                'm',
+                0.0,
+                12000.0,
+            ),
+            (
+                'depth_max',
+                12000.0,
+                'Chart range of the depth sensor: a depth above this is out_of_range',
+                'm',
+                0.0,
+                12000.0,
+            ),
+        )
     ),
     ParamSpec(
         'load_margin_warn',
@@ -683,6 +769,16 @@ class AlarmConfig:
     tide_trend_window: float = _default('tide_trend_window')
     uplift_time_warn: float = _default('uplift_time_warn')
     uplift_time_deadband: float = _default('uplift_time_deadband')
+    tension_resolution: float = _default('tension_resolution')
+    depth_resolution: float = _default('depth_resolution')
+    stuck_time: float = _default('stuck_time')
+    tension_rate_max: float = _default('tension_rate_max')
+    depth_rate_max: float = _default('depth_rate_max')
+    sensor_hold: float = _default('sensor_hold')
+    parted_drop: float = _default('parted_drop')
+    parted_window: float = _default('parted_window')
+    depth_min: float = _default('depth_min')
+    depth_max: float = _default('depth_max')
     load_margin_warn: float = _default('load_margin_warn')
     load_margin_deadband: float = _default('load_margin_deadband')
     safety_factor_warn: float = _default('safety_factor_warn')

@@ -41,6 +41,8 @@ import numpy as np
 from catenary_monitor.core import acknowledge as alarm_ack
 from catenary_monitor.core import elastic
 from catenary_monitor.core.alarms import (
+    CONDITIONS,
+    RANK,
     AlarmInputs,
     AlarmState,
     Level,
@@ -61,7 +63,7 @@ from catenary_monitor.core.health import logger_status, tide_status
 from catenary_monitor.core.plausible import reading_status, reading_status_array
 from catenary_monitor.core.result import STATUS_MESSAGES
 from catenary_monitor.core.solve import solve
-from catenary_monitor.core import tide_trend
+from catenary_monitor.core import sensor, tide_trend
 
 __all__ = [
     'NODE_NAME',
@@ -98,7 +100,9 @@ NODE_NAME = 'catenary_monitor'
 #: Element order of each line's outputs (``/catenary_monitor/NAME/outputs``), SI units;
 #: ``status`` is the solver code (:data:`NO_DEPTH` before the first depth), ``level`` 0-3;
 #: ``time_to_uplift`` [s] (:mod:`~catenary_monitor.core.tide_trend`) was appended last so the
-#: older indexes stay.
+#: older indexes stay; then ``sensor_state``, the line's sensor state code as of the newest tick
+#: (:data:`catenary_monitor.core.sensor.LINE_STATES`: 0 ok, 1 stuck, 2 spike, 3 over_mbl,
+#: 4 slack, 5 suspected_parted).
 OUTPUT_FIELDS = (
     'top_tension',
     'depth',
@@ -114,6 +118,7 @@ OUTPUT_FIELDS = (
     'status',
     'level',
     'time_to_uplift',
+    'sensor_state',
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -126,8 +131,10 @@ NO_MODEL = 'none'
 EVENTS_TOPIC = f'/{NODE_NAME}/events'
 
 _NAN = math.nan
+_INCONSISTENT = CONDITIONS.index('inconsistent')
 _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
+_SENSOR_AT = VALUE_FIELDS.index('sensor_state')  # not a solved value: kept by _implausible
 
 
 class Tension(NamedTuple):
@@ -243,6 +250,9 @@ class LineState:
     model: str = NO_MODEL  # model of the newest solve
     ack: alarm_ack.AckState = alarm_ack.AckState()  # the line's alarm in ISA-18.2 states
     dock: tuple[float, ...] = (_NAN,) * 4  # dock_live.LINE_INPUTS of the newest dock estimate
+    sensor_memory: sensor.Memory = sensor.Memory()  # the tension sensor's per-sample memory
+    sensor_code: int = sensor.OK  # sensor state decided at the newest tick
+    parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
 
     def inputs(self, depth_s: float, depth_stale: bool, rate: float = _NAN) -> AlarmInputs:
         """The alarm inputs of this line now (newest results, stamps, the tide's decision and
@@ -265,6 +275,9 @@ class LineState:
             dock_residual=d[1],
             dock_expected=d[2],
             dock_sigma=d[3],
+            sensor_state=float(self.sensor_code),
+            sensor_tension=self.tension,
+            mbl=self.config.mbl,
         )
 
 
@@ -311,6 +324,10 @@ class MonitorCore:
         self.depth_s = _NAN  # s, its stamp
         self.depth_stale = False
         self.trend = tide_trend.TrendState()  # the tide's rate (m/s) from the depth samples
+        self.depth_memory = sensor.Memory()  # the depth sensor's per-sample memory
+        self.depth_code = sensor.OK  # the depth sensor's state at the newest tick
+        self.sensor_times = np.zeros(0)  # s, the ticks the suspected_parted test still needs
+        self.sensor_rows = np.zeros((0, len(config.lines)))  # N, each line's tension there
         self.tide: tuple[Level, str] = tide_status(_NAN, _NAN, start, config.alarm.depth_timeout)
         self.tide_entered = start
         self.logger: tuple[Level, str] = (Level.OK, 'logging')
@@ -345,6 +362,14 @@ class MonitorCore:
     def _on_tension(self, ev: Tension) -> Step:
         line = self.lines[ev.line]
         line.tension, line.tension_s = float(ev.value), _stamp_s(ev.stamp_ns)
+        a = self.config.alarm
+        line.sensor_memory = sensor.sample(
+            line.sensor_memory,
+            line.tension_s,
+            line.tension,
+            a.tension_resolution,
+            a.tension_rate_max * line.config.mbl,
+        )
         self._solve_one(line)
         changes = self._step_lines([ev.line], ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'tension', [ev.line], changes)
@@ -353,6 +378,10 @@ class MonitorCore:
         self.depth, self.depth_s = float(ev.value), _stamp_s(ev.stamp_ns)
         window = self.config.alarm.tide_trend_window
         self.trend = tide_trend.step(self.trend, ev.stamp_ns, self.depth, window)
+        a = self.config.alarm
+        self.depth_memory = sensor.sample(
+            self.depth_memory, self.depth_s, self.depth, a.depth_resolution, a.depth_rate_max
+        )
         changes = self._decide_tide(ev.stamp_ns)
         solved = [k for k, line in enumerate(self.lines) if line.tension_s == line.tension_s]
         self._solve_many(solved)
@@ -360,6 +389,7 @@ class MonitorCore:
         return self._finish(ev.stamp_ns, 'depth', solved, changes)
 
     def _on_tick(self, ev: Tick) -> Step:
+        self._decide_sensors(ev.stamp_ns)
         changes = self._decide_tide(ev.stamp_ns)
         if self.dock_model is not None:
             changes += self._decide_dock(ev.stamp_ns)
@@ -398,8 +428,48 @@ class MonitorCore:
         now = _stamp_s(stamp_ns)
         timeout = self.config.alarm.depth_timeout
         self.depth_stale = self.depth_s == self.depth_s and now - self.depth_s > timeout
-        return self._set_component(
-            'tide', tide_status(self.depth, self.depth_s, now, timeout), stamp_ns
+        status = tide_status(self.depth, self.depth_s, now, timeout)
+        new = tide_with_sensor(status, self.depth_code, self.depth, self.config.alarm)
+        return self._set_component('tide', new, stamp_ns)
+
+    def _decide_sensors(self, stamp_ns: int) -> None:
+        """Every line's and the depth sensor's state at a tick (core.sensor)."""
+        a = self.config.alarm
+        now = np.array([_stamp_s(stamp_ns)])
+        lines = self.lines
+        tension = np.array([[line.tension for line in lines]])
+        changed = np.array([[line.sensor_memory.changed for line in lines]])
+        ref, keep = sensor.reference(self.sensor_times, self.sensor_rows, now, a.parted_window)
+        pattern = sensor.parted_pattern(tension, ref, a.parted_drop)
+        seen = np.array([[line.parted_seen for line in lines]])
+        seen = np.where(pattern, now[:, None], seen)
+        self.sensor_times = np.append(self.sensor_times[keep:], now)
+        self.sensor_rows = np.vstack([self.sensor_rows[keep:], tension])
+        codes = sensor.decide_lines(
+            a,
+            sensor_limits(self.config),
+            now,
+            tension,
+            np.array([[line.tension_s for line in lines]]),
+            changed,
+            np.array([[line.sensor_memory.spiked for line in lines]]),
+            seen,
+            np.array([self.depth]),
+            np.array([self.depth_memory.changed]),
+        )
+        for k, line in enumerate(lines):
+            line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
+        dm = self.depth_memory
+        self.depth_code = int(
+            sensor.decide_depth(
+                a,
+                now,
+                np.array([self.depth]),
+                np.array([self.depth_s]),
+                np.array([dm.changed]),
+                np.array([dm.spiked]),
+                changed,
+            )[0]
         )
 
     def _decide_dock(self, stamp_ns: int) -> list[Change]:
@@ -441,7 +511,7 @@ class MonitorCore:
         h = self.depth + lc.hook_height
         if self.depth_s != self.depth_s:  # no depth yet: nothing to solve
             line.values, line.status, line.status_message, line.model = (
-                (t, h) + _NAN_VALUES[2:],
+                (t, h) + _NAN_VALUES[2:_SENSOR_AT] + (float(line.sensor_code),),
                 NO_DEPTH,
                 '',
                 NO_MODEL,
@@ -465,6 +535,7 @@ class MonitorCore:
             tide_trend.time_to_uplift(
                 r.tide_margin, r.uplift_force, self.trend.rate, self.trend.excess
             ),
+            float(line.sensor_code),
         )
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
         code = reading_status(t, h, lc.mbl)
@@ -500,6 +571,7 @@ class MonitorCore:
                 for m, f in zip(columns[6], columns[5])
             ]
         )
+        columns.append([float(line.sensor_code) for line in lines])
         models = np.broadcast_to(np.asarray(r.model, dtype=object), tension.shape)
         messages, status = r.message, np.asarray(r.status).tolist()
         for i, line in enumerate(lines):
@@ -553,18 +625,28 @@ class MonitorCore:
                 line.status,
                 line.model,
                 now - line.tension_s,
+                sensor.line_word(line.sensor_code, line_dock_word(line) if dock else ''),
                 tuple(
                     alarm_ack.diagnostic_values(
                         line.ack, line.state.level, [latch.active for latch in line.state.latches]
                     )
                 )
-                + (line_dock_values(line.state.latches[-1].active, line.dock) if dock else ()),
+                + (
+                    line_dock_values(line.state.latches[_INCONSISTENT].active, line.dock)
+                    if dock
+                    else ()
+                ),
             )
             for line in self.lines
         ]
         statuses.append(
             tide_component(
-                self.tide, self.depth_id, self.depth, now - self.depth_s, self.trend.rate
+                self.tide,
+                self.depth_id,
+                self.depth,
+                now - self.depth_s,
+                self.trend.rate,
+                sensor.DEPTH_STATES[self.depth_code],
             )
         )
         level, message = self.logger
@@ -579,7 +661,7 @@ class MonitorCore:
 def _implausible(line: LineState, code: int) -> None:
     """An implausible reading (core.plausible): its status and sentence, no solved values
     (the measured tension and depth kept, as for every impossible input)."""
-    line.values = line.values[:2] + _NAN_VALUES[2:]
+    line.values = line.values[:2] + _NAN_VALUES[2:_SENSOR_AT] + line.values[_SENSOR_AT:]
     line.status, line.status_message = code, STATUS_MESSAGES[code]
     line.model = elastic.INEXTENSIBLE
 
@@ -600,11 +682,13 @@ def line_status(
     status: int,
     model: str,
     tension_age: float,
+    sensor_word: str = 'ok',
     extra: Sequence[tuple[str, str]] = (),
 ) -> ComponentStatus:
     """One line's ``DiagnosticStatus``: the contract keys (SI strings ``float()`` reads back
     exactly), then ``measured_tension``, ``tension_age`` [s], ``anchor_distance``,
-    ``allowed_uplift``, ``anchor_angle_deg``, ``solver_status``, ``model``, then ``extra``
+    ``allowed_uplift``, ``anchor_angle_deg``, ``solver_status``, ``model``, ``sensor_state``
+    (:func:`catenary_monitor.core.sensor.line_word`), then ``extra``
     (the alarm's acknowledgement keys: :func:`.acknowledge.diagnostic_values`; with the dock
     model, :func:`line_dock_values`)."""
     named = dict(zip(VALUE_FIELDS, values))
@@ -616,6 +700,7 @@ def line_status(
         ('anchor_angle_deg', repr(float(values[9]))),
         ('solver_status', str(int(status))),
         ('model', model),
+        ('sensor_state', sensor_word),
         *extra,
     ]
     return ComponentStatus(
@@ -624,15 +709,44 @@ def line_status(
 
 
 def line_dock_values(latched: bool, dock: Sequence[float]) -> tuple[tuple[str, str], ...]:
-    """A line's dock-model values: ``sensor_state``, ``residual`` (measured - expected, N),
-    ``expected_tension`` (N) and ``residual_sigma`` (normalized residual)."""
+    """A line's dock-model values: ``residual`` (measured - expected, N), ``expected_tension``
+    (N) and ``residual_sigma`` (normalized residual); its word for ``sensor_state`` is
+    :func:`line_dock_word`."""
     flag, residual, expected, sigma = dock
     return (
-        ('sensor_state', dock_live.sensor_state(latched, flag)),
         ('residual', repr(float(residual))),
         ('expected_tension', repr(float(expected))),
         ('residual_sigma', repr(float(sigma))),
     )
+
+
+def line_dock_word(line: LineState) -> str:
+    """The dock model's ``sensor_state`` word of a line (:func:`dock_live.sensor_state`)."""
+    return dock_live.sensor_state(line.state.latches[_INCONSISTENT].active, line.dock[0])
+
+
+def sensor_limits(config: MonitorConfig) -> sensor.LineLimits:
+    """The per-line constants of the sensor decision (MBL, weight, hook height)."""
+    lines = config.lines
+    return sensor.LineLimits(
+        np.array([c.mbl for c in lines]),
+        np.array([c.weight for c in lines]),
+        np.array([c.hook_height for c in lines]),
+    )
+
+
+def tide_with_sensor(
+    tide: tuple[Level, str], code: int, depth: float, config: Any
+) -> tuple[Level, str]:
+    """The tide's (level, message) with the depth sensor's state: the worse level (stuck and
+    spike WARN, out_of_range ERROR), the sensor's message appended."""
+    if code == sensor.OK:
+        return tide
+    level = Level.ERROR if code == sensor.OUT_OF_RANGE else Level.WARN
+    text = sensor.depth_message(code, depth, config)
+    if tide[0] == Level.OK:
+        return level, text
+    return (tide[0] if RANK[tide[0]] >= RANK[level] else level), f'{tide[1]}; {text}'
 
 
 def dock_component(
@@ -652,9 +766,11 @@ def tide_component(
     depth: float,
     depth_age: float,
     rate: float = math.nan,
+    sensor_word: str = 'ok',
 ) -> ComponentStatus:
     """The tide's ``DiagnosticStatus``: values ``depth`` [m], ``depth_age`` [s] and ``rate``
-    [m/s], the trend (:mod:`~catenary_monitor.core.tide_trend`; nan while unknown)."""
+    [m/s], the trend (:mod:`~catenary_monitor.core.tide_trend`; nan while unknown), and the
+    depth sensor's ``sensor_state`` (:data:`catenary_monitor.core.sensor.DEPTH_STATES`)."""
     return ComponentStatus(
         f'{NODE_NAME}: tide',
         tide[0],
@@ -664,6 +780,7 @@ def tide_component(
             ('depth', repr(float(depth))),
             ('depth_age', repr(float(depth_age))),
             ('rate', repr(float(rate))),
+            ('sensor_state', sensor_word),
         ),
     )
 
