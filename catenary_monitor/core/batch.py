@@ -468,7 +468,7 @@ def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
     if n == 0:
         return _Sensors(np.zeros((0, m), np.int8), np.zeros(0, np.int8), before, before_depth)
     times = np.concatenate([core.sensor_times, now])
-    rows = np.vstack([core.sensor_rows, tension])
+    rows = np.vstack([core.sensor_rows, sensor.history_row(now, tension, spiked, a.sensor_hold)])
     ref, keep = sensor.reference(times, rows, now, a.parted_window)
     pattern = sensor.parted_pattern(tension, ref, a.parted_drop)
     first = np.array([[line.parted_seen for line in lines]])

@@ -396,7 +396,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
             ),
             (
                 'parted_drop',
-                0.5,
+                0.75,
                 'suspected_parted: the tension fell by this fraction in parted_window',
                 '',
                 0.05,
@@ -404,7 +404,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
             ),
             (
                 'parted_window',
-                30.0,
+                5.0,
                 'suspected_parted: the tension is compared with its value this long ago',
                 's',
                 1.0,

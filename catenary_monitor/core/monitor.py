@@ -444,7 +444,9 @@ class MonitorCore:
         seen = np.array([[line.parted_seen for line in lines]])
         seen = np.where(pattern, now[:, None], seen)
         self.sensor_times = np.append(self.sensor_times[keep:], now)
-        self.sensor_rows = np.vstack([self.sensor_rows[keep:], tension])
+        spiked = np.array([[line.sensor_memory.spiked for line in lines]])
+        row = sensor.history_row(now, tension, spiked, a.sensor_hold)
+        self.sensor_rows = np.vstack([self.sensor_rows[keep:], row])
         codes = sensor.decide_lines(
             a,
             sensor_limits(self.config),
@@ -452,7 +454,7 @@ class MonitorCore:
             tension,
             np.array([[line.tension_s for line in lines]]),
             changed,
-            np.array([[line.sensor_memory.spiked for line in lines]]),
+            spiked,
             seen,
             np.array([self.depth]),
             np.array([self.depth_memory.changed]),

@@ -58,6 +58,7 @@ __all__ = [
     'decide_lines',
     'decide_depth',
     'reference',
+    'history_row',
     'line_word',
     'line_message',
     'depth_message',
@@ -264,6 +265,15 @@ def reference(
         ref[have] = rows[idx[have]]
     keep = int(idx[-1]) if len(idx) and idx[-1] >= 0 else 0
     return ref, keep
+
+
+def history_row(
+    now: np.ndarray, tension: np.ndarray, spiked: np.ndarray, hold: float
+) -> np.ndarray:
+    """The tick's tensions as a later reference of the parted test: NaN where the line's
+    reading spiked within ``hold`` (a spike is no reference)."""
+    with np.errstate(invalid='ignore'):
+        return np.where(now[:, None] - spiked <= hold, math.nan, tension)
 
 
 def line_word(code: int, dock: str = '') -> str:
