@@ -30,7 +30,8 @@ def _inconsistent(step_list, config):
 
 
 def _latched(core):
-    return [line.config.name for line in core.lines if line.state.latches[CONDITIONS.index('inconsistent')].active]
+    at = CONDITIONS.index('inconsistent')
+    return [line.config.name for line in core.lines if line.state.latches[at].active]
 
 
 @pytest.mark.parametrize('drifting', [DRIFTING, 4])  # line_09 windward, line_05 lee
