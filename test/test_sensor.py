@@ -228,9 +228,9 @@ def test_a_state_for_every_code_and_a_word_for_every_state():
     assert math.isinf(sensor.Memory().changed)
 
 
-def test_the_demo_storm_raises_no_sensor_state():
-    """The simulator's storm (at its 20 Hz tension and 2 Hz depth rates), the demo's alarm
-    overrides: every line and the depth sensor stay ok, while line 11 lifts (not vacuous)."""
+def demo_record():
+    """The simulator's storm at its 20 Hz tension and 2 Hz depth rates through the monitor
+    with the demo's overrides (the batch twin): (config, result)."""
     from catenary_monitor.cli.demo import DEMO_OVERRIDES
     from catenary_monitor.core.config import config_from_params, load_params_file
     from catenary_monitor.ros.simulator import Scenario, default_config_path
@@ -246,7 +246,13 @@ def test_the_demo_storm_raises_no_sensor_state():
     tensions = {line.name: (ns, rows[:, k]) for k, line in enumerate(cfg.lines)}
     d_ns = ns[::10] - 1000
     depth = (d_ns, np.array([scenario.depth(x) for x in t[::10]]))
-    result = recompute(cfg, tensions, depth, start_ns=T0_NS - 10**9, snapshots=True)
+    return cfg, recompute(cfg, tensions, depth, start_ns=T0_NS - 10**9, snapshots=True)
+
+
+def test_the_demo_storm_raises_no_sensor_state():
+    """The demo's storm: every line and the depth sensor stay ok, while line 11 lifts (not
+    vacuous)."""
+    cfg, result = demo_record()
     for r in result.lines:
         assert set(r.values['sensor_state'].tolist()) == {0.0}, r.name
     words = {
@@ -260,3 +266,24 @@ def test_the_demo_storm_raises_no_sensor_state():
     assert len(result.snapshots) > 50
     line_11 = result.lines[[r.name for r in result.lines].index('line_11')]
     assert np.nanmax(line_11.values['uplift_force']) > 0.0
+
+
+def test_the_demo_warns_of_the_uplift_before_line_11_lifts():
+    """The demo's tide rises toward the uplift: line 11's first alarm is the time-to-uplift
+    WARN, seconds before its anchor lifts; the chart's marks (from the outputs) agree."""
+    from catenary_monitor.cli.demo import uplift_warning_times
+
+    cfg, result = demo_record()
+    line = result.lines[[r.name for r in result.lines].index('line_11')]
+    tr = line.transitions
+    warn = [x for x in tr if x.new.name == 'WARN']
+    lift = [x for x in tr if x.new.name == 'ERROR' and 'anchor uplift' in x.message]
+    assert warn and lift and 'anchor uplift in' in warn[0].message, [x.message for x in tr]
+    assert 'tide keeps rising' in warn[0].message
+    assert 3.0 < lift[0].time - warn[0].time < 15.0
+    t = (line.t_ns - T0_NS) * 1e-9
+    data = np.column_stack([line.values[k] for k in ('time_to_uplift', 'uplift_force')])
+    idx = {'time_to_uplift': 0, 'uplift_force': 1}
+    first_w, first_lift = uplift_warning_times(t, data, idx, cfg.alarm.uplift_time_warn)
+    assert first_w == pytest.approx(warn[0].time - T0_NS * 1e-9, abs=1e-6)
+    assert first_lift == pytest.approx(lift[0].time - T0_NS * 1e-9, abs=1e-6)

@@ -361,13 +361,10 @@ class LineAlarm:
             if not value > 0.0:
                 return 'anchor lifted: time to uplift 0 min'
             rate = x.tide_rate * 3600.0
-            return (
-                f'anchor uplift in {_fmt(value, 60.0, 0)} min if the tide keeps rising '
-                f'{rate:.2f} m/h'
-            )
+            return f'anchor uplift in {_duration(value)} if the tide keeps rising {rate:.2f} m/h'
         return (
-            f'time to uplift {_fmt(value, 60.0, 0)} min, warning held (clears after {hold:g} s '
-            f'at >= {_fmt(high, 60.0, 0)} min)'
+            f'time to uplift {_duration(value)}, warning held (clears after {hold:g} s '
+            f'at >= {_duration(high)})'
         )
 
 
@@ -388,6 +385,13 @@ def _sensor_text(x: AlarmInputs, cond: str, hold: float) -> str:
     if bool(breach):
         return sensor.line_message(int(code), x.sensor_tension, x.mbl)
     return f'sensor alarm held (clears after {hold:g} s of sane readings)'
+
+
+def _duration(seconds: float) -> str:
+    """A time to uplift for the operator: whole minutes, seconds below 2 min."""
+    if seconds < 120.0:
+        return f'{_fmt(seconds, 1.0, 0)} s'
+    return f'{_fmt(seconds, 60.0, 0)} min'
 
 
 def _inconsistent_text(x: AlarmInputs, hold: float) -> str:
