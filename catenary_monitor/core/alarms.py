@@ -272,8 +272,8 @@ class LineAlarm:
         elif cond == 'inconsistent':
             breach, clear = x.inconsistent == 1.0, x.inconsistent == 0.0
         elif cond in _SENSOR:
-            breach, clear = _sensor_codes(cond, np.asarray(x.sensor_state))
-            breach, clear = bool(breach), bool(clear)
+            hit, ok = _sensor_codes(cond, np.asarray(x.sensor_state))
+            breach, clear = bool(hit), bool(ok)
         else:
             low, high = self._warn_limits(cond)
             value = getattr(x, cond)
