@@ -287,3 +287,13 @@ def test_the_demo_warns_of_the_uplift_before_line_11_lifts():
     first_w, first_lift = uplift_warning_times(t, data, idx, cfg.alarm.uplift_time_warn)
     assert first_w == pytest.approx(warn[0].time - T0_NS * 1e-9, abs=1e-6)
     assert first_lift == pytest.approx(lift[0].time - T0_NS * 1e-9, abs=1e-6)
+
+
+def test_node_md_sensor_parameter_table_is_generated():
+    from pathlib import Path
+
+    from catenary_monitor.core.config import parameters_markdown
+
+    page = (Path(__file__).resolve().parents[1] / 'docs' / 'node.md').read_text()
+    begin, end = '<!-- sensor-parameters:begin -->\n', '<!-- sensor-parameters:end -->'
+    assert page.split(begin, 1)[1].split(end, 1)[0] == parameters_markdown('sensor')
