@@ -296,22 +296,29 @@ def _mark_uplift_warning(
 ) -> None:
     """Mark the time-to-uplift WARN and the uplift of line ``name`` on every panel."""
     first_w, lift = uplift_warning_times(t, data, idx, warn)
-    for when, colour, text in (
-        (first_w, 'tab:orange', f'{name} time-to-uplift WARN'),
-        (lift, 'tab:red', f'{name} anchor lifts'),
+    for when, colour, text, side in (
+        (first_w, 'tab:orange', f'{name} time-to-uplift WARN', 'right'),
+        (lift, 'tab:red', f'{name} anchor lifts', 'left'),
     ):
         if when is None:
             continue
         for a in axes:
             a.axvline(when, color=colour, ls='-.', lw=1.0)
         axes[0].text(
-            when, 0.02, f' {text}\n t = {when:.1f} s', color=colour, fontsize=8,
-            transform=axes[0].get_xaxis_transform(), va='bottom',
+            when,
+            0.02,
+            f' {text} \n t = {when:.1f} s ',
+            color=colour,
+            fontsize=8,
+            ha=side,
+            va='bottom',
+            transform=axes[0].get_xaxis_transform(),
         )
 
 
 def plot_episode(files: list[Path], png: Path, params: str) -> Path:
-    """Chart of the episode from the MCAP log: depth, hook tensions, line 11, alarm levels."""
+    """Chart of the episode from the MCAP log: depth, hook tensions, line 11, alarm levels;
+    line 11's first time-to-uplift WARN and its uplift marked on every panel."""
     import matplotlib
 
     matplotlib.use('Agg')
@@ -321,7 +328,7 @@ def plot_episode(files: list[Path], png: Path, params: str) -> Path:
     from catenary_monitor.io.mcap_read import read_float64_topics
     from catenary_monitor.ros.node import NODE_NAME, OUTPUT_FIELDS
 
-    config = config_from_params(load_params_file(params))
+    config = config_from_params({**load_params_file(params), **DEMO_OVERRIDES})  # as the node
     names = [line.name for line in config.lines]
     tension_topics = {line.name: line.tension_topic for line in config.lines}
     cols, _ = read_float64_topics(files, [config.depth_topic, *tension_topics.values()])
