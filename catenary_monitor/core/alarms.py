@@ -129,6 +129,7 @@ class AlarmInputs:
     safety_factor: float = math.nan  # -, MBL / top tension
     time_to_uplift: float = math.nan  # s, until uplift at the tide's trend (inf: not coming)
     tide_rate: float = math.nan  # m/s, the tide's trend (for the message)
+    tide_forecast: float = 0.0  # 1: time_to_uplift is the tide table's forecast (the message)
     status: int = 0
     status_message: str = ''
     tension_stamp: float = math.nan  # s
@@ -361,6 +362,8 @@ class LineAlarm:
             if not value > 0.0:
                 return 'anchor lifted: time to uplift 0 min'
             rate = x.tide_rate * 3600.0
+            if x.tide_forecast == 1.0:
+                return f'anchor uplift in {_duration(value)} on the tide table\'s forecast'
             return f'anchor uplift in {_duration(value)} if the tide keeps rising {rate:.2f} m/h'
         return (
             f'time to uplift {_duration(value)}, warning held (clears after {hold:g} s '
@@ -458,6 +461,7 @@ _INPUT_FIELDS = (
     'safety_factor',
     'time_to_uplift',
     'tide_rate',
+    'tide_forecast',
     'tension_stamp',
     'depth_stamp',
     'inconsistent',

@@ -31,7 +31,7 @@ from typing import Any, NamedTuple, Optional
 import numpy as np
 
 from catenary_monitor.core import acknowledge as alarm_ack, catenary as cat, elastic, kernels
-from catenary_monitor.core import sensor, tide_trend
+from catenary_monitor.core import sensor, tide_table, tide_trend
 from catenary_monitor.core.alarms import RANK, Level, LevelSeries, Transition, replay_levels
 from catenary_monitor.core.config import LineConfig, MonitorConfig
 from catenary_monitor.core.body import live as dock_live
@@ -50,6 +50,7 @@ from catenary_monitor.core.monitor import (
     Snapshot,
     Start,
     dock_component,
+    forecast_word,
     line_dock_values,
     line_status,
     sensor_limits,
@@ -646,6 +647,18 @@ def _solve_line(
         steps.k_idx[steps.solved], sensors.codes[:, k].astype(np.float64), sensors.before[k]
     )
     d_idx = steps.d_idx[steps.solved]
+    a = core.config.alarm
+    if a.constituents:
+        now = _pick(d_idx, window.depth[0] * 1e-9, core.depth_s)
+        values['time_to_uplift'] = tide_table.uplift_times(
+            a.constituents,
+            a.tide_table_epoch,
+            a.tide_forecast_horizon,
+            now,
+            values['tide_margin'],
+            values['uplift_force'],
+        )
+        return values, status, used
     rate = _pick(d_idx, tide.rates, core.trend.rate)
     excess = _pick(d_idx, tide.excess, core.trend.excess)
     values['time_to_uplift'] = tide_trend.uplift_times(
@@ -723,6 +736,7 @@ def _line_inputs(
         np.int64
     )
     inputs['tide_rate'] = _pick(steps.d_idx, tide.rates, core.trend.rate)
+    inputs['tide_forecast'] = 1.0 if core.config.alarm.constituents else 0.0
     inputs['tension_stamp'] = _pick(steps.t_idx, tt * 1e-9, line.tension_s)
     inputs['depth_stamp'] = _pick(steps.d_idx, window.depth[0] * 1e-9, core.depth_s)
     inputs['depth_stale'] = _pick(
@@ -953,7 +967,8 @@ def _snapshots(
         word = depth_word if i < 0 else sensor.DEPTH_STATES[int(tide.sensor[i])]
         statuses = [col[n] for col in columns]
         age = stamp * 1e-9 - depth_s
-        statuses.append(tide_component(state, core.depth_id, depth, age, rate, word))
+        forecast = forecast_word(core.config, rate)
+        statuses.append(tide_component(state, core.depth_id, depth, age, rate, word, forecast))
         statuses.append(logger)
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))

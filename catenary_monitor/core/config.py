@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Mapping, NamedTuple, Optional
 
+from catenary_monitor.core import tide_table
+
 __all__ = [
     'REQUIRED',
     'ParamSpec',
@@ -342,6 +344,38 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.0,
         86400.0,
     ),
+    # The tide table (core/tide_table.py; table in docs/node.md).
+    ParamSpec(
+        'tide_table',
+        'string',
+        '',
+        'Tide table: constituents "NAME AMPLITUDE PHASE SPEED; ..." (m, deg, deg/h); '
+        'empty: none (the trend)',
+        '',
+        None,
+        None,
+        group='tide',
+    ),
+    ParamSpec(
+        'tide_table_epoch',
+        'double',
+        0.0,
+        'The time the table\'s phases refer to (Unix time on the monitor\'s clock)',
+        's',
+        -1.0e10,
+        1.0e10,
+        group='tide',
+    ),
+    ParamSpec(
+        'tide_forecast_horizon',
+        'double',
+        43200.0,
+        'With a table, time_to_uplift follows its forecast this far ahead (inf beyond)',
+        's',
+        600.0,
+        604800.0,
+        group='tide',
+    ),
     # Sensor sanity (core/sensor.py; table in docs/node.md).
     *(
         ParamSpec(name, 'double', default, text, unit, lo, hi, group='sensor')
@@ -349,15 +383,15 @@ PARAMETERS: tuple[ParamSpec, ...] = (
             (
                 'tension_resolution',
                 100.0,
-                'A tension change up to this is no change (stuck sensor test)',
+                'stuck: the tension sensor\'s step; readings within one step are no change',
                 'N',
                 0.0,
                 1.0e7,
             ),
             (
                 'depth_resolution',
-                0.005,
-                'A depth change up to this is no change (stuck sensor test)',
+                0.001,
+                'stuck: the depth sensor\'s step; readings within one step are no change',
                 'm',
                 0.0,
                 10.0,
@@ -779,6 +813,9 @@ class AlarmConfig:
     parted_window: float = _default('parted_window')
     depth_min: float = _default('depth_min')
     depth_max: float = _default('depth_max')
+    tide_table: str = _default('tide_table')
+    tide_table_epoch: float = _default('tide_table_epoch')
+    tide_forecast_horizon: float = _default('tide_forecast_horizon')
     load_margin_warn: float = _default('load_margin_warn')
     load_margin_deadband: float = _default('load_margin_deadband')
     safety_factor_warn: float = _default('safety_factor_warn')
@@ -796,6 +833,16 @@ class AlarmConfig:
         for f in dataclasses.fields(self):
             value = _check(f.name, _GLOBAL[f.name], getattr(self, f.name))
             object.__setattr__(self, f.name, value)
+        try:
+            table = tide_table.parse_table(self.tide_table)
+        except ValueError as err:
+            raise ConfigError('tide_table', str(err)) from None
+        object.__setattr__(self, '_constituents', table)
+
+    @property
+    def constituents(self) -> tuple[tide_table.Constituent, ...]:
+        """The tide table's constituents (empty: no table)."""
+        return getattr(self, '_constituents')
 
 
 @dataclass(frozen=True)

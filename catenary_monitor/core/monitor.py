@@ -63,7 +63,7 @@ from catenary_monitor.core.health import logger_status, tide_status
 from catenary_monitor.core.plausible import reading_status, reading_status_array
 from catenary_monitor.core.result import STATUS_MESSAGES
 from catenary_monitor.core.solve import solve
-from catenary_monitor.core import sensor, tide_trend
+from catenary_monitor.core import sensor, tide_table, tide_trend
 
 __all__ = [
     'NODE_NAME',
@@ -254,9 +254,11 @@ class LineState:
     sensor_code: int = sensor.OK  # sensor state decided at the newest tick
     parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
 
-    def inputs(self, depth_s: float, depth_stale: bool, rate: float = _NAN) -> AlarmInputs:
+    def inputs(
+        self, depth_s: float, depth_stale: bool, rate: float = _NAN, table: bool = False
+    ) -> AlarmInputs:
         """The alarm inputs of this line now (newest results, stamps, the tide's decision and
-        its trend ``rate`` [m/s])."""
+        its trend ``rate`` [m/s]; ``table``: the time to uplift is the tide table's)."""
         v, d = self.values, self.dock
         return AlarmInputs(
             uplift_force=v[5],
@@ -266,6 +268,7 @@ class LineState:
             safety_factor=v[8],
             time_to_uplift=v[11],
             tide_rate=rate,
+            tide_forecast=1.0 if table else 0.0,
             status=max(self.status, 0),
             status_message=self.status_message,
             tension_stamp=self.tension_s,
@@ -534,9 +537,7 @@ class MonitorCore:
             r.safety_factor,
             r.anchor_angle_deg,
             r.suspended_length,
-            tide_trend.time_to_uplift(
-                r.tide_margin, r.uplift_force, self.trend.rate, self.trend.excess
-            ),
+            self._uplift_times([r.tide_margin], [r.uplift_force])[0],
             float(line.sensor_code),
         )
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
@@ -566,13 +567,7 @@ class MonitorCore:
         columns = [tension.tolist(), h.tolist()] + [
             np.asarray(getattr(r, k)).tolist() for k in _SOLVED
         ]
-        rate, excess = self.trend.rate, self.trend.excess
-        columns.append(
-            [
-                tide_trend.time_to_uplift(m, f, rate, excess)
-                for m, f in zip(columns[6], columns[5])
-            ]
-        )
+        columns.append(self._uplift_times(columns[6], columns[5]))
         columns.append([float(line.sensor_code) for line in lines])
         models = np.broadcast_to(np.asarray(r.model, dtype=object), tension.shape)
         messages, status = r.message, np.asarray(r.status).tolist()
@@ -585,6 +580,23 @@ class MonitorCore:
             if code:
                 _implausible(line, code)
 
+    def _uplift_times(self, margins: Sequence[float], forces: Sequence[float]) -> list[float]:
+        """Each line's time to uplift [s]: on the tide table's forecast from the newest depth
+        sample where there is a table (core.tide_table), else at the tide's trend."""
+        a = self.config.alarm
+        if a.constituents:
+            times = tide_table.uplift_times(
+                a.constituents,
+                a.tide_table_epoch,
+                a.tide_forecast_horizon,
+                np.full(len(margins), self.depth_s),
+                np.array(margins, np.float64),
+                np.array(forces, np.float64),
+            )
+            return [float(v) for v in times]
+        rate, excess = self.trend.rate, self.trend.excess
+        return [tide_trend.time_to_uplift(m, f, rate, excess) for m, f in zip(margins, forces)]
+
     def _step_lines(self, which: Any, stamp_ns: int) -> list[Change]:
         """Step the alarms of the given lines at ``stamp_ns``; their transitions."""
         now = _stamp_s(stamp_ns)
@@ -592,7 +604,14 @@ class MonitorCore:
         for k in which:
             line = self.lines[k]
             line.state, events = line.alarm.update(
-                line.state, line.inputs(self.depth_s, self.depth_stale, self.trend.rate), now
+                line.state,
+                line.inputs(
+                    self.depth_s,
+                    self.depth_stale,
+                    self.trend.rate,
+                    bool(self.config.alarm.constituents),
+                ),
+                now,
             )
             grace = alarm_ack.startup_grace(self.config.alarm)
             line.ack = alarm_ack.step(line.ack, line.state.level, now, grace)
@@ -649,6 +668,7 @@ class MonitorCore:
                 now - self.depth_s,
                 self.trend.rate,
                 sensor.DEPTH_STATES[self.depth_code],
+                forecast_word(self.config, self.trend.rate),
             )
         )
         level, message = self.logger
@@ -737,6 +757,14 @@ def sensor_limits(config: MonitorConfig) -> sensor.LineLimits:
     )
 
 
+def forecast_word(config: MonitorConfig, rate: float) -> str:
+    """What the times to uplift follow: ``table`` (a tide table is configured), ``trend``
+    (the tide's trend is known) or ``unknown``."""
+    if config.alarm.constituents:
+        return 'table'
+    return 'trend' if math.isfinite(rate) else 'unknown'
+
+
 def tide_with_sensor(
     tide: tuple[Level, str], code: int, depth: float, config: Any
 ) -> tuple[Level, str]:
@@ -769,10 +797,12 @@ def tide_component(
     depth_age: float,
     rate: float = math.nan,
     sensor_word: str = 'ok',
+    forecast: str = 'unknown',
 ) -> ComponentStatus:
     """The tide's ``DiagnosticStatus``: values ``depth`` [m], ``depth_age`` [s] and ``rate``
     [m/s], the trend (:mod:`~catenary_monitor.core.tide_trend`; nan while unknown), and the
-    depth sensor's ``sensor_state`` (:data:`catenary_monitor.core.sensor.DEPTH_STATES`)."""
+    depth sensor's ``sensor_state`` (:data:`catenary_monitor.core.sensor.DEPTH_STATES`) and
+    ``tide_forecast``, what the times to uplift follow (:func:`forecast_word`)."""
     return ComponentStatus(
         f'{NODE_NAME}: tide',
         tide[0],
@@ -783,6 +813,7 @@ def tide_component(
             ('depth_age', repr(float(depth_age))),
             ('rate', repr(float(rate))),
             ('sensor_state', sensor_word),
+            ('tide_forecast', forecast),
         ),
     )
 

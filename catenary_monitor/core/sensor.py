@@ -4,8 +4,10 @@ Pure (no rclpy, no clock). Two parts, each with a scalar path (the core) and an 
 batch twin) that share the arithmetic, so live and replay decide alike:
 
 * **per sample** (:func:`sample`, :func:`samples`): what a sensor's readings remember: the
-  newest finite reading and its stamp, when it last *changed* by more than the resolution
-  (``tension_resolution`` N, ``depth_resolution`` m) from the reading before, and when it last
+  newest finite reading and its stamp, when it last *changed*: entered another step of the
+  resolution (``floor(x / resolution)``, ``tension_resolution`` N, ``depth_resolution`` m; a
+  reading drifting at rate r changes at least every resolution / r) than the reading before;
+  when it last
   *spiked*: a step ``|dx| > rate_max * dt + resolution`` between consecutive finite readings
   (a rate of change no chain and no tide can have). Non-finite readings are not remembered.
 * **per tick** (:func:`decide_lines`, :func:`decide_depth`): the states, decided at every tick
@@ -100,9 +102,19 @@ def sample(mem: Memory, stamp: float, value: float, resolution: float, rate: flo
     if not math.isfinite(value):
         return mem
     d = abs(value - mem.value)
-    changed = stamp if not d <= resolution else mem.changed
+    step = bool(_steps(np.array([mem.value]), np.array([value]), resolution)[0])
+    changed = stamp if step else mem.changed
     spiked = stamp if d > rate * (stamp - mem.stamp) + resolution else mem.spiked
     return Memory(value, stamp, changed, spiked)
+
+
+def _steps(before: np.ndarray, after: np.ndarray, resolution: float) -> np.ndarray:
+    """Whether each reading is in another resolution step than the one before (``floor(x /
+    resolution)``; a resolution of 0: another value; no reading before: yes)."""
+    with np.errstate(invalid='ignore', divide='ignore'):
+        if resolution > 0.0:
+            return ~(np.floor(after / resolution) == np.floor(before / resolution))
+        return ~(after == before)
 
 
 def samples(
@@ -122,7 +134,7 @@ def samples(
     pt = np.concatenate([[mem.stamp], t[:-1]])
     with np.errstate(invalid='ignore'):
         d = np.abs(v - pv)
-        change = ~(d <= resolution)
+        change = _steps(pv, v, resolution)
         spike = d > rate * (t - pt) + resolution
     ch = np.maximum.accumulate(np.concatenate([[mem.changed], np.where(change, t, _NEVER)]))
     sp = np.maximum.accumulate(np.concatenate([[mem.spiked], np.where(spike, t, _NEVER)]))
