@@ -156,3 +156,13 @@ def test_without_a_table_the_trend_is_used_and_said():
 def test_a_bad_table_is_one_config_error(text):
     with pytest.raises(ConfigError, match='tide_table'):
         config(tide_table=text)
+
+
+def test_node_md_tide_parameter_table_is_generated():
+    from pathlib import Path
+
+    from catenary_monitor.core.config import parameters_markdown
+
+    page = (Path(__file__).resolve().parents[1] / 'docs' / 'node.md').read_text()
+    begin, end = '<!-- tide-parameters:begin -->\n', '<!-- tide-parameters:end -->'
+    assert page.split(begin, 1)[1].split(end, 1)[0] == parameters_markdown('tide')
