@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Mapping, NamedTuple, Optional
 
-from catenary_monitor.core import tide_table
+from catenary_monitor.core.tide_table import Constituent, parse_table
 
 __all__ = [
     'REQUIRED',
@@ -834,13 +834,13 @@ class AlarmConfig:
             value = _check(f.name, _GLOBAL[f.name], getattr(self, f.name))
             object.__setattr__(self, f.name, value)
         try:
-            table = tide_table.parse_table(self.tide_table)
+            table = parse_table(self.tide_table)
         except ValueError as err:
             raise ConfigError('tide_table', str(err)) from None
         object.__setattr__(self, '_constituents', table)
 
     @property
-    def constituents(self) -> tuple[tide_table.Constituent, ...]:
+    def constituents(self) -> tuple[Constituent, ...]:
         """The tide table's constituents (empty: no table)."""
         return getattr(self, '_constituents')
 
