@@ -1007,6 +1007,7 @@ def _line_statuses(
         values, status, model, ts = before.values, before.status, before.model, before.tension_s
         latches = before.latches
         extra, word = before.extra, before.sensor_word
+        code = sensor.OK
         if i >= 0 and sensors is not None:
             j = int(steps.k_idx[i])
             code = sensors.before[k] if j < 0 else int(sensors.codes[j, k])
