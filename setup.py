@@ -63,6 +63,9 @@ setup(
             'selenium>=4.10',
             'moorpy',
             'pycatenary',
+            # Independent readers of the MCAP logs and the bag folder (issue 10).
+            'rosbags>=0.10',
+            'pymcap-cli',
         ],
         'peers': ['moorpy', 'pycatenary'],
     },

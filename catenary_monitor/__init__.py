@@ -4,6 +4,15 @@ The numerical core (this package's top level, ``catenary``, ``solve``) imports n
 """
 
 from catenary_monitor.core.solve import ALL_KEYS, STATUS_MESSAGES, SolveResult, Status, solve
+from catenary_monitor.core.whatif import whatif
 
 __version__ = '0.2.0'
-__all__ = ['solve', 'SolveResult', 'Status', 'STATUS_MESSAGES', 'ALL_KEYS', '__version__']
+__all__ = [
+    'solve',
+    'whatif',
+    'SolveResult',
+    'Status',
+    'STATUS_MESSAGES',
+    'ALL_KEYS',
+    '__version__',
+]

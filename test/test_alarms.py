@@ -541,6 +541,13 @@ def test_diagnostic_values_keys_and_exact_strings():
         'load_margin',
         'safety_factor',
         'time_to_uplift',
+        'uplift_force_upper',
+        'anchor_margin_lower',
+        'tide_margin_lower',
+        'grounded_length',
+        'holding_capacity',
+        'drag_margin',
+        'implied_anchor_distance',
     ]
     assert all(isinstance(v, str) and float(v) == float(fields_[k]) for k, v in values)
     from_object = dict(diagnostic_values(SimpleNamespace(depth=20.85)))

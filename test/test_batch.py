@@ -409,3 +409,35 @@ def test_run_log_steps_acknowledgements_as_the_core_does():
     assert got_rest == want_rest
     for g, w in zip(got_lines, want_lines):
         assert g[:2] == w[:2] and g[3:] == w[3:]
+
+
+def _lookahead_config(**alarm):
+    """dock_config(3) with accuracies and holding data: line_01 bounds (elastic), line_02 a
+    sinker with grounded chain, line_03 a drag anchor with chain length only."""
+    import dataclasses
+
+    base = dock_config(3, depth_accuracy=0.3, drag_margin_warn=150e3, **alarm)
+    extra = [
+        dict(tension_accuracy=40e3, ea=6.0e8, chain_length=300.0),
+        dict(tension_accuracy=20e3, chain_length=250.0, anchor_holding=500e3,
+             anchor_weight=400e3, chain_friction=0.7),
+        dict(chain_length=140.0, anchor_holding=300e3),
+    ]
+    lines = tuple(dataclasses.replace(lc, **e) for lc, e in zip(base.lines, extra))
+    return dataclasses.replace(base, lines=lines)
+
+
+@pytest.mark.parametrize('seed', [1, 2])
+def test_bounds_and_holding_twin_equals_the_core(seed):
+    """The bounds, holding values and their warnings: the twin equals the core, and both
+    warnings (uplift possible within accuracy, drag margin) are reached."""
+    config = _lookahead_config()
+    tensions, depth = generate(config, seconds=90.0, seed=seed)
+    steps = compare(config, tensions, depth, ticks_for(tensions, depth), cuts=[T0_NS + int(33e9)])
+    messages = ' | '.join(c.transition.message for s in steps for c in s.transitions)
+    assert 'uplift possible within sensor accuracy' in messages
+    assert 'anchor may drag' in messages
+    outs = np.array([o.values for s in steps for o in s.outputs if o.line == 1])
+    for key in ('uplift_force_upper', 'anchor_margin_lower', 'grounded_length', 'drag_margin',
+                'implied_anchor_distance'):
+        assert np.isfinite(outs[:, OUTPUT_FIELDS.index(key)]).any(), key

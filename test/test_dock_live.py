@@ -30,8 +30,8 @@ def _inconsistent(step_list, config):
 
 
 def _latched(core):
-    at = CONDITIONS.index('inconsistent')
-    return [line.config.name for line in core.lines if line.state.latches[at].active]
+    k = CONDITIONS.index('inconsistent')
+    return [line.config.name for line in core.lines if line.state.latches[k].active]
 
 
 @pytest.mark.parametrize('drifting', [DRIFTING, 4])  # line_09 windward, line_05 lee

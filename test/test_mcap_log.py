@@ -263,7 +263,7 @@ def test_rotation_by_size_keeps_every_message_once(tmp_path: Path) -> None:
             wall[0] += 0.01
     files = log.files
     assert len(files) >= 4
-    assert sorted(tmp_path.iterdir()) == sorted(files)
+    assert sorted(tmp_path.glob('*.mcap')) == sorted(files)
     names = [p.name for p in files]
     assert all(re.fullmatch(r'dock_\d{8}T\d{6}Z_\d{4}\.mcap', n) for n in names)
     assert [int(n[-9:-5]) for n in names] == list(range(len(files)))
@@ -414,7 +414,7 @@ def test_full_disk_mid_file_is_recorded_not_raised(tmp_path: Path, monkeypatch) 
     assert log.dropped > 0
     assert log.dropped + log.messages_written['/a'] == 600
     # The retry that failed at open left no file behind; the broken first file is readable.
-    files = sorted(tmp_path.iterdir())
+    files = sorted(tmp_path.glob('*.mcap'))
     assert len(files) == 2
     columns, report = read_float64_topics(files, ['/a'])
     got = columns['/a'][1].astype(int).tolist()
@@ -474,7 +474,7 @@ def test_sigkill_loses_at_most_about_one_second(tmp_path: Path) -> None:
         kill_ns = time.time_ns()
         proc.send_signal(signal.SIGKILL)
         proc.wait(timeout=10)
-    [path] = list(tmp_path.iterdir())
+    [path] = list(tmp_path.glob('*.mcap'))
     columns, report = read_float64_topics(path, ['/counter'])
     t, v = columns['/counter']
     # Everything written up to about one second before the kill is there, without holes.

@@ -121,3 +121,19 @@ def test_replay_results_file(js_reader, tmp_path, capsys) -> None:
         assert_read_alike(result, path)
     decoded = read_js(js_reader, [results])[0]['indexed']
     assert '/diagnostics' in decoded['counts'] and len(decoded['counts']) > 3
+
+
+@pytest.mark.parametrize('compression', ['zstd', 'lz4'])
+def test_recovered_files(js_reader, tmp_path, compression) -> None:
+    """A logger file cut inside its last chunk (as SIGKILL leaves it) fails the indexed reader;
+    after ``recover_file`` both of Foxglove's readers decode every message."""
+    from mcap_recover_helpers import cut_log
+
+    from catenary_monitor.io.mcap_recover import recover_file
+
+    path = cut_log(tmp_path, compression)
+    [before] = read_js(js_reader, [path])
+    assert 'indexed_error' in before
+    assert recover_file(path).status == 'recovered'
+    [result] = read_js(js_reader, [path])
+    assert_read_alike(result, path)

@@ -58,12 +58,22 @@ PARAMS = {
     line_02.anchor_distance: 121.06
     line_02.mbl: 4827000
     line_02.allowed_uplift: 2e4
+    line_02.tension_accuracy: 3e4
+    line_02.chain_length: 25e1
+    line_02.anchor_holding: 5e5
+    line_02.chain_friction: 7e-1
+    depth_accuracy: 2e-1
+    drag_margin_warn: 1e5
     line_03:
       weight: 1.3e3
       anchor_distance: 121.06
       mbl: 4.827E6
       allowed_uplift: 20000
       ea: 6.6e8
+      tension_accuracy: 2e4
+      chain_length: 300
+      anchor_holding: 3e5
+      anchor_weight: 4e5
 ''',
     'node_key_and_plain_floats': '''\
 catenary_monitor:
@@ -84,12 +94,22 @@ catenary_monitor:
       anchor_distance: 121.06
       mbl: 4827000.0
       allowed_uplift: 20000.0
+      tension_accuracy: 30000.0
+      chain_length: 250.0
+      anchor_holding: 500000.0
+      chain_friction: 0.7
+    depth_accuracy: 0.2
+    drag_margin_warn: 100000.0
     line_03:
       weight: 1300.0
       anchor_distance: 121.06
       mbl: 4827000.0
       allowed_uplift: 20000.0
       ea: 660000000.0
+      tension_accuracy: 20000.0
+      chain_length: 300.0
+      anchor_holding: 300000.0
+      anchor_weight: 400000.0
 ''',
 }
 

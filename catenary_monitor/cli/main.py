@@ -246,7 +246,7 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
     those installed under the :data:`COMMAND_GROUP` entry points."""
     from importlib.metadata import entry_points
 
-    from catenary_monitor.cli import dock, live, replay
+    from catenary_monitor.cli import dock, live, log, replay, whatif
     from catenary_monitor.console import command as console
 
     found: list[Callable[[argparse._SubParsersAction], None]] = [
@@ -254,6 +254,8 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
         replay.register,
         console.register,
         dock.register,
+        whatif.register,
+        log.register,
     ]
     for ep in sorted(entry_points(group=COMMAND_GROUP), key=lambda e: e.name):
         try:

@@ -67,8 +67,10 @@ __all__ = [
 
 #: Every CSV column, in order, with its decimals (None: a label). Units: s, N, m, -.
 #: ``time`` is exact (ns); forces have 3 decimals (1 mN), lengths 3 (1 mm), the safety factor 3,
-#: ``time_to_uplift`` 3 (s; ``inf`` when no uplift is coming); ``sensor_state`` the line's sensor
-#: state word (``ok``, ``stuck``, ``spike``, ``over_mbl``, ``slack``, ``suspected_parted``).
+#: ``time_to_uplift`` 3 (s; ``inf`` when no uplift is coming); the bounds and holding values
+#: (forces, lengths) 3 (``nan`` where the line has no accuracy or holding data); ``sensor_state``
+#: the line's sensor state word (``ok``, ``stuck``, ``spike``, ``over_mbl``, ``slack``,
+#: ``suspected_parted``).
 CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('time', 9),
     ('line', None),
@@ -82,6 +84,14 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('load_margin', 3),
     ('safety_factor', 3),
     ('time_to_uplift', 3),  # s
+    # The bounds within sensor accuracy (core/uncertainty.py) and holding (core/holding.py).
+    ('uplift_force_upper', 3),
+    ('anchor_margin_lower', 3),
+    ('tide_margin_lower', 3),
+    ('grounded_length', 3),
+    ('holding_capacity', 3),
+    ('drag_margin', 3),
+    ('implied_anchor_distance', 3),
     ('sensor_state', None),  # core.sensor.LINE_STATES word
     ('status', None),
     ('level', None),

@@ -140,6 +140,7 @@ def console_config(
         'safety_factor_warn': alarm.safety_factor_warn if alarm else 2.0,
         'anchor_margin_warn': alarm.anchor_margin_warn if alarm else 5.0,
         'uplift_time_warn': alarm.uplift_time_warn if alarm else 1800.0,
+        'drag_margin_warn': alarm.drag_margin_warn if alarm else 0.0,
         'tension_timeout': alarm.tension_timeout if alarm else 5.0,
         'period_s': 1.0 / rate,
         'silence_limit_s': silence_limit(rate),
@@ -345,6 +346,9 @@ def _line_view(
             'tide_margin',
             'min_anchor_distance',
             'time_to_uplift',  # s; None when not coming (inf) or unknown
+            'uplift_force_upper',  # N, within sensor accuracy; None when not configured
+            'drag_margin',  # N, holding minus horizontal load; None without anchor_holding
+            'implied_anchor_distance',  # m, from the chain length; None without it
         ):
             view[key] = _num(v.get(key))
     if output is not None:

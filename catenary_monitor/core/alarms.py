@@ -24,6 +24,14 @@ Conditions, each with its own latch:
     raised when the dock estimate flags the line's tension as irreconcilable with the other
     lines (its smoothed normalized residual beyond ``dock_residual_limit``) for ``on_delay``;
     cleared after ``warn_clear_hold`` of consistency; held while the line is not tested.
+``uplift_possible`` (WARN; with ``tension_accuracy`` or ``depth_accuracy``,
+:mod:`catenary_monitor.core.uncertainty`)
+    raised when ``uplift_force_upper > allowed_uplift`` while the nominal ``uplift_force`` is
+    not (uplift possible within sensor accuracy) for ``on_delay``; cleared when the bound is
+    back at or below ``allowed_uplift``, or when the nominal value itself is above it (the
+    ``uplift`` ERROR then says so), held for ``warn_clear_hold``; NaN holds.
+``drag_margin`` (WARN; with ``anchor_holding``, :mod:`catenary_monitor.core.holding`)
+    as the margins above with ``drag_margin_warn`` and ``drag_margin_deadband`` (N).
 ``sensor_error`` (ERROR), ``sensor_warn`` (WARN; :mod:`catenary_monitor.core.sensor`)
     raised when the line's ``sensor_state`` (decided at ticks) is an ERROR state (``over_mbl``,
     ``slack``, ``suspected_parted``), resp. a WARN state (``stuck``, ``spike``), for
@@ -100,13 +108,25 @@ CONDITIONS = (
     'safety_factor',
     'time_to_uplift',
     'inconsistent',
+    # Margins with uncertainty and holding (issue 12, items 3 and 4).
+    'uplift_possible',
+    'drag_margin',
+    # Sensor sanity (issue 12, item 2): core/sensor.py.
     'sensor_error',
     'sensor_warn',
 )
 _ERRORS = ('uplift', 'input', 'sensor_error')
 _WARNS = tuple(c for c in CONDITIONS if c not in _ERRORS)
 _ERROR_AT = tuple(CONDITIONS.index(c) for c in _ERRORS)
-_MARGINS = CONDITIONS[2:7]  # the warnings with a threshold and a deadband
+# The warnings with a threshold and a deadband.
+_MARGINS = (
+    'anchor_margin',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'time_to_uplift',
+    'drag_margin',
+)
 _LIMITS = {'time_to_uplift': 'uplift_time'}  # parameter prefix where it is not the name
 _HOLD, _BREACH, _CLEAR = 0, 1, 2  # classification of one update for one condition
 
@@ -139,6 +159,9 @@ class AlarmInputs:
     dock_residual: float = math.nan  # N, measured - expected tension
     dock_expected: float = math.nan  # N, the tension the dock estimate expects
     dock_sigma: float = math.nan  # normalized residual
+    uplift_force_upper: float = math.nan  # N, the uplift force's bound within sensor accuracy
+    drag_margin: float = math.nan  # N, holding capacity minus horizontal load
+    holding_capacity: float = math.nan  # N, anchor and grounded chain (for the message)
     sensor_state: float = 0.0  # core.sensor line state code (0 ok)
     sensor_tension: float = math.nan  # N, the newest tension the state was decided on
     mbl: float = math.nan  # N, the line's MBL (for the message)
@@ -275,6 +298,11 @@ class LineAlarm:
         elif cond in _SENSOR:
             hit, ok = _sensor_codes(cond, np.asarray(x.sensor_state))
             breach, clear = bool(hit), bool(ok)
+        elif cond == 'uplift_possible':
+            nominal = x.uplift_force > self.allowed_uplift
+            upper = x.uplift_force_upper
+            breach = upper > self.allowed_uplift and not nominal
+            clear = upper <= self.allowed_uplift or nominal
         else:
             low, high = self._warn_limits(cond)
             value = getattr(x, cond)
@@ -339,6 +367,12 @@ class LineAlarm:
                 parts.append(_sensor_text(x, cond, hold_w))
             elif up and cond == 'time_to_uplift':
                 parts.append(self._uplift_time_text(x, hold_w))
+            elif up and cond == 'uplift_possible':
+                parts.append(self._uplift_possible_text(x, hold_w))
+            elif up and cond == 'drag_margin':
+                text = self._warn_text(cond, x.drag_margin, hold_w)
+                holding = _fmt(x.holding_capacity, 1e3)
+                parts.append(f'{text} (holding {holding} kN): anchor may drag')
             elif up:
                 parts.append(self._warn_text(cond, getattr(x, cond), hold_w))
         return '; '.join(parts) if parts else 'OK'
@@ -346,9 +380,11 @@ class LineAlarm:
     def _warn_text(self, cond: str, value: float, hold: float) -> str:
         low, high = self._warn_limits(cond)
         label = cond.replace('_', ' ')
-        scale, unit, digits = {'load_margin': (1e3, ' kN', 1), 'safety_factor': (1.0, '', 2)}.get(
-            cond, (1.0, ' m', 2)
-        )
+        scale, unit, digits = {
+            'load_margin': (1e3, ' kN', 1),
+            'drag_margin': (1e3, ' kN', 1),
+            'safety_factor': (1.0, '', 2),
+        }.get(cond, (1.0, ' m', 2))
         v, lo, hi = (_fmt(a, scale, digits) for a in (value, low, high))
         if value < low:
             return f'{label} {v}{unit} < {lo}{unit}'
@@ -368,6 +404,19 @@ class LineAlarm:
         return (
             f'time to uplift {_duration(value)}, warning held (clears after {hold:g} s '
             f'at >= {_duration(high)})'
+        )
+
+    def _uplift_possible_text(self, x: AlarmInputs, hold: float) -> str:
+        """The message of the ``uplift_possible`` condition (bound and nominal in kN)."""
+        upper, allowed = x.uplift_force_upper, self.allowed_uplift
+        if upper > allowed:
+            return (
+                f'uplift possible within sensor accuracy: up to {_fmt(upper, 1e3)} kN > allowed '
+                f'{_fmt(allowed, 1e3)} kN (nominal {_fmt(x.uplift_force, 1e3)} kN)'
+            )
+        return (
+            f'uplift-within-accuracy warning held: bound {_fmt(upper, 1e3)} kN (clears after '
+            f'{hold:g} s at <= {_fmt(allowed, 1e3)} kN)'
         )
 
 
@@ -468,6 +517,9 @@ _INPUT_FIELDS = (
     'dock_residual',
     'dock_expected',
     'dock_sigma',
+    'uplift_force_upper',
+    'drag_margin',
+    'holding_capacity',
     'sensor_state',
     'sensor_tension',
     'mbl',
@@ -724,6 +776,11 @@ def _classify_columns(
         out[cond] = codes(x[cond] < low, x[cond] >= high)
     flag = x['inconsistent']
     out['inconsistent'] = codes(flag == 1.0, flag == 0.0)
+    nominal = f > alarm.allowed_uplift
+    upper = x['uplift_force_upper']
+    out['uplift_possible'] = codes(
+        (upper > alarm.allowed_uplift) & ~nominal, (upper <= alarm.allowed_uplift) | nominal
+    )
     for cond in _SENSOR:
         out[cond] = codes(*_sensor_codes(cond, x['sensor_state']))
     return out
@@ -743,6 +800,14 @@ DIAGNOSTIC_KEYS = (
     'load_margin',
     'safety_factor',
     'time_to_uplift',
+    # Margins with uncertainty (core/uncertainty.py) and holding (core/holding.py).
+    'uplift_force_upper',
+    'anchor_margin_lower',
+    'tide_margin_lower',
+    'grounded_length',
+    'holding_capacity',
+    'drag_margin',
+    'implied_anchor_distance',
 )
 
 

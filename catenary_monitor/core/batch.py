@@ -32,7 +32,13 @@ import numpy as np
 
 from catenary_monitor.core import acknowledge as alarm_ack, catenary as cat, elastic, kernels
 from catenary_monitor.core import sensor, tide_table, tide_trend
-from catenary_monitor.core.alarms import RANK, Level, LevelSeries, Transition, replay_levels
+from catenary_monitor.core.alarms import (
+    RANK,
+    Level,
+    LevelSeries,
+    Transition,
+    replay_levels,
+)
 from catenary_monitor.core.config import LineConfig, MonitorConfig
 from catenary_monitor.core.body import live as dock_live
 from catenary_monitor.core.health import tide_status
@@ -49,8 +55,10 @@ from catenary_monitor.core.monitor import (
     MonitorCore,
     Snapshot,
     Start,
+    bound_values,
     dock_component,
     forecast_word,
+    holding_values,
     line_dock_values,
     line_status,
     sensor_limits,
@@ -294,6 +302,10 @@ def solve_updates(
     return out, status
 
 
+#: Values the caller sets (inputs, the tide's forecast, the bounds and the holding values).
+_NOT_SOLVED = frozenset(('depth', 'top_tension', 'time_to_uplift')) | frozenset(
+    k for k in VALUE_FIELDS if k not in ALL_KEYS
+)
 _ROWS = {k: ALL_KEYS.index(k) for k in VALUE_FIELDS if k in ALL_KEYS}
 
 
@@ -340,7 +352,7 @@ def _solve_updates_elastic(
         status[has] = res.status
         used[has] = np.asarray(res.model) == elastic.ELASTIC
         for k in VALUE_FIELDS:
-            if k not in ('depth', 'top_tension', 'time_to_uplift', 'sensor_state'):
+            if k not in _NOT_SOLVED:
                 out[k][has] = getattr(res, k)
     return out, status, used
 
@@ -664,7 +676,14 @@ def _solve_line(
     values['time_to_uplift'] = tide_trend.uplift_times(
         values['tide_margin'], values['uplift_force'], rate, excess
     )
+    _add_derived(core, line.config, values)
     return values, status, used
+
+
+def _add_derived(core: MonitorCore, lc: LineConfig, values: dict[str, np.ndarray]) -> None:
+    """The bounds and the holding values from the nominal values, as the core adds them."""
+    values.update(bound_values([lc], core.config.alarm.depth_accuracy, values))
+    values.update(holding_values([lc], values))
 
 
 def _solve_at(
@@ -730,6 +749,9 @@ def _line_inputs(
             'load_margin',
             'safety_factor',
             'time_to_uplift',
+            'uplift_force_upper',
+            'drag_margin',
+            'holding_capacity',
         )
     }
     inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(

@@ -79,7 +79,8 @@ class ParamSpec(NamedTuple):
     scope: str = 'global'
     read_only: bool = False
     optional: bool = False
-    group: str = ''  # '' the monitor's table (README); 'dock' the dock model's (docs/dock_body.md)
+    group: str = ''  # '' the monitor's table (README); 'dock' docs/dock_body.md's; 'holding'
+    # docs/holding.md's
 
     def full_name(self, line: str | None = None) -> str:
         """Parameter name as declared on the node (``NAME.weight`` for per-line rows)."""
@@ -144,6 +145,17 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         's',
         1.0,
         604800.0,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_create_dir',
+        'bool',
+        True,
+        'Create log_dir when it is missing (at start, or after it vanished); false: wait for '
+        'it to reappear (e.g. a mount point), the logger status ERROR meanwhile',
+        '',
+        None,
+        None,
         read_only=True,
     ),
     ParamSpec(
@@ -273,12 +285,51 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'tension_accuracy',
         'double',
         _NOT_GIVEN,
-        'Accuracy of the tension sensor: standard uncertainty (1 sigma) of a reading',
+        'Accuracy of the tension sensor: a reading is within +- this of the true tension',
         'N',
         1.0,
         1.0e9,
         _L,
         optional=True,
+    ),
+    # Holding (docs/holding.md): optional; NaN means not given (no holding values).
+    ParamSpec(
+        'anchor_holding',
+        'double',
+        _NOT_GIVEN,
+        "Holding force of the anchor or sinker itself (weight in water x holding coefficient)",
+        'N',
+        0.0,
+        1.0e9,
+        _L,
+        optional=True,
+        group='holding',
+    ),
+    ParamSpec(
+        'anchor_weight',
+        'double',
+        _NOT_GIVEN,
+        'Weight in water of a sinker: its holding falls as anchor_holding (1 - uplift / this); '
+        'not set: any uplift leaves the anchor no holding',
+        'N',
+        1.0,
+        1.0e9,
+        _L,
+        optional=True,
+        group='holding',
+    ),
+    ParamSpec(
+        'chain_friction',
+        'double',
+        _NOT_GIVEN,
+        'Friction coefficient of the chain lying on the seabed (holding: weight x this x '
+        'grounded length; needs chain_length)',
+        '',
+        0.0,
+        10.0,
+        _L,
+        optional=True,
+        group='holding',
     ),
     # Alarm thresholds (WARN).
     ParamSpec(
@@ -461,6 +512,36 @@ PARAMETERS: tuple[ParamSpec, ...] = (
                 12000.0,
             ),
         )
+    ),
+    ParamSpec(
+        'depth_accuracy',
+        'double',
+        0.0,
+        'Accuracy of the depth sensor: a reading is within +- this of the true depth',
+        'm',
+        0.0,
+        100.0,
+    ),
+    ParamSpec(
+        'drag_margin_warn',
+        'double',
+        0.0,
+        'WARN when holding capacity minus horizontal load falls below this (0: only when the '
+        'load exceeds the holding)',
+        'N',
+        0.0,
+        1.0e9,
+        group='holding',
+    ),
+    ParamSpec(
+        'drag_margin_deadband',
+        'double',
+        1.0e4,
+        'Drag-margin warning clears only at warn + deadband or more',
+        'N',
+        0.0,
+        1.0e8,
+        group='holding',
     ),
     ParamSpec(
         'load_margin_warn',
@@ -740,7 +821,8 @@ class LineConfig:
 
     ``tension_topic`` ``''`` means ``/mooring/NAME/tension``; ``ea`` ``None`` (or 0) means an
     inextensible chain. The dock geometry (``hook_x``, ``hook_y`` m, ``heading`` deg,
-    ``chain_length`` m) and ``tension_accuracy`` (N) are None when not given. Values are
+    ``chain_length`` m), ``tension_accuracy`` (N) and the holding data (``anchor_holding``,
+    ``anchor_weight`` N, ``chain_friction``) are None when not given. Values are
     validated against :data:`PARAMETERS` on construction.
     """
 
@@ -757,6 +839,9 @@ class LineConfig:
     hook_y: float | None = None
     chain_length: float | None = None
     tension_accuracy: float | None = None
+    anchor_holding: float | None = None
+    anchor_weight: float | None = None
+    chain_friction: float | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not _LINE_NAME.match(self.name):
@@ -803,6 +888,9 @@ class AlarmConfig:
     tide_trend_window: float = _default('tide_trend_window')
     uplift_time_warn: float = _default('uplift_time_warn')
     uplift_time_deadband: float = _default('uplift_time_deadband')
+    depth_accuracy: float = _default('depth_accuracy')
+    drag_margin_warn: float = _default('drag_margin_warn')
+    drag_margin_deadband: float = _default('drag_margin_deadband')
     tension_resolution: float = _default('tension_resolution')
     depth_resolution: float = _default('depth_resolution')
     stuck_time: float = _default('stuck_time')
@@ -882,6 +970,7 @@ _TOP_LEVEL = (
     'log_dir',
     'log_rotate_size',
     'log_rotate_duration',
+    'log_create_dir',
     'allow_runtime_changes',
 )
 
@@ -900,6 +989,7 @@ class MonitorConfig:
     allow_runtime_changes: bool = _default('allow_runtime_changes')
     log_rotate_size: float = _default('log_rotate_size')  # MiB
     log_rotate_duration: float = _default('log_rotate_duration')  # s
+    log_create_dir: bool = _default('log_create_dir')
     alarm: AlarmConfig = field(default_factory=AlarmConfig)
     dock: DockConfig = field(default_factory=DockConfig)
 
@@ -1099,7 +1189,13 @@ def resolve_topic(topic: str, node_name: str = 'catenary_monitor') -> str:
 #: accepted): left out of :func:`config_hash`, so ``--log-dir`` or a runtime-change policy
 #: does not make replay think a log was recorded with other parameters.
 NON_DECIDING = frozenset(
-    {'log_dir', 'log_rotate_size', 'log_rotate_duration', 'allow_runtime_changes'}
+    {
+        'log_dir',
+        'log_rotate_size',
+        'log_rotate_duration',
+        'log_create_dir',
+        'allow_runtime_changes',
+    }
 )
 
 
@@ -1113,7 +1209,8 @@ def config_hash(config: MonitorConfig) -> str:
 
 def parameters_markdown(group: str = '') -> str:
     """The parameter table as Markdown: name, default (doubles unless noted), unit, range,
-    description; ``group`` ``''`` the monitor's (README), ``'dock'`` the dock model's."""
+    description; ``group`` ``''`` the monitor's (README), ``'dock'`` the dock model's,
+    ``'holding'`` the holding's (docs/holding.md)."""
     rows = ['| parameter | default | unit | range | description |', '|---|---|---|---|---|']
     for spec in PARAMETERS:
         if spec.group != group:

@@ -64,6 +64,7 @@ from catenary_monitor.core.plausible import reading_status, reading_status_array
 from catenary_monitor.core.result import STATUS_MESSAGES
 from catenary_monitor.core.solve import solve
 from catenary_monitor.core import sensor, tide_table, tide_trend
+from catenary_monitor.core import holding as holding_rule, uncertainty
 
 __all__ = [
     'NODE_NAME',
@@ -88,6 +89,8 @@ __all__ = [
     'LineState',
     'MonitorCore',
     'line_status',
+    'bound_values',
+    'holding_values',
     'output_values',
     'tide_component',
     'dock_component',
@@ -99,10 +102,11 @@ __all__ = [
 NODE_NAME = 'catenary_monitor'
 #: Element order of each line's outputs (``/catenary_monitor/NAME/outputs``), SI units;
 #: ``status`` is the solver code (:data:`NO_DEPTH` before the first depth), ``level`` 0-3;
-#: ``time_to_uplift`` [s] (:mod:`~catenary_monitor.core.tide_trend`) was appended last so the
-#: older indexes stay; then ``sensor_state``, the line's sensor state code as of the newest tick
-#: (:data:`catenary_monitor.core.sensor.LINE_STATES`: 0 ok, 1 stuck, 2 spike, 3 over_mbl,
-#: 4 slack, 5 suspected_parted).
+#: ``time_to_uplift`` [s] (:mod:`~catenary_monitor.core.tide_trend`) was appended after them
+#: so the older indexes stay, then the bounds (:mod:`~catenary_monitor.core.uncertainty`), the
+#: holding values (:mod:`~catenary_monitor.core.holding`) and ``sensor_state``, the line's
+#: sensor state code as of the newest tick (:data:`catenary_monitor.core.sensor.LINE_STATES`:
+#: 0 ok, 1 stuck, 2 spike, 3 over_mbl, 4 slack, 5 suspected_parted).
 OUTPUT_FIELDS = (
     'top_tension',
     'depth',
@@ -118,6 +122,11 @@ OUTPUT_FIELDS = (
     'status',
     'level',
     'time_to_uplift',
+    # Margins with the sensors' accuracy (issue 12, item 3): core/uncertainty.py.
+    *uncertainty.FIELDS,
+    # Holding and the anchor distance the chain implies (issue 12, item 4): core/holding.py.
+    *holding_rule.FIELDS,
+    # Sensor sanity (issue 12, item 2): core/sensor.py.
     'sensor_state',
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
@@ -134,6 +143,8 @@ _NAN = math.nan
 _INCONSISTENT = CONDITIONS.index('inconsistent')
 _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
+_AT = {key: i for i, key in enumerate(VALUE_FIELDS)}
+_LOOK = uncertainty.FIELDS + holding_rule.FIELDS  # computed from the nominal solve's values
 _SENSOR_AT = VALUE_FIELDS.index('sensor_state')  # not a solved value: kept by _implausible
 
 
@@ -267,6 +278,9 @@ class LineState:
             load_margin=v[7],
             safety_factor=v[8],
             time_to_uplift=v[11],
+            uplift_force_upper=v[_AT['uplift_force_upper']],
+            drag_margin=v[_AT['drag_margin']],
+            holding_capacity=v[_AT['holding_capacity']],
             tide_rate=rate,
             tide_forecast=1.0 if table else 0.0,
             status=max(self.status, 0),
@@ -538,12 +552,13 @@ class MonitorCore:
             r.anchor_angle_deg,
             r.suspended_length,
             self._uplift_times([r.tide_margin], [r.uplift_force])[0],
-            float(line.sensor_code),
         )
+        line.values = _with_sensor(line.values + _NAN_VALUES[len(line.values):], line.sensor_code)
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
         code = reading_status(t, h, lc.mbl)
         if code:
             _implausible(line, code)
+        self._add_derived([line])
 
     def _solve_many(self, which: Sequence[int]) -> None:
         """Solve several lines at the newest depth in one vectorized call."""
@@ -568,17 +583,37 @@ class MonitorCore:
             np.asarray(getattr(r, k)).tolist() for k in _SOLVED
         ]
         columns.append(self._uplift_times(columns[6], columns[5]))
-        columns.append([float(line.sensor_code) for line in lines])
         models = np.broadcast_to(np.asarray(r.model, dtype=object), tension.shape)
         messages, status = r.message, np.asarray(r.status).tolist()
         for i, line in enumerate(lines):
-            line.values = tuple(col[i] for col in columns)
+            line.values = tuple(col[i] for col in columns) + _NAN_VALUES[len(columns):]
+            line.values = _with_sensor(line.values, line.sensor_code)
             line.status, line.status_message = int(status[i]), str(messages[i])
             line.model = str(models[i])
         codes = reading_status_array(tension, h, [c.mbl for c in cfgs]).tolist()
         for line, code in zip(lines, codes):
             if code:
                 _implausible(line, code)
+        self._add_derived(lines)
+
+    def _add_derived(self, lines: Sequence[LineState]) -> None:
+        """The bounds and the holding values of freshly solved lines (from their values);
+        lines without accuracies or holding data keep NaN (what the functions give them)."""
+        accuracy = self.config.alarm.depth_accuracy
+        for fields, compute, wanted in (
+            (uncertainty.FIELDS, _bounds_of(accuracy), _wants_bounds(accuracy)),
+            (holding_rule.FIELDS, holding_values, _wants_holding),
+        ):
+            some = [line for line in lines if wanted(line.config)]
+            if not some:
+                continue
+            named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
+            derived = compute([line.config for line in some], named)
+            for j, line in enumerate(some):
+                v = list(line.values)
+                for key in fields:
+                    v[_AT[key]] = float(derived[key][j])
+                line.values = tuple(v)
 
     def _uplift_times(self, margins: Sequence[float], forces: Sequence[float]) -> list[float]:
         """Each line's time to uplift [s]: on the tide table's forecast from the newest depth
@@ -680,12 +715,76 @@ class MonitorCore:
         return Snapshot(stamp_ns, tuple(statuses))
 
 
+def _with_sensor(values: tuple[float, ...], code: int) -> tuple[float, ...]:
+    """``values`` with the line's sensor state code in its place (``sensor_state``)."""
+    return values[:_SENSOR_AT] + (float(code),) + values[_SENSOR_AT + 1 :]
+
+
 def _implausible(line: LineState, code: int) -> None:
     """An implausible reading (core.plausible): its status and sentence, no solved values
     (the measured tension and depth kept, as for every impossible input)."""
     line.values = line.values[:2] + _NAN_VALUES[2:_SENSOR_AT] + line.values[_SENSOR_AT:]
     line.status, line.status_message = code, STATUS_MESSAGES[code]
     line.model = elastic.INEXTENSIBLE
+
+
+def _column(cfgs: Sequence[LineConfig], key: str) -> np.ndarray:
+    """One line constant per config as floats (None: NaN, ``ea`` None: inf)."""
+    none = math.inf if key == 'ea' else math.nan
+    return np.array([none if getattr(c, key) is None else getattr(c, key) for c in cfgs])
+
+
+def _wants_bounds(depth_accuracy: float) -> Any:
+    """Whether a line has bounds: a tension accuracy, or a depth accuracy for all."""
+    return lambda c: depth_accuracy > 0.0 or c.tension_accuracy is not None
+
+
+def _wants_holding(c: LineConfig) -> bool:
+    """Whether a line has holding values: a chain length or an anchor holding."""
+    return c.chain_length is not None or c.anchor_holding is not None
+
+
+def _bounds_of(depth_accuracy: float) -> Any:
+    return lambda cfgs, named: bound_values(cfgs, depth_accuracy, named)
+
+
+def bound_values(
+    cfgs: Sequence[LineConfig], depth_accuracy: float, named: dict[str, np.ndarray]
+) -> dict[str, np.ndarray]:
+    """The bounds (:data:`catenary_monitor.core.uncertainty.FIELDS`) per element of the
+    nominal values ``named`` (VALUE_FIELDS -> arrays), each element's line in ``cfgs`` (one
+    config, or one per element); the core and its batch twin both call this."""
+    return uncertainty.bounds(
+        _column(cfgs, 'weight'),
+        _column(cfgs, 'anchor_distance'),
+        _column(cfgs, 'mbl'),
+        _column(cfgs, 'ea'),
+        named['top_tension'],
+        named['depth'],
+        _column(cfgs, 'tension_accuracy'),
+        depth_accuracy,
+        named['uplift_force'],
+    )
+
+
+def holding_values(
+    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray]
+) -> dict[str, np.ndarray]:
+    """The holding values (:data:`catenary_monitor.core.holding.FIELDS`), as
+    :func:`bound_values`."""
+    return holding_rule.holding(
+        _column(cfgs, 'weight'),
+        _column(cfgs, 'ea'),
+        _column(cfgs, 'chain_length'),
+        _column(cfgs, 'anchor_holding'),
+        _column(cfgs, 'anchor_weight'),
+        _column(cfgs, 'chain_friction'),
+        named['top_tension'],
+        named['depth'],
+        named['horizontal_tension'],
+        named['suspended_length'],
+        named['uplift_force'],
+    )
 
 
 def output_values(values: Sequence[float], status: float, level: float) -> tuple[float, ...]:

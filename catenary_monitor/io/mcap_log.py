@@ -22,6 +22,22 @@ flushed too. After a SIGKILL the file has no summary; :mod:`catenary_monitor.mca
 every complete chunk of it. Call :meth:`McapLogger.close` from the node's ``finally:`` block
 (SIGINT/SIGTERM) to write the summary.
 
+Vanished or replaced file or directory
+--------------------------------------
+At every flush and every :meth:`tick` the logger compares the device and inode of the open
+file's path and of ``log_dir`` with those it opened. A file or directory deleted, moved or
+replaced under it sets :attr:`McapLogger.error` (held at least ``error_hold`` seconds, so a
+status poll sees it), counts the messages of a deleted file as lost, and opens a new file at
+once (``log_dir`` is recreated if ``create_dir``, else waited for). A file that was only moved
+is finished with its summary where it went.
+
+rosbag2 bag
+-----------
+With ``bag_metadata`` (the default) the folder is a rosbag2 bag: ``metadata.yaml``
+(:mod:`catenary_monitor.io.bag_metadata`) is rewritten atomically whenever a file opens (so at
+each rotation) and on :meth:`close`. It lists the folder's finished files only, so bag readers
+open the folder at any time; the file being written joins it when it is finished.
+
 Disk errors
 -----------
 No file-system error escapes: an unwritable directory, a full disk or a failing flush sets
@@ -51,8 +67,9 @@ from types import TracebackType
 from typing import IO, Any, Callable, Mapping
 
 from mcap.well_known import MessageEncoding, SchemaEncoding
-from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, Writer
+from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, IndexType, Writer
 
+from catenary_monitor.io import bag_metadata as _bag
 from catenary_monitor.io.ros_schemas import (
     QOS_DEFAULT,
     QOS_LATCHED,
@@ -77,6 +94,9 @@ _COMPRESSION = {
     '': CompressionType.NONE,
     None: CompressionType.NONE,
 }
+# No Attachment Index group (the logger writes no attachments): an empty group's Summary Offset
+# is reported by pymcap-cli's doctor as pointing to a missing group.
+_INDEX_TYPES = IndexType.CHUNK | IndexType.MESSAGE | IndexType.METADATA
 _U64 = 1 << 64
 _LIBRARY = f'catenary_monitor.mcap_log; {LIBRARY_IDENTIFIER}'
 # Record overhead of one Message record in a chunk: opcode 1 + length 8 + header 22 bytes.
@@ -98,8 +118,11 @@ class _OpenFile:
     stream: IO[bytes]
     writer: Writer
     opened_at: float  # monotonic s
+    dir_id: tuple[int, int] = (0, 0)  # (st_dev, st_ino) of log_dir when opened
+    file_id: tuple[int, int] = (0, 0)  # (st_dev, st_ino) of the file
     schema_ids: dict[str, int] = field(default_factory=dict)
     messages: int = 0
+    counts: dict[str, list[int]] = field(default_factory=dict)  # topic -> [messages, bytes]
 
 
 class McapLogger:
@@ -134,6 +157,14 @@ class McapLogger:
         Monotonic clock in seconds used for flush, rotation and retry timing (inject for tests).
     wall_clock
         Clock in seconds since the Unix epoch used for file names.
+    create_dir
+        Create ``log_dir`` (and its parents) when it is missing, at start and after it
+        vanished; False: wait for it to reappear (e.g. a mount point).
+    error_hold
+        Shortest time (s) a vanished file or directory stays in :attr:`error` although a new
+        file was opened at once.
+    bag_metadata
+        Keep the folder's rosbag2 ``metadata.yaml`` current.
 
     Attributes
     ----------
@@ -168,6 +199,9 @@ class McapLogger:
         fsync: bool = True,
         clock: Callable[[], float] = time.monotonic,
         wall_clock: Callable[[], float] = time.time,
+        create_dir: bool = True,
+        error_hold: float = 2.0,
+        bag_metadata: bool = True,
     ) -> None:
         if compression not in _COMPRESSION:
             raise ValueError(f"compression must be 'zstd', 'lz4' or 'none', got {compression!r}")
@@ -193,6 +227,15 @@ class McapLogger:
         self.fsync = bool(fsync)
         self._clock = clock
         self._wall_clock = wall_clock
+        self.create_dir = bool(create_dir)
+        self.error_hold = float(error_hold)
+        self.bag_metadata = bool(bag_metadata)
+        #: Why ``metadata.yaml`` could not be written last time (None: it is current).
+        self.metadata_error: str | None = None
+        #: Files lost or displaced under the logger (deleted, moved or replaced).
+        self.vanished = 0
+        self._bag_cache: dict[str, _bag.FileInfo | None] = {}
+        self._sticky_until = float('-inf')
 
         self.error: str | None = None
         self.last_error: str | None = None
@@ -374,7 +417,11 @@ class McapLogger:
                 self.dropped += 1  # this message was in the chunk that failed to write
                 self._fail('cannot write MCAP message', exc)
                 return False
-            self._file.messages += 1
+            f = self._file
+            f.messages += 1
+            counts = f.counts.setdefault(topic, [0, 0])
+            counts[0] += 1
+            counts[1] += len(payload)
             self.messages_written[topic] += 1
             self.bytes_written[topic] += len(payload)
             slot = self._pending.setdefault(topic, [0, 0])
@@ -400,6 +447,10 @@ class McapLogger:
             if self._closed:
                 return False
             now = self._clock() if now is None else float(now)
+            if self._check_place(now):
+                return False
+            if self.error is not None and self._file is not None and now >= self._sticky_until:
+                self.error = None  # a vanished file's error, held for error_hold
             self._rotate_if_due(now)
             if self._file is None:
                 self._ensure_open(now)
@@ -426,12 +477,20 @@ class McapLogger:
             self._ensure_open(self._clock(), force=True)
 
     def close(self) -> None:
-        """Finish the current file with its summary. Idempotent; later writes are dropped."""
+        """Finish the current file with its summary and write ``metadata.yaml``. Idempotent;
+        later writes are dropped."""
         with self._lock:
             if self._closed:
                 return
+            self._check_place(self._clock(), reopen=False)
             self._finish_current()
             self._closed = True
+            self._write_bag_metadata()
+
+    def refresh_metadata(self) -> None:
+        """Rewrite ``metadata.yaml`` now (e.g. after files in the folder were recovered)."""
+        with self._lock:
+            self._write_bag_metadata()
 
     def diagnostic_values(self) -> dict[str, str]:
         """Key/value strings for a ``DiagnosticStatus`` about the logger (units in the keys)."""
@@ -442,7 +501,9 @@ class McapLogger:
                 'messages_dropped': str(self.dropped),
                 'file_bytes_B': str(self.file_bytes),
                 'files_finished': str(len(self.files)),
+                'files_vanished': str(self.vanished),
                 'error': self.error or '',
+                'bag_metadata_error': self.metadata_error or '',
             }
 
     def __enter__(self) -> 'McapLogger':
@@ -475,6 +536,8 @@ class McapLogger:
         return self._flush(now)
 
     def _flush(self, now: float) -> bool:
+        if self._check_place(now):
+            return False
         f = self._file
         if f is None:
             return False
@@ -508,13 +571,27 @@ class McapLogger:
         path: Path | None = None
         stream: IO[bytes] | None = None
         try:
-            self.log_dir.mkdir(parents=True, exist_ok=True)
+            if self.create_dir:
+                self.log_dir.mkdir(parents=True, exist_ok=True)
+            elif not self.log_dir.is_dir():
+                raise FileNotFoundError(
+                    'the directory is missing (create_dir is off: waiting for it to reappear)'
+                )
             path, stream = self._create_file()
+            _lock_quietly(stream)
             # The logger ends chunks itself (size or age) so that each end is flushed at once;
             # the writer's own limit is only a backstop.
-            writer = Writer(stream, chunk_size=4 * self.chunk_size, compression=self.compression)
+            writer = Writer(
+                stream,
+                chunk_size=4 * self.chunk_size,
+                compression=self.compression,
+                index_types=_INDEX_TYPES,
+            )
             writer.start(profile='ros2', library=_LIBRARY)
             opened = _OpenFile(path, stream, writer, now)
+            dir_stat, file_stat = os.stat(self.log_dir), os.fstat(stream.fileno())
+            opened.dir_id = (dir_stat.st_dev, dir_stat.st_ino)
+            opened.file_id = (file_stat.st_dev, file_stat.st_ino)
             for topic, info in self._topics.items():
                 self._register_channel(opened, topic, info)
             for name, record in self._metadata.items():
@@ -539,8 +616,83 @@ class McapLogger:
         self._file = opened
         self._file_index += 1
         self._clear_pending()
-        self.error = None
+        if now >= self._sticky_until:
+            self.error = None
+        self._write_bag_metadata()
         return True
+
+    def _check_place(self, now: float, reopen: bool = True) -> bool:
+        """Detect the open file or ``log_dir`` deleted, moved or replaced; handle it (error,
+        lost messages counted, a new file opened at once unless ``reopen`` is False). Returns
+        True if it was."""
+        f = self._file
+        if f is None:
+            return False
+        problem = None
+        try:
+            d = os.stat(self.log_dir)
+            if (d.st_dev, d.st_ino) != f.dir_id:
+                problem = f'log directory {self.log_dir} was replaced'
+        except OSError:
+            problem = f'log directory {self.log_dir} vanished (deleted or moved)'
+        if problem is None:
+            try:
+                st = os.stat(f.path)
+                if (st.st_dev, st.st_ino) != f.file_id:
+                    problem = f'log file {f.path} was replaced'
+            except OSError:
+                problem = f'log file {f.path} vanished (deleted or moved)'
+        if problem is None:
+            return False
+        self._vanished(f, problem, now)
+        if reopen:
+            self._ensure_open(now)
+        return True
+
+    def _vanished(self, f: _OpenFile, problem: str, now: float) -> None:
+        """Give up a file that is no longer where it was opened (see :meth:`_check_place`)."""
+        try:
+            deleted = os.fstat(f.stream.fileno()).st_nlink == 0
+        except (OSError, ValueError):
+            deleted = True
+        outcome = ''
+        if not deleted:  # moved or replaced: finish it where it went, nothing is lost
+            try:
+                f.writer.finish()
+                f.stream.flush()
+                if self.fsync:
+                    os.fsync(f.stream.fileno())
+                outcome = 'finished where it went'
+            except Exception:  # noqa: BLE001
+                deleted = True
+        if deleted:
+            for topic, (count, nbytes) in f.counts.items():
+                self.messages_written[topic] -= count
+                self.bytes_written[topic] -= nbytes
+            self.dropped += f.messages
+            outcome = f'{f.messages} message(s) lost with it'
+        _close_quietly(f.stream)
+        self._file = None
+        self._flushed_size = 0
+        self._clear_pending()
+        for info in self._topics.values():
+            info.channel_id = 0
+        self.vanished += 1
+        self.error = f'{problem}: {outcome}; writing a new file'
+        self.last_error = self.error
+        self.error_count += 1
+        self._sticky_until = now + self.error_hold
+        self._next_retry = now
+
+    def _write_bag_metadata(self) -> None:
+        """Rewrite ``metadata.yaml``; a failure is kept in :attr:`metadata_error`."""
+        if not self.bag_metadata:
+            return
+        try:
+            _bag.write_folder_metadata(self.log_dir, (), self._bag_cache)
+            self.metadata_error = None
+        except Exception as exc:  # noqa: BLE001 - never stops the logging
+            self.metadata_error = f'cannot write {self.log_dir / _bag.METADATA_NAME}: {exc}'
 
     def _create_file(self) -> tuple[Path, IO[bytes]]:
         stamp = _dt.datetime.fromtimestamp(self._wall_clock(), _dt.timezone.utc)
@@ -627,6 +779,17 @@ def _check_time(name: str, value: int) -> int:
     if not 0 <= value < _U64:
         raise ValueError(f'{name} must be in [0, 2**64) ns, got {value}')
     return value
+
+
+def _lock_quietly(stream: IO[bytes]) -> None:
+    """Hold an advisory lock on the file being written (released when the process dies), so
+    that recovery (:mod:`catenary_monitor.io.mcap_recover`) leaves a live file alone."""
+    try:
+        import fcntl
+
+        fcntl.flock(stream.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except (ImportError, OSError):
+        pass
 
 
 def _close_quietly(stream: IO[bytes]) -> None:

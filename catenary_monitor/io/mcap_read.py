@@ -687,6 +687,10 @@ class _Scanner:
             )
             return after, None
         usize, crc, compression, rec_start, rec_end = header
+        problem = chunk_size_problem(usize, rec_end - rec_start, compression)
+        if problem is not None:
+            self.skip(pos, 'corrupt_chunk', f'chunk {problem}', self._lost_in(indexes))
+            return after, None
         try:
             records = _decompress(data, rec_start, rec_end, compression, usize)
         except Exception as exc:  # noqa: BLE001 - any decoder error means a corrupt chunk
@@ -719,8 +723,12 @@ class _Scanner:
         if header is None:
             return None
         usize, _, compression, rec_start, rec_end = header
+        if chunk_size_problem(usize, rec_end - rec_start, compression) is not None:
+            return None  # implausible: nothing is decompressed (reported as the cut)
         try:
-            records = _decompress_partial(data, rec_start, min(rec_end, len(data)), compression)
+            records = _decompress_partial(
+                data, rec_start, min(rec_end, len(data)), compression, usize
+            )
         except Exception:  # noqa: BLE001 - whatever cannot be decoded is simply not recovered
             return None
         found: list[int] = []
@@ -983,17 +991,57 @@ def _find_chunk(data: bytes, start: int) -> int:
     return -1
 
 
+#: Largest uncompressed chunk accepted (B). The node's chunks are 0.5-2 MiB and rosbag2's
+#: default is 4 MiB; a larger declaration is taken as damage, not allocated.
+MAX_CHUNK_BYTES = 256 << 20
+#: Largest plausible ratio of declared uncompressed to compressed chunk size. Telemetry
+#: compresses 3-30x; only crafted data (long runs of one byte) goes past 1000x.
+MAX_CHUNK_RATIO = 1000
+_RATIO_SLACK = 4096  # B: a tiny chunk may compress by more than the ratio
+_READ_STEP = 1 << 20  # B decompressed per step of a bounded streaming read
+
+
+def chunk_size_problem(usize: int, compressed: int, compression: str) -> str | None:
+    """Why a chunk's declared uncompressed size ``usize`` (B) is implausible, or None.
+
+    ``compressed`` is the length of its compressed records (B). Checked before anything is
+    decompressed, so a crafted chunk costs no memory.
+    """
+    if usize > MAX_CHUNK_BYTES:
+        return f'declares {usize} B uncompressed, more than the {MAX_CHUNK_BYTES} B accepted'
+    if compression == '' and usize != compressed:
+        return f'uncompressed chunk declares {usize} B but holds {compressed} B'
+    if compression and usize > MAX_CHUNK_RATIO * compressed + _RATIO_SLACK:
+        return (
+            f'declares {usize} B from {compressed} B of {compression}, more than '
+            f'{MAX_CHUNK_RATIO}x: implausible'
+        )
+    return None
+
+
 def _decompress(
     data: bytes, start: int, end: int, compression: str, usize: int
 ) -> bytes | memoryview:
+    """Decompress a whole chunk's records, producing at most ``usize`` + 1 bytes.
+
+    Raises McapReadError when the data decompresses to more than declared (bounded: the
+    decoder stops one byte past ``usize``); fewer bytes come back as they are.
+    """
     if compression == '':
         return memoryview(data)[start:end]
     if compression == 'zstd':
-        return _zstd().decompress(memoryview(data)[start:end], max_output_size=usize)
-    if compression == 'lz4':
-        import lz4.frame
+        import zstandard
 
-        return lz4.frame.decompress(data[start:end])
+        view = memoryview(data)[start:end]
+        declared = zstandard.frame_content_size(view)
+        if declared >= 0 and declared != usize:
+            # zstandard allocates a frame's own content size whatever max_output_size says.
+            raise McapReadError(f'zstd frame declares {declared} B, the chunk {usize} B')
+        if declared == usize:
+            return _zstd().decompress(view, max_output_size=usize)
+        return _bounded(data, start, end, compression, usize + 1, exceeded=usize)
+    if compression == 'lz4':
+        return _bounded(data, start, end, compression, usize + 1, exceeded=usize)
     raise McapReadError(f'unsupported chunk compression {compression!r}')
 
 
@@ -1010,17 +1058,54 @@ def _zstd() -> 'zstandard.ZstdDecompressor':
     return decompressor
 
 
-def _decompress_partial(data: bytes, start: int, end: int, compression: str) -> bytes | memoryview:
-    """Decompress as much of a cut chunk as the decoder can produce."""
+def _bounded(
+    data: bytes, start: int, end: int, compression: str, limit: int, exceeded: int | None = None
+) -> bytes:
+    """Stream-decompress ``data[start:end]`` to at most ``limit`` bytes (time and memory
+    bounded by ``limit``). With ``exceeded``, producing more than that many bytes raises
+    McapReadError; a decoder error after some output returns what was decoded only when
+    ``exceeded`` is None (a cut chunk)."""
+    out = bytearray()
+    view = memoryview(data)[start:end]
+    try:
+        if compression == 'zstd':
+            import zstandard
+
+            reader = zstandard.ZstdDecompressor().stream_reader(view, read_across_frames=True)
+            while len(out) < limit:
+                piece = reader.read(min(_READ_STEP, limit - len(out)))
+                if not piece:
+                    break
+                out += piece
+        else:
+            import lz4.frame
+
+            lz4_dec = lz4.frame.LZ4FrameDecompressor()
+            pending = bytes(view)
+            while len(out) < limit and not lz4_dec.eof:
+                step = min(_READ_STEP, limit - len(out))
+                piece = lz4_dec.decompress(pending, max_length=step)
+                pending = b''
+                if not piece:
+                    break
+                out += piece
+    except Exception:  # noqa: BLE001 - a cut chunk ends in a decoder error
+        if exceeded is not None or not out:
+            raise
+    if exceeded is not None and len(out) > exceeded:
+        raise McapReadError(
+            f'{compression} data decompresses to more than the {exceeded} B declared'
+        )
+    return bytes(out)
+
+
+def _decompress_partial(
+    data: bytes, start: int, end: int, compression: str, usize: int = MAX_CHUNK_BYTES
+) -> bytes | memoryview:
+    """Decompress as much of a cut chunk as the decoder can produce, at most ``usize`` B."""
     if compression == '':
         return memoryview(data)[start:end]
-    if compression == 'zstd':
-        import zstandard
-
-        return zstandard.ZstdDecompressor().decompressobj().decompress(data[start:end])
-    import lz4.frame
-
-    return lz4.frame.LZ4FrameDecompressor().decompress(data[start:end])
+    return _bounded(data, start, end, compression, min(usize, MAX_CHUNK_BYTES))
 
 
 def _gather(arr: np.ndarray, positions: np.ndarray, width: int) -> np.ndarray:

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import json
 import os
+import queue
 import signal
 import sys
 import threading
@@ -74,6 +75,7 @@ from catenary_monitor.core.monitor import (
     event_record,
 )
 from catenary_monitor.io.mcap_log import McapLogger
+from catenary_monitor.io.mcap_recover import RecoverResult, recover_in_child, unfinished_files
 
 __all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'CatenaryMonitor', 'main']
 
@@ -142,6 +144,8 @@ class CatenaryMonitor(Node):
         self._logger_known = False
         self._logger_error: Optional[str] = None
         self.callback_errors = 0
+        self._recovered: queue.Queue[RecoverResult] = queue.Queue()
+        self.recovery: list[RecoverResult] = []
         self.log = self._open_log()
         self._create_interfaces()
         start = self._stamp()
@@ -189,20 +193,83 @@ class CatenaryMonitor(Node):
     def _open_log(self) -> Optional[McapLogger]:
         """The MCAP logger (never raises on disk errors: those become its ``error``)."""
         try:
+            # Files a crash left unfinished, found before this run's first file exists.
+            unfinished = unfinished_files(self._log_dir())
             # Flushed at 0.75 s age, checked every 0.25 s: a SIGKILL loses at most the last second.
+            # A vanished file or directory is seen at the next 0.25 s tick; retries every 1 s.
             log = McapLogger(
                 self._log_dir(),
                 prefix=NODE_NAME,
                 flush_period=0.75,
                 max_bytes=int(self.config.log_rotate_size * 1024 * 1024),
                 max_seconds=self.config.log_rotate_duration,
+                create_dir=self.config.log_create_dir,
+                retry_period=1.0,
             )
             log.add_metadata(NODE_NAME, self._metadata(self.config))
+            if unfinished:
+                self._start_recovery(unfinished)
             return log
         except Exception as exc:  # noqa: BLE001 - logging must never stop the monitoring
             self._log_setup_error = f'cannot start the MCAP logger: {exc}'
             self.get_logger().error(self._log_setup_error)
             return None
+
+    def _start_recovery(self, files: list[Any]) -> None:
+        """Finish the unfinished files in a niced child process, one at a time, waited for by
+        a thread (monitoring starts at once, its interpreter not shared); the log timer reports
+        each result (:meth:`_report_recovery`)."""
+        self.get_logger().warning(
+            f'{len(files)} unfinished MCAP log(s) in {self._log_dir()} (left by a crash): '
+            'finishing them in the background'
+        )
+
+        def work() -> None:
+            for path in files:
+                self._recovered.put(recover_in_child(path))
+
+        threading.Thread(target=work, name='mcap-recover', daemon=True).start()
+
+    def _report_recovery(self) -> None:
+        """One line and one events-channel record per recovered file; metadata.yaml redone."""
+        done = False
+        while True:
+            try:
+                result = self._recovered.get_nowait()
+            except queue.Empty:
+                break
+            done = True
+            self.recovery.append(result)
+            name = os.path.basename(result.path)
+            if result.status == 'recovered':
+                kept = ''
+                if result.backup:
+                    kept = f'; original kept as {os.path.basename(result.backup)}'
+                self.get_logger().warning(
+                    f'recovered unfinished MCAP log {name}: {result.messages} messages, '
+                    f'{len(result.damaged)} damaged part(s) skipped{kept}'
+                )
+            else:
+                self.get_logger().error(
+                    f'unfinished MCAP log {name} not recovered ({result.status}): {result.error}'
+                )
+            record = {'kind': 'log_recovered', **result.to_dict()}
+            self._write(
+                EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), self._stamp()
+            )
+        if done and self.log is not None:
+            self.log.refresh_metadata()
+
+    def _recovery_values(self) -> tuple[tuple[str, str], ...]:
+        """The logger status's keys about start-up recovery."""
+        if not self.recovery:
+            return ()
+        ok = [r for r in self.recovery if r.status == 'recovered']
+        return (
+            ('files_recovered', str(len(ok))),
+            ('files_not_recovered', str(len(self.recovery) - len(ok))),
+            ('recovered_messages', str(sum(r.messages for r in ok))),
+        )
 
     @staticmethod
     def _metadata(config: MonitorConfig) -> dict[str, str]:
@@ -312,6 +379,7 @@ class CatenaryMonitor(Node):
         if self.log is not None:
             self.log.tick()
         self._check_logger()
+        self._report_recovery()
 
     def _check_logger(self) -> None:
         """A LoggerHealth event whenever the logger's error changes (and once at start)."""
@@ -382,7 +450,7 @@ class CatenaryMonitor(Node):
         for st in snapshot.statuses:
             values = st.values
             if st.name == f'{NODE_NAME}: logger' and self.log is not None:
-                values = tuple(self.log.diagnostic_values().items())
+                values = tuple(self.log.diagnostic_values().items()) + self._recovery_values()
             statuses.append(
                 DiagnosticStatus(
                     level=bytes([int(st.level)]),

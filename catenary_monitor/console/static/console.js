@@ -130,6 +130,8 @@ function buildTiles() {
       <div class="bar-label"></div>
       <dl class="vals"><dt>anchor margin</dt><dd class="v-margin"></dd><dt>uplift</dt><dd class="v-uplift"></dd>
       <dt>safety factor</dt><dd class="v-sf"></dd><dt>uplift in</dt><dd class="v-ttu"></dd>
+      <dt class="x-upper">uplift ≤ (accuracy)</dt><dd class="v-upper x-upper"></dd>
+      <dt class="x-drag">drag margin</dt><dd class="v-drag x-drag"></dd>
       <dt>model</dt><dd class="v-model"></dd></dl>
       <div class="msg"></div><div class="foot"></div>`;
     t.querySelector('.name').textContent = line.name;
@@ -175,6 +177,17 @@ function renderTile(view, lost, frame) {
   const tt = t.querySelector('.v-ttu');
   tt.textContent = ttu === null || ttu === undefined ? '—' : ttu <= 0 ? 'lifted' : ago(ttu);
   tt.className = 'v-ttu ' + (ttu !== null && ttu !== undefined && ttu < S.config.uplift_time_warn ? 'warn' : '');
+  // The uplift bound within sensor accuracy and the drag margin: shown where configured.
+  const up = view.uplift_force_upper, drag = view.drag_margin;
+  const shown = (v) => v !== null && v !== undefined;
+  t.querySelectorAll('.x-upper').forEach((e) => { e.hidden = !shown(up); });
+  t.querySelectorAll('.x-drag').forEach((e) => { e.hidden = !shown(drag); });
+  const vu = t.querySelector('.v-upper');
+  vu.textContent = shown(up) ? `${num(up, 1, KN)} kN` : '';
+  vu.className = 'v-upper x-upper ' + (shown(up) && up > (cfg.allowed_uplift || 0) ? 'warn' : '');
+  const vd = t.querySelector('.v-drag');
+  vd.textContent = shown(drag) ? `${num(drag, 1, KN)} kN` : '';
+  vd.className = 'v-drag x-drag ' + (shown(drag) && drag < (S.config.drag_margin_warn || 0) ? 'warn' : '');
   t.querySelector('.v-model').textContent = (view.model || '—').replace(' catenary', '');
   const msg = lost ? `monitor silent: last known ${view.level} at ${clock(frame.snapshot_t)}` : view.message;
   t.querySelector('.msg').textContent = msg;

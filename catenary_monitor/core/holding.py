@@ -1,0 +1,85 @@
+"""Holding: will the anchor drag? Seed 001's rule and the anchor distance the chain implies.
+
+The holding of an anchor and its chain (seed 001: ``P = Wa la + Wc lc L1``) is the anchor's
+(or sinker's) own part, ``anchor_holding`` (N, its weight in water times its holding
+coefficient), plus the chain lying on the seabed: ``weight x chain_friction x
+grounded_length``. Per line (SI):
+
+``grounded_length`` (m)
+    ``chain_length - suspended_length`` (not below 0); 0 while the anchor is lifted (the
+    whole chain hangs). Needs ``chain_length``.
+``holding_capacity`` (N)
+    ``anchor part + weight x chain_friction x grounded_length`` (the chain's part only with
+    ``chain_friction``). The anchor part is ``anchor_holding`` while the anchor is down; with
+    an uplift ``V`` it is ``anchor_holding x max(0, 1 - V / anchor_weight)`` when the sinker's
+    weight in water ``anchor_weight`` is given (a sinker holds by friction ``mu (W - V)``), and
+    0 otherwise (a drag anchor pulled upward loses its grip: the conservative choice). Needs
+    ``anchor_holding``.
+``drag_margin`` (N)
+    ``holding_capacity - horizontal_tension``: the horizontal load the anchor and grounded chain
+    must hold is the chain's horizontal tension (the same all along a catenary).
+``implied_anchor_distance`` (m)
+    With ``chain_length`` the geometry is over-determined: the span at which a chain of that
+    length, at this depth, has this hook tension
+    (:func:`catenary_monitor.core.fixed_length.span_from_tension`: grounded length plus the
+    suspended part's span, lifted or not, elastic with ``ea``). Compared with the installed
+    ``anchor_distance`` it shows a dragged anchor (or a wrong chain length).
+
+NaN where the data are not given or the line has no solve.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from catenary_monitor.core import fixed_length
+
+__all__ = ['FIELDS', 'holding']
+
+#: The holding values' names (per-line outputs, /diagnostics values, replay CSV), in order.
+FIELDS = ('grounded_length', 'holding_capacity', 'drag_margin', 'implied_anchor_distance')
+
+
+def holding(
+    w: Any,
+    ea: Any,
+    chain_length: Any,
+    anchor_holding: Any,
+    anchor_weight: Any,
+    chain_friction: Any,
+    tension: Any,
+    depth: Any,
+    horizontal: Any,
+    suspended: Any,
+    uplift: Any,
+) -> dict[str, np.ndarray]:
+    """:data:`FIELDS` -> arrays from the line data (NaN: not given; ``ea`` inf: inextensible)
+    and the nominal solve: hook ``tension`` (N), ``depth`` (m, hook height added),
+    ``horizontal`` tension (N), ``suspended`` length (m) and ``uplift`` force (N)."""
+    arrays = np.broadcast_arrays(
+        *(
+            np.asarray(v, dtype=float)
+            for v in (w, ea, chain_length, anchor_holding, anchor_weight, chain_friction,
+                      tension, depth, horizontal, suspended, uplift)
+        )
+    )
+    w, ea, length, a_hold, a_weight, mu, t, h, r, s, v = arrays
+    with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
+        solved = ~np.isnan(r)
+        lifted = v > 0.0
+        grounded = np.where(lifted, 0.0, np.maximum(length - s, 0.0))
+        grounded = np.where(solved & ~np.isnan(length), grounded, np.nan)
+        sinker = a_hold * np.maximum(1.0 - v / a_weight, 0.0)
+        anchor = np.where(lifted, np.where(np.isnan(a_weight), 0.0, sinker), a_hold)
+        chain = np.where(np.isnan(mu) | np.isnan(grounded), 0.0, w * mu * grounded)
+        capacity = np.where(solved & ~np.isnan(a_hold), anchor + chain, np.nan)
+        implied = fixed_length.span_from_tension(w, h, length, t, ea)
+    implied = np.where(solved & ~np.isnan(length), implied, np.nan)
+    return {
+        'grounded_length': grounded,
+        'holding_capacity': capacity,
+        'drag_margin': capacity - r,
+        'implied_anchor_distance': np.asarray(implied, dtype=float).reshape(t.shape),
+    }

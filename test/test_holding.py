@@ -1,0 +1,119 @@
+"""Holding (core/holding.py) through the monitor core: seed 001's rule, Hou et al. 2005's
+table (w = 25 kgf/m, dm = 11 m, anchor 2500 kgf; consistent units kgf and m), a sinker's
+holding under uplift, a dragged anchor seen in implied_anchor_distance, the drag WARN."""
+
+import math
+
+import pytest
+
+from catenary_monitor import solve
+from catenary_monitor.core.alarms import Level
+from catenary_monitor.core.config import AlarmConfig, LineConfig, MonitorConfig
+from catenary_monitor.core.monitor import OUTPUT_FIELDS, Depth, MonitorCore, Tension
+
+LAMBDA_A, LAMBDA_C = 3.0, 0.75  # a holding coefficient and a chain friction (seed 001's form)
+ANCHOR = 2500.0  # kgf, Hou's anchor
+
+
+def printed(value, text):
+    digits = len(text.split('.')[1]) if '.' in text else 0
+    return abs(value - float(text)) <= 10.0**-digits
+
+
+def run(line, depth, tensions, **alarm):
+    core = MonitorCore(MonitorConfig(lines=(line,), alarm=AlarmConfig(**alarm)), 0)
+    core.step(Depth(1, depth))
+    outs = [core.step(Tension(2 + k, 0, t)).outputs[0].values for k, t in enumerate(tensions)]
+    return core, [dict(zip(OUTPUT_FIELDS, o)) for o in outs]
+
+
+def hou_line(lm, x=11.0, **extra):
+    return LineConfig(
+        name='hou', weight=25.0, anchor_distance=x, mbl=1e6, chain_length=lm,
+        anchor_holding=ANCHOR * LAMBDA_A, chain_friction=LAMBDA_C, **extra
+    )
+
+
+@pytest.mark.parametrize(
+    'lm,h,lying,fh',
+    [
+        (20.0, 15.0, '0.563', '127.33'),
+        (20.0, 13.0, '4.68', '63.09'),
+        (21.0, 15.0, '2.90', '85.51'),
+        (21.0, 13.0, '6.59', '37.14'),
+    ],
+)
+def test_hou_2005_table_through_the_holding_path(lm, h, lying, fh):
+    """The hook tension of Hou's horizontal force (T = Fh + w h, a grounded chain) gives the
+    printed lying length, the anchor back at dm = 11 m, and seed 001's holding."""
+    _, (out,) = run(hou_line(lm), h, [float(fh) + 25.0 * h])
+    assert out['uplift_force'] == 0.0
+    assert printed(out['grounded_length'], lying)
+    assert abs(out['implied_anchor_distance'] - 11.0) < 2e-3  # Fh printed to 0.01 kgf
+    capacity = ANCHOR * LAMBDA_A + 25.0 * LAMBDA_C * out['grounded_length']
+    assert math.isclose(out['holding_capacity'], capacity, rel_tol=1e-12)
+    assert math.isclose(out['drag_margin'], capacity - out['horizontal_tension'], rel_tol=1e-12)
+    assert abs(out['horizontal_tension'] - float(fh)) < 1e-9 * float(fh)
+
+
+def test_a_dragged_anchor_shows_in_the_implied_distance():
+    """The anchor dragged from 11 m to 11.4 m: the tension of that chain gives 11.4 m."""
+    t = solve(25.0, 15.0, chain_length=21.0, anchor_distance=11.4).top_tension
+    _, (out,) = run(hou_line(21.0), 15.0, [t])
+    assert abs(out['implied_anchor_distance'] - 11.4) < 1e-9
+
+
+def lifted_line(**extra):
+    return LineConfig(name='sinker', weight=1300.0, anchor_distance=100.0, mbl=4.8e6,
+                      chain_length=130.0, anchor_holding=200e3, chain_friction=0.7,
+                      allowed_uplift=1e9, **extra)
+
+
+def test_a_lifted_sinker_holds_by_its_remaining_weight():
+    """Uplift V: grounded chain 0; a sinker's holding anchor_holding (1 - V/W); a drag anchor
+    (no anchor_weight) none."""
+    t = 8.0e5
+    _, (out,) = run(lifted_line(anchor_weight=400e3), 20.0, [t])
+    v = out['uplift_force']
+    assert v > 0 and out['grounded_length'] == 0.0
+    assert math.isclose(out['holding_capacity'], 200e3 * (1 - v / 400e3), rel_tol=1e-12)
+    _, (drag,) = run(lifted_line(), 20.0, [t])
+    assert drag['holding_capacity'] == 0.0
+    assert drag['drag_margin'] == -drag['horizontal_tension']
+    _, (heavy,) = run(lifted_line(anchor_weight=v / 2), 20.0, [t])
+    assert heavy['holding_capacity'] == 0.0  # pulled off the seabed: no friction left
+
+
+def test_without_holding_data_the_values_are_nan():
+    """No chain length, no anchor holding: NaN, grounded or lifted."""
+    line = LineConfig(name='plain', weight=1300.0, anchor_distance=120.0, mbl=4.8e6)
+    core, (out, lifted) = run(line, 20.85, [3.7e5, 8e5])
+    assert lifted['uplift_force'] > 0
+    for key in ('grounded_length', 'holding_capacity', 'drag_margin', 'implied_anchor_distance'):
+        assert math.isnan(out[key]) and math.isnan(lifted[key]), key
+
+
+def test_drag_warning_with_deadband():
+    """WARN below drag_margin_warn; held until warn + deadband is reached."""
+    line = hou_line(21.0, allowed_uplift=1e9)  # the anchor may lift: only warnings here
+    core, outs = run(line, 15.0, [85.51 + 375, 900.0 + 375, 85.51 + 375],
+                     drag_margin_warn=7440.0, drag_margin_deadband=100.0, warn_clear_hold=0.0,
+                     clear_hold=0.0)
+    # 7500 + 25*0.75*2.9 - 85.5 = 7468.8 N: above 7440 but below 7540 at the end
+    assert outs[0]['drag_margin'] > 7440.0
+    assert outs[1]['drag_margin'] < 7440.0
+    state = core.lines[0].state
+    assert state.level == Level.WARN and 'drag margin 7.5 kN, warning held' in state.message
+    assert 'anchor may drag' in state.message
+    core2, _ = run(line, 15.0, [900.0 + 375], drag_margin_warn=7440.0)
+    assert 'drag margin' in core2.lines[0].state.message and 'kN <' in core2.lines[0].state.message
+
+
+def test_holding_doc_parameter_table_is_generated():
+    from pathlib import Path
+
+    from catenary_monitor.core.config import parameters_markdown
+
+    page = (Path(__file__).resolve().parent.parent / 'docs' / 'holding.md').read_text()
+    begin, end = '<!-- holding-parameters:begin -->\n', '<!-- holding-parameters:end -->'
+    assert page.split(begin, 1)[1].split(end, 1)[0] == parameters_markdown('holding')
