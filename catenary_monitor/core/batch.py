@@ -670,12 +670,12 @@ def _solve_line(
             values['tide_margin'],
             values['uplift_force'],
         )
-        return values, status, used
-    rate = _pick(d_idx, tide.rates, core.trend.rate)
-    excess = _pick(d_idx, tide.excess, core.trend.excess)
-    values['time_to_uplift'] = tide_trend.uplift_times(
-        values['tide_margin'], values['uplift_force'], rate, excess
-    )
+    else:
+        rate = _pick(d_idx, tide.rates, core.trend.rate)
+        excess = _pick(d_idx, tide.excess, core.trend.excess)
+        values['time_to_uplift'] = tide_trend.uplift_times(
+            values['tide_margin'], values['uplift_force'], rate, excess
+        )
     _add_derived(core, line.config, values)
     return values, status, used
 
