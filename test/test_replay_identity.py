@@ -38,7 +38,7 @@ def test_solve_updates_is_bit_identical_to_solve_on_arrays():
         assert status.tolist() == ref.status.tolist()
         assert (status == 0).sum() > 1000 and (ref.uplift_force > 0).sum() > 100
         for key in VALUE_FIELDS:
-            if key in ('depth', 'time_to_uplift', 'sensor_state') or key in DERIVED:  # not the solver's
+            if key in ('depth', 'time_to_uplift', 'sensor_state') or key in DERIVED:  # not solved
                 continue
             if key == 'top_tension':  # the measured input, also where it could not be solved
                 np.testing.assert_array_equal(got[key], t)
