@@ -79,10 +79,13 @@ def core_state(core):
             line.status_message,
             line.model,
             _nan_free(tuple(vars(line.ack).values())),
+            _nan_free((line.sensor_memory, line.sensor_code, line.parted_seen)),
         )
         for line in core.lines
     ]
     rest = (core.depth, core.depth_s, core.depth_stale, core.tide, core.tide_entered, core.trend)
+    rest += (core.depth_memory, core.depth_code)
+    rest += (core.sensor_times.tolist(), _nan_free(tuple(map(tuple, core.sensor_rows.tolist()))))
     return lines, _nan_free(rest)
 
 

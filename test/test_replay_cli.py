@@ -146,11 +146,13 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
     assert [t for t, _ in outputs] == r.t_ns.tolist()
     fields = outputs[0][1].layout.dim[0].label.split(',')
     assert fields[11:14] == ['status', 'level', 'time_to_uplift']  # appended, then the bounds
-    assert fields[14:] == list(BOUNDS + HOLDING)  # and the holding values
+    assert fields[14:-1] == list(BOUNDS + HOLDING)  # and the holding values
+    assert fields[-1] == 'sensor_state'  # appended last
     got = np.array([m.data for _, m in outputs])
     np.testing.assert_array_equal(
         got[:, fields.index('time_to_uplift')], r.values['time_to_uplift']
     )
+    np.testing.assert_array_equal(got[:, fields.index('sensor_state')], r.values['sensor_state'])
     np.testing.assert_array_equal(got[:, fields.index('level')], r.level)
     np.testing.assert_array_equal(got[:, fields.index('uplift_force')], r.values['uplift_force'])
     assert len(diags) >= len(ref.tick_ns)

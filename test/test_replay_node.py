@@ -247,6 +247,7 @@ TEXT_KEYS = {
     'alarm_condition',
     'acknowledged_by',
     'sensor_state',
+    'tide_forecast',
 }
 
 
@@ -322,7 +323,8 @@ def test_replay_of_a_live_node_log_redoes_every_step(tmp_path, form):
     assert Status.NO_CONVERGENCE not in codes
     assert any(tr.new.name == 'ERROR' and 'deeper than any' in tr.message for tr in result.tide)
     tide = [(tr.old.name, tr.new.name) for tr in result.tide]
-    assert tide[0] == ('STALE', 'OK') and ('OK', 'STALE') in tide
+    # (the depth's dropout comes while its spike, the implausible depth, is still held: WARN)
+    assert tide[0] == ('STALE', 'OK') and any(new == 'STALE' for _, new in tide[1:])
     models = {r.name: set(r.model_codes.tolist()) for r in result.lines}
     assert 2 in models['line_03'] and 2 not in models['line_01']
     # The node's own transition lines: the same sequence, with the same messages.

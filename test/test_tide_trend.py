@@ -54,6 +54,9 @@ def tide_scene(seconds, noise=0.0, wave=0.0, seed=0):
 
 
 def one_line(**alarm):
+    # The scene's tension is noise-free and moves by less than the default resolution per
+    # sample: resolution 0 keeps it from reading as a stuck sensor (core.sensor).
+    alarm.setdefault('tension_resolution', 0.0)
     line = LineConfig(name='line_11', weight=W, anchor_distance=X, mbl=4.8e6)
     return MonitorConfig(lines=(line,), alarm=AlarmConfig(**alarm))
 

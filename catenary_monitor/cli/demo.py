@@ -19,7 +19,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Optional
+from typing import Any, Optional
 
 import numpy as np
 
@@ -27,9 +27,19 @@ from catenary_monitor.ros.simulator import default_config_path
 
 __all__ = ['run_demo', 'start_console', 'DEMO_OVERRIDES']
 
-#: Alarm timings for the compressed episode (the storm and a tide cycle in under a minute):
-#: clear holds longer than the simulator's 4 s wave period, shorter than the episode.
-DEMO_OVERRIDES = {'clear_hold': 6.0, 'warn_clear_hold': 6.0}
+#: Alarm timings for the compressed episode (the storm and a tide cycle in under a minute, the
+#: tide 813 times fast): clear holds longer than the simulator's 4 s wave period, shorter than
+#: the episode; a tide trend over 10 s (2.3 h of that tide) and a time-to-uplift warning at
+#: 15 s (3.4 h); the anchor-margin warning at 2 m, so that the rising tide's time-to-uplift
+#: warning is line 11's first.
+DEMO_OVERRIDES = {
+    'clear_hold': 6.0,
+    'warn_clear_hold': 6.0,
+    'tide_trend_window': 10.0,
+    'uplift_time_warn': 15.0,
+    'uplift_time_deadband': 3.0,
+    'anchor_margin_warn': 2.0,
+}
 
 _ALARM = re.compile(r'\[(\d+\.\d+)\] \[[^\]]+\]: ALARM (\S+): (\S+) -> (\S+): (.*)$')
 _LEVEL_COLOURS = {'OK': '', 'WARN': '\033[33m', 'ERROR': '\033[31;1m', 'STALE': '\033[35m'}
@@ -268,8 +278,47 @@ def _outputs(files: list[Path], topics: list[str]) -> dict[str, tuple[np.ndarray
     }
 
 
+def uplift_warning_times(
+    t: np.ndarray, data: np.ndarray, idx: dict[str, int], warn: float
+) -> tuple[Optional[float], Optional[float]]:
+    """(first time the line's time to uplift is below ``warn`` while not lifted, first time
+    its anchor lifts) [s] from its outputs (None: never)."""
+    ttu, up = data[:, idx['time_to_uplift']], data[:, idx['uplift_force']]
+    with np.errstate(invalid='ignore'):
+        w = np.flatnonzero((ttu > 0.0) & (ttu < warn) & ~(up > 0.0))
+        lift = np.flatnonzero(up > 0.0)
+    first_w = float(t[w[0]]) if w.size else None
+    return first_w, (float(t[lift[0]]) if lift.size else None)
+
+
+def _mark_uplift_warning(
+    axes: Any, t: np.ndarray, data: np.ndarray, idx: dict[str, int], warn: float, name: str
+) -> None:
+    """Mark the time-to-uplift WARN and the uplift of line ``name`` on every panel."""
+    first_w, lift = uplift_warning_times(t, data, idx, warn)
+    for when, colour, text, side in (
+        (first_w, 'tab:orange', f'{name} time-to-uplift WARN', 'right'),
+        (lift, 'tab:red', f'{name} anchor lifts', 'left'),
+    ):
+        if when is None:
+            continue
+        for a in axes:
+            a.axvline(when, color=colour, ls='-.', lw=1.0)
+        axes[0].text(
+            when,
+            0.02,
+            f' {text} \n t = {when:.1f} s ',
+            color=colour,
+            fontsize=8,
+            ha=side,
+            va='bottom',
+            transform=axes[0].get_xaxis_transform(),
+        )
+
+
 def plot_episode(files: list[Path], png: Path, params: str) -> Path:
-    """Chart of the episode from the MCAP log: depth, hook tensions, line 11, alarm levels."""
+    """Chart of the episode from the MCAP log: depth, hook tensions, line 11, alarm levels;
+    line 11's first time-to-uplift WARN and its uplift marked on every panel."""
     import matplotlib
 
     matplotlib.use('Agg')
@@ -279,7 +328,7 @@ def plot_episode(files: list[Path], png: Path, params: str) -> Path:
     from catenary_monitor.io.mcap_read import read_float64_topics
     from catenary_monitor.ros.node import NODE_NAME, OUTPUT_FIELDS
 
-    config = config_from_params(load_params_file(params))
+    config = config_from_params({**load_params_file(params), **DEMO_OVERRIDES})  # as the node
     names = [line.name for line in config.lines]
     tension_topics = {line.name: line.tension_topic for line in config.lines}
     cols, _ = read_float64_topics(files, [config.depth_topic, *tension_topics.values()])
@@ -351,6 +400,8 @@ def plot_episode(files: list[Path], png: Path, params: str) -> Path:
         ax2.legend(loc='upper right', fontsize=8)
     ax.set_ylabel('uplift force [kN]')
     ax.legend(loc='upper left', fontsize=8)
+    if data.size:
+        _mark_uplift_warning(axes, sec(t), data, idx, config.alarm.uplift_time_warn, focus[0])
     ax = axes[3]
     for k, n in enumerate(names):
         tt, dd = outs[out_topics[n]]

@@ -16,6 +16,7 @@ from typing import IO, Any, Callable, Optional, Sequence
 import numpy as np
 
 from catenary_monitor import __version__
+from catenary_monitor.core import sensor
 from catenary_monitor.core.alarms import Level
 from catenary_monitor.core.batch import (
     MODEL_NAMES,
@@ -67,7 +68,9 @@ __all__ = [
 #: Every CSV column, in order, with its decimals (None: a label). Units: s, N, m, -.
 #: ``time`` is exact (ns); forces have 3 decimals (1 mN), lengths 3 (1 mm), the safety factor 3,
 #: ``time_to_uplift`` 3 (s; ``inf`` when no uplift is coming); the bounds and holding values
-#: (forces, lengths) 3 (``nan`` where the line has no accuracy or holding data).
+#: (forces, lengths) 3 (``nan`` where the line has no accuracy or holding data); ``sensor_state``
+#: the line's sensor state word (``ok``, ``stuck``, ``spike``, ``over_mbl``, ``slack``,
+#: ``suspected_parted``).
 CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('time', 9),
     ('line', None),
@@ -89,6 +92,7 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('holding_capacity', 3),
     ('drag_margin', 3),
     ('implied_anchor_distance', 3),
+    ('sensor_state', None),  # core.sensor.LINE_STATES word
     ('status', None),
     ('level', None),
     ('model', None),
@@ -177,6 +181,9 @@ def write_csv(
             out_columns.append(LabelColumn(name, level, _LEVELS))
         elif name == 'model':
             out_columns.append(LabelColumn(name, values['model'], list(MODEL_NAMES)))
+        elif name == 'sensor_state':
+            codes = values[name].astype(np.int64)
+            out_columns.append(LabelColumn(name, codes, list(sensor.LINE_STATES)))
         else:
             out_columns.append(FloatColumn(name, values[name], decimals or 0))
     n = len(t)

@@ -32,6 +32,12 @@ Conditions, each with its own latch:
     ``uplift`` ERROR then says so), held for ``warn_clear_hold``; NaN holds.
 ``drag_margin`` (WARN; with ``anchor_holding``, :mod:`catenary_monitor.core.holding`)
     as the margins above with ``drag_margin_warn`` and ``drag_margin_deadband`` (N).
+``sensor_error`` (ERROR), ``sensor_warn`` (WARN; :mod:`catenary_monitor.core.sensor`)
+    raised when the line's ``sensor_state`` (decided at ticks) is an ERROR state (``over_mbl``,
+    ``slack``, ``suspected_parted``), resp. a WARN state (``stuck``, ``spike``), for
+    ``on_delay``; cleared after ``clear_hold`` (resp. ``warn_clear_hold``) of any other state.
+    They are conditions of the line beside the load alarms: the line's level is the worst of
+    all, by the rule below.
 stale (STALE, no latch)
     no tension or no depth received yet (the line is blind: its results cannot be computed), the
     newest tension older than ``tension_timeout``, or the depth stale (older than
@@ -61,6 +67,7 @@ from typing import Any, Mapping, NamedTuple, Sequence
 
 import numpy as np
 
+from catenary_monitor.core import sensor
 from catenary_monitor.core.config import AlarmConfig, LineConfig
 
 __all__ = [
@@ -104,9 +111,13 @@ CONDITIONS = (
     # Margins with uncertainty and holding (issue 12, items 3 and 4).
     'uplift_possible',
     'drag_margin',
+    # Sensor sanity (issue 12, item 2): core/sensor.py.
+    'sensor_error',
+    'sensor_warn',
 )
-_ERRORS = CONDITIONS[:2]
-_WARNS = CONDITIONS[2:]
+_ERRORS = ('uplift', 'input', 'sensor_error')
+_WARNS = tuple(c for c in CONDITIONS if c not in _ERRORS)
+_ERROR_AT = tuple(CONDITIONS.index(c) for c in _ERRORS)
 # The warnings with a threshold and a deadband.
 _MARGINS = (
     'anchor_margin',
@@ -138,6 +149,7 @@ class AlarmInputs:
     safety_factor: float = math.nan  # -, MBL / top tension
     time_to_uplift: float = math.nan  # s, until uplift at the tide's trend (inf: not coming)
     tide_rate: float = math.nan  # m/s, the tide's trend (for the message)
+    tide_forecast: float = 0.0  # 1: time_to_uplift is the tide table's forecast (the message)
     status: int = 0
     status_message: str = ''
     tension_stamp: float = math.nan  # s
@@ -150,6 +162,9 @@ class AlarmInputs:
     uplift_force_upper: float = math.nan  # N, the uplift force's bound within sensor accuracy
     drag_margin: float = math.nan  # N, holding capacity minus horizontal load
     holding_capacity: float = math.nan  # N, anchor and grounded chain (for the message)
+    sensor_state: float = 0.0  # core.sensor line state code (0 ok)
+    sensor_tension: float = math.nan  # N, the newest tension the state was decided on
+    mbl: float = math.nan  # N, the line's MBL (for the message)
 
 
 class Latch(NamedTuple):
@@ -210,7 +225,7 @@ class LineAlarm:
         c = self.config
         if cond == 'input':
             return 0.0, c.clear_hold
-        return c.on_delay, (c.clear_hold if cond == 'uplift' else c.warn_clear_hold)
+        return c.on_delay, (c.clear_hold if cond in _ERRORS else c.warn_clear_hold)
 
     def _warn_limits(self, cond: str) -> tuple[float, float]:
         """(raise below, clear at or above) for a warning condition."""
@@ -280,6 +295,9 @@ class LineAlarm:
             )
         elif cond == 'inconsistent':
             breach, clear = x.inconsistent == 1.0, x.inconsistent == 0.0
+        elif cond in _SENSOR:
+            hit, ok = _sensor_codes(cond, np.asarray(x.sensor_state))
+            breach, clear = bool(hit), bool(ok)
         elif cond == 'uplift_possible':
             nominal = x.uplift_force > self.allowed_uplift
             upper = x.uplift_force_upper
@@ -325,6 +343,8 @@ class LineAlarm:
                     f'impossible input alarm held: last was "{input_message}" '
                     f'(clears after {hold_e:g} s of valid input)'
                 )
+        if active[CONDITIONS.index('sensor_error')]:
+            parts.append(_sensor_text(x, 'sensor_error', hold_e))
         for name, is_stale, stamp, timeout in (
             ('tension', stale_t, x.tension_stamp, self.config.tension_timeout),
             ('depth', stale_d, x.depth_stamp, self.config.depth_timeout),
@@ -338,9 +358,13 @@ class LineAlarm:
                     f'{name} stale: last sample {_fmt(now - stamp)} s ago '
                     f'(timeout {timeout:g} s)'
                 )
-        for cond, up in zip(_WARNS, active[2:]):
+        for cond, up in zip(CONDITIONS, active):
+            if cond in _ERRORS:
+                continue
             if up and cond == 'inconsistent':
                 parts.append(_inconsistent_text(x, hold_w))
+            elif up and cond == 'sensor_warn':
+                parts.append(_sensor_text(x, cond, hold_w))
             elif up and cond == 'time_to_uplift':
                 parts.append(self._uplift_time_text(x, hold_w))
             elif up and cond == 'uplift_possible':
@@ -374,13 +398,12 @@ class LineAlarm:
             if not value > 0.0:
                 return 'anchor lifted: time to uplift 0 min'
             rate = x.tide_rate * 3600.0
-            return (
-                f'anchor uplift in {_fmt(value, 60.0, 0)} min if the tide keeps rising '
-                f'{rate:.2f} m/h'
-            )
+            if x.tide_forecast == 1.0:
+                return f'anchor uplift in {_duration(value)} on the tide table\'s forecast'
+            return f'anchor uplift in {_duration(value)} if the tide keeps rising {rate:.2f} m/h'
         return (
-            f'time to uplift {_fmt(value, 60.0, 0)} min, warning held (clears after {hold:g} s '
-            f'at >= {_fmt(high, 60.0, 0)} min)'
+            f'time to uplift {_duration(value)}, warning held (clears after {hold:g} s '
+            f'at >= {_duration(high)})'
         )
 
     def _uplift_possible_text(self, x: AlarmInputs, hold: float) -> str:
@@ -395,6 +418,32 @@ class LineAlarm:
             f'uplift-within-accuracy warning held: bound {_fmt(upper, 1e3)} kN (clears after '
             f'{hold:g} s at <= {_fmt(allowed, 1e3)} kN)'
         )
+
+
+_SENSOR = ('sensor_error', 'sensor_warn')
+
+
+def _sensor_codes(cond: str, code: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(breach, clear) of a sensor condition from line state codes (NaN: hold)."""
+    errors = np.isin(code, sensor.ERROR_STATES)
+    breach = errors if cond == 'sensor_error' else ~errors & (code > 0)
+    return breach, ~breach & np.isfinite(code)
+
+
+def _sensor_text(x: AlarmInputs, cond: str, hold: float) -> str:
+    """The message of a sensor condition (what to check), or that it is held."""
+    code = x.sensor_state
+    breach, _ = _sensor_codes(cond, np.asarray(code))
+    if bool(breach):
+        return sensor.line_message(int(code), x.sensor_tension, x.mbl)
+    return f'sensor alarm held (clears after {hold:g} s of sane readings)'
+
+
+def _duration(seconds: float) -> str:
+    """A time to uplift for the operator: whole minutes, seconds below 2 min."""
+    if seconds < 120.0:
+        return f'{_fmt(seconds, 1.0, 0)} s'
+    return f'{_fmt(seconds, 60.0, 0)} min'
 
 
 def _inconsistent_text(x: AlarmInputs, hold: float) -> str:
@@ -434,11 +483,11 @@ def _step(latch: Latch, code: int, now: float, on_delay: float, hold: float) -> 
 
 def _combine(active: Sequence[bool], stale: bool) -> Level:
     """Explicit precedence ERROR > STALE > WARN > OK (not a max over level numbers)."""
-    if any(active[:2]):
+    if any(active[i] for i in _ERROR_AT):
         return Level.ERROR
     if stale:
         return Level.STALE
-    return Level.WARN if any(active[2:]) else Level.OK
+    return Level.WARN if any(a for i, a in enumerate(active) if i not in _ERROR_AT) else Level.OK
 
 
 def _episode(
@@ -461,6 +510,7 @@ _INPUT_FIELDS = (
     'safety_factor',
     'time_to_uplift',
     'tide_rate',
+    'tide_forecast',
     'tension_stamp',
     'depth_stamp',
     'inconsistent',
@@ -470,6 +520,9 @@ _INPUT_FIELDS = (
     'uplift_force_upper',
     'drag_margin',
     'holding_capacity',
+    'sensor_state',
+    'sensor_tension',
+    'mbl',
 )
 
 
@@ -538,7 +591,7 @@ class LevelSeries:
         self._stale_t, self._stale_d, self._active = stale_t, stale_d, active
         self._latches, self._initial = latches, initial
         n = times.size
-        err = active['uplift'] | active['input']
+        err = active['uplift'] | active['input'] | active['sensor_error']
         warn = np.zeros(n, dtype=bool)
         for cond in _WARNS:
             warn |= active[cond]
@@ -728,6 +781,8 @@ def _classify_columns(
     out['uplift_possible'] = codes(
         (upper > alarm.allowed_uplift) & ~nominal, (upper <= alarm.allowed_uplift) | nominal
     )
+    for cond in _SENSOR:
+        out[cond] = codes(*_sensor_codes(cond, x['sensor_state']))
     return out
 
 

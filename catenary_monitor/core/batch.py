@@ -31,9 +31,9 @@ from typing import Any, NamedTuple, Optional
 import numpy as np
 
 from catenary_monitor.core import acknowledge as alarm_ack, catenary as cat, elastic, kernels
-from catenary_monitor.core import tide_trend
+from catenary_monitor.core import sensor, tide_table, tide_trend
 from catenary_monitor.core.alarms import (
-    CONDITIONS,
+    RANK,
     Level,
     LevelSeries,
     Transition,
@@ -49,6 +49,7 @@ from catenary_monitor.core.monitor import (
     OUTPUT_FIELDS,
     VALUE_FIELDS,
     Change,
+    CONDITIONS,
     ComponentStatus,
     LineState,
     MonitorCore,
@@ -56,10 +57,13 @@ from catenary_monitor.core.monitor import (
     Start,
     bound_values,
     dock_component,
+    forecast_word,
     holding_values,
     line_dock_values,
     line_status,
+    sensor_limits,
     tide_component,
+    tide_with_sensor,
 )
 from catenary_monitor.core.solve import ALL_KEYS, STATUS_MESSAGES, Status
 
@@ -87,6 +91,7 @@ __all__ = [
 
 #: Model names by :attr:`LineResult.model_codes` (as the ``/diagnostics`` key ``model``).
 MODEL_NAMES = (NO_MODEL, elastic.INEXTENSIBLE, elastic.ELASTIC)
+_INCONSISTENT = CONDITIONS.index('inconsistent')
 #: Step kinds in :attr:`LineResult.kind` and :attr:`LineResult.step_kind`.
 KIND_DEPTH, KIND_TENSION, KIND_TICK = 0, 1, 2
 
@@ -298,7 +303,6 @@ def solve_updates(
 
 
 #: Values the caller sets (inputs, the tide's forecast, the bounds and the holding values).
-_INCONSISTENT = CONDITIONS.index('inconsistent')
 _NOT_SOLVED = frozenset(('depth', 'top_tension', 'time_to_uplift')) | frozenset(
     k for k in VALUE_FIELDS if k not in ALL_KEYS
 )
@@ -318,6 +322,7 @@ def _solve_updates_kernel(
     out = {k: rows[i] for k, i in _ROWS.items()}
     out['depth'], out['top_tension'] = h.copy(), t.copy()
     out['time_to_uplift'] = np.full(len(t), np.nan)  # set by the caller, from the tide's trend
+    out['sensor_state'] = np.full(len(t), np.nan)  # set by the caller, from the ticks
     return out, status
 
 
@@ -412,12 +417,96 @@ class _Tide:
     rates: np.ndarray  # m/s, the tide's trend after each depth sample of the window
     excess: np.ndarray  # m, each depth sample's excess over the trend's level
     trend: tide_trend.TrendState  # the trend after the window's last depth sample
+    sensor: np.ndarray  # the depth sensor's state code at each decision
 
 
-def _decide_tide(core: MonitorCore, window: Window) -> tuple[_Tide, list[Transition]]:
+def _worse(level: np.ndarray, other: np.ndarray, code: np.ndarray) -> np.ndarray:
+    """Per decision: the worse (by RANK) of the tide's level and its sensor's (where code)."""
+    rank = np.array([RANK[Level(v)] for v in range(4)])
+    pick = (code != sensor.OK) & (rank[other] > rank[level])
+    return np.where(pick, other, level).astype(np.int8)
+
+
+def _tide_at(core: MonitorCore, tide: _Tide, i: int) -> tuple[Level, str]:
+    """The tide's (level, message) at decision ``i`` (as the core's ``_decide_tide``)."""
+    status = tide_status(
+        float(tide.depth[i]),
+        float(tide.depth_s[i]),
+        float(tide.times[i] * 1e-9),
+        core.config.alarm.depth_timeout,
+    )
+    return tide_with_sensor(status, int(tide.sensor[i]), float(tide.depth[i]), core.config.alarm)
+
+
+@dataclass
+class _Sensors:
+    """The sensor states at the window's ticks (core.sensor): each line's code (ticks, lines)
+    and the depth sensor's (ticks), and the codes before the window."""
+
+    codes: np.ndarray
+    depth_codes: np.ndarray
+    before: list[int]
+    before_depth: int
+
+
+def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
+    """Every tick's sensor states (the arrays the core hands core.sensor one tick at a time);
+    leaves the core's sensor memories as after the window."""
+    a, ticks = core.config.alarm, window.ticks
+    lines = core.lines
+    n, m = len(ticks), len(lines)
+    before = [line.sensor_code for line in lines]
+    before_depth = core.depth_code
+    now = ticks * 1e-9
+    tension, tension_s = np.empty((n, m)), np.empty((n, m))
+    changed, spiked = np.empty((n, m)), np.empty((n, m))
+    for k, line in enumerate(lines):
+        tt, tv = window.tensions[k]
+        mem = line.sensor_memory
+        rate = a.tension_rate_max * line.config.mbl
+        ch, sp, line.sensor_memory = sensor.samples(mem, tt * 1e-9, tv, a.tension_resolution, rate)
+        j = np.searchsorted(tt, ticks, 'right') - 1  # tensions go before a tick at one stamp
+        tension[:, k] = _pick(j, tv, line.tension)
+        tension_s[:, k] = _pick(j, tt * 1e-9, line.tension_s)
+        changed[:, k] = _pick(j, ch, mem.changed)
+        spiked[:, k] = _pick(j, sp, mem.spiked)
+    dd, dv = window.depth
+    dmem = core.depth_memory
+    dch, dsp, core.depth_memory = sensor.samples(
+        dmem, dd * 1e-9, dv, a.depth_resolution, a.depth_rate_max
+    )
+    j = np.searchsorted(dd, ticks, 'right') - 1  # depth goes before a tick at one stamp
+    depth, depth_s = _pick(j, dv, core.depth), _pick(j, dd * 1e-9, core.depth_s)
+    d_changed, d_spiked = _pick(j, dch, dmem.changed), _pick(j, dsp, dmem.spiked)
+    if n == 0:
+        return _Sensors(np.zeros((0, m), np.int8), np.zeros(0, np.int8), before, before_depth)
+    times = np.concatenate([core.sensor_times, now])
+    rows = np.vstack([core.sensor_rows, sensor.history_row(now, tension, spiked, a.sensor_hold)])
+    ref, keep = sensor.reference(times, rows, now, a.parted_window)
+    pattern = sensor.parted_pattern(tension, ref, a.parted_drop)
+    first = np.array([[line.parted_seen for line in lines]])
+    seen = np.maximum.accumulate(
+        np.vstack([first, np.where(pattern, now[:, None], -math.inf)]), axis=0
+    )[1:]
+    core.sensor_times, core.sensor_rows = times[keep:], rows[keep:]
+    codes = sensor.decide_lines(
+        a, sensor_limits(core.config), now, tension, tension_s, changed, spiked, seen, depth,
+        d_changed,
+    )
+    depth_codes = sensor.decide_depth(a, now, depth, depth_s, d_changed, d_spiked, changed)
+    for k, line in enumerate(lines):
+        line.sensor_code, line.parted_seen = int(codes[-1, k]), float(seen[-1, k])
+    core.depth_code = int(depth_codes[-1])
+    return _Sensors(codes, depth_codes, before, before_depth)
+
+
+def _decide_tide(
+    core: MonitorCore, window: Window, sensors: _Sensors
+) -> tuple[_Tide, list[Transition]]:
     """The tide's decisions in the window and its transitions (the core is not changed)."""
     dd, dv = window.depth
     times, kinds = _merge(dd, np.zeros(0, np.int64), window.ticks)
+    k_idx = _newest(kinds == KIND_TICK)
     d_idx = _newest(kinds == KIND_DEPTH)
     have = d_idx >= 0
     j = np.maximum(d_idx, 0)
@@ -430,14 +519,15 @@ def _decide_tide(core: MonitorCore, window: Window) -> tuple[_Tide, list[Transit
         stale = ~blind & (now - depth_s > timeout)
         bad = ~(np.isfinite(depth) & (depth > 0) & (depth <= MAX_DEPTH))
     level = np.where(blind | stale, Level.STALE, np.where(bad, Level.ERROR, Level.OK))
-    level = level.astype(np.int8)
+    code = _pick(k_idx, sensors.depth_codes, sensors.before_depth).astype(np.int64)
+    level = _worse(level, np.where(code == sensor.OUT_OF_RANGE, Level.ERROR, Level.WARN), code)
     window_s = core.config.alarm.tide_trend_window
     rates, excess, trend = tide_trend.series(core.trend, dd, dv, window_s)
-    tide = _Tide(times, depth, depth_s, level, stale, rates, excess, trend)
+    tide = _Tide(times, depth, depth_s, level, stale, rates, excess, trend, code)
     transitions = []
     old, entered = core.tide[0], core.tide_entered
     for i in _changed(level, old).tolist():
-        new = tide_status(float(depth[i]), float(depth_s[i]), float(now[i]), timeout)
+        new = _tide_at(core, tide, i)
         transitions.append(Transition(float(now[i]), old, new[0], new[1], float(now[i]) - entered))
         old, entered = new[0], float(now[i])
     return tide, transitions
@@ -449,12 +539,7 @@ def _write_tide(
     """The core's depth and tide state after the window's last event."""
     if len(tide.times):
         i = len(tide.times) - 1
-        core.tide = tide_status(
-            float(tide.depth[i]),
-            float(tide.depth_s[i]),
-            float(tide.times[i] * 1e-9),
-            core.config.alarm.depth_timeout,
-        )
+        core.tide = _tide_at(core, tide, i)
         core.depth_stale = bool(tide.stale[i])
     if transitions:
         core.tide_entered = transitions[-1].time
@@ -557,17 +642,39 @@ def _pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
 
 
 def _solve_line(
-    core: MonitorCore, line: LineState, steps: _Steps, tv: np.ndarray, window: Window, tide: _Tide
+    core: MonitorCore,
+    line: LineState,
+    steps: _Steps,
+    tv: np.ndarray,
+    window: Window,
+    tide: _Tide,
+    sensors: _Sensors,
+    k: int,
 ) -> tuple[dict[str, np.ndarray], np.ndarray, Optional[np.ndarray]]:
     """Values, status and elastic flags at the line's solved steps, with the time to uplift
-    at the tide's trend of the newest depth sample."""
+    at the tide's trend of the newest depth sample and the sensor state of the newest tick."""
     values, status, used = _solve_at(core, line, steps, tv, window)
-    d_idx = steps.d_idx[steps.solved]
-    rate = _pick(d_idx, tide.rates, core.trend.rate)
-    excess = _pick(d_idx, tide.excess, core.trend.excess)
-    values['time_to_uplift'] = tide_trend.uplift_times(
-        values['tide_margin'], values['uplift_force'], rate, excess
+    values['sensor_state'] = _pick(
+        steps.k_idx[steps.solved], sensors.codes[:, k].astype(np.float64), sensors.before[k]
     )
+    d_idx = steps.d_idx[steps.solved]
+    a = core.config.alarm
+    if a.constituents:
+        now = _pick(d_idx, window.depth[0] * 1e-9, core.depth_s)
+        values['time_to_uplift'] = tide_table.uplift_times(
+            a.constituents,
+            a.tide_table_epoch,
+            a.tide_forecast_horizon,
+            now,
+            values['tide_margin'],
+            values['uplift_force'],
+        )
+    else:
+        rate = _pick(d_idx, tide.rates, core.trend.rate)
+        excess = _pick(d_idx, tide.excess, core.trend.excess)
+        values['time_to_uplift'] = tide_trend.uplift_times(
+            values['tide_margin'], values['uplift_force'], rate, excess
+        )
     _add_derived(core, line.config, values)
     return values, status, used
 
@@ -609,7 +716,7 @@ def _mark_implausible(
         return
     status[hit] = code[hit]
     for key, column in values.items():
-        if key not in ('depth', 'top_tension'):
+        if key not in ('depth', 'top_tension', 'sensor_state'):
             column[hit] = np.nan
     if used is not None:
         used[hit] = False
@@ -626,9 +733,10 @@ def _line_inputs(
     tt: np.ndarray,
     dock: Optional[_Dock] = None,
     k: int = 0,
+    sensors: Optional[_Sensors] = None,
 ) -> dict[str, Any]:
     """The alarm inputs at every step of the line (newest solve, stamps, tide decision, the
-    newest tick's dock estimate)."""
+    newest tick's dock estimate and sensor state)."""
     s = steps.s_idx
     before = dict(zip(VALUE_FIELDS, line.values))
     inputs: dict[str, Any] = {
@@ -649,11 +757,17 @@ def _line_inputs(
         np.int64
     )
     inputs['tide_rate'] = _pick(steps.d_idx, tide.rates, core.trend.rate)
+    inputs['tide_forecast'] = 1.0 if core.config.alarm.constituents else 0.0
     inputs['tension_stamp'] = _pick(steps.t_idx, tt * 1e-9, line.tension_s)
     inputs['depth_stamp'] = _pick(steps.d_idx, window.depth[0] * 1e-9, core.depth_s)
     inputs['depth_stale'] = _pick(
         steps.dk_idx, tide.stale.astype(np.float64), float(core.depth_stale)
     ).astype(bool)
+    if sensors is not None:
+        codes = sensors.codes[:, k].astype(np.float64)
+        inputs['sensor_state'] = _pick(steps.k_idx, codes, sensors.before[k])
+        inputs['sensor_tension'] = _pick(steps.t_idx, window.tensions[k][1], line.tension)
+        inputs['mbl'] = line.config.mbl
     if dock is not None:
         before_dock = dock.before[2][k]
         columns = dock.decision.line_inputs
@@ -664,15 +778,20 @@ def _line_inputs(
 
 
 def _advance_line(
-    core: MonitorCore, k: int, window: Window, tide: _Tide, dock: Optional[_Dock] = None
+    core: MonitorCore,
+    k: int,
+    window: Window,
+    tide: _Tide,
+    sensors: _Sensors,
+    dock: Optional[_Dock] = None,
 ) -> tuple[LineResult, LevelSeries, _Steps, alarm_ack.AckSeries]:
     """One line through the window; leaves the line's state in the core as after the steps
     (the core's depth and tide still as before the window)."""
     line = core.lines[k]
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
-    values, status, used = _solve_line(core, line, steps, tv, window, tide)
-    inputs = _line_inputs(core, line, steps, tide, values, status, window, tt, dock, k)
+    values, status, used = _solve_line(core, line, steps, tv, window, tide, sensors, k)
+    inputs = _line_inputs(core, line, steps, tide, values, status, window, tt, dock, k, sensors)
     series = replay_levels(
         steps.times * 1e-9, inputs, line.alarm, STATUS_MESSAGES, initial=line.state
     )
@@ -746,14 +865,17 @@ def advance(core: MonitorCore, window: Window, snapshots: bool = False) -> Windo
                 if core.dock_model is not None
                 else ()
             ),
+            _line_word(core, line, line.sensor_code, line.state.latches[_INCONSISTENT].active),
         )
         for line in core.lines
     ]
-    tide, tide_transitions = _decide_tide(core, window)
+    depth_word = sensor.DEPTH_STATES[core.depth_code]
+    sensors = _decide_sensors_window(core, window)
+    tide, tide_transitions = _decide_tide(core, window, sensors)
     dock = _decide_dock_window(core, window, tide)
     results, series, steps, acks = [], [], [], []
     for k in range(len(core.lines)):
-        r, s, st, a = _advance_line(core, k, window, tide, dock)
+        r, s, st, a = _advance_line(core, k, window, tide, sensors, dock)
         results.append(r)
         series.append(s)
         steps.append(st)
@@ -775,6 +897,8 @@ def advance(core: MonitorCore, window: Window, snapshots: bool = False) -> Windo
             lines_before,
             acks,
             dock,
+            sensors,
+            depth_word,
         )
     _write_tide(core, window, tide, tide_transitions)
     core.last_ns = max(core.last_ns, end)
@@ -796,6 +920,14 @@ class _Before(NamedTuple):
     tension_s: float
     latches: list[bool]
     extra: tuple[tuple[str, str], ...] = ()  # the dock model's line values
+    sensor_word: str = 'ok'  # the /diagnostics sensor_state
+
+
+def _line_word(core: MonitorCore, line: LineState, code: int, latched: bool) -> str:
+    """A line's ``sensor_state`` word (its own state, else the dock model's)."""
+    if core.dock_model is None:
+        return sensor.line_word(code)
+    return sensor.line_word(code, dock_live.sensor_state(latched, line.dock[0]))
 
 
 def _changed(levels: np.ndarray, before: Level) -> np.ndarray:
@@ -815,6 +947,8 @@ def _snapshots(
     lines_before: list[_Before],
     acks: list[alarm_ack.AckSeries],
     dock: Optional[_Dock] = None,
+    sensors: Optional[_Sensors] = None,
+    depth_word: str = 'ok',
 ) -> list[Snapshot]:
     """Every snapshot the core made in the window (ticks and level changes), built from the
     vectorized results."""
@@ -824,7 +958,6 @@ def _snapshots(
     dd, dv = window.depth
     tide_at = np.searchsorted(tide.times, stamps, 'right') - 1
     depth_at = np.searchsorted(dd, stamps, 'right') - 1
-    timeout = core.config.alarm.depth_timeout
     columns = [
         _line_statuses(
             core.lines[k],
@@ -837,6 +970,7 @@ def _snapshots(
             acks[k],
             dock,
             k,
+            sensors,
         )
         for k in range(len(results))
     ]
@@ -850,16 +984,12 @@ def _snapshots(
         depth = float(dv[j]) if j >= 0 else depth_before[0]
         depth_s = float(dd[j] * 1e-9) if j >= 0 else depth_before[1]
         rate = float(tide.rates[j]) if j >= 0 else depth_before[3]
-        state = (
-            tide_before
-            if i < 0
-            else tide_status(
-                float(tide.depth[i]), float(tide.depth_s[i]), float(tide.times[i] * 1e-9), timeout
-            )
-        )
+        state = tide_before if i < 0 else _tide_at(core, tide, i)
+        word = depth_word if i < 0 else sensor.DEPTH_STATES[int(tide.sensor[i])]
         statuses = [col[n] for col in columns]
         age = stamp * 1e-9 - depth_s
-        statuses.append(tide_component(state, core.depth_id, depth, age, rate))
+        forecast = forecast_word(core.config, rate)
+        statuses.append(tide_component(state, core.depth_id, depth, age, rate, word, forecast))
         statuses.append(logger)
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))
@@ -889,29 +1019,37 @@ def _line_statuses(
     acks: alarm_ack.AckSeries,
     dock: Optional[_Dock] = None,
     k: int = 0,
+    sensors: Optional[_Sensors] = None,
 ) -> list[ComponentStatus]:
     """The line's status in each snapshot (as after its newest step at or before the stamp)."""
     at = np.searchsorted(steps.times, stamps, 'right') - 1
-    codes = r.model_codes  # once per window, not once per snapshot
+    models = r.model_codes  # once per window, not once per snapshot
     inconsistent = series.active('inconsistent') if dock is not None else None
     out = []
     for n, i in enumerate(at.tolist()):
         level, message = before.level, before.message
         values, status, model, ts = before.values, before.status, before.model, before.tension_s
         latches = before.latches
-        extra = before.extra
+        extra, word = before.extra, before.sensor_word
+        code = sensor.OK
+        if i >= 0 and sensors is not None:
+            j = int(steps.k_idx[i])
+            code = sensors.before[k] if j < 0 else int(sensors.codes[j, k])
+            word = sensor.line_word(code)
         if i >= 0 and dock is not None:
             j = int(steps.k_idx[i])
             inputs = dock.before[2][k] if j < 0 else tuple(dock.decision.line_inputs[j, k])
             assert inconsistent is not None
-            extra = line_dock_values(bool(inconsistent[i]), inputs)
+            latched = bool(inconsistent[i])
+            extra = line_dock_values(latched, inputs)
+            word = sensor.line_word(code, dock_live.sensor_state(latched, inputs[0]))
         if i >= 0:
             level, message = Level(int(series.levels[i])), series.message_at(i)
             latches = series.active_at(i)
             s, t = int(steps.s_idx[i]), int(steps.t_idx[i])
             if s >= 0:
                 values = tuple(float(r.values[key][s]) for key in VALUE_FIELDS)
-                status, model = int(r.status[s]), MODEL_NAMES[int(codes[s])]
+                status, model = int(r.status[s]), MODEL_NAMES[int(models[s])]
             if t >= 0:
                 ts = float(tt[t] * 1e-9)
         out.append(
@@ -924,6 +1062,7 @@ def _line_statuses(
                 status,
                 model,
                 stamps[n] * 1e-9 - ts,
+                word,
                 tuple(alarm_ack.diagnostic_values(acks.at(i), level, latches)) + extra,
             )
         )

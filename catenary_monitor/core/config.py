@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Mapping, NamedTuple, Optional
 
+from catenary_monitor.core.tide_table import Constituent, parse_table
+
 __all__ = [
     'REQUIRED',
     'ParamSpec',
@@ -384,7 +386,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         1200.0,
         'Tide trend: Theil-Sen rate of 20 bin means over this window (known after half of it)',
         's',
-        60.0,
+        5.0,
         86400.0,
     ),
     ParamSpec(
@@ -404,6 +406,124 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         's',
         0.0,
         86400.0,
+    ),
+    # The tide table (core/tide_table.py; table in docs/node.md).
+    ParamSpec(
+        'tide_table',
+        'string',
+        '',
+        'Tide table: constituents "NAME AMPLITUDE PHASE SPEED; ..." (m, deg, deg/h); '
+        'empty: none (the trend)',
+        '',
+        None,
+        None,
+        group='tide',
+    ),
+    ParamSpec(
+        'tide_table_epoch',
+        'double',
+        0.0,
+        'The time the table\'s phases refer to (Unix time on the monitor\'s clock)',
+        's',
+        -1.0e10,
+        1.0e10,
+        group='tide',
+    ),
+    ParamSpec(
+        'tide_forecast_horizon',
+        'double',
+        43200.0,
+        'With a table, time_to_uplift follows its forecast this far ahead (inf beyond)',
+        's',
+        600.0,
+        604800.0,
+        group='tide',
+    ),
+    # Sensor sanity (core/sensor.py; table in docs/node.md).
+    *(
+        ParamSpec(name, 'double', default, text, unit, lo, hi, group='sensor')
+        for name, default, text, unit, lo, hi in (
+            (
+                'tension_resolution',
+                100.0,
+                'stuck: the tension sensor\'s step; readings within one step are no change',
+                'N',
+                0.0,
+                1.0e7,
+            ),
+            (
+                'depth_resolution',
+                0.001,
+                'stuck: the depth sensor\'s step; readings within one step are no change',
+                'm',
+                0.0,
+                10.0,
+            ),
+            (
+                'stuck_time',
+                60.0,
+                'stuck: no change beyond the resolution this long while the dock moves',
+                's',
+                1.0,
+                86400.0,
+            ),
+            (
+                'tension_rate_max',
+                0.5,
+                'spike: a tension step above this x MBL per second (+ the resolution)',
+                'MBL/s',
+                0.001,
+                1000.0,
+            ),
+            (
+                'depth_rate_max',
+                1.0,
+                'spike: a depth step above this rate (+ the resolution)',
+                'm/s',
+                0.001,
+                1000.0,
+            ),
+            (
+                'sensor_hold',
+                30.0,
+                'spike and suspected_parted stay this long after their pattern was last seen',
+                's',
+                0.0,
+                3600.0,
+            ),
+            (
+                'parted_drop',
+                0.75,
+                'suspected_parted: the tension fell by this fraction in parted_window',
+                '',
+                0.05,
+                1.0,
+            ),
+            (
+                'parted_window',
+                5.0,
+                'suspected_parted: the tension is compared with its value this long ago',
+                's',
+                1.0,
+                3600.0,
+            ),
+            (
+                'depth_min',
+                0.0,
+                'Chart range of the depth sensor: a depth below this is out_of_range',
+                'm',
+                0.0,
+                12000.0,
+            ),
+            (
+                'depth_max',
+                12000.0,
+                'Chart range of the depth sensor: a depth above this is out_of_range',
+                'm',
+                0.0,
+                12000.0,
+            ),
+        )
     ),
     ParamSpec(
         'depth_accuracy',
@@ -783,6 +903,19 @@ class AlarmConfig:
     depth_accuracy: float = _default('depth_accuracy')
     drag_margin_warn: float = _default('drag_margin_warn')
     drag_margin_deadband: float = _default('drag_margin_deadband')
+    tension_resolution: float = _default('tension_resolution')
+    depth_resolution: float = _default('depth_resolution')
+    stuck_time: float = _default('stuck_time')
+    tension_rate_max: float = _default('tension_rate_max')
+    depth_rate_max: float = _default('depth_rate_max')
+    sensor_hold: float = _default('sensor_hold')
+    parted_drop: float = _default('parted_drop')
+    parted_window: float = _default('parted_window')
+    depth_min: float = _default('depth_min')
+    depth_max: float = _default('depth_max')
+    tide_table: str = _default('tide_table')
+    tide_table_epoch: float = _default('tide_table_epoch')
+    tide_forecast_horizon: float = _default('tide_forecast_horizon')
     load_margin_warn: float = _default('load_margin_warn')
     load_margin_deadband: float = _default('load_margin_deadband')
     safety_factor_warn: float = _default('safety_factor_warn')
@@ -800,6 +933,16 @@ class AlarmConfig:
         for f in dataclasses.fields(self):
             value = _check(f.name, _GLOBAL[f.name], getattr(self, f.name))
             object.__setattr__(self, f.name, value)
+        try:
+            table = parse_table(self.tide_table)
+        except ValueError as err:
+            raise ConfigError('tide_table', str(err)) from None
+        object.__setattr__(self, '_constituents', table)
+
+    @property
+    def constituents(self) -> tuple[Constituent, ...]:
+        """The tide table's constituents (empty: no table)."""
+        return getattr(self, '_constituents')
 
 
 @dataclass(frozen=True)

@@ -42,6 +42,7 @@ from catenary_monitor.core import acknowledge as alarm_ack
 from catenary_monitor.core import elastic
 from catenary_monitor.core.alarms import (
     CONDITIONS,
+    RANK,
     AlarmInputs,
     AlarmState,
     Level,
@@ -71,7 +72,7 @@ from catenary_monitor.core.health import (
 from catenary_monitor.core.plausible import reading_status, reading_status_array
 from catenary_monitor.core.result import STATUS_MESSAGES
 from catenary_monitor.core.solve import solve
-from catenary_monitor.core import tide_trend
+from catenary_monitor.core import sensor, tide_table, tide_trend
 from catenary_monitor.core import holding as holding_rule, uncertainty
 
 __all__ = [
@@ -114,8 +115,10 @@ NODE_NAME = 'catenary_monitor'
 #: Element order of each line's outputs (``/catenary_monitor/NAME/outputs``), SI units;
 #: ``status`` is the solver code (:data:`NO_DEPTH` before the first depth), ``level`` 0-3;
 #: ``time_to_uplift`` [s] (:mod:`~catenary_monitor.core.tide_trend`) was appended after them
-#: so the older indexes stay, then the bounds (:mod:`~catenary_monitor.core.uncertainty`) and
-#: the holding values (:mod:`~catenary_monitor.core.holding`).
+#: so the older indexes stay, then the bounds (:mod:`~catenary_monitor.core.uncertainty`), the
+#: holding values (:mod:`~catenary_monitor.core.holding`) and ``sensor_state``, the line's
+#: sensor state code as of the newest tick (:data:`catenary_monitor.core.sensor.LINE_STATES`:
+#: 0 ok, 1 stuck, 2 spike, 3 over_mbl, 4 slack, 5 suspected_parted).
 OUTPUT_FIELDS = (
     'top_tension',
     'depth',
@@ -135,6 +138,8 @@ OUTPUT_FIELDS = (
     *uncertainty.FIELDS,
     # Holding and the anchor distance the chain implies (issue 12, item 4): core/holding.py.
     *holding_rule.FIELDS,
+    # Sensor sanity (issue 12, item 2): core/sensor.py.
+    'sensor_state',
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -147,13 +152,14 @@ NO_MODEL = 'none'
 EVENTS_TOPIC = f'/{NODE_NAME}/events'
 
 _NAN = math.nan
+_INCONSISTENT = CONDITIONS.index('inconsistent')
 _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
 #: The statuses on /diagnostics that are not lines (``catenary_monitor: NAME``).
 COMPONENTS = ('tide', 'logger', 'dock', 'parameters', 'clock', 'intake')
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
-_INCONSISTENT = CONDITIONS.index('inconsistent')
 _AT = {key: i for i, key in enumerate(VALUE_FIELDS)}
 _LOOK = uncertainty.FIELDS + holding_rule.FIELDS  # computed from the nominal solve's values
+_SENSOR_AT = VALUE_FIELDS.index('sensor_state')  # not a solved value: kept by _implausible
 
 
 class Tension(NamedTuple):
@@ -289,10 +295,15 @@ class LineState:
     model: str = NO_MODEL  # model of the newest solve
     ack: alarm_ack.AckState = alarm_ack.AckState()  # the line's alarm in ISA-18.2 states
     dock: tuple[float, ...] = (_NAN,) * 4  # dock_live.LINE_INPUTS of the newest dock estimate
+    sensor_memory: sensor.Memory = sensor.Memory()  # the tension sensor's per-sample memory
+    sensor_code: int = sensor.OK  # sensor state decided at the newest tick
+    parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
 
-    def inputs(self, depth_s: float, depth_stale: bool, rate: float = _NAN) -> AlarmInputs:
+    def inputs(
+        self, depth_s: float, depth_stale: bool, rate: float = _NAN, table: bool = False
+    ) -> AlarmInputs:
         """The alarm inputs of this line now (newest results, stamps, the tide's decision and
-        its trend ``rate`` [m/s])."""
+        its trend ``rate`` [m/s]; ``table``: the time to uplift is the tide table's)."""
         v, d = self.values, self.dock
         return AlarmInputs(
             uplift_force=v[5],
@@ -305,6 +316,7 @@ class LineState:
             drag_margin=v[_AT['drag_margin']],
             holding_capacity=v[_AT['holding_capacity']],
             tide_rate=rate,
+            tide_forecast=1.0 if table else 0.0,
             status=max(self.status, 0),
             status_message=self.status_message,
             tension_stamp=self.tension_s,
@@ -314,6 +326,9 @@ class LineState:
             dock_residual=d[1],
             dock_expected=d[2],
             dock_sigma=d[3],
+            sensor_state=float(self.sensor_code),
+            sensor_tension=self.tension,
+            mbl=self.config.mbl,
         )
 
 
@@ -360,6 +375,10 @@ class MonitorCore:
         self.depth_s = _NAN  # s, its stamp
         self.depth_stale = False
         self.trend = tide_trend.TrendState()  # the tide's rate (m/s) from the depth samples
+        self.depth_memory = sensor.Memory()  # the depth sensor's per-sample memory
+        self.depth_code = sensor.OK  # the depth sensor's state at the newest tick
+        self.sensor_times = np.zeros(0)  # s, the ticks the suspected_parted test still needs
+        self.sensor_rows = np.zeros((0, len(config.lines)))  # N, each line's tension there
         self.tide: tuple[Level, str] = tide_status(_NAN, _NAN, start, config.alarm.depth_timeout)
         self.tide_entered = start
         self.logger: tuple[Level, str] = (Level.OK, 'logging')
@@ -409,6 +428,14 @@ class MonitorCore:
     def _on_tension(self, ev: Tension) -> Step:
         line = self.lines[ev.line]
         line.tension, line.tension_s = float(ev.value), _stamp_s(ev.stamp_ns)
+        a = self.config.alarm
+        line.sensor_memory = sensor.sample(
+            line.sensor_memory,
+            line.tension_s,
+            line.tension,
+            a.tension_resolution,
+            a.tension_rate_max * line.config.mbl,
+        )
         self._solve_one(line)
         changes = self._step_lines([ev.line], ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'tension', [ev.line], changes)
@@ -417,6 +444,10 @@ class MonitorCore:
         self.depth, self.depth_s = float(ev.value), _stamp_s(ev.stamp_ns)
         window = self.config.alarm.tide_trend_window
         self.trend = tide_trend.step(self.trend, ev.stamp_ns, self.depth, window)
+        a = self.config.alarm
+        self.depth_memory = sensor.sample(
+            self.depth_memory, self.depth_s, self.depth, a.depth_resolution, a.depth_rate_max
+        )
         changes = self._decide_tide(ev.stamp_ns)
         solved = [k for k, line in enumerate(self.lines) if line.tension_s == line.tension_s]
         self._solve_many(solved)
@@ -424,6 +455,7 @@ class MonitorCore:
         return self._finish(ev.stamp_ns, 'depth', solved, changes)
 
     def _on_tick(self, ev: Tick) -> Step:
+        self._decide_sensors(ev.stamp_ns)
         changes = self._decide_tide(ev.stamp_ns)
         if self.dock_model is not None:
             changes += self._decide_dock(ev.stamp_ns)
@@ -511,8 +543,50 @@ class MonitorCore:
         now = _stamp_s(stamp_ns)
         timeout = self.config.alarm.depth_timeout
         self.depth_stale = self.depth_s == self.depth_s and now - self.depth_s > timeout
-        return self._set_component(
-            'tide', tide_status(self.depth, self.depth_s, now, timeout), stamp_ns
+        status = tide_status(self.depth, self.depth_s, now, timeout)
+        new = tide_with_sensor(status, self.depth_code, self.depth, self.config.alarm)
+        return self._set_component('tide', new, stamp_ns)
+
+    def _decide_sensors(self, stamp_ns: int) -> None:
+        """Every line's and the depth sensor's state at a tick (core.sensor)."""
+        a = self.config.alarm
+        now = np.array([_stamp_s(stamp_ns)])
+        lines = self.lines
+        tension = np.array([[line.tension for line in lines]])
+        changed = np.array([[line.sensor_memory.changed for line in lines]])
+        ref, keep = sensor.reference(self.sensor_times, self.sensor_rows, now, a.parted_window)
+        pattern = sensor.parted_pattern(tension, ref, a.parted_drop)
+        seen = np.array([[line.parted_seen for line in lines]])
+        seen = np.where(pattern, now[:, None], seen)
+        self.sensor_times = np.append(self.sensor_times[keep:], now)
+        spiked = np.array([[line.sensor_memory.spiked for line in lines]])
+        row = sensor.history_row(now, tension, spiked, a.sensor_hold)
+        self.sensor_rows = np.vstack([self.sensor_rows[keep:], row])
+        codes = sensor.decide_lines(
+            a,
+            sensor_limits(self.config),
+            now,
+            tension,
+            np.array([[line.tension_s for line in lines]]),
+            changed,
+            spiked,
+            seen,
+            np.array([self.depth]),
+            np.array([self.depth_memory.changed]),
+        )
+        for k, line in enumerate(lines):
+            line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
+        dm = self.depth_memory
+        self.depth_code = int(
+            sensor.decide_depth(
+                a,
+                now,
+                np.array([self.depth]),
+                np.array([self.depth_s]),
+                np.array([dm.changed]),
+                np.array([dm.spiked]),
+                changed,
+            )[0]
         )
 
     def _decide_dock(self, stamp_ns: int) -> list[Change]:
@@ -554,7 +628,7 @@ class MonitorCore:
         h = self.depth + lc.hook_height
         if self.depth_s != self.depth_s:  # no depth yet: nothing to solve
             line.values, line.status, line.status_message, line.model = (
-                (t, h) + _NAN_VALUES[2:],
+                (t, h) + _NAN_VALUES[2:_SENSOR_AT] + (float(line.sensor_code),),
                 NO_DEPTH,
                 '',
                 NO_MODEL,
@@ -575,11 +649,9 @@ class MonitorCore:
             r.safety_factor,
             r.anchor_angle_deg,
             r.suspended_length,
-            tide_trend.time_to_uplift(
-                r.tide_margin, r.uplift_force, self.trend.rate, self.trend.excess
-            ),
+            self._uplift_times([r.tide_margin], [r.uplift_force])[0],
         )
-        line.values += _NAN_VALUES[len(line.values):]
+        line.values = _with_sensor(line.values + _NAN_VALUES[len(line.values):], line.sensor_code)
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
         code = reading_status(t, h, lc.mbl)
         if code:
@@ -608,17 +680,12 @@ class MonitorCore:
         columns = [tension.tolist(), h.tolist()] + [
             np.asarray(getattr(r, k)).tolist() for k in _SOLVED
         ]
-        rate, excess = self.trend.rate, self.trend.excess
-        columns.append(
-            [
-                tide_trend.time_to_uplift(m, f, rate, excess)
-                for m, f in zip(columns[6], columns[5])
-            ]
-        )
+        columns.append(self._uplift_times(columns[6], columns[5]))
         models = np.broadcast_to(np.asarray(r.model, dtype=object), tension.shape)
         messages, status = r.message, np.asarray(r.status).tolist()
         for i, line in enumerate(lines):
             line.values = tuple(col[i] for col in columns) + _NAN_VALUES[len(columns):]
+            line.values = _with_sensor(line.values, line.sensor_code)
             line.status, line.status_message = int(status[i]), str(messages[i])
             line.model = str(models[i])
         codes = reading_status_array(tension, h, [c.mbl for c in cfgs]).tolist()
@@ -646,6 +713,23 @@ class MonitorCore:
                     v[_AT[key]] = float(derived[key][j])
                 line.values = tuple(v)
 
+    def _uplift_times(self, margins: Sequence[float], forces: Sequence[float]) -> list[float]:
+        """Each line's time to uplift [s]: on the tide table's forecast from the newest depth
+        sample where there is a table (core.tide_table), else at the tide's trend."""
+        a = self.config.alarm
+        if a.constituents:
+            times = tide_table.uplift_times(
+                a.constituents,
+                a.tide_table_epoch,
+                a.tide_forecast_horizon,
+                np.full(len(margins), self.depth_s),
+                np.array(margins, np.float64),
+                np.array(forces, np.float64),
+            )
+            return [float(v) for v in times]
+        rate, excess = self.trend.rate, self.trend.excess
+        return [tide_trend.time_to_uplift(m, f, rate, excess) for m, f in zip(margins, forces)]
+
     def _step_lines(self, which: Any, stamp_ns: int) -> list[Change]:
         """Step the alarms of the given lines at ``stamp_ns``; their transitions."""
         now = _stamp_s(stamp_ns)
@@ -653,7 +737,14 @@ class MonitorCore:
         for k in which:
             line = self.lines[k]
             line.state, events = line.alarm.update(
-                line.state, line.inputs(self.depth_s, self.depth_stale, self.trend.rate), now
+                line.state,
+                line.inputs(
+                    self.depth_s,
+                    self.depth_stale,
+                    self.trend.rate,
+                    bool(self.config.alarm.constituents),
+                ),
+                now,
             )
             grace = alarm_ack.startup_grace(self.config.alarm)
             line.ack = alarm_ack.step(line.ack, line.state.level, now, grace)
@@ -688,19 +779,29 @@ class MonitorCore:
                 line.status,
                 line.model,
                 now - line.tension_s,
+                sensor.line_word(line.sensor_code, line_dock_word(line) if dock else ''),
                 tuple(
                     alarm_ack.diagnostic_values(
                         line.ack, line.state.level, [latch.active for latch in line.state.latches]
                     )
                 )
-                + (line_dock_values(line.state.latches[_INCONSISTENT].active, line.dock)
-                   if dock else ()),
+                + (
+                    line_dock_values(line.state.latches[_INCONSISTENT].active, line.dock)
+                    if dock
+                    else ()
+                ),
             )
             for line in self.lines
         ]
         statuses.append(
             tide_component(
-                self.tide, self.depth_id, self.depth, now - self.depth_s, self.trend.rate
+                self.tide,
+                self.depth_id,
+                self.depth,
+                now - self.depth_s,
+                self.trend.rate,
+                sensor.DEPTH_STATES[self.depth_code],
+                forecast_word(self.config, self.trend.rate),
             )
         )
         level, message = self.logger
@@ -741,10 +842,15 @@ class MonitorCore:
         return ComponentStatus(f'{NODE_NAME}: parameters', level, message, NODE_NAME, values)
 
 
+def _with_sensor(values: tuple[float, ...], code: int) -> tuple[float, ...]:
+    """``values`` with the line's sensor state code in its place (``sensor_state``)."""
+    return values[:_SENSOR_AT] + (float(code),) + values[_SENSOR_AT + 1 :]
+
+
 def _implausible(line: LineState, code: int) -> None:
     """An implausible reading (core.plausible): its status and sentence, no solved values
     (the measured tension and depth kept, as for every impossible input)."""
-    line.values = line.values[:2] + _NAN_VALUES[2:]
+    line.values = line.values[:2] + _NAN_VALUES[2:_SENSOR_AT] + line.values[_SENSOR_AT:]
     line.status, line.status_message = code, STATUS_MESSAGES[code]
     line.model = elastic.INEXTENSIBLE
 
@@ -824,11 +930,13 @@ def line_status(
     status: int,
     model: str,
     tension_age: float,
+    sensor_word: str = 'ok',
     extra: Sequence[tuple[str, str]] = (),
 ) -> ComponentStatus:
     """One line's ``DiagnosticStatus``: the contract keys (SI strings ``float()`` reads back
     exactly), then ``measured_tension``, ``tension_age`` [s], ``anchor_distance``,
-    ``allowed_uplift``, ``anchor_angle_deg``, ``solver_status``, ``model``, then ``extra``
+    ``allowed_uplift``, ``anchor_angle_deg``, ``solver_status``, ``model``, ``sensor_state``
+    (:func:`catenary_monitor.core.sensor.line_word`), then ``extra``
     (the alarm's acknowledgement keys: :func:`.acknowledge.diagnostic_values`; with the dock
     model, :func:`line_dock_values`)."""
     named = dict(zip(VALUE_FIELDS, values))
@@ -840,6 +948,7 @@ def line_status(
         ('anchor_angle_deg', repr(float(values[9]))),
         ('solver_status', str(int(status))),
         ('model', model),
+        ('sensor_state', sensor_word),
         *extra,
     ]
     return ComponentStatus(
@@ -848,15 +957,52 @@ def line_status(
 
 
 def line_dock_values(latched: bool, dock: Sequence[float]) -> tuple[tuple[str, str], ...]:
-    """A line's dock-model values: ``sensor_state``, ``residual`` (measured - expected, N),
-    ``expected_tension`` (N) and ``residual_sigma`` (normalized residual)."""
+    """A line's dock-model values: ``residual`` (measured - expected, N), ``expected_tension``
+    (N) and ``residual_sigma`` (normalized residual); its word for ``sensor_state`` is
+    :func:`line_dock_word`."""
     flag, residual, expected, sigma = dock
     return (
-        ('sensor_state', dock_live.sensor_state(latched, flag)),
         ('residual', repr(float(residual))),
         ('expected_tension', repr(float(expected))),
         ('residual_sigma', repr(float(sigma))),
     )
+
+
+def line_dock_word(line: LineState) -> str:
+    """The dock model's ``sensor_state`` word of a line (:func:`dock_live.sensor_state`)."""
+    return dock_live.sensor_state(line.state.latches[_INCONSISTENT].active, line.dock[0])
+
+
+def sensor_limits(config: MonitorConfig) -> sensor.LineLimits:
+    """The per-line constants of the sensor decision (MBL, weight, hook height)."""
+    lines = config.lines
+    return sensor.LineLimits(
+        np.array([c.mbl for c in lines]),
+        np.array([c.weight for c in lines]),
+        np.array([c.hook_height for c in lines]),
+    )
+
+
+def forecast_word(config: MonitorConfig, rate: float) -> str:
+    """What the times to uplift follow: ``table`` (a tide table is configured), ``trend``
+    (the tide's trend is known) or ``unknown``."""
+    if config.alarm.constituents:
+        return 'table'
+    return 'trend' if math.isfinite(rate) else 'unknown'
+
+
+def tide_with_sensor(
+    tide: tuple[Level, str], code: int, depth: float, config: Any
+) -> tuple[Level, str]:
+    """The tide's (level, message) with the depth sensor's state: the worse level (stuck and
+    spike WARN, out_of_range ERROR), the sensor's message appended."""
+    if code == sensor.OK:
+        return tide
+    level = Level.ERROR if code == sensor.OUT_OF_RANGE else Level.WARN
+    text = sensor.depth_message(code, depth, config)
+    if tide[0] == Level.OK:
+        return level, text
+    return (tide[0] if RANK[tide[0]] >= RANK[level] else level), f'{tide[1]}; {text}'
 
 
 def dock_component(
@@ -876,9 +1022,13 @@ def tide_component(
     depth: float,
     depth_age: float,
     rate: float = math.nan,
+    sensor_word: str = 'ok',
+    forecast: str = 'unknown',
 ) -> ComponentStatus:
     """The tide's ``DiagnosticStatus``: values ``depth`` [m], ``depth_age`` [s] and ``rate``
-    [m/s], the trend (:mod:`~catenary_monitor.core.tide_trend`; nan while unknown)."""
+    [m/s], the trend (:mod:`~catenary_monitor.core.tide_trend`; nan while unknown), and the
+    depth sensor's ``sensor_state`` (:data:`catenary_monitor.core.sensor.DEPTH_STATES`) and
+    ``tide_forecast``, what the times to uplift follow (:func:`forecast_word`)."""
     return ComponentStatus(
         f'{NODE_NAME}: tide',
         tide[0],
@@ -888,6 +1038,8 @@ def tide_component(
             ('depth', repr(float(depth))),
             ('depth_age', repr(float(depth_age))),
             ('rate', repr(float(rate))),
+            ('sensor_state', sensor_word),
+            ('tide_forecast', forecast),
         ),
     )
 

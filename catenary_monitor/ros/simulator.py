@@ -8,8 +8,10 @@ the tide depth (m) on the depth topic, with sensor-data QoS, then exits by itsel
 The episode (:class:`Scenario`, pure: no rclpy) is the paper's dock (config/floating_dock.yaml):
 
 * tide: semi-diurnal (M2, 12.42 h) compressed into the episode, amplitude 1.0 m around the
-  paper's 20.85 m, at mean level at the storm peak;
+  paper's 20.85 m, rising from low water at the start to high water half-way;
 * load: every chain at the paper's pretension R = 372 kN (table 2) when calm; a storm builds,
+  pauses a little below line 11's uplift while the tide rises (``hold``, ``hold_level``: the
+  rising tide brings the uplift closer, the monitor's time-to-uplift warning), builds again,
   holds and eases. Line 11 reaches the table-3 typhoon load R = 1584.6 kN (hook tension about
   1623 kN at x = 121.06 m), which lifts its anchor; its neighbours 10 and 12 take a little more,
   the lee lines 2-6 a little less;
@@ -102,21 +104,26 @@ class Scenario:
     noise: float = 0.003  # relative noise (std)
     tide_amplitude: float = 1.0  # m
     build: tuple[float, float] = (0.12, 0.45)  # storm build from/to (fraction of duration)
+    hold: tuple[float, float] = (0.25, 0.36)  # the build pauses (the tide rises) from/to
+    hold_level: float = 0.055  # storm intensity during the pause (line 11 about 1 m of tide short)
     ease: tuple[float, float] = (0.60, 0.80)  # storm eases from/to
     seed: int = 11
 
     def storm(self, t: float) -> float:
-        """Storm intensity 0..1 at time ``t``."""
+        """Storm intensity 0..1 at time ``t``: up to ``hold_level`` by ``hold[0]``, kept there
+        to ``hold[1]``, up to 1 by ``build[1]``, eased over ``ease``."""
         u = t / self.duration
-        return _smooth((u - self.build[0]) / (self.build[1] - self.build[0])) * (
-            1.0 - _smooth((u - self.ease[0]) / (self.ease[1] - self.ease[0]))
-        )
+        (b0, b1), (h0, h1) = self.build, self.hold
+        first = self.hold_level * _smooth((u - b0) / (h0 - b0))
+        second = (1.0 - self.hold_level) * _smooth((u - h1) / (b1 - h1))
+        eased = 1.0 - _smooth((u - self.ease[0]) / (self.ease[1] - self.ease[0]))
+        return (first + second) * eased
 
     def depth(self, t: float) -> float:
-        """Tide depth [m]: one compressed M2 cycle, mean level at the storm peak."""
-        peak = 0.5 * (self.build[1] + self.ease[0]) * self.duration
-        phase = 2 * math.pi * (t - peak) / self.duration
-        return MEAN_DEPTH + self.tide_amplitude * math.sin(phase)
+        """Tide depth [m]: one compressed M2 cycle from low water at the start, rising through
+        the storm's build (fastest at the pause) to high water half-way."""
+        phase = 2 * math.pi * t / self.duration
+        return MEAN_DEPTH - self.tide_amplitude * math.cos(phase)
 
     def time_scale(self) -> float:
         """Simulated seconds of tide per wall second."""
@@ -125,7 +132,7 @@ class Scenario:
     def shares(self) -> np.ndarray:
         """Storm share per line: the typhoon increment on line 11, a little on 10 and 12,
         relief on the lee lines 2-6; lines named otherwise get none."""
-        table = {'line_11': 1.0, 'line_10': 0.033, 'line_12': 0.028}
+        table = {'line_11': 1.0, 'line_10': 0.02, 'line_12': 0.02}
         for i in range(2, 7):
             table[f'line_{i:02d}'] = -0.05
         return np.array([table.get(line.name, 0.0) for line in self.config.lines])
