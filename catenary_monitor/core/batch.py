@@ -637,8 +637,12 @@ def _line_steps(line: LineState, tt: np.ndarray, window: Window) -> _Steps:
 
 def _pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
     """``column[idx]`` where ``idx >= 0``, else ``before`` (the core's value before the window)."""
-    # ``before`` appended last: index -1 (``_newest``'s "none yet") picks it, one gather
-    return np.append(column, before)[idx]
+    if not len(column):
+        return np.full(len(idx), before)
+    # ``before`` appended last: index -1 (``_newest``'s "none yet") picks it, one gather; the
+    # dtype as ``np.where`` would give it (a Python scalar does not widen the column)
+    picked = np.append(column, before)[idx]
+    return picked.astype(np.result_type(column, before), copy=False)
 
 
 def _solve_line(

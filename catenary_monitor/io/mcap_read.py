@@ -1189,6 +1189,23 @@ def _extract_float64(
     return times, values, topic_lut[channel_ids], bad
 
 
+def _split_topics(
+    t: np.ndarray, v: np.ndarray, topic_of_row: np.ndarray, names: list[str]
+) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Columns per topic (file order kept within each): one stable sort by topic and slices,
+    not one mask pass per topic."""
+    order = np.argsort(topic_of_row, kind='stable')
+    counts = np.bincount(topic_of_row)
+    ts, vs = t[order], v[order]
+    out: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    start = 0
+    for topic, count in enumerate(counts.tolist()):
+        if count:
+            out[names[topic]] = (ts[start : start + count], vs[start : start + count])
+            start += count
+    return out
+
+
 def _unique(items: Iterable[str]) -> list[str]:
     if isinstance(items, str):
         items = [items]
@@ -1305,9 +1322,7 @@ def iter_file_blocks(
             if len(t) and np.all(topic_of_row == first):
                 columns[names[first]] = (t, v)
             else:
-                for topic in np.unique(topic_of_row).tolist():
-                    mask = topic_of_row == topic
-                    columns[names[topic]] = (t[mask], v[mask])
+                columns.update(_split_topics(t, v, topic_of_row, names))
         yield FileBlocks(columns, raw, scanner.position, index)
     scanner.finish()
 
