@@ -27,7 +27,7 @@ from typing import Any, Callable, Iterator, Optional, Sequence
 
 import numpy as np
 
-from catenary_monitor.core.batch import ReplayResult, Window, run_log
+from catenary_monitor.core.batch import ReplayResult, Window, run_log, slice_window
 from catenary_monitor.core.config import MonitorConfig, resolve_topic
 from catenary_monitor.core.monitor import (
     EVENTS_TOPIC,
@@ -197,15 +197,7 @@ def _parts(
     cuts = [int(t) for t in window.ticks[ticks::ticks]]
     lo: Optional[int] = None
     for hi in [*cuts, None]:
-
-        def cut(times: np.ndarray) -> slice:
-            a = 0 if lo is None else int(np.searchsorted(times, lo, 'left'))
-            b = len(times) if hi is None else int(np.searchsorted(times, hi, 'left'))
-            return slice(a, b)
-
-        tensions = [(t[cut(t)], v[cut(t)]) for t, v in window.tensions]
-        dt, dv = window.depth
-        part = Window(tensions, (dt[cut(dt)], dv[cut(dt)]), window.ticks[cut(window.ticks)])
+        part = slice_window(window, lo, hi)
         inside = [e for e in events if (lo is None or e.stamp_ns >= lo)]
         yield part, [e for e in inside if hi is None or e.stamp_ns < hi]
         lo = hi

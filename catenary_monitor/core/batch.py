@@ -77,6 +77,7 @@ __all__ = [
     'KIND_TICK',
     'Column',
     'Window',
+    'slice_window',
     'LineResult',
     'WindowResult',
     'ReplayResult',
@@ -1100,7 +1101,7 @@ def worst(result: LineResult) -> dict[str, Optional[dict[str, float]]]:
 # --- a whole log ---------------------------------------------------------------------------------
 
 
-def _slice(window: Window, lo: Optional[int], hi: Optional[int]) -> Window:
+def slice_window(window: Window, lo: Optional[int], hi: Optional[int]) -> Window:
     """The events of ``window`` with ``lo <= t < hi`` (None: unbounded)."""
 
     def cut(times: np.ndarray) -> slice:
@@ -1155,7 +1156,7 @@ def run_log(
     lo: Optional[int] = None
     for event in [*events, None]:
         hi = None if event is None else event.stamp_ns
-        pieces.append(advance(core, _slice(window, lo, hi), snapshots))
+        pieces.append(advance(core, slice_window(window, lo, hi), snapshots))
         if isinstance(event, Start):
             core = MonitorCore(
                 core.config, event.stamp_ns, _ids(core), core.depth_id, core.logger_id

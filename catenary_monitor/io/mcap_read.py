@@ -302,24 +302,9 @@ def read_float64_topics(
 
         scanner = _Scanner(path, accept, report)
         for block in scanner.blocks():
-            t, v, topic_of_row, bad = _extract_float64(block, scanner.topic_lut)
-            if bad:
-                scanner.skip(
-                    block.file_offset,
-                    'bad_payload',
-                    f'{bad} message(s) not a 12-byte CDR Float64',
-                    bad,
-                )
-            scanner.file_report.messages += len(t)
-            first = int(topic_of_row[0]) if len(t) else -1
-            if len(t) and np.all(topic_of_row == first):
-                times[scanner.topic_names[first]].append(t)
-                values[scanner.topic_names[first]].append(v)
-                continue
-            for topic in np.unique(topic_of_row).tolist():
-                mask = topic_of_row == topic
-                times[scanner.topic_names[topic]].append(t[mask])
-                values[scanner.topic_names[topic]].append(v[mask])
+            for topic, (t, v) in _block_columns(scanner, block).items():
+                times[topic].append(t)
+                values[topic].append(v)
         scanner.finish()
 
     columns: Columns = {}
@@ -1307,24 +1292,25 @@ def iter_file_blocks(
                     block.channels[keep],
                     block.file_offset,
                 )
-        columns: dict[str, tuple[np.ndarray, np.ndarray]] = {}
-        if len(block.offsets):
-            t, v, topic_of_row, bad = _extract_float64(block, scanner.topic_lut)
-            if bad:
-                scanner.skip(
-                    block.file_offset,
-                    'bad_payload',
-                    f'{bad} message(s) not a 12-byte CDR Float64',
-                    bad,
-                )
-            scanner.file_report.messages += len(t)
-            first = int(topic_of_row[0]) if len(t) else -1
-            if len(t) and np.all(topic_of_row == first):
-                columns[names[first]] = (t, v)
-            else:
-                columns.update(_split_topics(t, v, topic_of_row, names))
+        columns = _block_columns(scanner, block) if len(block.offsets) else {}
         yield FileBlocks(columns, raw, scanner.position, index)
     scanner.finish()
+
+
+def _block_columns(scanner: '_Scanner', block: '_Block') -> Columns:
+    """A block's Float64 messages as (log time ns, value) per topic (file order within each);
+    payloads that are not a CDR Float64 are reported as damage and counted out."""
+    t, v, topic_of_row, bad = _extract_float64(block, scanner.topic_lut)
+    if bad:
+        scanner.skip(
+            block.file_offset, 'bad_payload', f'{bad} message(s) not a 12-byte CDR Float64', bad
+        )
+    scanner.file_report.messages += len(t)
+    names = scanner.topic_names
+    first = int(topic_of_row[0]) if len(t) else -1
+    if len(t) and np.all(topic_of_row == first):
+        return {names[first]: (t, v)}
+    return _split_topics(t, v, topic_of_row, names)
 
 
 def _decode_file(
