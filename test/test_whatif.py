@@ -173,3 +173,21 @@ def test_lines_not_given_hang_as_installed():
     table = run('--params-file', 'config/floating_dock.yaml', '--depth', '20.85',
                 '--tension', 'line_11=1.6e6')
     assert table.returncode == 0 and 'hanging' in table.stdout and 'given' in table.stdout
+
+
+def test_a_lifted_anchor_is_said_once():
+    """While the uplift ERROR says the anchor is lifted, the time-to-uplift warning adds no
+    second sentence; lifted within the allowed uplift, it says so instead of '0 min'."""
+    import dataclasses
+
+    config = dock_config(3)
+    tensions = {'line_01': 6e5, 'line_02': 3.9e5, 'line_03': 4.3e5}
+    lifted = catenary_monitor.whatif(config, 20.85, tensions, tide_rate=8.6e-5).lines[0]
+    assert lifted.level == 'ERROR' and lifted.values['time_to_uplift'] == 0.0
+    assert 'anchor uplift' in lifted.message and 'time to uplift' not in lifted.message
+    allowed = dataclasses.replace(config.lines[0], allowed_uplift=5e5)
+    config = dataclasses.replace(config, lines=(allowed, *config.lines[1:]))
+    within = catenary_monitor.whatif(config, 20.85, tensions, tide_rate=8.6e-5).lines[0]
+    assert within.level == 'WARN', within.message
+    assert 'anchor off the seabed (uplift' in within.message
+    assert 'within the allowed 500.0 kN' in within.message

@@ -366,7 +366,8 @@ class LineAlarm:
             elif up and cond == 'sensor_warn':
                 parts.append(_sensor_text(x, cond, hold_w))
             elif up and cond == 'time_to_uplift':
-                parts.append(self._uplift_time_text(x, hold_w))
+                if not (active[0] and not x.time_to_uplift > 0.0):  # the ERROR says it
+                    parts.append(self._uplift_time_text(x, hold_w))
             elif up and cond == 'uplift_possible':
                 parts.append(self._uplift_possible_text(x, hold_w))
             elif up and cond == 'drag_margin':
@@ -396,7 +397,10 @@ class LineAlarm:
         value = x.time_to_uplift
         if value < low:
             if not value > 0.0:
-                return 'anchor lifted: time to uplift 0 min'
+                return (
+                    f'anchor off the seabed (uplift {_fmt(x.uplift_force, 1e3)} kN, within the '
+                    f'allowed {_fmt(self.allowed_uplift, 1e3)} kN)'
+                )
             rate = x.tide_rate * 3600.0
             if x.tide_forecast == 1.0:
                 return f'anchor uplift in {_duration(value)} on the tide table\'s forecast'
