@@ -66,6 +66,8 @@ def holding(
         )
     )
     w, ea, length, a_hold, a_weight, mu, t, h, r, s, v = arrays
+    if np.isnan(length).all() and np.isnan(a_hold).all():  # nothing configured: all NaN
+        return {key: np.full(t.shape, np.nan) for key in FIELDS}
     with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
         solved = ~np.isnan(r)
         lifted = v > 0.0
@@ -75,11 +77,15 @@ def holding(
         anchor = np.where(lifted, np.where(np.isnan(a_weight), 0.0, sinker), a_hold)
         chain = np.where(np.isnan(mu) | np.isnan(grounded), 0.0, w * mu * grounded)
         capacity = np.where(solved & ~np.isnan(a_hold), anchor + chain, np.nan)
-        implied = fixed_length.span_from_tension(w, h, length, t, ea)
-    implied = np.where(solved & ~np.isnan(length), implied, np.nan)
+        implied = np.full(t.shape, np.nan)
+        need = solved & ~np.isnan(length)
+        if need.any():  # only where a chain length is given (the span solve is the cost)
+            implied[need] = fixed_length.span_from_tension(
+                w[need], h[need], length[need], t[need], ea[need]
+            )
     return {
         'grounded_length': grounded,
         'holding_capacity': capacity,
         'drag_margin': capacity - r,
-        'implied_anchor_distance': np.asarray(implied, dtype=float).reshape(t.shape),
+        'implied_anchor_distance': implied,
     }
