@@ -210,6 +210,9 @@ def live_run(tmp_path_factory: Any) -> Any:
             ".map(e => e.dataset.monitorStatus + ':' + e.dataset.level)"
         )
         wait_for('line_11 ERROR', lambda: tiles(driver)['line_11'] == 'ERROR', 90.0)
+        seen['sensor_states'] = driver.execute_script(
+            "return [...document.querySelectorAll('.tile')].map(e => e.dataset.sensorState)"
+        )
         seen['row_before'] = wait_for(
             'line_11 alarm row unacknowledged',
             lambda: rows(driver).get('line_11') == 'unacknowledged' and rows(driver),
@@ -256,6 +259,8 @@ def test_live_page_storm_acknowledge_and_monitor_loss(live_run: Any) -> None:
     seen = live_run
     assert len(seen['tiles_at_load']) == 12
     assert 'logger:OK' in seen['monitor_statuses']  # the monitor's own health is on the page
+    # the storm is no sensor fault (unchecked: the dock model has not judged the line)
+    assert seen['sensor_states'] and set(seen['sensor_states']) <= {'ok', 'unchecked'}
     assert seen['row_before']['line_11'] == 'unacknowledged'
     assert seen['beeps'] >= 1
     assert seen['row_after']['line_11'] == 'acknowledged'

@@ -141,3 +141,11 @@ def test_frame_shows_the_monitors_own_statuses():
         ('logger', 'OK'), ('clock', 'ERROR'), ('intake', 'WARN')
     ]
     assert frame['monitor'][1]['message'].startswith('ROS clock stopped')
+
+
+def test_tiles_carry_the_sensor_state():
+    """The core's sensor_state word reaches the tile (ok when the monitor gives none)."""
+    kw = dict(outputs={}, sample_t={}, depth=None, history=[], silence_limit_s=3.0)
+    statuses = {'a': st('WARN', 'normal', sensor_state='stuck'), 'b': st('OK', 'normal')}
+    frame = build_frame(10.0, ['a', 'b'], 9.5, statuses, **kw)
+    assert [line['sensor_state'] for line in frame['lines']] == ['stuck', 'ok']

@@ -352,6 +352,7 @@ def _line_view(
             alarm_state=v.get('alarm_state', 'normal'),
             acknowledged=v.get('acknowledged', 'true') == 'true',
             alarm_condition=v.get('alarm_condition', ''),
+            sensor_state=v.get('sensor_state', 'ok'),  # the core's word: ok, stuck, spike, ...
         )
         for key in (
             'top_tension',

@@ -197,6 +197,11 @@ function renderTile(view, lost, frame) {
   foot.innerHTML = '';
   foot.appendChild(el('span', { class: old ? 'old' : '' }, `newest sample ${ago(view.age_s)} ago`));
   if (view.alarm_state && view.alarm_state !== 'normal') foot.append(` · alarm ${view.alarm_state}`);
+  // The load cell's sanity (stuck, spike, over_mbl, slack, suspected_parted; the dock model's
+  // inconsistent, suspect): check the sensor. 'unchecked' (not judged by the dock model) is quiet.
+  const sensor = view.sensor_state || 'ok';
+  t.dataset.sensorState = sensor;
+  if (sensor !== 'ok' && sensor !== 'unchecked') foot.appendChild(el('span', { class: 'old' }, ` · sensor ${sensor.replace('_', ' ')}`));
 }
 
 // ---------------------------------------------------------------- plan
