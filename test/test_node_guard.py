@@ -103,10 +103,11 @@ def _dropped(status):
 
 @pytest.mark.parametrize('executor', ['single', 'events'])
 def test_an_overflowing_intake_is_counted_and_reported(client, tmp_path, monkeypatch, executor):
-    """12 lines at 400 Hz into the node: it cannot keep up, and says so."""
+    """12 lines at 400 Hz into the node: it cannot keep up, and says so; with the load cells'
+    rate configured, the samples it never saw are counted under either executor."""
     monkeypatch.setenv('CATENARY_MONITOR_EXECUTOR', executor)
     lines = _lines(12)
-    params = write_params(tmp_path / 'params.yaml', lines)
+    params = write_params(tmp_path / 'params.yaml', lines, tension_sample_rate=400.0)
     t0 = time.monotonic()  # the client keeps what earlier tests' monitors published
     proc = start_monitor(params, tmp_path / 'log')
     flood = _flood(list(lines), 400.0, 60.0)
@@ -117,6 +118,29 @@ def test_an_overflowing_intake_is_counted_and_reported(client, tmp_path, monkeyp
             assert 'dropped' in s['message'], s
         else:
             assert 'cannot keep up' in s['message'] or _dropped(s) > 0, s
+        print('intake:', s['level'], s['message'], s['values'].get('messages_missing'))
+    finally:
+        flood.kill()
+        flood.wait(10)
+        assert stop(proc) == 0
+
+
+@pytest.mark.parametrize('executor', ['single', 'events'])
+def test_samples_missing_against_the_sample_rate_are_counted(
+    client, tmp_path, monkeypatch, executor
+):
+    """Load cells configured at 40 Hz that deliver 20 Hz: half the samples never reach the
+    node (whatever the executor can see), counted per line and reported ERROR."""
+    monkeypatch.setenv('CATENARY_MONITOR_EXECUTOR', executor)
+    params = write_params(tmp_path / 'params.yaml', _lines(2), tension_sample_rate=40.0)
+    t0 = time.monotonic()
+    proc = start_monitor(params, tmp_path / 'log')
+    flood = _flood(['l00', 'l01'], 20.0, 90.0)
+    try:
+        s = client.wait_status(INTAKE, 80.0, since=t0, check=lambda s: s['level'] == ERROR)
+        assert 'missing' in s['message'], s
+        assert int(s['values']['l00.messages_missing']) > 0, s
+        assert int(s['values']['messages_dropped']) >= int(s['values']['messages_missing']), s
     finally:
         flood.kill()
         flood.wait(10)

@@ -523,6 +523,23 @@ PARAMETERS: tuple[ParamSpec, ...] = (
                 0.0,
                 12000.0,
             ),
+            (
+                'tension_sample_rate',
+                0.0,
+                'Intake: each load cell publishes at this rate; fewer samples are counted '
+                'missing (0: not checked)',
+                'Hz',
+                0.0,
+                100000.0,
+            ),
+            (
+                'depth_sample_rate',
+                0.0,
+                'Intake: the depth gauge publishes at this rate (0: not checked)',
+                'Hz',
+                0.0,
+                100000.0,
+            ),
         )
     ),
     ParamSpec(
@@ -913,6 +930,8 @@ class AlarmConfig:
     parted_window: float = _default('parted_window')
     depth_min: float = _default('depth_min')
     depth_max: float = _default('depth_max')
+    tension_sample_rate: float = _default('tension_sample_rate')
+    depth_sample_rate: float = _default('depth_sample_rate')
     tide_table: str = _default('tide_table')
     tide_table_epoch: float = _default('tide_table_epoch')
     tide_forecast_horizon: float = _default('tide_forecast_horizon')

@@ -20,6 +20,7 @@ __all__ = [
     'clock_stopped',
     'clock_status',
     'intake_status',
+    'missing_samples',
 ]
 
 
@@ -89,6 +90,11 @@ DROPPED_ERROR_SHARE = 0.05
 BUSY_WARN_SHARE = 0.6
 BUSY_CLEAR_SHARE = 0.35
 BUSY_WINDOW = 5.0
+#: Intake with a configured sample rate: a shortfall counts as missing only beyond this many
+#: seconds of samples, or :data:`MISSING_TOLERANCE_SHARE` of those expected if more (the
+#: boundary of a report period and the sensors' clocks are not exact).
+MISSING_TOLERANCE_TIME = 0.5
+MISSING_TOLERANCE_SHARE = 0.01
 
 
 def clock_stopped(frozen_for: float) -> bool:
@@ -108,21 +114,51 @@ def clock_status(stopped_for: Optional[float]) -> tuple[Level, str]:
     )
 
 
+def missing_samples(rate: float, expected_time: float, got: int) -> int:
+    """Samples missing from an input that publishes at ``rate`` [Hz] (0: unknown) over
+    ``expected_time`` [s] in which ``got`` samples arrived or were counted dropped: the
+    shortfall, once it exceeds the tolerance (:data:`MISSING_TOLERANCE_TIME`,
+    :data:`MISSING_TOLERANCE_SHARE`), else 0."""
+    if rate <= 0.0 or expected_time <= 0.0:
+        return 0
+    expected = rate * expected_time
+    tolerance = max(rate * MISSING_TOLERANCE_TIME, MISSING_TOLERANCE_SHARE * expected)
+    short = expected - got
+    return int(round(short)) if short > tolerance else 0
+
+
 def intake_status(
-    received: int, dropped: int, busy: float, window: float, was_ok: bool = True
+    received: int,
+    dropped: int,
+    busy: float,
+    window: float,
+    was_ok: bool = True,
+    missing: int = 0,
 ) -> tuple[Level, str]:
     """Level and message of the sample intake over the last ``window`` [s].
 
     ``received`` / ``dropped``: tension and depth samples handled / lost before the node
-    handled them (publisher sequence gaps, QoS message-lost events); ``busy``: share of wall
-    time spent in callbacks over the last :data:`BUSY_WINDOW` (NaN: unknown). ERROR when at least
-    :data:`DROPPED_ERROR_SHARE` of the samples were dropped, WARN on any drop or when the node
-    is busy :data:`BUSY_WARN_SHARE` of the time (:data:`BUSY_CLEAR_SHARE` while the status
-    is not OK, ``was_ok`` False), else OK.
+    handled them (publisher sequence gaps, QoS message-lost events); ``missing``: samples not
+    seen against the configured sample rates (:func:`missing_samples`), counted with the
+    dropped ones; ``busy``: share of wall time spent in callbacks over the last
+    :data:`BUSY_WINDOW` (NaN: unknown). ERROR when at least :data:`DROPPED_ERROR_SHARE` of the
+    samples were dropped, WARN on any drop or when the node is busy :data:`BUSY_WARN_SHARE` of
+    the time (:data:`BUSY_CLEAR_SHARE` while the status is not OK, ``was_ok`` False), else OK.
     """
+    counted = dropped
+    dropped += missing
     total = received + dropped
     share = dropped / total if total else 0.0
     busy_text = '' if busy != busy else f'; busy {100.0 * busy:.0f} % of the time'
+    idle = busy != busy or busy < BUSY_CLEAR_SHARE
+    if missing and not counted and idle and share >= DROPPED_ERROR_SHARE:
+        return Level.ERROR, (
+            f'{100.0 * share:.0f} % of tension and depth samples missing in the last '
+            f'{window:g} s ({missing} of {total} expected at the sample rates): a sensor '
+            f'slower than its sample rate, or samples lost before the node{busy_text}'
+        )
+    if missing:
+        busy_text = f'; {missing} of them missing against the sample rates{busy_text}'
     if dropped and share >= DROPPED_ERROR_SHARE:
         return Level.ERROR, (
             f'node cannot keep up: {100.0 * share:.0f} % of tension and depth samples '

@@ -65,6 +65,7 @@ from catenary_monitor.core.health import (
     INTAKE_WINDOW,
     clock_status,
     intake_status,
+    missing_samples,
     logger_status,
     parameters_status,
     tide_status,
@@ -401,6 +402,10 @@ class MonitorCore:
         self.intake: tuple[Level, str] = (Level.OK, 'no sample counts yet')
         self.intake_entered = start
         self.intake_counts: list[Intake] = []  # the Intake events of the last INTAKE_WINDOW
+        # Per Intake event of the window and input: its period is checked against the input's
+        # sample rate (the input was heard in an earlier event, and in this one).
+        self.intake_checked: list[tuple[bool, ...]] = []
+        self.intake_heard: list[bool] = []
         self.intake_seen = False
 
     # ------------------------------------------------------------------ events
@@ -486,26 +491,60 @@ class MonitorCore:
     def _on_intake(self, ev: Intake) -> Step:
         """Sample counts: the intake status over the last :data:`INTAKE_WINDOW` of them."""
         self.intake_seen = True
+        n = len(ev.received)
+        if len(self.intake_heard) != n:
+            self.intake_heard = [False] * n
+        self.intake_checked.append(
+            tuple(h and r > 0 for h, r in zip(self.intake_heard, ev.received))
+        )
+        self.intake_heard = [h or r > 0 for h, r in zip(self.intake_heard, ev.received)]
         counts = self.intake_counts + [ev]
         while counts and ev.stamp_ns - counts[0].stamp_ns >= int(INTAKE_WINDOW * 1e9):
             counts.pop(0)
         self.intake_counts = counts
+        self.intake_checked = self.intake_checked[len(self.intake_checked) - len(counts):]
         received = sum(sum(c.received) for c in counts)
         dropped = sum(sum(c.dropped) for c in counts)
         recent = [c for c in counts if ev.stamp_ns - c.stamp_ns < int(BUSY_WINDOW * 1e9)]
         period = sum(c.period for c in recent)
         busy = sum(c.busy for c in recent) / period if period > 0 else _NAN
         new = intake_status(
-            received, dropped, busy, INTAKE_WINDOW, self.intake[0] == Level.OK
+            received,
+            dropped,
+            busy,
+            INTAKE_WINDOW,
+            self.intake[0] == Level.OK,
+            sum(self.intake_missing()),
         )
         changes = self._set_component('intake', new, ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'intake', [], changes)
 
     def intake_dropped(self) -> list[int]:
-        """Samples dropped per line, then the depth, in the last :data:`INTAKE_WINDOW`."""
+        """Samples dropped per line, then the depth, in the last :data:`INTAKE_WINDOW`: those
+        counted and those missing against the sample rates."""
         n = len(self.lines) + 1
-        return [sum(c.dropped[k] for c in self.intake_counts if len(c.dropped) == n)
-                for k in range(n)]
+        counted = [sum(c.dropped[k] for c in self.intake_counts if len(c.dropped) == n)
+                   for k in range(n)]
+        return [c + m for c, m in zip(counted, self.intake_missing())]
+
+    def intake_missing(self) -> list[int]:
+        """Samples missing per line, then the depth, in the last :data:`INTAKE_WINDOW`: the
+        shortfall against ``tension_sample_rate`` / ``depth_sample_rate`` over the report
+        periods in which the input was heard (not the first: it began before the first
+        sample), beyond the tolerance of :func:`~catenary_monitor.core.health.missing_samples`."""
+        n = len(self.lines) + 1
+        a = self.config.alarm
+        rates = [a.tension_sample_rate] * (n - 1) + [a.depth_sample_rate]
+        out = []
+        for k in range(n):
+            pairs = [
+                (c, ok[k]) for c, ok in zip(self.intake_counts, self.intake_checked)
+                if len(c.received) == n
+            ]
+            span = sum(c.period for c, ok in pairs if ok)
+            got = sum(c.received[k] + c.dropped[k] for c, ok in pairs if ok)
+            out.append(missing_samples(rates[k], span, got))
+        return out
 
     def _on_reconfigure(self, ev: Reconfigure) -> Step:
         """Take the new configuration; flag what changed (WARN on the ``parameters`` status
@@ -828,6 +867,12 @@ class MonitorCore:
             values = (('messages_dropped', str(sum(dropped))),) + tuple(
                 (f'{name}.messages_dropped', str(d)) for name, d in zip(names, dropped)
             )
+            a = self.config.alarm
+            if a.tension_sample_rate > 0.0 or a.depth_sample_rate > 0.0:
+                missing = self.intake_missing()
+                values += (('messages_missing', str(sum(missing))),) + tuple(
+                    (f'{name}.messages_missing', str(m)) for name, m in zip(names, missing)
+                )
             out.append(ComponentStatus(f'{NODE_NAME}: intake', *self.intake, NODE_NAME, values))
         return out
 

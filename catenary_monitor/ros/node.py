@@ -110,6 +110,8 @@ _SAMPLES = QoSProfile(
 WATCHDOG_PERIOD = 1.0
 #: The longest time without an Intake event [s] (while nothing is lost, only these are sent).
 INTAKE_HEARTBEAT = 60.0
+#: The same with a sample rate configured: the counts are checked against it this often [s].
+INTAKE_RATE_HEARTBEAT = 10.0
 
 
 def _events_executor_wanted() -> bool:
@@ -333,6 +335,9 @@ class CatenaryMonitor(Node):
         self._busy_tick = 0.0  # the same since the last watchdog period
         self._intake_wall = time.monotonic()
         self._intake_sent = False
+        a = self.config.alarm
+        rated = a.tension_sample_rate > 0.0 or a.depth_sample_rate > 0.0
+        self._intake_heartbeat = INTAKE_RATE_HEARTBEAT if rated else INTAKE_HEARTBEAT
         # rclpy's EventsExecutor (7.1) cannot call a callback taking MessageInfo: the
         # publisher's sequence numbers (gaps = samples lost) only with the other executor.
         self._with_info = not (_events_executor_wanted() and _has_events_executor())
@@ -475,14 +480,15 @@ class CatenaryMonitor(Node):
     def _report_intake(self, wall: float, force: bool = False) -> None:
         """An Intake event (samples received and dropped, callback time, since the last one)
         when something is to be said: a drop, a busy second, the intake not OK, or
-        :data:`INTAKE_HEARTBEAT` without one (few events: replay steps each one)."""
+        :data:`INTAKE_HEARTBEAT` (:data:`INTAKE_RATE_HEARTBEAT` with a sample rate to check
+        against) without one (few events: replay steps each one)."""
         busy_share = self._busy_tick / WATCHDOG_PERIOD
         self._busy_tick = 0.0
         quiet = (
             not any(self._dropped)
             and busy_share < 0.5
             and self.core.intake[0] == Level.OK
-            and wall - self._intake_wall < INTAKE_HEARTBEAT
+            and wall - self._intake_wall < self._intake_heartbeat
         )
         if quiet and self._intake_sent and not force:
             return

@@ -1,0 +1,77 @@
+"""The intake status against configured sample rates (core.monitor, core.health): samples
+that never reached the node, counted whatever the executor can see."""
+from __future__ import annotations
+
+from replay_data import T0_NS, dock_config
+
+from catenary_monitor.core.health import missing_samples
+from catenary_monitor.core.monitor import Intake, Level, MonitorCore
+
+
+def _at(s: float) -> int:
+    return T0_NS + int(s * 1e9)
+
+
+def _status(core: MonitorCore):
+    (status,) = [s for s in core.guard_components(0.0) if s.name.endswith('intake')]
+    return status
+
+
+def test_missing_samples_counts_a_shortfall_beyond_the_tolerance():
+    assert missing_samples(0.0, 60.0, 0) == 0  # no rate: not checked
+    assert missing_samples(400.0, 60.0, 24000) == 0
+    assert missing_samples(400.0, 60.0, 23800) == 0  # 200 short: within 1 % (240)
+    assert missing_samples(400.0, 60.0, 20880) == 3120  # 13 % short
+    assert missing_samples(20.0, 1.0, 9) == 11  # 0.5 s of samples is the floor
+    assert missing_samples(20.0, 1.0, 11) == 0
+
+
+def test_a_shortfall_against_the_sample_rate_is_counted_per_line():
+    """2 lines at a configured 400 Hz: line 1 delivers 87 %; the first report (which began
+    before the first sample) is not checked; the depth has no rate and is not checked."""
+    core = MonitorCore(dock_config(2, tension_sample_rate=400.0), T0_NS)
+    core.step(Intake(_at(1.0), (120, 90, 1), (0, 0, 0), 0.01, 1.0))  # first: not checked
+    assert core.intake[0] == Level.OK
+    core.step(Intake(_at(11.0), (4000, 3480, 10), (0, 0, 0), 0.5, 10.0))
+    status = _status(core)
+    values = dict(status.values)
+    assert values['line_01.messages_missing'] == '0'
+    assert values['line_02.messages_missing'] == '520'
+    assert values['depth.messages_missing'] == '0'
+    assert values['messages_missing'] == '520' and values['messages_dropped'] == '520'
+    assert status.level == Level.ERROR, status  # 520 of 8130: 6.4 %, the node idle
+    assert 'missing in the last 60 s (520 of' in status.message, status.message
+    assert 'a sensor slower than its sample rate, or samples lost' in status.message
+
+
+def test_missing_and_counted_drops_add_without_counting_twice():
+    """A sequence gap counted as dropped is not missing again."""
+    core = MonitorCore(dock_config(1, tension_sample_rate=100.0), T0_NS)
+    core.step(Intake(_at(1.0), (100, 1), (0, 0), 0.01, 1.0))
+    core.step(Intake(_at(11.0), (950, 10), (50, 0), 9.0, 10.0))  # 1000 expected: all there
+    values = dict(_status(core).values)
+    assert values['messages_missing'] == '0' and values['messages_dropped'] == '50'
+    core.step(Intake(_at(21.0), (800, 10), (50, 0), 9.5, 10.0))  # 150 short, 50 counted
+    status = _status(core)
+    values = dict(status.values)
+    assert values['messages_missing'] == '150' and values['messages_dropped'] == '250'
+    assert status.level == Level.ERROR and 'node cannot keep up' in status.message
+    assert '150 of them missing against the sample rates' in status.message
+
+
+def test_a_silent_input_is_left_to_staleness():
+    """A line that sends nothing in a report period is stale, not 'missing' samples."""
+    core = MonitorCore(dock_config(1, tension_sample_rate=20.0), T0_NS)
+    core.step(Intake(_at(1.0), (20, 1), (0, 0), 0.01, 1.0))
+    core.step(Intake(_at(11.0), (0, 10), (0, 0), 0.01, 10.0))
+    values = dict(_status(core).values)
+    assert values['messages_missing'] == '0' and core.intake[0] == Level.OK
+
+
+def test_without_rates_the_values_are_as_before():
+    core = MonitorCore(dock_config(1), T0_NS)
+    core.step(Intake(_at(1.0), (1, 1), (0, 0), 0.01, 1.0))
+    core.step(Intake(_at(11.0), (2, 10), (0, 0), 0.01, 10.0))
+    keys = [k for k, _ in _status(core).values]
+    assert keys == ['messages_dropped', 'line_01.messages_dropped', 'depth.messages_dropped']
+    assert core.intake[0] == Level.OK
