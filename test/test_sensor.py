@@ -150,6 +150,25 @@ def test_spike():
     assert_raised_and_cleared(steps, 'spike', 'WARN', 'spike')
 
 
+def test_samples_delivered_in_a_bunch_are_no_spike():
+    """A storm's normal 16 kN step between two 20 Hz readings that arrived 1 ms apart (DDS
+    delivered them together): no spike with the default stamp_jitter; the rule without it
+    would call it one. A real jump (1 MN) is still a spike."""
+    a = AlarmConfig()
+    rate = a.tension_rate_max * MBL
+    mem = sensor.sample(sensor.Memory(), 10.0, 1.2e6, a.tension_resolution, rate, a.stamp_jitter)
+    bunched = sensor.sample(mem, 10.001, 1.216e6, a.tension_resolution, rate, a.stamp_jitter)
+    assert bunched.spiked == -math.inf
+    assert sensor.sample(mem, 10.001, 1.216e6, a.tension_resolution, rate, 0.0).spiked == 10.001
+    jump = sensor.sample(mem, 10.05, 2.2e6, a.tension_resolution, rate, a.stamp_jitter)
+    assert jump.spiked == 10.05
+    _, sp, _ = sensor.samples(
+        mem, np.array([10.001, 10.05]), np.array([1.216e6, 2.216e6]),
+        a.tension_resolution, rate, a.stamp_jitter,
+    )
+    assert sp.tolist() == [-math.inf, 10.05]
+
+
 def test_over_mbl():
     t, tensions, depth_t, depth = scene(4)
     tensions[0][:] = plateau(t, tensions[0], 1.05 * MBL)

@@ -61,7 +61,7 @@ def child_env(domain_base: int = 1) -> dict[str, str]:
 
 def _relay(
     proc: subprocess.Popen,
-    t0: float,
+    origin: list[float],
     colour: bool,
     events: list,
     ready: threading.Event,
@@ -69,8 +69,9 @@ def _relay(
 ) -> None:
     """Print the monitor's alarm transitions as they arrive; keep everything it says.
 
-    The lines and the tide start blind (STALE); their first STALE -> OK, when data arrives, is
-    shown as one line for all of them.
+    Times are the monitor's log stamps in s since ``origin[0]`` (wall time the simulator
+    started, as on the chart). The lines and the tide start blind (STALE); their first
+    STALE -> OK, when data arrives, is shown as one line for all of them.
     """
     assert proc.stdout is not None
     seen: set[str] = set()
@@ -90,7 +91,7 @@ def _relay(
         m = _ALARM.search(line)
         if m:
             stamp, name, old, new, text = m.groups()
-            t = time.time() - t0
+            t = float(stamp) - origin[0]
             events.append((t, name, old, new, text))
             first = name not in seen
             seen.add(name)
@@ -178,11 +179,12 @@ def run_demo(
         env=env,
     )
     t0 = time.time()
+    origin = [t0]  # becomes the simulator's start: the printed times and the chart's
     events: list = []
     transcript: list = []
     ready = threading.Event()
     relay = threading.Thread(
-        target=_relay, args=(monitor, t0, colour, events, ready, transcript), daemon=True
+        target=_relay, args=(monitor, origin, colour, events, ready, transcript), daemon=True
     )
     relay.start()
     sim: Optional[subprocess.Popen] = None
@@ -200,7 +202,11 @@ def run_demo(
                 print(f'  the console did not start ({url}); the demo goes on without it')
             else:
                 print(f'  console: {url}  (open it in a browser on this machine)')
-        print('  monitor running; starting the dock simulator (alarm transitions follow)\n')
+        print(
+            '  monitor running; starting the dock simulator (alarm transitions follow, t in s '
+            'since the simulator started, as on the chart)\n'
+        )
+        origin[0] = time.time()
         sim = subprocess.Popen(
             [
                 sys.executable,
@@ -250,7 +256,7 @@ def run_demo(
     chart_file = out / 'demo.png'
     chart: Optional[Path] = chart_file  # None if it could not be drawn
     try:
-        plot_episode(files, chart_file, params)
+        plot_episode(files, chart_file, params, int(origin[0] * 1e9))
     except Exception as exc:  # noqa: BLE001 - the log is the product; the chart is a bonus
         print(f'catenary_monitor demo: could not draw the chart: {exc}', file=sys.stderr)
         chart = None
@@ -316,9 +322,12 @@ def _mark_uplift_warning(
         )
 
 
-def plot_episode(files: list[Path], png: Path, params: str) -> Path:
+def plot_episode(
+    files: list[Path], png: Path, params: str, origin_ns: Optional[int] = None
+) -> Path:
     """Chart of the episode from the MCAP log: depth, hook tensions, line 11, alarm levels;
-    line 11's first time-to-uplift WARN and its uplift marked on every panel."""
+    line 11's first time-to-uplift WARN and its uplift marked on every panel. Time in s since
+    ``origin_ns`` (log time, ns; None: the first logged sample)."""
     import matplotlib
 
     matplotlib.use('Agg')
@@ -336,6 +345,8 @@ def plot_episode(files: list[Path], png: Path, params: str) -> Path:
     outs = _outputs(files, list(out_topics.values()))
     t_all = [c[0][:1] for c in cols.values() if c[0].size]
     t0 = min(int(t[0]) for t in t_all) if t_all else 0
+    if origin_ns is not None:
+        t0 = origin_ns
     sec = lambda ns: (np.asarray(ns) - t0) * 1e-9  # noqa: E731
     idx = {k: i for i, k in enumerate(OUTPUT_FIELDS)}
     focus = [n for n in ('line_11', 'line_10', 'line_12', 'line_01') if n in names] or names[:3]
@@ -416,7 +427,7 @@ def plot_episode(files: list[Path], png: Path, params: str) -> Path:
             )
     ax.set_yticks([0, 1, 2, 3], ['OK', 'WARN', 'ERROR', 'STALE'])
     ax.set_ylabel('alarm level')
-    ax.set_xlabel('time [s]')
+    ax.set_xlabel('time since the simulator started [s]')
     ax.legend(loc='upper right', fontsize=8)
     for a in axes:
         a.grid(alpha=0.3)

@@ -465,7 +465,9 @@ def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
         tt, tv = window.tensions[k]
         mem = line.sensor_memory
         rate = a.tension_rate_max * line.config.mbl
-        ch, sp, line.sensor_memory = sensor.samples(mem, tt * 1e-9, tv, a.tension_resolution, rate)
+        ch, sp, line.sensor_memory = sensor.samples(
+            mem, tt * 1e-9, tv, a.tension_resolution, rate, a.stamp_jitter
+        )
         j = np.searchsorted(tt, ticks, 'right') - 1  # tensions go before a tick at one stamp
         tension[:, k] = _pick(j, tv, line.tension)
         tension_s[:, k] = _pick(j, tt * 1e-9, line.tension_s)
@@ -474,7 +476,7 @@ def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
     dd, dv = window.depth
     dmem = core.depth_memory
     dch, dsp, core.depth_memory = sensor.samples(
-        dmem, dd * 1e-9, dv, a.depth_resolution, a.depth_rate_max
+        dmem, dd * 1e-9, dv, a.depth_resolution, a.depth_rate_max, a.stamp_jitter
     )
     j = np.searchsorted(dd, ticks, 'right') - 1  # depth goes before a tick at one stamp
     depth, depth_s = _pick(j, dv, core.depth), _pick(j, dd * 1e-9, core.depth_s)

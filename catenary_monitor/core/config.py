@@ -484,6 +484,15 @@ PARAMETERS: tuple[ParamSpec, ...] = (
                 1000.0,
             ),
             (
+                'stamp_jitter',
+                0.25,
+                'spike: a reading\'s stamp may be off by this much (delivery bunches samples); '
+                'a step is compared with the rate x (dt + this)',
+                's',
+                0.0,
+                10.0,
+            ),
+            (
                 'sensor_hold',
                 30.0,
                 'spike and suspected_parted stay this long after their pattern was last seen',
@@ -925,6 +934,7 @@ class AlarmConfig:
     stuck_time: float = _default('stuck_time')
     tension_rate_max: float = _default('tension_rate_max')
     depth_rate_max: float = _default('depth_rate_max')
+    stamp_jitter: float = _default('stamp_jitter')
     sensor_hold: float = _default('sensor_hold')
     parted_drop: float = _default('parted_drop')
     parted_window: float = _default('parted_window')

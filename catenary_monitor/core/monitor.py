@@ -440,6 +440,7 @@ class MonitorCore:
             line.tension,
             a.tension_resolution,
             a.tension_rate_max * line.config.mbl,
+            a.stamp_jitter,
         )
         self._solve_one(line)
         changes = self._step_lines([ev.line], ev.stamp_ns)
@@ -451,7 +452,12 @@ class MonitorCore:
         self.trend = tide_trend.step(self.trend, ev.stamp_ns, self.depth, window)
         a = self.config.alarm
         self.depth_memory = sensor.sample(
-            self.depth_memory, self.depth_s, self.depth, a.depth_resolution, a.depth_rate_max
+            self.depth_memory,
+            self.depth_s,
+            self.depth,
+            a.depth_resolution,
+            a.depth_rate_max,
+            a.stamp_jitter,
         )
         changes = self._decide_tide(ev.stamp_ns)
         solved = [k for k, line in enumerate(self.lines) if line.tension_s == line.tension_s]

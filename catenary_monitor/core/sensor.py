@@ -8,8 +8,10 @@ batch twin) that share the arithmetic, so live and replay decide alike:
   resolution (``floor(x / resolution)``, ``tension_resolution`` N, ``depth_resolution`` m; a
   reading drifting at rate r changes at least every resolution / r) than the reading before;
   when it last
-  *spiked*: a step ``|dx| > rate_max * dt + resolution`` between consecutive finite readings
-  (a rate of change no chain and no tide can have). Non-finite readings are not remembered.
+  *spiked*: a step ``|dx| > rate_max * (dt + jitter) + resolution`` between consecutive finite
+  readings (a rate of change no chain and no tide can have; ``stamp_jitter`` because the
+  stamps are arrival times, and samples delivered in a bunch arrive closer than they were
+  taken). Non-finite readings are not remembered.
 * **per tick** (:func:`decide_lines`, :func:`decide_depth`): the states, decided at every tick
   (``diagnostic_rate``) from the newest readings, in this precedence (the first that holds):
 
@@ -96,15 +98,17 @@ class LineLimits(NamedTuple):
     hook_height: np.ndarray
 
 
-def sample(mem: Memory, stamp: float, value: float, resolution: float, rate: float) -> Memory:
+def sample(
+    mem: Memory, stamp: float, value: float, resolution: float, rate: float, jitter: float
+) -> Memory:
     """The memory after one reading ``value`` at ``stamp`` [s]; ``rate`` the largest credible
-    rate of change [unit/s]."""
+    rate of change [unit/s], ``jitter`` how far off a stamp may be [s]."""
     if not math.isfinite(value):
         return mem
     d = abs(value - mem.value)
     step = bool(_steps(np.array([mem.value]), np.array([value]), resolution)[0])
     changed = stamp if step else mem.changed
-    spiked = stamp if d > rate * (stamp - mem.stamp) + resolution else mem.spiked
+    spiked = stamp if d > rate * (stamp - mem.stamp + jitter) + resolution else mem.spiked
     return Memory(value, stamp, changed, spiked)
 
 
@@ -118,7 +122,12 @@ def _steps(before: np.ndarray, after: np.ndarray, resolution: float) -> np.ndarr
 
 
 def samples(
-    mem: Memory, stamps: np.ndarray, values: np.ndarray, resolution: float, rate: float
+    mem: Memory,
+    stamps: np.ndarray,
+    values: np.ndarray,
+    resolution: float,
+    rate: float,
+    jitter: float,
 ) -> tuple[np.ndarray, np.ndarray, Memory]:
     """:func:`sample` over sorted readings: ``changed`` and ``spiked`` [s] after each, and the
     memory after the last."""
@@ -135,7 +144,7 @@ def samples(
     with np.errstate(invalid='ignore'):
         d = np.abs(v - pv)
         change = _steps(pv, v, resolution)
-        spike = d > rate * (t - pt) + resolution
+        spike = d > rate * (t - pt + jitter) + resolution
     ch = np.maximum.accumulate(np.concatenate([[mem.changed], np.where(change, t, _NEVER)]))
     sp = np.maximum.accumulate(np.concatenate([[mem.spiked], np.where(spike, t, _NEVER)]))
     at = np.cumsum(good)  # position in ch / sp after each reading (0: the memory's)
