@@ -58,7 +58,7 @@ typedef struct {
 /* the lanes of one block; Block1 (one lane, the node's call) keeps its few cache lines together */
 #define DEFINE_BLOCK(NAME, N)                                                                   \
     typedef struct {                                                                           \
-        double w[N], h[N], t[N], x[N], mbl[N];                                                 \
+        double w[N], h[N], t[N], x[N];                                                             \
         double b[N], e[N], r02[N], len[N], x0[N];                                              \
         double xlo[N], m[N], d[N], d0[N], d_max[N];                                            \
         int status[N], lift[N], iters[N], cok[N], ldone[N];                                              \
@@ -66,6 +66,8 @@ typedef struct {
         int idx[N], gdone[N], giters[N];                                                       \
         double ge[N], gr[N], gx0[N], gxlo[N], gm2[N], gd[N], gd0[N], gdmax[N];                 \
         double *o[NOUT]; /* where this block's results go (rows of the output) */              \
+        const double *src[5]; /* the inputs w, h, t, x, mbl of this block (read in place) */   \
+        double cin[5][N]; /* a constant input's lanes; a last, partial block's padded copy */  \
         double spill[NOUT][N]; /* the results of a last, partial block (padded lanes) */     \
     } NAME;
 DEFINE_BLOCK(Block, BLK)
@@ -224,15 +226,6 @@ static void in_release(In *in)
         PyBuffer_Release(&in->view);
 }
 
-static inline void in_load(const In *in, double *dst, Py_ssize_t off, int nb)
-{
-    if (in->p)
-        memcpy(dst, in->p + off, (size_t)nb * sizeof(double));
-    else
-        for (int i = 0; i < nb; i++)
-            dst[i] = in->c;
-}
-
 static int params_from(PyObject *maxiter, PyObject *tol, Params *par)
 {
     par->maxiter = (int)PyLong_AsLong(maxiter);
@@ -246,20 +239,27 @@ static void run(In in[5], Params *par, Py_ssize_t n, double *out, long long *sta
     Block *k = PyMem_RawMalloc(sizeof(Block));
     if (!k)
         return;
+    for (int j = 0; j < 5; j++) /* a constant input: its lanes once for the whole call */
+        if (!in[j].p)
+            for (int i = 0; i < BLK; i++)
+                k->cin[j][i] = in[j].c;
     for (Py_ssize_t off = 0; off < n; off += BLK) {
         int nb = (int)(n - off < BLK ? n - off : BLK);
         int np = PADDED(nb);
-        in_load(&in[0], k->w, off, nb);
-        in_load(&in[1], k->h, off, nb);
-        in_load(&in[2], k->t, off, nb);
-        in_load(&in[3], k->x, off, nb); /* 1.0 where not given */
-        in_load(&in[4], k->mbl, off, nb);
-        for (int i = nb; i < np; i++) { /* stand-ins: copies of the block's first element */
-            k->w[i] = k->w[0];
-            k->h[i] = k->h[0];
-            k->t[i] = k->t[0];
-            k->x[i] = k->x[0];
-            k->mbl[i] = k->mbl[0];
+        for (int j = 0; j < 5; j++) {
+            if (!in[j].p) {
+                k->src[j] = k->cin[j];
+                continue;
+            }
+            if (np == nb) { /* whole vectors: read the input in place */
+                k->src[j] = in[j].p + off;
+                continue;
+            }
+            /* a last, partial block: copied, then stand-ins (copies of its first element) */
+            memcpy(k->cin[j], in[j].p + off, (size_t)nb * sizeof(double));
+            for (int i = nb; i < np; i++)
+                k->cin[j][i] = k->cin[j][0];
+            k->src[j] = k->cin[j];
         }
         for (int r = 0; r < NOUT; r++)
             k->o[r] = np == nb ? out + (Py_ssize_t)r * n + off : k->spill[r];
@@ -267,17 +267,26 @@ static void run(In in[5], Params *par, Py_ssize_t n, double *out, long long *sta
         if (np != nb)
             for (int r = 0; r < NOUT; r++)
                 memcpy(out + (Py_ssize_t)r * n + off, k->spill[r], (size_t)nb * sizeof(double));
-        for (int r = 0; r < NOUT; r++)
-            k->o[r] = out + (Py_ssize_t)r * n + off;
+        long long *restrict so = status + off;
+        const int *restrict sk = k->status;
+        int bad = 0;
+        CM_SIMD_REDUCTION(bad)
         for (int i = 0; i < nb; i++) {
-            status[off + i] = k->status[i];
-            if (k->status[i])
-                for (int r = 0; r < NOUT; r++)
-                    k->o[r][i] = NAN;
+            so[i] = sk[i];
+            bad += sk[i] != 0;
         }
-        if (iters)
+        if (bad) /* rare: the invalid elements' rows become NaN */
             for (int i = 0; i < nb; i++)
-                iters[off + i] = k->iters[i];
+                if (sk[i])
+                    for (int r = 0; r < NOUT; r++)
+                        out[(Py_ssize_t)r * n + off + i] = NAN;
+        if (iters) {
+            long long *restrict io = iters + off;
+            const int *restrict ik = k->iters;
+            CM_SIMD
+            for (int i = 0; i < nb; i++)
+                io[i] = ik[i];
+        }
     }
     PyMem_RawFree(k);
 }
@@ -383,11 +392,10 @@ static PyObject *solve_one(PyObject *self, PyObject *const *args, Py_ssize_t nar
     /* one lane: a small block on the stack's worth of heap, reused between calls */
     static Block1 one;
     Block1 *k = &one;
-    k->w[0] = v[0];
-    k->h[0] = v[1];
-    k->t[0] = v[2];
-    k->x[0] = v[3];
-    k->mbl[0] = v[4];
+    for (int j = 0; j < 5; j++) {
+        k->cin[j][0] = v[j];
+        k->src[j] = k->cin[j];
+    }
     double o[NOUT];
     for (int r = 0; r < NOUT; r++)
         k->o[r] = o + r;

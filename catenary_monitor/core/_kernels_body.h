@@ -77,10 +77,12 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
     double *restrict o_sf = k->o[O_SF];
 
     /* 1. validation, the grounded chain (problems 1 and 3), the uplift start */
+    const double *restrict s_w = k->src[0], *restrict s_h = k->src[1], *restrict s_t = k->src[2];
+    const double *restrict s_x = k->src[3], *restrict s_mbl = k->src[4];
     CM_SIMD
     for (int i = 0; i < nb; i++) {
-        double w = k->w[i], h = k->h[i], t = k->t[i];
-        double x = k->x[i], mbl = k->mbl[i]; /* 1.0 when not given */
+        double w = s_w[i], h = s_h[i], t = s_t[i];
+        double x = s_x[i], mbl = s_mbl[i]; /* 1.0 when not given */
         int fin = (fabs(w) <= DBL_MAX) & (fabs(h) <= DBL_MAX) & (fabs(t) <= DBL_MAX) &
                   (fabs(x) <= DBL_MAX) & (fabs(mbl) <= DBL_MAX);
         /* the first rule broken wins (Status order), written as selects */
