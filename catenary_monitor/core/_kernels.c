@@ -233,7 +233,9 @@ static int params_from(PyObject *maxiter, PyObject *tol, Params *par)
     return PyErr_Occurred() ? -1 : 0;
 }
 
-static void run(In in[5], Params *par, Py_ssize_t n, double *out, long long *status,
+/* row[r]: where result row r goes (n doubles), or NULL: a row nobody asked for, computed into
+ * the block's spill and dropped (no memory of the caller's written for it) */
+static void run(In in[5], Params *par, Py_ssize_t n, double *row[NOUT], long long *status,
                 long long *iters)
 {
     Block *k = PyMem_RawMalloc(sizeof(Block));
@@ -262,11 +264,12 @@ static void run(In in[5], Params *par, Py_ssize_t n, double *out, long long *sta
             k->src[j] = k->cin[j];
         }
         for (int r = 0; r < NOUT; r++)
-            k->o[r] = np == nb ? out + (Py_ssize_t)r * n + off : k->spill[r];
+            k->o[r] = np == nb && row[r] ? row[r] + off : k->spill[r];
         BLOCK_FN(k, np, par);
         if (np != nb)
             for (int r = 0; r < NOUT; r++)
-                memcpy(out + (Py_ssize_t)r * n + off, k->spill[r], (size_t)nb * sizeof(double));
+                if (row[r])
+                    memcpy(row[r] + off, k->spill[r], (size_t)nb * sizeof(double));
         long long *restrict so = status + off;
         const int *restrict sk = k->status;
         int bad = 0;
@@ -279,7 +282,8 @@ static void run(In in[5], Params *par, Py_ssize_t n, double *out, long long *sta
             for (int i = 0; i < nb; i++)
                 if (sk[i])
                     for (int r = 0; r < NOUT; r++)
-                        out[(Py_ssize_t)r * n + off + i] = NAN;
+                        if (row[r])
+                            row[r][off + i] = NAN;
         if (iters) {
             long long *restrict io = iters + off;
             const int *restrict ik = k->iters;
@@ -291,16 +295,31 @@ static void run(In in[5], Params *par, Py_ssize_t n, double *out, long long *sta
     PyMem_RawFree(k);
 }
 
-/* solve_tension(w, h, t, x, mbl, out, status, iters, maxiter, step_tol) -> None
+/* solve_tension(w, h, t, x, mbl, out, status, iters, maxiter, step_tol[, rows]) -> None
  * w, h, t: float or float64 arrays of one length n; x, mbl: the same or None; out: writable
  * float64 buffer of NOUT * n (rows in ALL_KEYS order); status, iters: int64 buffers of n
- * (iters may be None: the uplift residuals evaluated per element). */
+ * (iters may be None: the uplift residuals evaluated per element).  rows (an int, bit r for
+ * row r; default all): only those rows are written, into out of popcount(rows) * n, in
+ * ALL_KEYS order. */
 static PyObject *solve_tension(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 10) {
-        PyErr_SetString(PyExc_TypeError, "solve_tension takes 10 arguments");
+    if (nargs != 10 && nargs != 11) {
+        PyErr_SetString(PyExc_TypeError, "solve_tension takes 10 or 11 arguments");
         return NULL;
     }
+    long mask = (1L << NOUT) - 1;
+    if (nargs == 11) {
+        mask = PyLong_AsLong(args[10]);
+        if (mask == -1 && PyErr_Occurred())
+            return NULL;
+        if (mask < 0 || mask >= (1L << NOUT)) {
+            PyErr_SetString(PyExc_ValueError, "rows: a mask of the 12 result rows");
+            return NULL;
+        }
+    }
+    int nrow = 0;
+    for (int r = 0; r < NOUT; r++)
+        nrow += (mask >> r) & 1;
     if (!TAB.n) {
         PyErr_SetString(PyExc_RuntimeError, "load-margin table not set");
         return NULL;
@@ -332,12 +351,15 @@ static PyObject *solve_tension(PyObject *self, PyObject *const *args, Py_ssize_t
             goto done;
         have_i = 1;
     }
-    if (ob.len != (Py_ssize_t)(NOUT * n * 8) || sb.len != n * 8 || (have_i && ib.len != n * 8)) {
+    if (ob.len != (Py_ssize_t)(nrow * n * 8) || sb.len != n * 8 || (have_i && ib.len != n * 8)) {
         PyErr_SetString(PyExc_ValueError, "output buffers of the wrong size");
         goto done;
     }
+    double *row[NOUT];
+    for (int r = 0, q = 0; r < NOUT; r++)
+        row[r] = (mask >> r) & 1 ? (double *)ob.buf + (Py_ssize_t)(q++) * n : NULL;
     Py_BEGIN_ALLOW_THREADS;
-    run(in, &par, n, (double *)ob.buf, (long long *)sb.buf,
+    run(in, &par, n, row, (long long *)sb.buf,
         have_i ? (long long *)ib.buf : NULL);
     Py_END_ALLOW_THREADS;
     ok = 1;
