@@ -14,6 +14,7 @@
 #include <float.h>
 #include <math.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <string.h>
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__GLIBC__)
@@ -235,12 +236,45 @@ static int params_from(PyObject *maxiter, PyObject *tol, Params *par)
 
 /* row[r]: where result row r goes (n doubles), or NULL: a row nobody asked for, computed into
  * the block's spill and dropped (no memory of the caller's written for it) */
+#if defined(__x86_64__) && defined(__SSE2__)
+#include <emmintrin.h>
+/* nb doubles to dst with non-temporal stores (no read of the destination's lines first) */
+static void stream_row(double *dst, const double *src, int nb)
+{
+    int i = 0;
+    if (((uintptr_t)dst & 15) && nb > 0) {
+        dst[0] = src[0];
+        i = 1;
+    }
+    for (; i + 2 <= nb; i += 2)
+        _mm_stream_pd(dst + i, _mm_loadu_pd(src + i));
+    for (; i < nb; i++)
+        dst[i] = src[i];
+}
+#define CM_STREAM 1
+#endif
+
+/* results at least this large bypass the cache on their way out, as glibc's memcpy does with
+ * copies of this order: they would not stay in it anyway, and a plain store first reads every
+ * line it writes */
+#define STREAM_BYTES ((Py_ssize_t)32 << 20)
+
+/* row[r]: where result row r goes (n doubles), or NULL: a row nobody asked for, computed into
+ * the block's spill and dropped (no memory of the caller's written for it) */
 static void run(In in[5], Params *par, Py_ssize_t n, double *row[NOUT], long long *status,
                 long long *iters)
 {
     Block *k = PyMem_RawMalloc(sizeof(Block));
     if (!k)
         return;
+    int nrow = 0;
+    for (int r = 0; r < NOUT; r++)
+        nrow += row[r] != NULL;
+#ifdef CM_STREAM
+    const int stream = (Py_ssize_t)nrow * n * (Py_ssize_t)sizeof(double) >= STREAM_BYTES;
+#else
+    const int stream = 0;
+#endif
     for (int j = 0; j < 5; j++) /* a constant input: its lanes once for the whole call */
         if (!in[j].p)
             for (int i = 0; i < BLK; i++)
@@ -263,13 +297,10 @@ static void run(In in[5], Params *par, Py_ssize_t n, double *row[NOUT], long lon
                 k->cin[j][i] = k->cin[j][0];
             k->src[j] = k->cin[j];
         }
+        int direct = np == nb && !stream; /* the block writes its rows in place */
         for (int r = 0; r < NOUT; r++)
-            k->o[r] = np == nb && row[r] ? row[r] + off : k->spill[r];
+            k->o[r] = direct && row[r] ? row[r] + off : k->spill[r];
         BLOCK_FN(k, np, par);
-        if (np != nb)
-            for (int r = 0; r < NOUT; r++)
-                if (row[r])
-                    memcpy(row[r] + off, k->spill[r], (size_t)nb * sizeof(double));
         long long *restrict so = status + off;
         const int *restrict sk = k->status;
         int bad = 0;
@@ -282,8 +313,19 @@ static void run(In in[5], Params *par, Py_ssize_t n, double *row[NOUT], long lon
             for (int i = 0; i < nb; i++)
                 if (sk[i])
                     for (int r = 0; r < NOUT; r++)
-                        if (row[r])
-                            row[r][off + i] = NAN;
+                        k->o[r][i] = NAN;
+        if (!direct)
+            for (int r = 0; r < NOUT; r++) {
+                if (!row[r])
+                    continue;
+#ifdef CM_STREAM
+                if (stream) {
+                    stream_row(row[r] + off, k->spill[r], nb);
+                    continue;
+                }
+#endif
+                memcpy(row[r] + off, k->spill[r], (size_t)nb * sizeof(double));
+            }
         if (iters) {
             long long *restrict io = iters + off;
             const int *restrict ik = k->iters;
@@ -292,6 +334,10 @@ static void run(In in[5], Params *par, Py_ssize_t n, double *row[NOUT], long lon
                 io[i] = ik[i];
         }
     }
+#ifdef CM_STREAM
+    if (stream)
+        _mm_sfence();
+#endif
     PyMem_RawFree(k);
 }
 
