@@ -133,7 +133,7 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
     /* 2. Newton in eta = log(d) on the lifted lanes, gathered densely, each frozen once its step
      *    is below tol; the step is applied as d *= exp(step) (a degree-6 Taylor polynomial: exact
      *    for the converging steps, positive for any step) */
-    int nl = 0, ran = 0;
+    int nl = 0, ran = 0, pending = 0; /* pending: lanes the fast steps leave moving */
     if (has_x) {
         for (int i = 0; i < nb; i++) {
             k->idx[nl] = i;
@@ -183,6 +183,7 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
         for (int j = nl; j < nlp; j++)
             k->gdone[j] = 1; /* the stand-ins never move */
         int na = nl; /* the moving lanes: g entries [0, na) */
+        pending = nl;
         for (int it = 1; it <= kfast; it++) {
             int left = 0;
             int nap = LANES(na);
@@ -221,6 +222,7 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
                 left += !(was | conv);
             }
             ran = it;
+            pending = left;
             if (!left)
                 break;
             if (left * 2 <= na) { /* compact: the done lanes go home, the moving ones first */
@@ -252,9 +254,13 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
             SFX(lane_home)(k, j);
     }
     /* 3. the few lanes still moving: bracketed Newton, one at a time */
-    for (int i = 0; i < nb; i++)
-        if (!k->ldone[i])
-            k->ldone[i] = SFX(uplift_safeguarded)(k, i, ran, par);
+    int failed = 0;
+    if (pending)
+        for (int i = 0; i < nb; i++)
+            if (!k->ldone[i]) {
+                k->ldone[i] = SFX(uplift_safeguarded)(k, i, ran, par);
+                failed += !k->ldone[i];
+            }
 
     /* 4. uplift state, margins and the load-margin solve from its table start */
     CM_SIMD
@@ -283,7 +289,8 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
         o_tide[i] = has_x ? b * s * cm1 - h : NAN; /* a (cosh(x/a) - 1) - h, a = R/w */
     }
     if (has_x) {
-        CM_SIMD
+        int nscalar = 0;
+        CM_SIMD_REDUCTION(nscalar)
         for (int i = 0; i < nb; i++) {
             /* load margin: a_crit from the fine table (exact to ~1e-14 inside it) */
             double h = k->h[i], x = k->x[i];
@@ -299,18 +306,20 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
             double ce = y0 + tt * (s0 + tt * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) +
                                               tt * (2.0 * (y0 - y1) + s0 + s1)));
             double a_crit = 0.5 * x * exp(-ce); /* no division */
-            k->cok[i] = inside & (par->maxiter >= 1);
+            int cok = inside & (par->maxiter >= 1);
+            k->cok[i] = cok;
+            nscalar += !cok;
             o_load[i] = k->w[i] * (a_crit + h) - k->t[i];
         }
         /* 5. load-margin lanes outside the table or not converged: the scalar solve */
-        for (int i = 0; i < nb; i++)
+        for (int i = 0; nscalar && i < nb; i++)
             if (!k->cok[i] && !k->status[i]) {
                 double a_crit = critical_scalar(k->h[i], k->x[i], par);
                 o_load[i] = k->w[i] * (a_crit + k->h[i]) - k->t[i];
                 if (a_crit != a_crit)
                     k->status[i] = ST_NO_CONVERGENCE;
             }
-        for (int i = 0; i < nb; i++)
+        for (int i = 0; failed && i < nb; i++)
             if (!k->ldone[i] && !k->status[i])
                 k->status[i] = ST_NO_CONVERGENCE;
     } else
