@@ -65,7 +65,7 @@ typedef struct {
         int status[N], lift[N], iters[N], cok[N], ldone[N];                                              \
         /* the lifted lanes, gathered */                                                       \
         int idx[N], gdone[N], giters[N];                                                       \
-        double ge[N], gr[N], gx0[N], gxlo[N], gm2[N], gd[N], gd0[N], gdmax[N];                 \
+        double ge[N], gr[N], gx0[N], gxlo[N], gm[N], gd[N], gd0[N], gdmax[N];                  \
         double *o[NOUT]; /* where this block's results go (rows of the output) */              \
         const double *src[5]; /* the inputs w, h, t, x, mbl of this block (read in place) */   \
         double cin[5][N]; /* a constant input's lanes; a last, partial block's padded copy */  \
