@@ -84,6 +84,19 @@ def _rounds(
     return out
 
 
+def _settle_floor(n: int) -> None:
+    """Put glibc's allocator where the floor is fastest, whatever solve() allocated before.
+
+    glibc maps a block above its mmap threshold afresh (and page-faults it in), and the threshold
+    follows the largest block freed so far (up to 32 MB); its trim threshold is twice that.  So
+    whether the floor's n-element temporaries come back from the heap or are mapped and faulted
+    in each call depended on the sizes solve() had freed before (a 9.6 MB result block at 1e5
+    left the 1e6 floor at ~5 ns per element, an 8 MB one at ~8).  One freed block of 2n doubles
+    (at most 16 MB) raises the threshold above the temporaries, on every branch alike: the floor
+    at its fastest, the strictest baseline.  No allocator setting is changed."""
+    np.ones(2 * n).sum()
+
+
 def vector_figures(regime: str, n: int) -> dict[str, float]:
     """ns per element of vectorized problem 4 (with margins), problem 3 and the floor."""
     w, h, t, x = scenes(regime, n, seed=2)
@@ -95,6 +108,7 @@ def vector_figures(regime: str, n: int) -> dict[str, float]:
         return a * np.log1p(e + np.sqrt(e * (2 + e)))
 
     rounds = max(7, min(200, int(2e7 / n / 10)))
+    _settle_floor(n)
     med = _rounds(
         {
             'floor': floor,

@@ -14,6 +14,7 @@
 #include <float.h>
 #include <math.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <string.h>
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__GLIBC__)
@@ -58,14 +59,16 @@ typedef struct {
 /* the lanes of one block; Block1 (one lane, the node's call) keeps its few cache lines together */
 #define DEFINE_BLOCK(NAME, N)                                                                   \
     typedef struct {                                                                           \
-        double w[N], h[N], t[N], x[N], mbl[N];                                                 \
+        double w[N], h[N], t[N], x[N];                                                             \
         double b[N], e[N], r02[N], len[N], x0[N];                                              \
         double xlo[N], m[N], d[N], d0[N], d_max[N];                                            \
         int status[N], lift[N], iters[N], cok[N], ldone[N];                                              \
         /* the lifted lanes, gathered */                                                       \
         int idx[N], gdone[N], giters[N];                                                       \
-        double ge[N], gr[N], gx0[N], gxlo[N], gm2[N], gd[N], gd0[N], gdmax[N];                 \
+        double ge[N], gr[N], gx0[N], gxlo[N], gm[N], gd[N], gd0[N], gdmax[N];                  \
         double *o[NOUT]; /* where this block's results go (rows of the output) */              \
+        const double *src[5]; /* the inputs w, h, t, x, mbl of this block (read in place) */   \
+        double cin[5][N]; /* a constant input's lanes; a last, partial block's padded copy */  \
         double spill[NOUT][N]; /* the results of a last, partial block (padded lanes) */     \
     } NAME;
 DEFINE_BLOCK(Block, BLK)
@@ -224,15 +227,6 @@ static void in_release(In *in)
         PyBuffer_Release(&in->view);
 }
 
-static inline void in_load(const In *in, double *dst, Py_ssize_t off, int nb)
-{
-    if (in->p)
-        memcpy(dst, in->p + off, (size_t)nb * sizeof(double));
-    else
-        for (int i = 0; i < nb; i++)
-            dst[i] = in->c;
-}
-
 static int params_from(PyObject *maxiter, PyObject *tol, Params *par)
 {
     par->maxiter = (int)PyLong_AsLong(maxiter);
@@ -240,58 +234,138 @@ static int params_from(PyObject *maxiter, PyObject *tol, Params *par)
     return PyErr_Occurred() ? -1 : 0;
 }
 
-static void run(In in[5], Params *par, Py_ssize_t n, double *out, long long *status,
+/* row[r]: where result row r goes (n doubles), or NULL: a row nobody asked for, computed into
+ * the block's spill and dropped (no memory of the caller's written for it) */
+#if defined(__x86_64__) && defined(__SSE2__)
+#include <emmintrin.h>
+/* nb doubles to dst with non-temporal stores (no read of the destination's lines first) */
+static void stream_row(double *dst, const double *src, int nb)
+{
+    int i = 0;
+    if (((uintptr_t)dst & 15) && nb > 0) {
+        dst[0] = src[0];
+        i = 1;
+    }
+    for (; i + 2 <= nb; i += 2)
+        _mm_stream_pd(dst + i, _mm_loadu_pd(src + i));
+    for (; i < nb; i++)
+        dst[i] = src[i];
+}
+#define CM_STREAM 1
+#endif
+
+/* results at least this large bypass the cache on their way out, as glibc's memcpy does with
+ * copies of this order: they would not stay in it anyway, and a plain store first reads every
+ * line it writes */
+#define STREAM_BYTES ((Py_ssize_t)32 << 20)
+
+/* row[r]: where result row r goes (n doubles), or NULL: a row nobody asked for, computed into
+ * the block's spill and dropped (no memory of the caller's written for it) */
+static void run(In in[5], Params *par, Py_ssize_t n, double *row[NOUT], long long *status,
                 long long *iters)
 {
     Block *k = PyMem_RawMalloc(sizeof(Block));
     if (!k)
         return;
+    int nrow = 0;
+    for (int r = 0; r < NOUT; r++)
+        nrow += row[r] != NULL;
+#ifdef CM_STREAM
+    const int stream = (Py_ssize_t)nrow * n * (Py_ssize_t)sizeof(double) >= STREAM_BYTES;
+#else
+    const int stream = 0;
+#endif
+    for (int j = 0; j < 5; j++) /* a constant input: its lanes once for the whole call */
+        if (!in[j].p)
+            for (int i = 0; i < BLK; i++)
+                k->cin[j][i] = in[j].c;
     for (Py_ssize_t off = 0; off < n; off += BLK) {
         int nb = (int)(n - off < BLK ? n - off : BLK);
         int np = PADDED(nb);
-        in_load(&in[0], k->w, off, nb);
-        in_load(&in[1], k->h, off, nb);
-        in_load(&in[2], k->t, off, nb);
-        in_load(&in[3], k->x, off, nb); /* 1.0 where not given */
-        in_load(&in[4], k->mbl, off, nb);
-        for (int i = nb; i < np; i++) { /* stand-ins: copies of the block's first element */
-            k->w[i] = k->w[0];
-            k->h[i] = k->h[0];
-            k->t[i] = k->t[0];
-            k->x[i] = k->x[0];
-            k->mbl[i] = k->mbl[0];
+        for (int j = 0; j < 5; j++) {
+            if (!in[j].p) {
+                k->src[j] = k->cin[j];
+                continue;
+            }
+            if (np == nb) { /* whole vectors: read the input in place */
+                k->src[j] = in[j].p + off;
+                continue;
+            }
+            /* a last, partial block: copied, then stand-ins (copies of its first element) */
+            memcpy(k->cin[j], in[j].p + off, (size_t)nb * sizeof(double));
+            for (int i = nb; i < np; i++)
+                k->cin[j][i] = k->cin[j][0];
+            k->src[j] = k->cin[j];
         }
+        int direct = np == nb && !stream; /* the block writes its rows in place */
         for (int r = 0; r < NOUT; r++)
-            k->o[r] = np == nb ? out + (Py_ssize_t)r * n + off : k->spill[r];
+            k->o[r] = direct && row[r] ? row[r] + off : k->spill[r];
         BLOCK_FN(k, np, par);
-        if (np != nb)
-            for (int r = 0; r < NOUT; r++)
-                memcpy(out + (Py_ssize_t)r * n + off, k->spill[r], (size_t)nb * sizeof(double));
-        for (int r = 0; r < NOUT; r++)
-            k->o[r] = out + (Py_ssize_t)r * n + off;
+        long long *restrict so = status + off;
+        const int *restrict sk = k->status;
+        int bad = 0;
+        CM_SIMD_REDUCTION(bad)
         for (int i = 0; i < nb; i++) {
-            status[off + i] = k->status[i];
-            if (k->status[i])
-                for (int r = 0; r < NOUT; r++)
-                    k->o[r][i] = NAN;
+            so[i] = sk[i];
+            bad += sk[i] != 0;
         }
-        if (iters)
+        if (bad) /* rare: the invalid elements' rows become NaN */
             for (int i = 0; i < nb; i++)
-                iters[off + i] = k->iters[i];
+                if (sk[i])
+                    for (int r = 0; r < NOUT; r++)
+                        k->o[r][i] = NAN;
+        if (!direct)
+            for (int r = 0; r < NOUT; r++) {
+                if (!row[r])
+                    continue;
+#ifdef CM_STREAM
+                if (stream) {
+                    stream_row(row[r] + off, k->spill[r], nb);
+                    continue;
+                }
+#endif
+                memcpy(row[r] + off, k->spill[r], (size_t)nb * sizeof(double));
+            }
+        if (iters) {
+            long long *restrict io = iters + off;
+            const int *restrict ik = k->iters;
+            CM_SIMD
+            for (int i = 0; i < nb; i++)
+                io[i] = ik[i];
+        }
     }
+#ifdef CM_STREAM
+    if (stream)
+        _mm_sfence();
+#endif
     PyMem_RawFree(k);
 }
 
-/* solve_tension(w, h, t, x, mbl, out, status, iters, maxiter, step_tol) -> None
+/* solve_tension(w, h, t, x, mbl, out, status, iters, maxiter, step_tol[, rows]) -> None
  * w, h, t: float or float64 arrays of one length n; x, mbl: the same or None; out: writable
  * float64 buffer of NOUT * n (rows in ALL_KEYS order); status, iters: int64 buffers of n
- * (iters may be None: the uplift residuals evaluated per element). */
+ * (iters may be None: the uplift residuals evaluated per element).  rows (an int, bit r for
+ * row r; default all): only those rows are written, into out of popcount(rows) * n, in
+ * ALL_KEYS order. */
 static PyObject *solve_tension(PyObject *self, PyObject *const *args, Py_ssize_t nargs)
 {
-    if (nargs != 10) {
-        PyErr_SetString(PyExc_TypeError, "solve_tension takes 10 arguments");
+    if (nargs != 10 && nargs != 11) {
+        PyErr_SetString(PyExc_TypeError, "solve_tension takes 10 or 11 arguments");
         return NULL;
     }
+    long mask = (1L << NOUT) - 1;
+    if (nargs == 11) {
+        mask = PyLong_AsLong(args[10]);
+        if (mask == -1 && PyErr_Occurred())
+            return NULL;
+        if (mask < 0 || mask >= (1L << NOUT)) {
+            PyErr_SetString(PyExc_ValueError, "rows: a mask of the 12 result rows");
+            return NULL;
+        }
+    }
+    int nrow = 0;
+    for (int r = 0; r < NOUT; r++)
+        nrow += (mask >> r) & 1;
     if (!TAB.n) {
         PyErr_SetString(PyExc_RuntimeError, "load-margin table not set");
         return NULL;
@@ -323,12 +397,15 @@ static PyObject *solve_tension(PyObject *self, PyObject *const *args, Py_ssize_t
             goto done;
         have_i = 1;
     }
-    if (ob.len != (Py_ssize_t)(NOUT * n * 8) || sb.len != n * 8 || (have_i && ib.len != n * 8)) {
+    if (ob.len != (Py_ssize_t)(nrow * n * 8) || sb.len != n * 8 || (have_i && ib.len != n * 8)) {
         PyErr_SetString(PyExc_ValueError, "output buffers of the wrong size");
         goto done;
     }
+    double *row[NOUT];
+    for (int r = 0, q = 0; r < NOUT; r++)
+        row[r] = (mask >> r) & 1 ? (double *)ob.buf + (Py_ssize_t)(q++) * n : NULL;
     Py_BEGIN_ALLOW_THREADS;
-    run(in, &par, n, (double *)ob.buf, (long long *)sb.buf,
+    run(in, &par, n, row, (long long *)sb.buf,
         have_i ? (long long *)ib.buf : NULL);
     Py_END_ALLOW_THREADS;
     ok = 1;
@@ -383,11 +460,10 @@ static PyObject *solve_one(PyObject *self, PyObject *const *args, Py_ssize_t nar
     /* one lane: a small block on the stack's worth of heap, reused between calls */
     static Block1 one;
     Block1 *k = &one;
-    k->w[0] = v[0];
-    k->h[0] = v[1];
-    k->t[0] = v[2];
-    k->x[0] = v[3];
-    k->mbl[0] = v[4];
+    for (int j = 0; j < 5; j++) {
+        k->cin[j][0] = v[j];
+        k->src[j] = k->cin[j];
+    }
     double o[NOUT];
     for (int r = 0; r < NOUT; r++)
         k->o[r] = o + r;

@@ -77,10 +77,12 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
     double *restrict o_sf = k->o[O_SF];
 
     /* 1. validation, the grounded chain (problems 1 and 3), the uplift start */
+    const double *restrict s_w = k->src[0], *restrict s_h = k->src[1], *restrict s_t = k->src[2];
+    const double *restrict s_x = k->src[3], *restrict s_mbl = k->src[4];
     CM_SIMD
     for (int i = 0; i < nb; i++) {
-        double w = k->w[i], h = k->h[i], t = k->t[i];
-        double x = k->x[i], mbl = k->mbl[i]; /* 1.0 when not given */
+        double w = s_w[i], h = s_h[i], t = s_t[i];
+        double x = s_x[i], mbl = s_mbl[i]; /* 1.0 when not given */
         int fin = (fabs(w) <= DBL_MAX) & (fabs(h) <= DBL_MAX) & (fabs(t) <= DBL_MAX) &
                   (fabs(x) <= DBL_MAX) & (fabs(mbl) <= DBL_MAX);
         /* the first rule broken wins (Status order), written as selects */
@@ -131,31 +133,43 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
     /* 2. Newton in eta = log(d) on the lifted lanes, gathered densely, each frozen once its step
      *    is below tol; the step is applied as d *= exp(step) (a degree-6 Taylor polynomial: exact
      *    for the converging steps, positive for any step) */
-    int nl = 0, ran = 0;
+    int nl = 0, ran = 0, pending = 0; /* pending: lanes the fast steps leave moving */
     if (has_x) {
         for (int i = 0; i < nb; i++) {
             k->idx[nl] = i;
             nl += k->lift[i];
         }
-        for (int j = 0; j < nl; j++) {
-            int i = k->idx[j];
-            k->ge[j] = k->e[i];
-            k->gr[j] = k->r02[i];
-            k->gx0[j] = k->x0[i];
-            k->gm2[j] = k->m[i] * k->m[i];
+        /* the lanes being solved: gathered densely into the g arrays, or, when every lane of the
+         * block is lifted (the sweep's blocks), the block's own arrays, until a compaction
+         * gathers the lanes still moving */
+        int inplace = nl == nb;
+        double *ge = k->ge, *gr = k->gr, *gx0 = k->gx0, *gm = k->gm, *gxlo = k->gxlo;
+        double *gd = k->gd, *gd0 = k->gd0, *gdmax = k->gdmax;
+        int *gdone = k->gdone, *giters = k->giters;
+        if (inplace) {
+            ge = k->e, gr = k->r02, gx0 = k->x0, gm = k->m, gxlo = k->xlo;
+            gd = k->d, gd0 = k->d0, gdmax = k->d_max, gdone = k->ldone, giters = k->iters;
+        } else {
+            for (int j = 0; j < nl; j++) {
+                int i = k->idx[j];
+                ge[j] = k->e[i];
+                gr[j] = k->r02[i];
+                gx0[j] = k->x0[i];
+                gm[j] = k->m[i];
+            }
+            for (int j = nl; j < LANES(nl); j++) { /* stand-ins up to a whole vector */
+                k->idx[j] = k->idx[0];
+                ge[j] = ge[0];
+                gr[j] = gr[0];
+                gx0[j] = gx0[0];
+                gm[j] = gm[0];
+            }
         }
-        int nlp = LANES(nl); /* stand-in lanes up to a whole vector: copies of lane 0 */
-        for (int j = nl; j < nlp; j++) {
-            k->idx[j] = k->idx[0];
-            k->ge[j] = k->ge[0];
-            k->gr[j] = k->gr[0];
-            k->gx0[j] = k->gx0[0];
-            k->gm2[j] = k->gm2[0];
-        }
+        int nlp = LANES(nl);
         /* start of the uplift solve (catenary._uplift_setup), in d = X - log1p(e) */
         CM_SIMD
         for (int j = 0; j < nlp; j++) {
-            double e = k->ge[j], r02 = k->gr[j], x0 = k->gx0[j], m2 = k->gm2[j];
+            double e = ge[j], r02 = gr[j], x0 = gx0[j], m2 = gm[j] * gm[j];
             double xlo = log1p(e);
             double d_max = x0 - xlo;
             double inv = 1.0 / (x0 * r02);                     /* one division for two */
@@ -171,23 +185,24 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
             double d = 2.0 * q2 / (r02 + sqrt(r02_sq + 4.0 * q2));
             d = d > 1e-300 ? d : 1e-300;
             d = d < d_max ? d : d_max;
-            k->gxlo[j] = xlo;
-            k->gd[j] = d;
-            k->gd0[j] = d;
-            k->gdmax[j] = d_max;
-            k->gdone[j] = 0;
-            k->giters[j] = 0;
+            gxlo[j] = xlo;
+            gd[j] = d;
+            gd0[j] = d;
+            gdmax[j] = d_max;
+            gdone[j] = 0;
+            giters[j] = 0;
         }
         for (int j = nl; j < nlp; j++)
-            k->gdone[j] = 1; /* the stand-ins never move */
-        int na = nl; /* the moving lanes: g entries [0, na) */
+            gdone[j] = 1; /* the stand-ins never move */
+        int na = nl; /* the moving lanes: entries [0, na) */
+        pending = nl;
         for (int it = 1; it <= kfast; it++) {
             int left = 0;
             int nap = LANES(na);
             CM_SIMD_REDUCTION(left)
             for (int j = 0; j < nap; j++) {
-                double d = k->gd[j], e = k->ge[j], r02 = k->gr[j];
-                double big_x = k->gxlo[j] + d;
+                double d = gd[j], e = ge[j], r02 = gr[j];
+                double big_x = gxlo[j] + d;
                 double em = expm1(d);
                 double ed = 1.0 + em;
                 double e1 = e + em * (1.0 + e); /* expm1(X): exp(X) = (1 + e) exp(d) */
@@ -199,7 +214,7 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
                 double cx = 0.5 * (g + ig);        /* cosh X */
                 /* the residual log(A/B) of catenary._uplift_residual, as 2 (A - B)/(A + B) =
                  * 2 tanh(log(A/B)/2): the same root and slope there, no log to evaluate */
-                double ra = em * p * (big_x * big_x), rb = k->gm2[j] * (sx * sx);
+                double ra = em * p * (big_x * big_x), rb = (gm[j] * gm[j]) * (sx * sx);
                 /* d/dd of the residual: exp(d)/expm1(d) + 1/(exp(d) p) - 2 (coth X - 1/X),
                  * over one denominator; step = -f / (d * that), one division for both */
                 double den1 = em * ed * p, den2 = sx * big_x;
@@ -209,50 +224,68 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
                 double ex = 1.0 + step * (1.0 + step * (0.5 + step * (1.0 / 6.0 +
                             step * (1.0 / 24.0 + step * (1.0 / 120.0 + step * (1.0 / 720.0))))));
                 double nxt = d * ex;
-                nxt = nxt < k->gdmax[j] ? nxt : k->gdmax[j];
-                int was = k->gdone[j];
+                nxt = nxt < gdmax[j] ? nxt : gdmax[j];
+                int was = gdone[j];
                 int conv = (fabs(step) <= tol) | (f == 0.0);
                 double keep = f == 0.0 ? d : nxt;
-                k->gd[j] = was ? d : keep;
-                k->giters[j] = was ? k->giters[j] : it;
-                k->gdone[j] = was | conv;
+                gd[j] = was ? d : keep;
+                giters[j] = was ? giters[j] : it;
+                gdone[j] = was | conv;
                 left += !(was | conv);
             }
             ran = it;
+            pending = left;
             if (!left)
                 break;
             if (left * 2 <= na) { /* compact: the done lanes go home, the moving ones first */
                 int q = 0;
                 for (int j = 0; j < na; j++) {
-                    if (k->gdone[j]) {
-                        SFX(lane_home)(k, j);
+                    if (gdone[j]) {
+                        if (!inplace)
+                            SFX(lane_home)(k, j);
                         continue;
                     }
                     k->idx[q] = k->idx[j];
-                    k->ge[q] = k->ge[j];
-                    k->gr[q] = k->gr[j];
-                    k->gx0[q] = k->gx0[j];
-                    k->gxlo[q] = k->gxlo[j];
-                    k->gm2[q] = k->gm2[j];
-                    k->gd[q] = k->gd[j];
-                    k->gd0[q] = k->gd0[j];
-                    k->gdmax[q] = k->gdmax[j];
-                    k->giters[q] = k->giters[j];
+                    k->ge[q] = ge[j];
+                    k->gr[q] = gr[j];
+                    k->gx0[q] = gx0[j];
+                    k->gxlo[q] = gxlo[j];
+                    k->gm[q] = gm[j];
+                    k->gd[q] = gd[j];
+                    k->gd0[q] = gd0[j];
+                    k->gdmax[q] = gdmax[j];
+                    k->giters[q] = giters[j];
                     k->gdone[q] = 0;
                     q++;
                 }
                 na = q;
-                for (int j = na; j < LANES(na); j++)
-                    k->gdone[j] = 1; /* stand-ins again (stale but finite lanes) */
+                inplace = 0;
+                ge = k->ge, gr = k->gr, gx0 = k->gx0, gm = k->gm, gxlo = k->gxlo;
+                gd = k->gd, gd0 = k->gd0, gdmax = k->gdmax, gdone = k->gdone, giters = k->giters;
+                for (int j = na; j < LANES(na); j++) { /* stand-ins again: copies of lane 0 */
+                    ge[j] = ge[0];
+                    gr[j] = gr[0];
+                    gxlo[j] = gxlo[0];
+                    gm[j] = gm[0];
+                    gd[j] = gd[0];
+                    gdmax[j] = gdmax[0];
+                    giters[j] = 0;
+                    gdone[j] = 1;
+                }
             }
         }
-        for (int j = 0; j < na; j++)
-            SFX(lane_home)(k, j);
+        if (!inplace)
+            for (int j = 0; j < na; j++)
+                SFX(lane_home)(k, j);
     }
     /* 3. the few lanes still moving: bracketed Newton, one at a time */
-    for (int i = 0; i < nb; i++)
-        if (!k->ldone[i])
-            k->ldone[i] = SFX(uplift_safeguarded)(k, i, ran, par);
+    int failed = 0;
+    if (pending)
+        for (int i = 0; i < nb; i++)
+            if (!k->ldone[i]) {
+                k->ldone[i] = SFX(uplift_safeguarded)(k, i, ran, par);
+                failed += !k->ldone[i];
+            }
 
     /* 4. uplift state, margins and the load-margin solve from its table start */
     CM_SIMD
@@ -281,7 +314,8 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
         o_tide[i] = has_x ? b * s * cm1 - h : NAN; /* a (cosh(x/a) - 1) - h, a = R/w */
     }
     if (has_x) {
-        CM_SIMD
+        int nscalar = 0;
+        CM_SIMD_REDUCTION(nscalar)
         for (int i = 0; i < nb; i++) {
             /* load margin: a_crit from the fine table (exact to ~1e-14 inside it) */
             double h = k->h[i], x = k->x[i];
@@ -297,18 +331,20 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
             double ce = y0 + tt * (s0 + tt * ((3.0 * (y1 - y0) - 2.0 * s0 - s1) +
                                               tt * (2.0 * (y0 - y1) + s0 + s1)));
             double a_crit = 0.5 * x * exp(-ce); /* no division */
-            k->cok[i] = inside & (par->maxiter >= 1);
+            int cok = inside & (par->maxiter >= 1);
+            k->cok[i] = cok;
+            nscalar += !cok;
             o_load[i] = k->w[i] * (a_crit + h) - k->t[i];
         }
         /* 5. load-margin lanes outside the table or not converged: the scalar solve */
-        for (int i = 0; i < nb; i++)
+        for (int i = 0; nscalar && i < nb; i++)
             if (!k->cok[i] && !k->status[i]) {
                 double a_crit = critical_scalar(k->h[i], k->x[i], par);
                 o_load[i] = k->w[i] * (a_crit + k->h[i]) - k->t[i];
                 if (a_crit != a_crit)
                     k->status[i] = ST_NO_CONVERGENCE;
             }
-        for (int i = 0; i < nb; i++)
+        for (int i = 0; failed && i < nb; i++)
             if (!k->ldone[i] && !k->status[i])
                 k->status[i] = ST_NO_CONVERGENCE;
     } else

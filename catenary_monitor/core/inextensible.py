@@ -183,12 +183,20 @@ def _solve_tension_kernel(
             args.append(np.ascontiguousarray(a).reshape(n))
         else:
             args.append(np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(n))
-    rows, status = kernels.solve_arrays(args[0], args[1], args[2], args[3], args[4], n)
     keys = _keys('tension', anchor_distance is not None, mbl is not None)
     if not shape:  # every input 0-d (but not all plain floats: e.g. float32 or 0-d arrays)
+        rows, status = kernels.solve_arrays(args[0], args[1], args[2], args[3], args[4], n)
         values: dict[str, Any] = dict(zip(ALL_KEYS, (float(v) for v in rows[:, 0])))
         return SolveResult(**values, status=int(status[0]), problem='tension', keys=keys)
-    columns = dict(zip(ALL_KEYS, rows.reshape((len(ALL_KEYS),) + shape)))
+    # only the rows that apply are computed into memory of their own; the others are NaN
+    # everywhere, one read-only NaN broadcast to the shape (docs/benchmarks.md: the result's
+    # fresh memory is most of the cost at 1e6 elements)
+    rows, status = kernels.solve_arrays(
+        args[0], args[1], args[2], args[3], args[4], n, rows=keys
+    )
+    nan = np.broadcast_to(np.float64(np.nan), shape)
+    columns: dict[str, Any] = dict.fromkeys(ALL_KEYS, nan)
+    columns.update(zip(keys, rows.reshape((len(keys),) + shape)))
     return SolveResult(**columns, status=status.reshape(shape), problem='tension', keys=keys)
 
 

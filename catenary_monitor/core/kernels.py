@@ -23,6 +23,7 @@ from typing import Any, Optional
 import numpy as np
 
 from catenary_monitor.core import catenary as cat
+from catenary_monitor.core.result import ALL_KEYS
 
 try:  # the compiled module, next to this file
     from catenary_monitor.core import _kernels as _k  # type: ignore[attr-defined]
@@ -90,14 +91,31 @@ def solve_one(w: Any, h: Any, t: Any, x: Any = None, mbl: Any = None) -> Any:
 
 
 def solve_arrays(
-    w: Any, h: Any, t: Any, x: Any, mbl: Any, n: int, iters: Optional[np.ndarray] = None
+    w: Any,
+    h: Any,
+    t: Any,
+    x: Any,
+    mbl: Any,
+    n: int,
+    iters: Optional[np.ndarray] = None,
+    rows: Optional[tuple[str, ...]] = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Arrays (float64, C-contiguous, length n) or floats: ``(rows (12, n), status (n,))``.
 
     ``x`` and ``mbl`` may be None.  ``iters``, if given (int64, n), receives the uplift
-    residuals evaluated per element (0 where the anchor is not lifted).
+    residuals evaluated per element (0 where the anchor is not lifted).  ``rows``, if given
+    (keys of ``result.ALL_KEYS``, in that order), asks for those rows only: the result is then
+    ``(len(rows), n)`` and no memory is written for the others.
     """
-    out = np.empty((NOUT, n))
     status = np.empty(n, dtype=np.int64)
-    _k.solve_tension(w, h, t, x, mbl, out, status, iters, cat.MAXITER, cat.STEP_TOL)
+    if rows is None:
+        out = np.empty((NOUT, n))
+        _k.solve_tension(w, h, t, x, mbl, out, status, iters, cat.MAXITER, cat.STEP_TOL)
+        return out, status
+    out = np.empty((len(rows), n))
+    mask = sum(1 << _ROW[k] for k in rows)
+    _k.solve_tension(w, h, t, x, mbl, out, status, iters, cat.MAXITER, cat.STEP_TOL, mask)
     return out, status
+
+
+_ROW = {k: r for r, k in enumerate(ALL_KEYS)}
