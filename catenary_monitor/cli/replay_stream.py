@@ -108,7 +108,7 @@ def stream(
     *,
     ticks: str = 'auto',
     follow_log: bool = True,
-    snapshots: bool = False,
+    snapshots: bool | str = False,
     window_messages: Optional[int] = WINDOW_MESSAGES,
     jobs: int = 1,
     report: Optional[ReadReport] = None,

@@ -13,7 +13,7 @@ Alignment follows the CDR rule: a primitive of size n starts at an offset (count
 from __future__ import annotations
 
 import struct
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -229,3 +229,127 @@ def string_text(data: bytes) -> str:
     if n < 1 or 8 + n > len(data) or data[8 + n - 1] != 0:
         raise ValueError('not a CDR std_msgs/String')
     return data[8 : 8 + n - 1].decode('utf-8')
+
+
+# --- DiagnosticArrays of many snapshots, a status shape at a time (replay's --out) ------------
+# A status after its level byte is its "body": name, message, hardware_id, the values count
+# and the key/value strings, all 4-byte aligned from the body's start (which is aligned: the
+# level byte and the padding after it come before). :func:`status_bodies` encodes the bodies
+# of n statuses of one shape (the same keys) at once with numpy; :func:`diagnostic_array_bodies`
+# puts one array together from its statuses' levels and bodies. Both give the bytes
+# :func:`diagnostic_array` gives (the tests compare them).
+
+Field = str | Sequence[str]
+
+
+def status_body(
+    name: str, message: str, hardware_id: str, values: Sequence[tuple[str, str]]
+) -> bytes:
+    """The body of one DiagnosticStatus (everything after its level byte and padding)."""
+    buf = bytearray(ENCAPSULATION)  # a stand-in prefix: the body starts aligned
+    _string(buf, name)
+    _string(buf, message)
+    _string(buf, hardware_id)
+    buf += _PAD[-len(buf) % 4]
+    buf += _U32(len(values))
+    buf += key_values(values)
+    return bytes(buf[4:])
+
+
+def _padded(text: str) -> bytes:
+    """A CDR string padded with zeros to a multiple of 4 bytes."""
+    data = text.encode('utf-8')
+    cdr = _U32(len(data) + 1) + data + b'\0'
+    return cdr + b'\0' * (-len(cdr) % 4)
+
+
+def _as_bytes(texts: Sequence[str], n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(n, width) uint8 of the UTF-8 texts (zero-filled) and their lengths in bytes."""
+    if len(texts) != n:
+        raise ValueError(f'{len(texts)} values for {n} statuses')
+    try:
+        arr = np.array(texts, dtype='S')
+        lens = np.fromiter(map(len, texts), np.int64, n)
+    except UnicodeEncodeError:
+        data = [t.encode('utf-8') for t in texts]
+        arr = np.array(data, dtype='S')
+        lens = np.fromiter(map(len, data), np.int64, n)
+    width = arr.dtype.itemsize
+    return arr.view(np.uint8).reshape(n, width), lens
+
+
+def status_bodies(
+    n: int,
+    name: Field,
+    message: Field,
+    hardware_id: Field,
+    keys: Sequence[str],
+    values: Sequence[Field],
+) -> tuple[bytes, np.ndarray, np.ndarray]:
+    """The bodies (see :func:`status_body`) of ``n`` statuses with the same ``keys``: each of
+    ``name``, ``message``, ``hardware_id`` and ``values`` (one per key) is a str (the same in
+    every status) or a sequence of ``n`` str. Returns (buffer, starts, ends): body ``i`` is
+    ``buffer[starts[i]:ends[i]]``."""
+    if len(values) != len(keys):
+        raise ValueError(f'{len(values)} value columns for {len(keys)} keys')
+    fields: list[Any] = [name, message, hardware_id, None]
+    for key, value in zip(keys, values):
+        fields += [key, value]
+    rel: Any = 0  # each field's offset in its body: an int while every body has the same
+    plan: list[tuple[Any, Any, Any]] = []
+    last_end: Any = 0
+    for f in fields:
+        if f is None:  # the values count
+            data = _U32(len(keys))
+        elif isinstance(f, str):
+            data = _padded(f)
+        else:
+            chars, lens = _as_bytes(f, n)
+            plan.append((rel, chars, lens))
+            last_end = rel + 5 + lens
+            rel = rel + 4 + ((lens + 4) & ~3)
+            continue
+        plan.append((rel, np.frombuffer(data, '<u4'), None))
+        last_end = rel + (4 if f is None else 5 + len(f.encode('utf-8')))
+        rel = rel + len(data)
+    sizes = np.broadcast_to(np.asarray(rel, np.int64), (n,))
+    starts = np.zeros(n, np.int64)
+    np.cumsum(sizes[:-1], out=starts[1:])
+    total = int(sizes.sum()) if n else 0
+    buf = np.zeros(total, np.uint8)
+    words = buf.view('<u4')
+    for offset, data, lens in plan:
+        at = starts + offset
+        if lens is None:  # a constant: its padded words
+            words[(at >> 2)[:, None] + np.arange(len(data))] = data
+            continue
+        words[at >> 2] = lens + 1
+        width = data.shape[1]
+        if width:
+            inside = np.arange(width) < lens[:, None]
+            buf[((at + 4)[:, None] + np.arange(width))[inside]] = data[inside]
+    return buf.tobytes(), starts, starts + last_end
+
+
+_LEVEL_GAPS: dict[tuple[int, int], bytes] = {}
+
+
+def diagnostic_array_bodies(
+    stamp_ns: int, levels: Sequence[int], bodies: Sequence[bytes]
+) -> bytes:
+    """CDR of a DiagnosticArray (empty ``frame_id``) from its statuses' levels and bodies."""
+    parts = [
+        ENCAPSULATION,
+        struct.pack('<iI', stamp_ns // 1_000_000_000, stamp_ns % 1_000_000_000),
+        b'\x01\x00\x00\x00\x00\x00\x00\x00',
+        _U32(len(bodies)),
+    ]
+    end = 0  # offset 20 after the encapsulation: aligned
+    for level, body in zip(levels, bodies):
+        gap = _LEVEL_GAPS.get((level, end))
+        if gap is None:
+            gap = _LEVEL_GAPS[(level, end)] = bytes((level,)) + b'\0' * (3 - end)
+        parts.append(gap)
+        parts.append(body)
+        end = len(body) & 3
+    return b''.join(parts)
