@@ -1146,9 +1146,22 @@ def _column_statuses(c: StatusColumns, n: int) -> list[ComponentStatus]:
     ]
 
 
-def _reprs(values: np.ndarray) -> list[str]:
-    """``repr(float(x))`` of each element."""
-    return list(map(repr, np.asarray(values, np.float64).tolist()))
+def _reprs(values: np.ndarray) -> Field:
+    """``repr(float(x))`` of each element (each distinct value's once: the bits compared, so
+    that -0.0 and 0.0 stay apart), or the one str where all are the same."""
+    bits = np.ascontiguousarray(values, np.float64).view(np.int64)
+    if not len(bits):
+        return []
+    unique, inverse = np.unique(bits, return_inverse=True)
+    texts = list(map(repr, unique.view(np.float64).tolist()))
+    if len(texts) == 1:
+        return texts[0]
+    return [texts[i] for i in inverse.tolist()]
+
+
+def _same(texts: list[str]) -> Field:
+    """The one str where every element is it, else ``texts``."""
+    return texts[0] if texts and texts.count(texts[0]) == len(texts) else texts
 
 
 def _take(column: np.ndarray, idx: np.ndarray, before: Any, dtype: Any = np.float64) -> np.ndarray:
@@ -1260,12 +1273,12 @@ def _line_columns(
         repr(config.anchor_distance),
         repr(config.allowed_uplift),
         _reprs(values[VALUE_FIELDS[9]]),
-        list(map(str, status.tolist())),
-        models,
-        words,
+        _same(list(map(str, status.tolist()))),
+        _same(models),
+        _same(words),
     ]
-    columns += ack_columns
-    columns += [[row[e] for row in extra] for e in range(len(extra_keys))]
+    columns += [f if isinstance(f, str) else _same(f) for f in ack_columns]
+    columns += [_same([row[e] for row in extra]) for e in range(len(extra_keys))]
     keys = (
         *DIAGNOSTIC_KEYS,
         'measured_tension',
@@ -1282,7 +1295,7 @@ def _line_columns(
     return StatusColumns(
         levels,
         f'{NODE_NAME}: {config.name}',
-        messages,
+        _same(messages),
         line.hardware_id,
         keys,
         tuple(columns),

@@ -263,19 +263,15 @@ def _padded(text: str) -> bytes:
     return cdr + b'\0' * (-len(cdr) % 4)
 
 
-def _as_bytes(texts: Sequence[str], n: int) -> tuple[np.ndarray, np.ndarray]:
-    """(n, width) uint8 of the UTF-8 texts (zero-filled) and their lengths in bytes."""
+def _utf8(texts: Sequence[str], n: int) -> tuple[bytes, np.ndarray]:
+    """The UTF-8 texts one after the other, and their lengths in bytes."""
     if len(texts) != n:
         raise ValueError(f'{len(texts)} values for {n} statuses')
-    try:
-        arr = np.array(texts, dtype='S')
-        lens = np.fromiter(map(len, texts), np.int64, n)
-    except UnicodeEncodeError:
-        data = [t.encode('utf-8') for t in texts]
-        arr = np.array(data, dtype='S')
-        lens = np.fromiter(map(len, data), np.int64, n)
-    width = arr.dtype.itemsize
-    return arr.view(np.uint8).reshape(n, width), lens
+    joined = ''.join(texts)
+    if joined.isascii():
+        return joined.encode('ascii'), np.fromiter(map(len, texts), np.int64, n)
+    data = [t.encode('utf-8') for t in texts]
+    return b''.join(data), np.fromiter(map(len, data), np.int64, n)
 
 
 def status_bodies(
@@ -295,39 +291,38 @@ def status_bodies(
     fields: list[Any] = [name, message, hardware_id, None]
     for key, value in zip(keys, values):
         fields += [key, value]
-    rel: Any = 0  # each field's offset in its body: an int while every body has the same
-    plan: list[tuple[Any, Any, Any]] = []
+    # Where each field starts in its body: an int while every body has the same lengths.
+    rel: Any = 0
+    constants: list[tuple[Any, np.ndarray]] = []
+    texts: list[tuple[Any, bytes, np.ndarray]] = []
     last_end: Any = 0
     for f in fields:
-        if f is None:  # the values count
-            data = _U32(len(keys))
-        elif isinstance(f, str):
-            data = _padded(f)
+        if f is None or isinstance(f, str):
+            data = _U32(len(keys)) if f is None else _padded(f)
+            constants.append((rel, np.frombuffer(data, '<u4')))
+            last_end = rel + (4 if f is None else 5 + len(f.encode('utf-8')))
+            rel = rel + len(data)
         else:
-            chars, lens = _as_bytes(f, n)
-            plan.append((rel, chars, lens))
+            joined, lens = _utf8(f, n)
+            texts.append((rel, joined, lens))
             last_end = rel + 5 + lens
             rel = rel + 4 + ((lens + 4) & ~3)
-            continue
-        plan.append((rel, np.frombuffer(data, '<u4'), None))
-        last_end = rel + (4 if f is None else 5 + len(f.encode('utf-8')))
-        rel = rel + len(data)
     sizes = np.broadcast_to(np.asarray(rel, np.int64), (n,))
     starts = np.zeros(n, np.int64)
     np.cumsum(sizes[:-1], out=starts[1:])
-    total = int(sizes.sum()) if n else 0
-    buf = np.zeros(total, np.uint8)
+    buf = np.zeros(int(sizes.sum()) if n else 0, np.uint8)
     words = buf.view('<u4')
-    for offset, data, lens in plan:
+    for offset, data in constants:  # a constant's padded words, in every body
+        words[((starts + offset) >> 2)[:, None] + np.arange(len(data))] = data
+    for offset, joined, lens in texts:  # a text's length word, then its bytes
         at = starts + offset
-        if lens is None:  # a constant: its padded words
-            words[(at >> 2)[:, None] + np.arange(len(data))] = data
-            continue
         words[at >> 2] = lens + 1
-        width = data.shape[1]
-        if width:
-            inside = np.arange(width) < lens[:, None]
-            buf[((at + 4)[:, None] + np.arange(width))[inside]] = data[inside]
+        total = len(joined)
+        if total:
+            before = np.zeros(n, np.int64)
+            np.cumsum(lens[:-1], out=before[1:])
+            where = np.repeat(at + 4 - before, lens) + np.arange(total)
+            buf[where] = np.frombuffer(joined, np.uint8)
     return buf.tobytes(), starts, starts + last_end
 
 

@@ -210,18 +210,18 @@ class ColumnWriter:
         if not payloads:
             return
         self._define([channel_id])
+        n = len(payloads)
+        heads = np.zeros(n, _record_dtype(0))  # every message's record head at once
+        heads['op'] = Opcode.MESSAGE
+        heads['length'] = 22 + np.fromiter(map(len, payloads), np.int64, n)
+        heads['channel'] = channel_id
+        heads['sequence'] = (self._sequence[channel_id] + np.arange(n)) % (1 << 32)
+        heads['log_time'] = heads['publish_time'] = np.asarray(log_times, np.int64)
+        self._sequence[channel_id] += n
+        raw = heads.tobytes()
         parts, offsets, pos = [], [], 0
-        for t, data in zip(log_times, payloads):
-            seq = self._sequence[channel_id] % (1 << 32)
-            self._sequence[channel_id] += 1
-            head = np.zeros(1, _record_dtype(0))
-            head['op'], head['length'], head['channel'] = (
-                Opcode.MESSAGE,
-                22 + len(data),
-                channel_id,
-            )
-            head['sequence'], head['log_time'], head['publish_time'] = seq, t, t
-            parts += [head.tobytes(), data]
+        for i, data in enumerate(payloads):
+            parts += [raw[i * _HEAD : (i + 1) * _HEAD], data]
             offsets.append(pos)
             pos += _HEAD + len(data)
             if pos >= self.chunk_bytes:
