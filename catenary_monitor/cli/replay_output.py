@@ -254,14 +254,12 @@ def _snapshot_payloads(result: ReplayResult) -> tuple[list[int], list[bytes]]:
     return stamps, payloads
 
 
-_BODIES: dict[Any, bytes] = {}
-
-
 def _columns_payloads(table: SnapshotColumns) -> tuple[list[int], list[bytes]]:
     """The DiagnosticArrays of a :class:`SnapshotColumns` (every status of one shape encoded
     at once; the statuses given as objects encoded one by one, the repeated ones once)."""
     n = len(table.stamps)
     rows: list[tuple[list[int], list[bytes], int]] = []
+    cache: dict[Any, bytes] = {}  # per window: nothing kept between windows
     for group, m in table.groups:
         if isinstance(group, StatusColumns):
             buf, starts, ends = status_bodies(
@@ -272,12 +270,9 @@ def _columns_payloads(table: SnapshotColumns) -> tuple[list[int], list[bytes]]:
             continue
         levels, bodies = [], []
         for st in group:
-            body = _BODIES.get(st)
+            body = cache.get(st)
             if body is None:
-                body = status_body(st.name, st.message, st.hardware_id, st.values)
-                if len(_BODIES) >= 4096:
-                    _BODIES.clear()
-                _BODIES[st] = body
+                body = cache[st] = status_body(st.name, st.message, st.hardware_id, st.values)
             levels.append(int(st.level))
             bodies.append(body)
         rows.append((levels, bodies, m))

@@ -312,8 +312,8 @@ def status_bodies(
     np.cumsum(sizes[:-1], out=starts[1:])
     buf = np.zeros(int(sizes.sum()) if n else 0, np.uint8)
     words = buf.view('<u4')
-    for offset, data in constants:  # a constant's padded words, in every body
-        words[((starts + offset) >> 2)[:, None] + np.arange(len(data))] = data
+    for offset, padded in constants:  # a constant's padded words, in every body
+        words[((starts + offset) >> 2)[:, None] + np.arange(len(padded))] = padded
     for offset, joined, lens in texts:  # a text's length word, then its bytes
         at = starts + offset
         words[at >> 2] = lens + 1
