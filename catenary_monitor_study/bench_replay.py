@@ -366,6 +366,7 @@ def _streamed(log: Path, config: MonitorConfig, csv: Any = None, mcap: Any = Non
     from catenary_monitor.cli import replay_output as out
     from catenary_monitor.cli.replay import input_topics
     from catenary_monitor.cli.replay_stream import stream
+    from catenary_monitor.core.batch import COLUMNS
 
     names = [line.name for line in config.lines]
     tally = out.Tally(names)
@@ -380,7 +381,7 @@ def _streamed(log: Path, config: MonitorConfig, csv: Any = None, mcap: Any = Non
         if sink is not None:
             sink.write(result, dict(zip(names, window.tensions)), window.depth)
 
-    stream([log], config, take, ticks='grid', snapshots=sink is not None)
+    stream([log], config, take, ticks='grid', snapshots=COLUMNS if sink is not None else False)
     return tally, (sink.finish() if sink is not None else rows[0])
 
 

@@ -13,7 +13,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings, strategies as st
 
 from catenary_monitor.core.batch import (
+    COLUMNS,
     KIND_TENSION,
+    SnapshotColumns,
     Window,
     advance,
     recompute,
@@ -115,6 +117,30 @@ def assert_statuses_agree(got, want, stamp):
                 assert gv == wv, (stamp, g.name, key)
 
 
+def assert_columns_give(items, want):
+    """Snapshots in columns (``snapshots=COLUMNS``: :class:`SnapshotColumns`, else Snapshots)
+    are ``want`` (the Snapshots of ``snapshots=True``), string for string, and replay's
+    ``--out`` encodes both to the same DiagnosticArray bytes."""
+    from types import SimpleNamespace
+
+    from catenary_monitor.cli.replay_output import _snapshot_payloads
+
+    flat = []
+    for item in items:
+        flat += item.snapshots() if isinstance(item, SnapshotColumns) else [item]
+    flat.sort(key=lambda s: s.stamp_ns)
+    assert flat == list(want)
+    assert any(isinstance(item, SnapshotColumns) for item in items) or not want
+    got = _snapshot_payloads(SimpleNamespace(snapshots=items))
+    assert got == _snapshot_payloads(SimpleNamespace(snapshots=list(want)))
+
+
+def run_columns(twin, window, events, want):
+    """``run_log`` with ``snapshots=COLUMNS`` gives the snapshots ``want`` (see above)."""
+    result, _ = run_log(twin, window, events, snapshots=COLUMNS)
+    assert_columns_give(result.snapshots, want)
+
+
 def compare(config, tensions, depth, ticks, cuts=(), check_snapshots=True):
     """Core event by event vs advance over windows split at ``cuts``; returns the steps.
 
@@ -160,6 +186,11 @@ def compare(config, tensions, depth, ticks, cuts=(), check_snapshots=True):
     assert [s.stamp_ns for s in got_sn] == [s.stamp_ns for s in want_sn]
     for g, w in zip(got_sn, want_sn):
         assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
+    # The same in columns, window by window.
+    columns = MonitorCore(config, start)
+    for (lo, hi), r in zip(zip(bounds[:-1], bounds[1:]), results):
+        window = window_of(config, tensions, depth, ticks, lo, hi)
+        assert_columns_give(advance(columns, window, snapshots=COLUMNS).snapshots, r.snapshots)
     # The state left behind.
     got_lines, got_rest = core_state(twin)
     want_lines, want_rest = core_state(core)
@@ -400,6 +431,7 @@ def test_run_log_steps_acknowledgements_as_the_core_does():
     window = Window([tensions.get(line.name, empty) for line in config.lines], depth, ticks)
     result, twin = run_log(twin, window, acks, snapshots=True)
     want = [s.snapshot for s in steps if s.snapshot is not None]
+    run_columns(MonitorCore(config, T0_NS), window, acks, result.snapshots)
     assert [s.stamp_ns for s in result.snapshots] == [s.stamp_ns for s in want]
     for g, w in zip(result.snapshots, want):
         assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
@@ -474,6 +506,7 @@ def test_run_log_flags_runtime_changes_as_the_core_does():
     window = Window([tensions.get(line.name, empty) for line in config.lines], depth, ticks)
     result, twin = run_log(twin, window, changes, snapshots=True)
     want = [s.snapshot for s in steps if s.snapshot is not None]
+    run_columns(MonitorCore(config, T0_NS), window, changes, result.snapshots)
     assert [s.stamp_ns for s in result.snapshots] == [s.stamp_ns for s in want]
     for g, w in zip(result.snapshots, want):
         assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
@@ -530,6 +563,7 @@ def test_run_log_steps_clock_and_intake_events_as_the_core_does():
     window = Window([tensions.get(line.name, empty) for line in config.lines], depth, ticks)
     result, twin = run_log(twin, window, events, snapshots=True)
     want = [s.snapshot for s in steps if s.snapshot is not None]
+    run_columns(MonitorCore(config, T0_NS), window, events, result.snapshots)
     assert [s.stamp_ns for s in result.snapshots] == [s.stamp_ns for s in want]
     for g, w in zip(result.snapshots, want):
         assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)

@@ -9,10 +9,13 @@ import pytest
 from catenary_monitor.core.batch import OUTPUT_FIELDS
 from catenary_monitor.io.cdr import (
     diagnostic_array,
+    diagnostic_array_bodies,
     diagnostic_array_parts,
     float64_payloads,
     key_values,
     multiarray_payloads,
+    status_bodies,
+    status_body,
     status_header,
 )
 from catenary_monitor.io.mcap_fast import ColumnWriter
@@ -77,6 +80,43 @@ def test_cdr_equals_rclpy():
     ref.header.stamp.sec, ref.header.stamp.nanosec = 1_763_900_000, 123_456_789
     # rclpy leaves garbage in padding bytes: compare messages, and sizes.
     assert msg == ref and len(raw) == len(serialize_message(ref))
+
+
+def test_status_bodies_encode_what_diagnostic_array_does():
+    """Statuses of one shape encoded a column at a time (replay's --out) give the bytes of
+    the field-by-field encoder: every length mod 4, empty and non-ASCII strings, constants
+    and per-status columns, any number of statuses and keys."""
+    import random
+
+    rng = random.Random(11)
+
+    def word():
+        return ''.join(rng.choice('abé€x0.-') for _ in range(rng.randrange(0, 10)))
+
+    for trial in range(400):
+        n = rng.randrange(0, 7)
+        keys = [word() for _ in range(rng.randrange(0, 6))]
+
+        def field():
+            return word() if rng.random() < 0.4 else [word() for _ in range(n)]
+
+        name, message, hardware_id = field(), field(), field()
+        values = [field() for _ in keys]
+        buf, starts, ends = status_bodies(n, name, message, hardware_id, keys, values)
+
+        def get(f, i):
+            return f if isinstance(f, str) else f[i]
+
+        statuses = []
+        for i in range(n):
+            pairs = [(k, get(v, i)) for k, v in zip(keys, values)]
+            row = (get(name, i), get(message, i), get(hardware_id, i), pairs)
+            assert buf[starts[i] : ends[i]] == status_body(*row), (trial, i)
+            statuses.append((rng.randrange(4), *row))
+        stamp = rng.randrange(0, 1 << 60)
+        bodies = [buf[a:b] for a, b in zip(starts, ends)]
+        got = diagnostic_array_bodies(stamp, [s[0] for s in statuses], bodies)
+        assert got == diagnostic_array(stamp, statuses), trial
 
 
 @pytest.mark.parametrize('compression', ['zstd', 'lz4', 'none'])

@@ -36,7 +36,7 @@ from typing import Any, NamedTuple, Optional, Sequence
 
 import numpy as np
 
-from catenary_monitor.core.batch import ReplayResult, recompute
+from catenary_monitor.core.batch import COLUMNS, ReplayResult, recompute
 from catenary_monitor.core.config import (
     ConfigError,
     MonitorConfig,
@@ -450,7 +450,7 @@ def _stream_outputs(
                 sinks,
                 ticks=args.ticks,
                 follow_log=follow,
-                snapshots=bool(args.out),
+                snapshots=COLUMNS if args.out else False,
                 window_messages=window,
                 jobs=args.jobs,
                 report=report,

@@ -25,6 +25,8 @@ from catenary_monitor.core.batch import (
     VALUE_FIELDS,
     LineResult,
     ReplayResult,
+    SnapshotColumns,
+    StatusColumns,
     worst,
 )
 from catenary_monitor.core.monitor import (
@@ -37,10 +39,13 @@ from catenary_monitor.core.monitor import (
 )
 from catenary_monitor.core.config import MonitorConfig, config_hash, config_to_params
 from catenary_monitor.io.cdr import (
+    diagnostic_array_bodies,
     diagnostic_array_parts,
     float64_payloads,
     key_values,
     multiarray_payloads,
+    status_bodies,
+    status_body,
     status_header,
     string_message,
 )
@@ -218,10 +223,17 @@ def _event_payloads(
 
 
 def _snapshot_payloads(result: ReplayResult) -> tuple[list[int], list[bytes]]:
-    """Every snapshot of the replay as a DiagnosticArray in CDR (stamps ns, payloads)."""
+    """Every snapshot of the replay as a DiagnosticArray in CDR (stamps ns, payloads), in time
+    order (a stable sort: as :func:`catenary_monitor.core.batch.run_log` orders Snapshots)."""
     headers: dict[tuple[int, str, str, str, int], Any] = {}
-    stamps, payloads = [], []
+    stamps: list[int] = []
+    payloads: list[bytes] = []
     for snap in result.snapshots:
+        if isinstance(snap, SnapshotColumns):
+            s, p = _columns_payloads(snap)
+            stamps += s
+            payloads += p
+            continue
         parts = []
         for st in snap.statuses:
             key = (int(st.level), st.name, st.message, st.hardware_id, len(st.values))
@@ -235,6 +247,44 @@ def _snapshot_payloads(result: ReplayResult) -> tuple[list[int], list[bytes]]:
             parts.append((header, key_values(st.values)))
         stamps.append(snap.stamp_ns)
         payloads.append(diagnostic_array_parts(snap.stamp_ns, parts))
+    if any(b < a for a, b in zip(stamps, stamps[1:])):
+        order = sorted(range(len(stamps)), key=stamps.__getitem__)
+        stamps = [stamps[i] for i in order]
+        payloads = [payloads[i] for i in order]
+    return stamps, payloads
+
+
+def _columns_payloads(table: SnapshotColumns) -> tuple[list[int], list[bytes]]:
+    """The DiagnosticArrays of a :class:`SnapshotColumns` (every status of one shape encoded
+    at once; the statuses given as objects encoded one by one, the repeated ones once)."""
+    n = len(table.stamps)
+    rows: list[tuple[list[int], list[bytes], int]] = []
+    cache: dict[Any, bytes] = {}  # per window: nothing kept between windows
+    for group, m in table.groups:
+        if isinstance(group, StatusColumns):
+            buf, starts, ends = status_bodies(
+                m * n, group.name, group.message, group.hardware_id, group.keys, group.values
+            )
+            bodies = [buf[a:b] for a, b in zip(starts.tolist(), ends.tolist())]
+            rows.append((group.levels.tolist(), bodies, m))
+            continue
+        levels, bodies = [], []
+        for st in group:
+            body = cache.get(st)
+            if body is None:
+                body = cache[st] = status_body(st.name, st.message, st.hardware_id, st.values)
+            levels.append(int(st.level))
+            bodies.append(body)
+        rows.append((levels, bodies, m))
+    stamps = table.stamps.tolist()
+    payloads = []
+    for i, stamp in enumerate(stamps):
+        lv: list[int] = []
+        bd: list[bytes] = []
+        for levels, bodies, m in rows:
+            lv += levels[i::n][:m] if m > 1 else [levels[i]]
+            bd += bodies[i::n][:m] if m > 1 else [bodies[i]]
+        payloads.append(diagnostic_array_bodies(stamp, lv, bd))
     return stamps, payloads
 
 

@@ -47,7 +47,7 @@ __all__ = ['NoEventsChannel', 'Restart', 'StreamState', 'WINDOW_MESSAGES', 'stre
 WINDOW_MESSAGES = 1 << 17
 
 #: With snapshots (``--out``), a window is recomputed in parts of at most this many ticks:
-#: each tick's diagnostic snapshot and its payload take about 60 kB until written.
+#: a part's snapshots (in columns) and their payloads take about 30 kB per tick until written.
 TICKS_PER_PART = 512
 
 _TICK_PAYLOAD = string_message('{"kind": "tick"}')
@@ -108,7 +108,7 @@ def stream(
     *,
     ticks: str = 'auto',
     follow_log: bool = True,
-    snapshots: bool = False,
+    snapshots: bool | str = False,
     window_messages: Optional[int] = WINDOW_MESSAGES,
     jobs: int = 1,
     report: Optional[ReadReport] = None,

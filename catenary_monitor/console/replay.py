@@ -97,7 +97,8 @@ class ReplaySource:
         self.result = result
         self.files = [str(f) for f in files]
         self.limit = silence_limit(config.alarm.diagnostic_rate)
-        self.snapshots = result.snapshots
+        # run_replay(snapshots=True) gives Snapshots only (no SnapshotColumns)
+        self.snapshots = [s for s in result.snapshots if isinstance(s, Snapshot)]
         self.snap_t = np.array([s.stamp_ns for s in self.snapshots], np.int64) * 1e-9
         self.history = History()
         for snap in self.snapshots:

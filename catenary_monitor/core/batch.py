@@ -33,6 +33,7 @@ import numpy as np
 from catenary_monitor.core import acknowledge as alarm_ack, catenary as cat, elastic, kernels
 from catenary_monitor.core import sensor, tide_table, tide_trend
 from catenary_monitor.core.alarms import (
+    DIAGNOSTIC_KEYS,
     RANK,
     Level,
     LevelSeries,
@@ -44,6 +45,7 @@ from catenary_monitor.core.body import live as dock_live
 from catenary_monitor.core.health import tide_status
 from catenary_monitor.core.plausible import MAX_DEPTH, reading_status_array
 from catenary_monitor.core.monitor import (
+    NODE_NAME,
     NO_DEPTH,
     NO_MODEL,
     OUTPUT_FIELDS,
@@ -81,6 +83,9 @@ __all__ = [
     'LineResult',
     'WindowResult',
     'ReplayResult',
+    'COLUMNS',
+    'SnapshotColumns',
+    'StatusColumns',
     'advance',
     'run_log',
     'recompute',
@@ -196,7 +201,7 @@ class WindowResult:
 
     lines: list[LineResult]
     tide: list[Transition]
-    snapshots: list[Snapshot]
+    snapshots: list[Snapshot | SnapshotColumns]  # SnapshotColumns: snapshots=COLUMNS
     start_ns: int
     end_ns: int
     others: list[Change] = field(default_factory=list)  # e.g. the logger's
@@ -845,12 +850,15 @@ def _write_back(
         line.model = MODEL_NAMES[code]
 
 
-def advance(core: MonitorCore, window: Window, snapshots: bool = False) -> WindowResult:
+def advance(
+    core: MonitorCore, window: Window, snapshots: bool | str = False
+) -> WindowResult:
     """Step ``core`` through every event of ``window`` in vectorized code.
 
     Leaves ``core`` as ``core.step`` would, event by event (depth, tensions, tick at equal
     times), and returns what the steps did; ``snapshots=True`` also builds every diagnostic
-    snapshot the core would have made (ticks and level changes).
+    snapshot the core would have made (ticks and level changes); ``snapshots=COLUMNS``, the
+    same as one :class:`SnapshotColumns` (or Snapshots where it falls back).
     """
     if len(window.tensions) != len(core.lines):
         raise ValueError(
@@ -890,9 +898,10 @@ def advance(core: MonitorCore, window: Window, snapshots: bool = False) -> Windo
     times = [c[0] for c in (*window.tensions, window.depth, (window.ticks, None)) if len(c[0])]
     start = int(min(t[0] for t in times)) if times else core.last_ns
     end = int(max(t[-1] for t in times)) if times else core.last_ns
-    snaps: list[Snapshot] = []
+    snaps: list[Snapshot | SnapshotColumns] = []
     if snapshots:
-        snaps = _snapshots(
+        build = _snapshot_columns if snapshots == COLUMNS else _snapshots
+        made = build(
             core,
             window,
             tide,
@@ -907,6 +916,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool = False) -> Windo
             sensors,
             depth_word,
         )
+        snaps = [made] if isinstance(made, SnapshotColumns) else list(made)
     _write_tide(core, window, tide, tide_transitions)
     core.last_ns = max(core.last_ns, end)
     others = [] if dock is None else [Change('dock', tr) for tr in dock.transitions]
@@ -1076,6 +1086,322 @@ def _line_statuses(
     return out
 
 
+# --- snapshots in columns (replay's --out: encoded without a ComponentStatus per status) -------
+
+#: ``advance(..., snapshots=COLUMNS)``: the snapshots as :class:`SnapshotColumns`.
+COLUMNS = 'columns'
+
+#: A column of a :class:`StatusColumns`: a str (the same in every status) or one per status.
+Field = str | list[str]
+
+
+class StatusColumns(NamedTuple):
+    """``n`` DiagnosticStatus of one shape (the same keys), in columns: ``levels`` (n,) and
+    ``name``, ``message``, ``hardware_id`` and each key's value as :data:`Field` s."""
+
+    levels: np.ndarray
+    name: Field
+    message: Field
+    hardware_id: Field
+    keys: tuple[str, ...]
+    values: tuple[Field, ...]
+
+
+class SnapshotColumns(NamedTuple):
+    """The snapshots of a window at ``stamps`` (ns), in columns: ``groups`` of (statuses,
+    ``m``): a :class:`StatusColumns` or a list of ComponentStatus, ``m * len(stamps)`` of them,
+    snapshot ``n``'s being numbers ``k * len(stamps) + n`` for ``k < m``, groups in order.
+    They are the same snapshots as :class:`Snapshot` s (``test/test_batch.py`` compares)."""
+
+    stamps: np.ndarray
+    groups: tuple[tuple[StatusColumns | list[ComponentStatus], int], ...]
+
+    def snapshots(self) -> list[Snapshot]:
+        """The same as :class:`Snapshot` s."""
+        n = len(self.stamps)
+        rows: list[list[ComponentStatus]] = []
+        for group, m in self.groups:
+            if isinstance(group, StatusColumns):
+                rows.append(_column_statuses(group, m * n))
+            else:
+                rows.append(group)
+        out = []
+        for i, stamp in enumerate(self.stamps.tolist()):
+            statuses = [row[k * n + i] for row, (_, m) in zip(rows, self.groups) for k in range(m)]
+            out.append(Snapshot(stamp, tuple(statuses)))
+        return out
+
+
+def _column_statuses(c: StatusColumns, n: int) -> list[ComponentStatus]:
+    def get(f: Field, i: int) -> str:
+        return f if isinstance(f, str) else f[i]
+
+    return [
+        ComponentStatus(
+            get(c.name, i),
+            Level(int(c.levels[i])),
+            get(c.message, i),
+            get(c.hardware_id, i),
+            tuple((k, get(v, i)) for k, v in zip(c.keys, c.values)),
+        )
+        for i in range(n)
+    ]
+
+
+def _reprs(values: np.ndarray) -> Field:
+    """``repr(float(x))`` of each element (each distinct value's once: the bits compared, so
+    that -0.0 and 0.0 stay apart), or the one str where all are the same."""
+    bits = np.ascontiguousarray(values, np.float64).view(np.int64)
+    if not len(bits):
+        return []
+    unique, inverse = np.unique(bits, return_inverse=True)
+    texts = list(map(repr, unique.view(np.float64).tolist()))
+    if len(texts) == 1:
+        return texts[0]
+    return [texts[i] for i in inverse.tolist()]
+
+
+def _same(texts: list[str]) -> Field:
+    """The one str where every element is it, else ``texts``."""
+    return texts[0] if texts and texts.count(texts[0]) == len(texts) else texts
+
+
+def _take(column: np.ndarray, idx: np.ndarray, before: Any, dtype: Any = np.float64) -> np.ndarray:
+    """``column[idx]`` where ``idx >= 0``, else ``before``."""
+    out = np.full(len(idx), before, dtype)
+    ok = idx >= 0
+    if ok.any():
+        out[ok] = column[idx[ok]]
+    return out
+
+
+def _at(index: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """``index[at]`` where ``at >= 0``, else -1."""
+    return _take(index, at, -1, np.int64)
+
+
+def _line_columns(
+    line: LineState,
+    r: LineResult,
+    series: LevelSeries,
+    steps: _Steps,
+    stamps: np.ndarray,
+    tt: np.ndarray,
+    before: _Before,
+    acks: alarm_ack.AckSeries,
+    dock: Optional[_Dock] = None,
+    k: int = 0,
+    sensors: Optional[_Sensors] = None,
+) -> StatusColumns:
+    """:func:`_line_statuses` in columns (the same strings, built per key, not per status)."""
+    n = len(stamps)
+    at = np.searchsorted(steps.times, stamps, 'right') - 1
+    ok = at >= 0
+    at_list = at.tolist()
+    # Level, message and the alarm's condition (after step i, else as before the window).
+    levels = _take(series.levels, at, int(before.level), np.int64)
+    messages, conditions = [], []
+    for i, level in zip(at_list, levels.tolist()):
+        if i < 0:
+            messages.append(before.message)
+            conditions.append(alarm_ack.condition(before.level, before.latches))
+        elif level == Level.OK:
+            messages.append('OK')
+            conditions.append('none')
+        else:
+            messages.append(series.message_at(i))
+            conditions.append(alarm_ack.condition(Level(level), series.active_at(i)))
+    # The newest solve's values, status and model.
+    s = _at(steps.s_idx, at)
+    values = {
+        key: _take(r.values[key], s, float(before.values[j]))
+        for j, key in enumerate(VALUE_FIELDS)
+    }
+    status = _take(r.status, s, int(before.status), np.int64)
+    names = [*MODEL_NAMES, before.model]  # -1: the model before the window
+    models = [names[c] for c in _take(r.model_codes, s, -1, np.int64).tolist()]
+    t = _at(steps.t_idx, at)
+    ts = _take(tt * 1e-9, t, float(before.tension_s))
+    age = stamps * 1e-9 - ts
+    # The sensor state word and the dock model's values.
+    words = [before.sensor_word] * n
+    extra: list[list[str]] = [[v for _, v in before.extra] for _ in range(n)]
+    extra_keys = tuple(key for key, _ in before.extra)
+    j_tick = _at(steps.k_idx, at)
+    codes = [sensor.OK] * n
+    if sensors is not None:
+        for n_, (i, j) in enumerate(zip(at_list, j_tick.tolist())):
+            if i >= 0:
+                codes[n_] = sensors.before[k] if j < 0 else int(sensors.codes[j, k])
+                words[n_] = sensor.line_word(codes[n_])
+    if dock is not None:
+        inconsistent = series.active('inconsistent')
+        inputs = dock.decision.line_inputs
+        for n_, (i, j) in enumerate(zip(at_list, j_tick.tolist())):
+            if i >= 0:
+                dock_in = dock.before[2][k] if j < 0 else tuple(inputs[j, k])
+                latched = bool(inconsistent[i])
+                pairs = line_dock_values(latched, dock_in)
+                extra_keys = tuple(key for key, _ in pairs)
+                extra[n_] = [v for _, v in pairs]
+                words[n_] = sensor.line_word(
+                    codes[n_], dock_live.sensor_state(latched, dock_in[0])
+                )
+    # The alarm's acknowledgement values (the same for every step between two changes).
+    j_ack = np.searchsorted(acks.changes, at, 'right') - 1
+    j_ack[~ok] = -1
+    ack_cache: dict[int, list[tuple[str, str]]] = {}
+    ack_rows = []
+    for j in j_ack.tolist():
+        row = ack_cache.get(j)
+        if row is None:
+            state = acks.before if j < 0 else acks.states[j]
+            row = ack_cache[j] = alarm_ack.diagnostic_values(state, Level.OK, before.latches)
+        ack_rows.append(row)
+    ack_keys = tuple(key for key, _ in ack_rows[0]) if n else ()
+    ack_columns: list[Field] = []
+    for a, key in enumerate(ack_keys):
+        if key == 'alarm_condition':
+            ack_columns.append(conditions)
+        else:
+            ack_columns.append([row[a][1] for row in ack_rows])
+    # The keys and values, in line_status's order.
+    config = line.config
+    reprs = {key: _reprs(values[key]) for key in DIAGNOSTIC_KEYS if key in values}
+    columns: list[Field] = [reprs.get(key, 'nan') for key in DIAGNOSTIC_KEYS]
+    columns += [
+        reprs['top_tension'] if 'top_tension' in reprs else _reprs(values[VALUE_FIELDS[0]]),
+        _reprs(age),
+        repr(config.anchor_distance),
+        repr(config.allowed_uplift),
+        _reprs(values[VALUE_FIELDS[9]]),
+        _same(list(map(str, status.tolist()))),
+        _same(models),
+        _same(words),
+    ]
+    columns += [f if isinstance(f, str) else _same(f) for f in ack_columns]
+    columns += [_same([row[e] for row in extra]) for e in range(len(extra_keys))]
+    keys = (
+        *DIAGNOSTIC_KEYS,
+        'measured_tension',
+        'tension_age',
+        'anchor_distance',
+        'allowed_uplift',
+        'anchor_angle_deg',
+        'solver_status',
+        'model',
+        'sensor_state',
+        *ack_keys,
+        *extra_keys,
+    )
+    return StatusColumns(
+        levels,
+        f'{NODE_NAME}: {config.name}',
+        _same(messages),
+        line.hardware_id,
+        keys,
+        tuple(columns),
+    )
+
+
+def _stack(columns: list[StatusColumns], n: int) -> StatusColumns:
+    """Statuses of one shape, one after the other (constants kept where all agree)."""
+
+    def cat(fields: list[Field]) -> Field:
+        if all(isinstance(f, str) for f in fields) and len(set(fields)) == 1:
+            return fields[0]
+        out: list[str] = []
+        for f in fields:
+            out += [f] * n if isinstance(f, str) else f
+        return out
+
+    return StatusColumns(
+        np.concatenate([c.levels for c in columns]),
+        cat([c.name for c in columns]),
+        cat([c.message for c in columns]),
+        cat([c.hardware_id for c in columns]),
+        columns[0].keys,
+        tuple(cat([c.values[j] for c in columns]) for j in range(len(columns[0].keys))),
+    )
+
+
+def _snapshot_columns(
+    core: MonitorCore,
+    window: Window,
+    tide: _Tide,
+    results: list[LineResult],
+    series: list[LevelSeries],
+    steps: list[_Steps],
+    depth_before: tuple[float, float, bool, float],
+    tide_before: tuple[Level, str],
+    lines_before: list[_Before],
+    acks: list[alarm_ack.AckSeries],
+    dock: Optional[_Dock] = None,
+    sensors: Optional[_Sensors] = None,
+    depth_word: str = 'ok',
+) -> SnapshotColumns | list[Snapshot]:
+    """The snapshots of :func:`_snapshots` in columns (its Snapshot s where the statuses
+    after the dock do not have one shape)."""
+    parts = [window.ticks, tide.times[_changed(tide.level, tide_before[0])]]
+    parts += [r.step_ns[_changed(r.step_level, b.level)] for r, b in zip(results, lines_before)]
+    stamps = np.unique(np.concatenate(parts))
+    n = len(stamps)
+    guards = [core.guard_components(stamp * 1e-9) for stamp in stamps.tolist()]
+    shapes = {tuple((g.name, len(g.values)) for g in row) for row in guards}
+    if len(shapes) > 1:
+        return _snapshots(
+            core, window, tide, results, series, steps, depth_before, tide_before,
+            lines_before, acks, dock, sensors, depth_word,
+        )  # fmt: skip
+    lines = [
+        _line_columns(
+            core.lines[k],
+            results[k],
+            series[k],
+            steps[k],
+            stamps,
+            window.tensions[k][0],
+            lines_before[k],
+            acks[k],
+            dock,
+            k,
+            sensors,
+        )
+        for k in range(len(results))
+    ]
+    groups: list[tuple[StatusColumns | list[ComponentStatus], int]] = []
+    if lines and len({c.keys for c in lines}) == 1:
+        groups.append((_stack(lines, n), len(lines)))
+    else:
+        groups += [(c, 1) for c in lines]
+    dd, dv = window.depth
+    tide_at = np.searchsorted(tide.times, stamps, 'right') - 1
+    depth_at = np.searchsorted(dd, stamps, 'right') - 1
+    tick_at = np.searchsorted(window.ticks, stamps, 'right') - 1
+    tides = []
+    for n_, stamp in enumerate(stamps.tolist()):
+        i, j = int(tide_at[n_]), int(depth_at[n_])
+        depth = float(dv[j]) if j >= 0 else depth_before[0]
+        depth_s = float(dd[j] * 1e-9) if j >= 0 else depth_before[1]
+        rate = float(tide.rates[j]) if j >= 0 else depth_before[3]
+        state = tide_before if i < 0 else _tide_at(core, tide, i)
+        word = depth_word if i < 0 else sensor.DEPTH_STATES[int(tide.sensor[i])]
+        age = stamp * 1e-9 - depth_s
+        forecast = forecast_word(core.config, rate)
+        tides.append(tide_component(state, core.depth_id, depth, age, rate, word, forecast))
+    groups.append((tides, 1))
+    logger = ComponentStatus(
+        'catenary_monitor: logger', core.logger[0], core.logger[1], core.logger_id, ()
+    )
+    groups.append(([logger] * n, 1))
+    if dock is not None:
+        groups.append(([_dock_status(core, dock, int(i)) for i in tick_at.tolist()], 1))
+    m = len(guards[0]) if guards else 0
+    if m:
+        groups.append(([row[g] for g in range(m) for row in guards], m))
+    return SnapshotColumns(stamps, tuple(groups))
+
+
 def worst(result: LineResult) -> dict[str, Optional[dict[str, float]]]:
     """Worst value and its time (s) of each margin and force of a line over the log.
 
@@ -1143,17 +1469,19 @@ def _concat(parts: list[LineResult]) -> LineResult:
 
 
 def run_log(
-    core: MonitorCore, window: Window, events: Any = (), snapshots: bool = False
+    core: MonitorCore, window: Window, events: Any = (), snapshots: bool | str = False
 ) -> tuple[WindowResult, MonitorCore]:
     """Advance ``core`` over a whole log; return the results and the core at the end.
 
     ``window`` holds the input columns and the ticks; ``events`` the other records in time
     order: logger changes and reconfigurations, stepped by the core itself between vectorized
     stretches (inputs before an event's stamp go first), and :class:`Start` (the monitor
-    restarted: a new core, blind again, from then on).
+    restarted: a new core, blind again, from then on). ``snapshots=COLUMNS``: the snapshots
+    are the pieces' in order, then the events' (not merged in time: see
+    :class:`SnapshotColumns`).
     """
     pieces: list[WindowResult] = []
-    extra: list[Snapshot] = []
+    extra: list[Snapshot | SnapshotColumns] = []
     others: list[Change] = []
     lo: Optional[int] = None
     for event in [*events, None]:
@@ -1174,7 +1502,9 @@ def run_log(
     others = sorted(
         others + [c for p in pieces for c in p.others], key=lambda c: c.transition.time
     )
-    snaps = sorted([s for p in pieces for s in p.snapshots] + extra, key=lambda s: s.stamp_ns)
+    snaps = [s for p in pieces for s in p.snapshots] + extra
+    if snapshots != COLUMNS:
+        snaps.sort(key=lambda s: s.stamp_ns)  # type: ignore[union-attr]
     return (
         WindowResult(
             lines,

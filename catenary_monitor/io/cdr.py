@@ -13,7 +13,7 @@ Alignment follows the CDR rule: a primitive of size n starts at an offset (count
 from __future__ import annotations
 
 import struct
-from typing import Callable, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -229,3 +229,122 @@ def string_text(data: bytes) -> str:
     if n < 1 or 8 + n > len(data) or data[8 + n - 1] != 0:
         raise ValueError('not a CDR std_msgs/String')
     return data[8 : 8 + n - 1].decode('utf-8')
+
+
+# --- DiagnosticArrays of many snapshots, a status shape at a time (replay's --out) ------------
+# A status after its level byte is its "body": name, message, hardware_id, the values count
+# and the key/value strings, all 4-byte aligned from the body's start (which is aligned: the
+# level byte and the padding after it come before). :func:`status_bodies` encodes the bodies
+# of n statuses of one shape (the same keys) at once with numpy; :func:`diagnostic_array_bodies`
+# puts one array together from its statuses' levels and bodies. Both give the bytes
+# :func:`diagnostic_array` gives (the tests compare them).
+
+Field = str | Sequence[str]
+
+
+def status_body(
+    name: str, message: str, hardware_id: str, values: Sequence[tuple[str, str]]
+) -> bytes:
+    """The body of one DiagnosticStatus (everything after its level byte and padding)."""
+    buf = bytearray(ENCAPSULATION)  # a stand-in prefix: the body starts aligned
+    _string(buf, name)
+    _string(buf, message)
+    _string(buf, hardware_id)
+    buf += _PAD[-len(buf) % 4]
+    buf += _U32(len(values))
+    buf += key_values(values)
+    return bytes(buf[4:])
+
+
+def _padded(text: str) -> bytes:
+    """A CDR string padded with zeros to a multiple of 4 bytes."""
+    data = text.encode('utf-8')
+    cdr = _U32(len(data) + 1) + data + b'\0'
+    return cdr + b'\0' * (-len(cdr) % 4)
+
+
+def _utf8(texts: Sequence[str], n: int) -> tuple[bytes, np.ndarray]:
+    """The UTF-8 texts one after the other, and their lengths in bytes."""
+    if len(texts) != n:
+        raise ValueError(f'{len(texts)} values for {n} statuses')
+    joined = ''.join(texts)
+    if joined.isascii():
+        return joined.encode('ascii'), np.fromiter(map(len, texts), np.int64, n)
+    data = [t.encode('utf-8') for t in texts]
+    return b''.join(data), np.fromiter(map(len, data), np.int64, n)
+
+
+def status_bodies(
+    n: int,
+    name: Field,
+    message: Field,
+    hardware_id: Field,
+    keys: Sequence[str],
+    values: Sequence[Field],
+) -> tuple[bytes, np.ndarray, np.ndarray]:
+    """The bodies (see :func:`status_body`) of ``n`` statuses with the same ``keys``: each of
+    ``name``, ``message``, ``hardware_id`` and ``values`` (one per key) is a str (the same in
+    every status) or a sequence of ``n`` str. Returns (buffer, starts, ends): body ``i`` is
+    ``buffer[starts[i]:ends[i]]``."""
+    if len(values) != len(keys):
+        raise ValueError(f'{len(values)} value columns for {len(keys)} keys')
+    fields: list[Any] = [name, message, hardware_id, None]
+    for key, value in zip(keys, values):
+        fields += [key, value]
+    # Where each field starts in its body: an int while every body has the same lengths.
+    rel: Any = 0
+    constants: list[tuple[Any, np.ndarray]] = []
+    texts: list[tuple[Any, bytes, np.ndarray]] = []
+    last_end: Any = 0
+    for f in fields:
+        if f is None or isinstance(f, str):
+            data = _U32(len(keys)) if f is None else _padded(f)
+            constants.append((rel, np.frombuffer(data, '<u4')))
+            last_end = rel + (4 if f is None else 5 + len(f.encode('utf-8')))
+            rel = rel + len(data)
+        else:
+            joined, lens = _utf8(f, n)
+            texts.append((rel, joined, lens))
+            last_end = rel + 5 + lens
+            rel = rel + 4 + ((lens + 4) & ~3)
+    sizes = np.broadcast_to(np.asarray(rel, np.int64), (n,))
+    starts = np.zeros(n, np.int64)
+    np.cumsum(sizes[:-1], out=starts[1:])
+    buf = np.zeros(int(sizes.sum()) if n else 0, np.uint8)
+    words = buf.view('<u4')
+    for offset, padded in constants:  # a constant's padded words, in every body
+        words[((starts + offset) >> 2)[:, None] + np.arange(len(padded))] = padded
+    for offset, joined, lens in texts:  # a text's length word, then its bytes
+        at = starts + offset
+        words[at >> 2] = lens + 1
+        total = len(joined)
+        if total:
+            before = np.zeros(n, np.int64)
+            np.cumsum(lens[:-1], out=before[1:])
+            where = np.repeat(at + 4 - before, lens) + np.arange(total)
+            buf[where] = np.frombuffer(joined, np.uint8)
+    return buf.tobytes(), starts, starts + last_end
+
+
+_LEVEL_GAPS: dict[tuple[int, int], bytes] = {}
+
+
+def diagnostic_array_bodies(
+    stamp_ns: int, levels: Sequence[int], bodies: Sequence[bytes]
+) -> bytes:
+    """CDR of a DiagnosticArray (empty ``frame_id``) from its statuses' levels and bodies."""
+    parts = [
+        ENCAPSULATION,
+        struct.pack('<iI', stamp_ns // 1_000_000_000, stamp_ns % 1_000_000_000),
+        b'\x01\x00\x00\x00\x00\x00\x00\x00',
+        _U32(len(bodies)),
+    ]
+    end = 0  # offset 20 after the encapsulation: aligned
+    for level, body in zip(levels, bodies):
+        gap = _LEVEL_GAPS.get((level, end))
+        if gap is None:
+            gap = _LEVEL_GAPS[(level, end)] = bytes((level,)) + b'\0' * (3 - end)
+        parts.append(gap)
+        parts.append(body)
+        end = len(body) & 3
+    return b''.join(parts)

@@ -9,11 +9,16 @@ message). Output: ROS 2 profile, zstd (or lz4, or no) chunk compression, chunk C
 indexes and a summary with chunk indexes and statistics -- what ``mcap.reader``, rosbag2 and
 Foxglove expect.
 
-Schema and Channel records are written top-level before the first chunk that uses them.
+Schema and Channel records are written top-level before the first chunk that uses them. The
+Chunk Index records wait for the summary in a temporary file, not in memory (a long replay
+writes tens of thousands of chunks; kept as objects, they scattered the heap and its peak grew
+with the log).
 """
 
 from __future__ import annotations
 
+import shutil
+import tempfile
 import zlib
 from collections import OrderedDict
 from typing import IO, Any, Mapping, Optional, Sequence
@@ -93,7 +98,8 @@ class ColumnWriter:
         self._schemas: OrderedDict[int, Schema] = OrderedDict()
         self._channels: OrderedDict[int, Channel] = OrderedDict()
         self._written: set[tuple[int, int]] = set()
-        self._chunk_indexes: list[ChunkIndex] = []
+        self._chunk_indexes = tempfile.TemporaryFile()  # the Chunk Index records, serialized
+        self._chunk_count = 0
         self._metadata_indexes: list[MetadataIndex] = []
         self._counts: dict[int, int] = {}
         self._sequence: dict[int, int] = {}
@@ -210,18 +216,18 @@ class ColumnWriter:
         if not payloads:
             return
         self._define([channel_id])
+        n = len(payloads)
+        heads = np.zeros(n, _record_dtype(0))  # every message's record head at once
+        heads['op'] = Opcode.MESSAGE
+        heads['length'] = 22 + np.fromiter(map(len, payloads), np.int64, n)
+        heads['channel'] = channel_id
+        heads['sequence'] = (self._sequence[channel_id] + np.arange(n)) % (1 << 32)
+        heads['log_time'] = heads['publish_time'] = np.asarray(log_times, np.int64)
+        self._sequence[channel_id] += n
+        raw = heads.tobytes()
         parts, offsets, pos = [], [], 0
-        for t, data in zip(log_times, payloads):
-            seq = self._sequence[channel_id] % (1 << 32)
-            self._sequence[channel_id] += 1
-            head = np.zeros(1, _record_dtype(0))
-            head['op'], head['length'], head['channel'] = (
-                Opcode.MESSAGE,
-                22 + len(data),
-                channel_id,
-            )
-            head['sequence'], head['log_time'], head['publish_time'] = seq, t, t
-            parts += [head.tobytes(), data]
+        for i, data in enumerate(payloads):
+            parts += [raw[i * _HEAD : (i + 1) * _HEAD], data]
             offsets.append(pos)
             pos += _HEAD + len(data)
             if pos >= self.chunk_bytes:
@@ -294,19 +300,20 @@ class ColumnWriter:
             pieces.append(raw)
             pos += len(raw)
         self.stream.write(b''.join(pieces))
-        self._chunk_indexes.append(
-            ChunkIndex(
-                message_start_time=start,
-                message_end_time=end,
-                chunk_start_offset=chunk_start,
-                chunk_length=chunk_length,
-                message_index_offsets=offsets_by_channel,
-                message_index_length=pos - index_start,
-                compression=self.compression,
-                compressed_size=len(compressed),
-                uncompressed_size=len(data),
-            )
-        )
+        index = RecordBuilder()
+        ChunkIndex(
+            message_start_time=start,
+            message_end_time=end,
+            chunk_start_offset=chunk_start,
+            chunk_length=chunk_length,
+            message_index_offsets=offsets_by_channel,
+            message_index_length=pos - index_start,
+            compression=self.compression,
+            compressed_size=len(compressed),
+            uncompressed_size=len(data),
+        ).write(index)
+        self._chunk_indexes.write(index.end())
+        self._chunk_count += 1
 
     # ------------------------------------------------------------------ summary
     def finish(self) -> None:
@@ -315,48 +322,56 @@ class ColumnWriter:
         self._define(list(self._channels))
         self._record(DataEnd(data_section_crc=0))
         summary_start = self.stream.tell()
-        builder = RecordBuilder()
+        pos = summary_start
         offsets: list[SummaryOffset] = []
 
-        def group(opcode: int, records: Sequence[Any]) -> None:
-            if not records:
+        def group(opcode: int, data: bytes) -> None:
+            nonlocal pos
+            if not data:
                 return
-            start = builder.count
+            offsets.append(
+                SummaryOffset(group_opcode=opcode, group_start=pos, group_length=len(data))
+            )
+            self.stream.write(data)
+            pos += len(data)
+
+        def encode(records: Sequence[Any]) -> bytes:
+            builder = RecordBuilder()
             for r in records:
                 r.write(builder)
-            offsets.append(
-                SummaryOffset(
-                    group_opcode=opcode,
-                    group_start=summary_start + start,
-                    group_length=builder.count - start,
-                )
-            )
+            return builder.end()
 
-        group(Opcode.SCHEMA, list(self._schemas.values()))
-        group(Opcode.CHANNEL, list(self._channels.values()))
+        group(Opcode.SCHEMA, encode(list(self._schemas.values())))
+        group(Opcode.CHANNEL, encode(list(self._channels.values())))
         group(
             Opcode.STATISTICS,
-            [
-                Statistics(
-                    message_count=self.messages,
-                    schema_count=len(self._schemas),
-                    channel_count=len(self._channels),
-                    attachment_count=0,
-                    metadata_count=len(self._metadata_indexes),
-                    chunk_count=len(self._chunk_indexes),
-                    message_start_time=self._start or 0,
-                    message_end_time=self._end,
-                    channel_message_counts=dict(self._counts),
-                )
-            ],
+            encode(
+                [
+                    Statistics(
+                        message_count=self.messages,
+                        schema_count=len(self._schemas),
+                        channel_count=len(self._channels),
+                        attachment_count=0,
+                        metadata_count=len(self._metadata_indexes),
+                        chunk_count=self._chunk_count,
+                        message_start_time=self._start or 0,
+                        message_end_time=self._end,
+                        channel_message_counts=dict(self._counts),
+                    )
+                ]
+            ),
         )
-        group(Opcode.CHUNK_INDEX, self._chunk_indexes)
-        group(Opcode.METADATA_INDEX, self._metadata_indexes)
-        offset_start = summary_start + builder.count
-        for o in offsets:
-            o.write(builder)
-        summary = builder.end()
-        self.stream.write(summary)
+        length = self._chunk_indexes.tell()
+        if length:
+            chunk_group = dict(group_opcode=Opcode.CHUNK_INDEX, group_start=pos)
+            offsets.append(SummaryOffset(**chunk_group, group_length=length))
+            self._chunk_indexes.seek(0)
+            shutil.copyfileobj(self._chunk_indexes, self.stream, 1 << 20)
+            pos += length
+        self._chunk_indexes.close()
+        group(Opcode.METADATA_INDEX, encode(self._metadata_indexes))
+        offset_start = pos
+        self.stream.write(encode(offsets))
         footer = RecordBuilder()
         Footer(
             summary_start=summary_start, summary_offset_start=offset_start, summary_crc=0
