@@ -40,6 +40,15 @@ scan = Extension(
     optional=True,
 )
 
+# Two loops of the vectorized replay (core/batch.py: the step merge and the picks). Optional:
+# without it batch.py runs its numpy passes, which give the same arrays.
+steps = Extension(
+    'catenary_monitor.core._steps',
+    sources=['catenary_monitor/core/_steps.c'],
+    extra_compile_args=['-O2'],
+    optional=True,
+)
+
 setup(
     name=package_name,
     version='0.2.0',
@@ -82,7 +91,7 @@ setup(
         ],
         'peers': ['moorpy', 'pycatenary'],
     },
-    ext_modules=[kernels, scan],
+    ext_modules=[kernels, scan, steps],
     zip_safe=False,
     maintainer='catenary_monitor developers',
     maintainer_email='catenary-monitor@example.org',

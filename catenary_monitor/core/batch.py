@@ -67,6 +67,11 @@ from catenary_monitor.core.monitor import (
 )
 from catenary_monitor.core.solve import ALL_KEYS, STATUS_MESSAGES, Status
 
+try:  # two of the loops below in C, next to this file (optional: else the numpy passes)
+    from catenary_monitor.core import _steps  # type: ignore[attr-defined]
+except ImportError:  # not built
+    _steps = None
+
 __all__ = [
     'OUTPUT_FIELDS',
     'VALUE_FIELDS',
@@ -384,11 +389,17 @@ def tick_grid(start_ns: int, end_ns: int, rate_hz: float) -> np.ndarray:
 
 def _merge(dd: np.ndarray, tt: np.ndarray, kk: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Merge sorted depth, tension and tick times (ties: depth, tension, tick): (times, kinds)."""
+    n = len(dd) + len(tt) + len(kk)
+    if _steps is not None and dd.dtype == tt.dtype == kk.dtype == np.int64:
+        times = np.empty(n, np.int64)
+        kinds = np.empty(n, np.int8)
+        sources = [np.ascontiguousarray(c) for c in (dd, tt, kk)]
+        if _steps.merge3(*sources, times, kinds, KIND_DEPTH, KIND_TENSION, KIND_TICK):
+            return times, kinds
     before = np.searchsorted
     pos_d = np.arange(len(dd)) + before(tt, dd, 'left') + before(kk, dd, 'left')
     pos_t = np.arange(len(tt)) + before(dd, tt, 'right') + before(kk, tt, 'left')
     pos_k = np.arange(len(kk)) + before(dd, kk, 'right') + before(tt, kk, 'right')
-    n = len(dd) + len(tt) + len(kk)
     times = np.empty(n, np.int64)
     kinds = np.empty(n, np.int8)
     for pos, src, kind in (
@@ -638,6 +649,16 @@ def _line_steps(line: LineState, tt: np.ndarray, window: Window) -> _Steps:
 
 def _pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
     """``column[idx]`` where ``idx >= 0``, else ``before`` (the core's value before the window)."""
+    if (
+        _steps is not None
+        and len(column)
+        and column.dtype == np.float64
+        and isinstance(before, (float, int))
+        and idx.dtype == np.int64
+    ):
+        out = np.empty(len(idx))
+        _steps.pick(np.ascontiguousarray(idx), np.ascontiguousarray(column), before, out)
+        return out
     if not len(column):
         return np.full(len(idx), before)
     # ``before`` appended last: index -1 (``_newest``'s "none yet") picks it, one gather; the
