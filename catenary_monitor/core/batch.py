@@ -31,7 +31,8 @@ from typing import Any, NamedTuple, Optional
 import numpy as np
 
 from catenary_monitor.core import acknowledge as alarm_ack, catenary as cat, elastic, kernels
-from catenary_monitor.core import sensor, tide_table, tide_trend
+from catenary_monitor.core import holding as holding_rule, sensor, tide_table, tide_trend
+from catenary_monitor.core import uncertainty
 from catenary_monitor.core.alarms import (
     RANK,
     Level,
@@ -706,9 +707,17 @@ def _solve_line(
 
 
 def _add_derived(core: MonitorCore, lc: LineConfig, values: dict[str, np.ndarray]) -> None:
-    """The bounds and the holding values from the nominal values, as the core adds them."""
-    values.update(bound_values([lc], core.config.alarm.depth_accuracy, values))
-    values.update(holding_values([lc], values))
+    """The bounds and the holding values from the nominal values, as the core adds them
+    (all NaN, without their passes, for a line with neither accuracies nor holding data)."""
+    n = len(values['top_tension'])
+    if core.config.alarm.depth_accuracy > 0.0 or lc.tension_accuracy is not None:
+        values.update(bound_values([lc], core.config.alarm.depth_accuracy, values))
+    else:
+        values.update({key: np.full(n, np.nan) for key in uncertainty.FIELDS})
+    if lc.chain_length is not None or lc.anchor_holding is not None:
+        values.update(holding_values([lc], values))
+    else:
+        values.update({key: np.full(n, np.nan) for key in holding_rule.FIELDS})
 
 
 def _solve_at(
@@ -724,6 +733,8 @@ def _solve_at(
     used: Optional[np.ndarray] = None
     if lc.ea is not None:
         values, status, used = _solve_updates_elastic(lc, tension, h)
+    elif kernels.AVAILABLE:  # solve_updates' kernel path, which needs no critical parameter
+        values, status = _solve_updates_kernel(lc, tension, h)
     else:
         a_depth = critical_parameters(lc, dv + lc.hook_height)
         a_before = critical_parameters(lc, np.array([core.depth + lc.hook_height]))[0]
