@@ -40,6 +40,7 @@ from __future__ import annotations
 import mmap
 import os
 import struct
+import sys
 import threading
 import zlib
 from dataclasses import dataclass, field
@@ -55,6 +56,8 @@ if TYPE_CHECKING:
 try:  # the per-record loops in C, next to this file (optional: else the numpy passes)
     from catenary_monitor.io import _scan  # type: ignore[attr-defined]
 except ImportError:  # not built
+    _scan = None
+if sys.byteorder != 'little':  # the C loops read MCAP's little-endian fields natively
     _scan = None
 
 __all__ = [
