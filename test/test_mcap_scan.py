@@ -25,6 +25,7 @@ from test_mcap_hostile import (  # noqa: F401 - rerun on the numpy path
 )
 from test_mcap_read import (  # noqa: F401 - rerun on the numpy path
     TOPICS,
+    chunk_layout,
     sample_messages,
     test_big_endian_and_bad_payloads,
     test_corrupt_chunk_is_skipped_and_counted,
@@ -228,3 +229,30 @@ def test_gather_and_columns_match_numpy() -> None:
         )
     assert results[0] == results[1]
     assert results[0][1] and results[0][2] == 300 - len(range(5, 300, 11)) - 2
+
+
+def test_read_ahead_gives_the_same_windows_and_stops_with_its_caller(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The reader thread of iter_windows (one batch ahead) changes nothing handed out or
+    reported; a caller that stops early leaves no thread behind."""
+    import threading
+
+    files = write_own_log(tmp_path / 'own', 900, chunk_size=2500, compression='zstd')
+    blob = bytearray(files[0].read_bytes())
+    start, end, _ = chunk_layout(files[0])[2]
+    blob[(start + end) // 2] ^= 0x10  # a corrupt chunk: reported on the way
+    files[0].write_bytes(blob)
+    got = []
+    for ahead in (0, 1, 2):
+        monkeypatch.setattr(mcap_read, 'READ_AHEAD', ahead)
+        got.append(_both(files[0], windows=True))
+    assert got[0] == got[1] == got[2]
+    assert got[0][1].skips, 'the damage is reported'
+    monkeypatch.setattr(mcap_read, 'READ_AHEAD', 1)
+    big = write_own_log(tmp_path / 'big', 30000, chunk_size=4096, compression='zstd')
+    windows = iter_windows(big, TOPICS, window_messages=20)  # batches of 64 KiB: about 20
+    next(windows)
+    assert any(t.name == 'mcap-read-ahead' for t in threading.enumerate())
+    windows.close()
+    assert not any(t.name == 'mcap-read-ahead' for t in threading.enumerate())

@@ -39,6 +39,7 @@ from __future__ import annotations
 
 import mmap
 import os
+import queue
 import struct
 import sys
 import threading
@@ -1563,7 +1564,7 @@ def iter_windows(
             files, wanted, raw_wanted, report, jobs, batch
         )
     else:
-        source = (
+        source = _read_ahead(
             b
             for i, p in enumerate(files)
             for b in iter_file_blocks(p, i, wanted, raw_wanted, report, batch)
@@ -1597,6 +1598,55 @@ def iter_windows(
     if all(counts[t] == 0 for t in wanted):
         raise EmptyLogError(wanted, report)
     yield LogWindow(columns, raw, None, True, sum(sizes), n)
+
+
+#: Batches a reader thread may decode ahead of the windows handed out (0: no thread).
+READ_AHEAD = 1
+
+
+def _read_ahead(source: Iterator[FileBlocks]) -> Iterator[FileBlocks]:
+    """``source``'s batches, in order, decoded up to :data:`READ_AHEAD` batches ahead by a
+    thread of this process: the next batch is decompressed (zstd and the CRC run without the
+    GIL) while the caller recomputes the last window. Its errors are raised here, at the batch
+    where they occurred; when the caller stops early, the thread stops after its batch."""
+    if READ_AHEAD <= 0:
+        yield from source
+        return
+    slots: queue.Queue[tuple[bool, Any]] = queue.Queue(maxsize=READ_AHEAD)
+    stop = threading.Event()
+    end = object()
+
+    def put(item: tuple[bool, Any]) -> bool:
+        while not stop.is_set():
+            try:
+                slots.put(item, timeout=0.05)
+                return True
+            except queue.Full:
+                continue
+        return False
+
+    def run() -> None:
+        try:
+            for blocks in source:
+                if not put((True, blocks)):
+                    return
+            put((True, end))
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller, raised there
+            put((False, exc))
+
+    thread = threading.Thread(target=run, name='mcap-read-ahead', daemon=True)
+    thread.start()
+    try:
+        while True:
+            ok, item = slots.get()
+            if not ok:
+                raise item
+            if item is end:
+                return
+            yield item
+    finally:
+        stop.set()
+        thread.join()
 
 
 def _reorder_report(report: ReadReport, given: list[str]) -> None:
