@@ -30,6 +30,25 @@ kernels = Extension(
     optional=True,
 )
 
+# The MCAP reader's per-record loops (index check, gathers, Float64 columns). Optional too:
+# without it the reader runs its numpy passes, which give the same results
+# (catenary_monitor.io.mcap_read, test/test_mcap_scan.py).
+scan = Extension(
+    'catenary_monitor.io._scan',
+    sources=['catenary_monitor/io/_scan.c'],
+    extra_compile_args=['-O2'],
+    optional=True,
+)
+
+# Two loops of the vectorized replay (core/batch.py: the step merge and the picks). Optional:
+# without it batch.py runs its numpy passes, which give the same arrays.
+steps = Extension(
+    'catenary_monitor.core._steps',
+    sources=['catenary_monitor/core/_steps.c'],
+    extra_compile_args=['-O2'],
+    optional=True,
+)
+
 setup(
     name=package_name,
     version='0.2.0',
@@ -72,7 +91,7 @@ setup(
         ],
         'peers': ['moorpy', 'pycatenary'],
     },
-    ext_modules=[kernels],
+    ext_modules=[kernels, scan, steps],
     zip_safe=False,
     maintainer='catenary_monitor developers',
     maintainer_email='catenary-monitor@example.org',

@@ -712,11 +712,8 @@ def replay_levels(
     if initial is None:
         initial = alarm.initial(float(t[0]) if n else 0.0)
     default = AlarmInputs()
-    x = {
-        k: np.broadcast_to(np.asarray(inputs.get(k, getattr(default, k)), dtype=np.float64), (n,))
-        for k in _INPUT_FIELDS
-    }
-    status = np.broadcast_to(np.asarray(inputs.get('status', 0), dtype=np.int64), (n,))
+    x = {k: _column(inputs.get(k, getattr(default, k)), np.float64, n) for k in _INPUT_FIELDS}
+    status = _column(inputs.get('status', 0), np.int64, n)
     stale_t, stale_d = _stale_columns(alarm, t, x, inputs.get('depth_stale'))
     stale = stale_t | stale_d
     classified = _classify_columns(alarm, x, status, stale)
@@ -742,6 +739,12 @@ def replay_levels(
     )
 
 
+def _column(value: Any, dtype: Any, n: int) -> np.ndarray:
+    """``value`` as an array of ``dtype`` broadcast to (n,) (a column of that shape as is)."""
+    column = np.asarray(value, dtype=dtype)
+    return column if column.shape == (n,) else np.broadcast_to(column, (n,))
+
+
 def _stale_columns(
     alarm: LineAlarm, t: np.ndarray, x: dict[str, np.ndarray], depth_stale: Any
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -762,8 +765,16 @@ def _classify_columns(
 ) -> dict[str, np.ndarray]:
     """Each condition's code (breach, clear, hold) per update, as :meth:`LineAlarm._classify`."""
 
+    fresh = ~stale
+
     def codes(breach: np.ndarray, clear: np.ndarray) -> np.ndarray:
-        return np.where(breach, _BREACH, np.where(clear & ~stale, _CLEAR, _HOLD)).astype(np.int8)
+        # _HOLD 0, _BREACH 1, _CLEAR 2: breach wins, a clear counts only on fresh inputs
+        out = np.bitwise_and(clear, fresh, dtype=bool)
+        out &= ~breach
+        code = out.view(np.int8)
+        code <<= 1
+        code |= breach.view(np.int8) if breach.dtype == bool else breach.astype(np.int8)
+        return code
 
     cfg = alarm.config
     level_up = alarm.uplift_clear_level

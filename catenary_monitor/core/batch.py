@@ -31,7 +31,8 @@ from typing import Any, NamedTuple, Optional
 import numpy as np
 
 from catenary_monitor.core import acknowledge as alarm_ack, catenary as cat, elastic, kernels
-from catenary_monitor.core import sensor, tide_table, tide_trend
+from catenary_monitor.core import holding as holding_rule, sensor, tide_table, tide_trend
+from catenary_monitor.core import uncertainty
 from catenary_monitor.core.alarms import (
     DIAGNOSTIC_KEYS,
     RANK,
@@ -68,6 +69,11 @@ from catenary_monitor.core.monitor import (
     tide_with_sensor,
 )
 from catenary_monitor.core.solve import ALL_KEYS, STATUS_MESSAGES, Status
+
+try:  # two of the loops below in C, next to this file (optional: else the numpy passes)
+    from catenary_monitor.core import _steps  # type: ignore[attr-defined]
+except ImportError:  # not built
+    _steps = None
 
 __all__ = [
     'OUTPUT_FIELDS',
@@ -389,11 +395,17 @@ def tick_grid(start_ns: int, end_ns: int, rate_hz: float) -> np.ndarray:
 
 def _merge(dd: np.ndarray, tt: np.ndarray, kk: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Merge sorted depth, tension and tick times (ties: depth, tension, tick): (times, kinds)."""
+    n = len(dd) + len(tt) + len(kk)
+    if _steps is not None and dd.dtype == tt.dtype == kk.dtype == np.int64:
+        times = np.empty(n, np.int64)
+        kinds = np.empty(n, np.int8)
+        sources = [np.ascontiguousarray(c) for c in (dd, tt, kk)]
+        if _steps.merge3(*sources, times, kinds, KIND_DEPTH, KIND_TENSION, KIND_TICK):
+            return times, kinds
     before = np.searchsorted
     pos_d = np.arange(len(dd)) + before(tt, dd, 'left') + before(kk, dd, 'left')
     pos_t = np.arange(len(tt)) + before(dd, tt, 'right') + before(kk, tt, 'left')
     pos_k = np.arange(len(kk)) + before(dd, kk, 'right') + before(tt, kk, 'right')
-    n = len(dd) + len(tt) + len(kk)
     times = np.empty(n, np.int64)
     kinds = np.empty(n, np.int8)
     for pos, src, kind in (
@@ -645,6 +657,16 @@ def _line_steps(line: LineState, tt: np.ndarray, window: Window) -> _Steps:
 
 def _pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
     """``column[idx]`` where ``idx >= 0``, else ``before`` (the core's value before the window)."""
+    if (
+        _steps is not None
+        and len(column)
+        and column.dtype == np.float64
+        and isinstance(before, (float, int))
+        and idx.dtype == np.int64
+    ):
+        out = np.empty(len(idx))
+        _steps.pick(np.ascontiguousarray(idx), np.ascontiguousarray(column), before, out)
+        return out
     if not len(column):
         return np.full(len(idx), before)
     # ``before`` appended last: index -1 (``_newest``'s "none yet") picks it, one gather; the
@@ -692,9 +714,17 @@ def _solve_line(
 
 
 def _add_derived(core: MonitorCore, lc: LineConfig, values: dict[str, np.ndarray]) -> None:
-    """The bounds and the holding values from the nominal values, as the core adds them."""
-    values.update(bound_values([lc], core.config.alarm.depth_accuracy, values))
-    values.update(holding_values([lc], values))
+    """The bounds and the holding values from the nominal values, as the core adds them
+    (all NaN, without their passes, for a line with neither accuracies nor holding data)."""
+    n = len(values['top_tension'])
+    if core.config.alarm.depth_accuracy > 0.0 or lc.tension_accuracy is not None:
+        values.update(bound_values([lc], core.config.alarm.depth_accuracy, values))
+    else:
+        values.update({key: np.full(n, np.nan) for key in uncertainty.FIELDS})
+    if lc.chain_length is not None or lc.anchor_holding is not None:
+        values.update(holding_values([lc], values))
+    else:
+        values.update({key: np.full(n, np.nan) for key in holding_rule.FIELDS})
 
 
 def _solve_at(
@@ -710,6 +740,8 @@ def _solve_at(
     used: Optional[np.ndarray] = None
     if lc.ea is not None:
         values, status, used = _solve_updates_elastic(lc, tension, h)
+    elif kernels.AVAILABLE:  # solve_updates' kernel path, which needs no critical parameter
+        values, status = _solve_updates_kernel(lc, tension, h)
     else:
         a_depth = critical_parameters(lc, dv + lc.hook_height)
         a_before = critical_parameters(lc, np.array([core.depth + lc.hook_height]))[0]

@@ -39,7 +39,9 @@ from __future__ import annotations
 
 import mmap
 import os
+import queue
 import struct
+import sys
 import threading
 import zlib
 from dataclasses import dataclass, field
@@ -51,6 +53,13 @@ from numpy.lib.stride_tricks import as_strided, sliding_window_view
 
 if TYPE_CHECKING:
     import zstandard
+
+try:  # the per-record loops in C, next to this file (optional: else the numpy passes)
+    from catenary_monitor.io import _scan  # type: ignore[attr-defined]
+except ImportError:  # not built
+    _scan = None
+if sys.byteorder != 'little':  # the C loops read MCAP's little-endian fields natively
+    _scan = None
 
 __all__ = [
     'FLOAT64_TYPE',
@@ -794,6 +803,10 @@ class _Scanner:
             for cid, at, count in p.indexes
             if count
         ]
+        if _scan is not None:
+            g, gaps, bad = self._locate_c(arr, entries, starts, sizes)
+            indexed &= ~bad
+            return self._walk_gaps(pieces, buf, g, gaps, starts, sizes, piece_ends, indexed)
         g = np.empty(0, np.int64)
         e = np.empty(0, np.int64)
         owner = np.empty(0, np.int64)
@@ -839,11 +852,43 @@ class _Scanner:
         edge_e = np.concatenate((e, starts, piece_ends))
         order = np.lexsort((edge_e, edge_s))
         edge_s, edge_e = edge_s[order], edge_e[order]
-        gaps = np.flatnonzero(edge_e[:-1] < edge_s[1:])
+        at = np.flatnonzero(edge_e[:-1] < edge_s[1:])
+        gaps = np.stack((edge_e[at], edge_s[at + 1]), axis=1)
+        return self._walk_gaps(pieces, buf, g, gaps, starts, sizes, piece_ends, indexed)
+
+    def _locate_c(
+        self, arr: np.ndarray, entries: list[tuple[int, int, int, int]], starts: np.ndarray,
+        sizes: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The index check of :meth:`_locate_messages` in C (``_scan.locate``): the covered
+        record starts (sorted), the byte ranges between them to walk (n, 2) and the chunks
+        whose entries failed."""
+        k = len(starts)
+        table = np.array(entries, np.int64).reshape(-1, 4)
+        total = int(table[:, 3].sum())
+        g = np.empty(total, np.int64)
+        bad = np.zeros(k, np.uint8)
+        gaps = np.empty((total + k, 2), np.int64)
+        ng, ngaps = _scan.locate(arr, self.data_arr, table, starts, sizes, g, bad, gaps)
+        return g[:ng], gaps[:ngaps], bad.view(bool)
+
+    def _walk_gaps(
+        self,
+        pieces: list[_Piece],
+        buf: bytes | memoryview,
+        g: np.ndarray,
+        gaps: np.ndarray,
+        starts: np.ndarray,
+        sizes: np.ndarray,
+        piece_ends: np.ndarray,
+        indexed: np.ndarray,
+    ) -> tuple[bytes | memoryview, np.ndarray]:
+        """Walk the byte ranges that no checked index entry covers; return the buffer and
+        every Message record start (sorted)."""
+        k = len(pieces)
         found: list[int] = []
         rewalk: set[int] = set()
-        for i in gaps.tolist():
-            a, b = int(edge_e[i]), int(edge_s[i + 1])
+        for a, b in gaps.tolist():
             piece = int(np.searchsorted(starts, a, 'right')) - 1
             stop = self._walk(buf, a, b, found)
             if stop != b:
@@ -854,7 +899,7 @@ class _Scanner:
         if rewalk:
             drop = np.zeros(k, bool)
             drop[list(rewalk)] = True
-            g = g[~drop[owner]]
+            g = g[~drop[np.searchsorted(starts, g, 'right') - 1]]
             found = [f for f in found if not drop[int(np.searchsorted(starts, f, 'right')) - 1]]
             for piece in sorted(rewalk):
                 a, b = int(starts[piece]), int(piece_ends[piece])
@@ -1137,6 +1182,10 @@ def _gather(arr: np.ndarray, positions: np.ndarray, width: int) -> np.ndarray:
     """The ``width`` bytes at each position as an (n, width) uint8 array: a strided view (no
     copy) when the positions are evenly spaced (one topic type, one chunk run), else a copy."""
     n = len(positions)
+    if _scan is not None:
+        out = np.empty((n, width), np.uint8)
+        _scan.gather(arr, np.ascontiguousarray(positions, np.int64), width, out)
+        return out
     if n > 1:
         first, step = int(positions[0]), int(positions[1] - positions[0])
         if step >= width and int(positions[-1]) == first + step * (n - 1):
@@ -1300,13 +1349,43 @@ def iter_file_blocks(
 def _block_columns(scanner: '_Scanner', block: '_Block') -> Columns:
     """A block's Float64 messages as (log time ns, value) per topic (file order within each);
     payloads that are not a CDR Float64 are reported as damage and counted out."""
+    names = scanner.topic_names
+    if _scan is not None:  # one C pass: the same columns, grouped by topic
+        n = len(block.offsets)
+        t, v = np.empty(n, np.int64), np.empty(n, np.float64)
+        counts = np.empty(len(names), np.int64)
+        good, bad = _scan.float64_columns(
+            block.buf,
+            np.ascontiguousarray(block.offsets, np.int64),
+            np.ascontiguousarray(block.lengths, np.int64),
+            np.ascontiguousarray(block.channels, np.uint16),
+            scanner.topic_lut,
+            len(names),
+            t,
+            v,
+            counts,
+        )
+        if bad:
+            scanner.skip(
+                block.file_offset,
+                'bad_payload',
+                f'{bad} message(s) not a 12-byte CDR Float64',
+                bad,
+            )
+        scanner.file_report.messages += good
+        out: Columns = {}
+        start = 0
+        for topic, count in enumerate(counts.tolist()):
+            if count:
+                out[names[topic]] = (t[start : start + count], v[start : start + count])
+                start += count
+        return out
     t, v, topic_of_row, bad = _extract_float64(block, scanner.topic_lut)
     if bad:
         scanner.skip(
             block.file_offset, 'bad_payload', f'{bad} message(s) not a 12-byte CDR Float64', bad
         )
     scanner.file_report.messages += len(t)
-    names = scanner.topic_names
     first = int(topic_of_row[0]) if len(t) else -1
     if len(t) and np.all(topic_of_row == first):
         return {names[first]: (t, v)}
@@ -1485,7 +1564,7 @@ def iter_windows(
             files, wanted, raw_wanted, report, jobs, batch
         )
     else:
-        source = (
+        source = _read_ahead(
             b
             for i, p in enumerate(files)
             for b in iter_file_blocks(p, i, wanted, raw_wanted, report, batch)
@@ -1519,6 +1598,55 @@ def iter_windows(
     if all(counts[t] == 0 for t in wanted):
         raise EmptyLogError(wanted, report)
     yield LogWindow(columns, raw, None, True, sum(sizes), n)
+
+
+#: Batches a reader thread may decode ahead of the windows handed out (0: no thread).
+READ_AHEAD = 1
+
+
+def _read_ahead(source: Iterator[FileBlocks]) -> Iterator[FileBlocks]:
+    """``source``'s batches, in order, decoded up to :data:`READ_AHEAD` batches ahead by a
+    thread of this process: the next batch is decompressed (zstd and the CRC run without the
+    GIL) while the caller recomputes the last window. Its errors are raised here, at the batch
+    where they occurred; when the caller stops early, the thread stops after its batch."""
+    if READ_AHEAD <= 0:
+        yield from source
+        return
+    slots: queue.Queue[tuple[bool, Any]] = queue.Queue(maxsize=READ_AHEAD)
+    stop = threading.Event()
+    end = object()
+
+    def put(item: tuple[bool, Any]) -> bool:
+        while not stop.is_set():
+            try:
+                slots.put(item, timeout=0.05)
+                return True
+            except queue.Full:
+                continue
+        return False
+
+    def run() -> None:
+        try:
+            for blocks in source:
+                if not put((True, blocks)):
+                    return
+            put((True, end))
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller, raised there
+            put((False, exc))
+
+    thread = threading.Thread(target=run, name='mcap-read-ahead', daemon=True)
+    thread.start()
+    try:
+        while True:
+            ok, item = slots.get()
+            if not ok:
+                raise item
+            if item is end:
+                return
+            yield item
+    finally:
+        stop.set()
+        thread.join()
 
 
 def _reorder_report(report: ReadReport, given: list[str]) -> None:

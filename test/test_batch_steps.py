@@ -1,0 +1,77 @@
+"""The replay's C loops (catenary_monitor/core/_steps.c) against batch.py's numpy passes.
+
+The step merge and the picks must give the same arrays (values, dtypes) either way; the
+core-agreement tests of test_batch.py also run here on the numpy path (they run on the C path
+in their own file).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import catenary_monitor.core.batch as batch
+
+from test_batch import (  # noqa: F401 - rerun on the numpy path
+    test_advance_equals_the_core_on_a_storm_with_dropouts,
+    test_advance_in_several_windows_equals_one_core,
+    test_coincident_times_and_synthetic_ticks_and_on_delay,
+    test_late_first_depth_and_lines_without_tension,
+    test_random_schedules_with_equal_stamps,
+)
+
+STEPS = batch._steps
+
+
+@pytest.fixture(autouse=True)
+def numpy_path(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every test of this file starts on the numpy path (the imported ones stay there)."""
+    monkeypatch.setattr(batch, '_steps', None)
+
+
+def _both(fn, *args):
+    batch._steps = None
+    slow = fn(*args)
+    batch._steps = STEPS
+    try:
+        fast = fn(*args)
+    finally:
+        batch._steps = None
+    return fast, slow
+
+
+def test_the_c_loops_are_built() -> None:
+    assert STEPS is not None, 'core/_steps.c is not built: python setup.py build_ext --inplace'
+
+
+def test_merge_matches_numpy_with_ties_and_empty_columns() -> None:
+    rng = np.random.default_rng(3)
+    for trial in range(300):
+        cols = []
+        for _ in range(3):
+            n = int(rng.integers(0, 40)) if trial % 5 else 0
+            cols.append(np.sort(rng.integers(0, 30, n)).astype(np.int64))  # many equal stamps
+        (tf, kf), (ts, ks) = _both(batch._merge, *cols)
+        assert np.array_equal(tf, ts) and np.array_equal(kf, ks)
+        assert tf.dtype == ts.dtype and kf.dtype == ks.dtype
+
+
+def test_merge_refuses_unsorted_columns() -> None:
+    """(batch._merge then takes its numpy path, whose contract is sorted columns too.)"""
+    dd, tt, kk = np.array([5, 1], np.int64), np.array([2, 3], np.int64), np.zeros(0, np.int64)
+    assert not STEPS.merge3(dd, tt, kk, np.empty(4, np.int64), np.empty(4, np.int8), 0, 1, 2)
+
+
+def test_pick_matches_numpy() -> None:
+    rng = np.random.default_rng(4)
+    for trial in range(200):
+        n, m = int(rng.integers(0, 30)), int(rng.integers(0, 30))
+        column = rng.normal(size=m)
+        column[rng.random(m) < 0.2] = np.nan
+        idx = np.sort(rng.integers(-1, m, n)) if m else np.full(n, -1)
+        for before in (float('nan'), 2.5, 7, True, np.float64(-1.0)):
+            fast, slow = _both(batch._pick, idx.astype(np.int64), column, before)
+            assert fast.dtype == slow.dtype
+            assert np.array_equal(fast, slow, equal_nan=True)
+    with pytest.raises(IndexError):
+        STEPS.pick(np.array([3], np.int64), np.zeros(3), 0.0, np.empty(1))
