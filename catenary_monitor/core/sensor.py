@@ -137,21 +137,38 @@ def samples(
     values = np.asarray(values, np.float64)
     stamps = np.asarray(stamps, np.float64)
     good = np.isfinite(values)
-    idx = np.flatnonzero(good)
-    v, t = values[idx], stamps[idx]
-    pv = np.concatenate([[mem.value], v[:-1]])
-    pt = np.concatenate([[mem.stamp], t[:-1]])
-    with np.errstate(invalid='ignore'):
-        d = np.abs(v - pv)
-        change = _steps(pv, v, resolution)
-        spike = d > rate * (t - pt + jitter) + resolution
-    ch = np.maximum.accumulate(np.concatenate([[mem.changed], np.where(change, t, _NEVER)]))
-    sp = np.maximum.accumulate(np.concatenate([[mem.spiked], np.where(spike, t, _NEVER)]))
-    at = np.cumsum(good)  # position in ch / sp after each reading (0: the memory's)
+    every = bool(good.all())
+    idx = None if every else np.flatnonzero(good)
+    # the memory's reading first, then the finite readings (one pass per quantity)
+    vv = _after(mem.value, values if idx is None else values[idx])
+    tt = _after(mem.stamp, stamps if idx is None else stamps[idx])
+    with np.errstate(invalid='ignore', divide='ignore'):
+        d = np.abs(np.diff(vv))
+        if resolution > 0.0:
+            q = np.floor(vv / resolution)
+            change = ~(q[1:] == q[:-1])
+        else:
+            change = ~(vv[1:] == vv[:-1])
+        spike = d > rate * (np.diff(tt) + jitter) + resolution
+    ch = _after(mem.changed, np.where(change, tt[1:], _NEVER))
+    sp = _after(mem.spiked, np.where(spike, tt[1:], _NEVER))
+    np.maximum.accumulate(ch, out=ch)
+    np.maximum.accumulate(sp, out=sp)
     final = mem
-    if len(idx):
-        final = Memory(float(v[-1]), float(t[-1]), float(ch[-1]), float(sp[-1]))
+    if len(vv) > 1:
+        final = Memory(float(vv[-1]), float(tt[-1]), float(ch[-1]), float(sp[-1]))
+    if every:
+        return ch[1:], sp[1:], final
+    at = np.cumsum(good)  # position in ch / sp after each reading (0: the memory's)
     return ch[at], sp[at], final
+
+
+def _after(first: float, rest: np.ndarray) -> np.ndarray:
+    """``[first, *rest]`` as a new float64 array."""
+    out = np.empty(len(rest) + 1)
+    out[0] = first
+    out[1:] = rest
+    return out
 
 
 def _moved_since(changed: np.ndarray, depth_changed: np.ndarray) -> np.ndarray:
