@@ -984,6 +984,46 @@ def _changed(levels: np.ndarray, before: Level) -> np.ndarray:
     return np.flatnonzero(np.diff(levels, prepend=np.int8(before)))
 
 
+def _snapshot_stamps(
+    window: Window,
+    tide: _Tide,
+    results: list[LineResult],
+    tide_before: tuple[Level, str],
+    lines_before: list[_Before],
+) -> np.ndarray:
+    """The stamps of the window's snapshots: its ticks and every level change [ns]."""
+    parts = [window.ticks, tide.times[_changed(tide.level, tide_before[0])]]
+    parts += [r.step_ns[_changed(r.step_level, b.level)] for r, b in zip(results, lines_before)]
+    return np.unique(np.concatenate(parts))
+
+
+def _tide_statuses(
+    core: MonitorCore,
+    window: Window,
+    tide: _Tide,
+    stamps: np.ndarray,
+    depth_before: tuple[float, float, bool, float],
+    tide_before: tuple[Level, str],
+    depth_word: str,
+) -> list[ComponentStatus]:
+    """The tide status at each of ``stamps`` [ns]."""
+    dd, dv = window.depth
+    tide_at = np.searchsorted(tide.times, stamps, 'right') - 1
+    depth_at = np.searchsorted(dd, stamps, 'right') - 1
+    out = []
+    for n, stamp in enumerate(stamps.tolist()):
+        i, j = int(tide_at[n]), int(depth_at[n])
+        depth = float(dv[j]) if j >= 0 else depth_before[0]
+        depth_s = float(dd[j] * 1e-9) if j >= 0 else depth_before[1]
+        rate = float(tide.rates[j]) if j >= 0 else depth_before[3]
+        state = tide_before if i < 0 else _tide_at(core, tide, i)
+        word = depth_word if i < 0 else sensor.DEPTH_STATES[int(tide.sensor[i])]
+        age = stamp * 1e-9 - depth_s
+        forecast = forecast_word(core.config, rate)
+        out.append(tide_component(state, core.depth_id, depth, age, rate, word, forecast))
+    return out
+
+
 def _snapshots(
     core: MonitorCore,
     window: Window,
@@ -1001,12 +1041,8 @@ def _snapshots(
 ) -> list[Snapshot]:
     """Every snapshot the core made in the window (ticks and level changes), built from the
     vectorized results."""
-    parts = [window.ticks, tide.times[_changed(tide.level, tide_before[0])]]
-    parts += [r.step_ns[_changed(r.step_level, b.level)] for r, b in zip(results, lines_before)]
-    stamps = np.unique(np.concatenate(parts))
-    dd, dv = window.depth
-    tide_at = np.searchsorted(tide.times, stamps, 'right') - 1
-    depth_at = np.searchsorted(dd, stamps, 'right') - 1
+    stamps = _snapshot_stamps(window, tide, results, tide_before, lines_before)
+    tides = _tide_statuses(core, window, tide, stamps, depth_before, tide_before, depth_word)
     columns = [
         _line_statuses(
             core.lines[k],
@@ -1029,16 +1065,8 @@ def _snapshots(
     )
     out = []
     for n, stamp in enumerate(stamps.tolist()):
-        i, j = int(tide_at[n]), int(depth_at[n])
-        depth = float(dv[j]) if j >= 0 else depth_before[0]
-        depth_s = float(dd[j] * 1e-9) if j >= 0 else depth_before[1]
-        rate = float(tide.rates[j]) if j >= 0 else depth_before[3]
-        state = tide_before if i < 0 else _tide_at(core, tide, i)
-        word = depth_word if i < 0 else sensor.DEPTH_STATES[int(tide.sensor[i])]
         statuses = [col[n] for col in columns]
-        age = stamp * 1e-9 - depth_s
-        forecast = forecast_word(core.config, rate)
-        statuses.append(tide_component(state, core.depth_id, depth, age, rate, word, forecast))
+        statuses.append(tides[n])
         statuses.append(logger)
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))
@@ -1374,9 +1402,7 @@ def _snapshot_columns(
 ) -> SnapshotColumns | list[Snapshot]:
     """The snapshots of :func:`_snapshots` in columns (its Snapshot s where the statuses
     after the dock do not have one shape)."""
-    parts = [window.ticks, tide.times[_changed(tide.level, tide_before[0])]]
-    parts += [r.step_ns[_changed(r.step_level, b.level)] for r, b in zip(results, lines_before)]
-    stamps = np.unique(np.concatenate(parts))
+    stamps = _snapshot_stamps(window, tide, results, tide_before, lines_before)
     n = len(stamps)
     guards = [core.guard_components(stamp * 1e-9) for stamp in stamps.tolist()]
     shapes = {tuple((g.name, len(g.values)) for g in row) for row in guards}
@@ -1406,21 +1432,8 @@ def _snapshot_columns(
         groups.append((_stack(lines, n), len(lines)))
     else:
         groups += [(c, 1) for c in lines]
-    dd, dv = window.depth
-    tide_at = np.searchsorted(tide.times, stamps, 'right') - 1
-    depth_at = np.searchsorted(dd, stamps, 'right') - 1
     tick_at = np.searchsorted(window.ticks, stamps, 'right') - 1
-    tides = []
-    for n_, stamp in enumerate(stamps.tolist()):
-        i, j = int(tide_at[n_]), int(depth_at[n_])
-        depth = float(dv[j]) if j >= 0 else depth_before[0]
-        depth_s = float(dd[j] * 1e-9) if j >= 0 else depth_before[1]
-        rate = float(tide.rates[j]) if j >= 0 else depth_before[3]
-        state = tide_before if i < 0 else _tide_at(core, tide, i)
-        word = depth_word if i < 0 else sensor.DEPTH_STATES[int(tide.sensor[i])]
-        age = stamp * 1e-9 - depth_s
-        forecast = forecast_word(core.config, rate)
-        tides.append(tide_component(state, core.depth_id, depth, age, rate, word, forecast))
+    tides = _tide_statuses(core, window, tide, stamps, depth_before, tide_before, depth_word)
     groups.append((tides, 1))
     logger = ComponentStatus(
         'catenary_monitor: logger', core.logger[0], core.logger[1], core.logger_id, ()
