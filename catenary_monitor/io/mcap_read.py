@@ -1230,12 +1230,18 @@ def _split_topics(
     not one mask pass per topic."""
     order = np.argsort(topic_of_row, kind='stable')
     counts = np.bincount(topic_of_row)
-    ts, vs = t[order], v[order]
+    return _slices_by_topic(names, counts, t[order], v[order])
+
+
+def _slices_by_topic(
+    names: list[str], counts: np.ndarray, t: np.ndarray, v: np.ndarray
+) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Columns per topic from times and values grouped by topic (``counts`` per topic index)."""
     out: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     start = 0
     for topic, count in enumerate(counts.tolist()):
         if count:
-            out[names[topic]] = (ts[start : start + count], vs[start : start + count])
+            out[names[topic]] = (t[start : start + count], v[start : start + count])
             start += count
     return out
 
@@ -1373,13 +1379,7 @@ def _block_columns(scanner: '_Scanner', block: '_Block') -> Columns:
                 bad,
             )
         scanner.file_report.messages += good
-        out: Columns = {}
-        start = 0
-        for topic, count in enumerate(counts.tolist()):
-            if count:
-                out[names[topic]] = (t[start : start + count], v[start : start + count])
-                start += count
-        return out
+        return _slices_by_topic(names, counts, t, v)
     t, v, topic_of_row, bad = _extract_float64(block, scanner.topic_lut)
     if bad:
         scanner.skip(
