@@ -934,19 +934,10 @@ def advance(
     if snapshots:
         build = _snapshot_columns if snapshots == COLUMNS else _snapshots
         made = build(
-            core,
-            window,
-            tide,
-            results,
-            series,
-            steps,
-            depth_before,
-            tide_before,
-            lines_before,
-            acks,
-            dock,
-            sensors,
-            depth_word,
+            _Made(
+                core, window, tide, results, series, steps, depth_before, tide_before,
+                lines_before, acks, dock, sensors, depth_word,
+            )  # fmt: skip
         )
         snaps = [made] if isinstance(made, SnapshotColumns) else list(made)
     _write_tide(core, window, tide, tide_transitions)
@@ -1024,41 +1015,45 @@ def _tide_statuses(
     return out
 
 
-def _snapshots(
-    core: MonitorCore,
-    window: Window,
-    tide: _Tide,
-    results: list[LineResult],
-    series: list[LevelSeries],
-    steps: list[_Steps],
-    depth_before: tuple[float, float, bool, float],
-    tide_before: tuple[Level, str],
-    lines_before: list[_Before],
-    acks: list[alarm_ack.AckSeries],
-    dock: Optional[_Dock] = None,
-    sensors: Optional[_Sensors] = None,
-    depth_word: str = 'ok',
-) -> list[Snapshot]:
+class _Made(NamedTuple):
+    """What a window's recompute made, from which its snapshots are built."""
+
+    core: MonitorCore
+    window: Window
+    tide: _Tide
+    results: list[LineResult]
+    series: list[LevelSeries]
+    steps: list[_Steps]
+    depth_before: tuple[float, float, bool, float]
+    tide_before: tuple[Level, str]
+    lines_before: list[_Before]
+    acks: list[alarm_ack.AckSeries]
+    dock: Optional[_Dock] = None
+    sensors: Optional[_Sensors] = None
+    depth_word: str = 'ok'
+
+    def line_parts(self, k: int) -> tuple[
+        LineState, LineResult, LevelSeries, _Steps, np.ndarray, _Before,
+        alarm_ack.AckSeries, Optional[_Dock], Optional[_Sensors],
+    ]:  # fmt: skip
+        """Line ``k``'s state, result, levels, steps, tension times, state before the window,
+        acknowledgements, and the window's dock and sensor states."""
+        return (
+            self.core.lines[k], self.results[k], self.series[k], self.steps[k],
+            self.window.tensions[k][0], self.lines_before[k], self.acks[k], self.dock,
+            self.sensors,
+        )  # fmt: skip
+
+
+def _snapshots(m: _Made) -> list[Snapshot]:
     """Every snapshot the core made in the window (ticks and level changes), built from the
     vectorized results."""
-    stamps = _snapshot_stamps(window, tide, results, tide_before, lines_before)
-    tides = _tide_statuses(core, window, tide, stamps, depth_before, tide_before, depth_word)
-    columns = [
-        _line_statuses(
-            core.lines[k],
-            results[k],
-            series[k],
-            steps[k],
-            stamps,
-            window.tensions[k][0],
-            lines_before[k],
-            acks[k],
-            dock,
-            k,
-            sensors,
-        )
-        for k in range(len(results))
-    ]
+    core, window, tide, dock = m.core, m.window, m.tide, m.dock
+    stamps = _snapshot_stamps(window, tide, m.results, m.tide_before, m.lines_before)
+    tides = _tide_statuses(
+        core, window, tide, stamps, m.depth_before, m.tide_before, m.depth_word
+    )
+    columns = [_line_statuses(m, k, stamps) for k in range(len(m.results))]
     tick_at = np.searchsorted(window.ticks, stamps, 'right') - 1
     logger = ComponentStatus(
         'catenary_monitor: logger', core.logger[0], core.logger[1], core.logger_id, ()
@@ -1085,20 +1080,9 @@ def _dock_status(core: MonitorCore, dock: _Dock, i: int) -> ComponentStatus:
     return dock_component((level, message), dock_live.dock_values(dock.decision, i))
 
 
-def _line_statuses(
-    line: LineState,
-    r: LineResult,
-    series: LevelSeries,
-    steps: _Steps,
-    stamps: np.ndarray,
-    tt: np.ndarray,
-    before: _Before,
-    acks: alarm_ack.AckSeries,
-    dock: Optional[_Dock] = None,
-    k: int = 0,
-    sensors: Optional[_Sensors] = None,
-) -> list[ComponentStatus]:
+def _line_statuses(m: _Made, k: int, stamps: np.ndarray) -> list[ComponentStatus]:
     """The line's status in each snapshot (as after its newest step at or before the stamp)."""
+    line, r, series, steps, tt, before, acks, dock, sensors = m.line_parts(k)
     at = np.searchsorted(steps.times, stamps, 'right') - 1
     models = r.model_codes  # once per window, not once per snapshot
     inconsistent = series.active('inconsistent') if dock is not None else None
@@ -1240,20 +1224,9 @@ def _at(index: np.ndarray, at: np.ndarray) -> np.ndarray:
     return _take(index, at, -1, np.int64)
 
 
-def _line_columns(
-    line: LineState,
-    r: LineResult,
-    series: LevelSeries,
-    steps: _Steps,
-    stamps: np.ndarray,
-    tt: np.ndarray,
-    before: _Before,
-    acks: alarm_ack.AckSeries,
-    dock: Optional[_Dock] = None,
-    k: int = 0,
-    sensors: Optional[_Sensors] = None,
-) -> StatusColumns:
+def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
     """:func:`_line_statuses` in columns (the same strings, built per key, not per status)."""
+    line, r, series, steps, tt, before, acks, dock, sensors = m.line_parts(k)
     n = len(stamps)
     at = np.searchsorted(steps.times, stamps, 'right') - 1
     ok = at >= 0
@@ -1385,55 +1358,26 @@ def _stack(columns: list[StatusColumns], n: int) -> StatusColumns:
     )
 
 
-def _snapshot_columns(
-    core: MonitorCore,
-    window: Window,
-    tide: _Tide,
-    results: list[LineResult],
-    series: list[LevelSeries],
-    steps: list[_Steps],
-    depth_before: tuple[float, float, bool, float],
-    tide_before: tuple[Level, str],
-    lines_before: list[_Before],
-    acks: list[alarm_ack.AckSeries],
-    dock: Optional[_Dock] = None,
-    sensors: Optional[_Sensors] = None,
-    depth_word: str = 'ok',
-) -> SnapshotColumns | list[Snapshot]:
+def _snapshot_columns(m: _Made) -> SnapshotColumns | list[Snapshot]:
     """The snapshots of :func:`_snapshots` in columns (its Snapshot s where the statuses
     after the dock do not have one shape)."""
-    stamps = _snapshot_stamps(window, tide, results, tide_before, lines_before)
+    core, window, tide, dock = m.core, m.window, m.tide, m.dock
+    stamps = _snapshot_stamps(window, tide, m.results, m.tide_before, m.lines_before)
     n = len(stamps)
     guards = [core.guard_components(stamp * 1e-9) for stamp in stamps.tolist()]
     shapes = {tuple((g.name, len(g.values)) for g in row) for row in guards}
     if len(shapes) > 1:
-        return _snapshots(
-            core, window, tide, results, series, steps, depth_before, tide_before,
-            lines_before, acks, dock, sensors, depth_word,
-        )  # fmt: skip
-    lines = [
-        _line_columns(
-            core.lines[k],
-            results[k],
-            series[k],
-            steps[k],
-            stamps,
-            window.tensions[k][0],
-            lines_before[k],
-            acks[k],
-            dock,
-            k,
-            sensors,
-        )
-        for k in range(len(results))
-    ]
+        return _snapshots(m)
+    lines = [_line_columns(m, k, stamps) for k in range(len(m.results))]
     groups: list[tuple[StatusColumns | list[ComponentStatus], int]] = []
     if lines and len({c.keys for c in lines}) == 1:
         groups.append((_stack(lines, n), len(lines)))
     else:
         groups += [(c, 1) for c in lines]
     tick_at = np.searchsorted(window.ticks, stamps, 'right') - 1
-    tides = _tide_statuses(core, window, tide, stamps, depth_before, tide_before, depth_word)
+    tides = _tide_statuses(
+        core, window, tide, stamps, m.depth_before, m.tide_before, m.depth_word
+    )
     groups.append((tides, 1))
     logger = ComponentStatus(
         'catenary_monitor: logger', core.logger[0], core.logger[1], core.logger_id, ()
@@ -1441,9 +1385,9 @@ def _snapshot_columns(
     groups.append(([logger] * n, 1))
     if dock is not None:
         groups.append(([_dock_status(core, dock, int(i)) for i in tick_at.tolist()], 1))
-    m = len(guards[0]) if guards else 0
-    if m:
-        groups.append(([row[g] for g in range(m) for row in guards], m))
+    width = len(guards[0]) if guards else 0
+    if width:
+        groups.append(([row[g] for g in range(width) for row in guards], width))
     return SnapshotColumns(stamps, tuple(groups))
 
 
