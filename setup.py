@@ -11,7 +11,8 @@ package_name = 'catenary_monitor'
 # The fused problem-3/4 kernel (docs/benchmarks.md, "Where the time goes"). Vectorized with
 # glibc's libmvec on x86-64 Linux; elsewhere a plain C loop. Optional: without a C compiler the
 # package installs and solve() uses its numpy implementation (catenary_monitor.core.kernels).
-_mvec = sys.platform.startswith('linux') and platform.machine() in ('x86_64', 'AMD64')
+_linux = sys.platform.startswith('linux')
+_mvec = _linux and platform.machine() in ('x86_64', 'AMD64')
 kernels = Extension(
     'catenary_monitor.core._kernels',
     sources=['catenary_monitor/core/_kernels.c'],
@@ -26,7 +27,7 @@ kernels = Extension(
         # same vector code wherever it lies (a windowed replay gives the whole log's bits)
         '--param=vect-max-peeling-for-alignment=0',
     ],
-    libraries=(['mvec'] if _mvec else []) + ['m'],
+    libraries=(['mvec'] if _mvec else []) + ['m'] + (['pthread'] if _linux else []),
     optional=True,
 )
 

@@ -107,24 +107,31 @@ def vector_figures(regime: str, n: int) -> dict[str, float]:
         e = h / a
         return a * np.log1p(e + np.sqrt(e * (2 + e)))
 
+    def p4_one_thread() -> object:
+        threads = kernels.threads()
+        kernels.set_threads(1)
+        try:
+            return solve(wv, h, tension=t, anchor_distance=x)
+        finally:
+            kernels.set_threads(threads)
+
+    cases: dict[str, Callable[[], object]] = {
+        'floor': floor,
+        'p4': lambda: solve(wv, h, tension=t, anchor_distance=x),
+        'p3': lambda: solve(wv, h, tension=t),
+    }
+    if kernels.AVAILABLE and kernels.threads() > 1:
+        cases['p4_1t'] = p4_one_thread
     rounds = max(7, min(200, int(2e7 / n / 10)))
     _settle_floor(n)
-    med = _rounds(
-        {
-            'floor': floor,
-            'p4': lambda: solve(wv, h, tension=t, anchor_distance=x),
-            'p3': lambda: solve(wv, h, tension=t),
-        },
-        rounds,
-        base='floor',
-    )
+    med = _rounds(cases, rounds, base='floor')
     lifted = float(np.mean(solve(wv, h, tension=t, anchor_distance=x).uplift_force > 0))
-    out = {f'{k}_ns': med[k] / n * 1e9 for k in ('floor', 'p4', 'p3')}
-    out.update({f'{k}_best_ns': med[f'{k}_best'] / n * 1e9 for k in ('floor', 'p4', 'p3')})
-    out['p4_ratio'] = med['p4/floor']
-    out['p3_ratio'] = med['p3/floor']
-    out['p4_ratio_best'] = med['p4/floor_best']
-    out['p3_ratio_best'] = med['p3/floor_best']
+    out = {f'{k}_ns': med[k] / n * 1e9 for k in cases}
+    out.update({f'{k}_best_ns': med[f'{k}_best'] / n * 1e9 for k in cases})
+    for k in cases:
+        if k != 'floor':
+            out[f'{k}_ratio'] = med[f'{k}/floor']
+            out[f'{k}_ratio_best'] = med[f'{k}/floor_best']
     out['lifted_fraction'] = lifted
     return out
 
@@ -233,6 +240,7 @@ def run(
     """Measure everything; returns a JSON-ready dict."""
     out: dict[str, Any] = {
         'kernel': kernels.isa(),
+        'threads': kernels.threads(),
         'numpy': np.__version__,
         'vector': {},
         'scalar': {},
@@ -249,31 +257,41 @@ def run(
     return out
 
 
+def _vector_row(key: str, v: dict[str, float]) -> tuple[str, ...]:
+    """One row of the vectorized table (``key``: regime_n)."""
+    regime, n = key.split('_')
+    one = (
+        (f"{v['p4_1t_best_ns']:.1f}", f"{v['p4_1t_ratio_best']:.1f}x")
+        if 'p4_1t_best_ns' in v
+        else ('same', 'same')
+    )
+    return (
+        regime,
+        f'{int(n):.0e}'.replace('e+0', 'e'),
+        f"{v['p4_best_ns']:.1f}",
+        f"{v['p3_best_ns']:.1f}",
+        f"{v['floor_best_ns']:.1f}",
+        f"{v['p4_ratio_best']:.1f}x",
+        f"{v['p4_ratio']:.1f}x",
+        f"{v['p3_ratio_best']:.1f}x",
+        *one,
+        f"{100 * v['lifted_fraction']:.0f} %",
+    )
+
+
 def report(r: dict[str, Any]) -> str:
     from catenary_monitor.cli.main import format_table
 
-    rows = []
-    for key, v in r['vector'].items():
-        regime, n = key.split('_')
-        rows.append(
-            (
-                regime,
-                f'{int(n):.0e}'.replace('e+0', 'e'),
-                f"{v['p4_best_ns']:.1f}",
-                f"{v['p3_best_ns']:.1f}",
-                f"{v['floor_best_ns']:.1f}",
-                f"{v['p4_ratio_best']:.1f}x",
-                f"{v['p4_ratio']:.1f}x",
-                f"{v['p3_ratio_best']:.1f}x",
-                f"{100 * v['lifted_fraction']:.0f} %",
-            )
-        )
+    threads = r.get('threads', 1)
     text = [
-        f"vectorized solve(), ns per element, best of the rounds (kernel {r['kernel']}; floor = "
-        'one numpy closed-form evaluation of problem 3 on the same arrays; target problem 4 <= '
-        f'{TARGET_VECTOR:g}x; "median" = the median over rounds of the ratio within a round)',
+        f"vectorized solve(), ns per element, best of the rounds (kernel {r['kernel']}, up to "
+        f'{threads} thread{"s" if threads > 1 else ""} per call from '
+        f'{2 * kernels.MIN_SHARE} elements; floor = one numpy closed-form evaluation of '
+        'problem 3 on the same arrays, one thread; target problem 4 <= '
+        f'{TARGET_VECTOR:g}x; "median" = the median over rounds of the ratio within a round; '
+        '"1 thread" = problem 4 with set_threads(1))',
         format_table(
-            rows,
+            [_vector_row(key, v) for key, v in r['vector'].items()],
             (
                 'scenes',
                 'n',
@@ -283,6 +301,8 @@ def report(r: dict[str, Any]) -> str:
                 'p4/floor',
                 'p4/floor median',
                 'p3/floor',
+                'p4 1 thread',
+                'p4/floor 1 thread',
                 'lifted',
             ),
         ),
@@ -337,6 +357,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
         allocator = 'keep freed memory (cli/allocator.py)' if keep_freed_memory() else allocator
     sizes = tuple(int(float(s)) for s in args.sizes.split(','))
+    if args.threads is not None and kernels.AVAILABLE:
+        kernels.set_threads(args.threads)
 
     def progress(msg: str) -> None:
         print(f'\r[bench] {msg:<50}', end='', file=sys.stderr, flush=True)
@@ -361,5 +383,24 @@ def register(sub: argparse._SubParsersAction) -> None:
         action='store_true',
         help="apply the batch commands' allocator setting first (default: glibc defaults)",
     )
+    p.add_argument(
+        '--threads',
+        type=_threads,
+        default=None,
+        help='most threads per vectorized call (default: the kernel\'s, the usable CPUs or '
+        'CATENARY_MONITOR_THREADS)',
+    )
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench)
+
+
+def _threads(text: str) -> int:
+    """argparse type of ``--threads``: 1 to the kernel's MAX_THREADS."""
+    most = 64
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if not 1 <= value <= most:
+        raise argparse.ArgumentTypeError(f'a thread count from 1 to {most}, not {text!r}')
+    return value

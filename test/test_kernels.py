@@ -198,3 +198,55 @@ def test_no_convergence_is_reported(monkeypatch):
     arr = solve(1300.0, 20.85, tension=[1623.5e3], anchor_distance=[121.06])
     assert one.status == arr.status[0] == Status.NO_CONVERGENCE
     assert math.isnan(one.uplift_force) and math.isnan(arr.horizontal_tension[0])
+
+
+@pytest.fixture
+def threads():
+    before = kernels.threads()
+    yield kernels.set_threads
+    kernels.set_threads(before)
+
+
+@pytest.mark.parametrize('n', [4095, 4096, 3 * kernels.MIN_SHARE + 77, 50_001])
+def test_results_do_not_depend_on_the_thread_count(threads, n):
+    """Shares of whole blocks on several threads give the very bits of one thread (statuses,
+    residual counts, a partial last block, invalid elements and a constant weight included)."""
+    w, h, t, x = sweep_scenes(n, seed=5)
+    t[::97] = np.nan
+    x[::89] = -1.0
+    runs = []
+    for count in (1, 2, 3, 7):
+        threads(count)
+        iters = np.empty(n, dtype=np.int64)
+        out, status = kernels.solve_arrays(W, h, t, x, 4e6, n, iters)
+        one = solve(W, h, tension=t, anchor_distance=x, mbl=4e6)
+        runs.append((out, status, iters, one.uplift_force))
+    first = runs[0]
+    assert np.sum(first[1] != 0) > 0 and np.sum(first[2] > 0) > 0
+    for other in runs[1:]:
+        for a, b in zip(first, other):
+            np.testing.assert_array_equal(a, b)
+
+
+def test_thread_count_from_the_environment(monkeypatch):
+    monkeypatch.setenv(kernels.THREADS_ENV, '3')
+    assert kernels.default_threads() == 3
+    monkeypatch.setenv(kernels.THREADS_ENV, 'many')
+    with pytest.warns(UserWarning, match='CATENARY_MONITOR_THREADS'):
+        fallback = kernels.default_threads()
+    assert 1 <= fallback <= kernels._k.MAX_THREADS
+    with pytest.raises(ValueError, match='threads'):
+        kernels.set_threads(0)
+
+
+def test_bench_reports_one_thread_beside_the_default(threads):
+    """``catenary-monitor bench``'s vectorized row: problem 4 with the kernel's threads and with
+    one, each against the floor of the same rounds."""
+    from catenary_monitor_study import bench_core
+
+    threads(2)
+    v = bench_core.vector_figures('dock', 5000)
+    assert v['p4_ratio_best'] > 0 and v['p4_1t_ratio_best'] > 0
+    assert kernels.threads() == 2  # restored after the one-thread case
+    row = bench_core._vector_row('dock_5000', v)
+    assert row[8] == f"{v['p4_1t_best_ns']:.1f}" and row[-1].endswith('%')

@@ -16,6 +16,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
+#include <pthread.h>
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__GLIBC__)
 #define CM_MVEC 1
@@ -261,25 +262,33 @@ static void stream_row(double *dst, const double *src, int nb)
 
 /* row[r]: where result row r goes (n doubles), or NULL: a row nobody asked for, computed into
  * the block's spill and dropped (no memory of the caller's written for it) */
-static void run(In in[5], Params *par, Py_ssize_t n, double *row[NOUT], long long *status,
-                long long *iters)
+typedef struct {
+    In *in;
+    const Params *par;
+    Py_ssize_t n, lo, hi; /* the call's length; this share: elements [lo, hi) */
+    double **row;
+    long long *status, *iters;
+    int stream, ok;
+} Share;
+
+/* one share of a call (elements [lo, hi), lo a multiple of BLK) in its own block scratch */
+static void run_share(Share *sh)
 {
+    const Params *par = sh->par;
+    In *in = sh->in;
+    double **row = sh->row;
+    long long *status = sh->status, *iters = sh->iters;
+    const Py_ssize_t n = sh->hi;
+    const int stream = sh->stream;
     Block *k = PyMem_RawMalloc(sizeof(Block));
+    sh->ok = k != NULL;
     if (!k)
         return;
-    int nrow = 0;
-    for (int r = 0; r < NOUT; r++)
-        nrow += row[r] != NULL;
-#ifdef CM_STREAM
-    const int stream = (Py_ssize_t)nrow * n * (Py_ssize_t)sizeof(double) >= STREAM_BYTES;
-#else
-    const int stream = 0;
-#endif
     for (int j = 0; j < 5; j++) /* a constant input: its lanes once for the whole call */
         if (!in[j].p)
             for (int i = 0; i < BLK; i++)
                 k->cin[j][i] = in[j].c;
-    for (Py_ssize_t off = 0; off < n; off += BLK) {
+    for (Py_ssize_t off = sh->lo; off < n; off += BLK) {
         int nb = (int)(n - off < BLK ? n - off : BLK);
         int np = PADDED(nb);
         for (int j = 0; j < 5; j++) {
@@ -339,6 +348,57 @@ static void run(In in[5], Params *par, Py_ssize_t n, double *row[NOUT], long lon
         _mm_sfence();
 #endif
     PyMem_RawFree(k);
+}
+
+static void *share_main(void *arg)
+{
+    run_share((Share *)arg);
+    return NULL;
+}
+
+/* the threads solve_tension may use (set_threads) and the elements each must have at least:
+ * below that, starting a thread (~20-50 us) costs more than it saves */
+#define MAX_THREADS 64
+#define MIN_SHARE (8 * BLK)
+static int THREADS = 1;
+
+/* the whole call: cut into at most THREADS shares of whole blocks, one per thread (the calling
+ * thread takes the first); every element takes the same code whatever its share, so the
+ * results do not depend on the thread count.  Returns 0 when memory ran out. */
+static int run(In in[5], const Params *par, Py_ssize_t n, double *row[NOUT], long long *status,
+               long long *iters)
+{
+    int nrow = 0;
+    for (int r = 0; r < NOUT; r++)
+        nrow += row[r] != NULL;
+#ifdef CM_STREAM
+    const int stream = (Py_ssize_t)nrow * n * (Py_ssize_t)sizeof(double) >= STREAM_BYTES;
+#else
+    const int stream = 0;
+#endif
+    Py_ssize_t nblk = (n + BLK - 1) / BLK;
+    Py_ssize_t nt = n / MIN_SHARE < THREADS ? n / MIN_SHARE : THREADS;
+    if (nt < 1)
+        nt = 1;
+    Share sh[MAX_THREADS];
+    pthread_t tid[MAX_THREADS];
+    int started[MAX_THREADS] = {0};
+    for (Py_ssize_t t = 0; t < nt; t++) {
+        Py_ssize_t lo = nblk * t / nt * BLK, hi = nblk * (t + 1) / nt * BLK;
+        sh[t] = (Share){in, par, n, lo, hi < n ? hi : n, row, status, iters, stream, 0};
+    }
+    for (Py_ssize_t t = 1; t < nt; t++)
+        started[t] = pthread_create(&tid[t], NULL, share_main, &sh[t]) == 0;
+    run_share(&sh[0]);
+    int ok = sh[0].ok;
+    for (Py_ssize_t t = 1; t < nt; t++) {
+        if (started[t])
+            pthread_join(tid[t], NULL);
+        else
+            run_share(&sh[t]); /* no thread to be had: this one does the share */
+        ok &= sh[t].ok;
+    }
+    return ok;
 }
 
 /* solve_tension(w, h, t, x, mbl, out, status, iters, maxiter, step_tol[, rows]) -> None
@@ -404,10 +464,14 @@ static PyObject *solve_tension(PyObject *self, PyObject *const *args, Py_ssize_t
     double *row[NOUT];
     for (int r = 0, q = 0; r < NOUT; r++)
         row[r] = (mask >> r) & 1 ? (double *)ob.buf + (Py_ssize_t)(q++) * n : NULL;
+    int ran;
     Py_BEGIN_ALLOW_THREADS;
-    run(in, &par, n, row, (long long *)sb.buf,
-        have_i ? (long long *)ib.buf : NULL);
+    ran = run(in, &par, n, row, (long long *)sb.buf, have_i ? (long long *)ib.buf : NULL);
     Py_END_ALLOW_THREADS;
+    if (!ran) {
+        PyErr_NoMemory();
+        goto done;
+    }
     ok = 1;
 done:
     for (int j = 0; j < 5; j++)
@@ -737,6 +801,22 @@ static PyObject *set_isa(PyObject *self, PyObject *arg)
     return NULL;
 }
 
+/* threads() -> the most threads an array call uses; set_threads(n), 1 <= n <= MAX_THREADS */
+static PyObject *threads(PyObject *self, PyObject *noargs) { return PyLong_FromLong(THREADS); }
+
+static PyObject *set_threads(PyObject *self, PyObject *arg)
+{
+    long v = PyLong_AsLong(arg);
+    if (v == -1 && PyErr_Occurred())
+        return NULL;
+    if (v < 1 || v > MAX_THREADS) {
+        PyErr_Format(PyExc_ValueError, "threads: 1 to %d, not %ld", MAX_THREADS, v);
+        return NULL;
+    }
+    THREADS = (int)v;
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef methods[] = {
     {"solve_tension", (PyCFunction)(void (*)(void))solve_tension, METH_FASTCALL,
      "Problems 3/4 with margins over arrays (see the C source)."},
@@ -747,6 +827,8 @@ static PyMethodDef methods[] = {
     {"isa", isa, METH_NOARGS, "Instruction set in use."},
     {"supported", supported, METH_NOARGS, "Instruction sets this CPU runs."},
     {"set_isa", set_isa, METH_O, "Use another supported instruction set."},
+    {"threads", threads, METH_NOARGS, "The most threads an array call uses."},
+    {"set_threads", set_threads, METH_O, "Set the most threads an array call uses."},
     {NULL, NULL, 0, NULL}};
 
 static struct PyModuleDef moduledef = {PyModuleDef_HEAD_INIT, "_kernels",
@@ -778,6 +860,8 @@ PyMODINIT_FUNC PyInit__kernels(void)
     NAN_OBJ = PyFloat_FromDouble(NAN);
     if (!NAN_OBJ || PyModule_AddIntConstant(mod, "BLOCK", BLK) < 0 ||
         PyModule_AddIntConstant(mod, "FAST_STEPS", KFAST) < 0 ||
+        PyModule_AddIntConstant(mod, "MIN_SHARE", MIN_SHARE) < 0 ||
+        PyModule_AddIntConstant(mod, "MAX_THREADS", MAX_THREADS) < 0 ||
         PyModule_AddIntConstant(mod, "VERSION", 1) < 0) {
         Py_DECREF(mod);
         return NULL;

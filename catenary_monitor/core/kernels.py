@@ -13,11 +13,19 @@ Why it exists (docs/benchmarks.md, "Where the time goes"): numpy evaluates one o
 whole array at a time, about 1 ns per element each, and problem 4 with its margins needs about
 130 of them; a plain-float Python solve costs ~10 us in interpreter overhead.  The fused kernel
 keeps every intermediate in registers or L1 cache.
+
+Array calls of at least two shares (``MIN_SHARE`` elements each, 2048) are cut into shares of
+whole blocks solved on up to ``threads()`` threads, the GIL released; every element takes the
+same code whatever its share, so the results do not depend on the thread count.  The default is
+the CPUs this process may run on, or ``CATENARY_MONITOR_THREADS``; ``set_threads(1)`` keeps a
+call on the calling thread.
 """
 
 from __future__ import annotations
 
 import math
+import os
+import warnings
 from typing import Any, Optional
 
 import numpy as np
@@ -51,6 +59,53 @@ if _k is not None:
         np.asarray(_slope, dtype=float).tobytes(),
     )
     del _eta, _slope
+
+
+#: Elements per share of a threaded array call: a call uses a second thread from twice this.
+MIN_SHARE = int(_k.MIN_SHARE) if _k is not None else 2048
+#: Environment variable giving the most threads an array call uses (default: the usable CPUs).
+THREADS_ENV = 'CATENARY_MONITOR_THREADS'
+
+
+def default_threads() -> int:
+    """The threads an array call uses unless told otherwise: ``CATENARY_MONITOR_THREADS``
+    (1 to ``MAX_THREADS``), else the CPUs this process may run on (at most ``MAX_THREADS``)."""
+    most = _k.MAX_THREADS if _k is not None else 1
+    text = os.environ.get(THREADS_ENV, '').strip()
+    if text:
+        try:
+            value = int(text)
+        except ValueError:
+            value = 0
+        if 1 <= value <= most:
+            return value
+        warnings.warn(
+            f'{THREADS_ENV}={text!r} is not a thread count from 1 to {most}; '
+            'using the CPUs this process may run on',
+            stacklevel=2,
+        )
+    try:
+        cpus = len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        cpus = os.cpu_count() or 1
+    return max(1, min(cpus, most))
+
+
+def threads() -> int:
+    """The most threads one array call of the kernel uses (1 without the kernel)."""
+    return int(_k.threads()) if _k is not None else 1
+
+
+def set_threads(n: int) -> None:
+    """Let array calls use at most ``n`` threads (1 to ``MAX_THREADS``; 1: the calling
+    thread only).  Calls shorter than two shares of ``MIN_SHARE`` elements stay on one."""
+    if _k is None:
+        raise RuntimeError('the C kernel is not built')
+    _k.set_threads(int(n))
+
+
+if _k is not None:
+    _k.set_threads(default_threads())
 
 
 def isa() -> str:
