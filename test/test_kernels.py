@@ -250,3 +250,31 @@ def test_bench_reports_one_thread_beside_the_default(threads):
     assert kernels.threads() == 2  # restored after the one-thread case
     row = bench_core._vector_row('dock_5000', v)
     assert row[8] == f"{v['p4_1t_best_ns']:.1f}" and row[-1].endswith('%')
+
+
+def test_cores_left_to_other_work(threads):
+    threads(3)
+    with kernels.cores_left_to(1) as now:
+        assert now == kernels.threads() == 2
+        with kernels.cores_left_to(5):
+            assert kernels.threads() == 1
+        assert kernels.threads() == 2
+    assert kernels.threads() == 3
+
+
+def test_replay_leaves_the_read_ahead_its_core(threads, monkeypatch):
+    """stream() solves on one thread fewer while the read-ahead decodes (two kernel threads
+    beside it were slower on two cores), and gives the count back after."""
+    from catenary_monitor.cli import replay_stream
+
+    seen = []
+
+    def fake(*args):
+        seen.append(kernels.threads())
+        return 'state'
+
+    monkeypatch.setattr(replay_stream, '_stream', fake)
+    threads(2)
+    assert replay_stream.stream([], None, None) == 'state'
+    assert replay_stream.stream([], None, None, jobs=4) == 'state'
+    assert seen == [1, 1] and kernels.threads() == 2

@@ -27,6 +27,7 @@ from typing import Any, Callable, Iterator, Optional, Sequence
 
 import numpy as np
 
+from catenary_monitor.core import kernels
 from catenary_monitor.core.batch import ReplayResult, Window, run_log, slice_window
 from catenary_monitor.core.config import MonitorConfig, resolve_topic
 from catenary_monitor.core.monitor import (
@@ -38,6 +39,7 @@ from catenary_monitor.core.monitor import (
     parse_event_record,
 )
 from catenary_monitor.io.cdr import string_message, string_text
+from catenary_monitor.io import mcap_read
 from catenary_monitor.io.mcap_read import LogWindow, ReadReport, UnorderedLogError, iter_windows
 
 __all__ = ['NoEventsChannel', 'Restart', 'StreamState', 'WINDOW_MESSAGES', 'stream']
@@ -120,7 +122,31 @@ def stream(
     ``ticks``/``follow_log`` as :func:`catenary_monitor.cli.replay.run_replay`;
     ``window_messages`` None replays the log as one window. Raises :class:`Restart` (see the
     module docstring), and what :func:`iter_windows` raises (EmptyLogError at the end).
+    The solve kernel leaves the cores of the decoding to it: the read-ahead thread's, or the
+    ``jobs`` worker processes' (on two cores, two kernel threads beside the read-ahead made the
+    1e7 summary 10-25 % slower than one; docs/benchmarks.md).
     """
+    busy = jobs if jobs > 1 else int(mcap_read.READ_AHEAD > 0)
+    with kernels.cores_left_to(busy):
+        return _stream(
+            paths, config, sink, ticks, follow_log, snapshots, window_messages, jobs, report,
+            progress,
+        )
+
+
+def _stream(
+    paths: Sequence[Path],
+    config: MonitorConfig,
+    sink: Callable[[ReplayResult, Window], None],
+    ticks: str,
+    follow_log: bool,
+    snapshots: bool | str,
+    window_messages: Optional[int],
+    jobs: int,
+    report: Optional[ReadReport],
+    progress: Optional[Callable[[StreamState], None]],
+) -> StreamState:
+    """:func:`stream` itself."""
     state = StreamState()
     state.bytes_total = sum(p.stat().st_size for p in paths)
     lines_topics = [resolve_topic(line.tension_topic) for line in config.lines]

@@ -26,7 +26,8 @@ from __future__ import annotations
 import math
 import os
 import warnings
-from typing import Any, Optional
+from contextlib import contextmanager
+from typing import Any, Iterator, Optional
 
 import numpy as np
 
@@ -102,6 +103,22 @@ def set_threads(n: int) -> None:
     if _k is None:
         raise RuntimeError('the C kernel is not built')
     _k.set_threads(int(n))
+
+
+@contextmanager
+def cores_left_to(others: int) -> Iterator[int]:
+    """Within the block, array calls use ``others`` fewer threads (at least one): for callers
+    whose own threads or worker processes (replay's read-ahead decode) keep that many cores
+    busy meanwhile.  Yields the thread count in force; the previous one comes back after."""
+    before = threads()
+    now = max(1, before - max(0, int(others)))
+    if _k is not None:
+        _k.set_threads(now)
+    try:
+        yield now
+    finally:
+        if _k is not None:
+            _k.set_threads(before)
 
 
 if _k is not None:
