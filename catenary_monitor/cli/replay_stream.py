@@ -38,8 +38,8 @@ from catenary_monitor.core.monitor import (
     Tick,
     parse_event_record,
 )
-from catenary_monitor.io.cdr import string_message, string_text
 from catenary_monitor.io import mcap_read
+from catenary_monitor.io.cdr import string_message, string_text
 from catenary_monitor.io.mcap_read import LogWindow, ReadReport, UnorderedLogError, iter_windows
 
 __all__ = ['NoEventsChannel', 'Restart', 'StreamState', 'WINDOW_MESSAGES', 'stream']

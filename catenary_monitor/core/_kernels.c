@@ -16,7 +16,10 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <string.h>
+#ifndef _WIN32
 #include <pthread.h>
+#define CM_THREADS 1
+#endif
 
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__GLIBC__)
 #define CM_MVEC 1
@@ -260,12 +263,13 @@ static void stream_row(double *dst, const double *src, int nb)
  * line it writes */
 #define STREAM_BYTES ((Py_ssize_t)32 << 20)
 
-/* row[r]: where result row r goes (n doubles), or NULL: a row nobody asked for, computed into
- * the block's spill and dropped (no memory of the caller's written for it) */
+/* one share of a call: elements [lo, hi); row[r]: where result row r goes (n doubles), or
+ * NULL: a row nobody asked for, computed into the block's spill and dropped (no memory of the
+ * caller's written for it) */
 typedef struct {
     In *in;
     const Params *par;
-    Py_ssize_t n, lo, hi; /* the call's length; this share: elements [lo, hi) */
+    Py_ssize_t lo, hi;
     double **row;
     long long *status, *iters;
     int stream, ok;
@@ -350,11 +354,13 @@ static void run_share(Share *sh)
     PyMem_RawFree(k);
 }
 
+#ifdef CM_THREADS
 static void *share_main(void *arg)
 {
     run_share((Share *)arg);
     return NULL;
 }
+#endif
 
 /* the threads solve_tension may use (set_threads) and the elements each must have at least:
  * below that, starting a thread (~20-50 us) costs more than it saves */
@@ -381,20 +387,24 @@ static int run(In in[5], const Params *par, Py_ssize_t n, double *row[NOUT], lon
     if (nt < 1)
         nt = 1;
     Share sh[MAX_THREADS];
-    pthread_t tid[MAX_THREADS];
     int started[MAX_THREADS] = {0};
     for (Py_ssize_t t = 0; t < nt; t++) {
         Py_ssize_t lo = nblk * t / nt * BLK, hi = nblk * (t + 1) / nt * BLK;
-        sh[t] = (Share){in, par, n, lo, hi < n ? hi : n, row, status, iters, stream, 0};
+        sh[t] = (Share){in, par, lo, hi < n ? hi : n, row, status, iters, stream, 0};
     }
+#ifdef CM_THREADS
+    pthread_t tid[MAX_THREADS];
     for (Py_ssize_t t = 1; t < nt; t++)
         started[t] = pthread_create(&tid[t], NULL, share_main, &sh[t]) == 0;
+#endif
     run_share(&sh[0]);
     int ok = sh[0].ok;
     for (Py_ssize_t t = 1; t < nt; t++) {
+#ifdef CM_THREADS
         if (started[t])
             pthread_join(tid[t], NULL);
-        else
+#endif
+        if (!started[t])
             run_share(&sh[t]); /* no thread to be had: this one does the share */
         ok &= sh[t].ok;
     }
