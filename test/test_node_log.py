@@ -114,9 +114,10 @@ def test_deleted_log_dir_is_an_error_within_seconds_then_a_new_file(client, tmp_
     params = write_params(tmp_path / 'params.yaml', lines)
     log_dir = tmp_path / 'log'
     topic = '/mooring/gone/tension'
+    t0 = time.monotonic()  # the module's client also holds the earlier monitors' statuses
     proc = start_monitor(params, log_dir)
     try:
-        client.wait_status(LOGGER, 30.0, OK)
+        client.wait_status(LOGGER, 30.0, OK, since=t0)
         client.wait_matched([topic], 30.0)
         client.feed(topic, 400e3)
         feed_until_logged(client, topic, log_dir, 5)

@@ -36,14 +36,17 @@ def client():
 
 
 def _start(client, tmp, **extra):
+    """A monitor with ``up`` in uplift ERROR, and the monotonic time [s] it was started: the
+    module's client also holds the statuses of the module's earlier monitors (same names)."""
     params = write_params(tmp / 'params.yaml', LINES, diagnostic_rate=4.0, **extra)
+    t0 = time.monotonic()
     proc = start_monitor(params, tmp / 'log')
     client.wait_matched(['/tide/depth', '/mooring/up/tension'], 30.0)
     client.feed('/tide/depth', DEPTH)
     client.feed('/mooring/up/tension', 1623.5e3)  # the table-3 typhoon: the anchor lifts
-    s = client.wait_status(UP, 15.0, ERROR)
+    s = client.wait_status(UP, 15.0, ERROR, since=t0)
     assert 'uplift' in s['message'], s
-    return proc
+    return proc, t0
 
 
 def _set(client, name, value):
@@ -64,7 +67,7 @@ def _set(client, name, value):
 
 
 def test_alarm_parameters_and_use_sim_time_are_refused_by_default(client, tmp_path):
-    proc = _start(client, tmp_path)
+    proc, _ = _start(client, tmp_path)
     try:
         r = _set(client, 'up.allowed_uplift', 1e9)
         assert not r.successful and 'allow_runtime_changes' in r.reason, r.reason
@@ -86,9 +89,9 @@ def test_alarm_parameters_and_use_sim_time_are_refused_by_default(client, tmp_pa
 
 
 def test_allowed_changes_are_logged_and_recorded(client, tmp_path):
-    proc = _start(client, tmp_path, allow_runtime_changes=True)
+    proc, t0 = _start(client, tmp_path, allow_runtime_changes=True)
     try:
-        before = client.wait_status(FLAG, 10.0, OK)
+        before = client.wait_status(FLAG, 10.0, OK, since=t0)
         assert before['message'] == 'runtime changes allowed; none made', before
         r = _set(client, 'up.allowed_uplift', 1e9)
         assert r.successful, r.reason
@@ -96,16 +99,19 @@ def test_allowed_changes_are_logged_and_recorded(client, tmp_path):
         client.wait_for(lambda: line in output_of(proc), 10.0, 'the change log line')
         # The flag: a WARN naming old and new values, in the very array that first shows it
         # the active uplift still ERROR (it clears only after clear_hold of clear input).
-        flagged = client.wait_status(FLAG, 10.0, WARN)
+        flagged = client.wait_status(FLAG, 10.0, WARN, since=t0)
         assert flagged['message'] == line and flagged['values']['changes'] == '1', flagged
         with client.lock:
-            first = next(e for _, e in client.diagnostics if e.get(FLAG, {}).get('level') == WARN)
+            first = next(
+                e for t, e in client.diagnostics
+                if t >= t0 and e.get(FLAG, {}).get('level') == WARN
+            )
         assert first[UP]['level'] == ERROR, first[UP]
         assert f'ALARM parameters: OK -> WARN: {line}' in output_of(proc)
         r = _set(client, 'use_sim_time', True)  # never: a stopped /clock would silence it
         assert not r.successful and 'use_sim_time' in r.reason
-        t0 = time.monotonic()
-        client.wait_for(lambda: len(client.levels(UP, t0)) >= 4, 10.0, 'diagnostics after')
+        t1 = time.monotonic()
+        client.wait_for(lambda: len(client.levels(UP, t1)) >= 4, 10.0, 'diagnostics after')
     finally:
         client.feed('/mooring/up/tension', None)
         assert stop(proc) == 0
