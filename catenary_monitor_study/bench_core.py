@@ -27,12 +27,12 @@ import argparse
 import json
 import math
 import os
-import sys
 import time
 from typing import Any, Callable, Optional
 
 import numpy as np
 
+from catenary_monitor.cli.status_line import StatusLine
 from catenary_monitor.core import catenary as cat
 from catenary_monitor.core import kernels
 from catenary_monitor.core.solve import solve
@@ -362,11 +362,9 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if args.threads is not None and kernels.AVAILABLE:
         kernels.set_threads(args.threads)
 
-    def progress(msg: str) -> None:
-        print(f'\r[bench] {msg:<50}', end='', file=sys.stderr, flush=True)
-
-    r = run(sizes=sizes, regimes=tuple(args.regimes.split(',')), progress=progress)
-    print('\r' + ' ' * 60 + '\r', end='', file=sys.stderr, flush=True)
+    status = StatusLine('bench')
+    r = run(sizes=sizes, regimes=tuple(args.regimes.split(',')), progress=status)
+    status.done()
     r['allocator'] = allocator
     print(json.dumps(r) if args.json else f'allocator: {allocator}\n' + report(r))
     return 0

@@ -33,6 +33,8 @@ from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
 
+from catenary_monitor.cli.status_line import StatusLine
+
 W_DOCK, H_DOCK = 1300.0, 20.85  # the paper's floating dock: U3 chain 81 mm, g = 10
 GOOD = 1e-12  # the project's accuracy target
 FAIL = 1e-6  # above this the answer counts as a failure (issue 5)
@@ -592,15 +594,11 @@ def run(
     from catenary_monitor_study.methods import all_methods
     from catenary_monitor_study.methods.peers import peer_versions
 
-    t_start = time.perf_counter()
-    last = [0.0]
+    status = StatusLine('bench-methods', stream) if stream is not None else None
 
     def progress(msg: str) -> None:
-        now = time.perf_counter()
-        if stream is not None and now - last[0] > 0.2:
-            last[0] = now
-            stream.write(f'\r[bench-methods {now - t_start:5.0f} s] {msg[:90]:<90}')
-            stream.flush()
+        if status is not None:
+            status(f'{status.elapsed():5.0f} s: {msg[:90]}')
 
     versions = peer_versions()
     methods = [m for m in all_methods(peers=True) if m.problem in (2, 3, 4)]
@@ -731,10 +729,8 @@ def run(
         write_tables(rows, summary, out_dir)
         plot_speed_accuracy(rows, os.path.join(out_dir, 'speed_accuracy.png'))
         plot_stability(outcomes, scenes, os.path.join(out_dir, 'stability_map.png'))
-    if stream is not None:
-        stream.write(
-            f'\r[bench-methods] done in {time.perf_counter() - t_start:.0f} s' + ' ' * 80 + '\n'
-        )
+    if status is not None:
+        status.done(f'done in {status.elapsed():.0f} s')
     return {
         'rows': rows,
         'outcomes': outcomes,
