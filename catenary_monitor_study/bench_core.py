@@ -362,7 +362,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     if args.threads is not None and kernels.AVAILABLE:
         kernels.set_threads(args.threads)
 
-    status = StatusLine('bench')
+    status = StatusLine('[bench] ')
     r = run(sizes=sizes, regimes=tuple(args.regimes.split(',')), progress=status)
     status.done()
     r['allocator'] = allocator

@@ -594,7 +594,7 @@ def run(
     from catenary_monitor_study.methods import all_methods
     from catenary_monitor_study.methods.peers import peer_versions
 
-    status = StatusLine('bench-methods', stream) if stream is not None else None
+    status = StatusLine('[bench-methods] ', stream) if stream is not None else None
 
     def progress(msg: str) -> None:
         if status is not None:

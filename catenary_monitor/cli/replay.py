@@ -36,6 +36,7 @@ from typing import Any, NamedTuple, Optional, Sequence
 
 import numpy as np
 
+from catenary_monitor.cli.status_line import StatusLine
 from catenary_monitor.core.batch import COLUMNS, ReplayResult, recompute
 from catenary_monitor.core.config import (
     ConfigError,
@@ -94,61 +95,46 @@ def input_topics(config: MonitorConfig) -> tuple[dict[str, str], str]:
 
 
 class Progress:
-    """Stage progress on stderr for long logs (``\\r`` updates on a terminal)."""
+    """Stage progress on stderr for long logs (cli.status_line: in place on a terminal)."""
 
     def __init__(self, enabled: bool) -> None:
         self.enabled = enabled
-        self.tty = sys.stderr.isatty()
-        self.last = 0.0
+        self.line = StatusLine('replay: ')
+        self.tty = self.line.tty
+        self.shown = False
         self.start = time.monotonic()
 
     def __call__(self, stage: str, fraction: float = 0.0) -> None:
         if not self.enabled:
             return
-        now = time.monotonic()
-        if fraction < 1.0 and now - self.last < (0.2 if self.tty else 2.0) and fraction > 0:
+        text = f'{stage} {100 * fraction:3.0f}% ({time.monotonic() - self.start:.1f} s)'
+        if 0.0 < fraction < 1.0:
+            self.line(text)
             return
-        self.last = now
-        text = f'replay: {stage} {100 * fraction:3.0f}% ({now - self.start:.1f} s)'
-        if self.tty:
-            sys.stderr.write('\r' + text.ljust(60) + ('\n' if fraction >= 1.0 else ''))
-        else:
-            sys.stderr.write(text + '\n')
-        sys.stderr.flush()
+        self.line.show(text)
+        if fraction >= 1.0:
+            self.line.end()
 
     def stream(self, state: Any) -> None:
         """A streamed replay's progress: share of the files' bytes walked, with an ETA."""
-        if not self.enabled:
+        if not (self.enabled and self.line.due()):
             return
-        now = time.monotonic()
-        if now - self.last < (0.2 if self.tty else 2.0):
-            return
-        self.last = now
         total = max(state.bytes_total, 1)
         fraction = min(state.bytes_done / total, 1.0)
-        elapsed = now - self.start
+        elapsed = time.monotonic() - self.start
         eta = f', ETA {elapsed * (1 - fraction) / fraction:.0f} s' if fraction > 0 else ''
-        text = (
-            f'replay: {100 * fraction:3.0f}% of {total / 1e6:.0f} MB, '
+        self.line.show(
+            f'{100 * fraction:3.0f}% of {total / 1e6:.0f} MB, '
             f'{state.messages / 1e6:.1f} M messages ({elapsed:.0f} s{eta})'
         )
-        self._write(text)
         self.shown = True
-
-    def _write(self, text: str) -> None:
-        if self.tty:
-            sys.stderr.write('\r' + text.ljust(70))
-        else:
-            sys.stderr.write(text + '\n')
-        sys.stderr.flush()
 
     def done(self) -> None:
         if not self.enabled:
             return
-        if getattr(self, 'shown', False) or not self.tty:
-            self._write(f'replay: done ({time.monotonic() - self.start:.1f} s)')
-        if self.tty:
-            sys.stderr.write('\n')
+        if self.shown or not self.tty:
+            self.line.show(f'done ({time.monotonic() - self.start:.1f} s)')
+        self.line.end()
 
 
 def read_events(paths: Sequence[Path], config: MonitorConfig) -> Optional[LogEvents]:
