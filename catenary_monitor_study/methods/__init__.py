@@ -1,7 +1,7 @@
 """Alternative catenary solvers, side by side behind one interface (issue 5).
 
-Every method is a :class:`~catenary_monitor.methods.base.Method`: a name, the problem it solves
-and a scalar function (plus a vectorized one where the method allows).  Signatures, all SI:
+Every method is a :class:`~catenary_monitor_study.methods.base.Method`: a name, the problem it
+solves and a scalar function (plus a vectorized one where the method allows).  Signatures, all SI:
 
 * problem 3 (hook tension T -> minimum anchor distance): ``fn(w, h, T) -> (R, x_min)``;
 * problem 4 (T and anchor distance x -> uplift state):  ``fn(w, h, T, x) -> (R, F)``;
@@ -18,6 +18,24 @@ iteration and 0.618 search), ``peers`` (MoorPy, pycatenary; optional), ``referen
 50-digit mpmath solution of the paper's own equations).
 """
 
-from .base import FAIL_RTOL, Method, NoConvergence, all_methods
+from __future__ import annotations
+
+from typing import Optional
+
+from .base import FAIL_RTOL, Method, NoConvergence
 
 __all__ = ['Method', 'NoConvergence', 'FAIL_RTOL', 'all_methods']
+
+
+def all_methods(problem: Optional[int] = None, peers: bool = True) -> list[Method]:
+    """Every registered method (optionally of one problem); peers only if importable."""
+    from . import closed, hou, paper, roots
+
+    out: list[Method] = []
+    for mod in (closed, roots, hou, paper):
+        out.extend(mod.METHODS)
+    if peers:
+        from . import peers as peer_mod
+
+        out.extend(peer_mod.available_methods())
+    return [m for m in out if problem is None or m.problem == problem]

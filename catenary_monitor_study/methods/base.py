@@ -1,4 +1,4 @@
-"""The common interface of the alternative methods and the registry the benchmark walks."""
+"""The common interface of the alternative methods (the registry is the package's)."""
 
 from __future__ import annotations
 
@@ -34,17 +34,3 @@ class Method:
     #: 'load' for the problem as stated above; 'length' for peers that need the chain length:
     #: ``fn(w, h, x, L) -> (R, F)``, compared with the reference for that same L.
     given: str = 'load'
-
-
-def all_methods(problem: Optional[int] = None, peers: bool = True) -> list[Method]:
-    """Every registered method (optionally of one problem); peers only if importable."""
-    from . import closed, hou, paper, roots
-
-    out: list[Method] = []
-    for mod in (closed, roots, hou, paper):
-        out.extend(mod.METHODS)
-    if peers:
-        from . import peers as peer_mod
-
-        out.extend(peer_mod.available_methods())
-    return [m for m in out if problem is None or m.problem == problem]
