@@ -1224,17 +1224,14 @@ def _at(index: np.ndarray, at: np.ndarray) -> np.ndarray:
     return _take(index, at, -1, np.int64)
 
 
-def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
-    """:func:`_line_statuses` in columns (the same strings, built per key, not per status)."""
-    line, r, series, steps, tt, before, acks, dock, sensors = m.line_parts(k)
-    n = len(stamps)
-    at = np.searchsorted(steps.times, stamps, 'right') - 1
-    ok = at >= 0
-    at_list = at.tolist()
-    # Level, message and the alarm's condition (after step i, else as before the window).
+def _level_columns(
+    series: LevelSeries, before: _Before, at: np.ndarray
+) -> tuple[np.ndarray, list[str], list[str]]:
+    """Level, message and the alarm's condition per stamp (after step ``at``, else as before
+    the window)."""
     levels = _take(series.levels, at, int(before.level), np.int64)
     messages, conditions = [], []
-    for i, level in zip(at_list, levels.tolist()):
+    for i, level in zip(at.tolist(), levels.tolist()):
         if i < 0:
             messages.append(before.message)
             conditions.append(alarm_ack.condition(before.level, before.latches))
@@ -1244,6 +1241,71 @@ def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
         else:
             messages.append(series.message_at(i))
             conditions.append(alarm_ack.condition(Level(level), series.active_at(i)))
+    return levels, messages, conditions
+
+
+def _word_columns(
+    m: _Made, k: int, at: np.ndarray, j_tick: np.ndarray
+) -> tuple[list[str], tuple[str, ...], list[list[str]]]:
+    """The sensor state word per stamp, and the dock model's keys and values per stamp."""
+    _, _, series, _, _, before, _, dock, sensors = m.line_parts(k)
+    n = len(at)
+    words = [before.sensor_word] * n
+    extra: list[list[str]] = [[v for _, v in before.extra] for _ in range(n)]
+    extra_keys = tuple(key for key, _ in before.extra)
+    codes = [sensor.OK] * n
+    at_list, j_list = at.tolist(), j_tick.tolist()
+    if sensors is not None:
+        for n_, (i, j) in enumerate(zip(at_list, j_list)):
+            if i >= 0:
+                codes[n_] = sensors.before[k] if j < 0 else int(sensors.codes[j, k])
+                words[n_] = sensor.line_word(codes[n_])
+    if dock is not None:
+        inconsistent = series.active('inconsistent')
+        inputs = dock.decision.line_inputs
+        for n_, (i, j) in enumerate(zip(at_list, j_list)):
+            if i >= 0:
+                dock_in = dock.before[2][k] if j < 0 else tuple(inputs[j, k])
+                latched = bool(inconsistent[i])
+                pairs = line_dock_values(latched, dock_in)
+                extra_keys = tuple(key for key, _ in pairs)
+                extra[n_] = [v for _, v in pairs]
+                words[n_] = sensor.line_word(
+                    codes[n_], dock_live.sensor_state(latched, dock_in[0])
+                )
+    return words, extra_keys, extra
+
+
+def _ack_columns(
+    acks: alarm_ack.AckSeries, before: _Before, at: np.ndarray, conditions: list[str]
+) -> tuple[tuple[str, ...], list[Field]]:
+    """The alarm's acknowledgement keys and columns (the same for every step between two
+    changes)."""
+    j_ack = np.searchsorted(acks.changes, at, 'right') - 1
+    j_ack[at < 0] = -1
+    ack_cache: dict[int, list[tuple[str, str]]] = {}
+    ack_rows = []
+    for j in j_ack.tolist():
+        row = ack_cache.get(j)
+        if row is None:
+            state = acks.before if j < 0 else acks.states[j]
+            row = ack_cache[j] = alarm_ack.diagnostic_values(state, Level.OK, before.latches)
+        ack_rows.append(row)
+    ack_keys = tuple(key for key, _ in ack_rows[0]) if len(at) else ()
+    ack_columns: list[Field] = []
+    for a, key in enumerate(ack_keys):
+        if key == 'alarm_condition':
+            ack_columns.append(conditions)
+        else:
+            ack_columns.append([row[a][1] for row in ack_rows])
+    return ack_keys, ack_columns
+
+
+def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
+    """:func:`_line_statuses` in columns (the same strings, built per key, not per status)."""
+    line, r, series, steps, tt, before, acks, _, _ = m.line_parts(k)
+    at = np.searchsorted(steps.times, stamps, 'right') - 1
+    levels, messages, conditions = _level_columns(series, before, at)
     # The newest solve's values, status and model.
     s = _at(steps.s_idx, at)
     values = {
@@ -1256,48 +1318,8 @@ def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
     t = _at(steps.t_idx, at)
     ts = _take(tt * 1e-9, t, float(before.tension_s))
     age = stamps * 1e-9 - ts
-    # The sensor state word and the dock model's values.
-    words = [before.sensor_word] * n
-    extra: list[list[str]] = [[v for _, v in before.extra] for _ in range(n)]
-    extra_keys = tuple(key for key, _ in before.extra)
-    j_tick = _at(steps.k_idx, at)
-    codes = [sensor.OK] * n
-    if sensors is not None:
-        for n_, (i, j) in enumerate(zip(at_list, j_tick.tolist())):
-            if i >= 0:
-                codes[n_] = sensors.before[k] if j < 0 else int(sensors.codes[j, k])
-                words[n_] = sensor.line_word(codes[n_])
-    if dock is not None:
-        inconsistent = series.active('inconsistent')
-        inputs = dock.decision.line_inputs
-        for n_, (i, j) in enumerate(zip(at_list, j_tick.tolist())):
-            if i >= 0:
-                dock_in = dock.before[2][k] if j < 0 else tuple(inputs[j, k])
-                latched = bool(inconsistent[i])
-                pairs = line_dock_values(latched, dock_in)
-                extra_keys = tuple(key for key, _ in pairs)
-                extra[n_] = [v for _, v in pairs]
-                words[n_] = sensor.line_word(
-                    codes[n_], dock_live.sensor_state(latched, dock_in[0])
-                )
-    # The alarm's acknowledgement values (the same for every step between two changes).
-    j_ack = np.searchsorted(acks.changes, at, 'right') - 1
-    j_ack[~ok] = -1
-    ack_cache: dict[int, list[tuple[str, str]]] = {}
-    ack_rows = []
-    for j in j_ack.tolist():
-        row = ack_cache.get(j)
-        if row is None:
-            state = acks.before if j < 0 else acks.states[j]
-            row = ack_cache[j] = alarm_ack.diagnostic_values(state, Level.OK, before.latches)
-        ack_rows.append(row)
-    ack_keys = tuple(key for key, _ in ack_rows[0]) if n else ()
-    ack_columns: list[Field] = []
-    for a, key in enumerate(ack_keys):
-        if key == 'alarm_condition':
-            ack_columns.append(conditions)
-        else:
-            ack_columns.append([row[a][1] for row in ack_rows])
+    words, extra_keys, extra = _word_columns(m, k, at, _at(steps.k_idx, at))
+    ack_keys, ack_columns = _ack_columns(acks, before, at, conditions)
     # The keys and values, in line_status's order.
     config = line.config
     reprs = {key: _reprs(values[key]) for key in DIAGNOSTIC_KEYS if key in values}
