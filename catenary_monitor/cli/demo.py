@@ -19,7 +19,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any, Optional
+from typing import Any, NamedTuple, Optional
 
 import numpy as np
 
@@ -141,27 +141,10 @@ def start_console(
     return None, why
 
 
-def run_demo(
-    out_dir: str = 'catenary_monitor_demo',
-    duration: float = 55.0,
-    params_file: Optional[str] = None,
-    console_port: Optional[int] = 8080,
-) -> int:
-    """Run the demo; return 0 on success. Leaves the MCAP log and ``demo.png`` in ``out_dir``."""
-    params = params_file or default_config_path()
-    out = Path(out_dir).resolve()
-    log_dir = out / 'log'
-    log_dir.mkdir(parents=True, exist_ok=True)
-    before = set(log_dir.glob('*.mcap'))
-    env = child_env()
-    colour = sys.stdout.isatty()
-    print(f'catenary_monitor demo: the floating dock of Hu & Tang (2004), 12 chains, {params}')
-    print(
-        f'  a storm builds to the typhoon load on line_11 (R = 1584.6 kN), then eases; '
-        f'{duration:g} s of wall time (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]})'
-    )
+def _start_monitor(params: str, log_dir: Path, env: dict[str, str]) -> subprocess.Popen:
+    """The monitor node as its own process, logging into ``log_dir``, output piped."""
     overrides = [a for k, v in DEMO_OVERRIDES.items() for a in ('-p', f'{k}:={v}')]
-    monitor = subprocess.Popen(
+    return subprocess.Popen(
         [
             sys.executable,
             '-m',
@@ -178,16 +161,96 @@ def run_demo(
         text=True,
         env=env,
     )
+
+
+def _run_simulator(params: str, duration: float, env: dict[str, str]) -> Optional[str]:
+    """Drive the dock through the storm (blocks for ``duration`` s); its stderr if it failed."""
+    sim = subprocess.Popen(
+        [
+            sys.executable,
+            '-m',
+            'catenary_monitor.ros.simulator',
+            '--params-file',
+            params,
+            '--duration',
+            str(duration),
+        ],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        _, err = sim.communicate(timeout=duration + 60.0)
+    finally:
+        if sim.poll() is None:
+            sim.send_signal(signal.SIGINT)
+            sim.wait(10)
+    return err if sim.returncode != 0 else None
+
+
+def _stop(proc: Optional[subprocess.Popen], wait: float) -> None:
+    """SIGINT (a clean stop: the monitor closes its log), then kill after ``wait`` s."""
+    if proc is None:
+        return
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(wait)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+
+
+def _report(
+    files: list[Path], out: Path, params: str, origin_ns: int, monitor_rc: Optional[int]
+) -> int:
+    """Draw the chart and print where the log and the chart are; the demo's exit status."""
+    if not files:
+        print('catenary_monitor demo: no MCAP log was written', file=sys.stderr)
+        return 1
+    chart: Optional[Path] = out / 'demo.png'  # None if it could not be drawn
+    try:
+        plot_episode(files, out / 'demo.png', params, origin_ns)
+    except Exception as exc:  # noqa: BLE001 - the log is the product; the chart is a bonus
+        print(f'catenary_monitor demo: could not draw the chart: {exc}', file=sys.stderr)
+        chart = None
+    for f in files:
+        print(f'  MCAP log: {f}')
+    if chart is not None:
+        print(f'  chart:    {chart}')
+    return 0 if monitor_rc == 0 else 1
+
+
+def run_demo(
+    out_dir: str = 'catenary_monitor_demo',
+    duration: float = 55.0,
+    params_file: Optional[str] = None,
+    console_port: Optional[int] = 8080,
+) -> int:
+    """Run the demo; return 0 on success. Leaves the MCAP log and ``demo.png`` in ``out_dir``."""
+    params = params_file or default_config_path()
+    out = Path(out_dir).resolve()
+    log_dir = out / 'log'
+    log_dir.mkdir(parents=True, exist_ok=True)
+    before = set(log_dir.glob('*.mcap'))
+    env = child_env()
+    print(f'catenary_monitor demo: the floating dock of Hu & Tang (2004), 12 chains, {params}')
+    print(
+        f'  a storm builds to the typhoon load on line_11 (R = 1584.6 kN), then eases; '
+        f'{duration:g} s of wall time (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]})'
+    )
+    monitor = _start_monitor(params, log_dir, env)
     t0 = time.time()
     origin = [t0]  # becomes the simulator's start: the printed times and the chart's
     events: list = []
     transcript: list = []
     ready = threading.Event()
     relay = threading.Thread(
-        target=_relay, args=(monitor, origin, colour, events, ready, transcript), daemon=True
+        target=_relay,
+        args=(monitor, origin, sys.stdout.isatty(), events, ready, transcript),
+        daemon=True,
     )
     relay.start()
-    sim: Optional[subprocess.Popen] = None
     console: Optional[subprocess.Popen] = None
     try:
         if not ready.wait(30.0) or monitor.poll() is not None:
@@ -207,64 +270,22 @@ def run_demo(
             'since the simulator started, as on the chart)\n'
         )
         origin[0] = time.time()
-        sim = subprocess.Popen(
-            [
-                sys.executable,
-                '-m',
-                'catenary_monitor.ros.simulator',
-                '--params-file',
-                params,
-                '--duration',
-                str(duration),
-            ],
-            env=env,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.PIPE,
-            text=True,
-        )
-        _, sim_err = sim.communicate(timeout=duration + 60.0)
-        if sim.returncode != 0:
+        sim_err = _run_simulator(params, duration, env)
+        if sim_err is not None:
             print(f'catenary_monitor demo: simulator failed:\n{sim_err}', file=sys.stderr)
             return 1
     except KeyboardInterrupt:
         print('\n  interrupted')
     finally:
-        if sim is not None and sim.poll() is None:
-            sim.send_signal(signal.SIGINT)
-            sim.wait(10)
-        if console is not None and console.poll() is None:
-            console.send_signal(signal.SIGINT)
-            try:
-                console.wait(10)
-            except subprocess.TimeoutExpired:
-                console.kill()
-        if monitor.poll() is None:
-            monitor.send_signal(signal.SIGINT)
-        try:
-            monitor.wait(15)
-        except subprocess.TimeoutExpired:
-            monitor.kill()
+        _stop(console, 10)
+        _stop(monitor, 15)
         relay.join(5)
     files = sorted(set(log_dir.glob('*.mcap')) - before)
     print(
         f'\n  {len(events)} alarm transitions in {time.time() - t0:.0f} s; monitor exit status '
         f'{monitor.returncode}'
     )
-    if not files:
-        print('catenary_monitor demo: no MCAP log was written', file=sys.stderr)
-        return 1
-    chart_file = out / 'demo.png'
-    chart: Optional[Path] = chart_file  # None if it could not be drawn
-    try:
-        plot_episode(files, chart_file, params, int(origin[0] * 1e9))
-    except Exception as exc:  # noqa: BLE001 - the log is the product; the chart is a bonus
-        print(f'catenary_monitor demo: could not draw the chart: {exc}', file=sys.stderr)
-        chart = None
-    for f in files:
-        print(f'  MCAP log: {f}')
-    if chart is not None:
-        print(f'  chart:    {chart}')
-    return 0 if monitor.returncode == 0 else 1
+    return _report(files, out, params, int(origin[0] * 1e9), monitor.returncode)
 
 
 def _outputs(files: list[Path], topics: list[str]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -322,52 +343,62 @@ def _mark_uplift_warning(
         )
 
 
-def plot_episode(
-    files: list[Path], png: Path, params: str, origin_ns: Optional[int] = None
-) -> Path:
-    """Chart of the episode from the MCAP log: depth, hook tensions, line 11, alarm levels;
-    line 11's first time-to-uplift WARN and its uplift marked on every panel. Time in s since
-    ``origin_ns`` (log time, ns; None: the first logged sample)."""
-    import matplotlib
+class _Episode(NamedTuple):
+    """What the chart draws, read from the log: times in s since the origin."""
 
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
+    config: Any
+    names: list[str]
+    focus: list[str]
+    colours: dict[str, str]
+    cols: dict[str, tuple[np.ndarray, np.ndarray]]  # topic -> (s, values)
+    outs: dict[str, tuple[np.ndarray, np.ndarray]]  # line -> (s, outputs (n, k))
+    idx: dict[str, int]  # output field -> column
 
+
+def _read_episode(files: list[Path], params: str, origin_ns: Optional[int]) -> _Episode:
+    """The depth, the hook tensions and every line's outputs from the MCAP log."""
     from catenary_monitor.core.config import config_from_params, load_params_file
     from catenary_monitor.io.mcap_read import read_float64_topics
     from catenary_monitor.ros.node import NODE_NAME, OUTPUT_FIELDS
 
     config = config_from_params({**load_params_file(params), **DEMO_OVERRIDES})  # as the node
     names = [line.name for line in config.lines]
-    tension_topics = {line.name: line.tension_topic for line in config.lines}
-    cols, _ = read_float64_topics(files, [config.depth_topic, *tension_topics.values()])
+    topics = [config.depth_topic, *(line.tension_topic for line in config.lines)]
+    cols, _ = read_float64_topics(files, topics)
     out_topics = {n: f'/{NODE_NAME}/{n}/outputs' for n in names}
     outs = _outputs(files, list(out_topics.values()))
     t_all = [c[0][:1] for c in cols.values() if c[0].size]
     t0 = min(int(t[0]) for t in t_all) if t_all else 0
     if origin_ns is not None:
         t0 = origin_ns
-    sec = lambda ns: (np.asarray(ns) - t0) * 1e-9  # noqa: E731
-    idx = {k: i for i, k in enumerate(OUTPUT_FIELDS)}
-    focus = [n for n in ('line_11', 'line_10', 'line_12', 'line_01') if n in names] or names[:3]
-    colours = dict(zip(focus, ('tab:red', 'tab:orange', 'tab:purple', 'tab:green')))
 
-    fig, axes = plt.subplots(4, 1, figsize=(11, 11), sharex=True)
-    ax = axes[0]
-    t, v = cols[config.depth_topic]
-    ax.plot(sec(t), v, color='tab:blue')
-    ax.set_ylabel('depth at hook [m]')
-    ax.set_title('catenary_monitor demo: floating dock (Hu & Tang 2004), storm on line_11')
-    ax = axes[1]
-    for n in names:
-        t, v = cols[tension_topics[n]]
+    def sec(ns: np.ndarray) -> np.ndarray:
+        return (np.asarray(ns) - t0) * 1e-9
+
+    focus = [n for n in ('line_11', 'line_10', 'line_12', 'line_01') if n in names] or names[:3]
+    return _Episode(
+        config,
+        names,
+        focus,
+        dict(zip(focus, ('tab:red', 'tab:orange', 'tab:purple', 'tab:green'))),
+        {topic: (sec(t), v) for topic, (t, v) in cols.items()},
+        {n: (sec(outs[out_topics[n]][0]), outs[out_topics[n]][1]) for n in names},
+        {k: i for i, k in enumerate(OUTPUT_FIELDS)},
+    )
+
+
+def _draw_tensions(ax: Any, ep: _Episode) -> None:
+    """Every line's hook tension, the focus lines in colour, and Table 3's typhoon tension."""
+    for line in ep.config.lines:
+        n = line.name
+        t, v = ep.cols[line.tension_topic]
         ax.plot(
-            sec(t),
+            t,
             v / 1e3,
-            lw=1.2 if n in focus else 0.5,
-            color=colours.get(n, 'grey'),
-            alpha=1.0 if n in focus else 0.5,
-            label=n if n in focus else None,
+            lw=1.2 if n in ep.focus else 0.5,
+            color=ep.colours.get(n, 'grey'),
+            alpha=1.0 if n in ep.focus else 0.5,
+            label=n if n in ep.focus else None,
         )
     ax.plot([], [], color='grey', lw=0.5, label='other lines')
     ax.axhline(1623.4, color='k', ls=':', lw=0.8)
@@ -382,53 +413,75 @@ def plot_episode(
     )
     ax.set_ylabel('hook tension [kN]')
     ax.legend(loc='upper left', fontsize=8)
-    ax = axes[2]
-    t, data = outs[out_topics[focus[0]]]
+
+
+def _draw_uplift(axes: Any, ep: _Episode) -> None:
+    """The first focus line's uplift force and the focus lines' anchor margins (panel 3), its
+    time-to-uplift WARN and uplift marked on every panel."""
+    ax, idx, first = axes[2], ep.idx, ep.focus[0]
+    t, data = ep.outs[first]
     if data.size:
         ax.plot(
-            sec(t),
-            data[:, idx['uplift_force']] / 1e3,
-            color='k',
-            lw=1.5,
-            label=f'{focus[0]} uplift force [kN]',
-        )
+            t, data[:, idx['uplift_force']] / 1e3, color='k', lw=1.5,
+            label=f'{first} uplift force [kN]',
+        )  # fmt: skip
         ax2 = ax.twinx()
-        for n in focus:
-            c = colours[n]
-            tt, dd = outs[out_topics[n]]
+        for n in ep.focus:
+            tt, dd = ep.outs[n]
             if dd.size:
                 ax2.plot(
-                    sec(tt),
-                    dd[:, idx['anchor_margin']],
-                    color=c,
-                    lw=0.8,
-                    ls='--',
+                    tt, dd[:, idx['anchor_margin']], color=ep.colours[n], lw=0.8, ls='--',
                     label=f'{n} anchor margin [m]',
-                )
+                )  # fmt: skip
         ax2.set_ylim(-20, 25)
-        ax2.axhline(config.alarm.anchor_margin_warn, color='tab:orange', ls='--', lw=0.8)
+        ax2.axhline(ep.config.alarm.anchor_margin_warn, color='tab:orange', ls='--', lw=0.8)
         ax2.set_ylabel('anchor margin [m]')
         ax2.legend(loc='upper right', fontsize=8)
     ax.set_ylabel('uplift force [kN]')
     ax.legend(loc='upper left', fontsize=8)
     if data.size:
-        _mark_uplift_warning(axes, sec(t), data, idx, config.alarm.uplift_time_warn, focus[0])
-    ax = axes[3]
-    for k, n in enumerate(names):
-        tt, dd = outs[out_topics[n]]
+        _mark_uplift_warning(axes, t, data, idx, ep.config.alarm.uplift_time_warn, first)
+
+
+def _draw_levels(ax: Any, ep: _Episode) -> None:
+    """Every line's alarm level as steps (offset a little per line so they do not overlap)."""
+    for k, n in enumerate(ep.names):
+        tt, dd = ep.outs[n]
         if dd.size:
             ax.step(
-                sec(tt),
-                dd[:, idx['level']] + 0.04 * k,
+                tt,
+                dd[:, ep.idx['level']] + 0.04 * k,
                 where='post',
-                lw=1.2 if n in focus else 0.6,
-                color=colours.get(n, 'grey'),
-                label=n if n in focus else None,
+                lw=1.2 if n in ep.focus else 0.6,
+                color=ep.colours.get(n, 'grey'),
+                label=n if n in ep.focus else None,
             )
     ax.set_yticks([0, 1, 2, 3], ['OK', 'WARN', 'ERROR', 'STALE'])
     ax.set_ylabel('alarm level')
     ax.set_xlabel('time since the simulator started [s]')
     ax.legend(loc='upper right', fontsize=8)
+
+
+def plot_episode(
+    files: list[Path], png: Path, params: str, origin_ns: Optional[int] = None
+) -> Path:
+    """Chart of the episode from the MCAP log: depth, hook tensions, line 11, alarm levels;
+    line 11's first time-to-uplift WARN and its uplift marked on every panel. Time in s since
+    ``origin_ns`` (log time, ns; None: the first logged sample)."""
+    import matplotlib
+
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+
+    ep = _read_episode(files, params, origin_ns)
+    fig, axes = plt.subplots(4, 1, figsize=(11, 11), sharex=True)
+    t, v = ep.cols[ep.config.depth_topic]
+    axes[0].plot(t, v, color='tab:blue')
+    axes[0].set_ylabel('depth at hook [m]')
+    axes[0].set_title('catenary_monitor demo: floating dock (Hu & Tang 2004), storm on line_11')
+    _draw_tensions(axes[1], ep)
+    _draw_uplift(axes, ep)
+    _draw_levels(axes[3], ep)
     for a in axes:
         a.grid(alpha=0.3)
     fig.tight_layout()
