@@ -80,6 +80,9 @@ def test_csv_json_mcap_png(scene, capsys):
             float(np.nanmin(r.values['anchor_margin']))
         )
         assert [e['start'] for e in s['episodes']] == [e['start'] for e in r.episodes(ref.end_ns)]
+        # the level after the last step, OK included (Level.OK is 0: falsy)
+        assert s['final_level'] == Level(int(r.step_level[-1])).name
+    assert {s['final_level'] for s in summary['lines'].values()} & {'OK', 'WARN'}
     storm = summary['lines']['line_02']
     assert storm['worst']['uplift_force']['value'] > 50e3
     assert any(e['worst'] == 'ERROR' for e in storm['episodes'])

@@ -697,7 +697,7 @@ class LineTally:
             'unsolved_updates': self.unsolved,
             'worst': self.worst,
             'transitions': len(self.transitions),
-            'final_level': (self.final or Level.STALE).name,
+            'final_level': (Level.STALE if self.final is None else self.final).name,
             'episodes': episodes,
         }
 
