@@ -391,6 +391,13 @@ def test_empty_log_and_bad_arguments(scene, tmp_path):
     text.write_text('hello')
     p = _cli(text, '--params-file', scene['params'])
     assert p.returncode == 2 and 'not an MCAP file' in p.stderr
+    # without --params-file the file's own fault comes first, not the missing parameters
+    p = _cli(text)
+    assert p.returncode == 2 and 'not an MCAP file' in p.stderr, p.stderr
+    zero = tmp_path / 'zero.mcap'
+    zero.write_bytes(b'')
+    p = _cli(zero)
+    assert p.returncode == 3 and 'empty log' in p.stderr, p.stderr
 
 
 def test_progress_on_long_logs(scene, tmp_path):

@@ -53,7 +53,8 @@ def register(sub: Any) -> None:
         description='Turn unfinished MCAP files (writer killed: no summary, maybe a cut last '
         'chunk) into finished ones, keeping every readable message; finished files are left '
         'alone. A folder also gets its rosbag2 metadata.yaml. Exit 0: every file finished; '
-        '2: no such path or no MCAP file; 3: a file could not be finished.',
+        '2: no such path, or a folder without *.mcap files; 3: a file could not be finished '
+        '(not MCAP, unreadable or unwritable).',
     )
     r.add_argument('path', metavar='PATH', help='an MCAP file or a folder of them')
     r.add_argument('--json', action='store_true', help='print one JSON object instead of a table')

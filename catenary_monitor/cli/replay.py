@@ -62,6 +62,7 @@ from catenary_monitor.io.mcap_read import (
     TopicTypeError,
     expand_paths,
     iter_messages,
+    not_mcap,
     read_float64_topics,
 )
 
@@ -343,6 +344,11 @@ def _offline(args: argparse.Namespace) -> int:
 
     keep_freed_memory()  # a batch job on large arrays (see cli.allocator)
     paths = _expand(args.logs)
+    foreign = [why for why in map(not_mcap, paths) if why]
+    if len(foreign) == len(paths):  # nothing to read: say so before asking for parameters
+        raise ReplayError(foreign[0])
+    if all(p.stat().st_size == 0 for p in paths):
+        raise ReplayError(f'empty log: {paths[0]} holds no bytes; nothing to replay', EXIT_EMPTY)
     recorded = log_parameters(paths)
     if args.params_file:
         config = load_config(args.params_file)
@@ -689,8 +695,9 @@ def register(sub: Any) -> None:
         default='',
         help='comma-separated CSV columns, or "all" (default: time, line, '
         'top_tension, depth, min_anchor_distance, anchor_margin, uplift_force, '
-        'level); also horizontal_tension, tide_margin, load_margin, '
-        'safety_factor, status',
+        'level); also horizontal_tension, tide_margin, load_margin, safety_factor, '
+        'time_to_uplift, the bounds, the holding values, sensor_state, status, model '
+        '(docs/replay.md)',
     )
     p.add_argument(
         '--jobs',
@@ -719,8 +726,8 @@ def register(sub: Any) -> None:
         '--ticks',
         choices=('auto', 'log', 'grid'),
         default='auto',
-        help='periodic alarm steps: the log\'s /diagnostics times (auto: if present) '
-        'or a grid at diagnostic_rate',
+        help='periodic alarm steps: the ticks the node recorded on its events channel '
+        f'({EVENTS_TOPIC}; auto: if present) or a grid at diagnostic_rate',
     )
     p.add_argument(
         '--publish',

@@ -46,7 +46,17 @@ import threading
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, NamedTuple, Union, cast
+from typing import (
+    TYPE_CHECKING,
+    Any,
+    Callable,
+    Iterable,
+    Iterator,
+    NamedTuple,
+    Optional,
+    Union,
+    cast,
+)
 
 import numpy as np
 from numpy.lib.stride_tricks import as_strided, sliding_window_view
@@ -974,6 +984,17 @@ def _parse_channel(buf: bytes | memoryview, pos: int, end: int) -> tuple[int, in
     topic, p = _string(buf, pos + 4, end)
     encoding, _ = _string(buf, p, end)
     return channel_id, schema_id, topic, encoding
+
+
+def not_mcap(path: Path) -> Optional[str]:
+    """Why ``path`` cannot be an MCAP file at all (its reader's own rule: neither the magic,
+    nor a prefix of it, nor damaged magic before a Header record), else None; a file cut
+    inside the magic (an empty one too) counts as a damaged log, not as another format."""
+    with open(path, 'rb') as f:
+        head = f.read(4096)
+    if head[: len(MAGIC)] == MAGIC or MAGIC.startswith(head) or _looks_like_header(head):
+        return None
+    return f'{path} is not an MCAP file (bad magic)'
 
 
 def _looks_like_header(data: bytes) -> bool:
