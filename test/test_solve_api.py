@@ -147,6 +147,7 @@ def test_cli_json_contract():
     )
     assert p.returncode == 0, p.stderr
     data = json.loads(p.stdout)
+    assert data.pop('model') == 'inextensible catenary' and data.pop('anchor_lifted') is True
     assert set(data) == set(ALL_KEYS) - {'grounded_length'}
     want = solve(W, H, tension=T, anchor_distance=X, mbl=6.5e6)
     for key, value in data.items():
@@ -155,6 +156,18 @@ def test_cli_json_contract():
     data = json.loads(p.stdout)
     assert data['uplift_force'] == 0 and data['anchor_angle_deg'] == 0
     assert 'anchor_margin' not in data and 'safety_factor' not in data
+
+
+def test_cli_refuses_results_float64_cannot_hold():
+    """Problem 4 with T/w some 1e157 x the anchor distance under- and overflows inside the
+    solve: one line and exit 2, never a table of inf and NaN."""
+    for fmt in ((), ('--json',)):
+        p = cli(
+            'solve', '--weight', '1300', '--depth', '20.85', '--tension', '1e200',
+            '--anchor-distance', '100', *fmt,
+        )  # fmt: skip
+        assert p.returncode == 2 and p.stdout == '', p.stdout
+        assert len(p.stderr.strip().splitlines()) == 1 and 'range' in p.stderr, p.stderr
 
 
 def test_cli_table_default():

@@ -104,8 +104,16 @@ def cmd_solve(args: argparse.Namespace) -> int:
     )
     if int(result.status) != Status.OK:
         raise UsageError(_status_line(result, args))
+    values = result.to_dict()
+    bad = [k for k, v in values.items() if not math.isfinite(v)]
+    if bad:  # float64 over- or underflow inside the solve: say so, never print a NaN
+        raise UsageError(
+            f'{bad[0]} is not finite: the inputs are beyond the range the solver handles in '
+            'float64 (problem 4: hook tension / weight up to about 1e150 x the anchor distance)'
+        )
     if args.json:
-        print(json.dumps(result.to_dict()))
+        lifted = bool(result.uplift_force > 0)
+        print(json.dumps({**values, 'model': result.model, 'anchor_lifted': lifted}))
     else:
         given = f'w = {args.weight:g} N/m, h = {args.depth:g} m'
         for name, unit in (
