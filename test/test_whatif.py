@@ -56,7 +56,7 @@ def test_anchor_distance_and_tide_rate_of_the_scene():
 
 def test_whatif_names_unknown_and_missing_lines():
     config = dock_config(2)
-    with pytest.raises(ValueError, match="no tension for line 'line_02' .and no chain_length"):
+    with pytest.raises(ValueError, match="no tension for line 'line_02': no chain_length"):
         catenary_monitor.whatif(config, 20.0, {'line_01': 4e5})
     with pytest.raises(ValueError, match="unknown line 'line_9'"):
         catenary_monitor.whatif(config, 20.0, {'line_01': 4e5, 'line_02': 4e5},
@@ -173,6 +173,19 @@ def test_lines_not_given_hang_as_installed():
     table = run('--params-file', 'config/floating_dock.yaml', '--depth', '20.85',
                 '--tension', 'line_11=1.6e6')
     assert table.returncode == 0 and 'hanging' in table.stdout and 'given' in table.stdout
+
+
+def test_a_chain_that_cannot_hang_says_why():
+    """The shipped dock has chain lengths: a line that cannot hang as installed (too deep, or
+    its anchor moved beyond reach) says its chain is taut, not that it has no chain_length."""
+    for extra in (['--depth', '1000'], ['--depth', '20.85', '--anchor-distance', 'line_01=500']):
+        out = run('--params-file', 'config/floating_dock.yaml', *extra)
+        assert out.returncode == 2 and out.stdout == '', out.stdout
+        assert 'line line_01: no tension given' in out.stderr and 'taut' in out.stderr
+        assert 'no chain_length' not in out.stderr and out.stderr.count('\n') == 1
+    out = run('--params-file', 'config/floating_dock.yaml', '--depth', '20.85',
+              '--anchor-distance', 'nosuch=50')
+    assert out.returncode == 2 and "unknown line 'nosuch'" in out.stderr, out.stderr
 
 
 def test_a_lifted_anchor_is_said_once():

@@ -101,7 +101,13 @@ def scene_table(scene: Any) -> str:
 def cmd_whatif(args: argparse.Namespace) -> int:
     """Run the scene; print the table or the JSON."""
     from catenary_monitor.core.config import ConfigError, config_from_params, load_params_file
-    from catenary_monitor.core.whatif import hanging_tensions, scene_dict, whatif
+    from catenary_monitor.core.whatif import (
+        hanging_tensions,
+        scene_dict,
+        unhung_reason,
+        whatif,
+        with_distances,
+    )
 
     try:
         config = config_from_params(load_params_file(args.params_file))
@@ -121,13 +127,17 @@ def cmd_whatif(args: argparse.Namespace) -> int:
         tensions = {**{k: v for k, v in logged.items()}, **tensions}
         rate = log_rate if args.tide_rate is None else rate
     names = [line.name for line in config.lines]
-    hanging = hanging_tensions(config, depth, [n for n in names if n not in tensions])
+    try:
+        placed = with_distances(config, distances)
+    except ValueError as err:
+        raise WhatIfError(str(err)) from None
+    hanging = hanging_tensions(placed, depth, [n for n in names if n not in tensions])
     missing = [n for n in names if n not in tensions and n not in hanging]
     if missing:
         where = ' or a sample in --log' if not args.log else ' (the log has no sample of it)'
         raise WhatIfError(
-            f'line {missing[0]}: no tension and no chain_length to hang it as installed: '
-            f'give --tension {missing[0]}=N{where}'
+            f'line {missing[0]}: no tension given, and {unhung_reason(placed, depth, missing[0])}'
+            f': give --tension {missing[0]}=N{where}'
         )
     try:
         scene = whatif(config, depth, tensions, distances, rate)

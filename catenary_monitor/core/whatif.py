@@ -37,7 +37,10 @@ from catenary_monitor.core.monitor import (
     Tick,
 )
 
-__all__ = ['LineScene', 'Scene', 'whatif', 'hanging_tensions', 'scene_dict']
+__all__ = [
+    'LineScene', 'Scene', 'whatif', 'hanging_tensions', 'unhung_reason', 'with_distances',
+    'scene_dict',
+]
 
 
 class LineScene(NamedTuple):
@@ -61,7 +64,7 @@ class Scene(NamedTuple):
     lines: tuple[LineScene, ...]
 
 
-def _with_distances(config: MonitorConfig, distances: Mapping[str, float]) -> MonitorConfig:
+def with_distances(config: MonitorConfig, distances: Mapping[str, float]) -> MonitorConfig:
     names = {line.name for line in config.lines}
     unknown = sorted(set(distances) - names)
     if unknown:
@@ -113,7 +116,7 @@ def whatif(
     line), ``depth`` (m), ``anchor_distances`` (line name -> m, the others installed) and a
     ``tide_rate`` (m/s, NaN: no trend), as the monitor core decides them (module docstring).
     ValueError names an unknown or missing line."""
-    cfg = _with_distances(config, dict(anchor_distances or {}))
+    cfg = with_distances(config, dict(anchor_distances or {}))
     names = [line.name for line in cfg.lines]
     unknown = sorted(set(tensions) - set(names))
     if unknown:
@@ -122,7 +125,7 @@ def whatif(
     missing = [n for n in names if n not in tensions and n not in hanging]
     if missing:
         raise ValueError(
-            f'no tension for line {missing[0]!r} (and no chain_length to hang it as installed)'
+            f'no tension for line {missing[0]!r}: {unhung_reason(cfg, depth, missing[0])}'
         )
     values = [float(tensions[n]) if n in tensions else hanging[n] for n in names]
     events, _ = _events(cfg, float(depth), values, float(tide_rate))
@@ -164,6 +167,21 @@ def hanging_tensions(config: MonitorConfig, depth: float, names: list[str]) -> d
         if math.isfinite(tension):
             out[line.name] = tension
     return out
+
+
+def unhung_reason(config: MonitorConfig, depth: float, name: str) -> str:
+    """Why line ``name`` has no tension from :func:`hanging_tensions` at ``depth`` (m)."""
+    line = next(ln for ln in config.lines if ln.name == name)
+    if line.chain_length is None:
+        return 'no chain_length to hang it as installed'
+    h = depth + line.hook_height
+    reach = math.hypot(line.anchor_distance, h)
+    return (
+        f'its chain ({line.chain_length:g} m) cannot hang as installed at depth {h:g} m: '
+        f'it is taut, shorter than the straight line to the anchor ({reach:g} m)'
+        if line.chain_length <= reach
+        else f'its chain ({line.chain_length:g} m) gives no finite tension at depth {h:g} m'
+    )
 
 
 def scene_dict(scene: Scene) -> dict[str, Any]:
