@@ -162,6 +162,17 @@ def test_envelope_table_json_and_chart(tmp_path, capsys):
     assert code == 0 and 'weakest:' in out.out and 'wind m/s' in out.out
 
 
+def test_envelope_where_there_is_none_says_why_and_exits_3(capsys):
+    """At 40 m the chains cannot reach their anchors (taut): no equilibrium even unloaded,
+    so no direction has an envelope; the table says it in words, stderr in one line."""
+    code, out = run(capsys, 'envelope', '--params-file', DOCK_YAML, '--depth', 40, '--step', 90,
+                    '--quiet')  # fmt: skip
+    assert code == 3, out.err
+    assert 'line_failed' not in out.out and 'no equilibrium' in out.out
+    assert 'no envelope at this depth' in out.out
+    assert len(out.err.strip().splitlines()) == 1 and 'depth 40 m' in out.err
+
+
 def test_the_commands_run_as_a_user_runs_them():
     """The console script's module, in its own process: table out, nothing on stderr."""
     proc = subprocess.run(

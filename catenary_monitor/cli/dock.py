@@ -11,7 +11,7 @@ import argparse
 import json
 import math
 import sys
-from typing import Any, Sequence
+from typing import Any, Optional, Sequence
 
 import numpy as np
 
@@ -57,9 +57,8 @@ def _numbers(text: str, count: int, name: str) -> list[float]:
     except ValueError:
         values = []
     if len(values) != count or not all(math.isfinite(v) for v in values):
-        raise UsageError(
-            f'{name} must be {count} finite numbers separated by commas, got {text!r}'
-        )
+        what = 'a finite number' if count == 1 else f'{count} finite numbers separated by commas'
+        raise UsageError(f'{name} must be {what}, got {text!r}')
     return values
 
 
@@ -254,7 +253,11 @@ def cmd_envelope(args: argparse.Namespace) -> int:
             print(_envelope_table(depth, rows, wind, why))
         if args.plot:
             print(f'chart: {args.plot}')
-    return 0
+    failures = [_envelope_failure(rows) for _, rows in results]
+    for (depth, _), failed in zip(results, failures):
+        if failed:
+            print(f'catenary-monitor: depth {depth:g} m: {failed}', file=sys.stderr)
+    return 3 if any(failures) else 0
 
 
 def _title(path: str) -> str:
@@ -291,9 +294,11 @@ def _envelope_table(depth: float, rows: Sequence[Any], wind: bool, why: str) -> 
     )
     table_rows = []
     for r in rows:
-        row = [f'{r.direction_deg:g}', _fmt(r.force, 1e-3, 1), r.force_line or r.force_status]
+        row = [f'{r.direction_deg:g}', _fmt(r.force, 1e-3, 1)]
+        row += [_lifts(r.force_line, r.force_status)]
         if wind:
-            row += [_fmt(r.wind, 1.0, 2), r.wind_line or r.wind_status, _fmt(r.wind_load, 1e-3, 1)]
+            row += [_fmt(r.wind, 1.0, 2), _lifts(r.wind_line, r.wind_status)]
+            row += [_fmt(r.wind_load, 1e-3, 1)]
         table_rows.append(row)
     header = ['from deg', 'force kN', 'lifts']
     if wind:
@@ -311,7 +316,34 @@ def _envelope_table(depth: float, rows: Sequence[Any], wind: bool, why: str) -> 
             foot += f'; wind {lw.wind:.2f} m/s from {lw.direction_deg:g} deg ({lw.wind_line})'
     elif why:
         foot += f'\n{why}'
+    failed = _envelope_failure(rows)
+    if failed:
+        foot += f'\nno envelope at this depth: {failed}'
+    at_rest = sorted({r.force_line for r in rows if r.force_status == 'lifted at rest'})
+    if at_rest:
+        foot += f'\nanchor already lifted with no load at this depth: {", ".join(at_rest)}'
     return head + '\n\n' + format_table(table_rows, header) + foot + '\n'
+
+
+#: The envelope's own outcomes; any other status is the equilibrium's that stopped the search.
+_ENVELOPE_STATUSES = ('lifts', 'lifted at rest', 'none below limit', 'not computed')
+
+
+def _lifts(line: Optional[str], status: str) -> str:
+    """The 'lifts' cell: the line whose anchor lifts first, else what stopped the search."""
+    if line:
+        return line
+    return status if status in _ENVELOPE_STATUSES else 'no equilibrium'
+
+
+def _envelope_failure(rows: Sequence[Any]) -> str:
+    """Why no direction has an envelope (every search stopped by the equilibrium), else ''."""
+    from catenary_monitor.core.body.equilibrium import EQUILIBRIUM_MESSAGES, EquilibriumStatus
+
+    if not rows or any(r.force_status in _ENVELOPE_STATUSES for r in rows):
+        return ''
+    status = EquilibriumStatus[rows[0].force_status.upper()]
+    return f'the dock has no equilibrium even unloaded: {EQUILIBRIUM_MESSAGES[status]}'
 
 
 def _add_common(p: argparse.ArgumentParser) -> None:
