@@ -162,6 +162,17 @@ def test_envelope_table_json_and_chart(tmp_path, capsys):
     assert code == 0 and 'weakest:' in out.out and 'wind m/s' in out.out
 
 
+def test_equilibrium_beyond_the_breaking_load_says_so(capsys):
+    """1 GN of surge: the chains find an equilibrium on paper, far above their MBL."""
+    code, out = run(capsys, 'equilibrium', '--params-file', DOCK_YAML, '--depth', 20.85,
+                    '--load', '1e9,0,0')  # fmt: skip
+    assert code == 0, out.err
+    assert 'ABOVE ITS BREAKING LOAD' in out.out
+    code, out = run(capsys, 'equilibrium', '--params-file', DOCK_YAML, '--depth', 20.85,
+                    '--load', '1e5,0,0')  # fmt: skip
+    assert code == 0 and 'BREAKING' not in out.out
+
+
 def test_envelope_where_there_is_none_says_why_and_exits_3(capsys):
     """At 40 m the chains cannot reach their anchors (taut): no equilibrium even unloaded,
     so no direction has an envelope; the table says it in words, stderr in one line."""

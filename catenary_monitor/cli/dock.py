@@ -214,7 +214,14 @@ def _equilibrium_table(
         'load margin kN',
         'MBL/T',
     )
-    return '\n'.join(head) + '\n\n' + format_table(rows, header)
+    broken = [r['line'] for r in lines if r['safety_factor'] < 1.0]
+    foot = (
+        f'\nABOVE ITS BREAKING LOAD (MBL/T < 1): {", ".join(broken)}: the chain parts before '
+        'this equilibrium is reached'
+        if broken
+        else ''
+    )
+    return '\n'.join(head) + '\n\n' + format_table(rows, header) + foot
 
 
 def cmd_envelope(args: argparse.Namespace) -> int:
