@@ -38,7 +38,12 @@ from catenary_monitor.core.monitor import (
 )
 
 __all__ = [
-    'LineScene', 'Scene', 'whatif', 'hanging_tensions', 'unhung_reason', 'with_distances',
+    'LineScene',
+    'Scene',
+    'whatif',
+    'hanging_tensions',
+    'unhung_reason',
+    'with_distances',
     'scene_dict',
 ]
 

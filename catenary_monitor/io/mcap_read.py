@@ -990,8 +990,11 @@ def not_mcap(path: Path) -> Optional[str]:
     """Why ``path`` cannot be an MCAP file at all (its reader's own rule: neither the magic,
     nor a prefix of it, nor damaged magic before a Header record), else None; a file cut
     inside the magic (an empty one too) counts as a damaged log, not as another format."""
-    with open(path, 'rb') as f:
-        head = f.read(4096)
+    try:
+        with open(path, 'rb') as f:
+            head = f.read(4096)
+    except OSError:
+        return None  # unreadable: the reader says how
     if head[: len(MAGIC)] == MAGIC or MAGIC.startswith(head) or _looks_like_header(head):
         return None
     return f'{path} is not an MCAP file (bad magic)'
