@@ -375,7 +375,8 @@ def _read_episode(files: list[Path], params: str, origin_ns: Optional[int]) -> _
     def sec(ns: np.ndarray) -> np.ndarray:
         return (np.asarray(ns) - t0) * 1e-9
 
-    focus = [n for n in ('line_11', 'line_10', 'line_12', 'line_01') if n in names] or names[:3]
+    focus: list[str] = [n for n in ('line_11', 'line_10', 'line_12', 'line_01') if n in names]
+    focus = focus or names[:3]
     return _Episode(
         config,
         names,
