@@ -240,10 +240,16 @@ def live_run(tmp_path_factory: Any) -> Any:
             lambda: [s for s in watcher.seen if s == (2, 'true')],
             30.0,
         )
+        before_loss = driver.execute_script('return cmConsole.beeps')
         stop(monitor, signal.SIGTERM)
         t_kill = time.monotonic()
         wait_for('the lost-connection banner', lambda: driver.execute_script(LOST), 20.0)
         seen['banner_after_s'] = time.monotonic() - t_kill
+        seen['beeps_on_loss'] = wait_for(
+            'the loss of monitoring beeps',
+            lambda: driver.execute_script('return cmConsole.beeps') > before_loss,
+            15.0,
+        )
         seen['tiles_lost'] = tiles(driver)
         seen['banner_text'] = driver.find_element('id', 'banner').text
         yield seen
@@ -268,6 +274,7 @@ def test_live_page_storm_acknowledge_and_monitor_loss(live_run: Any) -> None:
     assert seen['diagnostics']
     assert seen['banner_after_s'] < 20.0
     assert set(seen['tiles_lost'].values()) == {'STALE'}  # old values are not shown as current
+    assert seen['beeps_on_loss']  # losing the monitor is an alarm of its own, audible
     assert 'MONITOR SILENT' in seen['banner_text'] or 'UNREACHABLE' in seen['banner_text']
     # The monitor's log holds the acknowledgement, with its origin.
     from catenary_monitor.core.monitor import EVENTS_TOPIC

@@ -201,7 +201,7 @@ function renderTile(view, lost, frame) {
   // inconsistent, suspect): check the sensor. 'unchecked' (not judged by the dock model) is quiet.
   const sensor = view.sensor_state || 'ok';
   t.dataset.sensorState = sensor;
-  if (sensor !== 'ok' && sensor !== 'unchecked') foot.appendChild(el('span', { class: 'old' }, ` · sensor ${sensor.replace('_', ' ')}`));
+  if (sensor !== 'ok' && sensor !== 'unchecked') foot.appendChild(el('span', { class: 'old' }, ` · sensor ${sensor.replaceAll('_', ' ')}`));
 }
 
 // ---------------------------------------------------------------- plan
@@ -297,7 +297,7 @@ function renderActive(frame, lost, replay) {
     setText(td[0], clock(a.raised));
     setText(td[1], a.line);
     setText(td[2], a.level);
-    setText(td[3], a.condition.replace('_', ' '));
+    setText(td[3], a.condition.replaceAll('_', ' '));
     setText(td[4].firstChild, a.message);
     td[4].title = a.message;
     setText(td[5], a.state.replace('-', ' '));
@@ -322,7 +322,7 @@ function renderHistory(frame) {
     tr.appendChild(el('td', {}, h.event));
     tr.appendChild(el('td', {}, h.level));
     const msg = el('td', { class: 'msg-cell', title: h.message });
-    msg.appendChild(el('div', {}, `${h.condition.replace('_', ' ')}: ${h.message}`));
+    msg.appendChild(el('div', {}, `${h.condition.replaceAll('_', ' ')}: ${h.message}`));
     tr.appendChild(msg);
     tr.appendChild(el('td', {}, h.by));
     hist.appendChild(tr);
@@ -492,6 +492,7 @@ function watchdog() {
   if (!S.config || S.config.mode !== 'live' || !S.lastMessage) return;
   const lost = (performance.now() - S.lastMessage) / 1000 > SERVER_TIMEOUT_S;
   if (lost !== S.serverLost) { S.serverLost = lost; if (S.frame) render(S.frame); }
+  else if (lost && S.frame) sound(S.frame, true); // no frames come while the server is gone
   updateSoundButton();
 }
 
@@ -516,13 +517,16 @@ function updateSoundButton() {
   else { b.textContent = `sound on (silence ${SILENCE_S} s)`; b.className = 'sound on'; }
 }
 
+// Beeps for each new unacknowledged ERROR and for the loss of monitoring itself (the monitor
+// silent or the console server unreachable: an alarm of its own), again every REPEAT_S.
 function sound(frame, lost) {
   const errors = frame.alarms.filter((a) => a.state === 'unacknowledged' && a.level === 'ERROR');
   const keys = new Set(errors.map((a) => `${a.line}@${a.raised}`));
+  if (lost) keys.add('monitoring lost');
   const fresh = [...keys].some((k) => !S.knownErrors.has(k));
   S.knownErrors = keys;
   const now = performance.now();
-  if (lost || !errors.length || now < S.mutedUntil) return;
+  if (!keys.size || now < S.mutedUntil) return;
   if (fresh || now - S.lastBeep > REPEAT_S * 1000) beep();
 }
 
