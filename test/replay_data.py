@@ -36,19 +36,9 @@ def dock_config(n_lines: int = 3, **alarm: Any) -> MonitorConfig:
 
 def params_yaml(config: MonitorConfig, path: Path) -> Path:
     """Write ``config`` as a ROS params file (the ``catenary_monitor`` section)."""
-    from catenary_monitor.core.config import config_to_params
+    from catenary_monitor.core.config import config_to_params, params_file_text
 
-    flat = config_to_params(config)
-    out = ['catenary_monitor:', '  ros__parameters:']
-    for key, value in flat.items():
-        if isinstance(value, (list, tuple)):
-            value = '[' + ', '.join(value) + ']'
-        elif isinstance(value, str):
-            value = f'"{value}"'
-        else:
-            value = repr(value)
-        out.append(f'    {key}: {value}')
-    path.write_text('\n'.join(out) + '\n')
+    path.write_text(params_file_text(config_to_params(config)))
     return path
 
 

@@ -1152,3 +1152,36 @@ def test_libyaml_divergences_are_refused(
     assert 'error' in _ours(path, '/')
     if version and version.startswith('0.1.'):  # this machine: what rcl itself does
         assert ('params' in results[path]) == accepted_by_017
+
+
+def test_written_params_files_read_back_to_the_same_values(tmp_path: Path) -> None:
+    """core.config.params_file_text (the demo's merged file, the tests' params files): every
+    kind of value comes back with its type, read by rcl's rules."""
+    from catenary_monitor.core.config import config_hash, config_to_params, params_file_text
+
+    flat = {
+        'lines': ['a', 'b'],
+        'x': 1300.0,
+        'tiny': 1e-300,
+        'huge': 1e200,
+        'big': 5.17e6,
+        'n': 3,
+        'flag': True,
+        'off': False,
+        'topic': '/tide/depth',
+        'odd': 'say "hi": yes',
+        'nan': math.nan,
+        'inf': -math.inf,
+        'fs': [1.5, 2.0],
+    }
+    path = tmp_path / 'p.yaml'
+    path.write_text(params_file_text(flat))
+    back = load_params_file(path)
+    assert set(back) == set(flat)
+    for key, want in flat.items():
+        got = back[key]
+        assert type(got) is type(want), key
+        assert got == want or (want != want and got != got), key
+    dock = config_from_params(load_params_file(DOCK_YAML))
+    path.write_text(params_file_text(config_to_params(dock)))
+    assert config_hash(config_from_params(load_params_file(path))) == config_hash(dock)

@@ -141,9 +141,25 @@ def start_console(
     return None, why
 
 
+def demo_params(params: str, out: Path) -> str:
+    """``params`` with :data:`DEMO_OVERRIDES`, written to ``out``/demo_params.yaml: the one
+    file the monitor, the console and the chart all read (the console's highlights use the
+    same thresholds as the monitor's alarms)."""
+    from catenary_monitor.core.config import (
+        config_from_params,
+        config_to_params,
+        load_params_file,
+        params_file_text,
+    )
+
+    config = config_from_params({**load_params_file(params), **DEMO_OVERRIDES})
+    path = out / 'demo_params.yaml'
+    path.write_text(params_file_text(config_to_params(config)))
+    return str(path)
+
+
 def _start_monitor(params: str, log_dir: Path, env: dict[str, str]) -> subprocess.Popen:
     """The monitor node as its own process, logging into ``log_dir``, output piped."""
-    overrides = [a for k, v in DEMO_OVERRIDES.items() for a in ('-p', f'{k}:={v}')]
     return subprocess.Popen(
         [
             sys.executable,
@@ -154,7 +170,6 @@ def _start_monitor(params: str, log_dir: Path, env: dict[str, str]) -> subproces
             params,
             '-p',
             f'log_dir:={log_dir}',
-            *overrides,
         ],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
@@ -228,13 +243,14 @@ def run_demo(
     console_port: Optional[int] = 8080,
 ) -> int:
     """Run the demo; return 0 on success. Leaves the MCAP log and ``demo.png`` in ``out_dir``."""
-    params = params_file or default_config_path()
+    given = params_file or default_config_path()
     out = Path(out_dir).resolve()
     log_dir = out / 'log'
     log_dir.mkdir(parents=True, exist_ok=True)
+    params = demo_params(given, out)
     before = set(log_dir.glob('*.mcap'))
     env = child_env()
-    print(f'catenary_monitor demo: the floating dock of Hu & Tang (2004), 12 chains, {params}')
+    print(f'catenary_monitor demo: the floating dock of Hu & Tang (2004), 12 chains, {given}')
     print(
         f'  a storm builds to the typhoon load on line_11 (R = 1584.6 kN), then eases; '
         f'{duration:g} s of wall time (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]})'

@@ -35,6 +35,7 @@ __all__ = [
     'DockConfig',
     'GEOMETRY',
     'all_parameters',
+    'params_file_text',
     'expand_parameters',
     'load_params_file',
     'config_from_params',
@@ -1128,6 +1129,33 @@ def load_params_file(
         return read_params_file(path, node_name, node_namespace)
     except ParamsFileError as err:
         raise ConfigError('--params-file', str(err)) from err
+
+
+def params_file_text(flat: Mapping[str, Any], node_name: str = 'catenary_monitor') -> str:
+    """A ROS 2 params file (``node_name: ros__parameters:``, dotted names) holding ``flat``
+    (bools, ints, floats, strings and lists of them), which :func:`load_params_file` and rcl
+    read back to the same values: floats by ``repr`` (always with a ``.`` or an exponent, so
+    rcl reads a double), strings quoted."""
+
+    def scalar(v: Any) -> str:
+        if isinstance(v, bool):
+            return 'true' if v else 'false'
+        if isinstance(v, str):
+            return json.dumps(v)
+        if isinstance(v, float):
+            if not math.isfinite(v):
+                return '.nan' if v != v else ('.inf' if v > 0 else '-.inf')
+            text = repr(v)  # 5e-324 would be a string: always a '.'
+            return text if '.' in text else text.replace('e', '.0e')
+        return repr(v)
+
+    out = [f'{node_name}:', '  ros__parameters:']
+    for key, value in flat.items():
+        if isinstance(value, (list, tuple)):
+            out.append(f'    {key}: [{", ".join(scalar(v) for v in value)}]')
+        else:
+            out.append(f'    {key}: {scalar(value)}')
+    return '\n'.join(out) + '\n'
 
 
 def config_from_params(flat: Mapping[str, Any]) -> MonitorConfig:
