@@ -451,12 +451,9 @@ _CHILD = (
 
 
 def _params_file(config: MonitorConfig, path: Path) -> None:
-    import yaml
+    from catenary_monitor.core.config import config_to_params, params_file_text
 
-    from catenary_monitor.core.config import config_to_params
-
-    body = {'catenary_monitor': {'ros__parameters': config_to_params(config)}}
-    path.write_text(yaml.safe_dump(body))
+    path.write_text(params_file_text(config_to_params(config)))
 
 
 def cmd_bench_replay(args: argparse.Namespace) -> int:

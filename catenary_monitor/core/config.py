@@ -1134,8 +1134,8 @@ def load_params_file(
 def params_file_text(flat: Mapping[str, Any], node_name: str = 'catenary_monitor') -> str:
     """A ROS 2 params file (``node_name: ros__parameters:``, dotted names) holding ``flat``
     (bools, ints, floats, strings and lists of them), which :func:`load_params_file` and rcl
-    read back to the same values: floats by ``repr`` (always with a ``.`` or an exponent, so
-    rcl reads a double), strings quoted."""
+    read back to the same values: floats by ``repr`` with a ``.`` always (rcl reads ``1e-300``
+    as a string, ``1.0e-300`` as a double), strings quoted."""
 
     def scalar(v: Any) -> str:
         if isinstance(v, bool):
@@ -1145,7 +1145,7 @@ def params_file_text(flat: Mapping[str, Any], node_name: str = 'catenary_monitor
         if isinstance(v, float):
             if not math.isfinite(v):
                 return '.nan' if v != v else ('.inf' if v > 0 else '-.inf')
-            text = repr(v)  # 5e-324 would be a string: always a '.'
+            text = repr(v)
             return text if '.' in text else text.replace('e', '.0e')
         return repr(v)
 
