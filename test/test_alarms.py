@@ -548,6 +548,7 @@ def test_diagnostic_values_keys_and_exact_strings():
         'holding_capacity',
         'drag_margin',
         'implied_anchor_distance',
+        'tide_margin_at_length',
     ]
     assert all(isinstance(v, str) and float(v) == float(fields_[k]) for k, v in values)
     from_object = dict(diagnostic_values(SimpleNamespace(depth=20.85)))

@@ -472,7 +472,7 @@ def test_bounds_and_holding_twin_equals_the_core(seed):
     assert 'anchor may drag' in messages
     outs = np.array([o.values for s in steps for o in s.outputs if o.line == 1])
     for key in ('uplift_force_upper', 'anchor_margin_lower', 'grounded_length', 'drag_margin',
-                'implied_anchor_distance'):
+                'implied_anchor_distance', 'tide_margin_at_length'):
         assert np.isfinite(outs[:, OUTPUT_FIELDS.index(key)]).any(), key
 
 

@@ -149,3 +149,53 @@ def test_solve_chain_length_with_ea():
     assert np.isnan(arr.top_tension[1:]).all()
     with pytest.raises(ValueError, match='anchor_distance'):
         solve(W, H, chain_length=L, ea=EA)
+
+
+def _mp_lift_depth(w, length, s, ea=None):
+    """40-digit depth at which the chain of length L at span s lifts its anchor (bisection)."""
+    mp.mp.dps = 40
+    w, length, s = mp.mpf(w), mp.mpf(length), mp.mpf(s)
+
+    def root(f, lo, hi):
+        for _ in range(300):
+            mid = (lo + hi) / 2
+            lo, hi = (lo, mid) if f(mid) > 0 else (mid, hi)
+        return (lo + hi) / 2
+
+    theta = root(lambda t: mp.sinh(t) / t - length / s, mp.mpf(10) ** -30, mp.mpf(60))
+    if ea is None:
+        return float(s / theta * (mp.cosh(theta) - 1))
+    ea = mp.mpf(ea)
+    r = root(lambda r: r / w * mp.asinh(w * length / r) + r * length / ea - s,
+             mp.mpf(10) ** -30, w * s / theta)
+    z = w * length / r
+    return float(r / w * (mp.sqrt(1 + z * z) - 1) + w * length**2 / (2 * ea))
+
+
+@pytest.mark.parametrize('ea', [None, EA, 1e7])
+def test_lift_depth_matches_40_digit_mpmath(ea):
+    """From a chain hanging almost straight down (s = 1 m) to one almost taut along the seabed
+    (s = L - 1e-7 m, where the inextensible lift depth tends to 0)."""
+    s = np.array([1.0, 30.0, 60.0, 100.0, 120.0, 122.0, 122.8, 122.89, L - 1e-4, L - 1e-7])
+    got = fl.lift_depth(W, L, s, math.inf if ea is None else ea)
+    for i in range(s.size):
+        assert got[i] == pytest.approx(_mp_lift_depth(W, L, s[i], ea), rel=1e-12), s[i]
+
+
+@pytest.mark.parametrize('ea', [math.inf, EA])
+def test_at_the_lift_depth_the_anchor_just_lifts(ea):
+    """The state at (lift depth, span): no chain on the seabed, no pull on the anchor; a
+    centimetre deeper the anchor lifts, a centimetre shallower it is down."""
+    s = np.array([60.0, 100.0, 120.0])
+    h = fl.lift_depth(W, L, s, ea)
+    at = fl.statics_at_span(W, h, L, s, ea)
+    np.testing.assert_allclose(at.grounded_length, 0.0, atol=1e-6)
+    np.testing.assert_allclose(at.uplift_force, 0.0, atol=1e-3 * W)
+    assert (fl.statics_at_span(W, h + 0.01, L, s, ea).uplift_force > 0).all()
+    assert (fl.statics_at_span(W, h - 0.01, L, s, ea).grounded_length > 0).all()
+
+
+def test_lift_depth_without_a_state_is_nan():
+    got = fl.lift_depth(W, L, np.array([L, L + 1.0, 0.0, -1.0, math.nan]))
+    assert np.isnan(got).all()
+    assert np.isnan(fl.lift_depth(0.0, L, 100.0)) and np.isnan(fl.lift_depth(W, L, 100.0, 0.0))

@@ -117,3 +117,56 @@ def test_holding_doc_parameter_table_is_generated():
     page = (Path(__file__).resolve().parent.parent / 'docs' / 'holding.md').read_text()
     begin, end = '<!-- holding-parameters:begin -->\n', '<!-- holding-parameters:end -->'
     assert page.split(begin, 1)[1].split(end, 1)[0] == parameters_markdown('holding')
+
+
+def paper_line(chain_length=122.6247):
+    """The paper dock's line (config/floating_dock.yaml): 122.6247 m of chain to a sinker
+    120 m off, the pretension R = 372 kN at the mean tide's 20.85 m."""
+    return LineConfig(name='line_01', weight=1300.0, anchor_distance=120.0, mbl=4.827e6,
+                      chain_length=chain_length)
+
+
+def test_tide_margin_at_length_is_the_rise_that_lifts_the_anchor():
+    """At rest the paper's dock lifts its sinkers after 1.05 m of tide (docs/dock_body.md, the
+    dock as one body), where ``tide_margin`` (R held) says 4.68 m; a chain lifted already has
+    a negative margin; without ``chain_length`` it is NaN."""
+    from catenary_monitor.core import fixed_length as fl
+
+    w, length, h = 1300.0, 122.6247, 20.85
+    t = float(fl.statics_at_span(w, h, length, 120.0).top_tension)
+    _, (o,) = run(paper_line(), h, [t])
+    assert printed(o['tide_margin'], '4.68') and printed(o['tide_margin_at_length'], '1.05')
+    assert o['implied_anchor_distance'] == pytest.approx(120.0, rel=1e-12)
+    # the state a margin deeper, the chain and span held: the anchor just lifts
+    at = fl.statics_at_span(w, h + o['tide_margin_at_length'], length, 120.0)
+    assert float(at.grounded_length) == pytest.approx(0.0, abs=1e-6)
+    assert float(at.uplift_force) == pytest.approx(0.0, abs=1.0)
+    lifted = fl.statics_at_span(w, h + 2.0, length, 120.0)
+    _, (o,) = run(paper_line(), h + 2.0, [float(lifted.top_tension)])
+    assert o['uplift_force'] > 0
+    assert o['tide_margin_at_length'] == pytest.approx(1.0515 - 2.0, abs=1e-3)
+    _, (o,) = run(paper_line(None), h, [t])
+    assert math.isnan(o['tide_margin_at_length']) and printed(o['tide_margin'], '4.68')
+
+
+def test_time_to_uplift_counts_down_the_nearer_margin():
+    """A rising tide, the chain's length and span held: ``time_to_uplift`` is the time to the
+    fixed-length lift (1.05 m), not to the R-held one (4.68 m)."""
+    from catenary_monitor.core import fixed_length as fl
+    from catenary_monitor.core import tide_trend
+
+    w, length, rate = 1300.0, 122.6247, 0.5 / 3600.0
+    core = MonitorCore(MonitorConfig(lines=(paper_line(),), alarm=AlarmConfig(
+        tension_resolution=0.0, tide_trend_window=600.0)), 0)
+    for k in range(1200):
+        h = 20.0 + rate * k
+        core.step(Depth(k * 1_000_000_000 + 1, h))
+        t = float(fl.statics_at_span(w, h, length, 120.0).top_tension)
+        o = dict(zip(OUTPUT_FIELDS, core.step(Tension(k * 1_000_000_000 + 2, 0, t)).outputs[0]
+                     .values))
+    nearer = min(o['tide_margin'], o['tide_margin_at_length'])
+    assert nearer == o['tide_margin_at_length'] < o['tide_margin'] - 3.0
+    assert o['time_to_uplift'] == tide_trend.time_to_uplift(
+        nearer, o['uplift_force'], core.trend.rate, core.trend.excess)
+    lift = float(fl.lift_depth(w, length, 120.0))  # the depth it lifts at, from 20.0 m
+    assert o['time_to_uplift'] == pytest.approx((lift - 20.0) / rate - 1199.0, rel=0.02)

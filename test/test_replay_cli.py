@@ -19,7 +19,7 @@ from replay_data import core_steps, dock_config, generate, params_yaml, write_lo
 from catenary_monitor.cli.main import main
 from catenary_monitor.core.alarms import Level
 from catenary_monitor.core.batch import recompute
-from catenary_monitor.core.holding import FIELDS as HOLDING
+from catenary_monitor.core.holding import FIELDS as HOLDING, LENGTH_FIELDS
 from catenary_monitor.core.uncertainty import FIELDS as BOUNDS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -149,8 +149,8 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
     assert [t for t, _ in outputs] == r.t_ns.tolist()
     fields = outputs[0][1].layout.dim[0].label.split(',')
     assert fields[11:14] == ['status', 'level', 'time_to_uplift']  # appended, then the bounds
-    assert fields[14:-1] == list(BOUNDS + HOLDING)  # and the holding values
-    assert fields[-1] == 'sensor_state'  # appended last
+    assert fields[14:-2] == list(BOUNDS + HOLDING)  # and the holding values
+    assert fields[-2:] == ['sensor_state', *LENGTH_FIELDS]  # appended last
     got = np.array([m.data for _, m in outputs])
     np.testing.assert_array_equal(
         got[:, fields.index('time_to_uplift')], r.values['time_to_uplift']

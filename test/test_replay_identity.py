@@ -14,9 +14,9 @@ from catenary_monitor.core.batch import (
 )
 from catenary_monitor.core.solve import solve
 from catenary_monitor.core.uncertainty import FIELDS as BOUNDS
-from catenary_monitor.core.holding import FIELDS as HOLDING
+from catenary_monitor.core.holding import FIELDS as HOLDING, LENGTH_FIELDS
 
-DERIVED = BOUNDS + HOLDING  # from the solve, by the monitor
+DERIVED = BOUNDS + HOLDING + LENGTH_FIELDS  # from the solve, by the monitor
 
 
 def test_solve_updates_is_bit_identical_to_solve_on_arrays():

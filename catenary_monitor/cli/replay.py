@@ -696,7 +696,8 @@ def register(sub: Any) -> None:
         help='comma-separated CSV columns, or "all" (default: time, line, '
         'top_tension, depth, min_anchor_distance, anchor_margin, uplift_force, '
         'level); also horizontal_tension, tide_margin, load_margin, safety_factor, '
-        'time_to_uplift, the bounds, the holding values, sensor_state, status, model '
+        'time_to_uplift, the bounds, the holding values, tide_margin_at_length, '
+        'sensor_state, status, model '
         '(docs/replay.md)',
     )
     p.add_argument(

@@ -97,6 +97,7 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('holding_capacity', 3),
     ('drag_margin', 3),
     ('implied_anchor_distance', 3),
+    ('tide_margin_at_length', 3),
     ('sensor_state', None),  # core.sensor.LINE_STATES word
     ('status', None),
     ('level', None),

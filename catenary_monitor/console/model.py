@@ -365,6 +365,7 @@ def _line_view(
             'uplift_force_upper',  # N, within sensor accuracy; None when not configured
             'drag_margin',  # N, holding minus horizontal load; None without anchor_holding
             'implied_anchor_distance',  # m, from the chain length; None without it
+            'tide_margin_at_length',  # m, the chain length held; None without it
         ):
             view[key] = _num(v.get(key))
     if output is not None:

@@ -823,6 +823,8 @@ DIAGNOSTIC_KEYS = (
     'holding_capacity',
     'drag_margin',
     'implied_anchor_distance',
+    # The tide margin at fixed chain length (core/holding.py).
+    'tide_margin_at_length',
 )
 
 

@@ -67,6 +67,7 @@ from catenary_monitor.core.monitor import (
     sensor_limits,
     tide_component,
     tide_with_sensor,
+    uplift_margin,
 )
 from catenary_monitor.core.solve import ALL_KEYS, STATUS_MESSAGES, Status
 
@@ -691,8 +692,10 @@ def _solve_line(
     values['sensor_state'] = _pick(
         steps.k_idx[steps.solved], sensors.codes[:, k].astype(np.float64), sensors.before[k]
     )
+    _add_derived(core, line.config, values)
     d_idx = steps.d_idx[steps.solved]
     a = core.config.alarm
+    margin = uplift_margin(values['tide_margin'], values['tide_margin_at_length'])
     if a.constituents:
         now = _pick(d_idx, window.depth[0] * 1e-9, core.depth_s)
         values['time_to_uplift'] = tide_table.uplift_times(
@@ -700,16 +703,15 @@ def _solve_line(
             a.tide_table_epoch,
             a.tide_forecast_horizon,
             now,
-            values['tide_margin'],
+            margin,
             values['uplift_force'],
         )
     else:
         rate = _pick(d_idx, tide.rates, core.trend.rate)
         excess = _pick(d_idx, tide.excess, core.trend.excess)
         values['time_to_uplift'] = tide_trend.uplift_times(
-            values['tide_margin'], values['uplift_force'], rate, excess
+            margin, values['uplift_force'], rate, excess
         )
-    _add_derived(core, line.config, values)
     return values, status, used
 
 
@@ -724,7 +726,8 @@ def _add_derived(core: MonitorCore, lc: LineConfig, values: dict[str, np.ndarray
     if lc.chain_length is not None or lc.anchor_holding is not None:
         values.update(holding_values([lc], values))
     else:
-        values.update({key: np.full(n, np.nan) for key in holding_rule.FIELDS})
+        empty = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS
+        values.update({key: np.full(n, np.nan) for key in empty})
 
 
 def _solve_at(

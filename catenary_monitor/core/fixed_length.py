@@ -52,6 +52,7 @@ __all__ = [
     'slack_span',
     'taut_span',
     'statics_at_span',
+    'lift_depth',
 ]
 
 #: Newton in T stops after a step of at most this relative size: convergence is quadratic, so
@@ -568,3 +569,57 @@ def span_and_sensitivity(
         _, dt_ds = _stiffness(w, length, tension, st, 1.0 / ea)
         slack = ~(st.r > 0.0)
     return np.where(slack, np.nan, st.span), np.where(slack, np.nan, dt_ds)
+
+
+def lift_depth(w: Any, length: Any, span: Any, ea: Any = math.inf) -> np.ndarray:
+    """Depth [m] at which a chain of unstretched length L [m], its hook at horizontal span s [m]
+    from the anchor, lifts the anchor: the whole chain hangs, horizontal at the anchor.
+
+    Inextensible, the lifting chain is half of a chain of length 2L hung between two level
+    points 2s apart (its vertex at the anchor): ``a`` from
+    :func:`catenary.taut_parameter_from_length`, ``theta = s/a`` and
+    ``h* = 2 a sinh(theta/2)^2``; it needs ``s < L``.  Elastic, R solves
+    ``s = (R/w) asinh(wL/R) + R L/EA`` (increasing in R, below the inextensible R: stretch
+    adds span) by safeguarded Newton, and ``h* = (R/w) (sqrt(1 + (wL/R)^2) - 1) + w L^2/(2 EA)``.
+    NaN where there is no such depth (``s >= L`` inextensible, NaN or non-positive inputs).
+    """
+    w, length, span, ea = _arrays(w, length, span, ea)
+    out = np.full(span.shape, np.nan)
+    ok = (w > 0.0) & (span > 0.0) & (span < length) & (ea > 0.0)
+    if not ok.any():
+        return out
+    w, length, span, ea = w[ok], length[ok], span[ok], ea[ok]
+    with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
+        a, _ = cat.taut_parameter_from_length(np.zeros_like(span), 2.0 * span, 2.0 * length)
+        half = np.sinh(0.5 * span / a)
+        depth = 2.0 * a * half * half
+        elastic = np.isfinite(ea)
+        if elastic.any():
+            depth[elastic] = _elastic_lift_depth(
+                w[elastic], length[elastic], span[elastic], ea[elastic], w[elastic] * a[elastic]
+            )
+    out[ok] = depth
+    return out
+
+
+def _elastic_lift_depth(
+    w: np.ndarray, length: np.ndarray, span: np.ndarray, ea: np.ndarray, r_rigid: np.ndarray
+) -> np.ndarray:
+    """:func:`lift_depth` of elastic chains, from the inextensible R (an upper bound)."""
+    q = w * length
+    lo, hi = np.zeros_like(span), r_rigid.copy()
+    r = r_rigid * (1.0 - 0.5 * r_rigid * length / (ea * span))  # first-order stretch
+    r = np.where((r > lo) & (r < hi), r, 0.5 * hi)
+    for _ in range(MAXITER):
+        z = q / r
+        f = r / w * np.arcsinh(z) + r * length / ea - span
+        lo, hi = np.where(f < 0.0, r, lo), np.where(f > 0.0, r, hi)
+        fp = (np.arcsinh(z) - z / np.sqrt(1.0 + z * z)) / w + length / ea
+        new = r - f / fp
+        new = np.where((new > lo) & (new < hi), new, 0.5 * (lo + hi))
+        done = np.abs(new - r) <= T_STEP_TOL * r
+        r = new
+        if done.all():
+            break
+    z = q / r
+    return r / w * (z * z / (np.sqrt(1.0 + z * z) + 1.0)) + q * length / (2.0 * ea)

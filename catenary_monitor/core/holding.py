@@ -24,6 +24,12 @@ grounded_length``. Per line (SI):
     (:func:`catenary_monitor.core.fixed_length.span_from_tension`: grounded length plus the
     suspended part's span, lifted or not, elastic with ``ea``). Compared with the installed
     ``anchor_distance`` it shows a dragged anchor (or a wrong chain length).
+``tide_margin_at_length`` (m)
+    The depth rise at which that chain, its length and the implied span held (the hook stays
+    where it is), lifts its anchor (:func:`catenary_monitor.core.fixed_length.lift_depth`)
+    minus the depth now; negative while the anchor is lifted. ``tide_margin`` holds the
+    horizontal tension instead; a chain of fixed length gains pretension as the tide rises,
+    so this one is usually the nearer. Needs ``chain_length``.
 
 NaN where the data are not given or the line has no solve.
 """
@@ -36,10 +42,12 @@ import numpy as np
 
 from catenary_monitor.core import fixed_length
 
-__all__ = ['FIELDS', 'holding']
+__all__ = ['FIELDS', 'LENGTH_FIELDS', 'holding']
 
 #: The holding values' names (per-line outputs, /diagnostics values, replay CSV), in order.
 FIELDS = ('grounded_length', 'holding_capacity', 'drag_margin', 'implied_anchor_distance')
+#: Appended after them (the per-line outputs end with it, after ``sensor_state``).
+LENGTH_FIELDS = ('tide_margin_at_length',)
 
 
 def holding(
@@ -55,9 +63,10 @@ def holding(
     suspended: Any,
     uplift: Any,
 ) -> dict[str, np.ndarray]:
-    """:data:`FIELDS` -> arrays from the line data (NaN: not given; ``ea`` inf: inextensible)
-    and the nominal solve: hook ``tension`` (N), ``depth`` (m, hook height added),
-    ``horizontal`` tension (N), ``suspended`` length (m) and ``uplift`` force (N)."""
+    """:data:`FIELDS` and :data:`LENGTH_FIELDS` -> arrays from the line data (NaN: not given;
+    ``ea`` inf: inextensible) and the nominal solve: hook ``tension`` (N), ``depth`` (m, hook
+    height added), ``horizontal`` tension (N), ``suspended`` length (m) and ``uplift`` force
+    (N)."""
     arrays = np.broadcast_arrays(
         *(
             np.asarray(v, dtype=float)
@@ -67,7 +76,7 @@ def holding(
     )
     w, ea, length, a_hold, a_weight, mu, t, h, r, s, v = arrays
     if np.isnan(length).all() and np.isnan(a_hold).all():  # nothing configured: all NaN
-        return {key: np.full(t.shape, np.nan) for key in FIELDS}
+        return {key: np.full(t.shape, np.nan) for key in FIELDS + LENGTH_FIELDS}
     with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
         solved = ~np.isnan(r)
         lifted = v > 0.0
@@ -77,15 +86,17 @@ def holding(
         anchor = np.where(lifted, np.where(np.isnan(a_weight), 0.0, sinker), a_hold)
         chain = np.where(np.isnan(mu) | np.isnan(grounded), 0.0, w * mu * grounded)
         capacity = np.where(solved & ~np.isnan(a_hold), anchor + chain, np.nan)
-        implied = np.full(t.shape, np.nan)
+        implied, lift = np.full(t.shape, np.nan), np.full(t.shape, np.nan)
         need = solved & ~np.isnan(length)
         if need.any():  # only where a chain length is given (the span solve is the cost)
             implied[need] = fixed_length.span_from_tension(
                 w[need], h[need], length[need], t[need], ea[need]
             )
+            lift[need] = fixed_length.lift_depth(w[need], length[need], implied[need], ea[need])
     return {
         'grounded_length': grounded,
         'holding_capacity': capacity,
         'drag_margin': capacity - r,
         'implied_anchor_distance': implied,
+        'tide_margin_at_length': lift - h,
     }

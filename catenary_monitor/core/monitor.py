@@ -104,6 +104,7 @@ __all__ = [
     'line_status',
     'bound_values',
     'holding_values',
+    'uplift_margin',
     'output_values',
     'tide_component',
     'dock_component',
@@ -119,7 +120,8 @@ NODE_NAME = 'catenary_monitor'
 #: so the older indexes stay, then the bounds (:mod:`~catenary_monitor.core.uncertainty`), the
 #: holding values (:mod:`~catenary_monitor.core.holding`) and ``sensor_state``, the line's
 #: sensor state code as of the newest tick (:data:`catenary_monitor.core.sensor.LINE_STATES`:
-#: 0 ok, 1 stuck, 2 spike, 3 over_mbl, 4 slack, 5 suspected_parted).
+#: 0 ok, 1 stuck, 2 spike, 3 over_mbl, 4 slack, 5 suspected_parted), then
+#: ``tide_margin_at_length`` [m] (:data:`catenary_monitor.core.holding.LENGTH_FIELDS`).
 OUTPUT_FIELDS = (
     'top_tension',
     'depth',
@@ -141,6 +143,8 @@ OUTPUT_FIELDS = (
     *holding_rule.FIELDS,
     # Sensor sanity (issue 12, item 2): core/sensor.py.
     'sensor_state',
+    # The tide margin of a chain of fixed length, its hook held: core/holding.py.
+    *holding_rule.LENGTH_FIELDS,
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -159,7 +163,7 @@ _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are t
 COMPONENTS = ('tide', 'logger', 'dock', 'parameters', 'clock', 'intake')
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
 _AT = {key: i for i, key in enumerate(VALUE_FIELDS)}
-_LOOK = uncertainty.FIELDS + holding_rule.FIELDS  # computed from the nominal solve's values
+_LENGTH_AT = VALUE_FIELDS.index('tide_margin_at_length')
 _SENSOR_AT = VALUE_FIELDS.index('sensor_state')  # not a solved value: kept by _implausible
 
 
@@ -673,7 +677,7 @@ class MonitorCore:
         h = self.depth + lc.hook_height
         if self.depth_s != self.depth_s:  # no depth yet: nothing to solve
             line.values, line.status, line.status_message, line.model = (
-                (t, h) + _NAN_VALUES[2:_SENSOR_AT] + (float(line.sensor_code),),
+                _with_sensor((t, h) + _NAN_VALUES[2:], line.sensor_code),
                 NO_DEPTH,
                 '',
                 NO_MODEL,
@@ -694,7 +698,6 @@ class MonitorCore:
             r.safety_factor,
             r.anchor_angle_deg,
             r.suspended_length,
-            self._uplift_times([r.tide_margin], [r.uplift_force])[0],
         )
         line.values = _with_sensor(line.values + _NAN_VALUES[len(line.values):], line.sensor_code)
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
@@ -702,6 +705,7 @@ class MonitorCore:
         if code:
             _implausible(line, code)
         self._add_derived([line])
+        self._add_uplift_times([line])
 
     def _solve_many(self, which: Sequence[int]) -> None:
         """Solve several lines at the newest depth in one vectorized call."""
@@ -725,7 +729,6 @@ class MonitorCore:
         columns = [tension.tolist(), h.tolist()] + [
             np.asarray(getattr(r, k)).tolist() for k in _SOLVED
         ]
-        columns.append(self._uplift_times(columns[6], columns[5]))
         models = np.broadcast_to(np.asarray(r.model, dtype=object), tension.shape)
         messages, status = r.message, np.asarray(r.status).tolist()
         for i, line in enumerate(lines):
@@ -738,6 +741,7 @@ class MonitorCore:
             if code:
                 _implausible(line, code)
         self._add_derived(lines)
+        self._add_uplift_times(lines)
 
     def _add_derived(self, lines: Sequence[LineState]) -> None:
         """The bounds and the holding values of freshly solved lines (from their values);
@@ -745,7 +749,7 @@ class MonitorCore:
         accuracy = self.config.alarm.depth_accuracy
         for fields, compute, wanted in (
             (uncertainty.FIELDS, _bounds_of(accuracy), _wants_bounds(accuracy)),
-            (holding_rule.FIELDS, holding_values, _wants_holding),
+            (holding_rule.FIELDS + holding_rule.LENGTH_FIELDS, holding_values, _wants_holding),
         ):
             some = [line for line in lines if wanted(line.config)]
             if not some:
@@ -757,6 +761,18 @@ class MonitorCore:
                 for key in fields:
                     v[_AT[key]] = float(derived[key][j])
                 line.values = tuple(v)
+
+    def _add_uplift_times(self, lines: Sequence[LineState]) -> None:
+        """Each freshly solved line's ``time_to_uplift``, from the nearer of its margins
+        (:func:`uplift_margin`)."""
+        v = [line.values for line in lines]
+        times = self._uplift_times(
+            uplift_margin(np.array([x[6] for x in v]), np.array([x[_LENGTH_AT] for x in v]))
+            .tolist(),
+            [x[5] for x in v],
+        )
+        for line, t in zip(lines, times):
+            line.values = line.values[:11] + (t,) + line.values[12:]
 
     def _uplift_times(self, margins: Sequence[float], forces: Sequence[float]) -> list[float]:
         """Each line's time to uplift [s]: on the tide table's forecast from the newest depth
@@ -963,6 +979,12 @@ def holding_values(
         named['suspended_length'],
         named['uplift_force'],
     )
+
+
+def uplift_margin(tide_margin: np.ndarray, at_length: np.ndarray) -> np.ndarray:
+    """The depth rise [m] ``time_to_uplift`` counts down: the nearer of ``tide_margin`` (R
+    held) and ``tide_margin_at_length`` (chain length held; NaN without ``chain_length``)."""
+    return np.fmin(tide_margin, at_length)
 
 
 def output_values(values: Sequence[float], status: float, level: float) -> tuple[float, ...]:
