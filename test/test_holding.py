@@ -149,24 +149,23 @@ def test_tide_margin_at_length_is_the_rise_that_lifts_the_anchor():
     assert math.isnan(o['tide_margin_at_length']) and printed(o['tide_margin'], '4.68')
 
 
-def test_time_to_uplift_counts_down_the_nearer_margin():
-    """A rising tide, the chain's length and span held: ``time_to_uplift`` is the time to the
-    fixed-length lift (1.05 m), not to the R-held one (4.68 m)."""
+def test_on_a_rising_tide_the_margin_at_length_counts_down_to_the_lift():
+    """The paper's chain, its length and span held, the tide rising 0.5 m/h: the pretension
+    rises (the scene is the fixed-length chain's own), ``tide_margin_at_length`` plus the depth
+    stays the lift depth at every update, while ``tide_margin`` (R held, what
+    ``time_to_uplift`` counts down) stays above it."""
     from catenary_monitor.core import fixed_length as fl
-    from catenary_monitor.core import tide_trend
 
     w, length, rate = 1300.0, 122.6247, 0.5 / 3600.0
+    lift = float(fl.lift_depth(w, length, 120.0))
     core = MonitorCore(MonitorConfig(lines=(paper_line(),), alarm=AlarmConfig(
-        tension_resolution=0.0, tide_trend_window=600.0)), 0)
-    for k in range(1200):
-        h = 20.0 + rate * k
+        tension_resolution=0.0)), 0)
+    for k in range(0, 7200, 60):
+        h = 20.85 + rate * k
         core.step(Depth(k * 1_000_000_000 + 1, h))
         t = float(fl.statics_at_span(w, h, length, 120.0).top_tension)
         o = dict(zip(OUTPUT_FIELDS, core.step(Tension(k * 1_000_000_000 + 2, 0, t)).outputs[0]
                      .values))
-    nearer = min(o['tide_margin'], o['tide_margin_at_length'])
-    assert nearer == o['tide_margin_at_length'] < o['tide_margin'] - 3.0
-    assert o['time_to_uplift'] == tide_trend.time_to_uplift(
-        nearer, o['uplift_force'], core.trend.rate, core.trend.excess)
-    lift = float(fl.lift_depth(w, length, 120.0))  # the depth it lifts at, from 20.0 m
-    assert o['time_to_uplift'] == pytest.approx((lift - 20.0) / rate - 1199.0, rel=0.02)
+        assert o['tide_margin_at_length'] + h == pytest.approx(lift, rel=1e-12, abs=1e-9)
+        assert o['tide_margin'] > o['tide_margin_at_length']  # R held: the later lift
+    assert o['tide_margin_at_length'] == pytest.approx(1.0515 - rate * 7140, abs=1e-3)  # 7140 s on

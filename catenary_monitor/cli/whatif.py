@@ -78,7 +78,7 @@ def scene_table(scene: Any) -> str:
     """The scene as a readable table (kN, m, minutes) and the message of every line not OK."""
     header = [
         'line', 'level', 'T kN', 'from', 'x m', 'uplift kN', 'upper kN', 'anchor m', 'tide m',
-        'drag kN', 'implied x m', 'to uplift',
+        'tide@L m', 'drag kN', 'implied x m', 'to uplift',
     ]
     rows = []
     for ls in scene.lines:
@@ -88,7 +88,7 @@ def scene_table(scene: Any) -> str:
             _cell(ls.anchor_distance, 1.0, 2),
             _cell(v['uplift_force'], 1e-3), _cell(v['uplift_force_upper'], 1e-3),
             _cell(v['anchor_margin'], 1.0, 2), _cell(v['tide_margin'], 1.0, 2),
-            _cell(v['drag_margin'], 1e-3), _cell(v['implied_anchor_distance'], 1.0, 2),
+            _cell(v['tide_margin_at_length'], 1.0, 2), _cell(v['drag_margin'], 1e-3), _cell(v['implied_anchor_distance'], 1.0, 2),
             _time(v['time_to_uplift']),
         ])
     rate = scene.tide_rate

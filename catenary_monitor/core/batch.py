@@ -67,7 +67,6 @@ from catenary_monitor.core.monitor import (
     sensor_limits,
     tide_component,
     tide_with_sensor,
-    uplift_margin,
 )
 from catenary_monitor.core.solve import ALL_KEYS, STATUS_MESSAGES, Status
 
@@ -692,10 +691,8 @@ def _solve_line(
     values['sensor_state'] = _pick(
         steps.k_idx[steps.solved], sensors.codes[:, k].astype(np.float64), sensors.before[k]
     )
-    _add_derived(core, line.config, values)
     d_idx = steps.d_idx[steps.solved]
     a = core.config.alarm
-    margin = uplift_margin(values['tide_margin'], values['tide_margin_at_length'])
     if a.constituents:
         now = _pick(d_idx, window.depth[0] * 1e-9, core.depth_s)
         values['time_to_uplift'] = tide_table.uplift_times(
@@ -703,15 +700,16 @@ def _solve_line(
             a.tide_table_epoch,
             a.tide_forecast_horizon,
             now,
-            margin,
+            values['tide_margin'],
             values['uplift_force'],
         )
     else:
         rate = _pick(d_idx, tide.rates, core.trend.rate)
         excess = _pick(d_idx, tide.excess, core.trend.excess)
         values['time_to_uplift'] = tide_trend.uplift_times(
-            margin, values['uplift_force'], rate, excess
+            values['tide_margin'], values['uplift_force'], rate, excess
         )
+    _add_derived(core, line.config, values)
     return values, status, used
 
 

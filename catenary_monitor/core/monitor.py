@@ -104,7 +104,6 @@ __all__ = [
     'line_status',
     'bound_values',
     'holding_values',
-    'uplift_margin',
     'output_values',
     'tide_component',
     'dock_component',
@@ -163,7 +162,6 @@ _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are t
 COMPONENTS = ('tide', 'logger', 'dock', 'parameters', 'clock', 'intake')
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
 _AT = {key: i for i, key in enumerate(VALUE_FIELDS)}
-_LENGTH_AT = VALUE_FIELDS.index('tide_margin_at_length')
 _SENSOR_AT = VALUE_FIELDS.index('sensor_state')  # not a solved value: kept by _implausible
 
 
@@ -698,6 +696,7 @@ class MonitorCore:
             r.safety_factor,
             r.anchor_angle_deg,
             r.suspended_length,
+            self._uplift_times([r.tide_margin], [r.uplift_force])[0],
         )
         line.values = _with_sensor(line.values + _NAN_VALUES[len(line.values):], line.sensor_code)
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
@@ -705,7 +704,6 @@ class MonitorCore:
         if code:
             _implausible(line, code)
         self._add_derived([line])
-        self._add_uplift_times([line])
 
     def _solve_many(self, which: Sequence[int]) -> None:
         """Solve several lines at the newest depth in one vectorized call."""
@@ -729,6 +727,7 @@ class MonitorCore:
         columns = [tension.tolist(), h.tolist()] + [
             np.asarray(getattr(r, k)).tolist() for k in _SOLVED
         ]
+        columns.append(self._uplift_times(columns[6], columns[5]))
         models = np.broadcast_to(np.asarray(r.model, dtype=object), tension.shape)
         messages, status = r.message, np.asarray(r.status).tolist()
         for i, line in enumerate(lines):
@@ -741,7 +740,6 @@ class MonitorCore:
             if code:
                 _implausible(line, code)
         self._add_derived(lines)
-        self._add_uplift_times(lines)
 
     def _add_derived(self, lines: Sequence[LineState]) -> None:
         """The bounds and the holding values of freshly solved lines (from their values);
@@ -761,18 +759,6 @@ class MonitorCore:
                 for key in fields:
                     v[_AT[key]] = float(derived[key][j])
                 line.values = tuple(v)
-
-    def _add_uplift_times(self, lines: Sequence[LineState]) -> None:
-        """Each freshly solved line's ``time_to_uplift``, from the nearer of its margins
-        (:func:`uplift_margin`)."""
-        v = [line.values for line in lines]
-        times = self._uplift_times(
-            uplift_margin(np.array([x[6] for x in v]), np.array([x[_LENGTH_AT] for x in v]))
-            .tolist(),
-            [x[5] for x in v],
-        )
-        for line, t in zip(lines, times):
-            line.values = line.values[:11] + (t,) + line.values[12:]
 
     def _uplift_times(self, margins: Sequence[float], forces: Sequence[float]) -> list[float]:
         """Each line's time to uplift [s]: on the tide table's forecast from the newest depth
@@ -979,12 +965,6 @@ def holding_values(
         named['suspended_length'],
         named['uplift_force'],
     )
-
-
-def uplift_margin(tide_margin: np.ndarray, at_length: np.ndarray) -> np.ndarray:
-    """The depth rise [m] ``time_to_uplift`` counts down: the nearer of ``tide_margin`` (R
-    held) and ``tide_margin_at_length`` (chain length held; NaN without ``chain_length``)."""
-    return np.fmin(tide_margin, at_length)
 
 
 def output_values(values: Sequence[float], status: float, level: float) -> tuple[float, ...]:
