@@ -88,7 +88,8 @@ def scene_table(scene: Any) -> str:
             _cell(ls.anchor_distance, 1.0, 2),
             _cell(v['uplift_force'], 1e-3), _cell(v['uplift_force_upper'], 1e-3),
             _cell(v['anchor_margin'], 1.0, 2), _cell(v['tide_margin'], 1.0, 2),
-            _cell(v['tide_margin_at_length'], 1.0, 2), _cell(v['drag_margin'], 1e-3), _cell(v['implied_anchor_distance'], 1.0, 2),
+            _cell(v['tide_margin_at_length'], 1.0, 2), _cell(v['drag_margin'], 1e-3),
+            _cell(v['implied_anchor_distance'], 1.0, 2),
             _time(v['time_to_uplift']),
         ])
     rate = scene.tide_rate
