@@ -52,7 +52,8 @@ enum {
     ST_TENSION = 4,
     ST_DISTANCE = 6,
     ST_MBL = 9,
-    ST_NO_CONVERGENCE = 10
+    ST_NO_CONVERGENCE = 10,
+    ST_OUT_OF_RANGE = 13
 };
 
 typedef struct {

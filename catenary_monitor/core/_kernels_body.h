@@ -350,4 +350,22 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
     } else
         for (int i = 0; i < nb; i++)
             o_load[i] = NAN;
+
+    /* 6. never status 0 with a value that is not finite: a solved lane whose results (those
+     *    that apply) under- or overflowed is beyond float64 range (Status.OUT_OF_RANGE); the one
+     *    exception is a tide margin of +inf, the depth a grounded chain reaches when x/a is
+     *    beyond exp's range (a real margin larger than float64 holds: no tide lifts it) */
+    CM_SIMD
+    for (int i = 0; i < nb; i++) {
+        int fin = (fabs(o_r[i]) <= DBL_MAX) & (fabs(o_t[i]) <= DBL_MAX) &
+                  (fabs(o_xmin[i]) <= DBL_MAX) & (fabs(o_l[i]) <= DBL_MAX) &
+                  (fabs(o_beta[i]) <= DBL_MAX) & (fabs(o_alpha[i]) <= DBL_MAX) &
+                  (fabs(o_f[i]) <= DBL_MAX);
+        int fin_x = (fabs(o_am[i]) <= DBL_MAX) & (o_tide[i] >= -DBL_MAX) &
+                    (fabs(o_load[i]) <= DBL_MAX);
+        fin &= has_x ? fin_x : 1;
+        fin &= has_mbl ? fabs(o_sf[i]) <= DBL_MAX : 1;
+        int st = k->status[i];
+        k->status[i] = st == 0 && !fin ? ST_OUT_OF_RANGE : st;
+    }
 }
