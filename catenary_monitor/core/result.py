@@ -152,4 +152,3 @@ def in_range(result: SolveResult) -> SolveResult:
     new_status = status.copy()
     new_status[beyond] = Status.OUT_OF_RANGE
     return result._replace(**changed, status=new_status)
-
