@@ -142,7 +142,7 @@ def in_range(result: SolveResult) -> SolveResult:
     if not beyond.any():
         return result
     if status.ndim == 0:
-        nan = dict.fromkeys(ALL_KEYS, float('nan'))
+        nan: dict[str, Any] = dict.fromkeys(ALL_KEYS, float('nan'))
         return result._replace(**nan, status=int(Status.OUT_OF_RANGE))
     changed: dict[str, Any] = {}
     for key in ALL_KEYS:
