@@ -12,8 +12,9 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
-from typing import Callable, Optional, Sequence
+from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
 
@@ -41,8 +42,25 @@ class UsageError(Exception):
     """Invalid input: reported as one line on stderr with exit status 2."""
 
 
+#: One number in any float syntax (``-5``, ``-.5e3``, ``-1E+06``, ``-1_000.5``, ``-inf``).
+_NUMBER = r'(?:(?:\d[\d_]*\.?[\d_]*|\.\d[\d_]*)(?:[eE][-+]?\d[\d_]*)?|inf(?:inity)?|nan)'
+#: What argparse should read as a value, not an option: a negative number, or a comma-separated
+#: list of numbers that starts with one (``--load -1e5,0,2e6``).
+NEGATIVE_VALUE = re.compile(rf'^-{_NUMBER}(?:\s*,\s*[-+]?{_NUMBER})*$', re.IGNORECASE)
+
+
 class OneLineParser(argparse.ArgumentParser):
-    """ArgumentParser whose errors are one line on stderr (exit 2), usage left to --help."""
+    """ArgumentParser whose errors are one line on stderr (exit 2), usage left to --help.
+
+    Every sub-command's parser is one (``parser_class``), and each reads a negative number in
+    any float syntax as an option's value (``--tension -1e6``; argparse itself takes only
+    ``-5`` and ``-.5``, and ``-1e6`` for an unknown option).
+    """
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        # argparse's own test of "looks like a negative number" (Python 3.11: -5 and -.5 only)
+        self._negative_number_matcher = NEGATIVE_VALUE
 
     def error(self, message: str) -> None:  # type: ignore[override]
         self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
@@ -109,7 +127,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
     if bad:  # float64 over- or underflow inside the solve: say so, never print a NaN
         raise UsageError(
             f'{bad[0]} is not finite: the inputs are beyond the range the solver handles in '
-            'float64 (problem 4: hook tension / weight up to about 1e150 x the anchor distance)'
+            'float64'
         )
     if args.json:
         lifted = bool(result.uplift_force > 0)
