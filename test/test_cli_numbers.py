@@ -91,3 +91,23 @@ def test_negative_values(text):
 @pytest.mark.parametrize('text', ['-x', '--tension', '-1e', '-e5', '-1e5,x', '-'])
 def test_options_stay_options(text):
     assert not NEGATIVE_VALUE.match(text)
+
+
+def test_a_closed_pipe_ends_the_command_quietly():
+    """`catenary-monitor paper | head -0`: the reader is gone before the first write; the
+    command ends by SIGPIPE, as Unix tools do, with no traceback."""
+    import os
+    import subprocess
+    import sys
+
+    read, write = os.pipe()
+    os.close(read)  # no reader: every write fails, deterministically
+    try:
+        p = subprocess.run(
+            [sys.executable, '-m', 'catenary_monitor.cli.main', 'paper'],
+            stdout=write, stderr=subprocess.PIPE, text=True, timeout=120,
+        )
+    finally:
+        os.close(write)
+    assert 'Traceback' not in p.stderr and p.stderr == '', p.stderr
+    assert p.returncode != 0

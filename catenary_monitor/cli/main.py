@@ -13,6 +13,7 @@ import argparse
 import json
 import math
 import re
+import signal
 import sys
 from typing import Any, Callable, Optional, Sequence
 
@@ -292,6 +293,8 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
+    if hasattr(signal, 'SIGPIPE'):  # `... | head`: end quietly, as Unix tools do (no traceback)
+        signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
