@@ -212,3 +212,30 @@ def test_cli_invalid_input_exit_2_one_line(args, needle):
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and needle in lines[0], p.stderr
     assert 'Traceback' not in p.stderr and 'nan' not in p.stdout.lower()
+
+
+def test_flat_array_call_equals_the_general_path():
+    """The common array call (1-D float64 arrays, floats, ints: taken without the generic
+    broadcast) gives the same bits as the general path (lists, a column and a row broadcast),
+    with its rows that do not apply NaN and read-only, and its length-mismatch error."""
+    rng = np.random.default_rng(13)
+    n = 301
+    t = rng.uniform(0.3e6, 3e6, n)
+    h = rng.uniform(2.0, 60.0, n)
+    x = rng.uniform(20.0, 400.0, n)
+    for mbl in (None, 6.5e6):
+        fast = solve(1300, h, tension=t, anchor_distance=x, mbl=mbl)
+        general = solve([1300.0] * n, h.tolist(), tension=t.tolist(), anchor_distance=x, mbl=mbl)
+        column = solve(1300.0, h[:, None], tension=t[:, None], anchor_distance=x[:, None], mbl=mbl)
+        assert fast.keys == general.keys == column.keys
+        assert 0 < np.count_nonzero(fast.uplift_force > 0) < n  # lifted and grounded mixed
+        for key in ALL_KEYS:
+            a = getattr(fast, key)
+            assert a.shape == (n,)
+            np.testing.assert_array_equal(a, getattr(general, key), err_msg=key)
+            np.testing.assert_array_equal(a, getattr(column, key)[:, 0], err_msg=key)
+            if key not in fast.keys:
+                assert np.isnan(a).all() and not a.flags.writeable, key
+        np.testing.assert_array_equal(fast.status, general.status)
+    with pytest.raises(ValueError, match='broadcast'):
+        solve(1300.0, h, tension=t[:-1], anchor_distance=x)

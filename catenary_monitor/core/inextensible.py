@@ -166,8 +166,11 @@ def _solve_tension_kernel(
     """Problems 3 and 4 through the C kernel (:mod:`catenary_monitor.core.kernels`).
 
     0-d inputs are passed as floats (no broadcast copy); arrays as flat float64 of the broadcast
-    shape.  The kernel writes the twelve result rows in place and the status per element.
+    shape.  The kernel writes the result rows that apply in place and the status per element.
     """
+    flat = _flat_inputs(weight, depth, tension, anchor_distance, mbl)
+    if flat is not None:  # the common call: 1-D float64 arrays of one length, floats
+        return _kernel_result(flat[0], (flat[1],), anchor_distance, mbl)
     given = [v for v in (weight, depth, tension, anchor_distance, mbl)]
     try:
         arrays = [None if v is None else np.asarray(v, dtype=float) for v in given]
@@ -183,21 +186,71 @@ def _solve_tension_kernel(
             args.append(np.ascontiguousarray(a).reshape(n))
         else:
             args.append(np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(n))
-    keys = _keys('tension', anchor_distance is not None, mbl is not None)
     if not shape:  # every input 0-d (but not all plain floats: e.g. float32 or 0-d arrays)
+        keys = _keys('tension', anchor_distance is not None, mbl is not None)
         rows, status = kernels.solve_arrays(args[0], args[1], args[2], args[3], args[4], n)
         values: dict[str, Any] = dict(zip(ALL_KEYS, (float(v) for v in rows[:, 0])))
         return SolveResult(**values, status=int(status[0]), problem='tension', keys=keys)
-    # only the rows that apply are computed into memory of their own; the others are NaN
-    # everywhere, one read-only NaN broadcast to the shape (docs/benchmarks.md: the result's
-    # fresh memory is most of the cost at 1e6 elements)
-    rows, status = kernels.solve_arrays(
-        args[0], args[1], args[2], args[3], args[4], n, rows=keys
-    )
-    nan = np.broadcast_to(np.float64(np.nan), shape)
-    columns: dict[str, Any] = dict.fromkeys(ALL_KEYS, nan)
-    columns.update(zip(keys, rows.reshape((len(keys),) + shape)))
-    return SolveResult(**columns, status=status.reshape(shape), problem='tension', keys=keys)
+    return _kernel_result(args, shape, anchor_distance, mbl)
+
+
+_F64 = np.dtype(np.float64)
+_NAN_BYTES = np.float64(np.nan).tobytes()  # read-only: arrays on it are read-only
+
+
+def _flat_inputs(*given: Any) -> Optional[tuple[list[Any], int]]:
+    """``(kernel arguments, n)`` when every input is None, a float, an int or a 1-D
+    C-contiguous float64 array, the arrays of one length n (at least one array); else None.
+
+    The library user's array call, taken without the generic broadcast (~15 us less a call:
+    at 1e3 elements as much as the floor itself)."""
+    n = -1
+    args: list[Any] = []
+    for v in given:
+        kind = type(v)
+        if kind is np.ndarray:
+            if v.dtype != _F64 or v.ndim != 1 or not v.flags.c_contiguous:
+                return None
+            if n < 0:
+                n = v.shape[0]
+            elif v.shape[0] != n:
+                return None
+        elif kind is int:
+            try:
+                v = float(v)
+            except OverflowError:  # the general path says so
+                return None
+        elif v is not None and kind is not float:
+            return None
+        args.append(v)
+    return (args, n) if n > 0 else None
+
+
+@functools.lru_cache(maxsize=None)
+def _row_plan(has_x: bool, has_mbl: bool) -> tuple[tuple[str, ...], int, tuple[int, ...]]:
+    """The keys that apply, the kernel's row mask for them, and per key of ``ALL_KEYS`` its
+    row in the kernel's output (-1: NaN, not computed)."""
+    keys = _keys('tension', has_x, has_mbl)
+    mask = sum(1 << ALL_KEYS.index(k) for k in keys)
+    return keys, mask, tuple(keys.index(k) if k in keys else -1 for k in ALL_KEYS)
+
+
+def _kernel_result(
+    args: list[Any], shape: tuple[int, ...], anchor_distance: Any, mbl: Any
+) -> SolveResult:
+    """Solve flat kernel arguments of ``math.prod(shape)`` elements into a result of ``shape``.
+
+    Only the rows that apply are computed into memory of their own; the others are NaN
+    everywhere, one read-only NaN broadcast to the shape (docs/benchmarks.md: the result's
+    fresh memory is most of the cost at 1e6 elements)."""
+    keys, mask, where = _row_plan(anchor_distance is not None, mbl is not None)
+    out = np.empty((len(keys),) + shape)
+    status = np.empty(shape, dtype=np.int64)
+    kernels.solve_into(args, out, status, mask)
+    nan = np.ndarray(shape, _F64, _NAN_BYTES, 0, (0,) * len(shape))
+    rows = tuple(out)
+    columns = [nan if j < 0 else rows[j] for j in where]
+    return _new_tuple(SolveResult, (*columns, status, 'tension', keys, *_TAIL))
 
 
 @functools.lru_cache(maxsize=None)

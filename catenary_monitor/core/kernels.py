@@ -182,12 +182,29 @@ def solve_arrays(
     status = np.empty(n, dtype=np.int64)
     if rows is None:
         out = np.empty((NOUT, n))
-        _k.solve_tension(w, h, t, x, mbl, out, status, iters, cat.MAXITER, cat.STEP_TOL)
+        solve_into([w, h, t, x, mbl], out, status, ALL_ROWS, iters)
         return out, status
     out = np.empty((len(rows), n))
-    mask = sum(1 << _ROW[k] for k in rows)
-    _k.solve_tension(w, h, t, x, mbl, out, status, iters, cat.MAXITER, cat.STEP_TOL, mask)
+    solve_into([w, h, t, x, mbl], out, status, sum(1 << _ROW[k] for k in rows), iters)
     return out, status
 
 
+def solve_into(
+    args: list[Any],
+    out: np.ndarray,
+    status: np.ndarray,
+    mask: int = 0,
+    iters: Optional[np.ndarray] = None,
+) -> None:
+    """Solve ``args`` (``[w, h, t, x, mbl]``: float64 arrays of one length n or floats; x, mbl
+    may be None) into ``out`` (C-contiguous float64, the rows of ``mask`` in ``ALL_KEYS`` order,
+    n each; bit r of ``mask`` for row r, 0 for all) and ``status`` (int64, n)."""
+    w, h, t, x, mbl = args
+    _k.solve_tension(
+        w, h, t, x, mbl, out, status, iters, cat.MAXITER, cat.STEP_TOL, mask or ALL_ROWS
+    )
+
+
 _ROW = {k: r for r, k in enumerate(ALL_KEYS)}
+#: The kernel's row mask of every result row.
+ALL_ROWS = (1 << NOUT) - 1
