@@ -150,14 +150,15 @@ def console_config(
     }
 
 
-#: The monitor's own statuses shown under the tide (the node publishes the last three only
-#: when they have something to say: allowed runtime changes, a sim clock, intake counts).
-MONITOR_STATUSES = ('logger', 'parameters', 'clock', 'intake')
+#: The monitor's own statuses shown under the tide: the sensors' common-cause alarm, the logger
+#: and the guards (the node publishes the last three only when they have something to say:
+#: allowed runtime changes, a sim clock, intake counts).
+MONITOR_STATUSES = (SENSORS, 'logger', 'parameters', 'clock', 'intake')
 
 
 def monitor_rows(statuses: Mapping[str, Status]) -> list[dict[str, str]]:
-    """The monitor's own statuses present in the array (logger, parameters, clock, intake):
-    name, level and message, in that order."""
+    """The monitor's own statuses present in the array (sensors, logger, parameters, clock,
+    intake): name, level and message, in that order."""
     return [
         {'name': name, 'level': statuses[name].level, 'message': statuses[name].message}
         for name in MONITOR_STATUSES
