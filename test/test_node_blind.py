@@ -33,18 +33,6 @@ def alarms(proc, skip: int = 0) -> list[tuple[str, str, str, str]]:
     return [m.groups() for m in found if m][skip:]
 
 
-def tension(line: str) -> str:
-    return f'/mooring/{line}/tension'
-
-
-@pytest.fixture(autouse=True)
-def no_callback_errors():
-    callback_errors()
-    yield
-    errors = callback_errors()
-    assert not errors, errors[:3]
-
-
 def test_blind_start_then_silent_depth_then_one_silent_load_cell(tmp_path):
     params = write_params(
         tmp_path / 'params.yaml',
@@ -54,6 +42,7 @@ def test_blind_start_then_silent_depth_then_one_silent_load_cell(tmp_path):
         depth_timeout=DEPTH_TIMEOUT,
         diagnostic_rate=2.0,
     )
+    callback_errors()  # (of earlier tests' monitors)
     client = Client('blind_test_client')
     proc = start_monitor(params, tmp_path / 'log')
     try:
@@ -75,7 +64,7 @@ def test_blind_start_then_silent_depth_then_one_silent_load_cell(tmp_path):
         # The data come: the return of the sensors alarm, no line announces its own.
         client.feed('/tide/depth', 20.85)
         for line in LINES:
-            client.feed(tension(line), 372e3)
+            client.feed(f'/mooring/{line}/tension', 372e3)
         client.wait_status('catenary_monitor: sensors', 30.0, 0)
         for line in LINES:
             client.wait_status(f'catenary_monitor: {line}', 30.0, 0)
@@ -98,7 +87,7 @@ def test_blind_start_then_silent_depth_then_one_silent_load_cell(tmp_path):
         client.wait_status('catenary_monitor: line_07', 30.0, 0)
         client.wait_for(lambda: len(alarms(proc)) > 3, 10.0, 'the depth alarm returning')
         # 3. One load cell goes silent after it reported: its own line's alarm.
-        client.feed(tension('line_05'), None)
+        client.feed('/mooring/line_05/tension', None)
         client.wait_for(
             lambda: any(a[0] == 'line_05' for a in alarms(proc)), 30.0, "line_05's own alarm"
         )
@@ -112,3 +101,5 @@ def test_blind_start_then_silent_depth_then_one_silent_load_cell(tmp_path):
             client.feed(topic, None)
         stop(proc)
         client.close()
+    errors = callback_errors()  # a callback that failed fails the test, even if it went on
+    assert not errors, errors[:3]
