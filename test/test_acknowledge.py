@@ -21,12 +21,13 @@ from replay_data import core_steps, events_of  # noqa: F401 - the oracle's helpe
 S = 10**9
 
 
-def walk(levels, grace=5.0, start=0.0, dt=1.0, state=None):
-    """Step the machine through levels at 1 s spacing from t = start + dt."""
+def walk(levels, suppressed=(), start=0.0, dt=1.0, state=None):
+    """Step the machine through levels at 1 s spacing from t = start + dt; ``suppressed``:
+    the step numbers whose level is suppressed by design."""
     state = state or ack.initial(start)
     out = []
     for k, level in enumerate(levels):
-        state = ack.step(state, level, start + dt * (k + 1), grace)
+        state = ack.step(state, level, start + dt * (k + 1), k in suppressed)
         out.append(state.state)
     return state, out
 
@@ -42,9 +43,9 @@ def test_raise_acknowledge_clear():
         3.5,
     )
     # An acknowledgement never clears an active alarm; the condition does.
-    state = ack.step(state, Level.WARN, 4.0, 5.0)
+    state = ack.step(state, Level.WARN, 4.0)
     assert state.state == 'acknowledged'
-    state = ack.step(state, Level.OK, 5.0, 5.0)
+    state = ack.step(state, Level.OK, 5.0)
     assert state.state == 'normal'
 
 
@@ -62,26 +63,37 @@ def test_return_unacknowledged_stays_until_acknowledged():
 def test_escalation_re_raises_an_acknowledged_alarm():
     state, _ = walk([Level.OK, Level.WARN])
     state = ack.acknowledge(state, 2.5, 'op')
-    state = ack.step(state, Level.ERROR, 3.0, 5.0)
+    state = ack.step(state, Level.ERROR, 3.0)
     assert (state.state, state.level, state.raised) == ('unacknowledged', Level.ERROR, 3.0)
     state = ack.acknowledge(state, 4.0, 'op')
     # Severity falling back keeps it acknowledged; rising again re-raises it.
-    state = ack.step(state, Level.WARN, 5.0, 5.0)
+    state = ack.step(state, Level.WARN, 5.0)
     assert state.state == 'acknowledged'
-    state = ack.step(state, Level.ERROR, 6.0, 5.0)
+    state = ack.step(state, Level.ERROR, 6.0)
     assert state.state == 'unacknowledged'
 
 
-def test_start_up_grace_then_a_silent_sensor_alarms():
-    # Blind (STALE since start) for less than the grace: no alarm, then data: normal.
-    _, seen = walk([Level.STALE, Level.STALE, Level.OK], grace=5.0)
-    assert seen == ['normal'] * 3
-    # A sensor that never reports becomes an alarm once the grace has passed.
-    _, seen = walk([Level.STALE] * 7, grace=5.0)
-    assert seen == ['normal'] * 4 + ['unacknowledged'] * 3
-    # After the line was in service, STALE is an alarm at once.
-    _, seen = walk([Level.STALE, Level.OK, Level.STALE], grace=5.0)
+def test_a_suppressed_stale_is_no_alarm_and_says_so():
+    # Blind by a common cause (suppressed by design), then data: never an alarm.
+    state, seen = walk([Level.STALE, Level.STALE, Level.OK], suppressed={0, 1})
+    assert seen == ['normal'] * 3 and not state.suppressed
+    state, _ = walk([Level.STALE] * 7, suppressed=set(range(7)))
+    assert state.state == 'normal' and state.suppressed
+    values = dict(ack.diagnostic_values(state, Level.STALE, [False] * 12))
+    assert (values['alarm_state'], values['acknowledged']) == ('suppressed', 'true')
+    # STALE of its own (a tension stale after it reported) is an alarm at once.
+    _, seen = walk([Level.STALE, Level.OK, Level.STALE], suppressed={0})
     assert seen == ['normal', 'normal', 'unacknowledged']
+    # An unacknowledged alarm that becomes suppressed waits for its acknowledgement.
+    state, seen = walk([Level.WARN, Level.STALE, Level.STALE], suppressed={1, 2})
+    assert seen == ['unacknowledged'] + ['returned-unacknowledged'] * 2
+    assert dict(ack.diagnostic_values(state, Level.STALE, [False] * 12))['alarm_state'] == (
+        'returned-unacknowledged'
+    )
+    state = ack.acknowledge(state, 9.0, 'op')
+    assert dict(ack.diagnostic_values(state, Level.STALE, [False] * 12))['alarm_state'] == (
+        'suppressed'
+    )
 
 
 def test_replay_acks_equals_stepping_every_update():
@@ -95,10 +107,11 @@ def test_replay_acks_equals_stepping_every_update():
         before = ack.initial(0.0)
         if trial % 4 == 1:
             before, _ = walk([Level.OK, Level.ERROR], start=-10.0)
-        series = ack.replay_acks(before, times, levels, 3.0)
+        quiet = (levels == Level.STALE) & (rng.uniform(size=n) < 0.6)
+        series = ack.replay_acks(before, times, levels, quiet)
         state = before
         for i in range(n):
-            state = ack.step(state, Level(int(levels[i])), float(times[i]), 3.0)
+            state = ack.step(state, Level(int(levels[i])), float(times[i]), bool(quiet[i]))
             assert series.at(i) == state, (trial, i)
         assert series.final == state
 

@@ -248,18 +248,44 @@ def test_stale_tension_is_detected_and_recovers():
 def test_a_line_starts_blind_and_says_what_it_misses():
     alarm = alarm_with(depth_timeout=60.0)
     start = alarm.initial(100.0)
-    assert (start.level, start.message) == (
+    note = ' (suppressed by design: alarm on sensors)'
+    assert (start.level, start.message, start.suppressed) == (
         Level.STALE,
-        'no tension received yet; no depth received yet',
+        'blind: no tension received yet; no depth received yet' + note,
+        True,
     )
     updates = [
         (float(t), AlarmInputs(**CALM, tension_stamp=float(t))) for t in range(110, 200, 10)
     ]
     state, levels, events = run(alarm, updates, start)
     assert levels == [Level.STALE] * 9 and events == []  # never OK without a depth
-    assert state.message == 'no depth received yet'
+    assert state.message == 'blind: no depth received yet' + note and state.suppressed
     state, levels, events = run(alarm, [(200.0, fresh(200.0))], state)
-    assert events == [Transition(200.0, Level.STALE, Level.OK, 'OK', 100.0)]
+    # Out of a STALE suppressed by design: not announced (the sensors alarm was).
+    assert events == [Transition(200.0, Level.STALE, Level.OK, 'OK', 100.0, True)]
+
+
+def test_only_a_line_blind_by_a_common_cause_is_suppressed():
+    """STALE by the depth (or a tension never received) is suppressed by design; a tension
+    that went stale after it reported is the line's own alarm, announced."""
+    alarm = alarm_with(depth_timeout=60.0, tension_timeout=5.0)
+    ok = [(float(t), fresh(float(t))) for t in range(0, 5)]
+    depth_gone = [
+        (float(t), AlarmInputs(**CALM, tension_stamp=float(t), depth_stamp=4.0))
+        for t in range(5, 70)
+    ]
+    state, levels, events = run(alarm, ok + depth_gone)
+    assert levels[-1] == Level.STALE and state.suppressed
+    assert events[-1].new == Level.STALE and events[-1].suppressed
+    assert state.message.startswith('blind: depth stale: last sample 65.0 s ago')
+    own = [(float(t), AlarmInputs(**CALM, tension_stamp=4.0, depth_stamp=float(t)))
+           for t in range(5, 12)]
+    state, levels, events = run(alarm, ok + own)
+    assert levels[-1] == Level.STALE and not state.suppressed
+    assert events[-1] == Transition(
+        10.0, Level.OK, Level.STALE, 'tension stale: last sample 6.0 s ago (timeout 5 s)', None
+    )
+    assert not events[-1].suppressed
 
 
 def test_depth_stale_decision_of_the_monitor_wins_over_the_age():
@@ -268,7 +294,10 @@ def test_depth_stale_decision_of_the_monitor_wins_over_the_age():
     said_fresh = AlarmInputs(**CALM, tension_stamp=95.0, depth_stamp=4.0, depth_stale=False)
     _, levels, events = run(alarm, [(5.0, said_stale), (95.0, said_fresh)])
     assert levels == [Level.STALE, Level.OK]
-    assert events[0].message == 'depth stale: last sample 1.0 s ago (timeout 60 s)'
+    assert events[0].message == (
+        'blind: depth stale: last sample 1.0 s ago (timeout 60 s)'
+        ' (suppressed by design: alarm on sensors)'
+    )
 
 
 def test_error_outranks_stale_and_nothing_clears_on_stale_data():

@@ -235,8 +235,15 @@ def test_late_first_depth_and_lines_without_tension():
     first = [s for s in steps if s.kind == 'depth'][0]
     assert first.snapshot is not None
     lines = {st.name.split(': ')[1]: st for st in first.snapshot.statuses}
-    assert lines['line_03'].message == 'no tension received yet'
+    assert lines['line_03'].message == (
+        'blind: no tension received yet (suppressed by design: alarm on sensors)'
+    )
     assert lines['line_03'].level.name == 'STALE'
+    # The one common-cause alarm: line_03 never reported (raised after tension_timeout).
+    assert lines['sensors'].level.name == 'STALE'
+    assert lines['sensors'].message.startswith('waiting for sensors: no tension from line_03')
+    raised = [c for s in steps for c in s.transitions if not c.transition.suppressed]
+    assert [c.component for c in raised if c.transition.new.name == 'STALE'][:1] == ['sensors']
 
 
 def test_elastic_line_and_depth_loss():
@@ -280,14 +287,15 @@ def test_before_any_input_every_line_is_stale_and_says_why():
     core = MonitorCore(config, T0_NS)
     step = core.step(Tick(T0_NS + 10**9))
     messages = {st.name: (st.level.name, st.message) for st in step.snapshot.statuses}
+    note = ' (suppressed by design: alarm on sensors)'
     assert messages['catenary_monitor: line_01'] == (
         'STALE',
-        'no tension received yet; no depth received yet',
+        'blind: no tension received yet; no depth received yet' + note,
     )
     assert messages['catenary_monitor: tide'] == ('STALE', 'no depth received yet')
     step = core.step(Tension(T0_NS + 2 * 10**9, 0, 372e3))
     assert step.outputs[0].values[11] == -1 and math.isnan(step.outputs[0].values[4])
-    assert core.lines[0].state.message == 'no depth received yet'
+    assert core.lines[0].state.message == 'blind: no depth received yet' + note
 
 
 def test_a_late_first_depth_gives_one_snapshot_that_agrees_with_itself():
@@ -567,10 +575,10 @@ def test_run_log_steps_clock_and_intake_events_as_the_core_does():
     assert [s.stamp_ns for s in result.snapshots] == [s.stamp_ns for s in want]
     for g, w in zip(result.snapshots, want):
         assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
-    got = [(c.component, int(c.transition.new)) for c in result.others]
-    assert got == [c for c in ((c.component, int(c.transition.new))
-                               for s in steps for c in s.transitions)
-                   if c[0] in ('clock', 'intake')]
+    assert result.others == [c for s in steps for c in s.transitions
+                             if c.component in ('clock', 'intake', 'sensors')]
+    got = [(c.component, int(c.transition.new)) for c in result.others
+           if c.component in ('clock', 'intake')]
     assert got == [
         ('intake', 1), ('intake', 2), ('clock', 2), ('clock', 0), ('intake', 0), ('intake', 1)
     ]

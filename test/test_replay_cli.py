@@ -165,6 +165,7 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
         'catenary_monitor: line_02',
         'catenary_monitor: line_03',
         'catenary_monitor: tide',
+        'catenary_monitor: sensors',
         'catenary_monitor: logger',
     ]
     keys = {kv.key for kv in diags[-1][1].status[1].values}

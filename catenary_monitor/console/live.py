@@ -29,7 +29,7 @@ from catenary_monitor.console.model import (
     statuses_by_name,
     tide_trend,
 )
-from catenary_monitor.core.acknowledge import ACKNOWLEDGE_TOPIC, ALL_LINES
+from catenary_monitor.core.acknowledge import ACKNOWLEDGE_TOPIC, ALL_LINES, SENSORS
 from catenary_monitor.core.config import MonitorConfig
 from catenary_monitor.core.monitor import COMPONENTS, NODE_NAME, OUTPUT_FIELDS
 
@@ -214,7 +214,7 @@ class LiveSource:
 
     def acknowledge(self, line: str, origin: str) -> str:
         """Publish one acknowledgement (``LINE|all ORIGIN``); the monitor decides."""
-        if line != ALL_LINES and line not in self.names:
+        if line != ALL_LINES and line not in self.names and line != SENSORS:
             raise AckError(f'unknown line {line!r}', 404)
         if self._ack_pub.get_subscription_count() == 0:
             raise AckError(f'no monitor is listening on {ACKNOWLEDGE_TOPIC}', 503)

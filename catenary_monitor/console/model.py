@@ -19,6 +19,7 @@ from typing import Any, Iterable, Mapping, Optional, Sequence
 
 import numpy as np
 
+from catenary_monitor.core.acknowledge import SENSORS
 from catenary_monitor.core.config import MonitorConfig
 from catenary_monitor.core.monitor import NODE_NAME, OUTPUT_FIELDS
 
@@ -29,6 +30,7 @@ __all__ = [
     'statuses_by_name',
     'console_config',
     'alarm_rows',
+    'alarm_names',
     'History',
     'Trend',
     'bucket',
@@ -148,14 +150,15 @@ def console_config(
     }
 
 
-#: The monitor's own statuses shown under the tide (the node publishes the last three only
-#: when they have something to say: allowed runtime changes, a sim clock, intake counts).
-MONITOR_STATUSES = ('logger', 'parameters', 'clock', 'intake')
+#: The monitor's own statuses shown under the tide: the sensors' common-cause alarm, the logger
+#: and the guards (the node publishes the last three only when they have something to say:
+#: allowed runtime changes, a sim clock, intake counts).
+MONITOR_STATUSES = (SENSORS, 'logger', 'parameters', 'clock', 'intake')
 
 
 def monitor_rows(statuses: Mapping[str, Status]) -> list[dict[str, str]]:
-    """The monitor's own statuses present in the array (logger, parameters, clock, intake):
-    name, level and message, in that order."""
+    """The monitor's own statuses present in the array (sensors, logger, parameters, clock,
+    intake): name, level and message, in that order."""
     return [
         {'name': name, 'level': statuses[name].level, 'message': statuses[name].message}
         for name in MONITOR_STATUSES
@@ -163,19 +166,25 @@ def monitor_rows(statuses: Mapping[str, Status]) -> list[dict[str, str]]:
     ]
 
 
+def alarm_names(lines: Sequence[str]) -> list[str]:
+    """The alarms on the page: each line's, then the sensors' common-cause alarm."""
+    return [*lines, SENSORS]
+
+
 def alarm_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dict[str, Any]]:
-    """The alarm list: one row per line whose alarm is not ``normal``, most urgent first
-    (unacknowledged, then returned-unacknowledged, then acknowledged; ERROR before STALE before
-    WARN; newest first)."""
+    """The alarm list: one row per alarm (each line's, the sensors') that is neither
+    ``normal`` nor ``suppressed`` (by design: the sensors alarm stands for it), most urgent
+    first (unacknowledged, then returned-unacknowledged, then acknowledged; ERROR before STALE
+    before WARN; newest first)."""
     rank_state = {'unacknowledged': 0, 'returned-unacknowledged': 1, 'acknowledged': 2}
     rank_level = {'ERROR': 0, 'STALE': 1, 'WARN': 2, 'OK': 3}
     rows: list[dict[str, Any]] = []
-    for name in lines:
+    for name in alarm_names(lines):
         st = statuses.get(name)
         if st is None:
             continue
         state = st.values.get('alarm_state', 'normal')
-        if state == 'normal':
+        if state in ('normal', 'suppressed'):
             continue
         rows.append(
             {
@@ -208,8 +217,9 @@ class History:
     _last: dict[str, tuple[str, str, float]] = field(default_factory=dict)
 
     def feed(self, stamp: float, statuses: Mapping[str, Status], lines: Sequence[str]) -> None:
-        """Compare one array (stamp s) with the previous and add what changed."""
-        for name in lines:
+        """Compare one array (stamp s) with the previous and add what changed (the lines'
+        alarms and the sensors')."""
+        for name in alarm_names(lines):
             st = statuses.get(name)
             if st is None:
                 continue
@@ -239,8 +249,10 @@ class History:
 
 
 def _history_event(old: tuple[str, str, float], new: tuple[str, str, float]) -> Optional[str]:
-    """What happened between two alarm states of a line (None: nothing to record)."""
+    """What happened between two alarm states of a line (None: nothing to record; suppressed
+    by design counts as normal)."""
     (s0, _, r0), (s1, _, r1) = old, new
+    s0, s1 = ('normal' if s == 'suppressed' else s for s in (s0, s1))
     if s1 == 'unacknowledged' and (s0 != 'unacknowledged' or r1 != r0):
         return 'raised' if s0 in ('normal', 'returned-unacknowledged') else 'raised again'
     if s0 == s1:

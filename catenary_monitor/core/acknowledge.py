@@ -1,10 +1,14 @@
 """Alarm acknowledgement: each line's alarm in ISA-18.2 / IEC 62682 states (no rclpy, no clock).
 
-One alarm per line. It is *active* while the line's level is not OK (WARN, STALE or ERROR),
-except during the start-up grace: a line still blind since the monitor started (STALE, never
-yet in another level) becomes an alarm only once that has lasted :func:`startup_grace` (the
-longer of ``tension_timeout`` and ``depth_timeout``), so a normal start, sensors coming up one
-by one, is no alarm flood, while a sensor that never reports still alarms.
+One alarm per line, and one for the sensors' common causes (:data:`SENSORS`: the depth sensor
+silent, lines that never reported since the start;
+:func:`catenary_monitor.core.health.sensors_status`).
+A line's alarm is *active* while its level is not OK (WARN, STALE or ERROR), except while it is
+**suppressed by design**: the line is STALE only because of a common cause (no depth, or no
+tension ever received: :attr:`~catenary_monitor.core.alarms.AlarmState.suppressed`), which the
+one ``sensors`` alarm reports, raised once the silence outlasts its timeout. So a blind start
+or a silent depth sensor is one alarm, not one per line; a tension sensor that goes silent after
+it reported is its own line's alarm at once.
 
 States (:data:`STATES`, the names the ``/diagnostics`` key ``alarm_state`` and the console use):
 
@@ -15,7 +19,9 @@ States (:data:`STATES`, the names the ``/diagnostics`` key ``alarm_state`` and t
 ``acknowledged``
     active and acknowledged: it stays until the condition clears;
 ``returned-unacknowledged``
-    the condition cleared before anyone acknowledged it: it stays listed until acknowledged.
+    the condition cleared before anyone acknowledged it: it stays listed until acknowledged;
+``suppressed`` (shown in ``alarm_state`` only; stored as ``normal`` with ``suppressed`` set)
+    not active because suppressed by design, nothing waiting for an acknowledgement.
 
 Rules: an alarm is raised (``unacknowledged``, ``raised`` = now) when it becomes active from
 ``normal`` or ``returned-unacknowledged``, and raised again when its severity rises while active
@@ -38,7 +44,6 @@ from typing import Optional, Sequence
 import numpy as np
 
 from catenary_monitor.core.alarms import CONDITIONS, RANK, Level
-from catenary_monitor.core.config import AlarmConfig
 
 __all__ = [
     'NORMAL',
@@ -50,8 +55,8 @@ __all__ = [
     'ACKNOWLEDGE_TOPIC',
     'AckState',
     'initial',
-    'startup_grace',
-    'is_active',
+    'SUPPRESSED',
+    'SENSORS',
     'step',
     'acknowledge',
     'condition',
@@ -65,6 +70,10 @@ NORMAL = 'normal'
 UNACKNOWLEDGED = 'unacknowledged'
 ACKNOWLEDGED = 'acknowledged'
 RETURNED_UNACKNOWLEDGED = 'returned-unacknowledged'
+#: ``alarm_state`` of a line whose alarm is suppressed by design (a view of ``normal``).
+SUPPRESSED = 'suppressed'
+#: The name of the sensors' common-cause alarm (a status on /diagnostics, acknowledged as a line).
+SENSORS = 'sensors'
 #: Every alarm state, in display order of urgency.
 STATES = (UNACKNOWLEDGED, RETURNED_UNACKNOWLEDGED, ACKNOWLEDGED, NORMAL)
 #: The line "name" of an acknowledgement of every line.
@@ -78,7 +87,8 @@ class AckState:
     """One line's alarm: its state, severity, when raised, the last acknowledgement (s).
 
     ``level`` is the alarm's current severity while active, its last one after it returned;
-    ``blind`` is True while the line has been STALE ever since ``start`` (the start-up grace).
+    ``suppressed`` is True while the line's level is not OK only by a common cause (suppressed
+    by design: not active).
     """
 
     state: str = NORMAL
@@ -86,32 +96,22 @@ class AckState:
     raised: float = math.nan
     acknowledged_at: float = math.nan
     acknowledged_by: str = ''
-    blind: bool = True
-    start: float = math.nan
+    suppressed: bool = False
 
 
 def initial(start: float) -> AckState:
-    """A line's alarm when the monitor starts at ``start`` (s): normal, blind."""
-    return AckState(start=start)
+    """A line's alarm when the monitor starts at ``start`` (s): normal (the line is blind, its
+    STALE suppressed by design: the ``sensors`` alarm says it once that is late)."""
+    return AckState(suppressed=True)
 
 
-def startup_grace(alarm: AlarmConfig) -> float:
-    """Seconds a line may stay blind after the monitor starts before that is an alarm."""
-    return max(alarm.tension_timeout, alarm.depth_timeout)
-
-
-def is_active(ack: AckState, level: Level, now: float, grace: float) -> tuple[bool, bool]:
-    """(active, still blind) for a line at ``level`` at ``now`` (s); ``grace`` in s."""
-    blind = ack.blind and level == Level.STALE
-    return level != Level.OK and not (blind and now - ack.start < grace), blind
-
-
-def step(ack: AckState, level: Level, now: float, grace: float) -> AckState:
-    """The alarm after the line was stepped to ``level`` at ``now`` (s); ``grace`` (s) is the
-    start-up grace (:func:`startup_grace`)."""
-    active, blind = is_active(ack, level, now, grace)
-    if blind != ack.blind:
-        ack = replace(ack, blind=blind)
+def step(ack: AckState, level: Level, now: float, suppressed: bool = False) -> AckState:
+    """The alarm after the line was stepped to ``level`` at ``now`` (s); ``suppressed``: the
+    level is a consequence of a common cause reported by another alarm (not active)."""
+    suppressed = suppressed and level != Level.OK
+    if suppressed != ack.suppressed:
+        ack = replace(ack, suppressed=suppressed)
+    active = level != Level.OK and not suppressed
     if active:
         if ack.state in (NORMAL, RETURNED_UNACKNOWLEDGED) or RANK[level] > RANK[ack.level]:
             return replace(ack, state=UNACKNOWLEDGED, level=level, raised=now)
@@ -156,9 +156,10 @@ def diagnostic_values(
     ``alarm_condition``, ``acknowledged_at`` [s] and ``acknowledged_by`` (the last one)."""
     pending = ack.state in (UNACKNOWLEDGED, RETURNED_UNACKNOWLEDGED)
     raised = math.nan if ack.state == NORMAL else ack.raised
+    state = SUPPRESSED if ack.state == NORMAL and ack.suppressed else ack.state
     return [
         ('acknowledged', 'false' if pending else 'true'),
-        ('alarm_state', ack.state),
+        ('alarm_state', state),
         ('alarm_raised', repr(float(raised))),
         ('alarm_condition', condition(level, latches)),
         ('acknowledged_at', repr(float(ack.acknowledged_at))),
@@ -182,7 +183,7 @@ class AckSeries:
     """A line's alarm over a sequence of steps, as :func:`step` at every one of them gives.
 
     ``changes`` are the step indexes where :func:`step` was applied (where the level or the
-    activity changes; elsewhere it would change nothing) and ``states`` the alarm after each.
+    suppression changes; elsewhere it would change nothing) and ``states`` the alarm after each.
     """
 
     def __init__(self, before: AckState, changes: np.ndarray, states: list[AckState]) -> None:
@@ -200,21 +201,24 @@ class AckSeries:
 
 
 def replay_acks(
-    before: AckState, times: np.ndarray, levels: np.ndarray, grace: float
+    before: AckState,
+    times: np.ndarray,
+    levels: np.ndarray,
+    suppressed: Optional[np.ndarray] = None,
 ) -> AckSeries:
-    """The alarm over steps at ``times`` (s) with the line's ``levels`` (int Level per step),
-    from ``before``, with no acknowledgement among them: :func:`step` applied where its inputs
-    change (it is idempotent elsewhere), so equal to stepping every one."""
+    """The alarm over steps at ``times`` (s) with the line's ``levels`` (int Level per step)
+    and ``suppressed`` flags (bool per step; None: none), from ``before``, with no
+    acknowledgement among them: :func:`step` applied where its inputs change (it is
+    idempotent elsewhere), so equal to stepping every one."""
     n = len(times)
     if n == 0:
         return AckSeries(before, np.zeros(0, np.int64), [])
-    blind = before.blind & (np.cumsum(levels != Level.STALE) == 0)
-    active = (levels != Level.OK) & ~(blind & (times - before.start < grace))
+    quiet = np.zeros(n, bool) if suppressed is None else np.asarray(suppressed, bool)
     change = np.ones(n, dtype=bool)
-    change[1:] = (active[1:] != active[:-1]) | (levels[1:] != levels[:-1])
+    change[1:] = (quiet[1:] != quiet[:-1]) | (levels[1:] != levels[:-1])
     idx = np.flatnonzero(change)
     states, state = [], before
     for i in idx.tolist():
-        state = step(state, Level(int(levels[i])), float(times[i]), grace)
+        state = step(state, Level(int(levels[i])), float(times[i]), bool(quiet[i]))
         states.append(state)
     return AckSeries(before, idx, states)

@@ -52,6 +52,14 @@ up, as long as ``clear_hold`` exceeds the wave period: one transition, not one p
 A line starts blind: :meth:`LineAlarm.initial` is STALE ("no tension received yet; no depth
 received yet"), never OK before its inputs are known.
 
+**Suppressed by design.** A line that is STALE only because of a common cause (no tension
+received since the start, or no depth / the depth stale: every line shares the depth), not
+because its own tension went stale after it reported, is ``suppressed``: its message says so
+(``blind: no depth received yet (suppressed by design: alarm on sensors)``), its alarm is not
+active (:mod:`catenary_monitor.core.acknowledge`) and its changes into and out of that STALE are
+not announced (:attr:`Transition.suppressed`): the one ``sensors`` alarm reports the cause
+(:func:`catenary_monitor.core.health.sensors_status`).
+
 Level: ERROR if an ERROR latch is up, else STALE if stale, else WARN if a warning latch is up,
 else OK. **ERROR outranks STALE** (a sensor dropout must not hide a lifted anchor) although
 ``Level.STALE`` is numerically larger; STALE outranks WARN (a warning from old data is not
@@ -83,6 +91,8 @@ __all__ = [
     'RANK',
     'replay_levels',
     'diagnostic_values',
+    'quiet_change',
+    'SUPPRESSED_NOTE',
 ]
 
 
@@ -179,21 +189,44 @@ class AlarmState:
     """Everything a line's alarm remembers between updates (immutable)."""
 
     level: Level = Level.STALE
-    message: str = 'no tension received yet; no depth received yet'
+    message: str = (
+        'blind: no tension received yet; no depth received yet '
+        '(suppressed by design: alarm on sensors)'
+    )
     latches: tuple[Latch, ...] = (Latch(),) * len(CONDITIONS)
     entered: tuple[float, ...] = (math.nan,) * 4  # s, when each severity rank was last entered
     input_message: str = ''  # last impossible-input sentence, while its alarm holds
+    suppressed: bool = True  # STALE only by a common cause (suppressed by design)
 
 
 class Transition(NamedTuple):
     """A level change. ``duration`` (s) is set when severity drops: how long the old level or
-    worse lasted (for a return to OK, the whole incident); otherwise None."""
+    worse lasted (for a return to OK, the whole incident); otherwise None. ``suppressed``: not
+    announced, the change into or out of a STALE suppressed by design (:func:`quiet_change`)."""
 
     time: float
     old: Level
     new: Level
     message: str
     duration: float | None
+    suppressed: bool = False
+
+
+#: Appended to the message of a line suppressed by design (after ``blind: ``).
+SUPPRESSED_NOTE = ' (suppressed by design: alarm on sensors)'
+
+
+def quiet_change(old: Level, old_suppressed: bool, new: Level, new_suppressed: bool) -> bool:
+    """Whether a level change is not announced: into a STALE suppressed by design, or out of
+    one back to OK (the common cause's own alarm announces both)."""
+    if new == Level.STALE:
+        return new_suppressed
+    return new == Level.OK and old == Level.STALE and old_suppressed
+
+
+def _blind_text(message: str, suppressed: bool) -> str:
+    """A line's message, marked when its STALE is suppressed by design."""
+    return f'blind: {message}{SUPPRESSED_NOTE}' if suppressed else message
 
 
 def _fmt(value: float, scale: float = 1.0, digits: int = 1) -> str:
@@ -259,11 +292,16 @@ class LineAlarm:
             input_message = _status_text(inputs.status, inputs.status_message)
         active = [latch.active for latch in latches]
         level = _combine(active, stale)
-        message = self._message(active, inputs, now, stale_t, stale_d, input_message)
+        own = stale_t and inputs.tension_stamp == inputs.tension_stamp
+        suppressed = level == Level.STALE and not own
+        message = _blind_text(
+            self._message(active, inputs, now, stale_t, stale_d, input_message), suppressed
+        )
         entered, events = state.entered, []
         if level != state.level:
             entered, duration = _episode(entered, state.level, level, now)
-            events.append(Transition(now, state.level, level, message, duration))
+            quiet = quiet_change(state.level, state.suppressed, level, suppressed)
+            events.append(Transition(now, state.level, level, message, duration, quiet))
         new = replace(
             state,
             level=level,
@@ -271,6 +309,7 @@ class LineAlarm:
             latches=tuple(latches),
             entered=entered,
             input_message=input_message if active[1] else '',
+            suppressed=suppressed,
         )
         return new, events
 
@@ -603,6 +642,9 @@ class LevelSeries:
         self.levels = np.where(
             err, Level.ERROR, np.where(stale, Level.STALE, np.where(warn, Level.WARN, Level.OK))
         ).astype(np.int8)
+        own = stale_t & ~np.isnan(x['tension_stamp'])
+        #: Per update: STALE only by a common cause (suppressed by design).
+        self.suppressed = (self.levels == Level.STALE) & ~own
         self._last_bad = (
             np.maximum.accumulate(np.where(status != 0, np.arange(n), -1))
             if n
@@ -634,7 +676,7 @@ class LevelSeries:
         floats: dict[str, Any] = {k: float(self._x[k][i]) for k in _INPUT_FIELDS}
         sample = AlarmInputs(**floats, status=int(self._status[i]))
         flags = [bool(self._active[cond][i]) for cond in CONDITIONS]
-        return self.alarm._message(
+        text = self.alarm._message(
             flags,
             sample,
             float(self.times[i]),
@@ -642,6 +684,7 @@ class LevelSeries:
             bool(self._stale_d[i]),
             self._held(i),
         )
+        return _blind_text(text, bool(self.suppressed[i]))
 
     def _walk(self) -> tuple[list[Transition], tuple[float, ...]]:
         """Transitions (with messages and episode durations) from the initial state."""
@@ -652,7 +695,9 @@ class LevelSeries:
             new = Level(int(self.levels[i]))
             now = float(self.times[i])
             entered, duration = _episode(entered, old, new, now)
-            transitions.append(Transition(now, old, new, self.message_at(i), duration))
+            was = bool(self.suppressed[i - 1]) if i > 0 else self._initial.suppressed
+            quiet = quiet_change(old, was, new, bool(self.suppressed[i]))
+            transitions.append(Transition(now, old, new, self.message_at(i), duration, quiet))
             old = new
         return transitions, entered
 
@@ -668,6 +713,7 @@ class LevelSeries:
             latches=self._latches,
             entered=self._entered,
             input_message=held,
+            suppressed=bool(self.suppressed[-1]),
         )
 
 

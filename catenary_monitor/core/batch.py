@@ -39,11 +39,12 @@ from catenary_monitor.core.alarms import (
     Level,
     LevelSeries,
     Transition,
+    quiet_change,
     replay_levels,
 )
 from catenary_monitor.core.config import LineConfig, MonitorConfig
 from catenary_monitor.core.body import live as dock_live
-from catenary_monitor.core.health import tide_status
+from catenary_monitor.core.health import sensors_status, tide_status
 from catenary_monitor.core.plausible import MAX_DEPTH, reading_status_array
 from catenary_monitor.core.monitor import (
     NODE_NAME,
@@ -59,12 +60,14 @@ from catenary_monitor.core.monitor import (
     Snapshot,
     Start,
     bound_values,
+    depth_word as depth_state_word,
     dock_component,
     forecast_word,
     holding_values,
     line_dock_values,
     line_status,
     sensor_limits,
+    sensors_component,
     tide_component,
     tide_with_sensor,
 )
@@ -436,6 +439,7 @@ class _Tide:
     excess: np.ndarray  # m, each depth sample's excess over the trend's level
     trend: tide_trend.TrendState  # the trend after the window's last depth sample
     sensor: np.ndarray  # the depth sensor's state code at each decision
+    kinds: np.ndarray  # KIND_DEPTH or KIND_TICK: what made each decision
 
 
 def _worse(level: np.ndarray, other: np.ndarray, code: np.ndarray) -> np.ndarray:
@@ -543,14 +547,80 @@ def _decide_tide(
     level = _worse(level, np.where(code == sensor.OUT_OF_RANGE, Level.ERROR, Level.WARN), code)
     window_s = core.config.alarm.tide_trend_window
     rates, excess, trend = tide_trend.series(core.trend, dd, dv, window_s)
-    tide = _Tide(times, depth, depth_s, level, stale, rates, excess, trend, code)
+    tide = _Tide(times, depth, depth_s, level, stale, rates, excess, trend, code, kinds)
     transitions = []
     old, entered = core.tide[0], core.tide_entered
     for i in _changed(level, old).tolist():
         new = _tide_at(core, tide, i)
-        transitions.append(Transition(float(now[i]), old, new[0], new[1], float(now[i]) - entered))
-        old, entered = new[0], float(now[i])
+        t = float(now[i])
+        quiet = quiet_change(old, True, new[0], True)
+        transitions.append(Transition(t, old, new[0], new[1], t - entered, quiet))
+        old, entered = new[0], t
     return tide, transitions
+
+
+@dataclass
+class _Blind:
+    """The sensors' common-cause alarm at the tide's decisions (core.health.sensors_status)."""
+
+    waiting: np.ndarray  # (decisions, lines) bool: the line has had no tension yet
+    levels: np.ndarray  # int8 Level per decision
+    transitions: list[Transition]
+    acks: alarm_ack.AckSeries
+    before: tuple[tuple[Level, str], int]  # the status and the lines waiting before the window
+
+
+def _blind_at(core: MonitorCore, tide: _Tide, blind: _Blind, i: int) -> tuple[Level, str]:
+    """The sensors alarm's (level, message) at tide decision ``i`` (as the core's
+    ``_decide_blind``)."""
+    a = core.config.alarm
+    names = [line.config.name for line, w in zip(core.lines, blind.waiting[i]) if w]
+    return sensors_status(
+        names,
+        len(core.lines),
+        float(tide.depth_s[i]),
+        bool(tide.stale[i]),
+        float(tide.times[i] * 1e-9),
+        core.start_s,
+        a.tension_timeout,
+        a.depth_timeout,
+    )
+
+
+def _decide_blind(core: MonitorCore, window: Window, tide: _Tide) -> _Blind:
+    """The sensors alarm at every tide decision of the window, its transitions and its
+    acknowledgement states; leaves the core's as after the window."""
+    a, times = core.config.alarm, tide.times
+    waiting = np.zeros((len(times), len(core.lines)), bool)
+    for k, line in enumerate(core.lines):
+        tt = window.tensions[k][0]
+        if line.tension_s == line.tension_s:
+            continue
+        if not len(tt):
+            waiting[:, k] = True
+            continue
+        # A tick follows the tensions of its own stamp; a depth sample goes before them.
+        waiting[:, k] = (times < tt[0]) | ((times == tt[0]) & (tide.kinds == KIND_DEPTH))
+    since = times * 1e-9 - core.start_s
+    late = waiting.any(axis=1) & (since > a.tension_timeout)
+    silent = tide.stale | (np.isnan(tide.depth_s) & (since > a.depth_timeout))
+    levels = np.where(late | silent, Level.STALE, Level.OK).astype(np.int8)
+    before = (core.sensors, core.sensors_waiting)
+    blind = _Blind(waiting, levels, [], alarm_ack.AckSeries(core.sensors_ack, levels[:0], []),
+                   before)  # fmt: skip
+    old, entered = core.sensors[0], core.sensors_entered
+    for i in _changed(levels, old).tolist():
+        new = _blind_at(core, tide, blind, i)
+        t = float(times[i] * 1e-9)
+        blind.transitions.append(Transition(t, old, new[0], new[1], t - entered))
+        old, entered = new[0], t
+    blind.acks = alarm_ack.replay_acks(core.sensors_ack, times * 1e-9, levels)
+    if len(times):
+        core.sensors = _blind_at(core, tide, blind, len(times) - 1)
+        core.sensors_waiting = int(waiting[-1].sum())
+    core.sensors_entered = entered
+    core.sensors_ack = blind.acks.final
+    return blind
 
 
 def _write_tide(
@@ -614,7 +684,8 @@ def _decide_dock_window(core: MonitorCore, window: Window, tide: _Tide) -> Optio
         new = Level(int(levels[i]))
         t = float(now[i])
         message = dock_live.dock_message(model, decision, i)
-        transitions.append(Transition(t, old, new, message, t - entered))
+        quiet = quiet_change(old, True, new, True)
+        transitions.append(Transition(t, old, new, message, t - entered, quiet))
         old, entered = new, t
     core.dock = (Level(int(levels[-1])), dock_live.dock_message(model, decision, n - 1))
     core.dock_entered = entered
@@ -840,9 +911,7 @@ def _advance_line(
     series = replay_levels(
         steps.times * 1e-9, inputs, line.alarm, STATUS_MESSAGES, initial=line.state
     )
-    acks = alarm_ack.replay_acks(
-        line.ack, steps.times * 1e-9, series.levels, alarm_ack.startup_grace(core.config.alarm)
-    )
+    acks = alarm_ack.replay_acks(line.ack, steps.times * 1e-9, series.levels, series.suppressed)
     line.ack = acks.final
     where = np.flatnonzero(steps.solved)
     result = LineResult(
@@ -917,9 +986,10 @@ def advance(
         )
         for line in core.lines
     ]
-    depth_word = sensor.DEPTH_STATES[core.depth_code]
+    depth_word = depth_state_word(core.depth_s, core.depth_code)
     sensors = _decide_sensors_window(core, window)
     tide, tide_transitions = _decide_tide(core, window, sensors)
+    blind = _decide_blind(core, window, tide)
     dock = _decide_dock_window(core, window, tide)
     results, series, steps, acks = [], [], [], []
     for k in range(len(core.lines)):
@@ -937,13 +1007,14 @@ def advance(
         made = build(
             _Made(
                 core, window, tide, results, series, steps, depth_before, tide_before,
-                lines_before, acks, dock, sensors, depth_word,
+                lines_before, acks, dock, sensors, depth_word, blind,
             )  # fmt: skip
         )
         snaps = [made] if isinstance(made, SnapshotColumns) else list(made)
     _write_tide(core, window, tide, tide_transitions)
     core.last_ns = max(core.last_ns, end)
-    others = [] if dock is None else [Change('dock', tr) for tr in dock.transitions]
+    others = [Change('sensors', tr) for tr in blind.transitions]
+    others += [] if dock is None else [Change('dock', tr) for tr in dock.transitions]
     return WindowResult(results, tide_transitions, snaps, start, end, others)
 
 
@@ -982,9 +1053,12 @@ def _snapshot_stamps(
     results: list[LineResult],
     tide_before: tuple[Level, str],
     lines_before: list[_Before],
+    blind: Optional[_Blind] = None,
 ) -> np.ndarray:
     """The stamps of the window's snapshots: its ticks and every level change [ns]."""
     parts = [window.ticks, tide.times[_changed(tide.level, tide_before[0])]]
+    if blind is not None:
+        parts.append(tide.times[_changed(blind.levels, blind.before[0][0])])
     parts += [r.step_ns[_changed(r.step_level, b.level)] for r, b in zip(results, lines_before)]
     return np.unique(np.concatenate(parts))
 
@@ -1009,7 +1083,7 @@ def _tide_statuses(
         depth_s = float(dd[j] * 1e-9) if j >= 0 else depth_before[1]
         rate = float(tide.rates[j]) if j >= 0 else depth_before[3]
         state = tide_before if i < 0 else _tide_at(core, tide, i)
-        word = depth_word if i < 0 else sensor.DEPTH_STATES[int(tide.sensor[i])]
+        word = depth_word if i < 0 else depth_state_word(depth_s, int(tide.sensor[i]))
         age = stamp * 1e-9 - depth_s
         forecast = forecast_word(core.config, rate)
         out.append(tide_component(state, core.depth_id, depth, age, rate, word, forecast))
@@ -1032,6 +1106,28 @@ class _Made(NamedTuple):
     dock: Optional[_Dock] = None
     sensors: Optional[_Sensors] = None
     depth_word: str = 'ok'
+    blind: Optional[_Blind] = None
+
+    def stamps(self) -> np.ndarray:
+        """The stamps of the window's snapshots (:func:`_snapshot_stamps`)."""
+        return _snapshot_stamps(
+            self.window, self.tide, self.results, self.tide_before, self.lines_before, self.blind
+        )
+
+    def blind_statuses(self, stamps: np.ndarray) -> list[ComponentStatus]:
+        """The sensors alarm's status at each of ``stamps`` [ns]."""
+        blind = self.blind
+        assert blind is not None
+        at = np.searchsorted(self.tide.times, stamps, 'right') - 1
+        out = []
+        for i in at.tolist():
+            if i < 0:
+                state, waiting = blind.before
+            else:
+                state = _blind_at(self.core, self.tide, blind, i)
+                waiting = int(blind.waiting[i].sum())
+            out.append(sensors_component(state, blind.acks.at(i), waiting))
+        return out
 
     def line_parts(self, k: int) -> tuple[
         LineState, LineResult, LevelSeries, _Steps, np.ndarray, _Before,
@@ -1050,10 +1146,11 @@ def _snapshots(m: _Made) -> list[Snapshot]:
     """Every snapshot the core made in the window (ticks and level changes), built from the
     vectorized results."""
     core, window, tide, dock = m.core, m.window, m.tide, m.dock
-    stamps = _snapshot_stamps(window, tide, m.results, m.tide_before, m.lines_before)
+    stamps = m.stamps()
     tides = _tide_statuses(
         core, window, tide, stamps, m.depth_before, m.tide_before, m.depth_word
     )
+    blinds = m.blind_statuses(stamps)
     columns = [_line_statuses(m, k, stamps) for k in range(len(m.results))]
     tick_at = np.searchsorted(window.ticks, stamps, 'right') - 1
     logger = ComponentStatus(
@@ -1063,6 +1160,7 @@ def _snapshots(m: _Made) -> list[Snapshot]:
     for n, stamp in enumerate(stamps.tolist()):
         statuses = [col[n] for col in columns]
         statuses.append(tides[n])
+        statuses.append(blinds[n])
         statuses.append(logger)
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))
@@ -1385,7 +1483,7 @@ def _snapshot_columns(m: _Made) -> SnapshotColumns | list[Snapshot]:
     """The snapshots of :func:`_snapshots` in columns (its Snapshot s where the statuses
     after the dock do not have one shape)."""
     core, window, tide, dock = m.core, m.window, m.tide, m.dock
-    stamps = _snapshot_stamps(window, tide, m.results, m.tide_before, m.lines_before)
+    stamps = m.stamps()
     n = len(stamps)
     guards = [core.guard_components(stamp * 1e-9) for stamp in stamps.tolist()]
     shapes = {tuple((g.name, len(g.values)) for g in row) for row in guards}
@@ -1402,6 +1500,7 @@ def _snapshot_columns(m: _Made) -> SnapshotColumns | list[Snapshot]:
         core, window, tide, stamps, m.depth_before, m.tide_before, m.depth_word
     )
     groups.append((tides, 1))
+    groups.append((m.blind_statuses(stamps), 1))
     logger = ComponentStatus(
         'catenary_monitor: logger', core.logger[0], core.logger[1], core.logger_id, ()
     )

@@ -8,13 +8,14 @@ seconds on one clock (the node clock, or log time in replay).
 from __future__ import annotations
 
 import math
-from typing import Optional
+from typing import Optional, Sequence
 
 from catenary_monitor.core.alarms import Level
 from catenary_monitor.core.plausible import MAX_DEPTH
 
 __all__ = [
     'tide_status',
+    'sensors_status',
     'logger_status',
     'parameters_status',
     'clock_stopped',
@@ -54,6 +55,73 @@ def tide_status(depth: float, stamp: float, now: float, timeout: float) -> tuple
             'a sensor or scaling fault)'
         )
     return Level.OK, f'depth {depth:.3f} m'
+
+
+def _every(lines: int) -> str:
+    """``all 12 lines`` (``the line`` when there is one)."""
+    return f'all {lines} lines' if lines > 1 else 'the line'
+
+
+def _names(names: Sequence[str], lines: int) -> str:
+    """``12 lines`` (all), ``line_03, line_07`` (up to three) or ``5 lines (line_01, ...)``."""
+    if len(names) == lines:
+        return _every(lines)
+    if len(names) <= 3:
+        return ', '.join(names)
+    return f'{len(names)} lines ({", ".join(names[:2])}, ...)'
+
+
+def sensors_status(
+    waiting: Sequence[str],
+    lines: int,
+    depth_s: float,
+    depth_stale: bool,
+    now: float,
+    start: float,
+    tension_timeout: float,
+    depth_timeout: float,
+) -> tuple[Level, str]:
+    """Level and message of the sensors' common-cause alarm (``catenary_monitor: sensors``).
+
+    ``waiting``: the lines that have received no tension since the monitor started at ``start``
+    [s]; ``lines``: how many lines there are; ``depth_s``: the newest depth sample's stamp [s]
+    (NaN: none yet) and ``depth_stale`` the tide's decision that it is older than
+    ``depth_timeout`` [s]; ``now`` [s].
+
+    STALE (one alarm for many blind lines, their own STALE suppressed by design) when lines are
+    still waiting ``tension_timeout`` after the start ("waiting for sensors"), or the depth is
+    stale or still missing ``depth_timeout`` after the start ("depth sensor silent": every line
+    is blind); else OK: every sensor reporting, or within those timeouts of the start (the
+    lines and the tide are STALE meanwhile, and the message names what has not reported yet).
+    """
+    since = now - start
+    late = list(waiting) if since > tension_timeout else []
+    no_depth = depth_s != depth_s
+    silent = depth_stale or (no_depth and since > depth_timeout)
+    parts = []
+    if late:
+        text = f'waiting for sensors: no tension from {_names(late, lines)} within '
+        text += f'{tension_timeout:g} s of start'
+        if silent and no_depth:
+            text += f', no depth within {depth_timeout:g} s: {_every(lines)} blind'
+        parts.append(text)
+    if silent and not (late and no_depth):
+        detail = (
+            f'no depth within {depth_timeout:g} s of start'
+            if no_depth
+            else f'last depth {now - depth_s:.1f} s ago, timeout {depth_timeout:g} s'
+        )
+        parts.append(f'depth sensor silent: {_every(lines)} blind ({detail})')
+    if parts:
+        return Level.STALE, '; '.join(parts)
+    if waiting or no_depth:
+        what = [f'no tension from {_names(waiting, lines)}'] if waiting else []
+        what += ['no depth'] if no_depth else []
+        return Level.OK, (
+            f'starting: {" and ".join(what)} yet (an alarm if still silent '
+            f'{tension_timeout:g} s after start for tensions, {depth_timeout:g} s for the depth)'
+        )
+    return Level.OK, 'every sensor reporting'
 
 
 def logger_status(error: Optional[str], path: Optional[str]) -> tuple[Level, str]:

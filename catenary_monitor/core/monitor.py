@@ -49,6 +49,7 @@ from catenary_monitor.core.alarms import (
     LineAlarm,
     Transition,
     diagnostic_values,
+    quiet_change,
 )
 from catenary_monitor.core.config import (
     LineConfig,
@@ -68,6 +69,7 @@ from catenary_monitor.core.health import (
     missing_samples,
     logger_status,
     parameters_status,
+    sensors_status,
     tide_status,
 )
 from catenary_monitor.core.plausible import reading_status, reading_status_array
@@ -106,6 +108,8 @@ __all__ = [
     'holding_values',
     'output_values',
     'tide_component',
+    'sensors_component',
+    'depth_word',
     'dock_component',
     'event_record',
     'parse_event_record',
@@ -159,7 +163,9 @@ _NAN = math.nan
 _INCONSISTENT = CONDITIONS.index('inconsistent')
 _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
 #: The statuses on /diagnostics that are not lines (``catenary_monitor: NAME``).
-COMPONENTS = ('tide', 'logger', 'dock', 'parameters', 'clock', 'intake')
+COMPONENTS = ('tide', 'sensors', 'logger', 'dock', 'parameters', 'clock', 'intake')
+#: The components whose STALE is a consequence of blind inputs, announced by the sensors alarm.
+_CONSEQUENCES = ('tide', 'dock')
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
 _AT = {key: i for i, key in enumerate(VALUE_FIELDS)}
 _SENSOR_AT = VALUE_FIELDS.index('sensor_state')  # not a solved value: kept by _implausible
@@ -384,6 +390,12 @@ class MonitorCore:
         self.sensor_rows = np.zeros((0, len(config.lines)))  # N, each line's tension there
         self.tide: tuple[Level, str] = tide_status(_NAN, _NAN, start, config.alarm.depth_timeout)
         self.tide_entered = start
+        # The sensors' common-cause alarm (blind start, silent depth sensor): one, not per line.
+        self.start_s = start
+        self.sensors: tuple[Level, str] = self._sensors_now(start)
+        self.sensors_waiting = len(self.lines)  # lines without a tension at that decision
+        self.sensors_entered = start
+        self.sensors_ack = alarm_ack.AckState()
         self.logger: tuple[Level, str] = (Level.OK, 'logging')
         self.logger_entered = start
         self.last_ns = start_ns
@@ -462,6 +474,7 @@ class MonitorCore:
             a.stamp_jitter,
         )
         changes = self._decide_tide(ev.stamp_ns)
+        changes += self._decide_blind(ev.stamp_ns)
         solved = [k for k, line in enumerate(self.lines) if line.tension_s == line.tension_s]
         self._solve_many(solved)
         changes += self._step_lines(range(len(self.lines)), ev.stamp_ns)
@@ -470,6 +483,7 @@ class MonitorCore:
     def _on_tick(self, ev: Tick) -> Step:
         self._decide_sensors(ev.stamp_ns)
         changes = self._decide_tide(ev.stamp_ns)
+        changes += self._decide_blind(ev.stamp_ns)
         if self.dock_model is not None:
             changes += self._decide_dock(ev.stamp_ns)
         changes += self._step_lines(range(len(self.lines)), ev.stamp_ns)
@@ -487,6 +501,8 @@ class MonitorCore:
         for line in self.lines:
             if ev.line is None or ev.line == line.config.name:
                 line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin)
+        if ev.line is None or ev.line == alarm_ack.SENSORS:
+            self.sensors_ack = alarm_ack.acknowledge(self.sensors_ack, now, ev.origin)
         return Step(ev.stamp_ns, 'acknowledge', (), self.snapshot(ev.stamp_ns), ())
 
     def _on_clock(self, ev: ClockHealth) -> Step:
@@ -594,6 +610,30 @@ class MonitorCore:
         new = tide_with_sensor(status, self.depth_code, self.depth, self.config.alarm)
         return self._set_component('tide', new, stamp_ns)
 
+    def _sensors_now(self, now: float) -> tuple[Level, str]:
+        """The sensors' common-cause alarm at ``now`` [s] (core.health.sensors_status)."""
+        a = self.config.alarm
+        waiting = [line.config.name for line in self.lines if line.tension_s != line.tension_s]
+        return sensors_status(
+            waiting,
+            len(self.lines),
+            self.depth_s,
+            self.depth_stale,
+            now,
+            self.start_s,
+            a.tension_timeout,
+            a.depth_timeout,
+        )
+
+    def _decide_blind(self, stamp_ns: int) -> list[Change]:
+        """The sensors' common-cause alarm, after the tide's decision, and its
+        acknowledgement state."""
+        now = _stamp_s(stamp_ns)
+        self.sensors_waiting = sum(line.tension_s != line.tension_s for line in self.lines)
+        changes = self._set_component('sensors', self._sensors_now(now), stamp_ns)
+        self.sensors_ack = alarm_ack.step(self.sensors_ack, self.sensors[0], now)
+        return changes
+
     def _decide_sensors(self, stamp_ns: int) -> None:
         """Every line's and the depth sensor's state at a tick (core.sensor)."""
         a = self.config.alarm
@@ -667,7 +707,8 @@ class MonitorCore:
         now = _stamp_s(stamp_ns)
         entered = getattr(self, f'{name}_entered')
         setattr(self, f'{name}_entered', now)
-        return [Change(name, Transition(now, old[0], new[0], new[1], now - entered))]
+        quiet = name in _CONSEQUENCES and quiet_change(old[0], True, new[0], True)
+        return [Change(name, Transition(now, old[0], new[0], new[1], now - entered, quiet))]
 
     def _solve_one(self, line: LineState) -> None:
         """Solve one line at the newest depth (the scalar fast path)."""
@@ -793,8 +834,7 @@ class MonitorCore:
                 ),
                 now,
             )
-            grace = alarm_ack.startup_grace(self.config.alarm)
-            line.ack = alarm_ack.step(line.ack, line.state.level, now, grace)
+            line.ack = alarm_ack.step(line.ack, line.state.level, now, line.state.suppressed)
             changes += [Change(line.config.name, ev) for ev in events]
         return changes
 
@@ -847,10 +887,11 @@ class MonitorCore:
                 self.depth,
                 now - self.depth_s,
                 self.trend.rate,
-                sensor.DEPTH_STATES[self.depth_code],
+                depth_word(self.depth_s, self.depth_code),
                 forecast_word(self.config, self.trend.rate),
             )
         )
+        statuses.append(sensors_component(self.sensors, self.sensors_ack, self.sensors_waiting))
         level, message = self.logger
         statuses.append(
             ComponentStatus(f'{NODE_NAME}: logger', level, message, self.logger_id, ())
@@ -1056,6 +1097,25 @@ def tide_with_sensor(
     if tide[0] == Level.OK:
         return level, text
     return (tide[0] if RANK[tide[0]] >= RANK[level] else level), f'{tide[1]}; {text}'
+
+
+def depth_word(depth_s: float, code: int) -> str:
+    """The depth sensor's ``sensor_state`` word: ``no_data`` before the first depth sample
+    (``depth_s`` NaN), else its state (:data:`catenary_monitor.core.sensor.DEPTH_STATES`)."""
+    return sensor.NO_DATA if depth_s != depth_s else sensor.DEPTH_STATES[code]
+
+
+def sensors_component(
+    state: tuple[Level, str], ack: alarm_ack.AckState, waiting: int
+) -> ComponentStatus:
+    """The ``catenary_monitor: sensors`` status: the common-cause alarm's level and message
+    (:func:`catenary_monitor.core.health.sensors_status`), ``lines_waiting`` (lines with no
+    tension since the start) and the alarm's acknowledgement keys
+    (:func:`.acknowledge.diagnostic_values`)."""
+    values = (('lines_waiting', str(waiting)),) + tuple(
+        alarm_ack.diagnostic_values(ack, state[0], ())
+    )
+    return ComponentStatus(f'{NODE_NAME}: sensors', state[0], state[1], NODE_NAME, values)
 
 
 def dock_component(

@@ -46,6 +46,7 @@ import numpy as np
 __all__ = [
     'LINE_STATES',
     'DEPTH_STATES',
+    'NO_DATA',
     'OK',
     'STUCK',
     'SPIKE',
@@ -74,6 +75,8 @@ OK, STUCK, SPIKE, OVER_MBL, SLACK, PARTED = range(6)
 #: Depth sensor states by code.
 DEPTH_STATES = ('ok', 'stuck', 'spike', 'out_of_range')
 OUT_OF_RANGE = 3
+#: The depth sensor's ``sensor_state`` word before its first sample (no state to decide yet).
+NO_DATA = 'no_data'
 #: Line states that are an ERROR (the others but ``ok`` are WARN).
 ERROR_STATES = (OVER_MBL, SLACK, PARTED)
 _NEVER = -math.inf

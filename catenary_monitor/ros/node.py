@@ -49,7 +49,7 @@ from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension, String
 
 from catenary_monitor import __version__
 from catenary_monitor.core import elastic
-from catenary_monitor.core.acknowledge import ACKNOWLEDGE_TOPIC, parse_request
+from catenary_monitor.core.acknowledge import ACKNOWLEDGE_TOPIC, SENSORS, parse_request
 from catenary_monitor.core.alarms import Level
 from catenary_monitor.core.health import clock_stopped
 from catenary_monitor.core.config import (
@@ -514,9 +514,10 @@ class CatenaryMonitor(Node):
         except ValueError as err:
             self.get_logger().warning(f'acknowledge refused: {err}')
             return
-        if line is not None and line not in self.core.index:
+        if line is not None and line not in self.core.index and line != SENSORS:
             self.get_logger().warning(
-                f'acknowledge refused: unknown line {line!r} (lines: {", ".join(self._names)})'
+                f'acknowledge refused: unknown line {line!r} (lines: {", ".join(self._names)}; '
+                f'{SENSORS}: the sensors alarm)'
             )
             return
         self._record(Acknowledge(self._stamp(), line, origin))
@@ -574,8 +575,12 @@ class CatenaryMonitor(Node):
         return step
 
     def _report(self, change: Change) -> None:
-        """One console line per level change: ``ALARM NAME: OLD -> NEW: message (after N s)``."""
+        """One console line per level change: ``ALARM NAME: OLD -> NEW: message (after N s)``;
+        none for a change the core marks suppressed by design (into or out of a STALE that the
+        one ``sensors`` alarm announces)."""
         ev = change.transition
+        if ev.suppressed:
+            return
         took = '' if ev.duration is None else f' (after {ev.duration:.1f} s)'
         text = f'ALARM {change.component}: {ev.old.name} -> {ev.new.name}: {ev.message}{took}'
         # rclpy fixes the severity per call site: one call per severity.
