@@ -38,6 +38,9 @@ double atan2(double, double);
 
 #define BLK 256
 #define KFAST 6 /* Newton steps on whole blocks before the bracketed per-lane loop */
+/* m = x/B below this: the block's fast steps and state would under- or overflow (m^2, m^4), so
+ * the lane is solved by the scaled per-lane code (uplift_tiny) */
+#define TINY_M 0x1p-200
 #define NOUT 12
 #define LOG_2 0.69314718055994530942
 #define RAD2DEG (180.0 / 3.14159265358979323846)
@@ -52,7 +55,8 @@ enum {
     ST_TENSION = 4,
     ST_DISTANCE = 6,
     ST_MBL = 9,
-    ST_NO_CONVERGENCE = 10
+    ST_NO_CONVERGENCE = 10,
+    ST_OUT_OF_RANGE = 13
 };
 
 typedef struct {
@@ -66,7 +70,7 @@ typedef struct {
         double w[N], h[N], t[N], x[N];                                                             \
         double b[N], e[N], r02[N], len[N], x0[N];                                              \
         double xlo[N], m[N], d[N], d0[N], d_max[N];                                            \
-        int status[N], lift[N], iters[N], cok[N], ldone[N];                                              \
+        int status[N], lift[N], tiny[N], iters[N], cok[N], ldone[N];                                     \
         /* the lifted lanes, gathered */                                                       \
         int idx[N], gdone[N], giters[N];                                                       \
         double ge[N], gr[N], gx0[N], gxlo[N], gm[N], gd[N], gd0[N], gdmax[N];                  \

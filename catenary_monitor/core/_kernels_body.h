@@ -15,8 +15,13 @@ static void SFX(uplift_residual)(const BLOCK_T *k, int i, double eta, double *f,
     double g = 1.0 + e1;
     double ig = 1.0 / g;
     double sx = 0.5 * e1 * (1.0 + ig), cx = 0.5 * (g + ig);
-    double qq = big_x / (k->m[i] * sx);
-    *f = log(em * p * (qq * qq));
+    /* the factors scaled by sc, the power of 2 nearest 1/m (catenary._scale): the same bits
+     * wherever nothing under- or overflows, no underflow of em p ~ m^2 for tiny m */
+    int ex;
+    frexp(k->m[i], &ex);
+    double sc = ldexp(1.0, -ex);
+    double qq = big_x / ((k->m[i] * sc) * sx);
+    *f = log((em * sc) * (p * sc) * (qq * qq));
     *fp = (ed / em + 1.0 / (ed * p) - 2.0 * (cx / sx - 1.0 / big_x)) * d;
 }
 
@@ -48,6 +53,56 @@ static int SFX(uplift_safeguarded)(BLOCK_T *k, int i, int kfast, const Params *p
     }
     k->d[i] = exp(eta);
     return conv;
+}
+
+/* a lane of tiny m = x/B (below TINY_M, hook tensions beyond T/w ~ 1e60 x): the start of
+ * catenary._uplift_setup in d sc (no underflow of m^2), then the bracketed Newton with the
+ * scaled residual; returns 1 if it converged */
+static int SFX(uplift_tiny)(BLOCK_T *k, int i, const Params *par)
+{
+    double e = k->e[i], r02 = k->r02[i], x0 = k->x0[i], m = k->m[i];
+    int ex;
+    frexp(m, &ex);
+    double sc = ldexp(1.0, -ex), ms = m * sc, r02s = r02 * sc;
+    double xlo = log1p(e);
+    double d_max = x0 - xlo;
+    double c1 = x0 * x0 / (d_max * (r02 + d_max));
+    double q = ms * ms / c1;
+    double r02_sq = r02s * r02s;
+    double d = 2.0 * q / (r02s + sqrt(r02_sq + 4.0 * q)) / sc;
+    double frac = d / d_max;
+    if (frac < 1.0) {
+        double c0 = 2.0 * (1.0 + e) * xlo / r02;
+        q = q * exp((frac - 1.0) * log(c0 * c0 / c1));
+        d = 2.0 * q / (r02s + sqrt(r02_sq + 4.0 * q)) / sc;
+    }
+    d = d > 1e-300 ? d : 1e-300;
+    d = d < d_max ? d : d_max;
+    k->xlo[i] = xlo;
+    k->d[i] = d;
+    k->d0[i] = d;
+    k->d_max[i] = d_max;
+    return SFX(uplift_safeguarded)(k, i, 0, par);
+}
+
+/* a tiny lane's uplift state (catenary._lifted_from_d in plain libm: the block's form divides
+ * by X^2, which underflows) */
+static void SFX(tiny_state)(BLOCK_T *k, int i, int has_x)
+{
+    double w = k->w[i], h = k->h[i], b = k->b[i], e = k->e[i], m = k->m[i];
+    double big_x = k->xlo[i] + k->d[i];
+    double s = m / big_x; /* sech u */
+    double half = sinh(0.5 * big_x), sx = sinh(big_x);
+    double cm1 = 2.0 * half * half;
+    double tu = (e - cm1) / sx;
+    tu = tu > 0.0 ? tu : 0.0;
+    double wb = w * b;
+    k->o[O_R][i] = wb * s;
+    k->o[O_F][i] = wb * tu;
+    k->o[O_L][i] = b * (tu * cm1 + sx);
+    k->o[O_ALPHA][i] = atan2(tu, s) * RAD2DEG;
+    k->o[O_BETA][i] = atan2(tu * (1.0 + cm1) + sx, s) * RAD2DEG;
+    k->o[O_TIDE][i] = has_x ? b * s * cm1 - h : NAN;
 }
 
 /* a gathered lane's results back to its place in the block */
@@ -121,6 +176,7 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
         k->len[i] = b * sq; /* sqrt(h (h + 2b)) */
         int lift = (x < xmin) & has_x;
         k->lift[i] = lift;
+        k->tiny[i] = lift & (m < TINY_M);
         k->ldone[i] = !lift;
         k->iters[i] = 0;
         o_xmin[i] = xmin;
@@ -134,10 +190,12 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
      *    is below tol; the step is applied as d *= exp(step) (a degree-6 Taylor polynomial: exact
      *    for the converging steps, positive for any step) */
     int nl = 0, ran = 0, pending = 0; /* pending: lanes the fast steps leave moving */
+    int ntiny = 0;                      /* lifted lanes of tiny m: solved one by one in 3. */
     if (has_x) {
         for (int i = 0; i < nb; i++) {
             k->idx[nl] = i;
-            nl += k->lift[i];
+            nl += k->lift[i] & !k->tiny[i];
+            ntiny += k->tiny[i];
         }
         /* the lanes being solved: gathered densely into the g arrays, or, when every lane of the
          * block is lifted (the sweep's blocks), the block's own arrays, until a compaction
@@ -280,10 +338,11 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
     }
     /* 3. the few lanes still moving: bracketed Newton, one at a time */
     int failed = 0;
-    if (pending)
+    if (pending | ntiny)
         for (int i = 0; i < nb; i++)
             if (!k->ldone[i]) {
-                k->ldone[i] = SFX(uplift_safeguarded)(k, i, ran, par);
+                k->ldone[i] = k->tiny[i] ? SFX(uplift_tiny)(k, i, par)
+                                         : SFX(uplift_safeguarded)(k, i, ran, par);
                 failed += !k->ldone[i];
             }
 
@@ -313,6 +372,9 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
         o_f[i] = wb * tu;
         o_tide[i] = has_x ? b * s * cm1 - h : NAN; /* a (cosh(x/a) - 1) - h, a = R/w */
     }
+    for (int i = 0; ntiny && i < nb; i++)
+        if (k->tiny[i])
+            SFX(tiny_state)(k, i, has_x);
     if (has_x) {
         int nscalar = 0;
         CM_SIMD_REDUCTION(nscalar)
@@ -350,4 +412,22 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
     } else
         for (int i = 0; i < nb; i++)
             o_load[i] = NAN;
+
+    /* 6. never status 0 with a value that is not finite: a solved lane whose results (those
+     *    that apply) under- or overflowed is beyond float64 range (Status.OUT_OF_RANGE); the one
+     *    exception is a tide margin of +inf, the depth a grounded chain reaches when x/a is
+     *    beyond exp's range (a real margin larger than float64 holds: no tide lifts it) */
+    CM_SIMD
+    for (int i = 0; i < nb; i++) {
+        int fin = (fabs(o_r[i]) <= DBL_MAX) & (fabs(o_t[i]) <= DBL_MAX) &
+                  (fabs(o_xmin[i]) <= DBL_MAX) & (fabs(o_l[i]) <= DBL_MAX) &
+                  (fabs(o_beta[i]) <= DBL_MAX) & (fabs(o_alpha[i]) <= DBL_MAX) &
+                  (fabs(o_f[i]) <= DBL_MAX);
+        int fin_x = (fabs(o_am[i]) <= DBL_MAX) & (o_tide[i] >= -DBL_MAX) &
+                    (fabs(o_load[i]) <= DBL_MAX);
+        fin &= has_x ? fin_x : 1;
+        fin &= has_mbl ? fabs(o_sf[i]) <= DBL_MAX : 1;
+        int st = k->status[i];
+        k->status[i] = st == 0 && !fin ? ST_OUT_OF_RANGE : st;
+    }
 }

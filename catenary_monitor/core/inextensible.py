@@ -299,14 +299,20 @@ def _solve_valid(problem: str, full: dict[str, np.ndarray], scalar: bool) -> Sol
         conv &= _fill_margins(out, w, h, x)
     if 'mbl' in a:
         out['safety_factor'] = a['mbl'] / out['top_tension']
-    bad = ~conv
+    keys = _keys(problem, x is not None, 'mbl' in a)
+    # never status 0 with inf or NaN: a solved element whose results under- or overflowed
+    # (a tide margin of +inf excepted: result.in_range)
+    beyond = np.zeros(n, dtype=bool)
+    for k in keys:
+        beyond |= ~(np.isfinite(out[k]) | (out[k] == np.inf if k == 'tide_margin' else False))
+    bad = ~conv | beyond
     if bad.any():
         for v in out.values():
             v[bad] = np.nan
         sub = status[ok]
-        sub[bad] = Status.NO_CONVERGENCE
+        sub[beyond] = Status.OUT_OF_RANGE
+        sub[~conv] = Status.NO_CONVERGENCE
         status[ok] = sub
-    keys = _keys(problem, x is not None, 'mbl' in a)
     result: dict[str, Any] = {}
     for k in ALL_KEYS:
         full_v = np.full(shape, np.nan)
@@ -448,28 +454,28 @@ def _solve_scalar(
             )
     if mbl is not None:
         safety = mbl / t
-    return _new_tuple(
-        SolveResult,
-        (
-            r,
-            t,
-            x_min,
-            length,
-            math.degrees(beta),
-            math.degrees(alpha),
-            uplift,
-            anchor_margin,
-            tide_margin,
-            load_margin,
-            _NAN,
-            safety,
-            0,
-            problem,
-            keys,
-            _MODEL,
-            _METHOD,
-        ),
+    values = (
+        r,
+        t,
+        x_min,
+        length,
+        math.degrees(beta),
+        math.degrees(alpha),
+        uplift,
+        anchor_margin,
+        tide_margin,
+        load_margin,
+        _NAN,
+        safety,
     )
+    if not all(
+        isfinite(v) or (v == math.inf and k == 'tide_margin')
+        for v, k in zip(values, ALL_KEYS)
+        if k in keys
+    ):
+        # never status 0 with inf or NaN: a result under- or overflowed
+        return _new_tuple(SolveResult, _NAN12 + (int(Status.OUT_OF_RANGE), problem, keys) + _TAIL)
+    return _new_tuple(SolveResult, values + (0, problem, keys, _MODEL, _METHOD))
 
 
 _ONE = kernels._k.solve_one if kernels.AVAILABLE else None
