@@ -355,7 +355,10 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
         double et = expm1(xt);
         double g = 1.0 + et;
         double rr = 1.0 / (g * xt * et * (g + 1.0));
-        double ig = et <= DBL_MAX ? xt * et * (g + 1.0) * rr : 0.0; /* 1 / g, overflow kept */
+        /* 1 / g; 0 where the shared denominator overflows (x/a > ~352, only grounded lanes get
+         * there: a lifted X is below acosh(1 + 2^53)): 1/g < 1e-153 then, nothing next to 1 in
+         * sinh and cosh - 1, where inf * 0 made them NaN (the grounded tide margin) */
+        double ig = rr > 0.0 ? xt * et * (g + 1.0) * rr : 0.0;
         double isx = 2.0 * g * g * xt * rr;   /* 1 / sinh */
         double sx = 0.5 * et * (1.0 + ig);    /* sinh */
         double cm1 = et < 1.0 ? 0.5 * et * et * ig : 0.5 * et * (1.0 - ig); /* cosh - 1 */
@@ -414,20 +417,31 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
             o_load[i] = NAN;
 
     /* 6. never status 0 with a value that is not finite: a solved lane whose results (those
-     *    that apply) under- or overflowed is beyond float64 range (Status.OUT_OF_RANGE); the one
-     *    exception is a tide margin of +inf, the depth a grounded chain reaches when x/a is
-     *    beyond exp's range (a real margin larger than float64 holds: no tide lifts it) */
-    CM_SIMD
+     *    that apply) under- or overflowed is beyond float64 range (Status.OUT_OF_RANGE); the
+     *    exceptions are the tide and load margins at +inf (result.INF_MARGINS): a grounded
+     *    chain's a (cosh(x/a) - 1) or critical tension beyond float64, real margins no tide or
+     *    load reaches */
+    int nfar = 0; /* lanes whose tide margin is +inf: 7. tells the finite ones */
+    CM_SIMD_REDUCTION(nfar)
     for (int i = 0; i < nb; i++) {
         int fin = (fabs(o_r[i]) <= DBL_MAX) & (fabs(o_t[i]) <= DBL_MAX) &
                   (fabs(o_xmin[i]) <= DBL_MAX) & (fabs(o_l[i]) <= DBL_MAX) &
                   (fabs(o_beta[i]) <= DBL_MAX) & (fabs(o_alpha[i]) <= DBL_MAX) &
                   (fabs(o_f[i]) <= DBL_MAX);
         int fin_x = (fabs(o_am[i]) <= DBL_MAX) & (o_tide[i] >= -DBL_MAX) &
-                    (fabs(o_load[i]) <= DBL_MAX);
+                    (o_load[i] >= -DBL_MAX);
         fin &= has_x ? fin_x : 1;
         fin &= has_mbl ? fabs(o_sf[i]) <= DBL_MAX : 1;
         int st = k->status[i];
         k->status[i] = st == 0 && !fin ? ST_OUT_OF_RANGE : st;
+        nfar += o_tide[i] > DBL_MAX;
     }
+    /* 7. a grounded lane with x/a beyond exp's range (> 709.78): cosh - 1 overflowed in 4.,
+     *    but a (cosh(x/a) - 1) stays finite up to x/a ~ 710 + log(2/a) for a < 2 m; it is
+     *    catenary.depth_reached's 2 a sinh(x/2a)^2 (+inf again where that overflows) */
+    for (int i = 0; nfar && i < nb; i++)
+        if (o_tide[i] > DBL_MAX) {
+            double half = sinh(0.5 * k->m[i]);
+            o_tide[i] = 2.0 * k->b[i] * half * half - k->h[i];
+        }
 }

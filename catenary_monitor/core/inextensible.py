@@ -19,7 +19,7 @@ import numpy as np
 
 from catenary_monitor.core import catenary as cat
 from catenary_monitor.core import kernels
-from catenary_monitor.core.result import ALL_KEYS, SolveResult, Status
+from catenary_monitor.core.result import ALL_KEYS, INF_MARGINS, SolveResult, Status
 
 ArrayLike = Union[float, int, np.ndarray, list]
 
@@ -301,10 +301,10 @@ def _solve_valid(problem: str, full: dict[str, np.ndarray], scalar: bool) -> Sol
         out['safety_factor'] = a['mbl'] / out['top_tension']
     keys = _keys(problem, x is not None, 'mbl' in a)
     # never status 0 with inf or NaN: a solved element whose results under- or overflowed
-    # (a tide margin of +inf excepted: result.in_range)
+    # (a margin of +inf excepted, INF_MARGINS: result.in_range)
     beyond = np.zeros(n, dtype=bool)
     for k in keys:
-        beyond |= ~(np.isfinite(out[k]) | (out[k] == np.inf if k == 'tide_margin' else False))
+        beyond |= ~(np.isfinite(out[k]) | ((out[k] == np.inf) & (k in INF_MARGINS)))
     bad = ~conv | beyond
     if bad.any():
         for v in out.values():
@@ -445,7 +445,10 @@ def _solve_scalar(
                 )
         anchor_margin = x - x_min
         a_now = r / w
-        half = math.sinh(0.5 * x / a_now)
+        try:
+            half = math.sinh(0.5 * x / a_now)
+        except OverflowError:  # x/a > ~1421: the depth is beyond float64, as numpy's inf
+            half = math.inf
         tide_margin = 2.0 * a_now * half * half - h
         load_margin = w * (cat.critical_parameter_scalar(h, x) + h) - t
         if load_margin != load_margin:  # NaN: the load-margin solve did not converge
@@ -469,7 +472,7 @@ def _solve_scalar(
         safety,
     )
     if not all(
-        isfinite(v) or (v == math.inf and k == 'tide_margin')
+        isfinite(v) or (v == math.inf and k in INF_MARGINS)
         for v, k in zip(values, ALL_KEYS)
         if k in keys
     ):

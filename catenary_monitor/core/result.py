@@ -7,7 +7,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-__all__ = ['Status', 'STATUS_MESSAGES', 'ALL_KEYS', 'SolveResult', 'in_range']
+__all__ = ['Status', 'STATUS_MESSAGES', 'ALL_KEYS', 'INF_MARGINS', 'SolveResult', 'in_range']
 
 
 class Status(IntEnum):
@@ -76,6 +76,11 @@ ALL_KEYS = (
     'safety_factor',
 )
 
+#: The keys a solved element may report as +inf: margins beyond float64 on the safe side (a
+#: grounded chain's ``a (cosh(x/a) - 1)`` or critical hook tension ``~ w x^2 / 2h`` overflows),
+#: real margins no tide or load reaches.  Every other value of status 0 is finite.
+INF_MARGINS = ('tide_margin', 'load_margin')
+
 
 class SolveResult(NamedTuple):
     """Solution of one catenary problem, element by element (SI units, angles in degrees).
@@ -130,14 +135,14 @@ def in_range(result: SolveResult) -> SolveResult:
     finite turned into :attr:`Status.OUT_OF_RANGE` with NaN values: never status 0 with inf or
     NaN.  Returns ``result`` itself when there is none.
 
-    The one exception is a ``tide_margin`` of +inf: a grounded chain whose span x/a is beyond
-    exp's range reaches a depth float64 cannot hold, a real margin (no tide lifts it).
+    The exceptions are the margins of :data:`INF_MARGINS` at +inf: real margins beyond float64
+    (a grounded chain whose ``a (cosh(x/a) - 1)`` or critical tension overflows).
     """
     status = np.asarray(result.status)
     beyond = np.zeros(status.shape, dtype=bool)
     for key in result.keys:
         value = np.asarray(getattr(result, key), dtype=float)
-        beyond |= ~(np.isfinite(value) | ((value == np.inf) & (key == 'tide_margin')))
+        beyond |= ~(np.isfinite(value) | ((value == np.inf) & (key in INF_MARGINS)))
     beyond &= status == 0
     if not beyond.any():
         return result
