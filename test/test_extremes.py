@@ -2,14 +2,17 @@
 paths (C kernel, numpy, plain floats) against mpmath, and never status 0 with inf or NaN."""
 
 import itertools
+import math
 
 import mpmath as mp
 import numpy as np
 import pytest
 
+import reference as ref
 from catenary_monitor import solve
-from catenary_monitor.core import inextensible
-from catenary_monitor.core.result import INF_MARGINS, Status
+from catenary_monitor.core import inextensible, kernels
+from catenary_monitor.core import solve as solve_module
+from catenary_monitor.core.result import ALL_KEYS, INF_MARGINS, Status
 
 W, H, X = 1300.0, 20.85, 121.06
 
@@ -100,3 +103,175 @@ def test_out_of_range_status_where_float64_cannot_hold_the_answer():
     r = solve(1e-300, 20.85, tension=1e200, anchor_distance=100.0)
     assert r.status == Status.OUT_OF_RANGE and np.isnan(r.horizontal_tension)
     assert 'float64' in r.message
+
+
+# --------------------------------------------------------------------------------------------
+# Grounded chains at extreme x/a: status 0, every value right (mpmath), +inf only for a margin
+# beyond float64.  The kernel once made x/a in (352, 709.8) NaN (an overflowed shared
+# denominator, inf * 0) and blanked the lane as OUT_OF_RANGE (test_uncertainty's T = 1.01 w h).
+# --------------------------------------------------------------------------------------------
+DBL_MAX = float(np.finfo(float).max)
+LIFTED = (1300.0, 20.85, 1623.5e3, 121.06)  # the paper's table-4 scene: anchor lifted
+
+
+def _b(w, h, t):
+    return mp.mpf(t) / mp.mpf(w) - mp.mpf(h)  # anchor-end tension / w, exact at 50 digits
+
+
+def _critical(w, h, x):
+    """Critical hook tension: a (cosh(x/a) - 1) = h, by bisection in log(x/2a) (wide bracket:
+    x/h up to 1e300 and beyond); 50 digits."""
+    c = mp.mpf(h) / mp.mpf(x)
+
+    def f(ld):
+        return 2 * mp.log(mp.sinh(mp.exp(ld))) - ld - mp.log(c)
+
+    lo, hi = mp.mpf(-1600), mp.mpf(10)
+    for _ in range(400):
+        mid = (lo + hi) / 2
+        lo, hi = (lo, mid) if f(mid) > 0 else (mid, hi)
+    return w * (x / (2 * mp.exp((lo + hi) / 2)) + h)
+
+
+def _float_or_inf(v):
+    return math.inf if v > DBL_MAX else float(v)
+
+
+def grounded_reference(w, h, t, x):
+    """Every value of a grounded chain (x >= x_min) from reference.py's problem-3 solution and
+    the margins' definitions, at 50 digits; a margin beyond float64 is +inf."""
+    with mp.workdps(50):
+        b = _b(w, h, t)
+        z = mp.mpf(x) / b
+        assert z > 1 and mp.mpf(x) >= b * mp.acosh(1 + mp.mpf(h) / b)  # grounded
+        out = {k: float(v) for k, v in ref.grounded(w, h, b).items()}
+        out['top_tension'] = float(t)
+        out['anchor_angle_deg'] = out['uplift_force'] = 0.0
+        out['anchor_margin'] = float(mp.mpf(x) - b * mp.acosh(1 + mp.mpf(h) / b))
+        if mp.log(b / 2) + z > 720:  # a (cosh z - 1) beyond float64 by far
+            out['tide_margin'] = math.inf
+        else:
+            out['tide_margin'] = _float_or_inf(b * (mp.cosh(z) - 1) - h)
+        out['load_margin'] = _float_or_inf(_critical(w, h, x) - t)
+    return out
+
+
+def _near_vertical(w, h, ulps):
+    """A hook tension ``ulps`` float steps above w h."""
+    t = w * h
+    for _ in range(ulps):
+        t = math.nextafter(t, math.inf)
+    return t
+
+
+_B = 0.01 * 20.85  # T = 1.01 w h: a = 0.2085 m
+GROUNDED = {
+    'uncertainty case (x/a 575)': (1300.0, 20.85, 1.01 * 1300.0 * 20.85, 120.0),
+    'x/a 400': (1300.0, 20.85, 1.01 * 1300.0 * 20.85, 400 * _B),
+    'x/a 700': (1300.0, 20.85, 1.01 * 1300.0 * 20.85, 700 * _B),
+    'x/a 709.9 (exp overflows, depth finite)': (1300.0, 20.85, 1.01 * 1300.0 * 20.85, 709.9 * _B),
+    'x/a 1e4': (1300.0, 20.85, 1.01 * 1300.0 * 20.85, 1e4 * _B),
+    'x/a 1e300 (load margin beyond float64)': (1300.0, 20.85, 1.01 * 1300.0 * 20.85, 1e300 * _B),
+    'x/a 1e300 (load margin finite)': (1.0, 1e-280, 1e-280 * (1.0 + 1e-10), 1e-290 * 1e300),
+    'T 2 ulps above w h': (1300.0, 20.85, _near_vertical(1300.0, 20.85, 2), 120.0),
+    'T 1 ulp above w h, dock span': (1300.0, 20.85, _near_vertical(1300.0, 20.85, 1), 121.06),
+}
+#: relative accuracy (forces, distances, angles); margins: of the larger term
+REL = 1e-12
+MARGIN_SCALE = {'anchor_margin': 'x', 'tide_margin': 'h', 'load_margin': 't'}
+
+
+def _check_values(name, r, expect, inputs):
+    w, h, t, x = inputs
+    assert r.status == 0, (name, r.message)
+    for key in r.keys:
+        got, want = float(getattr(r, key)), expect[key]
+        if math.isinf(want):
+            assert got == want, (name, key, got)
+            assert key in INF_MARGINS
+            continue
+        assert math.isfinite(got), (name, key, got)
+        scale = max(abs(want), {'x': x, 'h': h, 't': t}.get(MARGIN_SCALE.get(key, ''), 0.0))
+        assert abs(got - want) <= REL * scale, (name, key, got, want)
+
+
+@pytest.fixture(params=kernels.supported() or ['none'])
+def isa(request):
+    """Each instruction set of the kernel this CPU runs (as test_kernels.py)."""
+    if request.param == 'none':
+        pytest.fail('no kernel to test: python setup.py build_ext --inplace')
+    before = kernels.isa()
+    kernels.set_isa(request.param)
+    yield request.param
+    kernels.set_isa(before)
+
+
+@pytest.fixture
+def kernel_off(monkeypatch):
+    """solve() without the C kernel: arrays take the numpy path (catenary.py), one element the
+    plain-float path; a kernel call fails the test (no pass by construction)."""
+
+    def no_kernel(*args, **kwargs):
+        raise AssertionError('the C kernel was called')
+
+    monkeypatch.setattr(kernels, 'AVAILABLE', False)
+    monkeypatch.setattr(kernels, 'solve_arrays', no_kernel)
+    monkeypatch.setattr(kernels, 'solve_one', no_kernel)
+    monkeypatch.setattr(solve_module, '_ONE', None)
+    monkeypatch.setattr(inextensible, '_ONE', None)
+    return solve.__wrapped__  # the Python solve(): the kernel's Entry would take one element
+
+
+def _array_with_lifted_lanes(inputs, n=600, at=(0, 257, 599)):
+    """The scene at a few places of an array of lifted dock lanes (several blocks, a partial
+    one, gathered lifted lanes next to the grounded one)."""
+    cols = [np.full(n, v) for v in LIFTED]
+    for c, v in zip(cols, inputs):
+        c[list(at)] = v
+    return cols, at
+
+
+def _each_in_array(r, at):
+    for i in at:
+        yield r._replace(
+            **{k: float(getattr(r, k)[i]) for k in ALL_KEYS}, status=int(r.status[i])
+        )
+
+
+@pytest.mark.parametrize('name', list(GROUNDED))
+def test_grounded_extreme_span_kernel(name, isa):
+    """One element (solve_one) and arrays on every instruction set: status 0, values right."""
+    inputs = GROUNDED[name]
+    w, h, t, x = inputs
+    expect = grounded_reference(*inputs)
+    _check_values(name, solve(w, h, tension=t, anchor_distance=x), expect, inputs)
+    cols, at = _array_with_lifted_lanes(inputs)
+    r = solve(cols[0], cols[1], tension=cols[2], anchor_distance=cols[3])
+    assert (r.status == 0).all() and (r.uplift_force[1:-1:100] > 0).all()
+    for one in _each_in_array(r, at):
+        _check_values(name + ' (array)', one, expect, inputs)
+
+
+@pytest.mark.parametrize('name', list(GROUNDED))
+def test_grounded_extreme_span_without_the_kernel(name, kernel_off):
+    """The numpy path (arrays) and the plain-float path (one element), the kernel off."""
+    inputs = GROUNDED[name]
+    w, h, t, x = inputs
+    expect = grounded_reference(*inputs)
+    one = kernel_off(w, h, tension=t, anchor_distance=x)
+    _check_values(name + ' (plain floats)', one, expect, inputs)
+    # the plain-float path itself (no OverflowError handed on to numpy): the same result
+    direct = inextensible._solve_scalar('tension', w, h, t, x)
+    assert direct.status == 0 and all(getattr(direct, k) == getattr(one, k) for k in one.keys)
+    cols, at = _array_with_lifted_lanes(inputs)
+    r = kernel_off(cols[0], cols[1], tension=cols[2], anchor_distance=cols[3])
+    assert (r.status == 0).all()
+    for one in _each_in_array(r, at):
+        _check_values(name + ' (numpy)', one, expect, inputs)
+
+
+def test_uncertainty_scene_keeps_its_values():
+    """test_uncertainty's grounded near-vertical chain: status 0 and a finite tide margin
+    (~9.4e248 m) on the kernel, not OUT_OF_RANGE with NaN."""
+    r = solve(1300.0, 20.85, tension=1.01 * 1300.0 * 20.85, anchor_distance=120.0)
+    assert r.status == 0 and 9e248 < r.tide_margin < 1e249

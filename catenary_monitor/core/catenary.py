@@ -93,10 +93,11 @@ class Grounded(NamedTuple):
 def grounded(a: Any, h: Any, xp: Any = np) -> Grounded:
     """Suspended span, length and top angle of a catenary with its vertex at the anchor.
 
-    ``x_min = a acosh(1 + h/a)``, ``L = sqrt(h (h + 2a))``, ``tan(beta) = L / a``.
+    ``x_min = a acosh(1 + h/a)``, ``L = sqrt(h (h + 2a))``, ``tan(beta) = L / a``.  ``L`` is
+    taken as ``sqrt(h) sqrt(h + 2a)``: ``h (h + 2a)`` underflowed to 0 for h < ~1e-154 m.
     """
     x_min = a * acosh1p(h / a, xp)
-    length = xp.sqrt(h * (h + 2.0 * a))
+    length = xp.sqrt(h) * xp.sqrt(h + 2.0 * a)
     return Grounded(x_min, length, xp.arctan2(length, a))
 
 

@@ -426,7 +426,7 @@ def _solve_scalar(
         t = w * (b + h)
     z = h / b
     x_min = b * math.log1p(z + math.sqrt(z * (2.0 + z)))
-    length = math.sqrt(h * (h + 2.0 * b))
+    length = math.sqrt(h) * math.sqrt(h + 2.0 * b)  # cat.grounded's form: no underflow
     beta = math.atan2(length, b)
     r, alpha, uplift = w * b, 0.0, 0.0
     anchor_margin = tide_margin = load_margin = safety = _NAN
