@@ -275,3 +275,17 @@ def test_uncertainty_scene_keeps_its_values():
     (~9.4e248 m) on the kernel, not OUT_OF_RANGE with NaN."""
     r = solve(1300.0, 20.85, tension=1.01 * 1300.0 * 20.85, anchor_distance=120.0)
     assert r.status == 0 and 9e248 < r.tide_margin < 1e249
+
+
+def test_one_out_of_range_lane_among_solved_ones(isa):
+    """The kernel finds a lane beyond float64 in a block of ordinary ones (a block's sum of
+    outputs stops being finite; then each lane is classified): that lane OUT_OF_RANGE, the
+    others unchanged, bit for bit."""
+    cols, at = _array_with_lifted_lanes((1e-300, 20.85, 1e200, 100.0), at=(300,))
+    r = solve(cols[0], cols[1], tension=cols[2], anchor_distance=cols[3])
+    clean = solve(*(np.delete(c, 300) for c in cols[:2]), tension=np.delete(cols[2], 300),
+                  anchor_distance=np.delete(cols[3], 300))  # fmt: skip
+    assert r.status[300] == Status.OUT_OF_RANGE and np.isnan(r.horizontal_tension[300])
+    assert (np.delete(r.status, 300) == 0).all() and (clean.status == 0).all()
+    for k in r.keys:
+        np.testing.assert_array_equal(np.delete(getattr(r, k), 300), getattr(clean, k))

@@ -70,7 +70,7 @@ typedef struct {
         double w[N], h[N], t[N], x[N];                                                             \
         double b[N], e[N], r02[N], len[N], x0[N];                                              \
         double xlo[N], m[N], d[N], d0[N], d_max[N];                                            \
-        int status[N], lift[N], tiny[N], iters[N], cok[N], ldone[N];                                     \
+        int status[N], lift[N], iters[N], cok[N], ldone[N];                                    \
         /* the lifted lanes, gathered */                                                       \
         int idx[N], gdone[N], giters[N];                                                       \
         double ge[N], gr[N], gx0[N], gxlo[N], gm[N], gd[N], gd0[N], gdmax[N];                  \
@@ -132,7 +132,8 @@ static double critical_scalar(double h, double x, const Params *par)
 
 #define CM_PRAGMA(x) _Pragma(#x)
 #define CM_SIMD CM_PRAGMA(omp simd)
-#define CM_SIMD_REDUCTION(v) CM_PRAGMA(omp simd reduction(+ : v))
+#define CM_SIMD_REDUCTION(...) CM_PRAGMA(omp simd reduction(+ : __VA_ARGS__))
+#define CM_SIMD_WITH(clauses) CM_PRAGMA(omp simd clauses)
 #ifdef CM_MVEC
 #define BLOCK_T Block
 /* Every vector loop runs over a multiple of 16 lanes (stand-in lanes fill the rest: AVX-512
@@ -162,7 +163,9 @@ static double critical_scalar(double h, double x, const Params *par)
 #undef CM_SIMD
 #undef CM_SIMD_REDUCTION
 #define CM_SIMD
-#define CM_SIMD_REDUCTION(v)
+#define CM_SIMD_REDUCTION(...)
+#undef CM_SIMD_WITH
+#define CM_SIMD_WITH(clauses)
 #pragma GCC push_options
 #pragma GCC optimize("no-tree-vectorize")
 #undef BLOCK_T

@@ -105,6 +105,34 @@ static void SFX(tiny_state)(BLOCK_T *k, int i, int has_x)
     k->o[O_TIDE][i] = has_x ? b * s * cm1 - h : NAN;
 }
 
+/* 6. of block: lanes of status 0 whose results are not all finite become OUT_OF_RANGE (the tide
+ * and load margins may be +inf); then a grounded lane with x/a beyond exp's range (> 709.78),
+ * whose cosh - 1 overflowed in 4., gets the finite a (cosh(x/a) - 1) that lasts up to
+ * x/a ~ 710 + log(2/a) for a < 2 m: catenary.depth_reached's 2 a sinh(x/2a)^2 (+inf again
+ * where that overflows) */
+static void SFX(in_range)(BLOCK_T *k, int nb, const Params *par)
+{
+    const int has_x = par->has_x, has_mbl = par->has_mbl;
+    for (int i = 0; i < nb; i++) {
+        double *const *o = k->o;
+        int fin = (fabs(o[O_R][i]) <= DBL_MAX) & (fabs(o[O_T][i]) <= DBL_MAX) &
+                  (fabs(o[O_XMIN][i]) <= DBL_MAX) & (fabs(o[O_L][i]) <= DBL_MAX) &
+                  (fabs(o[O_BETA][i]) <= DBL_MAX) & (fabs(o[O_ALPHA][i]) <= DBL_MAX) &
+                  (fabs(o[O_F][i]) <= DBL_MAX);
+        if (has_x)
+            fin &= (fabs(o[O_AM][i]) <= DBL_MAX) & (o[O_TIDE][i] >= -DBL_MAX) &
+                   (o[O_LOAD][i] >= -DBL_MAX);
+        if (has_mbl)
+            fin &= fabs(o[O_SF][i]) <= DBL_MAX;
+        if (k->status[i] == 0 && !fin)
+            k->status[i] = ST_OUT_OF_RANGE;
+        if (o[O_TIDE][i] > DBL_MAX) {
+            double half = sinh(0.5 * k->m[i]);
+            o[O_TIDE][i] = 2.0 * k->b[i] * half * half - k->h[i];
+        }
+    }
+}
+
 /* a gathered lane's results back to its place in the block */
 static inline void SFX(lane_home)(BLOCK_T *k, int j)
 {
@@ -134,7 +162,10 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
     /* 1. validation, the grounded chain (problems 1 and 3), the uplift start */
     const double *restrict s_w = k->src[0], *restrict s_h = k->src[1], *restrict s_t = k->src[2];
     const double *restrict s_x = k->src[3], *restrict s_mbl = k->src[4];
-    CM_SIMD
+    /* odd: a sum of the outputs, finite unless one is inf or NaN (or the sum overflows): then
+     * 6. classifies the lanes; m_min: the smallest m, for the tiny lanes */
+    double odd = 0.0, m_min = INFINITY;
+    CM_SIMD_WITH(reduction(+ : odd) reduction(min : m_min))
     for (int i = 0; i < nb; i++) {
         double w = s_w[i], h = s_h[i], t = s_t[i];
         double x = s_x[i], mbl = s_mbl[i]; /* 1.0 when not given */
@@ -176,26 +207,35 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
         k->len[i] = b * sq; /* sqrt(h (h + 2b)) */
         int lift = (x < xmin) & has_x;
         k->lift[i] = lift;
-        k->tiny[i] = lift & (m < TINY_M);
         k->ldone[i] = !lift;
         k->iters[i] = 0;
+        m_min = m < m_min ? m : m_min;
+        double sf = mbl / t;
+        odd += xmin + sf; /* x - xmin is finite with xmin */
         o_xmin[i] = xmin;
         o_t[i] = t;
         o_gl[i] = NAN;
-        o_sf[i] = has_mbl ? mbl / t : NAN;
+        o_sf[i] = has_mbl ? sf : NAN;
         o_am[i] = has_x ? x - xmin : NAN;
     }
+
+    /* the lifted lanes of tiny m leave lift[] (the vector Newton's lanes): solved one by one
+     * in 3., their state by tiny_state */
+    int ntiny = 0;
+    for (int i = 0; m_min < TINY_M && i < nb; i++)
+        if (k->lift[i] & (k->m[i] < TINY_M)) {
+            k->lift[i] = 0;
+            ntiny++;
+        }
 
     /* 2. Newton in eta = log(d) on the lifted lanes, gathered densely, each frozen once its step
      *    is below tol; the step is applied as d *= exp(step) (a degree-6 Taylor polynomial: exact
      *    for the converging steps, positive for any step) */
     int nl = 0, ran = 0, pending = 0; /* pending: lanes the fast steps leave moving */
-    int ntiny = 0;                      /* lifted lanes of tiny m: solved one by one in 3. */
     if (has_x) {
         for (int i = 0; i < nb; i++) {
             k->idx[nl] = i;
-            nl += k->lift[i] & !k->tiny[i];
-            ntiny += k->tiny[i];
+            nl += k->lift[i];
         }
         /* the lanes being solved: gathered densely into the g arrays, or, when every lane of the
          * block is lifted (the sweep's blocks), the block's own arrays, until a compaction
@@ -341,13 +381,14 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
     if (pending | ntiny)
         for (int i = 0; i < nb; i++)
             if (!k->ldone[i]) {
-                k->ldone[i] = k->tiny[i] ? SFX(uplift_tiny)(k, i, par)
-                                         : SFX(uplift_safeguarded)(k, i, ran, par);
+                k->ldone[i] = k->lift[i] ? SFX(uplift_safeguarded)(k, i, ran, par)
+                                         : SFX(uplift_tiny)(k, i, par); /* a tiny lane */
                 failed += !k->ldone[i];
             }
 
-    /* 4. uplift state, margins and the load-margin solve from its table start */
-    CM_SIMD
+    /* 4. uplift state, margins and the load-margin solve from its table start (a tiny lane is
+     *    computed as grounded here, then by tiny_state) */
+    CM_SIMD_REDUCTION(odd)
     for (int i = 0; i < nb; i++) {
         double w = k->w[i], h = k->h[i], b = k->b[i], e = k->e[i], m = k->m[i];
         int lift = k->lift[i];
@@ -368,19 +409,25 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
         double wb = w * b;
         double r = wb * s;
         double len = k->len[i];
+        double l = lift ? b * (tu * cm1 + sx) : len, f = wb * tu;
+        double tide = b * s * cm1 - h; /* a (cosh(x/a) - 1) - h, a = R/w */
+        /* the angles need no term: atan2 is NaN only for a NaN argument, and then r, l or f
+         * is not finite (tu is never NaN) */
+        odd += r + l + f + tide;
         o_r[i] = r;
-        o_l[i] = lift ? b * (tu * cm1 + sx) : len;
+        o_l[i] = l;
+        o_f[i] = f;
+        o_tide[i] = has_x ? tide : NAN;
         o_beta[i] = atan2(lift ? tu * (1.0 + cm1) + sx : len, lift ? s : b) * RAD2DEG;
         o_alpha[i] = atan2(tu, s) * RAD2DEG;
-        o_f[i] = wb * tu;
-        o_tide[i] = has_x ? b * s * cm1 - h : NAN; /* a (cosh(x/a) - 1) - h, a = R/w */
     }
     for (int i = 0; ntiny && i < nb; i++)
-        if (k->tiny[i])
+        if (k->lift[i] < ((k->x[i] < o_xmin[i]) & has_x)) /* lifted, not in lift[]: tiny */
             SFX(tiny_state)(k, i, has_x);
+    int nodd = ntiny; /* tiny_state's values are not in odd */
     if (has_x) {
         int nscalar = 0;
-        CM_SIMD_REDUCTION(nscalar)
+        CM_SIMD_REDUCTION(nscalar, odd)
         for (int i = 0; i < nb; i++) {
             /* load margin: a_crit from the fine table (exact to ~1e-14 inside it) */
             double h = k->h[i], x = k->x[i];
@@ -399,13 +446,16 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
             int cok = inside & (par->maxiter >= 1);
             k->cok[i] = cok;
             nscalar += !cok;
-            o_load[i] = k->w[i] * (a_crit + h) - k->t[i];
+            double load = k->w[i] * (a_crit + h) - k->t[i];
+            odd += load;
+            o_load[i] = load;
         }
         /* 5. load-margin lanes outside the table or not converged: the scalar solve */
         for (int i = 0; nscalar && i < nb; i++)
             if (!k->cok[i] && !k->status[i]) {
                 double a_crit = critical_scalar(k->h[i], k->x[i], par);
                 o_load[i] = k->w[i] * (a_crit + k->h[i]) - k->t[i];
+                nodd += !(o_load[i] - o_load[i] == 0.0);
                 if (a_crit != a_crit)
                     k->status[i] = ST_NO_CONVERGENCE;
             }
@@ -420,28 +470,8 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
      *    that apply) under- or overflowed is beyond float64 range (Status.OUT_OF_RANGE); the
      *    exceptions are the tide and load margins at +inf (result.INF_MARGINS): a grounded
      *    chain's a (cosh(x/a) - 1) or critical tension beyond float64, real margins no tide or
-     *    load reaches */
-    int nfar = 0; /* lanes whose tide margin is +inf: 7. tells the finite ones */
-    CM_SIMD_REDUCTION(nfar)
-    for (int i = 0; i < nb; i++) {
-        int fin = (fabs(o_r[i]) <= DBL_MAX) & (fabs(o_t[i]) <= DBL_MAX) &
-                  (fabs(o_xmin[i]) <= DBL_MAX) & (fabs(o_l[i]) <= DBL_MAX) &
-                  (fabs(o_beta[i]) <= DBL_MAX) & (fabs(o_alpha[i]) <= DBL_MAX) &
-                  (fabs(o_f[i]) <= DBL_MAX);
-        int fin_x = (fabs(o_am[i]) <= DBL_MAX) & (o_tide[i] >= -DBL_MAX) &
-                    (o_load[i] >= -DBL_MAX);
-        fin &= has_x ? fin_x : 1;
-        fin &= has_mbl ? fabs(o_sf[i]) <= DBL_MAX : 1;
-        int st = k->status[i];
-        k->status[i] = st == 0 && !fin ? ST_OUT_OF_RANGE : st;
-        nfar += o_tide[i] > DBL_MAX;
-    }
-    /* 7. a grounded lane with x/a beyond exp's range (> 709.78): cosh - 1 overflowed in 4.,
-     *    but a (cosh(x/a) - 1) stays finite up to x/a ~ 710 + log(2/a) for a < 2 m; it is
-     *    catenary.depth_reached's 2 a sinh(x/2a)^2 (+inf again where that overflows) */
-    for (int i = 0; nfar && i < nb; i++)
-        if (o_tide[i] > DBL_MAX) {
-            double half = sinh(0.5 * k->m[i]);
-            o_tide[i] = 2.0 * k->b[i] * half * half - k->h[i];
-        }
+     *    load reaches.  Only in blocks whose odd is not finite or with a lane in nodd (rare:
+     *    extreme scenes) */
+    if (nodd | !(odd - odd == 0.0))
+        SFX(in_range)(k, nb, par);
 }
