@@ -423,3 +423,14 @@ def test_elastic_depth_beyond_float64_is_inf_without_a_warning():
         got = elastic._elastic_depth_reach(*(np.array([v]) for v in (w, r, x, ea)))
     assert got[0] == math.inf
     assert elastic._elastic_depth_reach_scalar(w, r, x, ea) == math.inf
+
+
+def test_depth_reach_of_an_infinitely_stiff_chain_is_the_rigid_one_without_a_warning():
+    """EA = inf (replay's inextensible lines): k = 0, no stretch bound on the start."""
+    w, r, x = 1300.0, 1.58e6, 121.06
+    rigid = float(cat.depth_reached(r / w, x))
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        got = elastic._elastic_depth_reach(*(np.array([v]) for v in (w, r, x, math.inf)))
+        assert elastic._elastic_depth_reach_scalar(w, r, x, math.inf) == pytest.approx(rigid)
+    assert got[0] == pytest.approx(rigid, rel=1e-14)

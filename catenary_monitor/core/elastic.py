@@ -406,7 +406,8 @@ def _elastic_depth_reach(
     """
     a = r / w
     k = r / ea
-    nu = np.minimum(np.minimum(x / a, np.arcsinh(x / (a * k))), 700.0)
+    with np.errstate(divide='ignore'):  # a k = 0 (EA infinite): no stretch bound, asinh(inf)
+        nu = np.minimum(np.minimum(x / a, np.arcsinh(x / (a * k))), 700.0)
     for _ in range(100):
         g = a * nu + a * k * np.sinh(nu) - x
         step = g / (a + a * k * np.cosh(nu))
@@ -457,7 +458,8 @@ def _elastic_depth_reach_scalar(w: float, r: float, x: float, ea: float) -> floa
     sinh, cosh = math.sinh, math.cosh
     a = r / w
     k = r / ea
-    nu = min(x / a, math.asinh(x / (a * k)), 700.0)
+    ak = a * k
+    nu = min(x / a, math.asinh(x / ak) if ak > 0.0 else math.inf, 700.0)
     tiny = 4.0 * _EPS
     for _ in range(100):
         g = a * nu + a * k * sinh(nu) - x
