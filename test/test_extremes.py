@@ -195,17 +195,6 @@ def _check_values(name, r, expect, inputs):
         assert abs(got - want) <= REL * scale, (name, key, got, want)
 
 
-@pytest.fixture(params=kernels.supported() or ['none'])
-def isa(request):
-    """Each instruction set of the kernel this CPU runs (as test_kernels.py)."""
-    if request.param == 'none':
-        pytest.fail('no kernel to test: python setup.py build_ext --inplace')
-    before = kernels.isa()
-    kernels.set_isa(request.param)
-    yield request.param
-    kernels.set_isa(before)
-
-
 @pytest.fixture
 def kernel_off(monkeypatch):
     """solve() without the C kernel: arrays take the numpy path (catenary.py), one element the
