@@ -3,6 +3,8 @@
 import os
 import random
 
+import pytest
+
 os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
 os.environ.setdefault('ROS_DOMAIN_ID', str(random.Random(os.getpid()).randint(100, 200)))
 
@@ -33,3 +35,23 @@ def _build_kernels() -> None:
 
 
 _build_kernels()
+
+
+def _isas() -> list:
+    """The kernel's instruction sets this CPU runs, once it is built ('none': not built)."""
+    from catenary_monitor.core import kernels
+
+    return kernels.supported() or ['none']
+
+
+@pytest.fixture(params=_isas())
+def isa(request):
+    """Each instruction set of the C kernel in turn (test_kernels, test_extremes)."""
+    from catenary_monitor.core import kernels
+
+    if request.param == 'none':
+        pytest.fail('no kernel to test: python setup.py build_ext --inplace')
+    before = kernels.isa()
+    kernels.set_isa(request.param)
+    yield request.param
+    kernels.set_isa(before)

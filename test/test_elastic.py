@@ -1,6 +1,7 @@
 """The elastic chain: limit, equations, an independent peer, and the model-picking rule."""
 
 import math
+import warnings
 
 import mpmath as mp
 import numpy as np
@@ -375,3 +376,61 @@ def test_solve_with_ea_is_the_elastic_model_through_the_one_entry():
     assert stiff == solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06)
     with pytest.raises(ValueError, match='measured hook tension'):
         solve(1300.0, 20.85, horizontal=1.5e6, ea=EA_DOCK)
+
+
+def _depth_reach_50(w, r, x, ea):
+    """Depth a no-uplift elastic chain of horizontal tension R spans over x, 50 digits:
+    x = a nu + a k sinh(nu), depth = 2 a sinh(nu/2)^2 + a k sinh(nu)^2 / 2 (a = R/w, k = R/EA)."""
+    with mp.workdps(50):
+        w, r, x, ea = (mp.mpf(v) for v in (w, r, x, ea))
+        a, k = r / w, r / ea
+        lo, hi = mp.mpf(0), min(x / a, mp.asinh(x / (a * k)))  # the root lies below both
+        for _ in range(400):
+            mid = (lo + hi) / 2
+            lo, hi = (lo, mid) if a * mid + a * k * mp.sinh(mid) > x else (mid, hi)
+        nu = (lo + hi) / 2
+        return 2 * a * mp.sinh(nu / 2) ** 2 + a * k * mp.sinh(nu) ** 2 / 2
+
+
+@pytest.mark.parametrize('tension_over_wh', [1.01, 1.000001])
+@pytest.mark.parametrize('ea', [1e7, EA_DOCK, 1e12])
+def test_nearly_slack_chain_tide_margin_is_finite_and_silent(tension_over_wh, ea):
+    """A nearly slack grounded chain (x/a ~ 500 and beyond): the tide margin is the finite depth
+    the elastic chain reaches (its stretch bounds sinh(nu) by x/(a k)), with no numpy warning;
+    Newton from x/a once crept down ~1 a step, stopped at 100 steps and squared sinh(~475) into
+    +inf with 'overflow encountered in square'."""
+    w, h, x = 1300.0, 20.85, 120.0
+    t = tension_over_wh * w * h
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        one = solve(w, h, tension=t, anchor_distance=x, ea=ea)
+        arr = solve(np.full(2, w), h, tension=np.full(2, t), anchor_distance=x, ea=ea)
+        direct = elastic._elastic_depth_reach(*(np.array([v]) for v in (w, 271.05, x, ea)))
+    want = _depth_reach_50(w, 271.05, x, ea)
+    assert math.isfinite(direct[0]) and abs(direct[0] - want) <= 1e-12 * want
+    for r in (one, arr):
+        assert np.all(r.status == 0) and np.all(r.model == elastic.ELASTIC)
+        r_now, tide = float(np.ravel(r.horizontal_tension)[0]), float(np.ravel(r.tide_margin)[0])
+        want = _depth_reach_50(w, r_now, x, ea) - h
+        assert math.isfinite(tide) and abs(tide - want) <= 1e-12 * want, (tide, want)
+
+
+def test_elastic_depth_beyond_float64_is_inf_without_a_warning():
+    w, r, x, ea = 1300.0, 271.05, 1e200, 1e9
+    assert _depth_reach_50(w, r, x, ea) > np.finfo(float).max
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        got = elastic._elastic_depth_reach(*(np.array([v]) for v in (w, r, x, ea)))
+    assert got[0] == math.inf
+    assert elastic._elastic_depth_reach_scalar(w, r, x, ea) == math.inf
+
+
+def test_depth_reach_of_an_infinitely_stiff_chain_is_the_rigid_one_without_a_warning():
+    """EA = inf (replay's inextensible lines): k = 0, no stretch bound on the start."""
+    w, r, x = 1300.0, 1.58e6, 121.06
+    rigid = float(cat.depth_reached(r / w, x))
+    with warnings.catch_warnings():
+        warnings.simplefilter('error')
+        got = elastic._elastic_depth_reach(*(np.array([v]) for v in (w, r, x, math.inf)))
+        assert elastic._elastic_depth_reach_scalar(w, r, x, math.inf) == pytest.approx(rigid)
+    assert got[0] == pytest.approx(rigid, rel=1e-14)

@@ -55,16 +55,6 @@ def test_kernel_is_built():
     assert kernels.isa() in kernels.supported() and 'baseline' in kernels.supported()
 
 
-@pytest.fixture(params=kernels.supported() or ['none'])
-def isa(request):
-    if request.param == 'none':
-        pytest.fail('no kernel to test: python setup.py build_ext --inplace')
-    before = kernels.isa()
-    kernels.set_isa(request.param)
-    yield request.param
-    kernels.set_isa(before)
-
-
 @pytest.mark.parametrize('scenes', [dock_scenes, sweep_scenes])
 def test_arrays_equal_numpy_implementation(isa, scenes):
     w, h, t, x = scenes(40_000)

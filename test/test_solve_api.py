@@ -1,6 +1,7 @@
 """The solve() contract: shapes, statuses, call errors, scalar == vectorized, no rclpy in core."""
 
 import json
+import math
 import subprocess
 import sys
 
@@ -158,12 +159,25 @@ def test_cli_json_contract():
     assert 'anchor_margin' not in data and 'safety_factor' not in data
 
 
+def test_cli_solves_problem4_far_beyond_any_chain():
+    """Problem 4 with T/w some 1e198 x the anchor distance (m^2 underflowed before 1e150):
+    solved, every value finite."""
+    p = cli(
+        'solve', '--weight', '1300', '--depth', '20.85', '--tension', '1e200',
+        '--anchor-distance', '100', '--json',
+    )  # fmt: skip
+    assert p.returncode == 0, p.stderr
+    got = json.loads(p.stdout)
+    assert got['anchor_lifted'] and all(math.isfinite(got[k]) for k in got if k not in (
+        'model', 'anchor_lifted'))
+
+
 def test_cli_refuses_results_float64_cannot_hold():
-    """Problem 4 with T/w some 1e157 x the anchor distance under- and overflows inside the
-    solve: one line and exit 2, never a table of inf and NaN."""
+    """T/w itself beyond float64 (w = 1e-300 N/m): Status.OUT_OF_RANGE, one line and exit 2,
+    never a table of inf and NaN."""
     for fmt in ((), ('--json',)):
         p = cli(
-            'solve', '--weight', '1300', '--depth', '20.85', '--tension', '1e200',
+            'solve', '--weight', '1e-300', '--depth', '20.85', '--tension', '1e200',
             '--anchor-distance', '100', *fmt,
         )  # fmt: skip
         assert p.returncode == 2 and p.stdout == '', p.stdout

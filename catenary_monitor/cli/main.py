@@ -128,7 +128,7 @@ def cmd_solve(args: argparse.Namespace) -> int:
     if bad:  # float64 over- or underflow inside the solve: say so, never print a NaN
         raise UsageError(
             f'{bad[0]} is not finite: the inputs are beyond the range the solver handles in '
-            'float64 (problem 4: hook tension / weight up to about 1e150 x the anchor distance)'
+            'float64'
         )
     if args.json:
         lifted = bool(result.uplift_force > 0)

@@ -38,6 +38,9 @@ double atan2(double, double);
 
 #define BLK 256
 #define KFAST 6 /* Newton steps on whole blocks before the bracketed per-lane loop */
+/* m = x/B below this: the block's fast steps and state would under- or overflow (m^2, m^4), so
+ * the lane is solved by the scaled per-lane code (uplift_tiny) */
+#define TINY_M 0x1p-200
 #define NOUT 12
 #define LOG_2 0.69314718055994530942
 #define RAD2DEG (180.0 / 3.14159265358979323846)
@@ -52,7 +55,8 @@ enum {
     ST_TENSION = 4,
     ST_DISTANCE = 6,
     ST_MBL = 9,
-    ST_NO_CONVERGENCE = 10
+    ST_NO_CONVERGENCE = 10,
+    ST_OUT_OF_RANGE = 13
 };
 
 typedef struct {
@@ -66,7 +70,7 @@ typedef struct {
         double w[N], h[N], t[N], x[N];                                                             \
         double b[N], e[N], r02[N], len[N], x0[N];                                              \
         double xlo[N], m[N], d[N], d0[N], d_max[N];                                            \
-        int status[N], lift[N], iters[N], cok[N], ldone[N];                                              \
+        int status[N], lift[N], iters[N], cok[N], ldone[N];                                    \
         /* the lifted lanes, gathered */                                                       \
         int idx[N], gdone[N], giters[N];                                                       \
         double ge[N], gr[N], gx0[N], gxlo[N], gm[N], gd[N], gd0[N], gdmax[N];                  \
@@ -128,7 +132,8 @@ static double critical_scalar(double h, double x, const Params *par)
 
 #define CM_PRAGMA(x) _Pragma(#x)
 #define CM_SIMD CM_PRAGMA(omp simd)
-#define CM_SIMD_REDUCTION(v) CM_PRAGMA(omp simd reduction(+ : v))
+#define CM_SIMD_REDUCTION(...) CM_PRAGMA(omp simd reduction(+ : __VA_ARGS__))
+#define CM_SIMD_WITH(clauses) CM_PRAGMA(omp simd clauses)
 #ifdef CM_MVEC
 #define BLOCK_T Block
 /* Every vector loop runs over a multiple of 16 lanes (stand-in lanes fill the rest: AVX-512
@@ -158,7 +163,9 @@ static double critical_scalar(double h, double x, const Params *par)
 #undef CM_SIMD
 #undef CM_SIMD_REDUCTION
 #define CM_SIMD
-#define CM_SIMD_REDUCTION(v)
+#define CM_SIMD_REDUCTION(...)
+#undef CM_SIMD_WITH
+#define CM_SIMD_WITH(clauses)
 #pragma GCC push_options
 #pragma GCC optimize("no-tree-vectorize")
 #undef BLOCK_T

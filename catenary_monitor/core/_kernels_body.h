@@ -15,8 +15,13 @@ static void SFX(uplift_residual)(const BLOCK_T *k, int i, double eta, double *f,
     double g = 1.0 + e1;
     double ig = 1.0 / g;
     double sx = 0.5 * e1 * (1.0 + ig), cx = 0.5 * (g + ig);
-    double qq = big_x / (k->m[i] * sx);
-    *f = log(em * p * (qq * qq));
+    /* the factors scaled by sc, the power of 2 nearest 1/m (catenary._scale): the same bits
+     * wherever nothing under- or overflows, no underflow of em p ~ m^2 for tiny m */
+    int ex;
+    frexp(k->m[i], &ex);
+    double sc = ldexp(1.0, -ex);
+    double qq = big_x / ((k->m[i] * sc) * sx);
+    *f = log((em * sc) * (p * sc) * (qq * qq));
     *fp = (ed / em + 1.0 / (ed * p) - 2.0 * (cx / sx - 1.0 / big_x)) * d;
 }
 
@@ -50,6 +55,84 @@ static int SFX(uplift_safeguarded)(BLOCK_T *k, int i, int kfast, const Params *p
     return conv;
 }
 
+/* a lane of tiny m = x/B (below TINY_M, hook tensions beyond T/w ~ 1e60 x): the start of
+ * catenary._uplift_setup in d sc (no underflow of m^2), then the bracketed Newton with the
+ * scaled residual; returns 1 if it converged */
+static int SFX(uplift_tiny)(BLOCK_T *k, int i, const Params *par)
+{
+    double e = k->e[i], r02 = k->r02[i], x0 = k->x0[i], m = k->m[i];
+    int ex;
+    frexp(m, &ex);
+    double sc = ldexp(1.0, -ex), ms = m * sc, r02s = r02 * sc;
+    double xlo = log1p(e);
+    double d_max = x0 - xlo;
+    double c1 = x0 * x0 / (d_max * (r02 + d_max));
+    double q = ms * ms / c1;
+    double r02_sq = r02s * r02s;
+    double d = 2.0 * q / (r02s + sqrt(r02_sq + 4.0 * q)) / sc;
+    double frac = d / d_max;
+    if (frac < 1.0) {
+        double c0 = 2.0 * (1.0 + e) * xlo / r02;
+        q = q * exp((frac - 1.0) * log(c0 * c0 / c1));
+        d = 2.0 * q / (r02s + sqrt(r02_sq + 4.0 * q)) / sc;
+    }
+    d = d > 1e-300 ? d : 1e-300;
+    d = d < d_max ? d : d_max;
+    k->xlo[i] = xlo;
+    k->d[i] = d;
+    k->d0[i] = d;
+    k->d_max[i] = d_max;
+    return SFX(uplift_safeguarded)(k, i, 0, par);
+}
+
+/* a tiny lane's uplift state (catenary._lifted_from_d in plain libm: the block's form divides
+ * by X^2, which underflows) */
+static void SFX(tiny_state)(BLOCK_T *k, int i, int has_x)
+{
+    double w = k->w[i], h = k->h[i], b = k->b[i], e = k->e[i], m = k->m[i];
+    double big_x = k->xlo[i] + k->d[i];
+    double s = m / big_x; /* sech u */
+    double half = sinh(0.5 * big_x), sx = sinh(big_x);
+    double cm1 = 2.0 * half * half;
+    double tu = (e - cm1) / sx;
+    tu = tu > 0.0 ? tu : 0.0;
+    double wb = w * b;
+    k->o[O_R][i] = wb * s;
+    k->o[O_F][i] = wb * tu;
+    k->o[O_L][i] = b * (tu * cm1 + sx);
+    k->o[O_ALPHA][i] = atan2(tu, s) * RAD2DEG;
+    k->o[O_BETA][i] = atan2(tu * (1.0 + cm1) + sx, s) * RAD2DEG;
+    k->o[O_TIDE][i] = has_x ? b * s * cm1 - h : NAN;
+}
+
+/* 6. of block: lanes of status 0 whose results are not all finite become OUT_OF_RANGE (the tide
+ * and load margins may be +inf); then a grounded lane with x/a beyond exp's range (> 709.78),
+ * whose cosh - 1 overflowed in 4., gets the finite a (cosh(x/a) - 1) that lasts up to
+ * x/a ~ 710 + log(2/a) for a < 2 m: catenary.depth_reached's 2 a sinh(x/2a)^2 (+inf again
+ * where that overflows) */
+static void SFX(in_range)(BLOCK_T *k, int nb, const Params *par)
+{
+    const int has_x = par->has_x, has_mbl = par->has_mbl;
+    for (int i = 0; i < nb; i++) {
+        double *const *o = k->o;
+        int fin = (fabs(o[O_R][i]) <= DBL_MAX) & (fabs(o[O_T][i]) <= DBL_MAX) &
+                  (fabs(o[O_XMIN][i]) <= DBL_MAX) & (fabs(o[O_L][i]) <= DBL_MAX) &
+                  (fabs(o[O_BETA][i]) <= DBL_MAX) & (fabs(o[O_ALPHA][i]) <= DBL_MAX) &
+                  (fabs(o[O_F][i]) <= DBL_MAX);
+        if (has_x)
+            fin &= (fabs(o[O_AM][i]) <= DBL_MAX) & (o[O_TIDE][i] >= -DBL_MAX) &
+                   (o[O_LOAD][i] >= -DBL_MAX);
+        if (has_mbl)
+            fin &= fabs(o[O_SF][i]) <= DBL_MAX;
+        if (k->status[i] == 0 && !fin)
+            k->status[i] = ST_OUT_OF_RANGE;
+        if (o[O_TIDE][i] > DBL_MAX) {
+            double half = sinh(0.5 * k->m[i]);
+            o[O_TIDE][i] = 2.0 * k->b[i] * half * half - k->h[i];
+        }
+    }
+}
+
 /* a gathered lane's results back to its place in the block */
 static inline void SFX(lane_home)(BLOCK_T *k, int j)
 {
@@ -79,7 +162,10 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
     /* 1. validation, the grounded chain (problems 1 and 3), the uplift start */
     const double *restrict s_w = k->src[0], *restrict s_h = k->src[1], *restrict s_t = k->src[2];
     const double *restrict s_x = k->src[3], *restrict s_mbl = k->src[4];
-    CM_SIMD
+    /* odd: a sum of the outputs, finite unless one is inf or NaN (or the sum overflows): then
+     * 6. classifies the lanes; m_min: the smallest m, for the tiny lanes */
+    double odd = 0.0, m_min = INFINITY;
+    CM_SIMD_WITH(reduction(+ : odd) reduction(min : m_min))
     for (int i = 0; i < nb; i++) {
         double w = s_w[i], h = s_h[i], t = s_t[i];
         double x = s_x[i], mbl = s_mbl[i]; /* 1.0 when not given */
@@ -123,12 +209,24 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
         k->lift[i] = lift;
         k->ldone[i] = !lift;
         k->iters[i] = 0;
+        m_min = m < m_min ? m : m_min;
+        double sf = mbl / t;
+        odd += xmin + sf; /* x - xmin is finite with xmin */
         o_xmin[i] = xmin;
         o_t[i] = t;
         o_gl[i] = NAN;
-        o_sf[i] = has_mbl ? mbl / t : NAN;
+        o_sf[i] = has_mbl ? sf : NAN;
         o_am[i] = has_x ? x - xmin : NAN;
     }
+
+    /* the lifted lanes of tiny m leave lift[] (the vector Newton's lanes): solved one by one
+     * in 3., their state by tiny_state */
+    int ntiny = 0;
+    for (int i = 0; m_min < TINY_M && i < nb; i++)
+        if (k->lift[i] & (k->m[i] < TINY_M)) {
+            k->lift[i] = 0;
+            ntiny++;
+        }
 
     /* 2. Newton in eta = log(d) on the lifted lanes, gathered densely, each frozen once its step
      *    is below tol; the step is applied as d *= exp(step) (a degree-6 Taylor polynomial: exact
@@ -280,15 +378,17 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
     }
     /* 3. the few lanes still moving: bracketed Newton, one at a time */
     int failed = 0;
-    if (pending)
+    if (pending | ntiny)
         for (int i = 0; i < nb; i++)
             if (!k->ldone[i]) {
-                k->ldone[i] = SFX(uplift_safeguarded)(k, i, ran, par);
+                k->ldone[i] = k->lift[i] ? SFX(uplift_safeguarded)(k, i, ran, par)
+                                         : SFX(uplift_tiny)(k, i, par); /* a tiny lane */
                 failed += !k->ldone[i];
             }
 
-    /* 4. uplift state, margins and the load-margin solve from its table start */
-    CM_SIMD
+    /* 4. uplift state, margins and the load-margin solve from its table start (a tiny lane is
+     *    computed as grounded here, then by tiny_state) */
+    CM_SIMD_REDUCTION(odd)
     for (int i = 0; i < nb; i++) {
         double w = k->w[i], h = k->h[i], b = k->b[i], e = k->e[i], m = k->m[i];
         int lift = k->lift[i];
@@ -296,7 +396,10 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
         double et = expm1(xt);
         double g = 1.0 + et;
         double rr = 1.0 / (g * xt * et * (g + 1.0));
-        double ig = et <= DBL_MAX ? xt * et * (g + 1.0) * rr : 0.0; /* 1 / g, overflow kept */
+        /* 1 / g; 0 where the shared denominator overflows (x/a > ~352, only grounded lanes get
+         * there: a lifted X is below acosh(1 + 2^53)): 1/g < 1e-153 then, nothing next to 1 in
+         * sinh and cosh - 1, where inf * 0 made them NaN (the grounded tide margin) */
+        double ig = rr > 0.0 ? xt * et * (g + 1.0) * rr : 0.0;
         double isx = 2.0 * g * g * xt * rr;   /* 1 / sinh */
         double sx = 0.5 * et * (1.0 + ig);    /* sinh */
         double cm1 = et < 1.0 ? 0.5 * et * et * ig : 0.5 * et * (1.0 - ig); /* cosh - 1 */
@@ -306,16 +409,25 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
         double wb = w * b;
         double r = wb * s;
         double len = k->len[i];
+        double l = lift ? b * (tu * cm1 + sx) : len, f = wb * tu;
+        double tide = b * s * cm1 - h; /* a (cosh(x/a) - 1) - h, a = R/w */
+        /* the angles need no term: atan2 is NaN only for a NaN argument, and then r, l or f
+         * is not finite (tu is never NaN) */
+        odd += r + l + f + tide;
         o_r[i] = r;
-        o_l[i] = lift ? b * (tu * cm1 + sx) : len;
+        o_l[i] = l;
+        o_f[i] = f;
+        o_tide[i] = has_x ? tide : NAN;
         o_beta[i] = atan2(lift ? tu * (1.0 + cm1) + sx : len, lift ? s : b) * RAD2DEG;
         o_alpha[i] = atan2(tu, s) * RAD2DEG;
-        o_f[i] = wb * tu;
-        o_tide[i] = has_x ? b * s * cm1 - h : NAN; /* a (cosh(x/a) - 1) - h, a = R/w */
     }
+    for (int i = 0; ntiny && i < nb; i++)
+        if (k->lift[i] < ((k->x[i] < o_xmin[i]) & has_x)) /* lifted, not in lift[]: tiny */
+            SFX(tiny_state)(k, i, has_x);
+    int nodd = ntiny; /* tiny_state's values are not in odd */
     if (has_x) {
         int nscalar = 0;
-        CM_SIMD_REDUCTION(nscalar)
+        CM_SIMD_REDUCTION(nscalar, odd)
         for (int i = 0; i < nb; i++) {
             /* load margin: a_crit from the fine table (exact to ~1e-14 inside it) */
             double h = k->h[i], x = k->x[i];
@@ -334,13 +446,16 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
             int cok = inside & (par->maxiter >= 1);
             k->cok[i] = cok;
             nscalar += !cok;
-            o_load[i] = k->w[i] * (a_crit + h) - k->t[i];
+            double load = k->w[i] * (a_crit + h) - k->t[i];
+            odd += load;
+            o_load[i] = load;
         }
         /* 5. load-margin lanes outside the table or not converged: the scalar solve */
         for (int i = 0; nscalar && i < nb; i++)
             if (!k->cok[i] && !k->status[i]) {
                 double a_crit = critical_scalar(k->h[i], k->x[i], par);
                 o_load[i] = k->w[i] * (a_crit + k->h[i]) - k->t[i];
+                nodd += !(o_load[i] - o_load[i] == 0.0);
                 if (a_crit != a_crit)
                     k->status[i] = ST_NO_CONVERGENCE;
             }
@@ -350,4 +465,13 @@ static void SFX(block)(BLOCK_T *restrict k, int nb, const Params *restrict par)
     } else
         for (int i = 0; i < nb; i++)
             o_load[i] = NAN;
+
+    /* 6. never status 0 with a value that is not finite: a solved lane whose results (those
+     *    that apply) under- or overflowed is beyond float64 range (Status.OUT_OF_RANGE); the
+     *    exceptions are the tide and load margins at +inf (result.INF_MARGINS): a grounded
+     *    chain's a (cosh(x/a) - 1) or critical tension beyond float64, real margins no tide or
+     *    load reaches.  Only in blocks whose odd is not finite or with a lane in nodd (rare:
+     *    extreme scenes) */
+    if (nodd | !(odd - odd == 0.0))
+        SFX(in_range)(k, nb, par);
 }

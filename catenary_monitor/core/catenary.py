@@ -51,6 +51,8 @@ _MATH = SimpleNamespace(
     arctan2=math.atan2,
     arcsinh=math.asinh,
     arctan=math.atan,
+    frexp=math.frexp,
+    ldexp=math.ldexp,
 )
 
 
@@ -91,10 +93,11 @@ class Grounded(NamedTuple):
 def grounded(a: Any, h: Any, xp: Any = np) -> Grounded:
     """Suspended span, length and top angle of a catenary with its vertex at the anchor.
 
-    ``x_min = a acosh(1 + h/a)``, ``L = sqrt(h (h + 2a))``, ``tan(beta) = L / a``.
+    ``x_min = a acosh(1 + h/a)``, ``L = sqrt(h (h + 2a))``, ``tan(beta) = L / a``.  ``L`` is
+    taken as ``sqrt(h) sqrt(h + 2a)``: ``h (h + 2a)`` underflowed to 0 for h < ~1e-154 m.
     """
     x_min = a * acosh1p(h / a, xp)
-    length = xp.sqrt(h * (h + 2.0 * a))
+    length = xp.sqrt(h) * xp.sqrt(h + 2.0 * a)
     return Grounded(x_min, length, xp.arctan2(length, a))
 
 
@@ -177,18 +180,27 @@ def _uplift_residual(eta: Any, e: Any, r02: Any, xlo: Any, m: Any, xp: Any) -> t
     """Residual ``log(x(d)^2 / x_t^2)`` and its derivative with respect to ``eta = log(d)``.
 
     ``r02 = e (2 + e)``, ``xlo = log1p(e)``, ``m = x_t / B``.  The residual is the log of one
-    product of well-conditioned factors, so its absolute error is a few ulps.
+    product of well-conditioned factors, so its absolute error is a few ulps.  The factors are
+    scaled by ``sc``, the power of 2 nearest ``1/m`` (:func:`_scale`): the same bits wherever
+    nothing under- or overflows, and no underflow of ``expm1(d) p ~ m^2`` for tiny ``m = x/B``
+    (hook tensions up to float64's limit, T/w ~ 1e300 x).
     """
     d = xp.exp(eta)
     big_x = xlo + d
     em = xp.expm1(d)
     ed = 1.0 + em  # exp(d)
     p = r02 + em / ed  # em / ed = -expm1(-d)
-    ratio = em * p * (big_x / (m * xp.sinh(big_x))) ** 2
+    sc = _scale(m, xp)
+    ratio = (em * sc) * (p * sc) * (big_x / ((m * sc) * xp.sinh(big_x))) ** 2
     # d/dd log(sinh X / X) = coth X - 1/X; its cancellation for small X only slows nothing:
     # the 1/d term dominates the derivative there.
     dfdd = ed / em + 1.0 / (ed * p) - 2.0 * (1.0 / xp.tanh(big_x) - 1.0 / big_x)
     return xp.log(ratio), dfdd * d
+
+
+def _scale(m: Any, xp: Any) -> Any:
+    """The power of 2 nearest ``1 / m`` (``m sc`` in [0.5, 1)): scaling by it is exact."""
+    return xp.ldexp(1.0, -xp.frexp(m)[1])
 
 
 def _uplift_setup(b: Any, h: Any, x: Any, xp: Any) -> tuple[Any, Any, Any, Any, Any, Any]:
@@ -198,7 +210,8 @@ def _uplift_setup(b: Any, h: Any, x: Any, xp: Any) -> tuple[Any, Any, Any, Any, 
     The start solves the model ``m^2 = c d (r02 + d)`` (exact as d -> 0 with ``c = c0``, and at
     d_max with ``c = c1``) twice: first with ``c1``, then with ``log c`` interpolated linearly in
     ``d / d_max`` at the first root.  It is within 1e-3 in eta over most of the domain (within 0.2
-    everywhere), so Newton needs 2-3 residuals instead of 3-6.
+    everywhere), so Newton needs 2-3 residuals instead of 3-6.  The model is solved in ``d sc``
+    (:func:`_scale`): no underflow of ``m^2`` for tiny ``m``, the same bits elsewhere.
     """
     e = h / b
     r02 = e * (2.0 + e)
@@ -208,12 +221,14 @@ def _uplift_setup(b: Any, h: Any, x: Any, xp: Any) -> tuple[Any, Any, Any, Any, 
     d_max = x0 - xlo
     eta_max = xp.log(d_max)
     c1 = x0 * x0 / (d_max * (r02 + d_max))
-    q = m * m / c1
-    r02_sq = r02 * r02
-    d = _start_root(q, r02, r02_sq, xp)
+    sc = _scale(m, xp)
+    ms, r02s = m * sc, r02 * sc
+    q = ms * ms / c1  # (m sc)^2 / c1
+    r02_sq = r02s * r02s
+    d = _start_root(q, r02s, r02_sq, xp) / sc
     frac = xp.minimum(d / d_max, 1.0)
     c0 = 2.0 * (1.0 + e) * xlo / r02
-    d = _start_root(q * xp.exp((frac - 1.0) * xp.log(c0 * c0 / c1)), r02, r02_sq, xp)
+    d = _start_root(q * xp.exp((frac - 1.0) * xp.log(c0 * c0 / c1)), r02s, r02_sq, xp) / sc
     return e, r02, xlo, m, xp.log(xp.maximum(d, 1e-300)), eta_max
 
 
@@ -325,14 +340,16 @@ def lifted_from_tension_scalar(w: float, b: float, h: float, x: float) -> tuple[
     d_max = x0 - xlo
     eta_hi = log(d_max)
     c1 = x0 * x0 / (d_max * (r02 + d_max))
-    q = m * m / c1
-    r02_sq = r02 * r02
-    d = 2.0 * q / (r02 + sqrt(r02_sq + 4.0 * q))
+    sc = math.ldexp(1.0, -math.frexp(m)[1])  # _scale: the model and residual in d sc
+    ms, r02s = m * sc, r02 * sc
+    q = ms * ms / c1
+    r02_sq = r02s * r02s
+    d = 2.0 * q / (r02s + sqrt(r02_sq + 4.0 * q)) / sc
     frac = d / d_max
     if frac < 1.0:  # else the second model solve gives the same d
         c0 = 2.0 * (1.0 + e) * xlo / r02
         q = q * exp((frac - 1.0) * log(c0 * c0 / c1))
-        d = 2.0 * q / (r02 + sqrt(r02_sq + 4.0 * q))
+        d = 2.0 * q / (r02s + sqrt(r02_sq + 4.0 * q)) / sc
     eta = log(d if d > 1e-300 else 1e-300)
     if eta > eta_hi:
         eta = eta_hi
@@ -348,8 +365,8 @@ def lifted_from_tension_scalar(w: float, b: float, h: float, x: float) -> tuple[
         em = expm1(d)
         ed = 1.0 + em
         p = r02 + em / ed
-        q = big_x / (m * sinh(big_x))
-        f = log(em * p * (q * q))  # numpy's ** 2 on arrays is this product
+        q = big_x / (ms * sinh(big_x))
+        f = log((em * sc) * (p * sc) * (q * q))  # numpy's ** 2 on arrays is this product
         if f < 0.0:
             if eta > eta_lo:
                 eta_lo = eta

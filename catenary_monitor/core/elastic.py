@@ -397,20 +397,26 @@ def _elastic_depth_reach(
 ) -> np.ndarray:
     """Depth a no-uplift elastic chain of horizontal tension R spans over x (the tide margin).
 
-    In ``nu = asinh(V/R)``: ``x = (R/w) nu + R^2 sinh(nu)/(w EA)``, increasing and convex, so
-    Newton from the rigid ``nu = x w / R`` (to the right of the root) decreases monotonically.
-    Then ``h = 2 (R/w) sinh(nu/2)^2 + R^2 sinh(nu)^2 / (2 EA w)``.
+    In ``nu = asinh(V/R)``: ``x = a nu + a k sinh(nu)`` (``a = R/w``, ``k = R/EA``), increasing
+    and convex, so Newton from a point right of the root decreases monotonically.  Both terms
+    bound it: the start is the smaller of the rigid ``x/a`` and ``asinh(x/(a k))``, the close one
+    for a nearly slack chain (from ``x/a`` ~ 500 Newton crept down by ~1 a step and stopped at
+    100 steps far off, where sinh^2 overflowed: a +inf tide margin for a finite one).
+    Then ``h = 2 a sinh(nu/2)^2 + a k sinh(nu)^2 / 2`` [m], +inf only beyond float64.
     """
     a = r / w
     k = r / ea
-    nu = np.minimum(x / a, 700.0)
+    with np.errstate(divide='ignore'):  # a k = 0 (EA infinite): no stretch bound, asinh(inf)
+        nu = np.minimum(np.minimum(x / a, np.arcsinh(x / (a * k))), 700.0)
     for _ in range(100):
         g = a * nu + a * k * np.sinh(nu) - x
         step = g / (a + a * k * np.cosh(nu))
         nu = nu - step
         if np.all(np.abs(step) <= 4.0 * np.finfo(float).eps * nu):
             break
-    return 2.0 * a * np.sinh(0.5 * nu) ** 2 + a * k * np.sinh(nu) ** 2 / 2.0
+    sn = np.sinh(nu)
+    with np.errstate(over='ignore'):  # a depth beyond float64: +inf, a real margin
+        return 2.0 * a * np.sinh(0.5 * nu) ** 2 + 0.5 * (a * k * sn) * sn
 
 
 def _elastic_critical_tension_scalar(
@@ -452,7 +458,8 @@ def _elastic_depth_reach_scalar(w: float, r: float, x: float, ea: float) -> floa
     sinh, cosh = math.sinh, math.cosh
     a = r / w
     k = r / ea
-    nu = min(x / a, 700.0)
+    ak = a * k
+    nu = min(x / a, math.asinh(x / ak) if ak > 0.0 else math.inf, 700.0)
     tiny = 4.0 * _EPS
     for _ in range(100):
         g = a * nu + a * k * sinh(nu) - x
@@ -462,7 +469,7 @@ def _elastic_depth_reach_scalar(w: float, r: float, x: float, ea: float) -> floa
             break
     s = sinh(0.5 * nu)
     sn = sinh(nu)
-    return 2.0 * a * (s * s) + a * k * (sn * sn) / 2.0
+    return 2.0 * a * (s * s) + 0.5 * (a * k * sn) * sn
 
 
 class RigidValues(Protocol):

@@ -19,7 +19,7 @@ import numpy as np
 
 from catenary_monitor.core import catenary as cat
 from catenary_monitor.core import kernels
-from catenary_monitor.core.result import ALL_KEYS, SolveResult, Status
+from catenary_monitor.core.result import ALL_KEYS, INF_MARGINS, SolveResult, Status
 
 ArrayLike = Union[float, int, np.ndarray, list]
 
@@ -352,14 +352,20 @@ def _solve_valid(problem: str, full: dict[str, np.ndarray], scalar: bool) -> Sol
         conv &= _fill_margins(out, w, h, x)
     if 'mbl' in a:
         out['safety_factor'] = a['mbl'] / out['top_tension']
-    bad = ~conv
+    keys = _keys(problem, x is not None, 'mbl' in a)
+    # never status 0 with inf or NaN: a solved element whose results under- or overflowed
+    # (a margin of +inf excepted, INF_MARGINS: result.in_range)
+    beyond = np.zeros(n, dtype=bool)
+    for k in keys:
+        beyond |= ~(np.isfinite(out[k]) | ((out[k] == np.inf) & (k in INF_MARGINS)))
+    bad = ~conv | beyond
     if bad.any():
         for v in out.values():
             v[bad] = np.nan
         sub = status[ok]
-        sub[bad] = Status.NO_CONVERGENCE
+        sub[beyond] = Status.OUT_OF_RANGE
+        sub[~conv] = Status.NO_CONVERGENCE
         status[ok] = sub
-    keys = _keys(problem, x is not None, 'mbl' in a)
     result: dict[str, Any] = {}
     for k in ALL_KEYS:
         full_v = np.full(shape, np.nan)
@@ -473,7 +479,7 @@ def _solve_scalar(
         t = w * (b + h)
     z = h / b
     x_min = b * math.log1p(z + math.sqrt(z * (2.0 + z)))
-    length = math.sqrt(h * (h + 2.0 * b))
+    length = math.sqrt(h) * math.sqrt(h + 2.0 * b)  # cat.grounded's form: no underflow
     beta = math.atan2(length, b)
     r, alpha, uplift = w * b, 0.0, 0.0
     anchor_margin = tide_margin = load_margin = safety = _NAN
@@ -492,7 +498,10 @@ def _solve_scalar(
                 )
         anchor_margin = x - x_min
         a_now = r / w
-        half = math.sinh(0.5 * x / a_now)
+        try:
+            half = math.sinh(0.5 * x / a_now)
+        except OverflowError:  # x/a > ~1421: the depth is beyond float64, as numpy's inf
+            half = math.inf
         tide_margin = 2.0 * a_now * half * half - h
         load_margin = w * (cat.critical_parameter_scalar(h, x) + h) - t
         if load_margin != load_margin:  # NaN: the load-margin solve did not converge
@@ -501,28 +510,28 @@ def _solve_scalar(
             )
     if mbl is not None:
         safety = mbl / t
-    return _new_tuple(
-        SolveResult,
-        (
-            r,
-            t,
-            x_min,
-            length,
-            math.degrees(beta),
-            math.degrees(alpha),
-            uplift,
-            anchor_margin,
-            tide_margin,
-            load_margin,
-            _NAN,
-            safety,
-            0,
-            problem,
-            keys,
-            _MODEL,
-            _METHOD,
-        ),
+    values = (
+        r,
+        t,
+        x_min,
+        length,
+        math.degrees(beta),
+        math.degrees(alpha),
+        uplift,
+        anchor_margin,
+        tide_margin,
+        load_margin,
+        _NAN,
+        safety,
     )
+    if not all(
+        isfinite(v) or (v == math.inf and k in INF_MARGINS)
+        for v, k in zip(values, ALL_KEYS)
+        if k in keys
+    ):
+        # never status 0 with inf or NaN: a result under- or overflowed
+        return _new_tuple(SolveResult, _NAN12 + (int(Status.OUT_OF_RANGE), problem, keys) + _TAIL)
+    return _new_tuple(SolveResult, values + (0, problem, keys, _MODEL, _METHOD))
 
 
 _ONE = kernels._k.solve_one if kernels.AVAILABLE else None

@@ -7,7 +7,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-__all__ = ['Status', 'STATUS_MESSAGES', 'ALL_KEYS', 'SolveResult']
+__all__ = ['Status', 'STATUS_MESSAGES', 'ALL_KEYS', 'INF_MARGINS', 'SolveResult', 'in_range']
 
 
 class Status(IntEnum):
@@ -26,6 +26,7 @@ class Status(IntEnum):
     NO_CONVERGENCE = 10
     IMPLAUSIBLE_TENSION = 11  # a reading, see core/plausible.py
     IMPLAUSIBLE_DEPTH = 12
+    OUT_OF_RANGE = 13  # a result float64 cannot hold (never status 0 with inf or NaN)
 
 
 STATUS_MESSAGES: dict[int, str] = {
@@ -54,6 +55,9 @@ STATUS_MESSAGES: dict[int, str] = {
     Status.IMPLAUSIBLE_DEPTH: (
         'depth above 12000 m, deeper than any sea: a sensor or scaling fault'
     ),
+    Status.OUT_OF_RANGE: (
+        'a result is beyond float64 range (inf or NaN): the inputs are too extreme to solve'
+    ),
 }
 
 #: Every result key, in display order (the JSON keys of ``catenary-monitor solve --json``).
@@ -71,6 +75,11 @@ ALL_KEYS = (
     'grounded_length',
     'safety_factor',
 )
+
+#: The keys a solved element may report as +inf: margins beyond float64 on the safe side (a
+#: grounded chain's ``a (cosh(x/a) - 1)`` or critical hook tension ``~ w x^2 / 2h`` overflows),
+#: real margins no tide or load reaches.  Every other value of status 0 is finite.
+INF_MARGINS = ('tide_margin', 'load_margin')
 
 
 class SolveResult(NamedTuple):
@@ -119,3 +128,32 @@ class SolveResult(NamedTuple):
             value = getattr(self, key)
             out[key] = float(value) if np.ndim(value) == 0 else np.asarray(value).tolist()
         return out
+
+
+def in_range(result: SolveResult) -> SolveResult:
+    """``result`` with every solved element whose results (the keys that apply) are not all
+    finite turned into :attr:`Status.OUT_OF_RANGE` with NaN values: never status 0 with inf or
+    NaN.  Returns ``result`` itself when there is none.
+
+    The exceptions are the margins of :data:`INF_MARGINS` at +inf: real margins beyond float64
+    (a grounded chain whose ``a (cosh(x/a) - 1)`` or critical tension overflows).
+    """
+    status = np.asarray(result.status)
+    beyond = np.zeros(status.shape, dtype=bool)
+    for key in result.keys:
+        value = np.asarray(getattr(result, key), dtype=float)
+        beyond |= ~(np.isfinite(value) | ((value == np.inf) & (key in INF_MARGINS)))
+    beyond &= status == 0
+    if not beyond.any():
+        return result
+    if status.ndim == 0:
+        nan: dict[str, Any] = dict.fromkeys(ALL_KEYS, float('nan'))
+        return result._replace(**nan, status=int(Status.OUT_OF_RANGE))
+    changed: dict[str, Any] = {}
+    for key in ALL_KEYS:
+        value = np.array(getattr(result, key), dtype=float)
+        value[beyond] = np.nan
+        changed[key] = value
+    new_status = status.copy()
+    new_status[beyond] = Status.OUT_OF_RANGE
+    return result._replace(**changed, status=new_status)

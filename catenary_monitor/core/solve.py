@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING, Any, Optional
 
 from catenary_monitor.core import elastic, fixed_length, kernels
 from catenary_monitor.core.inextensible import ArrayLike, solve_inextensible
-from catenary_monitor.core.result import ALL_KEYS, STATUS_MESSAGES, SolveResult, Status
+from catenary_monitor.core.result import ALL_KEYS, STATUS_MESSAGES, SolveResult, Status, in_range
 
 __all__ = ['solve', 'SolveResult', 'Status', 'STATUS_MESSAGES', 'ALL_KEYS']
 
@@ -91,17 +91,17 @@ def solve(
                 'chain_length needs anchor_distance (the chain lies on the seabed '
                 'between hook and anchor)'
             )
-        return fixed_length.solve_chain_length(
-            weight, depth, chain_length, anchor_distance, ea, mbl
+        return in_range(
+            fixed_length.solve_chain_length(weight, depth, chain_length, anchor_distance, ea, mbl)
         )
     if tension is None or horizontal is not None or chain_length is not None:
         raise ValueError(
             'ea (an elastic chain) is solved for a measured hook tension (problems 3 and 4) '
             'or a chain length (problem 5): give tension or chain_length, not horizontal'
         )
-    return elastic.solve_with_correction(weight, depth, tension, anchor_distance, ea=ea, mbl=mbl)[
-        0
-    ]
+    return in_range(
+        elastic.solve_with_correction(weight, depth, tension, anchor_distance, ea=ea, mbl=mbl)[0]
+    )
 
 
 _ONE = kernels._k.solve_one if kernels.AVAILABLE else None
