@@ -21,11 +21,11 @@ from typing import Any, Callable, Optional, Sequence
 
 import pytest
 
+from catenary_monitor_study.bench_console import CHROMEDRIVER, CHROMIUM, headless_chromium
 from ros_harness import child_env
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / 'config' / 'floating_dock.yaml'
-CHROMIUM, CHROMEDRIVER = '/usr/bin/chromium', '/usr/bin/chromedriver'
 HOW_TO = (
     'the browser tests need Debian\'s Chromium and its driver: '
     'apt-get install -y chromium chromium-driver (and pip install selenium)'
@@ -42,27 +42,10 @@ def browser(tmp: Path, width: int = 1920, height: int = 1080) -> Any:
     if not (os.access(CHROMIUM, os.X_OK) and os.access(CHROMEDRIVER, os.X_OK)):
         pytest.fail(HOW_TO, pytrace=False)
     try:
-        from selenium import webdriver
-        from selenium.webdriver.chrome.service import Service
+        import selenium  # noqa: F401 - the how-to when it is missing
     except ImportError:
         pytest.fail(HOW_TO, pytrace=False)
-    options = webdriver.ChromeOptions()
-    options.binary_location = CHROMIUM
-    for arg in (
-        '--headless',
-        '--no-sandbox',
-        '--disable-gpu',
-        '--disable-quic',
-        '--no-first-run',
-        '--disable-background-networking',
-        '--disable-component-update',
-        '--disable-sync',
-        '--autoplay-policy=no-user-gesture-required',
-        f'--user-data-dir={tmp / "chromium-profile"}',
-    ):
-        options.add_argument(arg)
-    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
-    set_viewport(driver, width, height)
+    driver = headless_chromium(str(tmp / 'chromium-profile'), width, height)
     driver.set_script_timeout(30)
     return driver
 
@@ -264,24 +247,64 @@ class DemoSource:
         return self.version
 
 
-# ---------------------------------------------------------------- a /diagnostics publisher
-class DiagnosticsPublisher:
-    """A test node that publishes, at 2 Hz, a monitor's ``/diagnostics`` array for ``names``
-    (every line OK, a tension sample 0.2 s old), as a monitor started on those lines does."""
+# ---------------------------------------------------------------- test nodes on /diagnostics
+class _TestNode:
+    """A test node spun in a daemon thread (rclpy initialised once per test process)."""
 
-    def __init__(self, names: Sequence[str]) -> None:
+    def __init__(self, name: str) -> None:
         import rclpy
-        from diagnostic_msgs.msg import DiagnosticArray
-        from rclpy.qos import QoSProfile
 
         if not rclpy.ok():
             rclpy.init()
-        self.names = list(names)
-        self.node = rclpy.create_node(f'console_diag_{os.getpid()}')
-        self.pub = self.node.create_publisher(DiagnosticArray, '/diagnostics', QoSProfile(depth=9))
-        self.node.create_timer(0.5, self._tick)
+        self.node = rclpy.create_node(f'{name}_{os.getpid()}')
         self.stop = threading.Event()
         self.thread = threading.Thread(target=self._spin, daemon=True)
+
+    def _spin(self) -> None:
+        import rclpy
+
+        while not self.stop.is_set() and rclpy.ok():
+            rclpy.spin_once(self.node, timeout_sec=0.1)
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join(5)
+        self.node.destroy_node()
+
+
+class DiagnosticsWatcher(_TestNode):
+    """Keeps line_11's newest (level, acknowledged) from /diagnostics."""
+
+    def __init__(self) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray
+        from rclpy.qos import QoSProfile
+
+        super().__init__('console_test')
+        self.seen: list[tuple[int, str]] = []
+        self.node.create_subscription(
+            DiagnosticArray, '/diagnostics', self._on, QoSProfile(depth=50)
+        )
+        self.thread.start()
+
+    def _on(self, msg: Any) -> None:
+        for st in msg.status:
+            if st.name == 'catenary_monitor: line_11':
+                values = {kv.key: kv.value for kv in st.values}
+                self.seen.append((st.level[0], values.get('acknowledged', '')))
+
+
+class DiagnosticsPublisher(_TestNode):
+    """Publishes, at 2 Hz, a monitor's ``/diagnostics`` array for ``names`` (every line OK, a
+    tension sample 0.2 s old), as a monitor started on those lines does."""
+
+    def __init__(self, names: Sequence[str]) -> None:
+        from diagnostic_msgs.msg import DiagnosticArray
+        from rclpy.qos import QoSProfile
+
+        super().__init__('console_diag')
+        self.names = list(names)
+        self.pub = self.node.create_publisher(DiagnosticArray, '/diagnostics', QoSProfile(depth=9))
+        self.node.create_timer(0.5, self._tick)
         self.thread.start()
 
     def _tick(self) -> None:
@@ -297,14 +320,3 @@ class DiagnosticsPublisher:
             st.values = [KeyValue(key=k, value=v) for k, v in values.items()]
             msg.status.append(st)
         self.pub.publish(msg)
-
-    def _spin(self) -> None:
-        import rclpy
-
-        while not self.stop.is_set() and rclpy.ok():
-            rclpy.spin_once(self.node, timeout_sec=0.1)
-
-    def close(self) -> None:
-        self.stop.set()
-        self.thread.join(5)
-        self.node.destroy_node()

@@ -17,11 +17,9 @@ is skipped: without the browser the tests fail with the command that installs it
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
-import threading
 import time
 from typing import Any
 
@@ -32,6 +30,7 @@ from browser_harness import (
     PARAMS,
     SCREENS,
     SHOTS,
+    DiagnosticsWatcher,
     browser,
     layout_problems,
     rows,
@@ -44,43 +43,6 @@ from browser_harness import (
 from ros_harness import child_env
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
-
-
-class DiagnosticsWatcher:
-    """A test node that keeps line_11's newest (level, acknowledged) from /diagnostics."""
-
-    def __init__(self) -> None:
-        import rclpy
-        from diagnostic_msgs.msg import DiagnosticArray
-        from rclpy.qos import QoSProfile
-
-        if not rclpy.ok():
-            rclpy.init()
-        self.node = rclpy.create_node(f'console_test_{os.getpid()}')
-        self.seen: list[tuple[int, str]] = []
-        self.node.create_subscription(
-            DiagnosticArray, '/diagnostics', self._on, QoSProfile(depth=50)
-        )
-        self.stop = threading.Event()
-        self.thread = threading.Thread(target=self._spin, daemon=True)
-        self.thread.start()
-
-    def _on(self, msg: Any) -> None:
-        for st in msg.status:
-            if st.name == 'catenary_monitor: line_11':
-                values = {kv.key: kv.value for kv in st.values}
-                self.seen.append((st.level[0], values.get('acknowledged', '')))
-
-    def _spin(self) -> None:
-        import rclpy
-
-        while not self.stop.is_set() and rclpy.ok():
-            rclpy.spin_once(self.node, timeout_sec=0.1)
-
-    def close(self) -> None:
-        self.stop.set()
-        self.thread.join(5)
-        self.node.destroy_node()
 
 
 @pytest.fixture(scope='module')
