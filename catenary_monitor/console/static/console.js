@@ -179,7 +179,7 @@ function buildTiles() {
     if (warn !== null) mark.style.left = `${100 * warn}%`; else mark.hidden = true;
     t.addEventListener('click', () => selectLine(line.name));
     box.appendChild(t);
-    const chip = el('button', { class: 'chip', role: 'listitem', 'data-chip': line.name }, line.name.replace('line_', ''));
+    const chip = el('button', { class: 'chip', 'data-chip': line.name }, line.name.replace('line_', ''));
     chip.addEventListener('click', () => { selectLine(line.name); t.scrollIntoView({ block: 'nearest' }); });
     chips.appendChild(chip);
   }
