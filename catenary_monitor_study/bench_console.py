@@ -26,12 +26,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ['run_bench', 'register']
+__all__ = ['run_bench', 'register', 'headless_chromium']
 
 CHROMIUM, CHROMEDRIVER = '/usr/bin/chromium', '/usr/bin/chromedriver'
 
 
-def _browser(profile: str) -> Any:
+def headless_chromium(profile: str, width: int = 1920, height: int = 1080) -> Any:
+    """Debian's Chromium, headless, through its chromedriver: a ``width`` x ``height`` CSS px
+    viewport, sound allowed without a click, its profile in the directory ``profile``."""
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 
@@ -46,13 +48,14 @@ def _browser(profile: str) -> Any:
         '--disable-background-networking',
         '--disable-component-update',
         '--disable-sync',
+        '--autoplay-policy=no-user-gesture-required',
         f'--user-data-dir={profile}',
     ):
         options.add_argument(arg)
     driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
     driver.execute_cdp_cmd(
         'Emulation.setDeviceMetricsOverride',
-        {'width': 1920, 'height': 1080, 'deviceScaleFactor': 1, 'mobile': False},
+        {'width': width, 'height': height, 'deviceScaleFactor': 1, 'mobile': False},
     )
     return driver
 
@@ -133,7 +136,7 @@ def run_bench(rate: float = 10.0, duration: float = 20.0, json_out: bool = False
 
     spinner = threading.Thread(target=spin, daemon=True)
     spinner.start()
-    driver = _browser(f'{tmp}/profile')
+    driver = headless_chromium(f'{tmp}/profile')
     try:
         driver.get(url + '?bench=1')
         deadline = time.monotonic() + 60.0

@@ -9,175 +9,47 @@ MCAP log holds the acknowledgement; when the monitor dies the banner ``data-conn
 shows within seconds. Then the recorded log is scrubbed in the replay console: the slider moves
 the page through the storm and the recorded acknowledgement.
 
-Waits are bounded and generous (the machine is shared); nothing is skipped: without the browser
-the tests fail with the command that installs it.
+The page is also measured in the storm at every screen size of ``browser_harness.SCREENS``:
+nothing clipped or overlapping. Waits are bounded and generous (the machine is shared); nothing
+is skipped: without the browser the tests fail with the command that installs it.
 """
 
 from __future__ import annotations
 
 import json
-import os
-import re
 import signal
 import subprocess
 import sys
-import threading
 import time
-from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import pytest
 
+from browser_harness import (
+    LOST,
+    PARAMS,
+    SCREENS,
+    SHOTS,
+    DiagnosticsWatcher,
+    browser,
+    layout_problems,
+    rows,
+    set_viewport,
+    start_console,
+    stop,
+    tiles,
+    wait_for,
+)
 from ros_harness import child_env
 
-ROOT = Path(__file__).resolve().parents[1]
-PARAMS = ROOT / 'config' / 'floating_dock.yaml'
-CHROMIUM, CHROMEDRIVER = '/usr/bin/chromium', '/usr/bin/chromedriver'
-HOW_TO = (
-    'the browser tests need Debian\'s Chromium and its driver: '
-    'apt-get install -y chromium chromium-driver (and pip install selenium)'
-)
-SHOTS = Path(os.environ.get('CATENARY_CONSOLE_SHOTS', '') or ROOT / 'build' / 'console_shots')
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
-
-
-def _browser(tmp: Path) -> Any:
-    """A headless Chromium at 1920x1080 (fails with the how-to when it is not installed)."""
-    if not (os.access(CHROMIUM, os.X_OK) and os.access(CHROMEDRIVER, os.X_OK)):
-        pytest.fail(HOW_TO, pytrace=False)
-    try:
-        from selenium import webdriver
-        from selenium.webdriver.chrome.service import Service
-    except ImportError:
-        pytest.fail(HOW_TO, pytrace=False)
-    options = webdriver.ChromeOptions()
-    options.binary_location = CHROMIUM
-    for arg in (
-        '--headless',
-        '--no-sandbox',
-        '--disable-gpu',
-        '--disable-quic',
-        '--no-first-run',
-        '--disable-background-networking',
-        '--disable-component-update',
-        '--disable-sync',
-        '--autoplay-policy=no-user-gesture-required',
-        f'--user-data-dir={tmp / "chromium-profile"}',
-    ):
-        options.add_argument(arg)
-    driver = webdriver.Chrome(service=Service(CHROMEDRIVER), options=options)
-    driver.execute_cdp_cmd(
-        'Emulation.setDeviceMetricsOverride',
-        {'width': 1920, 'height': 1080, 'deviceScaleFactor': 1, 'mobile': False},
-    )
-    driver.set_script_timeout(30)
-    return driver
-
-
-def wait_for(what: str, check: Callable[[], Any], timeout: float, every: float = 0.25) -> Any:
-    """Poll ``check`` until it returns something true; fail naming ``what`` after ``timeout``."""
-    deadline = time.monotonic() + timeout
-    last: Any = None
-    while time.monotonic() < deadline:
-        try:
-            last = check()
-        except Exception as exc:  # noqa: BLE001 - a page being rebuilt: try again
-            last = exc
-        if last and not isinstance(last, Exception):
-            return last
-        time.sleep(every)
-    raise AssertionError(f'{what}: not seen within {timeout:g} s (last: {last!r})')
-
-
-TILES = (
-    "return [...document.querySelectorAll('.tile[data-line][data-level]')]"
-    '.map(t => [t.dataset.line, t.dataset.level])'
-)
-ROWS = (
-    "return [...document.querySelectorAll('tr[data-line][data-alarm-state]')]"
-    '.map(r => [r.dataset.line, r.dataset.alarmState])'
-)
-LOST = "return !!document.querySelector('[data-connection=\"lost\"]:not([hidden])')"
-
-
-def tiles(driver: Any) -> dict[str, str]:
-    return dict(driver.execute_script(TILES))
-
-
-def rows(driver: Any) -> dict[str, str]:
-    return dict(driver.execute_script(ROWS))
-
-
-def start_console(args: list[str], out: Path) -> tuple[subprocess.Popen, str]:
-    """``catenary-monitor console ARGS --port 0``; (process, URL) once it listens."""
-    log = open(out, 'w+')
-    proc = subprocess.Popen(
-        [sys.executable, '-m', 'catenary_monitor.cli.main', 'console', *args, '--port', '0'],
-        stdout=log,
-        stderr=subprocess.STDOUT,
-        env=child_env(),
-    )
-
-    def url() -> Any:
-        assert proc.poll() is None, out.read_text()
-        match = re.search(r'console: (http://\S+)', out.read_text())
-        return match.group(1) if match else None
-
-    return proc, wait_for('the console URL', url, 90.0)
-
-
-def stop(proc: subprocess.Popen, sig: int = signal.SIGINT) -> int:
-    if proc.poll() is None:
-        proc.send_signal(sig)
-    try:
-        return proc.wait(30)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        return proc.wait(10)
-
-
-class DiagnosticsWatcher:
-    """A test node that keeps line_11's newest (level, acknowledged) from /diagnostics."""
-
-    def __init__(self) -> None:
-        import rclpy
-        from diagnostic_msgs.msg import DiagnosticArray
-        from rclpy.qos import QoSProfile
-
-        if not rclpy.ok():
-            rclpy.init()
-        self.node = rclpy.create_node(f'console_test_{os.getpid()}')
-        self.seen: list[tuple[int, str]] = []
-        self.node.create_subscription(
-            DiagnosticArray, '/diagnostics', self._on, QoSProfile(depth=50)
-        )
-        self.stop = threading.Event()
-        self.thread = threading.Thread(target=self._spin, daemon=True)
-        self.thread.start()
-
-    def _on(self, msg: Any) -> None:
-        for st in msg.status:
-            if st.name == 'catenary_monitor: line_11':
-                values = {kv.key: kv.value for kv in st.values}
-                self.seen.append((st.level[0], values.get('acknowledged', '')))
-
-    def _spin(self) -> None:
-        import rclpy
-
-        while not self.stop.is_set() and rclpy.ok():
-            rclpy.spin_once(self.node, timeout_sec=0.1)
-
-    def close(self) -> None:
-        self.stop.set()
-        self.thread.join(5)
-        self.node.destroy_node()
 
 
 @pytest.fixture(scope='module')
 def live_run(tmp_path_factory: Any) -> Any:
     """The live scenario, once: its observations, the monitor's log and the browser."""
     tmp = tmp_path_factory.mktemp('console')
-    driver = _browser(tmp)
+    driver = browser(tmp)
     log_dir = tmp / 'log'
     env = child_env()
     monitor = subprocess.Popen(
@@ -210,6 +82,12 @@ def live_run(tmp_path_factory: Any) -> Any:
             ".map(e => e.dataset.monitorStatus + ':' + e.dataset.level)"
         )
         wait_for('line_11 ERROR', lambda: tiles(driver)['line_11'] == 'ERROR', 90.0)
+        seen['layout'] = {}
+        for width, height in SCREENS:  # the real storm on every screen (the page re-renders)
+            set_viewport(driver, width, height)
+            in_window = (width, height) == (1920, 937)
+            seen['layout'][(width, height)] = layout_problems(driver, in_window)
+        set_viewport(driver, 1920, 1080)
         seen['sensor_states'] = driver.execute_script(
             "return [...document.querySelectorAll('.tile')].map(e => e.dataset.sensorState)"
         )
@@ -269,6 +147,7 @@ def test_live_page_storm_acknowledge_and_monitor_loss(live_run: Any) -> None:
     assert seen['sensor_states'] and set(seen['sensor_states']) <= {'ok', 'unchecked'}
     assert seen['row_before']['line_11'] == 'unacknowledged'
     assert seen['beeps'] >= 1
+    assert seen['layout'] and not any(seen['layout'].values()), seen['layout']
     assert seen['row_after']['line_11'] == 'acknowledged'
     assert seen['tile_after_ack'] == 'ERROR'  # acknowledged, not cleared: still lifted
     assert seen['diagnostics']
@@ -291,7 +170,7 @@ def test_live_page_storm_acknowledge_and_monitor_loss(live_run: Any) -> None:
 def test_replay_console_scrubs_the_recorded_storm(live_run: Any) -> None:
     tmp = live_run['tmp']
     console, url = start_console(['--log', str(live_run['log_dir'])], tmp / 'replay.out')
-    driver = _browser(tmp / 'replay')
+    driver = browser(tmp / 'replay')
     try:
         driver.get(url)
         wait_for('12 tiles', lambda: len(tiles(driver)) == 12, 60.0)

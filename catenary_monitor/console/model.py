@@ -141,6 +141,7 @@ def console_config(
         'dock_beam': dock.beam if dock else None,
         'safety_factor_warn': alarm.safety_factor_warn if alarm else 2.0,
         'anchor_margin_warn': alarm.anchor_margin_warn if alarm else 5.0,
+        'tide_margin_warn': alarm.tide_margin_warn if alarm else 1.0,
         'uplift_time_warn': alarm.uplift_time_warn if alarm else 1800.0,
         'drag_margin_warn': alarm.drag_margin_warn if alarm else 0.0,
         'tension_timeout': alarm.tension_timeout if alarm else 5.0,

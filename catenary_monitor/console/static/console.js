@@ -11,7 +11,7 @@ const SERVER_TIMEOUT_S = 2.5;  // no stream message for this long: the console s
 const S = {
   config: null, frame: null, line: null, span: 3600, tab: 'active',
   audio: null, mutedUntil: 0, lastBeep: 0, knownErrors: new Set(), beeps: 0,
-  lastMessage: 0, serverLost: false, replay: { t: 0, playing: false, speed: 10, last: 0 },
+  lastMessage: 0, serverLost: false, configPending: false, replay: { t: 0, playing: false, speed: 10, last: 0 },
   trendAt: 0, bench: location.search.includes('bench=1') ? [] : null,
 };
 window.cmConsole = S;  // for the tests and the latency benchmark
@@ -47,11 +47,9 @@ function ago(s) {
 // ---------------------------------------------------------------- start
 async function start() {
   S.config = await (await fetch('/api/config')).json();
-  S.line = (S.config.lines.find((l) => l.name === 'line_11') || S.config.lines[0] || {}).name;
   $('mode').textContent = S.config.mode === 'live' ? 'LIVE' : 'REPLAY';
-  buildTiles();
-  buildPlan();
-  buildPickers();
+  buildLines();
+  bindPickers();
   $('ack-all').addEventListener('click', () => acknowledge('all'));
   $('tab-active').addEventListener('click', () => showTab('active'));
   $('tab-history').addEventListener('click', () => showTab('history'));
@@ -61,6 +59,45 @@ async function start() {
   if (S.config.mode === 'live') startLive(); else startReplay();
   setInterval(watchdog, 250);
   setInterval(refreshTrend, 2000);
+  let resized = 0;
+  window.addEventListener('resize', () => { clearTimeout(resized); resized = setTimeout(refreshTrend, 200); });
+}
+
+// Everything drawn per line: tiles, level chips, plan, trend picker (again when the lines change).
+function buildLines() {
+  const names = S.config.lines.map((l) => l.name);
+  if (!names.includes(S.line)) S.line = names.includes('line_11') ? 'line_11' : names[0];
+  buildTiles();
+  buildPlan();
+  buildPickers();
+}
+
+// A console started without --params-file learns the lines from /diagnostics after the page
+// loaded: a frame naming other lines than the page's fetches the configuration again and
+// rebuilds the page's lines (no reload).
+async function reconfigure() {
+  if (S.configPending) return;
+  S.configPending = true;
+  try {
+    const config = await (await fetch('/api/config')).json();
+    S.config = config;
+    buildLines();
+    if (S.frame) render(S.frame);
+    refreshTrend();
+  } catch (e) { /* the server is gone: the banner says so; the next frame tries again */ }
+  finally { S.configPending = false; }
+}
+
+function sameLines(frame) {
+  const have = S.config.lines;
+  return frame.lines.length === have.length && frame.lines.every((v, k) => v.name === have[k].name);
+}
+
+// Seconds since the newest frame arrived, by the browser's own clock (live only): every age on
+// the page adds it, so ages keep counting while the console server is gone.
+function sinceFrame() {
+  if (!S.config || S.config.mode !== 'live' || !S.lastMessage) return 0;
+  return (performance.now() - S.lastMessage) / 1000;
 }
 
 function startLive() {
@@ -121,8 +158,9 @@ async function fetchFrame(withTrend) {
 
 // ---------------------------------------------------------------- tiles
 function buildTiles() {
-  const box = $('tiles');
+  const box = $('tiles'), chips = $('levels');
   box.textContent = '';
+  chips.textContent = '';
   for (const line of S.config.lines) {
     const t = el('div', { class: 'tile', 'data-line': line.name, 'data-level': 'STALE' });
     t.innerHTML = `<div class="tile-head"><span class="name"></span><span class="badge"></span></div>
@@ -130,17 +168,37 @@ function buildTiles() {
       <div class="bar-label"></div>
       <dl class="vals"><dt>anchor margin</dt><dd class="v-margin"></dd><dt>uplift</dt><dd class="v-uplift"></dd>
       <dt>safety factor</dt><dd class="v-sf"></dd><dt>uplift in</dt><dd class="v-ttu"></dd>
+      <dt title="${TIDE_R}">tide to lift, R held</dt><dd class="v-tide" title="${TIDE_R}"></dd>
+      <dt class="x-tidel" title="${TIDE_L}">tide to lift, chain length held</dt><dd class="v-tidel x-tidel" title="${TIDE_L}"></dd>
       <dt class="x-upper">uplift ≤ (accuracy)</dt><dd class="v-upper x-upper"></dd>
-      <dt class="x-drag">drag margin</dt><dd class="v-drag x-drag"></dd>
-      <dt>model</dt><dd class="v-model"></dd></dl>
-      <div class="msg"></div><div class="foot"></div>`;
+      <dt class="x-drag">drag margin</dt><dd class="v-drag x-drag"></dd></dl>
+      <div class="msg"></div><div class="foot"><span class="v-model" title="the model that answered"></span> · <span class="age"></span><span class="alarm-st"></span><span class="sensor old"></span></div>`;
     t.querySelector('.name').textContent = line.name;
     const warn = line.mbl ? 1 / S.config.safety_factor_warn : null;
     const mark = t.querySelector('.mark');
     if (warn !== null) mark.style.left = `${100 * warn}%`; else mark.hidden = true;
     t.addEventListener('click', () => selectLine(line.name));
     box.appendChild(t);
+    const chip = el('button', { class: 'chip', 'data-chip': line.name }, line.name.replace('line_', ''));
+    chip.addEventListener('click', () => { selectLine(line.name); t.scrollIntoView({ block: 'nearest' }); });
+    chips.appendChild(chip);
   }
+}
+
+// The two tide margins (docs/node.md): the monitor's (R held; its warning and time to uplift
+// follow it) and, with chain_length set, the chain's length and span held.
+const TIDE_R = 'tide_margin: the tide rise that lifts the anchor with the horizontal tension R held '
+  + 'where it is now (a dock free to drift under a steady load); the tide warning and the time to uplift follow it';
+const TIDE_L = 'tide_margin_at_length: the tide rise that lifts the anchor with the chain\'s length and '
+  + 'span held (a dock at rest on chains of fixed length: the nearer one there)';
+
+function renderChip(view, level) {
+  const chip = document.querySelector(`.chip[data-chip="${view.name}"]`);
+  if (!chip) return;
+  const short = view.name.replace('line_', '');
+  setText(chip, level === 'OK' ? short : `${short} ${level}`);
+  chip.className = `chip lv-${level}`;
+  chip.title = `${view.name}: ${level}: ${view.message}`;
 }
 
 function renderTile(view, lost, frame) {
@@ -177,9 +235,17 @@ function renderTile(view, lost, frame) {
   const tt = t.querySelector('.v-ttu');
   tt.textContent = ttu === null || ttu === undefined ? '—' : ttu <= 0 ? 'lifted' : ago(ttu);
   tt.className = 'v-ttu ' + (ttu !== null && ttu !== undefined && ttu < S.config.uplift_time_warn ? 'warn' : '');
+  // The two tide margins: R held (always), chain length held (where finite: chain_length set).
+  const shown = (v) => v !== null && v !== undefined;
+  const tide = t.querySelector('.v-tide'), tidel = t.querySelector('.v-tidel');
+  tide.textContent = `${num(view.tide_margin, 2)} m`;
+  tide.className = 'v-tide ' + (shown(view.tide_margin) && view.tide_margin < 0 ? 'bad' :
+    (shown(view.tide_margin) && view.tide_margin < S.config.tide_margin_warn ? 'warn' : ''));
+  t.querySelectorAll('.x-tidel').forEach((e) => { e.hidden = !shown(view.tide_margin_at_length); });
+  tidel.textContent = shown(view.tide_margin_at_length) ? `${num(view.tide_margin_at_length, 2)} m` : '';
+  tidel.className = 'v-tidel x-tidel ' + (shown(view.tide_margin_at_length) && view.tide_margin_at_length < 0 ? 'bad' : '');
   // The uplift bound within sensor accuracy and the drag margin: shown where configured.
   const up = view.uplift_force_upper, drag = view.drag_margin;
-  const shown = (v) => v !== null && v !== undefined;
   t.querySelectorAll('.x-upper').forEach((e) => { e.hidden = !shown(up); });
   t.querySelectorAll('.x-drag').forEach((e) => { e.hidden = !shown(drag); });
   const vu = t.querySelector('.v-upper');
@@ -188,20 +254,37 @@ function renderTile(view, lost, frame) {
   const vd = t.querySelector('.v-drag');
   vd.textContent = shown(drag) ? `${num(drag, 1, KN)} kN` : '';
   vd.className = 'v-drag x-drag ' + (shown(drag) && drag < (S.config.drag_margin_warn || 0) ? 'warn' : '');
-  t.querySelector('.v-model').textContent = (view.model || '—').replace(' catenary', '');
+  setText(t.querySelector('.v-model'), (view.model || 'no model').replace(' catenary', ''));
   const msg = lost ? `monitor silent: last known ${view.level} at ${clock(frame.snapshot_t)}` : view.message;
   t.querySelector('.msg').textContent = msg;
   t.querySelector('.msg').title = msg;
-  const old = view.age_s !== null && view.age_s > S.config.tension_timeout;
-  const foot = t.querySelector('.foot');
-  foot.innerHTML = '';
-  foot.appendChild(el('span', { class: old ? 'old' : '' }, `newest sample ${ago(view.age_s)} ago`));
-  if (view.alarm_state && view.alarm_state !== 'normal') foot.append(` · alarm ${view.alarm_state}`);
+  renderAge(t, view);
+  setText(t.querySelector('.alarm-st'), view.alarm_state && view.alarm_state !== 'normal' ? ` · alarm ${view.alarm_state}` : '');
   // The load cell's sanity (stuck, spike, over_mbl, slack, suspected_parted; the dock model's
   // inconsistent, suspect): check the sensor. 'unchecked' (not judged by the dock model) is quiet.
   const sensor = view.sensor_state || 'ok';
   t.dataset.sensorState = sensor;
-  if (sensor !== 'ok' && sensor !== 'unchecked') foot.appendChild(el('span', { class: 'old' }, ` · sensor ${sensor.replaceAll('_', ' ')}`));
+  setText(t.querySelector('.sensor'), sensor !== 'ok' && sensor !== 'unchecked' ? ` · sensor ${sensor.replaceAll('_', ' ')}` : '');
+  renderChip(view, level);
+}
+
+// The newest tension sample's age: the server's figure plus the time since that frame came.
+function renderAge(t, view) {
+  const age = view.age_s === null || view.age_s === undefined ? null : view.age_s + sinceFrame();
+  const span = t.querySelector('.age');
+  setText(span, `newest sample ${ago(age)} ago`);
+  span.className = `age ${age !== null && age > S.config.tension_timeout ? 'old' : ''}`;
+}
+
+// Everything on the page that counts time: run by each frame and, between frames (and while the
+// console server is gone), by the watchdog.
+function renderTimes(frame) {
+  for (const view of frame.lines) {
+    const t = document.querySelector(`.tile[data-line="${view.name}"]`);
+    if (t) renderAge(t, view);
+  }
+  renderBanner(frame);
+  $('clock').textContent = clock(frame.now + sinceFrame(), S.config.mode !== 'live');
 }
 
 // ---------------------------------------------------------------- plan
@@ -371,8 +454,13 @@ function renderTide(frame, lost) {
 // ---------------------------------------------------------------- trend
 function buildPickers() {
   const pick = $('trend-line');
+  pick.textContent = '';
   for (const line of S.config.lines) pick.appendChild(el('option', { value: line.name }, line.name));
-  pick.value = S.line;
+  if (S.line) pick.value = S.line;
+}
+
+function bindPickers() {
+  const pick = $('trend-line');
   pick.addEventListener('change', () => selectLine(pick.value));
   $('trend-span').addEventListener('change', () => { S.span = parseFloat($('trend-span').value); refreshTrend(); });
 }
@@ -457,13 +545,13 @@ function isLost(frame) { return S.serverLost || frame.connection === 'lost'; }
 
 function render(frame) {
   S.frame = frame;
+  if (!sameLines(frame)) reconfigure();
   const lost = isLost(frame);
   for (const view of frame.lines) renderTile(view, lost, frame);
   renderPlan(frame, lost);
   renderAlarms(frame, lost);
   renderTide(frame, lost);
-  renderBanner(frame);
-  $('clock').textContent = clock(frame.now, S.config.mode !== 'live');
+  renderTimes(frame);
   if (S.config.mode !== 'live') $('replay-time').textContent = `log time ${clock(frame.now, true)}`;
   if (S.config.mode === 'live') sound(frame, lost);
   if (S.bench) S.bench.push([performance.timeOrigin + performance.now(), frame.lines.map((l) => l.top_tension)]);
@@ -472,20 +560,21 @@ function render(frame) {
 function renderBanner(frame) {
   const b = $('banner'), pill = $('status-pill');
   let text = null, kind = null;
+  const silent = frame.silent_s === null || frame.silent_s === undefined ? null : frame.silent_s + sinceFrame();
   if (S.serverLost) {
     kind = 'lost';
-    text = `CONSOLE SERVER UNREACHABLE — nothing shown is current (last update ${clock(frame.now)})`;
+    text = `CONSOLE SERVER UNREACHABLE for ${ago(sinceFrame())} — nothing shown is current (last data ${clock(frame.now)})`;
   } else if (frame.connection === 'lost') {
     kind = 'lost';
-    text = frame.snapshot_t === null ? `NO DATA FROM THE MONITOR: nothing on /diagnostics for ${ago(frame.silent_s)} since the console started` :
-      `MONITOR SILENT for ${ago(frame.silent_s)} (period ${S.config.period_s} s) — values shown are the last received, at ${clock(frame.snapshot_t)}`;
+    text = frame.snapshot_t === null ? `NO DATA FROM THE MONITOR: nothing on /diagnostics for ${ago(silent)} since the console started` :
+      `MONITOR SILENT for ${ago(silent)} (period ${S.config.period_s} s) — values shown are the last received, at ${clock(frame.snapshot_t)}`;
   } else if (frame.connection === 'waiting') {
     kind = 'waiting';
     text = 'waiting for the monitor on /diagnostics…';
   }
   if (kind) { b.hidden = false; b.dataset.connection = kind; b.textContent = text; } else { b.hidden = true; delete b.dataset.connection; }
   pill.className = `pill ${kind === 'lost' ? 'lost' : 'ok'}`;
-  pill.textContent = kind === 'lost' ? 'CONNECTION LOST' : kind === 'waiting' ? 'waiting' : `monitor ok · ${ago(frame.silent_s)}`;
+  pill.textContent = kind === 'lost' ? 'CONNECTION LOST' : kind === 'waiting' ? 'waiting' : `monitor ok · ${ago(silent)}`;
 }
 
 function watchdog() {
@@ -493,6 +582,7 @@ function watchdog() {
   const lost = (performance.now() - S.lastMessage) / 1000 > SERVER_TIMEOUT_S;
   if (lost !== S.serverLost) { S.serverLost = lost; if (S.frame) render(S.frame); }
   else if (lost && S.frame) sound(S.frame, true); // no frames come while the server is gone
+  if (S.frame) renderTimes(S.frame);
   updateSoundButton();
 }
 

@@ -1,0 +1,176 @@
+"""The console page in Debian's Chromium: on real screen sizes, when its server dies, without
+``--params-file``, and its two tide margins.
+
+* Screens: the demo's storm (``browser_harness.DemoSource``: a long monitor message, every
+  optional value) at 1280x720, 1366x768, 1920x937 and 2560x1440; read from the DOM: no text
+  clipped, no two panels or tiles overlapping, every panel usable and reachable; at 1920x937
+  every tile's level and the alarm list in the window without scrolling.
+* Server loss: the console process killed (SIGKILL) under the page; the banner shows, a tile's
+  age and the clock keep counting by the browser's clock.
+* No ``--params-file``: the page loaded before the monitor is heard shows each line as soon as
+  ``/diagnostics`` names it, without reload.
+"""
+
+from __future__ import annotations
+
+import re
+import signal
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from browser_harness import (
+    LOST,
+    PARAMS,
+    SCREENS,
+    SHOTS,
+    DemoSource,
+    DiagnosticsPublisher,
+    browser,
+    layout_problems,
+    set_viewport,
+    start_console,
+    stop,
+    tiles,
+    wait_for,
+)
+
+pytestmark = [pytest.mark.slow]
+
+AGE = "return document.querySelector('.tile[data-line=\"line_01\"] .foot').textContent"
+CLOCK = "return document.getElementById('clock').textContent"
+
+
+def _age(text: str) -> float:
+    """Seconds in a tile's foot, 'newest sample 3.4 s ago' (minutes too)."""
+    match = re.search(r'newest sample (?:(\d+) min )?([\d.]+) s ago', text)
+    assert match, text
+    return 60.0 * float(match.group(1) or 0) + float(match.group(2))
+
+
+@pytest.fixture
+def demo_page(tmp_path: Path) -> Any:
+    """The page of a console serving the demo's storm (no ROS), in Chromium."""
+    from catenary_monitor.console.server import ConsoleServer
+
+    server = ConsoleServer(DemoSource(), '127.0.0.1', 0)
+    server.start()
+    driver = browser(tmp_path)
+    try:
+        driver.get(server.url)
+        wait_for('12 tiles, line_11 ERROR', lambda: tiles(driver).get('line_11') == 'ERROR', 60.0)
+        wait_for(
+            'the trend drawn',
+            lambda: driver.execute_script("return document.querySelectorAll('#trend path').length")
+            == 4,
+            30.0,
+        )
+        yield driver
+    finally:
+        driver.quit()
+        server.shutdown()
+
+
+def test_page_fits_every_screen(demo_page: Any) -> None:
+    driver = demo_page
+    SHOTS.mkdir(parents=True, exist_ok=True)
+    problems = {}
+    for width, height in SCREENS:
+        set_viewport(driver, width, height)
+        wait_for(
+            f'the page at {width}x{height}',
+            lambda: driver.execute_script('return [innerWidth, innerHeight]') == [width, height],
+            10.0,
+        )
+        problems[(width, height)] = layout_problems(driver, (width, height) == (1920, 937))
+        driver.save_screenshot(str(SHOTS / f'console_{width}x{height}.png'))
+    assert not any(problems.values()), problems
+    # The long message is all there, wrapped over several lines of its tile.
+    lines = driver.execute_script(
+        "const m = document.querySelector('.tile[data-line=\"line_11\"] .msg');"
+        'return [m.textContent, m.getBoundingClientRect().height'
+        ' / parseFloat(getComputedStyle(m).fontSize)]'
+    )
+    assert lines[0].endswith('check the anchor and the chain on the seabed')
+    assert lines[1] > 3.0  # over two lines high
+
+
+def test_both_tide_margins_on_the_tiles(demo_page: Any) -> None:
+    """'tide to lift, R held' (tide_margin) on every tile; 'tide to lift, chain length held'
+    (tide_margin_at_length) beside it where finite (line_01 has none)."""
+    rows = demo_page.execute_script(
+        "return [...document.querySelectorAll('.tile')].map(t => [t.dataset.line,"
+        " [...t.querySelectorAll('.vals dt')].filter(e => e.offsetParent)"
+        ".map(e => e.textContent + ' = ' + e.nextElementSibling.textContent)])"
+    )
+    vals = {line: shown for line, shown in rows}
+    assert 'tide to lift, R held = 4.68 m' in vals['line_02']
+    assert 'tide to lift, chain length held = 1.05 m' in vals['line_02']
+    assert 'tide to lift, R held = -2.10 m' in vals['line_11']
+    assert 'tide to lift, chain length held = -0.40 m' in vals['line_11']
+    assert 'tide to lift, R held = 4.68 m' in vals['line_01']
+    assert not [v for v in vals['line_01'] if 'chain length' in v], vals['line_01']
+    order = [v.split(' = ')[0] for v in vals['line_02']]
+    beside = order.index('tide to lift, R held') + 1
+    assert order.index('tide to lift, chain length held') == beside
+
+
+@pytest.mark.ros
+def test_ages_and_clock_keep_counting_when_the_server_dies(tmp_path: Path) -> None:
+    publisher = DiagnosticsPublisher([f'line_{k:02d}' for k in range(1, 13)])
+    console, url = start_console(['--params-file', str(PARAMS)], tmp_path / 'console.out')
+    driver = browser(tmp_path)
+    try:
+        driver.get(url)
+        wait_for('line_01 OK', lambda: tiles(driver).get('line_01') == 'OK', 60.0)
+        assert _age(driver.execute_script(AGE)) < 2.5  # fresh while the server serves
+        console.send_signal(signal.SIGKILL)
+        console.wait(30)
+        wait_for('the lost-connection banner', lambda: driver.execute_script(LOST), 20.0)
+        first, clock = _age(driver.execute_script(AGE)), driver.execute_script(CLOCK)
+        wait_for(
+            "line_01's age growing with the server gone",
+            lambda: _age(driver.execute_script(AGE)) > first + 2.0,
+            20.0,
+        )
+        assert driver.execute_script(CLOCK) != clock
+        assert 'UNREACHABLE' in driver.find_element('id', 'banner').text
+        assert set(tiles(driver).values()) == {'STALE'}
+    finally:
+        driver.quit()
+        stop(console)
+        publisher.close()
+
+
+@pytest.mark.ros
+def test_lines_learned_from_diagnostics_appear_without_reload(tmp_path: Path) -> None:
+    console, url = start_console([], tmp_path / 'console.out')
+    driver = browser(tmp_path)
+    publisher = None
+    try:
+        driver.get(url)
+        framed = 'return !!cmConsole.frame'
+        wait_for('a frame on the page', lambda: driver.execute_script(framed), 60.0)
+        assert tiles(driver) == {}
+        names = ['bow_port', 'bow_starboard', 'stern']
+        publisher = DiagnosticsPublisher(names)
+        seen = wait_for(
+            'a tile per line named on /diagnostics',
+            lambda: tiles(driver) == {n: 'OK' for n in names} and tiles(driver),
+            60.0,
+        )
+        assert list(seen) == names
+        plan = driver.execute_script(
+            "return [...document.querySelectorAll('[data-plan-line]')]"
+            '.map(g => g.dataset.planLine)'
+        )
+        picker = driver.execute_script(
+            "return [...document.getElementById('trend-line').options].map(o => o.value)"
+        )
+        assert plan == names and picker == names
+    finally:
+        driver.quit()
+        stop(console)
+        if publisher is not None:
+            publisher.close()
