@@ -757,6 +757,7 @@ def main(
         return 2
     extra = rclpy.utilities.remove_ros_args(argv)[1:]
     node = None
+    executor: Any = None
     try:
         if extra:
             print(
@@ -784,6 +785,8 @@ def main(
         if node is not None:
             node.close()
             node.get_logger().info('stopped; MCAP log closed')
+            if executor is not None:  # its event queue ends before the node it calls into
+                executor.shutdown()
             node.destroy_node()
         rclpy.try_shutdown()
     return 0
