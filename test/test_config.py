@@ -145,6 +145,9 @@ def test_missing_file(tmp_path):
         ({'lines': ['a', 'a']}, 'lines', "duplicate line name 'a'"),
         ({'lines': ['1a']}, 'lines', 'start with a letter'),
         ({'lines': ['a.b']}, 'lines', 'start with a letter'),
+        ({'lines': ['a', 'tide']}, 'lines', "line name 'tide' is the name of one of the"),
+        ({'lines': ['sensors']}, 'lines', "'sensors' is the name of one of the monitor's own"),
+        ({'lines': ['all']}, 'lines', 'choose another'),
         (
             _minimal(**{'a.wieght': 3.0}),
             'a.wieght',
@@ -298,3 +301,13 @@ def test_heading_is_optional_and_checked():
         assert 'finite' in str(err)
     else:
         raise AssertionError('an infinite heading must be refused')
+
+
+def test_a_line_named_like_a_monitor_status_is_refused_when_built_directly():
+    """LineConfig checks the name as the params-file reader does: a line called ``tide``
+    would share its /diagnostics name with the tide's status."""
+    from catenary_monitor.core.config import RESERVED_NAMES, LineConfig
+
+    for name in RESERVED_NAMES:
+        with pytest.raises(ConfigError, match='own statuses'):
+            LineConfig(name=name, weight=1300.0, anchor_distance=120.0, mbl=4.8e6)

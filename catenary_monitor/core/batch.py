@@ -279,7 +279,7 @@ def solve_updates(
         b = cat.two_prod_diff(t, w, h) / w
         x_min = b * cat.acosh1p(h / b)
         r = w * b
-        length = np.sqrt(h * (h + 2.0 * b))
+        length = np.sqrt(h) * np.sqrt(h + 2.0 * b)  # cat.grounded's form: no underflow
         uplift = np.zeros_like(b)
         angle = np.zeros_like(b)
         lift = np.flatnonzero(x < x_min)

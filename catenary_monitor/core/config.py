@@ -103,7 +103,11 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'lines',
         'string_array',
         REQUIRED,
-        'Names of the monitored chains; each NAME gets the NAME.* parameters below',
+        (
+            'Names of the monitored chains (a letter, then letters, digits, _; not tide, sensors,'
+            ' logger, dock, parameters, clock, intake, all); each NAME gets the NAME.* '
+            'parameters below'
+        ),
         '',
         None,
         None,
@@ -795,6 +799,26 @@ ROS_BUILTIN_PARAMETERS = frozenset({'use_sim_time', 'start_type_description_serv
 _ROS_BUILTIN_PREFIXES = ('qos_overrides.',)
 
 _LINE_NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*\Z')
+#: Names of the monitor's own statuses (``catenary_monitor: tide``, ...) and of the
+#: acknowledgement of every alarm (``all``): no line may take one.
+RESERVED_NAMES = ('tide', 'sensors', 'logger', 'dock', 'parameters', 'clock', 'intake', 'all')
+
+
+def _check_line_name(name: object) -> None:
+    """Raise ConfigError unless ``name`` is a usable line name."""
+    if not isinstance(name, str) or not _LINE_NAME.match(name):
+        raise ConfigError(
+            'lines',
+            f'line name {name!r} must start with a letter and hold only letters, digits and _',
+        )
+    if name in RESERVED_NAMES:
+        raise ConfigError(
+            'lines',
+            f'line name {name!r} is the name of one of the monitor\'s own statuses '
+            f'({", ".join(RESERVED_NAMES)}): choose another',
+        )
+
+
 _TOPIC = re.compile(r'/?[A-Za-z_~{][A-Za-z0-9_{}]*(/[A-Za-z_{][A-Za-z0-9_{}]*)*\Z')
 
 
@@ -883,12 +907,7 @@ class LineConfig:
     chain_friction: float | None = None
 
     def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not _LINE_NAME.match(self.name):
-            raise ConfigError(
-                'lines',
-                f'line name {self.name!r} must start with a letter and '
-                'hold only letters, digits and _',
-            )
+        _check_line_name(self.name)
         values = {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}
         if values['tension_topic'] == '':
             values['tension_topic'] = _PER_LINE['tension_topic'].default_for(self.name)
@@ -1170,12 +1189,7 @@ def config_from_params(flat: Mapping[str, Any]) -> MonitorConfig:
     if not lines:
         raise ConfigError('lines', 'must name at least one line')
     for name in lines:
-        if not _LINE_NAME.match(name):
-            raise ConfigError(
-                'lines',
-                f'line name {name!r} must start with a letter and '
-                'hold only letters, digits and _',
-            )
+        _check_line_name(name)
         if lines.count(name) > 1:
             raise ConfigError('lines', f'duplicate line name {name!r}')
     known = dict(expand_parameters(lines))
