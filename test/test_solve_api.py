@@ -253,3 +253,22 @@ def test_flat_array_call_equals_the_general_path():
         np.testing.assert_array_equal(fast.status, general.status)
     with pytest.raises(ValueError, match='broadcast'):
         solve(1300.0, h, tension=t[:-1], anchor_distance=x)
+
+
+def test_cli_prints_a_margin_beyond_float64_as_unbounded():
+    """A nearly slack chain's tide margin is beyond float64 (+inf in solve(), status 0): the
+    table says so in words, the JSON has null and names it under 'unbounded' (strict JSON, no
+    Infinity), exit 0; the other values are printed as they are."""
+    args = ['--weight', '1300', '--depth', '20.85', '--tension', '27376.05']
+    args += ['--anchor-distance', '200']
+    r = solve(1300.0, 20.85, tension=27376.05, anchor_distance=200.0)
+    assert r.status == 0 and r.tide_margin == np.inf
+    cmd = [sys.executable, '-m', 'catenary_monitor', 'solve', *args]
+    table = subprocess.run(cmd, capture_output=True, text=True, timeout=60)
+    assert table.returncode == 0, table.stderr
+    assert 'beyond float64' in table.stdout and 'inf' not in table.stdout.replace('float', '')
+    p = subprocess.run([*cmd, '--json'], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0, p.stderr
+    data = json.loads(p.stdout, parse_constant=lambda c: pytest.fail(f'non-JSON {c}'))
+    assert data['tide_margin'] is None and data['unbounded'] == ['tide_margin']
+    assert data['load_margin'] == r.load_margin and data['anchor_margin'] == r.anchor_margin

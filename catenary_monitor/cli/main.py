@@ -20,6 +20,7 @@ from typing import Any, Callable, Optional, Sequence
 import numpy as np
 
 from catenary_monitor.cli.table import format_table
+from catenary_monitor.core.result import INF_MARGINS
 from catenary_monitor.core.solve import STATUS_MESSAGES, SolveResult, Status, solve
 
 #: Display unit, scale from SI and format for each key of the human-readable table.
@@ -79,6 +80,8 @@ def result_table(result: SolveResult) -> str:
 def _shown(fmt: str, value: float) -> str:
     """``value`` in its column format, or in 7 significant digits where that would be longer
     than a column (a 1e300 N reading stays one readable cell)."""
+    if value == math.inf:
+        return 'beyond float64'
     if abs(value) >= 1e9:
         return f'{value:+.7g}' if fmt.startswith('{:+') else f'{value:.7g}'
     return fmt.format(value)
@@ -124,15 +127,22 @@ def cmd_solve(args: argparse.Namespace) -> int:
     if int(result.status) != Status.OK:
         raise UsageError(_status_line(result, args))
     values = result.to_dict()
-    bad = [k for k, v in values.items() if not math.isfinite(v)]
-    if bad:  # float64 over- or underflow inside the solve: say so, never print a NaN
+    # a solved result is finite but for a margin beyond float64 (result.INF_MARGINS: +inf);
+    # JSON has no infinity: such a margin is null there, named under 'unbounded'
+    unbounded = [k for k in INF_MARGINS if values.get(k) == math.inf]
+    bad = [k for k, v in values.items() if not math.isfinite(v) and k not in unbounded]
+    if bad:  # never print a NaN (solve() marks such elements OUT_OF_RANGE)
         raise UsageError(
             f'{bad[0]} is not finite: the inputs are beyond the range the solver handles in '
             'float64'
         )
     if args.json:
         lifted = bool(result.uplift_force > 0)
-        print(json.dumps({**values, 'model': result.model, 'anchor_lifted': lifted}))
+        values.update(dict.fromkeys(unbounded))
+        extra: dict[str, Any] = {'model': result.model, 'anchor_lifted': lifted}
+        if unbounded:
+            extra['unbounded'] = unbounded
+        print(json.dumps({**values, **extra}, allow_nan=False))
     else:
         given = f'w = {args.weight:g} N/m, h = {args.depth:g} m'
         for name, unit in (
