@@ -231,8 +231,8 @@ def _row_plan(has_x: bool, has_mbl: bool) -> tuple[tuple[str, ...], int, tuple[i
     """The keys that apply, the kernel's row mask for them, and per key of ``ALL_KEYS`` its
     row in the kernel's output (-1: NaN, not computed)."""
     keys = _keys('tension', has_x, has_mbl)
-    mask = sum(1 << ALL_KEYS.index(k) for k in keys)
-    return keys, mask, tuple(keys.index(k) if k in keys else -1 for k in ALL_KEYS)
+    where = tuple(keys.index(k) if k in keys else -1 for k in ALL_KEYS)
+    return keys, kernels.row_mask(keys), where
 
 
 def _kernel_result(
@@ -241,8 +241,7 @@ def _kernel_result(
     """Solve flat kernel arguments of ``math.prod(shape)`` elements into a result of ``shape``.
 
     Only the rows that apply are computed into memory of their own; the others are NaN
-    everywhere, one read-only NaN broadcast to the shape (docs/benchmarks.md: the result's
-    fresh memory is most of the cost at 1e6 elements)."""
+    everywhere, one read-only NaN broadcast to the shape (no memory written for them)."""
     keys, mask, where = _row_plan(anchor_distance is not None, mbl is not None)
     out = np.empty((len(keys),) + shape)
     status = np.empty(shape, dtype=np.int64)

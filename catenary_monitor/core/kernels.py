@@ -185,24 +185,27 @@ def solve_arrays(
         solve_into([w, h, t, x, mbl], out, status, ALL_ROWS, iters)
         return out, status
     out = np.empty((len(rows), n))
-    solve_into([w, h, t, x, mbl], out, status, sum(1 << _ROW[k] for k in rows), iters)
+    solve_into([w, h, t, x, mbl], out, status, row_mask(rows), iters)
     return out, status
+
+
+def row_mask(rows: tuple[str, ...]) -> int:
+    """The kernel's row mask of ``rows`` (keys of ``result.ALL_KEYS``): bit r for row r."""
+    return sum(1 << _ROW[k] for k in rows)
 
 
 def solve_into(
     args: list[Any],
     out: np.ndarray,
     status: np.ndarray,
-    mask: int = 0,
+    mask: int,
     iters: Optional[np.ndarray] = None,
 ) -> None:
     """Solve ``args`` (``[w, h, t, x, mbl]``: float64 arrays of one length n or floats; x, mbl
-    may be None) into ``out`` (C-contiguous float64, the rows of ``mask`` in ``ALL_KEYS`` order,
-    n each; bit r of ``mask`` for row r, 0 for all) and ``status`` (int64, n)."""
+    may be None) into ``out`` (C-contiguous float64, the rows of ``mask`` (:func:`row_mask`,
+    ``ALL_ROWS``) in ``ALL_KEYS`` order, n each) and ``status`` (int64, n)."""
     w, h, t, x, mbl = args
-    _k.solve_tension(
-        w, h, t, x, mbl, out, status, iters, cat.MAXITER, cat.STEP_TOL, mask or ALL_ROWS
-    )
+    _k.solve_tension(w, h, t, x, mbl, out, status, iters, cat.MAXITER, cat.STEP_TOL, mask)
 
 
 _ROW = {k: r for r, k in enumerate(ALL_KEYS)}
