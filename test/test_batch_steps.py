@@ -75,3 +75,29 @@ def test_pick_matches_numpy() -> None:
             assert np.array_equal(fast, slow, equal_nan=True)
     with pytest.raises(IndexError):
         STEPS.pick(np.array([3], np.int64), np.zeros(3), 0.0, np.empty(1))
+
+
+def test_latch_matches_the_scalar_step_and_numpy(monkeypatch: pytest.MonkeyPatch) -> None:
+    """alarms._latch_series in C and in numpy equal repeated alarms._step, from latches up or
+    down, pending (since a past update's stamp) or not, through equal stamps and zero delays."""
+    from catenary_monitor.core import alarms
+
+    rng = np.random.default_rng(5)
+    for trial in range(2000):
+        n = int(rng.integers(1, 50))
+        t = 10.0 + np.cumsum(rng.choice([0.0, 0.3, 1.0, 2.5], n))
+        codes = rng.choice(3, n, p=rng.dirichlet([1, 1, 1])).astype(np.int8)
+        since = None if trial % 2 else float(t[0] - rng.uniform(0.0, 4.0))
+        start = alarms.Latch(bool(trial % 3 == 0), since)
+        on_delay, hold = float(rng.choice([0.0, 0.5, 2.0])), float(rng.choice([0.0, 1.0, 3.0]))
+        latch, want = start, []
+        for code, now in zip(codes.tolist(), t.tolist()):
+            latch = alarms._step(latch, code, now, on_delay, hold)
+            want.append(latch.active)
+        for steps in (STEPS, None):
+            monkeypatch.setattr(alarms, '_steps', steps)
+            active, end = alarms._latch_series(codes, t, on_delay, hold, start)
+            assert active.dtype == bool and active.tolist() == want, (trial, steps)
+            assert end == latch, (trial, steps)
+    with pytest.raises(ValueError):
+        STEPS.latch(np.zeros(3, np.int8), np.zeros(2), 0.0, 0.0, False, np.nan, np.empty(3, bool))

@@ -1,4 +1,4 @@
-/* Two loops of the vectorized replay (catenary_monitor/core/batch.py) in C.
+/* Three loops of the vectorized replay (catenary_monitor/core/batch.py, alarms.py) in C.
  *
  * Optional, like the solve kernel: where it is not built, batch.py runs its numpy passes,
  * which give the same arrays (test/test_batch_steps.py compares them).
@@ -10,6 +10,10 @@
  *   pick(idx, column, before, out)
  *       batch._pick for a float64 column: out[i] = column[idx[i]], or `before` where
  *       idx[i] == -1 (every element `before` when the column is empty).
+ *   latch(codes, t, on_delay, hold, active, since, out) -> (active, since)
+ *       alarms._latch_series: one condition's latch after each update (out, bool) from its
+ *       codes (int8: 0 hold, 1 breach, 2 clear) at times t [s], stepped as alarms._step from
+ *       (active, since) (since NaN: None); returns the latch after the last update.
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
@@ -124,9 +128,58 @@ done:
     return result;
 }
 
+static PyObject *py_latch(PyObject *self, PyObject *args) {
+    PyObject *o_codes, *o_t, *o_out;
+    double on_delay, hold, since;
+    int active;
+    if (!PyArg_ParseTuple(args, "OOddpdO", &o_codes, &o_t, &on_delay, &hold, &active, &since,
+                          &o_out))
+        return NULL;
+    Py_buffer bc, bt, bo;
+    PyObject *result = NULL;
+    if (get(o_codes, &bc, 0, 1, "codes") < 0) return NULL;
+    if (get(o_t, &bt, 0, 8, "t") < 0) { PyBuffer_Release(&bc); return NULL; }
+    if (get(o_out, &bo, 1, 1, "out") < 0) {
+        PyBuffer_Release(&bc);
+        PyBuffer_Release(&bt);
+        return NULL;
+    }
+    const int8_t *codes = bc.buf;
+    const double *t = bt.buf;
+    uint8_t *out = bo.buf;
+    const Py_ssize_t n = bc.len;
+    if (bt.len != 8 * n || bo.len != n) {
+        PyErr_SetString(PyExc_ValueError, "latch: codes, t and out differ in length");
+        goto done;
+    }
+    int pending = since == since; /* alarms._step: since is None -> not pending */
+    for (Py_ssize_t i = 0; i < n; i++) {
+        const double now = t[i];
+        if (codes[i] != (active ? 2 : 1)) {
+            pending = 0;
+        } else {
+            if (!pending || since > now) since = now;
+            pending = 1;
+            if (now - since >= (active ? hold : on_delay)) {
+                active = !active;
+                pending = 0;
+            }
+        }
+        out[i] = (uint8_t)active;
+    }
+    result = pending ? Py_BuildValue("(Od)", active ? Py_True : Py_False, since)
+                     : Py_BuildValue("(OO)", active ? Py_True : Py_False, Py_None);
+done:
+    PyBuffer_Release(&bc);
+    PyBuffer_Release(&bt);
+    PyBuffer_Release(&bo);
+    return result;
+}
+
 static PyMethodDef methods[] = {
     {"merge3", py_merge3, METH_VARARGS, "Merge sorted depth, tension and tick times."},
     {"pick", py_pick, METH_VARARGS, "column[idx], before where idx == -1 (float64)."},
+    {"latch", py_latch, METH_VARARGS, "One condition's latch after each update."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -78,6 +78,11 @@ import numpy as np
 from catenary_monitor.core import sensor
 from catenary_monitor.core.config import AlarmConfig, LineConfig
 
+try:  # the latch's loop in C (core/_steps.c; optional: else the numpy passes)
+    from catenary_monitor.core import _steps  # type: ignore[attr-defined]
+except ImportError:  # not built
+    _steps = None
+
 __all__ = [
     'Level',
     'AlarmInputs',
@@ -468,7 +473,9 @@ _SENSOR = ('sensor_error', 'sensor_warn')
 
 def _sensor_codes(cond: str, code: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(breach, clear) of a sensor condition from line state codes (NaN: hold)."""
-    errors = np.isin(code, sensor.ERROR_STATES)
+    errors = code == sensor.ERROR_STATES[0]  # np.isin's machinery cost 4 ns per code
+    for state in sensor.ERROR_STATES[1:]:
+        errors = errors | (code == state)
     breach = errors if cond == 'sensor_error' else ~errors & (code > 0)
     return breach, ~breach & np.isfinite(code)
 
@@ -579,12 +586,19 @@ def _latch_series(
     depends on the latch state at the run's start (a breach run cannot clear, a clear run cannot
     raise). So every "set" and "reset" candidate is found independently and the latch is the
     most recent candidate, forward-filled from ``start.active``. Also returns the final latch.
+    Where core/_steps.c is built, a window with a breach is one C loop of ``_step`` instead
+    (the numpy passes cost ~17 ns per update there).
     """
     n = codes.size
     if n == 0:
         return np.zeros(0, dtype=bool), start
     if not start.active and not (codes == _BREACH).any():
         return np.zeros(n, dtype=bool), Latch()  # only a breach run can raise the latch
+    if _steps is not None and codes.dtype == np.int8 and t.dtype == np.float64:
+        out = np.empty(n, dtype=bool)
+        pending = math.nan if start.since is None else start.since
+        args = (np.ascontiguousarray(codes), np.ascontiguousarray(t), on_delay, hold)
+        return out, Latch(*_steps.latch(*args, start.active, pending, out))
     idx = np.arange(n)
     starts = np.empty(n, dtype=bool)
     starts[0] = True
@@ -638,23 +652,22 @@ class LevelSeries:
         warn = np.zeros(n, dtype=bool)
         for cond in _WARNS:
             warn |= active[cond]
-        stale = stale_t | stale_d
-        self.levels = np.where(
-            err, Level.ERROR, np.where(stale, Level.STALE, np.where(warn, Level.WARN, Level.OK))
-        ).astype(np.int8)
+        levels = np.where(warn, np.int8(Level.WARN), np.int8(Level.OK))
+        np.copyto(levels, np.int8(Level.STALE), where=stale_t | stale_d)
+        np.copyto(levels, np.int8(Level.ERROR), where=err)
+        self.levels = levels
         own = stale_t & ~np.isnan(x['tension_stamp'])
         #: Per update: STALE only by a common cause (suppressed by design).
-        self.suppressed = (self.levels == Level.STALE) & ~own
-        self._last_bad = (
-            np.maximum.accumulate(np.where(status != 0, np.arange(n), -1))
-            if n
-            else np.zeros(0, np.int64)
-        )
+        self.suppressed = (levels == Level.STALE) & ~own
+        self._bad: np.ndarray | None = None  # updates with a solver status, when first asked
         self.transitions, self._entered = self._walk()
 
     def _held(self, i: int) -> str:
         """The impossible-input sentence the input alarm holds after update ``i``."""
-        j = int(self._last_bad[i])
+        if self._bad is None:
+            self._bad = np.flatnonzero(self._status != 0)
+        at = int(np.searchsorted(self._bad, i, 'right')) - 1
+        j = int(self._bad[at]) if at >= 0 else -1
         if j < 0:
             return self._initial.input_message
         code = int(self._status[j])
@@ -762,10 +775,16 @@ def replay_levels(
     status = _column(inputs.get('status', 0), np.int64, n)
     stale_t, stale_d = _stale_columns(alarm, t, x, inputs.get('depth_stale'))
     stale = stale_t | stale_d
-    classified = _classify_columns(alarm, x, status, stale)
+    classified = _classify_columns(alarm, x, status, stale, initial.latches)
     active, latches = {}, []
+    quiet = np.zeros(n, dtype=bool)
+    quiet.flags.writeable = False
     for cond, latch in zip(CONDITIONS, initial.latches):
-        active[cond], end = _latch_series(classified[cond], t, *alarm._timing(cond), latch)
+        code = classified[cond]
+        if code is None:  # down before the window and no breach in it: down throughout
+            active[cond], end = quiet, Latch()
+        else:
+            active[cond], end = _latch_series(code, t, *alarm._timing(cond), latch)
         latches.append(end)
     texts = inputs.get('status_message')
     if texts is not None:
@@ -807,14 +826,26 @@ def _stale_columns(
 
 
 def _classify_columns(
-    alarm: LineAlarm, x: dict[str, np.ndarray], status: np.ndarray, stale: np.ndarray
-) -> dict[str, np.ndarray]:
-    """Each condition's code (breach, clear, hold) per update, as :meth:`LineAlarm._classify`."""
+    alarm: LineAlarm,
+    x: dict[str, np.ndarray],
+    status: np.ndarray,
+    stale: np.ndarray,
+    latches: Sequence[Latch] | None = None,
+) -> dict[str, np.ndarray | None]:
+    """Each condition's code (breach, clear, hold) per update, as :meth:`LineAlarm._classify`.
+
+    Given the latches before the updates (:data:`CONDITIONS` order), a condition whose latch is
+    down and that no update breaches is None instead: it stays down (most conditions of most
+    windows).
+    """
 
     fresh = ~stale
+    down = {} if latches is None else {c: not l.active for c, l in zip(CONDITIONS, latches)}
 
-    def codes(breach: np.ndarray, clear: np.ndarray) -> np.ndarray:
+    def codes(cond: str, breach: np.ndarray, clear: np.ndarray) -> np.ndarray | None:
         # _HOLD 0, _BREACH 1, _CLEAR 2: breach wins, a clear counts only on fresh inputs
+        if down.get(cond, False) and not breach.any():
+            return None
         out = np.bitwise_and(clear, fresh, dtype=bool)
         out &= ~breach
         code = out.view(np.int8)
@@ -829,21 +860,23 @@ def _classify_columns(
     if not level_up > 0.0:
         up_clear &= x['anchor_margin'] >= cfg.uplift_clear_margin
     out = {
-        'uplift': codes(f > alarm.allowed_uplift, up_clear),
-        'input': codes(status != 0, status == 0),
+        'uplift': codes('uplift', f > alarm.allowed_uplift, up_clear),
+        'input': codes('input', status != 0, status == 0),
     }
     for cond in _MARGINS:
         low, high = alarm._warn_limits(cond)
-        out[cond] = codes(x[cond] < low, x[cond] >= high)
+        out[cond] = codes(cond, x[cond] < low, x[cond] >= high)
     flag = x['inconsistent']
-    out['inconsistent'] = codes(flag == 1.0, flag == 0.0)
+    out['inconsistent'] = codes('inconsistent', flag == 1.0, flag == 0.0)
     nominal = f > alarm.allowed_uplift
     upper = x['uplift_force_upper']
     out['uplift_possible'] = codes(
-        (upper > alarm.allowed_uplift) & ~nominal, (upper <= alarm.allowed_uplift) | nominal
+        'uplift_possible',
+        (upper > alarm.allowed_uplift) & ~nominal,
+        (upper <= alarm.allowed_uplift) | nominal,
     )
     for cond in _SENSOR:
-        out[cond] = codes(*_sensor_codes(cond, x['sensor_state']))
+        out[cond] = codes(cond, *_sensor_codes(cond, x['sensor_state']))
     return out
 
 
