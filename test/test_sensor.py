@@ -317,3 +317,20 @@ def test_node_md_sensor_parameter_table_is_generated():
     page = (Path(__file__).resolve().parents[1] / 'docs' / 'node.md').read_text()
     begin, end = '<!-- sensor-parameters:begin -->\n', '<!-- sensor-parameters:end -->'
     assert page.split(begin, 1)[1].split(end, 1)[0] == parameters_markdown('sensor')
+
+
+def test_moved_since_is_the_other_lines_newest_change():
+    """sensor._moved_since (two reductions per row) against its definition, line by line:
+    with ties, never-changed lines (-inf), NaN, one line and no ticks."""
+    rng = np.random.default_rng(7)
+    for trial in range(300):
+        n, m = int(rng.integers(0, 20)), int(rng.integers(1, 14))
+        changed = rng.choice([-np.inf, 1.0, 2.0, 3.0, np.nan], (n, m), p=[0.2, 0.3, 0.2, 0.2, 0.1])
+        depth = rng.choice([-np.inf, 1.5, 2.0, np.nan], n)
+        want = np.zeros((n, m), bool)
+        for k in range(m):
+            others = np.delete(changed, k, axis=1)
+            newest = np.max(others, axis=1) if m > 1 else np.full(n, -np.inf)
+            with np.errstate(invalid='ignore'):
+                want[:, k] = np.maximum(newest, depth) > changed[:, k]
+        assert np.array_equal(sensor._moved_since(changed, depth), want), trial

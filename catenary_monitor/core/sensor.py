@@ -175,14 +175,22 @@ def _after(first: float, rest: np.ndarray) -> np.ndarray:
 
 
 def _moved_since(changed: np.ndarray, depth_changed: np.ndarray) -> np.ndarray:
-    """Per (tick, line): another line's or the depth's last change is newer than the line's."""
+    """Per (tick, line): another line's or the depth's last change is newer than the line's.
+
+    The other lines' newest change is the row's newest, or for the line holding it (the first
+    of equal ones) the newest of the rest: two reductions per row, not one per line."""
     n, lines = changed.shape
-    out = np.zeros((n, lines), bool)
-    for k in range(lines):
-        others = np.delete(changed, k, axis=1)
-        newest = np.max(others, axis=1) if lines > 1 else np.full(n, _NEVER)
-        out[:, k] = np.maximum(newest, depth_changed) > changed[:, k]
-    return out
+    if lines > 1:
+        top = changed.argmax(axis=1)  # the first NaN where there is one: np.max gives NaN
+        rows = np.arange(n)
+        rest = changed.copy()
+        rest[rows, top] = _NEVER
+        newest = np.repeat(changed[rows, top][:, None], lines, axis=1)
+        newest[rows, top] = rest.max(axis=1)
+    else:
+        newest = np.full((n, lines), _NEVER)
+    with np.errstate(invalid='ignore'):
+        return np.maximum(newest, depth_changed[:, None]) > changed
 
 
 def parted_pattern(tension: np.ndarray, ref: np.ndarray, drop: float) -> np.ndarray:
