@@ -597,3 +597,25 @@ def test_run_log_steps_clock_and_intake_events_as_the_core_does():
         if st.name == 'catenary_monitor: clock' and st.level == 2
     )
     assert stopped.message.startswith('ROS clock stopped: /clock not advancing for 4 s')
+
+
+def test_worst_is_the_first_extreme_ignoring_nan():
+    """batch.worst: the smallest margin and the largest force, the first of equal ones, NaN
+    ignored (where the other values are infinite too), None where every value is NaN."""
+    from catenary_monitor.core import batch
+
+    nan, inf = math.nan, math.inf
+    v = np.array([nan, 3.0, -inf, -inf, nan])
+    values = {key: v for key in ('anchor_margin', 'tide_margin', 'load_margin', 'uplift_force')}
+    values['safety_factor'] = np.full(5, nan)
+    values['top_tension'] = np.array([nan, -inf, nan, -inf, nan])
+    t = np.arange(5, dtype=np.int64) * 1_000_000_000
+    empty = np.zeros(0)
+    result = batch.LineResult('a', t, t, values, t, t, t, t, t)
+    out = batch.worst(result)
+    assert out['anchor_margin'] == {'value': -inf, 'time': 2.0}
+    assert out['uplift_force'] == {'value': 3.0, 'time': 1.0}
+    assert out['top_tension'] == {'value': -inf, 'time': 1.0}  # np.nanargmax gave index 0: NaN
+    assert out['safety_factor'] is None
+    nothing = batch.LineResult('a', empty, empty, {key: empty for key in values}, *[empty] * 5)
+    assert all(w is None for w in batch.worst(nothing).values())

@@ -1520,19 +1520,20 @@ def worst(result: LineResult) -> dict[str, Optional[dict[str, float]]]:
     ``uplift_force`` and ``top_tension``. None when the quantity never had a value.
     """
     out: dict[str, Optional[dict[str, float]]] = {}
-    for key, pick in (
-        ('anchor_margin', np.nanargmin),
-        ('tide_margin', np.nanargmin),
-        ('load_margin', np.nanargmin),
-        ('safety_factor', np.nanargmin),
-        ('uplift_force', np.nanargmax),
-        ('top_tension', np.nanargmax),
+    for key, best in (
+        ('anchor_margin', np.fmin),
+        ('tide_margin', np.fmin),
+        ('load_margin', np.fmin),
+        ('safety_factor', np.fmin),
+        ('uplift_force', np.fmax),
+        ('top_tension', np.fmax),
     ):
         v = result.values[key]
-        if len(v) == 0 or np.all(np.isnan(v)):
+        value = best.reduce(v) if len(v) else math.nan  # NaN only where every value is NaN
+        if value != value:
             out[key] = None
             continue
-        i = int(pick(v))
+        i = int(np.argmax(v == value))  # the first, as np.nanargmin (no NaN-free copy)
         out[key] = {'value': float(v[i]), 'time': float(result.t_ns[i] * 1e-9)}
     return out
 
