@@ -101,3 +101,22 @@ def test_latch_matches_the_scalar_step_and_numpy(monkeypatch: pytest.MonkeyPatch
             assert end == latch, (trial, steps)
     with pytest.raises(ValueError):
         STEPS.latch(np.zeros(3, np.int8), np.zeros(2), 0.0, 0.0, False, np.nan, np.empty(3, bool))
+
+
+def test_line_steps_match_numpy() -> None:
+    """batch._line_steps' C loop (every newest index, solved, in one pass) equals its cumulative
+    sums, with and without a tension known before the window, empty columns and equal stamps."""
+    rng = np.random.default_rng(6)
+    for trial in range(300):
+        cols = [np.sort(rng.integers(0, 30, int(rng.integers(0, 25)))).astype(np.int64)
+                for _ in range(3)]
+        tension = (cols[1], rng.normal(1e6, 1e4, len(cols[1])))
+        window = batch.Window([tension], (cols[0], rng.normal(20.0, 1.0, len(cols[0]))), cols[2])
+        line = type('Line', (), {'tension_s': np.nan if trial % 2 else 3.0})()
+        fast, slow = _both(batch._line_steps, line, cols[1], window)
+        for name in fast.__dataclass_fields__:
+            a, b = getattr(fast, name), getattr(slow, name)
+            assert a.dtype == b.dtype and np.array_equal(a, b), (trial, name)
+    with pytest.raises(ValueError):
+        STEPS.newest(np.array([7], np.int8), 0, 1, 2, False,
+                     *[np.empty(1, np.int64)] * 4, np.empty(1, bool), np.empty(1, np.int64))

@@ -1,4 +1,4 @@
-/* Three loops of the vectorized replay (catenary_monitor/core/batch.py, alarms.py) in C.
+/* Four loops of the vectorized replay (catenary_monitor/core/batch.py, alarms.py) in C.
  *
  * Optional, like the solve kernel: where it is not built, batch.py runs its numpy passes,
  * which give the same arrays (test/test_batch_steps.py compares them).
@@ -10,6 +10,11 @@
  *   pick(idx, column, before, out)
  *       batch._pick for a float64 column: out[i] = column[idx[i]], or `before` where
  *       idx[i] == -1 (every element `before` when the column is empty).
+ *   newest(kinds, kind_d, kind_t, kind_k, known, t_idx, d_idx, dk_idx, k_idx, solved, s_idx)
+ *       batch._line_steps: per step (kinds int8: the depth, tension or tick code), the index of
+ *       the newest tension, depth, non-tension and tick step within its kind (int64, -1:
+ *       none yet); whether the line is solved there (a tension; a depth once a tension is
+ *       known, `known` or one in the window) and the index of the newest solved step.
  *   latch(codes, t, on_delay, hold, active, since, out) -> (active, since)
  *       alarms._latch_series: one condition's latch after each update (out, bool) from its
  *       codes (int8: 0 hold, 1 breach, 2 clear) at times t [s], stepped as alarms._step from
@@ -128,6 +133,60 @@ done:
     return result;
 }
 
+static PyObject *py_newest(PyObject *self, PyObject *args) {
+    PyObject *o[7];
+    int kd, kt, kk, known;
+    if (!PyArg_ParseTuple(args, "OiiipOOOOOO", &o[0], &kd, &kt, &kk, &known, &o[1], &o[2],
+                          &o[3], &o[4], &o[5], &o[6]))
+        return NULL;
+    Py_buffer b[7];
+    const Py_ssize_t size[7] = {1, 8, 8, 8, 8, 1, 8};
+    const char *names[7] = {"kinds", "t_idx", "d_idx", "dk_idx", "k_idx", "solved", "s_idx"};
+    int got = 0;
+    PyObject *result = NULL;
+    for (; got < 7; got++)
+        if (get(o[got], &b[got], got > 0, size[got], names[got]) < 0)
+            goto done;
+    const int8_t *kinds = b[0].buf;
+    const Py_ssize_t n = b[0].len;
+    for (int g = 1; g < 7; g++)
+        if (b[g].len != n * size[g]) {
+            PyErr_SetString(PyExc_ValueError, "newest: outputs of the wrong size");
+            goto done;
+        }
+    int64_t *ti = b[1].buf, *di = b[2].buf, *dki = b[3].buf, *ki = b[4].buf, *si = b[6].buf;
+    uint8_t *solved = b[5].buf;
+    int64_t nt = -1, nd = -1, ndk = -1, nk = -1, ns = -1;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        const int k = kinds[i];
+        int s = 0;
+        if (k == kt) {
+            nt++;
+            known = 1;
+            s = 1;
+        } else {
+            ndk++;
+            if (k == kd) {
+                nd++;
+                s = known;
+            } else if (k == kk) {
+                nk++;
+            } else {
+                PyErr_Format(PyExc_ValueError, "newest: unknown step kind %d", k);
+                goto done;
+            }
+        }
+        ns += s;
+        ti[i] = nt, di[i] = nd, dki[i] = ndk, ki[i] = nk, si[i] = ns;
+        solved[i] = (uint8_t)s;
+    }
+    Py_INCREF(Py_None);
+    result = Py_None;
+done:
+    for (int g = 0; g < got; g++) PyBuffer_Release(&b[g]);
+    return result;
+}
+
 static PyObject *py_latch(PyObject *self, PyObject *args) {
     PyObject *o_codes, *o_t, *o_out;
     double on_delay, hold, since;
@@ -179,6 +238,7 @@ done:
 static PyMethodDef methods[] = {
     {"merge3", py_merge3, METH_VARARGS, "Merge sorted depth, tension and tick times."},
     {"pick", py_pick, METH_VARARGS, "column[idx], before where idx == -1 (float64)."},
+    {"newest", py_newest, METH_VARARGS, "Per step: the newest index of each kind."},
     {"latch", py_latch, METH_VARARGS, "One condition's latch after each update."},
     {NULL, NULL, 0, NULL},
 };

@@ -73,7 +73,7 @@ from catenary_monitor.core.monitor import (
 )
 from catenary_monitor.core.solve import ALL_KEYS, STATUS_MESSAGES, Status
 
-try:  # two of the loops below in C, next to this file (optional: else the numpy passes)
+try:  # three of the loops below in C, next to this file (optional: else the numpy passes)
     from catenary_monitor.core import _steps  # type: ignore[attr-defined]
 except ImportError:  # not built
     _steps = None
@@ -711,6 +711,14 @@ class _Steps:
 
 def _line_steps(line: LineState, tt: np.ndarray, window: Window) -> _Steps:
     times, kinds = _merge(window.depth[0], tt, window.ticks)
+    if _steps is not None:  # one loop instead of five cumulative sums
+        n = len(kinds)
+        t_idx, d_idx, dk_idx, k_idx, s_idx = np.empty((5, n), np.int64)
+        solved = np.empty(n, bool)
+        known = line.tension_s == line.tension_s
+        kind_codes = (KIND_DEPTH, KIND_TENSION, KIND_TICK)
+        _steps.newest(kinds, *kind_codes, known, t_idx, d_idx, dk_idx, k_idx, solved, s_idx)
+        return _Steps(times, kinds, t_idx, d_idx, dk_idx, solved, s_idx, k_idx)
     t_idx = _newest(kinds == KIND_TENSION)
     known = (t_idx >= 0) | (line.tension_s == line.tension_s)
     solved = (kinds == KIND_TENSION) | ((kinds == KIND_DEPTH) & known)
