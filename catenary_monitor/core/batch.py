@@ -715,9 +715,9 @@ def _line_steps(line: LineState, tt: np.ndarray, window: Window) -> _Steps:
         n = len(kinds)
         t_idx, d_idx, dk_idx, k_idx, s_idx = np.empty((5, n), np.int64)
         solved = np.empty(n, bool)
-        known = line.tension_s == line.tension_s
+        had = line.tension_s == line.tension_s  # a tension before the window
         kind_codes = (KIND_DEPTH, KIND_TENSION, KIND_TICK)
-        _steps.newest(kinds, *kind_codes, known, t_idx, d_idx, dk_idx, k_idx, solved, s_idx)
+        _steps.newest(kinds, *kind_codes, had, t_idx, d_idx, dk_idx, k_idx, solved, s_idx)
         return _Steps(times, kinds, t_idx, d_idx, dk_idx, solved, s_idx, k_idx)
     t_idx = _newest(kinds == KIND_TENSION)
     known = (t_idx >= 0) | (line.tension_s == line.tension_s)
