@@ -18,7 +18,7 @@ from replay_data import core_steps, dock_config, generate, params_yaml, write_lo
 
 from catenary_monitor.cli.main import main
 from catenary_monitor.core.alarms import Level
-from catenary_monitor.core.batch import recompute
+from catenary_monitor.core.batch import LineResult, recompute
 from catenary_monitor.core.holding import FIELDS as HOLDING, LENGTH_FIELDS
 from catenary_monitor.core.uncertainty import FIELDS as BOUNDS
 
@@ -86,6 +86,14 @@ def test_csv_json_mcap_png(scene, capsys):
     storm = summary['lines']['line_02']
     assert storm['worst']['uplift_force']['value'] > 50e3
     assert any(e['worst'] == 'ERROR' for e in storm['episodes'])
+    # The other components as the lines: the tide (with its dropouts) and the sensors alarm.
+    assert list(summary['components']) == ['tide', 'sensors']
+    tide = summary['components']['tide']
+    assert tide['transitions'] == len(ref.tide) and tide['final_level'] == ref.tide[-1].new.name
+    episodes = LineResult('tide', *[np.zeros(0)] * 8, ref.tide).episodes(ref.end_ns)
+    assert tide['episodes'] == episodes and episodes[0]['worst'] == 'STALE'  # a depth dropout
+    sensors = [c.transition for c in ref.others if c.component == 'sensors']
+    assert summary['components']['sensors']['transitions'] == len(sensors)
     # CSV: the contract columns, one row per tension message, in time order.
     with open(tmp / 'out.csv', newline='') as f:
         rows = list(csv.DictReader(f))

@@ -713,11 +713,16 @@ class Tally:
         self.end_ns: Optional[int] = None
         self.ticks = 0
         self.ticks_from_log = False
+        #: The other components' transitions (the tide, the sensors alarm, the dock model).
+        self.components: dict[str, list[Any]] = {'tide': [], 'sensors': []}
 
     def add(self, result: ReplayResult) -> None:
         """Take the next window's results."""
         for tally, r in zip(self.lines, result.lines):
             tally.add(r)
+        self.components['tide'] += result.tide
+        for change in result.others:
+            self.components.setdefault(change.component, []).append(change.transition)
         start, end = int(result.start_ns), int(result.end_ns)
         self.start_ns = start if self.start_ns is None else min(self.start_ns, start)
         self.end_ns = end if self.end_ns is None else max(self.end_ns, end)
@@ -757,10 +762,44 @@ def summary_dict(
             'count': result.ticks,
             'source': 'recorded by the node' if result.ticks_from_log else 'synthetic grid',
         },
+        'components': {
+            name: _component_dict(transitions, end)
+            for name, transitions in result.components.items()
+        },
         'lines': {t.name: t.as_dict(end) for t in result.lines},
     }
     if extra:
         out.update(extra)
+    return out
+
+
+def _component_dict(transitions: list[Any], end_ns: int) -> dict[str, Any]:
+    """A component's entry: its transitions, final level (None: it never changed) and
+    episodes, as a line's."""
+    empty = np.zeros(0)
+    episodes = LineResult(
+        '', empty, empty, {}, empty, empty, empty, empty, empty, transitions
+    ).episodes(end_ns)
+    return {
+        'transitions': len(transitions),
+        'final_level': transitions[-1].new.name if transitions else None,
+        'episodes': episodes,
+    }
+
+
+def _episode_text(episodes: list[dict[str, Any]]) -> list[str]:
+    """One line per alarm episode (or that there was none), indented."""
+    if not episodes:
+        return ['  no alarm episode']
+    out = []
+    for e in episodes:
+        end = (
+            'still active at the end of the log'
+            if e['end'] is None
+            else f'until {_utc(e["end"])[11:]}'
+        )
+        dur = '' if e['duration'] is None else f'{e["duration"]:.1f} s, '
+        out.append(f'  {e["worst"]:<5} from {_utc(e["start"])} ({dur}{end}): {e["message"]}')
     return out
 
 
@@ -801,6 +840,12 @@ def summary_text(summary: dict[str, Any]) -> str:
             out.append(f'  {s["path"]} @ byte {s["offset"]}: {s["kind"]}: {s["reason"]}{lost}')
     if summary['missing_topics']:
         out.append(f'no messages on: {", ".join(summary["missing_topics"])}')
+    for name, c in summary.get('components', {}).items():
+        final = c['final_level']
+        final = 'level unchanged' if final is None else f'final level {final}'
+        count = c['transitions']
+        out += ['', f'{name}: {count} transition{"" if count == 1 else "s"}, {final}']
+        out += _episode_text(c['episodes'])
     for name, ln in summary['lines'].items():
         w = ln['worst']
         out.append('')
@@ -826,17 +871,7 @@ def summary_text(summary: dict[str, Any]) -> str:
             f'  max uplift {lifted}; '
             f'max hook tension {_fmt(w["top_tension"], 1e3, "kN", ".1f")}'
         )
-        eps = ln['episodes']
-        if not eps:
-            out.append('  no alarm episode')
-        for e in eps:
-            end = (
-                'still active at the end of the log'
-                if e['end'] is None
-                else f'until {_utc(e["end"])[11:]}'
-            )
-            dur = '' if e['duration'] is None else f'{e["duration"]:.1f} s, '
-            out.append(f'  {e["worst"]:<5} from {_utc(e["start"])} ({dur}{end}): {e["message"]}')
+        out += _episode_text(ln['episodes'])
     for key in ('outputs', 'timing'):
         if summary.get(key):
             out.append('')
