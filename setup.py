@@ -41,12 +41,13 @@ scan = Extension(
     optional=True,
 )
 
-# Two loops of the vectorized replay (core/batch.py: the step merge and the picks). Optional:
-# without it batch.py runs its numpy passes, which give the same arrays.
+# Loops of the vectorized replay (core/batch.py: the step merge, the step indexes and the
+# picks; core/alarms.py: the latch). Optional: without it batch.py and alarms.py run their numpy
+# passes, which give the same arrays.
 steps = Extension(
     'catenary_monitor.core._steps',
     sources=['catenary_monitor/core/_steps.c'],
-    extra_compile_args=['-O2'],
+    extra_compile_args=['-O2', '-ffp-contract=off'],
     optional=True,
 )
 

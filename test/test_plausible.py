@@ -48,3 +48,19 @@ def test_messages_name_the_bounds():
     assert f'{MAX_TENSION_PER_MBL:g} x MBL' in STATUS_MESSAGES[Status.IMPLAUSIBLE_TENSION]
     assert f'{MAX_DEPTH:g} m' in STATUS_MESSAGES[Status.IMPLAUSIBLE_DEPTH]
     assert 'please report' not in STATUS_MESSAGES[Status.IMPLAUSIBLE_TENSION]
+
+
+def test_array_equals_scalar_on_long_columns():
+    """The array form's two-pass shortcut (no value beyond a bound: all plausible) and its full
+    path give the scalar's code for every element: rare outliers, NaN and inf among them."""
+    rng = np.random.default_rng(8)
+    for trial in range(200):
+        n = int(rng.integers(1, 300))
+        limit = MAX_TENSION_PER_MBL * MBL
+        t, h = rng.uniform(0.0, limit, n), rng.uniform(1.0, MAX_DEPTH, n)
+        above = (math.nextafter(limit, math.inf), 1e300, np.nan, np.inf, -np.inf)
+        for column, odd in ((t, above), (h, (np.nan, np.inf, np.nextafter(MAX_DEPTH, 1e9)))):
+            hit = rng.random(n) < (0.02 if trial % 3 else 0.0)
+            column[hit] = rng.choice(odd, int(hit.sum()))
+        want = [reading_status(a, b, MBL) for a, b in zip(t.tolist(), h.tolist())]
+        assert reading_status_array(t, h, MBL).tolist() == want, trial

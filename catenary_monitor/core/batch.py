@@ -325,9 +325,12 @@ _ROWS = {k: ALL_KEYS.index(k) for k in VALUE_FIELDS if k in ALL_KEYS}
 
 
 def _solve_updates_kernel(
-    line: LineConfig, tension: np.ndarray, depth: np.ndarray
+    line: LineConfig, tension: np.ndarray, depth: np.ndarray, keep: bool = False
 ) -> tuple[dict[str, np.ndarray], np.ndarray]:
-    """:func:`solve_updates` through the C kernel (core/kernels.py): one pass, every value."""
+    """:func:`solve_updates` through the C kernel (core/kernels.py): one pass, every value.
+
+    ``keep``: the inputs are the caller's to give (kept as the ``top_tension`` and ``depth``
+    columns, not copied), and the caller sets ``time_to_uplift`` and ``sensor_state``."""
     t = np.ascontiguousarray(tension, dtype=float)
     h = np.ascontiguousarray(depth, dtype=float)
     rows, status = kernels.solve_arrays(
@@ -335,6 +338,9 @@ def _solve_updates_kernel(
     )
     status[np.isnan(h)] = NO_DEPTH
     out = {k: rows[i] for k, i in _ROWS.items()}
+    if keep:
+        out['depth'], out['top_tension'] = h, t
+        return out, status
     out['depth'], out['top_tension'] = h.copy(), t.copy()
     out['time_to_uplift'] = np.full(len(t), np.nan)  # set by the caller, from the tide's trend
     out['sensor_state'] = np.full(len(t), np.nan)  # set by the caller, from the ticks
@@ -821,7 +827,7 @@ def _solve_at(
     if lc.ea is not None:
         values, status, used = _solve_updates_elastic(lc, tension, h)
     elif kernels.AVAILABLE:  # solve_updates' kernel path, which needs no critical parameter
-        values, status = _solve_updates_kernel(lc, tension, h)
+        values, status = _solve_updates_kernel(lc, tension, h, keep=True)
     else:
         a_depth = critical_parameters(lc, dv + lc.hook_height)
         a_before = critical_parameters(lc, np.array([core.depth + lc.hook_height]))[0]

@@ -49,6 +49,11 @@ def reading_status(tension: float, depth: float, mbl: float) -> int:
 def reading_status_array(tension: Any, depth: Any, mbl: Any) -> np.ndarray:
     """:func:`reading_status` element by element (int64 array of the broadcast shape)."""
     t, h = np.asarray(tension, dtype=float), np.asarray(depth, dtype=float)
+    if t.shape == h.shape and t.size and np.ndim(mbl) == 0:  # the usual case, in two passes
+        limit = MAX_TENSION_PER_MBL * float(mbl)
+        if not np.fmax.reduce(h, axis=None) > MAX_DEPTH:  # NaN only if every value is NaN
+            if not np.fmax.reduce(t, axis=None) > limit:
+                return np.zeros(t.shape, dtype=np.int64)
     with np.errstate(invalid='ignore'):
         finite = np.isfinite(t) & np.isfinite(h)
         deep = finite & (h > MAX_DEPTH)
