@@ -42,8 +42,8 @@ scan = Extension(
 )
 
 # Loops of the vectorized replay (core/batch.py: the step merge, the step indexes and the
-# picks; core/alarms.py: the latch). Optional: without it batch.py and alarms.py run their numpy
-# passes, which give the same arrays.
+# picks; core/alarms.py: the latch; core/sensor.py: the sensor memory). Optional: without it
+# those modules run their numpy passes, which give the same arrays.
 steps = Extension(
     'catenary_monitor.core._steps',
     sources=['catenary_monitor/core/_steps.c'],

@@ -120,3 +120,31 @@ def test_line_steps_match_numpy() -> None:
     with pytest.raises(ValueError):
         STEPS.newest(np.array([7], np.int8), 0, 1, 2, False,
                      *[np.empty(1, np.int64)] * 4, np.empty(1, bool), np.empty(1, np.int64))
+
+
+def test_sensor_samples_match_numpy_and_the_scalar_sample(monkeypatch: pytest.MonkeyPatch) -> None:
+    """sensor.samples in C and in numpy equal repeated sensor.sample, memory included: steps
+    within and across the resolution, spikes, non-finite readings, equal stamps, a fresh
+    memory (NaN reading, never changed) and one with history."""
+    from catenary_monitor.core import sensor
+
+    assert sensor._loops is STEPS
+    rng = np.random.default_rng(9)
+    for trial in range(600):
+        n = int(rng.integers(0, 40))
+        stamps = 100.0 + np.cumsum(rng.choice([0.0, 0.05, 0.5, 3.0], n))
+        values = 1e5 + np.cumsum(rng.choice([0.0, 3.0, -40.0, 2e4], n))
+        bad = rng.random(n) < 0.15
+        values[bad] = rng.choice([np.nan, np.inf, -np.inf], int(bad.sum()))
+        mem = sensor.Memory() if trial % 2 else sensor.Memory(1e5, 99.0, 50.0, -np.inf)
+        resolution = float(rng.choice([0.0, 10.0, 100.0]))
+        want_ch, want_sp, m = [], [], mem
+        for stamp, value in zip(stamps.tolist(), values.tolist()):
+            m = sensor.sample(m, stamp, value, resolution, 500.0, 0.1)
+            want_ch.append(m.changed)
+            want_sp.append(m.spiked)
+        for loops in (sensor._loops, None):
+            monkeypatch.setattr(sensor, '_loops', loops)
+            ch, sp, end = sensor.samples(mem, stamps, values, resolution, 500.0, 0.1)
+            assert ch.tolist() == want_ch and sp.tolist() == want_sp, (trial, loops)
+            assert end == m, (trial, loops)

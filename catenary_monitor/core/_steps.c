@@ -1,4 +1,5 @@
-/* Four loops of the vectorized replay (catenary_monitor/core/batch.py, alarms.py) in C.
+/* Five loops of the vectorized replay (catenary_monitor/core/batch.py, alarms.py, sensor.py)
+ * in C.
  *
  * Optional, like the solve kernel: where it is not built, batch.py runs its numpy passes,
  * which give the same arrays (test/test_batch_steps.py compares them).
@@ -15,6 +16,11 @@
  *       the newest tension, depth, non-tension and tick step within its kind (int64, -1:
  *       none yet); whether the line is solved there (a tension; a depth once a tension is
  *       known, `known` or one in the window) and the index of the newest solved step.
+ *   samples(values, stamps, value, stamp, changed, spiked, resolution, rate, jitter, ch, sp)
+ *       -> (value, stamp, changed, spiked)
+ *       sensor.samples: a sensor memory (value, stamp, changed, spiked) through its readings
+ *       (float64; non-finite ones skipped): when it last changed beyond the resolution and
+ *       when it last spiked after each (ch, sp), and the memory after the last.
  *   latch(codes, t, on_delay, hold, active, since, out) -> (active, since)
  *       alarms._latch_series: one condition's latch after each update (out, bool) from its
  *       codes (int8: 0 hold, 1 breach, 2 clear) at times t [s], stepped as alarms._step from
@@ -22,6 +28,7 @@
  */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
+#include <math.h>
 #include <stdint.h>
 
 static int get(PyObject *obj, Py_buffer *b, int writable, Py_ssize_t itemsize,
@@ -187,6 +194,46 @@ done:
     return result;
 }
 
+static double maximum(double a, double b) { /* np.maximum: NaN if either is NaN */
+    return (a != a || b != b) ? NAN : (a > b ? a : b);
+}
+
+static PyObject *py_samples(PyObject *self, PyObject *args) {
+    PyObject *o[4];
+    double value, stamp, changed, spiked, res, rate, jitter;
+    if (!PyArg_ParseTuple(args, "OOdddddddOO", &o[0], &o[1], &value, &stamp, &changed, &spiked,
+                          &res, &rate, &jitter, &o[2], &o[3]))
+        return NULL;
+    Py_buffer b[4];
+    const char *names[4] = {"values", "stamps", "ch", "sp"};
+    int got = 0;
+    PyObject *result = NULL;
+    for (; got < 4; got++)
+        if (get(o[got], &b[got], got >= 2, 8, names[got]) < 0) goto done;
+    const Py_ssize_t n = b[0].len / 8;
+    if (b[1].len != b[0].len || b[2].len != b[0].len || b[3].len != b[0].len) {
+        PyErr_SetString(PyExc_ValueError, "samples: columns differ in length");
+        goto done;
+    }
+    const double *v = b[0].buf, *t = b[1].buf;
+    double *ch = b[2].buf, *sp = b[3].buf;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        const double x = v[i];
+        if (isfinite(x)) {
+            const int change = res > 0.0 ? !(floor(x / res) == floor(value / res)) : !(x == value);
+            const int spike = fabs(x - value) > rate * ((t[i] - stamp) + jitter) + res;
+            changed = maximum(changed, change ? t[i] : -INFINITY);
+            spiked = maximum(spiked, spike ? t[i] : -INFINITY);
+            value = x, stamp = t[i];
+        }
+        ch[i] = changed, sp[i] = spiked;
+    }
+    result = Py_BuildValue("(dddd)", value, stamp, changed, spiked);
+done:
+    for (int g = 0; g < got; g++) PyBuffer_Release(&b[g]);
+    return result;
+}
+
 static PyObject *py_latch(PyObject *self, PyObject *args) {
     PyObject *o_codes, *o_t, *o_out;
     double on_delay, hold, since;
@@ -239,6 +286,7 @@ static PyMethodDef methods[] = {
     {"merge3", py_merge3, METH_VARARGS, "Merge sorted depth, tension and tick times."},
     {"pick", py_pick, METH_VARARGS, "column[idx], before where idx == -1 (float64)."},
     {"newest", py_newest, METH_VARARGS, "Per step: the newest index of each kind."},
+    {"samples", py_samples, METH_VARARGS, "A sensor memory through its readings."},
     {"latch", py_latch, METH_VARARGS, "One condition's latch after each update."},
     {NULL, NULL, 0, NULL},
 };

@@ -43,6 +43,11 @@ from typing import NamedTuple
 
 import numpy as np
 
+try:  # samples' loop in C (core/_steps.c; optional: else the numpy passes)
+    from catenary_monitor.core import _steps as _loops  # type: ignore[attr-defined]
+except ImportError:  # not built
+    _loops = None
+
 __all__ = [
     'LINE_STATES',
     'DEPTH_STATES',
@@ -137,8 +142,12 @@ def samples(
     n = len(values)
     if n == 0:
         return np.zeros(0), np.zeros(0), mem
-    values = np.asarray(values, np.float64)
-    stamps = np.asarray(stamps, np.float64)
+    values = np.ascontiguousarray(values, np.float64)
+    stamps = np.ascontiguousarray(stamps, np.float64)
+    if _loops is not None and values.shape == stamps.shape == (n,):
+        ch, sp = np.empty(n), np.empty(n)
+        final = _loops.samples(values, stamps, *mem, resolution, rate, jitter, ch, sp)
+        return ch, sp, Memory(*final)
     good = np.isfinite(values)
     every = bool(good.all())
     idx = None if every else np.flatnonzero(good)
