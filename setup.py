@@ -42,8 +42,9 @@ scan = Extension(
 )
 
 # Loops of the vectorized replay (core/batch.py: the step merge, the step indexes and the
-# picks; core/alarms.py: the latch; core/sensor.py: the sensor memory). Optional: without it
-# those modules run their numpy passes, which give the same arrays.
+# picks; core/alarms.py: the latch; core/sensor.py: the sensor memory; core/tide_trend.py: the
+# time to uplift). Optional: without it those modules run their numpy passes, which give the
+# same arrays.
 steps = Extension(
     'catenary_monitor.core._steps',
     sources=['catenary_monitor/core/_steps.c'],

@@ -148,3 +148,26 @@ def test_sensor_samples_match_numpy_and_the_scalar_sample(monkeypatch: pytest.Mo
             ch, sp, end = sensor.samples(mem, stamps, values, resolution, 500.0, 0.1)
             assert ch.tolist() == want_ch and sp.tolist() == want_sp, (trial, loops)
             assert end == m, (trial, loops)
+
+
+def test_uplift_times_match_numpy_and_the_scalar(monkeypatch: pytest.MonkeyPatch) -> None:
+    """tide_trend.uplift_times in C and in numpy equal time_to_uplift element by element:
+    lifted, falling or unknown tides, NaN margins and excesses, signed zeros, infinities."""
+    from catenary_monitor.core import tide_trend
+
+    assert tide_trend._loops is STEPS
+    rng = np.random.default_rng(10)
+    odd = [np.nan, np.inf, -np.inf, 0.0, -0.0, 1e-300]
+    n = 4000
+    cols = [rng.normal(0.5, 1.0, n), rng.choice([0.0, 0.0, 5e3], n), rng.normal(1e-4, 1e-4, n),
+            rng.normal(0.0, 0.2, n)]
+    for c in cols:
+        hit = rng.random(n) < 0.1
+        c[hit] = rng.choice(odd, int(hit.sum()))
+    want = [tide_trend.time_to_uplift(*v) for v in zip(*(c.tolist() for c in cols))]
+    for loops in (STEPS, None):
+        monkeypatch.setattr(tide_trend, '_loops', loops)
+        got = tide_trend.uplift_times(*cols)
+        assert np.array_equal(got, want, equal_nan=True), loops
+        number = ~np.isnan(got)
+        assert np.array_equal(np.signbit(got[number]), np.signbit(np.array(want)[number]))

@@ -1,5 +1,5 @@
-/* Five loops of the vectorized replay (catenary_monitor/core/batch.py, alarms.py, sensor.py)
- * in C.
+/* Six loops of the vectorized replay (catenary_monitor/core/batch.py, alarms.py, sensor.py,
+ * tide_trend.py) in C.
  *
  * Optional, like the solve kernel: where it is not built, batch.py runs its numpy passes,
  * which give the same arrays (test/test_batch_steps.py compares them).
@@ -21,6 +21,8 @@
  *       sensor.samples: a sensor memory (value, stamp, changed, spiked) through its readings
  *       (float64; non-finite ones skipped): when it last changed beyond the resolution and
  *       when it last spiked after each (ch, sp), and the memory after the last.
+ *   uplift_times(tide_margin, uplift_force, rate, excess, out)
+ *       tide_trend.uplift_times: tide_trend.time_to_uplift per element (float64).
  *   latch(codes, t, on_delay, hold, active, since, out) -> (active, since)
  *       alarms._latch_series: one condition's latch after each update (out, bool) from its
  *       codes (int8: 0 hold, 1 breach, 2 clear) at times t [s], stepped as alarms._step from
@@ -217,18 +219,53 @@ static PyObject *py_samples(PyObject *self, PyObject *args) {
     }
     const double *v = b[0].buf, *t = b[1].buf;
     double *ch = b[2].buf, *sp = b[3].buf;
+    double q = res > 0.0 ? floor(value / res) : value; /* the reading's resolution step */
     for (Py_ssize_t i = 0; i < n; i++) {
         const double x = v[i];
         if (isfinite(x)) {
-            const int change = res > 0.0 ? !(floor(x / res) == floor(value / res)) : !(x == value);
+            const double qx = res > 0.0 ? floor(x / res) : x;
+            const int change = !(qx == q);
             const int spike = fabs(x - value) > rate * ((t[i] - stamp) + jitter) + res;
             changed = maximum(changed, change ? t[i] : -INFINITY);
             spiked = maximum(spiked, spike ? t[i] : -INFINITY);
-            value = x, stamp = t[i];
+            value = x, stamp = t[i], q = qx;
         }
         ch[i] = changed, sp[i] = spiked;
     }
     result = Py_BuildValue("(dddd)", value, stamp, changed, spiked);
+done:
+    for (int g = 0; g < got; g++) PyBuffer_Release(&b[g]);
+    return result;
+}
+
+static PyObject *py_uplift_times(PyObject *self, PyObject *args) {
+    PyObject *o[5];
+    if (!PyArg_ParseTuple(args, "OOOOO", &o[0], &o[1], &o[2], &o[3], &o[4])) return NULL;
+    Py_buffer b[5];
+    const char *names[5] = {"tide_margin", "uplift_force", "rate", "excess", "out"};
+    int got = 0;
+    PyObject *result = NULL;
+    for (; got < 5; got++)
+        if (get(o[got], &b[got], got == 4, 8, names[got]) < 0) goto done;
+    for (int g = 1; g < 5; g++)
+        if (b[g].len != b[0].len) {
+            PyErr_SetString(PyExc_ValueError, "uplift_times: columns differ in length");
+            goto done;
+        }
+    const double *m = b[0].buf, *f = b[1].buf, *r = b[2].buf, *e = b[3].buf;
+    double *out = b[4].buf;
+    for (Py_ssize_t i = 0, n = b[0].len / 8; i < n; i++) {
+        if (m[i] != m[i])
+            out[i] = NAN;
+        else if (m[i] <= 0.0 || f[i] > 0.0)
+            out[i] = 0.0;
+        else if (!(r[i] > 0.0))
+            out[i] = INFINITY;
+        else
+            out[i] = maximum(m[i] + e[i], 0.0) / r[i];
+    }
+    Py_INCREF(Py_None);
+    result = Py_None;
 done:
     for (int g = 0; g < got; g++) PyBuffer_Release(&b[g]);
     return result;
@@ -287,6 +324,7 @@ static PyMethodDef methods[] = {
     {"pick", py_pick, METH_VARARGS, "column[idx], before where idx == -1 (float64)."},
     {"newest", py_newest, METH_VARARGS, "Per step: the newest index of each kind."},
     {"samples", py_samples, METH_VARARGS, "A sensor memory through its readings."},
+    {"uplift_times", py_uplift_times, METH_VARARGS, "Time to uplift per element."},
     {"latch", py_latch, METH_VARARGS, "One condition's latch after each update."},
     {NULL, NULL, 0, NULL},
 };

@@ -34,6 +34,11 @@ from typing import NamedTuple
 
 import numpy as np
 
+try:  # uplift_times' loop in C (core/_steps.c; optional: else the numpy passes)
+    from catenary_monitor.core import _steps as _loops  # type: ignore[attr-defined]
+except ImportError:  # not built
+    _loops = None
+
 __all__ = ['BINS', 'TrendState', 'bin_ns', 'step', 'series', 'time_to_uplift', 'uplift_times']
 
 #: Bins per trend window; the rate is known once BINS // 2 of them hold samples.
@@ -195,6 +200,13 @@ def uplift_times(
     tide_margin: np.ndarray, uplift_force: np.ndarray, rate: np.ndarray, excess: np.ndarray
 ) -> np.ndarray:
     """:func:`time_to_uplift` on arrays [s]."""
+    if _loops is not None:
+        columns = [np.ascontiguousarray(c, np.float64) for c in (tide_margin, uplift_force)]
+        columns += [np.ascontiguousarray(c, np.float64) for c in (rate, excess)]
+        if columns[0].ndim == 1 and all(c.shape == columns[0].shape for c in columns):
+            out = np.empty(columns[0].shape)
+            _loops.uplift_times(*columns, out)
+            return out
     with np.errstate(divide='ignore', invalid='ignore'):
         up = rate > 0.0
         ahead = np.maximum(tide_margin + excess, 0.0)
