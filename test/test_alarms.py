@@ -600,3 +600,34 @@ def test_core_modules_import_without_rclpy():
     )
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == 'ok'
+
+
+def test_margin_codes_match_the_scalar() -> None:
+    """The warnings with a deadband classified on columns give LineAlarm._classify's code for
+    every update: values at, below and between the limits, NaN and infinities, stale and fresh
+    inputs; None where the latch is down and nothing breaches."""
+    from catenary_monitor.core import alarms
+
+    alarm = alarms.LineAlarm(AlarmConfig(), 0.0)
+    rng = np.random.default_rng(11)
+    n = 3000
+    x = {}
+    for cond in alarms._MARGINS:
+        low, high = alarm._warn_limits(cond)
+        x[cond] = rng.choice([low, high, np.nextafter(low, -np.inf), (low + high) / 2,
+                              high * 2 + 1, np.nan, np.inf, -np.inf], n)
+    for key in ('uplift_force', 'uplift_force_upper', 'inconsistent', 'sensor_state'):
+        x[key] = np.zeros(n)
+    stale = rng.random(n) < 0.3
+    status = np.zeros(n, np.int64)
+    quiet = {cond: x[cond].copy() for cond in alarms._MARGINS}
+    for column in quiet.values():
+        column[:] = np.inf  # no breach anywhere
+    down = [alarms.Latch()] * len(alarms.CONDITIONS)
+    got = alarms._classify_columns(alarm, x, status, stale, down)
+    for cond in alarms._MARGINS:
+        want = [alarm._classify(cond, alarms.AlarmInputs(**{cond: v}), s)
+                for v, s in zip(x[cond].tolist(), stale.tolist())]
+        assert got[cond] is not None and got[cond].tolist() == want, cond
+    none = alarms._classify_columns(alarm, {**x, **quiet}, status, stale, down)
+    assert all(none[cond] is None for cond in alarms._MARGINS)
