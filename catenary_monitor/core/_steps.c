@@ -1,8 +1,9 @@
 /* Six loops of the vectorized replay (catenary_monitor/core/batch.py, alarms.py, sensor.py,
  * tide_trend.py) in C.
  *
- * Optional, like the solve kernel: where it is not built, batch.py runs its numpy passes,
- * which give the same arrays (test/test_batch_steps.py compares them).
+ * Optional, like the solve kernel: where it is not built, those modules run their numpy
+ * passes, which give the same arrays (test/test_batch_steps.py compares them, and each loop
+ * with the scalar step it replaces).
  *
  *   merge3(dd, tt, kk, times_out, kinds_out, kind_d, kind_t, kind_k) -> bool
  *       batch._merge: the sorted depth, tension and tick times (int64) merged into one
