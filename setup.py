@@ -1,5 +1,6 @@
 """ament_python package that also installs with plain ``pip install .``."""
 
+import os
 import platform
 import sys
 from glob import glob
@@ -8,15 +9,19 @@ from setuptools import Extension, find_packages, setup
 
 package_name = 'catenary_monitor'
 
-# The fused problem-3/4 kernel (docs/benchmarks.md, "Where the time goes"). Vectorized with
-# glibc's libmvec on x86-64 Linux; elsewhere a plain C loop. Optional: without a C compiler the
-# package installs and solve() uses its numpy implementation (catenary_monitor.core.kernels).
+# Three optional C accelerators, each measured faster than the numpy code it replaces and tested
+# equal to it (docs/benchmarks.md). Without a C compiler the build of each fails with a warning
+# and the package installs and runs on its numpy paths, with the same results.
+# CATENARY_MONITOR_NO_EXTENSIONS=1 builds none of them (what test/test_no_compiler.py installs).
 _linux = sys.platform.startswith('linux')
 _mvec = _linux and platform.machine() in ('x86_64', 'AMD64')
-kernels = Extension(
-    'catenary_monitor.core._kernels',
-    sources=['catenary_monitor/core/_kernels.c'],
-    depends=['catenary_monitor/core/_kernels_body.h'],
+
+# The fused problem-3/4 kernel of solve() (core/physics/fused_kernel.py loads it). Vectorized
+# with glibc's libmvec on x86-64 Linux; elsewhere a plain C loop.
+fused_kernel = Extension(
+    'catenary_monitor.core.physics._fused_kernel',
+    sources=['catenary_monitor/core/physics/_fused_kernel.c'],
+    depends=['catenary_monitor/core/physics/_fused_kernel_body.h'],
     extra_compile_args=[
         '-O3',
         '-fopenmp-simd',
@@ -31,9 +36,7 @@ kernels = Extension(
     optional=True,
 )
 
-# The MCAP reader's per-record loops (index check, gathers, Float64 columns). Optional too:
-# without it the reader runs its numpy passes, which give the same results
-# (catenary_monitor.io.mcap_read, test/test_mcap_scan.py).
+# The MCAP reader's per-record loops: index check, gathers, Float64 columns (io/mcap_read.py).
 scan = Extension(
     'catenary_monitor.io._scan',
     sources=['catenary_monitor/io/_scan.c'],
@@ -41,15 +44,22 @@ scan = Extension(
     optional=True,
 )
 
-# Loops of the vectorized replay (core/batch.py: the step merge, the step indexes and the
-# picks; core/alarms.py: the latch; core/sensor.py: the sensor memory; core/tide_trend.py: the
-# time to uplift). Optional: without it those modules run their numpy passes, which give the
-# same arrays.
-steps = Extension(
-    'catenary_monitor.core._steps',
-    sources=['catenary_monitor/core/_steps.c'],
+# The vectorized twin's loops (core/monitor/): the step merge, step indexes and picks (twin.py),
+# the latch (alarms.py), the sensor memory (sensor_state.py), the time to uplift (tide_trend.py).
+twin_loops = Extension(
+    'catenary_monitor.core.monitor._twin_loops',
+    sources=['catenary_monitor/core/monitor/_twin_loops.c'],
     extra_compile_args=['-O2', '-ffp-contract=off'],
     optional=True,
+)
+EXTENSIONS = (
+    []
+    if os.environ.get('CATENARY_MONITOR_NO_EXTENSIONS') == '1'
+    else [
+        fused_kernel,
+        scan,
+        twin_loops,
+    ]
 )
 
 setup(
@@ -94,7 +104,7 @@ setup(
         ],
         'peers': ['moorpy', 'pycatenary'],
     },
-    ext_modules=[kernels, scan, steps],
+    ext_modules=EXTENSIONS,
     zip_safe=False,
     maintainer='catenary_monitor developers',
     maintainer_email='catenary-monitor@example.org',
@@ -106,7 +116,11 @@ setup(
             'monitor = catenary_monitor.ros.node:main',
             'dock_simulator = catenary_monitor.ros.simulator:main',
         ],
-        # The benchmarks and the methods study add their sub-commands through this group.
-        'catenary_monitor.commands': ['study = catenary_monitor_study.commands:register'],
+        # The console and the benchmarks add their sub-commands through this group (the
+        # command line imports neither).
+        'catenary_monitor.commands': [
+            'console = catenary_monitor.console.command:register',
+            'study = catenary_monitor_study.commands:register',
+        ],
     },
 )

@@ -3,8 +3,14 @@
 The numerical core (this package's top level, ``catenary``, ``solve``) imports no rclpy.
 """
 
-from catenary_monitor.core.solve import ALL_KEYS, STATUS_MESSAGES, SolveResult, Status, solve
-from catenary_monitor.core.whatif import whatif
+from catenary_monitor.core.monitor.whatif_scene import whatif
+from catenary_monitor.core.physics.solve import (
+    ALL_KEYS,
+    STATUS_MESSAGES,
+    SolveResult,
+    Status,
+    solve,
+)
 
 __version__ = '0.2.0'
 __all__ = [

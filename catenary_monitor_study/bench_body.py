@@ -27,8 +27,8 @@ __all__ = ['run', 'register']
 
 
 def _model(params_file: str) -> tuple[Any, Any]:
-    from catenary_monitor.core.body.model import DockModel
-    from catenary_monitor.core.config import config_from_params, load_params_file
+    from catenary_monitor.core.body.dock_model import DockModel
+    from catenary_monitor.core.config.parameters import config_from_params, load_params_file
 
     config = config_from_params(load_params_file(params_file))
     return config, DockModel.from_config(config)
@@ -87,8 +87,8 @@ def run(params_file: str, repeats: int = 5, ticks: int = 600) -> dict[str, Any]:
 
 def _estimate_figures(config: Any, model: Any, ticks: int) -> dict[str, float]:
     """The live dock estimate: ms per tick one at a time, and per tick over a whole log."""
-    from catenary_monitor.core.body import live
     from catenary_monitor.core.body.equilibrium import solve_equilibrium
+    from catenary_monitor.core.monitor import dock_watch
 
     rng = np.random.default_rng(1)
     eq = solve_equilibrium(model, 20.85, np.array([0.0, -1.5e6, 0.0]))
@@ -98,18 +98,18 @@ def _estimate_figures(config: Any, model: Any, ticks: int) -> dict[str, float]:
     now = np.arange(ticks, dtype=float)
     stamps = np.tile(now[:, None], (1, len(truth)))
     depth, ok = np.full(ticks, 20.85), np.ones(ticks, bool)
-    state = live.Smoothing.initial(len(truth))
+    state = dock_watch.Smoothing.initial(len(truth))
 
     def one_at_a_time() -> None:
         s = state
         for i in range(ticks):
             sl = slice(i, i + 1)
-            _, s = live.decide_dock(
+            _, s = dock_watch.decide_dock(
                 model, config, now[sl], depth[sl], ok[sl], tensions[sl], stamps[sl], s
             )
 
     def all_at_once() -> None:
-        live.decide_dock(model, config, now, depth, ok, tensions, stamps, state)
+        dock_watch.decide_dock(model, config, now, depth, ok, tensions, stamps, state)
 
     single = _time(one_at_a_time) / ticks * 1e3
     batch = _time(all_at_once) / ticks * 1e3

@@ -33,9 +33,9 @@ from typing import Any, Callable, Optional
 import numpy as np
 
 from catenary_monitor.cli.status_line import StatusLine
-from catenary_monitor.core import catenary as cat
-from catenary_monitor.core import kernels
-from catenary_monitor.core.solve import solve
+from catenary_monitor.core.physics import catenary as cat
+from catenary_monitor.core.physics import fused_kernel
+from catenary_monitor.core.physics.solve import solve
 
 W = 1300.0  # the paper's dock chain
 SIZES = (1_000, 100_000, 1_000_000)
@@ -108,19 +108,19 @@ def vector_figures(regime: str, n: int) -> dict[str, float]:
         return a * np.log1p(e + np.sqrt(e * (2 + e)))
 
     def p4_one_thread() -> object:
-        threads = kernels.threads()
-        kernels.set_threads(1)
+        threads = fused_kernel.threads()
+        fused_kernel.set_threads(1)
         try:
             return solve(wv, h, tension=t, anchor_distance=x)
         finally:
-            kernels.set_threads(threads)
+            fused_kernel.set_threads(threads)
 
     cases: dict[str, Callable[[], object]] = {
         'floor': floor,
         'p4': lambda: solve(wv, h, tension=t, anchor_distance=x),
         'p3': lambda: solve(wv, h, tension=t),
     }
-    if kernels.AVAILABLE and kernels.threads() > 1:
+    if fused_kernel.AVAILABLE and fused_kernel.threads() > 1:
         cases['p4_1t'] = p4_one_thread
     # 1e7 elements per case (100 rounds at 1e5, 10 at 1e6): the best round then is a quiet one
     # for the slow cases too, not only for the floor's sub-millisecond calls
@@ -241,8 +241,8 @@ def run(
 ) -> dict[str, Any]:
     """Measure everything; returns a JSON-ready dict."""
     out: dict[str, Any] = {
-        'kernel': kernels.isa(),
-        'threads': kernels.threads(),
+        'kernel': fused_kernel.isa(),
+        'threads': fused_kernel.threads(),
         'numpy': np.__version__,
         'vector': {},
         'scalar': {},
@@ -288,7 +288,7 @@ def report(r: dict[str, Any]) -> str:
     text = [
         f"vectorized solve(), ns per element, best of the rounds (kernel {r['kernel']}, up to "
         f'{threads} thread{"s" if threads > 1 else ""} per call from '
-        f'{2 * kernels.MIN_SHARE} elements; floor = one numpy closed-form evaluation of '
+        f'{2 * fused_kernel.MIN_SHARE} elements; floor = one numpy closed-form evaluation of '
         'problem 3 on the same arrays, one thread; target problem 4 <= '
         f'{TARGET_VECTOR:g}x; "median" = the median over rounds of the ratio within a round; '
         '"1 thread" = problem 4 with set_threads(1))',
@@ -359,8 +359,8 @@ def cmd_bench(args: argparse.Namespace) -> int:
 
         allocator = 'keep freed memory (cli/allocator.py)' if keep_freed_memory() else allocator
     sizes = tuple(int(float(s)) for s in args.sizes.split(','))
-    if args.threads is not None and kernels.AVAILABLE:
-        kernels.set_threads(args.threads)
+    if args.threads is not None and fused_kernel.AVAILABLE:
+        fused_kernel.set_threads(args.threads)
 
     status = StatusLine('[bench] ')
     r = run(sizes=sizes, regimes=tuple(args.regimes.split(',')), progress=status)

@@ -89,7 +89,7 @@ def grid(quick: bool) -> tuple[np.ndarray, np.ndarray]:
 
 
 def build_scenes(problem: int, quick: bool) -> Scenes:
-    from catenary_monitor.core.catenary import grounded, two_prod_diff
+    from catenary_monitor.core.physics.catenary import grounded, two_prod_diff
 
     ha, xr = grid(quick)
     rows: list[tuple[float, float, float, float, float, float, bool]] = []

@@ -22,10 +22,9 @@ from pathlib import Path
 from typing import Any, Optional
 
 from catenary_monitor.cli.allocator import keep_freed_memory
-from catenary_monitor.cli.replay import input_topics, load_config
-from catenary_monitor.cli.replay_output import McapSink, _snapshot_payloads
-from catenary_monitor.cli.replay_stream import WINDOW_MESSAGES, stream
-from catenary_monitor.core.batch import COLUMNS
+from catenary_monitor.replay.outputs import McapSink, _snapshot_payloads
+from catenary_monitor.core.monitor.twin import COLUMNS
+from catenary_monitor.replay.driver import WINDOW_MESSAGES, input_topics, load_config, stream
 
 
 class _MallInfo2(ctypes.Structure):

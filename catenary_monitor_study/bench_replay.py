@@ -16,7 +16,7 @@ at 1 Hz, a storm that lifts line 11's anchor, zstd chunks of 512 KiB; ``--messag
   Each round times replay and both baselines one after the other, and each is reported as its
   median over the rounds, so a burst of load elsewhere slows them alike.
 
-Replay is the command's streamed path (:mod:`catenary_monitor.cli.replay_stream`, ticks on a
+Replay is the command's streamed path (:mod:`catenary_monitor.replay.driver`, ticks on a
 grid); ``read_s`` is a read-only pass of the same log and ``solve_alarm_s`` the rest of the
 summary run. The peak RSS of the command itself (summary, ``--csv``, ``--out``) is measured in
 child processes (``os.wait4``); ``--no-rss`` skips it.
@@ -41,11 +41,11 @@ from typing import Any, Optional
 
 import numpy as np
 
-from catenary_monitor.core.config import LineConfig, MonitorConfig
-from catenary_monitor.core.monitor import Depth, MonitorCore, Tension, Tick
-from catenary_monitor.core.solve import solve
+from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
+from catenary_monitor.core.monitor.monitor_core import Depth, MonitorCore, Tension, Tick
+from catenary_monitor.core.physics.solve import solve
 from catenary_monitor.io.cdr import float64_payloads
-from catenary_monitor.io.mcap_fast import ColumnWriter
+from catenary_monitor.io.mcap_column_writer import ColumnWriter
 from catenary_monitor.io.ros_schemas import QOS_SENSOR_DATA, message_definition
 
 __all__ = ['dock_config', 'generate_log', 'run', 'register']
@@ -183,9 +183,9 @@ def baseline(
     """The obvious loop over the first ``limit`` messages; returns the messages handled.
 
     ``alarms_too``: every message decoded and stepped through the monitor core
-    (:class:`~catenary_monitor.core.monitor.MonitorCore`, the node's own decision path: depth
-    re-solves, periodic ticks, alarms) and a CSV row per tension; False: only decode, a scalar
-    solve per tension message at the newest depth and a CSV row (the minimal loop, the
+    (:class:`~catenary_monitor.core.monitor.monitor_core.MonitorCore`, the node's own decision
+    path: depth re-solves, periodic ticks, alarms) and a CSV row per tension; False: only decode, a
+    scalar solve per tension message at the newest depth and a CSV row (the minimal loop, the
     conservative baseline).
     """
     from mcap.reader import make_reader
@@ -363,10 +363,9 @@ def run(
 def _streamed(log: Path, config: MonitorConfig, csv: Any = None, mcap: Any = None) -> Any:
     """The streamed replay of the command (ticks on a grid) into a summary tally and, if
     given, a CSV or a results MCAP; returns (tally, CSV rows or MCAP messages)."""
-    from catenary_monitor.cli import replay_output as out
-    from catenary_monitor.cli.replay import input_topics
-    from catenary_monitor.cli.replay_stream import stream
-    from catenary_monitor.core.batch import COLUMNS
+    from catenary_monitor.core.monitor.twin import COLUMNS
+    from catenary_monitor.replay import outputs as out
+    from catenary_monitor.replay.driver import input_topics, stream
 
     names = [line.name for line in config.lines]
     tally = out.Tally(names)
@@ -387,8 +386,8 @@ def _streamed(log: Path, config: MonitorConfig, csv: Any = None, mcap: Any = Non
 
 def _time_read(log: Path, config: MonitorConfig) -> float:
     """Seconds to read the log's input columns window by window (no recompute)."""
-    from catenary_monitor.cli.replay import input_topics
     from catenary_monitor.io.mcap_read import iter_windows
+    from catenary_monitor.replay.driver import input_topics
 
     topics, depth_topic = input_topics(config)
     t0 = time.perf_counter()
@@ -451,7 +450,7 @@ _CHILD = (
 
 
 def _params_file(config: MonitorConfig, path: Path) -> None:
-    from catenary_monitor.core.config import config_to_params, params_file_text
+    from catenary_monitor.core.config.parameters import config_to_params, params_file_text
 
     path.write_text(params_file_text(config_to_params(config)))
 

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from catenary_monitor.core.body.model import DockModel
+from catenary_monitor.core.body.dock_model import DockModel
 
 os.environ.setdefault('PYTHONBREAKPOINT', '0')
 

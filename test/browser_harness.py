@@ -20,9 +20,9 @@ from pathlib import Path
 from typing import Any, Callable, Optional, Sequence
 
 import pytest
+from ros_harness import child_env
 
 from catenary_monitor_study.bench_console import CHROMEDRIVER, CHROMIUM, headless_chromium
-from ros_harness import child_env
 
 ROOT = Path(__file__).resolve().parents[1]
 PARAMS = ROOT / 'config' / 'floating_dock.yaml'
@@ -145,7 +145,7 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
     long message), line_10 WARN unacknowledged, line_12 WARN acknowledged, the rest OK, every
     optional value set (bound, drag margin, tide margin at length but on line_01), the intake
     WARN."""
-    from catenary_monitor.console.model import Status
+    from catenary_monitor.console.frames import Status
 
     out: dict[str, Any] = {}
     for k, name in enumerate(names):
@@ -194,8 +194,8 @@ class DemoSource:
     mode = 'live'
 
     def __init__(self) -> None:
-        from catenary_monitor.console.model import History
-        from catenary_monitor.core.config import config_from_params, load_params_file
+        from catenary_monitor.console.frames import History
+        from catenary_monitor.core.config.parameters import config_from_params, load_params_file
 
         flat = load_params_file(PARAMS)
         for name in flat['lines']:
@@ -210,19 +210,27 @@ class DemoSource:
         self.history.feed(t0 - 100.0, demo_statuses(self.names, t0), self.names)
 
     def config_json(self) -> dict[str, Any]:
-        from catenary_monitor.console.model import console_config
+        from catenary_monitor.console.frames import console_config
 
         return console_config(self.config, self.names, 'live', host='dockpc')
 
     def frame(self, t: Optional[float] = None) -> dict[str, Any]:
-        from catenary_monitor.console.model import build_frame, tide_trend
+        from catenary_monitor.console.frames import build_frame, tide_trend
 
         now = time.time()
         statuses = demo_statuses(self.names, now)
         sample_t = {name: now - 0.4 for name in self.names}
         return build_frame(
-            now, self.names, now - 0.3, statuses, {}, sample_t, tide_trend(statuses),
-            self.history.entries, 3.0, started=now - 600.0,
+            now,
+            self.names,
+            now - 0.3,
+            statuses,
+            {},
+            sample_t,
+            tide_trend(statuses),
+            self.history.entries,
+            3.0,
+            started=now - 600.0,
         )
 
     def trend(self, line: str, t: Optional[float], span: float) -> dict[str, Any]:
@@ -312,8 +320,13 @@ class DiagnosticsPublisher(_TestNode):
 
         msg = DiagnosticArray()
         msg.header.stamp = self.node.get_clock().now().to_msg()
-        values = {'top_tension': '900000.0', 'anchor_margin': '20.0', 'tension_age': '0.2',
-                  'alarm_state': 'normal', 'model': 'elastic catenary'}
+        values = {
+            'top_tension': '900000.0',
+            'anchor_margin': '20.0',
+            'tension_age': '0.2',
+            'alarm_state': 'normal',
+            'model': 'elastic catenary',
+        }
         for name in self.names + ['tide']:
             st = DiagnosticStatus(name=f'catenary_monitor: {name}', message='ok')
             st.level = DiagnosticStatus.OK

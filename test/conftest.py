@@ -9,21 +9,37 @@ os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
 os.environ.setdefault('ROS_DOMAIN_ID', str(random.Random(os.getpid()).randint(100, 200)))
 
 
-def _build_kernels() -> None:
-    """Build core/_kernels.c in place when the tree has no up-to-date build (the tests import the
-    package from this tree, not from where pip installed it); test_kernels fails if it cannot."""
+#: The C accelerators (setup.py): their sources, and the built module beside them.
+EXTENSIONS = {
+    'catenary_monitor/core/physics/_fused_kernel': ('_fused_kernel.c', '_fused_kernel_body.h'),
+    'catenary_monitor/io/_scan': ('_scan.c',),
+    'catenary_monitor/core/monitor/_twin_loops': ('_twin_loops.c',),
+}
+
+
+def _build_extensions() -> None:
+    """Build the C accelerators in place when the tree has no up-to-date build of one (the tests
+    import the package from this tree, not from where pip installed it); test_kernels,
+    test_mcap_scan and test_batch_steps fail if one cannot be built. Nothing is built when
+    CATENARY_MONITOR_NO_EXTENSIONS=1 (the no-compiler run, test_no_compiler.py)."""
     import subprocess
     import sys
     import sysconfig
     from pathlib import Path
 
-    root = Path(__file__).resolve().parent.parent
-    core = root / 'catenary_monitor' / 'core'
-    so = core / ('_kernels' + sysconfig.get_config_var('EXT_SUFFIX'))
-    newest = max(p.stat().st_mtime for p in core.glob('_kernels*.[ch]'))
-    if so.exists() and so.stat().st_mtime >= newest:
+    if os.environ.get('CATENARY_MONITOR_NO_EXTENSIONS') == '1':
         return
-    so.unlink(missing_ok=True)  # a failed build must not leave a stale kernel behind
+    root = Path(__file__).resolve().parent.parent
+    suffix = sysconfig.get_config_var('EXT_SUFFIX')
+    stale = []
+    for module, sources in EXTENSIONS.items():
+        so = root / (module + suffix)
+        newest = max((so.parent / name).stat().st_mtime for name in sources)
+        if not so.exists() or so.stat().st_mtime < newest:
+            so.unlink(missing_ok=True)  # a failed build must not leave a stale module behind
+            stale.append(module)
+    if not stale:
+        return
     done = subprocess.run(
         [sys.executable, 'setup.py', '-q', 'build_ext', '--inplace'],
         cwd=root,
@@ -31,27 +47,27 @@ def _build_kernels() -> None:
         text=True,
     )
     if done.returncode:
-        print(f'conftest: building core/_kernels.c failed:\n{done.stderr[-2000:]}')
+        print(f'conftest: building {", ".join(stale)} failed:\n{done.stderr[-2000:]}')
 
 
-_build_kernels()
+_build_extensions()
 
 
 def _isas() -> list:
     """The kernel's instruction sets this CPU runs, once it is built ('none': not built)."""
-    from catenary_monitor.core import kernels
+    from catenary_monitor.core.physics import fused_kernel
 
-    return kernels.supported() or ['none']
+    return fused_kernel.supported() or ['none']
 
 
 @pytest.fixture(params=_isas())
 def isa(request):
     """Each instruction set of the C kernel in turn (test_kernels, test_extremes)."""
-    from catenary_monitor.core import kernels
+    from catenary_monitor.core.physics import fused_kernel
 
     if request.param == 'none':
         pytest.fail('no kernel to test: python setup.py build_ext --inplace')
-    before = kernels.isa()
-    kernels.set_isa(request.param)
+    before = fused_kernel.isa()
+    fused_kernel.set_isa(request.param)
     yield request.param
-    kernels.set_isa(before)
+    fused_kernel.set_isa(before)

@@ -11,13 +11,16 @@ from pathlib import Path
 from typing import Any, Optional
 
 import numpy as np
+from replay_data import T0_NS
 
+from catenary_monitor.core.body.dock_model import DockModel
 from catenary_monitor.core.body.equilibrium import EquilibriumStatus, solve_equilibrium
 from catenary_monitor.core.body.loads import environmental_load
-from catenary_monitor.core.body.model import DockModel
-from catenary_monitor.core.config import MonitorConfig, config_from_params, load_params_file
-
-from replay_data import T0_NS
+from catenary_monitor.core.config.parameters import (
+    MonitorConfig,
+    config_from_params,
+    load_params_file,
+)
 
 DOCK_YAML = Path(__file__).resolve().parents[1] / 'config' / 'floating_dock.yaml'
 #: Tension sensor accuracy of the generated logs (1 sigma) [N].

@@ -8,8 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from catenary_monitor.core.config import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor import Depth, MonitorCore, Tension, Tick
+from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
+from catenary_monitor.core.monitor.monitor_core import Depth, MonitorCore, Tension, Tick
 
 T0_NS = 1_763_900_000_000_000_000  # 2025-11-23, an epoch-like receive time
 
@@ -36,7 +36,7 @@ def dock_config(n_lines: int = 3, **alarm: Any) -> MonitorConfig:
 
 def params_yaml(config: MonitorConfig, path: Path) -> Path:
     """Write ``config`` as a ROS params file (the ``catenary_monitor`` section)."""
-    from catenary_monitor.core.config import config_to_params, params_file_text
+    from catenary_monitor.core.config.parameters import config_to_params, params_file_text
 
     path.write_text(params_file_text(config_to_params(config)))
     return path
@@ -129,8 +129,9 @@ def write_log(
 ) -> Path:
     """Write the inputs as a ROS 2 MCAP log.
 
-    ``writer``: ``'column'`` (catenary_monitor.io.mcap_fast), ``'logger'`` (the node's McapLogger,
-    small chunks, no fsync) or ``'ros2'`` (mcap_ros2.writer, as rosbag2-compatible tools do).
+    ``writer``: ``'column'`` (catenary_monitor.io.mcap_column_writer), ``'logger'`` (the node's
+    McapLogger, small chunks, no fsync) or ``'ros2'`` (mcap_ros2.writer, as rosbag2-compatible
+    tools do).
     """
     topics = [
         (line.tension_topic, *tensions[line.name])
@@ -144,7 +145,7 @@ def write_log(
     t, v, k = t[order], v[order], k[order]
     if writer == 'column':
         from catenary_monitor.io.cdr import float64_payloads
-        from catenary_monitor.io.mcap_fast import ColumnWriter
+        from catenary_monitor.io.mcap_column_writer import ColumnWriter
         from catenary_monitor.io.ros_schemas import message_definition
 
         with open(path, 'wb') as f:

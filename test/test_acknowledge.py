@@ -1,22 +1,27 @@
-"""Alarm acknowledgement (core/acknowledge.py): ISA-18.2 states, through the monitor core."""
+"""Alarm acknowledgement (core/monitor/acknowledge.py): ISA-18.2 states, through the monitor
+core."""
 
 import json
 import math
 
 import numpy as np
+from replay_data import (  # noqa: F401 - the oracle's helpers
+    T0_NS,
+    core_steps,
+    dock_config,
+    events_of,
+    generate,
+)
 
-from catenary_monitor.core import acknowledge as ack
-from catenary_monitor.core.alarms import Level
-from catenary_monitor.core.monitor import (
+from catenary_monitor.core.monitor import acknowledge as ack
+from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.monitor.monitor_core import (
     Acknowledge,
     MonitorCore,
     Tick,
     event_record,
     parse_event_record,
 )
-
-from replay_data import T0_NS, dock_config, generate
-from replay_data import core_steps, events_of  # noqa: F401 - the oracle's helpers
 
 S = 10**9
 

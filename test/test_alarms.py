@@ -10,9 +10,11 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
-from catenary_monitor.core.alarms import (
+from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig
+from catenary_monitor.core.monitor.alarms import (
     DIAGNOSTIC_KEYS,
     AlarmInputs,
     Level,
@@ -21,7 +23,6 @@ from catenary_monitor.core.alarms import (
     diagnostic_values,
     replay_levels,
 )
-from catenary_monitor.core.config import AlarmConfig, LineConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 # A line well inside every limit (SI): no uplift, margins above their warning thresholds.
@@ -278,8 +279,10 @@ def test_only_a_line_blind_by_a_common_cause_is_suppressed():
     assert levels[-1] == Level.STALE and state.suppressed
     assert events[-1].new == Level.STALE and events[-1].suppressed
     assert state.message.startswith('blind: depth stale: last sample 65.0 s ago')
-    own = [(float(t), AlarmInputs(**CALM, tension_stamp=4.0, depth_stamp=float(t)))
-           for t in range(5, 12)]
+    own = [
+        (float(t), AlarmInputs(**CALM, tension_stamp=4.0, depth_stamp=float(t)))
+        for t in range(5, 12)
+    ]
     state, levels, events = run(alarm, ok + own)
     assert levels[-1] == Level.STALE and not state.suppressed
     assert events[-1] == Transition(
@@ -588,7 +591,8 @@ def test_diagnostic_values_keys_and_exact_strings():
 def test_core_modules_import_without_rclpy():
     code = (
         "import sys; sys.modules['rclpy'] = None; "
-        "import catenary_monitor.core.config, catenary_monitor.core.alarms; print('ok')"
+        "import catenary_monitor.core.config.parameters, catenary_monitor.core.monitor.alarms; "
+        "print('ok')"
     )
     out = subprocess.run(
         [sys.executable, '-c', code],
@@ -606,7 +610,7 @@ def test_margin_codes_match_the_scalar() -> None:
     """The warnings with a deadband classified on columns give LineAlarm._classify's code for
     every update: values at, below and between the limits, NaN and infinities, stale and fresh
     inputs; None where the latch is down and nothing breaches."""
-    from catenary_monitor.core import alarms
+    from catenary_monitor.core.monitor import alarms
 
     alarm = alarms.LineAlarm(AlarmConfig(), 0.0)
     rng = np.random.default_rng(11)
@@ -614,8 +618,19 @@ def test_margin_codes_match_the_scalar() -> None:
     x = {}
     for cond in alarms._MARGINS:
         low, high = alarm._warn_limits(cond)
-        x[cond] = rng.choice([low, high, np.nextafter(low, -np.inf), (low + high) / 2,
-                              high * 2 + 1, np.nan, np.inf, -np.inf], n)
+        x[cond] = rng.choice(
+            [
+                low,
+                high,
+                np.nextafter(low, -np.inf),
+                (low + high) / 2,
+                high * 2 + 1,
+                np.nan,
+                np.inf,
+                -np.inf,
+            ],
+            n,
+        )
     for key in ('uplift_force', 'uplift_force_upper', 'inconsistent', 'sensor_state'):
         x[key] = np.zeros(n)
     stale = rng.random(n) < 0.3
@@ -626,8 +641,10 @@ def test_margin_codes_match_the_scalar() -> None:
     down = [alarms.Latch()] * len(alarms.CONDITIONS)
     got = alarms._classify_columns(alarm, x, status, stale, down)
     for cond in alarms._MARGINS:
-        want = [alarm._classify(cond, alarms.AlarmInputs(**{cond: v}), s)
-                for v, s in zip(x[cond].tolist(), stale.tolist())]
+        want = [
+            alarm._classify(cond, alarms.AlarmInputs(**{cond: v}), s)
+            for v, s in zip(x[cond].tolist(), stale.tolist())
+        ]
         assert got[cond] is not None and got[cond].tolist() == want, cond
     none = alarms._classify_columns(alarm, {**x, **quiet}, status, stale, down)
     assert all(none[cond] is None for cond in alarms._MARGINS)

@@ -14,8 +14,8 @@ def test_keep_freed_memory_applies_on_glibc_and_is_a_no_op_elsewhere():
 
 def test_importing_the_library_leaves_the_allocator_alone():
     code = (
-        'import catenary_monitor, catenary_monitor.core.solve, '
-        'catenary_monitor.core.elastic, sys; '
+        'import catenary_monitor, catenary_monitor.core.physics.solve, '
+        'catenary_monitor.core.physics.elastic, sys; '
         'sys.exit(int("catenary_monitor.cli.allocator" in sys.modules))'
     )
     assert subprocess.run([sys.executable, '-c', code]).returncode == 0

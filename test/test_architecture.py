@@ -1,11 +1,12 @@
 """The layering of the package, checked from the source: who may import whom, and no cycles.
 
-Layers: ``core`` (pure numpy) <- ``io`` (MCAP, CDR, CSV; today independent of
-core) <- ``ros`` (rclpy) <- ``cli``; the methods study (``catenary_monitor_study``) sits on top
-and the monitor never imports it. Imports are read with ``ast``: module-level and
-function-level, absolute and relative; ``from pkg import name`` counts as an import of the
-submodule ``pkg.name`` when there is one, else of ``pkg`` (a package ``__init__`` is a module of
-the graph under the package's name).
+Layers: the core's rooms ``physics`` <- ``config`` <- ``body`` <- ``monitor`` (pure numpy), and
+``io`` (MCAP, CDR, CSV; independent of the core) <- ``replay`` (core + io) <- ``ros`` (rclpy)
+<- the shells ``cli`` and ``console``, which never import each other; the methods study
+(``catenary_monitor_study``) sits on top and the monitor never imports it. Imports are read with
+``ast``: module-level and function-level, absolute and relative; ``from pkg import name`` counts as
+an import of the submodule ``pkg.name`` when there is one, else of ``pkg`` (a package ``__init__``
+is a module of the graph under the package's name).
 """
 
 import ast
@@ -67,30 +68,43 @@ def imports_of(name: str) -> frozenset[str]:
 
 
 def _layer(name: str) -> str:
-    """``top`` (the package __init__), ``core``, ``io``, ``ros``, ``cli`` or ``study``."""
+    """``top`` (the package __init__), a room of the core (``physics``, ``config``, ``body``,
+    ``monitor``), ``io``, ``replay``, ``ros``, ``cli``, ``console`` or ``study``."""
     if _within(name, 'catenary_monitor_study'):
         return 'study'
     if name == 'catenary_monitor':
         return 'top'
     if name == 'catenary_monitor.__main__':
         return 'cli'  # ``python -m catenary_monitor``: the command line
-    if _within(name, 'catenary_monitor.console'):
-        return 'cli'  # the operator's console: a shell beside the command line
-    for layer in ('core', 'io', 'ros', 'cli'):
+    if name == 'catenary_monitor.core':
+        return 'physics'  # the core's docstring only
+    for room in CORE_ROOMS:
+        if _within(name, f'catenary_monitor.core.{room}'):
+            return room
+    for layer in ('io', 'replay', 'ros', 'cli', 'console'):
         if _within(name, f'catenary_monitor.{layer}'):
             return layer
     raise AssertionError(f'{name}: module outside the known layers')
 
 
+#: The core's rooms, bottom first: each may import those before it.
+CORE_ROOMS = ('physics', 'config', 'body', 'monitor')
+CORE = set(CORE_ROOMS)
+
 #: What each layer may import of the project. The top level is the numerical core's face
-#: (``catenary_monitor.solve``); io imports nothing from core today, and that is kept.
+#: (``catenary_monitor.solve``, ``whatif``); io imports nothing from the core.
 ALLOWED = {
-    'top': {'top', 'core'},
-    'core': {'core'},
+    'top': {'top', *CORE},
+    'physics': {'physics'},
+    'config': {'physics', 'config'},
+    'body': {'physics', 'config', 'body'},
+    'monitor': CORE,
     'io': {'io'},
-    'ros': {'top', 'core', 'io', 'ros'},
-    'cli': {'top', 'core', 'io', 'ros', 'cli'},
-    'study': {'top', 'core', 'io', 'ros', 'cli', 'study'},
+    'replay': {'top', *CORE, 'io', 'replay'},
+    'ros': {'top', *CORE, 'io', 'ros'},
+    'cli': {'top', *CORE, 'io', 'replay', 'ros', 'cli'},
+    'console': {'top', *CORE, 'io', 'replay', 'ros', 'console'},
+    'study': {'top', *CORE, 'io', 'replay', 'ros', 'cli', 'console', 'study'},
 }
 
 
@@ -100,15 +114,21 @@ def _project_imports(name: str) -> list[str]:
 
 def test_modules_found_and_imports_resolved():
     """Guards the parser itself: known edges of each kind are seen."""
-    assert {'catenary_monitor', 'catenary_monitor.core.solve', 'catenary_monitor.io.cdr'} <= set(
-        MODULES
-    )
+    assert {
+        'catenary_monitor',
+        'catenary_monitor.core.physics.solve',
+        'catenary_monitor.io.cdr',
+    } <= set(MODULES)
     # the package __init__ (package-level edge)
-    assert 'catenary_monitor.core.solve' in imports_of('catenary_monitor')
+    assert 'catenary_monitor.core.physics.solve' in imports_of('catenary_monitor')
     # ``from catenary_monitor.core import catenary as cat``: the submodule
-    assert 'catenary_monitor.core.catenary' in imports_of('catenary_monitor.core.elastic')
+    assert 'catenary_monitor.core.physics.catenary' in imports_of(
+        'catenary_monitor.core.physics.elastic'
+    )
     # function-level import
-    assert 'catenary_monitor.core.params_file' in imports_of('catenary_monitor.core.config')
+    assert 'catenary_monitor.core.config.params_file' in imports_of(
+        'catenary_monitor.core.config.parameters'
+    )
     # relative imports, ``from .base import Method`` and ``from . import closed``
     assert 'catenary_monitor_study.methods.base' in imports_of(
         'catenary_monitor_study.methods.closed'
@@ -131,7 +151,7 @@ def test_core_and_io_import_no_ros_package_anywhere():
     bad = [
         f'{name} imports {target}'
         for name in MODULES
-        if _layer(name) in ('core', 'io')
+        if _layer(name) in (*CORE, 'io', 'replay')
         for target in sorted(imports_of(name))
         if target.split('.')[0] in ROS_PACKAGES
     ]
@@ -153,7 +173,7 @@ print(json.dumps({'failed': failed, 'file': sys.modules['catenary_monitor'].__fi
 
 
 def test_core_and_io_import_without_ros():
-    names = [n for n in MODULES if _layer(n) in ('core', 'io')]
+    names = [n for n in MODULES if _layer(n) in (*CORE, 'io', 'replay')]
     assert len(names) > 10
     p = subprocess.run(
         [sys.executable, '-c', _IMPORT_ALL, ','.join(ROS_PACKAGES), *names],
@@ -241,3 +261,43 @@ def test_no_import_cycles():
     graph = {n: {t for t in imports_of(n) if t in names} for n in names}
     cycles = find_cycles(graph)
     assert not cycles, 'import cycles:\n' + '\n'.join(' -> '.join(c) for c in cycles)
+
+
+def test_every_package_says_what_it_holds_and_may_import():
+    """Each sub-package of the core, and replay, opens with a paragraph naming its rooms."""
+    for name in MODULES:
+        if not _is_package(name) or not _within(name, 'catenary_monitor'):
+            continue
+        doc = ast.get_docstring(ast.parse(MODULES[name].read_text(encoding='utf-8')))
+        assert doc and len(doc) > 80, f'{name}: no docstring saying what it holds'
+        if _layer(name) in (*CORE, 'replay') and name != 'catenary_monitor.core':
+            assert (
+                'may import' in doc.lower()
+            ), f'{name}: its docstring does not say what it may import'
+
+
+def test_no_two_modules_share_a_name():
+    """A reader never confuses two modules: each module's own name is unique in the package
+    (``__init__``, ``__main__`` and ``command`` aside)."""
+    seen: dict[str, str] = {}
+    clash = []
+    for name in MODULES:
+        if not _within(name, 'catenary_monitor') or _is_package(name):
+            continue
+        base = name.rsplit('.', 1)[-1]
+        if base in ('__main__',):
+            continue
+        if base in seen:
+            clash.append(f'{seen[base]} and {name}')
+        seen[base] = name
+    assert not clash, 'modules with the same name:\n' + '\n'.join(clash)
+
+
+def test_cli_and_console_never_import_each_other():
+    bad = [
+        f'{name} imports {target}'
+        for name in MODULES
+        for target in _project_imports(name)
+        if {_layer(name), _layer(target)} == {'cli', 'console'}
+    ]
+    assert not bad, '\n'.join(bad)

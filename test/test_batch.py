@@ -10,9 +10,22 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings, strategies as st
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from replay_data import T0_NS, core_steps, dock_config, events_of, generate
 
-from catenary_monitor.core.batch import (
+from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
+from catenary_monitor.core.monitor.monitor_core import (
+    OUTPUT_FIELDS,
+    VALUE_FIELDS,
+    Acknowledge,
+    Depth,
+    MonitorCore,
+    Reconfigure,
+    Tension,
+    Tick,
+)
+from catenary_monitor.core.monitor.twin import (
     COLUMNS,
     KIND_TENSION,
     SnapshotColumns,
@@ -22,20 +35,7 @@ from catenary_monitor.core.batch import (
     run_log,
     tick_grid,
 )
-from catenary_monitor.core.config import LineConfig, MonitorConfig
-from catenary_monitor.core.result import Status
-from catenary_monitor.core.monitor import (
-    OUTPUT_FIELDS,
-    VALUE_FIELDS,
-    Acknowledge,
-    Reconfigure,
-    Depth,
-    MonitorCore,
-    Tension,
-    Tick,
-)
-
-from replay_data import T0_NS, core_steps, dock_config, events_of, generate
+from catenary_monitor.core.physics.result import Status
 
 
 def window_of(config, tensions, depth, ticks, lo=None, hi=None):
@@ -123,7 +123,7 @@ def assert_columns_give(items, want):
     ``--out`` encodes both to the same DiagnosticArray bytes."""
     from types import SimpleNamespace
 
-    from catenary_monitor.cli.replay_output import _snapshot_payloads
+    from catenary_monitor.replay.outputs import _snapshot_payloads
 
     flat = []
     for item in items:
@@ -460,8 +460,13 @@ def _lookahead_config(**alarm):
     base = dock_config(3, depth_accuracy=0.3, drag_margin_warn=150e3, **alarm)
     extra = [
         dict(tension_accuracy=40e3, ea=6.0e8, chain_length=300.0),
-        dict(tension_accuracy=20e3, chain_length=250.0, anchor_holding=500e3,
-             anchor_weight=400e3, chain_friction=0.7),
+        dict(
+            tension_accuracy=20e3,
+            chain_length=250.0,
+            anchor_holding=500e3,
+            anchor_weight=400e3,
+            chain_friction=0.7,
+        ),
         dict(chain_length=140.0, anchor_holding=300e3),
     ]
     lines = tuple(dataclasses.replace(lc, **e) for lc, e in zip(base.lines, extra))
@@ -479,8 +484,14 @@ def test_bounds_and_holding_twin_equals_the_core(seed):
     assert 'uplift possible within sensor accuracy' in messages
     assert 'anchor may drag' in messages
     outs = np.array([o.values for s in steps for o in s.outputs if o.line == 1])
-    for key in ('uplift_force_upper', 'anchor_margin_lower', 'grounded_length', 'drag_margin',
-                'implied_anchor_distance', 'tide_margin_at_length'):
+    for key in (
+        'uplift_force_upper',
+        'anchor_margin_lower',
+        'grounded_length',
+        'drag_margin',
+        'implied_anchor_distance',
+        'tide_margin_at_length',
+    ):
         assert np.isfinite(outs[:, OUTPUT_FIELDS.index(key)]).any(), key
 
 
@@ -535,13 +546,14 @@ def test_run_log_steps_clock_and_intake_events_as_the_core_does():
     """The node's clock-watchdog and intake records (through their JSON record and back)
     between vectorized stretches: the same clock and intake statuses, snapshots and
     transitions as the core; drops age out of the 60 s window."""
-    from catenary_monitor.core.monitor import (
+    import json
+
+    from catenary_monitor.core.monitor.monitor_core import (
         ClockHealth,
         Intake,
         event_record,
         parse_event_record,
     )
-    import json
 
     config = dock_config(3)
     tensions, depth = generate(config, seconds=150.0, seed=4)
@@ -575,34 +587,47 @@ def test_run_log_steps_clock_and_intake_events_as_the_core_does():
     assert [s.stamp_ns for s in result.snapshots] == [s.stamp_ns for s in want]
     for g, w in zip(result.snapshots, want):
         assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
-    assert result.others == [c for s in steps for c in s.transitions
-                             if c.component in ('clock', 'intake', 'sensors')]
-    got = [(c.component, int(c.transition.new)) for c in result.others
-           if c.component in ('clock', 'intake')]
+    assert result.others == [
+        c for s in steps for c in s.transitions if c.component in ('clock', 'intake', 'sensors')
+    ]
+    got = [
+        (c.component, int(c.transition.new))
+        for c in result.others
+        if c.component in ('clock', 'intake')
+    ]
     assert got == [
-        ('intake', 1), ('intake', 2), ('clock', 2), ('clock', 0), ('intake', 0), ('intake', 1)
+        ('intake', 1),
+        ('intake', 2),
+        ('clock', 2),
+        ('clock', 0),
+        ('intake', 0),
+        ('intake', 1),
     ]
     last = {st.name: st for st in want[-1].statuses}
     assert last['catenary_monitor: clock'].level == 0
     intake = last['catenary_monitor: intake']
     assert dict(intake.values)['messages_dropped'] == '0' and 'busy' in intake.message
     error = next(
-        st for s in want for st in s.statuses
+        st
+        for s in want
+        for st in s.statuses
         if st.name == 'catenary_monitor: intake' and st.level == 2
     )
     assert error.message.startswith('node cannot keep up: 5 % of tension and depth samples')
     assert dict(error.values)['line_02.messages_dropped'] == '90'
     stopped = next(
-        st for s in want for st in s.statuses
+        st
+        for s in want
+        for st in s.statuses
         if st.name == 'catenary_monitor: clock' and st.level == 2
     )
     assert stopped.message.startswith('ROS clock stopped: /clock not advancing for 4 s')
 
 
 def test_worst_is_the_first_extreme_ignoring_nan():
-    """batch.worst: the smallest margin and the largest force, the first of equal ones, NaN
+    """twin.worst: the smallest margin and the largest force, the first of equal ones, NaN
     ignored (where the other values are infinite too), None where every value is NaN."""
-    from catenary_monitor.core import batch
+    from catenary_monitor.core.monitor import twin
 
     nan, inf = math.nan, math.inf
     v = np.array([nan, 3.0, -inf, -inf, nan])
@@ -611,11 +636,11 @@ def test_worst_is_the_first_extreme_ignoring_nan():
     values['top_tension'] = np.array([nan, -inf, nan, -inf, nan])
     t = np.arange(5, dtype=np.int64) * 1_000_000_000
     empty = np.zeros(0)
-    result = batch.LineResult('a', t, t, values, t, t, t, t, t)
-    out = batch.worst(result)
+    result = twin.LineResult('a', t, t, values, t, t, t, t, t)
+    out = twin.worst(result)
     assert out['anchor_margin'] == {'value': -inf, 'time': 2.0}
     assert out['uplift_force'] == {'value': 3.0, 'time': 1.0}
     assert out['top_tension'] == {'value': -inf, 'time': 1.0}  # np.nanargmax gave index 0: NaN
     assert out['safety_factor'] is None
-    nothing = batch.LineResult('a', empty, empty, {key: empty for key in values}, *[empty] * 5)
-    assert all(w is None for w in batch.worst(nothing).values())
+    nothing = twin.LineResult('a', empty, empty, {key: empty for key in values}, *[empty] * 5)
+    assert all(w is None for w in twin.worst(nothing).values())

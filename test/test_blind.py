@@ -8,12 +8,18 @@ it reported is its own line's alarm. The console's alarm list and history follow
 and the vectorized replay twin gives the same steps.
 """
 
-from catenary_monitor.console.model import History, alarm_rows, statuses_by_name
-from catenary_monitor.core.batch import tick_grid
-from catenary_monitor.core.monitor import Acknowledge, Depth, MonitorCore, Tension, Tick
-
 from replay_data import T0_NS, dock_config, generate
 from test_batch import compare
+
+from catenary_monitor.console.frames import History, alarm_rows, statuses_by_name
+from catenary_monitor.core.monitor.monitor_core import (
+    Acknowledge,
+    Depth,
+    MonitorCore,
+    Tension,
+    Tick,
+)
+from catenary_monitor.core.monitor.twin import tick_grid
 
 S = 10**9
 NOTE = ' (suppressed by design: alarm on sensors)'

@@ -6,8 +6,10 @@ import math
 
 import numpy as np
 import pytest
+from dock_data import DOCK_YAML
 
 from catenary_monitor import solve
+from catenary_monitor.core.body.dock_model import DockModel, line_states
 from catenary_monitor.core.body.envelope import first_lift, lift_indicator, uplift_envelope
 from catenary_monitor.core.body.equilibrium import (
     EquilibriumStatus,
@@ -15,8 +17,7 @@ from catenary_monitor.core.body.equilibrium import (
     solve_equilibrium,
 )
 from catenary_monitor.core.body.loads import environmental_load, push_direction
-from catenary_monitor.core.body.model import DockModel, line_states
-from catenary_monitor.core.config import (
+from catenary_monitor.core.config.parameters import (
     ConfigError,
     DockConfig,
     LineConfig,
@@ -24,8 +25,6 @@ from catenary_monitor.core.config import (
     config_from_params,
     load_params_file,
 )
-
-from dock_data import DOCK_YAML
 
 W, H = 1300.0, 20.85
 
@@ -197,7 +196,7 @@ def test_config_needs_the_whole_geometry():
 def test_the_docs_page_parameter_table_is_generated_from_the_parameter_table():
     from pathlib import Path
 
-    from catenary_monitor.core.config import parameters_markdown
+    from catenary_monitor.core.config.parameters import parameters_markdown
 
     page = (Path(__file__).resolve().parents[1] / 'docs' / 'dock_body.md').read_text()
     begin, end = '<!-- dock-parameters:begin -->\n', '<!-- dock-parameters:end -->'

@@ -5,14 +5,13 @@ import dataclasses
 
 import numpy as np
 import pytest
+from dock_data import DOCK_YAML
 
+from catenary_monitor.core.body.dock_model import DockModel
 from catenary_monitor.core.body.equilibrium import EquilibriumStatus, solve_equilibrium
 from catenary_monitor.core.body.loads import environmental_load, push_direction
-from catenary_monitor.core.body.model import DockModel
-from catenary_monitor.core.config import config_from_params, load_params_file
+from catenary_monitor.core.config.parameters import config_from_params, load_params_file
 from catenary_monitor_study.body_peer import moorpy_equilibrium, moorpy_system
-
-from dock_data import DOCK_YAML
 
 TOL = 1e-4  # MoorPy's position tolerance [m] (solveEquilibrium(tol=...)), lines at 0.01 tol
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from catenary_monitor.core.config import (
+from catenary_monitor.core.config.parameters import (
     PARAMETERS,
     REQUIRED,
     AlarmConfig,
@@ -273,7 +273,11 @@ def test_heading_is_optional_and_checked():
     refused in one line; the same value through config_to_params."""
     import math
 
-    from catenary_monitor.core.config import ConfigError, config_from_params, config_to_params
+    from catenary_monitor.core.config.parameters import (
+        ConfigError,
+        config_from_params,
+        config_to_params,
+    )
 
     flat = {
         'lines': ['a', 'b', 'c', 'd'],
@@ -306,7 +310,7 @@ def test_heading_is_optional_and_checked():
 def test_a_line_named_like_a_monitor_status_is_refused_when_built_directly():
     """LineConfig checks the name as the params-file reader does: a line called ``tide``
     would share its /diagnostics name with the tide's status."""
-    from catenary_monitor.core.config import RESERVED_NAMES, LineConfig
+    from catenary_monitor.core.config.parameters import RESERVED_NAMES, LineConfig
 
     for name in RESERVED_NAMES:
         with pytest.raises(ConfigError, match='own statuses'):

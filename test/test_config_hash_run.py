@@ -16,8 +16,8 @@ from pathlib import Path
 import pytest
 from ros_harness import Client, child_env, stop, write_params
 
-from catenary_monitor.cli.replay import load_config, log_parameters
-from catenary_monitor.core.config import config_hash
+from catenary_monitor.core.config.parameters import config_hash
+from catenary_monitor.replay.driver import load_config, log_parameters
 
 pytestmark = pytest.mark.ros
 
@@ -85,7 +85,7 @@ def test_run_limits_discovery_to_localhost_unless_told(tmp_path, given):
     if given:
         env['ROS_AUTOMATIC_DISCOVERY_RANGE'] = given
     probe = (
-        'import os, sys; from catenary_monitor.cli.live import limit_discovery; '
+        'import os, sys; from catenary_monitor.cli.run import limit_discovery; '
         'print(limit_discovery(os.environ)); print(os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"])'
     )
     r = subprocess.run(

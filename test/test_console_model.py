@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from catenary_monitor.console.foxglove import layout
-from catenary_monitor.console.model import (
+from catenary_monitor.console.frames import (
     History,
     Status,
     Trend,
@@ -18,7 +18,7 @@ from catenary_monitor.console.model import (
     statuses_by_name,
     tide_trend,
 )
-from catenary_monitor.core.config import config_from_params, load_params_file
+from catenary_monitor.core.config.parameters import config_from_params, load_params_file
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -138,7 +138,9 @@ def test_frame_shows_the_monitors_own_statuses():
     kw = dict(outputs={}, sample_t={}, depth=None, history=[], silence_limit_s=3.0)
     frame = build_frame(10.0, ['line_01'], 9.5, statuses, **kw)
     assert [(r['name'], r['level']) for r in frame['monitor']] == [
-        ('logger', 'OK'), ('clock', 'ERROR'), ('intake', 'WARN')
+        ('logger', 'OK'),
+        ('clock', 'ERROR'),
+        ('intake', 'WARN'),
     ]
     assert frame['monitor'][1]['message'].startswith('ROS clock stopped')
 

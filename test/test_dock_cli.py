@@ -7,14 +7,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from dock_data import DOCK_YAML
 
 from catenary_monitor.cli.main import main
+from catenary_monitor.core.body.dock_model import DockModel
 from catenary_monitor.core.body.equilibrium import solve_equilibrium
 from catenary_monitor.core.body.loads import environmental_load
-from catenary_monitor.core.body.model import DockModel
-from catenary_monitor.core.config import config_from_params, load_params_file
-
-from dock_data import DOCK_YAML
+from catenary_monitor.core.config.parameters import config_from_params, load_params_file
 
 ROOT = Path(__file__).resolve().parents[1]
 LINE_KEYS = {'line', 'top_tension', 'horizontal_tension', 'uplift_force', 'anchor_margin'}

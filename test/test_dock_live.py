@@ -5,16 +5,15 @@ import math
 
 import numpy as np
 import pytest
-
-from catenary_monitor.core.alarms import CONDITIONS
-from catenary_monitor.core.batch import recompute
-from catenary_monitor.core.body.estimate import estimate_dock
-from catenary_monitor.core.body.model import DockModel
-from catenary_monitor.core.monitor import MonitorCore, Tick
-
 from dock_data import ACCURACY, dock_config, generate_dock, true_tensions
 from replay_data import T0_NS, core_steps
 from test_batch import compare, ticks_for
+
+from catenary_monitor.core.body.dock_model import DockModel
+from catenary_monitor.core.body.estimate import estimate_dock
+from catenary_monitor.core.monitor.alarms import CONDITIONS
+from catenary_monitor.core.monitor.monitor_core import MonitorCore, Tick
+from catenary_monitor.core.monitor.twin import recompute
 
 DRIFTING = 8  # line_09, on the windward side of the generated wind
 

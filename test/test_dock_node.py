@@ -10,13 +10,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from catenary_monitor.cli.replay import load_config, run_replay
-from catenary_monitor.core.body.equilibrium import solve_equilibrium
-from catenary_monitor.core.body.model import DockModel
-from catenary_monitor.io.mcap_read import iter_messages
-
 from test_replay_node import _assert_status_equal
+
+from catenary_monitor.core.body.dock_model import DockModel
+from catenary_monitor.core.body.equilibrium import solve_equilibrium
+from catenary_monitor.io.mcap_read import iter_messages
+from catenary_monitor.replay.driver import load_config, replay_log
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCK_YAML = ROOT / 'config' / 'floating_dock.yaml'
@@ -112,7 +111,7 @@ def test_the_node_estimates_the_dock_and_flags_the_drifting_line(tmp_path):
     assert 'tension inconsistent with the other lines' in last['catenary_monitor: line_09'].message
     # (its high reading also makes the line's own monitor see an uplift: the message says why)
     # Replay redoes every array the node published, dock status and line values included.
-    result, _, _, report, _ = run_replay(files, config, ticks='log', snapshots=True)
+    result, _, _, report = replay_log(files, config, ticks='log', snapshots=True)
     assert report.complete
     assert [t for t, _ in arrays] == [s.stamp_ns for s in result.snapshots]
     for (stamp, array), snap in zip(arrays, result.snapshots):

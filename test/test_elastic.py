@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from catenary_monitor import solve
-from catenary_monitor.core import catenary as cat, elastic
+from catenary_monitor.core.physics import catenary as cat
+from catenary_monitor.core.physics import elastic
 
 EA_DOCK = 1.01e8 * 0.081**2 * 1e3  # U3 studlink 81 mm, N
 

@@ -7,12 +7,12 @@ import math
 import mpmath as mp
 import numpy as np
 import pytest
-
 import reference as ref
+
 from catenary_monitor import solve
-from catenary_monitor.core import inextensible, kernels
-from catenary_monitor.core import solve as solve_module
-from catenary_monitor.core.result import ALL_KEYS, INF_MARGINS, Status
+from catenary_monitor.core.physics import fused_kernel, inextensible
+from catenary_monitor.core.physics import solve as solve_module
+from catenary_monitor.core.physics.result import ALL_KEYS, INF_MARGINS, Status
 
 W, H, X = 1300.0, 20.85, 121.06
 
@@ -203,9 +203,9 @@ def kernel_off(monkeypatch):
     def no_kernel(*args, **kwargs):
         raise AssertionError('the C kernel was called')
 
-    monkeypatch.setattr(kernels, 'AVAILABLE', False)
-    monkeypatch.setattr(kernels, 'solve_arrays', no_kernel)
-    monkeypatch.setattr(kernels, 'solve_one', no_kernel)
+    monkeypatch.setattr(fused_kernel, 'AVAILABLE', False)
+    monkeypatch.setattr(fused_kernel, 'solve_arrays', no_kernel)
+    monkeypatch.setattr(fused_kernel, 'solve_one', no_kernel)
     monkeypatch.setattr(solve_module, '_ONE', None)
     monkeypatch.setattr(inextensible, '_ONE', None)
     return solve.__wrapped__  # the Python solve(): the kernel's Entry would take one element
@@ -222,9 +222,7 @@ def _array_with_lifted_lanes(inputs, n=600, at=(0, 257, 599)):
 
 def _each_in_array(r, at):
     for i in at:
-        yield r._replace(
-            **{k: float(getattr(r, k)[i]) for k in ALL_KEYS}, status=int(r.status[i])
-        )
+        yield r._replace(**{k: float(getattr(r, k)[i]) for k in ALL_KEYS}, status=int(r.status[i]))
 
 
 @pytest.mark.parametrize('name', list(GROUNDED))

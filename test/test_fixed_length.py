@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from catenary_monitor import solve
-from catenary_monitor.core import fixed_length as fl
-from catenary_monitor.core.fixed_length import LineRegime
-from catenary_monitor.core.result import Status
+from catenary_monitor.core.physics import fixed_length as fl
+from catenary_monitor.core.physics.fixed_length import LineRegime
+from catenary_monitor.core.physics.result import Status
 
 W, H = 1300.0, 20.85
 L = 122.8915  # the paper's table-3 chain (suspended length at the typhoon load)
@@ -166,8 +166,11 @@ def _mp_lift_depth(w, length, s, ea=None):
     if ea is None:
         return float(s / theta * (mp.cosh(theta) - 1))
     ea = mp.mpf(ea)
-    r = root(lambda r: r / w * mp.asinh(w * length / r) + r * length / ea - s,
-             mp.mpf(10) ** -30, w * s / theta)
+    r = root(
+        lambda r: r / w * mp.asinh(w * length / r) + r * length / ea - s,
+        mp.mpf(10) ** -30,
+        w * s / theta,
+    )
     z = w * length / r
     return float(r / w * (mp.sqrt(1 + z * z) - 1) + w * length**2 / (2 * ea))
 

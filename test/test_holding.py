@@ -1,4 +1,4 @@
-"""Holding (core/holding.py) through the monitor core: seed 001's rule, Hou et al. 2005's
+"""Holding (core/monitor/holding.py) through the monitor core: seed 001's rule, Hou et al. 2005's
 table (w = 25 kgf/m, dm = 11 m, anchor 2500 kgf; consistent units kgf and m), a sinker's
 holding under uplift, a dragged anchor seen in implied_anchor_distance, the drag WARN."""
 
@@ -7,9 +7,9 @@ import math
 import pytest
 
 from catenary_monitor import solve
-from catenary_monitor.core.alarms import Level
-from catenary_monitor.core.config import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor import OUTPUT_FIELDS, Depth, MonitorCore, Tension
+from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
+from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore, Tension
 
 LAMBDA_A, LAMBDA_C = 3.0, 0.75  # a holding coefficient and a chain friction (seed 001's form)
 ANCHOR = 2500.0  # kgf, Hou's anchor
@@ -29,8 +29,14 @@ def run(line, depth, tensions, **alarm):
 
 def hou_line(lm, x=11.0, **extra):
     return LineConfig(
-        name='hou', weight=25.0, anchor_distance=x, mbl=1e6, chain_length=lm,
-        anchor_holding=ANCHOR * LAMBDA_A, chain_friction=LAMBDA_C, **extra
+        name='hou',
+        weight=25.0,
+        anchor_distance=x,
+        mbl=1e6,
+        chain_length=lm,
+        anchor_holding=ANCHOR * LAMBDA_A,
+        chain_friction=LAMBDA_C,
+        **extra,
     )
 
 
@@ -64,9 +70,17 @@ def test_a_dragged_anchor_shows_in_the_implied_distance():
 
 
 def lifted_line(**extra):
-    return LineConfig(name='sinker', weight=1300.0, anchor_distance=100.0, mbl=4.8e6,
-                      chain_length=130.0, anchor_holding=200e3, chain_friction=0.7,
-                      allowed_uplift=1e9, **extra)
+    return LineConfig(
+        name='sinker',
+        weight=1300.0,
+        anchor_distance=100.0,
+        mbl=4.8e6,
+        chain_length=130.0,
+        anchor_holding=200e3,
+        chain_friction=0.7,
+        allowed_uplift=1e9,
+        **extra,
+    )
 
 
 def test_a_lifted_sinker_holds_by_its_remaining_weight():
@@ -96,9 +110,15 @@ def test_without_holding_data_the_values_are_nan():
 def test_drag_warning_with_deadband():
     """WARN below drag_margin_warn; held until warn + deadband is reached."""
     line = hou_line(21.0, allowed_uplift=1e9)  # the anchor may lift: only warnings here
-    core, outs = run(line, 15.0, [85.51 + 375, 900.0 + 375, 85.51 + 375],
-                     drag_margin_warn=7440.0, drag_margin_deadband=100.0, warn_clear_hold=0.0,
-                     clear_hold=0.0)
+    core, outs = run(
+        line,
+        15.0,
+        [85.51 + 375, 900.0 + 375, 85.51 + 375],
+        drag_margin_warn=7440.0,
+        drag_margin_deadband=100.0,
+        warn_clear_hold=0.0,
+        clear_hold=0.0,
+    )
     # 7500 + 25*0.75*2.9 - 85.5 = 7468.8 N: above 7440 but below 7540 at the end
     assert outs[0]['drag_margin'] > 7440.0
     assert outs[1]['drag_margin'] < 7440.0
@@ -112,7 +132,7 @@ def test_drag_warning_with_deadband():
 def test_holding_doc_parameter_table_is_generated():
     from pathlib import Path
 
-    from catenary_monitor.core.config import parameters_markdown
+    from catenary_monitor.core.config.parameters import parameters_markdown
 
     page = (Path(__file__).resolve().parent.parent / 'docs' / 'holding.md').read_text()
     begin, end = '<!-- holding-parameters:begin -->\n', '<!-- holding-parameters:end -->'
@@ -122,15 +142,20 @@ def test_holding_doc_parameter_table_is_generated():
 def paper_line(chain_length=122.6247):
     """The paper dock's line (config/floating_dock.yaml): 122.6247 m of chain to a sinker
     120 m off, the pretension R = 372 kN at the mean tide's 20.85 m."""
-    return LineConfig(name='line_01', weight=1300.0, anchor_distance=120.0, mbl=4.827e6,
-                      chain_length=chain_length)
+    return LineConfig(
+        name='line_01',
+        weight=1300.0,
+        anchor_distance=120.0,
+        mbl=4.827e6,
+        chain_length=chain_length,
+    )
 
 
 def test_tide_margin_at_length_is_the_rise_that_lifts_the_anchor():
     """At rest the paper's dock lifts its sinkers after 1.05 m of tide (docs/dock_body.md, the
     dock as one body), where ``tide_margin`` (R held) says 4.68 m; a chain lifted already has
     a negative margin; without ``chain_length`` it is NaN."""
-    from catenary_monitor.core import fixed_length as fl
+    from catenary_monitor.core.physics import fixed_length as fl
 
     w, length, h = 1300.0, 122.6247, 20.85
     t = float(fl.statics_at_span(w, h, length, 120.0).top_tension)
@@ -154,18 +179,20 @@ def test_on_a_rising_tide_the_margin_at_length_counts_down_to_the_lift():
     rises (the scene is the fixed-length chain's own), ``tide_margin_at_length`` plus the depth
     stays the lift depth at every update, while ``tide_margin`` (R held, what
     ``time_to_uplift`` counts down) stays above it."""
-    from catenary_monitor.core import fixed_length as fl
+    from catenary_monitor.core.physics import fixed_length as fl
 
     w, length, rate = 1300.0, 122.6247, 0.5 / 3600.0
     lift = float(fl.lift_depth(w, length, 120.0))
-    core = MonitorCore(MonitorConfig(lines=(paper_line(),), alarm=AlarmConfig(
-        tension_resolution=0.0)), 0)
+    core = MonitorCore(
+        MonitorConfig(lines=(paper_line(),), alarm=AlarmConfig(tension_resolution=0.0)), 0
+    )
     for k in range(0, 7200, 60):
         h = 20.85 + rate * k
         core.step(Depth(k * 1_000_000_000 + 1, h))
         t = float(fl.statics_at_span(w, h, length, 120.0).top_tension)
-        o = dict(zip(OUTPUT_FIELDS, core.step(Tension(k * 1_000_000_000 + 2, 0, t)).outputs[0]
-                     .values))
+        o = dict(
+            zip(OUTPUT_FIELDS, core.step(Tension(k * 1_000_000_000 + 2, 0, t)).outputs[0].values)
+        )
         assert o['tide_margin_at_length'] + h == pytest.approx(lift, rel=1e-12, abs=1e-9)
         assert o['tide_margin'] > o['tide_margin_at_length']  # R held: the later lift
     assert o['tide_margin_at_length'] == pytest.approx(1.0515 - rate * 7140, abs=1e-3)  # 7140 s on

@@ -1,5 +1,5 @@
-"""The C kernel (core/_kernels.c) against the numpy implementation it replaces, on every
-instruction set this CPU runs; its residual counts per regime (counts, never timings)."""
+"""The C kernel (core/physics/_fused_kernel.c) against the numpy implementation it replaces, on
+every instruction set this CPU runs; its residual counts per regime (counts, never timings)."""
 
 import math
 
@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from catenary_monitor import solve
-from catenary_monitor.core import catenary as cat
-from catenary_monitor.core import inextensible, kernels
-from catenary_monitor.core import solve as solve_module
-from catenary_monitor.core.result import ALL_KEYS, Status
+from catenary_monitor.core.physics import catenary as cat
+from catenary_monitor.core.physics import fused_kernel, inextensible
+from catenary_monitor.core.physics import solve as solve_module
+from catenary_monitor.core.physics.result import ALL_KEYS, Status
 
 W = 1300.0
 
@@ -51,8 +51,12 @@ def _scales(w, h, t, x):
 
 def test_kernel_is_built():
     """CI builds it (pip install . and test/conftest.py); a missing build is a failure here."""
-    assert kernels.AVAILABLE, 'core/_kernels.c is not built: python setup.py build_ext --inplace'
-    assert kernels.isa() in kernels.supported() and 'baseline' in kernels.supported()
+    assert (
+        fused_kernel.AVAILABLE
+    ), 'core/physics/_fused_kernel.c is not built: python setup.py build_ext --inplace'
+    assert (
+        fused_kernel.isa() in fused_kernel.supported() and 'baseline' in fused_kernel.supported()
+    )
 
 
 @pytest.mark.parametrize('scenes', [dock_scenes, sweep_scenes])
@@ -97,10 +101,10 @@ def test_without_the_kernel_solve_gives_the_numpy_answers(monkeypatch):
     w, h, t, x = dock_scenes(500)
     fast = solve(w, h, tension=t, anchor_distance=x)
     one = solve(W, float(h[0]), tension=float(t[0]), anchor_distance=float(x[0]))
-    monkeypatch.setattr(kernels, 'AVAILABLE', False)
+    monkeypatch.setattr(fused_kernel, 'AVAILABLE', False)
     monkeypatch.setattr(solve_module, '_ONE', None)
     monkeypatch.setattr(inextensible, '_ONE', None)
-    monkeypatch.setattr(kernels, '_k', None)  # any call into the kernel now fails
+    monkeypatch.setattr(fused_kernel, '_k', None)  # any call into the kernel now fails
     # the Python solve() itself: the C entry that wraps it would still take a plain-float
     # element to the kernel, and the comparison would be the kernel against itself
     python_solve = solve_module.solve.__wrapped__
@@ -113,7 +117,7 @@ def test_without_the_kernel_solve_gives_the_numpy_answers(monkeypatch):
 
 def _counts(w, h, t, x):
     it = np.empty(w.size, dtype=np.int64)
-    rows, status = kernels.solve_arrays(w, h, t, x, None, w.size, it)
+    rows, status = fused_kernel.solve_arrays(w, h, t, x, None, w.size, it)
     assert (status == 0).all()
     lifted = rows[ALL_KEYS.index('uplift_force')] > 0
     return it, lifted
@@ -137,7 +141,7 @@ def test_residual_counts_sweep():
     it, lifted = _counts(w, h, t, x)
     n = it[lifted]
     assert np.median(n) == 2 and np.mean(n <= 3) >= 0.9, np.bincount(n)
-    assert n.max() <= kernels._k.FAST_STEPS, np.bincount(n)
+    assert n.max() <= fused_kernel._k.FAST_STEPS, np.bincount(n)
 
 
 def test_load_margin_table_matches_the_newton_solution():
@@ -196,12 +200,12 @@ def test_no_convergence_is_reported(monkeypatch):
 
 @pytest.fixture
 def threads():
-    before = kernels.threads()
-    yield kernels.set_threads
-    kernels.set_threads(before)
+    before = fused_kernel.threads()
+    yield fused_kernel.set_threads
+    fused_kernel.set_threads(before)
 
 
-@pytest.mark.parametrize('n', [4095, 4096, 3 * kernels.MIN_SHARE + 77, 50_001])
+@pytest.mark.parametrize('n', [4095, 4096, 3 * fused_kernel.MIN_SHARE + 77, 50_001])
 def test_results_do_not_depend_on_the_thread_count(threads, n):
     """Shares of whole blocks on several threads give the very bits of one thread (statuses,
     residual counts, a partial last block, invalid elements and a constant weight included)."""
@@ -212,7 +216,7 @@ def test_results_do_not_depend_on_the_thread_count(threads, n):
     for count in (1, 2, 3, 7):
         threads(count)
         iters = np.empty(n, dtype=np.int64)
-        out, status = kernels.solve_arrays(W, h, t, x, 4e6, n, iters)
+        out, status = fused_kernel.solve_arrays(W, h, t, x, 4e6, n, iters)
         one = solve(W, h, tension=t, anchor_distance=x, mbl=4e6)
         runs.append((out, status, iters, one.uplift_force))
     first = runs[0]
@@ -223,14 +227,14 @@ def test_results_do_not_depend_on_the_thread_count(threads, n):
 
 
 def test_thread_count_from_the_environment(monkeypatch):
-    monkeypatch.setenv(kernels.THREADS_ENV, '3')
-    assert kernels.default_threads() == 3
-    monkeypatch.setenv(kernels.THREADS_ENV, 'many')
+    monkeypatch.setenv(fused_kernel.THREADS_ENV, '3')
+    assert fused_kernel.default_threads() == 3
+    monkeypatch.setenv(fused_kernel.THREADS_ENV, 'many')
     with pytest.warns(UserWarning, match='CATENARY_MONITOR_THREADS'):
-        fallback = kernels.default_threads()
-    assert 1 <= fallback <= kernels._k.MAX_THREADS
+        fallback = fused_kernel.default_threads()
+    assert 1 <= fallback <= fused_kernel._k.MAX_THREADS
     with pytest.raises(ValueError, match='threads'):
-        kernels.set_threads(0)
+        fused_kernel.set_threads(0)
 
 
 def test_bench_reports_one_thread_beside_the_default(threads):
@@ -241,34 +245,34 @@ def test_bench_reports_one_thread_beside_the_default(threads):
     threads(2)
     v = bench_core.vector_figures('dock', 5000)
     assert v['p4_ratio_best'] > 0 and v['p4_1t_ratio_best'] > 0
-    assert kernels.threads() == 2  # restored after the one-thread case
+    assert fused_kernel.threads() == 2  # restored after the one-thread case
     row = bench_core._vector_row('dock_5000', v)
     assert row[8] == f"{v['p4_1t_best_ns']:.1f}" and row[-1].endswith('%')
 
 
 def test_cores_left_to_other_work(threads):
     threads(3)
-    with kernels.cores_left_to(1) as now:
-        assert now == kernels.threads() == 2
-        with kernels.cores_left_to(5):
-            assert kernels.threads() == 1
-        assert kernels.threads() == 2
-    assert kernels.threads() == 3
+    with fused_kernel.cores_left_to(1) as now:
+        assert now == fused_kernel.threads() == 2
+        with fused_kernel.cores_left_to(5):
+            assert fused_kernel.threads() == 1
+        assert fused_kernel.threads() == 2
+    assert fused_kernel.threads() == 3
 
 
 def test_replay_leaves_the_read_ahead_its_core(threads, monkeypatch):
     """stream() solves on one thread fewer while the read-ahead decodes (two kernel threads
     beside it were slower on two cores), and gives the count back after."""
-    from catenary_monitor.cli import replay_stream
+    from catenary_monitor.replay import driver
 
     seen = []
 
     def fake(*args):
-        seen.append(kernels.threads())
+        seen.append(fused_kernel.threads())
         return 'state'
 
-    monkeypatch.setattr(replay_stream, '_stream', fake)
+    monkeypatch.setattr(driver, '_stream', fake)
     threads(2)
-    assert replay_stream.stream([], None, None) == 'state'
-    assert replay_stream.stream([], None, None, jobs=4) == 'state'
-    assert seen == [1, 1] and kernels.threads() == 2
+    assert driver.stream([], None, None) == 'state'
+    assert driver.stream([], None, None, jobs=4) == 'state'
+    assert seen == [1, 1] and fused_kernel.threads() == 2

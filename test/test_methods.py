@@ -19,7 +19,7 @@ from functools import lru_cache
 import numpy as np
 import pytest
 
-from catenary_monitor.core import catenary as cat
+from catenary_monitor.core.physics import catenary as cat
 from catenary_monitor_study.bench_methods import FAIL, GOOD, H_DOCK, W_DOCK, scene_error
 from catenary_monitor_study.methods import (
     Method,

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from catenary_monitor import solve
-from catenary_monitor.core import catenary as cat
+from catenary_monitor.core.physics import catenary as cat
 from catenary_monitor_study.methods import reference
 
 N = 100_000

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from catenary_monitor import solve
-from catenary_monitor.core import catenary as cat
-from catenary_monitor.core.solve import ALL_KEYS, SolveResult, Status
+from catenary_monitor.core.physics import catenary as cat
+from catenary_monitor.core.physics.solve import ALL_KEYS, SolveResult, Status
 
 
 def scenes(n, seed=3, beyond=0.3):

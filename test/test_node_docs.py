@@ -2,7 +2,7 @@
 
 from pathlib import Path
 
-from catenary_monitor.core.config import parameters_markdown
+from catenary_monitor.core.config.parameters import parameters_markdown
 
 ROOT = Path(__file__).resolve().parent.parent
 README = ROOT / 'README.md'
@@ -25,8 +25,8 @@ def test_core_and_node_cli_import_without_rclpy():
     code = (
         "import sys; sys.modules['rclpy'] = None\n"
         "import catenary_monitor.cli.main, catenary_monitor.ros.simulator\n"
-        "import catenary_monitor.core.health\n"
-        "import catenary_monitor.core.config, catenary_monitor.core.alarms\n"
+        "import catenary_monitor.core.monitor.health\n"
+        "import catenary_monitor.core.config.parameters, catenary_monitor.core.monitor.alarms\n"
     )
     subprocess.run(
         [sys.executable, '-c', code],

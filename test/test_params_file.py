@@ -22,10 +22,15 @@ from pathlib import Path
 from typing import Any, Optional
 
 import pytest
-from hypothesis import HealthCheck, example, given, settings, strategies as st
+from hypothesis import HealthCheck, example, given, settings
+from hypothesis import strategies as st
 
-from catenary_monitor.core.config import ConfigError, config_from_params, load_params_file
-from catenary_monitor.core.params_file import (
+from catenary_monitor.core.config.parameters import (
+    ConfigError,
+    config_from_params,
+    load_params_file,
+)
+from catenary_monitor.core.config.params_file import (
     ParamsFileError,
     c_strtod,
     c_strtol,
@@ -1157,7 +1162,11 @@ def test_libyaml_divergences_are_refused(
 def test_written_params_files_read_back_to_the_same_values(tmp_path: Path) -> None:
     """core.config.params_file_text (the demo's merged file, the tests' params files): every
     kind of value comes back with its type, read by rcl's rules."""
-    from catenary_monitor.core.config import config_hash, config_to_params, params_file_text
+    from catenary_monitor.core.config.parameters import (
+        config_hash,
+        config_to_params,
+        params_file_text,
+    )
 
     flat = {
         'lines': ['a', 'b'],

@@ -1,5 +1,5 @@
-"""The plausibility bounds of a reading (core/plausible.py): scalar and array alike, and the
-status sentences name the bounds the code applies."""
+"""The plausibility bounds of a reading (core/monitor/plausible.py): scalar and array alike, and
+the status sentences name the bounds the code applies."""
 
 from __future__ import annotations
 
@@ -8,13 +8,13 @@ import math
 import numpy as np
 import pytest
 
-from catenary_monitor.core.plausible import (
+from catenary_monitor.core.monitor.plausible import (
     MAX_DEPTH,
     MAX_TENSION_PER_MBL,
     reading_status,
     reading_status_array,
 )
-from catenary_monitor.core.result import STATUS_MESSAGES, Status
+from catenary_monitor.core.physics.result import STATUS_MESSAGES, Status
 
 MBL = 4.827e6
 

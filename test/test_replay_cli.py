@@ -17,10 +17,11 @@ import pytest
 from replay_data import core_steps, dock_config, generate, params_yaml, write_log
 
 from catenary_monitor.cli.main import main
-from catenary_monitor.core.alarms import Level
-from catenary_monitor.core.batch import LineResult, recompute
-from catenary_monitor.core.holding import FIELDS as HOLDING, LENGTH_FIELDS
-from catenary_monitor.core.uncertainty import FIELDS as BOUNDS
+from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.monitor.holding import FIELDS as HOLDING
+from catenary_monitor.core.monitor.holding import LENGTH_FIELDS
+from catenary_monitor.core.monitor.twin import LineResult, recompute
+from catenary_monitor.core.monitor.uncertainty import FIELDS as BOUNDS
 
 ROOT = Path(__file__).resolve().parents[1]
 CONTRACT = [
@@ -425,10 +426,10 @@ def test_offline_replay_imports_without_rclpy():
     """Offline replay needs no ROS: its modules import with rclpy unavailable."""
     code = (
         'import sys; sys.modules["rclpy"] = None\n'
-        'import catenary_monitor.core.batch, catenary_monitor.cli.replay, '
-        'catenary_monitor.cli.replay_output, catenary_monitor.io.fastcsv, '
+        'import catenary_monitor.core.monitor.twin, catenary_monitor.cli.replay, '
+        'catenary_monitor.replay.outputs, catenary_monitor.io.csv_columns, '
         'catenary_monitor.io.cdr, '
-        'catenary_monitor.io.mcap_fast, catenary_monitor_study.bench_replay\n'
+        'catenary_monitor.io.mcap_column_writer, catenary_monitor_study.bench_replay\n'
         'from catenary_monitor.cli.main import build_parser; build_parser()\n'
     )
     p = subprocess.run(
@@ -438,7 +439,7 @@ def test_offline_replay_imports_without_rclpy():
 
 
 def test_topic_names_resolve_like_the_node(tmp_path):
-    from catenary_monitor.core.config import resolve_topic
+    from catenary_monitor.core.config.parameters import resolve_topic
     from catenary_monitor.ros.playback import float64_topics
 
     assert resolve_topic('/tide/depth') == '/tide/depth'
@@ -508,9 +509,9 @@ def test_parameters_recorded_in_the_log(scene, capsys, tmp_path):
     code, out = run_cli(results, '--params-file', other, capsys=capsys)
     assert code == 0 and 'the log was recorded with other parameters' in out.out
     # An unfinished file written by the node's logger: the record is near its start.
-    from catenary_monitor.cli.replay import log_parameters
-    from catenary_monitor.core.config import config_hash, config_to_params
+    from catenary_monitor.core.config.parameters import config_hash, config_to_params
     from catenary_monitor.io.mcap_log import McapLogger
+    from catenary_monitor.replay.driver import log_parameters
 
     log = McapLogger(tmp_path / 'node', fsync=False)
     log.add_metadata(

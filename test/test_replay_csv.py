@@ -1,4 +1,4 @@
-"""The numpy CSV formatter (catenary_monitor.io.fastcsv): every field parses back, with the
+"""The numpy CSV formatter (catenary_monitor.io.csv_columns): every field parses back, with the
 stated precision, and the rows are what the csv module reads."""
 
 import csv
@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from catenary_monitor.io.fastcsv import FloatColumn, IntColumn, LabelColumn, write_rows
+from catenary_monitor.io.csv_columns import FloatColumn, IntColumn, LabelColumn, write_rows
 
 EDGES = [
     0.0,

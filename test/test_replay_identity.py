@@ -4,7 +4,9 @@ tension message, and the latch fast path. (The twin against the core itself: tes
 import numpy as np
 from replay_data import dock_config, generate
 
-from catenary_monitor.core.batch import (
+from catenary_monitor.core.monitor.holding import FIELDS as HOLDING
+from catenary_monitor.core.monitor.holding import LENGTH_FIELDS
+from catenary_monitor.core.monitor.twin import (
     KIND_TENSION,
     NO_DEPTH,
     VALUE_FIELDS,
@@ -12,9 +14,8 @@ from catenary_monitor.core.batch import (
     recompute,
     solve_updates,
 )
-from catenary_monitor.core.solve import solve
-from catenary_monitor.core.uncertainty import FIELDS as BOUNDS
-from catenary_monitor.core.holding import FIELDS as HOLDING, LENGTH_FIELDS
+from catenary_monitor.core.monitor.uncertainty import FIELDS as BOUNDS
+from catenary_monitor.core.physics.solve import solve
 
 DERIVED = BOUNDS + HOLDING + LENGTH_FIELDS  # from the solve, by the monitor
 
@@ -63,7 +64,7 @@ def test_rows_per_tension_message():
 def test_latch_fast_path_without_breach():
     """alarms._latch_series returns at once when no update breaches (most conditions of most
     lines in a real log); it equals the scalar latch step, with and without breaches."""
-    from catenary_monitor.core import alarms
+    from catenary_monitor.core.monitor import alarms
 
     rng = np.random.default_rng(0)
     t = np.cumsum(rng.uniform(0, 1, 400))
@@ -86,7 +87,7 @@ def test_solve_updates_of_an_elastic_line_is_elastic_solve():
     """A line with ``ea``: replay solves it with ``elastic.solve_with_correction``, as the core."""
     from dataclasses import replace
 
-    from catenary_monitor.core import elastic
+    from catenary_monitor.core.physics import elastic
 
     line = replace(dock_config(2).lines[1], ea=6.6e8)
     rng = np.random.default_rng(4)

@@ -6,7 +6,7 @@ import functools
 import numpy as np
 import pytest
 
-from catenary_monitor.core.batch import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.twin import OUTPUT_FIELDS
 from catenary_monitor.io.cdr import (
     diagnostic_array,
     diagnostic_array_bodies,
@@ -18,7 +18,7 @@ from catenary_monitor.io.cdr import (
     status_body,
     status_header,
 )
-from catenary_monitor.io.mcap_fast import ColumnWriter
+from catenary_monitor.io.mcap_column_writer import ColumnWriter
 from catenary_monitor.io.mcap_read import read_float64_topics
 from catenary_monitor.io.ros_schemas import message_definition
 

@@ -32,11 +32,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from catenary_monitor.cli.replay import load_config, log_parameters, run_replay
-from catenary_monitor.core.config import config_hash
-from catenary_monitor.core.monitor import OUTPUT_FIELDS, VALUE_FIELDS
-from catenary_monitor.core.result import Status
+from catenary_monitor.core.config.parameters import config_hash
+from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, VALUE_FIELDS
+from catenary_monitor.core.physics.result import Status
 from catenary_monitor.io.mcap_read import iter_messages
+from catenary_monitor.replay.driver import load_config, log_parameters, replay_log
 
 ROOT = Path(__file__).resolve().parents[1]
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
@@ -272,7 +272,7 @@ def test_replay_of_a_live_node_log_redoes_every_step(tmp_path, form):
     recorded = log_parameters(files)
     assert recorded is not None and recorded[0] == config_hash(config)
 
-    result, tensions, _, report, _ = run_replay(files, config, ticks='log', snapshots=True)
+    result, tensions, _, report = replay_log(files, config, ticks='log', snapshots=True)
     assert report.complete and result.ticks_from_log
     assert sum(len(t) for t, _ in tensions.values()) > 300
     levels_seen = set()
@@ -304,7 +304,7 @@ def test_replay_of_a_live_node_log_redoes_every_step(tmp_path, form):
         for got, want in zip(array.status, snap.statuses):
             _assert_status_equal(got, want, f'{stamp} {got.name}')
     # The acknowledgements: recorded (the unknown line refused), replayed, seen on /diagnostics.
-    from catenary_monitor.core.monitor import Acknowledge
+    from catenary_monitor.core.monitor.monitor_core import Acknowledge
 
     acks = [e for e in result.events if isinstance(e, Acknowledge)]
     assert [(e.line, e.origin) for e in acks] == [
@@ -345,9 +345,9 @@ def test_replay_of_a_live_node_log_redoes_every_step(tmp_path, form):
 
 def test_output_layout_is_the_nodes():
     """The node publishes the core's layout; replay writes it too."""
-    from catenary_monitor.cli.replay_output import output_topic
-    from catenary_monitor.core import monitor
+    from catenary_monitor.replay.outputs import output_topic
+    from catenary_monitor.core.monitor import monitor_core
     from catenary_monitor.ros import node
 
-    assert node.OUTPUT_FIELDS is monitor.OUTPUT_FIELDS
-    assert output_topic('l1') == f'/{monitor.NODE_NAME}/l1/outputs'
+    assert node.OUTPUT_FIELDS is monitor_core.OUTPUT_FIELDS
+    assert output_topic('l1') == f'/{monitor_core.NODE_NAME}/l1/outputs'

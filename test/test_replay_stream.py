@@ -1,6 +1,7 @@
 """Replay streams: the command's results window by window equal those of the whole log at once.
 
-The reference is the whole-log path (:func:`catenary_monitor.cli.replay.run_replay`, then
+The reference is the whole log as one window (:func:`catenary_monitor.replay.driver.replay_log`,
+then
 ``write_csv`` / ``write_mcap`` / ``summary_dict`` on the one result). The streamed replay runs
 with tiny reader batches and windows (a few dozen messages), so window edges fall between
 ticks and the inputs at the same stamp, between a recorded event and the inputs around it,
@@ -15,10 +16,8 @@ import numpy as np
 import pytest
 from replay_data import dock_config, generate, params_yaml
 
-from catenary_monitor.cli import replay_output as out
 from catenary_monitor.cli.main import main
-from catenary_monitor.cli.replay import input_topics, run_replay
-from catenary_monitor.core.monitor import (
+from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,
     Acknowledge,
     LoggerHealth,
@@ -29,6 +28,8 @@ from catenary_monitor.core.monitor import (
 from catenary_monitor.io import mcap_read
 from catenary_monitor.io.cdr import string_message
 from catenary_monitor.io.mcap_read import ReadReport, iter_messages
+from catenary_monitor.replay import outputs as out
+from catenary_monitor.replay.driver import input_topics, replay_log
 
 T0 = 1_763_900_000_000_000_000
 
@@ -111,7 +112,9 @@ def _messages(path):
 
 def _reference(paths, config, tmp, ticks='auto'):
     """The whole-log replay: CSV bytes, MCAP messages and the summary's lines."""
-    result, tensions, depth, report, _ = run_replay(paths, config, ticks=ticks, snapshots=True)
+    result, tensions, depth, report = replay_log(
+        paths, config, ticks=ticks, snapshots=True, window_messages=None
+    )
     with open(tmp / 'ref.csv', 'wb') as f:
         out.write_csv(f, result, None, [n for n, _ in out.CSV_ALL])
     topics, depth_topic = input_topics(config)
@@ -169,9 +172,9 @@ def test_windows_give_the_whole_log_result(
     node_log, tmp_path, capsys, tiny_batches, window, monkeypatch
 ):
     if window == '5000':  # one window, recomputed in parts of 3 ticks (the snapshots' bound)
-        from catenary_monitor.cli import replay_stream
+        from catenary_monitor.replay import driver
 
-        monkeypatch.setattr(replay_stream, 'TICKS_PER_PART', 3)
+        monkeypatch.setattr(driver, 'TICKS_PER_PART', 3)
     ref = _reference([node_log['log']], node_log['config'], tmp_path)
     got = _streamed(
         [node_log['log']], node_log['params'], tmp_path, capsys, '--window-messages', window
@@ -205,8 +208,9 @@ def test_rotated_set_in_any_order_and_jobs(node_log, tmp_path, capsys, tiny_batc
     files = sorted(node_log['rotated'].glob('*.mcap'))
     ref = _reference(files, node_log['config'], tmp_path)
     given = [files[2], files[0], files[1]]
-    got = _streamed(given, node_log['params'], tmp_path, capsys, '--window-messages', '31',
-                    '--jobs', jobs)
+    got = _streamed(
+        given, node_log['params'], tmp_path, capsys, '--window-messages', '31', '--jobs', jobs
+    )
     # (the worker processes read with the default batches: a window per file at least)
     assert got[2]['streaming']['windows'] >= 3 and got[2]['streaming']['jobs'] == int(jobs)
     assert got[2]['files'] == [str(p) for p in given]

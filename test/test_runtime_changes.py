@@ -16,7 +16,7 @@ import time
 import pytest
 from ros_harness import Client, output_of, start_monitor, stop, write_params
 
-from catenary_monitor.core.monitor import EVENTS_TOPIC
+from catenary_monitor.core.monitor.monitor_core import EVENTS_TOPIC
 from catenary_monitor.io.mcap_read import iter_messages
 
 pytestmark = pytest.mark.ros
@@ -103,7 +103,8 @@ def test_allowed_changes_are_logged_and_recorded(client, tmp_path):
         assert flagged['message'] == line and flagged['values']['changes'] == '1', flagged
         with client.lock:
             first = next(
-                e for t, e in client.diagnostics
+                e
+                for t, e in client.diagnostics
                 if t >= t0 and e.get(FLAG, {}).get('level') == WARN
             )
         assert first[UP]['level'] == ERROR, first[UP]

@@ -1,20 +1,19 @@
-"""Sensor sanity (core/sensor.py): each line state and each depth state raised by its pattern and
-cleared after, live (the core event by event) and replay (the batch twin) agreeing on every
+"""Sensor sanity (core/sensor_state.py): each line state and each depth state raised by its pattern
+and cleared after, live (the core event by event) and replay (the batch twin) agreeing on every
 output, level, message and snapshot; the demo's storm raises none."""
 
 import math
 
 import numpy as np
 import pytest
-
-from catenary_monitor.core import sensor
-from catenary_monitor.core.batch import recompute
-from catenary_monitor.core.config import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor import OUTPUT_FIELDS
-from catenary_monitor.core.solve import solve
-
 from replay_data import T0_NS
 from test_batch import compare, ticks_for
+
+from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
+from catenary_monitor.core.monitor import sensor_state
+from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.twin import recompute
+from catenary_monitor.core.physics.solve import solve
 
 W, X, MBL, DEPTH = 1300.0, 120.0, 4.827e6, 20.85
 SECONDS = 300
@@ -100,11 +99,11 @@ def plateau(t, base, level, ramp=30.0):
 
 def assert_raised_and_cleared(steps, state, level, what, k=0):
     codes = line_codes(steps, k)
-    code = sensor.LINE_STATES.index(state)
+    code = sensor_state.LINE_STATES.index(state)
     seen = [t for t, c in codes if c == code]
     assert seen and EVENT_S[0] - 30.0 <= seen[0] <= EVENT_S[1] + 25.0, (state, seen[:3])
-    assert codes[-1][1] == sensor.OK, state
-    assert all(c in (sensor.OK, code) for _, c in codes), (state, set(c for _, c in codes))
+    assert codes[-1][1] == sensor_state.OK, state
+    assert all(c in (sensor_state.OK, code) for _, c in codes), (state, set(c for _, c in codes))
     shown = line_statuses(steps, k)
     raised = [t for t, st in shown if st.level.name == level and what in st.message]
     assert raised, (state, {(st.level.name, st.message) for _, st in shown})
@@ -113,13 +112,13 @@ def assert_raised_and_cleared(steps, state, level, what, k=0):
     tr = transitions(steps, f'line_{k:02d}')
     assert tr[-1].new.name == 'OK' and tr[-1].time > raised[0]
     others = [c for j in (1, 2) if j != k for _, c in line_codes(steps, j)]
-    assert set(others) <= {sensor.OK}, state
+    assert set(others) <= {sensor_state.OK}, state
 
 
 def test_a_normal_record_raises_nothing():
     steps = run(config(), *scene())
     for k in range(3):
-        assert {c for _, c in line_codes(steps, k)} == {sensor.OK}
+        assert {c for _, c in line_codes(steps, k)} == {sensor_state.OK}
     assert [x.new.name for k in range(3) for x in transitions(steps, f'line_{k:02d}')] == [
         'OK'
     ] * 3
@@ -139,7 +138,7 @@ def test_a_still_dock_is_not_a_stuck_sensor():
         v[still] = v[np.argmax(still)]
     depth[depth_t >= EVENT_S[0]] = depth[int(EVENT_S[0])]
     steps = run(config(), t, tensions, depth_t, depth)
-    assert {c for k in range(3) for _, c in line_codes(steps, k)} == {sensor.OK}
+    assert {c for k in range(3) for _, c in line_codes(steps, k)} == {sensor_state.OK}
 
 
 def test_spike():
@@ -156,15 +155,23 @@ def test_samples_delivered_in_a_bunch_are_no_spike():
     would call it one. A real jump (1 MN) is still a spike."""
     a = AlarmConfig()
     rate = a.tension_rate_max * MBL
-    mem = sensor.sample(sensor.Memory(), 10.0, 1.2e6, a.tension_resolution, rate, a.stamp_jitter)
-    bunched = sensor.sample(mem, 10.001, 1.216e6, a.tension_resolution, rate, a.stamp_jitter)
+    mem = sensor_state.sample(
+        sensor_state.Memory(), 10.0, 1.2e6, a.tension_resolution, rate, a.stamp_jitter
+    )
+    bunched = sensor_state.sample(mem, 10.001, 1.216e6, a.tension_resolution, rate, a.stamp_jitter)
     assert bunched.spiked == -math.inf
-    assert sensor.sample(mem, 10.001, 1.216e6, a.tension_resolution, rate, 0.0).spiked == 10.001
-    jump = sensor.sample(mem, 10.05, 2.2e6, a.tension_resolution, rate, a.stamp_jitter)
+    assert (
+        sensor_state.sample(mem, 10.001, 1.216e6, a.tension_resolution, rate, 0.0).spiked == 10.001
+    )
+    jump = sensor_state.sample(mem, 10.05, 2.2e6, a.tension_resolution, rate, a.stamp_jitter)
     assert jump.spiked == 10.05
-    _, sp, _ = sensor.samples(
-        mem, np.array([10.001, 10.05]), np.array([1.216e6, 2.216e6]),
-        a.tension_resolution, rate, a.stamp_jitter,
+    _, sp, _ = sensor_state.samples(
+        mem,
+        np.array([10.001, 10.05]),
+        np.array([1.216e6, 2.216e6]),
+        a.tension_resolution,
+        rate,
+        a.stamp_jitter,
     )
     assert sp.tolist() == [-math.inf, 10.05]
 
@@ -203,7 +210,7 @@ def test_a_line_that_falls_with_the_others_is_not_parted():
     for k in range(3):
         tensions[k][after] *= 0.3
     steps = run(config(tension_rate_max=100.0), t, tensions, depth_t, depth)
-    assert {c for k in range(3) for _, c in line_codes(steps, k)} == {sensor.OK}
+    assert {c for k in range(3) for _, c in line_codes(steps, k)} == {sensor_state.OK}
 
 
 def tide_words(steps):
@@ -239,19 +246,22 @@ def test_depth_sensor_states(state, level, what):
 
 
 def test_a_state_for_every_code_and_a_word_for_every_state():
-    assert sensor.LINE_STATES[sensor.OK] == 'ok' and len(set(sensor.LINE_STATES)) == 6
+    assert (
+        sensor_state.LINE_STATES[sensor_state.OK] == 'ok'
+        and len(set(sensor_state.LINE_STATES)) == 6
+    )
     for code in range(1, 6):
-        assert sensor.line_message(code, 1e6, MBL)
-    assert sensor.line_word(sensor.OK, 'inconsistent') == 'inconsistent'
-    assert sensor.line_word(sensor.SLACK, 'inconsistent') == 'slack'
-    assert math.isinf(sensor.Memory().changed)
+        assert sensor_state.line_message(code, 1e6, MBL)
+    assert sensor_state.line_word(sensor_state.OK, 'inconsistent') == 'inconsistent'
+    assert sensor_state.line_word(sensor_state.SLACK, 'inconsistent') == 'slack'
+    assert math.isinf(sensor_state.Memory().changed)
 
 
 def demo_record():
     """The simulator's storm at its 20 Hz tension and 2 Hz depth rates through the monitor
     with the demo's overrides (the batch twin): (config, result)."""
     from catenary_monitor.cli.demo import DEMO_OVERRIDES
-    from catenary_monitor.core.config import config_from_params, load_params_file
+    from catenary_monitor.core.config.parameters import config_from_params, load_params_file
     from catenary_monitor.ros.simulator import Scenario, default_config_path
 
     params = load_params_file(default_config_path())
@@ -312,7 +322,7 @@ def test_the_demo_warns_of_the_uplift_before_line_11_lifts():
 def test_node_md_sensor_parameter_table_is_generated():
     from pathlib import Path
 
-    from catenary_monitor.core.config import parameters_markdown
+    from catenary_monitor.core.config.parameters import parameters_markdown
 
     page = (Path(__file__).resolve().parents[1] / 'docs' / 'node.md').read_text()
     begin, end = '<!-- sensor-parameters:begin -->\n', '<!-- sensor-parameters:end -->'
@@ -320,7 +330,7 @@ def test_node_md_sensor_parameter_table_is_generated():
 
 
 def test_moved_since_is_the_other_lines_newest_change():
-    """sensor._moved_since (two reductions per row) against its definition, line by line:
+    """sensor_state._moved_since (two reductions per row) against its definition, line by line:
     with ties, never-changed lines (-inf), NaN, one line and no ticks."""
     rng = np.random.default_rng(7)
     for trial in range(300):
@@ -333,4 +343,4 @@ def test_moved_since_is_the_other_lines_newest_change():
             newest = np.max(others, axis=1) if m > 1 else np.full(n, -np.inf)
             with np.errstate(invalid='ignore'):
                 want[:, k] = np.maximum(newest, depth) > changed[:, k]
-        assert np.array_equal(sensor._moved_since(changed, depth), want), trial
+        assert np.array_equal(sensor_state._moved_since(changed, depth), want), trial

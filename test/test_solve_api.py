@@ -117,7 +117,8 @@ def test_uplift_grows_as_anchor_gets_closer():
 def test_core_imports_no_rclpy():
     code = (
         "import sys; sys.modules['rclpy'] = None\n"
-        "import catenary_monitor, catenary_monitor.core.catenary, catenary_monitor.core.solve\n"
+        "import catenary_monitor, catenary_monitor.core.physics.catenary\n"
+        "import catenary_monitor.core.physics.solve\n"
         "print(catenary_monitor.solve(1300.0, 20.85, tension=1623.5e3).min_anchor_distance)"
     )
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True)
@@ -168,8 +169,9 @@ def test_cli_solves_problem4_far_beyond_any_chain():
     )  # fmt: skip
     assert p.returncode == 0, p.stderr
     got = json.loads(p.stdout)
-    assert got['anchor_lifted'] and all(math.isfinite(got[k]) for k in got if k not in (
-        'model', 'anchor_lifted'))
+    assert got['anchor_lifted'] and all(
+        math.isfinite(got[k]) for k in got if k not in ('model', 'anchor_lifted')
+    )
 
 
 def test_cli_refuses_results_float64_cannot_hold():

@@ -11,15 +11,20 @@ import math
 
 import numpy as np
 import pytest
-from scipy.optimize import brentq
-
-from catenary_monitor.core import tide_table
-from catenary_monitor.core.config import AlarmConfig, ConfigError, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor import OUTPUT_FIELDS
-
 from replay_data import T0_NS
+from scipy.optimize import brentq
 from test_batch import compare
 from test_tide_trend import H, W, X, exact_crossing_depth
+
+from catenary_monitor.core.config.parameters import (
+    AlarmConfig,
+    ConfigError,
+    LineConfig,
+    MonitorConfig,
+)
+from catenary_monitor.core.config.tide_constituents import parse_table
+from catenary_monitor.core.monitor import tide_table
+from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS
 
 TABLE = 'M2 0.9 40.0 28.9841042; S2 0.3 100.0 30.0; K1 0.25 10.0 15.0410686'
 EPOCH = T0_NS * 1e-9 - 29400.0  # the record starts near low water
@@ -120,16 +125,14 @@ def test_the_forecast_is_the_first_crossing_on_the_tables_own_curve():
 
 
 def test_the_module_against_the_curve_at_a_few_points():
-    table = tide_table.parse_table(TABLE)
+    table = parse_table(TABLE)
     now = np.array([EPOCH + 1234.0, EPOCH + 20000.0, EPOCH + 40000.0])
     p0 = np.array([curve(t) for t in now])
     margin = np.array([0.5, 0.2, 5.0])
     got = tide_table.uplift_times(table, EPOCH, HORIZON, now, margin, np.zeros(3))
     for k in range(3):
         want = first_crossing(now[k], p0[k] + margin[k])
-        assert (math.isinf(want) and math.isinf(got[k])) or got[k] == pytest.approx(
-            want, abs=1e-4
-        )
+        assert (math.isinf(want) and math.isinf(got[k])) or got[k] == pytest.approx(want, abs=1e-4)
     assert math.isinf(got[2])  # a 5 m rise: never
     np.testing.assert_array_equal(
         tide_table.uplift_times(table, EPOCH, HORIZON, now[:1], [-1.0], [0.0]), [0.0]
@@ -161,7 +164,7 @@ def test_a_bad_table_is_one_config_error(text):
 def test_node_md_tide_parameter_table_is_generated():
     from pathlib import Path
 
-    from catenary_monitor.core.config import parameters_markdown
+    from catenary_monitor.core.config.parameters import parameters_markdown
 
     page = (Path(__file__).resolve().parents[1] / 'docs' / 'node.md').read_text()
     begin, end = '<!-- tide-parameters:begin -->\n', '<!-- tide-parameters:end -->'

@@ -16,13 +16,12 @@ import math
 import mpmath
 import numpy as np
 import pytest
-
-from catenary_monitor.core import tide_trend
-from catenary_monitor.core.config import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor import OUTPUT_FIELDS, Depth, MonitorCore, Tension
-
 from replay_data import T0_NS
 from test_batch import compare
+
+from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
+from catenary_monitor.core.monitor import tide_trend
+from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore, Tension
 
 W, X = 1300.0, 120.0  # chain weight N/m, anchor distance m
 H = 150e3  # horizontal tension held, N

@@ -1,5 +1,5 @@
-"""Margins with the sensors' accuracy (core/uncertainty.py): the monotonicity the bounds rest
-on, bounds that contain the solve at readings perturbed within the accuracy (the core's scalar
+"""Margins with the sensors' accuracy (core/monitor/uncertainty.py): the monotonicity the bounds
+rest on, bounds that contain the solve at readings perturbed within the accuracy (the core's scalar
 solve as the reference), and the uplift-within-accuracy WARN through the monitor core."""
 
 import math
@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from catenary_monitor import solve
-from catenary_monitor.core.alarms import Level
-from catenary_monitor.core.config import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor import OUTPUT_FIELDS, Depth, MonitorCore, Tension
-from catenary_monitor.core.uncertainty import T_STAR, bounds
+from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
+from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore, Tension
+from catenary_monitor.core.monitor.uncertainty import T_STAR, bounds
 
 W, X = 1300.0, 120.0
 
@@ -111,11 +111,16 @@ def _core(accuracy=30e3, depth_accuracy=0.2):
     line = LineConfig(
         name='line_01', weight=W, anchor_distance=X, mbl=4.827e6, tension_accuracy=accuracy
     )
-    cfg = MonitorConfig(lines=(line,), alarm=AlarmConfig(depth_accuracy=depth_accuracy,
-                                                         anchor_margin_warn=0.0,
-                                                         tide_margin_warn=0.0,
-                                                         warn_clear_hold=0.0,
-                                                         clear_hold=0.0))
+    cfg = MonitorConfig(
+        lines=(line,),
+        alarm=AlarmConfig(
+            depth_accuracy=depth_accuracy,
+            anchor_margin_warn=0.0,
+            tide_margin_warn=0.0,
+            warn_clear_hold=0.0,
+            clear_hold=0.0,
+        ),
+    )
     return MonitorCore(cfg, 0)
 
 

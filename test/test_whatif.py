@@ -1,5 +1,5 @@
-"""What-if (core/whatif.py, cli/whatif.py): the monitor core's own decisions for one scene, as
-a Python function and as ``catenary-monitor whatif`` (a subprocess)."""
+"""What-if (core/monitor/whatif_scene.py, cli/whatif.py): the monitor core's own decisions for one
+scene, as a Python function and as ``catenary-monitor whatif`` (a subprocess)."""
 
 import json
 import math
@@ -13,7 +13,7 @@ from replay_data import T0_NS, dock_config, generate, params_yaml, write_log
 
 import catenary_monitor
 from catenary_monitor import solve
-from catenary_monitor.core.monitor import OUTPUT_FIELDS, Depth, MonitorCore, Tension
+from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore, Tension
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -59,14 +59,18 @@ def test_whatif_names_unknown_and_missing_lines():
     with pytest.raises(ValueError, match="no tension for line 'line_02': no chain_length"):
         catenary_monitor.whatif(config, 20.0, {'line_01': 4e5})
     with pytest.raises(ValueError, match="unknown line 'line_9'"):
-        catenary_monitor.whatif(config, 20.0, {'line_01': 4e5, 'line_02': 4e5},
-                                anchor_distances={'line_9': 100.0})
+        catenary_monitor.whatif(
+            config, 20.0, {'line_01': 4e5, 'line_02': 4e5}, anchor_distances={'line_9': 100.0}
+        )
 
 
 def run(*args):
     return subprocess.run(
         [sys.executable, '-m', 'catenary_monitor.cli', 'whatif', *args],
-        capture_output=True, text=True, cwd=ROOT, timeout=120,
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
     )
 
 
@@ -76,9 +80,22 @@ def params(tmp_path):
 
 
 def test_cli_table_and_json(params):
-    args = ['--params-file', str(params), '--depth', '20.85', '--tension', 'line_01=6e5',
-            '--tension', 'line_02=3.9e5', '--tension', 'line_03=4.2e5',
-            '--anchor-distance', 'line_03=118', '--tide-rate', '8.6e-5']
+    args = [
+        '--params-file',
+        str(params),
+        '--depth',
+        '20.85',
+        '--tension',
+        'line_01=6e5',
+        '--tension',
+        'line_02=3.9e5',
+        '--tension',
+        'line_03=4.2e5',
+        '--anchor-distance',
+        'line_03=118',
+        '--tide-rate',
+        '8.6e-5',
+    ]
     table = run(*args)
     assert table.returncode == 0, table.stderr
     lines = table.stdout.splitlines()
@@ -89,8 +106,11 @@ def test_cli_table_and_json(params):
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     want = catenary_monitor.whatif(
-        dock_config(3), 20.85, {'line_01': 6e5, 'line_02': 3.9e5, 'line_03': 4.2e5},
-        {'line_03': 118.0}, 8.6e-5,
+        dock_config(3),
+        20.85,
+        {'line_01': 6e5, 'line_02': 3.9e5, 'line_03': 4.2e5},
+        {'line_03': 118.0},
+        8.6e-5,
     )
     for got, ls in zip(data['lines'], want.lines):
         assert got['level'] == ls.level and got['anchor_distance'] == ls.anchor_distance
@@ -107,9 +127,20 @@ def test_cli_bad_input_is_one_line(params):
     for depth in ('deep', '-3'):
         out = run('--params-file', str(params), '--depth', depth)
         assert out.returncode == 2 and 'must be a positive number' in out.stderr, out.stderr
-    far = run('--params-file', str(params), '--depth', '20', '--tension', 'line_01=4e5',
-              '--tension', 'line_02=4e5', '--tension', 'line_03=4e5',
-              '--anchor-distance', 'line_01=-5')
+    far = run(
+        '--params-file',
+        str(params),
+        '--depth',
+        '20',
+        '--tension',
+        'line_01=4e5',
+        '--tension',
+        'line_02=4e5',
+        '--tension',
+        'line_03=4e5',
+        '--anchor-distance',
+        'line_01=-5',
+    )
     assert far.returncode == 2 and 'anchor_distance' in far.stderr, far.stderr
     assert 'Traceback' not in far.stderr
     nolog = run('--params-file', str(params), '--depth', '20', '--log', str(params.parent / 'x'))
@@ -120,8 +151,17 @@ def test_cli_lines_not_given_take_the_logs_newest_sample(params, tmp_path):
     config = dock_config(3)
     tensions, depth = generate(config, seconds=60.0, seed=3, dropouts=False)
     log = write_log(tmp_path / 'log.mcap', config, tensions, depth)
-    out = run('--params-file', str(params), '--depth', '20.85', '--log', str(log),
-              '--tension', 'line_02=4.1e5', '--json')
+    out = run(
+        '--params-file',
+        str(params),
+        '--depth',
+        '20.85',
+        '--log',
+        str(log),
+        '--tension',
+        'line_02=4.1e5',
+        '--json',
+    )
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     got = {ls['line']: ls['tension'] for ls in data['lines']}
@@ -150,16 +190,24 @@ def test_cli_on_the_shipped_dock():
     assert out.returncode == 0, out.stderr
     data = json.loads(out.stdout)
     assert [ls['line'] for ls in data['lines']] == names
-    assert all(abs(ls['implied_anchor_distance'] - ls['anchor_distance']) < 1.0
-               for ls in data['lines'])
+    assert all(
+        abs(ls['implied_anchor_distance'] - ls['anchor_distance']) < 1.0 for ls in data['lines']
+    )
 
 
 def test_lines_not_given_hang_as_installed():
     """A line without a tension but with a chain_length hangs at its anchor distance in still
     water: its tension is problem 5's (the catenary's chain length equals the one paid out),
     and the command says where each tension came from."""
-    out = run('--params-file', 'config/floating_dock.yaml', '--depth', '20.85',
-              '--tension', 'line_11=1.6e6', '--json')
+    out = run(
+        '--params-file',
+        'config/floating_dock.yaml',
+        '--depth',
+        '20.85',
+        '--tension',
+        'line_11=1.6e6',
+        '--json',
+    )
     assert out.returncode == 0, out.stderr
     lines = {ls['line']: ls for ls in json.loads(out.stdout)['lines']}
     assert lines['line_11']['tension_source'] == 'given'
@@ -170,8 +218,14 @@ def test_lines_not_given_hang_as_installed():
     r = solve(weight=1300.0, depth=20.85, tension=hung['tension'], anchor_distance=120.0)
     length = r.suspended_length + (120.0 - r.min_anchor_distance)
     assert math.isclose(length, 122.6247, rel_tol=1e-9)
-    table = run('--params-file', 'config/floating_dock.yaml', '--depth', '20.85',
-                '--tension', 'line_11=1.6e6')
+    table = run(
+        '--params-file',
+        'config/floating_dock.yaml',
+        '--depth',
+        '20.85',
+        '--tension',
+        'line_11=1.6e6',
+    )
     assert table.returncode == 0 and 'hanging' in table.stdout and 'given' in table.stdout
 
 
@@ -183,8 +237,14 @@ def test_a_chain_that_cannot_hang_says_why():
         assert out.returncode == 2 and out.stdout == '', out.stdout
         assert 'line line_01: no tension given' in out.stderr and 'taut' in out.stderr
         assert 'no chain_length' not in out.stderr and out.stderr.count('\n') == 1
-    out = run('--params-file', 'config/floating_dock.yaml', '--depth', '20.85',
-              '--anchor-distance', 'nosuch=50')
+    out = run(
+        '--params-file',
+        'config/floating_dock.yaml',
+        '--depth',
+        '20.85',
+        '--anchor-distance',
+        'nosuch=50',
+    )
     assert out.returncode == 2 and "unknown line 'nosuch'" in out.stderr, out.stderr
 
 

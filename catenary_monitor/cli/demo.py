@@ -145,7 +145,7 @@ def demo_params(params: str, out: Path) -> str:
     """``params`` with :data:`DEMO_OVERRIDES`, written to ``out``/demo_params.yaml: the one
     file the monitor, the console and the chart all read (the console's highlights use the
     same thresholds as the monitor's alarms)."""
-    from catenary_monitor.core.config import (
+    from catenary_monitor.core.config.parameters import (
         config_from_params,
         config_to_params,
         load_params_file,
@@ -373,7 +373,7 @@ class _Episode(NamedTuple):
 
 def _read_episode(files: list[Path], params: str, origin_ns: Optional[int]) -> _Episode:
     """The depth, the hook tensions and every line's outputs from the MCAP log."""
-    from catenary_monitor.core.config import config_from_params, load_params_file
+    from catenary_monitor.core.config.parameters import config_from_params, load_params_file
     from catenary_monitor.io.mcap_read import read_float64_topics
     from catenary_monitor.ros.node import NODE_NAME, OUTPUT_FIELDS
 

@@ -40,8 +40,12 @@ def _guarded(func: Any) -> Any:
 
 def _model(params_file: str) -> Any:
     """The dock model of a params file (UsageError, one line, if it cannot be built)."""
-    from catenary_monitor.core.body.model import DockModel
-    from catenary_monitor.core.config import ConfigError, config_from_params, load_params_file
+    from catenary_monitor.core.body.dock_model import DockModel
+    from catenary_monitor.core.config.parameters import (
+        ConfigError,
+        config_from_params,
+        load_params_file,
+    )
 
     try:
         config = config_from_params(load_params_file(params_file))

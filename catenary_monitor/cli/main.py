@@ -20,8 +20,8 @@ from typing import Any, Callable, Optional, Sequence
 import numpy as np
 
 from catenary_monitor.cli.table import format_table
-from catenary_monitor.core.result import INF_MARGINS
-from catenary_monitor.core.solve import STATUS_MESSAGES, SolveResult, Status, solve
+from catenary_monitor.core.physics.result import INF_MARGINS
+from catenary_monitor.core.physics.solve import STATUS_MESSAGES, SolveResult, Status, solve
 
 #: Display unit, scale from SI and format for each key of the human-readable table.
 DISPLAY = {
@@ -273,8 +273,8 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-#: Entry-point group through which installed extensions (the benchmarks of
-#: ``catenary_monitor_study``) add sub-commands; the monitor never imports them itself.
+#: Entry-point group through which the console and installed extensions (the benchmarks of
+#: ``catenary_monitor_study``) add sub-commands; the command line never imports them itself.
 COMMAND_GROUP = 'catenary_monitor.commands'
 
 
@@ -283,18 +283,19 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
     those installed under the :data:`COMMAND_GROUP` entry points."""
     from importlib.metadata import entry_points
 
-    from catenary_monitor.cli import dock, live, log, replay, whatif
-    from catenary_monitor.console import command as console
+    from catenary_monitor.cli import dock, log, replay, run, whatif
 
     found: list[Callable[[argparse._SubParsersAction], None]] = [
-        live.register,
+        run.register,
         replay.register,
-        console.register,
         dock.register,
         whatif.register,
         log.register,
     ]
-    for ep in sorted(entry_points(group=COMMAND_GROUP), key=lambda e: e.name):
+    # the console first (as before the benchmarks), then the others by name
+    for ep in sorted(
+        entry_points(group=COMMAND_GROUP), key=lambda e: (e.name != 'console', e.name)
+    ):
         try:
             found.append(ep.load())
         except ImportError:  # an extension whose dependencies are missing: leave it out

@@ -7,9 +7,10 @@ Offline (no ROS graph)::
 
 reads the tension and depth topics named by the params file from any ROS 2-profile MCAP (the
 node's own logs, rosbag2 recordings; a rotated set or a directory), recomputes every update with
-the live node's schedule and alarm logic (:mod:`catenary_monitor.core.batch`), writes the chosen
-outputs (:mod:`catenary_monitor.replay_output`) and prints a summary (``--json``: one JSON
-object). Every step is redone as the node made it: the node records its ticks, its start and
+the live node's schedule and alarm logic (the replay driver, :mod:`catenary_monitor.replay.driver`,
+over the core's vectorized twin), writes the chosen outputs
+(:mod:`catenary_monitor.replay.outputs`) window by window and prints a summary (``--json``: one
+JSON object). Every step is redone as the node made it: the node records its ticks, its start and
 its logger and parameter changes on ``/catenary_monitor/events``; a log without that channel (a
 rosbag2 recording of the sensors) is stepped on a grid of ticks at ``diagnostic_rate``.
 
@@ -18,7 +19,7 @@ Playback::
     catenary-monitor replay LOG.mcap --publish [--params-file FILE] [--rate X] [--loop]
 
 publishes the recorded inputs (``std_msgs/Float64``) on their topics with their recorded timing
-scaled by X (:mod:`catenary_monitor.replay_publish`, needs rclpy).
+scaled by X (:mod:`catenary_monitor.ros.playback`, needs rclpy).
 
 Exit status: 0 done; 2 bad arguments, params file, missing file, not MCAP, or a topic with an
 unexpected type (one line naming it); 3 no message on any requested topic (empty log).
@@ -32,67 +33,38 @@ import os
 import sys
 import time
 from pathlib import Path
-from typing import Any, NamedTuple, Optional, Sequence
+from typing import Any, Optional, Sequence
 
 import numpy as np
 
 from catenary_monitor.cli.status_line import StatusLine
-from catenary_monitor.core.batch import COLUMNS, ReplayResult, recompute
-from catenary_monitor.core.config import (
+from catenary_monitor.core.config.parameters import (
     ConfigError,
     MonitorConfig,
     config_from_params,
     config_hash,
-    load_params_file,
-    resolve_topic,
 )
-from catenary_monitor.core.monitor import (
-    EVENTS_TOPIC,
-    NODE_NAME,
-    Reconfigure,
-    Start,
-    Tick,
-    parse_event_record,
-)
-from catenary_monitor.io.cdr import string_text
+from catenary_monitor.core.monitor.monitor_core import EVENTS_TOPIC
+from catenary_monitor.core.monitor.twin import COLUMNS
 from catenary_monitor.io.mcap_read import (
     EmptyLogError,
     McapReadError,
     ReadReport,
-    TopicTypeError,
-    expand_paths,
-    iter_messages,
     not_mcap,
     read_float64_topics,
 )
+from catenary_monitor.replay.driver import (
+    EXIT_EMPTY,
+    ReplayError,
+    drive,
+    expand,
+    input_topics,
+    load_config,
+    log_parameters,
+    read_inputs,
+)
 
-__all__ = ['register', 'cmd_replay', 'input_topics', 'read_events', 'run_replay', 'EXIT_EMPTY']
-
-#: Exit status for a log without any message on the requested topics.
-EXIT_EMPTY = 3
-
-
-class ReplayError(Exception):
-    """A user-facing failure: ``str()`` is one line; ``code`` the exit status."""
-
-    def __init__(self, message: str, code: int = 2) -> None:
-        super().__init__(message)
-        self.code = code
-
-
-class LogEvents(NamedTuple):
-    """The node's events-channel records: tick stamps (ns) and the other records."""
-
-    ticks: np.ndarray
-    others: list[Any]
-
-
-def input_topics(config: MonitorConfig) -> tuple[dict[str, str], str]:
-    """(line name -> resolved tension topic, resolved depth topic)."""
-    return (
-        {line.name: resolve_topic(line.tension_topic) for line in config.lines},
-        resolve_topic(config.depth_topic),
-    )
+__all__ = ['register', 'cmd_replay']
 
 
 class Progress:
@@ -138,159 +110,6 @@ class Progress:
         self.line.end()
 
 
-def read_events(paths: Sequence[Path], config: MonitorConfig) -> Optional[LogEvents]:
-    """The node's records on its events channel (ticks, start, logger changes,
-    reconfigurations), or None when the log has no such channel (not a node log)."""
-    report = ReadReport()
-    ticks, others, seen = [], [], False
-    for message in iter_messages(paths, [EVENTS_TOPIC], report):
-        seen = True
-        try:
-            text = string_text(message.data)
-        except ValueError:
-            continue
-        event = parse_event_record(message.log_time_ns, text)
-        if isinstance(event, Tick):
-            ticks.append(event.stamp_ns)
-        elif event is not None:
-            others.append(event)
-    if not seen:
-        return None
-    others.sort(key=lambda e: e.stamp_ns)
-    return LogEvents(np.array(sorted(ticks), np.int64), others)
-
-
-def _expand(paths: Sequence[str]) -> list[Path]:
-    try:
-        out = expand_paths(paths)
-    except FileNotFoundError as err:
-        raise ReplayError(str(err)) from None
-    if not out:
-        raise ReplayError(f'no *.mcap file in {", ".join(paths)}')
-    return out
-
-
-def log_parameters(paths: Sequence[Path]) -> Optional[tuple[str, dict[str, Any]]]:
-    """``(config hash, flat parameters)`` of the first ``catenary_monitor`` metadata record of
-    the files: the parameters the node started with (it writes one at start and one on every
-    parameter change, which replay follows from the events channel), or None.
-
-    Finished files answer from their summary; an unfinished file from its first MiB (where
-    the node's logger writes the record).
-    """
-    import io
-
-    from mcap.reader import NonSeekingReader, make_reader
-
-    for path in paths:
-        records = []
-        try:
-            with open(path, 'rb') as f:
-                reader = make_reader(f)
-                try:
-                    summary = reader.get_summary()
-                except Exception:  # noqa: BLE001 - no footer: the writer was killed
-                    summary = None
-                if summary is not None:
-                    records = list(reader.iter_metadata())
-                else:
-                    f.seek(0)
-                    head = NonSeekingReader(io.BytesIO(f.read(1 << 20)))
-                    try:
-                        for record in head.iter_metadata():
-                            records.append(record)
-                    except Exception:  # noqa: BLE001 - the cut at 1 MiB, or damage
-                        pass
-        except Exception:  # noqa: BLE001 - an unreadable summary: no parameters from it
-            continue
-        for record in records:
-            if record.name == NODE_NAME and 'parameters' in record.metadata:
-                try:
-                    return (
-                        record.metadata.get('config_hash', ''),
-                        json.loads(record.metadata['parameters']),
-                    )
-                except ValueError:
-                    continue
-    return None
-
-
-def load_config(path: str) -> MonitorConfig:
-    """The monitor configuration of a params file (ReplayError with the one-line reason)."""
-    try:
-        return config_from_params(load_params_file(path))
-    except ConfigError as err:
-        raise ReplayError(f'{path}: {err}') from err
-
-
-def read_inputs(
-    paths: Sequence[Path], config: MonitorConfig
-) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], tuple[np.ndarray, np.ndarray], ReadReport]:
-    """Tension columns per line, the depth column and the read report."""
-    topics, depth_topic = input_topics(config)
-    try:
-        columns, report = read_float64_topics(paths, [depth_topic, *topics.values()])
-    except TopicTypeError as err:
-        raise ReplayError(f'unexpected message type: {err} (check the params file topics)')
-    except EmptyLogError as err:
-        raise ReplayError(f'empty log: {err}; nothing to replay', EXIT_EMPTY) from err
-    except McapReadError as err:
-        raise ReplayError(str(err)) from err
-    tensions = {name: columns[topic] for name, topic in topics.items()}
-    return tensions, columns[depth_topic], report
-
-
-def run_replay(
-    paths: Sequence[Path],
-    config: MonitorConfig,
-    *,
-    ticks: str = 'auto',
-    follow_log: bool = True,
-    snapshots: bool = False,
-    progress: Optional[Progress] = None,
-) -> tuple[
-    ReplayResult,
-    dict[str, tuple[np.ndarray, np.ndarray]],
-    tuple[np.ndarray, np.ndarray],
-    ReadReport,
-    dict[str, float],
-]:
-    """Read and recompute; returns the result, the input columns, the report and timings (s).
-
-    ``ticks``: ``auto`` takes the node's recorded ticks when the log has them, else a grid;
-    ``log`` requires them; ``grid`` ignores them. ``follow_log``: apply the parameter changes
-    the node recorded (only meaningful when replaying with the recorded parameters).
-    """
-    prog = progress or Progress(False)
-    timing: dict[str, float] = {}
-    t0 = time.perf_counter()
-    prog('reading', 0.0)
-    tensions, depth, report = read_inputs(paths, config)
-    recorded = read_events(paths, config) if ticks != 'grid' else None
-    timing['read_s'] = time.perf_counter() - t0
-    prog('reading', 1.0)
-    if ticks == 'log' and recorded is None:
-        raise ReplayError(
-            '--ticks log: the log has no catenary_monitor events channel '
-            f'({EVENTS_TOPIC}); it was not recorded by the node'
-        )
-    tick_ns, events, start = None, [], None
-    if recorded is not None:
-        tick_ns = recorded.ticks
-        events = [e for e in recorded.others if follow_log or not isinstance(e, Reconfigure)]
-        starts = [e.stamp_ns for e in events if isinstance(e, Start)]
-        if starts:
-            start, events = starts[0], [
-                e for e in events if e.stamp_ns != starts[0] or not isinstance(e, Start)
-            ]
-    t1 = time.perf_counter()
-    prog('solving', 0.0)
-    result = recompute(config, tensions, depth, tick_ns, events, start, snapshots)
-    prog('solving', 1.0)
-    timing['solve_s'] = time.perf_counter() - t1
-    return result, tensions, depth, report, timing
-
-
 def _publish_columns(
     paths: Sequence[Path], config: Optional[MonitorConfig]
 ) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], ReadReport]:
@@ -321,7 +140,7 @@ def cmd_replay(args: argparse.Namespace) -> int:
         if args.publish:
             from catenary_monitor.ros.playback import publish
 
-            paths = _expand(args.logs)
+            paths = expand(args.logs)
             config = load_config(args.params_file) if args.params_file else None
             columns, report = _publish_columns(paths, config)
             return publish(
@@ -339,11 +158,11 @@ def cmd_replay(args: argparse.Namespace) -> int:
 
 
 def _offline(args: argparse.Namespace) -> int:
-    from catenary_monitor.cli import replay_output as out
     from catenary_monitor.cli.allocator import keep_freed_memory
+    from catenary_monitor.replay import outputs as out
 
     keep_freed_memory()  # a batch job on large arrays (see cli.allocator)
-    paths = _expand(args.logs)
+    paths = expand(args.logs)
     foreign = [why for why in map(not_mcap, paths) if why]
     if len(foreign) == len(paths):  # nothing to read: say so before asking for parameters
         raise ReplayError(foreign[0])
@@ -421,60 +240,35 @@ def _stream_outputs(
 ) -> tuple['_Sinks', Any, ReadReport]:
     """Stream the replay into the outputs; a log that cannot be streamed is replayed again
     as one window (one line on stderr says so)."""
-    from catenary_monitor.cli.replay_stream import (
-        WINDOW_MESSAGES,
-        NoEventsChannel,
-        Restart,
-        stream,
-    )
+    from catenary_monitor.replay.driver import WINDOW_MESSAGES
 
     # --out builds every diagnostic snapshot: about 2.5 times the memory per message
     window: Optional[int] = args.window_messages or (
         WINDOW_MESSAGES // 2 if args.out else WINDOW_MESSAGES
     )
-    while True:
-        report = ReadReport()
-        sinks = _Sinks(args, config, paths, csv_columns, window)
-        try:
-            state = stream(
-                paths,
-                config,
-                sinks,
-                ticks=args.ticks,
-                follow_log=follow,
-                snapshots=COLUMNS if args.out else False,
-                window_messages=window,
-                jobs=args.jobs,
-                report=report,
-                progress=progress.stream,
+
+    def restart(why: str) -> None:
+        if not args.quiet:
+            print(
+                f'catenary-monitor replay: cannot stream this log ({why}); replaying it '
+                'as one window (memory grows with the log)',
+                file=sys.stderr,
             )
-            return sinks, state, report
-        except Restart as err:
-            sinks.abandon()
-            if window is None:
-                raise ReplayError(f'cannot replay: {err}') from err
-            if not args.quiet:
-                print(
-                    f'catenary-monitor replay: cannot stream this log ({err}); replaying it '
-                    'as one window (memory grows with the log)',
-                    file=sys.stderr,
-                )
-            window = None
-        except NoEventsChannel as err:
-            sinks.abandon()
-            raise ReplayError(
-                '--ticks log: the log has no catenary_monitor events channel '
-                f'({EVENTS_TOPIC}); it was not recorded by the node'
-            ) from err
-        except TopicTypeError as err:
-            sinks.abandon()
-            raise ReplayError(f'unexpected message type: {err} (check the params file topics)')
-        except EmptyLogError as err:
-            sinks.abandon()
-            raise ReplayError(f'empty log: {err}; nothing to replay', EXIT_EMPTY) from err
-        except McapReadError as err:
-            sinks.abandon()
-            raise ReplayError(str(err)) from err
+
+    sinks, state, report = drive(
+        paths,
+        config,
+        lambda window: _Sinks(args, config, paths, csv_columns, window),
+        ticks=args.ticks,
+        follow_log=follow,
+        snapshots=COLUMNS if args.out else False,
+        window_messages=window,
+        jobs=args.jobs,
+        progress=progress.stream,
+        on_restart=restart,
+    )
+    assert isinstance(sinks, _Sinks)
+    return sinks, state, report
 
 
 class _Sinks:
@@ -489,7 +283,7 @@ class _Sinks:
         csv_columns: Sequence[str],
         window_messages: Optional[int],
     ) -> None:
-        from catenary_monitor.cli import replay_output as out
+        from catenary_monitor.replay import outputs as out
 
         self.out = out
         self.args, self.config, self.paths = args, config, paths
@@ -582,7 +376,7 @@ class _Sinks:
 
 
 def _csv_columns(text: str) -> Sequence[str]:
-    from catenary_monitor.cli.replay_output import CSV_ALL, CSV_COLUMNS
+    from catenary_monitor.replay.outputs import CSV_ALL, CSV_COLUMNS
 
     if not text:
         return CSV_COLUMNS

@@ -1,5 +1,6 @@
 """``catenary-monitor whatif``: every line's margins, uplift, holding and time to uplift for one
-scene, as the monitor core decides them (:func:`catenary_monitor.core.whatif.whatif`).
+scene, as the monitor core decides them
+(:func:`catenary_monitor.core.monitor.whatif_scene.whatif`).
 
 Which values a line takes: ``--tension NAME=N`` and ``--anchor-distance NAME=X`` where given;
 otherwise the newest tension sample of that line in ``--log`` (the last one recorded) and its
@@ -47,11 +48,11 @@ def _from_log(paths: Sequence[str], config: Any) -> tuple[dict[str, float], floa
     """The newest tension per line and the tide's trend (m/s) at the last depth sample."""
     import numpy as np
 
-    from catenary_monitor.cli.replay import ReplayError, _expand, read_inputs
-    from catenary_monitor.core import tide_trend
+    from catenary_monitor.core.monitor import tide_trend
+    from catenary_monitor.replay.driver import ReplayError, expand, read_inputs
 
     try:
-        tensions, depth, _ = read_inputs(_expand(list(paths)), config)
+        tensions, depth, _ = read_inputs(expand(list(paths)), config)
     except ReplayError as err:
         raise WhatIfError(f'--log: {err}') from None
     last = {name: float(v[-1]) for name, (_, v) in tensions.items() if len(v)}
@@ -77,21 +78,40 @@ def _time(value: float) -> str:
 def scene_table(scene: Any) -> str:
     """The scene as a readable table (kN, m, minutes) and the message of every line not OK."""
     header = [
-        'line', 'level', 'T kN', 'from', 'x m', 'uplift kN', 'upper kN', 'anchor m', 'tide m',
-        'tide@L m', 'drag kN', 'implied x m', 'to uplift',
+        'line',
+        'level',
+        'T kN',
+        'from',
+        'x m',
+        'uplift kN',
+        'upper kN',
+        'anchor m',
+        'tide m',
+        'tide@L m',
+        'drag kN',
+        'implied x m',
+        'to uplift',
     ]
     rows = []
     for ls in scene.lines:
         v = ls.values
-        rows.append([
-            ls.line, ls.level, _cell(ls.tension, 1e-3), ls.source,
-            _cell(ls.anchor_distance, 1.0, 2),
-            _cell(v['uplift_force'], 1e-3), _cell(v['uplift_force_upper'], 1e-3),
-            _cell(v['anchor_margin'], 1.0, 2), _cell(v['tide_margin'], 1.0, 2),
-            _cell(v['tide_margin_at_length'], 1.0, 2), _cell(v['drag_margin'], 1e-3),
-            _cell(v['implied_anchor_distance'], 1.0, 2),
-            _time(v['time_to_uplift']),
-        ])
+        rows.append(
+            [
+                ls.line,
+                ls.level,
+                _cell(ls.tension, 1e-3),
+                ls.source,
+                _cell(ls.anchor_distance, 1.0, 2),
+                _cell(v['uplift_force'], 1e-3),
+                _cell(v['uplift_force_upper'], 1e-3),
+                _cell(v['anchor_margin'], 1.0, 2),
+                _cell(v['tide_margin'], 1.0, 2),
+                _cell(v['tide_margin_at_length'], 1.0, 2),
+                _cell(v['drag_margin'], 1e-3),
+                _cell(v['implied_anchor_distance'], 1.0, 2),
+                _time(v['time_to_uplift']),
+            ]
+        )
     rate = scene.tide_rate
     tide = 'tide trend unknown' if math.isnan(rate) else f'tide {rate * 3600:+.2f} m/h'
     head = f'what-if at depth {scene.depth:g} m, {tide}'
@@ -101,8 +121,12 @@ def scene_table(scene: Any) -> str:
 
 def cmd_whatif(args: argparse.Namespace) -> int:
     """Run the scene; print the table or the JSON."""
-    from catenary_monitor.core.config import ConfigError, config_from_params, load_params_file
-    from catenary_monitor.core.whatif import (
+    from catenary_monitor.core.config.parameters import (
+        ConfigError,
+        config_from_params,
+        load_params_file,
+    )
+    from catenary_monitor.core.monitor.whatif_scene import (
         hanging_tensions,
         scene_dict,
         unhung_reason,

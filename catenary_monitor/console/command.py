@@ -25,13 +25,17 @@ def _fail(message: str, code: int = 2) -> int:
 def cmd_console(args: argparse.Namespace) -> int:
     """Start the console's source and HTTP server; serve until a signal."""
     from catenary_monitor.console.server import ConsoleServer
-    from catenary_monitor.core.config import ConfigError, config_from_params, load_params_file
+    from catenary_monitor.core.config.parameters import (
+        ConfigError,
+        config_from_params,
+        load_params_file,
+    )
 
     if args.foxglove_layout:
         return _write_layout(args)
     source: Any
     if args.log:
-        from catenary_monitor.console.replay import LogError, ReplaySource, load_log
+        from catenary_monitor.console.log_source import LogError, ReplaySource, load_log
 
         try:
             config, result, depth, files = load_log(args.log, args.params_file)
@@ -45,7 +49,7 @@ def cmd_console(args: argparse.Namespace) -> int:
                 config = config_from_params(load_params_file(args.params_file))
             except ConfigError as err:
                 return _fail(f'{args.params_file}: {err}')
-        from catenary_monitor.console.live import LiveSource
+        from catenary_monitor.console.ros_source import LiveSource
 
         source = LiveSource(config, args.ros_args)
     try:
@@ -78,7 +82,11 @@ def _write_layout(args: argparse.Namespace) -> int:
     import json
 
     from catenary_monitor.console.foxglove import layout
-    from catenary_monitor.core.config import ConfigError, config_from_params, load_params_file
+    from catenary_monitor.core.config.parameters import (
+        ConfigError,
+        config_from_params,
+        load_params_file,
+    )
     from catenary_monitor.ros.simulator import default_config_path
 
     path = args.params_file or default_config_path()

@@ -43,7 +43,7 @@ from importlib import resources
 from typing import Any, Optional, Protocol
 from urllib.parse import parse_qs, urlsplit
 
-from catenary_monitor.console.model import AckError
+from catenary_monitor.console.frames import AckError
 
 __all__ = ['Source', 'ConsoleServer', 'STATIC_FILES']
 

@@ -1,6 +1,15 @@
-"""The monitor's pure core: physics, solvers, configuration, alarms and the monitor itself.
+"""The monitor's pure core: plain Python and numpy, no rclpy, no clock, no files (but the params
+file :func:`~catenary_monitor.core.config.parameters.load_params_file` is handed).
 
-Plain Python and numpy only: nothing here imports rclpy, reads a clock or touches a file
-(``config.load_params_file`` reads the one file it is handed). The node, replay and the command
-line are thin shells around it.
+Four rooms, each importing only those before it (test/test_architecture.py):
+
+* :mod:`.physics` the chain models and ``solve()``: catenary closed forms and roots, the
+  inextensible, elastic and fixed-length chains, the fused C kernel;
+* :mod:`.config` the parameter table, the monitor's configuration and the params-file loader;
+* :mod:`.body` the dock as one body: geometry, loads, equilibrium, envelope, estimate;
+* :mod:`.monitor` the decisions: the event schedule (``MonitorCore.step``), alarms and
+  acknowledgement, sensor and tide checks, forecasts, bounds, holding, the dock watch, and the
+  core's vectorized twin with its C loops.
+
+The node, replay, the console and the command line are thin shells around it.
 """

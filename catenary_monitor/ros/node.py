@@ -1,10 +1,11 @@
 """The live monitor: the rclpy node ``catenary_monitor`` (console script ``monitor``).
 
 Wiring only. Subscriptions, timers, parameters, publishers and the MCAP logger around one
-:class:`~catenary_monitor.core.monitor.MonitorCore`: every received sample, every periodic tick,
-every logger change and every accepted parameter change becomes one core event, and the node
-publishes and logs what the core's :class:`~catenary_monitor.core.monitor.Step` says. No
-physics, no threshold comparison and no level decision live here.
+:class:`~catenary_monitor.core.monitor.monitor_core.MonitorCore`: every received sample, every
+periodic tick, every logger change and every accepted parameter change becomes one core event, and
+the node publishes and logs what the core's
+:class:`~catenary_monitor.core.monitor.monitor_core.Step` says. No physics, no threshold comparison
+and no level decision live here.
 
 Each event gets a distinct, increasing stamp (the node clock, moved on by 1 ns when two events
 would share a reading), used as the MCAP log time of everything the event produced; the events
@@ -48,24 +49,23 @@ from rclpy.signals import SignalHandlerOptions
 from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension, String
 
 from catenary_monitor import __version__
-from catenary_monitor.core import elastic
-from catenary_monitor.core.acknowledge import ACKNOWLEDGE_TOPIC, SENSORS, parse_request
-from catenary_monitor.core.alarms import Level
-from catenary_monitor.core.health import clock_stopped
-from catenary_monitor.core.config import (
+from catenary_monitor.core.config.parameters import (
     ConfigError,
     MonitorConfig,
     ParamSpec,
     all_parameters,
+    change_message,
     config_from_params,
     config_hash,
     config_to_params,
     expand_parameters,
-    change_message,
     load_params_file,
     runtime_change_refusal,
 )
-from catenary_monitor.core.monitor import (
+from catenary_monitor.core.monitor.acknowledge import ACKNOWLEDGE_TOPIC, SENSORS, parse_request
+from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.monitor.health import clock_stopped
+from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,
     NODE_NAME,
     OUTPUT_FIELDS,
@@ -85,6 +85,7 @@ from catenary_monitor.core.monitor import (
     Tick,
     event_record,
 )
+from catenary_monitor.core.physics import elastic
 from catenary_monitor.io.mcap_log import McapLogger
 from catenary_monitor.io.mcap_recover import RecoverResult, recover_in_child, unfinished_files
 

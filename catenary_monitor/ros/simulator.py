@@ -33,13 +33,13 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from catenary_monitor.core.config import (
+from catenary_monitor.core.config.parameters import (
     ConfigError,
     MonitorConfig,
     config_from_params,
     load_params_file,
 )
-from catenary_monitor.core.solve import solve
+from catenary_monitor.core.physics.solve import solve
 
 __all__ = ['Scenario', 'default_config_path', 'main']
 

@@ -17,8 +17,8 @@ import math
 
 import numpy as np
 
-from catenary_monitor.core import catenary as cat
-from catenary_monitor.core.solve import solve
+from catenary_monitor.core.physics import catenary as cat
+from catenary_monitor.core.physics.solve import solve
 
 from .base import Method
 

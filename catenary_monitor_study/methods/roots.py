@@ -22,7 +22,7 @@ import math
 import numpy as np
 from scipy import optimize
 
-from catenary_monitor.core import catenary as cat
+from catenary_monitor.core.physics import catenary as cat
 
 from .base import Method, NoConvergence
 

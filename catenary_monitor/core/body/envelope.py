@@ -21,13 +21,13 @@ from typing import Callable, NamedTuple, Optional
 import numpy as np
 from scipy.optimize import brentq
 
+from catenary_monitor.core.body.dock_model import DockModel
 from catenary_monitor.core.body.equilibrium import (
     Equilibrium,
     EquilibriumStatus,
     solve_equilibrium,
 )
 from catenary_monitor.core.body.loads import push_direction, wind_load_per_speed2
-from catenary_monitor.core.body.model import DockModel
 
 __all__ = ['Lift', 'lift_indicator', 'first_lift', 'EnvelopeRow', 'uplift_envelope']
 

@@ -1,6 +1,6 @@
 """Static equilibrium of the dock in surge, sway and yaw under a given load.
 
-Solves ``restoring(q) + load = 0`` (:func:`catenary_monitor.core.body.model.line_states`) for
+Solves ``restoring(q) + load = 0`` (:func:`catenary_monitor.core.body.dock_model.line_states`) for
 the offset ``q = (X, Y, psi)`` by Newton with the analytic stiffness, safeguarded:
 
 * the step ``K^-1 G`` (least squares where K is singular, e.g. a yaw nobody resists) is capped
@@ -31,8 +31,8 @@ from typing import NamedTuple, Optional
 
 import numpy as np
 
-from catenary_monitor.core.body.model import BodyLines, DockModel, line_states
-from catenary_monitor.core.fixed_length import LineRegime
+from catenary_monitor.core.body.dock_model import BodyLines, DockModel, line_states
+from catenary_monitor.core.physics.fixed_length import LineRegime
 
 __all__ = [
     'EquilibriumStatus',
@@ -315,8 +315,8 @@ def line_report(model: DockModel, lines: BodyLines) -> list[dict[str, object]]:
     suspended span: ``min_anchor_distance`` 0, ``anchor_margin`` the span, no ``tide_margin``
     (None: the tide margin holds R, which is 0).
     """
-    from catenary_monitor.core import catenary as cat
-    from catenary_monitor.core.solve import solve
+    from catenary_monitor.core.physics import catenary as cat
+    from catenary_monitor.core.physics.solve import solve
 
     st = lines.statics
     slack = st.regime == LineRegime.SLACK

@@ -4,7 +4,8 @@ estimates so that replay computes every tick's estimate in one call, element by 
 the live core does one at a time).
 
 Each measured hook tension T_i implies a span ``s_i`` (closed form for the fixed-length chain,
-:func:`catenary_monitor.core.fixed_length.span_and_sensitivity`) with the standard deviation
+:func:`catenary_monitor.core.physics.fixed_length.span_and_sensitivity`) with the standard
+deviation
 ``sigma_s = sigma_T / (dT/ds)`` (``sigma_T`` the sensor's ``tension_accuracy``; a slack reading
 says nothing about the span and gets no weight). The offset ``q = (X, Y, psi)`` minimizes
 
@@ -16,8 +17,8 @@ covariance of q); the largest-normalized-residual test (Schweppe; the bad-data t
 system state estimation) drops the line with the largest ``|z|`` above ``REMOVE_Z`` and refits,
 up to ``MAX_FLAGS`` times, as long as at least ``MIN_REDUNDANT`` readings remain (fewer cannot
 say which line is wrong); a dropped line's z is then its prediction residual. Whether a line is
-inconsistent is decided over time from these z (:mod:`catenary_monitor.core.body.live`). Only
-lines with a ``tension_accuracy`` are tested (without one, "beyond its accuracy" has no
+inconsistent is decided over time from these z (:mod:`catenary_monitor.core.monitor.dock_watch`).
+Only lines with a ``tension_accuracy`` are tested (without one, "beyond its accuracy" has no
 meaning); the others are weighted with the largest given accuracy (or all equally when none is
 given).
 
@@ -34,8 +35,8 @@ from typing import NamedTuple, Optional
 
 import numpy as np
 
-from catenary_monitor.core.body.model import DockModel
-from catenary_monitor.core.fixed_length import span_and_sensitivity, statics_at_span
+from catenary_monitor.core.body.dock_model import DockModel
+from catenary_monitor.core.physics.fixed_length import span_and_sensitivity, statics_at_span
 
 __all__ = ['DockEstimate', 'estimate_dock', 'REMOVE_Z', 'MAX_FLAGS', 'MIN_REDUNDANT', 'MIN_LINES']
 

@@ -9,7 +9,7 @@ g = 10 it uses throughout; SI here)::
 
 in kN, so in N: ``R1 = c_w V^2 (F' + k_h F)`` with ``c_w = 0.744 N s^2/m^4``, ``R2 = c_c Omega
 v^n`` with ``c_c = 1.8``, ``n = 1.83``, ``R3 = c_d B (Hs/4)^2 cos(a)`` with
-``c_d = 5382.1845 N/m^3`` (:class:`~catenary_monitor.core.config.DockConfig`, parameters
+``c_d = 5382.1845 N/m^3`` (:class:`~catenary_monitor.core.config.parameters.DockConfig`, parameters
 ``dock_*``). F' is the superstructure's and F the hull freeboard's area projected on the
 midship section, Omega the wetted area, B the beam, V, v the wind and current speeds [m/s],
 Hs the significant wave height [m].
@@ -34,7 +34,7 @@ from typing import NamedTuple, Optional
 
 import numpy as np
 
-from catenary_monitor.core.config import DockConfig
+from catenary_monitor.core.config.parameters import DockConfig
 
 __all__ = ['Loads', 'environmental_load', 'push_direction', 'wind_load_per_speed2']
 

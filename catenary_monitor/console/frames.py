@@ -1,0 +1,447 @@
+"""What the console page shows, built from what the monitor published (no rclpy, no HTTP).
+
+The console decides nothing: levels, messages, alarm states and acknowledgements come from the
+monitor's ``/diagnostics`` (:mod:`catenary_monitor.core.monitor.acknowledge` made them) and the
+values from its per-line outputs. This module turns those into one JSON-ready *frame* for the page
+(:func:`build_frame`), the alarm list (:func:`alarm_rows`), the alarm history (by comparing
+consecutive arrays, :class:`History`) and trend series bucketed for a chart (:class:`Trend`,
+:func:`bucket`). Live and replay build frames with the same functions.
+
+Times are seconds (epoch, the monitor's clock); forces N, lengths m: the page converts to kN.
+"""
+
+from __future__ import annotations
+
+import math
+from array import array
+from dataclasses import dataclass, field
+from typing import Any, Iterable, Mapping, Optional, Sequence
+
+import numpy as np
+
+from catenary_monitor.core.config.parameters import MonitorConfig
+from catenary_monitor.core.monitor.acknowledge import SENSORS
+from catenary_monitor.core.monitor.monitor_core import NODE_NAME, OUTPUT_FIELDS
+
+__all__ = [
+    'AckError',
+    'LEVEL_NAMES',
+    'Status',
+    'statuses_by_name',
+    'console_config',
+    'alarm_rows',
+    'alarm_names',
+    'History',
+    'Trend',
+    'bucket',
+    'tide_trend',
+    'build_frame',
+    'silence_limit',
+]
+
+#: diagnostic_msgs levels by number.
+LEVEL_NAMES = ('OK', 'WARN', 'ERROR', 'STALE')
+_PREFIX = f'{NODE_NAME}: '
+_INDEX = {name: i for i, name in enumerate(OUTPUT_FIELDS)}
+#: History: at most this many entries are kept (the newest).
+HISTORY_LIMIT = 2000
+
+
+class AckError(Exception):
+    """An acknowledgement that could not be sent: ``str()`` is one line; ``status`` HTTP."""
+
+    def __init__(self, message: str, status: int = 400) -> None:
+        super().__init__(message)
+        self.status = status
+
+
+@dataclass(frozen=True)
+class Status:
+    """One component of a ``/diagnostics`` array: level name, message, values (strings)."""
+
+    level: str
+    message: str
+    values: Mapping[str, str]
+
+
+def statuses_by_name(items: Iterable[tuple[str, int, str, Iterable[tuple[str, str]]]]) -> dict:
+    """``{component: Status}`` from ``(name, level, message, (key, value)...)`` of one array;
+    the component is the name without the ``catenary_monitor: `` prefix; others are left out."""
+    out: dict[str, Status] = {}
+    for name, level, message, values in items:
+        if name.startswith(_PREFIX):
+            lv = LEVEL_NAMES[level] if 0 <= level < len(LEVEL_NAMES) else 'STALE'
+            out[name[len(_PREFIX) :]] = Status(lv, message, dict(values))
+    return out
+
+
+def _num(text: Optional[str]) -> Optional[float]:
+    """A /diagnostics number as a float (None for a missing value or NaN: JSON has no NaN)."""
+    if text is None:
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        return None
+    return value if math.isfinite(value) else None
+
+
+def _finite(value: float) -> Optional[float]:
+    return value if math.isfinite(value) else None
+
+
+def silence_limit(diagnostic_rate: float) -> float:
+    """Seconds without ``/diagnostics`` after which the monitor counts as silent: twice its
+    period plus one second (jitter of a loaded machine is not a lost monitor)."""
+    return 2.0 / diagnostic_rate + 1.0
+
+
+def console_config(
+    config: Optional[MonitorConfig], names: Sequence[str], mode: str, **extra: Any
+) -> dict[str, Any]:
+    """The page's static facts: lines (heading, hook on the dock, MBL, anchor distance, allowed
+    uplift), the dock's size, the warning thresholds, the monitor's period and the silence
+    limit. Without a configuration
+    (a console started without ``--params-file``) the lines are those seen on /diagnostics."""
+    rate = config.alarm.diagnostic_rate if config else 1.0
+    lines = []
+    if config is not None:
+        for line, heading in zip(config.lines, config.headings()):
+            lines.append(
+                {
+                    'name': line.name,
+                    'heading': heading,
+                    'mbl': line.mbl,
+                    'anchor_distance': line.anchor_distance,
+                    'allowed_uplift': line.allowed_uplift,
+                    'hook_x': line.hook_x,
+                    'hook_y': line.hook_y,
+                }
+            )
+    else:
+        n = len(names)
+        for k, name in enumerate(names):
+            lines.append(
+                {
+                    'name': name,
+                    'heading': (k + 0.5) * 360.0 / max(n, 1),
+                    'mbl': None,
+                    'anchor_distance': None,
+                    'allowed_uplift': None,
+                    'hook_x': None,
+                    'hook_y': None,
+                }
+            )
+    alarm = config.alarm if config else None
+    dock = config.dock if config else None
+    return {
+        'mode': mode,
+        'lines': lines,
+        'dock_length': dock.length if dock else None,
+        'dock_beam': dock.beam if dock else None,
+        'safety_factor_warn': alarm.safety_factor_warn if alarm else 2.0,
+        'anchor_margin_warn': alarm.anchor_margin_warn if alarm else 5.0,
+        'tide_margin_warn': alarm.tide_margin_warn if alarm else 1.0,
+        'uplift_time_warn': alarm.uplift_time_warn if alarm else 1800.0,
+        'drag_margin_warn': alarm.drag_margin_warn if alarm else 0.0,
+        'tension_timeout': alarm.tension_timeout if alarm else 5.0,
+        'period_s': 1.0 / rate,
+        'silence_limit_s': silence_limit(rate),
+        **extra,
+    }
+
+
+#: The monitor's own statuses shown under the tide: the sensors' common-cause alarm, the logger
+#: and the guards (the node publishes the last three only when they have something to say:
+#: allowed runtime changes, a sim clock, intake counts).
+MONITOR_STATUSES = (SENSORS, 'logger', 'parameters', 'clock', 'intake')
+
+
+def monitor_rows(statuses: Mapping[str, Status]) -> list[dict[str, str]]:
+    """The monitor's own statuses present in the array (sensors, logger, parameters, clock,
+    intake): name, level and message, in that order."""
+    return [
+        {'name': name, 'level': statuses[name].level, 'message': statuses[name].message}
+        for name in MONITOR_STATUSES
+        if name in statuses
+    ]
+
+
+def alarm_names(lines: Sequence[str]) -> list[str]:
+    """The alarms on the page: each line's, then the sensors' common-cause alarm."""
+    return [*lines, SENSORS]
+
+
+def alarm_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dict[str, Any]]:
+    """The alarm list: one row per alarm (each line's, the sensors') that is neither
+    ``normal`` nor ``suppressed`` (by design: the sensors alarm stands for it), most urgent
+    first (unacknowledged, then returned-unacknowledged, then acknowledged; ERROR before STALE
+    before WARN; newest first)."""
+    rank_state = {'unacknowledged': 0, 'returned-unacknowledged': 1, 'acknowledged': 2}
+    rank_level = {'ERROR': 0, 'STALE': 1, 'WARN': 2, 'OK': 3}
+    rows: list[dict[str, Any]] = []
+    for name in alarm_names(lines):
+        st = statuses.get(name)
+        if st is None:
+            continue
+        state = st.values.get('alarm_state', 'normal')
+        if state in ('normal', 'suppressed'):
+            continue
+        rows.append(
+            {
+                'line': name,
+                'state': state,
+                'level': st.level,
+                'raised': _num(st.values.get('alarm_raised')),
+                'condition': st.values.get('alarm_condition', ''),
+                'message': st.message,
+                'acknowledged_by': st.values.get('acknowledged_by', ''),
+                'acknowledged_at': _num(st.values.get('acknowledged_at')),
+            }
+        )
+    rows.sort(
+        key=lambda r: (
+            rank_state.get(r['state'], 3),
+            rank_level.get(r['level'], 3),
+            -(r['raised'] or 0.0),
+        )
+    )
+    return rows
+
+
+@dataclass
+class History:
+    """The alarm history (audit trail) seen in consecutive ``/diagnostics`` arrays: raised,
+    raised again (severity rose), acknowledged (by whom), returned to normal, cleared."""
+
+    entries: list[dict[str, Any]] = field(default_factory=list)
+    _last: dict[str, tuple[str, str, float]] = field(default_factory=dict)
+
+    def feed(self, stamp: float, statuses: Mapping[str, Status], lines: Sequence[str]) -> None:
+        """Compare one array (stamp s) with the previous and add what changed (the lines'
+        alarms and the sensors')."""
+        for name in alarm_names(lines):
+            st = statuses.get(name)
+            if st is None:
+                continue
+            state = st.values.get('alarm_state', 'normal')
+            raised = _num(st.values.get('alarm_raised')) or 0.0
+            old = self._last.get(name, ('normal', 'OK', 0.0))
+            self._last[name] = (state, st.level, raised)
+            event = _history_event(old, (state, st.level, raised))
+            if event is None:
+                continue
+            when = raised if event.startswith('raised') else stamp
+            if event == 'acknowledged':
+                when = _num(st.values.get('acknowledged_at')) or stamp
+            self.entries.append(
+                {
+                    'time': when,
+                    'line': name,
+                    'event': event,
+                    'level': st.level,
+                    'condition': st.values.get('alarm_condition', ''),
+                    'message': st.message,
+                    'by': st.values.get('acknowledged_by', '') if event == 'acknowledged' else '',
+                }
+            )
+        if len(self.entries) > HISTORY_LIMIT:
+            del self.entries[: len(self.entries) - HISTORY_LIMIT]
+
+
+def _history_event(old: tuple[str, str, float], new: tuple[str, str, float]) -> Optional[str]:
+    """What happened between two alarm states of a line (None: nothing to record; suppressed
+    by design counts as normal)."""
+    (s0, _, r0), (s1, _, r1) = old, new
+    s0, s1 = ('normal' if s == 'suppressed' else s for s in (s0, s1))
+    if s1 == 'unacknowledged' and (s0 != 'unacknowledged' or r1 != r0):
+        return 'raised' if s0 in ('normal', 'returned-unacknowledged') else 'raised again'
+    if s0 == s1:
+        return None
+    if s1 == 'acknowledged' or (s0 == 'returned-unacknowledged' and s1 == 'normal'):
+        return 'acknowledged'
+    if s1 == 'returned-unacknowledged':
+        return 'returned to normal (unacknowledged)'
+    if s0 == 'acknowledged' and s1 == 'normal':
+        return 'cleared'
+    return None
+
+
+def bucket(
+    t: np.ndarray, columns: Mapping[str, np.ndarray], lo: float, hi: float, n: int = 600
+) -> dict[str, list[Optional[float]]]:
+    """Chart series over ``[lo, hi]`` s in at most ``n`` time buckets: per bucket its last time,
+    the maximum of ``*_max`` columns and the minimum of ``*_min`` columns (an envelope keeps
+    every peak a person must see); empty buckets are left out."""
+    keep = (t >= lo) & (t <= hi)
+    t = t[keep]
+    out: dict[str, list[Optional[float]]] = {'t': []}
+    for key in columns:
+        out[key] = []
+    if not len(t):
+        return out
+    lo = max(lo, float(t[0]))  # a record shorter than the span: buckets over what there is
+    width = max((hi - lo) / n, 1e-9)
+    b = np.minimum(((t - lo) / width).astype(np.int64), n - 1)
+    starts = np.flatnonzero(np.diff(b, prepend=-1))
+    ends = np.append(starts[1:], len(b))
+    out['t'] = t[ends - 1].tolist()
+    with np.errstate(invalid='ignore'):
+        for key, col in columns.items():
+            v = np.asarray(col)[keep]
+            if key.endswith('_min'):
+                agg = np.fmin.reduceat(v, starts)
+            else:
+                agg = np.fmax.reduceat(v, starts)
+            out[key] = [_finite(float(x)) for x in agg]
+    return out
+
+
+class Trend:
+    """Newest hours of a few series of one source, stored in ``resolution`` s buckets (maximum
+    of ``*_max`` keys, minimum of ``*_min`` keys) as arrays of doubles (two hours of three
+    series at 0.25 s: 0.7 MB), for the live console's charts."""
+
+    def __init__(
+        self, keys: Sequence[str], keep_s: float = 7200.0, resolution: float = 0.25
+    ) -> None:
+        self.keys, self.keep_s, self.resolution = tuple(keys), keep_s, resolution
+        self.t = array('d')
+        self.cols = {k: array('d') for k in keys}
+
+    def add(self, t: float, values: Mapping[str, float]) -> None:
+        """One sample at ``t`` (s)."""
+        r = self.resolution
+        if self.t and math.floor(self.t[-1] / r) == math.floor(t / r):
+            self.t[-1] = t
+            for k in self.keys:
+                old, new = self.cols[k][-1], values[k]
+                pick = min if k.endswith('_min') else max
+                self.cols[k][-1] = new if old != old else (old if new != new else pick(old, new))
+            return
+        self.t.append(t)
+        for k in self.keys:
+            self.cols[k].append(values[k])
+        if t - self.t[0] > self.keep_s + 60.0:
+            cut = int(np.searchsorted(np.frombuffer(self.t), t - self.keep_s))
+            del self.t[:cut]
+            for k in self.keys:
+                del self.cols[k][:cut]
+
+    def series(self, lo: float, hi: float, n: int = 600) -> dict[str, list[Optional[float]]]:
+        """:func:`bucket` of the stored samples over ``[lo, hi]``."""
+        return bucket(np.array(self.t), {k: np.array(v) for k, v in self.cols.items()}, lo, hi, n)
+
+
+def tide_trend(statuses: Mapping[str, Status]) -> dict:
+    """The tide's trend as the monitor decided it (the ``rate`` value [m/s] of the tide's
+    ``/diagnostics`` status, :mod:`catenary_monitor.core.monitor.tide_trend`): rate in m/h and
+    whether it is rising, falling or steady (|rate| < 0.05 m/h); unknown while the monitor says
+    nan."""
+    tide = statuses.get('tide')
+    rate = _num(tide.values.get('rate')) if tide is not None else None
+    if rate is None:
+        return {'rate_m_per_h': None, 'trend': 'unknown'}
+    slope = rate * 3600.0
+    word = 'steady' if abs(slope) < 0.05 else ('rising' if slope > 0 else 'falling')
+    return {'rate_m_per_h': slope, 'trend': word}
+
+
+def _line_view(
+    name: str,
+    status: Optional[Status],
+    output: Optional[tuple[float, Sequence[float]]],
+    sample_t: Optional[float],
+    now: float,
+) -> dict[str, Any]:
+    """One tile: level and message (the newest of /diagnostics and the outputs), values, the
+    alarm's state, and the age of the newest tension sample (s)."""
+    view: dict[str, Any] = {'name': name, 'level': 'STALE', 'message': 'no data from the monitor'}
+    if status is not None:
+        v = status.values
+        view.update(
+            level=status.level,
+            message=status.message,
+            model=v.get('model', ''),
+            alarm_state=v.get('alarm_state', 'normal'),
+            acknowledged=v.get('acknowledged', 'true') == 'true',
+            alarm_condition=v.get('alarm_condition', ''),
+            sensor_state=v.get('sensor_state', 'ok'),  # the core's word: ok, stuck, spike, ...
+        )
+        for key in (
+            'top_tension',
+            'anchor_margin',
+            'uplift_force',
+            'safety_factor',
+            'tide_margin',
+            'min_anchor_distance',
+            'time_to_uplift',  # s; None when not coming (inf) or unknown
+            'uplift_force_upper',  # N, within sensor accuracy; None when not configured
+            'drag_margin',  # N, holding minus horizontal load; None without anchor_holding
+            'implied_anchor_distance',  # m, from the chain length; None without it
+            'tide_margin_at_length',  # m, the chain length held; None without it
+        ):
+            view[key] = _num(v.get(key))
+    if output is not None:
+        rx, values = output
+        for key in ('top_tension', 'anchor_margin', 'uplift_force', 'safety_factor'):
+            view[key] = _finite(float(values[_INDEX[key]]))
+    view['age_s'] = None if sample_t is None else max(now - sample_t, 0.0)
+    return view
+
+
+def build_frame(
+    now: float,
+    config_lines: Sequence[str],
+    snapshot_t: Optional[float],
+    statuses: Mapping[str, Status],
+    outputs: Mapping[str, tuple[float, Sequence[float]]],
+    sample_t: Mapping[str, float],
+    depth: Optional[dict[str, Any]],
+    history: Sequence[dict[str, Any]],
+    silence_limit_s: float,
+    started: Optional[float] = None,
+    **extra: Any,
+) -> dict[str, Any]:
+    """One frame of the page at ``now`` (s).
+
+    ``snapshot_t``: when the newest ``/diagnostics`` array arrived (or its stamp in replay);
+    ``statuses`` its components; ``outputs`` line -> (time, OUTPUT_FIELDS values) of the newest
+    output; ``sample_t`` line -> time of the newest tension sample; ``depth``: the tide view.
+    Levels, messages and alarm states are the array's (the monitor publishes one at once on
+    every level change and acknowledgement); the values are the newest outputs'.
+    """
+    since = snapshot_t if snapshot_t is not None else started
+    silent = None if since is None else max(now - since, 0.0)
+    lines = []
+    for name in config_lines:
+        lines.append(
+            _line_view(name, statuses.get(name), outputs.get(name), sample_t.get(name), now)
+        )
+    tide = statuses.get('tide')
+    logger = statuses.get('logger')
+    return {
+        'now': now,
+        'snapshot_t': snapshot_t,
+        'silent_s': silent,
+        'connection': (
+            'lost'
+            if silent is not None and silent > silence_limit_s
+            else ('waiting' if snapshot_t is None else 'ok')
+        ),
+        'lines': lines,
+        'tide': {
+            'level': tide.level if tide else 'STALE',
+            'message': tide.message if tide else 'no data from the monitor',
+            'depth': _num(tide.values.get('depth')) if tide else None,
+            **(depth or {}),
+        },
+        'logger': {
+            'level': logger.level if logger else 'STALE',
+            'message': logger.message if logger else '',
+        },
+        'monitor': monitor_rows(statuses),
+        'alarms': alarm_rows(statuses, config_lines),
+        'history': list(history[-200:]),
+        **extra,
+    }

@@ -1,0 +1,335 @@
+/* Six loops of the vectorized replay (catenary_monitor/core/monitor/twin.py, alarms.py, sensor.py,
+ * tide_trend.py) in C.
+ *
+ * Optional, like the solve kernel: where it is not built, those modules run their numpy
+ * passes, which give the same arrays (test/test_batch_steps.py compares them, and each loop
+ * with the scalar step it replaces).
+ *
+ *   merge3(dd, tt, kk, times_out, kinds_out, kind_d, kind_t, kind_k) -> bool
+ *       batch._merge: the sorted depth, tension and tick times (int64) merged into one
+ *       schedule, ties taken depth, tension, tick; False (nothing written) when an input is
+ *       not sorted, for the caller's numpy path.
+ *   pick(idx, column, before, out)
+ *       batch._pick for a float64 column: out[i] = column[idx[i]], or `before` where
+ *       idx[i] == -1 (every element `before` when the column is empty).
+ *   newest(kinds, kind_d, kind_t, kind_k, known, t_idx, d_idx, dk_idx, k_idx, solved, s_idx)
+ *       batch._line_steps: per step (kinds int8: the depth, tension or tick code), the index of
+ *       the newest tension, depth, non-tension and tick step within its kind (int64, -1:
+ *       none yet); whether the line is solved there (a tension; a depth once a tension is
+ *       known, `known` or one in the window) and the index of the newest solved step.
+ *   samples(values, stamps, value, stamp, changed, spiked, resolution, rate, jitter, ch, sp)
+ *       -> (value, stamp, changed, spiked)
+ *       sensor.samples: a sensor memory (value, stamp, changed, spiked) through its readings
+ *       (float64; non-finite ones skipped): when it last changed beyond the resolution and
+ *       when it last spiked after each (ch, sp), and the memory after the last.
+ *   uplift_times(tide_margin, uplift_force, rate, excess, out)
+ *       tide_trend.uplift_times: tide_trend.time_to_uplift per element (float64).
+ *   latch(codes, t, on_delay, hold, active, since, out) -> (active, since)
+ *       alarms._latch_series: one condition's latch after each update (out, bool) from its
+ *       codes (int8: 0 hold, 1 breach, 2 clear) at times t [s], stepped as alarms._step from
+ *       (active, since) (since NaN: None); returns the latch after the last update.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+#include <math.h>
+#include <stdint.h>
+
+static int get(PyObject *obj, Py_buffer *b, int writable, Py_ssize_t itemsize,
+               const char *name) {
+    if (PyObject_GetBuffer(obj, b, (writable ? PyBUF_WRITABLE : 0) | PyBUF_C_CONTIGUOUS) < 0)
+        return -1;
+    if (b->len % itemsize) {
+        PyErr_Format(PyExc_ValueError, "%s: %zd B is not a whole number of items", name,
+                     b->len);
+        PyBuffer_Release(b);
+        return -1;
+    }
+    return 0;
+}
+
+static int sorted64(const int64_t *a, Py_ssize_t n) {
+    for (Py_ssize_t i = 1; i < n; i++)
+        if (a[i] < a[i - 1]) return 0;
+    return 1;
+}
+
+static PyObject *py_merge3(PyObject *self, PyObject *args) {
+    PyObject *o[5];
+    int kind[3];
+    if (!PyArg_ParseTuple(args, "OOOOOiii", &o[0], &o[1], &o[2], &o[3], &o[4], &kind[0],
+                          &kind[1], &kind[2]))
+        return NULL;
+    Py_buffer b[5];
+    const Py_ssize_t size[5] = {8, 8, 8, 8, 1};
+    const char *names[5] = {"dd", "tt", "kk", "times_out", "kinds_out"};
+    int got = 0;
+    PyObject *result = NULL;
+    for (; got < 5; got++)
+        if (get(o[got], &b[got], got >= 3, size[got], names[got]) < 0) goto done;
+    const int64_t *d = b[0].buf, *t = b[1].buf, *k = b[2].buf;
+    const Py_ssize_t nd = b[0].len / 8, nt = b[1].len / 8, nk = b[2].len / 8;
+    const Py_ssize_t n = nd + nt + nk;
+    if (b[3].len != 8 * n || b[4].len != n) {
+        PyErr_SetString(PyExc_ValueError, "merge3: outputs of the wrong size");
+        goto done;
+    }
+    if (!sorted64(d, nd) || !sorted64(t, nt) || !sorted64(k, nk)) {
+        Py_INCREF(Py_False);
+        result = Py_False;
+        goto done;
+    }
+    int64_t *times = b[3].buf;
+    int8_t *kinds = b[4].buf;
+    Py_ssize_t i = 0, j = 0, m = 0;
+    for (Py_ssize_t at = 0; at < n; at++) {
+        /* depth if it is not later than the others; tension if not later than the tick */
+        if (i < nd && (j >= nt || d[i] <= t[j]) && (m >= nk || d[i] <= k[m])) {
+            times[at] = d[i++];
+            kinds[at] = (int8_t)kind[0];
+        } else if (j < nt && (m >= nk || t[j] <= k[m])) {
+            times[at] = t[j++];
+            kinds[at] = (int8_t)kind[1];
+        } else {
+            times[at] = k[m++];
+            kinds[at] = (int8_t)kind[2];
+        }
+    }
+    Py_INCREF(Py_True);
+    result = Py_True;
+done:
+    for (int g = 0; g < got; g++) PyBuffer_Release(&b[g]);
+    return result;
+}
+
+static PyObject *py_pick(PyObject *self, PyObject *args) {
+    PyObject *o_idx, *o_col, *o_out;
+    double before;
+    if (!PyArg_ParseTuple(args, "OOdO", &o_idx, &o_col, &before, &o_out)) return NULL;
+    Py_buffer bi, bc, bo;
+    PyObject *result = NULL;
+    if (get(o_idx, &bi, 0, 8, "idx") < 0) return NULL;
+    if (get(o_col, &bc, 0, 8, "column") < 0) { PyBuffer_Release(&bi); return NULL; }
+    if (get(o_out, &bo, 1, 8, "out") < 0) {
+        PyBuffer_Release(&bi);
+        PyBuffer_Release(&bc);
+        return NULL;
+    }
+    const int64_t *idx = bi.buf;
+    const double *col = bc.buf;
+    double *out = bo.buf;
+    const Py_ssize_t n = bi.len / 8, nc = bc.len / 8;
+    if (bo.len != bi.len) {
+        PyErr_SetString(PyExc_ValueError, "pick: out and idx differ in length");
+        goto done;
+    }
+    if (nc == 0) {
+        for (Py_ssize_t i = 0; i < n; i++) out[i] = before;
+    } else {
+        for (Py_ssize_t i = 0; i < n; i++) {
+            const int64_t j = idx[i];
+            if (j < -1 || j >= nc) {
+                PyErr_SetString(PyExc_IndexError, "pick: index out of range");
+                goto done;
+            }
+            out[i] = j < 0 ? before : col[j];
+        }
+    }
+    Py_INCREF(Py_None);
+    result = Py_None;
+done:
+    PyBuffer_Release(&bi);
+    PyBuffer_Release(&bc);
+    PyBuffer_Release(&bo);
+    return result;
+}
+
+static PyObject *py_newest(PyObject *self, PyObject *args) {
+    PyObject *o[7];
+    int kd, kt, kk, known;
+    if (!PyArg_ParseTuple(args, "OiiipOOOOOO", &o[0], &kd, &kt, &kk, &known, &o[1], &o[2],
+                          &o[3], &o[4], &o[5], &o[6]))
+        return NULL;
+    Py_buffer b[7];
+    const Py_ssize_t size[7] = {1, 8, 8, 8, 8, 1, 8};
+    const char *names[7] = {"kinds", "t_idx", "d_idx", "dk_idx", "k_idx", "solved", "s_idx"};
+    int got = 0;
+    PyObject *result = NULL;
+    for (; got < 7; got++)
+        if (get(o[got], &b[got], got > 0, size[got], names[got]) < 0)
+            goto done;
+    const int8_t *kinds = b[0].buf;
+    const Py_ssize_t n = b[0].len;
+    for (int g = 1; g < 7; g++)
+        if (b[g].len != n * size[g]) {
+            PyErr_SetString(PyExc_ValueError, "newest: outputs of the wrong size");
+            goto done;
+        }
+    int64_t *ti = b[1].buf, *di = b[2].buf, *dki = b[3].buf, *ki = b[4].buf, *si = b[6].buf;
+    uint8_t *solved = b[5].buf;
+    int64_t nt = -1, nd = -1, ndk = -1, nk = -1, ns = -1;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        const int k = kinds[i];
+        int s = 0;
+        if (k == kt) {
+            nt++;
+            known = 1;
+            s = 1;
+        } else {
+            ndk++;
+            if (k == kd) {
+                nd++;
+                s = known;
+            } else if (k == kk) {
+                nk++;
+            } else {
+                PyErr_Format(PyExc_ValueError, "newest: unknown step kind %d", k);
+                goto done;
+            }
+        }
+        ns += s;
+        ti[i] = nt, di[i] = nd, dki[i] = ndk, ki[i] = nk, si[i] = ns;
+        solved[i] = (uint8_t)s;
+    }
+    Py_INCREF(Py_None);
+    result = Py_None;
+done:
+    for (int g = 0; g < got; g++) PyBuffer_Release(&b[g]);
+    return result;
+}
+
+static double maximum(double a, double b) { /* np.maximum: NaN if either is NaN */
+    return (a != a || b != b) ? NAN : (a > b ? a : b);
+}
+
+static PyObject *py_samples(PyObject *self, PyObject *args) {
+    PyObject *o[4];
+    double value, stamp, changed, spiked, res, rate, jitter;
+    if (!PyArg_ParseTuple(args, "OOdddddddOO", &o[0], &o[1], &value, &stamp, &changed, &spiked,
+                          &res, &rate, &jitter, &o[2], &o[3]))
+        return NULL;
+    Py_buffer b[4];
+    const char *names[4] = {"values", "stamps", "ch", "sp"};
+    int got = 0;
+    PyObject *result = NULL;
+    for (; got < 4; got++)
+        if (get(o[got], &b[got], got >= 2, 8, names[got]) < 0) goto done;
+    const Py_ssize_t n = b[0].len / 8;
+    if (b[1].len != b[0].len || b[2].len != b[0].len || b[3].len != b[0].len) {
+        PyErr_SetString(PyExc_ValueError, "samples: columns differ in length");
+        goto done;
+    }
+    const double *v = b[0].buf, *t = b[1].buf;
+    double *ch = b[2].buf, *sp = b[3].buf;
+    double q = res > 0.0 ? floor(value / res) : value; /* the reading's resolution step */
+    for (Py_ssize_t i = 0; i < n; i++) {
+        const double x = v[i];
+        if (isfinite(x)) {
+            const double qx = res > 0.0 ? floor(x / res) : x;
+            const int change = !(qx == q);
+            const int spike = fabs(x - value) > rate * ((t[i] - stamp) + jitter) + res;
+            changed = maximum(changed, change ? t[i] : -INFINITY);
+            spiked = maximum(spiked, spike ? t[i] : -INFINITY);
+            value = x, stamp = t[i], q = qx;
+        }
+        ch[i] = changed, sp[i] = spiked;
+    }
+    result = Py_BuildValue("(dddd)", value, stamp, changed, spiked);
+done:
+    for (int g = 0; g < got; g++) PyBuffer_Release(&b[g]);
+    return result;
+}
+
+static PyObject *py_uplift_times(PyObject *self, PyObject *args) {
+    PyObject *o[5];
+    if (!PyArg_ParseTuple(args, "OOOOO", &o[0], &o[1], &o[2], &o[3], &o[4])) return NULL;
+    Py_buffer b[5];
+    const char *names[5] = {"tide_margin", "uplift_force", "rate", "excess", "out"};
+    int got = 0;
+    PyObject *result = NULL;
+    for (; got < 5; got++)
+        if (get(o[got], &b[got], got == 4, 8, names[got]) < 0) goto done;
+    for (int g = 1; g < 5; g++)
+        if (b[g].len != b[0].len) {
+            PyErr_SetString(PyExc_ValueError, "uplift_times: columns differ in length");
+            goto done;
+        }
+    const double *m = b[0].buf, *f = b[1].buf, *r = b[2].buf, *e = b[3].buf;
+    double *out = b[4].buf;
+    for (Py_ssize_t i = 0, n = b[0].len / 8; i < n; i++) {
+        if (m[i] != m[i])
+            out[i] = NAN;
+        else if (m[i] <= 0.0 || f[i] > 0.0)
+            out[i] = 0.0;
+        else if (!(r[i] > 0.0))
+            out[i] = INFINITY;
+        else
+            out[i] = maximum(m[i] + e[i], 0.0) / r[i];
+    }
+    Py_INCREF(Py_None);
+    result = Py_None;
+done:
+    for (int g = 0; g < got; g++) PyBuffer_Release(&b[g]);
+    return result;
+}
+
+static PyObject *py_latch(PyObject *self, PyObject *args) {
+    PyObject *o_codes, *o_t, *o_out;
+    double on_delay, hold, since;
+    int active;
+    if (!PyArg_ParseTuple(args, "OOddpdO", &o_codes, &o_t, &on_delay, &hold, &active, &since,
+                          &o_out))
+        return NULL;
+    Py_buffer bc, bt, bo;
+    PyObject *result = NULL;
+    if (get(o_codes, &bc, 0, 1, "codes") < 0) return NULL;
+    if (get(o_t, &bt, 0, 8, "t") < 0) { PyBuffer_Release(&bc); return NULL; }
+    if (get(o_out, &bo, 1, 1, "out") < 0) {
+        PyBuffer_Release(&bc);
+        PyBuffer_Release(&bt);
+        return NULL;
+    }
+    const int8_t *codes = bc.buf;
+    const double *t = bt.buf;
+    uint8_t *out = bo.buf;
+    const Py_ssize_t n = bc.len;
+    if (bt.len != 8 * n || bo.len != n) {
+        PyErr_SetString(PyExc_ValueError, "latch: codes, t and out differ in length");
+        goto done;
+    }
+    int pending = since == since; /* alarms._step: since is None -> not pending */
+    for (Py_ssize_t i = 0; i < n; i++) {
+        const double now = t[i];
+        if (codes[i] != (active ? 2 : 1)) {
+            pending = 0;
+        } else {
+            if (!pending || since > now) since = now;
+            pending = 1;
+            if (now - since >= (active ? hold : on_delay)) {
+                active = !active;
+                pending = 0;
+            }
+        }
+        out[i] = (uint8_t)active;
+    }
+    result = pending ? Py_BuildValue("(Od)", active ? Py_True : Py_False, since)
+                     : Py_BuildValue("(OO)", active ? Py_True : Py_False, Py_None);
+done:
+    PyBuffer_Release(&bc);
+    PyBuffer_Release(&bt);
+    PyBuffer_Release(&bo);
+    return result;
+}
+
+static PyMethodDef methods[] = {
+    {"merge3", py_merge3, METH_VARARGS, "Merge sorted depth, tension and tick times."},
+    {"pick", py_pick, METH_VARARGS, "column[idx], before where idx == -1 (float64)."},
+    {"newest", py_newest, METH_VARARGS, "Per step: the newest index of each kind."},
+    {"samples", py_samples, METH_VARARGS, "A sensor memory through its readings."},
+    {"uplift_times", py_uplift_times, METH_VARARGS, "Time to uplift per element."},
+    {"latch", py_latch, METH_VARARGS, "One condition's latch after each update."},
+    {NULL, NULL, 0, NULL},
+};
+
+static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_twin_loops", NULL, -1, methods};
+
+PyMODINIT_FUNC PyInit__twin_loops(void) { return PyModule_Create(&module); }

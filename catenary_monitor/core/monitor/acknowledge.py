@@ -1,0 +1,225 @@
+"""Alarm acknowledgement: each line's alarm in ISA-18.2 / IEC 62682 states (no rclpy, no clock).
+
+One alarm per line, and one for the sensors' common causes (:data:`SENSORS`: the depth sensor
+silent, lines that never reported since the start;
+:func:`catenary_monitor.core.monitor.health.sensors_status`).
+A line's alarm is *active* while its level is not OK (WARN, STALE or ERROR), except while it is
+**suppressed by design**: the line is STALE only because of a common cause (no depth, or no
+tension ever received: :attr:`~catenary_monitor.core.monitor.alarms.AlarmState.suppressed`), which
+the one ``sensors`` alarm reports, raised once the silence outlasts its timeout. So a blind start
+or a silent depth sensor is one alarm, not one per line; a tension sensor that goes silent after
+it reported is its own line's alarm at once.
+
+States (:data:`STATES`, the names the ``/diagnostics`` key ``alarm_state`` and the console use):
+
+``normal``
+    not active, nothing to acknowledge;
+``unacknowledged``
+    active and not yet acknowledged (an operator has not seen it);
+``acknowledged``
+    active and acknowledged: it stays until the condition clears;
+``returned-unacknowledged``
+    the condition cleared before anyone acknowledged it: it stays listed until acknowledged;
+``suppressed`` (shown in ``alarm_state`` only; stored as ``normal`` with ``suppressed`` set)
+    not active because suppressed by design, nothing waiting for an acknowledgement.
+
+Rules: an alarm is raised (``unacknowledged``, ``raised`` = now) when it becomes active from
+``normal`` or ``returned-unacknowledged``, and raised again when its severity rises while active
+(WARN < STALE < ERROR: an acknowledged warning that becomes a lifted anchor is news). When it
+stops being active, ``unacknowledged`` becomes ``returned-unacknowledged`` and ``acknowledged``
+becomes ``normal``. An acknowledgement turns ``unacknowledged`` into ``acknowledged`` and
+``returned-unacknowledged`` into ``normal``; it never clears an active alarm: only the condition
+does. :func:`step` is idempotent (same level, same activity: no change), which is what lets the
+vectorized twin (:mod:`catenary_monitor.core.monitor.twin`) apply it only where its inputs change.
+
+Times are seconds on the monitor's clock.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import Optional, Sequence
+
+import numpy as np
+
+from catenary_monitor.core.monitor.alarms import CONDITIONS, RANK, Level
+
+__all__ = [
+    'NORMAL',
+    'UNACKNOWLEDGED',
+    'ACKNOWLEDGED',
+    'RETURNED_UNACKNOWLEDGED',
+    'STATES',
+    'ALL_LINES',
+    'ACKNOWLEDGE_TOPIC',
+    'AckState',
+    'initial',
+    'SUPPRESSED',
+    'SENSORS',
+    'step',
+    'acknowledge',
+    'condition',
+    'diagnostic_values',
+    'parse_request',
+    'AckSeries',
+    'replay_acks',
+]
+
+NORMAL = 'normal'
+UNACKNOWLEDGED = 'unacknowledged'
+ACKNOWLEDGED = 'acknowledged'
+RETURNED_UNACKNOWLEDGED = 'returned-unacknowledged'
+#: ``alarm_state`` of a line whose alarm is suppressed by design (a view of ``normal``).
+SUPPRESSED = 'suppressed'
+#: The name of the sensors' common-cause alarm (a status on /diagnostics, acknowledged as a line).
+SENSORS = 'sensors'
+#: Every alarm state, in display order of urgency.
+STATES = (UNACKNOWLEDGED, RETURNED_UNACKNOWLEDGED, ACKNOWLEDGED, NORMAL)
+#: The line "name" of an acknowledgement of every line.
+ALL_LINES = 'all'
+#: The node's acknowledgement topic (std_msgs/msg/String: ``LINE|all [ORIGIN...]``).
+ACKNOWLEDGE_TOPIC = '/catenary_monitor/acknowledge'
+
+
+@dataclass(frozen=True)
+class AckState:
+    """One line's alarm: its state, severity, when raised, the last acknowledgement (s).
+
+    ``level`` is the alarm's current severity while active, its last one after it returned;
+    ``suppressed`` is True while the line's level is not OK only by a common cause (suppressed
+    by design: not active).
+    """
+
+    state: str = NORMAL
+    level: Level = Level.OK
+    raised: float = math.nan
+    acknowledged_at: float = math.nan
+    acknowledged_by: str = ''
+    suppressed: bool = False
+
+
+def initial(start: float) -> AckState:
+    """A line's alarm when the monitor starts at ``start`` (s): normal (the line is blind, its
+    STALE suppressed by design: the ``sensors`` alarm says it once that is late)."""
+    return AckState(suppressed=True)
+
+
+def step(ack: AckState, level: Level, now: float, suppressed: bool = False) -> AckState:
+    """The alarm after the line was stepped to ``level`` at ``now`` (s); ``suppressed``: the
+    level is a consequence of a common cause reported by another alarm (not active)."""
+    suppressed = suppressed and level != Level.OK
+    if suppressed != ack.suppressed:
+        ack = replace(ack, suppressed=suppressed)
+    active = level != Level.OK and not suppressed
+    if active:
+        if ack.state in (NORMAL, RETURNED_UNACKNOWLEDGED) or RANK[level] > RANK[ack.level]:
+            return replace(ack, state=UNACKNOWLEDGED, level=level, raised=now)
+        return ack if level == ack.level else replace(ack, level=level)
+    if ack.state == UNACKNOWLEDGED:
+        return replace(ack, state=RETURNED_UNACKNOWLEDGED)
+    if ack.state == ACKNOWLEDGED:
+        return replace(ack, state=NORMAL)
+    return ack
+
+
+def acknowledge(ack: AckState, now: float, origin: str) -> AckState:
+    """The alarm after an operator acknowledged it at ``now`` (s) from ``origin``."""
+    if ack.state == UNACKNOWLEDGED:
+        return replace(ack, state=ACKNOWLEDGED, acknowledged_at=now, acknowledged_by=origin)
+    if ack.state == RETURNED_UNACKNOWLEDGED:
+        return replace(ack, state=NORMAL, acknowledged_at=now, acknowledged_by=origin)
+    return ack
+
+
+def condition(level: Level, latches: Sequence[bool]) -> str:
+    """The condition that sets the line's level: ``uplift``, ``input`` (impossible input),
+    ``stale``, a warning's name (``anchor_margin``, ...) or ``none`` when OK.
+
+    ``latches`` are the active flags of :data:`~catenary_monitor.core.monitor.alarms.CONDITIONS`.
+    """
+    if level == Level.ERROR:
+        return 'uplift' if latches[0] else 'input'
+    if level == Level.STALE:
+        return 'stale'
+    if level == Level.WARN:
+        for name, up in zip(CONDITIONS[2:], latches[2:]):
+            if up:
+                return name
+    return 'none'
+
+
+def diagnostic_values(
+    ack: AckState, level: Level, latches: Sequence[bool]
+) -> list[tuple[str, str]]:
+    """The ``/diagnostics`` keys of a line's alarm: ``acknowledged`` (``true`` unless something
+    waits for an acknowledgement), ``alarm_state``, ``alarm_raised`` [s, NaN when normal],
+    ``alarm_condition``, ``acknowledged_at`` [s] and ``acknowledged_by`` (the last one)."""
+    pending = ack.state in (UNACKNOWLEDGED, RETURNED_UNACKNOWLEDGED)
+    raised = math.nan if ack.state == NORMAL else ack.raised
+    state = SUPPRESSED if ack.state == NORMAL and ack.suppressed else ack.state
+    return [
+        ('acknowledged', 'false' if pending else 'true'),
+        ('alarm_state', state),
+        ('alarm_raised', repr(float(raised))),
+        ('alarm_condition', condition(level, latches)),
+        ('acknowledged_at', repr(float(ack.acknowledged_at))),
+        ('acknowledged_by', ack.acknowledged_by),
+    ]
+
+
+def parse_request(text: str) -> tuple[Optional[str], str]:
+    """(line name, or None for every line; origin) of an acknowledgement message's text:
+    ``LINE [ORIGIN...]`` or ``all [ORIGIN...]``; the origin defaults to ``ros``.
+
+    Raises ValueError for an empty text."""
+    parts = text.strip().split(None, 1)
+    if not parts:
+        raise ValueError('empty acknowledgement (expected "LINE [ORIGIN]" or "all [ORIGIN]")')
+    origin = parts[1].strip() if len(parts) > 1 else 'ros'
+    return (None if parts[0] == ALL_LINES else parts[0]), origin
+
+
+class AckSeries:
+    """A line's alarm over a sequence of steps, as :func:`step` at every one of them gives.
+
+    ``changes`` are the step indexes where :func:`step` was applied (where the level or the
+    suppression changes; elsewhere it would change nothing) and ``states`` the alarm after each.
+    """
+
+    def __init__(self, before: AckState, changes: np.ndarray, states: list[AckState]) -> None:
+        self.before, self.changes, self.states = before, changes, states
+
+    def at(self, i: int) -> AckState:
+        """The alarm after step ``i`` (``before`` for ``i < 0``)."""
+        j = int(np.searchsorted(self.changes, i, 'right')) - 1 if i >= 0 else -1
+        return self.before if j < 0 else self.states[j]
+
+    @property
+    def final(self) -> AckState:
+        """The alarm after the last step."""
+        return self.states[-1] if self.states else self.before
+
+
+def replay_acks(
+    before: AckState,
+    times: np.ndarray,
+    levels: np.ndarray,
+    suppressed: Optional[np.ndarray] = None,
+) -> AckSeries:
+    """The alarm over steps at ``times`` (s) with the line's ``levels`` (int Level per step)
+    and ``suppressed`` flags (bool per step; None: none), from ``before``, with no
+    acknowledgement among them: :func:`step` applied where its inputs change (it is
+    idempotent elsewhere), so equal to stepping every one."""
+    n = len(times)
+    if n == 0:
+        return AckSeries(before, np.zeros(0, np.int64), [])
+    quiet = np.zeros(n, bool) if suppressed is None else np.asarray(suppressed, bool)
+    change = np.ones(n, dtype=bool)
+    change[1:] = (quiet[1:] != quiet[:-1]) | (levels[1:] != levels[:-1])
+    idx = np.flatnonzero(change)
+    states, state = [], before
+    for i in idx.tolist():
+        state = step(state, Level(int(levels[i])), float(times[i]), bool(quiet[i]))
+        states.append(state)
+    return AckSeries(before, idx, states)

@@ -1,0 +1,922 @@
+"""Per-line alarm logic: a pure state machine that is handed the time, and its vectorized replay.
+
+No clocks and no rclpy: the node passes its clock (``use_sim_time`` honoured), replay passes log
+times, and both get the same transitions. Times are seconds on one clock, forces N, lengths m.
+
+Conditions, each with its own latch:
+
+``uplift`` (ERROR)
+    raised when ``uplift_force > allowed_uplift`` has lasted ``on_delay`` (0: at the first such
+    update); cleared when ``uplift_force <= max(allowed_uplift - uplift_clear_hysteresis, 0)``
+    (and, when that level is 0 N, ``anchor_margin >= uplift_clear_margin``) has held for
+    ``clear_hold``.
+``input`` (ERROR)
+    raised at once by an impossible input (solver ``status != 0``: NaN, negative tension,
+    tension <= weight * depth, ...); cleared after ``clear_hold`` of valid input.
+``anchor_margin``, ``tide_margin``, ``load_margin``, ``safety_factor`` (WARN)
+    raised when the value ``< *_warn`` has lasted ``on_delay``; cleared when ``>= *_warn +
+    *_deadband`` has held for ``warn_clear_hold``.
+``time_to_uplift`` (WARN)
+    the same with ``uplift_time_warn`` and ``uplift_time_deadband`` (s): the anchor lifts within
+    that time if the tide keeps its trend (:mod:`catenary_monitor.core.monitor.tide_trend`); inf
+    (no uplift coming) clears, NaN holds.
+``inconsistent`` (WARN; the dock model only, :mod:`catenary_monitor.core.monitor.dock_watch`)
+    raised when the dock estimate flags the line's tension as irreconcilable with the other
+    lines (its smoothed normalized residual beyond ``dock_residual_limit``) for ``on_delay``;
+    cleared after ``warn_clear_hold`` of consistency; held while the line is not tested.
+``uplift_possible`` (WARN; with ``tension_accuracy`` or ``depth_accuracy``,
+:mod:`catenary_monitor.core.monitor.uncertainty`)
+    raised when ``uplift_force_upper > allowed_uplift`` while the nominal ``uplift_force`` is
+    not (uplift possible within sensor accuracy) for ``on_delay``; cleared when the bound is
+    back at or below ``allowed_uplift``, or when the nominal value itself is above it (the
+    ``uplift`` ERROR then says so), held for ``warn_clear_hold``; NaN holds.
+``drag_margin`` (WARN; with ``anchor_holding``, :mod:`catenary_monitor.core.monitor.holding`)
+    as the margins above with ``drag_margin_warn`` and ``drag_margin_deadband`` (N).
+``sensor_error`` (ERROR), ``sensor_warn`` (WARN; :mod:`catenary_monitor.core.monitor.sensor_state`)
+    raised when the line's ``sensor_state`` (decided at ticks) is an ERROR state (``over_mbl``,
+    ``slack``, ``suspected_parted``), resp. a WARN state (``stuck``, ``spike``), for
+    ``on_delay``; cleared after ``clear_hold`` (resp. ``warn_clear_hold``) of any other state.
+    They are conditions of the line beside the load alarms: the line's level is the worst of
+    all, by the rule below.
+stale (STALE, no latch)
+    no tension or no depth received yet (the line is blind: its results cannot be computed), the
+    newest tension older than ``tension_timeout``, or the depth stale (older than
+    ``depth_timeout``; the monitor decides this once for every line, see
+    :attr:`AlarmInputs.depth_stale`).
+
+A latch only moves on evidence: an update whose value is NaN (not applicable) keeps the latch and
+restarts its pending timer. **While any input is stale nothing clears** (clearing on old data would
+hide a lifted anchor); raising still works. Wave-frequency oscillation therefore keeps an alarm
+up, as long as ``clear_hold`` exceeds the wave period: one transition, not one per wave.
+
+A line starts blind: :meth:`LineAlarm.initial` is STALE ("no tension received yet; no depth
+received yet"), never OK before its inputs are known.
+
+**Suppressed by design.** A line that is STALE only because of a common cause (no tension
+received since the start, or no depth / the depth stale: every line shares the depth), not
+because its own tension went stale after it reported, is ``suppressed``: its message says so
+(``blind: no depth received yet (suppressed by design: alarm on sensors)``), its alarm is not
+active (:mod:`catenary_monitor.core.monitor.acknowledge`) and its changes into and out of that
+STALE are not announced (:attr:`Transition.suppressed`): the one ``sensors`` alarm reports the
+cause (:func:`catenary_monitor.core.monitor.health.sensors_status`).
+
+Level: ERROR if an ERROR latch is up, else STALE if stale, else WARN if a warning latch is up,
+else OK. **ERROR outranks STALE** (a sensor dropout must not hide a lifted anchor) although
+``Level.STALE`` is numerically larger; STALE outranks WARN (a warning from old data is not
+news). The message joins every applicable condition with ``'; '``, ERRORs first.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from enum import IntEnum
+from typing import Any, Mapping, NamedTuple, Sequence
+
+import numpy as np
+
+from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig
+from catenary_monitor.core.monitor import sensor_state
+
+try:  # the latch's loop in C (core/_loops.c; optional: else the numpy passes)
+    from catenary_monitor.core.monitor import _twin_loops as _loops  # type: ignore[attr-defined]
+except ImportError:  # not built
+    _loops = None
+
+__all__ = [
+    'Level',
+    'AlarmInputs',
+    'Latch',
+    'AlarmState',
+    'Transition',
+    'LineAlarm',
+    'LevelSeries',
+    'CONDITIONS',
+    'DIAGNOSTIC_KEYS',
+    'RANK',
+    'replay_levels',
+    'diagnostic_values',
+    'quiet_change',
+    'SUPPRESSED_NOTE',
+]
+
+
+class Level(IntEnum):
+    """DiagnosticStatus level (same numbers as diagnostic_msgs)."""
+
+    OK = 0
+    WARN = 1
+    ERROR = 2
+    STALE = 3
+
+
+#: Severity rank used to combine and order levels (not the level number: ERROR > STALE).
+RANK = {Level.OK: 0, Level.WARN: 1, Level.STALE: 2, Level.ERROR: 3}
+
+#: Latched conditions, in message order: ERRORs, then WARNs.
+CONDITIONS = (
+    'uplift',
+    'input',
+    'anchor_margin',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'time_to_uplift',
+    'inconsistent',
+    # Margins with uncertainty and holding (issue 12, items 3 and 4).
+    'uplift_possible',
+    'drag_margin',
+    # Sensor sanity (issue 12, item 2): core/sensor_state.py.
+    'sensor_error',
+    'sensor_warn',
+)
+_ERRORS = ('uplift', 'input', 'sensor_error')
+_WARNS = tuple(c for c in CONDITIONS if c not in _ERRORS)
+_ERROR_AT = tuple(CONDITIONS.index(c) for c in _ERRORS)
+# The warnings with a threshold and a deadband.
+_MARGINS = (
+    'anchor_margin',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'time_to_uplift',
+    'drag_margin',
+)
+_LIMITS = {'time_to_uplift': 'uplift_time'}  # parameter prefix where it is not the name
+_HOLD, _BREACH, _CLEAR = 0, 1, 2  # classification of one update for one condition
+
+
+@dataclass(frozen=True)
+class AlarmInputs:
+    """One update of one line: solved quantities (SI) and the stamps of the newest samples.
+
+    NaN marks a quantity that does not apply. ``status`` is the solver's code (0 = ok) and
+    ``status_message`` its sentence. Stamps are the receive times (s, same clock as ``now``)
+    of the newest tension and depth samples; NaN means none received yet. ``depth_stale`` is
+    the monitor's decision that the depth is older than ``depth_timeout`` (taken once for all
+    lines, so they agree); None lets the alarm decide from ``depth_stamp`` itself.
+    """
+
+    uplift_force: float = math.nan  # N, vertical force on the anchor
+    anchor_margin: float = math.nan  # m, installed minus minimum anchor distance
+    tide_margin: float = math.nan  # m, depth rise the chain takes before uplift
+    load_margin: float = math.nan  # N, as reported by the solver
+    safety_factor: float = math.nan  # -, MBL / top tension
+    time_to_uplift: float = math.nan  # s, until uplift at the tide's trend (inf: not coming)
+    tide_rate: float = math.nan  # m/s, the tide's trend (for the message)
+    tide_forecast: float = 0.0  # 1: time_to_uplift is the tide table's forecast (the message)
+    status: int = 0
+    status_message: str = ''
+    tension_stamp: float = math.nan  # s
+    depth_stamp: float = math.nan  # s
+    depth_stale: bool | None = None
+    inconsistent: float = math.nan  # 1 flagged by the dock estimate, 0 consistent, NaN untested
+    dock_residual: float = math.nan  # N, measured - expected tension
+    dock_expected: float = math.nan  # N, the tension the dock estimate expects
+    dock_sigma: float = math.nan  # normalized residual
+    uplift_force_upper: float = math.nan  # N, the uplift force's bound within sensor accuracy
+    drag_margin: float = math.nan  # N, holding capacity minus horizontal load
+    holding_capacity: float = math.nan  # N, anchor and grounded chain (for the message)
+    sensor_state: float = 0.0  # core.sensor line state code (0 ok)
+    sensor_tension: float = math.nan  # N, the newest tension the state was decided on
+    mbl: float = math.nan  # N, the line's MBL (for the message)
+
+
+class Latch(NamedTuple):
+    """One condition's latch: up or not, and when the pending raise or clear started (s)."""
+
+    active: bool = False
+    since: float | None = None
+
+
+@dataclass(frozen=True)
+class AlarmState:
+    """Everything a line's alarm remembers between updates (immutable)."""
+
+    level: Level = Level.STALE
+    message: str = (
+        'blind: no tension received yet; no depth received yet '
+        '(suppressed by design: alarm on sensors)'
+    )
+    latches: tuple[Latch, ...] = (Latch(),) * len(CONDITIONS)
+    entered: tuple[float, ...] = (math.nan,) * 4  # s, when each severity rank was last entered
+    input_message: str = ''  # last impossible-input sentence, while its alarm holds
+    suppressed: bool = True  # STALE only by a common cause (suppressed by design)
+
+
+class Transition(NamedTuple):
+    """A level change. ``duration`` (s) is set when severity drops: how long the old level or
+    worse lasted (for a return to OK, the whole incident); otherwise None. ``suppressed``: not
+    announced, the change into or out of a STALE suppressed by design (:func:`quiet_change`)."""
+
+    time: float
+    old: Level
+    new: Level
+    message: str
+    duration: float | None
+    suppressed: bool = False
+
+
+#: Appended to the message of a line suppressed by design (after ``blind: ``).
+SUPPRESSED_NOTE = ' (suppressed by design: alarm on sensors)'
+
+
+def quiet_change(old: Level, old_suppressed: bool, new: Level, new_suppressed: bool) -> bool:
+    """Whether a level change is not announced: into a STALE suppressed by design, or out of
+    one back to OK (the common cause's own alarm announces both)."""
+    if new == Level.STALE:
+        return new_suppressed
+    return new == Level.OK and old == Level.STALE and old_suppressed
+
+
+def _blind_text(message: str, suppressed: bool) -> str:
+    """A line's message, marked when its STALE is suppressed by design."""
+    return f'blind: {message}{SUPPRESSED_NOTE}' if suppressed else message
+
+
+def _fmt(value: float, scale: float = 1.0, digits: int = 1) -> str:
+    if math.isnan(value):
+        return 'n/a'
+    v = value / scale
+    return f'{v:.{digits}f}' if v == 0 or abs(v) >= 10.0**-digits else f'{v:.2g}'
+
+
+@dataclass(frozen=True)
+class LineAlarm:
+    """The alarm rules for one line: :class:`AlarmConfig` plus the line's allowed uplift (N)."""
+
+    config: AlarmConfig = field(default_factory=AlarmConfig)
+    allowed_uplift: float = 0.0
+
+    @classmethod
+    def for_line(cls, line: LineConfig, config: AlarmConfig) -> LineAlarm:
+        """Rules for ``line`` under ``config``."""
+        return cls(config, line.allowed_uplift)
+
+    @property
+    def uplift_clear_level(self) -> float:
+        """Uplift force (N) at or below which the uplift alarm may clear."""
+        return max(self.allowed_uplift - self.config.uplift_clear_hysteresis, 0.0)
+
+    def _timing(self, cond: str) -> tuple[float, float]:
+        """(on_delay, hold) in s for a condition."""
+        c = self.config
+        if cond == 'input':
+            return 0.0, c.clear_hold
+        return c.on_delay, (c.clear_hold if cond in _ERRORS else c.warn_clear_hold)
+
+    def _warn_limits(self, cond: str) -> tuple[float, float]:
+        """(raise below, clear at or above) for a warning condition."""
+        prefix = _LIMITS.get(cond, cond)
+        warn = getattr(self.config, f'{prefix}_warn')
+        return warn, warn + getattr(self.config, f'{prefix}_deadband')
+
+    def initial(self, now: float) -> AlarmState:
+        """State of a line that has received nothing yet, at time ``now`` (s): blind, STALE."""
+        return AlarmState(entered=(now, now, now, math.nan))
+
+    def update(
+        self, state: AlarmState, inputs: AlarmInputs, now: float
+    ) -> tuple[AlarmState, list[Transition]]:
+        """Advance ``state`` by one update at time ``now`` (s); return it and any transition.
+
+        Call it on every solved update and also periodically (e.g. at the diagnostic rate) with
+        the newest inputs, so that staleness is noticed when samples stop. ``now`` should not
+        decrease; if it does, pending timers restart at ``now``.
+        """
+        if not math.isfinite(now):
+            raise ValueError(f'now must be finite, got {now!r}')
+        stale_t, stale_d = self._stale(inputs, now)
+        stale = stale_t or stale_d
+        latches = []
+        for cond, latch in zip(CONDITIONS, state.latches):
+            code = self._classify(cond, inputs, stale)
+            latches.append(_step(latch, code, now, *self._timing(cond)))
+        input_message = state.input_message
+        if inputs.status != 0:
+            input_message = _status_text(inputs.status, inputs.status_message)
+        active = [latch.active for latch in latches]
+        level = _combine(active, stale)
+        own = stale_t and inputs.tension_stamp == inputs.tension_stamp
+        suppressed = level == Level.STALE and not own
+        message = _blind_text(
+            self._message(active, inputs, now, stale_t, stale_d, input_message), suppressed
+        )
+        entered, events = state.entered, []
+        if level != state.level:
+            entered, duration = _episode(entered, state.level, level, now)
+            quiet = quiet_change(state.level, state.suppressed, level, suppressed)
+            events.append(Transition(now, state.level, level, message, duration, quiet))
+        new = replace(
+            state,
+            level=level,
+            message=message,
+            latches=tuple(latches),
+            entered=entered,
+            input_message=input_message if active[1] else '',
+            suppressed=suppressed,
+        )
+        return new, events
+
+    def _stale(self, x: AlarmInputs, now: float) -> tuple[bool, bool]:
+        """(tension stale or never received, depth stale or never received)."""
+        ts, ds = x.tension_stamp, x.depth_stamp
+        stale_t = ts != ts or now - ts > self.config.tension_timeout
+        if ds != ds:
+            return stale_t, True
+        if x.depth_stale is None:
+            return stale_t, now - ds > self.config.depth_timeout
+        return stale_t, bool(x.depth_stale)
+
+    def _classify(self, cond: str, x: AlarmInputs, stale: bool) -> int:
+        if cond == 'input':
+            return _BREACH if x.status != 0 else (_HOLD if stale else _CLEAR)
+        if cond == 'uplift':
+            breach = x.uplift_force > self.allowed_uplift
+            level = self.uplift_clear_level
+            clear = x.uplift_force <= level and (
+                level > 0.0 or x.anchor_margin >= self.config.uplift_clear_margin
+            )
+        elif cond == 'inconsistent':
+            breach, clear = x.inconsistent == 1.0, x.inconsistent == 0.0
+        elif cond in _SENSOR:
+            hit, ok = _sensor_codes(cond, np.asarray(x.sensor_state))
+            breach, clear = bool(hit), bool(ok)
+        elif cond == 'uplift_possible':
+            nominal = x.uplift_force > self.allowed_uplift
+            upper = x.uplift_force_upper
+            breach = upper > self.allowed_uplift and not nominal
+            clear = upper <= self.allowed_uplift or nominal
+        else:
+            low, high = self._warn_limits(cond)
+            value = getattr(x, cond)
+            breach, clear = value < low, value >= high
+        return _BREACH if breach else (_CLEAR if clear and not stale else _HOLD)
+
+    def _message(
+        self,
+        active: Sequence[bool],
+        x: AlarmInputs,
+        now: float,
+        stale_t: bool,
+        stale_d: bool,
+        input_message: str,
+    ) -> str:
+        """Operator message for the conditions that apply, joined with '; '."""
+        parts = []
+        hold_e, hold_w = self.config.clear_hold, self.config.warn_clear_hold
+        if active[0]:
+            f, allowed = x.uplift_force, self.allowed_uplift
+            if f > allowed:
+                parts.append(f'anchor uplift {_fmt(f, 1e3)} kN > allowed {_fmt(allowed, 1e3)} kN')
+            else:
+                level = self.uplift_clear_level
+                text = (
+                    f'anchor uplift alarm held: uplift {_fmt(f, 1e3)} kN, anchor margin '
+                    f'{_fmt(x.anchor_margin)} m (clears after {hold_e:g} s at uplift <= '
+                    f'{_fmt(level, 1e3)} kN'
+                )
+                if level == 0.0:
+                    text += f' and anchor margin >= {_fmt(self.config.uplift_clear_margin)} m'
+                parts.append(text + ')')
+        if active[1]:
+            if x.status != 0:
+                parts.append(f'impossible input: {input_message}')
+            else:
+                parts.append(
+                    f'impossible input alarm held: last was "{input_message}" '
+                    f'(clears after {hold_e:g} s of valid input)'
+                )
+        if active[CONDITIONS.index('sensor_error')]:
+            parts.append(_sensor_text(x, 'sensor_error', hold_e))
+        for name, is_stale, stamp, timeout in (
+            ('tension', stale_t, x.tension_stamp, self.config.tension_timeout),
+            ('depth', stale_d, x.depth_stamp, self.config.depth_timeout),
+        ):
+            if not is_stale:
+                continue
+            if math.isnan(stamp):
+                parts.append(f'no {name} received yet')
+            else:
+                parts.append(
+                    f'{name} stale: last sample {_fmt(now - stamp)} s ago '
+                    f'(timeout {timeout:g} s)'
+                )
+        for cond, up in zip(CONDITIONS, active):
+            if cond in _ERRORS:
+                continue
+            if up and cond == 'inconsistent':
+                parts.append(_inconsistent_text(x, hold_w))
+            elif up and cond == 'sensor_warn':
+                parts.append(_sensor_text(x, cond, hold_w))
+            elif up and cond == 'time_to_uplift':
+                if not (active[0] and not x.time_to_uplift > 0.0):  # the ERROR says it
+                    parts.append(self._uplift_time_text(x, hold_w))
+            elif up and cond == 'uplift_possible':
+                parts.append(self._uplift_possible_text(x, hold_w))
+            elif up and cond == 'drag_margin':
+                text = self._warn_text(cond, x.drag_margin, hold_w)
+                holding = _fmt(x.holding_capacity, 1e3)
+                parts.append(f'{text} (holding {holding} kN): anchor may drag')
+            elif up:
+                parts.append(self._warn_text(cond, getattr(x, cond), hold_w))
+        return '; '.join(parts) if parts else 'OK'
+
+    def _warn_text(self, cond: str, value: float, hold: float) -> str:
+        low, high = self._warn_limits(cond)
+        label = cond.replace('_', ' ')
+        scale, unit, digits = {
+            'load_margin': (1e3, ' kN', 1),
+            'drag_margin': (1e3, ' kN', 1),
+            'safety_factor': (1.0, '', 2),
+        }.get(cond, (1.0, ' m', 2))
+        v, lo, hi = (_fmt(a, scale, digits) for a in (value, low, high))
+        if value < low:
+            return f'{label} {v}{unit} < {lo}{unit}'
+        return f'{label} {v}{unit}, warning held (clears after {hold:g} s at >= {hi}{unit})'
+
+    def _uplift_time_text(self, x: AlarmInputs, hold: float) -> str:
+        """The message of the ``time_to_uplift`` condition (minutes, the tide's rate in m/h)."""
+        low, high = self._warn_limits('time_to_uplift')
+        value = x.time_to_uplift
+        if value < low:
+            if not value > 0.0:
+                return (
+                    f'anchor off the seabed (uplift {_fmt(x.uplift_force, 1e3)} kN, within the '
+                    f'allowed {_fmt(self.allowed_uplift, 1e3)} kN)'
+                )
+            rate = x.tide_rate * 3600.0
+            if x.tide_forecast == 1.0:
+                return f'anchor uplift in {_duration(value)} on the tide table\'s forecast'
+            return f'anchor uplift in {_duration(value)} if the tide keeps rising {rate:.2f} m/h'
+        return (
+            f'time to uplift {_duration(value)}, warning held (clears after {hold:g} s '
+            f'at >= {_duration(high)})'
+        )
+
+    def _uplift_possible_text(self, x: AlarmInputs, hold: float) -> str:
+        """The message of the ``uplift_possible`` condition (bound and nominal in kN)."""
+        upper, allowed = x.uplift_force_upper, self.allowed_uplift
+        if upper > allowed:
+            return (
+                f'uplift possible within sensor accuracy: up to {_fmt(upper, 1e3)} kN > allowed '
+                f'{_fmt(allowed, 1e3)} kN (nominal {_fmt(x.uplift_force, 1e3)} kN)'
+            )
+        return (
+            f'uplift-within-accuracy warning held: bound {_fmt(upper, 1e3)} kN (clears after '
+            f'{hold:g} s at <= {_fmt(allowed, 1e3)} kN)'
+        )
+
+
+_SENSOR = ('sensor_error', 'sensor_warn')
+
+
+def _sensor_codes(cond: str, code: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(breach, clear) of a sensor condition from line state codes (NaN: hold)."""
+    errors = code == sensor_state.ERROR_STATES[0]  # np.isin's machinery cost 4 ns per code
+    for state in sensor_state.ERROR_STATES[1:]:
+        errors = errors | (code == state)
+    breach = errors if cond == 'sensor_error' else ~errors & (code > 0)
+    return breach, ~breach & np.isfinite(code)
+
+
+def _sensor_text(x: AlarmInputs, cond: str, hold: float) -> str:
+    """The message of a sensor condition (what to check), or that it is held."""
+    code = x.sensor_state
+    breach, _ = _sensor_codes(cond, np.asarray(code))
+    if bool(breach):
+        return sensor_state.line_message(int(code), x.sensor_tension, x.mbl)
+    return f'sensor alarm held (clears after {hold:g} s of sane readings)'
+
+
+def _duration(seconds: float) -> str:
+    """A time to uplift for the operator: whole minutes, seconds below 2 min."""
+    if seconds < 120.0:
+        return f'{_fmt(seconds, 1.0, 0)} s'
+    return f'{_fmt(seconds, 60.0, 0)} min'
+
+
+def _inconsistent_text(x: AlarmInputs, hold: float) -> str:
+    """The message of the ``inconsistent`` condition (what to check)."""
+    expected, residual = x.dock_expected, x.dock_residual
+    if math.isinf(expected):
+        gap = 'the other lines put the hook beyond its chain\'s reach'
+    else:
+        gap = (
+            f'measured {_fmt(expected + residual, 1e3)} kN, the dock position the other lines '
+            f'agree on gives {_fmt(expected, 1e3)} kN ({residual / 1e3:+.1f} kN, '
+            f'{x.dock_sigma:+.1f} sigma)'
+        )
+    check = (
+        'check the tension sensor (calibration, drift, cable), the chain (slipped stopper, '
+        'broken link) and the anchor (dragging)'
+    )
+    if x.inconsistent == 1.0:
+        return f'tension inconsistent with the other lines: {gap}: {check}'
+    return f'tension inconsistency held (clears after {hold:g} s consistent): {check}'
+
+
+def _status_text(status: int, message: str) -> str:
+    return message or f'solver status {status}'
+
+
+def _step(latch: Latch, code: int, now: float, on_delay: float, hold: float) -> Latch:
+    """One latch update: raise after ``on_delay`` of breaches, clear after ``hold`` of clears."""
+    want = _CLEAR if latch.active else _BREACH
+    if code != want:
+        return Latch(latch.active, None)
+    since = now if latch.since is None or latch.since > now else latch.since
+    if now - since >= (hold if latch.active else on_delay):
+        return Latch(not latch.active, None)
+    return Latch(latch.active, since)
+
+
+def _combine(active: Sequence[bool], stale: bool) -> Level:
+    """Explicit precedence ERROR > STALE > WARN > OK (not a max over level numbers)."""
+    if any(active[i] for i in _ERROR_AT):
+        return Level.ERROR
+    if stale:
+        return Level.STALE
+    return Level.WARN if any(a for i, a in enumerate(active) if i not in _ERROR_AT) else Level.OK
+
+
+def _episode(
+    entered: tuple[float, ...], old: Level, new: Level, now: float
+) -> tuple[tuple[float, ...], float | None]:
+    """Update the time each severity rank was entered; return the ending episode's length."""
+    r_old, r_new = RANK[old], RANK[new]
+    if r_new > r_old:
+        return tuple(now if r_old < r <= r_new else t for r, t in enumerate(entered)), None
+    return entered, now - entered[r_old]
+
+
+# --- vectorized replay --------------------------------------------------------------------------
+
+_INPUT_FIELDS = (
+    'uplift_force',
+    'anchor_margin',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'time_to_uplift',
+    'tide_rate',
+    'tide_forecast',
+    'tension_stamp',
+    'depth_stamp',
+    'inconsistent',
+    'dock_residual',
+    'dock_expected',
+    'dock_sigma',
+    'uplift_force_upper',
+    'drag_margin',
+    'holding_capacity',
+    'sensor_state',
+    'sensor_tension',
+    'mbl',
+)
+
+
+def _latch_series(
+    codes: np.ndarray, t: np.ndarray, on_delay: float, hold: float, start: Latch = Latch()
+) -> tuple[np.ndarray, Latch]:
+    """Latch state after each update, exactly as repeated :func:`_step` from ``start``.
+
+    A raise or clear is decided inside one run of equal codes, timed from the run's first
+    update (or from ``start.since`` when the first run continues a pending one), and never
+    depends on the latch state at the run's start (a breach run cannot clear, a clear run cannot
+    raise). So every "set" and "reset" candidate is found independently and the latch is the
+    most recent candidate, forward-filled from ``start.active``. Also returns the final latch.
+    Where core/_loops.c is built, a window with a breach is one C loop of ``_step`` instead
+    (the numpy passes cost ~17 ns per update there).
+    """
+    n = codes.size
+    if n == 0:
+        return np.zeros(0, dtype=bool), start
+    if not start.active and not (codes == _BREACH).any():
+        return np.zeros(n, dtype=bool), Latch()  # only a breach run can raise the latch
+    if _loops is not None and codes.dtype == np.int8 and t.dtype == np.float64:
+        out = np.empty(n, dtype=bool)
+        pending = math.nan if start.since is None else start.since
+        args = (np.ascontiguousarray(codes), np.ascontiguousarray(t), on_delay, hold)
+        return out, Latch(*_loops.latch(*args, start.active, pending, out))
+    idx = np.arange(n)
+    starts = np.empty(n, dtype=bool)
+    starts[0] = True
+    np.not_equal(codes[1:], codes[:-1], out=starts[1:])
+    run_start = np.maximum.accumulate(np.where(starts, idx, 0))
+    began = t[run_start]
+    pending = _CLEAR if start.active else _BREACH
+    if start.since is not None and codes[0] == pending:
+        first = np.flatnonzero(starts[1:])
+        began[: first[0] + 1 if first.size else n] = start.since
+    elapsed = t - began
+    event = np.full(n, -1, dtype=np.int8)
+    event[(codes == _CLEAR) & (elapsed >= hold)] = 0
+    event[(codes == _BREACH) & (elapsed >= on_delay)] = 1
+    last = np.maximum.accumulate(np.where(event >= 0, idx, -1))
+    active = np.where(last >= 0, event[np.maximum(last, 0)] == 1, start.active)
+    final_active = bool(active[-1])
+    want = _CLEAR if final_active else _BREACH
+    since = float(began[-1]) if codes[-1] == want else None
+    return active, Latch(final_active, since)
+
+
+class LevelSeries:
+    """Levels of a whole sequence of updates of one line, and what the scalar machine says.
+
+    ``levels`` (int8, one per update) and ``transitions`` equal those of feeding
+    ``alarm.update`` one update at a time from ``initial``; :meth:`message_at` gives the
+    message after update ``i`` and :meth:`final_state` the state after the last one.
+    """
+
+    def __init__(
+        self,
+        alarm: LineAlarm,
+        times: np.ndarray,
+        x: dict[str, np.ndarray],
+        status: np.ndarray,
+        texts: Any,
+        stale_t: np.ndarray,
+        stale_d: np.ndarray,
+        active: dict[str, np.ndarray],
+        latches: tuple[Latch, ...],
+        initial: AlarmState,
+        status_messages: Mapping[int, str] | None,
+    ) -> None:
+        self.alarm, self.times, self._x, self._status = alarm, times, x, status
+        self._texts, self._table = texts, status_messages or {}
+        self._stale_t, self._stale_d, self._active = stale_t, stale_d, active
+        self._latches, self._initial = latches, initial
+        n = times.size
+        err = active['uplift'] | active['input'] | active['sensor_error']
+        warn = np.zeros(n, dtype=bool)
+        for cond in _WARNS:
+            warn |= active[cond]
+        levels = np.where(warn, np.int8(Level.WARN), np.int8(Level.OK))
+        np.copyto(levels, np.int8(Level.STALE), where=stale_t | stale_d)
+        np.copyto(levels, np.int8(Level.ERROR), where=err)
+        self.levels = levels
+        own = stale_t & ~np.isnan(x['tension_stamp'])
+        #: Per update: STALE only by a common cause (suppressed by design).
+        self.suppressed = (levels == Level.STALE) & ~own
+        self._bad: np.ndarray | None = None  # updates with a solver status, when first asked
+        self.transitions, self._entered = self._walk()
+
+    def _held(self, i: int) -> str:
+        """The impossible-input sentence the input alarm holds after update ``i``."""
+        if self._bad is None:
+            self._bad = np.flatnonzero(self._status != 0)
+        at = int(np.searchsorted(self._bad, i, 'right')) - 1
+        j = int(self._bad[at]) if at >= 0 else -1
+        if j < 0:
+            return self._initial.input_message
+        code = int(self._status[j])
+        text = str(self._texts[j]) if self._texts is not None else self._table.get(code, '')
+        return _status_text(code, text)
+
+    def active(self, cond: str) -> np.ndarray:
+        """Per update: whether condition ``cond``'s latch is up after it."""
+        return self._active[cond]
+
+    def active_at(self, i: int) -> list[bool]:
+        """The latches' active flags (:data:`CONDITIONS` order) after update ``i``."""
+        return [bool(self._active[cond][i]) for cond in CONDITIONS]
+
+    def message_at(self, i: int) -> str:
+        """The line's message after update ``i`` (as ``AlarmState.message``)."""
+        if self.levels[i] == Level.OK:
+            return 'OK'
+        floats: dict[str, Any] = {k: float(self._x[k][i]) for k in _INPUT_FIELDS}
+        sample = AlarmInputs(**floats, status=int(self._status[i]))
+        flags = [bool(self._active[cond][i]) for cond in CONDITIONS]
+        text = self.alarm._message(
+            flags,
+            sample,
+            float(self.times[i]),
+            bool(self._stale_t[i]),
+            bool(self._stale_d[i]),
+            self._held(i),
+        )
+        return _blind_text(text, bool(self.suppressed[i]))
+
+    def _walk(self) -> tuple[list[Transition], tuple[float, ...]]:
+        """Transitions (with messages and episode durations) from the initial state."""
+        changed = np.flatnonzero(np.diff(self.levels, prepend=np.int8(self._initial.level)))
+        transitions: list[Transition] = []
+        entered, old = self._initial.entered, self._initial.level
+        for i in changed.tolist():
+            new = Level(int(self.levels[i]))
+            now = float(self.times[i])
+            entered, duration = _episode(entered, old, new, now)
+            was = bool(self.suppressed[i - 1]) if i > 0 else self._initial.suppressed
+            quiet = quiet_change(old, was, new, bool(self.suppressed[i]))
+            transitions.append(Transition(now, old, new, self.message_at(i), duration, quiet))
+            old = new
+        return transitions, entered
+
+    def final_state(self) -> AlarmState:
+        """The :class:`AlarmState` after the last update (the initial state if there is none)."""
+        n = self.times.size
+        if n == 0:
+            return self._initial
+        held = self._held(n - 1) if self._active['input'][-1] else ''
+        return AlarmState(
+            level=Level(int(self.levels[-1])),
+            message=self.message_at(n - 1),
+            latches=self._latches,
+            entered=self._entered,
+            input_message=held,
+            suppressed=bool(self.suppressed[-1]),
+        )
+
+
+def replay_levels(
+    times: Any,
+    inputs: Mapping[str, Any],
+    alarm: LineAlarm,
+    status_messages: Mapping[int, str] | None = None,
+    initial: AlarmState | None = None,
+) -> LevelSeries:
+    """Levels and transitions for a whole sequence of updates of one line, vectorized.
+
+    Gives exactly the levels, transitions (times, levels, messages, durations) and final state
+    of feeding ``alarm.update`` one update at a time from ``initial`` (default: a blind line,
+    ``alarm.initial(times[0])``).
+
+    Parameters
+    ----------
+    times : array (n,), s, non-decreasing
+        Update times (the ``now`` of each update).
+    inputs : mapping of field name to array or scalar broadcastable to (n,)
+        The :class:`AlarmInputs` fields; a missing field takes its default (``depth_stale``
+        missing: decided from ``depth_stamp``). ``status_message`` may be an array of str;
+        otherwise ``status_messages`` maps codes to sentences.
+    alarm : LineAlarm
+    status_messages : mapping int -> str, optional
+    initial : AlarmState, optional
+
+    Notes
+    -----
+    Cost is a few dozen numpy passes over the arrays plus Python work per transition only.
+    """
+    t = np.asarray(times, dtype=np.float64)
+    if t.ndim != 1:
+        raise ValueError(f'times must be one-dimensional, got shape {t.shape}')
+    n = t.size
+    if n and (not np.all(np.isfinite(t)) or np.any(t[1:] < t[:-1])):
+        raise ValueError('times must be finite and non-decreasing')
+    unknown = set(inputs) - set(_INPUT_FIELDS) - {'status', 'status_message', 'depth_stale'}
+    if unknown:
+        raise ValueError(f'unknown input fields {sorted(unknown)}')
+    if initial is None:
+        initial = alarm.initial(float(t[0]) if n else 0.0)
+    default = AlarmInputs()
+    x = {k: _column(inputs.get(k, getattr(default, k)), np.float64, n) for k in _INPUT_FIELDS}
+    status = _column(inputs.get('status', 0), np.int64, n)
+    stale_t, stale_d = _stale_columns(alarm, t, x, inputs.get('depth_stale'))
+    stale = stale_t | stale_d
+    classified = _classify_columns(alarm, x, status, stale, initial.latches)
+    active, latches = {}, []
+    quiet = np.zeros(n, dtype=bool)
+    quiet.flags.writeable = False
+    for cond, latch in zip(CONDITIONS, initial.latches):
+        code = classified[cond]
+        if code is None:  # down before the window and no breach in it: down throughout
+            active[cond], end = quiet, Latch()
+        else:
+            active[cond], end = _latch_series(code, t, *alarm._timing(cond), latch)
+        latches.append(end)
+    texts = inputs.get('status_message')
+    if texts is not None:
+        texts = np.broadcast_to(np.asarray(texts, dtype=object), (n,))
+    return LevelSeries(
+        alarm,
+        t,
+        x,
+        status,
+        texts,
+        stale_t,
+        stale_d,
+        active,
+        tuple(latches),
+        initial,
+        status_messages,
+    )
+
+
+def _column(value: Any, dtype: Any, n: int) -> np.ndarray:
+    """``value`` as an array of ``dtype`` broadcast to (n,) (a column of that shape as is)."""
+    column = np.asarray(value, dtype=dtype)
+    return column if column.shape == (n,) else np.broadcast_to(column, (n,))
+
+
+def _stale_columns(
+    alarm: LineAlarm, t: np.ndarray, x: dict[str, np.ndarray], depth_stale: Any
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per update: (tension stale or never received, depth stale or never received)."""
+    cfg = alarm.config
+    ts, ds = x['tension_stamp'], x['depth_stamp']
+    with np.errstate(invalid='ignore'):
+        stale_t = np.isnan(ts) | (t - ts > cfg.tension_timeout)
+        if depth_stale is None:
+            stale_d = np.isnan(ds) | (t - ds > cfg.depth_timeout)
+        else:
+            stale_d = np.isnan(ds) | np.broadcast_to(np.asarray(depth_stale, bool), t.shape)
+    return stale_t, stale_d
+
+
+def _classify_columns(
+    alarm: LineAlarm,
+    x: dict[str, np.ndarray],
+    status: np.ndarray,
+    stale: np.ndarray,
+    latches: Sequence[Latch] | None = None,
+) -> dict[str, np.ndarray | None]:
+    """Each condition's code (breach, clear, hold) per update, as :meth:`LineAlarm._classify`.
+
+    Given the latches before the updates (:data:`CONDITIONS` order), a condition whose latch is
+    down and that no update breaches is None instead: it stays down (most conditions of most
+    windows).
+    """
+
+    fresh = ~stale
+    down = {} if latches is None else {c: not l.active for c, l in zip(CONDITIONS, latches)}
+
+    def codes(cond: str, breach: np.ndarray, clear: np.ndarray) -> np.ndarray | None:
+        # _HOLD 0, _BREACH 1, _CLEAR 2: breach wins, a clear counts only on fresh inputs
+        if down.get(cond, False) and not breach.any():
+            return None
+        out = np.bitwise_and(clear, fresh, dtype=bool)
+        out &= ~breach
+        code = out.view(np.int8)
+        code <<= 1
+        code |= breach.view(np.int8) if breach.dtype == bool else breach.astype(np.int8)
+        return code
+
+    cfg = alarm.config
+    level_up = alarm.uplift_clear_level
+    f = x['uplift_force']
+    up_clear = f <= level_up
+    if not level_up > 0.0:
+        up_clear &= x['anchor_margin'] >= cfg.uplift_clear_margin
+    out = {
+        'uplift': codes('uplift', f > alarm.allowed_uplift, up_clear),
+        'input': codes('input', status != 0, status == 0),
+    }
+    for cond in _MARGINS:
+        low, high = alarm._warn_limits(cond)
+        out[cond] = codes(cond, x[cond] < low, x[cond] >= high)
+    flag = x['inconsistent']
+    out['inconsistent'] = codes('inconsistent', flag == 1.0, flag == 0.0)
+    nominal = f > alarm.allowed_uplift
+    upper = x['uplift_force_upper']
+    out['uplift_possible'] = codes(
+        'uplift_possible',
+        (upper > alarm.allowed_uplift) & ~nominal,
+        (upper <= alarm.allowed_uplift) | nominal,
+    )
+    for cond in _SENSOR:
+        out[cond] = codes(cond, *_sensor_codes(cond, x['sensor_state']))
+    return out
+
+
+# --- diagnostics values -------------------------------------------------------------------------
+
+#: KeyValue keys of each line's DiagnosticStatus (contract, SI units).
+DIAGNOSTIC_KEYS = (
+    'top_tension',
+    'depth',
+    'horizontal_tension',
+    'min_anchor_distance',
+    'anchor_margin',
+    'uplift_force',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'time_to_uplift',
+    # Margins with uncertainty (core/monitor/uncertainty.py) and holding (core/monitor/holding.py).
+    'uplift_force_upper',
+    'anchor_margin_lower',
+    'tide_margin_lower',
+    'grounded_length',
+    'holding_capacity',
+    'drag_margin',
+    'implied_anchor_distance',
+    # The tide margin at fixed chain length (core/monitor/holding.py).
+    'tide_margin_at_length',
+)
+
+
+def diagnostic_values(result_fields: Any) -> list[tuple[str, str]]:
+    """``[(key, value)]`` for :data:`DIAGNOSTIC_KEYS`, values as ``repr(float(x))``.
+
+    ``result_fields`` is a mapping or an object with those attributes (e.g. a scalar solve
+    result); a missing field gives ``'nan'``. ``float()`` parses every value back exactly.
+    """
+
+    def get(key: str) -> Any:
+        if isinstance(result_fields, Mapping):
+            return result_fields.get(key, math.nan)
+        return getattr(result_fields, key, math.nan)
+
+    return [(key, repr(float(get(key)))) for key in DIAGNOSTIC_KEYS]

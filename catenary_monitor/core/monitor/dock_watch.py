@@ -1,0 +1,224 @@
+"""The dock estimate as the monitor makes it: at every tick, from each line's newest tension.
+
+One decision, for the live core and its vectorized twin alike (:func:`decide_dock` takes
+arrays over ticks; the core passes one): which readings count (:func:`readings`), the estimate
+(:func:`~catenary_monitor.core.body.estimate.estimate_dock`), the ``dock`` status, and what
+each line's alarm sees (:data:`LINE_INPUTS`).
+
+A reading counts when its line has a tension no older than ``tension_timeout``, finite, above
+``w h`` and plausible (:mod:`catenary_monitor.core.monitor.plausible`; otherwise the line's own
+status is an impossible input), and the depth is known, not stale, positive and plausible.
+
+A line flagged at one tick is left out of the next tick's fit, until it agrees again.
+
+One tick's normalized residual is noisy (a line within its accuracy exceeds 4 sigma once in
+15 000 readings), so the decision uses each line's residual smoothed over the ticks: an
+exponential average ``m <- m + lam (z - m)``, ``lam = 1 - exp(-dt / dock_residual_time)``,
+divided by its own standard deviation under consistent readings (``v <- (1 - lam)^2 v +
+lam^2``, exact from the first tick on, whatever the tick spacing): ``S = m / sqrt(v)`` is a
+normal deviate while the line agrees with the others, and a drifting sensor's grows as
+``sqrt(2 dock_residual_time / dt)`` times its per-tick deviation. A line is flagged while
+``|S| > dock_residual_limit``. Ticks where the line is not tested leave its average as it was.
+
+The ``dock`` status is STALE while no estimate can be made (fewer than three readings, or no
+usable depth) and OK otherwise; its message gives the offset and the load and names the lines
+flagged. A line's ``inconsistent`` alarm condition (WARN) is latched in
+:mod:`catenary_monitor.core.monitor.alarms` (``on_delay``, ``warn_clear_hold``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from catenary_monitor.core.body.dock_model import DockModel
+from catenary_monitor.core.body.estimate import MIN_LINES, DockEstimate, estimate_dock
+from catenary_monitor.core.config.parameters import MonitorConfig
+from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.monitor.plausible import MAX_DEPTH, reading_status_array
+
+__all__ = [
+    'LINE_INPUTS',
+    'DOCK_KEYS',
+    'DockDecision',
+    'Smoothing',
+    'smooth_step',
+    'readings',
+    'decide_dock',
+    'dock_message',
+    'dock_values',
+    'sensor_state',
+]
+
+#: What a line's alarm takes from the estimate (AlarmInputs fields): 1.0 flagged / 0.0 tested
+#: and consistent / NaN not tested; residual and expected tension [N]; normalized residual.
+LINE_INPUTS = ('inconsistent', 'dock_residual', 'dock_expected', 'dock_sigma')
+#: Values of the ``catenary_monitor: dock`` status (SI; yaw in deg, REP 103).
+DOCK_KEYS = ('offset_x', 'offset_y', 'yaw_deg', 'load_x', 'load_y', 'load_mz', 'readings')
+
+
+class DockDecision(NamedTuple):
+    """``n`` tick decisions: the estimate, per tick the level, per tick and line the inputs
+    (the smoothed statistic S as ``dock_sigma``) and the flags."""
+
+    estimate: DockEstimate
+    level: np.ndarray  # (n,) int8 Level
+    line_inputs: np.ndarray  # (n, m, 4): LINE_INPUTS
+    flagged: np.ndarray  # (n, m) bool: |S| > dock_residual_limit
+
+
+class Smoothing(NamedTuple):
+    """Each line's smoothed normalized residual: mean, its variance under consistency (NaN:
+    no residual yet), whether it is flagged, and the time of the last tick [s] (NaN: none)."""
+
+    mean: np.ndarray  # (m,)
+    var: np.ndarray  # (m,)
+    flagged: np.ndarray  # (m,) bool
+    last_s: float
+
+    @classmethod
+    def initial(cls, m: int) -> 'Smoothing':
+        """No residual seen yet."""
+        return cls(np.zeros(m), np.full(m, math.nan), np.zeros(m, bool), math.nan)
+
+
+def smooth_step(
+    state: Smoothing, now: float, z: np.ndarray, tau: float, limit: float
+) -> tuple[np.ndarray, Smoothing]:
+    """One tick: the statistic S (m,) from the normalized residuals ``z`` (NaN: not tested,
+    which leaves the line's average as it was) and the new state."""
+    mean, var, last = state.mean, state.var, state.last_s
+    lam = 1.0 if last != last else -math.expm1(-(now - last) / tau)
+    seen = np.isfinite(z)
+    first = seen & np.isnan(var)
+    mean = np.where(first, z, np.where(seen, mean + lam * (z - mean), mean))
+    var = np.where(first, 1.0, np.where(seen, (1.0 - lam) * (1.0 - lam) * var + lam * lam, var))
+    with np.errstate(invalid='ignore'):
+        held = mean / np.sqrt(var)
+        flagged = np.where(np.isnan(var), False, np.abs(held) > limit)
+    return np.where(seen, held, math.nan), Smoothing(mean, var, flagged, now)
+
+
+def readings(
+    model: DockModel,
+    timeout: float,
+    now: np.ndarray,
+    depth: np.ndarray,
+    depth_ok: np.ndarray,
+    tension: np.ndarray,
+    tension_s: np.ndarray,
+) -> np.ndarray:
+    """(n, m) bool: the readings that count (see the module docstring). ``now`` (n,) s;
+    ``depth`` (n,) m and ``depth_ok`` (n,) bool (known, not stale); ``tension`` and
+    ``tension_s`` (n, m) N and s (NaN: none yet)."""
+    with np.errstate(invalid='ignore'):
+        h = depth[:, None] + model.hook_height[None, :]
+        fresh = ~np.isnan(tension_s) & (now[:, None] - tension_s <= timeout)
+        good = np.isfinite(tension) & (tension > model.weight[None, :] * h)
+        good &= reading_status_array(tension, h, model.mbl[None, :]) == 0
+        depth_good = depth_ok & np.isfinite(depth) & (depth > 0) & (depth <= MAX_DEPTH)
+    return fresh & good & depth_good[:, None]
+
+
+def decide_dock(
+    model: DockModel,
+    config: MonitorConfig,
+    now: np.ndarray,
+    depth: np.ndarray,
+    depth_ok: np.ndarray,
+    tension: np.ndarray,
+    tension_s: np.ndarray,
+    state: Smoothing,
+) -> tuple[DockDecision, Smoothing]:
+    """The dock decisions at ``n`` ticks in time order (arrays as :func:`readings`), from the
+    smoothing ``state`` before the first; and the state after the last.
+
+    The lines flagged after one tick are left out of the next tick's fit (a bad line must not
+    bias the others' residuals). So the ticks are estimated in runs with one set left out,
+    vectorized, and a run is cut where the flags change: each tick is estimated exactly as a
+    core stepping one tick at a time does.
+    """
+    use = readings(model, config.alarm.tension_timeout, now, depth, depth_ok, tension, tension_s)
+    limit, tau = config.dock.residual_limit, config.dock.residual_time
+    h = np.where(np.isfinite(depth), depth, 1.0)
+    n, m = tension.shape
+    rows: list[DockEstimate] = []
+    stat = np.full((n, m), math.nan)
+    start = 0
+    while start < n:
+        est = estimate_dock(model, h[start:], tension[start:], use[start:], state.flagged)
+        stop = n
+        for i in range(start, n):
+            stat[i], new = smooth_step(state, float(now[i]), est.normalized[i - start], tau, limit)
+            changed = not np.array_equal(new.flagged, state.flagged)
+            state = new
+            if changed:
+                stop = i + 1
+                break
+        rows.append(DockEstimate(*(v[: stop - start] for v in est)))
+        start = stop
+    est = (
+        DockEstimate(*(np.concatenate(parts) for parts in zip(*rows)))
+        if rows
+        else estimate_dock(model, h, tension, use)
+    )
+    level = np.where(est.valid, Level.OK, Level.STALE).astype(np.int8)
+    flagged = np.abs(stat) > limit
+    flag = np.where(flagged, 1.0, np.where(np.isfinite(stat), 0.0, math.nan))
+    inputs = np.stack([flag, est.residual, est.expected, stat], axis=-1)
+    return DockDecision(est, level, inputs, flagged), state
+
+
+def _row(est: DockEstimate, i: int) -> DockEstimate:
+    return DockEstimate(*(v[i] for v in est))
+
+
+def load_from_deg(load: np.ndarray) -> float:
+    """Direction the load comes from [deg, clockwise from the bow]."""
+    return math.degrees(math.atan2(float(load[1]), -float(load[0]))) % 360.0
+
+
+def dock_message(model: DockModel, decision: DockDecision, i: int) -> str:
+    """The dock status message of tick ``i``."""
+    est = _row(decision.estimate, i)
+    if not est.valid:
+        return (
+            f'no dock estimate: {int(est.readings)} line(s) with a recent tension and a depth '
+            f'(needs {MIN_LINES})'
+        )
+    x, y, psi = (float(v) for v in est.offset)
+    text = f'offset x {x:+.2f} m, y {y:+.2f} m, yaw {math.degrees(psi):+.3f} deg'
+    if np.all(np.isfinite(est.load[:2])):
+        size = math.hypot(float(est.load[0]), float(est.load[1]))
+        text += f'; load {size / 1e3:.0f} kN from {load_from_deg(est.load):.0f} deg'
+    else:
+        text += '; load not estimated (a line would be beyond its reach)'
+    bad = [
+        f'{model.names[k]} ({float(decision.line_inputs[i, k, 3]):+.1f} sigma)'
+        for k in np.flatnonzero(decision.flagged[i]).tolist()
+    ]
+    if bad:
+        text += '; disagreeing: ' + ', '.join(bad)
+    return text
+
+
+def dock_values(decision: DockDecision, i: int) -> tuple[tuple[str, str], ...]:
+    """The dock status values of tick ``i`` (:data:`DOCK_KEYS`, strings ``float()`` reads)."""
+    est = _row(decision.estimate, i)
+    x, y, psi = (float(v) for v in est.offset)
+    fx, fy, mz = (float(v) for v in est.load)
+    numbers = (x, y, math.degrees(psi), fx, fy, mz)
+    return tuple(zip(DOCK_KEYS, [repr(v) for v in numbers] + [str(int(est.readings))]))
+
+
+def sensor_state(latched: bool, flag: float) -> str:
+    """A line's ``sensor_state``: ``inconsistent`` while its alarm condition is up, ``suspect``
+    when flagged but not yet for ``on_delay``, ``ok`` when tested and consistent, ``unchecked``
+    when not tested (no accuracy, no reading or no estimate)."""
+    if latched:
+        return 'inconsistent'
+    if flag == 1.0:
+        return 'suspect'
+    return 'ok' if flag == 0.0 else 'unchecked'

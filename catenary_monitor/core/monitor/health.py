@@ -1,0 +1,243 @@
+"""Health of the node's shared inputs and of its logger: pure decisions, handed the time.
+
+No rclpy. The node asks these functions which level and message its ``tide`` and ``logger``
+diagnostic statuses carry, so that the node itself makes no threshold comparison. Times are
+seconds on one clock (the node clock, or log time in replay).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Optional, Sequence
+
+from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.monitor.plausible import MAX_DEPTH
+
+__all__ = [
+    'tide_status',
+    'sensors_status',
+    'logger_status',
+    'parameters_status',
+    'clock_stopped',
+    'clock_status',
+    'intake_status',
+    'missing_samples',
+]
+
+
+def tide_status(depth: float, stamp: float, now: float, timeout: float) -> tuple[Level, str]:
+    """Level and message of the tide (depth) input.
+
+    Parameters
+    ----------
+    depth : newest depth sample [m]; NaN if none was received.
+    stamp : receive time of that sample [s]; NaN if none.
+    now : current time [s].
+    timeout : depth_timeout [s].
+
+    Returns
+    -------
+    (Level.STALE, ...) before the first sample and when the newest one is older than
+    ``timeout``; (Level.ERROR, ...) when the sample is not a positive finite number or is above
+    :data:`~catenary_monitor.core.monitor.plausible.MAX_DEPTH` (12 000 m); else
+    (Level.OK, ...).
+    """
+    if math.isnan(stamp):
+        return Level.STALE, 'no depth received yet'
+    age = now - stamp
+    if age > timeout:
+        return Level.STALE, f'depth stale: last sample {age:.1f} s ago (timeout {timeout:g} s)'
+    if not (math.isfinite(depth) and depth > 0.0):
+        return Level.ERROR, f'impossible depth {depth!r} m (must be a positive number)'
+    if depth > MAX_DEPTH:
+        return Level.ERROR, (
+            f'impossible depth {depth:g} m (above {MAX_DEPTH:g} m, deeper than any sea: '
+            'a sensor or scaling fault)'
+        )
+    return Level.OK, f'depth {depth:.3f} m'
+
+
+def _every(lines: int) -> str:
+    """``all 12 lines`` (``the line`` when there is one)."""
+    return f'all {lines} lines' if lines > 1 else 'the line'
+
+
+def _names(names: Sequence[str], lines: int) -> str:
+    """``12 lines`` (all), ``line_03, line_07`` (up to three) or ``5 lines (line_01, ...)``."""
+    if len(names) == lines:
+        return _every(lines)
+    if len(names) <= 3:
+        return ', '.join(names)
+    return f'{len(names)} lines ({", ".join(names[:2])}, ...)'
+
+
+def sensors_status(
+    waiting: Sequence[str],
+    lines: int,
+    depth_s: float,
+    depth_stale: bool,
+    now: float,
+    start: float,
+    tension_timeout: float,
+    depth_timeout: float,
+) -> tuple[Level, str]:
+    """Level and message of the sensors' common-cause alarm (``catenary_monitor: sensors``).
+
+    ``waiting``: the lines that have received no tension since the monitor started at ``start``
+    [s]; ``lines``: how many lines there are; ``depth_s``: the newest depth sample's stamp [s]
+    (NaN: none yet) and ``depth_stale`` the tide's decision that it is older than
+    ``depth_timeout`` [s]; ``now`` [s].
+
+    STALE (one alarm for many blind lines, their own STALE suppressed by design) when lines are
+    still waiting ``tension_timeout`` after the start ("waiting for sensors"), or the depth is
+    stale or still missing ``depth_timeout`` after the start ("depth sensor silent": every line
+    is blind); else OK: every sensor reporting, or within those timeouts of the start (the
+    lines and the tide are STALE meanwhile, and the message names what has not reported yet).
+    """
+    since = now - start
+    late = list(waiting) if since > tension_timeout else []
+    no_depth = depth_s != depth_s
+    silent = depth_stale or (no_depth and since > depth_timeout)
+    parts = []
+    if late:
+        text = f'waiting for sensors: no tension from {_names(late, lines)} within '
+        text += f'{tension_timeout:g} s of start'
+        if silent and no_depth:
+            text += f', no depth within {depth_timeout:g} s: {_every(lines)} blind'
+        parts.append(text)
+    if silent and not (late and no_depth):
+        detail = (
+            f'no depth within {depth_timeout:g} s of start'
+            if no_depth
+            else f'last depth {now - depth_s:.1f} s ago, timeout {depth_timeout:g} s'
+        )
+        parts.append(f'depth sensor silent: {_every(lines)} blind ({detail})')
+    if parts:
+        return Level.STALE, '; '.join(parts)
+    if waiting or no_depth:
+        what = [f'no tension from {_names(waiting, lines)}'] if waiting else []
+        what += ['no depth'] if no_depth else []
+        return Level.OK, (
+            f'starting: {" and ".join(what)} yet (an alarm if still silent '
+            f'{tension_timeout:g} s after start for tensions, {depth_timeout:g} s for the depth)'
+        )
+    return Level.OK, 'every sensor reporting'
+
+
+def logger_status(error: Optional[str], path: Optional[str]) -> tuple[Level, str]:
+    """Level and message of the MCAP logger: ERROR while it cannot write, else OK."""
+    if error:
+        return Level.ERROR, f'MCAP log not written: {error}'
+    return Level.OK, f'logging to {path}' if path else 'logging'
+
+
+def parameters_status(messages: tuple[str, ...], until: float, now: float) -> tuple[Level, str]:
+    """Level and message of the runtime-change flag: WARN, naming the accepted runtime
+    changes, until ``until`` [s] (``runtime_change_warn_time`` after the newest one), else OK.
+
+    ``messages`` are the :func:`~catenary_monitor.core.config.parameters.change_message` lines of
+    the changes accepted while the flag was up (empty: none yet).
+    """
+    if messages and now < until:
+        return Level.WARN, '; '.join(messages)
+    if messages:
+        return Level.OK, 'runtime changes allowed; the flag of the last one has expired'
+    return Level.OK, 'runtime changes allowed; none made'
+
+
+#: The ROS clock is reported stopped once it has not advanced for this long of wall time [s].
+CLOCK_STOPPED_AFTER = 3.0
+#: Intake: the counts are summed over this long [s].
+INTAKE_WINDOW = 60.0
+#: Intake: dropped share of the samples at or above which the status is ERROR (any drop: WARN).
+DROPPED_ERROR_SHARE = 0.05
+#: Intake: share of wall time spent in callbacks (over the last BUSY_WINDOW [s]) at or above
+#: which the node cannot keep up, and below which that WARN clears (hysteresis: no flicker).
+BUSY_WARN_SHARE = 0.6
+BUSY_CLEAR_SHARE = 0.35
+BUSY_WINDOW = 5.0
+#: Intake with a configured sample rate: a shortfall counts as missing only beyond this many
+#: seconds of samples, or :data:`MISSING_TOLERANCE_SHARE` of those expected if more (the
+#: boundary of a report period and the sensors' clocks are not exact).
+MISSING_TOLERANCE_TIME = 0.5
+MISSING_TOLERANCE_SHARE = 0.01
+
+
+def clock_stopped(frozen_for: float) -> bool:
+    """True when the ROS clock has not advanced for ``frozen_for`` [s] of wall time, long
+    enough (:data:`CLOCK_STOPPED_AFTER`) to say it stopped."""
+    return frozen_for >= CLOCK_STOPPED_AFTER
+
+
+def clock_status(stopped_for: Optional[float]) -> tuple[Level, str]:
+    """Level and message of the ROS clock (``use_sim_time``): ERROR while it has not advanced
+    for ``stopped_for`` [s] of wall time (None: it advances)."""
+    if stopped_for is None:
+        return Level.OK, 'ROS clock advancing (use_sim_time)'
+    return Level.ERROR, (
+        f'ROS clock stopped: /clock not advancing for {stopped_for:.0f} s '
+        '(use_sim_time: alarms and staleness are frozen)'
+    )
+
+
+def missing_samples(rate: float, expected_time: float, got: int) -> int:
+    """Samples missing from an input that publishes at ``rate`` [Hz] (0: unknown) over
+    ``expected_time`` [s] in which ``got`` samples arrived or were counted dropped: the
+    shortfall, once it exceeds the tolerance (:data:`MISSING_TOLERANCE_TIME`,
+    :data:`MISSING_TOLERANCE_SHARE`), else 0."""
+    if rate <= 0.0 or expected_time <= 0.0:
+        return 0
+    expected = rate * expected_time
+    tolerance = max(rate * MISSING_TOLERANCE_TIME, MISSING_TOLERANCE_SHARE * expected)
+    short = expected - got
+    return int(round(short)) if short > tolerance else 0
+
+
+def intake_status(
+    received: int,
+    dropped: int,
+    busy: float,
+    window: float,
+    was_ok: bool = True,
+    missing: int = 0,
+) -> tuple[Level, str]:
+    """Level and message of the sample intake over the last ``window`` [s].
+
+    ``received`` / ``dropped``: tension and depth samples handled / lost before the node
+    handled them (publisher sequence gaps, QoS message-lost events); ``missing``: samples not
+    seen against the configured sample rates (:func:`missing_samples`), counted with the
+    dropped ones; ``busy``: share of wall time spent in callbacks over the last
+    :data:`BUSY_WINDOW` (NaN: unknown). ERROR when at least :data:`DROPPED_ERROR_SHARE` of the
+    samples were dropped, WARN on any drop or when the node is busy :data:`BUSY_WARN_SHARE` of
+    the time (:data:`BUSY_CLEAR_SHARE` while the status is not OK, ``was_ok`` False), else OK.
+    """
+    counted = dropped
+    dropped += missing
+    total = received + dropped
+    share = dropped / total if total else 0.0
+    busy_text = '' if busy != busy else f'; busy {100.0 * busy:.0f} % of the time'
+    idle = busy != busy or busy < BUSY_CLEAR_SHARE
+    if missing and not counted and idle and share >= DROPPED_ERROR_SHARE:
+        return Level.ERROR, (
+            f'{100.0 * share:.0f} % of tension and depth samples missing in the last '
+            f'{window:g} s ({missing} of {total} expected at the sample rates): a sensor '
+            f'slower than its sample rate, or samples lost before the node{busy_text}'
+        )
+    if missing:
+        busy_text = f'; {missing} of them missing against the sample rates{busy_text}'
+    if dropped and share >= DROPPED_ERROR_SHARE:
+        return Level.ERROR, (
+            f'node cannot keep up: {100.0 * share:.0f} % of tension and depth samples '
+            f'dropped in the last {window:g} s ({dropped} of {total}){busy_text}'
+        )
+    if dropped:
+        return Level.WARN, (
+            f'{dropped} of {total} tension and depth samples dropped in the last {window:g} s '
+            f'({100.0 * share:.1f} %){busy_text}'
+        )
+    if busy == busy and busy >= (BUSY_WARN_SHARE if was_ok else BUSY_CLEAR_SHARE):
+        return Level.WARN, (
+            f'node cannot keep up: busy {100.0 * busy:.0f} % of the last {BUSY_WINDOW:g} s in '
+            'callbacks (samples may be lost)'
+        )
+    return Level.OK, f'{received} samples counted in the last {window:g} s, none dropped'

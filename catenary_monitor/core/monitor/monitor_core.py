@@ -1,0 +1,1239 @@
+"""The monitor core: one object that owns every decision of the live monitor (no rclpy, no clock).
+
+:class:`MonitorCore` holds the per-line state (newest inputs and results, alarm states), the
+tide and logger statuses, and turns each event into one :class:`Step`:
+
+* :class:`Tension` (a hook tension sample of one line), :class:`Depth` (a tide depth sample),
+  :class:`Tick` (the periodic step, at ``diagnostic_rate``), :class:`LoggerHealth` (the MCAP
+  logger's state changed), :class:`Reconfigure` (accepted parameter change) and
+  :class:`Acknowledge` (an operator acknowledged a line's alarm, or all:
+  :mod:`catenary_monitor.core.monitor.acknowledge`), each with its time ``stamp_ns`` (ns on the
+  monitor's clock; events come in time order).
+
+What an event does, in this order (the one schedule the node, replay and the tests share):
+
+1. its input is taken: the line's newest tension, or the depth, stamped ``stamp_ns``;
+2. at a depth event or a tick the tide is decided: its level and message, and whether the depth
+   is stale (older than ``depth_timeout``), one decision that every line then takes;
+3. lines are solved (``solve(..., ea=line.ea)``): a tension event solves its line at the newest
+   depth (``depth + hook_height``); a depth event solves every line that has a tension;
+4. alarms are stepped (:class:`~catenary_monitor.core.monitor.alarms.LineAlarm`): the solved line
+at a
+   tension event, every line at a depth event or a tick; each stepped line's acknowledgement
+   state follows its level (:func:`catenary_monitor.core.monitor.acknowledge.step`);
+5. a diagnostic snapshot is taken when the event is a tick or when any level changed: never two
+   per event, so the statuses of one snapshot always agree.
+
+The :class:`Step` carries the outputs of the lines solved (:data:`OUTPUT_FIELDS`), the snapshot
+(or None) and the level transitions. A line is never OK while blind: before its first tension
+and before the first depth it is STALE and says what is missing. Times in the alarm logic are
+seconds (``stamp_ns * 1e-9``); forces N, lengths m.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from typing import Any, NamedTuple, Optional, Sequence, Union
+
+import numpy as np
+
+from catenary_monitor.core.body.dock_model import DockModel
+from catenary_monitor.core.config.parameters import (
+    LineConfig,
+    MonitorConfig,
+    config_from_params,
+    config_to_params,
+    resolve_topic,
+    runtime_change_messages,
+)
+from catenary_monitor.core.monitor import acknowledge as alarm_ack
+from catenary_monitor.core.monitor import dock_watch as dock_live
+from catenary_monitor.core.monitor import holding as holding_rule
+from catenary_monitor.core.monitor import sensor_state, tide_table, tide_trend, uncertainty
+from catenary_monitor.core.monitor.alarms import (
+    CONDITIONS,
+    RANK,
+    AlarmInputs,
+    AlarmState,
+    Level,
+    LineAlarm,
+    Transition,
+    diagnostic_values,
+    quiet_change,
+)
+from catenary_monitor.core.monitor.health import (
+    BUSY_WINDOW,
+    INTAKE_WINDOW,
+    clock_status,
+    intake_status,
+    logger_status,
+    missing_samples,
+    parameters_status,
+    sensors_status,
+    tide_status,
+)
+from catenary_monitor.core.monitor.plausible import reading_status, reading_status_array
+from catenary_monitor.core.physics import elastic
+from catenary_monitor.core.physics.result import STATUS_MESSAGES
+from catenary_monitor.core.physics.solve import solve
+
+__all__ = [
+    'NODE_NAME',
+    'OUTPUT_FIELDS',
+    'VALUE_FIELDS',
+    'NO_DEPTH',
+    'NO_MODEL',
+    'EVENTS_TOPIC',
+    'COMPONENTS',
+    'Tension',
+    'Depth',
+    'Tick',
+    'LoggerHealth',
+    'Reconfigure',
+    'Start',
+    'Acknowledge',
+    'ClockHealth',
+    'Intake',
+    'Event',
+    'LineOutput',
+    'ComponentStatus',
+    'Snapshot',
+    'Change',
+    'Step',
+    'LineState',
+    'MonitorCore',
+    'line_status',
+    'bound_values',
+    'holding_values',
+    'output_values',
+    'tide_component',
+    'sensors_component',
+    'depth_word',
+    'dock_component',
+    'event_record',
+    'parse_event_record',
+]
+
+#: Node name: the ``/diagnostics`` status names start with it; params files use it as top key.
+NODE_NAME = 'catenary_monitor'
+#: Element order of each line's outputs (``/catenary_monitor/NAME/outputs``), SI units;
+#: ``status`` is the solver code (:data:`NO_DEPTH` before the first depth), ``level`` 0-3;
+#: ``time_to_uplift`` [s] (:mod:`~catenary_monitor.core.monitor.tide_trend`) was appended after
+#: them so the older indexes stay, then the bounds
+#: (:mod:`~catenary_monitor.core.monitor.uncertainty`), the holding values
+#: (:mod:`~catenary_monitor.core.monitor.holding`) and ``sensor_state``, the line's sensor state
+#: code as of the newest tick (:data:`catenary_monitor.core.monitor.sensor_state.LINE_STATES`: 0
+#: ok, 1 stuck, 2 spike, 3 over_mbl, 4 slack, 5 suspected_parted), then ``tide_margin_at_length``
+#: [m] (:data:`catenary_monitor.core.monitor.holding.LENGTH_FIELDS`).
+OUTPUT_FIELDS = (
+    'top_tension',
+    'depth',
+    'horizontal_tension',
+    'min_anchor_distance',
+    'anchor_margin',
+    'uplift_force',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'anchor_angle_deg',
+    'suspended_length',
+    'status',
+    'level',
+    'time_to_uplift',
+    # Margins with the sensors' accuracy (issue 12, item 3): core/monitor/uncertainty.py.
+    *uncertainty.FIELDS,
+    # Holding and the anchor distance the chain implies (issue 12, item 4):
+    # core/monitor/holding.py.
+    *holding_rule.FIELDS,
+    # Sensor sanity (issue 12, item 2): core/sensor_state.py.
+    'sensor_state',
+    # The tide margin of a chain of fixed length, its hook held: core/monitor/holding.py.
+    *holding_rule.LENGTH_FIELDS,
+)
+#: The solved quantities among them (every field but ``status`` and ``level``).
+VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
+#: Solver status of an update made before any depth sample arrived.
+NO_DEPTH = -1
+#: ``model`` of a line that has not been solved yet.
+NO_MODEL = 'none'
+#: MCAP-only channel where the node records the events that are not input messages (ticks,
+#: logger changes, reconfigurations), so that replay redoes every step exactly.
+EVENTS_TOPIC = f'/{NODE_NAME}/events'
+
+_NAN = math.nan
+_INCONSISTENT = CONDITIONS.index('inconsistent')
+_SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
+#: The statuses on /diagnostics that are not lines (``catenary_monitor: NAME``).
+COMPONENTS = ('tide', 'sensors', 'logger', 'dock', 'parameters', 'clock', 'intake')
+#: The components whose STALE is a consequence of blind inputs, announced by the sensors alarm.
+_CONSEQUENCES = ('tide', 'dock')
+_NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
+_AT = {key: i for i, key in enumerate(VALUE_FIELDS)}
+_SENSOR_AT = VALUE_FIELDS.index('sensor_state')  # not a solved value: kept by _implausible
+
+
+class Tension(NamedTuple):
+    """A hook tension sample [N] of line number ``line`` (config order), received at
+    ``stamp_ns``."""
+
+    stamp_ns: int
+    line: int
+    value: float
+
+
+class Depth(NamedTuple):
+    """A tide depth sample [m] at the hooks, received at ``stamp_ns``."""
+
+    stamp_ns: int
+    value: float
+
+
+class Tick(NamedTuple):
+    """The periodic step at ``stamp_ns`` (staleness and hold-time clears are decided here)."""
+
+    stamp_ns: int
+
+
+class LoggerHealth(NamedTuple):
+    """The MCAP logger's state at ``stamp_ns``: ``error`` (None while it writes) and its file."""
+
+    stamp_ns: int
+    error: Optional[str]
+    path: Optional[str]
+
+
+class Start(NamedTuple):
+    """Not an event but a record: the monitor started (blind) at ``stamp_ns``."""
+
+    stamp_ns: int
+
+
+class Reconfigure(NamedTuple):
+    """Accepted parameter change at ``stamp_ns``: the new configuration (same lines)."""
+
+    stamp_ns: int
+    config: MonitorConfig
+
+
+class Acknowledge(NamedTuple):
+    """An operator acknowledged line ``line``'s alarm (None: every line) from ``origin``."""
+
+    stamp_ns: int
+    line: Optional[str]
+    origin: str
+
+
+class ClockHealth(NamedTuple):
+    """The ROS clock (``use_sim_time``) at ``stamp_ns``: ``stopped_for`` [s] of wall time
+    without advancing (None: it advances)."""
+
+    stamp_ns: int
+    stopped_for: Optional[float]
+
+
+class Intake(NamedTuple):
+    """Samples since the previous Intake event: per line, then the depth, ``received``
+    (handled) and ``dropped`` (lost before the node handled them); ``busy`` [s] of wall time
+    spent in callbacks over ``period`` [s] of wall time."""
+
+    stamp_ns: int
+    received: tuple[int, ...]
+    dropped: tuple[int, ...]
+    busy: float
+    period: float
+
+
+Event = Union[Tension, Depth, Tick, LoggerHealth, Reconfigure, Acknowledge, ClockHealth, Intake]
+
+
+class LineOutput(NamedTuple):
+    """The outputs of line number ``line`` after a solve: :data:`OUTPUT_FIELDS` as floats."""
+
+    line: int
+    values: tuple[float, ...]
+
+
+class ComponentStatus(NamedTuple):
+    """One ``DiagnosticStatus``: name, level, message, hardware id and ``(key, value)`` strings."""
+
+    name: str
+    level: Level
+    message: str
+    hardware_id: str
+    values: tuple[tuple[str, str], ...]
+
+
+class Snapshot(NamedTuple):
+    """One ``DiagnosticArray`` at ``stamp_ns``: every line, then the tide, then the logger."""
+
+    stamp_ns: int
+    statuses: tuple[ComponentStatus, ...]
+
+
+class Change(NamedTuple):
+    """A level transition of one component (a line name, ``tide`` or ``logger``)."""
+
+    component: str
+    transition: Transition
+
+
+class Step(NamedTuple):
+    """What one event did: the outputs of the lines solved, the snapshot (or None), the
+    transitions; ``kind`` is ``tension``, ``depth``, ``tick``, ``logger``, ``configure`` or
+    ``acknowledge``."""
+
+    stamp_ns: int
+    kind: str
+    outputs: tuple[LineOutput, ...]
+    snapshot: Optional[Snapshot]
+    transitions: tuple[Change, ...]
+
+
+@dataclass
+class LineState:
+    """Everything the core remembers of one line between events."""
+
+    config: LineConfig
+    alarm: LineAlarm
+    hardware_id: str
+    state: AlarmState
+    tension: float = _NAN  # N, newest sample
+    tension_s: float = _NAN  # s, its stamp (NaN: none yet)
+    values: tuple[float, ...] = _NAN_VALUES  # VALUE_FIELDS of the newest solve
+    status: int = NO_DEPTH  # solver status of the newest solve
+    status_message: str = ''
+    model: str = NO_MODEL  # model of the newest solve
+    ack: alarm_ack.AckState = alarm_ack.AckState()  # the line's alarm in ISA-18.2 states
+    dock: tuple[float, ...] = (_NAN,) * 4  # dock_live.LINE_INPUTS of the newest dock estimate
+    sensor_memory: sensor_state.Memory = (
+        sensor_state.Memory()
+    )  # the tension sensor's per-sample memory
+    sensor_code: int = sensor_state.OK  # sensor state decided at the newest tick
+    parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
+
+    def inputs(
+        self, depth_s: float, depth_stale: bool, rate: float = _NAN, table: bool = False
+    ) -> AlarmInputs:
+        """The alarm inputs of this line now (newest results, stamps, the tide's decision and
+        its trend ``rate`` [m/s]; ``table``: the time to uplift is the tide table's)."""
+        v, d = self.values, self.dock
+        return AlarmInputs(
+            uplift_force=v[5],
+            anchor_margin=v[4],
+            tide_margin=v[6],
+            load_margin=v[7],
+            safety_factor=v[8],
+            time_to_uplift=v[11],
+            uplift_force_upper=v[_AT['uplift_force_upper']],
+            drag_margin=v[_AT['drag_margin']],
+            holding_capacity=v[_AT['holding_capacity']],
+            tide_rate=rate,
+            tide_forecast=1.0 if table else 0.0,
+            status=max(self.status, 0),
+            status_message=self.status_message,
+            tension_stamp=self.tension_s,
+            depth_stamp=depth_s,
+            depth_stale=depth_stale,
+            inconsistent=d[0],
+            dock_residual=d[1],
+            dock_expected=d[2],
+            dock_sigma=d[3],
+            sensor_state=float(self.sensor_code),
+            sensor_tension=self.tension,
+            mbl=self.config.mbl,
+        )
+
+
+def _stamp_s(stamp_ns: int) -> float:
+    return stamp_ns * 1e-9
+
+
+class MonitorCore:
+    """The monitor's state and its one decision path: :meth:`step` an event, get a :class:`Step`.
+
+    Parameters
+    ----------
+    config : the validated configuration (lines, topics, alarm settings).
+    start_ns : time the monitor starts (ns); lines and tide are blind (STALE) from then.
+    hardware_ids : line name -> the tension topic as resolved by the node (default: resolved
+        in the root namespace); ``depth_id`` the depth topic; ``logger_id`` the log directory.
+    """
+
+    def __init__(
+        self,
+        config: MonitorConfig,
+        start_ns: int,
+        hardware_ids: Optional[dict[str, str]] = None,
+        depth_id: Optional[str] = None,
+        logger_id: str = '',
+    ) -> None:
+        ids = hardware_ids or {}
+        start = _stamp_s(start_ns)
+        self.config = config
+        self.lines = [
+            LineState(
+                lc,
+                LineAlarm.for_line(lc, config.alarm),
+                ids.get(lc.name, resolve_topic(lc.tension_topic)),
+                LineAlarm.for_line(lc, config.alarm).initial(start),
+                ack=alarm_ack.initial(start),
+            )
+            for lc in config.lines
+        ]
+        self.index = {line.config.name: k for k, line in enumerate(self.lines)}
+        self.depth_id = depth_id or resolve_topic(config.depth_topic)
+        self.logger_id = logger_id
+        self.depth = _NAN  # m, newest sample
+        self.depth_s = _NAN  # s, its stamp
+        self.depth_stale = False
+        self.trend = tide_trend.TrendState()  # the tide's rate (m/s) from the depth samples
+        self.depth_memory = sensor_state.Memory()  # the depth sensor's per-sample memory
+        self.depth_code = sensor_state.OK  # the depth sensor's state at the newest tick
+        self.sensor_times = np.zeros(0)  # s, the ticks the suspected_parted test still needs
+        self.sensor_rows = np.zeros((0, len(config.lines)))  # N, each line's tension there
+        self.tide: tuple[Level, str] = tide_status(_NAN, _NAN, start, config.alarm.depth_timeout)
+        self.tide_entered = start
+        # The sensors' common-cause alarm (blind start, silent depth sensor): one, not per line.
+        self.start_s = start
+        self.sensors: tuple[Level, str] = self._sensors_now(start)
+        self.sensors_waiting = len(self.lines)  # lines without a tension at that decision
+        self.sensors_entered = start
+        self.sensors_ack = alarm_ack.AckState()
+        self.logger: tuple[Level, str] = (Level.OK, 'logging')
+        self.logger_entered = start
+        self.last_ns = start_ns
+        # The dock as one body (configs placing every line on the dock): estimated at ticks.
+        self.dock_model = DockModel.from_config(config) if config.has_dock_model else None
+        self.dock: tuple[Level, str] = (Level.STALE, 'no dock estimate yet')
+        self.dock_entered = start
+        self.dock_values: tuple[tuple[str, str], ...] = ()
+        self.dock_smoothing = dock_live.Smoothing.initial(len(self.lines))
+        # Accepted runtime changes: their lines, flagged (WARN) until changes_until [s].
+        self.changes: tuple[str, ...] = ()
+        self.changes_until = -math.inf
+        self.parameters: tuple[Level, str] = parameters_status((), -math.inf, start)
+        self.parameters_entered = start
+        self.clock: tuple[Level, str] = clock_status(None)
+        self.clock_entered = start
+        self.clock_seen = False
+        self.intake: tuple[Level, str] = (Level.OK, 'no sample counts yet')
+        self.intake_entered = start
+        self.intake_counts: list[Intake] = []  # the Intake events of the last INTAKE_WINDOW
+        # Per Intake event of the window and input: its period is checked against the input's
+        # sample rate (the input was heard in an earlier event, and in this one).
+        self.intake_checked: list[tuple[bool, ...]] = []
+        self.intake_heard: list[bool] = []
+        self.intake_seen = False
+
+    # ------------------------------------------------------------------ events
+    def step(self, event: Event) -> Step:
+        """Apply one event (see the module docstring for the schedule); return what it did."""
+        self.last_ns = event.stamp_ns
+        if isinstance(event, Tension):
+            return self._on_tension(event)
+        if isinstance(event, Depth):
+            return self._on_depth(event)
+        if isinstance(event, Tick):
+            return self._on_tick(event)
+        if isinstance(event, LoggerHealth):
+            return self._on_logger(event)
+        if isinstance(event, Reconfigure):
+            return self._on_reconfigure(event)
+        if isinstance(event, Acknowledge):
+            return self._on_acknowledge(event)
+        if isinstance(event, ClockHealth):
+            return self._on_clock(event)
+        if isinstance(event, Intake):
+            return self._on_intake(event)
+        raise TypeError(f'not a monitor event: {event!r}')
+
+    def _on_tension(self, ev: Tension) -> Step:
+        line = self.lines[ev.line]
+        line.tension, line.tension_s = float(ev.value), _stamp_s(ev.stamp_ns)
+        a = self.config.alarm
+        line.sensor_memory = sensor_state.sample(
+            line.sensor_memory,
+            line.tension_s,
+            line.tension,
+            a.tension_resolution,
+            a.tension_rate_max * line.config.mbl,
+            a.stamp_jitter,
+        )
+        self._solve_one(line)
+        changes = self._step_lines([ev.line], ev.stamp_ns)
+        return self._finish(ev.stamp_ns, 'tension', [ev.line], changes)
+
+    def _on_depth(self, ev: Depth) -> Step:
+        self.depth, self.depth_s = float(ev.value), _stamp_s(ev.stamp_ns)
+        window = self.config.alarm.tide_trend_window
+        self.trend = tide_trend.step(self.trend, ev.stamp_ns, self.depth, window)
+        a = self.config.alarm
+        self.depth_memory = sensor_state.sample(
+            self.depth_memory,
+            self.depth_s,
+            self.depth,
+            a.depth_resolution,
+            a.depth_rate_max,
+            a.stamp_jitter,
+        )
+        changes = self._decide_tide(ev.stamp_ns)
+        changes += self._decide_blind(ev.stamp_ns)
+        solved = [k for k, line in enumerate(self.lines) if line.tension_s == line.tension_s]
+        self._solve_many(solved)
+        changes += self._step_lines(range(len(self.lines)), ev.stamp_ns)
+        return self._finish(ev.stamp_ns, 'depth', solved, changes)
+
+    def _on_tick(self, ev: Tick) -> Step:
+        self._decide_sensors(ev.stamp_ns)
+        changes = self._decide_tide(ev.stamp_ns)
+        changes += self._decide_blind(ev.stamp_ns)
+        if self.dock_model is not None:
+            changes += self._decide_dock(ev.stamp_ns)
+        changes += self._step_lines(range(len(self.lines)), ev.stamp_ns)
+        return Step(ev.stamp_ns, 'tick', (), self.snapshot(ev.stamp_ns), tuple(changes))
+
+    def _on_logger(self, ev: LoggerHealth) -> Step:
+        new = logger_status(ev.error, ev.path)
+        changes = self._set_component('logger', new, ev.stamp_ns)
+        return self._finish(ev.stamp_ns, 'logger', [], changes)
+
+    def _on_acknowledge(self, ev: Acknowledge) -> Step:
+        """Acknowledge one line's alarm (or every line's; an unknown name changes nothing);
+        the snapshot shows it at once."""
+        now = _stamp_s(ev.stamp_ns)
+        for line in self.lines:
+            if ev.line is None or ev.line == line.config.name:
+                line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin)
+        if ev.line is None or ev.line == alarm_ack.SENSORS:
+            self.sensors_ack = alarm_ack.acknowledge(self.sensors_ack, now, ev.origin)
+        return Step(ev.stamp_ns, 'acknowledge', (), self.snapshot(ev.stamp_ns), ())
+
+    def _on_clock(self, ev: ClockHealth) -> Step:
+        """The ROS clock's state; always a snapshot (the node sends these on a wall-clock
+        timer while the ROS clock stands still, so /diagnostics keeps coming)."""
+        self.clock_seen = True
+        changes = self._set_component('clock', clock_status(ev.stopped_for), ev.stamp_ns)
+        return Step(ev.stamp_ns, 'clock', (), self.snapshot(ev.stamp_ns), tuple(changes))
+
+    def _on_intake(self, ev: Intake) -> Step:
+        """Sample counts: the intake status over the last :data:`INTAKE_WINDOW` of them."""
+        self.intake_seen = True
+        n = len(ev.received)
+        if len(self.intake_heard) != n:
+            self.intake_heard = [False] * n
+        self.intake_checked.append(
+            tuple(h and r > 0 for h, r in zip(self.intake_heard, ev.received))
+        )
+        self.intake_heard = [h or r > 0 for h, r in zip(self.intake_heard, ev.received)]
+        counts = self.intake_counts + [ev]
+        while counts and ev.stamp_ns - counts[0].stamp_ns >= int(INTAKE_WINDOW * 1e9):
+            counts.pop(0)
+        self.intake_counts = counts
+        self.intake_checked = self.intake_checked[len(self.intake_checked) - len(counts) :]
+        received = sum(sum(c.received) for c in counts)
+        dropped = sum(sum(c.dropped) for c in counts)
+        recent = [c for c in counts if ev.stamp_ns - c.stamp_ns < int(BUSY_WINDOW * 1e9)]
+        period = sum(c.period for c in recent)
+        busy = sum(c.busy for c in recent) / period if period > 0 else _NAN
+        new = intake_status(
+            received,
+            dropped,
+            busy,
+            INTAKE_WINDOW,
+            self.intake[0] == Level.OK,
+            sum(self.intake_missing()),
+        )
+        changes = self._set_component('intake', new, ev.stamp_ns)
+        return self._finish(ev.stamp_ns, 'intake', [], changes)
+
+    def intake_dropped(self) -> list[int]:
+        """Samples dropped per line, then the depth, in the last :data:`INTAKE_WINDOW`: those
+        counted and those missing against the sample rates."""
+        n = len(self.lines) + 1
+        counted = [
+            sum(c.dropped[k] for c in self.intake_counts if len(c.dropped) == n) for k in range(n)
+        ]
+        return [c + m for c, m in zip(counted, self.intake_missing())]
+
+    def intake_missing(self) -> list[int]:
+        """Samples missing per line, then the depth, in the last :data:`INTAKE_WINDOW`: the
+        shortfall against ``tension_sample_rate`` / ``depth_sample_rate`` over the report
+        periods in which the input was heard (not the first: it began before the first
+        sample), beyond the tolerance of
+        :func:`~catenary_monitor.core.monitor.health.missing_samples`.
+        """
+        n = len(self.lines) + 1
+        a = self.config.alarm
+        rates = [a.tension_sample_rate] * (n - 1) + [a.depth_sample_rate]
+        out = []
+        for k in range(n):
+            pairs = [
+                (c, ok[k])
+                for c, ok in zip(self.intake_counts, self.intake_checked)
+                if len(c.received) == n
+            ]
+            span = sum(c.period for c, ok in pairs if ok)
+            got = sum(c.received[k] + c.dropped[k] for c, ok in pairs if ok)
+            out.append(missing_samples(rates[k], span, got))
+        return out
+
+    def _on_reconfigure(self, ev: Reconfigure) -> Step:
+        """Take the new configuration; flag what changed (WARN on the ``parameters`` status
+        for ``runtime_change_warn_time``), shown at once."""
+        now = _stamp_s(ev.stamp_ns)
+        messages = runtime_change_messages(self.config, ev.config)
+        self.reconfigure(ev.config)
+        if not messages:
+            return Step(ev.stamp_ns, 'configure', (), None, ())
+        held = self.changes if now < self.changes_until else ()
+        if self.changes and not held and self.parameters[0] != Level.OK:  # the flag expired
+            self.parameters = parameters_status(self.changes, self.changes_until, now)
+            self.parameters_entered = self.changes_until
+        self.changes = held + tuple(messages)
+        self.changes_until = now + ev.config.runtime_change_warn_time
+        new = parameters_status(self.changes, self.changes_until, now)
+        changes = self._set_component('parameters', new, ev.stamp_ns)
+        return Step(ev.stamp_ns, 'configure', (), self.snapshot(ev.stamp_ns), tuple(changes))
+
+    def reconfigure(self, config: MonitorConfig) -> None:
+        """Take new line constants and alarm rules (same line names); alarm states are kept."""
+        names = [lc.name for lc in config.lines]
+        if names != [line.config.name for line in self.lines]:
+            raise ValueError(f'reconfigure: the lines must stay {list(self.index)}, got {names}')
+        if config.alarm.tide_trend_window != self.config.alarm.tide_trend_window:
+            self.trend = tide_trend.TrendState()  # other bins: the trend starts again
+        self.config = config
+        for line, lc in zip(self.lines, config.lines):
+            line.config, line.alarm = lc, LineAlarm.for_line(lc, config.alarm)
+        self.dock_model = DockModel.from_config(config) if config.has_dock_model else None
+
+    # ------------------------------------------------------------------ decisions
+    def _decide_tide(self, stamp_ns: int) -> list[Change]:
+        """Tide level and message, and the one depth-stale decision every line takes."""
+        now = _stamp_s(stamp_ns)
+        timeout = self.config.alarm.depth_timeout
+        self.depth_stale = self.depth_s == self.depth_s and now - self.depth_s > timeout
+        status = tide_status(self.depth, self.depth_s, now, timeout)
+        new = tide_with_sensor(status, self.depth_code, self.depth, self.config.alarm)
+        return self._set_component('tide', new, stamp_ns)
+
+    def _sensors_now(self, now: float) -> tuple[Level, str]:
+        """The sensors' common-cause alarm at ``now`` [s] (core.health.sensors_status)."""
+        a = self.config.alarm
+        waiting = [line.config.name for line in self.lines if line.tension_s != line.tension_s]
+        return sensors_status(
+            waiting,
+            len(self.lines),
+            self.depth_s,
+            self.depth_stale,
+            now,
+            self.start_s,
+            a.tension_timeout,
+            a.depth_timeout,
+        )
+
+    def _decide_blind(self, stamp_ns: int) -> list[Change]:
+        """The sensors' common-cause alarm, after the tide's decision, and its
+        acknowledgement state."""
+        now = _stamp_s(stamp_ns)
+        self.sensors_waiting = sum(line.tension_s != line.tension_s for line in self.lines)
+        changes = self._set_component('sensors', self._sensors_now(now), stamp_ns)
+        self.sensors_ack = alarm_ack.step(self.sensors_ack, self.sensors[0], now)
+        return changes
+
+    def _decide_sensors(self, stamp_ns: int) -> None:
+        """Every line's and the depth sensor's state at a tick (core.sensor)."""
+        a = self.config.alarm
+        now = np.array([_stamp_s(stamp_ns)])
+        lines = self.lines
+        tension = np.array([[line.tension for line in lines]])
+        changed = np.array([[line.sensor_memory.changed for line in lines]])
+        ref, keep = sensor_state.reference(
+            self.sensor_times, self.sensor_rows, now, a.parted_window
+        )
+        pattern = sensor_state.parted_pattern(tension, ref, a.parted_drop)
+        seen = np.array([[line.parted_seen for line in lines]])
+        seen = np.where(pattern, now[:, None], seen)
+        self.sensor_times = np.append(self.sensor_times[keep:], now)
+        spiked = np.array([[line.sensor_memory.spiked for line in lines]])
+        row = sensor_state.history_row(now, tension, spiked, a.sensor_hold)
+        self.sensor_rows = np.vstack([self.sensor_rows[keep:], row])
+        codes = sensor_state.decide_lines(
+            a,
+            sensor_limits(self.config),
+            now,
+            tension,
+            np.array([[line.tension_s for line in lines]]),
+            changed,
+            spiked,
+            seen,
+            np.array([self.depth]),
+            np.array([self.depth_memory.changed]),
+        )
+        for k, line in enumerate(lines):
+            line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
+        dm = self.depth_memory
+        self.depth_code = int(
+            sensor_state.decide_depth(
+                a,
+                now,
+                np.array([self.depth]),
+                np.array([self.depth_s]),
+                np.array([dm.changed]),
+                np.array([dm.spiked]),
+                changed,
+            )[0]
+        )
+
+    def _decide_dock(self, stamp_ns: int) -> list[Change]:
+        """The dock estimate from every line's newest tension (core.body.live): the dock
+        status, and what each line's ``inconsistent`` alarm condition sees."""
+        assert self.dock_model is not None
+        now = _stamp_s(stamp_ns)
+        depth_ok = self.depth_s == self.depth_s and not self.depth_stale
+        decision, self.dock_smoothing = dock_live.decide_dock(
+            self.dock_model,
+            self.config,
+            np.array([now]),
+            np.array([self.depth]),
+            np.array([depth_ok]),
+            np.array([[line.tension for line in self.lines]]),
+            np.array([[line.tension_s for line in self.lines]]),
+            self.dock_smoothing,
+        )
+        for k, line in enumerate(self.lines):
+            line.dock = tuple(decision.line_inputs[0, k].tolist())
+        self.dock_values = dock_live.dock_values(decision, 0)
+        new = (Level(int(decision.level[0])), dock_live.dock_message(self.dock_model, decision, 0))
+        return self._set_component('dock', new, stamp_ns)
+
+    def _set_component(self, name: str, new: tuple[Level, str], stamp_ns: int) -> list[Change]:
+        """Set the tide's or the logger's (level, message); a Change if the level moved."""
+        old: tuple[Level, str] = getattr(self, name)
+        setattr(self, name, new)
+        if new[0] == old[0]:
+            return []
+        now = _stamp_s(stamp_ns)
+        entered = getattr(self, f'{name}_entered')
+        setattr(self, f'{name}_entered', now)
+        quiet = name in _CONSEQUENCES and quiet_change(old[0], True, new[0], True)
+        return [Change(name, Transition(now, old[0], new[0], new[1], now - entered, quiet))]
+
+    def _solve_one(self, line: LineState) -> None:
+        """Solve one line at the newest depth (the scalar fast path)."""
+        lc, t = line.config, line.tension
+        h = self.depth + lc.hook_height
+        if self.depth_s != self.depth_s:  # no depth yet: nothing to solve
+            line.values, line.status, line.status_message, line.model = (
+                _with_sensor((t, h) + _NAN_VALUES[2:], line.sensor_code),
+                NO_DEPTH,
+                '',
+                NO_MODEL,
+            )
+            return
+        r = solve(
+            lc.weight, h, tension=t, anchor_distance=lc.anchor_distance, mbl=lc.mbl, ea=lc.ea
+        )
+        line.values = (
+            t,
+            h,
+            r.horizontal_tension,
+            r.min_anchor_distance,
+            r.anchor_margin,
+            r.uplift_force,
+            r.tide_margin,
+            r.load_margin,
+            r.safety_factor,
+            r.anchor_angle_deg,
+            r.suspended_length,
+            self._uplift_times([r.tide_margin], [r.uplift_force])[0],
+        )
+        line.values = _with_sensor(line.values + _NAN_VALUES[len(line.values) :], line.sensor_code)
+        line.status, line.status_message, line.model = int(r.status), r.message, r.model
+        code = reading_status(t, h, lc.mbl)
+        if code:
+            _implausible(line, code)
+        self._add_derived([line])
+
+    def _solve_many(self, which: Sequence[int]) -> None:
+        """Solve several lines at the newest depth in one vectorized call."""
+        if not which:
+            return
+        lines = [self.lines[k] for k in which]
+        cfgs = [line.config for line in lines]
+        tension = np.array([line.tension for line in lines])
+        h = self.depth + np.array([c.hook_height for c in cfgs])
+        ea = None
+        if any(c.ea is not None for c in cfgs):
+            ea = np.array([math.inf if c.ea is None else c.ea for c in cfgs])
+        r = solve(
+            np.array([c.weight for c in cfgs]),
+            h,
+            tension=tension,
+            anchor_distance=np.array([c.anchor_distance for c in cfgs]),
+            mbl=np.array([c.mbl for c in cfgs]),
+            ea=ea,
+        )
+        columns = [tension.tolist(), h.tolist()] + [
+            np.asarray(getattr(r, k)).tolist() for k in _SOLVED
+        ]
+        columns.append(self._uplift_times(columns[6], columns[5]))
+        models = np.broadcast_to(np.asarray(r.model, dtype=object), tension.shape)
+        messages, status = r.message, np.asarray(r.status).tolist()
+        for i, line in enumerate(lines):
+            line.values = tuple(col[i] for col in columns) + _NAN_VALUES[len(columns) :]
+            line.values = _with_sensor(line.values, line.sensor_code)
+            line.status, line.status_message = int(status[i]), str(messages[i])
+            line.model = str(models[i])
+        codes = reading_status_array(tension, h, [c.mbl for c in cfgs]).tolist()
+        for line, code in zip(lines, codes):
+            if code:
+                _implausible(line, code)
+        self._add_derived(lines)
+
+    def _add_derived(self, lines: Sequence[LineState]) -> None:
+        """The bounds and the holding values of freshly solved lines (from their values);
+        lines without accuracies or holding data keep NaN (what the functions give them)."""
+        accuracy = self.config.alarm.depth_accuracy
+        for fields, compute, wanted in (
+            (uncertainty.FIELDS, _bounds_of(accuracy), _wants_bounds(accuracy)),
+            (holding_rule.FIELDS + holding_rule.LENGTH_FIELDS, holding_values, _wants_holding),
+        ):
+            some = [line for line in lines if wanted(line.config)]
+            if not some:
+                continue
+            named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
+            derived = compute([line.config for line in some], named)
+            for j, line in enumerate(some):
+                v = list(line.values)
+                for key in fields:
+                    v[_AT[key]] = float(derived[key][j])
+                line.values = tuple(v)
+
+    def _uplift_times(self, margins: Sequence[float], forces: Sequence[float]) -> list[float]:
+        """Each line's time to uplift [s]: on the tide table's forecast from the newest depth
+        sample where there is a table (core.tide_table), else at the tide's trend."""
+        a = self.config.alarm
+        if a.constituents:
+            times = tide_table.uplift_times(
+                a.constituents,
+                a.tide_table_epoch,
+                a.tide_forecast_horizon,
+                np.full(len(margins), self.depth_s),
+                np.array(margins, np.float64),
+                np.array(forces, np.float64),
+            )
+            return [float(v) for v in times]
+        rate, excess = self.trend.rate, self.trend.excess
+        return [tide_trend.time_to_uplift(m, f, rate, excess) for m, f in zip(margins, forces)]
+
+    def _step_lines(self, which: Any, stamp_ns: int) -> list[Change]:
+        """Step the alarms of the given lines at ``stamp_ns``; their transitions."""
+        now = _stamp_s(stamp_ns)
+        changes = []
+        for k in which:
+            line = self.lines[k]
+            line.state, events = line.alarm.update(
+                line.state,
+                line.inputs(
+                    self.depth_s,
+                    self.depth_stale,
+                    self.trend.rate,
+                    bool(self.config.alarm.constituents),
+                ),
+                now,
+            )
+            line.ack = alarm_ack.step(line.ack, line.state.level, now, line.state.suppressed)
+            changes += [Change(line.config.name, ev) for ev in events]
+        return changes
+
+    def _finish(
+        self, stamp_ns: int, kind: str, solved: Sequence[int], changes: list[Change]
+    ) -> Step:
+        """The Step of an input event: outputs of the solved lines, a snapshot on a change."""
+        outputs = tuple(self.output(k) for k in solved)
+        snapshot = self.snapshot(stamp_ns) if changes else None
+        return Step(stamp_ns, kind, outputs, snapshot, tuple(changes))
+
+    # ------------------------------------------------------------------ views
+    def output(self, k: int) -> LineOutput:
+        """Line ``k``'s outputs now (:data:`OUTPUT_FIELDS`)."""
+        line = self.lines[k]
+        return LineOutput(k, output_values(line.values, line.status, line.state.level))
+
+    def snapshot(self, stamp_ns: int) -> Snapshot:
+        """The diagnostic snapshot at ``stamp_ns``: every line, the tide, the logger."""
+        now = _stamp_s(stamp_ns)
+        dock = self.dock_model is not None
+        statuses = [
+            line_status(
+                line.config,
+                line.hardware_id,
+                line.state.level,
+                line.state.message,
+                line.values,
+                line.status,
+                line.model,
+                now - line.tension_s,
+                sensor_state.line_word(line.sensor_code, line_dock_word(line) if dock else ''),
+                tuple(
+                    alarm_ack.diagnostic_values(
+                        line.ack, line.state.level, [latch.active for latch in line.state.latches]
+                    )
+                )
+                + (
+                    line_dock_values(line.state.latches[_INCONSISTENT].active, line.dock)
+                    if dock
+                    else ()
+                ),
+            )
+            for line in self.lines
+        ]
+        statuses.append(
+            tide_component(
+                self.tide,
+                self.depth_id,
+                self.depth,
+                now - self.depth_s,
+                self.trend.rate,
+                depth_word(self.depth_s, self.depth_code),
+                forecast_word(self.config, self.trend.rate),
+            )
+        )
+        statuses.append(sensors_component(self.sensors, self.sensors_ack, self.sensors_waiting))
+        level, message = self.logger
+        statuses.append(
+            ComponentStatus(f'{NODE_NAME}: logger', level, message, self.logger_id, ())
+        )
+        if dock:
+            statuses.append(dock_component(self.dock, self.dock_values))
+        statuses += self.guard_components(now)
+        return Snapshot(stamp_ns, tuple(statuses))
+
+    def guard_components(self, now: float) -> list[ComponentStatus]:
+        """The statuses after the logger and the dock: the runtime-change flag, the ROS clock
+        and the intake, each once it applies (events only change them)."""
+        out = []
+        flag = self.parameters_component(now)
+        if flag is not None:
+            out.append(flag)
+        if self.clock_seen:
+            out.append(ComponentStatus(f'{NODE_NAME}: clock', *self.clock, NODE_NAME, ()))
+        if self.intake_seen:
+            dropped = self.intake_dropped()
+            names = [line.config.name for line in self.lines] + ['depth']
+            values = (('messages_dropped', str(sum(dropped))),) + tuple(
+                (f'{name}.messages_dropped', str(d)) for name, d in zip(names, dropped)
+            )
+            a = self.config.alarm
+            if a.tension_sample_rate > 0.0 or a.depth_sample_rate > 0.0:
+                missing = self.intake_missing()
+                values += (('messages_missing', str(sum(missing))),) + tuple(
+                    (f'{name}.messages_missing', str(m)) for name, m in zip(names, missing)
+                )
+            out.append(ComponentStatus(f'{NODE_NAME}: intake', *self.intake, NODE_NAME, values))
+        return out
+
+    def parameters_component(self, now: float) -> Optional[ComponentStatus]:
+        """The runtime-change status at ``now`` [s] (None when runtime changes are not
+        allowed and none was made): WARN naming the changes until their flag expires."""
+        if not (self.config.allow_runtime_changes or self.changes):
+            return None
+        level, message = parameters_status(self.changes, self.changes_until, now)
+        until = repr(float(self.changes_until)) if self.changes else 'nan'
+        values = (('changes', str(len(self.changes))), ('flagged_until', until))
+        return ComponentStatus(f'{NODE_NAME}: parameters', level, message, NODE_NAME, values)
+
+
+def _with_sensor(values: tuple[float, ...], code: int) -> tuple[float, ...]:
+    """``values`` with the line's sensor state code in its place (``sensor_state``)."""
+    return values[:_SENSOR_AT] + (float(code),) + values[_SENSOR_AT + 1 :]
+
+
+def _implausible(line: LineState, code: int) -> None:
+    """An implausible reading (core.plausible): its status and sentence, no solved values
+    (the measured tension and depth kept, as for every impossible input)."""
+    line.values = line.values[:2] + _NAN_VALUES[2:_SENSOR_AT] + line.values[_SENSOR_AT:]
+    line.status, line.status_message = code, STATUS_MESSAGES[code]
+    line.model = elastic.INEXTENSIBLE
+
+
+def _column(cfgs: Sequence[LineConfig], key: str) -> np.ndarray:
+    """One line constant per config as floats (None: NaN, ``ea`` None: inf)."""
+    none = math.inf if key == 'ea' else math.nan
+    return np.array([none if getattr(c, key) is None else getattr(c, key) for c in cfgs])
+
+
+def _wants_bounds(depth_accuracy: float) -> Any:
+    """Whether a line has bounds: a tension accuracy, or a depth accuracy for all."""
+    return lambda c: depth_accuracy > 0.0 or c.tension_accuracy is not None
+
+
+def _wants_holding(c: LineConfig) -> bool:
+    """Whether a line has holding values: a chain length or an anchor holding."""
+    return c.chain_length is not None or c.anchor_holding is not None
+
+
+def _bounds_of(depth_accuracy: float) -> Any:
+    return lambda cfgs, named: bound_values(cfgs, depth_accuracy, named)
+
+
+def bound_values(
+    cfgs: Sequence[LineConfig], depth_accuracy: float, named: dict[str, np.ndarray]
+) -> dict[str, np.ndarray]:
+    """The bounds (:data:`catenary_monitor.core.monitor.uncertainty.FIELDS`) per element of the
+    nominal values ``named`` (VALUE_FIELDS -> arrays), each element's line in ``cfgs`` (one
+    config, or one per element); the core and its batch twin both call this."""
+    return uncertainty.bounds(
+        _column(cfgs, 'weight'),
+        _column(cfgs, 'anchor_distance'),
+        _column(cfgs, 'mbl'),
+        _column(cfgs, 'ea'),
+        named['top_tension'],
+        named['depth'],
+        _column(cfgs, 'tension_accuracy'),
+        depth_accuracy,
+        named['uplift_force'],
+    )
+
+
+def holding_values(
+    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray]
+) -> dict[str, np.ndarray]:
+    """The holding values (:data:`catenary_monitor.core.monitor.holding.FIELDS`), as
+    :func:`bound_values`."""
+    return holding_rule.holding(
+        _column(cfgs, 'weight'),
+        _column(cfgs, 'ea'),
+        _column(cfgs, 'chain_length'),
+        _column(cfgs, 'anchor_holding'),
+        _column(cfgs, 'anchor_weight'),
+        _column(cfgs, 'chain_friction'),
+        named['top_tension'],
+        named['depth'],
+        named['horizontal_tension'],
+        named['suspended_length'],
+        named['uplift_force'],
+    )
+
+
+def output_values(values: Sequence[float], status: float, level: float) -> tuple[float, ...]:
+    """One output message's elements (:data:`OUTPUT_FIELDS` order) from the
+    :data:`VALUE_FIELDS` values, the solver status and the level."""
+    v = tuple(float(x) for x in values)
+    return v[:11] + (float(status), float(int(level))) + v[11:]
+
+
+def line_status(
+    config: LineConfig,
+    hardware_id: str,
+    level: Level,
+    message: str,
+    values: Sequence[float],
+    status: int,
+    model: str,
+    tension_age: float,
+    sensor_word: str = 'ok',
+    extra: Sequence[tuple[str, str]] = (),
+) -> ComponentStatus:
+    """One line's ``DiagnosticStatus``: the contract keys (SI strings ``float()`` reads back
+    exactly), then ``measured_tension``, ``tension_age`` [s], ``anchor_distance``,
+    ``allowed_uplift``, ``anchor_angle_deg``, ``solver_status``, ``model``, ``sensor_state``
+    (:func:`catenary_monitor.core.monitor.sensor_state.line_word`), then ``extra``
+    (the alarm's acknowledgement keys: :func:`.acknowledge.diagnostic_values`; with the dock
+    model, :func:`line_dock_values`)."""
+    named = dict(zip(VALUE_FIELDS, values))
+    pairs = diagnostic_values(named) + [
+        ('measured_tension', repr(float(values[0]))),
+        ('tension_age', repr(float(tension_age))),
+        ('anchor_distance', repr(config.anchor_distance)),
+        ('allowed_uplift', repr(config.allowed_uplift)),
+        ('anchor_angle_deg', repr(float(values[9]))),
+        ('solver_status', str(int(status))),
+        ('model', model),
+        ('sensor_state', sensor_word),
+        *extra,
+    ]
+    return ComponentStatus(
+        f'{NODE_NAME}: {config.name}', level, message, hardware_id, tuple(pairs)
+    )
+
+
+def line_dock_values(latched: bool, dock: Sequence[float]) -> tuple[tuple[str, str], ...]:
+    """A line's dock-model values: ``residual`` (measured - expected, N), ``expected_tension``
+    (N) and ``residual_sigma`` (normalized residual); its word for ``sensor_state`` is
+    :func:`line_dock_word`."""
+    flag, residual, expected, sigma = dock
+    return (
+        ('residual', repr(float(residual))),
+        ('expected_tension', repr(float(expected))),
+        ('residual_sigma', repr(float(sigma))),
+    )
+
+
+def line_dock_word(line: LineState) -> str:
+    """The dock model's ``sensor_state`` word of a line (:func:`dock_live.sensor_state`)."""
+    return dock_live.sensor_state(line.state.latches[_INCONSISTENT].active, line.dock[0])
+
+
+def sensor_limits(config: MonitorConfig) -> sensor_state.LineLimits:
+    """The per-line constants of the sensor decision (MBL, weight, hook height)."""
+    lines = config.lines
+    return sensor_state.LineLimits(
+        np.array([c.mbl for c in lines]),
+        np.array([c.weight for c in lines]),
+        np.array([c.hook_height for c in lines]),
+    )
+
+
+def forecast_word(config: MonitorConfig, rate: float) -> str:
+    """What the times to uplift follow: ``table`` (a tide table is configured), ``trend``
+    (the tide's trend is known) or ``unknown``."""
+    if config.alarm.constituents:
+        return 'table'
+    return 'trend' if math.isfinite(rate) else 'unknown'
+
+
+def tide_with_sensor(
+    tide: tuple[Level, str], code: int, depth: float, config: Any
+) -> tuple[Level, str]:
+    """The tide's (level, message) with the depth sensor's state: the worse level (stuck and
+    spike WARN, out_of_range ERROR), the sensor's message appended."""
+    if code == sensor_state.OK:
+        return tide
+    level = Level.ERROR if code == sensor_state.OUT_OF_RANGE else Level.WARN
+    text = sensor_state.depth_message(code, depth, config)
+    if tide[0] == Level.OK:
+        return level, text
+    return (tide[0] if RANK[tide[0]] >= RANK[level] else level), f'{tide[1]}; {text}'
+
+
+def depth_word(depth_s: float, code: int) -> str:
+    """The depth sensor's ``sensor_state`` word: ``no_data`` before the first depth sample
+    (``depth_s`` NaN), else its state
+    (:data:`catenary_monitor.core.monitor.sensor_state.DEPTH_STATES`).
+    """
+    return sensor_state.NO_DATA if depth_s != depth_s else sensor_state.DEPTH_STATES[code]
+
+
+def sensors_component(
+    state: tuple[Level, str], ack: alarm_ack.AckState, waiting: int
+) -> ComponentStatus:
+    """The ``catenary_monitor: sensors`` status: the common-cause alarm's level and message
+    (:func:`catenary_monitor.core.monitor.health.sensors_status`), ``lines_waiting`` (lines with no
+    tension since the start) and the alarm's acknowledgement keys
+    (:func:`.acknowledge.diagnostic_values`)."""
+    values = (('lines_waiting', str(waiting)),) + tuple(
+        alarm_ack.diagnostic_values(ack, state[0], ())
+    )
+    return ComponentStatus(f'{NODE_NAME}: sensors', state[0], state[1], NODE_NAME, values)
+
+
+def dock_component(
+    dock: tuple[Level, str], values: tuple[tuple[str, str], ...]
+) -> ComponentStatus:
+    """The ``catenary_monitor: dock`` status: the estimate's level and message, values
+    ``offset_x``, ``offset_y`` [m], ``yaw_deg``, ``load_x``, ``load_y`` [N], ``load_mz`` [N m],
+    ``readings`` (NaN strings before the first estimate)."""
+    if not values:
+        values = tuple((k, 'nan') for k in dock_live.DOCK_KEYS[:-1]) + (('readings', '0'),)
+    return ComponentStatus(f'{NODE_NAME}: dock', dock[0], dock[1], 'dock model', values)
+
+
+def tide_component(
+    tide: tuple[Level, str],
+    hardware_id: str,
+    depth: float,
+    depth_age: float,
+    rate: float = math.nan,
+    sensor_word: str = 'ok',
+    forecast: str = 'unknown',
+) -> ComponentStatus:
+    """The tide's ``DiagnosticStatus``: values ``depth`` [m], ``depth_age`` [s] and ``rate``
+    [m/s], the trend (:mod:`~catenary_monitor.core.monitor.tide_trend`; nan while unknown), and the
+    depth sensor's ``sensor_state``
+    (:data:`catenary_monitor.core.monitor.sensor_state.DEPTH_STATES`) and
+    ``tide_forecast``, what the times to uplift follow (:func:`forecast_word`)."""
+    return ComponentStatus(
+        f'{NODE_NAME}: tide',
+        tide[0],
+        tide[1],
+        hardware_id,
+        (
+            ('depth', repr(float(depth))),
+            ('depth_age', repr(float(depth_age))),
+            ('rate', repr(float(rate))),
+            ('sensor_state', sensor_word),
+            ('tide_forecast', forecast),
+        ),
+    )
+
+
+# --- the events channel
+# ---------------------------------------------------------------------------
+
+
+def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
+    """What the node records on :data:`EVENTS_TOPIC` for an event that is not an input message
+    (None for tension and depth: their input messages are the record)."""
+    if isinstance(event, Start):
+        return {'kind': 'start'}
+    if isinstance(event, Tick):
+        return {'kind': 'tick'}
+    if isinstance(event, LoggerHealth):
+        return {'kind': 'logger', 'error': event.error, 'path': event.path}
+    if isinstance(event, Reconfigure):
+        return {'kind': 'configure', 'parameters': config_to_params(event.config)}
+    if isinstance(event, Acknowledge):
+        line = alarm_ack.ALL_LINES if event.line is None else event.line
+        return {'kind': 'acknowledge', 'line': line, 'origin': event.origin}
+    if isinstance(event, ClockHealth):
+        return {'kind': 'clock', 'stopped_for': event.stopped_for}
+    if isinstance(event, Intake):
+        return {
+            'kind': 'intake',
+            'received': list(event.received),
+            'dropped': list(event.dropped),
+            'busy': event.busy,
+            'period': event.period,
+        }
+    return None
+
+
+def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]]:
+    """The event (or :class:`Start`) of one :data:`EVENTS_TOPIC` record (None for an unknown
+    or damaged one)."""
+    try:
+        record = json.loads(text)
+        kind = record['kind']
+        if kind == 'start':
+            return Start(stamp_ns)
+        if kind == 'tick':
+            return Tick(stamp_ns)
+        if kind == 'logger':
+            return LoggerHealth(stamp_ns, record.get('error'), record.get('path'))
+        if kind == 'configure':
+            return Reconfigure(stamp_ns, config_from_params(record['parameters']))
+        if kind == 'clock':
+            stopped = record.get('stopped_for')
+            return ClockHealth(stamp_ns, None if stopped is None else float(stopped))
+        if kind == 'intake':
+            return Intake(
+                stamp_ns,
+                tuple(int(x) for x in record['received']),
+                tuple(int(x) for x in record['dropped']),
+                float(record['busy']),
+                float(record['period']),
+            )
+        if kind == 'acknowledge':
+            line = str(record['line'])
+            return Acknowledge(
+                stamp_ns,
+                None if line == alarm_ack.ALL_LINES else line,
+                str(record.get('origin', '')),
+            )
+    except (ValueError, KeyError, TypeError):
+        return None
+    return None

@@ -1,0 +1,342 @@
+"""Sensor sanity, apart from load alarms: each line's ``sensor_state`` and the depth sensor's.
+
+Pure (no rclpy, no clock). Two parts, each with a scalar path (the core) and an array path (its
+batch twin) that share the arithmetic, so live and replay decide alike:
+
+* **per sample** (:func:`sample`, :func:`samples`): what a sensor's readings remember: the
+  newest finite reading and its stamp, when it last *changed*: entered another step of the
+  resolution (``floor(x / resolution)``, ``tension_resolution`` N, ``depth_resolution`` m; a
+  reading drifting at rate r changes at least every resolution / r) than the reading before;
+  when it last
+  *spiked*: a step ``|dx| > rate_max * (dt + jitter) + resolution`` between consecutive finite
+  readings (a rate of change no chain and no tide can have; ``stamp_jitter`` because the
+  stamps are arrival times, and samples delivered in a bunch arrive closer than they were
+  taken). Non-finite readings are not remembered.
+* **per tick** (:func:`decide_lines`, :func:`decide_depth`): the states, decided at every tick
+  (``diagnostic_rate``) from the newest readings, in this precedence (the first that holds):
+
+  ======================  =====  ===================================================
+  line state (code)       level  pattern
+  ======================  =====  ===================================================
+  ``over_mbl`` (3)        ERROR  newest tension > MBL
+  ``suspected_parted``    ERROR  tension fell below ``(1 - parted_drop)`` x its value
+  (5)                            ``parted_window`` ago while the other lines' sum
+                                 rose; held ``sensor_hold`` after last seen
+  ``slack`` (4)           ERROR  tension <= w * h (the hanging chain's own weight at
+                                 the depth at the hook)
+  ``spike`` (2)           WARN   a spiked sample within ``sensor_hold``
+  ``stuck`` (1)           WARN   no change beyond the resolution for ``stuck_time``
+                                 while the dock moves (another line or the depth
+                                 changed since), the sensor still reporting
+  ``ok`` (0)              OK
+  ======================  =====  ===================================================
+
+  The depth sensor: ``out_of_range`` (ERROR, depth outside ``[depth_min, depth_max]``, the
+  chart range), ``spike`` (WARN, within ``sensor_hold``), ``stuck`` (WARN, no change beyond
+  ``depth_resolution`` for ``stuck_time`` while a line's tension changed since), ``ok``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+try:  # samples' loop in C (core/monitor/_twin_loops.c; optional: else the numpy passes)
+    from catenary_monitor.core.monitor import _twin_loops as _loops  # type: ignore[attr-defined]
+except ImportError:  # not built
+    _loops = None
+
+__all__ = [
+    'LINE_STATES',
+    'DEPTH_STATES',
+    'NO_DATA',
+    'OK',
+    'STUCK',
+    'SPIKE',
+    'OVER_MBL',
+    'SLACK',
+    'PARTED',
+    'OUT_OF_RANGE',
+    'ERROR_STATES',
+    'Memory',
+    'LineLimits',
+    'sample',
+    'samples',
+    'parted_pattern',
+    'decide_lines',
+    'decide_depth',
+    'reference',
+    'history_row',
+    'line_word',
+    'line_message',
+    'depth_message',
+]
+
+#: Line states by code (the ``sensor_state`` output field is the code, /diagnostics the word).
+LINE_STATES = ('ok', 'stuck', 'spike', 'over_mbl', 'slack', 'suspected_parted')
+OK, STUCK, SPIKE, OVER_MBL, SLACK, PARTED = range(6)
+#: Depth sensor states by code.
+DEPTH_STATES = ('ok', 'stuck', 'spike', 'out_of_range')
+OUT_OF_RANGE = 3
+#: The depth sensor's ``sensor_state`` word before its first sample (no state to decide yet).
+NO_DATA = 'no_data'
+#: Line states that are an ERROR (the others but ``ok`` are WARN).
+ERROR_STATES = (OVER_MBL, SLACK, PARTED)
+_NEVER = -math.inf
+
+
+class Memory(NamedTuple):
+    """One sensor's per-sample memory: newest finite reading and its stamp [s], when it last
+    changed beyond the resolution [s] and when it last spiked [s] (-inf: never)."""
+
+    value: float = math.nan
+    stamp: float = math.nan
+    changed: float = _NEVER
+    spiked: float = _NEVER
+
+
+class LineLimits(NamedTuple):
+    """Per-line constants of the tick decision (arrays over lines): MBL [N], weight in water
+    per metre [N/m], hook height [m]."""
+
+    mbl: np.ndarray
+    weight: np.ndarray
+    hook_height: np.ndarray
+
+
+def sample(
+    mem: Memory, stamp: float, value: float, resolution: float, rate: float, jitter: float
+) -> Memory:
+    """The memory after one reading ``value`` at ``stamp`` [s]; ``rate`` the largest credible
+    rate of change [unit/s], ``jitter`` how far off a stamp may be [s]."""
+    if not math.isfinite(value):
+        return mem
+    d = abs(value - mem.value)
+    step = bool(_steps(np.array([mem.value]), np.array([value]), resolution)[0])
+    changed = stamp if step else mem.changed
+    spiked = stamp if d > rate * (stamp - mem.stamp + jitter) + resolution else mem.spiked
+    return Memory(value, stamp, changed, spiked)
+
+
+def _steps(before: np.ndarray, after: np.ndarray, resolution: float) -> np.ndarray:
+    """Whether each reading is in another resolution step than the one before (``floor(x /
+    resolution)``; a resolution of 0: another value; no reading before: yes)."""
+    with np.errstate(invalid='ignore', divide='ignore'):
+        if resolution > 0.0:
+            return ~(np.floor(after / resolution) == np.floor(before / resolution))
+        return ~(after == before)
+
+
+def samples(
+    mem: Memory,
+    stamps: np.ndarray,
+    values: np.ndarray,
+    resolution: float,
+    rate: float,
+    jitter: float,
+) -> tuple[np.ndarray, np.ndarray, Memory]:
+    """:func:`sample` over sorted readings: ``changed`` and ``spiked`` [s] after each, and the
+    memory after the last."""
+    n = len(values)
+    if n == 0:
+        return np.zeros(0), np.zeros(0), mem
+    values = np.ascontiguousarray(values, np.float64)
+    stamps = np.ascontiguousarray(stamps, np.float64)
+    if _loops is not None and values.shape == stamps.shape == (n,):
+        ch, sp = np.empty(n), np.empty(n)
+        final = _loops.samples(values, stamps, *mem, resolution, rate, jitter, ch, sp)
+        return ch, sp, Memory(*final)
+    good = np.isfinite(values)
+    every = bool(good.all())
+    idx = None if every else np.flatnonzero(good)
+    # the memory's reading first, then the finite readings (one pass per quantity)
+    vv = _after(mem.value, values if idx is None else values[idx])
+    tt = _after(mem.stamp, stamps if idx is None else stamps[idx])
+    with np.errstate(invalid='ignore', divide='ignore'):
+        d = np.abs(np.diff(vv))
+        if resolution > 0.0:
+            q = np.floor(vv / resolution)
+            change = ~(q[1:] == q[:-1])
+        else:
+            change = ~(vv[1:] == vv[:-1])
+        spike = d > rate * (np.diff(tt) + jitter) + resolution
+    ch = _after(mem.changed, np.where(change, tt[1:], _NEVER))
+    sp = _after(mem.spiked, np.where(spike, tt[1:], _NEVER))
+    np.maximum.accumulate(ch, out=ch)
+    np.maximum.accumulate(sp, out=sp)
+    final = mem
+    if len(vv) > 1:
+        final = Memory(float(vv[-1]), float(tt[-1]), float(ch[-1]), float(sp[-1]))
+    if every:
+        return ch[1:], sp[1:], final
+    at = np.cumsum(good)  # position in ch / sp after each reading (0: the memory's)
+    return ch[at], sp[at], final
+
+
+def _after(first: float, rest: np.ndarray) -> np.ndarray:
+    """``[first, *rest]`` as a new float64 array."""
+    out = np.empty(len(rest) + 1)
+    out[0] = first
+    out[1:] = rest
+    return out
+
+
+def _moved_since(changed: np.ndarray, depth_changed: np.ndarray) -> np.ndarray:
+    """Per (tick, line): another line's or the depth's last change is newer than the line's.
+
+    The other lines' newest change is the row's newest, or for the line holding it (the first
+    of equal ones) the newest of the rest: two reductions per row, not one per line."""
+    n, lines = changed.shape
+    if lines > 1:
+        top = changed.argmax(axis=1)  # the first NaN where there is one: np.max gives NaN
+        rows = np.arange(n)
+        rest = changed.copy()
+        rest[rows, top] = _NEVER
+        newest = np.repeat(changed[rows, top][:, None], lines, axis=1)
+        newest[rows, top] = rest.max(axis=1)
+    else:
+        newest = np.full((n, lines), _NEVER)
+    with np.errstate(invalid='ignore'):
+        return np.maximum(newest, depth_changed[:, None]) > changed
+
+
+def parted_pattern(tension: np.ndarray, ref: np.ndarray, drop: float) -> np.ndarray:
+    """Per (tick, line): the tension fell below ``(1 - drop)`` x its reference while the
+    other lines' sum rose above theirs (NaN references: no)."""
+    lines = tension.shape[1]
+    with np.errstate(invalid='ignore'):
+        fell = tension < (1.0 - drop) * ref
+        total, total_ref = np.sum(tension, axis=1), np.sum(ref, axis=1)
+        others = total[:, None] - tension
+        others_ref = total_ref[:, None] - ref
+        rose = others > others_ref
+    return fell & rose & (lines > 1)
+
+
+def decide_lines(
+    cfg: object,
+    limits: LineLimits,
+    now: np.ndarray,
+    tension: np.ndarray,
+    tension_s: np.ndarray,
+    changed: np.ndarray,
+    spiked: np.ndarray,
+    parted_seen: np.ndarray,
+    depth: np.ndarray,
+    depth_changed: np.ndarray,
+) -> np.ndarray:
+    """Line state codes (int8, shape (ticks, lines)) at ticks ``now`` [s] from each line's
+    newest tension [N] and its stamp [s], its memory's ``changed`` and ``spiked`` [s], when
+    the parted pattern was last seen [s], the newest depth [m] and the depth's ``changed``.
+    ``cfg`` is the :class:`~catenary_monitor.core.config.parameters.AlarmConfig`."""
+    t_now = now[:, None]
+    hold = getattr(cfg, 'sensor_hold')
+    h = depth[:, None] + limits.hook_height[None, :]
+    with np.errstate(invalid='ignore'):
+        reporting = np.isfinite(tension) & (t_now - tension_s <= getattr(cfg, 'tension_timeout'))
+        over = tension > limits.mbl
+        slack = np.isfinite(h) & (h > 0) & (tension <= limits.weight * h)
+        spike = t_now - spiked <= hold
+        parted = t_now - parted_seen <= hold
+        quiet = t_now - changed >= getattr(cfg, 'stuck_time')
+    stuck = reporting & quiet & _moved_since(changed, depth_changed)
+    code = np.full(tension.shape, OK, np.int8)
+    for mask, c in ((stuck, STUCK), (spike, SPIKE), (slack, SLACK), (parted, PARTED)):
+        code[mask] = c
+    code[over] = OVER_MBL
+    return code
+
+
+def decide_depth(
+    cfg: object,
+    now: np.ndarray,
+    depth: np.ndarray,
+    depth_s: np.ndarray,
+    mem_changed: np.ndarray,
+    mem_spiked: np.ndarray,
+    line_changed: np.ndarray,
+) -> np.ndarray:
+    """Depth sensor state codes (int8 per tick) from the newest depth [m] and its stamp [s],
+    the depth memory's ``changed`` and ``spiked`` [s] and each line's ``changed`` (ticks,
+    lines) [s]."""
+    with np.errstate(invalid='ignore'):
+        reporting = np.isfinite(depth) & (now - depth_s <= getattr(cfg, 'depth_timeout'))
+        out = reporting & (
+            (depth < getattr(cfg, 'depth_min')) | (depth > getattr(cfg, 'depth_max'))
+        )
+        spike = now - mem_spiked <= getattr(cfg, 'sensor_hold')
+        quiet = now - mem_changed >= getattr(cfg, 'stuck_time')
+        newest = (
+            np.max(line_changed, axis=1) if line_changed.shape[1] else np.full(len(now), _NEVER)
+        )
+        stuck = reporting & quiet & (newest > mem_changed)
+    code = np.full(len(now), OK, np.int8)
+    code[stuck] = STUCK
+    code[spike] = SPIKE
+    code[out] = OUT_OF_RANGE
+    return code
+
+
+def line_message(code: int, tension: float, mbl: float) -> str:
+    """What a line's sensor state tells the operator to check (empty for ``ok``)."""
+    kn = f'{tension / 1e3:.1f} kN'
+    return {
+        STUCK: f'tension sensor stuck at {kn} while the dock moves: check the load cell, its '
+        'cable and the amplifier',
+        SPIKE: 'tension sensor spike (a change no chain can make): check the load cell cable '
+        'and connector, electrical noise, the amplifier',
+        OVER_MBL: f'tension {kn} above the MBL {mbl / 1e3:.0f} kN: check the chain at once '
+        '(about to part?) and the sensor calibration',
+        SLACK: f'tension {kn} at or below the hanging chain\'s own weight: slack or parted line '
+        'or failed sensor: check the chain, the stopper and the load cell',
+        PARTED: f'suspected parted line: tension collapsed to {kn} while the other lines rose: '
+        'check the chain and the anchor at once',
+    }.get(int(code), '')
+
+
+def depth_message(code: int, depth: float, cfg: object) -> str:
+    """What the depth sensor's state tells the operator to check (empty for ``ok``)."""
+    lo, hi = getattr(cfg, 'depth_min'), getattr(cfg, 'depth_max')
+    return {
+        STUCK: f'depth sensor stuck at {depth:.2f} m while the lines move: check the tide '
+        'gauge and its cable',
+        SPIKE: 'depth sensor spike (a change no tide makes): check the tide gauge, its cable '
+        'and electrical noise',
+        OUT_OF_RANGE: f'depth {depth:.2f} m outside the chart range [{lo:g}, {hi:g}] m: check '
+        'the depth sensor\'s datum, offset and scaling (or the range)',
+    }.get(int(code), '')
+
+
+def reference(
+    times: np.ndarray, rows: np.ndarray, now: np.ndarray, window: float
+) -> tuple[np.ndarray, int]:
+    """Each tick's reference tensions (rows of the newest tick at or before ``now - window``;
+    NaN where none) from the tick history ``times`` [s] / ``rows`` (ticks, lines), and the first
+    history row still needed after the last tick."""
+    idx = np.searchsorted(times, now - window, 'right') - 1
+    lines = rows.shape[1]
+    ref = np.full((len(now), lines), math.nan)
+    have = idx >= 0
+    if len(rows):
+        ref[have] = rows[idx[have]]
+    keep = int(idx[-1]) if len(idx) and idx[-1] >= 0 else 0
+    return ref, keep
+
+
+def history_row(
+    now: np.ndarray, tension: np.ndarray, spiked: np.ndarray, hold: float
+) -> np.ndarray:
+    """The tick's tensions as a later reference of the parted test: NaN where the line's
+    reading spiked within ``hold`` (a spike is no reference)."""
+    with np.errstate(invalid='ignore'):
+        return np.where(now[:, None] - spiked <= hold, math.nan, tension)
+
+
+def line_word(code: int, dock: str = '') -> str:
+    """A line's ``sensor_state`` word in /diagnostics: its own state unless ``ok``, then the
+    dock model's (``inconsistent``, ``suspect``, ``ok`` or ``unchecked``) where there is one."""
+    if code != OK or not dock:
+        return LINE_STATES[int(code)]
+    return dock

@@ -1,0 +1,1727 @@
+"""The vectorized twin of :class:`~catenary_monitor.core.monitor.monitor_core.MonitorCore` over log
+columns.
+
+:func:`advance` takes a :class:`MonitorCore` and a :class:`Window` of events in time order
+(tension samples per line, depth samples, ticks: columns of receive times in ns and values) and
+leaves the core in exactly the state that stepping it event by event would leave (alarm
+states, newest inputs and results, tide), returning what those steps did: every line's solved
+updates (:data:`~catenary_monitor.core.monitor.monitor_core.OUTPUT_FIELDS`), every level transition
+and, on request, every diagnostic snapshot. It exists only because it is measured faster (replay of
+a day of log in seconds); ``test/test_batch.py`` feeds the same events to both and compares
+every step.
+
+It follows the core's schedule (:mod:`catenary_monitor.core.monitor.monitor_core`): each line is
+stepped at its tension samples, at every depth sample and at every tick; a line is solved at its
+tension samples and, once it has a tension, at every depth sample; the tide is decided at depth
+samples and ticks. Events with equal times are taken in the order depth, tensions (config order),
+tick (the node's own logs have distinct stamps, so the rule only matters for other recordings).
+
+Reuse: the critical hook tension of the load margin depends only on depth and line, so it is
+solved once per depth sample, not once per update; the uplift iteration runs only on the updates
+whose anchor is lifted. The formulas are the ones :func:`catenary_monitor.solve` evaluates on
+arrays, so values equal the core's scalar path to rounding (1e-12 relative) and levels and
+messages are identical.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple, Optional
+
+import numpy as np
+
+from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
+from catenary_monitor.core.monitor import acknowledge as alarm_ack
+from catenary_monitor.core.monitor import dock_watch as dock_live
+from catenary_monitor.core.monitor import holding as holding_rule
+from catenary_monitor.core.monitor import sensor_state, tide_table, tide_trend, uncertainty
+from catenary_monitor.core.monitor.alarms import (
+    DIAGNOSTIC_KEYS,
+    RANK,
+    Level,
+    LevelSeries,
+    Transition,
+    quiet_change,
+    replay_levels,
+)
+from catenary_monitor.core.monitor.health import sensors_status, tide_status
+from catenary_monitor.core.monitor.monitor_core import (
+    CONDITIONS,
+    NO_DEPTH,
+    NO_MODEL,
+    NODE_NAME,
+    OUTPUT_FIELDS,
+    VALUE_FIELDS,
+    Change,
+    ComponentStatus,
+    LineState,
+    MonitorCore,
+    Snapshot,
+    Start,
+    bound_values,
+)
+from catenary_monitor.core.monitor.monitor_core import depth_word as depth_state_word
+from catenary_monitor.core.monitor.monitor_core import (
+    dock_component,
+    forecast_word,
+    holding_values,
+    line_dock_values,
+    line_status,
+    sensor_limits,
+    sensors_component,
+    tide_component,
+    tide_with_sensor,
+)
+from catenary_monitor.core.monitor.plausible import MAX_DEPTH, reading_status_array
+from catenary_monitor.core.physics import catenary as cat
+from catenary_monitor.core.physics import elastic, fused_kernel
+from catenary_monitor.core.physics.solve import ALL_KEYS, STATUS_MESSAGES, Status
+
+try:  # three of the loops below in C, next to this file (optional: else the numpy passes)
+    from catenary_monitor.core.monitor import _twin_loops as _loops  # type: ignore[attr-defined]
+except ImportError:  # not built
+    _loops = None
+
+__all__ = [
+    'OUTPUT_FIELDS',
+    'VALUE_FIELDS',
+    'NO_DEPTH',
+    'MODEL_NAMES',
+    'KIND_DEPTH',
+    'KIND_TENSION',
+    'KIND_TICK',
+    'Column',
+    'Window',
+    'slice_window',
+    'LineResult',
+    'WindowResult',
+    'ReplayResult',
+    'COLUMNS',
+    'SnapshotColumns',
+    'StatusColumns',
+    'advance',
+    'run_log',
+    'recompute',
+    'solve_updates',
+    'critical_parameters',
+    'tick_grid',
+    'worst',
+]
+
+#: Model names by :attr:`LineResult.model_codes` (as the ``/diagnostics`` key ``model``).
+MODEL_NAMES = (NO_MODEL, elastic.INEXTENSIBLE, elastic.ELASTIC)
+_INCONSISTENT = CONDITIONS.index('inconsistent')
+#: Step kinds in :attr:`LineResult.kind` and :attr:`LineResult.step_kind`.
+KIND_DEPTH, KIND_TENSION, KIND_TICK = 0, 1, 2
+
+Column = tuple[np.ndarray, np.ndarray]  # (receive times ns int64, values float64), sorted
+_EMPTY: Column = (np.zeros(0, np.int64), np.zeros(0))
+
+
+@dataclass
+class Window:
+    """Events of a stretch of log, each column sorted by time (ns): ``tensions`` per line
+    (config order), ``depth``, and the ``ticks``."""
+
+    tensions: list[Column]
+    depth: Column = _EMPTY
+    ticks: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+
+    @property
+    def messages(self) -> int:
+        """Input messages in the window."""
+        return sum(len(t) for t, _ in self.tensions) + len(self.depth[0])
+
+
+@dataclass
+class LineResult:
+    """What one line's steps did in a window.
+
+    Updates (the solved steps, one output message each): ``t_ns``, ``kind`` (tension or depth),
+    ``values`` (:data:`VALUE_FIELDS` -> float64 arrays, SI; ``depth`` is depth + hook height),
+    ``status`` (solver code, :data:`NO_DEPTH` before the first depth), ``level`` after the
+    update, ``elastic`` (True where the elastic model answered; None for an inextensible line).
+    Steps (every alarm step, ticks and unsolved depth steps too): ``step_ns``, ``step_kind``,
+    ``step_level``. ``transitions``: every level change.
+    """
+
+    name: str
+    t_ns: np.ndarray
+    kind: np.ndarray
+    values: dict[str, np.ndarray]
+    status: np.ndarray
+    level: np.ndarray
+    step_ns: np.ndarray
+    step_kind: np.ndarray
+    step_level: np.ndarray
+    transitions: list[Transition] = field(default_factory=list)
+    elastic: Optional[np.ndarray] = None
+
+    @property
+    def model_codes(self) -> np.ndarray:
+        """Per update: index into :data:`MODEL_NAMES` (0, ``none``, before the first depth)."""
+        code = np.ones(len(self.t_ns), np.int64)
+        if self.elastic is not None:
+            code[self.elastic] = 2
+        code[self.status == NO_DEPTH] = 0
+        return code
+
+    @property
+    def tension_rows(self) -> np.ndarray:
+        """Indexes of the updates made by a tension sample (one per tension message)."""
+        return np.flatnonzero(self.kind == KIND_TENSION)
+
+    def episodes(self, end_ns: Optional[int] = None) -> list[dict[str, object]]:
+        """Alarm episodes: maximal periods with level != OK.
+
+        Each is a dict: ``start``, ``end`` (s; None if still open at the end of the log),
+        ``duration`` (s; up to ``end_ns`` if still open), ``worst`` (level name, ERROR > STALE >
+        WARN), ``message`` (first message at the worst level).
+        """
+        rank = {Level.OK: 0, Level.WARN: 1, Level.STALE: 2, Level.ERROR: 3}
+        out: list[dict[str, object]] = []
+        cur: Optional[dict[str, object]] = None
+        for tr in self.transitions:
+            if cur is None and tr.new != Level.OK:
+                cur = {
+                    'start': tr.time,
+                    'end': None,
+                    'duration': None,
+                    'worst': tr.new.name,
+                    'message': tr.message,
+                }
+            elif cur is not None:
+                if tr.new == Level.OK:
+                    cur['end'] = tr.time
+                    cur['duration'] = tr.time - float(cur['start'])  # type: ignore[arg-type]
+                    out.append(cur)
+                    cur = None
+                    continue
+                if rank[tr.new] > rank[Level[str(cur['worst'])]]:
+                    cur['worst'] = tr.new.name
+                    cur['message'] = tr.message
+        if cur is not None:
+            if end_ns is not None:
+                cur['duration'] = max(end_ns * 1e-9 - float(cur['start']), 0.0)  # type: ignore
+            out.append(cur)
+        return out
+
+
+@dataclass
+class WindowResult:
+    """What :func:`advance` did: one :class:`LineResult` per line (config order), the tide's
+    transitions, the snapshots (if asked for) and the window's time span (ns)."""
+
+    lines: list[LineResult]
+    tide: list[Transition]
+    snapshots: list[Snapshot | SnapshotColumns]  # SnapshotColumns: snapshots=COLUMNS
+    start_ns: int
+    end_ns: int
+    others: list[Change] = field(default_factory=list)  # e.g. the logger's
+
+    @property
+    def updates(self) -> int:
+        """Solved updates over all lines."""
+        return sum(len(r.t_ns) for r in self.lines)
+
+    def changes(self) -> list[Change]:
+        """Every transition of the window as the core reports them, in time order."""
+        out = [Change('tide', tr) for tr in self.tide] + list(self.others)
+        for r in self.lines:
+            out += [Change(r.name, tr) for tr in r.transitions]
+        return sorted(out, key=lambda c: c.transition.time)
+
+
+def solve_updates(
+    line: LineConfig, tension: np.ndarray, depth: np.ndarray, a_crit: np.ndarray
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Problems 3 and 4 for one line on arrays, with the critical parameter given per element.
+
+    Parameters
+    ----------
+    line : the chain (weight N/m, anchor distance m, MBL N).
+    tension : hook tension T (N) per update.
+    depth : depth h (m) per update, hook height already added; NaN means no depth yet.
+    a_crit : catenary parameter (m) of the critical no-uplift chain at that depth
+        (:func:`catenary_monitor.catenary.critical_parameter`), per update.
+
+    Returns
+    -------
+    values : dict of :data:`VALUE_FIELDS` -> float64 arrays (NaN where status != 0, except
+        ``top_tension`` and ``depth``, the measured inputs, as the node publishes them)
+    status : int64 array, :class:`~catenary_monitor.solve.Status` codes, :data:`NO_DEPTH` where
+        ``depth`` is NaN.
+
+    Notes
+    -----
+    Same checks (first failed rule wins) and the same floating-point operations as
+    ``solve(w, h, tension=T, anchor_distance=x, mbl=mbl)`` on arrays.  A line with an axial
+    stiffness (``line.ea``) is solved by ``elastic.solve_with_correction`` as the core
+    does (``a_crit`` unused).
+    """
+    if line.ea is not None:
+        return _solve_updates_elastic(line, tension, depth)[:2]
+    if fused_kernel.AVAILABLE:  # the C kernel, as the core's scalar solve() (a_crit unused)
+        return _solve_updates_kernel(line, tension, depth)
+    n = len(tension)
+    w, x, mbl = line.weight, line.anchor_distance, line.mbl
+    out = {k: np.full(n, np.nan) for k in VALUE_FIELDS}
+    status = np.zeros(n, dtype=np.int64)
+    with np.errstate(over='ignore', invalid='ignore', divide='ignore'):
+        finite = np.isfinite(tension) & np.isfinite(depth)
+        status[~finite] = Status.NON_FINITE
+        status[(status == 0) & ~(depth > 0)] = Status.DEPTH
+        status[(status == 0) & ~(tension > w * depth)] = Status.TENSION
+        status[np.isnan(depth)] = NO_DEPTH
+        out['depth'] = depth.copy()
+        ok = status == 0
+        out['top_tension'] = tension.copy()
+        all_ok = bool(ok.all())
+        t = tension if all_ok else tension[ok]
+        h = depth if all_ok else depth[ok]
+        ac = a_crit if all_ok else a_crit[ok]
+        b = cat.two_prod_diff(t, w, h) / w
+        x_min = b * cat.acosh1p(h / b)
+        r = w * b
+        length = np.sqrt(h) * np.sqrt(h + 2.0 * b)  # cat.grounded's form: no underflow
+        uplift = np.zeros_like(b)
+        angle = np.zeros_like(b)
+        lift = np.flatnonzero(x < x_min)
+        if lift.size:
+            m = lift.size
+            state, _, conv = cat.lifted_from_tension(
+                np.full(m, w), b[lift], h[lift], np.full(m, x)
+            )
+            r[lift] = state.horizontal_tension
+            length[lift] = state.suspended_length
+            uplift[lift] = state.uplift_force
+            angle[lift] = np.degrees(state.anchor_angle)
+        cols = {
+            'horizontal_tension': r,
+            'min_anchor_distance': x_min,
+            'anchor_margin': x - x_min,
+            'uplift_force': uplift,
+            'tide_margin': cat.depth_reached(r / w, x) - h,
+            'load_margin': w * (ac + h) - t,
+            'safety_factor': mbl / t,
+            'anchor_angle_deg': angle,
+            'suspended_length': length,
+        }
+        if lift.size and not conv.all():
+            bad = lift[~conv]
+            for v in cols.values():
+                v[bad] = np.nan
+            where = np.flatnonzero(ok)[bad] if not all_ok else bad
+            status[where] = Status.NO_CONVERGENCE
+        for k, v in cols.items():
+            if all_ok:
+                out[k] = v
+            else:
+                out[k][ok] = v
+    return out, status
+
+
+#: Values the caller sets (inputs, the tide's forecast, the bounds and the holding values).
+_NOT_SOLVED = frozenset(('depth', 'top_tension', 'time_to_uplift')) | frozenset(
+    k for k in VALUE_FIELDS if k not in ALL_KEYS
+)
+_ROWS = {k: ALL_KEYS.index(k) for k in VALUE_FIELDS if k in ALL_KEYS}
+
+
+def _solve_updates_kernel(
+    line: LineConfig, tension: np.ndarray, depth: np.ndarray, keep: bool = False
+) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """:func:`solve_updates` through the C kernel (core/fused_kernel.py): one pass, every value.
+
+    ``keep``: the inputs are the caller's to give (kept as the ``top_tension`` and ``depth``
+    columns, not copied), and the caller sets ``time_to_uplift`` and ``sensor_state``."""
+    t = np.ascontiguousarray(tension, dtype=float)
+    h = np.ascontiguousarray(depth, dtype=float)
+    rows, status = fused_kernel.solve_arrays(
+        float(line.weight), h, t, float(line.anchor_distance), float(line.mbl), len(t)
+    )
+    status[np.isnan(h)] = NO_DEPTH
+    out = {k: rows[i] for k, i in _ROWS.items()}
+    if keep:
+        out['depth'], out['top_tension'] = h, t
+        return out, status
+    out['depth'], out['top_tension'] = h.copy(), t.copy()
+    out['time_to_uplift'] = np.full(len(t), np.nan)  # set by the caller, from the tide's trend
+    out['sensor_state'] = np.full(len(t), np.nan)  # set by the caller, from the ticks
+    return out, status
+
+
+def _solve_updates_elastic(
+    line: LineConfig, tension: np.ndarray, depth: np.ndarray
+) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+    """:func:`solve_updates` for a line with ``ea``: ``elastic.solve_with_correction`` (the
+    rule picks the model).
+
+    Also returns, per update, whether the elastic model answered.
+    """
+    n = len(tension)
+    out = {k: np.full(n, np.nan) for k in VALUE_FIELDS}
+    out['depth'], out['top_tension'] = depth.copy(), tension.copy()
+    status = np.full(n, NO_DEPTH, dtype=np.int64)
+    used = np.zeros(n, dtype=bool)
+    has = ~np.isnan(depth)
+    if has.any():
+        res, _ = elastic.solve_with_correction(
+            line.weight,
+            depth[has],
+            tension[has],
+            anchor_distance=line.anchor_distance,
+            ea=line.ea,
+            mbl=line.mbl,
+        )
+        status[has] = res.status
+        used[has] = np.asarray(res.model) == elastic.ELASTIC
+        for k in VALUE_FIELDS:
+            if k not in _NOT_SOLVED:
+                out[k][has] = getattr(res, k)
+    return out, status, used
+
+
+def critical_parameters(line: LineConfig, depth: np.ndarray) -> np.ndarray:
+    """Critical catenary parameter (m) per depth sample (depth already includes hook height)."""
+    a = np.full(len(depth), np.nan)
+    good = np.isfinite(depth) & (depth > 0)
+    if good.any():
+        h = depth[good]
+        with np.errstate(over='ignore', invalid='ignore', divide='ignore'):
+            a[good], _ = cat.critical_parameter(h, np.full(h.size, line.anchor_distance))
+    return a
+
+
+def tick_grid(
+    start_ns: int, end_ns: int, rate_hz: float, k0: int = 0, n: Optional[int] = None
+) -> np.ndarray:
+    """The periodic ticks of a log without recorded ones: ``start + rint(k * 1e9 / rate)`` (ns)
+    for ``k0 <= k < n`` (default: every k up to ``end_ns``), at or before ``end_ns``."""
+    period = 1e9 / rate_hz
+    if n is None:
+        if end_ns < start_ns:
+            return np.zeros(0, np.int64)
+        n = int((end_ns - start_ns) // period) + 1
+    k = np.arange(k0, max(k0, n), dtype=np.int64)
+    ticks = start_ns + np.rint(k * period).astype(np.int64)
+    return ticks[ticks <= end_ns]
+
+
+# --- the engine ----------------------------------------------------------------------------------
+
+
+def _merge(dd: np.ndarray, tt: np.ndarray, kk: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Merge sorted depth, tension and tick times (ties: depth, tension, tick): (times, kinds)."""
+    n = len(dd) + len(tt) + len(kk)
+    if _loops is not None and dd.dtype == tt.dtype == kk.dtype == np.int64:
+        times = np.empty(n, np.int64)
+        kinds = np.empty(n, np.int8)
+        sources = [np.ascontiguousarray(c) for c in (dd, tt, kk)]
+        if _loops.merge3(*sources, times, kinds, KIND_DEPTH, KIND_TENSION, KIND_TICK):
+            return times, kinds
+    before = np.searchsorted
+    pos_d = np.arange(len(dd)) + before(tt, dd, 'left') + before(kk, dd, 'left')
+    pos_t = np.arange(len(tt)) + before(dd, tt, 'right') + before(kk, tt, 'left')
+    pos_k = np.arange(len(kk)) + before(dd, kk, 'right') + before(tt, kk, 'right')
+    times = np.empty(n, np.int64)
+    kinds = np.empty(n, np.int8)
+    for pos, src, kind in (
+        (pos_d, dd, KIND_DEPTH),
+        (pos_t, tt, KIND_TENSION),
+        (pos_k, kk, KIND_TICK),
+    ):
+        times[pos] = src
+        kinds[pos] = kind
+    return times, kinds
+
+
+def _newest(mask: np.ndarray) -> np.ndarray:
+    """Per step: index (within the window) of the newest step where ``mask`` holds (-1: none)."""
+    return np.cumsum(mask) - 1
+
+
+@dataclass
+class _Tide:
+    """The tide's decisions in a window (at depth samples and ticks, in time order)."""
+
+    times: np.ndarray  # ns
+    depth: np.ndarray  # m, newest depth at each decision
+    depth_s: np.ndarray  # s, its stamp (NaN: none)
+    level: np.ndarray  # int8 Level
+    stale: np.ndarray  # bool, the depth-stale decision the lines take
+    rates: np.ndarray  # m/s, the tide's trend after each depth sample of the window
+    excess: np.ndarray  # m, each depth sample's excess over the trend's level
+    trend: tide_trend.TrendState  # the trend after the window's last depth sample
+    sensor: np.ndarray  # the depth sensor's state code at each decision
+    kinds: np.ndarray  # KIND_DEPTH or KIND_TICK: what made each decision
+
+
+def _worse(level: np.ndarray, other: np.ndarray, code: np.ndarray) -> np.ndarray:
+    """Per decision: the worse (by RANK) of the tide's level and its sensor's (where code)."""
+    rank = np.array([RANK[Level(v)] for v in range(4)])
+    pick = (code != sensor_state.OK) & (rank[other] > rank[level])
+    return np.where(pick, other, level).astype(np.int8)
+
+
+def _tide_at(core: MonitorCore, tide: _Tide, i: int) -> tuple[Level, str]:
+    """The tide's (level, message) at decision ``i`` (as the core's ``_decide_tide``)."""
+    status = tide_status(
+        float(tide.depth[i]),
+        float(tide.depth_s[i]),
+        float(tide.times[i] * 1e-9),
+        core.config.alarm.depth_timeout,
+    )
+    return tide_with_sensor(status, int(tide.sensor[i]), float(tide.depth[i]), core.config.alarm)
+
+
+@dataclass
+class _Sensors:
+    """The sensor states at the window's ticks (core.sensor): each line's code (ticks, lines)
+    and the depth sensor's (ticks), and the codes before the window."""
+
+    codes: np.ndarray
+    depth_codes: np.ndarray
+    before: list[int]
+    before_depth: int
+
+
+def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
+    """Every tick's sensor states (the arrays the core hands core.sensor one tick at a time);
+    leaves the core's sensor memories as after the window."""
+    a, ticks = core.config.alarm, window.ticks
+    lines = core.lines
+    n, m = len(ticks), len(lines)
+    before = [line.sensor_code for line in lines]
+    before_depth = core.depth_code
+    now = ticks * 1e-9
+    tension, tension_s = np.empty((n, m)), np.empty((n, m))
+    changed, spiked = np.empty((n, m)), np.empty((n, m))
+    for k, line in enumerate(lines):
+        tt, tv = window.tensions[k]
+        mem = line.sensor_memory
+        rate = a.tension_rate_max * line.config.mbl
+        ch, sp, line.sensor_memory = sensor_state.samples(
+            mem, tt * 1e-9, tv, a.tension_resolution, rate, a.stamp_jitter
+        )
+        j = np.searchsorted(tt, ticks, 'right') - 1  # tensions go before a tick at one stamp
+        tension[:, k] = _pick(j, tv, line.tension)
+        tension_s[:, k] = _pick(j, tt * 1e-9, line.tension_s)
+        changed[:, k] = _pick(j, ch, mem.changed)
+        spiked[:, k] = _pick(j, sp, mem.spiked)
+    dd, dv = window.depth
+    dmem = core.depth_memory
+    dch, dsp, core.depth_memory = sensor_state.samples(
+        dmem, dd * 1e-9, dv, a.depth_resolution, a.depth_rate_max, a.stamp_jitter
+    )
+    j = np.searchsorted(dd, ticks, 'right') - 1  # depth goes before a tick at one stamp
+    depth, depth_s = _pick(j, dv, core.depth), _pick(j, dd * 1e-9, core.depth_s)
+    d_changed, d_spiked = _pick(j, dch, dmem.changed), _pick(j, dsp, dmem.spiked)
+    if n == 0:
+        return _Sensors(np.zeros((0, m), np.int8), np.zeros(0, np.int8), before, before_depth)
+    times = np.concatenate([core.sensor_times, now])
+    rows = np.vstack(
+        [core.sensor_rows, sensor_state.history_row(now, tension, spiked, a.sensor_hold)]
+    )
+    ref, keep = sensor_state.reference(times, rows, now, a.parted_window)
+    pattern = sensor_state.parted_pattern(tension, ref, a.parted_drop)
+    first = np.array([[line.parted_seen for line in lines]])
+    seen = np.maximum.accumulate(
+        np.vstack([first, np.where(pattern, now[:, None], -math.inf)]), axis=0
+    )[1:]
+    core.sensor_times, core.sensor_rows = times[keep:], rows[keep:]
+    codes = sensor_state.decide_lines(
+        a,
+        sensor_limits(core.config),
+        now,
+        tension,
+        tension_s,
+        changed,
+        spiked,
+        seen,
+        depth,
+        d_changed,
+    )
+    depth_codes = sensor_state.decide_depth(a, now, depth, depth_s, d_changed, d_spiked, changed)
+    for k, line in enumerate(lines):
+        line.sensor_code, line.parted_seen = int(codes[-1, k]), float(seen[-1, k])
+    core.depth_code = int(depth_codes[-1])
+    return _Sensors(codes, depth_codes, before, before_depth)
+
+
+def _decide_tide(
+    core: MonitorCore, window: Window, sensors: _Sensors
+) -> tuple[_Tide, list[Transition]]:
+    """The tide's decisions in the window and its transitions (the core is not changed)."""
+    dd, dv = window.depth
+    times, kinds = _merge(dd, np.zeros(0, np.int64), window.ticks)
+    k_idx = _newest(kinds == KIND_TICK)
+    d_idx = _newest(kinds == KIND_DEPTH)
+    have = d_idx >= 0
+    j = np.maximum(d_idx, 0)
+    depth = np.where(have, dv[j] if len(dv) else math.nan, core.depth)
+    depth_s = np.where(have, dd[j] * 1e-9 if len(dd) else math.nan, core.depth_s)
+    now = times * 1e-9
+    timeout = core.config.alarm.depth_timeout
+    with np.errstate(invalid='ignore'):
+        blind = np.isnan(depth_s)
+        stale = ~blind & (now - depth_s > timeout)
+        bad = ~(np.isfinite(depth) & (depth > 0) & (depth <= MAX_DEPTH))
+    level = np.where(blind | stale, Level.STALE, np.where(bad, Level.ERROR, Level.OK))
+    code = _pick(k_idx, sensors.depth_codes, sensors.before_depth).astype(np.int64)
+    level = _worse(
+        level, np.where(code == sensor_state.OUT_OF_RANGE, Level.ERROR, Level.WARN), code
+    )
+    window_s = core.config.alarm.tide_trend_window
+    rates, excess, trend = tide_trend.series(core.trend, dd, dv, window_s)
+    tide = _Tide(times, depth, depth_s, level, stale, rates, excess, trend, code, kinds)
+    transitions = []
+    old, entered = core.tide[0], core.tide_entered
+    for i in _changed(level, old).tolist():
+        new = _tide_at(core, tide, i)
+        t = float(now[i])
+        quiet = quiet_change(old, True, new[0], True)
+        transitions.append(Transition(t, old, new[0], new[1], t - entered, quiet))
+        old, entered = new[0], t
+    return tide, transitions
+
+
+@dataclass
+class _Blind:
+    """The sensors' common-cause alarm at the tide's decisions (core.health.sensors_status)."""
+
+    waiting: np.ndarray  # (decisions, lines) bool: the line has had no tension yet
+    levels: np.ndarray  # int8 Level per decision
+    transitions: list[Transition]
+    acks: alarm_ack.AckSeries
+    before: tuple[tuple[Level, str], int]  # the status and the lines waiting before the window
+
+
+def _blind_at(core: MonitorCore, tide: _Tide, blind: _Blind, i: int) -> tuple[Level, str]:
+    """The sensors alarm's (level, message) at tide decision ``i`` (as the core's
+    ``_decide_blind``)."""
+    a = core.config.alarm
+    names = [line.config.name for line, w in zip(core.lines, blind.waiting[i]) if w]
+    return sensors_status(
+        names,
+        len(core.lines),
+        float(tide.depth_s[i]),
+        bool(tide.stale[i]),
+        float(tide.times[i] * 1e-9),
+        core.start_s,
+        a.tension_timeout,
+        a.depth_timeout,
+    )
+
+
+def _decide_blind(core: MonitorCore, window: Window, tide: _Tide) -> _Blind:
+    """The sensors alarm at every tide decision of the window, its transitions and its
+    acknowledgement states; leaves the core's as after the window."""
+    a, times = core.config.alarm, tide.times
+    waiting = np.zeros((len(times), len(core.lines)), bool)
+    for k, line in enumerate(core.lines):
+        tt = window.tensions[k][0]
+        if line.tension_s == line.tension_s:
+            continue
+        if not len(tt):
+            waiting[:, k] = True
+            continue
+        # A tick follows the tensions of its own stamp; a depth sample goes before them.
+        waiting[:, k] = (times < tt[0]) | ((times == tt[0]) & (tide.kinds == KIND_DEPTH))
+    since = times * 1e-9 - core.start_s
+    late = waiting.any(axis=1) & (since > a.tension_timeout)
+    silent = tide.stale | (np.isnan(tide.depth_s) & (since > a.depth_timeout))
+    levels = np.where(late | silent, Level.STALE, Level.OK).astype(np.int8)
+    before = (core.sensors, core.sensors_waiting)
+    blind = _Blind(waiting, levels, [], alarm_ack.AckSeries(core.sensors_ack, levels[:0], []),
+                   before)  # fmt: skip
+    old, entered = core.sensors[0], core.sensors_entered
+    for i in _changed(levels, old).tolist():
+        new = _blind_at(core, tide, blind, i)
+        t = float(times[i] * 1e-9)
+        blind.transitions.append(Transition(t, old, new[0], new[1], t - entered))
+        old, entered = new[0], t
+    blind.acks = alarm_ack.replay_acks(core.sensors_ack, times * 1e-9, levels)
+    if len(times):
+        core.sensors = _blind_at(core, tide, blind, len(times) - 1)
+        core.sensors_waiting = int(waiting[-1].sum())
+    core.sensors_entered = entered
+    core.sensors_ack = blind.acks.final
+    return blind
+
+
+def _write_tide(
+    core: MonitorCore, window: Window, tide: _Tide, transitions: list[Transition]
+) -> None:
+    """The core's depth and tide state after the window's last event."""
+    if len(tide.times):
+        i = len(tide.times) - 1
+        core.tide = _tide_at(core, tide, i)
+        core.depth_stale = bool(tide.stale[i])
+    if transitions:
+        core.tide_entered = transitions[-1].time
+    core.trend = tide.trend
+    dd, dv = window.depth
+    if len(dd):
+        core.depth, core.depth_s = float(dv[-1]), float(dd[-1] * 1e-9)
+
+
+@dataclass
+class _Dock:
+    """The dock decisions at the window's ticks (the dock model only)."""
+
+    decision: dock_live.DockDecision
+    levels: np.ndarray  # int8 per tick
+    before: tuple[tuple[Level, str], tuple[tuple[str, str], ...], list[tuple[float, ...]]]
+    transitions: list[Transition]
+
+
+def _decide_dock_window(core: MonitorCore, window: Window, tide: _Tide) -> Optional[_Dock]:
+    """Every tick's dock estimate from each line's newest tension and the tide's decision
+    there (the same arrays the core hands :func:`dock_live.decide_dock` one tick at a time);
+    leaves the core's dock state as after the last tick."""
+    model = core.dock_model
+    if model is None:
+        return None
+    before = (core.dock, core.dock_values, [line.dock for line in core.lines])
+    ticks = window.ticks
+    n = len(ticks)
+    if n == 0:
+        return _Dock(
+            dock_live.DockDecision(*([None] * 4)), np.zeros(0, np.int8), before, []  # type: ignore
+        )
+    now = ticks * 1e-9
+    at = np.searchsorted(tide.times, ticks, 'right') - 1  # the tick's own tide decision
+    depth = tide.depth[at]
+    depth_ok = ~np.isnan(tide.depth_s[at]) & ~tide.stale[at]
+    tension = np.empty((n, len(core.lines)))
+    tension_s = np.empty((n, len(core.lines)))
+    for k, line in enumerate(core.lines):
+        tt, tv = window.tensions[k]
+        j = np.searchsorted(tt, ticks, 'right') - 1  # tensions go before a tick at one stamp
+        tension[:, k] = _pick(j, tv, line.tension)
+        tension_s[:, k] = _pick(j, tt * 1e-9, line.tension_s)
+    decision, core.dock_smoothing = dock_live.decide_dock(
+        model, core.config, now, depth, depth_ok, tension, tension_s, core.dock_smoothing
+    )
+    levels = decision.level
+    transitions = []
+    old, entered = core.dock[0], core.dock_entered
+    for i in _changed(levels, old).tolist():
+        new = Level(int(levels[i]))
+        t = float(now[i])
+        message = dock_live.dock_message(model, decision, i)
+        quiet = quiet_change(old, True, new, True)
+        transitions.append(Transition(t, old, new, message, t - entered, quiet))
+        old, entered = new, t
+    core.dock = (Level(int(levels[-1])), dock_live.dock_message(model, decision, n - 1))
+    core.dock_entered = entered
+    core.dock_values = dock_live.dock_values(decision, n - 1)
+    for k, line in enumerate(core.lines):
+        line.dock = tuple(decision.line_inputs[-1, k].tolist())
+    return _Dock(decision, levels, before, transitions)
+
+
+@dataclass
+class _Steps:
+    """One line's steps in a window and what each step sees."""
+
+    times: np.ndarray  # ns
+    kinds: np.ndarray  # int8
+    t_idx: np.ndarray  # newest tension sample in the window (-1: the core's)
+    d_idx: np.ndarray  # newest depth sample in the window (-1: the core's)
+    dk_idx: np.ndarray  # newest tide decision in the window (-1: the core's)
+    solved: np.ndarray  # bool: the line is solved at this step
+    s_idx: np.ndarray  # newest solve in the window (-1: the core's)
+    k_idx: np.ndarray  # newest tick in the window (-1: the core's)
+
+
+def _line_steps(line: LineState, tt: np.ndarray, window: Window) -> _Steps:
+    times, kinds = _merge(window.depth[0], tt, window.ticks)
+    if _loops is not None:  # one loop instead of five cumulative sums
+        n = len(kinds)
+        t_idx, d_idx, dk_idx, k_idx, s_idx = np.empty((5, n), np.int64)
+        solved = np.empty(n, bool)
+        had = line.tension_s == line.tension_s  # a tension before the window
+        kind_codes = (KIND_DEPTH, KIND_TENSION, KIND_TICK)
+        _loops.newest(kinds, *kind_codes, had, t_idx, d_idx, dk_idx, k_idx, solved, s_idx)
+        return _Steps(times, kinds, t_idx, d_idx, dk_idx, solved, s_idx, k_idx)
+    t_idx = _newest(kinds == KIND_TENSION)
+    known = (t_idx >= 0) | (line.tension_s == line.tension_s)
+    solved = (kinds == KIND_TENSION) | ((kinds == KIND_DEPTH) & known)
+    return _Steps(
+        times,
+        kinds,
+        t_idx,
+        _newest(kinds == KIND_DEPTH),
+        _newest(kinds != KIND_TENSION),
+        solved,
+        _newest(solved),
+        _newest(kinds == KIND_TICK),
+    )
+
+
+def _pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
+    """``column[idx]`` where ``idx >= 0``, else ``before`` (the core's value before the window)."""
+    if (
+        _loops is not None
+        and len(column)
+        and column.dtype == np.float64
+        and isinstance(before, (float, int))
+        and idx.dtype == np.int64
+    ):
+        out = np.empty(len(idx))
+        _loops.pick(np.ascontiguousarray(idx), np.ascontiguousarray(column), before, out)
+        return out
+    if not len(column):
+        return np.full(len(idx), before)
+    # ``before`` appended last: index -1 (``_newest``'s "none yet") picks it, one gather; the
+    # dtype as ``np.where`` would give it (a Python scalar does not widen the column)
+    picked = np.append(column, before)[idx]
+    return picked.astype(np.result_type(column, before), copy=False)
+
+
+def _solve_line(
+    core: MonitorCore,
+    line: LineState,
+    steps: _Steps,
+    tv: np.ndarray,
+    window: Window,
+    tide: _Tide,
+    sensors: _Sensors,
+    k: int,
+) -> tuple[dict[str, np.ndarray], np.ndarray, Optional[np.ndarray]]:
+    """Values, status and elastic flags at the line's solved steps, with the time to uplift
+    at the tide's trend of the newest depth sample and the sensor state of the newest tick."""
+    values, status, used = _solve_at(core, line, steps, tv, window)
+    values['sensor_state'] = _pick(
+        steps.k_idx[steps.solved], sensors.codes[:, k].astype(np.float64), sensors.before[k]
+    )
+    d_idx = steps.d_idx[steps.solved]
+    a = core.config.alarm
+    if a.constituents:
+        now = _pick(d_idx, window.depth[0] * 1e-9, core.depth_s)
+        values['time_to_uplift'] = tide_table.uplift_times(
+            a.constituents,
+            a.tide_table_epoch,
+            a.tide_forecast_horizon,
+            now,
+            values['tide_margin'],
+            values['uplift_force'],
+        )
+    else:
+        rate = _pick(d_idx, tide.rates, core.trend.rate)
+        excess = _pick(d_idx, tide.excess, core.trend.excess)
+        values['time_to_uplift'] = tide_trend.uplift_times(
+            values['tide_margin'], values['uplift_force'], rate, excess
+        )
+    _add_derived(core, line.config, values)
+    return values, status, used
+
+
+def _add_derived(core: MonitorCore, lc: LineConfig, values: dict[str, np.ndarray]) -> None:
+    """The bounds and the holding values from the nominal values, as the core adds them
+    (all NaN, without their passes, for a line with neither accuracies nor holding data)."""
+    n = len(values['top_tension'])
+    if core.config.alarm.depth_accuracy > 0.0 or lc.tension_accuracy is not None:
+        values.update(bound_values([lc], core.config.alarm.depth_accuracy, values))
+    else:
+        values.update({key: np.full(n, np.nan) for key in uncertainty.FIELDS})
+    if lc.chain_length is not None or lc.anchor_holding is not None:
+        values.update(holding_values([lc], values))
+    else:
+        empty = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS
+        values.update({key: np.full(n, np.nan) for key in empty})
+
+
+def _solve_at(
+    core: MonitorCore, line: LineState, steps: _Steps, tv: np.ndarray, window: Window
+) -> tuple[dict[str, np.ndarray], np.ndarray, Optional[np.ndarray]]:
+    """Values, status and elastic flags at the line's solved steps (the solver's part)."""
+    lc = line.config
+    where = np.flatnonzero(steps.solved)
+    tension = _pick(steps.t_idx[where], tv, line.tension)
+    d_idx = steps.d_idx[where]
+    dv = window.depth[1]
+    h = _pick(d_idx, dv + lc.hook_height, core.depth + lc.hook_height)  # NaN: no depth yet
+    used: Optional[np.ndarray] = None
+    if lc.ea is not None:
+        values, status, used = _solve_updates_elastic(lc, tension, h)
+    elif fused_kernel.AVAILABLE:  # solve_updates' kernel path, which needs no critical parameter
+        values, status = _solve_updates_kernel(lc, tension, h, keep=True)
+    else:
+        a_depth = critical_parameters(lc, dv + lc.hook_height)
+        a_before = critical_parameters(lc, np.array([core.depth + lc.hook_height]))[0]
+        values, status = solve_updates(lc, tension, h, _pick(d_idx, a_depth, a_before))
+    _mark_implausible(values, status, used, reading_status_array(tension, h, lc.mbl))
+    return values, status, used
+
+
+def _mark_implausible(
+    values: dict[str, np.ndarray], status: np.ndarray, used: Optional[np.ndarray], code: np.ndarray
+) -> None:
+    """Implausible readings (core.plausible), as the core marks them: their status, no solved
+    values (the measured tension and depth kept), the inextensible model named."""
+    hit = code != 0
+    if not hit.any():
+        return
+    status[hit] = code[hit]
+    for key, column in values.items():
+        if key not in ('depth', 'top_tension', 'sensor_state'):
+            column[hit] = np.nan
+    if used is not None:
+        used[hit] = False
+
+
+def _line_inputs(
+    core: MonitorCore,
+    line: LineState,
+    steps: _Steps,
+    tide: _Tide,
+    values: dict[str, np.ndarray],
+    status: np.ndarray,
+    window: Window,
+    tt: np.ndarray,
+    dock: Optional[_Dock] = None,
+    k: int = 0,
+    sensors: Optional[_Sensors] = None,
+) -> dict[str, Any]:
+    """The alarm inputs at every step of the line (newest solve, stamps, tide decision, the
+    newest tick's dock estimate and sensor state)."""
+    s = steps.s_idx
+    before = dict(zip(VALUE_FIELDS, line.values))
+    inputs: dict[str, Any] = {
+        k: _pick(s, values[k], before[k])
+        for k in (
+            'uplift_force',
+            'anchor_margin',
+            'tide_margin',
+            'load_margin',
+            'safety_factor',
+            'time_to_uplift',
+            'uplift_force_upper',
+            'drag_margin',
+            'holding_capacity',
+        )
+    }
+    inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
+        np.int64
+    )
+    inputs['tide_rate'] = _pick(steps.d_idx, tide.rates, core.trend.rate)
+    inputs['tide_forecast'] = 1.0 if core.config.alarm.constituents else 0.0
+    inputs['tension_stamp'] = _pick(steps.t_idx, tt * 1e-9, line.tension_s)
+    inputs['depth_stamp'] = _pick(steps.d_idx, window.depth[0] * 1e-9, core.depth_s)
+    inputs['depth_stale'] = _pick(
+        steps.dk_idx, tide.stale.astype(np.float64), float(core.depth_stale)
+    ).astype(bool)
+    if sensors is not None:
+        codes = sensors.codes[:, k].astype(np.float64)
+        inputs['sensor_state'] = _pick(steps.k_idx, codes, sensors.before[k])
+        inputs['sensor_tension'] = _pick(steps.t_idx, window.tensions[k][1], line.tension)
+        inputs['mbl'] = line.config.mbl
+    if dock is not None:
+        before_dock = dock.before[2][k]
+        columns = dock.decision.line_inputs
+        for j, key in enumerate(dock_live.LINE_INPUTS):
+            col = columns[:, k, j] if columns is not None else np.zeros(0)
+            inputs[key] = _pick(steps.k_idx, col, before_dock[j])
+    return inputs
+
+
+def _advance_line(
+    core: MonitorCore,
+    k: int,
+    window: Window,
+    tide: _Tide,
+    sensors: _Sensors,
+    dock: Optional[_Dock] = None,
+) -> tuple[LineResult, LevelSeries, _Steps, alarm_ack.AckSeries]:
+    """One line through the window; leaves the line's state in the core as after the steps
+    (the core's depth and tide still as before the window)."""
+    line = core.lines[k]
+    tt, tv = window.tensions[k]
+    steps = _line_steps(line, tt, window)
+    values, status, used = _solve_line(core, line, steps, tv, window, tide, sensors, k)
+    inputs = _line_inputs(core, line, steps, tide, values, status, window, tt, dock, k, sensors)
+    series = replay_levels(
+        steps.times * 1e-9, inputs, line.alarm, STATUS_MESSAGES, initial=line.state
+    )
+    acks = alarm_ack.replay_acks(line.ack, steps.times * 1e-9, series.levels, series.suppressed)
+    line.ack = acks.final
+    where = np.flatnonzero(steps.solved)
+    result = LineResult(
+        line.config.name,
+        steps.times[where],
+        steps.kinds[where],
+        values,
+        status,
+        series.levels[where],
+        steps.times,
+        steps.kinds,
+        series.levels,
+        series.transitions,
+        used,
+    )
+    _write_back(line, series, values, status, used, tt, tv)
+    return result, series, steps, acks
+
+
+def _write_back(
+    line: LineState,
+    series: LevelSeries,
+    values: dict[str, np.ndarray],
+    status: np.ndarray,
+    used: Optional[np.ndarray],
+    tt: np.ndarray,
+    tv: np.ndarray,
+) -> None:
+    """The line's state after its last step in the window."""
+    line.state = series.final_state()
+    if len(tt):
+        line.tension, line.tension_s = float(tv[-1]), float(tt[-1] * 1e-9)
+    if len(status):
+        line.values = tuple(float(values[key][-1]) for key in VALUE_FIELDS)
+        line.status = int(status[-1])
+        line.status_message = '' if line.status == NO_DEPTH else STATUS_MESSAGES[line.status]
+        code = 0 if line.status == NO_DEPTH else (2 if used is not None and used[-1] else 1)
+        line.model = MODEL_NAMES[code]
+
+
+def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) -> WindowResult:
+    """Step ``core`` through every event of ``window`` in vectorized code.
+
+    Leaves ``core`` as ``core.step`` would, event by event (depth, tensions, tick at equal
+    times), and returns what the steps did; ``snapshots=True`` also builds every diagnostic
+    snapshot the core would have made (ticks and level changes); ``snapshots=COLUMNS``, the
+    same as one :class:`SnapshotColumns` (or Snapshots where it falls back).
+    """
+    if len(window.tensions) != len(core.lines):
+        raise ValueError(
+            f'window has {len(window.tensions)} tension columns for ' f'{len(core.lines)} lines'
+        )
+    depth_before = (core.depth, core.depth_s, core.depth_stale, core.trend.rate)
+    tide_before = core.tide
+    lines_before = [
+        _Before(
+            line.state.level,
+            line.state.message,
+            line.values,
+            line.status,
+            line.model,
+            line.tension_s,
+            [latch.active for latch in line.state.latches],
+            (
+                line_dock_values(line.state.latches[_INCONSISTENT].active, line.dock)
+                if core.dock_model is not None
+                else ()
+            ),
+            _line_word(core, line, line.sensor_code, line.state.latches[_INCONSISTENT].active),
+        )
+        for line in core.lines
+    ]
+    depth_word = depth_state_word(core.depth_s, core.depth_code)
+    sensors = _decide_sensors_window(core, window)
+    tide, tide_transitions = _decide_tide(core, window, sensors)
+    blind = _decide_blind(core, window, tide)
+    dock = _decide_dock_window(core, window, tide)
+    results, series, steps, acks = [], [], [], []
+    for k in range(len(core.lines)):
+        r, s, st, a = _advance_line(core, k, window, tide, sensors, dock)
+        results.append(r)
+        series.append(s)
+        steps.append(st)
+        acks.append(a)
+    times = [c[0] for c in (*window.tensions, window.depth, (window.ticks, None)) if len(c[0])]
+    start = int(min(t[0] for t in times)) if times else core.last_ns
+    end = int(max(t[-1] for t in times)) if times else core.last_ns
+    snaps: list[Snapshot | SnapshotColumns] = []
+    if snapshots:
+        build = _snapshot_columns if snapshots == COLUMNS else _snapshots
+        made = build(
+            _Made(
+                core, window, tide, results, series, steps, depth_before, tide_before,
+                lines_before, acks, dock, sensors, depth_word, blind,
+            )  # fmt: skip
+        )
+        snaps = [made] if isinstance(made, SnapshotColumns) else list(made)
+    _write_tide(core, window, tide, tide_transitions)
+    core.last_ns = max(core.last_ns, end)
+    others = [Change('sensors', tr) for tr in blind.transitions]
+    others += [] if dock is None else [Change('dock', tr) for tr in dock.transitions]
+    return WindowResult(results, tide_transitions, snaps, start, end, others)
+
+
+# --- snapshots -----------------------------------------------------------------------------------
+
+
+class _Before(NamedTuple):
+    """A line as the core held it before the window (for snapshots before its first step)."""
+
+    level: Level
+    message: str
+    values: tuple[float, ...]
+    status: int
+    model: str
+    tension_s: float
+    latches: list[bool]
+    extra: tuple[tuple[str, str], ...] = ()  # the dock model's line values
+    sensor_word: str = 'ok'  # the /diagnostics sensor_state
+
+
+def _line_word(core: MonitorCore, line: LineState, code: int, latched: bool) -> str:
+    """A line's ``sensor_state`` word (its own state, else the dock model's)."""
+    if core.dock_model is None:
+        return sensor_state.line_word(code)
+    return sensor_state.line_word(code, dock_live.sensor_state(latched, line.dock[0]))
+
+
+def _changed(levels: np.ndarray, before: Level) -> np.ndarray:
+    """Indexes where the level differs from the one before (the first against ``before``)."""
+    return np.flatnonzero(np.diff(levels, prepend=np.int8(before)))
+
+
+def _snapshot_stamps(
+    window: Window,
+    tide: _Tide,
+    results: list[LineResult],
+    tide_before: tuple[Level, str],
+    lines_before: list[_Before],
+    blind: Optional[_Blind] = None,
+) -> np.ndarray:
+    """The stamps of the window's snapshots: its ticks and every level change [ns]."""
+    parts = [window.ticks, tide.times[_changed(tide.level, tide_before[0])]]
+    if blind is not None:
+        parts.append(tide.times[_changed(blind.levels, blind.before[0][0])])
+    parts += [r.step_ns[_changed(r.step_level, b.level)] for r, b in zip(results, lines_before)]
+    return np.unique(np.concatenate(parts))
+
+
+def _tide_statuses(
+    core: MonitorCore,
+    window: Window,
+    tide: _Tide,
+    stamps: np.ndarray,
+    depth_before: tuple[float, float, bool, float],
+    tide_before: tuple[Level, str],
+    depth_word: str,
+) -> list[ComponentStatus]:
+    """The tide status at each of ``stamps`` [ns]."""
+    dd, dv = window.depth
+    tide_at = np.searchsorted(tide.times, stamps, 'right') - 1
+    depth_at = np.searchsorted(dd, stamps, 'right') - 1
+    out = []
+    for n, stamp in enumerate(stamps.tolist()):
+        i, j = int(tide_at[n]), int(depth_at[n])
+        depth = float(dv[j]) if j >= 0 else depth_before[0]
+        depth_s = float(dd[j] * 1e-9) if j >= 0 else depth_before[1]
+        rate = float(tide.rates[j]) if j >= 0 else depth_before[3]
+        state = tide_before if i < 0 else _tide_at(core, tide, i)
+        word = depth_word if i < 0 else depth_state_word(depth_s, int(tide.sensor[i]))
+        age = stamp * 1e-9 - depth_s
+        forecast = forecast_word(core.config, rate)
+        out.append(tide_component(state, core.depth_id, depth, age, rate, word, forecast))
+    return out
+
+
+class _Made(NamedTuple):
+    """What a window's recompute made, from which its snapshots are built."""
+
+    core: MonitorCore
+    window: Window
+    tide: _Tide
+    results: list[LineResult]
+    series: list[LevelSeries]
+    steps: list[_Steps]
+    depth_before: tuple[float, float, bool, float]
+    tide_before: tuple[Level, str]
+    lines_before: list[_Before]
+    acks: list[alarm_ack.AckSeries]
+    dock: Optional[_Dock] = None
+    sensors: Optional[_Sensors] = None
+    depth_word: str = 'ok'
+    blind: Optional[_Blind] = None
+
+    def stamps(self) -> np.ndarray:
+        """The stamps of the window's snapshots (:func:`_snapshot_stamps`)."""
+        return _snapshot_stamps(
+            self.window, self.tide, self.results, self.tide_before, self.lines_before, self.blind
+        )
+
+    def blind_statuses(self, stamps: np.ndarray) -> list[ComponentStatus]:
+        """The sensors alarm's status at each of ``stamps`` [ns]."""
+        blind = self.blind
+        assert blind is not None
+        at = np.searchsorted(self.tide.times, stamps, 'right') - 1
+        out = []
+        for i in at.tolist():
+            if i < 0:
+                state, waiting = blind.before
+            else:
+                state = _blind_at(self.core, self.tide, blind, i)
+                waiting = int(blind.waiting[i].sum())
+            out.append(sensors_component(state, blind.acks.at(i), waiting))
+        return out
+
+    def line_parts(self, k: int) -> tuple[
+        LineState, LineResult, LevelSeries, _Steps, np.ndarray, _Before,
+        alarm_ack.AckSeries, Optional[_Dock], Optional[_Sensors],
+    ]:  # fmt: skip
+        """Line ``k``'s state, result, levels, steps, tension times, state before the window,
+        acknowledgements, and the window's dock and sensor states."""
+        return (
+            self.core.lines[k], self.results[k], self.series[k], self.steps[k],
+            self.window.tensions[k][0], self.lines_before[k], self.acks[k], self.dock,
+            self.sensors,
+        )  # fmt: skip
+
+
+def _snapshots(m: _Made) -> list[Snapshot]:
+    """Every snapshot the core made in the window (ticks and level changes), built from the
+    vectorized results."""
+    core, window, tide, dock = m.core, m.window, m.tide, m.dock
+    stamps = m.stamps()
+    tides = _tide_statuses(core, window, tide, stamps, m.depth_before, m.tide_before, m.depth_word)
+    blinds = m.blind_statuses(stamps)
+    columns = [_line_statuses(m, k, stamps) for k in range(len(m.results))]
+    tick_at = np.searchsorted(window.ticks, stamps, 'right') - 1
+    logger = ComponentStatus(
+        'catenary_monitor: logger', core.logger[0], core.logger[1], core.logger_id, ()
+    )
+    out = []
+    for n, stamp in enumerate(stamps.tolist()):
+        statuses = [col[n] for col in columns]
+        statuses.append(tides[n])
+        statuses.append(blinds[n])
+        statuses.append(logger)
+        if dock is not None:
+            statuses.append(_dock_status(core, dock, int(tick_at[n])))
+        statuses += core.guard_components(stamp * 1e-9)
+        out.append(Snapshot(stamp, tuple(statuses)))
+    return out
+
+
+def _dock_status(core: MonitorCore, dock: _Dock, i: int) -> ComponentStatus:
+    """The dock status as after tick ``i`` of the window (-1: as before the window)."""
+    if i < 0:
+        return dock_component(dock.before[0], dock.before[1])
+    assert core.dock_model is not None
+    level = Level(int(dock.levels[i]))
+    message = dock_live.dock_message(core.dock_model, dock.decision, i)
+    return dock_component((level, message), dock_live.dock_values(dock.decision, i))
+
+
+def _line_statuses(m: _Made, k: int, stamps: np.ndarray) -> list[ComponentStatus]:
+    """The line's status in each snapshot (as after its newest step at or before the stamp)."""
+    line, r, series, steps, tt, before, acks, dock, sensors = m.line_parts(k)
+    at = np.searchsorted(steps.times, stamps, 'right') - 1
+    models = r.model_codes  # once per window, not once per snapshot
+    inconsistent = series.active('inconsistent') if dock is not None else None
+    out = []
+    for n, i in enumerate(at.tolist()):
+        level, message = before.level, before.message
+        values, status, model, ts = before.values, before.status, before.model, before.tension_s
+        latches = before.latches
+        extra, word = before.extra, before.sensor_word
+        code = sensor_state.OK
+        if i >= 0 and sensors is not None:
+            j = int(steps.k_idx[i])
+            code = sensors.before[k] if j < 0 else int(sensors.codes[j, k])
+            word = sensor_state.line_word(code)
+        if i >= 0 and dock is not None:
+            j = int(steps.k_idx[i])
+            inputs = dock.before[2][k] if j < 0 else tuple(dock.decision.line_inputs[j, k])
+            assert inconsistent is not None
+            latched = bool(inconsistent[i])
+            extra = line_dock_values(latched, inputs)
+            word = sensor_state.line_word(code, dock_live.sensor_state(latched, inputs[0]))
+        if i >= 0:
+            level, message = Level(int(series.levels[i])), series.message_at(i)
+            latches = series.active_at(i)
+            s, t = int(steps.s_idx[i]), int(steps.t_idx[i])
+            if s >= 0:
+                values = tuple(float(r.values[key][s]) for key in VALUE_FIELDS)
+                status, model = int(r.status[s]), MODEL_NAMES[int(models[s])]
+            if t >= 0:
+                ts = float(tt[t] * 1e-9)
+        out.append(
+            line_status(
+                line.config,
+                line.hardware_id,
+                level,
+                message,
+                values,
+                status,
+                model,
+                stamps[n] * 1e-9 - ts,
+                word,
+                tuple(alarm_ack.diagnostic_values(acks.at(i), level, latches)) + extra,
+            )
+        )
+    return out
+
+
+# --- snapshots in columns (replay's --out: encoded without a ComponentStatus per status) -------
+
+#: ``advance(..., snapshots=COLUMNS)``: the snapshots as :class:`SnapshotColumns`.
+COLUMNS = 'columns'
+
+#: A column of a :class:`StatusColumns`: a str (the same in every status) or one per status.
+Field = str | list[str]
+
+
+class StatusColumns(NamedTuple):
+    """``n`` DiagnosticStatus of one shape (the same keys), in columns: ``levels`` (n,) and
+    ``name``, ``message``, ``hardware_id`` and each key's value as :data:`Field` s."""
+
+    levels: np.ndarray
+    name: Field
+    message: Field
+    hardware_id: Field
+    keys: tuple[str, ...]
+    values: tuple[Field, ...]
+
+
+class SnapshotColumns(NamedTuple):
+    """The snapshots of a window at ``stamps`` (ns), in columns: ``groups`` of (statuses,
+    ``m``): a :class:`StatusColumns` or a list of ComponentStatus, ``m * len(stamps)`` of them,
+    snapshot ``n``'s being numbers ``k * len(stamps) + n`` for ``k < m``, groups in order.
+    They are the same snapshots as :class:`Snapshot` s (``test/test_batch.py`` compares)."""
+
+    stamps: np.ndarray
+    groups: tuple[tuple[StatusColumns | list[ComponentStatus], int], ...]
+
+    def snapshots(self) -> list[Snapshot]:
+        """The same as :class:`Snapshot` s."""
+        n = len(self.stamps)
+        rows: list[list[ComponentStatus]] = []
+        for group, m in self.groups:
+            if isinstance(group, StatusColumns):
+                rows.append(_column_statuses(group, m * n))
+            else:
+                rows.append(group)
+        out = []
+        for i, stamp in enumerate(self.stamps.tolist()):
+            statuses = [row[k * n + i] for row, (_, m) in zip(rows, self.groups) for k in range(m)]
+            out.append(Snapshot(stamp, tuple(statuses)))
+        return out
+
+
+def _column_statuses(c: StatusColumns, n: int) -> list[ComponentStatus]:
+    def get(f: Field, i: int) -> str:
+        return f if isinstance(f, str) else f[i]
+
+    return [
+        ComponentStatus(
+            get(c.name, i),
+            Level(int(c.levels[i])),
+            get(c.message, i),
+            get(c.hardware_id, i),
+            tuple((k, get(v, i)) for k, v in zip(c.keys, c.values)),
+        )
+        for i in range(n)
+    ]
+
+
+def _reprs(values: np.ndarray) -> Field:
+    """``repr(float(x))`` of each element (each distinct value's once: the bits compared, so
+    that -0.0 and 0.0 stay apart), or the one str where all are the same."""
+    bits = np.ascontiguousarray(values, np.float64).view(np.int64)
+    if not len(bits):
+        return []
+    unique, inverse = np.unique(bits, return_inverse=True)
+    texts = list(map(repr, unique.view(np.float64).tolist()))
+    if len(texts) == 1:
+        return texts[0]
+    return [texts[i] for i in inverse.tolist()]
+
+
+def _same(texts: list[str]) -> Field:
+    """The one str where every element is it, else ``texts``."""
+    return texts[0] if texts and texts.count(texts[0]) == len(texts) else texts
+
+
+def _take(column: np.ndarray, idx: np.ndarray, before: Any, dtype: Any = np.float64) -> np.ndarray:
+    """``column[idx]`` where ``idx >= 0``, else ``before``."""
+    out = np.full(len(idx), before, dtype)
+    ok = idx >= 0
+    if ok.any():
+        out[ok] = column[idx[ok]]
+    return out
+
+
+def _at(index: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """``index[at]`` where ``at >= 0``, else -1."""
+    return _take(index, at, -1, np.int64)
+
+
+def _level_columns(
+    series: LevelSeries, before: _Before, at: np.ndarray
+) -> tuple[np.ndarray, list[str], list[str]]:
+    """Level, message and the alarm's condition per stamp (after step ``at``, else as before
+    the window)."""
+    levels = _take(series.levels, at, int(before.level), np.int64)
+    messages, conditions = [], []
+    for i, level in zip(at.tolist(), levels.tolist()):
+        if i < 0:
+            messages.append(before.message)
+            conditions.append(alarm_ack.condition(before.level, before.latches))
+        elif level == Level.OK:
+            messages.append('OK')
+            conditions.append('none')
+        else:
+            messages.append(series.message_at(i))
+            conditions.append(alarm_ack.condition(Level(level), series.active_at(i)))
+    return levels, messages, conditions
+
+
+def _word_columns(
+    m: _Made, k: int, at: np.ndarray, j_tick: np.ndarray
+) -> tuple[list[str], tuple[str, ...], list[list[str]]]:
+    """The sensor state word per stamp, and the dock model's keys and values per stamp."""
+    _, _, series, _, _, before, _, dock, sensors = m.line_parts(k)
+    n = len(at)
+    words = [before.sensor_word] * n
+    extra: list[list[str]] = [[v for _, v in before.extra] for _ in range(n)]
+    extra_keys = tuple(key for key, _ in before.extra)
+    codes = [sensor_state.OK] * n
+    at_list, j_list = at.tolist(), j_tick.tolist()
+    if sensors is not None:
+        for n_, (i, j) in enumerate(zip(at_list, j_list)):
+            if i >= 0:
+                codes[n_] = sensors.before[k] if j < 0 else int(sensors.codes[j, k])
+                words[n_] = sensor_state.line_word(codes[n_])
+    if dock is not None:
+        inconsistent = series.active('inconsistent')
+        inputs = dock.decision.line_inputs
+        for n_, (i, j) in enumerate(zip(at_list, j_list)):
+            if i >= 0:
+                dock_in = dock.before[2][k] if j < 0 else tuple(inputs[j, k])
+                latched = bool(inconsistent[i])
+                pairs = line_dock_values(latched, dock_in)
+                extra_keys = tuple(key for key, _ in pairs)
+                extra[n_] = [v for _, v in pairs]
+                words[n_] = sensor_state.line_word(
+                    codes[n_], dock_live.sensor_state(latched, dock_in[0])
+                )
+    return words, extra_keys, extra
+
+
+def _ack_columns(
+    acks: alarm_ack.AckSeries, before: _Before, at: np.ndarray, conditions: list[str]
+) -> tuple[tuple[str, ...], list[Field]]:
+    """The alarm's acknowledgement keys and columns (the same for every step between two
+    changes)."""
+    j_ack = np.searchsorted(acks.changes, at, 'right') - 1
+    j_ack[at < 0] = -1
+    ack_cache: dict[int, list[tuple[str, str]]] = {}
+    ack_rows = []
+    for j in j_ack.tolist():
+        row = ack_cache.get(j)
+        if row is None:
+            state = acks.before if j < 0 else acks.states[j]
+            row = ack_cache[j] = alarm_ack.diagnostic_values(state, Level.OK, before.latches)
+        ack_rows.append(row)
+    ack_keys = tuple(key for key, _ in ack_rows[0]) if len(at) else ()
+    ack_columns: list[Field] = []
+    for a, key in enumerate(ack_keys):
+        if key == 'alarm_condition':
+            ack_columns.append(conditions)
+        else:
+            ack_columns.append([row[a][1] for row in ack_rows])
+    return ack_keys, ack_columns
+
+
+def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
+    """:func:`_line_statuses` in columns (the same strings, built per key, not per status)."""
+    line, r, series, steps, tt, before, acks, _, _ = m.line_parts(k)
+    at = np.searchsorted(steps.times, stamps, 'right') - 1
+    levels, messages, conditions = _level_columns(series, before, at)
+    # The newest solve's values, status and model.
+    s = _at(steps.s_idx, at)
+    values = {
+        key: _take(r.values[key], s, float(before.values[j])) for j, key in enumerate(VALUE_FIELDS)
+    }
+    status = _take(r.status, s, int(before.status), np.int64)
+    names = [*MODEL_NAMES, before.model]  # -1: the model before the window
+    models = [names[c] for c in _take(r.model_codes, s, -1, np.int64).tolist()]
+    t = _at(steps.t_idx, at)
+    ts = _take(tt * 1e-9, t, float(before.tension_s))
+    age = stamps * 1e-9 - ts
+    words, extra_keys, extra = _word_columns(m, k, at, _at(steps.k_idx, at))
+    ack_keys, ack_columns = _ack_columns(acks, before, at, conditions)
+    # The keys and values, in line_status's order.
+    config = line.config
+    reprs = {key: _reprs(values[key]) for key in DIAGNOSTIC_KEYS if key in values}
+    columns: list[Field] = [reprs.get(key, 'nan') for key in DIAGNOSTIC_KEYS]
+    columns += [
+        reprs['top_tension'] if 'top_tension' in reprs else _reprs(values[VALUE_FIELDS[0]]),
+        _reprs(age),
+        repr(config.anchor_distance),
+        repr(config.allowed_uplift),
+        _reprs(values[VALUE_FIELDS[9]]),
+        _same(list(map(str, status.tolist()))),
+        _same(models),
+        _same(words),
+    ]
+    columns += [f if isinstance(f, str) else _same(f) for f in ack_columns]
+    columns += [_same([row[e] for row in extra]) for e in range(len(extra_keys))]
+    keys = (
+        *DIAGNOSTIC_KEYS,
+        'measured_tension',
+        'tension_age',
+        'anchor_distance',
+        'allowed_uplift',
+        'anchor_angle_deg',
+        'solver_status',
+        'model',
+        'sensor_state',
+        *ack_keys,
+        *extra_keys,
+    )
+    return StatusColumns(
+        levels,
+        f'{NODE_NAME}: {config.name}',
+        _same(messages),
+        line.hardware_id,
+        keys,
+        tuple(columns),
+    )
+
+
+def _stack(columns: list[StatusColumns], n: int) -> StatusColumns:
+    """Statuses of one shape, one after the other (constants kept where all agree)."""
+
+    def cat(fields: list[Field]) -> Field:
+        if all(isinstance(f, str) for f in fields) and len(set(fields)) == 1:
+            return fields[0]
+        out: list[str] = []
+        for f in fields:
+            out += [f] * n if isinstance(f, str) else f
+        return out
+
+    return StatusColumns(
+        np.concatenate([c.levels for c in columns]),
+        cat([c.name for c in columns]),
+        cat([c.message for c in columns]),
+        cat([c.hardware_id for c in columns]),
+        columns[0].keys,
+        tuple(cat([c.values[j] for c in columns]) for j in range(len(columns[0].keys))),
+    )
+
+
+def _snapshot_columns(m: _Made) -> SnapshotColumns | list[Snapshot]:
+    """The snapshots of :func:`_snapshots` in columns (its Snapshot s where the statuses
+    after the dock do not have one shape)."""
+    core, window, tide, dock = m.core, m.window, m.tide, m.dock
+    stamps = m.stamps()
+    n = len(stamps)
+    guards = [core.guard_components(stamp * 1e-9) for stamp in stamps.tolist()]
+    shapes = {tuple((g.name, len(g.values)) for g in row) for row in guards}
+    if len(shapes) > 1:
+        return _snapshots(m)
+    lines = [_line_columns(m, k, stamps) for k in range(len(m.results))]
+    groups: list[tuple[StatusColumns | list[ComponentStatus], int]] = []
+    if lines and len({c.keys for c in lines}) == 1:
+        groups.append((_stack(lines, n), len(lines)))
+    else:
+        groups += [(c, 1) for c in lines]
+    tick_at = np.searchsorted(window.ticks, stamps, 'right') - 1
+    tides = _tide_statuses(core, window, tide, stamps, m.depth_before, m.tide_before, m.depth_word)
+    groups.append((tides, 1))
+    groups.append((m.blind_statuses(stamps), 1))
+    logger = ComponentStatus(
+        'catenary_monitor: logger', core.logger[0], core.logger[1], core.logger_id, ()
+    )
+    groups.append(([logger] * n, 1))
+    if dock is not None:
+        groups.append(([_dock_status(core, dock, int(i)) for i in tick_at.tolist()], 1))
+    width = len(guards[0]) if guards else 0
+    if width:
+        groups.append(([row[g] for g in range(width) for row in guards], width))
+    return SnapshotColumns(stamps, tuple(groups))
+
+
+def worst(result: LineResult) -> dict[str, Optional[dict[str, float]]]:
+    """Worst value and its time (s) of each margin and force of a line over the log.
+
+    Minimum of ``anchor_margin``, ``tide_margin``, ``load_margin``, ``safety_factor``; maximum of
+    ``uplift_force`` and ``top_tension``. None when the quantity never had a value.
+    """
+    out: dict[str, Optional[dict[str, float]]] = {}
+    for key, best in (
+        ('anchor_margin', np.fmin),
+        ('tide_margin', np.fmin),
+        ('load_margin', np.fmin),
+        ('safety_factor', np.fmin),
+        ('uplift_force', np.fmax),
+        ('top_tension', np.fmax),
+    ):
+        v = result.values[key]
+        value = best.reduce(v) if len(v) else math.nan  # NaN only where every value is NaN
+        if value != value:
+            out[key] = None
+            continue
+        i = int(np.argmax(v == value))  # the first, as np.nanargmin (no NaN-free copy)
+        out[key] = {'value': float(v[i]), 'time': float(result.t_ns[i] * 1e-9)}
+    return out
+
+
+# --- a whole log ---------------------------------------------------------------------------------
+
+
+def slice_window(window: Window, lo: Optional[int], hi: Optional[int]) -> Window:
+    """The events of ``window`` with ``lo <= t < hi`` (None: unbounded)."""
+
+    def cut(times: np.ndarray) -> slice:
+        a = 0 if lo is None else int(np.searchsorted(times, lo, 'left'))
+        b = len(times) if hi is None else int(np.searchsorted(times, hi, 'left'))
+        return slice(a, b)
+
+    tensions = [(t[cut(t)], v[cut(t)]) for t, v in window.tensions]
+    dt, dv = window.depth
+    return Window(tensions, (dt[cut(dt)], dv[cut(dt)]), window.ticks[cut(window.ticks)])
+
+
+def concat_lines(parts: list[LineResult]) -> LineResult:
+    """One line's results of consecutive windows as one."""
+    if len(parts) == 1:
+        return parts[0]
+    cat_ = np.concatenate
+    flags = [p.elastic for p in parts]
+    used = (
+        None
+        if all(f is None for f in flags)
+        else cat_([np.zeros(len(p.t_ns), bool) if f is None else f for p, f in zip(parts, flags)])
+    )
+    return LineResult(
+        parts[0].name,
+        cat_([p.t_ns for p in parts]),
+        cat_([p.kind for p in parts]),
+        {k: cat_([p.values[k] for p in parts]) for k in VALUE_FIELDS},
+        cat_([p.status for p in parts]),
+        cat_([p.level for p in parts]),
+        cat_([p.step_ns for p in parts]),
+        cat_([p.step_kind for p in parts]),
+        cat_([p.step_level for p in parts]),
+        [tr for p in parts for tr in p.transitions],
+        used,
+    )
+
+
+def run_log(
+    core: MonitorCore, window: Window, events: Any = (), snapshots: bool | str = False
+) -> tuple[WindowResult, MonitorCore]:
+    """Advance ``core`` over a whole log; return the results and the core at the end.
+
+    ``window`` holds the input columns and the ticks; ``events`` the other records in time
+    order: logger changes and reconfigurations, stepped by the core itself between vectorized
+    stretches (inputs before an event's stamp go first), and :class:`Start` (the monitor
+    restarted: a new core, blind again, from then on). ``snapshots=COLUMNS``: the snapshots
+    are the pieces' in order, then the events' (not merged in time: see
+    :class:`SnapshotColumns`).
+    """
+    pieces: list[WindowResult] = []
+    extra: list[Snapshot | SnapshotColumns] = []
+    others: list[Change] = []
+    lo: Optional[int] = None
+    for event in [*events, None]:
+        hi = None if event is None else event.stamp_ns
+        pieces.append(advance(core, slice_window(window, lo, hi), snapshots))
+        if isinstance(event, Start):
+            core = MonitorCore(
+                core.config, event.stamp_ns, _ids(core), core.depth_id, core.logger_id
+            )
+        elif event is not None:
+            step = core.step(event)
+            others += list(step.transitions)
+            if snapshots and step.snapshot is not None:
+                extra.append(step.snapshot)
+        lo = hi
+    lines = [concat_lines([p.lines[k] for p in pieces]) for k in range(len(core.lines))]
+    tide = [tr for p in pieces for tr in p.tide]
+    others = sorted(
+        others + [c for p in pieces for c in p.others], key=lambda c: c.transition.time
+    )
+    snaps = [s for p in pieces for s in p.snapshots] + extra
+    if snapshots != COLUMNS:
+        snaps.sort(key=lambda s: s.stamp_ns)  # type: ignore[union-attr]
+    return (
+        WindowResult(
+            lines,
+            tide,
+            snaps,
+            min(p.start_ns for p in pieces),
+            max(p.end_ns for p in pieces),
+            others,
+        ),
+        core,
+    )
+
+
+def _ids(core: MonitorCore) -> dict[str, str]:
+    return {line.config.name: line.hardware_id for line in core.lines}
+
+
+@dataclass
+class ReplayResult(WindowResult):
+    """:func:`recompute` of a log: the :class:`WindowResult` and the ticks it used (ns),
+    taken from the log's events channel (``ticks_from_log``) or on a grid at
+    ``diagnostic_rate``."""
+
+    tick_ns: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    ticks_from_log: bool = False
+    started_ns: int = 0  # when the monitor started (blind)
+    events: list[Any] = field(default_factory=list)  # the other records it was given
+
+
+def recompute(
+    config: MonitorConfig,
+    tensions: dict[str, Column],
+    depth: Column,
+    tick_ns: Optional[np.ndarray] = None,
+    events: Any = (),
+    start_ns: Optional[int] = None,
+    snapshots: bool = False,
+) -> ReplayResult:
+    """Every step of a recorded log, as the monitor made them.
+
+    Parameters
+    ----------
+    config : the monitor configuration (lines, topics, alarm settings).
+    tensions : line name -> (receive time ns, tension N), sorted (a missing line: none).
+    depth : (receive time ns, tide depth m), sorted.
+    tick_ns : the ticks (ns), as the node recorded them; None: a grid at ``diagnostic_rate``
+        from ``start_ns`` to the last message.
+    events : the node's other records in time order (:class:`Start`, logger changes,
+        reconfigurations).
+    start_ns : when the monitor started (blind); default the first message.
+    snapshots : also build every diagnostic snapshot.
+    """
+    columns = [tensions.get(line.name, _EMPTY) for line in config.lines]
+    stamps = [c[0] for c in (*columns, depth) if len(c[0])]
+    first = int(min(t[0] for t in stamps)) if stamps else 0
+    last = int(max(t[-1] for t in stamps)) if stamps else 0
+    start = first if start_ns is None else int(start_ns)
+    from_log = tick_ns is not None
+    if tick_ns is None:
+        tick_ns = (
+            tick_grid(start, last, config.alarm.diagnostic_rate)
+            if stamps
+            else np.zeros(0, np.int64)
+        )
+    ticks = np.sort(np.asarray(tick_ns, np.int64))
+    core = MonitorCore(config, start)
+    result, _ = run_log(core, Window(columns, depth, ticks), events, snapshots)
+    return ReplayResult(
+        result.lines,
+        result.tide,
+        result.snapshots,
+        min(start, result.start_ns),
+        result.end_ns,
+        result.others,
+        ticks,
+        from_log,
+        start,
+        list(events),
+    )

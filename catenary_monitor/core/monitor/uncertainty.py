@@ -1,0 +1,165 @@
+"""Margins with the sensors' accuracy: the worst case over the box of true readings.
+
+A tension reading is within ``+- tension_accuracy`` (N, per line) of the true hook tension and
+a depth reading within ``+- depth_accuracy`` (m) of the true depth: both are taken as bounds
+(the sensor's stated accuracy), not as standard deviations. Over the box ``[T - dT, T + dT] x
+[h - dh, h + dh]`` each bound is the worst value of the same solve the monitor makes:
+
+``uplift_force_upper`` (N), ``anchor_margin_lower`` (m), ``tide_margin_lower`` (m).
+
+Monotonicity (inextensible closed forms of :mod:`catenary_monitor.core.physics.catenary`, ``a = T/w
+- h`` for a grounded chain, ``t = acosh(1 + h/a)``, ``X = x/a``):
+
+* in ``T`` at fixed ``h``: ``x_min = a acosh(1 + h/a)`` grows with ``a`` (its derivative is
+  ``t - tanh(t/2) > 0``), so the anchor margin falls with ``T``; the tide margin
+  ``a (cosh X - 1) - h`` falls with ``a`` (derivative ``cosh X - 1 - X sinh X < 0``); the
+  uplift force grows with ``T`` (tested). Every bound is taken at ``T + dT``.
+* in ``h`` at fixed ``T`` none is monotone: ``dx_min/dh = coth t - t`` changes sign at ``t* =
+  1.19968`` (the root of ``t tanh t = 1``), so ``x_min`` peaks at ``h = k T / (w (1 + k))``,
+  ``k = cosh t* - 1``; ``d(tide margin)/dh = cosh X (X tanh X - 1)`` makes the tide margin lowest
+  at ``X = t*``, ``h = T/w - x/t*``; the uplift force rises with depth and then falls.
+  The solve is therefore evaluated at ``T + dT`` and the depths ``h - dh``, ``h``, ``h + dh``
+  and the two critical depths clipped to the interval: exact for the anchor and tide margins
+  of a grounded inextensible chain. The uplift force has no closed-form peak: where it is
+  concave over the interval, the vertex of the parabola through ``h - dh``, ``h``, ``h + dh``
+  (clipped) is solved too, which finds its peak to about 1e-7 relative (tested). For a lifted
+  tide margin and an elastic chain the bounds are the worst of these values (the tests check
+  that the bounds contain the solve at random readings within the accuracy).
+
+A corner whose readings are impossible (e.g. ``T + dT <= w (h + dh)``) is left out. The bounds
+are NaN while the nominal solve has none, and when neither accuracy is given.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from catenary_monitor.core.physics.solve import solve
+
+__all__ = ['FIELDS', 'T_STAR', 'depth_candidates', 'bounds']
+
+#: The bounds' names (per-line outputs, /diagnostics values, replay CSV), in output order.
+FIELDS = ('uplift_force_upper', 'anchor_margin_lower', 'tide_margin_lower')
+#: Root of ``t tanh t = 1``: where ``x_min`` (fixed T) and the tide margin turn in depth.
+T_STAR = 1.1996786402577338
+_K = math.cosh(T_STAR) - 1.0
+
+
+def depth_candidates(w: Any, x: Any, tension: Any, depth: Any, d_h: Any) -> np.ndarray:
+    """The five depths (m, shape ``(5, n)``) the bounds are evaluated at for hook tension
+    ``tension`` (N, already ``T + dT``): ``h - dh``, ``h``, ``h + dh`` and the two critical
+    depths (module docstring) clipped to ``[h - dh, h + dh]``."""
+    given = (w, x, tension, depth, d_h)
+    w, x, t, h, dh = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in given))
+    lo, hi = h - dh, h + dh
+    h_anchor = np.clip(_K * t / (w * (1.0 + _K)), lo, hi)
+    h_tide = np.clip(t / w - x / T_STAR, lo, hi)
+    return np.stack([lo, h, hi, h_anchor, h_tide])
+
+
+def bounds(
+    w: Any,
+    x: Any,
+    mbl: Any,
+    ea: Any,
+    tension: Any,
+    depth: Any,
+    d_t: Any,
+    d_h: Any,
+    nominal_uplift: Any,
+) -> dict[str, np.ndarray]:
+    """:data:`FIELDS` -> arrays for readings ``tension`` (N) and ``depth`` (m, hook height
+    added), per-element line constants (``ea`` inf: inextensible) and accuracies ``d_t`` (N,
+    NaN: not given) and ``d_h`` (m, 0: exact); ``nominal_uplift`` (N) is the nominal solve's
+    uplift force (NaN: no solve, no bounds)."""
+    given = (w, x, mbl, ea, tension, depth, d_t, d_h, nominal_uplift)
+    arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in given))
+    w, x, mbl, ea, t, h, dt, dh, f0 = (a.ravel() for a in arrays)
+    keep = (~np.isnan(dt) | (dh > 0.0)) & ~np.isnan(f0)
+    shape = arrays[0].shape
+    out = {key: np.full(len(t), np.nan) for key in FIELDS}
+    k = np.flatnonzero(keep)
+    if k.size:
+        upper, anchor, tide = _worst(w[k], x[k], mbl[k], ea[k], t[k], h[k], dt[k], dh[k])
+        out['uplift_force_upper'][k] = np.fmax(upper, f0[k])
+        out['anchor_margin_lower'][k] = anchor
+        out['tide_margin_lower'][k] = tide
+    return {key: v.reshape(shape) for key, v in out.items()}
+
+
+def _worst(
+    w: np.ndarray,
+    x: np.ndarray,
+    mbl: np.ndarray,
+    ea: np.ndarray,
+    t: np.ndarray,
+    h: np.ndarray,
+    dt: np.ndarray,
+    dh: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(largest uplift force, smallest anchor margin, smallest tide margin) over the five
+    candidate depths at ``T + dT`` (NaN where every candidate is impossible)."""
+    t_up = t + np.where(np.isnan(dt), 0.0, dt)
+    hs = depth_candidates(w, x, t_up, h, dh)
+    n = len(t)
+    rep = [np.broadcast_to(v, (5, n)).ravel() for v in (w, x, mbl, ea, t_up)]
+    with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
+        r = solve(
+            rep[0],
+            hs.ravel(),
+            tension=rep[4],
+            anchor_distance=rep[1],
+            mbl=rep[2],
+            ea=None if np.all(np.isinf(ea)) else rep[3],
+        )
+
+    def pick(key: str, big: bool) -> np.ndarray:
+        v = np.asarray(getattr(r, key), dtype=float).reshape(5, n)
+        v = np.where(np.isnan(v), -np.inf if big else np.inf, v)
+        best = v.max(axis=0) if big else v.min(axis=0)
+        return np.where(np.isinf(best), np.nan, best)
+
+    upper = _peak(pick('uplift_force', True), r, w, x, mbl, ea, t_up, h, dh)
+    return upper, pick('anchor_margin', False), pick('tide_margin', False)
+
+
+def _peak(
+    upper: np.ndarray,
+    r: Any,
+    w: np.ndarray,
+    x: np.ndarray,
+    mbl: np.ndarray,
+    ea: np.ndarray,
+    t_up: np.ndarray,
+    h: np.ndarray,
+    dh: np.ndarray,
+) -> np.ndarray:
+    """The uplift bound with its peak in depth refined: where the uplift force is concave over
+    ``h - dh``, ``h``, ``h + dh`` (a peak may lie inside: the force is unimodal in depth), also
+    the vertex of the parabola through the three, clipped (one more solve for those)."""
+    n = len(h)
+    v = np.asarray(r.uplift_force, dtype=float).reshape(5, n)[:3]
+    lo, mid, hi = v
+    with np.errstate(invalid='ignore', divide='ignore'):
+        curve = hi - 2.0 * mid + lo
+        inside = (np.fmax(lo, hi) > 0.0) & (curve < 0.0) & (dh > 0.0)
+    k = np.flatnonzero(inside)
+    if not k.size:
+        return upper
+    vertex = h[k] - dh[k] * (hi[k] - lo[k]) / (2.0 * curve[k])
+    vertex = np.clip(vertex, h[k] - dh[k], h[k] + dh[k])
+    with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
+        peak = solve(
+            w[k],
+            vertex,
+            tension=t_up[k],
+            anchor_distance=x[k],
+            mbl=mbl[k],
+            ea=None if np.all(np.isinf(ea[k])) else ea[k],
+        )
+    out = upper.copy()
+    out[k] = np.fmax(upper[k], np.asarray(peak.uplift_force, dtype=float))
+    return out

@@ -1,0 +1,567 @@
+"""The one replay driver: a log read once, the node's schedule rebuilt, the core advanced window
+by window (bounded memory). ``catenary-monitor replay``, the console's log view and the tests
+all call it: :func:`drive` for outputs written window by window, :func:`replay_log` for one
+:class:`ReplayResult` of the whole log.
+
+:func:`stream` walks the log (every file of a rotated set or directory, in time order, merged
+across topics) in windows of log time (:func:`catenary_monitor.io.mcap_read.iter_windows`),
+hands each window to :func:`catenary_monitor.core.monitor.twin.run_log` with the core that the
+previous window left (``advance`` leaves it exactly as stepping would), and gives each
+window's results to the caller, which writes them (summary tally, CSV rows, MCAP, plot
+envelopes). Every column of a window, ticks and events included, is cut at the same time
+boundary (``t < hi`` in the window, ``t >= hi`` after it), so events at equal stamps stay
+together in their window in the core's order (depth, tensions, tick) and a recorded event
+still splits the inputs at its stamp. The results equal one window over the whole log (the
+tests replay with tiny windows and compare).
+
+Two facts are only known once the first window is read: when the monitor started (the first
+Start record, else the first input message) and where the ticks come from (the node's
+records or a grid). A log that contradicts them later (a Start after inputs without one
+before, events after a first window without any, files overlapping in time) cannot be
+streamed: :class:`Restart` asks the caller to replay it as one window (memory then grows with
+the log; the summary says ``streamed: false``); :func:`drive` does that.
+
+Errors a user can act on are :class:`ReplayError` (one line, with the command's exit status).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Iterator, NamedTuple, Optional, Protocol, Sequence
+
+import numpy as np
+
+from catenary_monitor.core.config.parameters import (
+    ConfigError,
+    MonitorConfig,
+    config_from_params,
+    load_params_file,
+    resolve_topic,
+)
+from catenary_monitor.core.monitor.monitor_core import (
+    EVENTS_TOPIC,
+    NODE_NAME,
+    MonitorCore,
+    Reconfigure,
+    Start,
+    Tick,
+    parse_event_record,
+)
+from catenary_monitor.core.monitor.twin import (
+    ReplayResult,
+    Window,
+    concat_lines,
+    run_log,
+    slice_window,
+    tick_grid,
+)
+from catenary_monitor.core.physics import fused_kernel
+from catenary_monitor.io import mcap_read
+from catenary_monitor.io.cdr import string_message, string_text
+from catenary_monitor.io.mcap_read import (
+    EmptyLogError,
+    LogWindow,
+    McapReadError,
+    ReadReport,
+    TopicTypeError,
+    UnorderedLogError,
+    expand_paths,
+    iter_windows,
+    read_float64_topics,
+)
+
+__all__ = [
+    'EXIT_EMPTY',
+    'NoEventsChannel',
+    'LogReplay',
+    'ReplayError',
+    'Restart',
+    'Sink',
+    'StreamState',
+    'WINDOW_MESSAGES',
+    'drive',
+    'expand',
+    'input_topics',
+    'load_config',
+    'log_parameters',
+    'read_inputs',
+    'replay_log',
+    'stream',
+]
+
+#: Exit status for a log without any message on the requested topics.
+EXIT_EMPTY = 3
+
+#: Input messages per window by default (about 300 B each in flight for a summary, 750 B with
+#: the diagnostics of ``--out``): the bound of replay's memory beyond the interpreter's.
+WINDOW_MESSAGES = 1 << 17
+
+#: With snapshots (``--out``), a window is recomputed in parts of at most this many ticks:
+#: a part's snapshots (in columns) and their payloads take about 30 kB per tick until written.
+TICKS_PER_PART = 512
+
+_TICK_PAYLOAD = string_message('{"kind": "tick"}')
+
+
+class ReplayError(Exception):
+    """A failure a user can act on: ``str()`` is one line; ``code`` the command's exit status."""
+
+    def __init__(self, message: str, code: int = 2) -> None:
+        super().__init__(message)
+        self.code = code
+
+
+class Restart(Exception):
+    """The log cannot be streamed (see the module docstring): replay it as one window."""
+
+
+class NoEventsChannel(LookupError):
+    """``ticks='log'`` and the log has no events channel (it was not recorded by the node)."""
+
+
+@dataclass
+class StreamState:
+    """What the stream knows after its first window, and the figures of the run."""
+
+    start_ns: Optional[int] = None
+    start_from_record: bool = False
+    ticks_from_log: Optional[bool] = None
+    windows: int = 0
+    messages: int = 0
+    bytes_done: int = 0
+    bytes_total: int = 0
+
+
+def _events(window: LogWindow) -> tuple[bool, np.ndarray, list[Any]]:
+    """(any record seen, tick stamps ns, the other records) of a window's events channel."""
+    stamps, payloads = window.raw.get(EVENTS_TOPIC, (np.zeros(0, np.int64), []))
+    if not len(payloads):
+        return False, np.zeros(0, np.int64), []
+    is_tick = np.fromiter((p == _TICK_PAYLOAD for p in payloads), bool, len(payloads))
+    ticks = [stamps[is_tick]]
+    others: list[Any] = []
+    for i in np.flatnonzero(~is_tick).tolist():
+        try:
+            text = string_text(payloads[i])
+        except ValueError:
+            continue
+        event = parse_event_record(int(stamps[i]), text)
+        if isinstance(event, Tick):
+            ticks.append(np.array([event.stamp_ns], np.int64))
+        elif event is not None:
+            others.append(event)
+    return True, np.sort(np.concatenate(ticks)), others
+
+
+def _inputs(config: MonitorConfig, window: LogWindow) -> tuple[list[Any], Any]:
+    """The window's tension columns (config order) and depth column."""
+    lines = [window.columns[resolve_topic(line.tension_topic)] for line in config.lines]
+    return lines, window.columns[resolve_topic(config.depth_topic)]
+
+
+def stream(
+    paths: Sequence[Path],
+    config: MonitorConfig,
+    sink: Callable[[ReplayResult, Window], None],
+    *,
+    ticks: str = 'auto',
+    follow_log: bool = True,
+    snapshots: bool | str = False,
+    window_messages: Optional[int] = WINDOW_MESSAGES,
+    jobs: int = 1,
+    report: Optional[ReadReport] = None,
+    progress: Optional[Callable[[StreamState], None]] = None,
+) -> StreamState:
+    """Replay ``paths`` window by window; ``sink(result, window)`` gets each window's
+    :class:`ReplayResult` (its ticks, events, start) and its input :class:`Window`.
+
+    ``ticks``: ``auto`` takes the node's recorded ticks when the log has them, else a grid at
+    ``diagnostic_rate``; ``log`` requires them; ``grid`` ignores them. ``follow_log``: apply
+    the parameter changes the node recorded (with the recorded parameters only);
+    ``window_messages`` None replays the log as one window. Raises :class:`Restart` (see the
+    module docstring), and what :func:`iter_windows` raises (EmptyLogError at the end).
+    The solve kernel leaves the cores of the decoding to it: the read-ahead thread's, or the
+    ``jobs`` worker processes' (on two cores, two kernel threads beside the read-ahead made the
+    1e7 summary 10-25 % slower than one; docs/benchmarks.md).
+    """
+    busy = jobs if jobs > 1 else int(mcap_read.READ_AHEAD > 0)
+    with fused_kernel.cores_left_to(busy):
+        return _stream(
+            paths,
+            config,
+            sink,
+            ticks,
+            follow_log,
+            snapshots,
+            window_messages,
+            jobs,
+            report,
+            progress,
+        )
+
+
+def _stream(
+    paths: Sequence[Path],
+    config: MonitorConfig,
+    sink: Callable[[ReplayResult, Window], None],
+    ticks: str,
+    follow_log: bool,
+    snapshots: bool | str,
+    window_messages: Optional[int],
+    jobs: int,
+    report: Optional[ReadReport],
+    progress: Optional[Callable[[StreamState], None]],
+) -> StreamState:
+    """:func:`stream` itself."""
+    state = StreamState()
+    state.bytes_total = sum(p.stat().st_size for p in paths)
+    lines_topics = [resolve_topic(line.tension_topic) for line in config.lines]
+    topics = [resolve_topic(config.depth_topic), *lines_topics]
+    raw = [EVENTS_TOPIC] if ticks != 'grid' else []
+    core: Optional[MonitorCore] = None
+    grid_k = 0  # next grid tick index
+    try:
+        for window in iter_windows(paths, topics, raw, window_messages, report, jobs):
+            seen, tick_ns, others = _events(window) if raw else (False, np.zeros(0, np.int64), [])
+            if not follow_log:
+                others = [e for e in others if not isinstance(e, Reconfigure)]
+            tensions, depth = _inputs(config, window)
+            if core is None:
+                firsts = [int(c[0][0]) for c in (*tensions, depth) if len(c[0])]
+                starts = [e.stamp_ns for e in others if isinstance(e, Start)]
+                if starts:
+                    state.start_ns, state.start_from_record = starts[0], True
+                    others = [
+                        e for e in others if e.stamp_ns != starts[0] or not isinstance(e, Start)
+                    ]
+                elif firsts:
+                    state.start_ns = min(firsts)
+                elif not window.final:
+                    raise Restart('no input message and no start record in the first window')
+                state.ticks_from_log = seen
+                if ticks == 'log' and not seen:
+                    if not window.final:
+                        raise Restart('no events record in the first window')
+                    raise NoEventsChannel(EVENTS_TOPIC)
+                core = MonitorCore(config, state.start_ns or 0)
+            elif any(isinstance(e, Start) for e in others) and not state.start_from_record:
+                raise Restart('a start record after the first window, none before it')
+            elif seen and not state.ticks_from_log:
+                raise Restart('events records after a first window without any')
+            if not state.ticks_from_log:
+                tick_ns, grid_k = _grid(
+                    state, window, tensions, depth, grid_k, config.alarm.diagnostic_rate
+                )
+            whole = Window(tensions, depth, tick_ns)
+            for part, part_events in _parts(whole, others, TICKS_PER_PART if snapshots else 0):
+                result, core = run_log(core, part, part_events, snapshots)
+                replay = ReplayResult(
+                    result.lines,
+                    result.tide,
+                    result.snapshots,
+                    min(state.start_ns or 0, result.start_ns),
+                    result.end_ns,
+                    result.others,
+                    part.ticks,
+                    bool(state.ticks_from_log),
+                    state.start_ns or 0,
+                    part_events,
+                )
+                sink(replay, part)
+            state.windows += 1
+            state.messages += window.messages
+            state.bytes_done = window.bytes_done
+            if progress is not None:
+                progress(state)
+    except UnorderedLogError as err:
+        raise Restart(str(err)) from err
+    return state
+
+
+def _parts(window: Window, events: list[Any], ticks: int) -> Iterator[tuple[Window, list[Any]]]:
+    """The window cut in time before every ``ticks``-th tick (all of it when ``ticks`` is 0
+    or it has no more): each part is itself a legal window (every column cut at the same
+    time), with the events of its stretch."""
+    if not ticks or len(window.ticks) <= ticks:
+        yield window, events
+        return
+    cuts = [int(t) for t in window.ticks[ticks::ticks]]
+    lo: Optional[int] = None
+    for hi in [*cuts, None]:
+        part = slice_window(window, lo, hi)
+        inside = [e for e in events if (lo is None or e.stamp_ns >= lo)]
+        yield part, [e for e in inside if hi is None or e.stamp_ns < hi]
+        lo = hi
+
+
+def _grid(
+    state: StreamState,
+    window: LogWindow,
+    tensions: list[Any],
+    depth: Any,
+    k0: int,
+    rate_hz: float,
+) -> tuple[np.ndarray, int]:
+    """The grid ticks of a window (:func:`tick_grid` from ``k0``) below the window's end, or up
+    to the last input message in the final window; and the next k."""
+    start = state.start_ns or 0
+    period = 1e9 / rate_hz
+    if window.final:
+        lasts = [int(c[0][-1]) for c in (*tensions, depth) if len(c[0])]
+        if not lasts:
+            if state.windows:
+                raise Restart('the last window has no input message')
+            return np.zeros(0, np.int64), k0
+        end = max(lasts)
+        if end < start:
+            return np.zeros(0, np.int64), k0
+        n = int((end - start) // period) + 1
+    else:
+        assert window.hi is not None
+        end = window.hi - 1
+        n = max(0, int((window.hi - start) // period) + 1)
+    ticks = tick_grid(start, end, rate_hz, k0, n)
+    return ticks, k0 + len(ticks)
+
+
+# --- the log, its parameters and the runs
+# ---------------------------------------------------------
+
+
+def input_topics(config: MonitorConfig) -> tuple[dict[str, str], str]:
+    """(line name -> resolved tension topic, resolved depth topic)."""
+    return (
+        {line.name: resolve_topic(line.tension_topic) for line in config.lines},
+        resolve_topic(config.depth_topic),
+    )
+
+
+def expand(paths: Sequence[str]) -> list[Path]:
+    """The MCAP files of the given files and directories (ReplayError when there are none)."""
+    try:
+        out = expand_paths(paths)
+    except FileNotFoundError as err:
+        raise ReplayError(str(err)) from None
+    if not out:
+        raise ReplayError(f'no *.mcap file in {", ".join(paths)}')
+    return out
+
+
+def load_config(path: str) -> MonitorConfig:
+    """The monitor configuration of a params file (ReplayError with the one-line reason)."""
+    try:
+        return config_from_params(load_params_file(path))
+    except ConfigError as err:
+        raise ReplayError(f'{path}: {err}') from err
+
+
+def log_parameters(paths: Sequence[Path]) -> Optional[tuple[str, dict[str, Any]]]:
+    """``(config hash, flat parameters)`` of the first ``catenary_monitor`` metadata record of
+    the files: the parameters the node started with (it writes one at start and one on every
+    parameter change, which replay follows from the events channel), or None.
+
+    Finished files answer from their summary; an unfinished file from its first MiB (where
+    the node's logger writes the record).
+    """
+    import io
+
+    from mcap.reader import NonSeekingReader, make_reader
+
+    for path in paths:
+        records = []
+        try:
+            with open(path, 'rb') as f:
+                reader = make_reader(f)
+                try:
+                    summary = reader.get_summary()
+                except Exception:  # noqa: BLE001 - no footer: the writer was killed
+                    summary = None
+                if summary is not None:
+                    records = list(reader.iter_metadata())
+                else:
+                    f.seek(0)
+                    head = NonSeekingReader(io.BytesIO(f.read(1 << 20)))
+                    try:
+                        for record in head.iter_metadata():
+                            records.append(record)
+                    except Exception:  # noqa: BLE001 - the cut at 1 MiB, or damage
+                        pass
+        except Exception:  # noqa: BLE001 - an unreadable summary: no parameters from it
+            continue
+        for record in records:
+            if record.name == NODE_NAME and 'parameters' in record.metadata:
+                try:
+                    return (
+                        record.metadata.get('config_hash', ''),
+                        json.loads(record.metadata['parameters']),
+                    )
+                except ValueError:
+                    continue
+    return None
+
+
+def read_inputs(
+    paths: Sequence[Path], config: MonitorConfig
+) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], tuple[np.ndarray, np.ndarray], ReadReport]:
+    """The whole input columns of a log, not replayed (``whatif --log``, ``replay --publish``):
+    tension columns per line, the depth column and the read report."""
+    topics, depth_topic = input_topics(config)
+    try:
+        columns, report = read_float64_topics(paths, [depth_topic, *topics.values()])
+    except TopicTypeError as err:
+        raise ReplayError(f'unexpected message type: {err} (check the params file topics)')
+    except EmptyLogError as err:
+        raise ReplayError(f'empty log: {err}; nothing to replay', EXIT_EMPTY) from err
+    except McapReadError as err:
+        raise ReplayError(str(err)) from err
+    tensions = {name: columns[topic] for name, topic in topics.items()}
+    return tensions, columns[depth_topic], report
+
+
+class Sink(Protocol):
+    """What :func:`drive` hands each window's results to."""
+
+    def __call__(self, result: ReplayResult, window: Window) -> None: ...
+
+    def abandon(self) -> None:
+        """Forget what was taken (the replay is redone as one window, or failed)."""
+
+
+def drive(
+    paths: Sequence[Path],
+    config: MonitorConfig,
+    make_sink: Callable[[Optional[int]], Sink],
+    *,
+    ticks: str = 'auto',
+    follow_log: bool = True,
+    snapshots: bool | str = False,
+    window_messages: Optional[int] = WINDOW_MESSAGES,
+    jobs: int = 1,
+    progress: Optional[Callable[[StreamState], None]] = None,
+    on_restart: Optional[Callable[[str], None]] = None,
+) -> tuple[Sink, StreamState, ReadReport]:
+    """Replay ``paths`` into ``make_sink(window_messages)``: streamed, or, for a log that cannot
+    be streamed (:class:`Restart`), again as one window into a new sink (``on_restart`` gets
+    the reason). Returns the sink, the stream's figures and the read report; failures a user
+    can act on are :class:`ReplayError`."""
+    window = window_messages
+    while True:
+        report = ReadReport()
+        sink = make_sink(window)
+        try:
+            state = stream(
+                paths,
+                config,
+                sink,
+                ticks=ticks,
+                follow_log=follow_log,
+                snapshots=snapshots,
+                window_messages=window,
+                jobs=jobs,
+                report=report,
+                progress=progress,
+            )
+            return sink, state, report
+        except Restart as err:
+            sink.abandon()
+            if window is None:
+                raise ReplayError(f'cannot replay: {err}') from err
+            if on_restart is not None:
+                on_restart(str(err))
+            window = None
+        except NoEventsChannel as err:
+            sink.abandon()
+            raise ReplayError(
+                '--ticks log: the log has no catenary_monitor events channel '
+                f'({EVENTS_TOPIC}); it was not recorded by the node'
+            ) from err
+        except TopicTypeError as err:
+            sink.abandon()
+            raise ReplayError(f'unexpected message type: {err} (check the params file topics)')
+        except EmptyLogError as err:
+            sink.abandon()
+            raise ReplayError(f'empty log: {err}; nothing to replay', EXIT_EMPTY) from err
+        except McapReadError as err:
+            sink.abandon()
+            raise ReplayError(str(err)) from err
+
+
+class _Collect:
+    """A sink that keeps every window's results (for :func:`replay_log`)."""
+
+    def __init__(self) -> None:
+        self.results: list[ReplayResult] = []
+        self.windows: list[Window] = []
+
+    def __call__(self, result: ReplayResult, window: Window) -> None:
+        self.results.append(result)
+        self.windows.append(window)
+
+    def abandon(self) -> None:
+        self.results, self.windows = [], []
+
+
+class LogReplay(NamedTuple):
+    """:func:`replay_log`'s answer: every step, the input columns it read, the read report."""
+
+    result: ReplayResult
+    tensions: dict[str, tuple[np.ndarray, np.ndarray]]  # line name -> (stamp ns, tension N)
+    depth: tuple[np.ndarray, np.ndarray]  # (stamp ns, depth m)
+    report: ReadReport
+
+
+def replay_log(
+    paths: Sequence[Path],
+    config: MonitorConfig,
+    *,
+    ticks: str = 'auto',
+    follow_log: bool = True,
+    snapshots: bool = False,
+    window_messages: Optional[int] = WINDOW_MESSAGES,
+) -> LogReplay:
+    """Every step of a log as one :class:`ReplayResult` (the windows' results joined), with the
+    input columns and the read report: for the console's log view and the tests. Memory grows
+    with the log; the command writes its outputs window by window (:func:`drive`)."""
+    sink, state, report = drive(
+        paths,
+        config,
+        lambda _: _Collect(),
+        ticks=ticks,
+        follow_log=follow_log,
+        snapshots=snapshots,
+        window_messages=window_messages,
+    )
+    assert isinstance(sink, _Collect)
+    names = [line.name for line in config.lines]
+    tensions = {
+        name: _joined_column([w.tensions[k] for w in sink.windows]) for k, name in enumerate(names)
+    }
+    depth = _joined_column([w.depth for w in sink.windows])
+    return LogReplay(_joined(sink.results, state), tensions, depth, report)
+
+
+def _joined(parts: list[ReplayResult], state: StreamState) -> ReplayResult:
+    """Consecutive windows' results as one (each list is in time order window after window)."""
+    if not parts:
+        start = state.start_ns or 0
+        return ReplayResult([], [], [], start, start, [], started_ns=start)
+    return ReplayResult(
+        [concat_lines([p.lines[k] for p in parts]) for k in range(len(parts[0].lines))],
+        [tr for p in parts for tr in p.tide],
+        [s for p in parts for s in p.snapshots],
+        min(p.start_ns for p in parts),
+        max(p.end_ns for p in parts),
+        [c for p in parts for c in p.others],
+        np.concatenate([p.tick_ns for p in parts]),
+        parts[0].ticks_from_log,
+        parts[0].started_ns,
+        [e for p in parts for e in p.events],
+    )
+
+
+def _joined_column(parts: list[tuple[np.ndarray, np.ndarray]]) -> tuple[np.ndarray, np.ndarray]:
+    if not parts:
+        return np.zeros(0, np.int64), np.zeros(0)
+    return np.concatenate([t for t, _ in parts]), np.concatenate([v for _, v in parts])
