@@ -259,7 +259,7 @@ def baseline(
                             repr(v[3]),
                             repr(v[4]),
                             repr(v[5]),
-                            core.lines[k].state.level.name,
+                            core.state.lines[k].state.level.name,
                         ]
                     )
             if n >= limit:

@@ -155,7 +155,10 @@ def test_core_acknowledge_event_shows_at_once_in_diagnostics():
     raised = None
     for ev in events:
         step = core.step(ev)
-        if core.lines[1].ack.state == 'unacknowledged' and core.lines[1].state.level == 2:
+        if (
+            core.state.lines[1].ack.state == 'unacknowledged'
+            and core.state.lines[1].state.level == 2
+        ):
             raised = ev.stamp_ns
             break
     assert raised is not None, 'the storm must lift line_02'
@@ -171,5 +174,5 @@ def test_core_acknowledge_event_shows_at_once_in_diagnostics():
         'acknowledged',
         'test',
     )
-    assert core.lines[1].state.level == Level.ERROR  # still lifted: the alarm stays
+    assert core.state.lines[1].state.level == Level.ERROR  # still lifted: the alarm stays
     assert not math.isnan(float(values['acknowledged_at']))

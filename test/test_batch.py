@@ -6,6 +6,7 @@ transition and snapshot must agree (values to 1e-12, everything else exactly), a
 core's state afterwards.
 """
 
+import dataclasses
 import math
 
 import numpy as np
@@ -19,7 +20,9 @@ from catenary_monitor.core.monitor.monitor_core import (
     OUTPUT_FIELDS,
     VALUE_FIELDS,
     Acknowledge,
+    CoreState,
     Depth,
+    LineState,
     MonitorCore,
     Reconfigure,
     Tension,
@@ -55,40 +58,62 @@ def window_of(config, tensions, depth, ticks, lo=None, hi=None):
 
 
 def _nan_free(x):
-    """``x`` with every NaN float as None (NaN != NaN would fail equal states)."""
+    """``x`` comparable with ==: NaN floats as None (NaN != NaN would fail equal states),
+    arrays as lists, dataclasses and named tuples field by field."""
     if isinstance(x, float) and math.isnan(x):
         return None
+    if isinstance(x, np.ndarray):
+        return _nan_free(tuple(map(_nan_free, x.tolist())))
+    if isinstance(x, list):
+        return [_nan_free(v) for v in x]
     if isinstance(x, tuple):
         return type(x)(*map(_nan_free, x)) if hasattr(x, '_fields') else tuple(map(_nan_free, x))
+    if dataclasses.is_dataclass(x) and not isinstance(x, type):
+        return (
+            type(x).__name__,
+            {f.name: _nan_free(getattr(x, f.name)) for f in dataclasses.fields(x)},
+        )
+    if hasattr(x, '__dict__') and not callable(x):
+        return (type(x).__name__, {k: _nan_free(v) for k, v in vars(x).items()})
     return x
 
 
+#: LineState fields fixed by the configuration (not decisions): left out of the comparison.
+LINE_CONFIG_FIELDS = ('config', 'alarm', 'hardware_id')
+
+
 def core_state(core):
+    """Every field of the core's state (:class:`CoreState`, each line's :class:`LineState`):
+    ``(per line {field: value}, {field: value})``, the solved ``values`` compared apart (to
+    rounding). A field added to the state is compared here without anyone listing it."""
     lines = [
-        (
-            _nan_free(
-                (
-                    line.state.level,
-                    line.state.message,
-                    line.state.latches,
-                    line.state.entered,
-                    line.state.input_message,
-                )
-            ),
-            _nan_free((line.tension, line.tension_s)),
-            line.values,
-            line.status,
-            line.status_message,
-            line.model,
-            _nan_free(tuple(vars(line.ack).values())),
-            _nan_free((line.sensor_memory, line.sensor_code, line.parted_seen)),
-        )
-        for line in core.lines
+        {
+            f.name: (
+                getattr(line, f.name) if f.name == 'values' else _nan_free(getattr(line, f.name))
+            )
+            for f in dataclasses.fields(LineState)
+            if f.name not in LINE_CONFIG_FIELDS
+        }
+        for line in core.state.lines
     ]
-    rest = (core.depth, core.depth_s, core.depth_stale, core.tide, core.tide_entered, core.trend)
-    rest += (core.depth_memory, core.depth_code)
-    rest += (core.sensor_times.tolist(), _nan_free(tuple(map(tuple, core.sensor_rows.tolist()))))
-    return lines, _nan_free(rest)
+    rest = {
+        f.name: _nan_free(getattr(core.state, f.name))
+        for f in dataclasses.fields(CoreState)
+        if f.name != 'lines'
+    }
+    return lines, rest
+
+
+def assert_same_state(twin, core):
+    """The twin left ``twin`` in the state stepping left ``core`` in, field by field."""
+    got_lines, got_rest = core_state(twin)
+    want_lines, want_rest = core_state(core)
+    differ = [k for k in want_rest if got_rest[k] != want_rest[k]]
+    assert not differ, {k: (got_rest[k], want_rest[k]) for k in differ}
+    for k, (g, w) in enumerate(zip(got_lines, want_lines)):
+        assert_same_float(g.pop('values'), w.pop('values'), 'values')
+        differ = [f for f in w if g[f] != w[f]]
+        assert not differ, (k, {f: (g[f], w[f]) for f in differ})
 
 
 def assert_same_float(a, b, what):
@@ -192,12 +217,7 @@ def compare(config, tensions, depth, ticks, cuts=(), check_snapshots=True):
         window = window_of(config, tensions, depth, ticks, lo, hi)
         assert_columns_give(advance(columns, window, snapshots=COLUMNS).snapshots, r.snapshots)
     # The state left behind.
-    got_lines, got_rest = core_state(twin)
-    want_lines, want_rest = core_state(core)
-    assert got_rest == want_rest
-    for g, w in zip(got_lines, want_lines):
-        assert g[:2] == w[:2] and g[3:] == w[3:]
-        assert_same_float(g[2], w[2], 'values')
+    assert_same_state(twin, core)
     return steps
 
 
@@ -295,7 +315,7 @@ def test_before_any_input_every_line_is_stale_and_says_why():
     assert messages['catenary_monitor: tide'] == ('STALE', 'no depth received yet')
     step = core.step(Tension(T0_NS + 2 * 10**9, 0, 372e3))
     assert step.outputs[0].values[11] == -1 and math.isnan(step.outputs[0].values[4])
-    assert core.lines[0].state.message == 'blind: no depth received yet' + note
+    assert core.state.lines[0].state.message == 'blind: no depth received yet' + note
 
 
 def test_a_late_first_depth_gives_one_snapshot_that_agrees_with_itself():
@@ -445,11 +465,7 @@ def test_run_log_steps_acknowledgements_as_the_core_does():
         assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
     states = {dict(st.values).get('alarm_state') for s in want for st in s.statuses[:3]}
     assert {'unacknowledged', 'acknowledged', 'returned-unacknowledged', 'normal'} <= states
-    got_lines, got_rest = core_state(twin)
-    want_lines, want_rest = core_state(core)
-    assert got_rest == want_rest
-    for g, w in zip(got_lines, want_lines):
-        assert g[:2] == w[:2] and g[3:] == w[3:]
+    assert_same_state(twin, core)
 
 
 def _lookahead_config(**alarm):
@@ -644,3 +660,44 @@ def test_worst_is_the_first_extreme_ignoring_nan():
     assert out['safety_factor'] is None
     nothing = twin.LineResult('a', empty, empty, {key: empty for key in values}, *[empty] * 5)
     assert all(w is None for w in twin.worst(nothing).values())
+
+
+def test_the_state_comparison_sees_every_field():
+    """The twin's check covers the whole state by construction: changing any one field of
+    :class:`CoreState` or of a line's :class:`LineState` (a field the twin forgot) fails it, and
+    the core keeps no decision state outside them (``__slots__``)."""
+    import copy
+
+    config = dock_config(2)
+    tensions, depth = generate(config, seconds=20.0, seed=3)
+    core, _ = core_steps(config, tensions, depth, ticks_for(tensions, depth), T0_NS)
+    assert_same_state(copy.deepcopy(core), core)
+
+    def spoiled(value):
+        if isinstance(value, bool):
+            return not value
+        if isinstance(value, (int, float)):
+            return value + 1.0 if math.isfinite(value) else 0.5
+        if isinstance(value, np.ndarray):
+            return np.append(value.astype(float), 1.0)
+        if isinstance(value, (tuple, list)):
+            return (7,) if not len(value) or hasattr(value, '_fields') else value[:-1]
+        return object()
+
+    for f in dataclasses.fields(CoreState):
+        if f.name == 'lines':
+            continue
+        other = copy.deepcopy(core)
+        setattr(other.state, f.name, spoiled(getattr(other.state, f.name)))
+        with pytest.raises(AssertionError):
+            assert_same_state(other, core)
+    for f in dataclasses.fields(LineState):
+        if f.name in LINE_CONFIG_FIELDS:
+            continue
+        other = copy.deepcopy(core)
+        line = other.state.lines[1]
+        setattr(line, f.name, spoiled(getattr(line, f.name)))
+        with pytest.raises(AssertionError):
+            assert_same_state(other, core)
+    with pytest.raises(AttributeError):
+        core.forgotten = 1.0  # type: ignore[attr-defined]

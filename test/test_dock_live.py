@@ -30,7 +30,7 @@ def _inconsistent(step_list, config):
 
 def _latched(core):
     k = CONDITIONS.index('inconsistent')
-    return [line.config.name for line in core.lines if line.state.latches[k].active]
+    return [line.config.name for line in core.state.lines if line.state.latches[k].active]
 
 
 @pytest.mark.parametrize('drifting', [DRIFTING, 4])  # line_09 windward, line_05 lee
@@ -56,7 +56,7 @@ def test_a_drifting_sensor_is_flagged_and_only_that_line(drifting):
     # Raised after the drift began (25 % of the record) and held to the end.
     assert flagged_at is not None and 0.25 * seconds < flagged_at < 0.6 * seconds
     assert _latched(core) == [bad]
-    snap = core.snapshot(core.last_ns)
+    snap = core.snapshot(core.state.last_ns)
     status = {st.name: st for st in snap.statuses}
     line = status[f'catenary_monitor: {bad}']
     values = dict(line.values)
@@ -84,7 +84,7 @@ def test_consistent_sensors_are_never_flagged(seed):
     core, steps = core_steps(config, tensions, depth, ticks, T0_NS)
     assert _inconsistent(steps, config) == {line.name: [] for line in config.lines}
     assert _latched(core) == []
-    values = {st.name: dict(st.values) for st in core.snapshot(core.last_ns).statuses}
+    values = {st.name: dict(st.values) for st in core.snapshot(core.state.last_ns).statuses}
     states = [values[f'catenary_monitor: {n.name}']['sensor_state'] for n in config.lines]
     # 'unchecked': a line whose last sample is older than tension_timeout at the record's end
     assert set(states) <= {'ok', 'unchecked'} and states.count('ok') >= 10
@@ -127,7 +127,7 @@ def test_without_accuracy_residuals_are_reported_and_nothing_is_flagged():
     )
     ticks = ticks_for(tensions, depth)
     core, steps = core_steps(config, tensions, depth, ticks, T0_NS)
-    values = {st.name: dict(st.values) for st in core.snapshot(core.last_ns).statuses}
+    values = {st.name: dict(st.values) for st in core.snapshot(core.state.last_ns).statuses}
     lines = [values[f'catenary_monitor: {n.name}'] for n in config.lines]
     assert {v['sensor_state'] for v in lines} == {'unchecked'}
     assert all(math.isfinite(float(v['residual'])) for v in lines)

@@ -122,7 +122,7 @@ def test_drag_warning_with_deadband():
     # 7500 + 25*0.75*2.9 - 85.5 = 7468.8 N: above 7440 but below 7540 at the end
     assert outs[0]['drag_margin'] > 7440.0
     assert outs[1]['drag_margin'] < 7440.0
-    state = core.lines[0].state
+    state = core.state.lines[0].state
     assert state.level == Level.WARN and 'drag margin 7.5 kN, warning held' in state.message
     assert 'anchor may drag' in state.message
     core2, _ = run(line, 15.0, [900.0 + 375], drag_margin_warn=7440.0)

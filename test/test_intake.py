@@ -32,7 +32,7 @@ def test_a_shortfall_against_the_sample_rate_is_counted_per_line():
     before the first sample) is not checked; the depth has no rate and is not checked."""
     core = MonitorCore(dock_config(2, tension_sample_rate=400.0), T0_NS)
     core.step(Intake(_at(1.0), (120, 90, 1), (0, 0, 0), 0.01, 1.0))  # first: not checked
-    assert core.intake[0] == Level.OK
+    assert core.state.intake[0] == Level.OK
     core.step(Intake(_at(11.0), (4000, 3480, 10), (0, 0, 0), 0.5, 10.0))
     status = _status(core)
     values = dict(status.values)
@@ -66,7 +66,7 @@ def test_a_silent_input_is_left_to_staleness():
     core.step(Intake(_at(1.0), (20, 1), (0, 0), 0.01, 1.0))
     core.step(Intake(_at(11.0), (0, 10), (0, 0), 0.01, 10.0))
     values = dict(_status(core).values)
-    assert values['messages_missing'] == '0' and core.intake[0] == Level.OK
+    assert values['messages_missing'] == '0' and core.state.intake[0] == Level.OK
 
 
 def test_without_rates_the_values_are_as_before():
@@ -75,4 +75,4 @@ def test_without_rates_the_values_are_as_before():
     core.step(Intake(_at(11.0), (2, 10), (0, 0), 0.01, 10.0))
     keys = [k for k, _ in _status(core).values]
     assert keys == ['messages_dropped', 'line_01.messages_dropped', 'depth.messages_dropped']
-    assert core.intake[0] == Level.OK
+    assert core.state.intake[0] == Level.OK

@@ -83,7 +83,7 @@ def test_time_to_uplift_against_the_exact_crossing(noise, wave, window):
             assert np.median(minute) == pytest.approx(exact, rel=0.03), (s, exact)
         else:
             assert got[s] == pytest.approx(exact, rel=0.03), (s, got[s], exact)
-    assert core.trend.rate == pytest.approx(RATE, rel=0.02)
+    assert core.state.trend.rate == pytest.approx(RATE, rel=0.02)
     # Waves must not make it jump: every sample (with gauge noise: every minute's median)
     # from half an hour on within 5 %.
     late = t >= 1800.0

@@ -138,13 +138,13 @@ def test_uplift_possible_warns_and_the_error_stays_on_the_nominal():
     out = dict(zip(OUTPUT_FIELDS, step.outputs[0].values))
     assert out['uplift_force'] == 0.0 and out['uplift_force_upper'] > 0.0
     assert out['anchor_margin_lower'] < 0.0 < out['anchor_margin']
-    assert core.lines[0].state.level == Level.WARN
-    assert 'uplift possible within sensor accuracy' in core.lines[0].state.message
+    assert core.state.lines[0].state.level == Level.WARN
+    assert 'uplift possible within sensor accuracy' in core.state.lines[0].state.message
     core.step(Tension(3, 0, tc + 50e3))  # nominal uplift: the ERROR, the WARN gives way
-    state = core.lines[0].state
+    state = core.state.lines[0].state
     assert state.level == Level.ERROR and 'within sensor accuracy' not in state.message
     core.step(Tension(4, 0, tc - 200e3))  # far from uplift: both clear
-    assert core.lines[0].state.level == Level.OK
+    assert core.state.lines[0].state.level == Level.OK
 
 
 def test_without_accuracy_no_bounds_and_no_warning():
@@ -153,7 +153,7 @@ def test_without_accuracy_no_bounds_and_no_warning():
     step = core.step(Tension(2, 0, _critical_tension(20.85) - 10e3))
     out = dict(zip(OUTPUT_FIELDS, step.outputs[0].values))
     assert math.isnan(out['uplift_force_upper']) and math.isnan(out['anchor_margin_lower'])
-    assert core.lines[0].state.level == Level.OK
+    assert core.state.lines[0].state.level == Level.OK
 
 
 @pytest.mark.parametrize('t', [2.5e5, 8e5])

@@ -488,7 +488,7 @@ class CatenaryMonitor(Node):
         quiet = (
             not any(self._dropped)
             and busy_share < 0.5
-            and self.core.intake[0] == Level.OK
+            and self.core.state.intake[0] == Level.OK
             and wall - self._intake_wall < self._intake_heartbeat
         )
         if quiet and self._intake_sent and not force:

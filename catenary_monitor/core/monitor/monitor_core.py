@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, NamedTuple, Optional, Sequence, Union
 
 import numpy as np
@@ -350,8 +350,65 @@ def _stamp_s(stamp_ns: int) -> float:
     return stamp_ns * 1e-9
 
 
+@dataclass
+class CoreState:
+    """Everything the core's decisions carry from one event to the next (its lines' too).
+
+    The vectorized twin (:mod:`catenary_monitor.core.monitor.twin`) reads and writes the core
+    only through this object, and test/test_batch.py compares every field (dataclass fields,
+    each line's included) after the same events: state added here and not carried by the twin
+    fails there. Times in s (Unix, the monitor's clock) unless named ``_ns``.
+    """
+
+    lines: list[LineState]
+    sensor_rows: np.ndarray  # N, each line's tension at the sensor_times
+    tide: tuple[Level, str]
+    tide_entered: float
+    start_s: float  # when the monitor started (blind)
+    sensors_waiting: int  # lines without a tension at the sensors' decision
+    sensors_entered: float
+    logger_entered: float
+    last_ns: int  # the newest event's stamp
+    dock_entered: float
+    dock_smoothing: dock_live.Smoothing
+    parameters: tuple[Level, str]
+    parameters_entered: float
+    clock_entered: float
+    intake_entered: float
+    depth: float = _NAN  # m, newest sample
+    depth_s: float = _NAN  # s, its stamp
+    depth_stale: bool = False
+    trend: tide_trend.TrendState = field(default_factory=tide_trend.TrendState)  # tide rate
+    depth_memory: sensor_state.Memory = field(default_factory=sensor_state.Memory)
+    depth_code: int = sensor_state.OK  # the depth sensor's state at the newest tick
+    sensor_times: np.ndarray = field(default_factory=lambda: np.zeros(0))  # s, the ticks the
+    # suspected_parted test still needs
+    # The sensors' common-cause alarm (blind start, silent depth sensor): one, not per line.
+    sensors: tuple[Level, str] = (Level.STALE, '')
+    sensors_ack: alarm_ack.AckState = field(default_factory=alarm_ack.AckState)
+    logger: tuple[Level, str] = (Level.OK, 'logging')
+    dock: tuple[Level, str] = (Level.STALE, 'no dock estimate yet')
+    dock_values: tuple[tuple[str, str], ...] = ()
+    # Accepted runtime changes: their lines, flagged (WARN) until changes_until [s].
+    changes: tuple[str, ...] = ()
+    changes_until: float = -math.inf
+    clock: tuple[Level, str] = field(default_factory=lambda: clock_status(None))
+    clock_seen: bool = False
+    intake: tuple[Level, str] = (Level.OK, 'no sample counts yet')
+    intake_counts: list[Intake] = field(default_factory=list)  # the last INTAKE_WINDOW's events
+    # Per Intake event of the window and input: its period is checked against the input's
+    # sample rate (the input was heard in an earlier event, and in this one).
+    intake_checked: list[tuple[bool, ...]] = field(default_factory=list)
+    intake_heard: list[bool] = field(default_factory=list)
+    intake_seen: bool = False
+
+
 class MonitorCore:
-    """The monitor's state and its one decision path: :meth:`step` an event, get a :class:`Step`.
+    """The monitor's one decision path: :meth:`step` an event, get a :class:`Step`.
+
+    What the decisions carry from one event to the next is :attr:`state` (a :class:`CoreState`),
+    the one door through which the vectorized twin reads and writes the core; the rest is the
+    configuration and what follows from it (``__slots__``: no other attribute can be added).
 
     Parameters
     ----------
@@ -360,6 +417,8 @@ class MonitorCore:
     hardware_ids : line name -> the tension topic as resolved by the node (default: resolved
         in the root namespace); ``depth_id`` the depth topic; ``logger_id`` the log directory.
     """
+
+    __slots__ = ('config', 'index', 'depth_id', 'logger_id', 'dock_model', 'state')
 
     def __init__(
         self,
@@ -372,7 +431,7 @@ class MonitorCore:
         ids = hardware_ids or {}
         start = _stamp_s(start_ns)
         self.config = config
-        self.lines = [
+        lines = [
             LineState(
                 lc,
                 LineAlarm.for_line(lc, config.alarm),
@@ -382,55 +441,34 @@ class MonitorCore:
             )
             for lc in config.lines
         ]
-        self.index = {line.config.name: k for k, line in enumerate(self.lines)}
+        self.index = {line.config.name: k for k, line in enumerate(lines)}
         self.depth_id = depth_id or resolve_topic(config.depth_topic)
         self.logger_id = logger_id
-        self.depth = _NAN  # m, newest sample
-        self.depth_s = _NAN  # s, its stamp
-        self.depth_stale = False
-        self.trend = tide_trend.TrendState()  # the tide's rate (m/s) from the depth samples
-        self.depth_memory = sensor_state.Memory()  # the depth sensor's per-sample memory
-        self.depth_code = sensor_state.OK  # the depth sensor's state at the newest tick
-        self.sensor_times = np.zeros(0)  # s, the ticks the suspected_parted test still needs
-        self.sensor_rows = np.zeros((0, len(config.lines)))  # N, each line's tension there
-        self.tide: tuple[Level, str] = tide_status(_NAN, _NAN, start, config.alarm.depth_timeout)
-        self.tide_entered = start
-        # The sensors' common-cause alarm (blind start, silent depth sensor): one, not per line.
-        self.start_s = start
-        self.sensors: tuple[Level, str] = self._sensors_now(start)
-        self.sensors_waiting = len(self.lines)  # lines without a tension at that decision
-        self.sensors_entered = start
-        self.sensors_ack = alarm_ack.AckState()
-        self.logger: tuple[Level, str] = (Level.OK, 'logging')
-        self.logger_entered = start
-        self.last_ns = start_ns
         # The dock as one body (configs placing every line on the dock): estimated at ticks.
         self.dock_model = DockModel.from_config(config) if config.has_dock_model else None
-        self.dock: tuple[Level, str] = (Level.STALE, 'no dock estimate yet')
-        self.dock_entered = start
-        self.dock_values: tuple[tuple[str, str], ...] = ()
-        self.dock_smoothing = dock_live.Smoothing.initial(len(self.lines))
-        # Accepted runtime changes: their lines, flagged (WARN) until changes_until [s].
-        self.changes: tuple[str, ...] = ()
-        self.changes_until = -math.inf
-        self.parameters: tuple[Level, str] = parameters_status((), -math.inf, start)
-        self.parameters_entered = start
-        self.clock: tuple[Level, str] = clock_status(None)
-        self.clock_entered = start
-        self.clock_seen = False
-        self.intake: tuple[Level, str] = (Level.OK, 'no sample counts yet')
-        self.intake_entered = start
-        self.intake_counts: list[Intake] = []  # the Intake events of the last INTAKE_WINDOW
-        # Per Intake event of the window and input: its period is checked against the input's
-        # sample rate (the input was heard in an earlier event, and in this one).
-        self.intake_checked: list[tuple[bool, ...]] = []
-        self.intake_heard: list[bool] = []
-        self.intake_seen = False
+        self.state = CoreState(
+            lines=lines,
+            sensor_rows=np.zeros((0, len(config.lines))),
+            tide=tide_status(_NAN, _NAN, start, config.alarm.depth_timeout),
+            tide_entered=start,
+            start_s=start,
+            sensors_waiting=len(lines),
+            sensors_entered=start,
+            logger_entered=start,
+            last_ns=start_ns,
+            dock_entered=start,
+            dock_smoothing=dock_live.Smoothing.initial(len(lines)),
+            parameters=parameters_status((), -math.inf, start),
+            parameters_entered=start,
+            clock_entered=start,
+            intake_entered=start,
+        )
+        self.state.sensors = self._sensors_now(start)
 
     # ------------------------------------------------------------------ events
     def step(self, event: Event) -> Step:
         """Apply one event (see the module docstring for the schedule); return what it did."""
-        self.last_ns = event.stamp_ns
+        self.state.last_ns = event.stamp_ns
         if isinstance(event, Tension):
             return self._on_tension(event)
         if isinstance(event, Depth):
@@ -450,7 +488,7 @@ class MonitorCore:
         raise TypeError(f'not a monitor event: {event!r}')
 
     def _on_tension(self, ev: Tension) -> Step:
-        line = self.lines[ev.line]
+        line = self.state.lines[ev.line]
         line.tension, line.tension_s = float(ev.value), _stamp_s(ev.stamp_ns)
         a = self.config.alarm
         line.sensor_memory = sensor_state.sample(
@@ -466,23 +504,23 @@ class MonitorCore:
         return self._finish(ev.stamp_ns, 'tension', [ev.line], changes)
 
     def _on_depth(self, ev: Depth) -> Step:
-        self.depth, self.depth_s = float(ev.value), _stamp_s(ev.stamp_ns)
+        self.state.depth, self.state.depth_s = float(ev.value), _stamp_s(ev.stamp_ns)
         window = self.config.alarm.tide_trend_window
-        self.trend = tide_trend.step(self.trend, ev.stamp_ns, self.depth, window)
+        self.state.trend = tide_trend.step(self.state.trend, ev.stamp_ns, self.state.depth, window)
         a = self.config.alarm
-        self.depth_memory = sensor_state.sample(
-            self.depth_memory,
-            self.depth_s,
-            self.depth,
+        self.state.depth_memory = sensor_state.sample(
+            self.state.depth_memory,
+            self.state.depth_s,
+            self.state.depth,
             a.depth_resolution,
             a.depth_rate_max,
             a.stamp_jitter,
         )
         changes = self._decide_tide(ev.stamp_ns)
         changes += self._decide_blind(ev.stamp_ns)
-        solved = [k for k, line in enumerate(self.lines) if line.tension_s == line.tension_s]
+        solved = [k for k, line in enumerate(self.state.lines) if line.tension_s == line.tension_s]
         self._solve_many(solved)
-        changes += self._step_lines(range(len(self.lines)), ev.stamp_ns)
+        changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'depth', solved, changes)
 
     def _on_tick(self, ev: Tick) -> Step:
@@ -491,7 +529,7 @@ class MonitorCore:
         changes += self._decide_blind(ev.stamp_ns)
         if self.dock_model is not None:
             changes += self._decide_dock(ev.stamp_ns)
-        changes += self._step_lines(range(len(self.lines)), ev.stamp_ns)
+        changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns)
         return Step(ev.stamp_ns, 'tick', (), self.snapshot(ev.stamp_ns), tuple(changes))
 
     def _on_logger(self, ev: LoggerHealth) -> Step:
@@ -503,35 +541,39 @@ class MonitorCore:
         """Acknowledge one line's alarm (or every line's; an unknown name changes nothing);
         the snapshot shows it at once."""
         now = _stamp_s(ev.stamp_ns)
-        for line in self.lines:
+        for line in self.state.lines:
             if ev.line is None or ev.line == line.config.name:
                 line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin)
         if ev.line is None or ev.line == alarm_ack.SENSORS:
-            self.sensors_ack = alarm_ack.acknowledge(self.sensors_ack, now, ev.origin)
+            self.state.sensors_ack = alarm_ack.acknowledge(self.state.sensors_ack, now, ev.origin)
         return Step(ev.stamp_ns, 'acknowledge', (), self.snapshot(ev.stamp_ns), ())
 
     def _on_clock(self, ev: ClockHealth) -> Step:
         """The ROS clock's state; always a snapshot (the node sends these on a wall-clock
         timer while the ROS clock stands still, so /diagnostics keeps coming)."""
-        self.clock_seen = True
+        self.state.clock_seen = True
         changes = self._set_component('clock', clock_status(ev.stopped_for), ev.stamp_ns)
         return Step(ev.stamp_ns, 'clock', (), self.snapshot(ev.stamp_ns), tuple(changes))
 
     def _on_intake(self, ev: Intake) -> Step:
         """Sample counts: the intake status over the last :data:`INTAKE_WINDOW` of them."""
-        self.intake_seen = True
+        self.state.intake_seen = True
         n = len(ev.received)
-        if len(self.intake_heard) != n:
-            self.intake_heard = [False] * n
-        self.intake_checked.append(
-            tuple(h and r > 0 for h, r in zip(self.intake_heard, ev.received))
+        if len(self.state.intake_heard) != n:
+            self.state.intake_heard = [False] * n
+        self.state.intake_checked.append(
+            tuple(h and r > 0 for h, r in zip(self.state.intake_heard, ev.received))
         )
-        self.intake_heard = [h or r > 0 for h, r in zip(self.intake_heard, ev.received)]
-        counts = self.intake_counts + [ev]
+        self.state.intake_heard = [
+            h or r > 0 for h, r in zip(self.state.intake_heard, ev.received)
+        ]
+        counts = self.state.intake_counts + [ev]
         while counts and ev.stamp_ns - counts[0].stamp_ns >= int(INTAKE_WINDOW * 1e9):
             counts.pop(0)
-        self.intake_counts = counts
-        self.intake_checked = self.intake_checked[len(self.intake_checked) - len(counts) :]
+        self.state.intake_counts = counts
+        self.state.intake_checked = self.state.intake_checked[
+            len(self.state.intake_checked) - len(counts) :
+        ]
         received = sum(sum(c.received) for c in counts)
         dropped = sum(sum(c.dropped) for c in counts)
         recent = [c for c in counts if ev.stamp_ns - c.stamp_ns < int(BUSY_WINDOW * 1e9)]
@@ -542,7 +584,7 @@ class MonitorCore:
             dropped,
             busy,
             INTAKE_WINDOW,
-            self.intake[0] == Level.OK,
+            self.state.intake[0] == Level.OK,
             sum(self.intake_missing()),
         )
         changes = self._set_component('intake', new, ev.stamp_ns)
@@ -551,9 +593,10 @@ class MonitorCore:
     def intake_dropped(self) -> list[int]:
         """Samples dropped per line, then the depth, in the last :data:`INTAKE_WINDOW`: those
         counted and those missing against the sample rates."""
-        n = len(self.lines) + 1
+        n = len(self.state.lines) + 1
         counted = [
-            sum(c.dropped[k] for c in self.intake_counts if len(c.dropped) == n) for k in range(n)
+            sum(c.dropped[k] for c in self.state.intake_counts if len(c.dropped) == n)
+            for k in range(n)
         ]
         return [c + m for c, m in zip(counted, self.intake_missing())]
 
@@ -564,14 +607,14 @@ class MonitorCore:
         sample), beyond the tolerance of
         :func:`~catenary_monitor.core.monitor.health.missing_samples`.
         """
-        n = len(self.lines) + 1
+        n = len(self.state.lines) + 1
         a = self.config.alarm
         rates = [a.tension_sample_rate] * (n - 1) + [a.depth_sample_rate]
         out = []
         for k in range(n):
             pairs = [
                 (c, ok[k])
-                for c, ok in zip(self.intake_counts, self.intake_checked)
+                for c, ok in zip(self.state.intake_counts, self.state.intake_checked)
                 if len(c.received) == n
             ]
             span = sum(c.period for c, ok in pairs if ok)
@@ -587,25 +630,29 @@ class MonitorCore:
         self.reconfigure(ev.config)
         if not messages:
             return Step(ev.stamp_ns, 'configure', (), None, ())
-        held = self.changes if now < self.changes_until else ()
-        if self.changes and not held and self.parameters[0] != Level.OK:  # the flag expired
-            self.parameters = parameters_status(self.changes, self.changes_until, now)
-            self.parameters_entered = self.changes_until
-        self.changes = held + tuple(messages)
-        self.changes_until = now + ev.config.runtime_change_warn_time
-        new = parameters_status(self.changes, self.changes_until, now)
+        held = self.state.changes if now < self.state.changes_until else ()
+        if (
+            self.state.changes and not held and self.state.parameters[0] != Level.OK
+        ):  # the flag expired
+            self.state.parameters = parameters_status(
+                self.state.changes, self.state.changes_until, now
+            )
+            self.state.parameters_entered = self.state.changes_until
+        self.state.changes = held + tuple(messages)
+        self.state.changes_until = now + ev.config.runtime_change_warn_time
+        new = parameters_status(self.state.changes, self.state.changes_until, now)
         changes = self._set_component('parameters', new, ev.stamp_ns)
         return Step(ev.stamp_ns, 'configure', (), self.snapshot(ev.stamp_ns), tuple(changes))
 
     def reconfigure(self, config: MonitorConfig) -> None:
         """Take new line constants and alarm rules (same line names); alarm states are kept."""
         names = [lc.name for lc in config.lines]
-        if names != [line.config.name for line in self.lines]:
+        if names != [line.config.name for line in self.state.lines]:
             raise ValueError(f'reconfigure: the lines must stay {list(self.index)}, got {names}')
         if config.alarm.tide_trend_window != self.config.alarm.tide_trend_window:
-            self.trend = tide_trend.TrendState()  # other bins: the trend starts again
+            self.state.trend = tide_trend.TrendState()  # other bins: the trend starts again
         self.config = config
-        for line, lc in zip(self.lines, config.lines):
+        for line, lc in zip(self.state.lines, config.lines):
             line.config, line.alarm = lc, LineAlarm.for_line(lc, config.alarm)
         self.dock_model = DockModel.from_config(config) if config.has_dock_model else None
 
@@ -614,22 +661,26 @@ class MonitorCore:
         """Tide level and message, and the one depth-stale decision every line takes."""
         now = _stamp_s(stamp_ns)
         timeout = self.config.alarm.depth_timeout
-        self.depth_stale = self.depth_s == self.depth_s and now - self.depth_s > timeout
-        status = tide_status(self.depth, self.depth_s, now, timeout)
-        new = tide_with_sensor(status, self.depth_code, self.depth, self.config.alarm)
+        self.state.depth_stale = (
+            self.state.depth_s == self.state.depth_s and now - self.state.depth_s > timeout
+        )
+        status = tide_status(self.state.depth, self.state.depth_s, now, timeout)
+        new = tide_with_sensor(status, self.state.depth_code, self.state.depth, self.config.alarm)
         return self._set_component('tide', new, stamp_ns)
 
     def _sensors_now(self, now: float) -> tuple[Level, str]:
         """The sensors' common-cause alarm at ``now`` [s] (core.health.sensors_status)."""
         a = self.config.alarm
-        waiting = [line.config.name for line in self.lines if line.tension_s != line.tension_s]
+        waiting = [
+            line.config.name for line in self.state.lines if line.tension_s != line.tension_s
+        ]
         return sensors_status(
             waiting,
-            len(self.lines),
-            self.depth_s,
-            self.depth_stale,
+            len(self.state.lines),
+            self.state.depth_s,
+            self.state.depth_stale,
             now,
-            self.start_s,
+            self.state.start_s,
             a.tension_timeout,
             a.depth_timeout,
         )
@@ -638,28 +689,30 @@ class MonitorCore:
         """The sensors' common-cause alarm, after the tide's decision, and its
         acknowledgement state."""
         now = _stamp_s(stamp_ns)
-        self.sensors_waiting = sum(line.tension_s != line.tension_s for line in self.lines)
+        self.state.sensors_waiting = sum(
+            line.tension_s != line.tension_s for line in self.state.lines
+        )
         changes = self._set_component('sensors', self._sensors_now(now), stamp_ns)
-        self.sensors_ack = alarm_ack.step(self.sensors_ack, self.sensors[0], now)
+        self.state.sensors_ack = alarm_ack.step(self.state.sensors_ack, self.state.sensors[0], now)
         return changes
 
     def _decide_sensors(self, stamp_ns: int) -> None:
         """Every line's and the depth sensor's state at a tick (core.sensor)."""
         a = self.config.alarm
         now = np.array([_stamp_s(stamp_ns)])
-        lines = self.lines
+        lines = self.state.lines
         tension = np.array([[line.tension for line in lines]])
         changed = np.array([[line.sensor_memory.changed for line in lines]])
         ref, keep = sensor_state.reference(
-            self.sensor_times, self.sensor_rows, now, a.parted_window
+            self.state.sensor_times, self.state.sensor_rows, now, a.parted_window
         )
         pattern = sensor_state.parted_pattern(tension, ref, a.parted_drop)
         seen = np.array([[line.parted_seen for line in lines]])
         seen = np.where(pattern, now[:, None], seen)
-        self.sensor_times = np.append(self.sensor_times[keep:], now)
+        self.state.sensor_times = np.append(self.state.sensor_times[keep:], now)
         spiked = np.array([[line.sensor_memory.spiked for line in lines]])
         row = sensor_state.history_row(now, tension, spiked, a.sensor_hold)
-        self.sensor_rows = np.vstack([self.sensor_rows[keep:], row])
+        self.state.sensor_rows = np.vstack([self.state.sensor_rows[keep:], row])
         codes = sensor_state.decide_lines(
             a,
             sensor_limits(self.config),
@@ -669,18 +722,18 @@ class MonitorCore:
             changed,
             spiked,
             seen,
-            np.array([self.depth]),
-            np.array([self.depth_memory.changed]),
+            np.array([self.state.depth]),
+            np.array([self.state.depth_memory.changed]),
         )
         for k, line in enumerate(lines):
             line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
-        dm = self.depth_memory
-        self.depth_code = int(
+        dm = self.state.depth_memory
+        self.state.depth_code = int(
             sensor_state.decide_depth(
                 a,
                 now,
-                np.array([self.depth]),
-                np.array([self.depth_s]),
+                np.array([self.state.depth]),
+                np.array([self.state.depth_s]),
                 np.array([dm.changed]),
                 np.array([dm.spiked]),
                 changed,
@@ -692,40 +745,40 @@ class MonitorCore:
         status, and what each line's ``inconsistent`` alarm condition sees."""
         assert self.dock_model is not None
         now = _stamp_s(stamp_ns)
-        depth_ok = self.depth_s == self.depth_s and not self.depth_stale
-        decision, self.dock_smoothing = dock_live.decide_dock(
+        depth_ok = self.state.depth_s == self.state.depth_s and not self.state.depth_stale
+        decision, self.state.dock_smoothing = dock_live.decide_dock(
             self.dock_model,
             self.config,
             np.array([now]),
-            np.array([self.depth]),
+            np.array([self.state.depth]),
             np.array([depth_ok]),
-            np.array([[line.tension for line in self.lines]]),
-            np.array([[line.tension_s for line in self.lines]]),
-            self.dock_smoothing,
+            np.array([[line.tension for line in self.state.lines]]),
+            np.array([[line.tension_s for line in self.state.lines]]),
+            self.state.dock_smoothing,
         )
-        for k, line in enumerate(self.lines):
+        for k, line in enumerate(self.state.lines):
             line.dock = tuple(decision.line_inputs[0, k].tolist())
-        self.dock_values = dock_live.dock_values(decision, 0)
+        self.state.dock_values = dock_live.dock_values(decision, 0)
         new = (Level(int(decision.level[0])), dock_live.dock_message(self.dock_model, decision, 0))
         return self._set_component('dock', new, stamp_ns)
 
     def _set_component(self, name: str, new: tuple[Level, str], stamp_ns: int) -> list[Change]:
         """Set the tide's or the logger's (level, message); a Change if the level moved."""
-        old: tuple[Level, str] = getattr(self, name)
-        setattr(self, name, new)
+        old: tuple[Level, str] = getattr(self.state, name)
+        setattr(self.state, name, new)
         if new[0] == old[0]:
             return []
         now = _stamp_s(stamp_ns)
-        entered = getattr(self, f'{name}_entered')
-        setattr(self, f'{name}_entered', now)
+        entered = getattr(self.state, f'{name}_entered')
+        setattr(self.state, f'{name}_entered', now)
         quiet = name in _CONSEQUENCES and quiet_change(old[0], True, new[0], True)
         return [Change(name, Transition(now, old[0], new[0], new[1], now - entered, quiet))]
 
     def _solve_one(self, line: LineState) -> None:
         """Solve one line at the newest depth (the scalar fast path)."""
         lc, t = line.config, line.tension
-        h = self.depth + lc.hook_height
-        if self.depth_s != self.depth_s:  # no depth yet: nothing to solve
+        h = self.state.depth + lc.hook_height
+        if self.state.depth_s != self.state.depth_s:  # no depth yet: nothing to solve
             line.values, line.status, line.status_message, line.model = (
                 _with_sensor((t, h) + _NAN_VALUES[2:], line.sensor_code),
                 NO_DEPTH,
@@ -761,10 +814,10 @@ class MonitorCore:
         """Solve several lines at the newest depth in one vectorized call."""
         if not which:
             return
-        lines = [self.lines[k] for k in which]
+        lines = [self.state.lines[k] for k in which]
         cfgs = [line.config for line in lines]
         tension = np.array([line.tension for line in lines])
-        h = self.depth + np.array([c.hook_height for c in cfgs])
+        h = self.state.depth + np.array([c.hook_height for c in cfgs])
         ea = None
         if any(c.ea is not None for c in cfgs):
             ea = np.array([math.inf if c.ea is None else c.ea for c in cfgs])
@@ -821,12 +874,12 @@ class MonitorCore:
                 a.constituents,
                 a.tide_table_epoch,
                 a.tide_forecast_horizon,
-                np.full(len(margins), self.depth_s),
+                np.full(len(margins), self.state.depth_s),
                 np.array(margins, np.float64),
                 np.array(forces, np.float64),
             )
             return [float(v) for v in times]
-        rate, excess = self.trend.rate, self.trend.excess
+        rate, excess = self.state.trend.rate, self.state.trend.excess
         return [tide_trend.time_to_uplift(m, f, rate, excess) for m, f in zip(margins, forces)]
 
     def _step_lines(self, which: Any, stamp_ns: int) -> list[Change]:
@@ -834,13 +887,13 @@ class MonitorCore:
         now = _stamp_s(stamp_ns)
         changes = []
         for k in which:
-            line = self.lines[k]
+            line = self.state.lines[k]
             line.state, events = line.alarm.update(
                 line.state,
                 line.inputs(
-                    self.depth_s,
-                    self.depth_stale,
-                    self.trend.rate,
+                    self.state.depth_s,
+                    self.state.depth_stale,
+                    self.state.trend.rate,
                     bool(self.config.alarm.constituents),
                 ),
                 now,
@@ -860,7 +913,7 @@ class MonitorCore:
     # ------------------------------------------------------------------ views
     def output(self, k: int) -> LineOutput:
         """Line ``k``'s outputs now (:data:`OUTPUT_FIELDS`)."""
-        line = self.lines[k]
+        line = self.state.lines[k]
         return LineOutput(k, output_values(line.values, line.status, line.state.level))
 
     def snapshot(self, stamp_ns: int) -> Snapshot:
@@ -889,26 +942,30 @@ class MonitorCore:
                     else ()
                 ),
             )
-            for line in self.lines
+            for line in self.state.lines
         ]
         statuses.append(
             tide_component(
-                self.tide,
+                self.state.tide,
                 self.depth_id,
-                self.depth,
-                now - self.depth_s,
-                self.trend.rate,
-                depth_word(self.depth_s, self.depth_code),
-                forecast_word(self.config, self.trend.rate),
+                self.state.depth,
+                now - self.state.depth_s,
+                self.state.trend.rate,
+                depth_word(self.state.depth_s, self.state.depth_code),
+                forecast_word(self.config, self.state.trend.rate),
             )
         )
-        statuses.append(sensors_component(self.sensors, self.sensors_ack, self.sensors_waiting))
-        level, message = self.logger
+        statuses.append(
+            sensors_component(
+                self.state.sensors, self.state.sensors_ack, self.state.sensors_waiting
+            )
+        )
+        level, message = self.state.logger
         statuses.append(
             ComponentStatus(f'{NODE_NAME}: logger', level, message, self.logger_id, ())
         )
         if dock:
-            statuses.append(dock_component(self.dock, self.dock_values))
+            statuses.append(dock_component(self.state.dock, self.state.dock_values))
         statuses += self.guard_components(now)
         return Snapshot(stamp_ns, tuple(statuses))
 
@@ -919,11 +976,11 @@ class MonitorCore:
         flag = self.parameters_component(now)
         if flag is not None:
             out.append(flag)
-        if self.clock_seen:
-            out.append(ComponentStatus(f'{NODE_NAME}: clock', *self.clock, NODE_NAME, ()))
-        if self.intake_seen:
+        if self.state.clock_seen:
+            out.append(ComponentStatus(f'{NODE_NAME}: clock', *self.state.clock, NODE_NAME, ()))
+        if self.state.intake_seen:
             dropped = self.intake_dropped()
-            names = [line.config.name for line in self.lines] + ['depth']
+            names = [line.config.name for line in self.state.lines] + ['depth']
             values = (('messages_dropped', str(sum(dropped))),) + tuple(
                 (f'{name}.messages_dropped', str(d)) for name, d in zip(names, dropped)
             )
@@ -933,17 +990,19 @@ class MonitorCore:
                 values += (('messages_missing', str(sum(missing))),) + tuple(
                     (f'{name}.messages_missing', str(m)) for name, m in zip(names, missing)
                 )
-            out.append(ComponentStatus(f'{NODE_NAME}: intake', *self.intake, NODE_NAME, values))
+            out.append(
+                ComponentStatus(f'{NODE_NAME}: intake', *self.state.intake, NODE_NAME, values)
+            )
         return out
 
     def parameters_component(self, now: float) -> Optional[ComponentStatus]:
         """The runtime-change status at ``now`` [s] (None when runtime changes are not
         allowed and none was made): WARN naming the changes until their flag expires."""
-        if not (self.config.allow_runtime_changes or self.changes):
+        if not (self.config.allow_runtime_changes or self.state.changes):
             return None
-        level, message = parameters_status(self.changes, self.changes_until, now)
-        until = repr(float(self.changes_until)) if self.changes else 'nan'
-        values = (('changes', str(len(self.changes))), ('flagged_until', until))
+        level, message = parameters_status(self.state.changes, self.state.changes_until, now)
+        until = repr(float(self.state.changes_until)) if self.state.changes else 'nan'
+        values = (('changes', str(len(self.state.changes))), ('flagged_until', until))
         return ComponentStatus(f'{NODE_NAME}: parameters', level, message, NODE_NAME, values)
 
 

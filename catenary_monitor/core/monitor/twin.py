@@ -491,10 +491,10 @@ def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
     """Every tick's sensor states (the arrays the core hands core.sensor one tick at a time);
     leaves the core's sensor memories as after the window."""
     a, ticks = core.config.alarm, window.ticks
-    lines = core.lines
+    lines = core.state.lines
     n, m = len(ticks), len(lines)
     before = [line.sensor_code for line in lines]
-    before_depth = core.depth_code
+    before_depth = core.state.depth_code
     now = ticks * 1e-9
     tension, tension_s = np.empty((n, m)), np.empty((n, m))
     changed, spiked = np.empty((n, m)), np.empty((n, m))
@@ -511,18 +511,18 @@ def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
         changed[:, k] = _pick(j, ch, mem.changed)
         spiked[:, k] = _pick(j, sp, mem.spiked)
     dd, dv = window.depth
-    dmem = core.depth_memory
-    dch, dsp, core.depth_memory = sensor_state.samples(
+    dmem = core.state.depth_memory
+    dch, dsp, core.state.depth_memory = sensor_state.samples(
         dmem, dd * 1e-9, dv, a.depth_resolution, a.depth_rate_max, a.stamp_jitter
     )
     j = np.searchsorted(dd, ticks, 'right') - 1  # depth goes before a tick at one stamp
-    depth, depth_s = _pick(j, dv, core.depth), _pick(j, dd * 1e-9, core.depth_s)
+    depth, depth_s = _pick(j, dv, core.state.depth), _pick(j, dd * 1e-9, core.state.depth_s)
     d_changed, d_spiked = _pick(j, dch, dmem.changed), _pick(j, dsp, dmem.spiked)
     if n == 0:
         return _Sensors(np.zeros((0, m), np.int8), np.zeros(0, np.int8), before, before_depth)
-    times = np.concatenate([core.sensor_times, now])
+    times = np.concatenate([core.state.sensor_times, now])
     rows = np.vstack(
-        [core.sensor_rows, sensor_state.history_row(now, tension, spiked, a.sensor_hold)]
+        [core.state.sensor_rows, sensor_state.history_row(now, tension, spiked, a.sensor_hold)]
     )
     ref, keep = sensor_state.reference(times, rows, now, a.parted_window)
     pattern = sensor_state.parted_pattern(tension, ref, a.parted_drop)
@@ -530,7 +530,7 @@ def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
     seen = np.maximum.accumulate(
         np.vstack([first, np.where(pattern, now[:, None], -math.inf)]), axis=0
     )[1:]
-    core.sensor_times, core.sensor_rows = times[keep:], rows[keep:]
+    core.state.sensor_times, core.state.sensor_rows = times[keep:], rows[keep:]
     codes = sensor_state.decide_lines(
         a,
         sensor_limits(core.config),
@@ -546,7 +546,7 @@ def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
     depth_codes = sensor_state.decide_depth(a, now, depth, depth_s, d_changed, d_spiked, changed)
     for k, line in enumerate(lines):
         line.sensor_code, line.parted_seen = int(codes[-1, k]), float(seen[-1, k])
-    core.depth_code = int(depth_codes[-1])
+    core.state.depth_code = int(depth_codes[-1])
     return _Sensors(codes, depth_codes, before, before_depth)
 
 
@@ -560,8 +560,8 @@ def _decide_tide(
     d_idx = _newest(kinds == KIND_DEPTH)
     have = d_idx >= 0
     j = np.maximum(d_idx, 0)
-    depth = np.where(have, dv[j] if len(dv) else math.nan, core.depth)
-    depth_s = np.where(have, dd[j] * 1e-9 if len(dd) else math.nan, core.depth_s)
+    depth = np.where(have, dv[j] if len(dv) else math.nan, core.state.depth)
+    depth_s = np.where(have, dd[j] * 1e-9 if len(dd) else math.nan, core.state.depth_s)
     now = times * 1e-9
     timeout = core.config.alarm.depth_timeout
     with np.errstate(invalid='ignore'):
@@ -574,10 +574,10 @@ def _decide_tide(
         level, np.where(code == sensor_state.OUT_OF_RANGE, Level.ERROR, Level.WARN), code
     )
     window_s = core.config.alarm.tide_trend_window
-    rates, excess, trend = tide_trend.series(core.trend, dd, dv, window_s)
+    rates, excess, trend = tide_trend.series(core.state.trend, dd, dv, window_s)
     tide = _Tide(times, depth, depth_s, level, stale, rates, excess, trend, code, kinds)
     transitions = []
-    old, entered = core.tide[0], core.tide_entered
+    old, entered = core.state.tide[0], core.state.tide_entered
     for i in _changed(level, old).tolist():
         new = _tide_at(core, tide, i)
         t = float(now[i])
@@ -602,14 +602,14 @@ def _blind_at(core: MonitorCore, tide: _Tide, blind: _Blind, i: int) -> tuple[Le
     """The sensors alarm's (level, message) at tide decision ``i`` (as the core's
     ``_decide_blind``)."""
     a = core.config.alarm
-    names = [line.config.name for line, w in zip(core.lines, blind.waiting[i]) if w]
+    names = [line.config.name for line, w in zip(core.state.lines, blind.waiting[i]) if w]
     return sensors_status(
         names,
-        len(core.lines),
+        len(core.state.lines),
         float(tide.depth_s[i]),
         bool(tide.stale[i]),
         float(tide.times[i] * 1e-9),
-        core.start_s,
+        core.state.start_s,
         a.tension_timeout,
         a.depth_timeout,
     )
@@ -619,8 +619,8 @@ def _decide_blind(core: MonitorCore, window: Window, tide: _Tide) -> _Blind:
     """The sensors alarm at every tide decision of the window, its transitions and its
     acknowledgement states; leaves the core's as after the window."""
     a, times = core.config.alarm, tide.times
-    waiting = np.zeros((len(times), len(core.lines)), bool)
-    for k, line in enumerate(core.lines):
+    waiting = np.zeros((len(times), len(core.state.lines)), bool)
+    for k, line in enumerate(core.state.lines):
         tt = window.tensions[k][0]
         if line.tension_s == line.tension_s:
             continue
@@ -629,25 +629,25 @@ def _decide_blind(core: MonitorCore, window: Window, tide: _Tide) -> _Blind:
             continue
         # A tick follows the tensions of its own stamp; a depth sample goes before them.
         waiting[:, k] = (times < tt[0]) | ((times == tt[0]) & (tide.kinds == KIND_DEPTH))
-    since = times * 1e-9 - core.start_s
+    since = times * 1e-9 - core.state.start_s
     late = waiting.any(axis=1) & (since > a.tension_timeout)
     silent = tide.stale | (np.isnan(tide.depth_s) & (since > a.depth_timeout))
     levels = np.where(late | silent, Level.STALE, Level.OK).astype(np.int8)
-    before = (core.sensors, core.sensors_waiting)
-    blind = _Blind(waiting, levels, [], alarm_ack.AckSeries(core.sensors_ack, levels[:0], []),
-                   before)  # fmt: skip
-    old, entered = core.sensors[0], core.sensors_entered
+    before = (core.state.sensors, core.state.sensors_waiting)
+    acks = alarm_ack.AckSeries(core.state.sensors_ack, levels[:0], [])
+    blind = _Blind(waiting, levels, [], acks, before)
+    old, entered = core.state.sensors[0], core.state.sensors_entered
     for i in _changed(levels, old).tolist():
         new = _blind_at(core, tide, blind, i)
         t = float(times[i] * 1e-9)
         blind.transitions.append(Transition(t, old, new[0], new[1], t - entered))
         old, entered = new[0], t
-    blind.acks = alarm_ack.replay_acks(core.sensors_ack, times * 1e-9, levels)
+    blind.acks = alarm_ack.replay_acks(core.state.sensors_ack, times * 1e-9, levels)
     if len(times):
-        core.sensors = _blind_at(core, tide, blind, len(times) - 1)
-        core.sensors_waiting = int(waiting[-1].sum())
-    core.sensors_entered = entered
-    core.sensors_ack = blind.acks.final
+        core.state.sensors = _blind_at(core, tide, blind, len(times) - 1)
+        core.state.sensors_waiting = int(waiting[-1].sum())
+    core.state.sensors_entered = entered
+    core.state.sensors_ack = blind.acks.final
     return blind
 
 
@@ -657,14 +657,14 @@ def _write_tide(
     """The core's depth and tide state after the window's last event."""
     if len(tide.times):
         i = len(tide.times) - 1
-        core.tide = _tide_at(core, tide, i)
-        core.depth_stale = bool(tide.stale[i])
+        core.state.tide = _tide_at(core, tide, i)
+        core.state.depth_stale = bool(tide.stale[i])
     if transitions:
-        core.tide_entered = transitions[-1].time
-    core.trend = tide.trend
+        core.state.tide_entered = transitions[-1].time
+    core.state.trend = tide.trend
     dd, dv = window.depth
     if len(dd):
-        core.depth, core.depth_s = float(dv[-1]), float(dd[-1] * 1e-9)
+        core.state.depth, core.state.depth_s = float(dv[-1]), float(dd[-1] * 1e-9)
 
 
 @dataclass
@@ -684,7 +684,7 @@ def _decide_dock_window(core: MonitorCore, window: Window, tide: _Tide) -> Optio
     model = core.dock_model
     if model is None:
         return None
-    before = (core.dock, core.dock_values, [line.dock for line in core.lines])
+    before = (core.state.dock, core.state.dock_values, [line.dock for line in core.state.lines])
     ticks = window.ticks
     n = len(ticks)
     if n == 0:
@@ -695,19 +695,19 @@ def _decide_dock_window(core: MonitorCore, window: Window, tide: _Tide) -> Optio
     at = np.searchsorted(tide.times, ticks, 'right') - 1  # the tick's own tide decision
     depth = tide.depth[at]
     depth_ok = ~np.isnan(tide.depth_s[at]) & ~tide.stale[at]
-    tension = np.empty((n, len(core.lines)))
-    tension_s = np.empty((n, len(core.lines)))
-    for k, line in enumerate(core.lines):
+    tension = np.empty((n, len(core.state.lines)))
+    tension_s = np.empty((n, len(core.state.lines)))
+    for k, line in enumerate(core.state.lines):
         tt, tv = window.tensions[k]
         j = np.searchsorted(tt, ticks, 'right') - 1  # tensions go before a tick at one stamp
         tension[:, k] = _pick(j, tv, line.tension)
         tension_s[:, k] = _pick(j, tt * 1e-9, line.tension_s)
-    decision, core.dock_smoothing = dock_live.decide_dock(
-        model, core.config, now, depth, depth_ok, tension, tension_s, core.dock_smoothing
+    decision, core.state.dock_smoothing = dock_live.decide_dock(
+        model, core.config, now, depth, depth_ok, tension, tension_s, core.state.dock_smoothing
     )
     levels = decision.level
     transitions = []
-    old, entered = core.dock[0], core.dock_entered
+    old, entered = core.state.dock[0], core.state.dock_entered
     for i in _changed(levels, old).tolist():
         new = Level(int(levels[i]))
         t = float(now[i])
@@ -715,10 +715,10 @@ def _decide_dock_window(core: MonitorCore, window: Window, tide: _Tide) -> Optio
         quiet = quiet_change(old, True, new, True)
         transitions.append(Transition(t, old, new, message, t - entered, quiet))
         old, entered = new, t
-    core.dock = (Level(int(levels[-1])), dock_live.dock_message(model, decision, n - 1))
-    core.dock_entered = entered
-    core.dock_values = dock_live.dock_values(decision, n - 1)
-    for k, line in enumerate(core.lines):
+    core.state.dock = (Level(int(levels[-1])), dock_live.dock_message(model, decision, n - 1))
+    core.state.dock_entered = entered
+    core.state.dock_values = dock_live.dock_values(decision, n - 1)
+    for k, line in enumerate(core.state.lines):
         line.dock = tuple(decision.line_inputs[-1, k].tolist())
     return _Dock(decision, levels, before, transitions)
 
@@ -801,7 +801,7 @@ def _solve_line(
     d_idx = steps.d_idx[steps.solved]
     a = core.config.alarm
     if a.constituents:
-        now = _pick(d_idx, window.depth[0] * 1e-9, core.depth_s)
+        now = _pick(d_idx, window.depth[0] * 1e-9, core.state.depth_s)
         values['time_to_uplift'] = tide_table.uplift_times(
             a.constituents,
             a.tide_table_epoch,
@@ -811,8 +811,8 @@ def _solve_line(
             values['uplift_force'],
         )
     else:
-        rate = _pick(d_idx, tide.rates, core.trend.rate)
-        excess = _pick(d_idx, tide.excess, core.trend.excess)
+        rate = _pick(d_idx, tide.rates, core.state.trend.rate)
+        excess = _pick(d_idx, tide.excess, core.state.trend.excess)
         values['time_to_uplift'] = tide_trend.uplift_times(
             values['tide_margin'], values['uplift_force'], rate, excess
         )
@@ -844,7 +844,7 @@ def _solve_at(
     tension = _pick(steps.t_idx[where], tv, line.tension)
     d_idx = steps.d_idx[where]
     dv = window.depth[1]
-    h = _pick(d_idx, dv + lc.hook_height, core.depth + lc.hook_height)  # NaN: no depth yet
+    h = _pick(d_idx, dv + lc.hook_height, core.state.depth + lc.hook_height)  # NaN: no depth yet
     used: Optional[np.ndarray] = None
     if lc.ea is not None:
         values, status, used = _solve_updates_elastic(lc, tension, h)
@@ -852,7 +852,7 @@ def _solve_at(
         values, status = _solve_updates_kernel(lc, tension, h, keep=True)
     else:
         a_depth = critical_parameters(lc, dv + lc.hook_height)
-        a_before = critical_parameters(lc, np.array([core.depth + lc.hook_height]))[0]
+        a_before = critical_parameters(lc, np.array([core.state.depth + lc.hook_height]))[0]
         values, status = solve_updates(lc, tension, h, _pick(d_idx, a_depth, a_before))
     _mark_implausible(values, status, used, reading_status_array(tension, h, lc.mbl))
     return values, status, used
@@ -908,12 +908,12 @@ def _line_inputs(
     inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
         np.int64
     )
-    inputs['tide_rate'] = _pick(steps.d_idx, tide.rates, core.trend.rate)
+    inputs['tide_rate'] = _pick(steps.d_idx, tide.rates, core.state.trend.rate)
     inputs['tide_forecast'] = 1.0 if core.config.alarm.constituents else 0.0
     inputs['tension_stamp'] = _pick(steps.t_idx, tt * 1e-9, line.tension_s)
-    inputs['depth_stamp'] = _pick(steps.d_idx, window.depth[0] * 1e-9, core.depth_s)
+    inputs['depth_stamp'] = _pick(steps.d_idx, window.depth[0] * 1e-9, core.state.depth_s)
     inputs['depth_stale'] = _pick(
-        steps.dk_idx, tide.stale.astype(np.float64), float(core.depth_stale)
+        steps.dk_idx, tide.stale.astype(np.float64), float(core.state.depth_stale)
     ).astype(bool)
     if sensors is not None:
         codes = sensors.codes[:, k].astype(np.float64)
@@ -939,7 +939,7 @@ def _advance_line(
 ) -> tuple[LineResult, LevelSeries, _Steps, alarm_ack.AckSeries]:
     """One line through the window; leaves the line's state in the core as after the steps
     (the core's depth and tide still as before the window)."""
-    line = core.lines[k]
+    line = core.state.lines[k]
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
     values, status, used = _solve_line(core, line, steps, tv, window, tide, sensors, k)
@@ -996,12 +996,18 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
     snapshot the core would have made (ticks and level changes); ``snapshots=COLUMNS``, the
     same as one :class:`SnapshotColumns` (or Snapshots where it falls back).
     """
-    if len(window.tensions) != len(core.lines):
+    if len(window.tensions) != len(core.state.lines):
         raise ValueError(
-            f'window has {len(window.tensions)} tension columns for ' f'{len(core.lines)} lines'
+            f'window has {len(window.tensions)} tension columns for '
+            f'{len(core.state.lines)} lines'
         )
-    depth_before = (core.depth, core.depth_s, core.depth_stale, core.trend.rate)
-    tide_before = core.tide
+    depth_before = (
+        core.state.depth,
+        core.state.depth_s,
+        core.state.depth_stale,
+        core.state.trend.rate,
+    )
+    tide_before = core.state.tide
     lines_before = [
         _Before(
             line.state.level,
@@ -1018,23 +1024,23 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
             ),
             _line_word(core, line, line.sensor_code, line.state.latches[_INCONSISTENT].active),
         )
-        for line in core.lines
+        for line in core.state.lines
     ]
-    depth_word = depth_state_word(core.depth_s, core.depth_code)
+    depth_word = depth_state_word(core.state.depth_s, core.state.depth_code)
     sensors = _decide_sensors_window(core, window)
     tide, tide_transitions = _decide_tide(core, window, sensors)
     blind = _decide_blind(core, window, tide)
     dock = _decide_dock_window(core, window, tide)
     results, series, steps, acks = [], [], [], []
-    for k in range(len(core.lines)):
+    for k in range(len(core.state.lines)):
         r, s, st, a = _advance_line(core, k, window, tide, sensors, dock)
         results.append(r)
         series.append(s)
         steps.append(st)
         acks.append(a)
     times = [c[0] for c in (*window.tensions, window.depth, (window.ticks, None)) if len(c[0])]
-    start = int(min(t[0] for t in times)) if times else core.last_ns
-    end = int(max(t[-1] for t in times)) if times else core.last_ns
+    start = int(min(t[0] for t in times)) if times else core.state.last_ns
+    end = int(max(t[-1] for t in times)) if times else core.state.last_ns
     snaps: list[Snapshot | SnapshotColumns] = []
     if snapshots:
         build = _snapshot_columns if snapshots == COLUMNS else _snapshots
@@ -1046,7 +1052,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         )
         snaps = [made] if isinstance(made, SnapshotColumns) else list(made)
     _write_tide(core, window, tide, tide_transitions)
-    core.last_ns = max(core.last_ns, end)
+    core.state.last_ns = max(core.state.last_ns, end)
     others = [Change('sensors', tr) for tr in blind.transitions]
     others += [] if dock is None else [Change('dock', tr) for tr in dock.transitions]
     return WindowResult(results, tide_transitions, snaps, start, end, others)
@@ -1170,7 +1176,7 @@ class _Made(NamedTuple):
         """Line ``k``'s state, result, levels, steps, tension times, state before the window,
         acknowledgements, and the window's dock and sensor states."""
         return (
-            self.core.lines[k], self.results[k], self.series[k], self.steps[k],
+            self.core.state.lines[k], self.results[k], self.series[k], self.steps[k],
             self.window.tensions[k][0], self.lines_before[k], self.acks[k], self.dock,
             self.sensors,
         )  # fmt: skip
@@ -1186,7 +1192,7 @@ def _snapshots(m: _Made) -> list[Snapshot]:
     columns = [_line_statuses(m, k, stamps) for k in range(len(m.results))]
     tick_at = np.searchsorted(window.ticks, stamps, 'right') - 1
     logger = ComponentStatus(
-        'catenary_monitor: logger', core.logger[0], core.logger[1], core.logger_id, ()
+        'catenary_monitor: logger', core.state.logger[0], core.state.logger[1], core.logger_id, ()
     )
     out = []
     for n, stamp in enumerate(stamps.tolist()):
@@ -1531,7 +1537,7 @@ def _snapshot_columns(m: _Made) -> SnapshotColumns | list[Snapshot]:
     groups.append((tides, 1))
     groups.append((m.blind_statuses(stamps), 1))
     logger = ComponentStatus(
-        'catenary_monitor: logger', core.logger[0], core.logger[1], core.logger_id, ()
+        'catenary_monitor: logger', core.state.logger[0], core.state.logger[1], core.logger_id, ()
     )
     groups.append(([logger] * n, 1))
     if dock is not None:
@@ -1638,7 +1644,7 @@ def run_log(
             if snapshots and step.snapshot is not None:
                 extra.append(step.snapshot)
         lo = hi
-    lines = [concat_lines([p.lines[k] for p in pieces]) for k in range(len(core.lines))]
+    lines = [concat_lines([p.lines[k] for p in pieces]) for k in range(len(core.state.lines))]
     tide = [tr for p in pieces for tr in p.tide]
     others = sorted(
         others + [c for p in pieces for c in p.others], key=lambda c: c.transition.time
@@ -1660,7 +1666,7 @@ def run_log(
 
 
 def _ids(core: MonitorCore) -> dict[str, str]:
-    return {line.config.name: line.hardware_id for line in core.lines}
+    return {line.config.name: line.hardware_id for line in core.state.lines}
 
 
 @dataclass

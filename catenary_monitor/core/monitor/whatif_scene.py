@@ -141,7 +141,7 @@ def whatif(
     for event in events:
         core.step(event)
     lines = []
-    for k, line in enumerate(core.lines):
+    for k, line in enumerate(core.state.lines):
         out = dict(zip(OUTPUT_FIELDS, core.output(k).values))
         lines.append(
             LineScene(
