@@ -71,3 +71,10 @@ def isa(request):
     fused_kernel.set_isa(request.param)
     yield request.param
     fused_kernel.set_isa(before)
+
+
+def pytest_collection_modifyitems(items):
+    """A test of the C kernel's instruction sets needs the kernel: marked ``c_extension``."""
+    for item in items:
+        if 'isa' in getattr(item, 'fixturenames', ()):
+            item.add_marker(pytest.mark.c_extension)

@@ -40,12 +40,14 @@ def _both(fn, *args):
     return fast, slow
 
 
+@pytest.mark.c_extension
 def test_the_c_loops_are_built() -> None:
     assert (
         STEPS is not None
     ), 'core/monitor/_twin_loops.c is not built: python setup.py build_ext --inplace'
 
 
+@pytest.mark.c_extension
 def test_merge_matches_numpy_with_ties_and_empty_columns() -> None:
     rng = np.random.default_rng(3)
     for trial in range(300):
@@ -58,12 +60,14 @@ def test_merge_matches_numpy_with_ties_and_empty_columns() -> None:
         assert tf.dtype == ts.dtype and kf.dtype == ks.dtype
 
 
+@pytest.mark.c_extension
 def test_merge_refuses_unsorted_columns() -> None:
     """(twin._merge then takes its numpy path, whose contract is sorted columns too.)"""
     dd, tt, kk = np.array([5, 1], np.int64), np.array([2, 3], np.int64), np.zeros(0, np.int64)
     assert not STEPS.merge3(dd, tt, kk, np.empty(4, np.int64), np.empty(4, np.int8), 0, 1, 2)
 
 
+@pytest.mark.c_extension
 def test_pick_matches_numpy() -> None:
     rng = np.random.default_rng(4)
     for trial in range(200):
@@ -79,6 +83,7 @@ def test_pick_matches_numpy() -> None:
         STEPS.pick(np.array([3], np.int64), np.zeros(3), 0.0, np.empty(1))
 
 
+@pytest.mark.c_extension
 def test_latch_matches_the_scalar_step_and_numpy(monkeypatch: pytest.MonkeyPatch) -> None:
     """alarms._latch_series in C and in numpy equal repeated alarms._step, from latches up or
     down, pending (since a past update's stamp) or not, through equal stamps and zero delays."""
@@ -105,6 +110,7 @@ def test_latch_matches_the_scalar_step_and_numpy(monkeypatch: pytest.MonkeyPatch
         STEPS.latch(np.zeros(3, np.int8), np.zeros(2), 0.0, 0.0, False, np.nan, np.empty(3, bool))
 
 
+@pytest.mark.c_extension
 def test_line_steps_match_numpy() -> None:
     """twin._line_steps' C loop (every newest index, solved, in one pass) equals its cumulative
     sums, with and without a tension known before the window, empty columns and equal stamps."""
@@ -134,6 +140,7 @@ def test_line_steps_match_numpy() -> None:
         )
 
 
+@pytest.mark.c_extension
 def test_sensor_samples_match_numpy_and_the_scalar_sample(monkeypatch: pytest.MonkeyPatch) -> None:
     """sensor_state.samples in C and in numpy equal repeated sensor_state.sample, memory included:
     steps within and across the resolution, spikes, non-finite readings, equal stamps, a fresh
@@ -162,6 +169,7 @@ def test_sensor_samples_match_numpy_and_the_scalar_sample(monkeypatch: pytest.Mo
             assert end == m, (trial, loops)
 
 
+@pytest.mark.c_extension
 def test_uplift_times_match_numpy_and_the_scalar(monkeypatch: pytest.MonkeyPatch) -> None:
     """tide_trend.uplift_times in C and in numpy equal time_to_uplift element by element:
     lifted, falling or unknown tides, NaN margins and excesses, signed zeros, infinities."""

@@ -12,6 +12,9 @@ from catenary_monitor.core.physics import fused_kernel, inextensible
 from catenary_monitor.core.physics import solve as solve_module
 from catenary_monitor.core.physics.result import ALL_KEYS, Status
 
+#: C against numpy: needs the accelerators (not in the no-compiler run).
+pytestmark = pytest.mark.c_extension
+
 W = 1300.0
 
 

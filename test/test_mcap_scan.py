@@ -48,6 +48,7 @@ def numpy_path(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(mcap_read, '_scan', None)
 
 
+@pytest.mark.c_extension
 def test_the_c_loops_are_built() -> None:
     assert SCAN is not None, 'io/_scan.c is not built: python setup.py build_ext --inplace'
 
@@ -87,6 +88,7 @@ def _both(path: Path, windows: bool = False) -> Any:
     return got
 
 
+@pytest.mark.c_extension
 def test_same_results_on_good_files(tmp_path: Path) -> None:
     files = write_own_log(tmp_path / 'own', 700, chunk_size=2500, compression='zstd')
     bag = write_rosbag2_style(tmp_path / 'bag.mcap', sample_messages(700), compression='zstd')
@@ -108,6 +110,7 @@ def _index_entries(path: Path) -> list[tuple[int, int]]:
     return out
 
 
+@pytest.mark.c_extension
 def test_same_results_on_damaged_message_indexes(tmp_path: Path) -> None:
     """Index entries moved (inside a record, onto another channel's record, onto another
     entry's record, out of the chunk, out of order); the checks must agree entry by entry."""
@@ -148,6 +151,7 @@ def test_same_results_on_damaged_message_indexes(tmp_path: Path) -> None:
             _both(damaged, windows=True)
 
 
+@pytest.mark.c_extension
 def test_same_results_on_random_damage(tmp_path: Path) -> None:
     """Bit flips anywhere (mostly in the index, which has no CRC), in two kinds of file."""
     own = write_own_log(tmp_path / 'own', 600, chunk_size=2500, compression='zstd')[0]
@@ -169,6 +173,7 @@ def test_same_results_on_random_damage(tmp_path: Path) -> None:
     assert outcomes >= {True, False}
 
 
+@pytest.mark.c_extension
 def test_gather_and_columns_match_numpy() -> None:
     """The C gather and the Float64 columns, record by record (big and little endian, bad
     encapsulation, records too short or running past the buffer)."""

@@ -1,0 +1,106 @@
+"""The package as it installs on a machine without a C compiler: no accelerator is built, the
+numpy paths answer, and the tests of those paths pass against that install.
+
+The source is copied (tracked files only: no in-place build comes along), installed with
+``CC=/bin/false`` into a folder of its own, and the tests run with that folder first on the
+path and ``CATENARY_MONITOR_NO_EXTENSIONS=1`` (the conftest builds nothing); the tests that
+compare the C code with numpy (marker ``c_extension``) are left out.
+"""
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: The tests of the numpy paths: solve() without the kernel, the twin without its loops, the
+#: reader without its scan, and the streamed replay over all of them.
+NUMPY_PATH_TESTS = (
+    'test_solve_api.py',
+    'test_seed_tables.py',
+    'test_kernels.py',
+    'test_batch.py',
+    'test_batch_steps.py',
+    'test_sensor.py',
+    'test_tide_trend.py',
+    'test_mcap_scan.py',
+    'test_replay_stream.py',
+)
+
+
+@pytest.fixture(scope='module')
+def installed(tmp_path_factory) -> Path:
+    src = tmp_path_factory.mktemp('src')
+    files = subprocess.run(
+        ['git', 'ls-files', '-z'], cwd=ROOT, capture_output=True, check=True
+    ).stdout.split(b'\0')
+    for name in filter(None, files):
+        target = src / name.decode()
+        if (ROOT / name.decode()).is_file():
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / name.decode(), target)
+    where = tmp_path_factory.mktemp('site')
+    env = dict(os.environ, CC='/bin/false', CXX='/bin/false')
+    done = subprocess.run(
+        [sys.executable, '-m', 'pip', 'install', '-q', '--no-deps', '--target', str(where), '.'],
+        cwd=src,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr[-3000:]
+    return where
+
+
+def test_it_installs_without_a_compiler_and_runs_on_numpy(installed):
+    assert not list(installed.rglob('*.so')), 'an accelerator was built without a compiler'
+    code = (
+        'import catenary_monitor as cm\n'
+        'from catenary_monitor.core.physics import fused_kernel\n'
+        'from catenary_monitor.core.monitor import twin, sensor_state, tide_trend, alarms\n'
+        'from catenary_monitor.io import mcap_read\n'
+        'print(cm.__file__)\n'
+        'print(fused_kernel.AVAILABLE, twin._loops, sensor_state._loops, tide_trend._loops,'
+        ' alarms._loops, mcap_read._scan)\n'
+        'print(cm.solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06).uplift_force)\n'
+    )
+    out = subprocess.run(
+        [sys.executable, '-c', code], cwd=installed, capture_output=True, text=True, timeout=120
+    )
+    assert out.returncode == 0, out.stderr
+    where, loaded, uplift = out.stdout.splitlines()
+    assert Path(where).resolve().is_relative_to(installed.resolve())
+    assert loaded == 'False None None None None None'
+    assert float(uplift) == pytest.approx(193267.5, rel=1e-5)  # the seed's Table 4 answer
+
+
+def test_the_numpy_path_tests_pass_on_that_install(installed):
+    env = dict(os.environ, CATENARY_MONITOR_NO_EXTENSIONS='1')
+    done = subprocess.run(
+        [
+            sys.executable,
+            '-m',
+            'pytest',
+            '-q',
+            '-p',
+            'no:cacheprovider',
+            '-c',
+            str(ROOT / 'pytest.ini'),
+            '-m',
+            'not c_extension',
+            *(str(ROOT / 'test' / name) for name in NUMPY_PATH_TESTS),
+        ],
+        cwd=installed,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=900,
+    )
+    tail = done.stdout[-3000:]
+    assert done.returncode == 0, tail
+    assert ' passed' in tail and 'failed' not in tail
