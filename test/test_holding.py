@@ -126,7 +126,10 @@ def test_drag_warning_with_deadband():
     assert state.level == Level.WARN and 'drag margin 7.5 kN, warning held' in state.message
     assert 'anchor may drag' in state.message
     core2, _ = run(line, 15.0, [900.0 + 375], drag_margin_warn=7440.0)
-    assert 'drag margin' in core2.state.lines[0].state.message and 'kN <' in core2.state.lines[0].state.message
+    assert (
+        'drag margin' in core2.state.lines[0].state.message
+        and 'kN <' in core2.state.lines[0].state.message
+    )
 
 
 def test_holding_doc_parameter_table_is_generated():
