@@ -84,6 +84,10 @@ setup(
         'mcap-ros2-support>=0.5',
         'ros-jazzy-rclpy[fastrtps]',
         'ros-jazzy-common-interfaces',
+        # The sensors' own messages (WrenchStamped, FluidPressure, Range) and replay's /clock.
+        'ros-jazzy-geometry-msgs',
+        'ros-jazzy-sensor-msgs',
+        'ros-jazzy-rosgraph-msgs',
     ],
     extras_require={
         # The test suite also checks the peers (MoorPy, pycatenary): nothing there is skipped.
