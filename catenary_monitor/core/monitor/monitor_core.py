@@ -17,9 +17,10 @@ What an event does, in this order (the one schedule the node, replay and the tes
    is stale (older than ``depth_timeout``), one decision that every line then takes;
 3. lines are solved (``solve(..., ea=line.ea)``): a tension event solves its line at the newest
    depth (``depth + hook_height``); a depth event solves every line that has a tension;
-4. alarms are stepped (:class:`~catenary_monitor.core.monitor.alarms.LineAlarm`): the solved line at a
-   tension event, every line at a depth event or a tick; each stepped line's acknowledgement
-   state follows its level (:func:`catenary_monitor.core.monitor.acknowledge.step`);
+4. alarms are stepped (:class:`~catenary_monitor.core.monitor.alarms.LineAlarm`): the solved
+   line at a tension event, every line at a depth event or a tick; each stepped line's
+   acknowledgement state follows its level
+   (:func:`catenary_monitor.core.monitor.acknowledge.step`);
 5. a diagnostic snapshot is taken when the event is a tick or when any level changed: never two
    per event, so the statuses of one snapshot always agree.
 
