@@ -1,4 +1,5 @@
-/* Seven loops of the vectorized replay (catenary_monitor/core/monitor/twin.py, alarms.py, sensor.py,
+/* Seven loops of the vectorized replay (catenary_monitor/core/monitor/twin.py, alarms.py,
+ * sensor_state.py, fatigue.py,
  * tide_trend.py) in C.
  *
  * Optional, like the solve kernel: where it is not built, those modules run their numpy
@@ -6,20 +7,20 @@
  * with the scalar step it replaces).
  *
  *   merge3(dd, tt, kk, times_out, kinds_out, kind_d, kind_t, kind_k) -> bool
- *       batch._merge: the sorted depth, tension and tick times (int64) merged into one
+ *       twin._merge: the sorted depth, tension and tick times (int64) merged into one
  *       schedule, ties taken depth, tension, tick; False (nothing written) when an input is
  *       not sorted, for the caller's numpy path.
  *   pick(idx, column, before, out)
- *       batch._pick for a float64 column: out[i] = column[idx[i]], or `before` where
+ *       twin._pick for a float64 column: out[i] = column[idx[i]], or `before` where
  *       idx[i] == -1 (every element `before` when the column is empty).
  *   newest(kinds, kind_d, kind_t, kind_k, known, t_idx, d_idx, dk_idx, k_idx, solved, s_idx)
- *       batch._line_steps: per step (kinds int8: the depth, tension or tick code), the index of
+ *       twin._line_steps: per step (kinds int8: the depth, tension or tick code), the index of
  *       the newest tension, depth, non-tension and tick step within its kind (int64, -1:
  *       none yet); whether the line is solved there (a tension; a depth once a tension is
  *       known, `known` or one in the window) and the index of the newest solved step.
  *   samples(values, stamps, value, stamp, changed, spiked, resolution, rate, jitter, ch, sp)
  *       -> (value, stamp, changed, spiked)
- *       sensor.samples: a sensor memory (value, stamp, changed, spiked) through its readings
+ *       sensor_state.samples: a sensor memory (value, stamp, changed, spiked) through its readings
  *       (float64; non-finite ones skipped): when it last changed beyond the resolution and
  *       when it last spiked after each (ch, sp), and the memory after the last.
  *   uplift_times(tide_margin, uplift_force, rate, excess, out)
