@@ -101,6 +101,9 @@ setup(
             # Independent readers of the MCAP logs and the bag folder.
             'rosbags>=0.10',
             'pymcap-cli',
+            # Two rainflow counts (ASTM E1049-85) the streamed fatigue count is tested against.
+            'rainflow>=3.2',
+            'fatpack>=0.7',
         ],
         'peers': ['moorpy', 'pycatenary'],
     },
