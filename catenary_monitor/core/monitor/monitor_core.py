@@ -107,6 +107,7 @@ __all__ = [
     'line_status',
     'bound_values',
     'holding_values',
+    'holding_one',
     'output_values',
     'tide_component',
     'sensors_component',
@@ -856,8 +857,13 @@ class MonitorCore:
             some = [line for line in lines if wanted(line.config)]
             if not some:
                 continue
-            named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
-            derived = compute([line.config for line in some], named)
+            derived: dict[str, Any]
+            if compute is holding_values and len(some) == 1:  # a tension event: plain floats
+                one = holding_one(some[0].config, some[0].values)
+                derived = {k: (v,) for k, v in one.items()}
+            else:
+                named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
+                derived = compute([line.config for line in some], named)
             for j, line in enumerate(some):
                 v = list(line.values)
                 for key in fields:
@@ -1074,6 +1080,29 @@ def holding_values(
         named['horizontal_tension'],
         named['suspended_length'],
         named['uplift_force'],
+    )
+
+
+def holding_one(lc: LineConfig, values: Sequence[float]) -> dict[str, float]:
+    """:func:`holding_values` of one line's :data:`VALUE_FIELDS` values in plain floats
+    (:func:`catenary_monitor.core.monitor.holding.holding_scalar`: the same numbers to
+    rounding, an order of magnitude faster than one-element arrays)."""
+
+    def given(v: Optional[float]) -> float:
+        return _NAN if v is None else v
+
+    return holding_rule.holding_scalar(
+        lc.weight,
+        math.inf if lc.ea is None else lc.ea,
+        given(lc.chain_length),
+        given(lc.anchor_holding),
+        given(lc.anchor_weight),
+        given(lc.chain_friction),
+        values[_AT['top_tension']],
+        values[_AT['depth']],
+        values[_AT['horizontal_tension']],
+        values[_AT['suspended_length']],
+        values[_AT['uplift_force']],
     )
 
 
