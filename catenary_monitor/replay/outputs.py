@@ -1,7 +1,7 @@
 """Replay outputs: CSV rows, an MCAP results log, PNG charts and the summary (text or JSON).
 
-No rclpy: the MCAP messages are encoded by :mod:`catenary_monitor.cdr` and written by
-:mod:`catenary_monitor.mcap_fast`.
+No rclpy: the MCAP messages are encoded by :mod:`catenary_monitor.io.cdr` and written by
+:mod:`catenary_monitor.io.mcap_column_writer`.
 """
 
 from __future__ import annotations
@@ -100,7 +100,7 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('drag_margin', 3),
     ('implied_anchor_distance', 3),
     ('tide_margin_at_length', 3),
-    ('sensor_state', None),  # core.sensor.LINE_STATES word
+    ('sensor_state', None),  # core.monitor.sensor_state.LINE_STATES word
     ('status', None),
     ('level', None),
     ('model', None),

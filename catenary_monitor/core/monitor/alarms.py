@@ -123,10 +123,10 @@ CONDITIONS = (
     'safety_factor',
     'time_to_uplift',
     'inconsistent',
-    # Margins with uncertainty and holding (issue 12, items 3 and 4).
+    # Margins within the sensors' accuracy, and holding.
     'uplift_possible',
     'drag_margin',
-    # Sensor sanity (issue 12, item 2): core/sensor_state.py.
+    # Sensor sanity: core/monitor/sensor_state.py.
     'sensor_error',
     'sensor_warn',
 )
@@ -177,7 +177,7 @@ class AlarmInputs:
     uplift_force_upper: float = math.nan  # N, the uplift force's bound within sensor accuracy
     drag_margin: float = math.nan  # N, holding capacity minus horizontal load
     holding_capacity: float = math.nan  # N, anchor and grounded chain (for the message)
-    sensor_state: float = 0.0  # core.sensor line state code (0 ok)
+    sensor_state: float = 0.0  # core.monitor.sensor_state line state code (0 ok)
     sensor_tension: float = math.nan  # N, the newest tension the state was decided on
     mbl: float = math.nan  # N, the line's MBL (for the message)
 
