@@ -15,7 +15,8 @@ Bounds
   below the hanging chain's own weight ``w * h`` (``UNITS_FACTOR``), or at or below ``w * h``
   where 1000 times the reading (a load cell in kN read as N) would lie between ``w * h`` and
   the MBL. A chain cannot hang with less than its own weight at the hook, so such a reading is
-  a scale (or a parted chain); the message names the line's ``tension_scale``.
+  a scale (or a parted chain); the message names the line's ``tension_scale``. A negative
+  reading stays the solver's ``T <= w*h``.
 * **Depth** (with the hook height) above ``MAX_DEPTH`` = 12 000 m: deeper than any sea
   (Challenger Deep, about 10 935 m).
 
@@ -64,7 +65,7 @@ def reading_status(tension: float, depth: float, mbl: float, weight: float = mat
     if tension > MAX_TENSION_PER_MBL * mbl:
         return int(Status.IMPLAUSIBLE_TENSION)
     hanging = weight * depth
-    if depth > 0.0 and (
+    if depth > 0.0 and tension >= 0.0 and (
         tension * UNITS_FACTOR <= hanging or (tension <= hanging < KN * tension <= mbl)
     ):
         return int(Status.WRONG_UNITS)
@@ -85,6 +86,7 @@ def reading_status_array(tension: Any, depth: Any, mbl: Any, weight: Any = math.
             & ~deep
             & ~strong
             & (h > 0.0)
+            & (t >= 0.0)
             & (
                 (t * UNITS_FACTOR <= hanging)
                 | ((t <= hanging) & (hanging < KN * t) & (KN * t <= np.asarray(mbl, float)))
