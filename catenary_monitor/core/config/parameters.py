@@ -177,6 +177,19 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         read_only=True,
     ),
     ParamSpec(
+        'acknowledge_from_ros',
+        'bool',
+        True,
+        'Accept alarm acknowledgements on /catenary_monitor/acknowledge from any publisher; '
+        'false: only from a console (a node catenary_console_*, the only publisher on the '
+        'topic): where operators acknowledge through the authenticated console (docs/node.md, '
+        'Security)',
+        '',
+        None,
+        None,
+        read_only=True,
+    ),
+    ParamSpec(
         'runtime_change_warn_time',
         'double',
         3600.0,
@@ -1034,6 +1047,7 @@ _TOP_LEVEL = (
     'log_rotate_duration',
     'log_create_dir',
     'allow_runtime_changes',
+    'acknowledge_from_ros',
     'runtime_change_warn_time',
 )
 
@@ -1050,6 +1064,7 @@ class MonitorConfig:
     depth_topic: str = _default('depth_topic')
     log_dir: str = _default('log_dir')
     allow_runtime_changes: bool = _default('allow_runtime_changes')
+    acknowledge_from_ros: bool = _default('acknowledge_from_ros')
     runtime_change_warn_time: float = _default('runtime_change_warn_time')  # s
     log_rotate_size: float = _default('log_rotate_size')  # MiB
     log_rotate_duration: float = _default('log_rotate_duration')  # s
@@ -1281,6 +1296,7 @@ NON_DECIDING = frozenset(
         'log_rotate_duration',
         'log_create_dir',
         'allow_runtime_changes',
+        'acknowledge_from_ros',
     }
 )
 

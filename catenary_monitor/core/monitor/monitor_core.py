@@ -218,11 +218,14 @@ class Reconfigure(NamedTuple):
 
 
 class Acknowledge(NamedTuple):
-    """An operator acknowledged line ``line``'s alarm (None: every line) from ``origin``."""
+    """An operator acknowledged line ``line``'s alarm (None: every line) from ``origin`` (as
+    the message claims), published by ``publisher`` (the middleware's identity of the sender:
+    node and GID; empty when unknown)."""
 
     stamp_ns: int
     line: Optional[str]
     origin: str
+    publisher: str = ''
 
 
 class ClockHealth(NamedTuple):
@@ -543,9 +546,11 @@ class MonitorCore:
         now = _stamp_s(ev.stamp_ns)
         for line in self.state.lines:
             if ev.line is None or ev.line == line.config.name:
-                line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin)
+                line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin, ev.publisher)
         if ev.line is None or ev.line == alarm_ack.SENSORS:
-            self.state.sensors_ack = alarm_ack.acknowledge(self.state.sensors_ack, now, ev.origin)
+            self.state.sensors_ack = alarm_ack.acknowledge(
+                self.state.sensors_ack, now, ev.origin, ev.publisher
+            )
         return Step(ev.stamp_ns, 'acknowledge', (), self.snapshot(ev.stamp_ns), ())
 
     def _on_clock(self, ev: ClockHealth) -> Step:
@@ -1247,7 +1252,12 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
         return {'kind': 'configure', 'parameters': config_to_params(event.config)}
     if isinstance(event, Acknowledge):
         line = alarm_ack.ALL_LINES if event.line is None else event.line
-        return {'kind': 'acknowledge', 'line': line, 'origin': event.origin}
+        return {
+            'kind': 'acknowledge',
+            'line': line,
+            'origin': alarm_ack.bounded_text(event.origin),
+            'publisher': alarm_ack.bounded_text(event.publisher),
+        }
     if isinstance(event, ClockHealth):
         return {'kind': 'clock', 'stopped_for': event.stopped_for}
     if isinstance(event, Intake):
@@ -1290,8 +1300,9 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
             line = str(record['line'])
             return Acknowledge(
                 stamp_ns,
-                None if line == alarm_ack.ALL_LINES else line,
-                str(record.get('origin', '')),
+                None if line == alarm_ack.ALL_LINES else alarm_ack.bounded_text(line),
+                alarm_ack.bounded_text(str(record.get('origin', ''))),
+                alarm_ack.bounded_text(str(record.get('publisher', ''))),
             )
     except (ValueError, KeyError, TypeError):
         return None
