@@ -588,6 +588,17 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         group='holding',
     ),
     ParamSpec(
+        'drag_tolerance',
+        'double',
+        1.0,
+        'ERROR (anchor dragging) when the load exceeds the holding and the implied anchor '
+        'distance is beyond the installed one by more than this',
+        'm',
+        0.0,
+        1000.0,
+        group='holding',
+    ),
+    ParamSpec(
         'load_margin_warn',
         'double',
         0.0,
@@ -950,6 +961,7 @@ class AlarmConfig:
     depth_accuracy: float = _default('depth_accuracy')
     drag_margin_warn: float = _default('drag_margin_warn')
     drag_margin_deadband: float = _default('drag_margin_deadband')
+    drag_tolerance: float = _default('drag_tolerance')
     tension_resolution: float = _default('tension_resolution')
     depth_resolution: float = _default('depth_resolution')
     stuck_time: float = _default('stuck_time')

@@ -106,6 +106,7 @@ __all__ = [
     'line_status',
     'bound_values',
     'holding_values',
+    'HOLDING_FIELDS',
     'output_values',
     'tide_component',
     'sensors_component',
@@ -149,6 +150,8 @@ OUTPUT_FIELDS = (
     'sensor_state',
     # The tide margin of a chain of fixed length, its hook held: core/monitor/holding.py.
     *holding_rule.LENGTH_FIELDS,
+    # The anchor's drag state (0 holding, 1 overloaded, 2 dragging): core/monitor/holding.py.
+    *holding_rule.DRAG_FIELDS,
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -341,6 +344,8 @@ class LineState:
             sensor_state=float(self.sensor_code),
             sensor_tension=self.tension,
             mbl=self.config.mbl,
+            drag_state=v[_AT['drag_state']],
+            implied_anchor_distance=v[_AT['implied_anchor_distance']],
         )
 
 
@@ -848,9 +853,10 @@ class MonitorCore:
         """The bounds and the holding values of freshly solved lines (from their values);
         lines without accuracies or holding data keep NaN (what the functions give them)."""
         accuracy = self.config.alarm.depth_accuracy
+        tolerance = self.config.alarm.drag_tolerance
         for fields, compute, wanted in (
             (uncertainty.FIELDS, _bounds_of(accuracy), _wants_bounds(accuracy)),
-            (holding_rule.FIELDS + holding_rule.LENGTH_FIELDS, holding_values, _wants_holding),
+            (HOLDING_FIELDS, _holding_of(tolerance), _wants_holding),
         ):
             some = [line for line in lines if wanted(line.config)]
             if not some:
@@ -1033,6 +1039,14 @@ def _wants_holding(c: LineConfig) -> bool:
     return c.chain_length is not None or c.anchor_holding is not None
 
 
+#: The values :func:`holding_values` gives (core/monitor/holding.py).
+HOLDING_FIELDS = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS + holding_rule.DRAG_FIELDS
+
+
+def _holding_of(tolerance: float) -> Any:
+    return lambda cfgs, named: holding_values(cfgs, named, tolerance)
+
+
 def _bounds_of(depth_accuracy: float) -> Any:
     return lambda cfgs, named: bound_values(cfgs, depth_accuracy, named)
 
@@ -1057,10 +1071,10 @@ def bound_values(
 
 
 def holding_values(
-    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray]
+    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray], tolerance: float = math.inf
 ) -> dict[str, np.ndarray]:
-    """The holding values (:data:`catenary_monitor.core.monitor.holding.FIELDS`), as
-    :func:`bound_values`."""
+    """The holding values (:data:`HOLDING_FIELDS`), as :func:`bound_values`; ``tolerance``
+    is ``drag_tolerance`` (m)."""
     return holding_rule.holding(
         _column(cfgs, 'weight'),
         _column(cfgs, 'ea'),
@@ -1073,6 +1087,8 @@ def holding_values(
         named['horizontal_tension'],
         named['suspended_length'],
         named['uplift_force'],
+        _column(cfgs, 'anchor_distance'),
+        tolerance,
     )
 
 
