@@ -195,6 +195,125 @@ def test_on_a_rising_tide_the_margin_at_length_counts_down_to_the_lift():
     assert o['tide_margin_at_length'] == pytest.approx(1.0515 - rate * 7140, abs=1e-3)  # 7140 s on
 
 
+def _holding_scenes(n, seed):
+    """Chains of the dock's kind and far beyond: grounded and lifted, inextensible and
+    elastic, holding data given or not (NaN), a few solves missing (NaN)."""
+    import numpy as np
+
+    from catenary_monitor.core.physics import fixed_length
+
+    rng = np.random.default_rng(seed)
+    w = 10.0 ** rng.uniform(1, 4, n)
+    h = 10.0 ** rng.uniform(0, 2.5, n)
+    length = h * 10.0 ** rng.uniform(0.05, 1.5, n)
+    ea = np.where(rng.random(n) < 0.5, np.inf, w * length * 10.0 ** rng.uniform(1, 6, n))
+    slack = np.asarray(fixed_length.slack_span(w, h, length, ea))
+    reach = np.where(np.isinf(ea), fixed_length.taut_span(h, length), 1.3 * length)
+    span = slack + (reach - slack) * rng.uniform(0.01, 0.999, n)
+    st = fixed_length.statics_at_span(w, h, length, span, ea)
+    given = rng.random((4, n)) < 0.7
+    holding = np.where(given[0], w * h * rng.uniform(1, 50, n), np.nan)
+    anchor_weight = np.where(given[1], holding * rng.uniform(0.2, 3, n), np.nan)
+    friction = np.where(given[2], rng.uniform(0.3, 1.5, n), np.nan)
+    length = np.where(given[3] | np.isnan(holding), length, np.nan)
+    r = np.where(rng.random(n) < 0.05, np.nan, st.horizontal_tension)
+    return (
+        w,
+        ea,
+        length,
+        holding,
+        anchor_weight,
+        friction,
+        st.top_tension,
+        h,
+        r,
+        st.suspended_length,
+        st.uplift_force,
+    )
+
+
+@pytest.mark.parametrize('seed', [1, 2])
+def test_the_plain_float_holding_path_gives_the_array_path_numbers(seed):
+    """holding_scalar (the monitor's per-sample path, about 20x faster on one line) against
+    holding() on the same scenes as one array. The implied span agrees to a few ulps; the lift
+    depth, at the same span and at the implied one, to the problem's own conditioning (near the
+    taut limit a relative change e of the span moves it by about e / (2 (1 - span / length));
+    the elastic chain's Newton in R is as sensitive, and the array path itself differs by as
+    much between batch sizes, as it iterates until every element has converged); NaN where
+    NaN."""
+    import numpy as np
+
+    from catenary_monitor.core.monitor.holding import (
+        FIELDS,
+        LENGTH_FIELDS,
+        holding,
+        holding_scalar,
+    )
+    from catenary_monitor.core.physics import fixed_length
+
+    scenes = _holding_scenes(2000, seed)
+    w, ea, length, h = scenes[0], scenes[1], scenes[2], scenes[7]
+    vec = holding(*scenes)
+    implied = vec['implied_anchor_distance']
+    lift = fixed_length.lift_depth(w, length, implied, ea)
+    lifted = 0
+    for i in range(len(w)):
+        one = holding_scalar(*(float(c[i]) for c in scenes))
+        lifted += scenes[-1][i] > 0
+        if np.isfinite(implied[i]):
+            assert one['implied_anchor_distance'] == pytest.approx(implied[i], rel=1e-15, abs=0)
+            at_same = fixed_length.lift_depth_scalar(w[i], length[i], implied[i], ea[i])
+            cond = 1.0 / (1.0 - implied[i] / length[i])
+            assert at_same == pytest.approx(lift[i], rel=2e-15 * cond, abs=0) or (
+                math.isnan(at_same) and math.isnan(lift[i])
+            )
+        for key in FIELDS + LENGTH_FIELDS:
+            want = float(vec[key][i])
+            scale = abs(want)
+            if key == 'tide_margin_at_length':
+                scale = (abs(lift[i]) + h[i]) / (1.0 - implied[i] / length[i])
+            if math.isnan(want):
+                assert math.isnan(one[key]), (i, key, one[key])
+            else:
+                assert abs(one[key] - want) <= 1e-14 * scale, (i, key, one[key], want)
+    assert 200 < lifted < 1800  # both regimes are in the sweep (no pass by construction)
+    assert np.isfinite(vec['tide_margin_at_length']).sum() > 500
+
+
+def test_the_core_takes_the_plain_float_path_on_a_tension_and_the_array_path_on_a_depth(
+    monkeypatch,
+):
+    """A tension event (one line: plain floats, the array path never called) and a depth
+    event (every line: the array path) give the same holding values for the same tension and
+    depth."""
+    import dataclasses
+
+    from catenary_monitor.core.monitor import holding as holding_rule
+
+    calls = []
+    array_path = holding_rule.holding
+    monkeypatch.setattr(holding_rule, 'holding', lambda *a: calls.append(1) or array_path(*a))
+    line = hou_line(20.5)
+    other = dataclasses.replace(line, name='b', tension_topic='')
+    core = MonitorCore(MonitorConfig(lines=(line, other)), 0)
+    core.step(Depth(1, 14.0))
+    one = core.step(Tension(2, 0, 120.0 + 25.0 * 14.0)).outputs[0].values
+    core.step(Tension(3, 1, 120.0 + 25.0 * 14.0))
+    assert calls == []
+    both = core.step(Depth(4, 14.0)).outputs
+    assert calls == [1]
+    for k in (
+        'grounded_length',
+        'holding_capacity',
+        'implied_anchor_distance',
+        'tide_margin_at_length',
+    ):
+        i = OUTPUT_FIELDS.index(k)
+        assert math.isfinite(one[i]), k
+        assert one[i] == pytest.approx(both[0].values[i], rel=1e-13)
+        assert both[0].values[i] == both[1].values[i]
+
+
 def _storm(spans, line, **alarm):
     """The core and its twin through one tension a second at those spans (Hou's depth 13 m,
     a tick a second): the core's outputs and transitions, and the twin's."""

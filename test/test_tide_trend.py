@@ -1,4 +1,5 @@
-"""The tide's trend and each line's time to uplift (core.monitor.tide_trend, the core, its vectorized twin).
+"""The tide's trend and each line's time to uplift (core.monitor.tide_trend, the core, its
+vectorized twin).
 
 * the scalar trend (``step``) and its vectorized twin (``series``) give the same bits, in any
   windows;

@@ -82,7 +82,7 @@ class ParamSpec(NamedTuple):
     scope: str = 'global'
     read_only: bool = False
     optional: bool = False
-    group: str = ''  # '' the monitor's table (README); 'dock' docs/dock_body.md's; 'holding'
+    group: str = ''  # '' the monitor's table (docs/node.md); 'dock' docs/dock_body.md's; 'holding'
     # docs/holding.md's
 
     def full_name(self, line: str | None = None) -> str:
@@ -98,7 +98,7 @@ class ParamSpec(NamedTuple):
 
 _L = 'line'
 _NOT_GIVEN = math.nan
-#: The one source of truth for every parameter: the node declares these, the README renders them.
+#: The one source of truth for every parameter: the node declares these, the docs render them.
 PARAMETERS: tuple[ParamSpec, ...] = (
     ParamSpec(
         'lines',
@@ -303,7 +303,9 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'tension_accuracy',
         'double',
         _NOT_GIVEN,
-        'Accuracy of the tension sensor: a reading is within +- this of the true tension',
+        'Stated accuracy of the tension sensor, a bound: a reading is within +- this of the true '
+        'tension (the margin bounds take the worst case within it; the dock estimate takes it '
+        'as a reading\'s standard deviation)',
         'N',
         1.0,
         1.0e9,
@@ -561,7 +563,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'depth_accuracy',
         'double',
         0.0,
-        'Accuracy of the depth sensor: a reading is within +- this of the true depth',
+        'Stated accuracy of the depth sensor, a bound: a reading is within +- this of the true '
+        'depth (the margin bounds take the worst case within it; 0: exact)',
         'm',
         0.0,
         100.0,
@@ -1307,7 +1310,7 @@ def config_hash(config: MonitorConfig) -> str:
 
 def parameters_markdown(group: str = '') -> str:
     """The parameter table as Markdown: name, default (doubles unless noted), unit, range,
-    description; ``group`` ``''`` the monitor's (README), ``'dock'`` the dock model's,
+    description; ``group`` ``''`` the monitor's (docs/node.md), ``'dock'`` the dock model's,
     ``'holding'`` the holding's (docs/holding.md)."""
     rows = ['| parameter | default | unit | range | description |', '|---|---|---|---|---|']
     for spec in PARAMETERS:

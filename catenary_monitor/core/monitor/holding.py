@@ -47,6 +47,7 @@ NaN where the data are not given or the line has no solve.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -62,6 +63,7 @@ __all__ = [
     'DRAGGING',
     'DRAG_STATES',
     'holding',
+    'holding_scalar',
     'drag_word',
 ]
 
@@ -151,3 +153,95 @@ def holding(
 def drag_word(code: float) -> str:
     """The word of a ``drag_state`` code (``unknown`` for NaN)."""
     return DRAG_STATES[int(code)] if code == code else 'unknown'
+
+
+def holding_scalar(
+    w: float,
+    ea: float,
+    chain_length: float,
+    anchor_holding: float,
+    anchor_weight: float,
+    chain_friction: float,
+    tension: float,
+    depth: float,
+    horizontal: float,
+    suspended: float,
+    uplift: float,
+    anchor_distance: float = math.nan,
+    tolerance: float = math.inf,
+) -> dict[str, float]:
+    """:func:`holding` of one line in plain floats (the monitor's per-sample path, an order of
+    magnitude faster on one element): the same formulas in the same order, the fixed-length
+    chain by :func:`~catenary_monitor.core.physics.fixed_length.span_from_tension_scalar` and
+    :func:`~catenary_monitor.core.physics.fixed_length.lift_depth_scalar`. Where plain floats
+    raise (an overflow, a root of a negative number) the array path answers instead, so the
+    numbers are the array path's to rounding (test_holding)."""
+    args = (
+        w,
+        ea,
+        chain_length,
+        anchor_holding,
+        anchor_weight,
+        chain_friction,
+        tension,
+        depth,
+        horizontal,
+        suspended,
+        uplift,
+        anchor_distance,
+    )
+    try:
+        return _holding_floats(*(float(v) for v in args), tolerance)
+    except (ValueError, OverflowError, ZeroDivisionError):
+        arrays = holding(*([v] for v in args), tolerance)  # type: ignore[misc]
+        return {key: float(v[0]) for key, v in arrays.items()}
+
+
+def _holding_floats(
+    w: float,
+    ea: float,
+    length: float,
+    a_hold: float,
+    a_weight: float,
+    mu: float,
+    t: float,
+    h: float,
+    r: float,
+    s: float,
+    v: float,
+    x0: float,
+    tolerance: float,
+) -> dict[str, float]:
+    """:func:`holding_scalar` itself (raises where :mod:`math` does)."""
+    nan = math.nan
+    if length != length and a_hold != a_hold:  # nothing configured: all NaN
+        return dict.fromkeys(FIELDS + LENGTH_FIELDS + DRAG_FIELDS, nan)
+    solved = r == r
+    lifted = v > 0.0
+    grounded = 0.0 if lifted else _maximum0(length - s)
+    grounded = grounded if solved and length == length else nan
+    if lifted:
+        anchor = 0.0 if a_weight != a_weight else a_hold * _maximum0(1.0 - v / a_weight)
+    else:
+        anchor = a_hold
+    chain = 0.0 if (mu != mu or grounded != grounded) else w * mu * grounded
+    capacity = anchor + chain if solved and a_hold == a_hold else nan
+    implied = lift = nan
+    if solved and length == length:
+        implied = fixed_length.span_from_tension_scalar(w, h, length, t, ea)
+        lift = fixed_length.lift_depth_scalar(w, length, implied, ea)
+    margin = capacity - r
+    state = float(DRAGGING if implied - x0 > tolerance else OVERLOADED) if margin < 0.0 else 0.0
+    return {
+        'grounded_length': grounded,
+        'holding_capacity': capacity,
+        'drag_margin': margin,
+        'implied_anchor_distance': implied,
+        'tide_margin_at_length': lift - h,
+        'drag_state': nan if margin != margin else state,
+    }
+
+
+def _maximum0(x: float) -> float:
+    """``np.maximum(x, 0.0)`` of one float (NaN stays NaN)."""
+    return x if (x != x or x >= 0.0) else 0.0

@@ -17,9 +17,10 @@ What an event does, in this order (the one schedule the node, replay and the tes
    is stale (older than ``depth_timeout``), one decision that every line then takes;
 3. lines are solved (``solve(..., ea=line.ea)``): a tension event solves its line at the newest
    depth (``depth + hook_height``); a depth event solves every line that has a tension;
-4. alarms are stepped (:class:`~catenary_monitor.core.monitor.alarms.LineAlarm`): the solved line at a
-   tension event, every line at a depth event or a tick; each stepped line's acknowledgement
-   state follows its level (:func:`catenary_monitor.core.monitor.acknowledge.step`);
+4. alarms are stepped (:class:`~catenary_monitor.core.monitor.alarms.LineAlarm`): the solved
+   line at a tension event, every line at a depth event or a tick; each stepped line's
+   acknowledgement state follows its level
+   (:func:`catenary_monitor.core.monitor.acknowledge.step`);
 5. a diagnostic snapshot is taken when the event is a tick or when any level changed: never two
    per event, so the statuses of one snapshot always agree.
 
@@ -107,6 +108,7 @@ __all__ = [
     'bound_values',
     'holding_values',
     'HOLDING_FIELDS',
+    'holding_one',
     'output_values',
     'tide_component',
     'sensors_component',
@@ -861,8 +863,13 @@ class MonitorCore:
             some = [line for line in lines if wanted(line.config)]
             if not some:
                 continue
-            named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
-            derived = compute([line.config for line in some], named)
+            derived: dict[str, Any]
+            if fields is HOLDING_FIELDS and len(some) == 1:  # a tension event: plain floats
+                one = holding_one(some[0].config, some[0].values, tolerance)
+                derived = {k: (v,) for k, v in one.items()}
+            else:
+                named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
+                derived = compute([line.config for line in some], named)
             for j, line in enumerate(some):
                 v = list(line.values)
                 for key in fields:
@@ -1088,6 +1095,33 @@ def holding_values(
         named['suspended_length'],
         named['uplift_force'],
         _column(cfgs, 'anchor_distance'),
+        tolerance,
+    )
+
+
+def holding_one(
+    lc: LineConfig, values: Sequence[float], tolerance: float = math.inf
+) -> dict[str, float]:
+    """:func:`holding_values` of one line's :data:`VALUE_FIELDS` values in plain floats
+    (:func:`catenary_monitor.core.monitor.holding.holding_scalar`: the same numbers to
+    rounding, an order of magnitude faster than one-element arrays)."""
+
+    def given(v: Optional[float]) -> float:
+        return _NAN if v is None else v
+
+    return holding_rule.holding_scalar(
+        lc.weight,
+        math.inf if lc.ea is None else lc.ea,
+        given(lc.chain_length),
+        given(lc.anchor_holding),
+        given(lc.anchor_weight),
+        given(lc.chain_friction),
+        values[_AT['top_tension']],
+        values[_AT['depth']],
+        values[_AT['horizontal_tension']],
+        values[_AT['suspended_length']],
+        values[_AT['uplift_force']],
+        lc.anchor_distance,
         tolerance,
     )
 

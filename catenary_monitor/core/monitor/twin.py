@@ -478,8 +478,8 @@ def _tide_at(core: MonitorCore, tide: _Tide, i: int) -> tuple[Level, str]:
 
 @dataclass
 class _Sensors:
-    """The sensor states at the window's ticks (core.monitor.sensor_state): each line's code (ticks, lines)
-    and the depth sensor's (ticks), and the codes before the window."""
+    """The sensor states at the window's ticks (core.monitor.sensor_state): each line's code
+    (ticks, lines) and the depth sensor's (ticks), and the codes before the window."""
 
     codes: np.ndarray
     depth_codes: np.ndarray
@@ -488,8 +488,8 @@ class _Sensors:
 
 
 def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
-    """Every tick's sensor states (the arrays the core hands core.monitor.sensor_state one tick at a time);
-    leaves the core's sensor memories as after the window."""
+    """Every tick's sensor states (the arrays the core hands core.monitor.sensor_state one tick
+    at a time); leaves the core's sensor memories as after the window."""
     a, ticks = core.config.alarm, window.ticks
     lines = core.state.lines
     n, m = len(ticks), len(lines)
@@ -589,7 +589,8 @@ def _decide_tide(
 
 @dataclass
 class _Blind:
-    """The sensors' common-cause alarm at the tide's decisions (core.monitor.health.sensors_status)."""
+    """The sensors' common-cause alarm at the tide's decisions
+    (core.monitor.health.sensors_status)."""
 
     waiting: np.ndarray  # (decisions, lines) bool: the line has had no tension yet
     levels: np.ndarray  # int8 Level per decision
@@ -860,8 +861,8 @@ def _solve_at(
 def _mark_implausible(
     values: dict[str, np.ndarray], status: np.ndarray, used: Optional[np.ndarray], code: np.ndarray
 ) -> None:
-    """Implausible readings (core.monitor.plausible), as the core marks them: their status, no solved
-    values (the measured tension and depth kept), the inextensible model named."""
+    """Implausible readings (core.monitor.plausible), as the core marks them: their status, no
+    solved values (the measured tension and depth kept), the inextensible model named."""
     hit = code != 0
     if not hit.any():
         return
