@@ -632,7 +632,8 @@ def test_margin_codes_match_the_scalar() -> None:
             ],
             n,
         )
-    for key in ('uplift_force', 'uplift_force_upper', 'inconsistent', 'sensor_state', 'drag_state'):
+    keys = ('uplift_force', 'uplift_force_upper', 'inconsistent', 'sensor_state', 'drag_state')
+    for key in keys:
         x[key] = np.zeros(n)
     stale = rng.random(n) < 0.3
     status = np.zeros(n, np.int64)

@@ -190,10 +190,12 @@ def holding_scalar(
         uplift,
         anchor_distance,
     )
+    floats = [float(v) for v in args] + [float(tolerance)]
     try:
-        return _holding_floats(*(float(v) for v in args), tolerance)
+        return _holding_floats(*floats)
     except (ValueError, OverflowError, ZeroDivisionError):
-        arrays = holding(*([v] for v in args), tolerance)  # type: ignore[misc]
+        array_path: Any = holding
+        arrays = array_path(*([v] for v in floats[:-1]), tolerance)
         return {key: float(v[0]) for key, v in arrays.items()}
 
 
