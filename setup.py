@@ -100,9 +100,12 @@ setup(
             'selenium>=4.10',
             'moorpy',
             'pycatenary',
-            # Independent readers of the MCAP logs and the bag folder (issue 10).
+            # Independent readers of the MCAP logs and the bag folder.
             'rosbags>=0.10',
             'pymcap-cli',
+            # Two rainflow counts (ASTM E1049-85) the streamed fatigue count is tested against.
+            'rainflow>=3.2',
+            'fatpack>=0.7',
         ],
         'peers': ['moorpy', 'pycatenary'],
     },

@@ -253,9 +253,12 @@ function renderTile(view, lost, frame) {
   const vu = t.querySelector('.v-upper');
   vu.textContent = shown(up) ? `${num(up, 1, KN)} kN` : '';
   vu.className = 'v-upper x-upper ' + (shown(up) && up > (cfg.allowed_uplift || 0) ? 'warn' : '');
-  const vd = t.querySelector('.v-drag');
-  vd.textContent = shown(drag) ? `${num(drag, 1, KN)} kN` : '';
-  vd.className = 'v-drag x-drag ' + (shown(drag) && drag < (S.config.drag_margin_warn || 0) ? 'warn' : '');
+  // drag_state (docs/holding.md): 0 holding, 1 overloaded, 2 dragging (an ERROR).
+  const vd = t.querySelector('.v-drag'), dstate = view.drag_state;
+  const dword = dstate === 2 ? ' · DRAGGING' : dstate === 1 ? ' · overloaded' : '';
+  vd.textContent = shown(drag) ? `${num(drag, 1, KN)} kN${dword}` : '';
+  vd.className = 'v-drag x-drag ' + (dstate === 2 ? 'bad' :
+    (shown(drag) && drag < (S.config.drag_margin_warn || 0) ? 'warn' : ''));
   setText(t.querySelector('.v-model'), (view.model || 'no model').replace(' catenary', ''));
   const msg = lost ? `monitor silent: last known ${view.level} at ${clock(frame.snapshot_t)}` : view.message;
   t.querySelector('.msg').textContent = msg;

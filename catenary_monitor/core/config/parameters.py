@@ -82,7 +82,7 @@ class ParamSpec(NamedTuple):
     scope: str = 'global'
     read_only: bool = False
     optional: bool = False
-    group: str = ''  # '' the monitor's table (README); 'dock' docs/dock_body.md's; 'holding'
+    group: str = ''  # '' the monitor's table (docs/node.md); 'dock' docs/dock_body.md's; 'holding'
     # docs/holding.md's
 
     def full_name(self, line: str | None = None) -> str:
@@ -98,7 +98,7 @@ class ParamSpec(NamedTuple):
 
 _L = 'line'
 _NOT_GIVEN = math.nan
-#: The one source of truth for every parameter: the node declares these, the README renders them.
+#: The one source of truth for every parameter: the node declares these, the docs render them.
 PARAMETERS: tuple[ParamSpec, ...] = (
     ParamSpec(
         'lines',
@@ -316,7 +316,9 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'tension_accuracy',
         'double',
         _NOT_GIVEN,
-        'Accuracy of the tension sensor: a reading is within +- this of the true tension',
+        'Stated accuracy of the tension sensor, a bound: a reading is within +- this of the true '
+        'tension (the margin bounds take the worst case within it; the dock estimate takes it '
+        'as a reading\'s standard deviation)',
         'N',
         1.0,
         1.0e9,
@@ -574,7 +576,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'depth_accuracy',
         'double',
         0.0,
-        'Accuracy of the depth sensor: a reading is within +- this of the true depth',
+        'Stated accuracy of the depth sensor, a bound: a reading is within +- this of the true '
+        'depth (the margin bounds take the worst case within it; 0: exact)',
         'm',
         0.0,
         100.0,
@@ -598,6 +601,17 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'N',
         0.0,
         1.0e8,
+        group='holding',
+    ),
+    ParamSpec(
+        'drag_tolerance',
+        'double',
+        1.0,
+        'ERROR (anchor dragging) when the load exceeds the holding and the implied anchor '
+        'distance is beyond the installed one by more than this',
+        'm',
+        0.0,
+        1000.0,
         group='holding',
     ),
     ParamSpec(
@@ -963,6 +977,7 @@ class AlarmConfig:
     depth_accuracy: float = _default('depth_accuracy')
     drag_margin_warn: float = _default('drag_margin_warn')
     drag_margin_deadband: float = _default('drag_margin_deadband')
+    drag_tolerance: float = _default('drag_tolerance')
     tension_resolution: float = _default('tension_resolution')
     depth_resolution: float = _default('depth_resolution')
     stuck_time: float = _default('stuck_time')
@@ -1311,7 +1326,7 @@ def config_hash(config: MonitorConfig) -> str:
 
 def parameters_markdown(group: str = '') -> str:
     """The parameter table as Markdown: name, default (doubles unless noted), unit, range,
-    description; ``group`` ``''`` the monitor's (README), ``'dock'`` the dock model's,
+    description; ``group`` ``''`` the monitor's (docs/node.md), ``'dock'`` the dock model's,
     ``'holding'`` the holding's (docs/holding.md)."""
     rows = ['| parameter | default | unit | range | description |', '|---|---|---|---|---|']
     for spec in PARAMETERS:

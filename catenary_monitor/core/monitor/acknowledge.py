@@ -43,7 +43,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from catenary_monitor.core.monitor.alarms import CONDITIONS, RANK, Level
+from catenary_monitor.core.monitor.alarms import CONDITIONS, ERROR_CONDITIONS, RANK, Level
 
 __all__ = [
     'NORMAL',
@@ -155,18 +155,22 @@ def acknowledge(ack: AckState, now: float, origin: str, publisher: str = '') -> 
 
 
 def condition(level: Level, latches: Sequence[bool]) -> str:
-    """The condition that sets the line's level: ``uplift``, ``input`` (impossible input),
-    ``stale``, a warning's name (``anchor_margin``, ...) or ``none`` when OK.
+    """The condition that sets the line's level: an ERROR's name (``uplift``, ``input`` for an
+    impossible input, ``sensor_error``, ``dragging``), ``stale``, a warning's name
+    (``anchor_margin``, ...) or ``none`` when OK.
 
     ``latches`` are the active flags of :data:`~catenary_monitor.core.monitor.alarms.CONDITIONS`.
     """
     if level == Level.ERROR:
-        return 'uplift' if latches[0] else 'input'
+        for name, up in zip(CONDITIONS, latches):
+            if up and name in ERROR_CONDITIONS:
+                return name
+        return 'input'
     if level == Level.STALE:
         return 'stale'
     if level == Level.WARN:
-        for name, up in zip(CONDITIONS[2:], latches[2:]):
-            if up:
+        for name, up in zip(CONDITIONS, latches):
+            if up and name not in ERROR_CONDITIONS:
                 return name
     return 'none'
 

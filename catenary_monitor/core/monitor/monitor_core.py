@@ -17,10 +17,10 @@ What an event does, in this order (the one schedule the node, replay and the tes
    is stale (older than ``depth_timeout``), one decision that every line then takes;
 3. lines are solved (``solve(..., ea=line.ea)``): a tension event solves its line at the newest
    depth (``depth + hook_height``); a depth event solves every line that has a tension;
-4. alarms are stepped (:class:`~catenary_monitor.core.monitor.alarms.LineAlarm`): the solved line
-at a
-   tension event, every line at a depth event or a tick; each stepped line's acknowledgement
-   state follows its level (:func:`catenary_monitor.core.monitor.acknowledge.step`);
+4. alarms are stepped (:class:`~catenary_monitor.core.monitor.alarms.LineAlarm`): the solved
+   line at a tension event, every line at a depth event or a tick; each stepped line's
+   acknowledgement state follows its level
+   (:func:`catenary_monitor.core.monitor.acknowledge.step`);
 5. a diagnostic snapshot is taken when the event is a tick or when any level changed: never two
    per event, so the statuses of one snapshot always agree.
 
@@ -107,6 +107,8 @@ __all__ = [
     'line_status',
     'bound_values',
     'holding_values',
+    'HOLDING_FIELDS',
+    'holding_one',
     'output_values',
     'tide_component',
     'sensors_component',
@@ -142,15 +144,16 @@ OUTPUT_FIELDS = (
     'status',
     'level',
     'time_to_uplift',
-    # Margins with the sensors' accuracy (issue 12, item 3): core/monitor/uncertainty.py.
+    # Margins with the sensors' accuracy: core/monitor/uncertainty.py.
     *uncertainty.FIELDS,
-    # Holding and the anchor distance the chain implies (issue 12, item 4):
-    # core/monitor/holding.py.
+    # Holding and the anchor distance the chain implies: core/monitor/holding.py.
     *holding_rule.FIELDS,
-    # Sensor sanity (issue 12, item 2): core/sensor_state.py.
+    # Sensor sanity: core/monitor/sensor_state.py.
     'sensor_state',
     # The tide margin of a chain of fixed length, its hook held: core/monitor/holding.py.
     *holding_rule.LENGTH_FIELDS,
+    # The anchor's drag state (0 holding, 1 overloaded, 2 dragging): core/monitor/holding.py.
+    *holding_rule.DRAG_FIELDS,
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -346,6 +349,8 @@ class LineState:
             sensor_state=float(self.sensor_code),
             sensor_tension=self.tension,
             mbl=self.config.mbl,
+            drag_state=v[_AT['drag_state']],
+            implied_anchor_distance=v[_AT['implied_anchor_distance']],
         )
 
 
@@ -674,7 +679,7 @@ class MonitorCore:
         return self._set_component('tide', new, stamp_ns)
 
     def _sensors_now(self, now: float) -> tuple[Level, str]:
-        """The sensors' common-cause alarm at ``now`` [s] (core.health.sensors_status)."""
+        """The sensors' common-cause alarm at ``now`` [s] (core.monitor.health.sensors_status)."""
         a = self.config.alarm
         waiting = [
             line.config.name for line in self.state.lines if line.tension_s != line.tension_s
@@ -702,7 +707,7 @@ class MonitorCore:
         return changes
 
     def _decide_sensors(self, stamp_ns: int) -> None:
-        """Every line's and the depth sensor's state at a tick (core.sensor)."""
+        """Every line's and the depth sensor's state at a tick (core.monitor.sensor_state)."""
         a = self.config.alarm
         now = np.array([_stamp_s(stamp_ns)])
         lines = self.state.lines
@@ -746,7 +751,7 @@ class MonitorCore:
         )
 
     def _decide_dock(self, stamp_ns: int) -> list[Change]:
-        """The dock estimate from every line's newest tension (core.body.live): the dock
+        """The dock estimate from every line's newest tension (core.monitor.dock_watch): the dock
         status, and what each line's ``inconsistent`` alarm condition sees."""
         assert self.dock_model is not None
         now = _stamp_s(stamp_ns)
@@ -855,15 +860,21 @@ class MonitorCore:
         """The bounds and the holding values of freshly solved lines (from their values);
         lines without accuracies or holding data keep NaN (what the functions give them)."""
         accuracy = self.config.alarm.depth_accuracy
+        tolerance = self.config.alarm.drag_tolerance
         for fields, compute, wanted in (
             (uncertainty.FIELDS, _bounds_of(accuracy), _wants_bounds(accuracy)),
-            (holding_rule.FIELDS + holding_rule.LENGTH_FIELDS, holding_values, _wants_holding),
+            (HOLDING_FIELDS, _holding_of(tolerance), _wants_holding),
         ):
             some = [line for line in lines if wanted(line.config)]
             if not some:
                 continue
-            named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
-            derived = compute([line.config for line in some], named)
+            derived: dict[str, Any]
+            if fields is HOLDING_FIELDS and len(some) == 1:  # a tension event: plain floats
+                one = holding_one(some[0].config, some[0].values, tolerance)
+                derived = {k: (v,) for k, v in one.items()}
+            else:
+                named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
+                derived = compute([line.config for line in some], named)
             for j, line in enumerate(some):
                 v = list(line.values)
                 for key in fields:
@@ -872,7 +883,7 @@ class MonitorCore:
 
     def _uplift_times(self, margins: Sequence[float], forces: Sequence[float]) -> list[float]:
         """Each line's time to uplift [s]: on the tide table's forecast from the newest depth
-        sample where there is a table (core.tide_table), else at the tide's trend."""
+        sample where there is a table (core.monitor.tide_table), else at the tide's trend."""
         a = self.config.alarm
         if a.constituents:
             times = tide_table.uplift_times(
@@ -1017,7 +1028,7 @@ def _with_sensor(values: tuple[float, ...], code: int) -> tuple[float, ...]:
 
 
 def _implausible(line: LineState, code: int) -> None:
-    """An implausible reading (core.plausible): its status and sentence, no solved values
+    """An implausible reading (core.monitor.plausible): its status and sentence, no solved values
     (the measured tension and depth kept, as for every impossible input)."""
     line.values = line.values[:2] + _NAN_VALUES[2:_SENSOR_AT] + line.values[_SENSOR_AT:]
     line.status, line.status_message = code, STATUS_MESSAGES[code]
@@ -1038,6 +1049,14 @@ def _wants_bounds(depth_accuracy: float) -> Any:
 def _wants_holding(c: LineConfig) -> bool:
     """Whether a line has holding values: a chain length or an anchor holding."""
     return c.chain_length is not None or c.anchor_holding is not None
+
+
+#: The values :func:`holding_values` gives (core/monitor/holding.py).
+HOLDING_FIELDS = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS + holding_rule.DRAG_FIELDS
+
+
+def _holding_of(tolerance: float) -> Any:
+    return lambda cfgs, named: holding_values(cfgs, named, tolerance)
 
 
 def _bounds_of(depth_accuracy: float) -> Any:
@@ -1064,10 +1083,10 @@ def bound_values(
 
 
 def holding_values(
-    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray]
+    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray], tolerance: float = math.inf
 ) -> dict[str, np.ndarray]:
-    """The holding values (:data:`catenary_monitor.core.monitor.holding.FIELDS`), as
-    :func:`bound_values`."""
+    """The holding values (:data:`HOLDING_FIELDS`), as :func:`bound_values`; ``tolerance``
+    is ``drag_tolerance`` (m)."""
     return holding_rule.holding(
         _column(cfgs, 'weight'),
         _column(cfgs, 'ea'),
@@ -1080,6 +1099,35 @@ def holding_values(
         named['horizontal_tension'],
         named['suspended_length'],
         named['uplift_force'],
+        _column(cfgs, 'anchor_distance'),
+        tolerance,
+    )
+
+
+def holding_one(
+    lc: LineConfig, values: Sequence[float], tolerance: float = math.inf
+) -> dict[str, float]:
+    """:func:`holding_values` of one line's :data:`VALUE_FIELDS` values in plain floats
+    (:func:`catenary_monitor.core.monitor.holding.holding_scalar`: the same numbers to
+    rounding, an order of magnitude faster than one-element arrays)."""
+
+    def given(v: Optional[float]) -> float:
+        return _NAN if v is None else v
+
+    return holding_rule.holding_scalar(
+        lc.weight,
+        math.inf if lc.ea is None else lc.ea,
+        given(lc.chain_length),
+        given(lc.anchor_holding),
+        given(lc.anchor_weight),
+        given(lc.chain_friction),
+        values[_AT['top_tension']],
+        values[_AT['depth']],
+        values[_AT['horizontal_tension']],
+        values[_AT['suspended_length']],
+        values[_AT['uplift_force']],
+        lc.anchor_distance,
+        tolerance,
     )
 
 

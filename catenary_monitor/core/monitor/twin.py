@@ -34,7 +34,6 @@ import numpy as np
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
 from catenary_monitor.core.monitor import dock_watch as dock_live
-from catenary_monitor.core.monitor import holding as holding_rule
 from catenary_monitor.core.monitor import sensor_state, tide_table, tide_trend, uncertainty
 from catenary_monitor.core.monitor.alarms import (
     DIAGNOSTIC_KEYS,
@@ -65,6 +64,7 @@ from catenary_monitor.core.monitor.monitor_core import depth_word as depth_state
 from catenary_monitor.core.monitor.monitor_core import (
     dock_component,
     forecast_word,
+    HOLDING_FIELDS,
     holding_values,
     line_dock_values,
     line_status,
@@ -244,7 +244,7 @@ def solve_updates(
     tension : hook tension T (N) per update.
     depth : depth h (m) per update, hook height already added; NaN means no depth yet.
     a_crit : catenary parameter (m) of the critical no-uplift chain at that depth
-        (:func:`catenary_monitor.catenary.critical_parameter`), per update.
+        (:func:`catenary_monitor.core.physics.catenary.critical_parameter`), per update.
 
     Returns
     -------
@@ -478,8 +478,8 @@ def _tide_at(core: MonitorCore, tide: _Tide, i: int) -> tuple[Level, str]:
 
 @dataclass
 class _Sensors:
-    """The sensor states at the window's ticks (core.sensor): each line's code (ticks, lines)
-    and the depth sensor's (ticks), and the codes before the window."""
+    """The sensor states at the window's ticks (core.monitor.sensor_state): each line's code
+    (ticks, lines) and the depth sensor's (ticks), and the codes before the window."""
 
     codes: np.ndarray
     depth_codes: np.ndarray
@@ -488,8 +488,8 @@ class _Sensors:
 
 
 def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
-    """Every tick's sensor states (the arrays the core hands core.sensor one tick at a time);
-    leaves the core's sensor memories as after the window."""
+    """Every tick's sensor states (the arrays the core hands core.monitor.sensor_state one tick
+    at a time); leaves the core's sensor memories as after the window."""
     a, ticks = core.config.alarm, window.ticks
     lines = core.state.lines
     n, m = len(ticks), len(lines)
@@ -589,7 +589,8 @@ def _decide_tide(
 
 @dataclass
 class _Blind:
-    """The sensors' common-cause alarm at the tide's decisions (core.health.sensors_status)."""
+    """The sensors' common-cause alarm at the tide's decisions
+    (core.monitor.health.sensors_status)."""
 
     waiting: np.ndarray  # (decisions, lines) bool: the line has had no tension yet
     levels: np.ndarray  # int8 Level per decision
@@ -829,10 +830,9 @@ def _add_derived(core: MonitorCore, lc: LineConfig, values: dict[str, np.ndarray
     else:
         values.update({key: np.full(n, np.nan) for key in uncertainty.FIELDS})
     if lc.chain_length is not None or lc.anchor_holding is not None:
-        values.update(holding_values([lc], values))
+        values.update(holding_values([lc], values, core.config.alarm.drag_tolerance))
     else:
-        empty = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS
-        values.update({key: np.full(n, np.nan) for key in empty})
+        values.update({key: np.full(n, np.nan) for key in HOLDING_FIELDS})
 
 
 def _solve_at(
@@ -861,8 +861,8 @@ def _solve_at(
 def _mark_implausible(
     values: dict[str, np.ndarray], status: np.ndarray, used: Optional[np.ndarray], code: np.ndarray
 ) -> None:
-    """Implausible readings (core.plausible), as the core marks them: their status, no solved
-    values (the measured tension and depth kept), the inextensible model named."""
+    """Implausible readings (core.monitor.plausible), as the core marks them: their status, no
+    solved values (the measured tension and depth kept), the inextensible model named."""
     hit = code != 0
     if not hit.any():
         return
@@ -903,6 +903,8 @@ def _line_inputs(
             'uplift_force_upper',
             'drag_margin',
             'holding_capacity',
+            'drag_state',
+            'implied_anchor_distance',
         )
     }
     inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
