@@ -82,6 +82,8 @@ setup(
         'matplotlib>=3.7',
         'mcap>=1.1',
         'mcap-ros2-support>=0.5',
+        # The console's HTTP/1.1 framing (pure Python, no dependencies).
+        'h11>=0.14',
         'ros-jazzy-rclpy[fastrtps]',
         'ros-jazzy-common-interfaces',
         # The sensors' own messages (WrenchStamped, FluidPressure, Range) and replay's /clock.

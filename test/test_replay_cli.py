@@ -158,8 +158,9 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
     assert [t for t, _ in outputs] == r.t_ns.tolist()
     fields = outputs[0][1].layout.dim[0].label.split(',')
     assert fields[11:14] == ['status', 'level', 'time_to_uplift']  # appended, then the bounds
-    assert fields[14:-2] == list(BOUNDS + HOLDING)  # and the holding values
-    assert fields[-2:] == ['sensor_state', *LENGTH_FIELDS]  # appended last
+    k = 14 + len(BOUNDS + HOLDING)
+    assert fields[14:k] == list(BOUNDS + HOLDING)  # and the holding values
+    assert fields[k : k + 3] == ['sensor_state', *LENGTH_FIELDS, 'drag_state']  # appended
     got = np.array([m.data for _, m in outputs])
     np.testing.assert_array_equal(
         got[:, fields.index('time_to_uplift')], r.values['time_to_uplift']
@@ -205,8 +206,9 @@ def test_csv_all_columns_and_stdout_summary(scene, capsys):
     assert code == 0
     with open(tmp / 'all.csv', newline='') as f:
         header = next(csv.reader(f))
-        models = {row[-1] for row in csv.reader(f)}
-    assert header[:2] == ['time', 'line'] and header[-3:] == ['status', 'level', 'model']
+        models = {row[header.index('model')] for row in csv.reader(f)}
+    assert header[:2] == ['time', 'line']
+    assert header[-4:] == ['status', 'level', 'model', 'drag_state']
     assert {'tide_margin', 'load_margin', 'safety_factor', 'horizontal_tension'} <= set(header)
     assert 'time_to_uplift' in header
     assert 'inextensible catenary' in models and models <= {'none', 'inextensible catenary'}

@@ -17,7 +17,7 @@ import numpy as np
 
 from catenary_monitor import __version__
 from catenary_monitor.core.config.parameters import MonitorConfig, config_hash, config_to_params
-from catenary_monitor.core.monitor import sensor_state
+from catenary_monitor.core.monitor import holding, sensor_state
 from catenary_monitor.core.monitor.alarms import Level
 from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,
@@ -76,7 +76,8 @@ __all__ = [
 #: ``time_to_uplift`` 3 (s; ``inf`` when no uplift is coming); the bounds and holding values
 #: (forces, lengths) 3 (``nan`` where the line has no accuracy or holding data); ``sensor_state``
 #: the line's sensor state word (``ok``, ``stuck``, ``spike``, ``over_mbl``, ``slack``,
-#: ``suspected_parted``).
+#: ``suspected_parted``); ``drag_state`` the anchor's (``holding``, ``overloaded``,
+#: ``dragging``, ``unknown``).
 CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('time', 9),
     ('line', None),
@@ -104,6 +105,7 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('status', None),
     ('level', None),
     ('model', None),
+    ('drag_state', None),  # core.monitor.holding.DRAG_STATES word, or unknown
 )
 #: The default columns (the issue's contract), in this order.
 CSV_COLUMNS = (
@@ -192,6 +194,9 @@ def write_csv(
         elif name == 'sensor_state':
             codes = values[name].astype(np.int64)
             out_columns.append(LabelColumn(name, codes, list(sensor_state.LINE_STATES)))
+        elif name == 'drag_state':
+            codes = np.where(np.isnan(values[name]), 3, values[name]).astype(np.int64)
+            out_columns.append(LabelColumn(name, codes, [*holding.DRAG_STATES, 'unknown']))
         else:
             out_columns.append(FloatColumn(name, values[name], decimals or 0))
     n = len(t)

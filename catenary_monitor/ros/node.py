@@ -65,7 +65,14 @@ from catenary_monitor.core.config.parameters import (
     runtime_change_refusal,
 )
 from catenary_monitor.core.monitor import readings
-from catenary_monitor.core.monitor.acknowledge import ACKNOWLEDGE_TOPIC, SENSORS, parse_request
+from catenary_monitor.core.monitor.acknowledge import (
+    ACKNOWLEDGE_TOPIC,
+    SENSORS,
+    bounded_text,
+    console_only_refusal,
+    parse_request,
+    publisher_identity,
+)
 from catenary_monitor.core.monitor.alarms import Level
 from catenary_monitor.core.monitor.health import clock_stopped
 from catenary_monitor.core.monitor.monitor_core import (
@@ -524,7 +531,24 @@ class CatenaryMonitor(Node):
 
     @_guarded
     def _on_acknowledge(self, msg: String) -> None:
-        """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event."""
+        """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event, with
+        its publisher as the ROS graph names it; refused (one warning line) for an unknown
+        line, and, with ``acknowledge_from_ros`` false, unless only consoles publish."""
+        endpoints = [
+            (f'{ns.rstrip("/")}/{name}', bytes(gid))
+            for name, ns, gid in (
+                (e.node_name, e.node_namespace, e.endpoint_gid)
+                for e in self.get_publishers_info_by_topic(ACKNOWLEDGE_TOPIC)
+            )
+        ]
+        publisher = publisher_identity(endpoints)
+        if not self.config.acknowledge_from_ros:
+            refusal = console_only_refusal(endpoints)
+            if refusal is not None:
+                self.get_logger().warning(
+                    f'acknowledge refused: {refusal}', throttle_duration_sec=10.0
+                )
+                return
         try:
             line, origin = parse_request(msg.data)
         except ValueError as err:
@@ -532,12 +556,13 @@ class CatenaryMonitor(Node):
             return
         if line is not None and line not in self.core.index and line != SENSORS:
             self.get_logger().warning(
-                f'acknowledge refused: unknown line {line!r} (lines: {", ".join(self._names)}; '
-                f'{SENSORS}: the sensors alarm)'
+                f'acknowledge refused: unknown line {bounded_text(line, 64)!r} (lines: '
+                f'{", ".join(self._names)}; {SENSORS}: the sensors alarm)',
+                throttle_duration_sec=10.0,
             )
             return
-        self._record(Acknowledge(self._stamp(), line, origin))
-        self.get_logger().info(f'ACKNOWLEDGED {line or "all"} by {origin}')
+        self._record(Acknowledge(self._stamp(), line, origin, publisher))
+        self.get_logger().info(f'ACKNOWLEDGED {line or "all"} by {origin} ({publisher})')
 
     @_guarded
     def _on_log_timer(self) -> None:

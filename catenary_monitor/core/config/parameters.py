@@ -187,6 +187,19 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         read_only=True,
     ),
     ParamSpec(
+        'acknowledge_from_ros',
+        'bool',
+        True,
+        'Accept alarm acknowledgements on /catenary_monitor/acknowledge from any publisher; '
+        'false: only from a console (a node catenary_console_*, the only publisher on the '
+        'topic): where operators acknowledge through the authenticated console (docs/node.md, '
+        'Security)',
+        '',
+        None,
+        None,
+        read_only=True,
+    ),
+    ParamSpec(
         'runtime_change_warn_time',
         'double',
         3600.0,
@@ -711,6 +724,17 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         group='holding',
     ),
     ParamSpec(
+        'drag_tolerance',
+        'double',
+        1.0,
+        'ERROR (anchor dragging) when the load exceeds the holding and the implied anchor '
+        'distance is beyond the installed one by more than this',
+        'm',
+        0.0,
+        1000.0,
+        group='holding',
+    ),
+    ParamSpec(
         'load_margin_warn',
         'double',
         0.0,
@@ -1087,6 +1111,7 @@ class AlarmConfig:
     depth_accuracy: float = _default('depth_accuracy')
     drag_margin_warn: float = _default('drag_margin_warn')
     drag_margin_deadband: float = _default('drag_margin_deadband')
+    drag_tolerance: float = _default('drag_tolerance')
     tension_resolution: float = _default('tension_resolution')
     depth_resolution: float = _default('depth_resolution')
     stuck_time: float = _default('stuck_time')
@@ -1172,6 +1197,7 @@ _TOP_LEVEL = (
     'log_rotate_duration',
     'log_create_dir',
     'allow_runtime_changes',
+    'acknowledge_from_ros',
     'runtime_change_warn_time',
     'depth_type',
     'water_density',
@@ -1193,6 +1219,7 @@ class MonitorConfig:
     depth_topic: str = _default('depth_topic')
     log_dir: str = _default('log_dir')
     allow_runtime_changes: bool = _default('allow_runtime_changes')
+    acknowledge_from_ros: bool = _default('acknowledge_from_ros')
     runtime_change_warn_time: float = _default('runtime_change_warn_time')  # s
     log_rotate_size: float = _default('log_rotate_size')  # MiB
     log_rotate_duration: float = _default('log_rotate_duration')  # s
@@ -1430,6 +1457,7 @@ NON_DECIDING = frozenset(
         'log_rotate_duration',
         'log_create_dir',
         'allow_runtime_changes',
+        'acknowledge_from_ros',
     }
 )
 

@@ -116,6 +116,7 @@ __all__ = [
     'line_status',
     'bound_values',
     'holding_values',
+    'HOLDING_FIELDS',
     'holding_one',
     'output_values',
     'tide_component',
@@ -160,6 +161,8 @@ OUTPUT_FIELDS = (
     'sensor_state',
     # The tide margin of a chain of fixed length, its hook held: core/monitor/holding.py.
     *holding_rule.LENGTH_FIELDS,
+    # The anchor's drag state (0 holding, 1 overloaded, 2 dragging): core/monitor/holding.py.
+    *holding_rule.DRAG_FIELDS,
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -231,11 +234,14 @@ class Reconfigure(NamedTuple):
 
 
 class Acknowledge(NamedTuple):
-    """An operator acknowledged line ``line``'s alarm (None: every line) from ``origin``."""
+    """An operator acknowledged line ``line``'s alarm (None: every line) from ``origin`` (as
+    the message claims), published by ``publisher`` (the middleware's identity of the sender:
+    node and GID; empty when unknown)."""
 
     stamp_ns: int
     line: Optional[str]
     origin: str
+    publisher: str = ''
 
 
 class ClockHealth(NamedTuple):
@@ -358,6 +364,8 @@ class LineState:
             sensor_state=float(self.sensor_code),
             sensor_tension=self.tension,
             mbl=self.config.mbl,
+            drag_state=v[_AT['drag_state']],
+            implied_anchor_distance=v[_AT['implied_anchor_distance']],
         )
 
 
@@ -580,9 +588,11 @@ class MonitorCore:
         now = _stamp_s(ev.stamp_ns)
         for line in self.state.lines:
             if ev.line is None or ev.line == line.config.name:
-                line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin)
+                line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin, ev.publisher)
         if ev.line is None or ev.line == alarm_ack.SENSORS:
-            self.state.sensors_ack = alarm_ack.acknowledge(self.state.sensors_ack, now, ev.origin)
+            self.state.sensors_ack = alarm_ack.acknowledge(
+                self.state.sensors_ack, now, ev.origin, ev.publisher
+            )
         return Step(ev.stamp_ns, 'acknowledge', (), self.snapshot(ev.stamp_ns), ())
 
     def _on_clock(self, ev: ClockHealth) -> Step:
@@ -891,16 +901,17 @@ class MonitorCore:
         """The bounds and the holding values of freshly solved lines (from their values);
         lines without accuracies or holding data keep NaN (what the functions give them)."""
         accuracy = self.config.alarm.depth_accuracy
+        tolerance = self.config.alarm.drag_tolerance
         for fields, compute, wanted in (
             (uncertainty.FIELDS, _bounds_of(accuracy), _wants_bounds(accuracy)),
-            (holding_rule.FIELDS + holding_rule.LENGTH_FIELDS, holding_values, _wants_holding),
+            (HOLDING_FIELDS, _holding_of(tolerance), _wants_holding),
         ):
             some = [line for line in lines if wanted(line.config)]
             if not some:
                 continue
             derived: dict[str, Any]
-            if compute is holding_values and len(some) == 1:  # a tension event: plain floats
-                one = holding_one(some[0].config, some[0].values)
+            if fields is HOLDING_FIELDS and len(some) == 1:  # a tension event: plain floats
+                one = holding_one(some[0].config, some[0].values, tolerance)
                 derived = {k: (v,) for k, v in one.items()}
             else:
                 named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
@@ -1081,6 +1092,14 @@ def _wants_holding(c: LineConfig) -> bool:
     return c.chain_length is not None or c.anchor_holding is not None
 
 
+#: The values :func:`holding_values` gives (core/monitor/holding.py).
+HOLDING_FIELDS = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS + holding_rule.DRAG_FIELDS
+
+
+def _holding_of(tolerance: float) -> Any:
+    return lambda cfgs, named: holding_values(cfgs, named, tolerance)
+
+
 def _bounds_of(depth_accuracy: float) -> Any:
     return lambda cfgs, named: bound_values(cfgs, depth_accuracy, named)
 
@@ -1105,10 +1124,10 @@ def bound_values(
 
 
 def holding_values(
-    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray]
+    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray], tolerance: float = math.inf
 ) -> dict[str, np.ndarray]:
-    """The holding values (:data:`catenary_monitor.core.monitor.holding.FIELDS`), as
-    :func:`bound_values`."""
+    """The holding values (:data:`HOLDING_FIELDS`), as :func:`bound_values`; ``tolerance``
+    is ``drag_tolerance`` (m)."""
     return holding_rule.holding(
         _column(cfgs, 'weight'),
         _column(cfgs, 'ea'),
@@ -1121,10 +1140,14 @@ def holding_values(
         named['horizontal_tension'],
         named['suspended_length'],
         named['uplift_force'],
+        _column(cfgs, 'anchor_distance'),
+        tolerance,
     )
 
 
-def holding_one(lc: LineConfig, values: Sequence[float]) -> dict[str, float]:
+def holding_one(
+    lc: LineConfig, values: Sequence[float], tolerance: float = math.inf
+) -> dict[str, float]:
     """:func:`holding_values` of one line's :data:`VALUE_FIELDS` values in plain floats
     (:func:`catenary_monitor.core.monitor.holding.holding_scalar`: the same numbers to
     rounding, an order of magnitude faster than one-element arrays)."""
@@ -1144,6 +1167,8 @@ def holding_one(lc: LineConfig, values: Sequence[float]) -> dict[str, float]:
         values[_AT['horizontal_tension']],
         values[_AT['suspended_length']],
         values[_AT['uplift_force']],
+        lc.anchor_distance,
+        tolerance,
     )
 
 
@@ -1316,7 +1341,12 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
         return {'kind': 'configure', 'parameters': config_to_params(event.config)}
     if isinstance(event, Acknowledge):
         line = alarm_ack.ALL_LINES if event.line is None else event.line
-        return {'kind': 'acknowledge', 'line': line, 'origin': event.origin}
+        return {
+            'kind': 'acknowledge',
+            'line': line,
+            'origin': alarm_ack.bounded_text(event.origin),
+            'publisher': alarm_ack.bounded_text(event.publisher),
+        }
     if isinstance(event, ClockHealth):
         return {'kind': 'clock', 'stopped_for': event.stopped_for}
     if isinstance(event, Intake):
@@ -1359,8 +1389,9 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
             line = str(record['line'])
             return Acknowledge(
                 stamp_ns,
-                None if line == alarm_ack.ALL_LINES else line,
-                str(record.get('origin', '')),
+                None if line == alarm_ack.ALL_LINES else alarm_ack.bounded_text(line),
+                alarm_ack.bounded_text(str(record.get('origin', ''))),
+                alarm_ack.bounded_text(str(record.get('publisher', ''))),
             )
     except (ValueError, KeyError, TypeError):
         return None

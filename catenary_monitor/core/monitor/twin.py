@@ -34,7 +34,6 @@ import numpy as np
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
 from catenary_monitor.core.monitor import dock_watch as dock_live
-from catenary_monitor.core.monitor import holding as holding_rule
 from catenary_monitor.core.monitor import (
     readings,
     sensor_state,
@@ -71,6 +70,7 @@ from catenary_monitor.core.monitor.monitor_core import depth_word as depth_state
 from catenary_monitor.core.monitor.monitor_core import (
     dock_component,
     forecast_word,
+    HOLDING_FIELDS,
     holding_values,
     line_dock_values,
     line_status,
@@ -879,10 +879,9 @@ def _add_derived(core: MonitorCore, lc: LineConfig, values: dict[str, np.ndarray
     else:
         values.update({key: np.full(n, np.nan) for key in uncertainty.FIELDS})
     if lc.chain_length is not None or lc.anchor_holding is not None:
-        values.update(holding_values([lc], values))
+        values.update(holding_values([lc], values, core.config.alarm.drag_tolerance))
     else:
-        empty = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS
-        values.update({key: np.full(n, np.nan) for key in empty})
+        values.update({key: np.full(n, np.nan) for key in HOLDING_FIELDS})
 
 
 def _solve_at(
@@ -953,6 +952,8 @@ def _line_inputs(
             'uplift_force_upper',
             'drag_margin',
             'holding_capacity',
+            'drag_state',
+            'implied_anchor_distance',
         )
     }
     inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
