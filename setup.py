@@ -86,6 +86,10 @@ setup(
         'h11>=0.14',
         'ros-jazzy-rclpy[fastrtps]',
         'ros-jazzy-common-interfaces',
+        # The sensors' own messages (WrenchStamped, FluidPressure, Range) and replay's /clock.
+        'ros-jazzy-geometry-msgs',
+        'ros-jazzy-sensor-msgs',
+        'ros-jazzy-rosgraph-msgs',
     ],
     extras_require={
         # The test suite also checks the peers (MoorPy, pycatenary): nothing there is skipped.
