@@ -44,7 +44,8 @@ def test_a_sim_time_node_follows_the_playbacks_clock(tmp_path):
     try:
         client.wait_for(lambda: client.diagnostics, 30.0, 'the monitor up')
         cmd = [sys.executable, '-m', 'catenary_monitor.cli', 'replay', str(log), '--publish',
-               '--params-file', str(params), '--rate', '10', '--wait-subscribers', '20']  # fmt: skip
+               '--params-file', str(params), '--rate', '10',
+               '--wait-subscribers', '20']  # fmt: skip
         t0 = time.monotonic()
         played = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=60)
         wall = time.monotonic() - t0
