@@ -380,6 +380,7 @@ def _line_view(
             'drag_margin',  # N, holding minus horizontal load; None without anchor_holding
             'implied_anchor_distance',  # m, from the chain length; None without it
             'tide_margin_at_length',  # m, the chain length held; None without it
+            'drag_state',  # 0 holding, 1 overloaded, 2 dragging; None unknown
         ):
             view[key] = _num(v.get(key))
     if output is not None:

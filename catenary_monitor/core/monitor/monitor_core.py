@@ -18,10 +18,10 @@ What an event does, in this order (the one schedule the node, replay and the tes
    is stale (older than ``depth_timeout``), one decision that every line then takes;
 3. lines are solved (``solve(..., ea=line.ea)``): a tension event solves its line at the newest
    depth (``depth + hook_height``); a depth event solves every line that has a tension;
-4. alarms are stepped (:class:`~catenary_monitor.core.monitor.alarms.LineAlarm`): the solved line
-at a
-   tension event, every line at a depth event or a tick; each stepped line's acknowledgement
-   state follows its level (:func:`catenary_monitor.core.monitor.acknowledge.step`);
+4. alarms are stepped (:class:`~catenary_monitor.core.monitor.alarms.LineAlarm`): the solved
+   line at a tension event, every line at a depth event or a tick; each stepped line's
+   acknowledgement state follows its level
+   (:func:`catenary_monitor.core.monitor.acknowledge.step`);
 5. the alarm flood is decided when the event raised an alarm and at a tick
    (:mod:`catenary_monitor.core.monitor.alarm_flood`);
 6. a diagnostic snapshot is taken when the event is a tick or when any level changed: never two
@@ -56,7 +56,13 @@ from catenary_monitor.core.monitor import acknowledge as alarm_ack
 from catenary_monitor.core.monitor import alarm_flood, shelving
 from catenary_monitor.core.monitor import dock_watch as dock_live
 from catenary_monitor.core.monitor import holding as holding_rule
-from catenary_monitor.core.monitor import sensor_state, tide_table, tide_trend, uncertainty
+from catenary_monitor.core.monitor import (
+    readings,
+    sensor_state,
+    tide_table,
+    tide_trend,
+    uncertainty,
+)
 from catenary_monitor.core.monitor.alarm_journal import AlarmEvent, entries
 from catenary_monitor.core.monitor.alarms import (
     CONDITIONS,
@@ -80,9 +86,12 @@ from catenary_monitor.core.monitor.health import (
     sensors_status,
     tide_status,
 )
-from catenary_monitor.core.monitor.plausible import reading_status, reading_status_array
+from catenary_monitor.core.monitor.plausible import (
+    reading_status,
+    reading_status_array,
+    status_messages,
+)
 from catenary_monitor.core.physics import elastic
-from catenary_monitor.core.physics.result import STATUS_MESSAGES
 from catenary_monitor.core.physics.solve import solve
 
 __all__ = [
@@ -114,6 +123,8 @@ __all__ = [
     'line_status',
     'bound_values',
     'holding_values',
+    'HOLDING_FIELDS',
+    'holding_one',
     'output_values',
     'tide_component',
     'sensors_component',
@@ -149,15 +160,16 @@ OUTPUT_FIELDS = (
     'status',
     'level',
     'time_to_uplift',
-    # Margins with the sensors' accuracy (issue 12, item 3): core/monitor/uncertainty.py.
+    # Margins with the sensors' accuracy: core/monitor/uncertainty.py.
     *uncertainty.FIELDS,
-    # Holding and the anchor distance the chain implies (issue 12, item 4):
-    # core/monitor/holding.py.
+    # Holding and the anchor distance the chain implies: core/monitor/holding.py.
     *holding_rule.FIELDS,
-    # Sensor sanity (issue 12, item 2): core/sensor_state.py.
+    # Sensor sanity: core/monitor/sensor_state.py.
     'sensor_state',
     # The tide margin of a chain of fixed length, its hook held: core/monitor/holding.py.
     *holding_rule.LENGTH_FIELDS,
+    # The anchor's drag state (0 holding, 1 overloaded, 2 dragging): core/monitor/holding.py.
+    *holding_rule.DRAG_FIELDS,
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -183,18 +195,22 @@ _SENSOR_AT = VALUE_FIELDS.index('sensor_state')  # not a solved value: kept by _
 
 class Tension(NamedTuple):
     """A hook tension sample [N] of line number ``line`` (config order), received at
-    ``stamp_ns``."""
+    ``stamp_ns``; ``sample_ns`` the sensor's header stamp (None: a message without one, taken
+    at its arrival)."""
 
     stamp_ns: int
     line: int
     value: float
+    sample_ns: Optional[int] = None
 
 
 class Depth(NamedTuple):
-    """A tide depth sample [m] at the hooks, received at ``stamp_ns``."""
+    """A tide depth sample [m] at the hooks, received at ``stamp_ns``; ``sample_ns`` as for
+    :class:`Tension`."""
 
     stamp_ns: int
     value: float
+    sample_ns: Optional[int] = None
 
 
 class Tick(NamedTuple):
@@ -225,23 +241,28 @@ class Reconfigure(NamedTuple):
 
 
 class Acknowledge(NamedTuple):
-    """An operator acknowledged line ``line``'s alarm (None: every line) from ``origin``."""
+    """An operator acknowledged line ``line``'s alarm (None: every line) from ``origin`` (as
+    the message claims), published by ``publisher`` (the middleware's identity of the sender:
+    node and GID; empty when unknown)."""
 
     stamp_ns: int
     line: Optional[str]
     origin: str
+    publisher: str = ''
 
 
 class Shelve(NamedTuple):
     """An operator shelved ``alarm`` (a line, or ``sensors``) or one ``condition`` of it
     (:data:`~catenary_monitor.core.monitor.acknowledge.WHOLE`: the whole alarm) for
-    ``seconds`` (0: unshelve it), from ``origin``."""
+    ``seconds`` (0: unshelve it), from ``origin`` (as claimed), published by ``publisher``
+    (the middleware's identity of the sender; '' from the console's page)."""
 
     stamp_ns: int
     alarm: str
     condition: str
     seconds: float
     origin: str
+    publisher: str = ''
 
 
 class ClockHealth(NamedTuple):
@@ -336,6 +357,8 @@ class LineState:
     )  # the tension sensor's per-sample memory
     sensor_code: int = sensor_state.OK  # sensor state decided at the newest tick
     parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
+    sample_ns: int = -1  # ns, the newest accepted sample's stamp (header or arrival; -1: none)
+    stamp_refused: float = -math.inf  # s, when a sample's stamp was last refused (arrival)
 
     def inputs(
         self, depth_s: float, depth_stale: bool, rate: float = _NAN, table: bool = False
@@ -367,11 +390,19 @@ class LineState:
             sensor_state=float(self.sensor_code),
             sensor_tension=self.tension,
             mbl=self.config.mbl,
+            drag_state=v[_AT['drag_state']],
+            implied_anchor_distance=v[_AT['implied_anchor_distance']],
         )
 
 
 def _stamp_s(stamp_ns: int) -> float:
     return stamp_ns * 1e-9
+
+
+def _jitter(alarm: Any, sample_ns: Optional[int]) -> float:
+    """How far off a reading's stamp may be [s]: ``stamp_jitter`` for a reading stamped at its
+    arrival (delivery bunches samples), 0 for one at the sensor's own header stamp."""
+    return alarm.stamp_jitter if sample_ns is None else 0.0
 
 
 @dataclass
@@ -405,6 +436,8 @@ class CoreState:
     trend: tide_trend.TrendState = field(default_factory=tide_trend.TrendState)  # tide rate
     depth_memory: sensor_state.Memory = field(default_factory=sensor_state.Memory)
     depth_code: int = sensor_state.OK  # the depth sensor's state at the newest tick
+    depth_sample_ns: int = -1  # ns, the newest accepted depth sample's stamp (-1: none)
+    depth_refused: float = -math.inf  # s, when a depth sample's stamp was last refused
     sensor_times: np.ndarray = field(default_factory=lambda: np.zeros(0))  # s, the ticks the
     # suspected_parted test still needs
     # The sensors' common-cause alarm (blind start, silent depth sensor): one, not per line.
@@ -524,15 +557,22 @@ class MonitorCore:
 
     def _on_tension(self, ev: Tension) -> Step:
         line = self.state.lines[ev.line]
-        line.tension, line.tension_s = float(ev.value), _stamp_s(ev.stamp_ns)
         a = self.config.alarm
+        sample_ns = ev.stamp_ns if ev.sample_ns is None else int(ev.sample_ns)
+        if ev.sample_ns is not None and readings.stamp_fault(
+            ev.stamp_ns, sample_ns, line.sample_ns, a.stamp_ahead_max
+        ):
+            line.stamp_refused = _stamp_s(ev.stamp_ns)  # refused: not a reading (bad_stamp)
+            return Step(ev.stamp_ns, 'tension', (), None, ())
+        line.sample_ns = sample_ns
+        line.tension, line.tension_s = float(ev.value), _stamp_s(sample_ns)
         line.sensor_memory = sensor_state.sample(
             line.sensor_memory,
             line.tension_s,
             line.tension,
             a.tension_resolution,
             a.tension_rate_max * line.config.mbl,
-            a.stamp_jitter,
+            _jitter(a, ev.sample_ns),
         )
         self._solve_one(line)
         log: list[AlarmEvent] = []
@@ -540,17 +580,24 @@ class MonitorCore:
         return self._finish(ev.stamp_ns, 'tension', [ev.line], changes, log)
 
     def _on_depth(self, ev: Depth) -> Step:
-        self.state.depth, self.state.depth_s = float(ev.value), _stamp_s(ev.stamp_ns)
-        window = self.config.alarm.tide_trend_window
-        self.state.trend = tide_trend.step(self.state.trend, ev.stamp_ns, self.state.depth, window)
         a = self.config.alarm
+        sample_ns = ev.stamp_ns if ev.sample_ns is None else int(ev.sample_ns)
+        if ev.sample_ns is not None and readings.stamp_fault(
+            ev.stamp_ns, sample_ns, self.state.depth_sample_ns, a.stamp_ahead_max
+        ):
+            self.state.depth_refused = _stamp_s(ev.stamp_ns)
+            return Step(ev.stamp_ns, 'depth', (), None, ())
+        self.state.depth_sample_ns = sample_ns
+        self.state.depth, self.state.depth_s = float(ev.value), _stamp_s(sample_ns)
+        window = a.tide_trend_window
+        self.state.trend = tide_trend.step(self.state.trend, sample_ns, self.state.depth, window)
         self.state.depth_memory = sensor_state.sample(
             self.state.depth_memory,
             self.state.depth_s,
             self.state.depth,
             a.depth_resolution,
             a.depth_rate_max,
-            a.stamp_jitter,
+            _jitter(a, ev.sample_ns),
         )
         log: list[AlarmEvent] = []
         changes = self._decide_tide(ev.stamp_ns)
@@ -584,11 +631,12 @@ class MonitorCore:
         log: list[AlarmEvent] = []
         for line in self.state.lines:
             if ev.line is None or ev.line == line.config.name:
-                old, line.ack = line.ack, alarm_ack.acknowledge(line.ack, now, ev.origin)
+                old = line.ack
+                line.ack = alarm_ack.acknowledge(old, now, ev.origin, ev.publisher)
                 log += entries(line.config.name, old, line.ack, now)
         if ev.line is None or ev.line == alarm_ack.SENSORS:
             old = self.state.sensors_ack
-            self.state.sensors_ack = alarm_ack.acknowledge(old, now, ev.origin)
+            self.state.sensors_ack = alarm_ack.acknowledge(old, now, ev.origin, ev.publisher)
             log += entries(alarm_ack.SENSORS, old, self.state.sensors_ack, now)
         snapshot = self.snapshot(ev.stamp_ns)
         return Step(ev.stamp_ns, 'acknowledge', (), snapshot, (), tuple(log))
@@ -608,7 +656,8 @@ class MonitorCore:
         log: list[AlarmEvent] = []
         if refused is not None:
             answer = f'{target}: refused: {refused}'
-            log.append(AlarmEvent(now, ev.alarm, 'refused', condition=refused, by=ev.origin))
+            by = alarm_ack.bounded_text(ev.origin)
+            log.append(AlarmEvent(now, ev.alarm, 'refused', condition=refused, by=by))
         else:
             old = self.state.sensors_ack if line is None else line.ack
             new, answer = self._shelf(old, line, ev, now, target)
@@ -645,7 +694,9 @@ class MonitorCore:
             return new, f'{ev.alarm} unshelved by {ev.origin}'
         until = now + ev.seconds
         masked = self._masked(line, replace(old, shelved_condition=ev.condition))
-        new = alarm_ack.shelve(old, now, until, ev.condition, ev.origin, masked, suppressed)
+        new = alarm_ack.shelve(
+            old, now, until, ev.condition, ev.origin, masked, suppressed, ev.publisher
+        )
         return new, f'{target} shelved for {ev.seconds:g} s by {ev.origin}'
 
     def _masked(self, line: Optional[LineState], ack: alarm_ack.AckState) -> Level:
@@ -820,7 +871,7 @@ class MonitorCore:
         return self._set_component('tide', new, stamp_ns)
 
     def _sensors_now(self, now: float) -> tuple[Level, str]:
-        """The sensors' common-cause alarm at ``now`` [s] (core.health.sensors_status)."""
+        """The sensors' common-cause alarm at ``now`` [s] (core.monitor.health.sensors_status)."""
         a = self.config.alarm
         waiting = [
             line.config.name for line in self.state.lines if line.tension_s != line.tension_s
@@ -853,7 +904,7 @@ class MonitorCore:
         return changes
 
     def _decide_sensors(self, stamp_ns: int) -> None:
-        """Every line's and the depth sensor's state at a tick (core.sensor)."""
+        """Every line's and the depth sensor's state at a tick (core.monitor.sensor_state)."""
         a = self.config.alarm
         now = np.array([_stamp_s(stamp_ns)])
         lines = self.state.lines
@@ -880,6 +931,7 @@ class MonitorCore:
             seen,
             np.array([self.state.depth]),
             np.array([self.state.depth_memory.changed]),
+            np.array([[line.stamp_refused for line in lines]]),
         )
         for k, line in enumerate(lines):
             line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
@@ -893,11 +945,12 @@ class MonitorCore:
                 np.array([dm.changed]),
                 np.array([dm.spiked]),
                 changed,
+                np.array([self.state.depth_refused]),
             )[0]
         )
 
     def _decide_dock(self, stamp_ns: int) -> list[Change]:
-        """The dock estimate from every line's newest tension (core.body.live): the dock
+        """The dock estimate from every line's newest tension (core.monitor.dock_watch): the dock
         status, and what each line's ``inconsistent`` alarm condition sees."""
         assert self.dock_model is not None
         now = _stamp_s(stamp_ns)
@@ -961,7 +1014,7 @@ class MonitorCore:
         )
         line.values = _with_sensor(line.values + _NAN_VALUES[len(line.values) :], line.sensor_code)
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
-        code = reading_status(t, h, lc.mbl)
+        code = reading_status(t, h, lc.mbl, lc.weight)
         if code:
             _implausible(line, code)
         self._add_derived([line])
@@ -996,7 +1049,9 @@ class MonitorCore:
             line.values = _with_sensor(line.values, line.sensor_code)
             line.status, line.status_message = int(status[i]), str(messages[i])
             line.model = str(models[i])
-        codes = reading_status_array(tension, h, [c.mbl for c in cfgs]).tolist()
+        codes = reading_status_array(
+            tension, h, [c.mbl for c in cfgs], [c.weight for c in cfgs]
+        ).tolist()
         for line, code in zip(lines, codes):
             if code:
                 _implausible(line, code)
@@ -1006,15 +1061,21 @@ class MonitorCore:
         """The bounds and the holding values of freshly solved lines (from their values);
         lines without accuracies or holding data keep NaN (what the functions give them)."""
         accuracy = self.config.alarm.depth_accuracy
+        tolerance = self.config.alarm.drag_tolerance
         for fields, compute, wanted in (
             (uncertainty.FIELDS, _bounds_of(accuracy), _wants_bounds(accuracy)),
-            (holding_rule.FIELDS + holding_rule.LENGTH_FIELDS, holding_values, _wants_holding),
+            (HOLDING_FIELDS, _holding_of(tolerance), _wants_holding),
         ):
             some = [line for line in lines if wanted(line.config)]
             if not some:
                 continue
-            named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
-            derived = compute([line.config for line in some], named)
+            derived: dict[str, Any]
+            if fields is HOLDING_FIELDS and len(some) == 1:  # a tension event: plain floats
+                one = holding_one(some[0].config, some[0].values, tolerance)
+                derived = {k: (v,) for k, v in one.items()}
+            else:
+                named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
+                derived = compute([line.config for line in some], named)
             for j, line in enumerate(some):
                 v = list(line.values)
                 for key in fields:
@@ -1023,7 +1084,7 @@ class MonitorCore:
 
     def _uplift_times(self, margins: Sequence[float], forces: Sequence[float]) -> list[float]:
         """Each line's time to uplift [s]: on the tide table's forecast from the newest depth
-        sample where there is a table (core.tide_table), else at the tide's trend."""
+        sample where there is a table (core.monitor.tide_table), else at the tide's trend."""
         a = self.config.alarm
         if a.constituents:
             times = tide_table.uplift_times(
@@ -1197,10 +1258,10 @@ def _with_sensor(values: tuple[float, ...], code: int) -> tuple[float, ...]:
 
 
 def _implausible(line: LineState, code: int) -> None:
-    """An implausible reading (core.plausible): its status and sentence, no solved values
+    """An implausible reading (core.monitor.plausible): its status and sentence, no solved values
     (the measured tension and depth kept, as for every impossible input)."""
     line.values = line.values[:2] + _NAN_VALUES[2:_SENSOR_AT] + line.values[_SENSOR_AT:]
-    line.status, line.status_message = code, STATUS_MESSAGES[code]
+    line.status, line.status_message = code, status_messages(line.config)[code]
     line.model = elastic.INEXTENSIBLE
 
 
@@ -1218,6 +1279,14 @@ def _wants_bounds(depth_accuracy: float) -> Any:
 def _wants_holding(c: LineConfig) -> bool:
     """Whether a line has holding values: a chain length or an anchor holding."""
     return c.chain_length is not None or c.anchor_holding is not None
+
+
+#: The values :func:`holding_values` gives (core/monitor/holding.py).
+HOLDING_FIELDS = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS + holding_rule.DRAG_FIELDS
+
+
+def _holding_of(tolerance: float) -> Any:
+    return lambda cfgs, named: holding_values(cfgs, named, tolerance)
 
 
 def _bounds_of(depth_accuracy: float) -> Any:
@@ -1244,10 +1313,10 @@ def bound_values(
 
 
 def holding_values(
-    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray]
+    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray], tolerance: float = math.inf
 ) -> dict[str, np.ndarray]:
-    """The holding values (:data:`catenary_monitor.core.monitor.holding.FIELDS`), as
-    :func:`bound_values`."""
+    """The holding values (:data:`HOLDING_FIELDS`), as :func:`bound_values`; ``tolerance``
+    is ``drag_tolerance`` (m)."""
     return holding_rule.holding(
         _column(cfgs, 'weight'),
         _column(cfgs, 'ea'),
@@ -1260,6 +1329,35 @@ def holding_values(
         named['horizontal_tension'],
         named['suspended_length'],
         named['uplift_force'],
+        _column(cfgs, 'anchor_distance'),
+        tolerance,
+    )
+
+
+def holding_one(
+    lc: LineConfig, values: Sequence[float], tolerance: float = math.inf
+) -> dict[str, float]:
+    """:func:`holding_values` of one line's :data:`VALUE_FIELDS` values in plain floats
+    (:func:`catenary_monitor.core.monitor.holding.holding_scalar`: the same numbers to
+    rounding, an order of magnitude faster than one-element arrays)."""
+
+    def given(v: Optional[float]) -> float:
+        return _NAN if v is None else v
+
+    return holding_rule.holding_scalar(
+        lc.weight,
+        math.inf if lc.ea is None else lc.ea,
+        given(lc.chain_length),
+        given(lc.anchor_holding),
+        given(lc.anchor_weight),
+        given(lc.chain_friction),
+        values[_AT['top_tension']],
+        values[_AT['depth']],
+        values[_AT['horizontal_tension']],
+        values[_AT['suspended_length']],
+        values[_AT['uplift_force']],
+        lc.anchor_distance,
+        tolerance,
     )
 
 
@@ -1432,14 +1530,20 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
         return {'kind': 'configure', 'parameters': config_to_params(event.config)}
     if isinstance(event, Acknowledge):
         line = alarm_ack.ALL_LINES if event.line is None else event.line
-        return {'kind': 'acknowledge', 'line': line, 'origin': event.origin}
+        return {
+            'kind': 'acknowledge',
+            'line': line,
+            'origin': alarm_ack.bounded_text(event.origin),
+            'publisher': alarm_ack.bounded_text(event.publisher),
+        }
     if isinstance(event, Shelve):
         return {
             'kind': 'shelve',
             'alarm': event.alarm,
             'condition': event.condition,
             'seconds': event.seconds,
-            'origin': event.origin,
+            'origin': alarm_ack.bounded_text(event.origin),
+            'publisher': alarm_ack.bounded_text(event.publisher),
         }
     if isinstance(event, ClockHealth):
         return {'kind': 'clock', 'stopped_for': event.stopped_for}
@@ -1485,17 +1589,19 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
                 return None
             return Shelve(
                 stamp_ns,
-                str(record['alarm']),
-                str(record.get('condition') or alarm_ack.WHOLE),
+                alarm_ack.bounded_text(str(record['alarm'])),
+                alarm_ack.bounded_text(str(record.get('condition') or alarm_ack.WHOLE)),
                 seconds,
-                str(record.get('origin', '')),
+                alarm_ack.bounded_text(str(record.get('origin', ''))),
+                alarm_ack.bounded_text(str(record.get('publisher', ''))),
             )
         if kind == 'acknowledge':
             line = str(record['line'])
             return Acknowledge(
                 stamp_ns,
-                None if line == alarm_ack.ALL_LINES else line,
-                str(record.get('origin', '')),
+                None if line == alarm_ack.ALL_LINES else alarm_ack.bounded_text(line),
+                alarm_ack.bounded_text(str(record.get('origin', ''))),
+                alarm_ack.bounded_text(str(record.get('publisher', ''))),
             )
     except (ValueError, KeyError, TypeError):
         return None

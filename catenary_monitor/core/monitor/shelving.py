@@ -25,7 +25,7 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, AlarmConfig
 from catenary_monitor.core.monitor.acknowledge import SENSORS, WHOLE
-from catenary_monitor.core.monitor.alarms import CONDITIONS, Level
+from catenary_monitor.core.monitor.alarms import CONDITIONS, ERROR_CONDITIONS, Level
 
 __all__ = [
     'SHELVE_TOPIC',
@@ -40,7 +40,7 @@ __all__ = [
 
 #: The node's shelving topic (std_msgs/msg/String: ``LINE[.CONDITION] SECONDS [ORIGIN...]``).
 SHELVE_TOPIC = '/catenary_monitor/shelve'
-_ERRORS = ('uplift', 'input', 'sensor_error')
+_ERRORS = ERROR_CONDITIONS
 #: Longest origin kept from a request (characters): the rest is cut, never stored.
 ORIGIN_MAX = 200
 
