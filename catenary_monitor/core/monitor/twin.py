@@ -34,6 +34,7 @@ import numpy as np
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
 from catenary_monitor.core.monitor import dock_watch as dock_live
+from catenary_monitor.core.monitor import fatigue as fatigue_rule
 from catenary_monitor.core.monitor import sensor_state, tide_table, tide_trend, uncertainty
 from catenary_monitor.core.monitor.alarms import (
     DIAGNOSTIC_KEYS,
@@ -905,6 +906,8 @@ def _line_inputs(
             'holding_capacity',
             'drag_state',
             'implied_anchor_distance',
+            'fatigue_damage',
+            'fatigue_life_left',
         )
     }
     inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
@@ -945,6 +948,10 @@ def _advance_line(
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
     values, status, used = _solve_line(core, line, steps, tv, window, tide, sensors, k)
+    fatigue, fatigue_end = fatigue_rule.series(line.fatigue, tt * 1e-9, tv, core.curves[k])
+    at = steps.t_idx[steps.solved]
+    for j, key in enumerate(fatigue_rule.FIELDS):
+        values[key] = _pick(at, fatigue[key], line.fatigue_values[j])
     inputs = _line_inputs(core, line, steps, tide, values, status, window, tt, dock, k, sensors)
     series = replay_levels(
         steps.times * 1e-9, inputs, line.alarm, STATUS_MESSAGES, initial=line.state
@@ -966,6 +973,9 @@ def _advance_line(
         used,
     )
     _write_back(line, series, values, status, used, tt, tv)
+    line.fatigue = fatigue_end
+    if len(tt):
+        line.fatigue_values = tuple(float(fatigue[key][-1]) for key in fatigue_rule.FIELDS)
     return result, series, steps, acks
 
 
