@@ -544,4 +544,4 @@ def register(sub: Any) -> None:
         metavar='S',
         help='--publish: wait up to S s until every topic has a subscriber',
     )
-    p.set_defaults(func=cmd_replay)
+    p.set_defaults(func=cmd_replay, long_running=lambda a: bool(a.publish))

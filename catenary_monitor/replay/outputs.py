@@ -49,6 +49,7 @@ from catenary_monitor.io.cdr import (
     status_header,
     string_message,
 )
+from catenary_monitor.core.physics.result import Status
 from catenary_monitor.io.csv_columns import FloatColumn, IntColumn, LabelColumn, write_rows
 from catenary_monitor.io.mcap_column_writer import ColumnWriter
 from catenary_monitor.io.ros_schemas import (
@@ -122,7 +123,7 @@ CSV_COLUMNS = (
     'level',
 )
 _LEVELS = [lv.name for lv in sorted(Level)]
-_STATUS_LABELS = [str(s) for s in range(NO_DEPTH, 11)]
+_STATUS_LABELS = [str(s) for s in range(NO_DEPTH, max(Status) + 1)]  # every solver code
 
 Progress = Optional[Callable[[str, float], None]]
 

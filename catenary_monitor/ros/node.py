@@ -37,6 +37,7 @@ from typing import Any, Optional, Sequence
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import SubscriptionEventCallbacks
@@ -46,6 +47,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, qos_profile_sensor_data
 from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.signals import SignalHandlerOptions
+from sensor_msgs.msg import FluidPressure, Range
 from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension, String
 
 from catenary_monitor import __version__
@@ -62,7 +64,15 @@ from catenary_monitor.core.config.parameters import (
     load_params_file,
     runtime_change_refusal,
 )
-from catenary_monitor.core.monitor.acknowledge import ACKNOWLEDGE_TOPIC, SENSORS, parse_request
+from catenary_monitor.core.monitor import readings
+from catenary_monitor.core.monitor.acknowledge import (
+    ACKNOWLEDGE_TOPIC,
+    SENSORS,
+    bounded_text,
+    console_only_refusal,
+    parse_request,
+    publisher_identity,
+)
 from catenary_monitor.core.monitor.alarms import Level
 from catenary_monitor.core.monitor.health import clock_stopped
 from catenary_monitor.core.monitor.monitor_core import (
@@ -101,6 +111,13 @@ _PARAM_TYPES = {
     'string_array': Parameter.Type.STRING_ARRAY,
 }
 _RELIABLE = QoSProfile(depth=10)
+#: The message class of each input type (core.config.parameters.TENSION_TYPES, DEPTH_TYPES).
+_MESSAGE_CLASSES: dict[str, Any] = {
+    'std_msgs/msg/Float64': Float64,
+    readings.WRENCH: WrenchStamped,
+    readings.FLUID_PRESSURE: FluidPressure,
+    readings.RANGE: Range,
+}
 #: The input subscriptions: sensor-data QoS (best effort) with a deeper queue than its 5, so a
 #: node held off the CPU for up to about 2 s at 50 Hz loses no sample (bench-soak measured
 #: 0.7 % lost with depth 5 on a loaded machine).
@@ -409,7 +426,7 @@ class CatenaryMonitor(Node):
         self._output_pubs: list[Any] = []
         for k, line in enumerate(cfg.lines):
             sub = self.create_subscription(
-                Float64,
+                _MESSAGE_CLASSES[line.tension_type],
                 line.tension_topic,
                 self._sample_callback(partial(self._on_tension, k), k),
                 _SAMPLES,
@@ -417,14 +434,14 @@ class CatenaryMonitor(Node):
                 raw=True,
             )
             self._tension_topics.append(sub.topic_name)
-            self._register(sub.topic_name, 'std_msgs/msg/Float64', 'sensor_data')
+            self._register(sub.topic_name, line.tension_type, 'sensor_data')
             pub = self.create_publisher(Float64MultiArray, f'~/{line.name}/outputs', _RELIABLE)
             self._output_pubs.append(pub)
             self._output_topics.append(pub.topic_name)
             self._register(pub.topic_name, 'std_msgs/msg/Float64MultiArray', 'default')
         n = len(cfg.lines)
         sub = self.create_subscription(
-            Float64,
+            _MESSAGE_CLASSES[cfg.depth_type],
             cfg.depth_topic,
             self._sample_callback(self._on_depth, n),
             _SAMPLES,
@@ -432,7 +449,7 @@ class CatenaryMonitor(Node):
             raw=True,
         )
         self._depth_topic = sub.topic_name
-        self._register(self._depth_topic, 'std_msgs/msg/Float64', 'sensor_data')
+        self._register(self._depth_topic, cfg.depth_type, 'sensor_data')
         self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', _RELIABLE)
         self._register('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', 'default')
         self._register(EVENTS_TOPIC, 'std_msgs/msg/String', 'default')
@@ -460,24 +477,29 @@ class CatenaryMonitor(Node):
 
     @_guarded
     def _on_tension(self, line: int, data: bytes) -> None:
-        """A hook tension sample (N): log it, one core event, publish what it says."""
+        """A hook tension sample: log the message as it came, one core event (the reading in
+        N, at its header stamp where it has one), publish what it says."""
         t0 = time.perf_counter()
         self._received[line] += 1
         stamp = self._stamp()
         self._write(self._tension_topics[line], data, stamp)
-        self._run(Tension(stamp, line, deserialize_message(data, Float64).data))
+        lc = self.config.lines[line]
+        fields, sample_ns = _fields(data, lc.tension_type)
+        self._run(Tension(stamp, line, float(readings.tension_si(lc, fields)), sample_ns))
         took = time.perf_counter() - t0
         self._busy += took
         self._busy_tick += took
 
     @_guarded
     def _on_depth(self, data: bytes) -> None:
-        """A depth sample (m): log it, one core event, publish what it says."""
+        """A depth sample: log the message as it came, one core event (the depth in m, at its
+        header stamp where it has one), publish what it says."""
         t0 = time.perf_counter()
         self._received[-1] += 1
         stamp = self._stamp()
         self._write(self._depth_topic, data, stamp)
-        self._run(Depth(stamp, deserialize_message(data, Float64).data))
+        fields, sample_ns = _fields(data, self.config.depth_type)
+        self._run(Depth(stamp, float(readings.depth_si(self.config, fields)), sample_ns))
         took = time.perf_counter() - t0
         self._busy += took
         self._busy_tick += took
@@ -557,7 +579,24 @@ class CatenaryMonitor(Node):
 
     @_guarded
     def _on_acknowledge(self, msg: String) -> None:
-        """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event."""
+        """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event, with
+        its publisher as the ROS graph names it; refused (one warning line) for an unknown
+        line, and, with ``acknowledge_from_ros`` false, unless only consoles publish."""
+        endpoints = [
+            (f'{ns.rstrip("/")}/{name}', bytes(gid))
+            for name, ns, gid in (
+                (e.node_name, e.node_namespace, e.endpoint_gid)
+                for e in self.get_publishers_info_by_topic(ACKNOWLEDGE_TOPIC)
+            )
+        ]
+        publisher = publisher_identity(endpoints)
+        if not self.config.acknowledge_from_ros:
+            refusal = console_only_refusal(endpoints)
+            if refusal is not None:
+                self.get_logger().warning(
+                    f'acknowledge refused: {refusal}', throttle_duration_sec=10.0
+                )
+                return
         try:
             line, origin = parse_request(msg.data)
         except ValueError as err:
@@ -565,12 +604,13 @@ class CatenaryMonitor(Node):
             return
         if line is not None and line not in self.core.index and line != SENSORS:
             self.get_logger().warning(
-                f'acknowledge refused: unknown line {line!r} (lines: {", ".join(self._names)}; '
-                f'{SENSORS}: the sensors alarm)'
+                f'acknowledge refused: unknown line {bounded_text(line, 64)!r} (lines: '
+                f'{", ".join(self._names)}; {SENSORS}: the sensors alarm)',
+                throttle_duration_sec=10.0,
             )
             return
-        self._record(Acknowledge(self._stamp(), line, origin))
-        self.get_logger().info(f'ACKNOWLEDGED {line or "all"} by {origin}')
+        self._record(Acknowledge(self._stamp(), line, origin, publisher))
+        self.get_logger().info(f'ACKNOWLEDGED {line or "all"} by {origin} ({publisher})')
 
     @_guarded
     def _on_log_timer(self) -> None:
@@ -713,6 +753,21 @@ class CatenaryMonitor(Node):
             self.get_logger().error(f'fatigue store not written at the end: {exc}')
         if self.log is not None:
             self.log.close()
+
+
+def _fields(data: bytes, type_name: str) -> tuple[dict[str, float], Optional[int]]:
+    """A raw input message's fields (core.monitor.readings) and its header stamp in ns (None
+    for a type without a header)."""
+    msg = deserialize_message(data, _MESSAGE_CLASSES[type_name])
+    if type_name == 'std_msgs/msg/Float64':
+        return {'value': msg.data}, None
+    stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+    if type_name == readings.WRENCH:
+        f = msg.wrench.force
+        return {'x': f.x, 'y': f.y, 'z': f.z}, stamp
+    if type_name == readings.FLUID_PRESSURE:
+        return {'fluid_pressure': msg.fluid_pressure}, stamp
+    return {'range': msg.range, 'min_range': msg.min_range, 'max_range': msg.max_range}, stamp
 
 
 def _has_events_executor() -> bool:

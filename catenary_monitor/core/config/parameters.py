@@ -26,6 +26,10 @@ from catenary_monitor.core.config.tide_constituents import Constituent, parse_ta
 
 __all__ = [
     'REQUIRED',
+    'FLOAT64',
+    'TENSION_TYPES',
+    'DEPTH_TYPES',
+    'AXES',
     'ParamSpec',
     'PARAMETERS',
     'ROS_BUILTIN_PARAMETERS',
@@ -97,6 +101,12 @@ class ParamSpec(NamedTuple):
 
 
 _L = 'line'
+#: The default message type of the inputs.
+FLOAT64 = 'std_msgs/msg/Float64'
+#: The message types each input accepts.
+TENSION_TYPES = (FLOAT64, 'geometry_msgs/msg/WrenchStamped')
+DEPTH_TYPES = (FLOAT64, 'sensor_msgs/msg/FluidPressure', 'sensor_msgs/msg/Range')
+AXES = ('x', 'y', 'z', 'norm')
 _NOT_GIVEN = math.nan
 #: The one source of truth for every parameter: the node declares these, the docs render them.
 PARAMETERS: tuple[ParamSpec, ...] = (
@@ -118,7 +128,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'depth_topic',
         'string',
         '/tide/depth',
-        'std_msgs/Float64 topic with the water depth at the hooks (m)',
+        'Topic of the depth sensor (its message type: depth_type); the depth at the hooks (m)',
         '',
         None,
         None,
@@ -177,6 +187,19 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         read_only=True,
     ),
     ParamSpec(
+        'acknowledge_from_ros',
+        'bool',
+        True,
+        'Accept alarm acknowledgements on /catenary_monitor/acknowledge from any publisher; '
+        'false: only from a console (a node catenary_console_*, the only publisher on the '
+        'topic): where operators acknowledge through the authenticated console (docs/node.md, '
+        'Security)',
+        '',
+        None,
+        None,
+        read_only=True,
+    ),
+    ParamSpec(
         'runtime_change_warn_time',
         'double',
         3600.0,
@@ -186,6 +209,77 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.0,
         31536000.0,
         read_only=True,
+    ),
+    ParamSpec(
+        'depth_type',
+        'string',
+        FLOAT64,
+        'Message type of depth_topic: std_msgs/msg/Float64 (the depth, stamped at arrival), '
+        'sensor_msgs/msg/FluidPressure (a pressure gauge) or sensor_msgs/msg/Range (a radar '
+        'or sonar gauge looking down), the latter two at their header stamps',
+        '',
+        None,
+        None,
+        read_only=True,
+        group='inputs',
+    ),
+    ParamSpec(
+        'water_density',
+        'double',
+        1025.0,
+        'FluidPressure: density of the water above the gauge (1025 sea water, 1000 fresh)',
+        'kg/m^3',
+        900.0,
+        1300.0,
+        read_only=True,
+        group='inputs',
+    ),
+    ParamSpec(
+        'atmospheric_pressure',
+        'double',
+        101325.0,
+        'FluidPressure: the air pressure the gauge reads at the surface (0 for a gauge that '
+        'reports pressure relative to the air)',
+        'Pa',
+        0.0,
+        200000.0,
+        read_only=True,
+        group='inputs',
+    ),
+    ParamSpec(
+        'gauge_height',
+        'double',
+        0.0,
+        'FluidPressure and Range: the gauge\'s height above the seabed (depth = gauge_height + '
+        '(pressure - atmospheric_pressure) / (water_density g); depth = gauge_height - range)',
+        'm',
+        -100.0,
+        12000.0,
+        read_only=True,
+        group='inputs',
+    ),
+    ParamSpec(
+        'depth_offset',
+        'double',
+        0.0,
+        'Added to every depth reading (the datum: from the gauge\'s zero to the depth at the '
+        'hooks)',
+        'm',
+        -1000.0,
+        1000.0,
+        read_only=True,
+        group='inputs',
+    ),
+    ParamSpec(
+        'stamp_ahead_max',
+        'double',
+        1.0,
+        'A stamped sample whose header stamp is this far ahead of the monitor\'s clock at its '
+        'arrival is refused (sensor state bad_stamp), as is one stamped before the one before',
+        's',
+        0.0,
+        3600.0,
+        group='inputs',
     ),
     # Per line.
     ParamSpec(
@@ -235,7 +329,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'tension_topic',
         'string',
         '/mooring/{line}/tension',
-        'std_msgs/Float64 topic with the measured hook tension (N)',
+        'Topic of the line\'s load cell (its message type: NAME.tension_type)',
         '',
         None,
         None,
@@ -251,6 +345,45 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.0,
         1.0e12,
         _L,
+    ),
+    # Inputs as the sensors' drivers publish them (core/monitor/readings.py; docs/node.md).
+    ParamSpec(
+        'tension_type',
+        'string',
+        FLOAT64,
+        'Message type of NAME.tension_topic: std_msgs/msg/Float64 (the reading, stamped at '
+        'arrival) or geometry_msgs/msg/WrenchStamped (one force axis, at its header stamp)',
+        '',
+        None,
+        None,
+        _L,
+        read_only=True,
+        group='inputs',
+    ),
+    ParamSpec(
+        'tension_axis',
+        'string',
+        'norm',
+        'With a WrenchStamped: the tension is its force x, y, z or norm (the vector\'s length)',
+        '',
+        None,
+        None,
+        _L,
+        read_only=True,
+        group='inputs',
+    ),
+    ParamSpec(
+        'tension_scale',
+        'double',
+        1.0,
+        'The tension is the reading x this (1000 for a load cell in kN; negative for an axis '
+        'that reads tension below zero; not 0)',
+        'N/unit',
+        -1.0e9,
+        1.0e9,
+        _L,
+        read_only=True,
+        group='inputs',
     ),
     # Dock geometry (the dock model, core/body): optional; NaN means not given.
     ParamSpec(
@@ -997,6 +1130,9 @@ class LineConfig:
     fatigue_log_a: float = _PER_LINE_DEFAULT('fatigue_log_a')
     fatigue_stress_per_tension: float | None = None
     fatigue_damage_initial: float = 0.0
+    tension_type: str = FLOAT64
+    tension_axis: str = 'norm'
+    tension_scale: float = 1.0
 
     def __post_init__(self) -> None:
         _check_line_name(self.name)
@@ -1015,6 +1151,12 @@ class LineConfig:
                 value = None  # (heading keeps NaN for "not set", as the console reads it)
             object.__setattr__(self, key, value)
         _check_topic(f'{self.name}.tension_topic', self.tension_topic)
+        _check_choice(f'{self.name}.tension_type', self.tension_type, TENSION_TYPES)
+        _check_choice(f'{self.name}.tension_axis', self.tension_axis, AXES)
+        if self.tension_scale == 0.0:
+            raise ConfigError(
+                f'{self.name}.tension_scale', 'must not be 0 (1 for a load cell in N)'
+            )
         if self.ea == 0.0:
             object.__setattr__(self, 'ea', None)
 
@@ -1029,6 +1171,11 @@ class LineConfig:
 
 def _default(name: str) -> Any:
     return _GLOBAL[name].default
+
+
+def _check_choice(full_name: str, value: str, choices: tuple[str, ...]) -> None:
+    if value not in choices:
+        raise ConfigError(full_name, f'{value!r} is not one of {", ".join(choices)}')
 
 
 @dataclass(frozen=True)
@@ -1062,6 +1209,7 @@ class AlarmConfig:
     parted_window: float = _default('parted_window')
     depth_min: float = _default('depth_min')
     depth_max: float = _default('depth_max')
+    stamp_ahead_max: float = _default('stamp_ahead_max')
     tension_sample_rate: float = _default('tension_sample_rate')
     depth_sample_rate: float = _default('depth_sample_rate')
     tide_table: str = _default('tide_table')
@@ -1135,7 +1283,13 @@ _TOP_LEVEL = (
     'log_rotate_duration',
     'log_create_dir',
     'allow_runtime_changes',
+    'acknowledge_from_ros',
     'runtime_change_warn_time',
+    'depth_type',
+    'water_density',
+    'atmospheric_pressure',
+    'gauge_height',
+    'depth_offset',
 )
 
 #: Per-line parameters that place a line on the dock (all given on every line, or none).
@@ -1151,10 +1305,16 @@ class MonitorConfig:
     depth_topic: str = _default('depth_topic')
     log_dir: str = _default('log_dir')
     allow_runtime_changes: bool = _default('allow_runtime_changes')
+    acknowledge_from_ros: bool = _default('acknowledge_from_ros')
     runtime_change_warn_time: float = _default('runtime_change_warn_time')  # s
     log_rotate_size: float = _default('log_rotate_size')  # MiB
     log_rotate_duration: float = _default('log_rotate_duration')  # s
     log_create_dir: bool = _default('log_create_dir')
+    depth_type: str = _default('depth_type')
+    water_density: float = _default('water_density')  # kg/m^3
+    atmospheric_pressure: float = _default('atmospheric_pressure')  # Pa
+    gauge_height: float = _default('gauge_height')  # m
+    depth_offset: float = _default('depth_offset')  # m
     alarm: AlarmConfig = field(default_factory=AlarmConfig)
     dock: DockConfig = field(default_factory=DockConfig)
 
@@ -1174,6 +1334,7 @@ class MonitorConfig:
         for key in _TOP_LEVEL:
             object.__setattr__(self, key, _check(key, _GLOBAL[key], getattr(self, key)))
         _check_topic('depth_topic', self.depth_topic)
+        _check_choice('depth_type', self.depth_type, DEPTH_TYPES)
         if not self.log_dir:
             raise ConfigError('log_dir', 'must not be empty')
         _check_geometry(self.lines)
@@ -1382,6 +1543,7 @@ NON_DECIDING = frozenset(
         'log_rotate_duration',
         'log_create_dir',
         'allow_runtime_changes',
+        'acknowledge_from_ros',
     }
 )
 

@@ -52,7 +52,13 @@ from catenary_monitor.core.monitor import acknowledge as alarm_ack
 from catenary_monitor.core.monitor import dock_watch as dock_live
 from catenary_monitor.core.monitor import fatigue as fatigue_rule
 from catenary_monitor.core.monitor import holding as holding_rule
-from catenary_monitor.core.monitor import sensor_state, tide_table, tide_trend, uncertainty
+from catenary_monitor.core.monitor import (
+    readings,
+    sensor_state,
+    tide_table,
+    tide_trend,
+    uncertainty,
+)
 from catenary_monitor.core.monitor.alarms import (
     CONDITIONS,
     RANK,
@@ -75,9 +81,12 @@ from catenary_monitor.core.monitor.health import (
     sensors_status,
     tide_status,
 )
-from catenary_monitor.core.monitor.plausible import reading_status, reading_status_array
+from catenary_monitor.core.monitor.plausible import (
+    reading_status,
+    reading_status_array,
+    status_messages,
+)
 from catenary_monitor.core.physics import elastic
-from catenary_monitor.core.physics.result import STATUS_MESSAGES
 from catenary_monitor.core.physics.solve import solve
 
 __all__ = [
@@ -183,18 +192,22 @@ _SENSOR_AT = VALUE_FIELDS.index('sensor_state')  # not a solved value: kept by _
 
 class Tension(NamedTuple):
     """A hook tension sample [N] of line number ``line`` (config order), received at
-    ``stamp_ns``."""
+    ``stamp_ns``; ``sample_ns`` the sensor's header stamp (None: a message without one, taken
+    at its arrival)."""
 
     stamp_ns: int
     line: int
     value: float
+    sample_ns: Optional[int] = None
 
 
 class Depth(NamedTuple):
-    """A tide depth sample [m] at the hooks, received at ``stamp_ns``."""
+    """A tide depth sample [m] at the hooks, received at ``stamp_ns``; ``sample_ns`` as for
+    :class:`Tension`."""
 
     stamp_ns: int
     value: float
+    sample_ns: Optional[int] = None
 
 
 class Tick(NamedTuple):
@@ -225,11 +238,14 @@ class Reconfigure(NamedTuple):
 
 
 class Acknowledge(NamedTuple):
-    """An operator acknowledged line ``line``'s alarm (None: every line) from ``origin``."""
+    """An operator acknowledged line ``line``'s alarm (None: every line) from ``origin`` (as
+    the message claims), published by ``publisher`` (the middleware's identity of the sender:
+    node and GID; empty when unknown)."""
 
     stamp_ns: int
     line: Optional[str]
     origin: str
+    publisher: str = ''
 
 
 class ClockHealth(NamedTuple):
@@ -357,6 +373,8 @@ class LineState:
     parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
     fatigue: fatigue_rule.FatigueState = fatigue_rule.FatigueState()  # the streamed count
     fatigue_values: tuple[float, ...] = (0.0, _NAN, _NAN)  # fatigue_rule.FIELDS now
+    sample_ns: int = -1  # ns, the newest accepted sample's stamp (header or arrival; -1: none)
+    stamp_refused: float = -math.inf  # s, when a sample's stamp was last refused (arrival)
 
     def inputs(
         self, depth_s: float, depth_stale: bool, rate: float = _NAN, table: bool = False
@@ -399,6 +417,12 @@ def _stamp_s(stamp_ns: int) -> float:
     return stamp_ns * 1e-9
 
 
+def _jitter(alarm: Any, sample_ns: Optional[int]) -> float:
+    """How far off a reading's stamp may be [s]: ``stamp_jitter`` for a reading stamped at its
+    arrival (delivery bunches samples), 0 for one at the sensor's own header stamp."""
+    return alarm.stamp_jitter if sample_ns is None else 0.0
+
+
 @dataclass
 class CoreState:
     """Everything the core's decisions carry from one event to the next (its lines' too).
@@ -430,6 +454,8 @@ class CoreState:
     trend: tide_trend.TrendState = field(default_factory=tide_trend.TrendState)  # tide rate
     depth_memory: sensor_state.Memory = field(default_factory=sensor_state.Memory)
     depth_code: int = sensor_state.OK  # the depth sensor's state at the newest tick
+    depth_sample_ns: int = -1  # ns, the newest accepted depth sample's stamp (-1: none)
+    depth_refused: float = -math.inf  # s, when a depth sample's stamp was last refused
     sensor_times: np.ndarray = field(default_factory=lambda: np.zeros(0))  # s, the ticks the
     # suspected_parted test still needs
     # The sensors' common-cause alarm (blind start, silent depth sensor): one, not per line.
@@ -549,15 +575,22 @@ class MonitorCore:
 
     def _on_tension(self, ev: Tension) -> Step:
         line = self.state.lines[ev.line]
-        line.tension, line.tension_s = float(ev.value), _stamp_s(ev.stamp_ns)
         a = self.config.alarm
+        sample_ns = ev.stamp_ns if ev.sample_ns is None else int(ev.sample_ns)
+        if ev.sample_ns is not None and readings.stamp_fault(
+            ev.stamp_ns, sample_ns, line.sample_ns, a.stamp_ahead_max
+        ):
+            line.stamp_refused = _stamp_s(ev.stamp_ns)  # refused: not a reading (bad_stamp)
+            return Step(ev.stamp_ns, 'tension', (), None, ())
+        line.sample_ns = sample_ns
+        line.tension, line.tension_s = float(ev.value), _stamp_s(sample_ns)
         line.sensor_memory = sensor_state.sample(
             line.sensor_memory,
             line.tension_s,
             line.tension,
             a.tension_resolution,
             a.tension_rate_max * line.config.mbl,
-            a.stamp_jitter,
+            _jitter(a, ev.sample_ns),
         )
         line.fatigue, line.fatigue_values = fatigue_rule.step(
             line.fatigue, line.tension_s, line.tension, self.curves[ev.line]
@@ -567,17 +600,24 @@ class MonitorCore:
         return self._finish(ev.stamp_ns, 'tension', [ev.line], changes)
 
     def _on_depth(self, ev: Depth) -> Step:
-        self.state.depth, self.state.depth_s = float(ev.value), _stamp_s(ev.stamp_ns)
-        window = self.config.alarm.tide_trend_window
-        self.state.trend = tide_trend.step(self.state.trend, ev.stamp_ns, self.state.depth, window)
         a = self.config.alarm
+        sample_ns = ev.stamp_ns if ev.sample_ns is None else int(ev.sample_ns)
+        if ev.sample_ns is not None and readings.stamp_fault(
+            ev.stamp_ns, sample_ns, self.state.depth_sample_ns, a.stamp_ahead_max
+        ):
+            self.state.depth_refused = _stamp_s(ev.stamp_ns)
+            return Step(ev.stamp_ns, 'depth', (), None, ())
+        self.state.depth_sample_ns = sample_ns
+        self.state.depth, self.state.depth_s = float(ev.value), _stamp_s(sample_ns)
+        window = a.tide_trend_window
+        self.state.trend = tide_trend.step(self.state.trend, sample_ns, self.state.depth, window)
         self.state.depth_memory = sensor_state.sample(
             self.state.depth_memory,
             self.state.depth_s,
             self.state.depth,
             a.depth_resolution,
             a.depth_rate_max,
-            a.stamp_jitter,
+            _jitter(a, ev.sample_ns),
         )
         changes = self._decide_tide(ev.stamp_ns)
         changes += self._decide_blind(ev.stamp_ns)
@@ -626,9 +666,11 @@ class MonitorCore:
         now = _stamp_s(ev.stamp_ns)
         for line in self.state.lines:
             if ev.line is None or ev.line == line.config.name:
-                line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin)
+                line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin, ev.publisher)
         if ev.line is None or ev.line == alarm_ack.SENSORS:
-            self.state.sensors_ack = alarm_ack.acknowledge(self.state.sensors_ack, now, ev.origin)
+            self.state.sensors_ack = alarm_ack.acknowledge(
+                self.state.sensors_ack, now, ev.origin, ev.publisher
+            )
         return Step(ev.stamp_ns, 'acknowledge', (), self.snapshot(ev.stamp_ns), ())
 
     def _on_clock(self, ev: ClockHealth) -> Step:
@@ -808,6 +850,7 @@ class MonitorCore:
             seen,
             np.array([self.state.depth]),
             np.array([self.state.depth_memory.changed]),
+            np.array([[line.stamp_refused for line in lines]]),
         )
         for k, line in enumerate(lines):
             line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
@@ -821,6 +864,7 @@ class MonitorCore:
                 np.array([dm.changed]),
                 np.array([dm.spiked]),
                 changed,
+                np.array([self.state.depth_refused]),
             )[0]
         )
 
@@ -890,7 +934,7 @@ class MonitorCore:
         )
         line.values = _with_sensor(line.values + _NAN_VALUES[len(line.values) :], line.sensor_code)
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
-        code = reading_status(t, h, lc.mbl)
+        code = reading_status(t, h, lc.mbl, lc.weight)
         if code:
             _implausible(line, code)
         self._add_derived([line])
@@ -925,7 +969,9 @@ class MonitorCore:
             line.values = _with_sensor(line.values, line.sensor_code)
             line.status, line.status_message = int(status[i]), str(messages[i])
             line.model = str(models[i])
-        codes = reading_status_array(tension, h, [c.mbl for c in cfgs]).tolist()
+        codes = reading_status_array(
+            tension, h, [c.mbl for c in cfgs], [c.weight for c in cfgs]
+        ).tolist()
         for line, code in zip(lines, codes):
             if code:
                 _implausible(line, code)
@@ -1126,7 +1172,7 @@ def _implausible(line: LineState, code: int) -> None:
     """An implausible reading (core.monitor.plausible): its status and sentence, no solved values
     (the measured tension and depth kept, as for every impossible input)."""
     line.values = line.values[:2] + _NAN_VALUES[2:_SENSOR_AT] + line.values[_SENSOR_AT:]
-    line.status, line.status_message = code, STATUS_MESSAGES[code]
+    line.status, line.status_message = code, status_messages(line.config)[code]
     line.model = elastic.INEXTENSIBLE
 
 
@@ -1395,7 +1441,12 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
         return {'kind': 'configure', 'parameters': config_to_params(event.config)}
     if isinstance(event, Acknowledge):
         line = alarm_ack.ALL_LINES if event.line is None else event.line
-        return {'kind': 'acknowledge', 'line': line, 'origin': event.origin}
+        return {
+            'kind': 'acknowledge',
+            'line': line,
+            'origin': alarm_ack.bounded_text(event.origin),
+            'publisher': alarm_ack.bounded_text(event.publisher),
+        }
     if isinstance(event, ClockHealth):
         return {'kind': 'clock', 'stopped_for': event.stopped_for}
     if isinstance(event, FatigueStore):
@@ -1449,8 +1500,9 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
             line = str(record['line'])
             return Acknowledge(
                 stamp_ns,
-                None if line == alarm_ack.ALL_LINES else line,
-                str(record.get('origin', '')),
+                None if line == alarm_ack.ALL_LINES else alarm_ack.bounded_text(line),
+                alarm_ack.bounded_text(str(record.get('origin', ''))),
+                alarm_ack.bounded_text(str(record.get('publisher', ''))),
             )
     except (ValueError, KeyError, TypeError):
         return None
