@@ -997,7 +997,8 @@ def _advance_line(
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
     values, status, used = _solve_line(core, line, steps, tv, window, tide, sensors, k)
-    fatigue, fatigue_end = fatigue_rule.series(line.fatigue, window.sample_s(k), tv, core.curves[k])
+    times = window.sample_s(k)  # the reading times, as the core's tension_s
+    fatigue, fatigue_end = fatigue_rule.series(line.fatigue, times, tv, core.curves[k])
     at = steps.t_idx[steps.solved]
     for j, key in enumerate(fatigue_rule.FIELDS):
         values[key] = _pick(at, fatigue[key], line.fatigue_values[j])
