@@ -4,7 +4,8 @@ count survives restarts (the node reads it at start and writes it every
 
 One JSON file, ``chain_fatigue.json`` in the log folder, written atomically: a temporary file
 in the same folder, flushed and fsync'ed, renamed over the store (the folder fsync'ed), the
-previous store kept as ``chain_fatigue.json.prev``. What :func:`load` finds is named, never a silent reset:
+previous store kept as ``chain_fatigue.json.prev``. What :func:`load` finds is named, never a
+silent reset:
 
 ``loaded``   the store read;
 ``new``      no store and no log in the folder (a new dock): each line from
