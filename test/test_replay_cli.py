@@ -444,21 +444,22 @@ def test_offline_replay_imports_without_rclpy():
 
 def test_topic_names_resolve_like_the_node(tmp_path):
     from catenary_monitor.core.config.parameters import resolve_topic
-    from catenary_monitor.ros.playback import float64_topics
+    from catenary_monitor.ros.playback import input_topics_of_log
 
     assert resolve_topic('/tide/depth') == '/tide/depth'
     assert resolve_topic('mooring/a/tension') == '/mooring/a/tension'
     assert resolve_topic('~/a/tension') == '/catenary_monitor/a/tension'
-    # --publish without a params file plays every Float64 topic (summary, or a scan when the
-    # file has none).
+    # --publish without a params file plays every topic of an input type (summary, or a scan
+    # when the file has none).
     config = dock_config(2)
     tensions, depth = generate(config, seconds=5.0, seed=2, dropouts=False)
     log = write_log(tmp_path / 'a.mcap', config, tensions, depth)
     want = ['/mooring/line_01/tension', '/mooring/line_02/tension', '/tide/depth']
-    assert sorted(float64_topics([log])) == want
+    assert sorted(input_topics_of_log([log])) == want
+    assert set(input_topics_of_log([log]).values()) == {'std_msgs/msg/Float64'}
     cut = tmp_path / 'cut.mcap'
     cut.write_bytes(log.read_bytes()[:-200])
-    assert sorted(float64_topics([cut])) == want
+    assert sorted(input_topics_of_log([cut])) == want
 
 
 def test_bench_replay_command_runs():
