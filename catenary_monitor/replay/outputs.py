@@ -106,6 +106,10 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('level', None),
     ('model', None),
     ('drag_state', None),  # core.monitor.holding.DRAG_STATES word, or unknown
+    # Chain fatigue (core/monitor/fatigue.py): Miner's damage, its rate (1/s), life left (s).
+    ('fatigue_damage', 12),
+    ('fatigue_damage_rate', 12),
+    ('fatigue_life_left', 0),
 )
 #: The default columns (the issue's contract), in this order.
 CSV_COLUMNS = (

@@ -84,6 +84,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     ClockHealth,
     Depth,
     Event,
+    FatigueStore,
     Intake,
     LoggerHealth,
     MonitorCore,
@@ -95,7 +96,9 @@ from catenary_monitor.core.monitor.monitor_core import (
     Tick,
     event_record,
 )
+from catenary_monitor.core.monitor.fatigue import to_record
 from catenary_monitor.core.physics import elastic
+from catenary_monitor.io import fatigue_store
 from catenary_monitor.io.mcap_log import McapLogger
 from catenary_monitor.io.mcap_recover import RecoverResult, recover_in_child, unfinished_files
 
@@ -196,6 +199,9 @@ class CatenaryMonitor(Node):
         self.callback_errors = 0
         self._recovered: queue.Queue[RecoverResult] = queue.Queue()
         self.recovery: list[RecoverResult] = []
+        # The fatigue store, read before this run's first log file exists (a new folder).
+        names = [line.name for line in self.config.lines]
+        self._fatigue_found = fatigue_store.load(self._log_dir(), names)
         self.log = self._open_log()
         self._init_intake()
         self._create_interfaces()
@@ -208,6 +214,7 @@ class CatenaryMonitor(Node):
             logger_id=self._log_dir(),
         )
         self._write_record(Start(start))
+        self._load_fatigue()
         self._check_logger()
         self._clock_ros, self._clock_wall = start, time.monotonic()
         self._clock_state: Optional[bool] = None  # stopped? (None: not reported yet)
@@ -243,6 +250,47 @@ class CatenaryMonitor(Node):
 
     def _log_dir(self) -> str:
         return os.path.expanduser(self.config.log_dir)
+
+    # ------------------------------------------------------------------ fatigue store
+    def _load_fatigue(self) -> None:
+        """Read the fatigue store beside the log: one recorded FatigueStore event (each line's
+        stored count, so replay carries the same), one log line unless it was read clean."""
+        names = [line.name for line in self.config.lines]
+        found = self._fatigue_found
+        lines = tuple((name, found.lines.get(name)) for name in names)
+        if found.state in ('loaded', 'new'):
+            self.get_logger().info(found.message)
+        else:
+            self.get_logger().warning(f'FATIGUE {found.state}: {found.message}')
+        self._record(FatigueStore(self._stamp(), found.state, found.message, lines))
+        self._fatigue_saved = time.monotonic()
+        self._fatigue_failed: Optional[str] = None
+
+    def _save_fatigue(self, force: bool = False) -> None:
+        """Write the store every SAVE_PERIOD (and at the end); a failed write is a recorded
+        FatigueStore event (WARN) and one line, a write that works again another."""
+        wall = time.monotonic()
+        if not force and wall - self._fatigue_saved < fatigue_store.SAVE_PERIOD:
+            return
+        self._fatigue_saved = wall
+        lines = {
+            line.config.name: to_record(line.fatigue) for line in self.core.state.lines
+        }
+        extra = {'config_hash': config_hash(self.config), 'saved_ns': self._last_ns}
+        try:
+            path = fatigue_store.save(self._log_dir(), lines, extra)
+        except (OSError, ValueError) as err:
+            if self._fatigue_failed is None:
+                text = f'fatigue store not written: {_one_line(err)}'
+                self.get_logger().error(text)
+                self._record(FatigueStore(self._stamp(), 'write_failed', text))
+            self._fatigue_failed = str(err)
+            return
+        if self._fatigue_failed is not None:
+            self._fatigue_failed = None
+            text = f'fatigue store {path} written again'
+            self.get_logger().info(text)
+            self._record(FatigueStore(self._stamp(), 'saved', text))
 
     def _open_log(self) -> Optional[McapLogger]:
         """The MCAP logger (never raises on disk errors: those become its ``error``)."""
@@ -576,6 +624,7 @@ class CatenaryMonitor(Node):
             self._report_deleted()
         self._check_logger()
         self._report_recovery()
+        self._save_fatigue()
 
     def _report_deleted(self) -> None:
         """One log line and one events-channel record per file the retention deleted."""
@@ -725,6 +774,10 @@ class CatenaryMonitor(Node):
             self._report_intake(time.monotonic(), force=True)
         except Exception as exc:  # noqa: BLE001 - closing the log matters more
             self.get_logger().error(f'last intake counts not recorded: {exc}')
+        try:
+            self._save_fatigue(force=True)
+        except Exception as exc:  # noqa: BLE001 - closing the log matters more
+            self.get_logger().error(f'fatigue store not written at the end: {exc}')
         if self.log is not None:
             self.log.close()
 

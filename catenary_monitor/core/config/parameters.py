@@ -116,7 +116,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         REQUIRED,
         (
             'Names of the monitored chains (a letter, then letters, digits, _; not tide, sensors,'
-            ' logger, dock, parameters, clock, intake, all); each NAME gets the NAME.* '
+            ' logger, dock, parameters, clock, intake, fatigue, all); each NAME gets the NAME.* '
             'parameters below'
         ),
         '',
@@ -477,6 +477,55 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         _L,
         optional=True,
     ),
+    # Chain fatigue (core/monitor/fatigue.py, docs/fatigue.md): seed 001's S-N curve.
+    ParamSpec(
+        'fatigue_m',
+        'double',
+        3.36,
+        'S-N curve N (delta_sigma / 1 MPa)^m = 10^log_a: m (seed 001, anchor chain)',
+        '',
+        1.0,
+        20.0,
+        _L,
+        group='fatigue',
+    ),
+    ParamSpec(
+        'fatigue_log_a',
+        'double',
+        13.6451,
+        'S-N curve N (delta_sigma / 1 MPa)^m = 10^log_a: log10 a (seed 001, anchor chain)',
+        '',
+        1.0,
+        40.0,
+        _L,
+        group='fatigue',
+    ),
+    ParamSpec(
+        'fatigue_stress_per_tension',
+        'double',
+        _NOT_GIVEN,
+        'Stress range per tension range of a link; not set: seed 001\'s 80.5 Pa/N for its '
+        '12 421 kN chain scaled to this MBL (80.5 x 12421e3 / mbl: the same stress at the '
+        'same fraction of MBL)',
+        'Pa/N',
+        1.0e-6,
+        1.0e9,
+        _L,
+        optional=True,
+        group='fatigue',
+    ),
+    ParamSpec(
+        'fatigue_damage_initial',
+        'double',
+        0.0,
+        'Miner damage the chain had when monitoring began (used only where the fatigue store '
+        'holds none for the line)',
+        '',
+        0.0,
+        10.0,
+        _L,
+        group='fatigue',
+    ),
     # Holding (docs/holding.md): optional; NaN means not given (no holding values).
     ParamSpec(
         'anchor_holding',
@@ -767,6 +816,16 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         group='holding',
     ),
     ParamSpec(
+        'fatigue_damage_warn',
+        'double',
+        0.5,
+        'WARN when a line\'s cumulative Miner damage reaches this (1: the S-N curve\'s failure)',
+        '',
+        0.0,
+        10.0,
+        group='fatigue',
+    ),
+    ParamSpec(
         'load_margin_warn',
         'double',
         0.0,
@@ -981,7 +1040,17 @@ _ROS_BUILTIN_PREFIXES = ('qos_overrides.',)
 _LINE_NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*\Z')
 #: Names of the monitor's own statuses (``catenary_monitor: tide``, ...) and of the
 #: acknowledgement of every alarm (``all``): no line may take one.
-RESERVED_NAMES = ('tide', 'sensors', 'logger', 'dock', 'parameters', 'clock', 'intake', 'all')
+RESERVED_NAMES = (
+    'tide',
+    'sensors',
+    'logger',
+    'dock',
+    'parameters',
+    'clock',
+    'intake',
+    'fatigue',
+    'all',
+)
 
 
 def _check_line_name(name: object) -> None:
@@ -1058,6 +1127,10 @@ def _check_topic(full_name: str, topic: str) -> None:
         raise ConfigError(full_name, f'{topic!r} is not a valid ROS topic name')
 
 
+def _PER_LINE_DEFAULT(name: str) -> Any:  # noqa: N802 - read as a constant
+    return _PER_LINE[name].default
+
+
 @dataclass(frozen=True)
 class LineConfig:
     """One anchor chain. SI units: weight N/m (submerged), distances m, forces N.
@@ -1085,6 +1158,10 @@ class LineConfig:
     anchor_holding: float | None = None
     anchor_weight: float | None = None
     chain_friction: float | None = None
+    fatigue_m: float = _PER_LINE_DEFAULT('fatigue_m')
+    fatigue_log_a: float = _PER_LINE_DEFAULT('fatigue_log_a')
+    fatigue_stress_per_tension: float | None = None
+    fatigue_damage_initial: float = 0.0
     tension_type: str = FLOAT64
     tension_axis: str = 'norm'
     tension_scale: float = 1.0
@@ -1115,6 +1192,14 @@ class LineConfig:
         if self.ea == 0.0:
             object.__setattr__(self, 'ea', None)
 
+    @property
+    def stress_per_tension(self) -> float:
+        """Pa of stress range per N of tension range: ``fatigue_stress_per_tension``, or seed
+        001's 80.5 Pa/N for its 12 421 kN chain scaled to this line's MBL."""
+        if self.fatigue_stress_per_tension is not None:
+            return self.fatigue_stress_per_tension
+        return 80.5 * 12421.0e3 / self.mbl
+
 
 def _default(name: str) -> Any:
     return _GLOBAL[name].default
@@ -1144,6 +1229,7 @@ class AlarmConfig:
     drag_margin_warn: float = _default('drag_margin_warn')
     drag_margin_deadband: float = _default('drag_margin_deadband')
     drag_tolerance: float = _default('drag_tolerance')
+    fatigue_damage_warn: float = _default('fatigue_damage_warn')
     tension_resolution: float = _default('tension_resolution')
     depth_resolution: float = _default('depth_resolution')
     stuck_time: float = _default('stuck_time')

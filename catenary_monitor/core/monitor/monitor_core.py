@@ -50,6 +50,7 @@ from catenary_monitor.core.config.parameters import (
 )
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
 from catenary_monitor.core.monitor import dock_watch as dock_live
+from catenary_monitor.core.monitor import fatigue as fatigue_rule
 from catenary_monitor.core.monitor import holding as holding_rule
 from catenary_monitor.core.monitor import (
     readings,
@@ -105,6 +106,7 @@ __all__ = [
     'Acknowledge',
     'ClockHealth',
     'Intake',
+    'FatigueStore',
     'Event',
     'LineOutput',
     'ComponentStatus',
@@ -163,6 +165,8 @@ OUTPUT_FIELDS = (
     *holding_rule.LENGTH_FIELDS,
     # The anchor's drag state (0 holding, 1 overloaded, 2 dragging): core/monitor/holding.py.
     *holding_rule.DRAG_FIELDS,
+    # Chain fatigue (Miner's damage, its rate over the last day, the life left): fatigue.py.
+    *fatigue_rule.FIELDS,
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -178,7 +182,7 @@ _NAN = math.nan
 _INCONSISTENT = CONDITIONS.index('inconsistent')
 _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
 #: The statuses on /diagnostics that are not lines (``catenary_monitor: NAME``).
-COMPONENTS = ('tide', 'sensors', 'logger', 'dock', 'parameters', 'clock', 'intake')
+COMPONENTS = ('tide', 'sensors', 'logger', 'dock', 'parameters', 'clock', 'intake', 'fatigue')
 #: The components whose STALE is a consequence of blind inputs, announced by the sensors alarm.
 _CONSEQUENCES = ('tide', 'dock')
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
@@ -266,7 +270,43 @@ class Intake(NamedTuple):
     period: float
 
 
-Event = Union[Tension, Depth, Tick, LoggerHealth, Reconfigure, Acknowledge, ClockHealth, Intake]
+class FatigueStore(NamedTuple):
+    """The fatigue store at ``stamp_ns`` (core/monitor/fatigue.py; the node keeps it beside
+    its log): its ``state`` (:data:`FATIGUE_STORE_STATES`), one-line ``message``, and, when it
+    was read at start, each line's stored state (``(name, record or None)``: None, from
+    ``NAME.fatigue_damage_initial``); ``lines`` None only changes the status (a write that
+    failed or worked again)."""
+
+    stamp_ns: int
+    state: str
+    message: str
+    lines: Optional[tuple[tuple[str, Any], ...]] = None
+
+
+#: The fatigue store's states and their levels: read at start (``loaded``), none yet in a new
+#: log folder (``new``), none where logs are (``missing``), unreadable (``damaged``), a save that
+#: failed (``write_failed``).
+FATIGUE_STORE_STATES = {
+    'loaded': Level.OK,
+    'new': Level.OK,
+    'saved': Level.OK,
+    'missing': Level.WARN,
+    'damaged': Level.WARN,
+    'write_failed': Level.WARN,
+}
+
+
+Event = Union[
+    Tension,
+    Depth,
+    Tick,
+    LoggerHealth,
+    Reconfigure,
+    Acknowledge,
+    ClockHealth,
+    Intake,
+    FatigueStore,
+]
 
 
 class LineOutput(NamedTuple):
@@ -333,6 +373,8 @@ class LineState:
     )  # the tension sensor's per-sample memory
     sensor_code: int = sensor_state.OK  # sensor state decided at the newest tick
     parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
+    fatigue: fatigue_rule.FatigueState = fatigue_rule.FatigueState()  # the streamed count
+    fatigue_values: tuple[float, ...] = (0.0, _NAN, _NAN)  # fatigue_rule.FIELDS now
     sample_ns: int = -1  # ns, the newest accepted sample's stamp (header or arrival; -1: none)
     stamp_refused: float = -math.inf  # s, when a sample's stamp was last refused (arrival)
 
@@ -368,6 +410,8 @@ class LineState:
             mbl=self.config.mbl,
             drag_state=v[_AT['drag_state']],
             implied_anchor_distance=v[_AT['implied_anchor_distance']],
+            fatigue_damage=self.fatigue_values[0],
+            fatigue_life_left=self.fatigue_values[2],
         )
 
 
@@ -434,6 +478,11 @@ class CoreState:
     intake_checked: list[tuple[bool, ...]] = field(default_factory=list)
     intake_heard: list[bool] = field(default_factory=list)
     intake_seen: bool = False
+    # The fatigue store's status (a FatigueStore event seen: the node keeps one).
+    fatigue: tuple[Level, str] = (Level.OK, '')
+    fatigue_word: str = ''
+    fatigue_entered: float = 0.0
+    fatigue_seen: bool = False
 
 
 class MonitorCore:
@@ -451,7 +500,7 @@ class MonitorCore:
         in the root namespace); ``depth_id`` the depth topic; ``logger_id`` the log directory.
     """
 
-    __slots__ = ('config', 'index', 'depth_id', 'logger_id', 'dock_model', 'state')
+    __slots__ = ('config', 'index', 'depth_id', 'logger_id', 'dock_model', 'curves', 'state')
 
     def __init__(
         self,
@@ -471,9 +520,12 @@ class MonitorCore:
                 ids.get(lc.name, resolve_topic(lc.tension_topic)),
                 LineAlarm.for_line(lc, config.alarm).initial(start),
                 ack=alarm_ack.initial(start),
+                fatigue=fatigue_rule.initial(lc.fatigue_damage_initial),
+                fatigue_values=(lc.fatigue_damage_initial, _NAN, _NAN),
             )
             for lc in config.lines
         ]
+        self.curves = [fatigue_rule.Curve.of(lc) for lc in config.lines]
         self.index = {line.config.name: k for k, line in enumerate(lines)}
         self.depth_id = depth_id or resolve_topic(config.depth_topic)
         self.logger_id = logger_id
@@ -495,6 +547,7 @@ class MonitorCore:
             parameters_entered=start,
             clock_entered=start,
             intake_entered=start,
+            fatigue_entered=start,
         )
         self.state.sensors = self._sensors_now(start)
 
@@ -518,6 +571,8 @@ class MonitorCore:
             return self._on_clock(event)
         if isinstance(event, Intake):
             return self._on_intake(event)
+        if isinstance(event, FatigueStore):
+            return self._on_fatigue_store(event)
         raise TypeError(f'not a monitor event: {event!r}')
 
     def _on_tension(self, ev: Tension) -> Step:
@@ -538,6 +593,9 @@ class MonitorCore:
             a.tension_resolution,
             a.tension_rate_max * line.config.mbl,
             _jitter(a, ev.sample_ns),
+        )
+        line.fatigue, line.fatigue_values = fatigue_rule.step(
+            line.fatigue, line.tension_s, line.tension, self.curves[ev.line]
         )
         self._solve_one(line)
         changes = self._step_lines([ev.line], ev.stamp_ns)
@@ -578,6 +636,26 @@ class MonitorCore:
             changes += self._decide_dock(ev.stamp_ns)
         changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns)
         return Step(ev.stamp_ns, 'tick', (), self.snapshot(ev.stamp_ns), tuple(changes))
+
+    def _on_fatigue_store(self, ev: FatigueStore) -> Step:
+        """The fatigue store: each line's stored count taken where it was read (a line the
+        store lacks, or whose record is damaged, from ``NAME.fatigue_damage_initial``), and
+        the store's status, shown at once."""
+        if ev.lines is not None:
+            stored = dict(ev.lines)
+            for line, curve in zip(self.state.lines, self.curves):
+                state = fatigue_rule.from_record(stored.get(line.config.name), curve)
+                if state is None:
+                    state = fatigue_rule.initial(line.config.fatigue_damage_initial)
+                line.fatigue = state
+                damage = state.damage()
+                line.fatigue_values = (damage, _NAN, fatigue_rule.life_left(damage, _NAN))
+                line.values = _with_fatigue(line.values, line.fatigue_values)
+        self.state.fatigue_seen = True
+        self.state.fatigue_word = ev.state
+        level = FATIGUE_STORE_STATES.get(ev.state, Level.WARN)
+        changes = self._set_component('fatigue', (level, ev.message), ev.stamp_ns)
+        return Step(ev.stamp_ns, 'fatigue', (), self.snapshot(ev.stamp_ns), tuple(changes))
 
     def _on_logger(self, ev: LoggerHealth) -> Step:
         new = logger_status(ev.error, ev.path, ev.warning)
@@ -701,6 +779,7 @@ class MonitorCore:
         if config.alarm.tide_trend_window != self.config.alarm.tide_trend_window:
             self.state.trend = tide_trend.TrendState()  # other bins: the trend starts again
         self.config = config
+        self.curves = [fatigue_rule.Curve.of(lc) for lc in config.lines]
         for line, lc in zip(self.state.lines, config.lines):
             line.config, line.alarm = lc, LineAlarm.for_line(lc, config.alarm)
         self.dock_model = DockModel.from_config(config) if config.has_dock_model else None
@@ -836,6 +915,7 @@ class MonitorCore:
                 '',
                 NO_MODEL,
             )
+            line.values = _with_fatigue(line.values, line.fatigue_values)
             return
         r = solve(
             lc.weight, h, tension=t, anchor_distance=lc.anchor_distance, mbl=lc.mbl, ea=lc.ea
@@ -902,6 +982,8 @@ class MonitorCore:
     def _add_derived(self, lines: Sequence[LineState]) -> None:
         """The bounds and the holding values of freshly solved lines (from their values);
         lines without accuracies or holding data keep NaN (what the functions give them)."""
+        for line in lines:
+            line.values = _with_fatigue(line.values, line.fatigue_values)
         accuracy = self.config.alarm.depth_accuracy
         tolerance = self.config.alarm.drag_tolerance
         for fields, compute, wanted in (
@@ -1037,6 +1119,8 @@ class MonitorCore:
             out.append(flag)
         if self.state.clock_seen:
             out.append(ComponentStatus(f'{NODE_NAME}: clock', *self.state.clock, NODE_NAME, ()))
+        if self.state.fatigue_seen:
+            out.append(self.fatigue_component())
         if self.state.intake_seen:
             dropped = self.intake_dropped()
             names = [line.config.name for line in self.state.lines] + ['depth']
@@ -1054,6 +1138,13 @@ class MonitorCore:
             )
         return out
 
+    def fatigue_component(self) -> ComponentStatus:
+        """The ``catenary_monitor: fatigue`` status: the fatigue store's level and message,
+        ``store_state`` (:data:`FATIGUE_STORE_STATES`) and the worst line's ``fatigue_damage``."""
+        damages = [line.fatigue_values[0] for line in self.state.lines]
+        values = (('store_state', self.state.fatigue_word), ('max_damage', repr(max(damages))))
+        return ComponentStatus(f'{NODE_NAME}: fatigue', *self.state.fatigue, NODE_NAME, values)
+
     def parameters_component(self, now: float) -> Optional[ComponentStatus]:
         """The runtime-change status at ``now`` [s] (None when runtime changes are not
         allowed and none was made): WARN naming the changes until their flag expires."""
@@ -1068,6 +1159,15 @@ class MonitorCore:
 def _with_sensor(values: tuple[float, ...], code: int) -> tuple[float, ...]:
     """``values`` with the line's sensor state code in its place (``sensor_state``)."""
     return values[:_SENSOR_AT] + (float(code),) + values[_SENSOR_AT + 1 :]
+
+
+_FATIGUE_AT = VALUE_FIELDS.index(fatigue_rule.FIELDS[0])
+
+
+def _with_fatigue(values: tuple[float, ...], fatigue: tuple[float, ...]) -> tuple[float, ...]:
+    """``values`` with the line's fatigue values in their places."""
+    end = _FATIGUE_AT + len(fatigue)
+    return values[:_FATIGUE_AT] + tuple(fatigue) + values[end:]
 
 
 def _implausible(line: LineState, code: int) -> None:
@@ -1354,6 +1454,9 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
         }
     if isinstance(event, ClockHealth):
         return {'kind': 'clock', 'stopped_for': event.stopped_for}
+    if isinstance(event, FatigueStore):
+        lines = None if event.lines is None else dict(event.lines)
+        return {'kind': 'fatigue', 'state': event.state, 'message': event.message, 'lines': lines}
     if isinstance(event, Intake):
         return {
             'kind': 'intake',
@@ -1391,6 +1494,14 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
                 tuple(int(x) for x in record['dropped']),
                 float(record['busy']),
                 float(record['period']),
+            )
+        if kind == 'fatigue':
+            lines = record.get('lines')
+            return FatigueStore(
+                stamp_ns,
+                str(record['state']),
+                str(record['message']),
+                None if lines is None else tuple((str(k), v) for k, v in dict(lines).items()),
             )
         if kind == 'acknowledge':
             line = str(record['line'])

@@ -34,6 +34,7 @@ import numpy as np
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
 from catenary_monitor.core.monitor import dock_watch as dock_live
+from catenary_monitor.core.monitor import fatigue as fatigue_rule
 from catenary_monitor.core.monitor import (
     readings,
     sensor_state,
@@ -954,6 +955,8 @@ def _line_inputs(
             'holding_capacity',
             'drag_state',
             'implied_anchor_distance',
+            'fatigue_damage',
+            'fatigue_life_left',
         )
     }
     inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
@@ -994,6 +997,11 @@ def _advance_line(
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
     values, status, used = _solve_line(core, line, steps, tv, window, tide, sensors, k)
+    times = window.sample_s(k)  # the reading times, as the core's tension_s
+    fatigue, fatigue_end = fatigue_rule.series(line.fatigue, times, tv, core.curves[k])
+    at = steps.t_idx[steps.solved]
+    for j, key in enumerate(fatigue_rule.FIELDS):
+        values[key] = _pick(at, fatigue[key], line.fatigue_values[j])
     inputs = _line_inputs(core, line, steps, tide, values, status, window, tt, dock, k, sensors)
     series = replay_levels(
         steps.times * 1e-9, inputs, line.alarm, status_messages(line.config), initial=line.state
@@ -1015,6 +1023,9 @@ def _advance_line(
         used,
     )
     _write_back(line, series, values, status, used, window.sample_ns(k), tv)
+    line.fatigue = fatigue_end
+    if len(tt):
+        line.fatigue_values = tuple(float(fatigue[key][-1]) for key in fatigue_rule.FIELDS)
     return result, series, steps, acks
 
 
