@@ -41,16 +41,16 @@ open the folder at any time; the file being written joins it when it is finished
 Retention and free space
 ------------------------
 With ``max_total_bytes`` and/or ``max_age`` (0: keep all), the folder's finished ``*.mcap``
-files are deleted oldest first (by modification time, the end of a file) once the folder's
-MCAP files exceed ``max_total_bytes`` with the open one counted at the size it may reach
-before it rotates (``max_bytes`` plus a chunk: the bound holds between two checks), or once
-a file ended more than ``max_age`` seconds ago. The file being written is never touched, nor a file another process
-holds locked (a second logger's open file). Each deletion is kept in :attr:`McapLogger.deleted`
-(path, bytes, why) for the caller to report, and ``metadata.yaml`` is rewritten at once, so it
-only ever lists files that exist. The check runs when a file is finished and every
-``retention_period`` seconds in :meth:`tick`. With ``min_free_bytes``, :attr:`McapLogger.warning`
-says so while the file system holds less than that free (checked as often): a warning before
-anything is lost to a full disk.
+files are deleted oldest first (by modification time, the end of a file) once the folder's MCAP
+files exceed ``max_total_bytes`` with the open one counted at the size it may reach before it
+rotates (``max_bytes`` plus a chunk: the bound holds between two checks), or once a file ended
+more than ``max_age`` seconds ago. The file being written is never touched, nor a file another
+process holds locked (a second logger's open file). Each deletion is kept in
+:attr:`McapLogger.deleted` (path, bytes, why) for the caller to report, and ``metadata.yaml`` is
+rewritten at once, so it only ever lists files that exist. The check runs when a file is
+finished and every ``retention_period`` seconds in :meth:`tick`. With ``min_free_bytes``,
+:attr:`McapLogger.warning` says so while the file system holds less than that free (checked as
+often): a warning before anything is lost to a full disk.
 
 Disk errors
 -----------
