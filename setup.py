@@ -82,8 +82,14 @@ setup(
         'matplotlib>=3.7',
         'mcap>=1.1',
         'mcap-ros2-support>=0.5',
+        # The console's HTTP/1.1 framing (pure Python, no dependencies).
+        'h11>=0.14',
         'ros-jazzy-rclpy[fastrtps]',
         'ros-jazzy-common-interfaces',
+        # The sensors' own messages (WrenchStamped, FluidPressure, Range) and replay's /clock.
+        'ros-jazzy-geometry-msgs',
+        'ros-jazzy-sensor-msgs',
+        'ros-jazzy-rosgraph-msgs',
     ],
     extras_require={
         # The test suite also checks the peers (MoorPy, pycatenary): nothing there is skipped.
@@ -98,9 +104,12 @@ setup(
             'selenium>=4.10',
             'moorpy',
             'pycatenary',
-            # Independent readers of the MCAP logs and the bag folder (issue 10).
+            # Independent readers of the MCAP logs and the bag folder.
             'rosbags>=0.10',
             'pymcap-cli',
+            # Two rainflow counts (ASTM E1049-85) the streamed fatigue count is tested against.
+            'rainflow>=3.2',
+            'fatpack>=0.7',
         ],
         'peers': ['moorpy', 'pycatenary'],
     },

@@ -1,4 +1,4 @@
-"""The vectorized twin (core.batch.advance) against the monitor core itself, event by event.
+"""The vectorized twin (core.monitor.twin.advance) against the monitor core itself, event by event.
 
 The scalar :class:`MonitorCore` is the oracle: the same events are stepped through it one at a
 time and handed to ``advance`` as columns (in one window or several), and every output, level,

@@ -1,6 +1,6 @@
 """Params files read as rcl reads them: rules, glibc number parsing, agreement with rcl itself.
 
-* unit tests of the scalar typing and the structure rules of ``core.params_file``;
+* unit tests of the scalar typing and the structure rules of ``core.config.params_file``;
 * hypothesis: the Python ``strtol``/``strtod`` against glibc's (ctypes), the scalar typing against
   rcl's own ``get_value`` and whole generated files against ``rcl_parse_yaml_file`` (ctypes, the
   library rclpy loads; skipped where it is not found);

@@ -56,7 +56,7 @@ class DockModel:
     hook_height: np.ndarray
     mbl: np.ndarray
     allowed_uplift: np.ndarray
-    accuracy: np.ndarray  # N, tension sensor 1 sigma (NaN: not given)
+    accuracy: np.ndarray  # N, tension_accuracy (+- bound; the estimate's sigma_T; NaN: not given)
     dock: DockConfig
 
     @classmethod
