@@ -167,6 +167,38 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         read_only=True,
     ),
     ParamSpec(
+        'log_max_total_size',
+        'double',
+        0.0,
+        'Retention: the log folder\'s MCAP files are kept under this size, the oldest finished '
+        'files deleted first, never the open one (0: keep all; at least 2 x log_rotate_size)',
+        'B',
+        0.0,
+        1.0e15,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_max_age',
+        'double',
+        0.0,
+        'Retention: a finished MCAP log file is deleted this long after it ended (0: keep all)',
+        's',
+        0.0,
+        3.2e9,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_min_free_space',
+        'double',
+        1073741824.0,
+        'The logger status is WARN while the log\'s file system has less free space than this '
+        '(before a full disk stops the logging; 0: not checked)',
+        'B',
+        0.0,
+        1.0e15,
+        read_only=True,
+    ),
+    ParamSpec(
         'log_create_dir',
         'bool',
         True,
@@ -1378,6 +1410,9 @@ _TOP_LEVEL = (
     'log_dir',
     'log_rotate_size',
     'log_rotate_duration',
+    'log_max_total_size',
+    'log_max_age',
+    'log_min_free_space',
     'log_create_dir',
     'allow_runtime_changes',
     'acknowledge_from_ros',
@@ -1407,6 +1442,9 @@ class MonitorConfig:
     log_rotate_size: float = _default('log_rotate_size')  # MiB
     log_rotate_duration: float = _default('log_rotate_duration')  # s
     log_create_dir: bool = _default('log_create_dir')
+    log_max_total_size: float = _default('log_max_total_size')  # B
+    log_max_age: float = _default('log_max_age')  # s
+    log_min_free_space: float = _default('log_min_free_space')  # B
     depth_type: str = _default('depth_type')
     water_density: float = _default('water_density')  # kg/m^3
     atmospheric_pressure: float = _default('atmospheric_pressure')  # Pa
@@ -1432,6 +1470,13 @@ class MonitorConfig:
             object.__setattr__(self, key, _check(key, _GLOBAL[key], getattr(self, key)))
         _check_topic('depth_topic', self.depth_topic)
         _check_choice('depth_type', self.depth_type, DEPTH_TYPES)
+        rotate = self.log_rotate_size * 2**20
+        if 0.0 < self.log_max_total_size < 2.0 * rotate:
+            raise ConfigError(
+                'log_max_total_size',
+                f'{self.log_max_total_size:g} B is below 2 x log_rotate_size ({2 * rotate:g} B): '
+                'the open file and a finished one must fit',
+            )
         if not self.log_dir:
             raise ConfigError('log_dir', 'must not be empty')
         _check_geometry(self.lines)
@@ -1638,6 +1683,9 @@ NON_DECIDING = frozenset(
         'log_dir',
         'log_rotate_size',
         'log_rotate_duration',
+        'log_max_total_size',
+        'log_max_age',
+        'log_min_free_space',
         'log_create_dir',
         'allow_runtime_changes',
         'acknowledge_from_ros',

@@ -234,11 +234,13 @@ class Tick(NamedTuple):
 
 
 class LoggerHealth(NamedTuple):
-    """The MCAP logger's state at ``stamp_ns``: ``error`` (None while it writes) and its file."""
+    """The MCAP logger's state at ``stamp_ns``: ``error`` (None while it writes), its file and
+    a ``warning`` (low disk space; None: none)."""
 
     stamp_ns: int
     error: Optional[str]
     path: Optional[str]
+    warning: Optional[str] = None
 
 
 class Start(NamedTuple):
@@ -707,7 +709,7 @@ class MonitorCore:
         return Step(ev.stamp_ns, 'fatigue', (), self.snapshot(ev.stamp_ns), tuple(changes))
 
     def _on_logger(self, ev: LoggerHealth) -> Step:
-        new = logger_status(ev.error, ev.path)
+        new = logger_status(ev.error, ev.path, ev.warning)
         changes = self._set_component('logger', new, ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'logger', [], changes)
 
@@ -1634,7 +1636,10 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
     if isinstance(event, Tick):
         return {'kind': 'tick'}
     if isinstance(event, LoggerHealth):
-        return {'kind': 'logger', 'error': event.error, 'path': event.path}
+        record = {'kind': 'logger', 'error': event.error, 'path': event.path}
+        if event.warning is not None:
+            record['warning'] = event.warning
+        return record
     if isinstance(event, Reconfigure):
         return {'kind': 'configure', 'parameters': config_to_params(event.config)}
     if isinstance(event, Acknowledge):
@@ -1681,7 +1686,9 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
         if kind == 'tick':
             return Tick(stamp_ns)
         if kind == 'logger':
-            return LoggerHealth(stamp_ns, record.get('error'), record.get('path'))
+            return LoggerHealth(
+                stamp_ns, record.get('error'), record.get('path'), record.get('warning')
+            )
         if kind == 'configure':
             return Reconfigure(stamp_ns, config_from_params(record['parameters']))
         if kind == 'clock':
