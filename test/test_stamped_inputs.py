@@ -409,3 +409,21 @@ def test_replay_of_a_rosbag2_recording_of_stamped_sensors_equals_the_core(tmp_pa
         assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
     words = {dict(st.values).get('sensor_state') for s in want for st in s.statuses}
     assert 'bad_stamp' in words  # the refused stamps of the scene, from the bag too
+    # replay --out: the results log holds the inputs as SI Float64 readings and says so in its
+    # recorded parameters (scale 1, Float64), so it reads back in N, not 1000 times that.
+    from replay_data import params_yaml
+
+    from catenary_monitor.cli.main import main as cli
+    from catenary_monitor.replay.driver import log_parameters, read_inputs
+
+    out = tmp_path / 'out.mcap'
+    params = params_yaml(config, tmp_path / 'dock.yaml')
+    assert cli(['replay', str(bag), '--params-file', str(params), '--out', str(out), '--quiet']) == 0
+    recorded = config_from_params(log_parameters([out])[1])
+    assert {lc.tension_type for lc in recorded.lines} == {'std_msgs/msg/Float64'}
+    assert recorded.lines[0].tension_scale == 1.0 and recorded.depth_type.endswith('Float64')
+    tensions, depth_col, _ = read_inputs([out], recorded)
+    first = lines[0].name
+    want = replay.tensions[first][1]
+    np.testing.assert_array_equal(tensions[first][1], want)
+    assert 300e3 < np.nanmedian(want) < 2e6
