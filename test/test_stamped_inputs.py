@@ -364,7 +364,9 @@ def test_replay_of_a_rosbag2_recording_of_stamped_sensors_equals_the_core(tmp_pa
             writer.add_connection(lc.tension_topic, readings.WRENCH, typestore=store)
             for lc in lines
         ]
-        dconn = writer.add_connection(config.depth_topic, readings.FLUID_PRESSURE, typestore=store)
+        dconn = writer.add_connection(
+            config.depth_topic, readings.FLUID_PRESSURE, typestore=store
+        )
         rows = []
         for k, lc in enumerate(lines):
             for a, v, s in zip(*cols[lc.name]):
@@ -418,7 +420,8 @@ def test_replay_of_a_rosbag2_recording_of_stamped_sensors_equals_the_core(tmp_pa
 
     out = tmp_path / 'out.mcap'
     params = params_yaml(config, tmp_path / 'dock.yaml')
-    assert cli(['replay', str(bag), '--params-file', str(params), '--out', str(out), '--quiet']) == 0
+    args = ['replay', str(bag), '--params-file', str(params), '--out', str(out), '--quiet']
+    assert cli(args) == 0
     recorded = config_from_params(log_parameters([out])[1])
     assert {lc.tension_type for lc in recorded.lines} == {'std_msgs/msg/Float64'}
     assert recorded.lines[0].tension_scale == 1.0 and recorded.depth_type.endswith('Float64')
