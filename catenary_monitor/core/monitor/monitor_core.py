@@ -96,6 +96,7 @@ __all__ = [
     'Acknowledge',
     'ClockHealth',
     'Intake',
+    'Coalesced',
     'Event',
     'LineOutput',
     'ComponentStatus',
@@ -235,17 +236,34 @@ class ClockHealth(NamedTuple):
 
 class Intake(NamedTuple):
     """Samples since the previous Intake event: per line, then the depth, ``received``
-    (handled) and ``dropped`` (lost before the node handled them); ``busy`` [s] of wall time
-    spent in callbacks over ``period`` [s] of wall time."""
+    (handled: stepped), ``dropped`` (lost before the node took them) and ``coalesced`` (taken
+    and logged, not stepped: a newer sample of the same input was handled instead; empty:
+    none, as in logs from before coalescing); ``busy`` [s] of wall time spent in callbacks
+    over ``period`` [s] of wall time."""
 
     stamp_ns: int
     received: tuple[int, ...]
     dropped: tuple[int, ...]
     busy: float
     period: float
+    coalesced: tuple[int, ...] = ()
 
 
-Event = Union[Tension, Depth, Tick, LoggerHealth, Reconfigure, Acknowledge, ClockHealth, Intake]
+class Coalesced(NamedTuple):
+    """The node took ``samples`` samples of line ``line`` (a name; None: the depth) faster than
+    it could handle them: they are logged, stamped after ``stamp_ns`` and at most ``last_ns``,
+    and not stepped (the newer sample that follows them is). Recorded before them, so replay
+    leaves out exactly the samples the node left out."""
+
+    stamp_ns: int
+    line: Optional[str]
+    last_ns: int
+    samples: int
+
+
+Event = Union[
+    Tension, Depth, Tick, LoggerHealth, Reconfigure, Acknowledge, ClockHealth, Intake, Coalesced
+]
 
 
 class LineOutput(NamedTuple):
@@ -312,6 +330,7 @@ class LineState:
     )  # the tension sensor's per-sample memory
     sensor_code: int = sensor_state.OK  # sensor state decided at the newest tick
     parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
+    coalesced_until: int = -1  # ns: this line's samples stamped up to it were not stepped
 
     def inputs(
         self, depth_s: float, depth_stale: bool, rate: float = _NAN, table: bool = False
@@ -401,6 +420,7 @@ class CoreState:
     intake_checked: list[tuple[bool, ...]] = field(default_factory=list)
     intake_heard: list[bool] = field(default_factory=list)
     intake_seen: bool = False
+    depth_coalesced_until: int = -1  # ns: depth samples stamped up to it were not stepped
 
 
 class MonitorCore:
@@ -467,12 +487,19 @@ class MonitorCore:
 
     # ------------------------------------------------------------------ events
     def step(self, event: Event) -> Step:
-        """Apply one event (see the module docstring for the schedule); return what it did."""
+        """Apply one event (see the module docstring for the schedule); return what it did.
+
+        A tension or depth sample that a :class:`Coalesced` record left out is not stepped
+        (an empty Step of kind ``coalesced``, the core unchanged)."""
+        if isinstance(event, (Tension, Depth)) and self.coalesced(event):
+            return Step(event.stamp_ns, 'coalesced', (), None, ())
         self.state.last_ns = event.stamp_ns
         if isinstance(event, Tension):
             return self._on_tension(event)
         if isinstance(event, Depth):
             return self._on_depth(event)
+        if isinstance(event, Coalesced):
+            return self._on_coalesced(event)
         if isinstance(event, Tick):
             return self._on_tick(event)
         if isinstance(event, LoggerHealth):
@@ -576,6 +603,7 @@ class MonitorCore:
         ]
         received = sum(sum(c.received) for c in counts)
         dropped = sum(sum(c.dropped) for c in counts)
+        coalesced = sum(sum(c.coalesced) for c in counts)
         recent = [c for c in counts if ev.stamp_ns - c.stamp_ns < int(BUSY_WINDOW * 1e9)]
         period = sum(c.period for c in recent)
         busy = sum(c.busy for c in recent) / period if period > 0 else _NAN
@@ -586,19 +614,31 @@ class MonitorCore:
             INTAKE_WINDOW,
             self.state.intake[0] == Level.OK,
             sum(self.intake_missing()),
+            coalesced,
         )
         changes = self._set_component('intake', new, ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'intake', [], changes)
 
     def intake_dropped(self) -> list[int]:
-        """Samples dropped per line, then the depth, in the last :data:`INTAKE_WINDOW`: those
-        counted and those missing against the sample rates."""
+        """Samples not handled per line, then the depth, in the last :data:`INTAKE_WINDOW`:
+        those counted lost, those coalesced (logged, not stepped) and those missing against
+        the sample rates."""
         n = len(self.state.lines) + 1
         counted = [
             sum(c.dropped[k] for c in self.state.intake_counts if len(c.dropped) == n)
             for k in range(n)
         ]
-        return [c + m for c, m in zip(counted, self.intake_missing())]
+        coalesced = self.intake_coalesced()
+        return [c + j + m for c, j, m in zip(counted, coalesced, self.intake_missing())]
+
+    def intake_coalesced(self) -> list[int]:
+        """Samples coalesced (taken and logged, a newer one stepped instead) per line, then the
+        depth, in the last :data:`INTAKE_WINDOW`."""
+        n = len(self.state.lines) + 1
+        return [
+            sum(c.coalesced[k] for c in self.state.intake_counts if len(c.coalesced) == n)
+            for k in range(n)
+        ]
 
     def intake_missing(self) -> list[int]:
         """Samples missing per line, then the depth, in the last :data:`INTAKE_WINDOW`: the
@@ -618,9 +658,28 @@ class MonitorCore:
                 if len(c.received) == n
             ]
             span = sum(c.period for c, ok in pairs if ok)
-            got = sum(c.received[k] + c.dropped[k] for c, ok in pairs if ok)
+            got = sum(
+                c.received[k] + c.dropped[k] + (c.coalesced[k] if len(c.coalesced) == n else 0)
+                for c, ok in pairs
+                if ok
+            )
             out.append(missing_samples(rates[k], span, got))
         return out
+
+    def coalesced(self, ev: Union[Tension, Depth]) -> bool:
+        """Whether a :class:`Coalesced` record left this sample out (it is not stepped)."""
+        if isinstance(ev, Depth):
+            return ev.stamp_ns <= self.state.depth_coalesced_until
+        return ev.stamp_ns <= self.state.lines[ev.line].coalesced_until
+
+    def _on_coalesced(self, ev: Coalesced) -> Step:
+        """Leave out the samples the record names (an unknown line name changes nothing)."""
+        if ev.line is None:
+            self.state.depth_coalesced_until = max(self.state.depth_coalesced_until, ev.last_ns)
+        elif ev.line in self.index:
+            line = self.state.lines[self.index[ev.line]]
+            line.coalesced_until = max(line.coalesced_until, ev.last_ns)
+        return Step(ev.stamp_ns, 'coalesced', (), None, ())
 
     def _on_reconfigure(self, ev: Reconfigure) -> Step:
         """Take the new configuration; flag what changed (WARN on the ``parameters`` status
@@ -995,6 +1054,11 @@ class MonitorCore:
                 values += (('messages_missing', str(sum(missing))),) + tuple(
                     (f'{name}.messages_missing', str(m)) for name, m in zip(names, missing)
                 )
+            handled = sum(sum(c.received) for c in self.state.intake_counts)
+            values += (
+                ('messages_coalesced', str(sum(self.intake_coalesced()))),
+                ('messages_handled', str(handled)),
+            )
             out.append(
                 ComponentStatus(f'{NODE_NAME}: intake', *self.state.intake, NODE_NAME, values)
             )
@@ -1283,9 +1347,13 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
             'kind': 'intake',
             'received': list(event.received),
             'dropped': list(event.dropped),
+            'coalesced': list(event.coalesced),
             'busy': event.busy,
             'period': event.period,
         }
+    if isinstance(event, Coalesced):
+        where = {'input': 'depth'} if event.line is None else {'line': event.line}
+        return {'kind': 'coalesced', **where, 'last_ns': event.last_ns, 'samples': event.samples}
     return None
 
 
@@ -1313,7 +1381,11 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
                 tuple(int(x) for x in record['dropped']),
                 float(record['busy']),
                 float(record['period']),
+                tuple(int(x) for x in record.get('coalesced', ())),
             )
+        if kind == 'coalesced':
+            line = None if record.get('input') == 'depth' else str(record['line'])
+            return Coalesced(stamp_ns, line, int(record['last_ns']), int(record['samples']))
         if kind == 'acknowledge':
             line = str(record['line'])
             return Acknowledge(

@@ -54,6 +54,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     OUTPUT_FIELDS,
     VALUE_FIELDS,
     Change,
+    Coalesced,
     ComponentStatus,
     LineState,
     MonitorCore,
@@ -1628,6 +1629,7 @@ def run_log(
     are the pieces' in order, then the events' (not merged in time: see
     :class:`SnapshotColumns`).
     """
+    window, events, marks = _leave_out_coalesced(core, window, list(events))
     pieces: list[WindowResult] = []
     extra: list[Snapshot | SnapshotColumns] = []
     others: list[Change] = []
@@ -1645,6 +1647,7 @@ def run_log(
             if snapshots and step.snapshot is not None:
                 extra.append(step.snapshot)
         lo = hi
+    _keep_marks(core, marks, events)
     lines = [concat_lines([p.lines[k] for p in pieces]) for k in range(len(core.state.lines))]
     tide = [tr for p in pieces for tr in p.tide]
     others = sorted(
@@ -1664,6 +1667,61 @@ def run_log(
         ),
         core,
     )
+
+
+def _leave_out_coalesced(
+    core: MonitorCore, window: Window, events: list[Any]
+) -> tuple[Window, list[Any], list[Coalesced]]:
+    """The window without the samples the node coalesced (:class:`Coalesced` records: each
+    leaves out its input's samples stamped after it and at most its ``last_ns``, and the core
+    carries the newest bound into the next window), the other events, and the records."""
+    marks = [e for e in events if isinstance(e, Coalesced)]
+    if marks:
+        events = [e for e in events if not isinstance(e, Coalesced)]
+    carried = [line.coalesced_until for line in core.state.lines]
+    if not marks and max(carried + [core.state.depth_coalesced_until]) < 0:
+        return window, events, marks
+    index = {line.config.name: k for k, line in enumerate(core.state.lines)}
+    tensions = [
+        _keep(column, carried[k], [m for m in marks if index.get(m.line or '') == k])
+        for k, column in enumerate(window.tensions)
+    ]
+    depth = _keep(
+        window.depth,
+        core.state.depth_coalesced_until,
+        [m for m in marks if m.line is None],
+    )
+    return Window(tensions, depth, window.ticks), events, marks
+
+
+def _keep_marks(core: MonitorCore, marks: list[Coalesced], events: list[Any]) -> None:
+    """What the core keeps of the window's coalescing records (those since its last start):
+    each input's newest bound, and the newest stamp."""
+    starts = [e.stamp_ns for e in events if isinstance(e, Start)]
+    kept = [m for m in marks if not starts or m.stamp_ns > max(starts)]
+    if not kept:
+        return
+    last = core.state.last_ns
+    for mark in kept:
+        core.step(mark)
+    core.state.last_ns = max(last, max(m.stamp_ns for m in kept))
+
+
+def _keep(column: Column, carried: int, marks: list[Coalesced]) -> Column:
+    """``column`` without the samples stamped at most ``carried`` [ns] or inside a record's
+    ``(stamp_ns, last_ns]``."""
+    t, v = column
+    out = t <= carried
+    if marks:
+        starts = np.array([m.stamp_ns for m in marks], np.int64)
+        ends = np.array([m.last_ns for m in marks], np.int64)
+        order = np.argsort(starts, kind='stable')
+        starts, ends = starts[order], ends[order]
+        at = np.searchsorted(starts, t, 'left') - 1  # the newest record before each sample
+        out |= (at >= 0) & (t <= ends[np.maximum(at, 0)])
+    if not out.any():
+        return column
+    return t[~out], v[~out]
 
 
 def _ids(core: MonitorCore) -> dict[str, str]:
