@@ -82,8 +82,14 @@ setup(
         'matplotlib>=3.7',
         'mcap>=1.1',
         'mcap-ros2-support>=0.5',
+        # The console's HTTP/1.1 framing (pure Python, no dependencies).
+        'h11>=0.14',
         'ros-jazzy-rclpy[fastrtps]',
         'ros-jazzy-common-interfaces',
+        # The sensors' own messages (WrenchStamped, FluidPressure, Range) and replay's /clock.
+        'ros-jazzy-geometry-msgs',
+        'ros-jazzy-sensor-msgs',
+        'ros-jazzy-rosgraph-msgs',
     ],
     extras_require={
         # The test suite also checks the peers (MoorPy, pycatenary): nothing there is skipped.

@@ -45,11 +45,12 @@ from catenary_monitor.cli.demo import child_env
 
 __all__ = ['run_flood', 'flood', 'publish_main', 'register', 'flood_params', 'analyse']
 
-#: Tension of sample i: BASE + STEP * i (N): the paper's pretension, each sample its own value.
-BASE, STEP = 372e3, 1e-3
+#: Tension of sample i: BASE + STEP * i (N): the paper's pretension, each sample its own value;
+#: the priming samples before the flood are i - PRIMING (negative indexes).
+BASE, STEP, PRIMING = 372e3, 1e-3, 1_000_000
 #: Depth published during the flood [m] (the paper's mean tide) and its rate [Hz].
 DEPTH, DEPTH_RATE = 20.85, 10.0
-INTAKE = 'catenary_monitor: intake'
+INTAKE, SENSORS = 'catenary_monitor: intake', 'catenary_monitor: sensors'
 
 
 def flood_params(path: Path, params_file: Optional[str] = None) -> Any:
@@ -77,8 +78,12 @@ def flood_params(path: Path, params_file: Optional[str] = None) -> Any:
 
 # --------------------------------------------------------------------------- the publisher
 def publish_main(argv: list[str]) -> int:
-    """``publish TOPICS RATE DURATION BURST``: publish, print one JSON line at the start
-    (``{"t0": wall s}``) and one at the end (``{"sent": [...]}``)."""
+    """``publish TOPICS RATE DURATION BURST``: prime every topic at 10 Hz (values below
+    :data:`BASE`: not part of the flood) until a line comes on stdin, then flood; print one
+    JSON line at the start (``{"t0": wall s}``) and one at the end (``{"sent": [...],
+    "primed": [...]}``)."""
+    import select
+
     import rclpy
     from rclpy.qos import qos_profile_sensor_data
     from std_msgs.msg import Float64
@@ -89,17 +94,24 @@ def publish_main(argv: list[str]) -> int:
     node = rclpy.create_node('bench_flood_publisher')
     pubs = [node.create_publisher(Float64, t, qos_profile_sensor_data) for t in topics]
     depth = node.create_publisher(Float64, '/bench/depth', qos_profile_sensor_data)
-    deadline = time.monotonic() + 60.0
-    while any(p.get_subscription_count() == 0 for p in [*pubs, depth]):
-        if time.monotonic() > deadline:
-            print(json.dumps({'error': 'no subscriber'}), flush=True)
-            return 1
-        time.sleep(0.05)
-    time.sleep(2.0)  # the node's readers match the publishers too
     n = len(pubs)
+    msg, level = Float64(), Float64(data=DEPTH)
+    primed = [0] * n
+    deadline = time.monotonic() + 90.0
+    # Until the driver says every line reached the node (its readers matched these writers
+    # too: samples sent before are lost to DDS, not to the node), one sample a line at 10 Hz.
+    while not select.select([sys.stdin], [], [], 0.1)[0]:
+        if time.monotonic() > deadline:
+            print(json.dumps({'error': 'no go from the driver'}), flush=True)
+            return 1
+        depth.publish(level)
+        for k, pub in enumerate(pubs):
+            msg.data = BASE + STEP * (primed[k] - PRIMING)
+            pub.publish(msg)
+            primed[k] += 1
+    sys.stdin.readline()
     step = burst / (rate * n)  # between one line's send and the next line's
     sent, d = [0] * n, 0
-    msg, level = Float64(), Float64(data=DEPTH)
     depth.publish(level)
     t0_wall, t0 = time.time(), time.monotonic()
     print(json.dumps({'t0': t0_wall}), flush=True)
@@ -121,7 +133,7 @@ def publish_main(argv: list[str]) -> int:
         while d < int(now * DEPTH_RATE):
             depth.publish(level)
             d += 1
-    print(json.dumps({'sent': sent, 'depth': d + 1}), flush=True)
+    print(json.dumps({'sent': sent, 'primed': primed, 'depth': d + 1}), flush=True)
     node.destroy_node()
     rclpy.try_shutdown()
     return 0
@@ -188,8 +200,11 @@ def analyse(
     burst: int,
     diagnostics: list[tuple[float, int, str, dict[str, str]]],
     flood_end: float,
+    primed: Optional[list[int]] = None,
 ) -> dict[str, Any]:
-    """The figures and checks of one flood (see the module docstring)."""
+    """The figures and checks of one flood (see the module docstring); ``primed``: the
+    samples sent before it (negative indexes: in the node's counts, those that reached it,
+    but not in the flood's figures)."""
     from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, VALUE_FIELDS
     from catenary_monitor.io.mcap_read import read_float64_topics
     from catenary_monitor.replay.driver import replay_log
@@ -199,16 +214,19 @@ def analyse(
     topics = [f'/bench/{name}/tension' for name in names]
     columns, _ = read_float64_topics(files, topics)
     n = len(names)
-    logged = stepped = 0
+    logged = logged_all = stepped = stepped_all = 0
     first_missed = np.inf
     outputs = {}
     for k, (name, topic) in enumerate(zip(names, topics)):
         index = np.rint((columns[topic][1] - BASE) / STEP).astype(np.int64)
-        logged += len(index)
+        logged += int((index >= 0).sum())
+        logged_all += len(index)
         out_t, out = _logged_outputs(files, f'/catenary_monitor/{name}/outputs')
         outputs[name] = (out_t, out)
         handled = np.rint((out[:, 0] - BASE) / STEP).astype(np.int64) if len(out) else index[:0]
-        stepped += len(np.unique(handled))
+        handled = np.unique(handled)  # a depth event's output repeats the line's tension
+        stepped += int((handled >= 0).sum())
+        stepped_all += len(handled)
         missed = np.setdiff1d(np.arange(sent[k]), handled)
         if missed.size:
             first_missed = min(first_missed, float(send_times(t0, rate, n, burst, k, missed)[0]))
@@ -250,6 +268,9 @@ def analyse(
     shown_of = shown + int(values.get('messages_handled', 0))
     return {
         'sent': total,
+        'primed': sum(primed or []),
+        'logged_with_priming': logged_all,
+        'stepped_with_priming': stepped_all,
         'logged': logged,
         'stepped': stepped,
         'not_stepped': total - stepped,
@@ -286,10 +307,11 @@ def _checks(r: dict[str, Any]) -> dict[str, bool]:
         'no "none dropped" while dropping': not (
             missed and 'none dropped' in (r['last_intake_message'] or '')
         ),
-        'node counted what it stepped': counted['received'] == r['stepped'],
-        'node counted what it coalesced and lost': (
-            counted['coalesced'] + counted['dropped'] == r['not_stepped']
+        'node counted what it stepped': counted['received'] == r['stepped_with_priming'],
+        'node counted what it coalesced': (
+            counted['coalesced'] == r['logged_with_priming'] - r['stepped_with_priming']
         ),
+        'node counted what it lost': counted['dropped'] == r['sent'] - r['logged'],
         'live = replay': not r['replay_mismatches'] and r['replay_max_rel_diff'] <= 1e-12,
     }
 
@@ -347,9 +369,15 @@ def flood(
     diagnostics: list[tuple[float, int, str, dict[str, str]]] = []
     lock = threading.Lock()
 
+    reporting = threading.Event()  # every line's tension reached the node
+
     def on_diag(msg: Any) -> None:
         now = time.time()
         for st in msg.status:
+            if st.name == SENSORS and any(
+                kv.key == 'lines_waiting' and kv.value == '0' for kv in st.values
+            ):
+                reporting.set()
             if st.name == INTAKE:
                 values = {kv.key: kv.value for kv in st.values}
                 with lock:
@@ -370,10 +398,17 @@ def flood(
             repr(rate), repr(duration), str(burst),
         ],
         env=env,
+        stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         text=True,
     )  # fmt: skip
     try:
+        if not reporting.wait(90.0):
+            publisher.kill()
+            return {'error': 'the node never had every line reporting'}
+        time.sleep(1.0)  # a quiet second: no status left over from the start
+        publisher.stdin.write('go\n')  # type: ignore[union-attr]
+        publisher.stdin.flush()  # type: ignore[union-attr]
         start = json.loads(publisher.stdout.readline() or '{}')  # type: ignore[union-attr]
         if 't0' not in start:
             return {'error': f'the publisher did not start ({start})'}
@@ -385,7 +420,11 @@ def flood(
         rss = _rss_mb(monitor.pid)
         time.sleep(3.0)  # the last intake counts and diagnostics
     finally:
-        publisher.wait(30)
+        try:
+            publisher.wait(30)
+        except subprocess.TimeoutExpired:
+            publisher.kill()
+            publisher.wait(5)
         if monitor.poll() is None:
             monitor.send_signal(signal.SIGINT)
         try:
@@ -410,7 +449,9 @@ def flood(
         'node_cpu_share': cpu,
         'node_rss_mb': rss,
         'node_exit': monitor.returncode,
-        **analyse(config, logs, end['sent'], t0, rate, burst, seen, flood_end),
+        **analyse(
+            config, logs, end['sent'], t0, rate, burst, seen, flood_end, end.get('primed')
+        ),
     }
     checks = _checks(result)
     result['checks'] = checks

@@ -40,9 +40,10 @@ def _holding_on_arrays() -> Iterator[None]:
     """The core's holding values through ``holding_values`` on one-element arrays."""
     from catenary_monitor.core.monitor import monitor_core
 
-    def on_arrays(lc: Any, values: Any) -> dict[str, float]:
+    def on_arrays(lc: Any, values: Any, tolerance: float = np.inf) -> dict[str, float]:
         named = {k: np.array([values[i]]) for k, i in monitor_core._AT.items()}
-        return {k: float(v[0]) for k, v in monitor_core.holding_values([lc], named).items()}
+        derived = monitor_core.holding_values([lc], named, tolerance)
+        return {k: float(v[0]) for k, v in derived.items()}
 
     plain = monitor_core.holding_one
     monitor_core.holding_one = on_arrays

@@ -4,6 +4,7 @@ holding under uplift, a dragged anchor seen in implied_anchor_distance, the drag
 
 import math
 
+import numpy as np
 import pytest
 
 from catenary_monitor import solve
@@ -28,16 +29,9 @@ def run(line, depth, tensions, **alarm):
 
 
 def hou_line(lm, x=11.0, **extra):
-    return LineConfig(
-        name='hou',
-        weight=25.0,
-        anchor_distance=x,
-        mbl=1e6,
-        chain_length=lm,
-        anchor_holding=ANCHOR * LAMBDA_A,
-        chain_friction=LAMBDA_C,
-        **extra,
-    )
+    data = dict(anchor_holding=ANCHOR * LAMBDA_A, chain_friction=LAMBDA_C)
+    data.update(extra)
+    return LineConfig(name='hou', weight=25.0, anchor_distance=x, mbl=1e6, chain_length=lm, **data)
 
 
 @pytest.mark.parametrize(
@@ -318,3 +312,69 @@ def test_the_core_takes_the_plain_float_path_on_a_tension_and_the_array_path_on_
         assert math.isfinite(one[i]), k
         assert one[i] == pytest.approx(both[0].values[i], rel=1e-13)
         assert both[0].values[i] == both[1].values[i]
+
+
+def _storm(spans, line, **alarm):
+    """The core and its twin through one tension a second at those spans (Hou's depth 13 m,
+    a tick a second): the core's outputs and transitions, and the twin's."""
+    from catenary_monitor.core.monitor.monitor_core import Tick
+    from catenary_monitor.core.monitor.twin import recompute
+
+    config = MonitorConfig(lines=(line,), alarm=AlarmConfig(clear_hold=0.0, **alarm))
+    tensions = [solve(25.0, 13.0, chain_length=21.0, anchor_distance=x).top_tension for x in spans]
+    core = MonitorCore(config, 0)
+    core.step(Depth(1, 13.0))
+    outs, changes = [], []
+    for k, t in enumerate(tensions):
+        step = core.step(Tension(10**9 * (k + 1), 0, t))
+        outs.append(dict(zip(OUTPUT_FIELDS, step.outputs[0].values)))
+        changes += [c.transition for c in step.transitions if c.component == 'hou']
+        changes += [
+            c.transition
+            for c in core.step(Tick(10**9 * (k + 1) + 5)).transitions
+            if c.component == 'hou'
+        ]
+    stamps = [10**9 * (k + 1) for k in range(len(spans))]
+    result = recompute(
+        config,
+        {'hou': (np.array(stamps, np.int64), np.array(tensions))},
+        (np.array([1], np.int64), np.array([13.0])),
+        tick_ns=np.array(stamps, np.int64) + 5,
+        start_ns=0,
+    )
+    return outs, changes, result.lines[0]
+
+
+def test_a_dragging_anchor_in_a_storm_raises_its_error():
+    """Hou's ship (chain 21 m, 13 m deep, anchor 11 m away) in a scripted storm: the span opens
+    from 11 m to 14 m while the anchor slides; past 13.4 m the load exceeds the holding (40 +
+    chain friction) with the anchor 2.4 m beyond its place: drag_state 2 and the ERROR, live and
+    in replay alike; it clears once the anchor holds again."""
+    spans = list(np.linspace(11.0, 14.0, 31)) + [14.0] * 5 + [11.2] * 5
+    line = hou_line(21.0, allowed_uplift=1e9, anchor_holding=40.0)
+    outs, changes, replayed = _storm(spans, line)
+    states = [o['drag_state'] for o in outs]
+    assert states[0] == 0.0 and 2.0 in states and states[-1] == 0.0
+    first = states.index(2.0)
+    assert outs[first]['drag_margin'] < 0 and outs[first]['implied_anchor_distance'] > 12.0
+    assert 1.0 not in states[:first]  # the span is beyond the tolerance when the load passes
+    errors = [c for c in changes if c.new == Level.ERROR]
+    assert errors and 'anchor dragging: horizontal load' in errors[0].message
+    assert 'beyond its installed 11.0 m' in errors[0].message
+    assert changes[-1].new in (Level.OK, Level.WARN)
+    assert np.array_equal(replayed.values['drag_state'], np.array(states))
+    assert [(t.time, t.new, t.message) for t in replayed.transitions] == [
+        (t.time, t.new, t.message) for t in changes
+    ]
+
+
+def test_a_steady_overload_without_drag_warns_but_raises_no_error():
+    """The load above a conservative holding (30 < 37.1) with the anchor where it was
+    installed: overloaded (drag_state 1), the drag-margin WARN, no ERROR."""
+    line = hou_line(21.0, allowed_uplift=1e9, anchor_holding=30.0, chain_friction=0.0)
+    outs, changes, replayed = _storm([11.0] * 40, line)
+    assert {o['drag_state'] for o in outs} == {1.0}
+    assert all(o['drag_margin'] < 0 for o in outs)
+    assert Level.ERROR not in [c.new for c in changes]
+    assert changes[-1].new == Level.WARN and 'anchor may drag' in changes[-1].message
+    assert [t.new for t in replayed.transitions] == [t.new for t in changes]

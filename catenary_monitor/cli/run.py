@@ -81,7 +81,7 @@ def register(sub: Any) -> None:
         metavar='ARG',
         help='the rest is passed to ROS (e.g. -p clear_hold:=10.0)',
     )
-    p.set_defaults(func=cmd_run)
+    p.set_defaults(func=cmd_run, long_running=True)
 
     p = sub.add_parser(
         'demo',
@@ -111,4 +111,4 @@ def register(sub: Any) -> None:
         help='port of the operator\'s console (default %(default)s; busy or 0: any free port)',
     )
     p.add_argument('--no-console', action='store_true', help='do not start the console')
-    p.set_defaults(func=cmd_demo)
+    p.set_defaults(func=cmd_demo, long_running=True)

@@ -1314,9 +1314,17 @@ class FileBlocks:
     file: int
 
 
-def _float64_accept(wanted: set[str], raw: set[str], path: str) -> Callable[[_Channel], bool]:
+def _float64_accept(
+    wanted: set[str], raw: set[str], path: str, typed: Optional[dict[str, str]] = None
+) -> Callable[[_Channel], bool]:
     def accept(channel: _Channel) -> bool:
         if channel.topic in raw:
+            expected = (typed or {}).get(channel.topic)
+            if expected is not None and (
+                channel.schema_name != expected or channel.encoding != 'cdr'
+            ):
+                shown = channel.schema_name or '<no schema>'
+                raise TopicTypeError(channel.topic, shown, expected, path)
             return True
         if channel.topic not in wanted:
             return False
@@ -1337,12 +1345,14 @@ def iter_file_blocks(
     raw_topics: list[str],
     report: ReadReport,
     batch_bytes: int | None = None,
+    typed: Optional[dict[str, str]] = None,
 ) -> Iterator[FileBlocks]:
     """The batches of one file (file order) as :class:`FileBlocks`: the Float64 ``topics``
-    decoded into columns, the ``raw_topics`` (any type) as bytes; damage goes to ``report``
-    exactly as :func:`read_float64_topics` reports it."""
+    decoded into columns, the ``raw_topics`` as bytes (of the type ``typed`` names for a
+    topic, else any); damage goes to ``report`` exactly as :func:`read_float64_topics`
+    reports it."""
     raw_set = set(raw_topics)
-    accept = _float64_accept(set(topics), raw_set, str(path))
+    accept = _float64_accept(set(topics), raw_set, str(path), typed)
     scanner = _Scanner(path, accept, report, frozenset(raw_set))
     if batch_bytes is not None:
         scanner.batch_bytes = min(scanner.batch_bytes, batch_bytes)
@@ -1417,13 +1427,15 @@ def _block_columns(scanner: '_Scanner', block: '_Block') -> Columns:
 
 
 def _decode_file(
-    args: tuple[str, int, list[str], list[str], int | None]
+    args: tuple[str, int, list[str], list[str], int | None, Optional[dict[str, str]]]
 ) -> tuple[list[FileBlocks], ReadReport, tuple[str, tuple[Any, ...]] | None]:
     """Worker of ``jobs > 1``: a whole file's batches, its report, or the error it raised."""
-    path, index, topics, raw_topics, batch = args
+    path, index, topics, raw_topics, batch, typed = args
     report = ReadReport()
     try:
-        blocks = list(iter_file_blocks(Path(path), index, topics, raw_topics, report, batch))
+        blocks = list(
+            iter_file_blocks(Path(path), index, topics, raw_topics, report, batch, typed)
+        )
     except TopicTypeError as err:
         return [], report, ('type', (err.topic, err.type_name, err.expected, err.path))
     except McapReadError as err:
@@ -1445,6 +1457,7 @@ def _parallel_blocks(
     report: ReadReport,
     jobs: int,
     batch: int | None,
+    typed: Optional[dict[str, str]] = None,
 ) -> Iterator[FileBlocks]:
     """:func:`iter_file_blocks` of every file, decoded by ``jobs`` worker processes (at most
     ``jobs + 1`` files in flight), handed on in file order."""
@@ -1458,7 +1471,7 @@ def _parallel_blocks(
         def submit() -> None:
             nxt = next(todo, None)
             if nxt is not None:
-                task = (str(nxt[1]), nxt[0], topics, raw_topics, batch)
+                task = (str(nxt[1]), nxt[0], topics, raw_topics, batch, typed)
                 pending.append(pool.apply_async(_decode_file, (task,)))
 
         for _ in range(jobs + 1):
@@ -1556,6 +1569,7 @@ def iter_windows(
     window_messages: int | None = 1 << 18,
     report: ReadReport | None = None,
     jobs: int = 1,
+    typed: Optional[dict[str, str]] = None,
 ) -> Iterator[LogWindow]:
     """Stream a log (one file, a rotated set, directories) as :class:`LogWindow` s in time
     order, merged across topics and files, each of about ``window_messages`` messages (None:
@@ -1567,12 +1581,17 @@ def iter_windows(
     sorts them (stable on time, file order at equal stamps); a log whose files or chunks overlap
     in time so much that a message comes after its window was handed out raises
     :class:`UnorderedLogError` (read it with ``window_messages=None``). ``jobs > 1`` decodes
-    files in that many worker processes (the hand-out stays in order). Raises as
-    :func:`read_float64_topics` (TopicTypeError, EmptyLogError at the end, McapReadError).
+    files in that many worker processes (the hand-out stays in order). ``typed``: raw topics
+    that are inputs of a given type (``topic -> type name``; e.g. a stamped sensor message):
+    their type is checked as the Float64 topics' is, and they count as inputs (the report's
+    messages, EmptyLogError). Raises as :func:`read_float64_topics` (TopicTypeError,
+    EmptyLogError at the end, McapReadError).
     """
-    wanted = _unique(topics)
-    raw_wanted = [t for t in _unique(raw_topics) if t not in wanted]
-    if not wanted:
+    typed = dict(typed or {})
+    wanted = [t for t in _unique(topics) if t not in typed]
+    raw_wanted = [t for t in _unique([*raw_topics, *typed]) if t not in wanted]
+    inputs = wanted + list(typed)
+    if not inputs:
         raise ValueError('topics must name at least one topic')
     report = ReadReport() if report is None else report
     files = order_by_start(expand_paths(paths))
@@ -1580,18 +1599,18 @@ def iter_windows(
     done_before = [sum(sizes[:i]) for i in range(len(files))]
     pending = _Pending(wanted, raw_wanted)
     handed: int | None = None  # every message before this was handed out
-    counts = {t: 0 for t in wanted}
+    counts = {t: 0 for t in inputs}
     # reader batches of about a window (43 B per Float64 record decompressed)
     batch = None if window_messages is None else max(1 << 16, 40 * window_messages)
     if jobs > 1 and len(files) > 1:
         source: Iterator[FileBlocks] = _parallel_blocks(
-            files, wanted, raw_wanted, report, jobs, batch
+            files, wanted, raw_wanted, report, jobs, batch, typed
         )
     else:
         source = _read_ahead(
             b
             for i, p in enumerate(files)
-            for b in iter_file_blocks(p, i, wanted, raw_wanted, report, batch)
+            for b in iter_file_blocks(p, i, wanted, raw_wanted, report, batch, typed)
         )
     for blocks in source:
         low = pending.add(blocks)
@@ -1607,21 +1626,28 @@ def iter_windows(
             handed = low
             if not n:
                 continue
-            for t in wanted:
-                counts[t] += len(columns[t][0])
+            _count(counts, columns, raw)
             done = done_before[blocks.file] + blocks.position
             yield LogWindow(columns, raw, low, False, done, n)
     columns, raw, n = pending.take(None)
-    for t in wanted:
-        counts[t] += len(columns[t][0])
+    _count(counts, columns, raw)
     _reorder_report(report, [str(p) for p in expand_paths(paths)])
-    for topic in wanted:
+    for topic in inputs:
         report.messages[topic] = counts[topic]
         if counts[topic] == 0:
             report.missing_topics.append(topic)
-    if all(counts[t] == 0 for t in wanted):
-        raise EmptyLogError(wanted, report)
+    if all(counts[t] == 0 for t in inputs):
+        raise EmptyLogError(inputs, report)
     yield LogWindow(columns, raw, None, True, sum(sizes), n)
+
+
+def _count(counts: dict[str, int], columns: dict[str, Any], raw: dict[str, Any]) -> None:
+    """Add a window's messages per input topic (Float64 columns and typed raw topics)."""
+    for topic in counts:
+        if topic in columns:
+            counts[topic] += len(columns[topic][0])
+        elif topic in raw:
+            counts[topic] += len(raw[topic][0])
 
 
 #: Batches a reader thread may decode ahead of the windows handed out (0: no thread).

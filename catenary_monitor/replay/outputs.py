@@ -17,7 +17,7 @@ import numpy as np
 
 from catenary_monitor import __version__
 from catenary_monitor.core.config.parameters import MonitorConfig, config_hash, config_to_params
-from catenary_monitor.core.monitor import sensor_state
+from catenary_monitor.core.monitor import holding, sensor_state
 from catenary_monitor.core.monitor.alarms import Level
 from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,
@@ -49,6 +49,7 @@ from catenary_monitor.io.cdr import (
     status_header,
     string_message,
 )
+from catenary_monitor.core.physics.result import Status
 from catenary_monitor.io.csv_columns import FloatColumn, IntColumn, LabelColumn, write_rows
 from catenary_monitor.io.mcap_column_writer import ColumnWriter
 from catenary_monitor.io.ros_schemas import (
@@ -75,7 +76,8 @@ __all__ = [
 #: ``time_to_uplift`` 3 (s; ``inf`` when no uplift is coming); the bounds and holding values
 #: (forces, lengths) 3 (``nan`` where the line has no accuracy or holding data); ``sensor_state``
 #: the line's sensor state word (``ok``, ``stuck``, ``spike``, ``over_mbl``, ``slack``,
-#: ``suspected_parted``).
+#: ``suspected_parted``); ``drag_state`` the anchor's (``holding``, ``overloaded``,
+#: ``dragging``, ``unknown``).
 CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('time', 9),
     ('line', None),
@@ -103,6 +105,11 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('status', None),
     ('level', None),
     ('model', None),
+    ('drag_state', None),  # core.monitor.holding.DRAG_STATES word, or unknown
+    # Chain fatigue (core/monitor/fatigue.py): Miner's damage, its rate (1/s), life left (s).
+    ('fatigue_damage', 12),
+    ('fatigue_damage_rate', 12),
+    ('fatigue_life_left', 0),
 )
 #: The default columns (the issue's contract), in this order.
 CSV_COLUMNS = (
@@ -116,7 +123,7 @@ CSV_COLUMNS = (
     'level',
 )
 _LEVELS = [lv.name for lv in sorted(Level)]
-_STATUS_LABELS = [str(s) for s in range(NO_DEPTH, 11)]
+_STATUS_LABELS = [str(s) for s in range(NO_DEPTH, max(Status) + 1)]  # every solver code
 
 Progress = Optional[Callable[[str, float], None]]
 
@@ -191,6 +198,9 @@ def write_csv(
         elif name == 'sensor_state':
             codes = values[name].astype(np.int64)
             out_columns.append(LabelColumn(name, codes, list(sensor_state.LINE_STATES)))
+        elif name == 'drag_state':
+            codes = np.where(np.isnan(values[name]), 3, values[name]).astype(np.int64)
+            out_columns.append(LabelColumn(name, codes, [*holding.DRAG_STATES, 'unknown']))
         else:
             out_columns.append(FloatColumn(name, values[name], decimals or 0))
     n = len(t)

@@ -25,7 +25,7 @@ A wall-clock (steady) watchdog runs once a second whatever the ROS clock does: w
 ``use_sim_time`` it reports a ROS clock that stopped (ClockHealth events, each with a
 ``/diagnostics`` array), and it hands the core the intake counts (Intake events: samples
 handled, coalesced, and lost before the node took them, time spent in the sample callbacks);
-the first sample not handled brings the counts forward to the next periodic tick.
+the first sample not handled brings the counts forward (at once, or at the next periodic tick).
 
 Run it as ``monitor --ros-args --params-file FILE`` (``ros2 run catenary_monitor monitor ...``),
 ``python -m catenary_monitor.ros.node --ros-args --params-file FILE`` or
@@ -48,6 +48,7 @@ from typing import Any, Optional, Sequence
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import SubscriptionEventCallbacks
@@ -57,6 +58,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, qos_profile_sensor_data
 from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.signals import SignalHandlerOptions
+from sensor_msgs.msg import FluidPressure, Range
 from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension, String
 
 from catenary_monitor import __version__
@@ -73,7 +75,15 @@ from catenary_monitor.core.config.parameters import (
     load_params_file,
     runtime_change_refusal,
 )
-from catenary_monitor.core.monitor.acknowledge import ACKNOWLEDGE_TOPIC, SENSORS, parse_request
+from catenary_monitor.core.monitor import readings
+from catenary_monitor.core.monitor.acknowledge import (
+    ACKNOWLEDGE_TOPIC,
+    SENSORS,
+    bounded_text,
+    console_only_refusal,
+    parse_request,
+    publisher_identity,
+)
 from catenary_monitor.core.monitor.alarms import Level
 from catenary_monitor.core.monitor.health import clock_stopped
 from catenary_monitor.core.monitor.monitor_core import (
@@ -86,6 +96,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     Coalesced,
     Depth,
     Event,
+    FatigueStore,
     Intake,
     LoggerHealth,
     MonitorCore,
@@ -97,7 +108,9 @@ from catenary_monitor.core.monitor.monitor_core import (
     Tick,
     event_record,
 )
+from catenary_monitor.core.monitor.fatigue import to_record
 from catenary_monitor.core.physics import elastic
+from catenary_monitor.io import fatigue_store
 from catenary_monitor.io.mcap_log import McapLogger
 from catenary_monitor.io.mcap_recover import RecoverResult, recover_in_child, unfinished_files
 
@@ -110,6 +123,13 @@ _PARAM_TYPES = {
     'string_array': Parameter.Type.STRING_ARRAY,
 }
 _RELIABLE = QoSProfile(depth=10)
+#: The message class of each input type (core.config.parameters.TENSION_TYPES, DEPTH_TYPES).
+_MESSAGE_CLASSES: dict[str, Any] = {
+    'std_msgs/msg/Float64': Float64,
+    readings.WRENCH: WrenchStamped,
+    readings.FLUID_PRESSURE: FluidPressure,
+    readings.RANGE: Range,
+}
 #: The input subscriptions: sensor-data QoS (best effort) with a deeper queue than its 5, so a
 #: node held off the CPU for up to 5 s at 200 Hz loses no sample before it is logged
 #: (bench-soak measured 0.7 % lost with depth 5 on a loaded machine; bench-flood, 12 x 200 Hz
@@ -204,9 +224,13 @@ class CatenaryMonitor(Node):
         self._log_setup_error = ''
         self._logger_known = False
         self._logger_error: Optional[str] = None
+        self._logger_warning: Optional[str] = None
         self.callback_errors = 0
         self._recovered: queue.Queue[RecoverResult] = queue.Queue()
         self.recovery: list[RecoverResult] = []
+        # The fatigue store, read before this run's first log file exists (a new folder).
+        names = [line.name for line in self.config.lines]
+        self._fatigue_found = fatigue_store.load(self._log_dir(), names)
         self.log = self._open_log()
         self._init_intake()
         self._create_interfaces()
@@ -219,6 +243,7 @@ class CatenaryMonitor(Node):
             logger_id=self._log_dir(),
         )
         self._write_record(Start(start))
+        self._load_fatigue()
         self._check_logger()
         self._clock_ros, self._clock_wall = start, time.monotonic()
         self._clock_state: Optional[bool] = None  # stopped? (None: not reported yet)
@@ -255,6 +280,47 @@ class CatenaryMonitor(Node):
     def _log_dir(self) -> str:
         return os.path.expanduser(self.config.log_dir)
 
+    # ------------------------------------------------------------------ fatigue store
+    def _load_fatigue(self) -> None:
+        """Read the fatigue store beside the log: one recorded FatigueStore event (each line's
+        stored count, so replay carries the same), one log line unless it was read clean."""
+        names = [line.name for line in self.config.lines]
+        found = self._fatigue_found
+        lines = tuple((name, found.lines.get(name)) for name in names)
+        if found.state in ('loaded', 'new'):
+            self.get_logger().info(found.message)
+        else:
+            self.get_logger().warning(f'FATIGUE {found.state}: {found.message}')
+        self._record(FatigueStore(self._stamp(), found.state, found.message, lines))
+        self._fatigue_saved = time.monotonic()
+        self._fatigue_failed: Optional[str] = None
+
+    def _save_fatigue(self, force: bool = False) -> None:
+        """Write the store every SAVE_PERIOD (and at the end); a failed write is a recorded
+        FatigueStore event (WARN) and one line, a write that works again another."""
+        wall = time.monotonic()
+        if not force and wall - self._fatigue_saved < fatigue_store.SAVE_PERIOD:
+            return
+        self._fatigue_saved = wall
+        lines = {
+            line.config.name: to_record(line.fatigue) for line in self.core.state.lines
+        }
+        extra = {'config_hash': config_hash(self.config), 'saved_ns': self._last_ns}
+        try:
+            path = fatigue_store.save(self._log_dir(), lines, extra)
+        except (OSError, ValueError) as err:
+            if self._fatigue_failed is None:
+                text = f'fatigue store not written: {_one_line(err)}'
+                self.get_logger().error(text)
+                self._record(FatigueStore(self._stamp(), 'write_failed', text))
+            self._fatigue_failed = str(err)
+            return
+        if self._fatigue_failed is not None:
+            self._fatigue_failed = None
+            text = f'fatigue store {path} written again'
+            self.get_logger().info(text)
+            self._record(FatigueStore(self._stamp(), 'saved', text))
+
     def _open_log(self) -> Optional[McapLogger]:
         """The MCAP logger (never raises on disk errors: those become its ``error``)."""
         try:
@@ -270,6 +336,9 @@ class CatenaryMonitor(Node):
                 max_seconds=self.config.log_rotate_duration,
                 create_dir=self.config.log_create_dir,
                 retry_period=1.0,
+                max_total_bytes=int(self.config.log_max_total_size),
+                max_age=self.config.log_max_age,
+                min_free_bytes=int(self.config.log_min_free_space),
             )
             log.add_metadata(NODE_NAME, self._metadata(self.config))
             if unfinished:
@@ -399,7 +468,7 @@ class CatenaryMonitor(Node):
         self._subs: list[Any] = []
         for k, line in enumerate(cfg.lines):
             sub = self.create_subscription(
-                Float64,
+                _MESSAGE_CLASSES[line.tension_type],
                 line.tension_topic,
                 self._sample_callback(k),
                 _SAMPLES,
@@ -408,14 +477,14 @@ class CatenaryMonitor(Node):
             )
             self._subs.append(sub)
             self._tension_topics.append(sub.topic_name)
-            self._register(sub.topic_name, 'std_msgs/msg/Float64', 'sensor_data')
+            self._register(sub.topic_name, line.tension_type, 'sensor_data')
             pub = self.create_publisher(Float64MultiArray, f'~/{line.name}/outputs', _RELIABLE)
             self._output_pubs.append(pub)
             self._output_topics.append(pub.topic_name)
             self._register(pub.topic_name, 'std_msgs/msg/Float64MultiArray', 'default')
         n = len(cfg.lines)
         sub = self.create_subscription(
-            Float64,
+            _MESSAGE_CLASSES[cfg.depth_type],
             cfg.depth_topic,
             self._sample_callback(n),
             _SAMPLES,
@@ -424,7 +493,7 @@ class CatenaryMonitor(Node):
         )
         self._subs.append(sub)
         self._depth_topic = sub.topic_name
-        self._register(self._depth_topic, 'std_msgs/msg/Float64', 'sensor_data')
+        self._register(self._depth_topic, cfg.depth_type, 'sensor_data')
         self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', _RELIABLE)
         self._register('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', 'default')
         self._register(EVENTS_TOPIC, 'std_msgs/msg/String', 'default')
@@ -528,12 +597,18 @@ class CatenaryMonitor(Node):
         return not times or time.time_ns() - min(times) > COALESCE_AFTER * 1e9
 
     def _step_tension(self, k: int, stamp: int, raw: bytes) -> None:
+        """One core event of a hook tension sample as it came (the reading in N, at its header
+        stamp where it has one); publish what it says."""
         self._received[k] += 1
-        self._run(Tension(stamp, k, float64_value(raw)))
+        lc = self.config.lines[k]
+        fields, sample_ns = _fields(raw, lc.tension_type)
+        self._run(Tension(stamp, k, float(readings.tension_si(lc, fields)), sample_ns))
 
     def _step_depth(self, k: int, stamp: int, raw: bytes) -> None:
+        """The same for a depth sample (the depth in m)."""
         self._received[k] += 1
-        self._run(Depth(stamp, float64_value(raw)))
+        fields, sample_ns = _fields(raw, self.config.depth_type)
+        self._run(Depth(stamp, float(readings.depth_si(self.config, fields)), sample_ns))
 
     def _drain(self, k: int) -> list[tuple[bytes, Optional[int]]]:
         """Every sample waiting on input ``k``'s subscription (up to :data:`DRAIN_MAX`), with
@@ -593,9 +668,12 @@ class CatenaryMonitor(Node):
         self._report_intake(wall)
 
     def _timers_late(self) -> None:
-        """Run the periodic tick and the watchdog here when their timers are late by a
-        quarter period (:data:`LATE_TIMER`): a flood's callbacks wait ahead of them in the
-        executor's queue, and /diagnostics must keep its time."""
+        """Report the intake counts at once when a sample was not handled while the intake
+        status said OK; run the periodic tick and the watchdog here when their timers are late
+        by a quarter period (:data:`LATE_TIMER`): a flood's callbacks wait ahead of them in
+        the executor's queue, and /diagnostics must keep its time."""
+        if self._intake_due and self.core.state.intake[0] == Level.OK:
+            self._report_intake(time.monotonic(), force=True)
         if self._now_ns() - self._tick_ns >= LATE_TIMER * self._period_ns:
             self._tick()
         if time.monotonic() - self._watchdog_wall >= LATE_TIMER * WATCHDOG_PERIOD:
@@ -671,7 +749,24 @@ class CatenaryMonitor(Node):
 
     @_guarded
     def _on_acknowledge(self, msg: String) -> None:
-        """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event."""
+        """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event, with
+        its publisher as the ROS graph names it; refused (one warning line) for an unknown
+        line, and, with ``acknowledge_from_ros`` false, unless only consoles publish."""
+        endpoints = [
+            (f'{ns.rstrip("/")}/{name}', bytes(gid))
+            for name, ns, gid in (
+                (e.node_name, e.node_namespace, e.endpoint_gid)
+                for e in self.get_publishers_info_by_topic(ACKNOWLEDGE_TOPIC)
+            )
+        ]
+        publisher = publisher_identity(endpoints)
+        if not self.config.acknowledge_from_ros:
+            refusal = console_only_refusal(endpoints)
+            if refusal is not None:
+                self.get_logger().warning(
+                    f'acknowledge refused: {refusal}', throttle_duration_sec=10.0
+                )
+                return
         try:
             line, origin = parse_request(msg.data)
         except ValueError as err:
@@ -679,36 +774,61 @@ class CatenaryMonitor(Node):
             return
         if line is not None and line not in self.core.index and line != SENSORS:
             self.get_logger().warning(
-                f'acknowledge refused: unknown line {line!r} (lines: {", ".join(self._names)}; '
-                f'{SENSORS}: the sensors alarm)'
+                f'acknowledge refused: unknown line {bounded_text(line, 64)!r} (lines: '
+                f'{", ".join(self._names)}; {SENSORS}: the sensors alarm)',
+                throttle_duration_sec=10.0,
             )
             return
-        self._record(Acknowledge(self._stamp(), line, origin))
-        self.get_logger().info(f'ACKNOWLEDGED {line or "all"} by {origin}')
+        self._record(Acknowledge(self._stamp(), line, origin, publisher))
+        self.get_logger().info(f'ACKNOWLEDGED {line or "all"} by {origin} ({publisher})')
 
     @_guarded
     def _on_log_timer(self) -> None:
         """Flush the MCAP chunk when due (bounded loss on SIGKILL); report logger changes."""
         if self.log is not None:
             self.log.tick()
+            self._report_deleted()
         self._check_logger()
         self._report_recovery()
+        self._save_fatigue()
+
+    def _report_deleted(self) -> None:
+        """One log line and one events-channel record per file the retention deleted."""
+        assert self.log is not None
+        for path, size, why in self.log.take_deleted():
+            rule = (
+                f'older than log_max_age {self.config.log_max_age:g} s'
+                if why == 'age'
+                else f'the folder above log_max_total_size {self.config.log_max_total_size:g} B'
+            )
+            self.get_logger().warning(
+                f'log retention: deleted {path.name} ({size / 2**20:.1f} MiB): {rule}'
+            )
+            record = {'kind': 'log_deleted', 'path': str(path), 'bytes': size, 'reason': why}
+            self._write(
+                EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), self._stamp()
+            )
 
     def _check_logger(self) -> None:
         """A LoggerHealth event whenever the logger's error changes (and once at start)."""
         error: Optional[str]
         path: Optional[str]
+        warning: Optional[str] = None
         if self.log is None:
             error, path = self._log_setup_error or 'no logger', None
         else:
             current = self.log.current_path
             error, path = self.log.error, str(current) if current else None
-        if self._logger_known and error == self._logger_error:
+            warning = self.log.warning
+        if self._logger_known and (error, warning) == (self._logger_error, self._logger_warning):
             return
         self._logger_known, self._logger_error = True, error
         if error:
             self.get_logger().error(f'MCAP log not written: {error}')
-        self._record(LoggerHealth(self._stamp(), error, path))
+        elif warning and warning != self._logger_warning:
+            self.get_logger().warning(warning)
+        self._logger_warning = warning
+        self._record(LoggerHealth(self._stamp(), error, path, warning))
 
     def _write_record(self, event: Any) -> None:
         """Log a record of a non-input event (or the start) on the events channel."""
@@ -820,6 +940,10 @@ class CatenaryMonitor(Node):
             self._report_intake(time.monotonic(), force=True)
         except Exception as exc:  # noqa: BLE001 - closing the log matters more
             self.get_logger().error(f'last intake counts not recorded: {exc}')
+        try:
+            self._save_fatigue(force=True)
+        except Exception as exc:  # noqa: BLE001 - closing the log matters more
+            self.get_logger().error(f'fatigue store not written at the end: {exc}')
         if self.log is not None:
             self.log.close()
 
@@ -852,6 +976,21 @@ class OutputEncoder:
             self.template.data = list(values)
             return serialize_message(self.template)
         return self.prefix + self.pack(*values)
+
+
+def _fields(data: bytes, type_name: str) -> tuple[dict[str, float], Optional[int]]:
+    """A raw input message's fields (core.monitor.readings) and its header stamp in ns (None
+    for a type without a header)."""
+    if type_name == 'std_msgs/msg/Float64':
+        return {'value': float64_value(data)}, None
+    msg = deserialize_message(data, _MESSAGE_CLASSES[type_name])
+    stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+    if type_name == readings.WRENCH:
+        f = msg.wrench.force
+        return {'x': f.x, 'y': f.y, 'z': f.z}, stamp
+    if type_name == readings.FLUID_PRESSURE:
+        return {'fluid_pressure': msg.fluid_pressure}, stamp
+    return {'range': msg.range, 'min_range': msg.min_range, 'max_range': msg.max_range}, stamp
 
 
 def _has_events_executor() -> bool:

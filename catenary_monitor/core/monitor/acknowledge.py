@@ -43,7 +43,7 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from catenary_monitor.core.monitor.alarms import CONDITIONS, RANK, Level
+from catenary_monitor.core.monitor.alarms import CONDITIONS, ERROR_CONDITIONS, RANK, Level
 
 __all__ = [
     'NORMAL',
@@ -62,6 +62,12 @@ __all__ = [
     'condition',
     'diagnostic_values',
     'parse_request',
+    'bounded_text',
+    'publisher_identity',
+    'console_only_refusal',
+    'CONSOLE_NODE_PREFIX',
+    'ORIGIN_LIMIT',
+    'REQUEST_LIMIT',
     'AckSeries',
     'replay_acks',
 ]
@@ -80,11 +86,19 @@ STATES = (UNACKNOWLEDGED, RETURNED_UNACKNOWLEDGED, ACKNOWLEDGED, NORMAL)
 ALL_LINES = 'all'
 #: The node's acknowledgement topic (std_msgs/msg/String: ``LINE|all [ORIGIN...]``).
 ACKNOWLEDGE_TOPIC = '/catenary_monitor/acknowledge'
+#: The node name of a console (``catenary_console_PID``): with ``acknowledge_from_ros`` false
+#: the node takes acknowledgements only from such a node.
+CONSOLE_NODE_PREFIX = 'catenary_console'
+#: Characters kept of an acknowledgement's origin and of its publisher's identity.
+ORIGIN_LIMIT = 160
+#: Characters of an acknowledgement message read at most (the rest is never looked at).
+REQUEST_LIMIT = 1024
 
 
 @dataclass(frozen=True)
 class AckState:
-    """One line's alarm: its state, severity, when raised, the last acknowledgement (s).
+    """One line's alarm: its state, severity, when raised, the last acknowledgement (s, the
+    origin it claimed, ``acknowledged_publisher``: who published it as the middleware saw it).
 
     ``level`` is the alarm's current severity while active, its last one after it returned;
     ``suppressed`` is True while the line's level is not OK only by a common cause (suppressed
@@ -97,6 +111,7 @@ class AckState:
     acknowledged_at: float = math.nan
     acknowledged_by: str = ''
     suppressed: bool = False
+    acknowledged_publisher: str = ''
 
 
 def initial(start: float) -> AckState:
@@ -123,28 +138,39 @@ def step(ack: AckState, level: Level, now: float, suppressed: bool = False) -> A
     return ack
 
 
-def acknowledge(ack: AckState, now: float, origin: str) -> AckState:
-    """The alarm after an operator acknowledged it at ``now`` (s) from ``origin``."""
-    if ack.state == UNACKNOWLEDGED:
-        return replace(ack, state=ACKNOWLEDGED, acknowledged_at=now, acknowledged_by=origin)
-    if ack.state == RETURNED_UNACKNOWLEDGED:
-        return replace(ack, state=NORMAL, acknowledged_at=now, acknowledged_by=origin)
-    return ack
+def acknowledge(ack: AckState, now: float, origin: str, publisher: str = '') -> AckState:
+    """The alarm after an operator acknowledged it at ``now`` (s) from ``origin`` (as claimed),
+    published by ``publisher`` (the middleware's identity of the sender); both kept bounded
+    (:func:`bounded_text`)."""
+    if ack.state not in (UNACKNOWLEDGED, RETURNED_UNACKNOWLEDGED):
+        return ack
+    state = ACKNOWLEDGED if ack.state == UNACKNOWLEDGED else NORMAL
+    return replace(
+        ack,
+        state=state,
+        acknowledged_at=now,
+        acknowledged_by=bounded_text(origin),
+        acknowledged_publisher=bounded_text(publisher),
+    )
 
 
 def condition(level: Level, latches: Sequence[bool]) -> str:
-    """The condition that sets the line's level: ``uplift``, ``input`` (impossible input),
-    ``stale``, a warning's name (``anchor_margin``, ...) or ``none`` when OK.
+    """The condition that sets the line's level: an ERROR's name (``uplift``, ``input`` for an
+    impossible input, ``sensor_error``, ``dragging``), ``stale``, a warning's name
+    (``anchor_margin``, ...) or ``none`` when OK.
 
     ``latches`` are the active flags of :data:`~catenary_monitor.core.monitor.alarms.CONDITIONS`.
     """
     if level == Level.ERROR:
-        return 'uplift' if latches[0] else 'input'
+        for name, up in zip(CONDITIONS, latches):
+            if up and name in ERROR_CONDITIONS:
+                return name
+        return 'input'
     if level == Level.STALE:
         return 'stale'
     if level == Level.WARN:
-        for name, up in zip(CONDITIONS[2:], latches[2:]):
-            if up:
+        for name, up in zip(CONDITIONS, latches):
+            if up and name not in ERROR_CONDITIONS:
                 return name
     return 'none'
 
@@ -154,7 +180,8 @@ def diagnostic_values(
 ) -> list[tuple[str, str]]:
     """The ``/diagnostics`` keys of a line's alarm: ``acknowledged`` (``true`` unless something
     waits for an acknowledgement), ``alarm_state``, ``alarm_raised`` [s, NaN when normal],
-    ``alarm_condition``, ``acknowledged_at`` [s] and ``acknowledged_by`` (the last one)."""
+    ``alarm_condition``, ``acknowledged_at`` [s], ``acknowledged_by`` (the last one's origin, as
+    it claimed) and ``acknowledged_publisher`` (who published it, as the middleware saw it)."""
     pending = ack.state in (UNACKNOWLEDGED, RETURNED_UNACKNOWLEDGED)
     raised = math.nan if ack.state == NORMAL else ack.raised
     state = SUPPRESSED if ack.state == NORMAL and ack.suppressed else ack.state
@@ -165,19 +192,64 @@ def diagnostic_values(
         ('alarm_condition', condition(level, latches)),
         ('acknowledged_at', repr(float(ack.acknowledged_at))),
         ('acknowledged_by', ack.acknowledged_by),
+        ('acknowledged_publisher', ack.acknowledged_publisher),
     ]
+
+
+def bounded_text(text: str, limit: int = ORIGIN_LIMIT) -> str:
+    """``text`` as one printable line of at most ``limit`` characters: runs of white space
+    become one space, other unprintable characters ``?``; a longer text is cut, ending in
+    ``...``. Idempotent."""
+    head = text[: 4 * limit]
+    clean = ''.join(c if c.isprintable() else '?' for c in ' '.join(head.split()))
+    if len(clean) > limit or len(text) > 4 * limit:
+        return clean[: limit - 3] + '...'
+    return clean
 
 
 def parse_request(text: str) -> tuple[Optional[str], str]:
     """(line name, or None for every line; origin) of an acknowledgement message's text:
-    ``LINE [ORIGIN...]`` or ``all [ORIGIN...]``; the origin defaults to ``ros``.
+    ``LINE [ORIGIN...]`` or ``all [ORIGIN...]``; the origin defaults to ``ros``. Only the first
+    :data:`REQUEST_LIMIT` characters are read; the origin is bounded (:func:`bounded_text`).
 
     Raises ValueError for an empty text."""
-    parts = text.strip().split(None, 1)
+    parts = text[:REQUEST_LIMIT].strip().split(None, 1)
     if not parts:
         raise ValueError('empty acknowledgement (expected "LINE [ORIGIN]" or "all [ORIGIN]")')
-    origin = parts[1].strip() if len(parts) > 1 else 'ros'
+    origin = bounded_text(parts[1]) if len(parts) > 1 else 'ros'
     return (None if parts[0] == ALL_LINES else parts[0]), origin
+
+
+def publisher_identity(endpoints: Sequence[tuple[str, bytes]]) -> str:
+    """Who published an acknowledgement, from the publishers on the topic as the middleware
+    lists them (``(node's full name, GID)`` each): ``/NODE gid 01.0f...``; with several,
+    ``one of N: ...`` (rclpy in Jazzy gives no sender GID per message); ``unknown`` for none."""
+    named = [f'{node} gid {".".join(f"{b:02x}" for b in gid[:16])}' for node, gid in endpoints]
+    if not named:
+        return 'unknown (no publisher on the topic)'
+    if len(named) == 1:
+        return named[0]
+    return bounded_text(f'one of {len(named)}: ' + '; '.join(sorted(named)))
+
+
+def console_only_refusal(endpoints: Sequence[tuple[str, bytes]]) -> Optional[str]:
+    """Why an acknowledgement is refused where only a console may acknowledge
+    (``acknowledge_from_ros`` false), or None: every publisher on the topic must be a console
+    node (:data:`CONSOLE_NODE_PREFIX`), so a message cannot have come from another one."""
+    others = sorted({node for node, _ in endpoints if not _is_console(node)})
+    if not endpoints:
+        return 'its publisher is not on the ROS graph'
+    if others:
+        return bounded_text(
+            'acknowledge_from_ros is false and not only consoles publish on the topic: '
+            + ', '.join(others),
+            240,
+        )
+    return None
+
+
+def _is_console(node: str) -> bool:
+    return node.rsplit('/', 1)[-1].startswith(CONSOLE_NODE_PREFIX)
 
 
 class AckSeries:

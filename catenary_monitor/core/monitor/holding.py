@@ -24,6 +24,17 @@ grounded_length``. Per line (SI):
     (:func:`catenary_monitor.core.physics.fixed_length.span_from_tension`: grounded length plus the
     suspended part's span, lifted or not, elastic with ``ea``). Compared with the installed
     ``anchor_distance`` it shows a dragged anchor (or a wrong chain length).
+``drag_state`` (code)
+    Hou et al. 2005's third regime, the anchor dragging (seed 001), by this rule: ``2``
+    (:data:`DRAGGING`) when the horizontal load exceeds the holding capacity (``drag_margin <
+    0``) **and** the chain puts the anchor more than ``drag_tolerance`` beyond its installed
+    ``anchor_distance`` (``implied_anchor_distance - anchor_distance > drag_tolerance``): the
+    load is more than the anchor holds and the hook-anchor span has opened, so either the
+    anchor is moving or only an anchor holding more than its configured capacity stops it.
+    ``1`` (:data:`OVERLOADED`) when the load exceeds the holding but the span has not opened
+    beyond the tolerance (a steady overload of an anchor that has not moved: the capacity is
+    conservative); ``0`` (:data:`HOLDING`) otherwise. NaN without ``anchor_holding``; never 2
+    without ``chain_length`` (the span is not known).
 ``tide_margin_at_length`` (m)
     The depth rise at which that chain, its length and the implied span held (the hook stays
     where it is), lifts its anchor (:func:`catenary_monitor.core.physics.fixed_length.lift_depth`)
@@ -43,12 +54,28 @@ import numpy as np
 
 from catenary_monitor.core.physics import fixed_length
 
-__all__ = ['FIELDS', 'LENGTH_FIELDS', 'holding', 'holding_scalar']
+__all__ = [
+    'FIELDS',
+    'LENGTH_FIELDS',
+    'DRAG_FIELDS',
+    'HOLDING',
+    'OVERLOADED',
+    'DRAGGING',
+    'DRAG_STATES',
+    'holding',
+    'holding_scalar',
+    'drag_word',
+]
 
 #: The holding values' names (per-line outputs, /diagnostics values, replay CSV), in order.
 FIELDS = ('grounded_length', 'holding_capacity', 'drag_margin', 'implied_anchor_distance')
 #: Appended after them (the per-line outputs end with it, after ``sensor_state``).
 LENGTH_FIELDS = ('tide_margin_at_length',)
+#: Appended at the end of the per-line outputs: the anchor's drag state (:data:`DRAG_STATES`).
+DRAG_FIELDS = ('drag_state',)
+#: ``drag_state`` codes and their words (``/diagnostics`` and the console show the word).
+HOLDING, OVERLOADED, DRAGGING = 0, 1, 2
+DRAG_STATES = ('holding', 'overloaded', 'dragging')
 
 
 def holding(
@@ -63,11 +90,14 @@ def holding(
     horizontal: Any,
     suspended: Any,
     uplift: Any,
+    anchor_distance: Any = np.nan,
+    tolerance: float = np.inf,
 ) -> dict[str, np.ndarray]:
-    """:data:`FIELDS` and :data:`LENGTH_FIELDS` -> arrays from the line data (NaN: not given;
-    ``ea`` inf: inextensible) and the nominal solve: hook ``tension`` (N), ``depth`` (m, hook
-    height added), ``horizontal`` tension (N), ``suspended`` length (m) and ``uplift`` force
-    (N)."""
+    """:data:`FIELDS`, :data:`LENGTH_FIELDS` and :data:`DRAG_FIELDS` -> arrays from the line
+    data (NaN: not given; ``ea`` inf: inextensible) and the nominal solve: hook ``tension`` (N),
+    ``depth`` (m, hook height added), ``horizontal`` tension (N), ``suspended`` length (m) and
+    ``uplift`` force (N); the installed ``anchor_distance`` (m) and ``drag_tolerance`` (m)
+    decide ``drag_state``."""
     arrays = np.broadcast_arrays(
         *(
             np.asarray(v, dtype=float)
@@ -83,12 +113,13 @@ def holding(
                 horizontal,
                 suspended,
                 uplift,
+                anchor_distance,
             )
         )
     )
-    w, ea, length, a_hold, a_weight, mu, t, h, r, s, v = arrays
+    w, ea, length, a_hold, a_weight, mu, t, h, r, s, v, x0 = arrays
     if np.isnan(length).all() and np.isnan(a_hold).all():  # nothing configured: all NaN
-        return {key: np.full(t.shape, np.nan) for key in FIELDS + LENGTH_FIELDS}
+        return {key: np.full(t.shape, np.nan) for key in FIELDS + LENGTH_FIELDS + DRAG_FIELDS}
     with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
         solved = ~np.isnan(r)
         lifted = v > 0.0
@@ -105,13 +136,23 @@ def holding(
                 w[need], h[need], length[need], t[need], ea[need]
             )
             lift[need] = fixed_length.lift_depth(w[need], length[need], implied[need], ea[need])
+        margin = capacity - r
+        over = margin < 0.0
+        state = np.where(over, np.where(implied - x0 > tolerance, DRAGGING, OVERLOADED), HOLDING)
+        state = np.where(np.isnan(margin), np.nan, state.astype(float))
     return {
         'grounded_length': grounded,
         'holding_capacity': capacity,
-        'drag_margin': capacity - r,
+        'drag_margin': margin,
         'implied_anchor_distance': implied,
         'tide_margin_at_length': lift - h,
+        'drag_state': state,
     }
+
+
+def drag_word(code: float) -> str:
+    """The word of a ``drag_state`` code (``unknown`` for NaN)."""
+    return DRAG_STATES[int(code)] if code == code else 'unknown'
 
 
 def holding_scalar(
@@ -126,6 +167,8 @@ def holding_scalar(
     horizontal: float,
     suspended: float,
     uplift: float,
+    anchor_distance: float = math.nan,
+    tolerance: float = math.inf,
 ) -> dict[str, float]:
     """:func:`holding` of one line in plain floats (the monitor's per-sample path, an order of
     magnitude faster on one element): the same formulas in the same order, the fixed-length
@@ -145,11 +188,15 @@ def holding_scalar(
         horizontal,
         suspended,
         uplift,
+        anchor_distance,
     )
+    floats = [float(v) for v in args] + [float(tolerance)]
     try:
-        return _holding_floats(*(float(v) for v in args))
+        return _holding_floats(*floats)
     except (ValueError, OverflowError, ZeroDivisionError):
-        return {key: float(v[0]) for key, v in holding(*([v] for v in args)).items()}
+        array_path: Any = holding
+        arrays = array_path(*([v] for v in floats[:-1]), tolerance)
+        return {key: float(v[0]) for key, v in arrays.items()}
 
 
 def _holding_floats(
@@ -164,11 +211,13 @@ def _holding_floats(
     r: float,
     s: float,
     v: float,
+    x0: float,
+    tolerance: float,
 ) -> dict[str, float]:
     """:func:`holding_scalar` itself (raises where :mod:`math` does)."""
     nan = math.nan
     if length != length and a_hold != a_hold:  # nothing configured: all NaN
-        return dict.fromkeys(FIELDS + LENGTH_FIELDS, nan)
+        return dict.fromkeys(FIELDS + LENGTH_FIELDS + DRAG_FIELDS, nan)
     solved = r == r
     lifted = v > 0.0
     grounded = 0.0 if lifted else _maximum0(length - s)
@@ -183,12 +232,15 @@ def _holding_floats(
     if solved and length == length:
         implied = fixed_length.span_from_tension_scalar(w, h, length, t, ea)
         lift = fixed_length.lift_depth_scalar(w, length, implied, ea)
+    margin = capacity - r
+    state = float(DRAGGING if implied - x0 > tolerance else OVERLOADED) if margin < 0.0 else 0.0
     return {
         'grounded_length': grounded,
         'holding_capacity': capacity,
-        'drag_margin': capacity - r,
+        'drag_margin': margin,
         'implied_anchor_distance': implied,
         'tide_margin_at_length': lift - h,
+        'drag_state': nan if margin != margin else state,
     }
 
 

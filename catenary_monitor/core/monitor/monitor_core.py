@@ -50,8 +50,15 @@ from catenary_monitor.core.config.parameters import (
 )
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
 from catenary_monitor.core.monitor import dock_watch as dock_live
+from catenary_monitor.core.monitor import fatigue as fatigue_rule
 from catenary_monitor.core.monitor import holding as holding_rule
-from catenary_monitor.core.monitor import sensor_state, tide_table, tide_trend, uncertainty
+from catenary_monitor.core.monitor import (
+    readings,
+    sensor_state,
+    tide_table,
+    tide_trend,
+    uncertainty,
+)
 from catenary_monitor.core.monitor.alarms import (
     CONDITIONS,
     RANK,
@@ -74,9 +81,12 @@ from catenary_monitor.core.monitor.health import (
     sensors_status,
     tide_status,
 )
-from catenary_monitor.core.monitor.plausible import reading_status, reading_status_array
+from catenary_monitor.core.monitor.plausible import (
+    reading_status,
+    reading_status_array,
+    status_messages,
+)
 from catenary_monitor.core.physics import elastic
-from catenary_monitor.core.physics.result import STATUS_MESSAGES
 from catenary_monitor.core.physics.solve import solve
 
 __all__ = [
@@ -97,6 +107,7 @@ __all__ = [
     'ClockHealth',
     'Intake',
     'Coalesced',
+    'FatigueStore',
     'Event',
     'LineOutput',
     'ComponentStatus',
@@ -108,6 +119,7 @@ __all__ = [
     'line_status',
     'bound_values',
     'holding_values',
+    'HOLDING_FIELDS',
     'holding_one',
     'output_values',
     'tide_component',
@@ -152,6 +164,10 @@ OUTPUT_FIELDS = (
     'sensor_state',
     # The tide margin of a chain of fixed length, its hook held: core/monitor/holding.py.
     *holding_rule.LENGTH_FIELDS,
+    # The anchor's drag state (0 holding, 1 overloaded, 2 dragging): core/monitor/holding.py.
+    *holding_rule.DRAG_FIELDS,
+    # Chain fatigue (Miner's damage, its rate over the last day, the life left): fatigue.py.
+    *fatigue_rule.FIELDS,
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -167,7 +183,7 @@ _NAN = math.nan
 _INCONSISTENT = CONDITIONS.index('inconsistent')
 _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
 #: The statuses on /diagnostics that are not lines (``catenary_monitor: NAME``).
-COMPONENTS = ('tide', 'sensors', 'logger', 'dock', 'parameters', 'clock', 'intake')
+COMPONENTS = ('tide', 'sensors', 'logger', 'dock', 'parameters', 'clock', 'intake', 'fatigue')
 #: The components whose STALE is a consequence of blind inputs, announced by the sensors alarm.
 _CONSEQUENCES = ('tide', 'dock')
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
@@ -177,18 +193,22 @@ _SENSOR_AT = VALUE_FIELDS.index('sensor_state')  # not a solved value: kept by _
 
 class Tension(NamedTuple):
     """A hook tension sample [N] of line number ``line`` (config order), received at
-    ``stamp_ns``."""
+    ``stamp_ns``; ``sample_ns`` the sensor's header stamp (None: a message without one, taken
+    at its arrival)."""
 
     stamp_ns: int
     line: int
     value: float
+    sample_ns: Optional[int] = None
 
 
 class Depth(NamedTuple):
-    """A tide depth sample [m] at the hooks, received at ``stamp_ns``."""
+    """A tide depth sample [m] at the hooks, received at ``stamp_ns``; ``sample_ns`` as for
+    :class:`Tension`."""
 
     stamp_ns: int
     value: float
+    sample_ns: Optional[int] = None
 
 
 class Tick(NamedTuple):
@@ -198,11 +218,13 @@ class Tick(NamedTuple):
 
 
 class LoggerHealth(NamedTuple):
-    """The MCAP logger's state at ``stamp_ns``: ``error`` (None while it writes) and its file."""
+    """The MCAP logger's state at ``stamp_ns``: ``error`` (None while it writes), its file and
+    a ``warning`` (low disk space; None: none)."""
 
     stamp_ns: int
     error: Optional[str]
     path: Optional[str]
+    warning: Optional[str] = None
 
 
 class Start(NamedTuple):
@@ -219,11 +241,14 @@ class Reconfigure(NamedTuple):
 
 
 class Acknowledge(NamedTuple):
-    """An operator acknowledged line ``line``'s alarm (None: every line) from ``origin``."""
+    """An operator acknowledged line ``line``'s alarm (None: every line) from ``origin`` (as
+    the message claims), published by ``publisher`` (the middleware's identity of the sender:
+    node and GID; empty when unknown)."""
 
     stamp_ns: int
     line: Optional[str]
     origin: str
+    publisher: str = ''
 
 
 class ClockHealth(NamedTuple):
@@ -261,8 +286,43 @@ class Coalesced(NamedTuple):
     samples: int
 
 
+class FatigueStore(NamedTuple):
+    """The fatigue store at ``stamp_ns`` (core/monitor/fatigue.py; the node keeps it beside
+    its log): its ``state`` (:data:`FATIGUE_STORE_STATES`), one-line ``message``, and, when it
+    was read at start, each line's stored state (``(name, record or None)``: None, from
+    ``NAME.fatigue_damage_initial``); ``lines`` None only changes the status (a write that
+    failed or worked again)."""
+
+    stamp_ns: int
+    state: str
+    message: str
+    lines: Optional[tuple[tuple[str, Any], ...]] = None
+
+
+#: The fatigue store's states and their levels: read at start (``loaded``), none yet in a new
+#: log folder (``new``), none where logs are (``missing``), unreadable (``damaged``), a save that
+#: failed (``write_failed``).
+FATIGUE_STORE_STATES = {
+    'loaded': Level.OK,
+    'new': Level.OK,
+    'saved': Level.OK,
+    'missing': Level.WARN,
+    'damaged': Level.WARN,
+    'write_failed': Level.WARN,
+}
+
+
 Event = Union[
-    Tension, Depth, Tick, LoggerHealth, Reconfigure, Acknowledge, ClockHealth, Intake, Coalesced
+    Tension,
+    Depth,
+    Tick,
+    LoggerHealth,
+    Reconfigure,
+    Acknowledge,
+    ClockHealth,
+    Intake,
+    FatigueStore,
+    Coalesced,
 ]
 
 
@@ -331,6 +391,10 @@ class LineState:
     sensor_code: int = sensor_state.OK  # sensor state decided at the newest tick
     parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
     coalesced_until: int = -1  # ns: this line's samples stamped up to it were not stepped
+    fatigue: fatigue_rule.FatigueState = fatigue_rule.FatigueState()  # the streamed count
+    fatigue_values: tuple[float, ...] = (0.0, _NAN, _NAN)  # fatigue_rule.FIELDS now
+    sample_ns: int = -1  # ns, the newest accepted sample's stamp (header or arrival; -1: none)
+    stamp_refused: float = -math.inf  # s, when a sample's stamp was last refused (arrival)
 
     def inputs(
         self, depth_s: float, depth_stale: bool, rate: float = _NAN, table: bool = False
@@ -362,11 +426,21 @@ class LineState:
             sensor_state=float(self.sensor_code),
             sensor_tension=self.tension,
             mbl=self.config.mbl,
+            drag_state=v[_AT['drag_state']],
+            implied_anchor_distance=v[_AT['implied_anchor_distance']],
+            fatigue_damage=self.fatigue_values[0],
+            fatigue_life_left=self.fatigue_values[2],
         )
 
 
 def _stamp_s(stamp_ns: int) -> float:
     return stamp_ns * 1e-9
+
+
+def _jitter(alarm: Any, sample_ns: Optional[int]) -> float:
+    """How far off a reading's stamp may be [s]: ``stamp_jitter`` for a reading stamped at its
+    arrival (delivery bunches samples), 0 for one at the sensor's own header stamp."""
+    return alarm.stamp_jitter if sample_ns is None else 0.0
 
 
 @dataclass
@@ -400,6 +474,8 @@ class CoreState:
     trend: tide_trend.TrendState = field(default_factory=tide_trend.TrendState)  # tide rate
     depth_memory: sensor_state.Memory = field(default_factory=sensor_state.Memory)
     depth_code: int = sensor_state.OK  # the depth sensor's state at the newest tick
+    depth_sample_ns: int = -1  # ns, the newest accepted depth sample's stamp (-1: none)
+    depth_refused: float = -math.inf  # s, when a depth sample's stamp was last refused
     sensor_times: np.ndarray = field(default_factory=lambda: np.zeros(0))  # s, the ticks the
     # suspected_parted test still needs
     # The sensors' common-cause alarm (blind start, silent depth sensor): one, not per line.
@@ -421,6 +497,11 @@ class CoreState:
     intake_heard: list[bool] = field(default_factory=list)
     intake_seen: bool = False
     depth_coalesced_until: int = -1  # ns: depth samples stamped up to it were not stepped
+    # The fatigue store's status (a FatigueStore event seen: the node keeps one).
+    fatigue: tuple[Level, str] = (Level.OK, '')
+    fatigue_word: str = ''
+    fatigue_entered: float = 0.0
+    fatigue_seen: bool = False
 
 
 class MonitorCore:
@@ -438,7 +519,7 @@ class MonitorCore:
         in the root namespace); ``depth_id`` the depth topic; ``logger_id`` the log directory.
     """
 
-    __slots__ = ('config', 'index', 'depth_id', 'logger_id', 'dock_model', 'state')
+    __slots__ = ('config', 'index', 'depth_id', 'logger_id', 'dock_model', 'curves', 'state')
 
     def __init__(
         self,
@@ -458,9 +539,12 @@ class MonitorCore:
                 ids.get(lc.name, resolve_topic(lc.tension_topic)),
                 LineAlarm.for_line(lc, config.alarm).initial(start),
                 ack=alarm_ack.initial(start),
+                fatigue=fatigue_rule.initial(lc.fatigue_damage_initial),
+                fatigue_values=(lc.fatigue_damage_initial, _NAN, _NAN),
             )
             for lc in config.lines
         ]
+        self.curves = [fatigue_rule.Curve.of(lc) for lc in config.lines]
         self.index = {line.config.name: k for k, line in enumerate(lines)}
         self.depth_id = depth_id or resolve_topic(config.depth_topic)
         self.logger_id = logger_id
@@ -482,6 +566,7 @@ class MonitorCore:
             parameters_entered=start,
             clock_entered=start,
             intake_entered=start,
+            fatigue_entered=start,
         )
         self.state.sensors = self._sensors_now(start)
 
@@ -512,36 +597,55 @@ class MonitorCore:
             return self._on_clock(event)
         if isinstance(event, Intake):
             return self._on_intake(event)
+        if isinstance(event, FatigueStore):
+            return self._on_fatigue_store(event)
         raise TypeError(f'not a monitor event: {event!r}')
 
     def _on_tension(self, ev: Tension) -> Step:
         line = self.state.lines[ev.line]
-        line.tension, line.tension_s = float(ev.value), _stamp_s(ev.stamp_ns)
         a = self.config.alarm
+        sample_ns = ev.stamp_ns if ev.sample_ns is None else int(ev.sample_ns)
+        if ev.sample_ns is not None and readings.stamp_fault(
+            ev.stamp_ns, sample_ns, line.sample_ns, a.stamp_ahead_max
+        ):
+            line.stamp_refused = _stamp_s(ev.stamp_ns)  # refused: not a reading (bad_stamp)
+            return Step(ev.stamp_ns, 'tension', (), None, ())
+        line.sample_ns = sample_ns
+        line.tension, line.tension_s = float(ev.value), _stamp_s(sample_ns)
         line.sensor_memory = sensor_state.sample(
             line.sensor_memory,
             line.tension_s,
             line.tension,
             a.tension_resolution,
             a.tension_rate_max * line.config.mbl,
-            a.stamp_jitter,
+            _jitter(a, ev.sample_ns),
+        )
+        line.fatigue, line.fatigue_values = fatigue_rule.step(
+            line.fatigue, line.tension_s, line.tension, self.curves[ev.line]
         )
         self._solve_one(line)
         changes = self._step_lines([ev.line], ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'tension', [ev.line], changes)
 
     def _on_depth(self, ev: Depth) -> Step:
-        self.state.depth, self.state.depth_s = float(ev.value), _stamp_s(ev.stamp_ns)
-        window = self.config.alarm.tide_trend_window
-        self.state.trend = tide_trend.step(self.state.trend, ev.stamp_ns, self.state.depth, window)
         a = self.config.alarm
+        sample_ns = ev.stamp_ns if ev.sample_ns is None else int(ev.sample_ns)
+        if ev.sample_ns is not None and readings.stamp_fault(
+            ev.stamp_ns, sample_ns, self.state.depth_sample_ns, a.stamp_ahead_max
+        ):
+            self.state.depth_refused = _stamp_s(ev.stamp_ns)
+            return Step(ev.stamp_ns, 'depth', (), None, ())
+        self.state.depth_sample_ns = sample_ns
+        self.state.depth, self.state.depth_s = float(ev.value), _stamp_s(sample_ns)
+        window = a.tide_trend_window
+        self.state.trend = tide_trend.step(self.state.trend, sample_ns, self.state.depth, window)
         self.state.depth_memory = sensor_state.sample(
             self.state.depth_memory,
             self.state.depth_s,
             self.state.depth,
             a.depth_resolution,
             a.depth_rate_max,
-            a.stamp_jitter,
+            _jitter(a, ev.sample_ns),
         )
         changes = self._decide_tide(ev.stamp_ns)
         changes += self._decide_blind(ev.stamp_ns)
@@ -559,8 +663,28 @@ class MonitorCore:
         changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns)
         return Step(ev.stamp_ns, 'tick', (), self.snapshot(ev.stamp_ns), tuple(changes))
 
+    def _on_fatigue_store(self, ev: FatigueStore) -> Step:
+        """The fatigue store: each line's stored count taken where it was read (a line the
+        store lacks, or whose record is damaged, from ``NAME.fatigue_damage_initial``), and
+        the store's status, shown at once."""
+        if ev.lines is not None:
+            stored = dict(ev.lines)
+            for line, curve in zip(self.state.lines, self.curves):
+                state = fatigue_rule.from_record(stored.get(line.config.name), curve)
+                if state is None:
+                    state = fatigue_rule.initial(line.config.fatigue_damage_initial)
+                line.fatigue = state
+                damage = state.damage()
+                line.fatigue_values = (damage, _NAN, fatigue_rule.life_left(damage, _NAN))
+                line.values = _with_fatigue(line.values, line.fatigue_values)
+        self.state.fatigue_seen = True
+        self.state.fatigue_word = ev.state
+        level = FATIGUE_STORE_STATES.get(ev.state, Level.WARN)
+        changes = self._set_component('fatigue', (level, ev.message), ev.stamp_ns)
+        return Step(ev.stamp_ns, 'fatigue', (), self.snapshot(ev.stamp_ns), tuple(changes))
+
     def _on_logger(self, ev: LoggerHealth) -> Step:
-        new = logger_status(ev.error, ev.path)
+        new = logger_status(ev.error, ev.path, ev.warning)
         changes = self._set_component('logger', new, ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'logger', [], changes)
 
@@ -570,9 +694,11 @@ class MonitorCore:
         now = _stamp_s(ev.stamp_ns)
         for line in self.state.lines:
             if ev.line is None or ev.line == line.config.name:
-                line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin)
+                line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin, ev.publisher)
         if ev.line is None or ev.line == alarm_ack.SENSORS:
-            self.state.sensors_ack = alarm_ack.acknowledge(self.state.sensors_ack, now, ev.origin)
+            self.state.sensors_ack = alarm_ack.acknowledge(
+                self.state.sensors_ack, now, ev.origin, ev.publisher
+            )
         return Step(ev.stamp_ns, 'acknowledge', (), self.snapshot(ev.stamp_ns), ())
 
     def _on_clock(self, ev: ClockHealth) -> Step:
@@ -711,6 +837,7 @@ class MonitorCore:
         if config.alarm.tide_trend_window != self.config.alarm.tide_trend_window:
             self.state.trend = tide_trend.TrendState()  # other bins: the trend starts again
         self.config = config
+        self.curves = [fatigue_rule.Curve.of(lc) for lc in config.lines]
         for line, lc in zip(self.state.lines, config.lines):
             line.config, line.alarm = lc, LineAlarm.for_line(lc, config.alarm)
         self.dock_model = DockModel.from_config(config) if config.has_dock_model else None
@@ -783,6 +910,7 @@ class MonitorCore:
             seen,
             np.array([self.state.depth]),
             np.array([self.state.depth_memory.changed]),
+            np.array([[line.stamp_refused for line in lines]]),
         )
         for k, line in enumerate(lines):
             line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
@@ -796,6 +924,7 @@ class MonitorCore:
                 np.array([dm.changed]),
                 np.array([dm.spiked]),
                 changed,
+                np.array([self.state.depth_refused]),
             )[0]
         )
 
@@ -844,6 +973,7 @@ class MonitorCore:
                 '',
                 NO_MODEL,
             )
+            line.values = _with_fatigue(line.values, line.fatigue_values)
             return
         r = solve(
             lc.weight, h, tension=t, anchor_distance=lc.anchor_distance, mbl=lc.mbl, ea=lc.ea
@@ -864,7 +994,7 @@ class MonitorCore:
         )
         line.values = _with_sensor(line.values + _NAN_VALUES[len(line.values) :], line.sensor_code)
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
-        code = reading_status(t, h, lc.mbl)
+        code = reading_status(t, h, lc.mbl, lc.weight)
         if code:
             _implausible(line, code)
         self._add_derived([line])
@@ -899,7 +1029,9 @@ class MonitorCore:
             line.values = _with_sensor(line.values, line.sensor_code)
             line.status, line.status_message = int(status[i]), str(messages[i])
             line.model = str(models[i])
-        codes = reading_status_array(tension, h, [c.mbl for c in cfgs]).tolist()
+        codes = reading_status_array(
+            tension, h, [c.mbl for c in cfgs], [c.weight for c in cfgs]
+        ).tolist()
         for line, code in zip(lines, codes):
             if code:
                 _implausible(line, code)
@@ -908,17 +1040,20 @@ class MonitorCore:
     def _add_derived(self, lines: Sequence[LineState]) -> None:
         """The bounds and the holding values of freshly solved lines (from their values);
         lines without accuracies or holding data keep NaN (what the functions give them)."""
+        for line in lines:
+            line.values = _with_fatigue(line.values, line.fatigue_values)
         accuracy = self.config.alarm.depth_accuracy
+        tolerance = self.config.alarm.drag_tolerance
         for fields, compute, wanted in (
             (uncertainty.FIELDS, _bounds_of(accuracy), _wants_bounds(accuracy)),
-            (holding_rule.FIELDS + holding_rule.LENGTH_FIELDS, holding_values, _wants_holding),
+            (HOLDING_FIELDS, _holding_of(tolerance), _wants_holding),
         ):
             some = [line for line in lines if wanted(line.config)]
             if not some:
                 continue
             derived: dict[str, Any]
-            if compute is holding_values and len(some) == 1:  # a tension event: plain floats
-                one = holding_one(some[0].config, some[0].values)
+            if fields is HOLDING_FIELDS and len(some) == 1:  # a tension event: plain floats
+                one = holding_one(some[0].config, some[0].values, tolerance)
                 derived = {k: (v,) for k, v in one.items()}
             else:
                 named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
@@ -1042,6 +1177,8 @@ class MonitorCore:
             out.append(flag)
         if self.state.clock_seen:
             out.append(ComponentStatus(f'{NODE_NAME}: clock', *self.state.clock, NODE_NAME, ()))
+        if self.state.fatigue_seen:
+            out.append(self.fatigue_component())
         if self.state.intake_seen:
             dropped = self.intake_dropped()
             names = [line.config.name for line in self.state.lines] + ['depth']
@@ -1064,6 +1201,13 @@ class MonitorCore:
             )
         return out
 
+    def fatigue_component(self) -> ComponentStatus:
+        """The ``catenary_monitor: fatigue`` status: the fatigue store's level and message,
+        ``store_state`` (:data:`FATIGUE_STORE_STATES`) and the worst line's ``fatigue_damage``."""
+        damages = [line.fatigue_values[0] for line in self.state.lines]
+        values = (('store_state', self.state.fatigue_word), ('max_damage', repr(max(damages))))
+        return ComponentStatus(f'{NODE_NAME}: fatigue', *self.state.fatigue, NODE_NAME, values)
+
     def parameters_component(self, now: float) -> Optional[ComponentStatus]:
         """The runtime-change status at ``now`` [s] (None when runtime changes are not
         allowed and none was made): WARN naming the changes until their flag expires."""
@@ -1080,11 +1224,20 @@ def _with_sensor(values: tuple[float, ...], code: int) -> tuple[float, ...]:
     return values[:_SENSOR_AT] + (float(code),) + values[_SENSOR_AT + 1 :]
 
 
+_FATIGUE_AT = VALUE_FIELDS.index(fatigue_rule.FIELDS[0])
+
+
+def _with_fatigue(values: tuple[float, ...], fatigue: tuple[float, ...]) -> tuple[float, ...]:
+    """``values`` with the line's fatigue values in their places."""
+    end = _FATIGUE_AT + len(fatigue)
+    return values[:_FATIGUE_AT] + tuple(fatigue) + values[end:]
+
+
 def _implausible(line: LineState, code: int) -> None:
     """An implausible reading (core.monitor.plausible): its status and sentence, no solved values
     (the measured tension and depth kept, as for every impossible input)."""
     line.values = line.values[:2] + _NAN_VALUES[2:_SENSOR_AT] + line.values[_SENSOR_AT:]
-    line.status, line.status_message = code, STATUS_MESSAGES[code]
+    line.status, line.status_message = code, status_messages(line.config)[code]
     line.model = elastic.INEXTENSIBLE
 
 
@@ -1102,6 +1255,14 @@ def _wants_bounds(depth_accuracy: float) -> Any:
 def _wants_holding(c: LineConfig) -> bool:
     """Whether a line has holding values: a chain length or an anchor holding."""
     return c.chain_length is not None or c.anchor_holding is not None
+
+
+#: The values :func:`holding_values` gives (core/monitor/holding.py).
+HOLDING_FIELDS = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS + holding_rule.DRAG_FIELDS
+
+
+def _holding_of(tolerance: float) -> Any:
+    return lambda cfgs, named: holding_values(cfgs, named, tolerance)
 
 
 def _bounds_of(depth_accuracy: float) -> Any:
@@ -1128,10 +1289,10 @@ def bound_values(
 
 
 def holding_values(
-    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray]
+    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray], tolerance: float = math.inf
 ) -> dict[str, np.ndarray]:
-    """The holding values (:data:`catenary_monitor.core.monitor.holding.FIELDS`), as
-    :func:`bound_values`."""
+    """The holding values (:data:`HOLDING_FIELDS`), as :func:`bound_values`; ``tolerance``
+    is ``drag_tolerance`` (m)."""
     return holding_rule.holding(
         _column(cfgs, 'weight'),
         _column(cfgs, 'ea'),
@@ -1144,10 +1305,14 @@ def holding_values(
         named['horizontal_tension'],
         named['suspended_length'],
         named['uplift_force'],
+        _column(cfgs, 'anchor_distance'),
+        tolerance,
     )
 
 
-def holding_one(lc: LineConfig, values: Sequence[float]) -> dict[str, float]:
+def holding_one(
+    lc: LineConfig, values: Sequence[float], tolerance: float = math.inf
+) -> dict[str, float]:
     """:func:`holding_values` of one line's :data:`VALUE_FIELDS` values in plain floats
     (:func:`catenary_monitor.core.monitor.holding.holding_scalar`: the same numbers to
     rounding, an order of magnitude faster than one-element arrays)."""
@@ -1167,6 +1332,8 @@ def holding_one(lc: LineConfig, values: Sequence[float]) -> dict[str, float]:
         values[_AT['horizontal_tension']],
         values[_AT['suspended_length']],
         values[_AT['uplift_force']],
+        lc.anchor_distance,
+        tolerance,
     )
 
 
@@ -1334,14 +1501,25 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
     if isinstance(event, Tick):
         return {'kind': 'tick'}
     if isinstance(event, LoggerHealth):
-        return {'kind': 'logger', 'error': event.error, 'path': event.path}
+        record = {'kind': 'logger', 'error': event.error, 'path': event.path}
+        if event.warning is not None:
+            record['warning'] = event.warning
+        return record
     if isinstance(event, Reconfigure):
         return {'kind': 'configure', 'parameters': config_to_params(event.config)}
     if isinstance(event, Acknowledge):
         line = alarm_ack.ALL_LINES if event.line is None else event.line
-        return {'kind': 'acknowledge', 'line': line, 'origin': event.origin}
+        return {
+            'kind': 'acknowledge',
+            'line': line,
+            'origin': alarm_ack.bounded_text(event.origin),
+            'publisher': alarm_ack.bounded_text(event.publisher),
+        }
     if isinstance(event, ClockHealth):
         return {'kind': 'clock', 'stopped_for': event.stopped_for}
+    if isinstance(event, FatigueStore):
+        lines = None if event.lines is None else dict(event.lines)
+        return {'kind': 'fatigue', 'state': event.state, 'message': event.message, 'lines': lines}
     if isinstance(event, Intake):
         return {
             'kind': 'intake',
@@ -1368,7 +1546,9 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
         if kind == 'tick':
             return Tick(stamp_ns)
         if kind == 'logger':
-            return LoggerHealth(stamp_ns, record.get('error'), record.get('path'))
+            return LoggerHealth(
+                stamp_ns, record.get('error'), record.get('path'), record.get('warning')
+            )
         if kind == 'configure':
             return Reconfigure(stamp_ns, config_from_params(record['parameters']))
         if kind == 'clock':
@@ -1386,12 +1566,21 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
         if kind == 'coalesced':
             line = None if record.get('input') == 'depth' else str(record['line'])
             return Coalesced(stamp_ns, line, int(record['last_ns']), int(record['samples']))
+        if kind == 'fatigue':
+            lines = record.get('lines')
+            return FatigueStore(
+                stamp_ns,
+                str(record['state']),
+                str(record['message']),
+                None if lines is None else tuple((str(k), v) for k, v in dict(lines).items()),
+            )
         if kind == 'acknowledge':
             line = str(record['line'])
             return Acknowledge(
                 stamp_ns,
-                None if line == alarm_ack.ALL_LINES else line,
-                str(record.get('origin', '')),
+                None if line == alarm_ack.ALL_LINES else alarm_ack.bounded_text(line),
+                alarm_ack.bounded_text(str(record.get('origin', ''))),
+                alarm_ack.bounded_text(str(record.get('publisher', ''))),
             )
     except (ValueError, KeyError, TypeError):
         return None

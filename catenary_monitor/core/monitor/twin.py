@@ -34,8 +34,14 @@ import numpy as np
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
 from catenary_monitor.core.monitor import dock_watch as dock_live
-from catenary_monitor.core.monitor import holding as holding_rule
-from catenary_monitor.core.monitor import sensor_state, tide_table, tide_trend, uncertainty
+from catenary_monitor.core.monitor import fatigue as fatigue_rule
+from catenary_monitor.core.monitor import (
+    readings,
+    sensor_state,
+    tide_table,
+    tide_trend,
+    uncertainty,
+)
 from catenary_monitor.core.monitor.alarms import (
     DIAGNOSTIC_KEYS,
     RANK,
@@ -66,6 +72,7 @@ from catenary_monitor.core.monitor.monitor_core import depth_word as depth_state
 from catenary_monitor.core.monitor.monitor_core import (
     dock_component,
     forecast_word,
+    HOLDING_FIELDS,
     holding_values,
     line_dock_values,
     line_status,
@@ -74,10 +81,14 @@ from catenary_monitor.core.monitor.monitor_core import (
     tide_component,
     tide_with_sensor,
 )
-from catenary_monitor.core.monitor.plausible import MAX_DEPTH, reading_status_array
+from catenary_monitor.core.monitor.plausible import (
+    MAX_DEPTH,
+    reading_status_array,
+    status_messages,
+)
 from catenary_monitor.core.physics import catenary as cat
 from catenary_monitor.core.physics import elastic, fused_kernel
-from catenary_monitor.core.physics.solve import ALL_KEYS, STATUS_MESSAGES, Status
+from catenary_monitor.core.physics.solve import ALL_KEYS, Status
 
 try:  # three of the loops below in C, next to this file (optional: else the numpy passes)
     from catenary_monitor.core.monitor import _twin_loops as _loops  # type: ignore[attr-defined]
@@ -123,16 +134,38 @@ _EMPTY: Column = (np.zeros(0, np.int64), np.zeros(0))
 @dataclass
 class Window:
     """Events of a stretch of log, each column sorted by time (ns): ``tensions`` per line
-    (config order), ``depth``, and the ``ticks``."""
+    (config order), ``depth``, and the ``ticks``. ``tension_stamps`` (per line) and
+    ``depth_stamps``: the header stamps (ns) of a stamped input's samples, beside its column
+    (None: taken at arrival, the column's time)."""
 
     tensions: list[Column]
     depth: Column = _EMPTY
     ticks: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    tension_stamps: Optional[list[Optional[np.ndarray]]] = None
+    depth_stamps: Optional[np.ndarray] = None
 
     @property
     def messages(self) -> int:
         """Input messages in the window."""
         return sum(len(t) for t, _ in self.tensions) + len(self.depth[0])
+
+    def stamped(self, k: Optional[int]) -> bool:
+        """Whether line ``k``'s samples (None: the depth's) carry header stamps."""
+        if k is None:
+            return self.depth_stamps is not None
+        return self.tension_stamps is not None and self.tension_stamps[k] is not None
+
+    def sample_ns(self, k: Optional[int]) -> np.ndarray:
+        """The reading times (ns) of line ``k``'s samples (None: the depth's): the header
+        stamps of a stamped input, else the arrival times."""
+        if k is None:
+            return self.depth[0] if self.depth_stamps is None else self.depth_stamps
+        stamps = None if self.tension_stamps is None else self.tension_stamps[k]
+        return self.tensions[k][0] if stamps is None else stamps
+
+    def sample_s(self, k: Optional[int]) -> np.ndarray:
+        """:meth:`sample_ns` in s."""
+        return self.sample_ns(k) * 1e-9
 
 
 @dataclass
@@ -488,7 +521,7 @@ class _Sensors:
     before_depth: int
 
 
-def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
+def _decide_sensors_window(core: MonitorCore, window: Window, refusals: '_Refusals') -> _Sensors:
     """Every tick's sensor states (the arrays the core hands core.monitor.sensor_state one tick
     at a time); leaves the core's sensor memories as after the window."""
     a, ticks = core.config.alarm, window.ticks
@@ -499,26 +532,35 @@ def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
     now = ticks * 1e-9
     tension, tension_s = np.empty((n, m)), np.empty((n, m))
     changed, spiked = np.empty((n, m)), np.empty((n, m))
+    refused = np.empty((n, m))
     for k, line in enumerate(lines):
         tt, tv = window.tensions[k]
+        ts = window.sample_s(k)
         mem = line.sensor_memory
         rate = a.tension_rate_max * line.config.mbl
+        jitter = 0.0 if window.stamped(k) else a.stamp_jitter
         ch, sp, line.sensor_memory = sensor_state.samples(
-            mem, tt * 1e-9, tv, a.tension_resolution, rate, a.stamp_jitter
+            mem, ts, tv, a.tension_resolution, rate, jitter
         )
         j = np.searchsorted(tt, ticks, 'right') - 1  # tensions go before a tick at one stamp
         tension[:, k] = _pick(j, tv, line.tension)
-        tension_s[:, k] = _pick(j, tt * 1e-9, line.tension_s)
+        tension_s[:, k] = _pick(j, ts, line.tension_s)
         changed[:, k] = _pick(j, ch, mem.changed)
         spiked[:, k] = _pick(j, sp, mem.spiked)
+        r = refusals.lines[k]
+        refused[:, k] = _pick(np.searchsorted(r, ticks, 'right') - 1, r * 1e-9, line.stamp_refused)
     dd, dv = window.depth
+    ds = window.sample_s(None)
     dmem = core.state.depth_memory
+    jitter = 0.0 if window.stamped(None) else a.stamp_jitter
     dch, dsp, core.state.depth_memory = sensor_state.samples(
-        dmem, dd * 1e-9, dv, a.depth_resolution, a.depth_rate_max, a.stamp_jitter
+        dmem, ds, dv, a.depth_resolution, a.depth_rate_max, jitter
     )
     j = np.searchsorted(dd, ticks, 'right') - 1  # depth goes before a tick at one stamp
-    depth, depth_s = _pick(j, dv, core.state.depth), _pick(j, dd * 1e-9, core.state.depth_s)
+    depth, depth_s = _pick(j, dv, core.state.depth), _pick(j, ds, core.state.depth_s)
     d_changed, d_spiked = _pick(j, dch, dmem.changed), _pick(j, dsp, dmem.spiked)
+    r = refusals.depth
+    d_refused = _pick(np.searchsorted(r, ticks, 'right') - 1, r * 1e-9, core.state.depth_refused)
     if n == 0:
         return _Sensors(np.zeros((0, m), np.int8), np.zeros(0, np.int8), before, before_depth)
     times = np.concatenate([core.state.sensor_times, now])
@@ -543,8 +585,11 @@ def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
         seen,
         depth,
         d_changed,
+        refused,
     )
-    depth_codes = sensor_state.decide_depth(a, now, depth, depth_s, d_changed, d_spiked, changed)
+    depth_codes = sensor_state.decide_depth(
+        a, now, depth, depth_s, d_changed, d_spiked, changed, d_refused
+    )
     for k, line in enumerate(lines):
         line.sensor_code, line.parted_seen = int(codes[-1, k]), float(seen[-1, k])
     core.state.depth_code = int(depth_codes[-1])
@@ -562,7 +607,8 @@ def _decide_tide(
     have = d_idx >= 0
     j = np.maximum(d_idx, 0)
     depth = np.where(have, dv[j] if len(dv) else math.nan, core.state.depth)
-    depth_s = np.where(have, dd[j] * 1e-9 if len(dd) else math.nan, core.state.depth_s)
+    ds = window.sample_s(None)
+    depth_s = np.where(have, ds[j] if len(dd) else math.nan, core.state.depth_s)
     now = times * 1e-9
     timeout = core.config.alarm.depth_timeout
     with np.errstate(invalid='ignore'):
@@ -575,7 +621,9 @@ def _decide_tide(
         level, np.where(code == sensor_state.OUT_OF_RANGE, Level.ERROR, Level.WARN), code
     )
     window_s = core.config.alarm.tide_trend_window
-    rates, excess, trend = tide_trend.series(core.state.trend, dd, dv, window_s)
+    rates, excess, trend = tide_trend.series(
+        core.state.trend, window.sample_ns(None), dv, window_s
+    )
     tide = _Tide(times, depth, depth_s, level, stale, rates, excess, trend, code, kinds)
     transitions = []
     old, entered = core.state.tide[0], core.state.tide_entered
@@ -666,7 +714,9 @@ def _write_tide(
     core.state.trend = tide.trend
     dd, dv = window.depth
     if len(dd):
-        core.state.depth, core.state.depth_s = float(dv[-1]), float(dd[-1] * 1e-9)
+        last = int(window.sample_ns(None)[-1])
+        core.state.depth, core.state.depth_s = float(dv[-1]), float(last * 1e-9)
+        core.state.depth_sample_ns = last
 
 
 @dataclass
@@ -703,7 +753,7 @@ def _decide_dock_window(core: MonitorCore, window: Window, tide: _Tide) -> Optio
         tt, tv = window.tensions[k]
         j = np.searchsorted(tt, ticks, 'right') - 1  # tensions go before a tick at one stamp
         tension[:, k] = _pick(j, tv, line.tension)
-        tension_s[:, k] = _pick(j, tt * 1e-9, line.tension_s)
+        tension_s[:, k] = _pick(j, window.sample_s(k), line.tension_s)
     decision, core.state.dock_smoothing = dock_live.decide_dock(
         model, core.config, now, depth, depth_ok, tension, tension_s, core.state.dock_smoothing
     )
@@ -803,7 +853,7 @@ def _solve_line(
     d_idx = steps.d_idx[steps.solved]
     a = core.config.alarm
     if a.constituents:
-        now = _pick(d_idx, window.depth[0] * 1e-9, core.state.depth_s)
+        now = _pick(d_idx, window.sample_s(None), core.state.depth_s)
         values['time_to_uplift'] = tide_table.uplift_times(
             a.constituents,
             a.tide_table_epoch,
@@ -831,10 +881,9 @@ def _add_derived(core: MonitorCore, lc: LineConfig, values: dict[str, np.ndarray
     else:
         values.update({key: np.full(n, np.nan) for key in uncertainty.FIELDS})
     if lc.chain_length is not None or lc.anchor_holding is not None:
-        values.update(holding_values([lc], values))
+        values.update(holding_values([lc], values, core.config.alarm.drag_tolerance))
     else:
-        empty = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS
-        values.update({key: np.full(n, np.nan) for key in empty})
+        values.update({key: np.full(n, np.nan) for key in HOLDING_FIELDS})
 
 
 def _solve_at(
@@ -856,7 +905,7 @@ def _solve_at(
         a_depth = critical_parameters(lc, dv + lc.hook_height)
         a_before = critical_parameters(lc, np.array([core.state.depth + lc.hook_height]))[0]
         values, status = solve_updates(lc, tension, h, _pick(d_idx, a_depth, a_before))
-    _mark_implausible(values, status, used, reading_status_array(tension, h, lc.mbl))
+    _mark_implausible(values, status, used, reading_status_array(tension, h, lc.mbl, lc.weight))
     return values, status, used
 
 
@@ -905,6 +954,10 @@ def _line_inputs(
             'uplift_force_upper',
             'drag_margin',
             'holding_capacity',
+            'drag_state',
+            'implied_anchor_distance',
+            'fatigue_damage',
+            'fatigue_life_left',
         )
     }
     inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
@@ -912,8 +965,8 @@ def _line_inputs(
     )
     inputs['tide_rate'] = _pick(steps.d_idx, tide.rates, core.state.trend.rate)
     inputs['tide_forecast'] = 1.0 if core.config.alarm.constituents else 0.0
-    inputs['tension_stamp'] = _pick(steps.t_idx, tt * 1e-9, line.tension_s)
-    inputs['depth_stamp'] = _pick(steps.d_idx, window.depth[0] * 1e-9, core.state.depth_s)
+    inputs['tension_stamp'] = _pick(steps.t_idx, window.sample_s(k), line.tension_s)
+    inputs['depth_stamp'] = _pick(steps.d_idx, window.sample_s(None), core.state.depth_s)
     inputs['depth_stale'] = _pick(
         steps.dk_idx, tide.stale.astype(np.float64), float(core.state.depth_stale)
     ).astype(bool)
@@ -945,9 +998,14 @@ def _advance_line(
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
     values, status, used = _solve_line(core, line, steps, tv, window, tide, sensors, k)
+    times = window.sample_s(k)  # the reading times, as the core's tension_s
+    fatigue, fatigue_end = fatigue_rule.series(line.fatigue, times, tv, core.curves[k])
+    at = steps.t_idx[steps.solved]
+    for j, key in enumerate(fatigue_rule.FIELDS):
+        values[key] = _pick(at, fatigue[key], line.fatigue_values[j])
     inputs = _line_inputs(core, line, steps, tide, values, status, window, tt, dock, k, sensors)
     series = replay_levels(
-        steps.times * 1e-9, inputs, line.alarm, STATUS_MESSAGES, initial=line.state
+        steps.times * 1e-9, inputs, line.alarm, status_messages(line.config), initial=line.state
     )
     acks = alarm_ack.replay_acks(line.ack, steps.times * 1e-9, series.levels, series.suppressed)
     line.ack = acks.final
@@ -965,7 +1023,10 @@ def _advance_line(
         series.transitions,
         used,
     )
-    _write_back(line, series, values, status, used, tt, tv)
+    _write_back(line, series, values, status, used, window.sample_ns(k), tv)
+    line.fatigue = fatigue_end
+    if len(tt):
+        line.fatigue_values = tuple(float(fatigue[key][-1]) for key in fatigue_rule.FIELDS)
     return result, series, steps, acks
 
 
@@ -978,14 +1039,17 @@ def _write_back(
     tt: np.ndarray,
     tv: np.ndarray,
 ) -> None:
-    """The line's state after its last step in the window."""
+    """The line's state after its last step in the window (``tt``: its samples' reading
+    times, ns)."""
     line.state = series.final_state()
     if len(tt):
         line.tension, line.tension_s = float(tv[-1]), float(tt[-1] * 1e-9)
+        line.sample_ns = int(tt[-1])
     if len(status):
         line.values = tuple(float(values[key][-1]) for key in VALUE_FIELDS)
         line.status = int(status[-1])
-        line.status_message = '' if line.status == NO_DEPTH else STATUS_MESSAGES[line.status]
+        table = status_messages(line.config)
+        line.status_message = '' if line.status == NO_DEPTH else table[line.status]
         code = 0 if line.status == NO_DEPTH else (2 if used is not None and used[-1] else 1)
         line.model = MODEL_NAMES[code]
 
@@ -1003,6 +1067,8 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
             f'window has {len(window.tensions)} tension columns for '
             f'{len(core.state.lines)} lines'
         )
+    given = window
+    window, refusals = _accept(core, window)
     depth_before = (
         core.state.depth,
         core.state.depth_s,
@@ -1029,7 +1095,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         for line in core.state.lines
     ]
     depth_word = depth_state_word(core.state.depth_s, core.state.depth_code)
-    sensors = _decide_sensors_window(core, window)
+    sensors = _decide_sensors_window(core, window, refusals)
     tide, tide_transitions = _decide_tide(core, window, sensors)
     blind = _decide_blind(core, window, tide)
     dock = _decide_dock_window(core, window, tide)
@@ -1040,7 +1106,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         series.append(s)
         steps.append(st)
         acks.append(a)
-    times = [c[0] for c in (*window.tensions, window.depth, (window.ticks, None)) if len(c[0])]
+    times = [c[0] for c in (*given.tensions, given.depth, (given.ticks, None)) if len(c[0])]
     start = int(min(t[0] for t in times)) if times else core.state.last_ns
     end = int(max(t[-1] for t in times)) if times else core.state.last_ns
     snaps: list[Snapshot | SnapshotColumns] = []
@@ -1054,10 +1120,63 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         )
         snaps = [made] if isinstance(made, SnapshotColumns) else list(made)
     _write_tide(core, window, tide, tide_transitions)
+    _write_refusals(core, refusals)
     core.state.last_ns = max(core.state.last_ns, end)
     others = [Change('sensors', tr) for tr in blind.transitions]
     others += [] if dock is None else [Change('dock', tr) for tr in dock.transitions]
     return WindowResult(results, tide_transitions, snaps, start, end, others)
+
+
+@dataclass
+class _Refusals:
+    """The arrival times (ns) of the samples refused for their header stamps in a window
+    (:func:`catenary_monitor.core.monitor.readings.stamp_faults`): per line, and the depth's."""
+
+    lines: list[np.ndarray]
+    depth: np.ndarray
+
+
+def _accept(core: MonitorCore, window: Window) -> tuple[Window, _Refusals]:
+    """The window without the stamped samples the core refuses (a header stamp ahead of the
+    clock, or going backwards: they are no reading, as :meth:`MonitorCore.step` takes them),
+    and when those arrived."""
+    ahead_max = core.config.alarm.stamp_ahead_max
+    none = np.zeros(0, np.int64)
+
+    def split(
+        column: Column, stamps: Optional[np.ndarray], last: int
+    ) -> tuple[Column, Optional[np.ndarray], np.ndarray]:
+        if stamps is None or not len(stamps):
+            return column, stamps, none
+        bad = readings.stamp_faults(column[0], stamps, last, ahead_max) != 0
+        if not bad.any():
+            return column, stamps, none
+        ok = ~bad
+        return (column[0][ok], column[1][ok]), stamps[ok], column[0][bad]
+
+    if window.tension_stamps is None and window.depth_stamps is None:
+        return window, _Refusals([none] * len(window.tensions), none)
+    tensions, stamps, refused = [], [], []
+    for k, line in enumerate(core.state.lines):
+        own = None if window.tension_stamps is None else window.tension_stamps[k]
+        column, st, r = split(window.tensions[k], own, line.sample_ns)
+        tensions.append(column)
+        stamps.append(st)
+        refused.append(r)
+    depth, d_stamps, d_refused = split(
+        window.depth, window.depth_stamps, core.state.depth_sample_ns
+    )
+    kept = Window(tensions, depth, window.ticks, stamps, d_stamps)
+    return kept, _Refusals(refused, d_refused)
+
+
+def _write_refusals(core: MonitorCore, refusals: _Refusals) -> None:
+    """When a sample was last refused for its stamp, per line and the depth, after the window."""
+    for line, r in zip(core.state.lines, refusals.lines):
+        if len(r):
+            line.stamp_refused = float(r[-1] * 1e-9)
+    if len(refusals.depth):
+        core.state.depth_refused = float(refusals.depth[-1] * 1e-9)
 
 
 # --- snapshots -----------------------------------------------------------------------------------
@@ -1116,13 +1235,14 @@ def _tide_statuses(
 ) -> list[ComponentStatus]:
     """The tide status at each of ``stamps`` [ns]."""
     dd, dv = window.depth
+    ds = window.sample_s(None)
     tide_at = np.searchsorted(tide.times, stamps, 'right') - 1
     depth_at = np.searchsorted(dd, stamps, 'right') - 1
     out = []
     for n, stamp in enumerate(stamps.tolist()):
         i, j = int(tide_at[n]), int(depth_at[n])
         depth = float(dv[j]) if j >= 0 else depth_before[0]
-        depth_s = float(dd[j] * 1e-9) if j >= 0 else depth_before[1]
+        depth_s = float(ds[j]) if j >= 0 else depth_before[1]
         rate = float(tide.rates[j]) if j >= 0 else depth_before[3]
         state = tide_before if i < 0 else _tide_at(core, tide, i)
         word = depth_word if i < 0 else depth_state_word(depth_s, int(tide.sensor[i]))
@@ -1175,11 +1295,11 @@ class _Made(NamedTuple):
         LineState, LineResult, LevelSeries, _Steps, np.ndarray, _Before,
         alarm_ack.AckSeries, Optional[_Dock], Optional[_Sensors],
     ]:  # fmt: skip
-        """Line ``k``'s state, result, levels, steps, tension times, state before the window,
-        acknowledgements, and the window's dock and sensor states."""
+        """Line ``k``'s state, result, levels, steps, tension reading times, state before the
+        window, acknowledgements, and the window's dock and sensor states."""
         return (
             self.core.state.lines[k], self.results[k], self.series[k], self.steps[k],
-            self.window.tensions[k][0], self.lines_before[k], self.acks[k], self.dock,
+            self.window.sample_ns(k), self.lines_before[k], self.acks[k], self.dock,
             self.sensors,
         )  # fmt: skip
 
@@ -1454,7 +1574,7 @@ def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
     names = [*MODEL_NAMES, before.model]  # -1: the model before the window
     models = [names[c] for c in _take(r.model_codes, s, -1, np.int64).tolist()]
     t = _at(steps.t_idx, at)
-    ts = _take(tt * 1e-9, t, float(before.tension_s))
+    ts = _take(m.window.sample_s(k), t, float(before.tension_s))
     age = stamps * 1e-9 - ts
     words, extra_keys, extra = _word_columns(m, k, at, _at(steps.k_idx, at))
     ack_keys, ack_columns = _ack_columns(acks, before, at, conditions)
@@ -1588,7 +1708,14 @@ def slice_window(window: Window, lo: Optional[int], hi: Optional[int]) -> Window
 
     tensions = [(t[cut(t)], v[cut(t)]) for t, v in window.tensions]
     dt, dv = window.depth
-    return Window(tensions, (dt[cut(dt)], dv[cut(dt)]), window.ticks[cut(window.ticks)])
+    stamps = None
+    if window.tension_stamps is not None:
+        pairs = zip(window.tension_stamps, window.tensions)
+        stamps = [None if s is None else s[cut(t)] for s, (t, _) in pairs]
+    d_stamps = None if window.depth_stamps is None else window.depth_stamps[cut(dt)]
+    return Window(
+        tensions, (dt[cut(dt)], dv[cut(dt)]), window.ticks[cut(window.ticks)], stamps, d_stamps
+    )
 
 
 def concat_lines(parts: list[LineResult]) -> LineResult:
@@ -1682,16 +1809,34 @@ def _leave_out_coalesced(
     if not marks and max(carried + [core.state.depth_coalesced_until]) < 0:
         return window, events, marks
     index = {line.config.name: k for k, line in enumerate(core.state.lines)}
-    tensions = [
-        _keep(column, carried[k], [m for m in marks if index.get(m.line or '') == k])
+    keep = [
+        _kept(column[0], carried[k], [m for m in marks if index.get(m.line or '') == k])
         for k, column in enumerate(window.tensions)
     ]
-    depth = _keep(
-        window.depth,
-        core.state.depth_coalesced_until,
-        [m for m in marks if m.line is None],
+    d_keep = _kept(
+        window.depth[0], core.state.depth_coalesced_until, [m for m in marks if m.line is None]
     )
-    return Window(tensions, depth, window.ticks), events, marks
+
+    def cut(array: Optional[np.ndarray], kept: Optional[np.ndarray]) -> Optional[np.ndarray]:
+        return array if array is None or kept is None else array[kept]
+
+    tension_stamps = window.tension_stamps
+    if tension_stamps is not None:
+        tension_stamps = [cut(s, kept) for s, kept in zip(tension_stamps, keep)]
+    return (
+        Window(
+            [
+                column if kept is None else (column[0][kept], column[1][kept])
+                for column, kept in zip(window.tensions, keep)
+            ],
+            window.depth if d_keep is None else (window.depth[0][d_keep], window.depth[1][d_keep]),
+            window.ticks,
+            tension_stamps,
+            cut(window.depth_stamps, d_keep),
+        ),
+        events,
+        marks,
+    )
 
 
 def _keep_marks(core: MonitorCore, marks: list[Coalesced], events: list[Any]) -> None:
@@ -1707,10 +1852,9 @@ def _keep_marks(core: MonitorCore, marks: list[Coalesced], events: list[Any]) ->
     core.state.last_ns = max(last, max(m.stamp_ns for m in kept))
 
 
-def _keep(column: Column, carried: int, marks: list[Coalesced]) -> Column:
-    """``column`` without the samples stamped at most ``carried`` [ns] or inside a record's
-    ``(stamp_ns, last_ns]``."""
-    t, v = column
+def _kept(t: np.ndarray, carried: int, marks: list[Coalesced]) -> Optional[np.ndarray]:
+    """Which samples stamped ``t`` [ns] stay: not those at most ``carried`` nor inside a
+    record's ``(stamp_ns, last_ns]`` (None: all of them)."""
     out = t <= carried
     if marks:
         starts = np.array([m.stamp_ns for m in marks], np.int64)
@@ -1719,9 +1863,7 @@ def _keep(column: Column, carried: int, marks: list[Coalesced]) -> Column:
         starts, ends = starts[order], ends[order]
         at = np.searchsorted(starts, t, 'left') - 1  # the newest record before each sample
         out |= (at >= 0) & (t <= ends[np.maximum(at, 0)])
-    if not out.any():
-        return column
-    return t[~out], v[~out]
+    return ~out if out.any() else None
 
 
 def _ids(core: MonitorCore) -> dict[str, str]:
