@@ -26,6 +26,7 @@ from catenary_monitor.core.config.tide_constituents import Constituent, parse_ta
 
 __all__ = [
     'REQUIRED',
+    'ALARM_CONDITIONS',
     'FLOAT64',
     'TENSION_TYPES',
     'DEPTH_TYPES',
@@ -116,7 +117,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         REQUIRED,
         (
             'Names of the monitored chains (a letter, then letters, digits, _; not tide, sensors,'
-            ' logger, dock, parameters, clock, intake, fatigue, all); each NAME gets the NAME.* '
+            ' alarms, logger, dock, parameters, clock, intake, fatigue, all); each NAME gets the '
+            'NAME.* '
             'parameters below'
         ),
         '',
@@ -935,6 +937,64 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.01,
         100.0,
     ),
+    # Alarm management (ISA-18.2 / IEC 62682, EEMUA 191): shelving, chattering, floods.
+    ParamSpec(
+        'shelve_max',
+        'double',
+        28800.0,
+        'Longest an operator may shelve an alarm (one shift; 0: shelving disabled)',
+        's',
+        0.0,
+        604800.0,
+    ),
+    ParamSpec(
+        'unshelvable_conditions',
+        'string_array',
+        ('uplift',),
+        'Alarm conditions no operator may shelve (uplift, input, sensor_error, stale, '
+        'anchor_margin, ...); a shelved alarm still annunciates them',
+        '',
+        None,
+        None,
+    ),
+    ParamSpec(
+        'chatter_count',
+        'double',
+        3.0,
+        'An alarm with this many level changes or more within chatter_window is chattering '
+        '(a whole number)',
+        '',
+        2.0,
+        1000.0,
+    ),
+    ParamSpec(
+        'chatter_window',
+        'double',
+        60.0,
+        'The window of the chattering count',
+        's',
+        1.0,
+        86400.0,
+    ),
+    ParamSpec(
+        'flood_count',
+        'double',
+        10.0,
+        'More than this many alarms raised within flood_window is an alarm flood (a whole '
+        'number)',
+        '',
+        1.0,
+        10000.0,
+    ),
+    ParamSpec(
+        'flood_window',
+        'double',
+        600.0,
+        'The window of the flood count',
+        's',
+        1.0,
+        86400.0,
+    ),
     # The dock as one body (core/body): loads by the seed paper's formulas (docs/dock_body.md).
     *(
         ParamSpec(
@@ -1037,12 +1097,33 @@ _PER_LINE = {p.name: p for p in PARAMETERS if p.scope == 'line'}
 ROS_BUILTIN_PARAMETERS = frozenset({'use_sim_time', 'start_type_description_service'})
 _ROS_BUILTIN_PREFIXES = ('qos_overrides.',)
 
+#: Every condition of a line's alarm (core.monitor.alarms.CONDITIONS, then ``stale``): the names
+#: of ``unshelvable_conditions`` and of a shelved condition (test_shelving checks they agree).
+ALARM_CONDITIONS = (
+    'uplift',
+    'input',
+    'anchor_margin',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'time_to_uplift',
+    'inconsistent',
+    'uplift_possible',
+    'drag_margin',
+    'sensor_error',
+    'sensor_warn',
+    'dragging',
+    'fatigue',
+    'stale',
+)
+
 _LINE_NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*\Z')
 #: Names of the monitor's own statuses (``catenary_monitor: tide``, ...) and of the
 #: acknowledgement of every alarm (``all``): no line may take one.
 RESERVED_NAMES = (
     'tide',
     'sensors',
+    'alarms',
     'logger',
     'dock',
     'parameters',
@@ -1259,11 +1340,27 @@ class AlarmConfig:
     tension_timeout: float = _default('tension_timeout')
     depth_timeout: float = _default('depth_timeout')
     diagnostic_rate: float = _default('diagnostic_rate')
+    shelve_max: float = _default('shelve_max')
+    unshelvable_conditions: tuple[str, ...] = _default('unshelvable_conditions')
+    chatter_count: float = _default('chatter_count')
+    chatter_window: float = _default('chatter_window')
+    flood_count: float = _default('flood_count')
+    flood_window: float = _default('flood_window')
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             value = _check(f.name, _GLOBAL[f.name], getattr(self, f.name))
             object.__setattr__(self, f.name, value)
+        for name in ('chatter_count', 'flood_count'):
+            if getattr(self, name) != int(getattr(self, name)):
+                raise ConfigError(name, f'must be a whole number, got {getattr(self, name)!r}')
+        for cond in self.unshelvable_conditions:
+            if cond not in ALARM_CONDITIONS:
+                raise ConfigError(
+                    'unshelvable_conditions',
+                    f'unknown alarm condition {cond!r} '
+                    f'(conditions: {", ".join(ALARM_CONDITIONS)})',
+                )
         try:
             table = parse_table(self.tide_table)
         except ValueError as err:
@@ -1617,6 +1714,8 @@ def parameters_markdown(group: str = '') -> str:
             default = 'required'
         elif spec.optional:
             default = 'not set (NaN)'
+        elif isinstance(spec.default, tuple):
+            default = f'`[{", ".join(spec.default)}]`'
         else:
             default = f'`{spec.default_for("NAME")!r}`'
         if spec.type != 'double':
