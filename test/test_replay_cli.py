@@ -87,14 +87,16 @@ def test_csv_json_mcap_png(scene, capsys):
     storm = summary['lines']['line_02']
     assert storm['worst']['uplift_force']['value'] > 50e3
     assert any(e['worst'] == 'ERROR' for e in storm['episodes'])
-    # The other components as the lines: the tide (with its dropouts) and the sensors alarm.
-    assert list(summary['components']) == ['tide', 'sensors']
+    # The other components as the lines: the tide (with its dropouts), the sensors alarm and
+    # the alarm system's flood status.
+    assert list(summary['components']) == ['tide', 'sensors', 'alarms']
     tide = summary['components']['tide']
     assert tide['transitions'] == len(ref.tide) and tide['final_level'] == ref.tide[-1].new.name
     episodes = LineResult('tide', *[np.zeros(0)] * 8, ref.tide).episodes(ref.end_ns)
     assert tide['episodes'] == episodes and episodes[0]['worst'] == 'STALE'  # a depth dropout
-    sensors = [c.transition for c in ref.others if c.component == 'sensors']
-    assert summary['components']['sensors']['transitions'] == len(sensors)
+    for name in ('sensors', 'alarms'):
+        changes = [c.transition for c in ref.others if c.component == name]
+        assert summary['components'][name]['transitions'] == len(changes)
     # CSV: the contract columns, one row per tension message, in time order.
     with open(tmp / 'out.csv', newline='') as f:
         rows = list(csv.DictReader(f))
@@ -176,6 +178,7 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
         'catenary_monitor: line_03',
         'catenary_monitor: tide',
         'catenary_monitor: sensors',
+        'catenary_monitor: alarms',
         'catenary_monitor: logger',
     ]
     keys = {kv.key for kv in diags[-1][1].status[1].values}

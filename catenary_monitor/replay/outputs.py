@@ -720,8 +720,9 @@ class Tally:
         self.end_ns: Optional[int] = None
         self.ticks = 0
         self.ticks_from_log = False
-        #: The other components' transitions (the tide, the sensors alarm, the dock model).
-        self.components: dict[str, list[Any]] = {'tide': [], 'sensors': []}
+        #: The other components' transitions (the tide, the sensors alarm, the alarm flood
+        #: status, the dock model).
+        self.components: dict[str, list[Any]] = {'tide': [], 'sensors': [], 'alarms': []}
 
     def add(self, result: ReplayResult) -> None:
         """Take the next window's results."""

@@ -198,6 +198,7 @@ class CatenaryMonitor(Node):
         self._log_setup_error = ''
         self._logger_known = False
         self._logger_error: Optional[str] = None
+        self._logger_warning: Optional[str] = None
         self.callback_errors = 0
         self._recovered: queue.Queue[RecoverResult] = queue.Queue()
         self.recovery: list[RecoverResult] = []
@@ -311,6 +312,9 @@ class CatenaryMonitor(Node):
                 max_seconds=self.config.log_rotate_duration,
                 create_dir=self.config.log_create_dir,
                 retry_period=1.0,
+                max_total_bytes=int(self.config.log_max_total_size),
+                max_age=self.config.log_max_age,
+                min_free_bytes=int(self.config.log_min_free_space),
             )
             log.add_metadata(NODE_NAME, self._metadata(self.config))
             if unfinished:
@@ -622,25 +626,48 @@ class CatenaryMonitor(Node):
         """Flush the MCAP chunk when due (bounded loss on SIGKILL); report logger changes."""
         if self.log is not None:
             self.log.tick()
+            self._report_deleted()
         self._check_logger()
         self._report_recovery()
         self._save_fatigue()
+
+    def _report_deleted(self) -> None:
+        """One log line and one events-channel record per file the retention deleted."""
+        assert self.log is not None
+        for path, size, why in self.log.take_deleted():
+            rule = (
+                f'older than log_max_age {self.config.log_max_age:g} s'
+                if why == 'age'
+                else f'the folder above log_max_total_size {self.config.log_max_total_size:g} B'
+            )
+            self.get_logger().warning(
+                f'log retention: deleted {path.name} ({size / 2**20:.1f} MiB): {rule}'
+            )
+            record = {'kind': 'log_deleted', 'path': str(path), 'bytes': size, 'reason': why}
+            self._write(
+                EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), self._stamp()
+            )
 
     def _check_logger(self) -> None:
         """A LoggerHealth event whenever the logger's error changes (and once at start)."""
         error: Optional[str]
         path: Optional[str]
+        warning: Optional[str] = None
         if self.log is None:
             error, path = self._log_setup_error or 'no logger', None
         else:
             current = self.log.current_path
             error, path = self.log.error, str(current) if current else None
-        if self._logger_known and error == self._logger_error:
+            warning = self.log.warning
+        if self._logger_known and (error, warning) == (self._logger_error, self._logger_warning):
             return
         self._logger_known, self._logger_error = True, error
         if error:
             self.get_logger().error(f'MCAP log not written: {error}')
-        self._record(LoggerHealth(self._stamp(), error, path))
+        elif warning and warning != self._logger_warning:
+            self.get_logger().warning(warning)
+        self._logger_warning = warning
+        self._record(LoggerHealth(self._stamp(), error, path, warning))
 
     def _write_record(self, event: Any) -> None:
         """Log a record of a non-input event (or the start) on the events channel."""

@@ -26,6 +26,7 @@ from catenary_monitor.core.config.tide_constituents import Constituent, parse_ta
 
 __all__ = [
     'REQUIRED',
+    'ALARM_CONDITIONS',
     'FLOAT64',
     'TENSION_TYPES',
     'DEPTH_TYPES',
@@ -116,7 +117,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         REQUIRED,
         (
             'Names of the monitored chains (a letter, then letters, digits, _; not tide, sensors,'
-            ' logger, dock, parameters, clock, intake, fatigue, all); each NAME gets the NAME.* '
+            ' alarms, logger, dock, parameters, clock, intake, fatigue, all); each NAME gets the '
+            'NAME.* '
             'parameters below'
         ),
         '',
@@ -162,6 +164,38 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         's',
         1.0,
         604800.0,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_max_total_size',
+        'double',
+        0.0,
+        'Retention: the log folder\'s MCAP files are kept under this size, the oldest finished '
+        'files deleted first, never the open one (0: keep all; at least 2 x log_rotate_size)',
+        'B',
+        0.0,
+        1.0e15,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_max_age',
+        'double',
+        0.0,
+        'Retention: a finished MCAP log file is deleted this long after it ended (0: keep all)',
+        's',
+        0.0,
+        3.2e9,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_min_free_space',
+        'double',
+        1073741824.0,
+        'The logger status is WARN while the log\'s file system has less free space than this '
+        '(before a full disk stops the logging; 0: not checked)',
+        'B',
+        0.0,
+        1.0e15,
         read_only=True,
     ),
     ParamSpec(
@@ -927,6 +961,64 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.01,
         100.0,
     ),
+    # Alarm management (ISA-18.2 / IEC 62682, EEMUA 191): shelving, chattering, floods.
+    ParamSpec(
+        'shelve_max',
+        'double',
+        28800.0,
+        'Longest an operator may shelve an alarm (one shift; 0: shelving disabled)',
+        's',
+        0.0,
+        604800.0,
+    ),
+    ParamSpec(
+        'unshelvable_conditions',
+        'string_array',
+        ('uplift',),
+        'Alarm conditions no operator may shelve (uplift, input, sensor_error, stale, '
+        'anchor_margin, ...); a shelved alarm still annunciates them',
+        '',
+        None,
+        None,
+    ),
+    ParamSpec(
+        'chatter_count',
+        'double',
+        3.0,
+        'An alarm with this many level changes or more within chatter_window is chattering '
+        '(a whole number)',
+        '',
+        2.0,
+        1000.0,
+    ),
+    ParamSpec(
+        'chatter_window',
+        'double',
+        60.0,
+        'The window of the chattering count',
+        's',
+        1.0,
+        86400.0,
+    ),
+    ParamSpec(
+        'flood_count',
+        'double',
+        10.0,
+        'More than this many alarms raised within flood_window is an alarm flood (a whole '
+        'number)',
+        '',
+        1.0,
+        10000.0,
+    ),
+    ParamSpec(
+        'flood_window',
+        'double',
+        600.0,
+        'The window of the flood count',
+        's',
+        1.0,
+        86400.0,
+    ),
     # The dock as one body (core/body): loads by the seed paper's formulas (docs/dock_body.md).
     *(
         ParamSpec(
@@ -1029,12 +1121,33 @@ _PER_LINE = {p.name: p for p in PARAMETERS if p.scope == 'line'}
 ROS_BUILTIN_PARAMETERS = frozenset({'use_sim_time', 'start_type_description_service'})
 _ROS_BUILTIN_PREFIXES = ('qos_overrides.',)
 
+#: Every condition of a line's alarm (core.monitor.alarms.CONDITIONS, then ``stale``): the names
+#: of ``unshelvable_conditions`` and of a shelved condition (test_shelving checks they agree).
+ALARM_CONDITIONS = (
+    'uplift',
+    'input',
+    'anchor_margin',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'time_to_uplift',
+    'inconsistent',
+    'uplift_possible',
+    'drag_margin',
+    'sensor_error',
+    'sensor_warn',
+    'dragging',
+    'fatigue',
+    'stale',
+)
+
 _LINE_NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*\Z')
 #: Names of the monitor's own statuses (``catenary_monitor: tide``, ...) and of the
 #: acknowledgement of every alarm (``all``): no line may take one.
 RESERVED_NAMES = (
     'tide',
     'sensors',
+    'alarms',
     'logger',
     'dock',
     'parameters',
@@ -1311,11 +1424,27 @@ class AlarmConfig:
     tension_timeout: float = _default('tension_timeout')
     depth_timeout: float = _default('depth_timeout')
     diagnostic_rate: float = _default('diagnostic_rate')
+    shelve_max: float = _default('shelve_max')
+    unshelvable_conditions: tuple[str, ...] = _default('unshelvable_conditions')
+    chatter_count: float = _default('chatter_count')
+    chatter_window: float = _default('chatter_window')
+    flood_count: float = _default('flood_count')
+    flood_window: float = _default('flood_window')
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             value = _check(f.name, _GLOBAL[f.name], getattr(self, f.name))
             object.__setattr__(self, f.name, value)
+        for name in ('chatter_count', 'flood_count'):
+            if getattr(self, name) != int(getattr(self, name)):
+                raise ConfigError(name, f'must be a whole number, got {getattr(self, name)!r}')
+        for cond in self.unshelvable_conditions:
+            if cond not in ALARM_CONDITIONS:
+                raise ConfigError(
+                    'unshelvable_conditions',
+                    f'unknown alarm condition {cond!r} '
+                    f'(conditions: {", ".join(ALARM_CONDITIONS)})',
+                )
         try:
             table = parse_table(self.tide_table)
         except ValueError as err:
@@ -1365,6 +1494,9 @@ _TOP_LEVEL = (
     'log_dir',
     'log_rotate_size',
     'log_rotate_duration',
+    'log_max_total_size',
+    'log_max_age',
+    'log_min_free_space',
     'log_create_dir',
     'allow_runtime_changes',
     'acknowledge_from_ros',
@@ -1394,6 +1526,9 @@ class MonitorConfig:
     log_rotate_size: float = _default('log_rotate_size')  # MiB
     log_rotate_duration: float = _default('log_rotate_duration')  # s
     log_create_dir: bool = _default('log_create_dir')
+    log_max_total_size: float = _default('log_max_total_size')  # B
+    log_max_age: float = _default('log_max_age')  # s
+    log_min_free_space: float = _default('log_min_free_space')  # B
     depth_type: str = _default('depth_type')
     water_density: float = _default('water_density')  # kg/m^3
     atmospheric_pressure: float = _default('atmospheric_pressure')  # Pa
@@ -1419,6 +1554,13 @@ class MonitorConfig:
             object.__setattr__(self, key, _check(key, _GLOBAL[key], getattr(self, key)))
         _check_topic('depth_topic', self.depth_topic)
         _check_choice('depth_type', self.depth_type, DEPTH_TYPES)
+        rotate = self.log_rotate_size * 2**20
+        if 0.0 < self.log_max_total_size < 2.0 * rotate:
+            raise ConfigError(
+                'log_max_total_size',
+                f'{self.log_max_total_size:g} B is below 2 x log_rotate_size ({2 * rotate:g} B): '
+                'the open file and a finished one must fit',
+            )
         if not self.log_dir:
             raise ConfigError('log_dir', 'must not be empty')
         _check_geometry(self.lines)
@@ -1632,6 +1774,9 @@ NON_DECIDING = frozenset(
         'log_dir',
         'log_rotate_size',
         'log_rotate_duration',
+        'log_max_total_size',
+        'log_max_age',
+        'log_min_free_space',
         'log_create_dir',
         'allow_runtime_changes',
         'acknowledge_from_ros',
@@ -1660,6 +1805,8 @@ def parameters_markdown(group: str = '') -> str:
             default = 'required'
         elif spec.optional:
             default = 'not set (NaN)'
+        elif isinstance(spec.default, tuple):
+            default = f'`[{", ".join(spec.default)}]`'
         else:
             default = f'`{spec.default_for("NAME")!r}`'
         if spec.type != 'double':

@@ -219,6 +219,7 @@ class AlarmState:
     entered: tuple[float, ...] = (math.nan,) * 4  # s, when each severity rank was last entered
     input_message: str = ''  # last impossible-input sentence, while its alarm holds
     suppressed: bool = True  # STALE only by a common cause (suppressed by design)
+    stale: bool = True  # an input stale or never received (the level may still be ERROR)
 
 
 class Transition(NamedTuple):
@@ -333,6 +334,7 @@ class LineAlarm:
             entered=entered,
             input_message=input_message if active[1] else '',
             suppressed=suppressed,
+            stale=stale,
         )
         return new, events
 
@@ -721,7 +723,11 @@ class LevelSeries:
         own = stale_t & ~np.isnan(x['tension_stamp'])
         #: Per update: STALE only by a common cause (suppressed by design).
         self.suppressed = (levels == Level.STALE) & ~own
+        #: Per update: an input stale or never received.
+        self.stale = stale_t | stale_d
         self._bad: np.ndarray | None = None  # updates with a solver status, when first asked
+        #: The updates at which the level changed (one per transition, in order).
+        self.changed_at = np.zeros(0, np.int64)
         self.transitions, self._entered = self._walk()
 
     def _held(self, i: int) -> str:
@@ -764,6 +770,7 @@ class LevelSeries:
     def _walk(self) -> tuple[list[Transition], tuple[float, ...]]:
         """Transitions (with messages and episode durations) from the initial state."""
         changed = np.flatnonzero(np.diff(self.levels, prepend=np.int8(self._initial.level)))
+        self.changed_at = changed
         transitions: list[Transition] = []
         entered, old = self._initial.entered, self._initial.level
         for i in changed.tolist():
@@ -789,6 +796,7 @@ class LevelSeries:
             entered=self._entered,
             input_message=held,
             suppressed=bool(self.suppressed[-1]),
+            stale=bool(self.stale[-1]),
         )
 
 

@@ -133,9 +133,7 @@ def cycle_damage(tension_range: float, curve: Curve) -> float:
     return float((abs(tension_range) * curve.scale) ** curve.m * curve.inv_a)
 
 
-def _push(
-    s: list[float], r: list[float], h: list[float], value: float, curve: Curve
-) -> None:
+def _push(s: list[float], r: list[float], h: list[float], value: float, curve: Curve) -> None:
     """One sample into the residue ``r`` and its halves ``h``; ``s`` is ``[closed, fixed]``
     (all changed in place). The same operations, in the same order, as the C loop."""
     n = len(r)
