@@ -734,8 +734,9 @@ PARAMETERS: tuple[ParamSpec, ...] = (
             (
                 'stamp_jitter',
                 0.25,
-                'spike: a reading\'s stamp may be off by this much (delivery bunches samples); '
-                'a step is compared with the rate x (dt + this)',
+                'spike: a Float64 reading\'s arrival stamp may be off by this much (delivery '
+                'bunches samples); a step is compared with the rate x (dt + this); stamped '
+                'inputs use their header stamps and no jitter',
                 's',
                 0.0,
                 10.0,

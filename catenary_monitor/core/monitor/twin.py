@@ -62,6 +62,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     OUTPUT_FIELDS,
     VALUE_FIELDS,
     Change,
+    Coalesced,
     ComponentStatus,
     LineState,
     MonitorCore,
@@ -1985,6 +1986,7 @@ def run_log(
     are the pieces' in order, then the events' (not merged in time: see
     :class:`SnapshotColumns`).
     """
+    window, events, marks = _leave_out_coalesced(core, window, list(events))
     pieces: list[WindowResult] = []
     extra: list[Snapshot | SnapshotColumns] = []
     others: list[Change] = []
@@ -2005,6 +2007,7 @@ def run_log(
             if snapshots and step.snapshot is not None:
                 extra.append(step.snapshot)
         lo = hi
+    _keep_marks(core, marks, events)
     lines = [concat_lines([p.lines[k] for p in pieces]) for k in range(len(core.state.lines))]
     tide = [tr for p in pieces for tr in p.tide]
     others = sorted(
@@ -2025,6 +2028,76 @@ def run_log(
         ),
         core,
     )
+
+
+def _leave_out_coalesced(
+    core: MonitorCore, window: Window, events: list[Any]
+) -> tuple[Window, list[Any], list[Coalesced]]:
+    """The window without the samples the node coalesced (:class:`Coalesced` records: each
+    leaves out its input's samples stamped after it and at most its ``last_ns``, and the core
+    carries the newest bound into the next window), the other events, and the records."""
+    marks = [e for e in events if isinstance(e, Coalesced)]
+    if marks:
+        events = [e for e in events if not isinstance(e, Coalesced)]
+    carried = [line.coalesced_until for line in core.state.lines]
+    if not marks and max(carried + [core.state.depth_coalesced_until]) < 0:
+        return window, events, marks
+    index = {line.config.name: k for k, line in enumerate(core.state.lines)}
+    keep = [
+        _kept(column[0], carried[k], [m for m in marks if index.get(m.line or '') == k])
+        for k, column in enumerate(window.tensions)
+    ]
+    d_keep = _kept(
+        window.depth[0], core.state.depth_coalesced_until, [m for m in marks if m.line is None]
+    )
+
+    def cut(array: Optional[np.ndarray], kept: Optional[np.ndarray]) -> Optional[np.ndarray]:
+        return array if array is None or kept is None else array[kept]
+
+    tension_stamps = window.tension_stamps
+    if tension_stamps is not None:
+        tension_stamps = [cut(s, kept) for s, kept in zip(tension_stamps, keep)]
+    return (
+        Window(
+            [
+                column if kept is None else (column[0][kept], column[1][kept])
+                for column, kept in zip(window.tensions, keep)
+            ],
+            window.depth if d_keep is None else (window.depth[0][d_keep], window.depth[1][d_keep]),
+            window.ticks,
+            tension_stamps,
+            cut(window.depth_stamps, d_keep),
+        ),
+        events,
+        marks,
+    )
+
+
+def _keep_marks(core: MonitorCore, marks: list[Coalesced], events: list[Any]) -> None:
+    """What the core keeps of the window's coalescing records (those since its last start):
+    each input's newest bound, and the newest stamp."""
+    starts = [e.stamp_ns for e in events if isinstance(e, Start)]
+    kept = [m for m in marks if not starts or m.stamp_ns > max(starts)]
+    if not kept:
+        return
+    last = core.state.last_ns
+    for mark in kept:
+        core.step(mark)
+    core.state.last_ns = max(last, max(m.stamp_ns for m in kept))
+
+
+def _kept(t: np.ndarray, carried: int, marks: list[Coalesced]) -> Optional[np.ndarray]:
+    """Which samples stamped ``t`` [ns] stay: not those at most ``carried`` nor inside a
+    record's ``(stamp_ns, last_ns]`` (None: all of them)."""
+    out = t <= carried
+    if marks:
+        starts = np.array([m.stamp_ns for m in marks], np.int64)
+        ends = np.array([m.last_ns for m in marks], np.int64)
+        order = np.argsort(starts, kind='stable')
+        starts, ends = starts[order], ends[order]
+        at = np.searchsorted(starts, t, 'left') - 1  # the newest record before each sample
+        out |= (at >= 0) & (t <= ends[np.maximum(at, 0)])
+    return ~out if out.any() else None
 
 
 def _ids(core: MonitorCore) -> dict[str, str]:
