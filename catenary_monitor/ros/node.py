@@ -125,6 +125,7 @@ _PARAM_TYPES = {
     'bool': Parameter.Type.BOOL,
     'string': Parameter.Type.STRING,
     'string_array': Parameter.Type.STRING_ARRAY,
+    'double_array': Parameter.Type.DOUBLE_ARRAY,
 }
 _RELIABLE = QoSProfile(depth=10)
 #: The message class of each input type (core.config.parameters.TENSION_TYPES, DEPTH_TYPES).
@@ -199,7 +200,9 @@ def _descriptor(spec: ParamSpec, name: str) -> ParameterDescriptor:
         read_only=spec.read_only,
     )
     # An optional parameter (default NaN: not set) cannot carry a ROS range; config checks it.
-    if (spec.min is not None or spec.max is not None) and spec.default == spec.default:
+    if spec.type == 'double_array':  # each element's range is config's to check
+        constraints.append(f'each element in [{spec.min:g}, {spec.max:g}]')
+    elif (spec.min is not None or spec.max is not None) and spec.default == spec.default:
         low = -sys.float_info.max if spec.min is None else float(spec.min)
         high = sys.float_info.max if spec.max is None else float(spec.max)
         if not spec.optional:  # rclpy's range check refuses NaN, an optional's "not given"
@@ -270,8 +273,10 @@ class CatenaryMonitor(Node):
         values = all_parameters(config)
         for name, spec in expand_parameters([line.name for line in config.lines]):
             value = values[name]
-            if spec.type == 'string_array':
+            if spec.type in ('string_array', 'double_array'):
                 value = list(value)
+            if spec.type == 'double_array' and not value:  # [] would be typed a byte array
+                value = Parameter.Type.DOUBLE_ARRAY
             self.declare_parameter(name, value, _descriptor(spec, name), ignore_override=True)
         for line in config.lines:
             if line.ea is not None:
