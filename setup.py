@@ -72,6 +72,8 @@ setup(
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config', glob('config/*.yaml')),
         ('share/' + package_name + '/foxglove', glob('foxglove/*.json')),
+        ('share/' + package_name + '/launch', glob('launch/*.launch.xml')),
+        ('share/' + package_name + '/deploy', glob('deploy/*.service')),
     ],
     python_requires='>=3.10',
     install_requires=[
@@ -82,6 +84,9 @@ setup(
         'matplotlib>=3.7',
         'mcap>=1.1',
         'mcap-ros2-support>=0.5',
+        # The MCAP reader's own chunk decompression (io/mcap_read.py).
+        'zstandard',
+        'lz4',
         # The console's HTTP/1.1 framing (pure Python, no dependencies).
         'h11>=0.14',
         'ros-jazzy-rclpy[fastrtps]',

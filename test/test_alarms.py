@@ -582,6 +582,9 @@ def test_diagnostic_values_keys_and_exact_strings():
         'implied_anchor_distance',
         'tide_margin_at_length',
         'drag_state',
+        'fatigue_damage',
+        'fatigue_damage_rate',
+        'fatigue_life_left',
     ]
     assert all(isinstance(v, str) and float(v) == float(fields_[k]) for k, v in values)
     from_object = dict(diagnostic_values(SimpleNamespace(depth=20.85)))
@@ -633,6 +636,7 @@ def test_margin_codes_match_the_scalar() -> None:
             n,
         )
     keys = ('uplift_force', 'uplift_force_upper', 'inconsistent', 'sensor_state', 'drag_state')
+    keys += ('fatigue_damage',)
     for key in keys:
         x[key] = np.zeros(n)
     stale = rng.random(n) < 0.3

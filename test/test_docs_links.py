@@ -8,7 +8,8 @@ Read from the Markdown text and the sources' syntax trees, with no import of the
 ROS needed): links ``[t](target)``, ``![t](target)`` and ``<img src=...>`` outside fenced code
 blocks; paths such as ``core/monitor/alarms.py`` or ``test/test_batch.py::test_x`` anywhere
 outside fenced code blocks. docs/CHANGES.md is history (it names modules as they were called):
-its links only. Web links are not fetched.
+its links only. The shipped params files (config/*.yaml) are held to the same in their comments.
+Web links are not fetched.
 """
 
 import ast
@@ -257,6 +258,26 @@ def _check_name(code: str) -> str:
 @pytest.mark.parametrize('page', PAGES, ids=[p.name for p in PAGES])
 def test_every_link_path_and_name_in_the_docs_exists(page):
     problems = _problems(page)
+    assert not problems, '\n'.join(problems)
+
+
+CONFIGS = sorted((ROOT / 'config').glob('*.yaml'))
+
+
+@pytest.mark.parametrize('config', CONFIGS, ids=[p.name for p in CONFIGS])
+def test_the_example_params_name_files_and_modules_that_exist(config):
+    """The shipped params files' comments: their paths and ``catenary_monitor.x.y`` names."""
+    problems = []
+    for n, line in enumerate(config.read_text(encoding='utf-8').splitlines(), 1):
+        comment = line.partition('#')[2]
+        problems += [
+            f'{config.name}:{n}: no file {m.group(1)}'
+            for m in _PATH.finditer(comment)
+            if _resolve_path(m.group(1)) is None
+        ]
+        for name in re.findall(r'\bcatenary_monitor(?:\.\w+)+', comment):
+            if why := resolve_dotted(name):
+                problems.append(f'{config.name}:{n}: {why}')
     assert not problems, '\n'.join(problems)
 
 

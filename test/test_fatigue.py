@@ -160,3 +160,137 @@ def test_residue_is_bounded():
 )
 def test_damaged_records_are_refused(record):
     assert fatigue.from_record(record, fatigue.Curve()) is None
+
+
+# --- through the monitor: live, replay, the store ------------------------------------------------
+
+
+def _config(**line):
+    from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
+
+    base = dict(name='ch', weight=1300.0, anchor_distance=120.0, mbl=4.827e6)
+    base.update(line)
+    return MonitorConfig(lines=(LineConfig(**base),))
+
+
+def _tensions(n, seed=5):
+    rng = np.random.default_rng(seed)
+    return 4.0e5 + 6e4 * np.sin(np.arange(n) * 0.7) + rng.normal(0.0, 8e3, n)
+
+
+def test_the_monitor_counts_every_tension_and_its_replay_agrees():
+    """Every tension sample through MonitorCore: fatigue_damage in the outputs is the
+    independent rainflow + Miner count of the samples so far (1e-9); the vectorized twin
+    (replay) gives the same bits; the seed's curve scaled to this MBL."""
+    from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore
+    from catenary_monitor.core.monitor.monitor_core import Tension, Tick
+    from catenary_monitor.core.monitor.twin import recompute
+
+    config = _config()
+    line = config.lines[0]
+    assert line.stress_per_tension == pytest.approx(80.5 * 12421e3 / 4.827e6)
+    curve = fatigue.Curve.of(line)
+    x = _tensions(1500)
+    stamps = (np.arange(x.size) + 1) * 500_000_000
+    core = MonitorCore(config, 0)
+    core.step(Depth(1, 20.85))
+    got = []
+    for k, (t, v) in enumerate(zip(stamps.tolist(), x.tolist())):
+        got.append(dict(zip(OUTPUT_FIELDS, core.step(Tension(t, 0, v)).outputs[0].values)))
+        if k % 2:
+            core.step(Tick(t + 1))
+    damage = np.array([g['fatigue_damage'] for g in got])
+    for n in (3, 100, 1499):
+        assert damage[n - 1] == pytest.approx(_miner(x[:n], curve), rel=1e-9)
+    assert damage[-1] > damage[100] > 0
+    replay = recompute(
+        config,
+        {'ch': (stamps, x)},
+        (np.array([1], np.int64), np.array([20.85])),
+        tick_ns=stamps[1::2] + 1,
+        start_ns=0,
+    )
+    r = replay.lines[0]
+    assert np.array_equal(r.values['fatigue_damage'][r.tension_rows], damage)
+    assert core.state.lines[0].fatigue.closed > 0
+
+
+def test_the_store_carries_the_count_across_a_restart_and_replay_follows(tmp_path):
+    """Run, save the store, restart (a new core and the store's FatigueStore event): the count
+    goes on as if never stopped; replaying the log's events (Start, FatigueStore) gives the
+    restarted core's bits."""
+    from catenary_monitor.core.monitor.monitor_core import Depth, FatigueStore, MonitorCore
+    from catenary_monitor.core.monitor.monitor_core import Start, Tension, event_record
+    from catenary_monitor.core.monitor.monitor_core import parse_event_record
+    from catenary_monitor.core.monitor.twin import Window, run_log
+    from catenary_monitor.io import fatigue_store
+
+    config = _config(fatigue_damage_initial=0.125)
+    x = _tensions(1000, seed=9)
+    stamps = (np.arange(x.size) + 10) * 10**9
+    first = MonitorCore(config, 0)
+    first.step(Depth(1, 20.85))
+    loaded = fatigue_store.load(tmp_path, ['ch'])
+    assert loaded.state == 'new'
+    first.step(FatigueStore(2, loaded.state, loaded.message, (('ch', None),)))
+    for t, v in zip(stamps[:600].tolist(), x[:600].tolist()):
+        first.step(Tension(t, 0, v))
+    fatigue_store.save(tmp_path, {'ch': fatigue.to_record(first.state.lines[0].fatigue)})
+    loaded = fatigue_store.load(tmp_path, ['ch'])
+    assert loaded.state == 'loaded'
+    restart = int(stamps[600]) - 5
+    event = FatigueStore(restart + 1, 'loaded', loaded.message, (('ch', loaded.lines['ch']),))
+    event = parse_event_record(event.stamp_ns, __import__('json').dumps(event_record(event)))
+    second = MonitorCore(config, restart)
+    second.step(Depth(restart + 2, 20.85))
+    second.step(event)
+    for t, v in zip(stamps[600:].tolist(), x[600:].tolist()):
+        second.step(Tension(t, 0, v))
+    whole = _miner(x, fatigue.Curve.of(config.lines[0])) + 0.125
+    assert second.state.lines[0].fatigue_values[0] == pytest.approx(whole, rel=1e-9)
+    # replay: the same events through the twin
+    core = MonitorCore(config, 0)
+    window = Window(
+        [(stamps, x)],
+        (np.array([1, restart + 2], np.int64), np.array([20.85, 20.85])),
+        np.zeros(0, np.int64),
+    )
+    first_event = FatigueStore(2, 'new', 'new', (('ch', None),))
+    _, end = run_log(core, window, [first_event, Start(restart), event])
+    assert end.state.lines[0].fatigue == second.state.lines[0].fatigue
+    assert end.state.lines[0].fatigue_values[0] == second.state.lines[0].fatigue_values[0]
+    assert np.isnan(end.state.lines[0].fatigue_values[1:]).all()  # under an hour: no rate
+
+
+def test_store_states_are_named(tmp_path):
+    from catenary_monitor.io import fatigue_store
+
+    record = {'closed': 0.25, 'residue': [1e5, 2e5], 'marks': [[0.0, 0.2]]}
+    assert fatigue_store.load(tmp_path / 'none', ['a']).state == 'new'
+    (tmp_path / 'catenary_monitor_0.mcap').write_bytes(b'')
+    missing = fatigue_store.load(tmp_path, ['a'])
+    assert missing.state == 'missing' and 'replay the log folder' in missing.message
+    fatigue_store.save(tmp_path, {'a': record})
+    fatigue_store.save(tmp_path, {'a': dict(record, closed=0.5)})
+    assert fatigue_store.load(tmp_path, ['a', 'b']).lines['a']['closed'] == 0.5
+    assert 'b not in it' in fatigue_store.load(tmp_path, ['a', 'b']).message
+    (tmp_path / 'chain_fatigue.json').write_text('{"version": 1, "lines": {"a": {"closed": "x"}}')
+    damaged = fatigue_store.load(tmp_path, ['a'])
+    assert damaged.state == 'damaged' and damaged.lines['a']['closed'] == 0.25  # the copy
+    assert (tmp_path / 'chain_fatigue.json.damaged-1').exists()
+    (tmp_path / 'chain_fatigue.json.prev').write_text('garbage')
+    (tmp_path / 'chain_fatigue.json').write_text('{"version": 1, "lines": {"a": 3}}')
+    worse = fatigue_store.load(tmp_path, ['a'])
+    assert worse.state == 'damaged' and worse.lines == {}
+    assert 'damaged record of a' in worse.message and 'restarted from' in worse.message
+    assert (tmp_path / 'chain_fatigue.json.damaged-2').exists()
+
+
+def test_fatigue_doc_parameter_table_is_generated():
+    from pathlib import Path
+
+    from catenary_monitor.core.config.parameters import parameters_markdown
+
+    page = (Path(__file__).resolve().parent.parent / 'docs' / 'fatigue.md').read_text()
+    begin, end = '<!-- fatigue-parameters:begin -->\n', '<!-- fatigue-parameters:end -->'
+    assert page.split(begin, 1)[1].split(end, 1)[0] == parameters_markdown('fatigue')

@@ -259,6 +259,17 @@ TEXT_KEYS = {
     'acknowledged_publisher',
     'sensor_state',
     'tide_forecast',
+    'store_state',
+    # Alarm management: shelving, chattering, the flood status.
+    'shelved',
+    'shelved_condition',
+    'shelved_by',
+    'shelved_publisher',
+    'chattering',
+    'flood',
+    'first_out',
+    'unshelvable_conditions',
+    'shelve_answer',
 }
 
 

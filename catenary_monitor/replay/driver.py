@@ -329,6 +329,7 @@ def _stream(
                     bool(state.ticks_from_log),
                     state.start_ns or 0,
                     part_events,
+                    alarm_events=result.alarm_events,
                 )
                 sink(replay, part)
             state.windows += 1
@@ -641,6 +642,7 @@ def _joined(parts: list[ReplayResult], state: StreamState) -> ReplayResult:
         parts[0].ticks_from_log,
         parts[0].started_ns,
         [e for p in parts for e in p.events],
+        alarm_events=[e for p in parts for e in p.alarm_events],
     )
 
 

@@ -12,10 +12,20 @@ would share a reading), used as the MCAP log time of everything the event produc
 that are not input messages (ticks, logger changes, parameter changes) are recorded on the
 MCAP-only channel ``/catenary_monitor/events``, so replay redoes every step exactly.
 
+Intake: a sample callback takes every sample waiting on its input (the one the executor handed
+over, then the subscription's queue until it is empty) and logs each one. While the node keeps
+up that is one sample per callback, stepped at once; after a hiccup (the oldest waited at most
+:data:`COALESCE_AFTER`) each is stepped in turn. When the node is behind, only the newest is
+stepped and the older ones are coalesced: logged, counted, and recorded (a :class:`Coalesced`
+record before them) so that replay leaves out exactly those; never a queue worked through late.
+So the executor's queue never holds more than about one round of callbacks, and the timers (the
+periodic tick, ``/diagnostics``) keep their time whatever the input rate.
+
 A wall-clock (steady) watchdog runs once a second whatever the ROS clock does: with
 ``use_sim_time`` it reports a ROS clock that stopped (ClockHealth events, each with a
 ``/diagnostics`` array), and it hands the core the intake counts (Intake events: samples
-received, samples lost before the node took them, time spent in the sample callbacks).
+handled, coalesced, and lost before the node took them, time spent in the sample callbacks);
+the first sample not handled brings the counts forward (at once, or at the next periodic tick).
 
 Run it as ``monitor --ros-args --params-file FILE`` (``ros2 run catenary_monitor monitor ...``),
 ``python -m catenary_monitor.ros.node --ros-args --params-file FILE`` or
@@ -28,6 +38,7 @@ import json
 import os
 import queue
 import signal
+import struct
 import sys
 import threading
 import time
@@ -82,8 +93,10 @@ from catenary_monitor.core.monitor.monitor_core import (
     Acknowledge,
     Change,
     ClockHealth,
+    Coalesced,
     Depth,
     Event,
+    FatigueStore,
     Intake,
     LoggerHealth,
     MonitorCore,
@@ -95,7 +108,9 @@ from catenary_monitor.core.monitor.monitor_core import (
     Tick,
     event_record,
 )
+from catenary_monitor.core.monitor.fatigue import to_record
 from catenary_monitor.core.physics import elastic
+from catenary_monitor.io import fatigue_store
 from catenary_monitor.io.mcap_log import McapLogger
 from catenary_monitor.io.mcap_recover import RecoverResult, recover_in_child, unfinished_files
 
@@ -116,11 +131,12 @@ _MESSAGE_CLASSES: dict[str, Any] = {
     readings.RANGE: Range,
 }
 #: The input subscriptions: sensor-data QoS (best effort) with a deeper queue than its 5, so a
-#: node held off the CPU for up to about 2 s at 50 Hz loses no sample (bench-soak measured
-#: 0.7 % lost with depth 5 on a loaded machine).
+#: node held off the CPU for up to 5 s at 200 Hz loses no sample before it is logged
+#: (bench-soak measured 0.7 % lost with depth 5 on a loaded machine; bench-flood, 12 x 200 Hz
+#: at a load of 14 on 2 cores, 4 % with 100 and none with 1000, the RSS unchanged).
 _SAMPLES = QoSProfile(
     history=qos_profile_sensor_data.history,
-    depth=100,
+    depth=1000,
     reliability=qos_profile_sensor_data.reliability,
     durability=qos_profile_sensor_data.durability,
 )
@@ -130,6 +146,19 @@ WATCHDOG_PERIOD = 1.0
 INTAKE_HEARTBEAT = 60.0
 #: The same with a sample rate configured: the counts are checked against it this often [s].
 INTAKE_RATE_HEARTBEAT = 10.0
+#: The most samples one callback takes off an input's queue (the queue holds _SAMPLES.depth).
+DRAIN_MAX = 1000
+#: Samples that waited longer than this [s] when their callback ran mean the node is behind:
+#: the older ones of the input's waiting samples are then coalesced (logged, not stepped) and
+#: only the newest is stepped; a shorter hiccup is caught up with, sample by sample.
+COALESCE_AFTER = 0.25
+#: ... and so do samples waiting while the sample callbacks took more than this share of the
+#: last CATCH_UP_WINDOW [s] of wall time: catching up would take the time the timers need.
+CATCH_UP_BUSY = 0.5
+CATCH_UP_WINDOW = 0.25
+#: A sample callback runs the periodic tick (the watchdog) itself once its timer is this many
+#: periods late (waiting in the executor's queue behind a flood's callbacks).
+LATE_TIMER = 1.25
 
 
 def _events_executor_wanted() -> bool:
@@ -188,13 +217,20 @@ class CatenaryMonitor(Node):
         )
         self.config = self._declare_parameters(log_dir)
         self._node_clock = self.get_clock()  # not _clock: rclpy's Node owns that name
+        # use_sim_time cannot change at runtime (refused): without it the node clock is the
+        # system clock, read without building an rclpy Time each time.
+        self._system_time = not self.get_parameter('use_sim_time').value
         self._last_ns = 0
         self._log_setup_error = ''
         self._logger_known = False
         self._logger_error: Optional[str] = None
+        self._logger_warning: Optional[str] = None
         self.callback_errors = 0
         self._recovered: queue.Queue[RecoverResult] = queue.Queue()
         self.recovery: list[RecoverResult] = []
+        # The fatigue store, read before this run's first log file exists (a new folder).
+        names = [line.name for line in self.config.lines]
+        self._fatigue_found = fatigue_store.load(self._log_dir(), names)
         self.log = self._open_log()
         self._init_intake()
         self._create_interfaces()
@@ -207,6 +243,7 @@ class CatenaryMonitor(Node):
             logger_id=self._log_dir(),
         )
         self._write_record(Start(start))
+        self._load_fatigue()
         self._check_logger()
         self._clock_ros, self._clock_wall = start, time.monotonic()
         self._clock_state: Optional[bool] = None  # stopped? (None: not reported yet)
@@ -243,6 +280,47 @@ class CatenaryMonitor(Node):
     def _log_dir(self) -> str:
         return os.path.expanduser(self.config.log_dir)
 
+    # ------------------------------------------------------------------ fatigue store
+    def _load_fatigue(self) -> None:
+        """Read the fatigue store beside the log: one recorded FatigueStore event (each line's
+        stored count, so replay carries the same), one log line unless it was read clean."""
+        names = [line.name for line in self.config.lines]
+        found = self._fatigue_found
+        lines = tuple((name, found.lines.get(name)) for name in names)
+        if found.state in ('loaded', 'new'):
+            self.get_logger().info(found.message)
+        else:
+            self.get_logger().warning(f'FATIGUE {found.state}: {found.message}')
+        self._record(FatigueStore(self._stamp(), found.state, found.message, lines))
+        self._fatigue_saved = time.monotonic()
+        self._fatigue_failed: Optional[str] = None
+
+    def _save_fatigue(self, force: bool = False) -> None:
+        """Write the store every SAVE_PERIOD (and at the end); a failed write is a recorded
+        FatigueStore event (WARN) and one line, a write that works again another."""
+        wall = time.monotonic()
+        if not force and wall - self._fatigue_saved < fatigue_store.SAVE_PERIOD:
+            return
+        self._fatigue_saved = wall
+        lines = {
+            line.config.name: to_record(line.fatigue) for line in self.core.state.lines
+        }
+        extra = {'config_hash': config_hash(self.config), 'saved_ns': self._last_ns}
+        try:
+            path = fatigue_store.save(self._log_dir(), lines, extra)
+        except (OSError, ValueError) as err:
+            if self._fatigue_failed is None:
+                text = f'fatigue store not written: {_one_line(err)}'
+                self.get_logger().error(text)
+                self._record(FatigueStore(self._stamp(), 'write_failed', text))
+            self._fatigue_failed = str(err)
+            return
+        if self._fatigue_failed is not None:
+            self._fatigue_failed = None
+            text = f'fatigue store {path} written again'
+            self.get_logger().info(text)
+            self._record(FatigueStore(self._stamp(), 'saved', text))
+
     def _open_log(self) -> Optional[McapLogger]:
         """The MCAP logger (never raises on disk errors: those become its ``error``)."""
         try:
@@ -258,6 +336,9 @@ class CatenaryMonitor(Node):
                 max_seconds=self.config.log_rotate_duration,
                 create_dir=self.config.log_create_dir,
                 retry_period=1.0,
+                max_total_bytes=int(self.config.log_max_total_size),
+                max_age=self.config.log_max_age,
+                min_free_bytes=int(self.config.log_min_free_space),
             )
             log.add_metadata(NODE_NAME, self._metadata(self.config))
             if unfinished:
@@ -348,9 +429,16 @@ class CatenaryMonitor(Node):
         n = len(self.config.lines) + 1
         self._received = [0] * n
         self._dropped = [0] * n
+        self._coalesced = [0] * n
         self._last_seq: list[Optional[int]] = [None] * n
+        self._unsequenced = [0] * n  # samples taken without a sequence number since _last_seq
+        self._lost_unseen = [0] * n  # samples DDS reported lost, their gap not seen yet
+        self._gap_unreported = [0] * n  # samples of seen gaps DDS has not reported (yet)
+        self._intake_due = False  # a sample was not handled while the intake said OK
         self._busy = 0.0  # s of wall time in the sample callbacks since the last Intake event
         self._busy_tick = 0.0  # the same since the last watchdog period
+        self._busy_recent, self._recent_start = 0.0, time.monotonic()  # ... _busy_share()'s
+        self._recent_share = 0.0
         self._intake_wall = time.monotonic()
         self._intake_sent = False
         a = self.config.alarm
@@ -360,11 +448,12 @@ class CatenaryMonitor(Node):
         # publisher's sequence numbers (gaps = samples lost) only with the other executor.
         self._with_info = not (_events_executor_wanted() and _has_events_executor())
 
-    def _sample_callback(self, handler: Any, k: int) -> Any:
-        """The subscription callback for input ``k`` (sequence-checked where possible)."""
+    def _sample_callback(self, k: int) -> Any:
+        """The subscription callback for input ``k`` (with the MessageInfo where the executor
+        can hand it over)."""
         if self._with_info:
-            return partial(self._on_sample_info, handler, k)
-        return handler
+            return partial(self._on_sample_info, k)
+        return partial(self._on_sample, k)
 
     def _sample_events(self, k: int) -> SubscriptionEventCallbacks:
         return SubscriptionEventCallbacks(message_lost=partial(self._on_lost, k))
@@ -376,15 +465,17 @@ class CatenaryMonitor(Node):
         self._tension_topics: list[str] = []
         self._output_topics: list[str] = []
         self._output_pubs: list[Any] = []
+        self._subs: list[Any] = []
         for k, line in enumerate(cfg.lines):
             sub = self.create_subscription(
                 _MESSAGE_CLASSES[line.tension_type],
                 line.tension_topic,
-                self._sample_callback(partial(self._on_tension, k), k),
+                self._sample_callback(k),
                 _SAMPLES,
                 event_callbacks=self._sample_events(k),
                 raw=True,
             )
+            self._subs.append(sub)
             self._tension_topics.append(sub.topic_name)
             self._register(sub.topic_name, line.tension_type, 'sensor_data')
             pub = self.create_publisher(Float64MultiArray, f'~/{line.name}/outputs', _RELIABLE)
@@ -395,11 +486,12 @@ class CatenaryMonitor(Node):
         sub = self.create_subscription(
             _MESSAGE_CLASSES[cfg.depth_type],
             cfg.depth_topic,
-            self._sample_callback(self._on_depth, n),
+            self._sample_callback(n),
             _SAMPLES,
             event_callbacks=self._sample_events(n),
             raw=True,
         )
+        self._subs.append(sub)
         self._depth_topic = sub.topic_name
         self._register(self._depth_topic, cfg.depth_type, 'sensor_data')
         self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', _RELIABLE)
@@ -411,72 +503,181 @@ class CatenaryMonitor(Node):
                 label=','.join(OUTPUT_FIELDS), size=len(OUTPUT_FIELDS), stride=len(OUTPUT_FIELDS)
             )
         ]
+        self._output_cdr = OutputEncoder(self._output)
         self._ack_sub = self.create_subscription(
             String, ACKNOWLEDGE_TOPIC, self._on_acknowledge, _RELIABLE
         )
         self._diag_timer = self.create_timer(1.0 / cfg.alarm.diagnostic_rate, self._on_period)
+        self._period_ns = int(1e9 / cfg.alarm.diagnostic_rate)
+        self._tick_ns = self._now_ns()  # the newest tick's stamp
+        self._watchdog_wall = time.monotonic()
         # Wall-clock timers: they run while a simulated ROS clock stands still.
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._log_timer = self.create_timer(0.25, self._on_log_timer, clock=steady)
-        self._watchdog = self.create_timer(WATCHDOG_PERIOD, self._on_watchdog, clock=steady)
+        self._watchdog = self.create_timer(WATCHDOG_PERIOD, self._on_watchdog_timer, clock=steady)
 
     # ------------------------------------------------------------------ callbacks
+    def _now_ns(self) -> int:
+        """The node clock [ns] (the system clock read directly unless ``use_sim_time``)."""
+        if self._system_time:
+            return time.time_ns()
+        return self._node_clock.now().nanoseconds
+
     def _stamp(self) -> int:
         """A distinct, increasing event stamp (ns): the node clock, or 1 ns after the last one."""
-        now = self._node_clock.now().nanoseconds
+        now = self._now_ns()
         self._last_ns = now if now > self._last_ns else self._last_ns + 1
         return self._last_ns
 
     @_guarded
-    def _on_tension(self, line: int, data: bytes) -> None:
-        """A hook tension sample: log the message as it came, one core event (the reading in
-        N, at its header stamp where it has one), publish what it says."""
-        t0 = time.perf_counter()
-        self._received[line] += 1
-        stamp = self._stamp()
-        self._write(self._tension_topics[line], data, stamp)
-        lc = self.config.lines[line]
-        fields, sample_ns = _fields(data, lc.tension_type)
-        self._run(Tension(stamp, line, float(readings.tension_si(lc, fields)), sample_ns))
-        took = time.perf_counter() - t0
-        self._busy += took
-        self._busy_tick += took
+    def _on_sample(self, k: int, data: bytes) -> None:
+        """A sample of input ``k`` (a line, then the depth), and every one waiting behind it
+        (:meth:`_take`)."""
+        self._unsequenced[k] += 1
+        self._take(k, data, None)
 
     @_guarded
-    def _on_depth(self, data: bytes) -> None:
-        """A depth sample: log the message as it came, one core event (the depth in m, at its
-        header stamp where it has one), publish what it says."""
+    def _on_sample_info(self, k: int, data: bytes, info: Any) -> None:
+        """The same with its MessageInfo (the SingleThreadedExecutor)."""
+        self._count_sequence(k, info.get('publication_sequence_number'))
+        self._take(k, data, info.get('received_timestamp'))
+
+    def _take(self, k: int, data: bytes, received_ns: Optional[int]) -> None:
+        """Log ``data`` and the samples waiting behind it on input ``k``, and step them: each
+        one while the oldest waited at most :data:`COALESCE_AFTER` and the callbacks took at
+        most :data:`CATCH_UP_BUSY` of the time (a hiccup the node catches up with), else only
+        the newest.
+
+        The older ones are then coalesced: a :class:`Coalesced` record stamped before them
+        tells replay to leave them out, as the node does, and they are counted (Intake
+        ``coalesced``); the node never works through a backlog it cannot keep up with."""
         t0 = time.perf_counter()
-        self._received[-1] += 1
-        stamp = self._stamp()
-        self._write(self._depth_topic, data, stamp)
-        fields, sample_ns = _fields(data, self.config.depth_type)
-        self._run(Depth(stamp, float(readings.depth_si(self.config, fields)), sample_ns))
+        batch = [(data, received_ns)] + self._drain(k)
+        n = len(batch)
+        topic = self._depth_topic if k == len(self._names) else self._tension_topics[k]
+        step = self._step_depth if k == len(self._names) else self._step_tension
+        if n > 1 and (self._busy_share() > CATCH_UP_BUSY or self._behind(batch)):
+            line = None if k == len(self._names) else self._names[k]
+            stamps = [self._stamp() for _ in range(n + 1)]
+            self._record(Coalesced(stamps[0], line, stamps[-2], n - 1))
+            for (raw, _), stamp in zip(batch, stamps[1:]):
+                self._write(topic, raw, stamp)
+            self._coalesced[k] += n - 1
+            self._intake_due = True
+            step(k, stamps[-1], batch[-1][0])
+        else:
+            for raw, _ in batch:
+                stamp = self._stamp()
+                self._write(topic, raw, stamp)
+                step(k, stamp, raw)
         took = time.perf_counter() - t0
         self._busy += took
         self._busy_tick += took
+        self._busy_recent += took
+        self._timers_late()
 
-    def _on_sample_info(self, handler: Any, k: int, data: bytes, info: Any) -> None:
-        """A sample with its MessageInfo: a gap in the publisher's sequence numbers counts
-        the samples lost before the node took them (a restarted publisher starts again)."""
-        seq = info.get('publication_sequence_number')
+    def _busy_share(self) -> float:
+        """Share of wall time the sample callbacks took over the last
+        :data:`CATCH_UP_WINDOW` or so (the one before, until this one has run half its
+        length)."""
+        now = time.monotonic()
+        elapsed = now - self._recent_start
+        if elapsed >= CATCH_UP_WINDOW:
+            self._recent_share = self._busy_recent / elapsed
+            self._busy_recent, self._recent_start, elapsed = 0.0, now, 0.0
+        if elapsed < 0.5 * CATCH_UP_WINDOW:
+            return self._recent_share
+        return self._busy_recent / elapsed
+
+    @staticmethod
+    def _behind(batch: list[tuple[bytes, Optional[int]]]) -> bool:
+        """Whether the oldest sample of ``batch`` (with a reception time) waited longer than
+        :data:`COALESCE_AFTER` (unknown: yes)."""
+        times = [t for _, t in batch if isinstance(t, int) and t > 0]
+        return not times or time.time_ns() - min(times) > COALESCE_AFTER * 1e9
+
+    def _step_tension(self, k: int, stamp: int, raw: bytes) -> None:
+        """One core event of a hook tension sample as it came (the reading in N, at its header
+        stamp where it has one); publish what it says."""
+        self._received[k] += 1
+        lc = self.config.lines[k]
+        fields, sample_ns = _fields(raw, lc.tension_type)
+        self._run(Tension(stamp, k, float(readings.tension_si(lc, fields)), sample_ns))
+
+    def _step_depth(self, k: int, stamp: int, raw: bytes) -> None:
+        """The same for a depth sample (the depth in m)."""
+        self._received[k] += 1
+        fields, sample_ns = _fields(raw, self.config.depth_type)
+        self._run(Depth(stamp, float(readings.depth_si(self.config, fields)), sample_ns))
+
+    def _drain(self, k: int) -> list[tuple[bytes, Optional[int]]]:
+        """Every sample waiting on input ``k``'s subscription (up to :data:`DRAIN_MAX`), with
+        its reception time [ns] and its publisher's sequence number counted."""
+        sub = self._subs[k]
+        out: list[tuple[bytes, Optional[int]]] = []
+        with sub.handle:
+            while len(out) < DRAIN_MAX:
+                taken = sub.handle.take_message(sub.msg_type, sub.raw)
+                if taken is None:
+                    break
+                data, info = taken
+                out.append((data, info.get('received_timestamp')))
+                self._count_sequence(k, info.get('publication_sequence_number'))
+        return out
+
+    def _count_sequence(self, k: int, seq: Any) -> None:
+        """A gap in the publisher's sequence numbers counts the samples lost before the node
+        took them, less those taken without a number in between (the EventsExecutor hands a
+        callback its sample without one); a restarted publisher (the numbers start again) is
+        not a loss."""
+        if not isinstance(seq, int):
+            self._unsequenced[k] += 1
+            return
         last = self._last_seq[k]
-        if isinstance(seq, int):
-            if last is not None and seq > last + 1:
-                self._dropped[k] += seq - last - 1
-            self._last_seq[k] = seq
-        handler(data)
+        if last is not None:
+            gap = seq - last - 1 - self._unsequenced[k]
+            if gap > 0:
+                counted = min(gap, self._lost_unseen[k])  # DDS reported these already
+                self._lost_unseen[k] -= counted
+                self._gap_unreported[k] += gap - counted
+                self._dropped[k] += gap - counted
+                self._intake_due = True
+        self._last_seq[k], self._unsequenced[k] = seq, 0
 
     def _on_lost(self, k: int, info: Any) -> None:
-        """A QoS message-lost event of input ``k`` (what DDS reports lost)."""
-        self._dropped[k] += int(info.total_count_change)
+        """A QoS message-lost event of input ``k`` (what DDS reports lost): counted now, and
+        not again when the gap it leaves in the sequence numbers is seen."""
+        lost = int(info.total_count_change)
+        seen = min(lost, self._gap_unreported[k])  # their gap was counted already
+        self._gap_unreported[k] -= seen
+        self._lost_unseen[k] += lost - seen
+        self._dropped[k] += lost - seen
+        self._intake_due = True
 
     @_guarded
+    def _on_watchdog_timer(self) -> None:
+        """The watchdog's timer (none when a sample callback ran it lately)."""
+        if time.monotonic() - self._watchdog_wall >= 0.5 * WATCHDOG_PERIOD:
+            self._on_watchdog()
+
     def _on_watchdog(self) -> None:
         """Wall-clock checks: the ROS clock advances, and the intake counts."""
         wall = time.monotonic()
+        self._watchdog_wall = wall
         self._check_clock(wall)
         self._report_intake(wall)
+
+    def _timers_late(self) -> None:
+        """Report the intake counts at once when a sample was not handled while the intake
+        status said OK; run the periodic tick and the watchdog here when their timers are late
+        by a quarter period (:data:`LATE_TIMER`): a flood's callbacks wait ahead of them in
+        the executor's queue, and /diagnostics must keep its time."""
+        if self._intake_due and self.core.state.intake[0] == Level.OK:
+            self._report_intake(time.monotonic(), force=True)
+        if self._now_ns() - self._tick_ns >= LATE_TIMER * self._period_ns:
+            self._tick()
+        if time.monotonic() - self._watchdog_wall >= LATE_TIMER * WATCHDOG_PERIOD:
+            self._on_watchdog()
 
     def _check_clock(self, wall: float) -> None:
         """With ``use_sim_time``: a ClockHealth event (and /diagnostics) every watchdog
@@ -509,6 +710,7 @@ class CatenaryMonitor(Node):
         self._busy_tick = 0.0
         quiet = (
             not any(self._dropped)
+            and not any(self._coalesced)
             and busy_share < 0.5
             and self.core.state.intake[0] == Level.OK
             and wall - self._intake_wall < self._intake_heartbeat
@@ -517,17 +719,33 @@ class CatenaryMonitor(Node):
             return
         period = wall - self._intake_wall
         event = Intake(
-            self._stamp(), tuple(self._received), tuple(self._dropped), self._busy, period
+            self._stamp(),
+            tuple(self._received),
+            tuple(self._dropped),
+            self._busy,
+            period,
+            tuple(self._coalesced),
         )
         n = len(self._received)
         self._received, self._dropped, self._busy = [0] * n, [0] * n, 0.0
-        self._intake_wall, self._intake_sent = wall, True
+        self._coalesced = [0] * n
+        self._intake_wall, self._intake_sent, self._intake_due = wall, True, False
         self._record(event)
 
     @_guarded
     def _on_period(self) -> None:
-        """The periodic tick: staleness and hold-time clears; /diagnostics at a steady rate."""
-        self._record(Tick(self._stamp()))
+        """The periodic tick's timer (none when a sample callback ran it lately)."""
+        if self._now_ns() - self._tick_ns >= 0.5 * self._period_ns:
+            self._tick()
+
+    def _tick(self) -> None:
+        """The periodic tick: staleness and hold-time clears; /diagnostics at a steady rate.
+        The intake counts come first when a sample was not handled while the intake status
+        said OK, so it says otherwise within one period."""
+        if self._intake_due and self.core.state.intake[0] == Level.OK:
+            self._report_intake(time.monotonic(), force=True)
+        self._tick_ns = self._stamp()
+        self._record(Tick(self._tick_ns))
 
     @_guarded
     def _on_acknowledge(self, msg: String) -> None:
@@ -569,24 +787,48 @@ class CatenaryMonitor(Node):
         """Flush the MCAP chunk when due (bounded loss on SIGKILL); report logger changes."""
         if self.log is not None:
             self.log.tick()
+            self._report_deleted()
         self._check_logger()
         self._report_recovery()
+        self._save_fatigue()
+
+    def _report_deleted(self) -> None:
+        """One log line and one events-channel record per file the retention deleted."""
+        assert self.log is not None
+        for path, size, why in self.log.take_deleted():
+            rule = (
+                f'older than log_max_age {self.config.log_max_age:g} s'
+                if why == 'age'
+                else f'the folder above log_max_total_size {self.config.log_max_total_size:g} B'
+            )
+            self.get_logger().warning(
+                f'log retention: deleted {path.name} ({size / 2**20:.1f} MiB): {rule}'
+            )
+            record = {'kind': 'log_deleted', 'path': str(path), 'bytes': size, 'reason': why}
+            self._write(
+                EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), self._stamp()
+            )
 
     def _check_logger(self) -> None:
         """A LoggerHealth event whenever the logger's error changes (and once at start)."""
         error: Optional[str]
         path: Optional[str]
+        warning: Optional[str] = None
         if self.log is None:
             error, path = self._log_setup_error or 'no logger', None
         else:
             current = self.log.current_path
             error, path = self.log.error, str(current) if current else None
-        if self._logger_known and error == self._logger_error:
+            warning = self.log.warning
+        if self._logger_known and (error, warning) == (self._logger_error, self._logger_warning):
             return
         self._logger_known, self._logger_error = True, error
         if error:
             self.get_logger().error(f'MCAP log not written: {error}')
-        self._record(LoggerHealth(self._stamp(), error, path))
+        elif warning and warning != self._logger_warning:
+            self.get_logger().warning(warning)
+        self._logger_warning = warning
+        self._record(LoggerHealth(self._stamp(), error, path, warning))
 
     def _write_record(self, event: Any) -> None:
         """Log a record of a non-input event (or the start) on the events channel."""
@@ -605,8 +847,7 @@ class CatenaryMonitor(Node):
         """One core step; publish and log its outputs and snapshot, report its transitions."""
         step = self.core.step(event)
         for out in step.outputs:
-            self._output.data = list(out.values)
-            data = serialize_message(self._output)
+            data = self._output_cdr(out.values)
             self._output_pubs[out.line].publish(data)
             self._write(self._output_topics[out.line], data, step.stamp_ns)
         for change in step.transitions:
@@ -689,6 +930,7 @@ class CatenaryMonitor(Node):
         self.config = config
         self._record(Reconfigure(self._stamp(), config))
         self._diag_timer.timer_period_ns = int(1e9 / config.alarm.diagnostic_rate)
+        self._period_ns = self._diag_timer.timer_period_ns
         if self.log is not None:
             self.log.add_metadata(NODE_NAME, self._metadata(config))
 
@@ -698,16 +940,50 @@ class CatenaryMonitor(Node):
             self._report_intake(time.monotonic(), force=True)
         except Exception as exc:  # noqa: BLE001 - closing the log matters more
             self.get_logger().error(f'last intake counts not recorded: {exc}')
+        try:
+            self._save_fatigue(force=True)
+        except Exception as exc:  # noqa: BLE001 - closing the log matters more
+            self.get_logger().error(f'fatigue store not written at the end: {exc}')
         if self.log is not None:
             self.log.close()
+
+
+_FLOAT64_LE = struct.Struct('<d')
+
+
+def float64_value(raw: bytes) -> float:
+    """The value of a serialized ``std_msgs/Float64`` (little-endian CDR read in place)."""
+    if len(raw) == 12 and raw[:2] == b'\x00\x01':
+        return float(_FLOAT64_LE.unpack_from(raw, 4)[0])
+    return float(deserialize_message(raw, Float64).data)
+
+
+class OutputEncoder:
+    """Serialized outputs (``Float64MultiArray``) from their values: the layout, which never
+    changes, serialized once; the values packed after it (little-endian CDR; rclpy's
+    serializer where it is not)."""
+
+    def __init__(self, template: Float64MultiArray) -> None:
+        self.template = template
+        n = len(OUTPUT_FIELDS)
+        template.data = [0.0] * n
+        whole = serialize_message(template)
+        self.prefix = whole[: -8 * n] if whole[:2] == b'\x00\x01' else None
+        self.pack = struct.Struct(f'<{n}d').pack
+
+    def __call__(self, values: Sequence[float]) -> bytes:
+        if self.prefix is None or len(values) != len(OUTPUT_FIELDS):
+            self.template.data = list(values)
+            return serialize_message(self.template)
+        return self.prefix + self.pack(*values)
 
 
 def _fields(data: bytes, type_name: str) -> tuple[dict[str, float], Optional[int]]:
     """A raw input message's fields (core.monitor.readings) and its header stamp in ns (None
     for a type without a header)."""
-    msg = deserialize_message(data, _MESSAGE_CLASSES[type_name])
     if type_name == 'std_msgs/msg/Float64':
-        return {'value': msg.data}, None
+        return {'value': float64_value(data)}, None
+    msg = deserialize_message(data, _MESSAGE_CLASSES[type_name])
     stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
     if type_name == readings.WRENCH:
         f = msg.wrench.force

@@ -173,7 +173,8 @@ function buildTiles() {
       <dt title="${TIDE_R}">tide to lift, R held</dt><dd class="v-tide" title="${TIDE_R}"></dd>
       <dt class="x-tidel" title="${TIDE_L}">tide to lift, chain length held</dt><dd class="v-tidel x-tidel" title="${TIDE_L}"></dd>
       <dt class="x-upper">uplift ≤ (accuracy)</dt><dd class="v-upper x-upper"></dd>
-      <dt class="x-drag">drag margin</dt><dd class="v-drag x-drag"></dd></dl>
+      <dt class="x-drag">drag margin</dt><dd class="v-drag x-drag"></dd>
+      <dt class="x-fatigue" title="Miner's damage of the chain (1: the S-N curve's failure) and the life left at the last day's rate">fatigue</dt><dd class="v-fatigue x-fatigue"></dd></dl>
       <div class="msg"></div><div class="foot"><span class="v-model" title="the model that answered"></span> · <span class="age"></span><span class="alarm-st"></span><span class="sensor old"></span></div>`;
     t.querySelector('.name').textContent = line.name;
     const warn = line.mbl ? 1 / S.config.safety_factor_warn : null;
@@ -259,6 +260,13 @@ function renderTile(view, lost, frame) {
   vd.textContent = shown(drag) ? `${num(drag, 1, KN)} kN${dword}` : '';
   vd.className = 'v-drag x-drag ' + (dstate === 2 ? 'bad' :
     (shown(drag) && drag < (S.config.drag_margin_warn || 0) ? 'warn' : ''));
+  // Chain fatigue (docs/fatigue.md): Miner's damage and the life left at the last day's rate.
+  const dmg = view.fatigue_damage, life = view.fatigue_life_left;
+  t.querySelectorAll('.x-fatigue').forEach((e) => { e.hidden = !shown(dmg); });
+  const vf = t.querySelector('.v-fatigue');
+  const years = shown(life) ? ` · ${life / 31557600 > 2 ? (life / 31557600).toFixed(1) + ' y' : (life / 86400).toFixed(1) + ' d'} left` : '';
+  vf.textContent = shown(dmg) ? `D ${dmg.toPrecision(3)}${years}` : '';
+  vf.className = 'v-fatigue x-fatigue ' + (shown(dmg) && dmg >= (S.config.fatigue_damage_warn || 1) ? 'warn' : '');
   setText(t.querySelector('.v-model'), (view.model || 'no model').replace(' catenary', ''));
   const msg = lost ? `monitor silent: last known ${view.level} at ${clock(frame.snapshot_t)}` : view.message;
   t.querySelector('.msg').textContent = msg;

@@ -26,6 +26,7 @@ from catenary_monitor.core.config.tide_constituents import Constituent, parse_ta
 
 __all__ = [
     'REQUIRED',
+    'ALARM_CONDITIONS',
     'FLOAT64',
     'TENSION_TYPES',
     'DEPTH_TYPES',
@@ -116,7 +117,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         REQUIRED,
         (
             'Names of the monitored chains (a letter, then letters, digits, _; not tide, sensors,'
-            ' logger, dock, parameters, clock, intake, all); each NAME gets the NAME.* '
+            ' alarms, logger, dock, parameters, clock, intake, fatigue, all); each NAME gets the '
+            'NAME.* '
             'parameters below'
         ),
         '',
@@ -162,6 +164,38 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         's',
         1.0,
         604800.0,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_max_total_size',
+        'double',
+        0.0,
+        'Retention: the log folder\'s MCAP files are kept under this size, the oldest finished '
+        'files deleted first, never the open one (0: keep all; at least 2 x log_rotate_size)',
+        'B',
+        0.0,
+        1.0e15,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_max_age',
+        'double',
+        0.0,
+        'Retention: a finished MCAP log file is deleted this long after it ended (0: keep all)',
+        's',
+        0.0,
+        3.2e9,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_min_free_space',
+        'double',
+        1073741824.0,
+        'The logger status is WARN while the log\'s file system has less free space than this '
+        '(before a full disk stops the logging; 0: not checked)',
+        'B',
+        0.0,
+        1.0e15,
         read_only=True,
     ),
     ParamSpec(
@@ -445,6 +479,55 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         _L,
         optional=True,
     ),
+    # Chain fatigue (core/monitor/fatigue.py, docs/fatigue.md): seed 001's S-N curve.
+    ParamSpec(
+        'fatigue_m',
+        'double',
+        3.36,
+        'S-N curve N (delta_sigma / 1 MPa)^m = 10^log_a: m (seed 001, anchor chain)',
+        '',
+        1.0,
+        20.0,
+        _L,
+        group='fatigue',
+    ),
+    ParamSpec(
+        'fatigue_log_a',
+        'double',
+        13.6451,
+        'S-N curve N (delta_sigma / 1 MPa)^m = 10^log_a: log10 a (seed 001, anchor chain)',
+        '',
+        1.0,
+        40.0,
+        _L,
+        group='fatigue',
+    ),
+    ParamSpec(
+        'fatigue_stress_per_tension',
+        'double',
+        _NOT_GIVEN,
+        'Stress range per tension range of a link; not set: seed 001\'s 80.5 Pa/N for its '
+        '12 421 kN chain scaled to this MBL (80.5 x 12421e3 / mbl: the same stress at the '
+        'same fraction of MBL)',
+        'Pa/N',
+        1.0e-6,
+        1.0e9,
+        _L,
+        optional=True,
+        group='fatigue',
+    ),
+    ParamSpec(
+        'fatigue_damage_initial',
+        'double',
+        0.0,
+        'Miner damage the chain had when monitoring began (used only where the fatigue store '
+        'holds none for the line)',
+        '',
+        0.0,
+        10.0,
+        _L,
+        group='fatigue',
+    ),
     # Holding (docs/holding.md): optional; NaN means not given (no holding values).
     ParamSpec(
         'anchor_holding',
@@ -627,8 +710,9 @@ PARAMETERS: tuple[ParamSpec, ...] = (
             (
                 'stamp_jitter',
                 0.25,
-                'spike: a reading\'s stamp may be off by this much (delivery bunches samples); '
-                'a step is compared with the rate x (dt + this)',
+                'spike: a Float64 reading\'s arrival stamp may be off by this much (delivery '
+                'bunches samples); a step is compared with the rate x (dt + this); stamped '
+                'inputs use their header stamps and no jitter',
                 's',
                 0.0,
                 10.0,
@@ -733,6 +817,16 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.0,
         1000.0,
         group='holding',
+    ),
+    ParamSpec(
+        'fatigue_damage_warn',
+        'double',
+        0.5,
+        'WARN when a line\'s cumulative Miner damage reaches this (1: the S-N curve\'s failure)',
+        '',
+        0.0,
+        10.0,
+        group='fatigue',
     ),
     ParamSpec(
         'load_margin_warn',
@@ -844,6 +938,64 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.01,
         100.0,
     ),
+    # Alarm management (ISA-18.2 / IEC 62682, EEMUA 191): shelving, chattering, floods.
+    ParamSpec(
+        'shelve_max',
+        'double',
+        28800.0,
+        'Longest an operator may shelve an alarm (one shift; 0: shelving disabled)',
+        's',
+        0.0,
+        604800.0,
+    ),
+    ParamSpec(
+        'unshelvable_conditions',
+        'string_array',
+        ('uplift',),
+        'Alarm conditions no operator may shelve (uplift, input, sensor_error, stale, '
+        'anchor_margin, ...); a shelved alarm still annunciates them',
+        '',
+        None,
+        None,
+    ),
+    ParamSpec(
+        'chatter_count',
+        'double',
+        3.0,
+        'An alarm with this many level changes or more within chatter_window is chattering '
+        '(a whole number)',
+        '',
+        2.0,
+        1000.0,
+    ),
+    ParamSpec(
+        'chatter_window',
+        'double',
+        60.0,
+        'The window of the chattering count',
+        's',
+        1.0,
+        86400.0,
+    ),
+    ParamSpec(
+        'flood_count',
+        'double',
+        10.0,
+        'More than this many alarms raised within flood_window is an alarm flood (a whole '
+        'number)',
+        '',
+        1.0,
+        10000.0,
+    ),
+    ParamSpec(
+        'flood_window',
+        'double',
+        600.0,
+        'The window of the flood count',
+        's',
+        1.0,
+        86400.0,
+    ),
     # The dock as one body (core/body): loads by the seed paper's formulas (docs/dock_body.md).
     *(
         ParamSpec(
@@ -946,10 +1098,41 @@ _PER_LINE = {p.name: p for p in PARAMETERS if p.scope == 'line'}
 ROS_BUILTIN_PARAMETERS = frozenset({'use_sim_time', 'start_type_description_service'})
 _ROS_BUILTIN_PREFIXES = ('qos_overrides.',)
 
+#: Every condition of a line's alarm (core.monitor.alarms.CONDITIONS, then ``stale``): the names
+#: of ``unshelvable_conditions`` and of a shelved condition (test_shelving checks they agree).
+ALARM_CONDITIONS = (
+    'uplift',
+    'input',
+    'anchor_margin',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'time_to_uplift',
+    'inconsistent',
+    'uplift_possible',
+    'drag_margin',
+    'sensor_error',
+    'sensor_warn',
+    'dragging',
+    'fatigue',
+    'stale',
+)
+
 _LINE_NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*\Z')
 #: Names of the monitor's own statuses (``catenary_monitor: tide``, ...) and of the
 #: acknowledgement of every alarm (``all``): no line may take one.
-RESERVED_NAMES = ('tide', 'sensors', 'logger', 'dock', 'parameters', 'clock', 'intake', 'all')
+RESERVED_NAMES = (
+    'tide',
+    'sensors',
+    'alarms',
+    'logger',
+    'dock',
+    'parameters',
+    'clock',
+    'intake',
+    'fatigue',
+    'all',
+)
 
 
 def _check_line_name(name: object) -> None:
@@ -1026,6 +1209,10 @@ def _check_topic(full_name: str, topic: str) -> None:
         raise ConfigError(full_name, f'{topic!r} is not a valid ROS topic name')
 
 
+def _PER_LINE_DEFAULT(name: str) -> Any:  # noqa: N802 - read as a constant
+    return _PER_LINE[name].default
+
+
 @dataclass(frozen=True)
 class LineConfig:
     """One anchor chain. SI units: weight N/m (submerged), distances m, forces N.
@@ -1053,6 +1240,10 @@ class LineConfig:
     anchor_holding: float | None = None
     anchor_weight: float | None = None
     chain_friction: float | None = None
+    fatigue_m: float = _PER_LINE_DEFAULT('fatigue_m')
+    fatigue_log_a: float = _PER_LINE_DEFAULT('fatigue_log_a')
+    fatigue_stress_per_tension: float | None = None
+    fatigue_damage_initial: float = 0.0
     tension_type: str = FLOAT64
     tension_axis: str = 'norm'
     tension_scale: float = 1.0
@@ -1083,6 +1274,14 @@ class LineConfig:
         if self.ea == 0.0:
             object.__setattr__(self, 'ea', None)
 
+    @property
+    def stress_per_tension(self) -> float:
+        """Pa of stress range per N of tension range: ``fatigue_stress_per_tension``, or seed
+        001's 80.5 Pa/N for its 12 421 kN chain scaled to this line's MBL."""
+        if self.fatigue_stress_per_tension is not None:
+            return self.fatigue_stress_per_tension
+        return 80.5 * 12421.0e3 / self.mbl
+
 
 def _default(name: str) -> Any:
     return _GLOBAL[name].default
@@ -1112,6 +1311,7 @@ class AlarmConfig:
     drag_margin_warn: float = _default('drag_margin_warn')
     drag_margin_deadband: float = _default('drag_margin_deadband')
     drag_tolerance: float = _default('drag_tolerance')
+    fatigue_damage_warn: float = _default('fatigue_damage_warn')
     tension_resolution: float = _default('tension_resolution')
     depth_resolution: float = _default('depth_resolution')
     stuck_time: float = _default('stuck_time')
@@ -1141,11 +1341,27 @@ class AlarmConfig:
     tension_timeout: float = _default('tension_timeout')
     depth_timeout: float = _default('depth_timeout')
     diagnostic_rate: float = _default('diagnostic_rate')
+    shelve_max: float = _default('shelve_max')
+    unshelvable_conditions: tuple[str, ...] = _default('unshelvable_conditions')
+    chatter_count: float = _default('chatter_count')
+    chatter_window: float = _default('chatter_window')
+    flood_count: float = _default('flood_count')
+    flood_window: float = _default('flood_window')
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             value = _check(f.name, _GLOBAL[f.name], getattr(self, f.name))
             object.__setattr__(self, f.name, value)
+        for name in ('chatter_count', 'flood_count'):
+            if getattr(self, name) != int(getattr(self, name)):
+                raise ConfigError(name, f'must be a whole number, got {getattr(self, name)!r}')
+        for cond in self.unshelvable_conditions:
+            if cond not in ALARM_CONDITIONS:
+                raise ConfigError(
+                    'unshelvable_conditions',
+                    f'unknown alarm condition {cond!r} '
+                    f'(conditions: {", ".join(ALARM_CONDITIONS)})',
+                )
         try:
             table = parse_table(self.tide_table)
         except ValueError as err:
@@ -1195,6 +1411,9 @@ _TOP_LEVEL = (
     'log_dir',
     'log_rotate_size',
     'log_rotate_duration',
+    'log_max_total_size',
+    'log_max_age',
+    'log_min_free_space',
     'log_create_dir',
     'allow_runtime_changes',
     'acknowledge_from_ros',
@@ -1224,6 +1443,9 @@ class MonitorConfig:
     log_rotate_size: float = _default('log_rotate_size')  # MiB
     log_rotate_duration: float = _default('log_rotate_duration')  # s
     log_create_dir: bool = _default('log_create_dir')
+    log_max_total_size: float = _default('log_max_total_size')  # B
+    log_max_age: float = _default('log_max_age')  # s
+    log_min_free_space: float = _default('log_min_free_space')  # B
     depth_type: str = _default('depth_type')
     water_density: float = _default('water_density')  # kg/m^3
     atmospheric_pressure: float = _default('atmospheric_pressure')  # Pa
@@ -1249,6 +1471,13 @@ class MonitorConfig:
             object.__setattr__(self, key, _check(key, _GLOBAL[key], getattr(self, key)))
         _check_topic('depth_topic', self.depth_topic)
         _check_choice('depth_type', self.depth_type, DEPTH_TYPES)
+        rotate = self.log_rotate_size * 2**20
+        if 0.0 < self.log_max_total_size < 2.0 * rotate:
+            raise ConfigError(
+                'log_max_total_size',
+                f'{self.log_max_total_size:g} B is below 2 x log_rotate_size ({2 * rotate:g} B): '
+                'the open file and a finished one must fit',
+            )
         if not self.log_dir:
             raise ConfigError('log_dir', 'must not be empty')
         _check_geometry(self.lines)
@@ -1455,6 +1684,9 @@ NON_DECIDING = frozenset(
         'log_dir',
         'log_rotate_size',
         'log_rotate_duration',
+        'log_max_total_size',
+        'log_max_age',
+        'log_min_free_space',
         'log_create_dir',
         'allow_runtime_changes',
         'acknowledge_from_ros',
@@ -1483,6 +1715,8 @@ def parameters_markdown(group: str = '') -> str:
             default = 'required'
         elif spec.optional:
             default = 'not set (NaN)'
+        elif isinstance(spec.default, tuple):
+            default = f'`[{", ".join(spec.default)}]`'
         else:
             default = f'`{spec.default_for("NAME")!r}`'
         if spec.type != 'double':

@@ -29,7 +29,8 @@
  *       alarms._latch_series: one condition's latch after each update (out, bool) from its
  *       codes (int8: 0 hold, 1 breach, 2 clear) at times t [s], stepped as alarms._step from
  *       (active, since) (since NaN: None); returns the latch after the last update.
- *   fatigue(t, tension, scale, m, inv_a, residue, halves, n_res, marks, n_marks, closed, fixed,
+ *   fatigue(t, tension, scale, m, inv_a, limit, residue, halves, n_res, marks, n_marks, closed,
+ *           fixed,
  *           residue_max, mark_every, rate_window, rate_min_span, damage, rate, life)
  *       -> (closed, fixed, n_res, n_marks)
  *       fatigue.series: fatigue.step per sample (the streamed rainflow residue, Miner's damage,
@@ -335,10 +336,10 @@ static double cycle_damage(double range, double scale, double m, double inv_a) {
 
 static PyObject *py_fatigue(PyObject *self, PyObject *args) {
     PyObject *o[8];
-    double scale, m, inv_a, closed, fixed, mark_every, window, min_span;
+    double scale, m, inv_a, limit, closed, fixed, mark_every, window, min_span;
     Py_ssize_t n_res, n_marks, res_max;
-    if (!PyArg_ParseTuple(args, "OOdddOOnOnddndddOOO", &o[0], &o[1], &scale, &m, &inv_a, &o[2],
-                          &o[3], &n_res, &o[4], &n_marks, &closed, &fixed, &res_max,
+    if (!PyArg_ParseTuple(args, "OOddddOOnOnddndddOOO", &o[0], &o[1], &scale, &m, &inv_a, &limit,
+                          &o[2], &o[3], &n_res, &o[4], &n_marks, &closed, &fixed, &res_max,
                           &mark_every, &window, &min_span, &o[5], &o[6], &o[7]))
         return NULL;
     Py_buffer b[8];
@@ -361,7 +362,7 @@ static PyObject *py_fatigue(PyObject *self, PyObject *args) {
     }
     for (Py_ssize_t i = 0; i < n; i++) {
         const double v = x[i], now = t[i];
-        if (isfinite(v) && v >= 0.0 && !(n_res && v == r[n_res - 1])) {
+        if (isfinite(v) && v >= 0.0 && v <= limit && !(n_res && v == r[n_res - 1])) {
             if (n_res < 2 || (v - r[n_res - 1]) * (r[n_res - 1] - r[n_res - 2]) <= 0.0) {
                 if (n_res) fixed += h[n_res - 1];
                 r[n_res] = v;

@@ -23,6 +23,10 @@ States (:data:`STATES`, the names the ``/diagnostics`` key ``alarm_state`` and t
 ``suppressed`` (shown in ``alarm_state`` only; stored as ``normal`` with ``suppressed`` set)
     not active because suppressed by design, nothing waiting for an acknowledgement.
 
+``shelved`` (shown in ``alarm_state`` only; stored as ``normal`` with a shelf)
+    an operator shelved the alarm (or one condition of it) until ``shelved_until``: the
+    shelved conditions are computed and shown but not annunciated (ISA-18.2 shelving).
+
 Rules: an alarm is raised (``unacknowledged``, ``raised`` = now) when it becomes active from
 ``normal`` or ``returned-unacknowledged``, and raised again when its severity rises while active
 (WARN < STALE < ERROR: an acknowledged warning that becomes a lifted anchor is news). When it
@@ -31,6 +35,18 @@ becomes ``normal``. An acknowledgement turns ``unacknowledged`` into ``acknowled
 ``returned-unacknowledged`` into ``normal``; it never clears an active alarm: only the condition
 does. :func:`step` is idempotent (same level, same activity: no change), which is what lets the
 vectorized twin (:mod:`catenary_monitor.core.monitor.twin`) apply it only where its inputs change.
+
+**Shelving** (:func:`shelve`, :func:`unshelve`; requests and rules in
+:mod:`catenary_monitor.core.monitor.shelving`): the alarm follows the level its shelf leaves
+visible (``masked``: the level without the shelved conditions); shelving takes the alarm off
+the list when that level is not active. When the shelf ends (it expires at the first step at or
+after ``shelved_until``, or an operator unshelves) and it was hiding an active condition, the
+alarm returns ``unacknowledged``, raised again at that time.
+
+**Chattering**: the alarm keeps the times of its newest ``chatter_count`` level changes
+(``flips``); it is ``chattering`` while the oldest of them is at most ``chatter_window`` old
+(ISA-18.2: 3 in 60 s), decided at every step. ``active_since`` is when the alarm's condition
+(shelved or not, not suppressed) last became active: the alarm report's standing alarms.
 
 Times are seconds on the monitor's clock.
 """
@@ -44,6 +60,8 @@ from typing import Optional, Sequence
 import numpy as np
 
 from catenary_monitor.core.monitor.alarms import CONDITIONS, ERROR_CONDITIONS, RANK, Level
+
+_NAN = math.nan
 
 __all__ = [
     'NORMAL',
@@ -70,6 +88,12 @@ __all__ = [
     'REQUEST_LIMIT',
     'AckSeries',
     'replay_acks',
+    'SHELVED',
+    'WHOLE',
+    'shelved',
+    'shelve',
+    'unshelve',
+    'chatter_flags',
 ]
 
 NORMAL = 'normal'
@@ -80,6 +104,10 @@ RETURNED_UNACKNOWLEDGED = 'returned-unacknowledged'
 SUPPRESSED = 'suppressed'
 #: The name of the sensors' common-cause alarm (a status on /diagnostics, acknowledged as a line).
 SENSORS = 'sensors'
+#: ``alarm_state`` of an alarm whose shelf leaves nothing to annunciate (a view of ``normal``).
+SHELVED = 'shelved'
+#: ``shelved_condition`` of a shelf over the whole alarm (every shelvable condition).
+WHOLE = 'all'
 #: Every alarm state, in display order of urgency.
 STATES = (UNACKNOWLEDGED, RETURNED_UNACKNOWLEDGED, ACKNOWLEDGED, NORMAL)
 #: The line "name" of an acknowledgement of every line.
@@ -112,6 +140,14 @@ class AckState:
     acknowledged_by: str = ''
     suppressed: bool = False
     acknowledged_publisher: str = ''
+    shelved_until: float = math.nan  # s; NaN: not shelved
+    shelved_at: float = math.nan  # s, when the shelf was put on
+    shelved_by: str = ''  # the origin the shelving request claimed
+    shelved_publisher: str = ''  # who published it, as the middleware saw it
+    shelved_condition: str = ''  # WHOLE or one condition; '' not shelved
+    flips: tuple[float, ...] = ()  # s, the newest chatter_count level changes
+    chattering: bool = False
+    active_since: float = math.nan  # s, since when the condition is active; NaN: not active
 
 
 def initial(start: float) -> AckState:
@@ -120,10 +156,67 @@ def initial(start: float) -> AckState:
     return AckState(suppressed=True)
 
 
-def step(ack: AckState, level: Level, now: float, suppressed: bool = False) -> AckState:
-    """The alarm after the line was stepped to ``level`` at ``now`` (s); ``suppressed``: the
-    level is a consequence of a common cause reported by another alarm (not active)."""
-    suppressed = suppressed and level != Level.OK
+#: The chattering rule by default: (chatter_count, chatter_window [s]).
+CHATTER = (3, 60.0)
+
+
+def shelved(ack: AckState) -> bool:
+    """Whether the alarm is shelved."""
+    return ack.shelved_until == ack.shelved_until
+
+
+def step(
+    ack: AckState,
+    level: Level,
+    now: float,
+    suppressed: bool = False,
+    masked: Optional[Level] = None,
+    flip: bool = False,
+    chatter: tuple[int, float] = CHATTER,
+) -> AckState:
+    """The alarm after the line was stepped to ``level`` at ``now`` (s).
+
+    ``suppressed``: the level is a consequence of a common cause reported by another alarm
+    (not active); ``masked``: the level the alarm's shelf leaves visible (None: ``level``);
+    ``flip``: the level changed at this step (an announced change); ``chatter``:
+    (chatter_count, chatter_window [s]).
+    """
+    ack = _watch(ack, level, now, suppressed, flip, chatter)
+    if not shelved(ack):
+        return _follow(ack, level, now, suppressed)
+    shown = level if masked is None else masked
+    if now >= ack.shelved_until:
+        return unshelve(ack, now, level, shown, suppressed)
+    return _follow(ack, shown, now, suppressed)
+
+
+def _watch(
+    ack: AckState,
+    level: Level,
+    now: float,
+    suppressed: bool,
+    flip: bool,
+    chatter: tuple[int, float],
+) -> AckState:
+    """The alarm's chattering and activity after a step (whatever its shelf)."""
+    count, window = chatter
+    flips = (ack.flips + (now,))[-count:] if flip else ack.flips
+    chattering = len(flips) >= count and now - flips[-count] <= window
+    active = level != Level.OK and not (suppressed and level == Level.STALE)
+    since = (ack.active_since if ack.active_since == ack.active_since else now) if active else _NAN
+    if flips is ack.flips and chattering == ack.chattering and _same(since, ack.active_since):
+        return ack
+    return replace(ack, flips=flips, chattering=chattering, active_since=since)
+
+
+def _same(a: float, b: float) -> bool:
+    return a == b or (a != a and b != b)
+
+
+def _follow(ack: AckState, level: Level, now: float, suppressed: bool) -> AckState:
+    """The alarm's state machine on the level it annunciates (see the module docstring);
+    ``suppressed`` applies to a STALE level only."""
+    suppressed = suppressed and level == Level.STALE
     if suppressed != ack.suppressed:
         ack = replace(ack, suppressed=suppressed)
     active = level != Level.OK and not suppressed
@@ -136,6 +229,53 @@ def step(ack: AckState, level: Level, now: float, suppressed: bool = False) -> A
     if ack.state == ACKNOWLEDGED:
         return replace(ack, state=NORMAL)
     return ack
+
+
+def shelve(
+    ack: AckState,
+    now: float,
+    until: float,
+    condition: str,
+    origin: str,
+    masked: Level,
+    suppressed: bool = False,
+    publisher: str = '',
+) -> AckState:
+    """The alarm shelved at ``now`` until ``until`` (s) by ``origin`` (as claimed; published by
+    ``publisher``, both bounded): ``condition`` is :data:`WHOLE` or one condition; ``masked``
+    the level the shelf leaves visible. An alarm whose visible level is not active leaves the
+    list (``normal``, shown ``shelved``)."""
+    ack = replace(
+        ack,
+        shelved_until=until,
+        shelved_at=now,
+        shelved_by=bounded_text(origin),
+        shelved_publisher=bounded_text(publisher),
+        shelved_condition=condition,
+    )
+    if masked == Level.OK or (suppressed and masked == Level.STALE):
+        ack = replace(ack, state=NORMAL)
+    return _follow(ack, masked, now, suppressed)
+
+
+def unshelve(
+    ack: AckState, now: float, level: Level, masked: Level, suppressed: bool = False
+) -> AckState:
+    """The alarm's shelf ended at ``now`` (s; expired, or an operator unshelved it): ``level``
+    the line's level, ``masked`` what the shelf left visible. An active condition the shelf hid
+    returns the alarm ``unacknowledged``, raised at ``now``."""
+    ack = replace(
+        ack,
+        shelved_until=_NAN,
+        shelved_at=_NAN,
+        shelved_by='',
+        shelved_publisher='',
+        shelved_condition='',
+    )
+    quiet = suppressed and level == Level.STALE
+    if RANK[level] > RANK[masked] and level != Level.OK and not quiet:
+        return replace(ack, state=UNACKNOWLEDGED, level=level, raised=now, suppressed=False)
+    return _follow(ack, level, now, suppressed)
 
 
 def acknowledge(ack: AckState, now: float, origin: str, publisher: str = '') -> AckState:
@@ -181,10 +321,15 @@ def diagnostic_values(
     """The ``/diagnostics`` keys of a line's alarm: ``acknowledged`` (``true`` unless something
     waits for an acknowledgement), ``alarm_state``, ``alarm_raised`` [s, NaN when normal],
     ``alarm_condition``, ``acknowledged_at`` [s], ``acknowledged_by`` (the last one's origin, as
-    it claimed) and ``acknowledged_publisher`` (who published it, as the middleware saw it)."""
+    it claimed) and ``acknowledged_publisher`` (who published it, as the middleware saw it),
+    then ``shelved`` (``true``/``false``), ``shelved_until`` [s, NaN when not],
+    ``shelved_condition`` (``all`` or one condition), ``shelved_by``, ``shelved_publisher`` and
+    ``chattering`` (``true``/``false``)."""
     pending = ack.state in (UNACKNOWLEDGED, RETURNED_UNACKNOWLEDGED)
     raised = math.nan if ack.state == NORMAL else ack.raised
-    state = SUPPRESSED if ack.state == NORMAL and ack.suppressed else ack.state
+    state = ack.state
+    if ack.state == NORMAL:
+        state = SHELVED if shelved(ack) else (SUPPRESSED if ack.suppressed else NORMAL)
     return [
         ('acknowledged', 'false' if pending else 'true'),
         ('alarm_state', state),
@@ -193,6 +338,12 @@ def diagnostic_values(
         ('acknowledged_at', repr(float(ack.acknowledged_at))),
         ('acknowledged_by', ack.acknowledged_by),
         ('acknowledged_publisher', ack.acknowledged_publisher),
+        ('shelved', 'true' if shelved(ack) else 'false'),
+        ('shelved_until', repr(float(ack.shelved_until))),
+        ('shelved_condition', ack.shelved_condition),
+        ('shelved_by', ack.shelved_by),
+        ('shelved_publisher', ack.shelved_publisher),
+        ('chattering', 'true' if ack.chattering else 'false'),
     ]
 
 
@@ -273,25 +424,67 @@ class AckSeries:
         return self.states[-1] if self.states else self.before
 
 
+def chatter_flags(
+    before: tuple[float, ...], times: np.ndarray, flip: np.ndarray, chatter: tuple[int, float]
+) -> np.ndarray:
+    """Per step at ``times`` (s): chattering after it, as :func:`step` decides, given the
+    changes ``before`` (the alarm's ``flips``) and ``flip`` (bool per step)."""
+    count, window = chatter
+    n = len(times)
+    if not len(before) and not flip.any():
+        return np.zeros(n, bool)
+    flips = np.concatenate([np.asarray(before, np.float64), times[flip]])
+    k = len(before) + np.cumsum(flip) - count  # the count-th newest change so far
+    ok = k >= 0
+    oldest = flips[np.clip(k, 0, max(len(flips) - 1, 0))] if len(flips) else np.zeros(n)
+    return ok & (times - oldest <= window)
+
+
 def replay_acks(
     before: AckState,
     times: np.ndarray,
     levels: np.ndarray,
     suppressed: Optional[np.ndarray] = None,
+    masked: Optional[np.ndarray] = None,
+    flip_at: Optional[np.ndarray] = None,
+    chatter: tuple[int, float] = CHATTER,
 ) -> AckSeries:
     """The alarm over steps at ``times`` (s) with the line's ``levels`` (int Level per step)
     and ``suppressed`` flags (bool per step; None: none), from ``before``, with no
-    acknowledgement among them: :func:`step` applied where its inputs change (it is
-    idempotent elsewhere), so equal to stepping every one."""
+    acknowledgement or shelving request among them: ``masked`` the levels ``before``'s shelf
+    leaves visible (None: no shelf), ``flip_at`` the steps whose level change is announced.
+    :func:`step` is applied where its inputs change (it is idempotent elsewhere: a level,
+    suppression, visible level, chattering or activity change, a flip, the shelf's expiry),
+    so the result equals stepping every one."""
     n = len(times)
     if n == 0:
         return AckSeries(before, np.zeros(0, np.int64), [])
     quiet = np.zeros(n, bool) if suppressed is None else np.asarray(suppressed, bool)
+    flip = np.zeros(n, bool)
+    if flip_at is not None:
+        flip[flip_at] = True
+    chat = chatter_flags(before.flips, times, flip, chatter)
     change = np.ones(n, dtype=bool)
-    change[1:] = (quiet[1:] != quiet[:-1]) | (levels[1:] != levels[:-1])
+    change[1:] = (quiet[1:] != quiet[:-1]) | (levels[1:] != levels[:-1]) | (chat[1:] != chat[:-1])
+    change |= flip
+    shelf = shelved(before)
+    if shelf and masked is not None:
+        change[1:] |= masked[1:] != masked[:-1]
+        end = int(np.searchsorted(times, before.shelved_until, 'left'))
+        if end < n:
+            change[end] = True
     idx = np.flatnonzero(change)
     states, state = [], before
     for i in idx.tolist():
-        state = step(state, Level(int(levels[i])), float(times[i]), bool(quiet[i]))
+        shown = Level(int(masked[i])) if masked is not None and shelved(state) else None
+        state = step(
+            state,
+            Level(int(levels[i])),
+            float(times[i]),
+            bool(quiet[i]),
+            shown,
+            bool(flip[i]),
+            chatter,
+        )
         states.append(state)
     return AckSeries(before, idx, states)

@@ -36,6 +36,9 @@ Conditions, each with its own latch:
     raised when the line's ``drag_state`` is ``dragging`` (the load beyond the holding and the
     implied anchor distance beyond the installed one by ``drag_tolerance``) for ``on_delay``;
     cleared after ``clear_hold`` of ``holding`` or ``overloaded``; NaN holds.
+``fatigue`` (WARN; :mod:`catenary_monitor.core.monitor.fatigue`)
+    raised when the line's cumulative Miner damage reaches ``fatigue_damage_warn`` for
+    ``on_delay``; cleared below it (the damage only grows: a new chain, a new store).
 ``sensor_error`` (ERROR), ``sensor_warn`` (WARN; :mod:`catenary_monitor.core.monitor.sensor_state`)
     raised when the line's ``sensor_state`` (decided at ticks) is an ERROR state (``over_mbl``,
     ``slack``, ``suspected_parted``), resp. a WARN state (``stuck``, ``spike``), for
@@ -136,6 +139,8 @@ CONDITIONS = (
     'sensor_warn',
     # Hou et al.'s third regime, the anchor dragging: core/monitor/holding.py.
     'dragging',
+    # Chain fatigue (Miner's damage): core/monitor/fatigue.py.
+    'fatigue',
 )
 #: The conditions that raise an ERROR (the others a WARN).
 ERROR_CONDITIONS = _ERRORS = ('uplift', 'input', 'sensor_error', 'dragging')
@@ -190,6 +195,8 @@ class AlarmInputs:
     mbl: float = math.nan  # N, the line's MBL (for the message)
     drag_state: float = math.nan  # core.holding code (2 dragging), NaN unknown
     implied_anchor_distance: float = math.nan  # m (for the message)
+    fatigue_damage: float = math.nan  # Miner's damage so far
+    fatigue_life_left: float = math.nan  # s at the last day's rate (for the message)
 
 
 class Latch(NamedTuple):
@@ -212,6 +219,7 @@ class AlarmState:
     entered: tuple[float, ...] = (math.nan,) * 4  # s, when each severity rank was last entered
     input_message: str = ''  # last impossible-input sentence, while its alarm holds
     suppressed: bool = True  # STALE only by a common cause (suppressed by design)
+    stale: bool = True  # an input stale or never received (the level may still be ERROR)
 
 
 class Transition(NamedTuple):
@@ -326,6 +334,7 @@ class LineAlarm:
             entered=entered,
             input_message=input_message if active[1] else '',
             suppressed=suppressed,
+            stale=stale,
         )
         return new, events
 
@@ -352,9 +361,11 @@ class LineAlarm:
             breach, clear = x.inconsistent == 1.0, x.inconsistent == 0.0
         elif cond == 'dragging':
             breach, clear = x.drag_state == 2.0, x.drag_state < 2.0
+        elif cond == 'fatigue':
+            warn = self.config.fatigue_damage_warn
+            breach, clear = x.fatigue_damage >= warn, x.fatigue_damage < warn
         elif cond in _SENSOR:
-            hit, ok = _sensor_codes(cond, np.asarray(x.sensor_state))
-            breach, clear = bool(hit), bool(ok)
+            breach, clear = _sensor_code(cond, float(x.sensor_state))
         elif cond == 'uplift_possible':
             nominal = x.uplift_force > self.allowed_uplift
             upper = x.uplift_force_upper
@@ -429,6 +440,8 @@ class LineAlarm:
                     parts.append(self._uplift_time_text(x, hold_w))
             elif up and cond == 'uplift_possible':
                 parts.append(self._uplift_possible_text(x, hold_w))
+            elif up and cond == 'fatigue':
+                parts.append(self._fatigue_text(x))
             elif up and cond == 'drag_margin':
                 text = self._warn_text(cond, x.drag_margin, hold_w)
                 holding = _fmt(x.holding_capacity, 1e3)
@@ -467,6 +480,15 @@ class LineAlarm:
         return (
             f'time to uplift {_duration(value)}, warning held (clears after {hold:g} s '
             f'at >= {_duration(high)})'
+        )
+
+    def _fatigue_text(self, x: AlarmInputs) -> str:
+        """The message of the ``fatigue`` condition (the damage, the life left in days)."""
+        warn, life = self.config.fatigue_damage_warn, x.fatigue_life_left
+        left = 'unknown' if life != life else _life(life)
+        return (
+            f'chain fatigue: Miner damage {x.fatigue_damage:.3g} >= {warn:g} '
+            f'(life left {left} at the last day\'s rate)'
         )
 
     def _dragging_text(self, x: AlarmInputs, hold: float) -> str:
@@ -509,6 +531,16 @@ def _sensor_codes(cond: str, code: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return breach, ~breach & np.isfinite(code)
 
 
+def _sensor_code(cond: str, code: float) -> tuple[bool, bool]:
+    """:func:`_sensor_codes` of one code (the per-sample path: no arrays)."""
+    errors = code in _ERROR_CODES
+    breach = errors if cond == 'sensor_error' else not errors and code > 0
+    return breach, not breach and math.isfinite(code)
+
+
+_ERROR_CODES = frozenset(float(c) for c in sensor_state.ERROR_STATES)
+
+
 def _sensor_text(x: AlarmInputs, cond: str, hold: float) -> str:
     """The message of a sensor condition (what to check), or that it is held."""
     code = x.sensor_state
@@ -516,6 +548,14 @@ def _sensor_text(x: AlarmInputs, cond: str, hold: float) -> str:
     if bool(breach):
         return sensor_state.line_message(int(code), x.sensor_tension, x.mbl)
     return f'sensor alarm held (clears after {hold:g} s of sane readings)'
+
+
+def _life(seconds: float) -> str:
+    """A fatigue life for the operator: days, years beyond two years."""
+    if seconds == math.inf:
+        return 'unlimited'
+    days = seconds / 86400.0
+    return f'{days / 365.25:.1f} years' if days > 730.0 else f'{days:.1f} days'
 
 
 def _duration(seconds: float) -> str:
@@ -604,6 +644,8 @@ _INPUT_FIELDS = (
     'mbl',
     'drag_state',
     'implied_anchor_distance',
+    'fatigue_damage',
+    'fatigue_life_left',
 )
 
 
@@ -690,7 +732,11 @@ class LevelSeries:
         own = stale_t & ~np.isnan(x['tension_stamp'])
         #: Per update: STALE only by a common cause (suppressed by design).
         self.suppressed = (levels == Level.STALE) & ~own
+        #: Per update: an input stale or never received.
+        self.stale = stale_t | stale_d
         self._bad: np.ndarray | None = None  # updates with a solver status, when first asked
+        #: The updates at which the level changed (one per transition, in order).
+        self.changed_at = np.zeros(0, np.int64)
         self.transitions, self._entered = self._walk()
 
     def _held(self, i: int) -> str:
@@ -733,6 +779,7 @@ class LevelSeries:
     def _walk(self) -> tuple[list[Transition], tuple[float, ...]]:
         """Transitions (with messages and episode durations) from the initial state."""
         changed = np.flatnonzero(np.diff(self.levels, prepend=np.int8(self._initial.level)))
+        self.changed_at = changed
         transitions: list[Transition] = []
         entered, old = self._initial.entered, self._initial.level
         for i in changed.tolist():
@@ -758,6 +805,7 @@ class LevelSeries:
             entered=self._entered,
             input_message=held,
             suppressed=bool(self.suppressed[-1]),
+            stale=bool(self.stale[-1]),
         )
 
 
@@ -910,6 +958,8 @@ def _classify_columns(
         out[cond] = codes(cond, *_sensor_codes(cond, x['sensor_state']))
     drag = x['drag_state']
     out['dragging'] = codes('dragging', drag == 2.0, drag < 2.0)
+    damage, warn = x['fatigue_damage'], cfg.fatigue_damage_warn
+    out['fatigue'] = codes('fatigue', damage >= warn, damage < warn)
     return out
 
 
@@ -939,6 +989,10 @@ DIAGNOSTIC_KEYS = (
     'tide_margin_at_length',
     # The anchor's drag state code (core/monitor/holding.py).
     'drag_state',
+    # Chain fatigue (core/monitor/fatigue.py): Miner's damage, its rate (1/s), life left (s).
+    'fatigue_damage',
+    'fatigue_damage_rate',
+    'fatigue_life_left',
 )
 
 

@@ -33,6 +33,8 @@ from typing import NamedTuple, Optional
 
 import numpy as np
 
+from catenary_monitor.core.config.parameters import LineConfig
+
 try:  # the per-sample loop in C (core/monitor/_twin_loops.c; optional: else the Python loop)
     from catenary_monitor.core.monitor import _twin_loops as _loops  # type: ignore[attr-defined]
 except ImportError:  # not built
@@ -79,11 +81,19 @@ RATE_MIN_SPAN = 3600.0
 
 
 class Curve(NamedTuple):
-    """One line's S-N curve: ``m``, ``log_a`` and the stress per tension (Pa/N)."""
+    """One line's S-N curve: ``m``, ``log_a`` and the stress per tension (Pa/N); samples above
+    ``limit`` (N) are not counted (no mooring produces them: a sensor or scaling fault)."""
 
     m: float = SEED_M
     log_a: float = SEED_LOG_A
     stress_per_tension: float = SEED_STRESS_PER_TENSION
+    limit: float = math.inf
+
+    @classmethod
+    def of(cls, line: LineConfig) -> Curve:
+        """A line's curve (``NAME.fatigue_*``); readings above 10 x MBL are skipped (the
+        monitor's impossible-input bound, core/monitor/plausible.py)."""
+        return cls(line.fatigue_m, line.fatigue_log_a, line.stress_per_tension, 10.0 * line.mbl)
 
     @property
     def scale(self) -> float:
@@ -123,9 +133,7 @@ def cycle_damage(tension_range: float, curve: Curve) -> float:
     return float((abs(tension_range) * curve.scale) ** curve.m * curve.inv_a)
 
 
-def _push(
-    s: list[float], r: list[float], h: list[float], value: float, curve: Curve
-) -> None:
+def _push(s: list[float], r: list[float], h: list[float], value: float, curve: Curve) -> None:
     """One sample into the residue ``r`` and its halves ``h``; ``s`` is ``[closed, fixed]``
     (all changed in place). The same operations, in the same order, as the C loop."""
     n = len(r)
@@ -187,16 +195,17 @@ def life_left(damage: float, rate_per_s: float) -> float:
     return math.inf if rate_per_s <= 0.0 else (1.0 - damage) / rate_per_s
 
 
-def _usable(tension: float) -> bool:
-    """A sample the count takes: finite and not negative (others are skipped)."""
-    return math.isfinite(tension) and tension >= 0.0
+def _usable(tension: float, limit: float) -> bool:
+    """A sample the count takes: finite, not negative, not above ``limit`` (others are
+    skipped)."""
+    return math.isfinite(tension) and 0.0 <= tension <= limit
 
 
 def step(
     state: FatigueState, t: float, tension: float, curve: Curve
 ) -> tuple[FatigueState, tuple[float, float, float]]:
     """One tension sample (N) at ``t`` (s): the new state and :data:`FIELDS` after it."""
-    if _usable(tension):
+    if _usable(tension, curve.limit):
         r, h = list(state.residue), list(state.halves)
         sums = [state.closed, state.fixed]
         _push(sums, r, h, float(tension), curve)
@@ -245,6 +254,7 @@ def _series_c(
         curve.scale,
         curve.m,
         curve.inv_a,
+        curve.limit,
         residue,
         halves,
         len(state.residue),

@@ -7,8 +7,9 @@ tide and logger statuses, and turns each event into one :class:`Step`:
   :class:`Tick` (the periodic step, at ``diagnostic_rate``), :class:`LoggerHealth` (the MCAP
   logger's state changed), :class:`Reconfigure` (accepted parameter change) and
   :class:`Acknowledge` (an operator acknowledged a line's alarm, or all:
-  :mod:`catenary_monitor.core.monitor.acknowledge`), each with its time ``stamp_ns`` (ns on the
-  monitor's clock; events come in time order).
+  :mod:`catenary_monitor.core.monitor.acknowledge`) and :class:`Shelve` (an operator shelved or
+  unshelved an alarm: :mod:`catenary_monitor.core.monitor.shelving`), each with its time
+  ``stamp_ns`` (ns on the monitor's clock; events come in time order).
 
 What an event does, in this order (the one schedule the node, replay and the tests share):
 
@@ -21,20 +22,23 @@ What an event does, in this order (the one schedule the node, replay and the tes
    line at a tension event, every line at a depth event or a tick; each stepped line's
    acknowledgement state follows its level
    (:func:`catenary_monitor.core.monitor.acknowledge.step`);
-5. a diagnostic snapshot is taken when the event is a tick or when any level changed: never two
+5. the alarm flood is decided when the event raised an alarm and at a tick
+   (:mod:`catenary_monitor.core.monitor.alarm_flood`);
+6. a diagnostic snapshot is taken when the event is a tick or when any level changed: never two
    per event, so the statuses of one snapshot always agree.
 
 The :class:`Step` carries the outputs of the lines solved (:data:`OUTPUT_FIELDS`), the snapshot
-(or None) and the level transitions. A line is never OK while blind: before its first tension
-and before the first depth it is STALE and says what is missing. Times in the alarm logic are
-seconds (``stamp_ns * 1e-9``); forces N, lengths m.
+(or None), the level transitions and the alarm journal's records
+(:mod:`catenary_monitor.core.monitor.alarm_journal`). A line is never OK while blind: before
+its first tension and before the first depth it is STALE and says what is missing. Times in the
+alarm logic are seconds (``stamp_ns * 1e-9``); forces N, lengths m.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, NamedTuple, Optional, Sequence, Union
 
 import numpy as np
@@ -49,7 +53,9 @@ from catenary_monitor.core.config.parameters import (
     runtime_change_messages,
 )
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
+from catenary_monitor.core.monitor import alarm_flood, shelving
 from catenary_monitor.core.monitor import dock_watch as dock_live
+from catenary_monitor.core.monitor import fatigue as fatigue_rule
 from catenary_monitor.core.monitor import holding as holding_rule
 from catenary_monitor.core.monitor import (
     readings,
@@ -58,6 +64,7 @@ from catenary_monitor.core.monitor import (
     tide_trend,
     uncertainty,
 )
+from catenary_monitor.core.monitor.alarm_journal import AlarmEvent, entries
 from catenary_monitor.core.monitor.alarms import (
     CONDITIONS,
     RANK,
@@ -103,8 +110,11 @@ __all__ = [
     'Reconfigure',
     'Start',
     'Acknowledge',
+    'Shelve',
     'ClockHealth',
     'Intake',
+    'Coalesced',
+    'FatigueStore',
     'Event',
     'LineOutput',
     'ComponentStatus',
@@ -163,6 +173,8 @@ OUTPUT_FIELDS = (
     *holding_rule.LENGTH_FIELDS,
     # The anchor's drag state (0 holding, 1 overloaded, 2 dragging): core/monitor/holding.py.
     *holding_rule.DRAG_FIELDS,
+    # Chain fatigue (Miner's damage, its rate over the last day, the life left): fatigue.py.
+    *fatigue_rule.FIELDS,
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -178,7 +190,17 @@ _NAN = math.nan
 _INCONSISTENT = CONDITIONS.index('inconsistent')
 _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
 #: The statuses on /diagnostics that are not lines (``catenary_monitor: NAME``).
-COMPONENTS = ('tide', 'sensors', 'logger', 'dock', 'parameters', 'clock', 'intake')
+COMPONENTS = (
+    'tide',
+    'sensors',
+    'alarms',
+    'logger',
+    'dock',
+    'parameters',
+    'clock',
+    'intake',
+    'fatigue',
+)
 #: The components whose STALE is a consequence of blind inputs, announced by the sensors alarm.
 _CONSEQUENCES = ('tide', 'dock')
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
@@ -213,11 +235,13 @@ class Tick(NamedTuple):
 
 
 class LoggerHealth(NamedTuple):
-    """The MCAP logger's state at ``stamp_ns``: ``error`` (None while it writes) and its file."""
+    """The MCAP logger's state at ``stamp_ns``: ``error`` (None while it writes), its file and
+    a ``warning`` (low disk space; None: none)."""
 
     stamp_ns: int
     error: Optional[str]
     path: Optional[str]
+    warning: Optional[str] = None
 
 
 class Start(NamedTuple):
@@ -244,6 +268,20 @@ class Acknowledge(NamedTuple):
     publisher: str = ''
 
 
+class Shelve(NamedTuple):
+    """An operator shelved ``alarm`` (a line, or ``sensors``) or one ``condition`` of it
+    (:data:`~catenary_monitor.core.monitor.acknowledge.WHOLE`: the whole alarm) for
+    ``seconds`` (0: unshelve it), from ``origin`` (as claimed), published by ``publisher``
+    (the middleware's identity of the sender; '' from the console's page)."""
+
+    stamp_ns: int
+    alarm: str
+    condition: str
+    seconds: float
+    origin: str
+    publisher: str = ''
+
+
 class ClockHealth(NamedTuple):
     """The ROS clock (``use_sim_time``) at ``stamp_ns``: ``stopped_for`` [s] of wall time
     without advancing (None: it advances)."""
@@ -254,17 +292,70 @@ class ClockHealth(NamedTuple):
 
 class Intake(NamedTuple):
     """Samples since the previous Intake event: per line, then the depth, ``received``
-    (handled) and ``dropped`` (lost before the node handled them); ``busy`` [s] of wall time
-    spent in callbacks over ``period`` [s] of wall time."""
+    (handled: stepped), ``dropped`` (lost before the node took them) and ``coalesced`` (taken
+    and logged, not stepped: a newer sample of the same input was handled instead; empty:
+    none, as in logs from before coalescing); ``busy`` [s] of wall time spent in callbacks
+    over ``period`` [s] of wall time."""
 
     stamp_ns: int
     received: tuple[int, ...]
     dropped: tuple[int, ...]
     busy: float
     period: float
+    coalesced: tuple[int, ...] = ()
 
 
-Event = Union[Tension, Depth, Tick, LoggerHealth, Reconfigure, Acknowledge, ClockHealth, Intake]
+class Coalesced(NamedTuple):
+    """The node took ``samples`` samples of line ``line`` (a name; None: the depth) faster than
+    it could handle them: they are logged, stamped after ``stamp_ns`` and at most ``last_ns``,
+    and not stepped (the newer sample that follows them is). Recorded before them, so replay
+    leaves out exactly the samples the node left out."""
+
+    stamp_ns: int
+    line: Optional[str]
+    last_ns: int
+    samples: int
+
+
+class FatigueStore(NamedTuple):
+    """The fatigue store at ``stamp_ns`` (core/monitor/fatigue.py; the node keeps it beside
+    its log): its ``state`` (:data:`FATIGUE_STORE_STATES`), one-line ``message``, and, when it
+    was read at start, each line's stored state (``(name, record or None)``: None, from
+    ``NAME.fatigue_damage_initial``); ``lines`` None only changes the status (a write that
+    failed or worked again)."""
+
+    stamp_ns: int
+    state: str
+    message: str
+    lines: Optional[tuple[tuple[str, Any], ...]] = None
+
+
+#: The fatigue store's states and their levels: read at start (``loaded``), none yet in a new
+#: log folder (``new``), none where logs are (``missing``), unreadable (``damaged``), a save that
+#: failed (``write_failed``).
+FATIGUE_STORE_STATES = {
+    'loaded': Level.OK,
+    'new': Level.OK,
+    'saved': Level.OK,
+    'missing': Level.WARN,
+    'damaged': Level.WARN,
+    'write_failed': Level.WARN,
+}
+
+
+Event = Union[
+    Tension,
+    Depth,
+    Tick,
+    LoggerHealth,
+    Reconfigure,
+    Acknowledge,
+    Shelve,
+    ClockHealth,
+    Intake,
+    FatigueStore,
+    Coalesced,
+]
 
 
 class LineOutput(NamedTuple):
@@ -300,14 +391,17 @@ class Change(NamedTuple):
 
 class Step(NamedTuple):
     """What one event did: the outputs of the lines solved, the snapshot (or None), the
-    transitions; ``kind`` is ``tension``, ``depth``, ``tick``, ``logger``, ``configure`` or
-    ``acknowledge``."""
+    transitions, the alarm journal's records and, for a shelving request, the monitor's answer
+    (``note``); ``kind`` is ``tension``, ``depth``, ``tick``, ``logger``, ``configure``,
+    ``acknowledge``, ``shelve``, ``clock`` or ``intake``."""
 
     stamp_ns: int
     kind: str
     outputs: tuple[LineOutput, ...]
     snapshot: Optional[Snapshot]
     transitions: tuple[Change, ...]
+    alarm_events: tuple[AlarmEvent, ...] = ()
+    note: str = ''
 
 
 @dataclass
@@ -331,6 +425,9 @@ class LineState:
     )  # the tension sensor's per-sample memory
     sensor_code: int = sensor_state.OK  # sensor state decided at the newest tick
     parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
+    coalesced_until: int = -1  # ns: this line's samples stamped up to it were not stepped
+    fatigue: fatigue_rule.FatigueState = fatigue_rule.FatigueState()  # the streamed count
+    fatigue_values: tuple[float, ...] = (0.0, _NAN, _NAN)  # fatigue_rule.FIELDS now
     sample_ns: int = -1  # ns, the newest accepted sample's stamp (header or arrival; -1: none)
     stamp_refused: float = -math.inf  # s, when a sample's stamp was last refused (arrival)
 
@@ -366,6 +463,8 @@ class LineState:
             mbl=self.config.mbl,
             drag_state=v[_AT['drag_state']],
             implied_anchor_distance=v[_AT['implied_anchor_distance']],
+            fatigue_damage=self.fatigue_values[0],
+            fatigue_life_left=self.fatigue_values[2],
         )
 
 
@@ -432,6 +531,19 @@ class CoreState:
     intake_checked: list[tuple[bool, ...]] = field(default_factory=list)
     intake_heard: list[bool] = field(default_factory=list)
     intake_seen: bool = False
+    depth_coalesced_until: int = -1  # ns: depth samples stamped up to it were not stepped
+    # The alarm system (core.alarm_flood): the flood status, the raises it counts.
+    alarms: tuple[Level, str] = (Level.OK, '')
+    alarms_entered: float = _NAN
+    flood: alarm_flood.Flood = field(default_factory=alarm_flood.initial)
+    # The answer to the newest shelving request, and how many were answered.
+    shelve_answer: str = ''
+    shelve_requests: int = 0
+    # The fatigue store's status (a FatigueStore event seen: the node keeps one).
+    fatigue: tuple[Level, str] = (Level.OK, '')
+    fatigue_word: str = ''
+    fatigue_entered: float = 0.0
+    fatigue_seen: bool = False
 
 
 class MonitorCore:
@@ -449,7 +561,7 @@ class MonitorCore:
         in the root namespace); ``depth_id`` the depth topic; ``logger_id`` the log directory.
     """
 
-    __slots__ = ('config', 'index', 'depth_id', 'logger_id', 'dock_model', 'state')
+    __slots__ = ('config', 'index', 'depth_id', 'logger_id', 'dock_model', 'curves', 'state')
 
     def __init__(
         self,
@@ -469,9 +581,12 @@ class MonitorCore:
                 ids.get(lc.name, resolve_topic(lc.tension_topic)),
                 LineAlarm.for_line(lc, config.alarm).initial(start),
                 ack=alarm_ack.initial(start),
+                fatigue=fatigue_rule.initial(lc.fatigue_damage_initial),
+                fatigue_values=(lc.fatigue_damage_initial, _NAN, _NAN),
             )
             for lc in config.lines
         ]
+        self.curves = [fatigue_rule.Curve.of(lc) for lc in config.lines]
         self.index = {line.config.name: k for k, line in enumerate(lines)}
         self.depth_id = depth_id or resolve_topic(config.depth_topic)
         self.logger_id = logger_id
@@ -493,17 +608,27 @@ class MonitorCore:
             parameters_entered=start,
             clock_entered=start,
             intake_entered=start,
+            fatigue_entered=start,
         )
         self.state.sensors = self._sensors_now(start)
+        self.state.alarms = alarm_flood.status(self.state.flood, config.alarm)
+        self.state.alarms_entered = start
 
     # ------------------------------------------------------------------ events
     def step(self, event: Event) -> Step:
-        """Apply one event (see the module docstring for the schedule); return what it did."""
+        """Apply one event (see the module docstring for the schedule); return what it did.
+
+        A tension or depth sample that a :class:`Coalesced` record left out is not stepped
+        (an empty Step of kind ``coalesced``, the core unchanged)."""
+        if isinstance(event, (Tension, Depth)) and self.coalesced(event):
+            return Step(event.stamp_ns, 'coalesced', (), None, ())
         self.state.last_ns = event.stamp_ns
         if isinstance(event, Tension):
             return self._on_tension(event)
         if isinstance(event, Depth):
             return self._on_depth(event)
+        if isinstance(event, Coalesced):
+            return self._on_coalesced(event)
         if isinstance(event, Tick):
             return self._on_tick(event)
         if isinstance(event, LoggerHealth):
@@ -512,10 +637,14 @@ class MonitorCore:
             return self._on_reconfigure(event)
         if isinstance(event, Acknowledge):
             return self._on_acknowledge(event)
+        if isinstance(event, Shelve):
+            return self._on_shelve(event)
         if isinstance(event, ClockHealth):
             return self._on_clock(event)
         if isinstance(event, Intake):
             return self._on_intake(event)
+        if isinstance(event, FatigueStore):
+            return self._on_fatigue_store(event)
         raise TypeError(f'not a monitor event: {event!r}')
 
     def _on_tension(self, ev: Tension) -> Step:
@@ -537,9 +666,13 @@ class MonitorCore:
             a.tension_rate_max * line.config.mbl,
             _jitter(a, ev.sample_ns),
         )
+        line.fatigue, line.fatigue_values = fatigue_rule.step(
+            line.fatigue, line.tension_s, line.tension, self.curves[ev.line]
+        )
         self._solve_one(line)
-        changes = self._step_lines([ev.line], ev.stamp_ns)
-        return self._finish(ev.stamp_ns, 'tension', [ev.line], changes)
+        log: list[AlarmEvent] = []
+        changes = self._step_lines([ev.line], ev.stamp_ns, log)
+        return self._finish(ev.stamp_ns, 'tension', [ev.line], changes, log)
 
     def _on_depth(self, ev: Depth) -> Step:
         a = self.config.alarm
@@ -561,24 +694,48 @@ class MonitorCore:
             a.depth_rate_max,
             _jitter(a, ev.sample_ns),
         )
+        log: list[AlarmEvent] = []
         changes = self._decide_tide(ev.stamp_ns)
-        changes += self._decide_blind(ev.stamp_ns)
+        changes += self._decide_blind(ev.stamp_ns, log)
         solved = [k for k, line in enumerate(self.state.lines) if line.tension_s == line.tension_s]
         self._solve_many(solved)
-        changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns)
-        return self._finish(ev.stamp_ns, 'depth', solved, changes)
+        changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns, log)
+        return self._finish(ev.stamp_ns, 'depth', solved, changes, log)
 
     def _on_tick(self, ev: Tick) -> Step:
+        log: list[AlarmEvent] = []
         self._decide_sensors(ev.stamp_ns)
         changes = self._decide_tide(ev.stamp_ns)
-        changes += self._decide_blind(ev.stamp_ns)
+        changes += self._decide_blind(ev.stamp_ns, log)
         if self.dock_model is not None:
             changes += self._decide_dock(ev.stamp_ns)
-        changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns)
-        return Step(ev.stamp_ns, 'tick', (), self.snapshot(ev.stamp_ns), tuple(changes))
+        changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns, log)
+        changes += self._decide_flood(ev.stamp_ns, log, tick=True)
+        snapshot = self.snapshot(ev.stamp_ns)
+        return Step(ev.stamp_ns, 'tick', (), snapshot, tuple(changes), tuple(log))
+
+    def _on_fatigue_store(self, ev: FatigueStore) -> Step:
+        """The fatigue store: each line's stored count taken where it was read (a line the
+        store lacks, or whose record is damaged, from ``NAME.fatigue_damage_initial``), and
+        the store's status, shown at once."""
+        if ev.lines is not None:
+            stored = dict(ev.lines)
+            for line, curve in zip(self.state.lines, self.curves):
+                state = fatigue_rule.from_record(stored.get(line.config.name), curve)
+                if state is None:
+                    state = fatigue_rule.initial(line.config.fatigue_damage_initial)
+                line.fatigue = state
+                damage = state.damage()
+                line.fatigue_values = (damage, _NAN, fatigue_rule.life_left(damage, _NAN))
+                line.values = _with_fatigue(line.values, line.fatigue_values)
+        self.state.fatigue_seen = True
+        self.state.fatigue_word = ev.state
+        level = FATIGUE_STORE_STATES.get(ev.state, Level.WARN)
+        changes = self._set_component('fatigue', (level, ev.message), ev.stamp_ns)
+        return Step(ev.stamp_ns, 'fatigue', (), self.snapshot(ev.stamp_ns), tuple(changes))
 
     def _on_logger(self, ev: LoggerHealth) -> Step:
-        new = logger_status(ev.error, ev.path)
+        new = logger_status(ev.error, ev.path, ev.warning)
         changes = self._set_component('logger', new, ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'logger', [], changes)
 
@@ -586,14 +743,127 @@ class MonitorCore:
         """Acknowledge one line's alarm (or every line's; an unknown name changes nothing);
         the snapshot shows it at once."""
         now = _stamp_s(ev.stamp_ns)
+        log: list[AlarmEvent] = []
         for line in self.state.lines:
             if ev.line is None or ev.line == line.config.name:
-                line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin, ev.publisher)
+                old = line.ack
+                line.ack = alarm_ack.acknowledge(old, now, ev.origin, ev.publisher)
+                log += entries(line.config.name, old, line.ack, now)
         if ev.line is None or ev.line == alarm_ack.SENSORS:
-            self.state.sensors_ack = alarm_ack.acknowledge(
-                self.state.sensors_ack, now, ev.origin, ev.publisher
+            old = self.state.sensors_ack
+            self.state.sensors_ack = alarm_ack.acknowledge(old, now, ev.origin, ev.publisher)
+            log += entries(alarm_ack.SENSORS, old, self.state.sensors_ack, now)
+        snapshot = self.snapshot(ev.stamp_ns)
+        return Step(ev.stamp_ns, 'acknowledge', (), snapshot, (), tuple(log))
+
+    def _on_shelve(self, ev: Shelve) -> Step:
+        """Shelve or unshelve an alarm (core.shelving's rules) or refuse to; the answer is the
+        step's ``note`` and the ``alarms`` status's ``shelve_answer``, shown at once."""
+        now = _stamp_s(ev.stamp_ns)
+        a = self.config.alarm
+        request = shelving.ShelveRequest(ev.alarm, ev.condition, ev.seconds, ev.origin)
+        k = self.index.get(ev.alarm)
+        line = None if k is None else self.state.lines[k]
+        active = None if line is None else [latch.active for latch in line.state.latches]
+        names = [ln.config.name for ln in self.state.lines]
+        target = ev.alarm if ev.condition == alarm_ack.WHOLE else f'{ev.alarm}.{ev.condition}'
+        refused = shelving.refusal(request, names, a, active)
+        log: list[AlarmEvent] = []
+        if refused is not None:
+            answer = f'{target}: refused: {refused}'
+            by = alarm_ack.bounded_text(ev.origin)
+            log.append(AlarmEvent(now, ev.alarm, 'refused', condition=refused, by=by))
+        else:
+            old = self.state.sensors_ack if line is None else line.ack
+            new, answer = self._shelf(old, line, ev, now, target)
+            if line is None:
+                self.state.sensors_ack = new
+            else:
+                line.ack = new
+            log += entries(ev.alarm, old, new, now, self._raised_condition(line, new), ev.origin)
+        self.state.shelve_answer = answer
+        self.state.shelve_requests += 1
+        changes = self._decide_flood(ev.stamp_ns, log)
+        snapshot = self.snapshot(ev.stamp_ns)
+        return Step(ev.stamp_ns, 'shelve', (), snapshot, tuple(changes), tuple(log), answer)
+
+    def _shelf(
+        self,
+        old: alarm_ack.AckState,
+        line: Optional[LineState],
+        ev: Shelve,
+        now: float,
+        target: str,
+    ) -> tuple[alarm_ack.AckState, str]:
+        """The alarm after an accepted shelving request, and the answer."""
+        level, suppressed = (
+            (self.state.sensors[0], False)
+            if line is None
+            else (line.state.level, line.state.suppressed)
+        )
+        if ev.seconds == 0.0:
+            if not alarm_ack.shelved(old):
+                return old, f'{target}: not shelved, nothing to unshelve'
+            masked = self._masked(line, old)
+            new = alarm_ack.unshelve(old, now, level, masked, suppressed)
+            return new, f'{ev.alarm} unshelved by {ev.origin}'
+        until = now + ev.seconds
+        masked = self._masked(line, replace(old, shelved_condition=ev.condition))
+        new = alarm_ack.shelve(
+            old, now, until, ev.condition, ev.origin, masked, suppressed, ev.publisher
+        )
+        return new, f'{target} shelved for {ev.seconds:g} s by {ev.origin}'
+
+    def _masked(self, line: Optional[LineState], ack: alarm_ack.AckState) -> Level:
+        """The level ``ack``'s shelf leaves visible of ``line`` (None: the sensors alarm, whose
+        one condition a shelf hides)."""
+        if line is None:
+            return Level.OK
+        hidden = shelving.hidden_conditions(
+            ack.shelved_condition, self.config.alarm.unshelvable_conditions
+        )
+        latches = [latch.active for latch in line.state.latches]
+        return shelving.masked_level(latches, line.state.stale, hidden)
+
+    def _raised_condition(self, line: Optional[LineState], ack: alarm_ack.AckState) -> str:
+        """The condition a raise of ``line``'s alarm names: the visible one under its shelf."""
+        if line is None:
+            return alarm_ack.condition(ack.level, ())
+        hidden = (
+            shelving.hidden_conditions(
+                ack.shelved_condition, self.config.alarm.unshelvable_conditions
             )
-        return Step(ev.stamp_ns, 'acknowledge', (), self.snapshot(ev.stamp_ns), ())
+            if alarm_ack.shelved(ack)
+            else frozenset()
+        )
+        latches = [
+            latch.active and c not in hidden for c, latch in zip(CONDITIONS, line.state.latches)
+        ]
+        return alarm_ack.condition(ack.level, latches)
+
+    def _chatter(self) -> tuple[int, float]:
+        """The chattering rule: (chatter_count, chatter_window [s])."""
+        a = self.config.alarm
+        return int(a.chatter_count), a.chatter_window
+
+    def _decide_flood(
+        self, stamp_ns: int, log: list[AlarmEvent], tick: bool = False
+    ) -> list[Change]:
+        """The flood decision (core.alarm_flood) after an event that raised an alarm, or at a
+        tick; its start and end go to the journal ``log``."""
+        raised = [(e.time, e.alarm) for e in log if e.kind == 'raised']
+        if not raised and not tick:
+            return []
+        now = _stamp_s(stamp_ns)
+        old = self.state.flood
+        new = alarm_flood.decide(old, raised, now, self.config.alarm)
+        self.state.flood = new
+        if new.since == new.since and old.since != old.since:
+            name, at = new.first_out
+            log.append(AlarmEvent(now, alarm_flood.NAME, 'flood', 'WARN', by=name, value=at))
+        elif old.since == old.since and new.since != new.since:
+            log.append(AlarmEvent(now, alarm_flood.NAME, 'flood_end', value=now - old.since))
+        return self._set_component('alarms', alarm_flood.status(new, self.config.alarm), stamp_ns)
 
     def _on_clock(self, ev: ClockHealth) -> Step:
         """The ROS clock's state; always a snapshot (the node sends these on a wall-clock
@@ -623,6 +893,7 @@ class MonitorCore:
         ]
         received = sum(sum(c.received) for c in counts)
         dropped = sum(sum(c.dropped) for c in counts)
+        coalesced = sum(sum(c.coalesced) for c in counts)
         recent = [c for c in counts if ev.stamp_ns - c.stamp_ns < int(BUSY_WINDOW * 1e9)]
         period = sum(c.period for c in recent)
         busy = sum(c.busy for c in recent) / period if period > 0 else _NAN
@@ -633,19 +904,31 @@ class MonitorCore:
             INTAKE_WINDOW,
             self.state.intake[0] == Level.OK,
             sum(self.intake_missing()),
+            coalesced,
         )
         changes = self._set_component('intake', new, ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'intake', [], changes)
 
     def intake_dropped(self) -> list[int]:
-        """Samples dropped per line, then the depth, in the last :data:`INTAKE_WINDOW`: those
-        counted and those missing against the sample rates."""
+        """Samples not handled per line, then the depth, in the last :data:`INTAKE_WINDOW`:
+        those counted lost, those coalesced (logged, not stepped) and those missing against
+        the sample rates."""
         n = len(self.state.lines) + 1
         counted = [
             sum(c.dropped[k] for c in self.state.intake_counts if len(c.dropped) == n)
             for k in range(n)
         ]
-        return [c + m for c, m in zip(counted, self.intake_missing())]
+        coalesced = self.intake_coalesced()
+        return [c + j + m for c, j, m in zip(counted, coalesced, self.intake_missing())]
+
+    def intake_coalesced(self) -> list[int]:
+        """Samples coalesced (taken and logged, a newer one stepped instead) per line, then the
+        depth, in the last :data:`INTAKE_WINDOW`."""
+        n = len(self.state.lines) + 1
+        return [
+            sum(c.coalesced[k] for c in self.state.intake_counts if len(c.coalesced) == n)
+            for k in range(n)
+        ]
 
     def intake_missing(self) -> list[int]:
         """Samples missing per line, then the depth, in the last :data:`INTAKE_WINDOW`: the
@@ -665,9 +948,28 @@ class MonitorCore:
                 if len(c.received) == n
             ]
             span = sum(c.period for c, ok in pairs if ok)
-            got = sum(c.received[k] + c.dropped[k] for c, ok in pairs if ok)
+            got = sum(
+                c.received[k] + c.dropped[k] + (c.coalesced[k] if len(c.coalesced) == n else 0)
+                for c, ok in pairs
+                if ok
+            )
             out.append(missing_samples(rates[k], span, got))
         return out
+
+    def coalesced(self, ev: Union[Tension, Depth]) -> bool:
+        """Whether a :class:`Coalesced` record left this sample out (it is not stepped)."""
+        if isinstance(ev, Depth):
+            return ev.stamp_ns <= self.state.depth_coalesced_until
+        return ev.stamp_ns <= self.state.lines[ev.line].coalesced_until
+
+    def _on_coalesced(self, ev: Coalesced) -> Step:
+        """Leave out the samples the record names (an unknown line name changes nothing)."""
+        if ev.line is None:
+            self.state.depth_coalesced_until = max(self.state.depth_coalesced_until, ev.last_ns)
+        elif ev.line in self.index:
+            line = self.state.lines[self.index[ev.line]]
+            line.coalesced_until = max(line.coalesced_until, ev.last_ns)
+        return Step(ev.stamp_ns, 'coalesced', (), None, ())
 
     def _on_reconfigure(self, ev: Reconfigure) -> Step:
         """Take the new configuration; flag what changed (WARN on the ``parameters`` status
@@ -699,6 +1001,7 @@ class MonitorCore:
         if config.alarm.tide_trend_window != self.config.alarm.tide_trend_window:
             self.state.trend = tide_trend.TrendState()  # other bins: the trend starts again
         self.config = config
+        self.curves = [fatigue_rule.Curve.of(lc) for lc in config.lines]
         for line, lc in zip(self.state.lines, config.lines):
             line.config, line.alarm = lc, LineAlarm.for_line(lc, config.alarm)
         self.dock_model = DockModel.from_config(config) if config.has_dock_model else None
@@ -732,15 +1035,20 @@ class MonitorCore:
             a.depth_timeout,
         )
 
-    def _decide_blind(self, stamp_ns: int) -> list[Change]:
+    def _decide_blind(self, stamp_ns: int, log: list[AlarmEvent]) -> list[Change]:
         """The sensors' common-cause alarm, after the tide's decision, and its
-        acknowledgement state."""
+        acknowledgement state (its records to the journal ``log``)."""
         now = _stamp_s(stamp_ns)
         self.state.sensors_waiting = sum(
             line.tension_s != line.tension_s for line in self.state.lines
         )
         changes = self._set_component('sensors', self._sensors_now(now), stamp_ns)
-        self.state.sensors_ack = alarm_ack.step(self.state.sensors_ack, self.state.sensors[0], now)
+        old = self.state.sensors_ack
+        masked = Level.OK if alarm_ack.shelved(old) else None
+        level = self.state.sensors[0]
+        new = alarm_ack.step(old, level, now, False, masked, bool(changes), self._chatter())
+        self.state.sensors_ack = new
+        log += entries(alarm_ack.SENSORS, old, new, now, alarm_ack.condition(new.level, ()))
         return changes
 
     def _decide_sensors(self, stamp_ns: int) -> None:
@@ -834,6 +1142,7 @@ class MonitorCore:
                 '',
                 NO_MODEL,
             )
+            line.values = _with_fatigue(line.values, line.fatigue_values)
             return
         r = solve(
             lc.weight, h, tension=t, anchor_distance=lc.anchor_distance, mbl=lc.mbl, ea=lc.ea
@@ -900,6 +1209,8 @@ class MonitorCore:
     def _add_derived(self, lines: Sequence[LineState]) -> None:
         """The bounds and the holding values of freshly solved lines (from their values);
         lines without accuracies or holding data keep NaN (what the functions give them)."""
+        for line in lines:
+            line.values = _with_fatigue(line.values, line.fatigue_values)
         accuracy = self.config.alarm.depth_accuracy
         tolerance = self.config.alarm.drag_tolerance
         for fields, compute, wanted in (
@@ -939,9 +1250,11 @@ class MonitorCore:
         rate, excess = self.state.trend.rate, self.state.trend.excess
         return [tide_trend.time_to_uplift(m, f, rate, excess) for m, f in zip(margins, forces)]
 
-    def _step_lines(self, which: Any, stamp_ns: int) -> list[Change]:
-        """Step the alarms of the given lines at ``stamp_ns``; their transitions."""
+    def _step_lines(self, which: Any, stamp_ns: int, log: list[AlarmEvent]) -> list[Change]:
+        """Step the alarms of the given lines at ``stamp_ns``; their transitions (their
+        alarms' records to the journal ``log``)."""
         now = _stamp_s(stamp_ns)
+        chatter = self._chatter()
         changes = []
         for k in which:
             line = self.state.lines[k]
@@ -955,17 +1268,32 @@ class MonitorCore:
                 ),
                 now,
             )
-            line.ack = alarm_ack.step(line.ack, line.state.level, now, line.state.suppressed)
+            old = line.ack
+            flip = any(not ev.suppressed for ev in events)
+            masked = self._masked(line, old) if alarm_ack.shelved(old) else None
+            level, quiet = line.state.level, line.state.suppressed
+            line.ack = alarm_ack.step(old, level, now, quiet, masked, flip, chatter)
+            if line.ack is not old:
+                condition = self._raised_condition(line, line.ack)
+                log += entries(line.config.name, old, line.ack, now, condition)
             changes += [Change(line.config.name, ev) for ev in events]
         return changes
 
     def _finish(
-        self, stamp_ns: int, kind: str, solved: Sequence[int], changes: list[Change]
+        self,
+        stamp_ns: int,
+        kind: str,
+        solved: Sequence[int],
+        changes: list[Change],
+        log: Sequence[AlarmEvent] = (),
     ) -> Step:
-        """The Step of an input event: outputs of the solved lines, a snapshot on a change."""
+        """The Step of an input event: outputs of the solved lines, the flood decision if it
+        raised an alarm, a snapshot on a change."""
+        log = list(log)
+        changes = changes + self._decide_flood(stamp_ns, log)
         outputs = tuple(self.output(k) for k in solved)
         snapshot = self.snapshot(stamp_ns) if changes else None
-        return Step(stamp_ns, kind, outputs, snapshot, tuple(changes))
+        return Step(stamp_ns, kind, outputs, snapshot, tuple(changes), tuple(log))
 
     # ------------------------------------------------------------------ views
     def output(self, k: int) -> LineOutput:
@@ -1017,6 +1345,7 @@ class MonitorCore:
                 self.state.sensors, self.state.sensors_ack, self.state.sensors_waiting
             )
         )
+        statuses.append(self.alarms_component(self.state.alarms, self.state.flood))
         level, message = self.state.logger
         statuses.append(
             ComponentStatus(f'{NODE_NAME}: logger', level, message, self.logger_id, ())
@@ -1025,6 +1354,17 @@ class MonitorCore:
             statuses.append(dock_component(self.state.dock, self.state.dock_values))
         statuses += self.guard_components(now)
         return Snapshot(stamp_ns, tuple(statuses))
+
+    def alarms_component(
+        self, status: tuple[Level, str], flood: alarm_flood.Flood
+    ) -> ComponentStatus:
+        """The ``catenary_monitor: alarms`` status: the flood decision ``status`` and ``flood``
+        (:mod:`catenary_monitor.core.monitor.alarm_flood`), the shelving rules and the answer
+        to the newest shelving request."""
+        values = alarm_flood.values(
+            flood, self.config.alarm, self.state.shelve_answer, self.state.shelve_requests
+        )
+        return ComponentStatus(f'{NODE_NAME}: alarms', status[0], status[1], NODE_NAME, values)
 
     def guard_components(self, now: float) -> list[ComponentStatus]:
         """The statuses after the logger and the dock: the runtime-change flag, the ROS clock
@@ -1035,6 +1375,8 @@ class MonitorCore:
             out.append(flag)
         if self.state.clock_seen:
             out.append(ComponentStatus(f'{NODE_NAME}: clock', *self.state.clock, NODE_NAME, ()))
+        if self.state.fatigue_seen:
+            out.append(self.fatigue_component())
         if self.state.intake_seen:
             dropped = self.intake_dropped()
             names = [line.config.name for line in self.state.lines] + ['depth']
@@ -1047,10 +1389,22 @@ class MonitorCore:
                 values += (('messages_missing', str(sum(missing))),) + tuple(
                     (f'{name}.messages_missing', str(m)) for name, m in zip(names, missing)
                 )
+            handled = sum(sum(c.received) for c in self.state.intake_counts)
+            values += (
+                ('messages_coalesced', str(sum(self.intake_coalesced()))),
+                ('messages_handled', str(handled)),
+            )
             out.append(
                 ComponentStatus(f'{NODE_NAME}: intake', *self.state.intake, NODE_NAME, values)
             )
         return out
+
+    def fatigue_component(self) -> ComponentStatus:
+        """The ``catenary_monitor: fatigue`` status: the fatigue store's level and message,
+        ``store_state`` (:data:`FATIGUE_STORE_STATES`) and the worst line's ``fatigue_damage``."""
+        damages = [line.fatigue_values[0] for line in self.state.lines]
+        values = (('store_state', self.state.fatigue_word), ('max_damage', repr(max(damages))))
+        return ComponentStatus(f'{NODE_NAME}: fatigue', *self.state.fatigue, NODE_NAME, values)
 
     def parameters_component(self, now: float) -> Optional[ComponentStatus]:
         """The runtime-change status at ``now`` [s] (None when runtime changes are not
@@ -1066,6 +1420,15 @@ class MonitorCore:
 def _with_sensor(values: tuple[float, ...], code: int) -> tuple[float, ...]:
     """``values`` with the line's sensor state code in its place (``sensor_state``)."""
     return values[:_SENSOR_AT] + (float(code),) + values[_SENSOR_AT + 1 :]
+
+
+_FATIGUE_AT = VALUE_FIELDS.index(fatigue_rule.FIELDS[0])
+
+
+def _with_fatigue(values: tuple[float, ...], fatigue: tuple[float, ...]) -> tuple[float, ...]:
+    """``values`` with the line's fatigue values in their places."""
+    end = _FATIGUE_AT + len(fatigue)
+    return values[:_FATIGUE_AT] + tuple(fatigue) + values[end:]
 
 
 def _implausible(line: LineState, code: int) -> None:
@@ -1336,7 +1699,10 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
     if isinstance(event, Tick):
         return {'kind': 'tick'}
     if isinstance(event, LoggerHealth):
-        return {'kind': 'logger', 'error': event.error, 'path': event.path}
+        record = {'kind': 'logger', 'error': event.error, 'path': event.path}
+        if event.warning is not None:
+            record['warning'] = event.warning
+        return record
     if isinstance(event, Reconfigure):
         return {'kind': 'configure', 'parameters': config_to_params(event.config)}
     if isinstance(event, Acknowledge):
@@ -1347,16 +1713,32 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
             'origin': alarm_ack.bounded_text(event.origin),
             'publisher': alarm_ack.bounded_text(event.publisher),
         }
+    if isinstance(event, Shelve):
+        return {
+            'kind': 'shelve',
+            'alarm': event.alarm,
+            'condition': event.condition,
+            'seconds': event.seconds,
+            'origin': alarm_ack.bounded_text(event.origin),
+            'publisher': alarm_ack.bounded_text(event.publisher),
+        }
     if isinstance(event, ClockHealth):
         return {'kind': 'clock', 'stopped_for': event.stopped_for}
+    if isinstance(event, FatigueStore):
+        lines = None if event.lines is None else dict(event.lines)
+        return {'kind': 'fatigue', 'state': event.state, 'message': event.message, 'lines': lines}
     if isinstance(event, Intake):
         return {
             'kind': 'intake',
             'received': list(event.received),
             'dropped': list(event.dropped),
+            'coalesced': list(event.coalesced),
             'busy': event.busy,
             'period': event.period,
         }
+    if isinstance(event, Coalesced):
+        where = {'input': 'depth'} if event.line is None else {'line': event.line}
+        return {'kind': 'coalesced', **where, 'last_ns': event.last_ns, 'samples': event.samples}
     return None
 
 
@@ -1371,7 +1753,9 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
         if kind == 'tick':
             return Tick(stamp_ns)
         if kind == 'logger':
-            return LoggerHealth(stamp_ns, record.get('error'), record.get('path'))
+            return LoggerHealth(
+                stamp_ns, record.get('error'), record.get('path'), record.get('warning')
+            )
         if kind == 'configure':
             return Reconfigure(stamp_ns, config_from_params(record['parameters']))
         if kind == 'clock':
@@ -1384,6 +1768,30 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
                 tuple(int(x) for x in record['dropped']),
                 float(record['busy']),
                 float(record['period']),
+                tuple(int(x) for x in record.get('coalesced', ())),
+            )
+        if kind == 'coalesced':
+            line = None if record.get('input') == 'depth' else str(record['line'])
+            return Coalesced(stamp_ns, line, int(record['last_ns']), int(record['samples']))
+        if kind == 'shelve':
+            seconds = float(record['seconds'])
+            if not math.isfinite(seconds) or seconds < 0.0:
+                return None
+            return Shelve(
+                stamp_ns,
+                alarm_ack.bounded_text(str(record['alarm'])),
+                alarm_ack.bounded_text(str(record.get('condition') or alarm_ack.WHOLE)),
+                seconds,
+                alarm_ack.bounded_text(str(record.get('origin', ''))),
+                alarm_ack.bounded_text(str(record.get('publisher', ''))),
+            )
+        if kind == 'fatigue':
+            lines = record.get('lines')
+            return FatigueStore(
+                stamp_ns,
+                str(record['state']),
+                str(record['message']),
+                None if lines is None else tuple((str(k), v) for k, v in dict(lines).items()),
             )
         if kind == 'acknowledge':
             line = str(record['line'])

@@ -65,8 +65,10 @@ def reading_status(tension: float, depth: float, mbl: float, weight: float = mat
     if tension > MAX_TENSION_PER_MBL * mbl:
         return int(Status.IMPLAUSIBLE_TENSION)
     hanging = weight * depth
-    if depth > 0.0 and tension >= 0.0 and (
-        tension * UNITS_FACTOR <= hanging or (tension <= hanging < KN * tension <= mbl)
+    if (
+        depth > 0.0
+        and tension >= 0.0
+        and (tension * UNITS_FACTOR <= hanging or (tension <= hanging < KN * tension <= mbl))
     ):
         return int(Status.WRONG_UNITS)
     return 0
@@ -100,7 +102,7 @@ def reading_status_array(tension: Any, depth: Any, mbl: Any, weight: Any = math.
 
 
 def units_hint(line: LineConfig, low: bool) -> str:
-    """"wrong units?" and the parameter to check, for a reading too low (``low``) or too high."""
+    """ "wrong units?" and the parameter to check, for a reading too low (``low``) or too high."""
     name, scale = f'{line.name}.tension_scale', line.tension_scale
     if low:
         return (

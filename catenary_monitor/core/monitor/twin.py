@@ -33,7 +33,9 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
+from catenary_monitor.core.monitor import alarm_flood, shelving
 from catenary_monitor.core.monitor import dock_watch as dock_live
+from catenary_monitor.core.monitor import fatigue as fatigue_rule
 from catenary_monitor.core.monitor import (
     readings,
     sensor_state,
@@ -41,6 +43,7 @@ from catenary_monitor.core.monitor import (
     tide_trend,
     uncertainty,
 )
+from catenary_monitor.core.monitor.alarm_journal import AlarmEvent, entries, raised
 from catenary_monitor.core.monitor.alarms import (
     DIAGNOSTIC_KEYS,
     RANK,
@@ -59,6 +62,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     OUTPUT_FIELDS,
     VALUE_FIELDS,
     Change,
+    Coalesced,
     ComponentStatus,
     LineState,
     MonitorCore,
@@ -251,6 +255,8 @@ class WindowResult:
     start_ns: int
     end_ns: int
     others: list[Change] = field(default_factory=list)  # e.g. the logger's
+    #: The alarm journal's records (core.alarm_journal), in time order (keyword only).
+    alarm_events: list[AlarmEvent] = field(default_factory=list, kw_only=True)
 
     @property
     def updates(self) -> int:
@@ -690,13 +696,43 @@ def _decide_blind(core: MonitorCore, window: Window, tide: _Tide) -> _Blind:
         t = float(times[i] * 1e-9)
         blind.transitions.append(Transition(t, old, new[0], new[1], t - entered))
         old, entered = new[0], t
-    blind.acks = alarm_ack.replay_acks(core.state.sensors_ack, times * 1e-9, levels)
+    shelf = alarm_ack.shelved(core.state.sensors_ack)
+    blind.acks = alarm_ack.replay_acks(
+        core.state.sensors_ack,
+        times * 1e-9,
+        levels,
+        masked=np.zeros(len(levels), np.int8) if shelf else None,
+        flip_at=_changed(levels, core.state.sensors[0]),
+        chatter=_chatter(core),
+    )
     if len(times):
         core.state.sensors = _blind_at(core, tide, blind, len(times) - 1)
         core.state.sensors_waiting = int(waiting[-1].sum())
     core.state.sensors_entered = entered
     core.state.sensors_ack = blind.acks.final
     return blind
+
+
+def _chatter(core: MonitorCore) -> tuple[int, float]:
+    """The chattering rule: (chatter_count, chatter_window [s])."""
+    a = core.config.alarm
+    return int(a.chatter_count), a.chatter_window
+
+
+def _journal(
+    name: str, acks: alarm_ack.AckSeries, times_ns: np.ndarray, condition: Any
+) -> list[tuple[int, AlarmEvent]]:
+    """The journal records of an alarm's states over the window, with their step stamps
+    [ns]; ``condition(i, state)`` is the condition a raise at step ``i`` names."""
+    out: list[tuple[int, AlarmEvent]] = []
+    old = acks.before
+    for new, i in zip(acks.states, acks.changes.tolist()):
+        if new is not old:
+            stamp = int(times_ns[i])
+            cond = condition(i, new) if raised(old, new) else ''
+            out += [(stamp, e) for e in entries(name, old, new, stamp * 1e-9, cond)]
+        old = new
+    return out
 
 
 def _write_tide(
@@ -954,6 +990,8 @@ def _line_inputs(
             'holding_capacity',
             'drag_state',
             'implied_anchor_distance',
+            'fatigue_damage',
+            'fatigue_life_left',
         )
     }
     inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
@@ -994,11 +1032,30 @@ def _advance_line(
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
     values, status, used = _solve_line(core, line, steps, tv, window, tide, sensors, k)
+    times = window.sample_s(k)  # the reading times, as the core's tension_s
+    fatigue, fatigue_end = fatigue_rule.series(line.fatigue, times, tv, core.curves[k])
+    at = steps.t_idx[steps.solved]
+    for j, key in enumerate(fatigue_rule.FIELDS):
+        values[key] = _pick(at, fatigue[key], line.fatigue_values[j])
     inputs = _line_inputs(core, line, steps, tide, values, status, window, tt, dock, k, sensors)
     series = replay_levels(
         steps.times * 1e-9, inputs, line.alarm, status_messages(line.config), initial=line.state
     )
-    acks = alarm_ack.replay_acks(line.ack, steps.times * 1e-9, series.levels, series.suppressed)
+    masked = None
+    unshelvable = core.config.alarm.unshelvable_conditions
+    if alarm_ack.shelved(line.ack):
+        hidden = shelving.hidden_conditions(line.ack.shelved_condition, unshelvable)
+        masked = shelving.masked_levels(series._active, series.stale, hidden)
+    quiet = np.array([tr.suppressed for tr in series.transitions], bool)
+    acks = alarm_ack.replay_acks(
+        line.ack,
+        steps.times * 1e-9,
+        series.levels,
+        series.suppressed,
+        masked,
+        series.changed_at[~quiet] if len(quiet) else None,
+        _chatter(core),
+    )
     line.ack = acks.final
     where = np.flatnonzero(steps.solved)
     result = LineResult(
@@ -1015,6 +1072,9 @@ def _advance_line(
         used,
     )
     _write_back(line, series, values, status, used, window.sample_ns(k), tv)
+    line.fatigue = fatigue_end
+    if len(tt):
+        line.fatigue_values = tuple(float(fatigue[key][-1]) for key in fatigue_rule.FIELDS)
     return result, series, steps, acks
 
 
@@ -1094,6 +1154,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         series.append(s)
         steps.append(st)
         acks.append(a)
+    journal, flood = _window_journal(core, window, tide, blind, series, steps, acks)
     times = [c[0] for c in (*given.tensions, given.depth, (given.ticks, None)) if len(c[0])]
     start = int(min(t[0] for t in times)) if times else core.state.last_ns
     end = int(max(t[-1] for t in times)) if times else core.state.last_ns
@@ -1103,7 +1164,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         made = build(
             _Made(
                 core, window, tide, results, series, steps, depth_before, tide_before,
-                lines_before, acks, dock, sensors, depth_word, blind,
+                lines_before, acks, dock, sensors, depth_word, blind, flood,
             )  # fmt: skip
         )
         snaps = [made] if isinstance(made, SnapshotColumns) else list(made)
@@ -1112,7 +1173,37 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
     core.state.last_ns = max(core.state.last_ns, end)
     others = [Change('sensors', tr) for tr in blind.transitions]
     others += [] if dock is None else [Change('dock', tr) for tr in dock.transitions]
-    return WindowResult(results, tide_transitions, snaps, start, end, others)
+    others += [Change(alarm_flood.NAME, tr) for tr in flood.transitions]
+    return WindowResult(results, tide_transitions, snaps, start, end, others, alarm_events=journal)
+
+
+def _window_journal(
+    core: MonitorCore,
+    window: Window,
+    tide: _Tide,
+    blind: _Blind,
+    series: list[LevelSeries],
+    steps: list[_Steps],
+    acks: list[alarm_ack.AckSeries],
+) -> tuple[list[AlarmEvent], _Flood]:
+    """The window's alarm journal (the sensors alarm, each line's, the flood's) in the core's
+    order (time; within one event the sensors, the lines, the flood), and the flood decisions."""
+    unshelvable = core.config.alarm.unshelvable_conditions
+    ranked: list[tuple[int, int, AlarmEvent]] = []
+    sensors = _journal(
+        alarm_ack.SENSORS, blind.acks, tide.times, lambda i, a: alarm_ack.condition(a.level, ())
+    )
+    ranked += [(t, -1, e) for t, e in sensors]
+    for k, line in enumerate(core.state.lines):
+        condition = _raised_condition(series[k], unshelvable)
+        ranked += [
+            (t, k, e) for t, e in _journal(line.config.name, acks[k], steps[k].times, condition)
+        ]
+    raises = [(t, k, e.alarm) for t, k, e in ranked if e.kind == 'raised']
+    flood, flood_log = _decide_flood(core, window, raises)
+    ranked += [(t, len(core.state.lines), e) for t, e in flood_log]
+    ranked.sort(key=lambda r: (r[0], r[1]))
+    return [e for _, _, e in ranked], flood
 
 
 @dataclass
@@ -1203,11 +1294,14 @@ def _snapshot_stamps(
     tide_before: tuple[Level, str],
     lines_before: list[_Before],
     blind: Optional[_Blind] = None,
+    flood: Optional[_Flood] = None,
 ) -> np.ndarray:
     """The stamps of the window's snapshots: its ticks and every level change [ns]."""
     parts = [window.ticks, tide.times[_changed(tide.level, tide_before[0])]]
     if blind is not None:
         parts.append(tide.times[_changed(blind.levels, blind.before[0][0])])
+    if flood is not None:
+        parts.append(flood.stamps[flood.changes])
     parts += [r.step_ns[_changed(r.step_level, b.level)] for r, b in zip(results, lines_before)]
     return np.unique(np.concatenate(parts))
 
@@ -1240,6 +1334,102 @@ def _tide_statuses(
     return out
 
 
+def _raised_condition(series: LevelSeries, unshelvable: Any) -> Any:
+    """The condition a raise of the line's alarm at step ``i`` names (the visible one under
+    the alarm's shelf), as the core's ``_raised_condition``."""
+
+    def condition(i: int, ack: alarm_ack.AckState) -> str:
+        latches = series.active_at(i)
+        if alarm_ack.shelved(ack):
+            hidden = shelving.hidden_conditions(ack.shelved_condition, unshelvable)
+            latches = [on and c not in hidden for c, on in zip(CONDITIONS, latches)]
+        return alarm_ack.condition(ack.level, latches)
+
+    return condition
+
+
+class _Flood(NamedTuple):
+    """The flood decisions of a window (core.alarm_flood): decision stamps [ns] (raises and
+    ticks), per decision the window's oldest raise and count, the flood's start decision (-1:
+    the flood before the window, or none), the raises counted (times [s], alarms), the flood
+    before the window, and the status's transitions."""
+
+    stamps: np.ndarray
+    lo: np.ndarray
+    counted: np.ndarray
+    start: np.ndarray
+    times: np.ndarray
+    names: list[str]
+    before: alarm_flood.Flood
+    status_before: tuple[Level, str]
+    transitions: list[Transition]
+    changes: np.ndarray  # the decisions at which the status's level changed
+
+    def at(self, j: int) -> alarm_flood.Flood:
+        """The flood decision ``j`` (-1: as before the window)."""
+        if j < 0:
+            return self.before
+        lo, hi = int(self.lo[j]), int(self.lo[j] + self.counted[j])
+        recent = tuple(zip(self.times[lo:hi].tolist(), self.names[lo:hi]))
+        start = int(self.start[j])
+        if start == -2:  # no flood
+            return alarm_flood.Flood(recent)
+        if start < 0:
+            return alarm_flood.Flood(recent, self.before.since, self.before.first_out)
+        first = int(self.lo[start])
+        since = float(self.stamps[start] * 1e-9)
+        return alarm_flood.Flood(recent, since, (self.names[first], float(self.times[first])))
+
+
+def _decide_flood(
+    core: MonitorCore, window: Window, raises: list[tuple[int, int, str]]
+) -> tuple[_Flood, list[tuple[int, AlarmEvent]]]:
+    """The flood decisions at the window's raises (stamp ns, rank, alarm) and ticks, their
+    journal records; leaves the core's flood state as after the window."""
+    a = core.config.alarm
+    raises = sorted(raises)
+    before, status_before = core.state.flood, core.state.alarms
+    stamps = np.unique(np.concatenate([np.array([r[0] for r in raises], np.int64), window.ticks]))
+    times = np.concatenate(
+        [np.array([t for t, _ in before.recent]), np.array([r[0] for r in raises]) * 1e-9]
+    )
+    names = [n for _, n in before.recent] + [r[2] for r in raises]
+    # Raises up to each decision by their stamps (ns: two events 1 ns apart share a float s).
+    hi = len(before.recent) + np.searchsorted(
+        np.array([r[0] for r in raises], np.int64), stamps, 'right'
+    )
+    lo, count = alarm_flood.counts(times, hi, stamps * 1e-9, a.flood_window)
+    flooded = count > a.flood_count
+    was = np.concatenate([[before.since == before.since], flooded[:-1]])
+    starts = flooded & ~was
+    episode = np.cumsum(starts)
+    first = np.flatnonzero(starts)
+    start = np.where(episode > 0, first[np.maximum(episode - 1, 0)] if len(first) else -1, -1)
+    start = np.where(flooded, start, -2)
+    changes = np.flatnonzero(flooded != was)
+    flood = _Flood(stamps, lo, count, start, times, names, before, status_before, [], changes)
+    log: list[tuple[int, AlarmEvent]] = []
+    old, entered = status_before, core.state.alarms_entered
+    for j in changes.tolist():
+        now = float(stamps[j] * 1e-9)
+        state = flood.at(j)
+        new = alarm_flood.status(state, a)
+        flood.transitions.append(Transition(now, old[0], new[0], new[1], now - entered))
+        if flooded[j]:
+            name, at = state.first_out
+            event = AlarmEvent(now, alarm_flood.NAME, 'flood', 'WARN', by=name, value=at)
+        else:
+            ended = now - flood.at(j - 1).since
+            event = AlarmEvent(now, alarm_flood.NAME, 'flood_end', value=ended)
+        log.append((int(stamps[j]), event))
+        old, entered = new, now
+    if len(stamps):
+        core.state.flood = flood.at(len(stamps) - 1)
+        core.state.alarms = alarm_flood.status(core.state.flood, a)
+    core.state.alarms_entered = entered
+    return flood, log
+
+
 class _Made(NamedTuple):
     """What a window's recompute made, from which its snapshots are built."""
 
@@ -1257,12 +1447,27 @@ class _Made(NamedTuple):
     sensors: Optional[_Sensors] = None
     depth_word: str = 'ok'
     blind: Optional[_Blind] = None
+    flood: Optional[_Flood] = None
 
     def stamps(self) -> np.ndarray:
         """The stamps of the window's snapshots (:func:`_snapshot_stamps`)."""
         return _snapshot_stamps(
-            self.window, self.tide, self.results, self.tide_before, self.lines_before, self.blind
-        )
+            self.window, self.tide, self.results, self.tide_before, self.lines_before, self.blind,
+            self.flood,
+        )  # fmt: skip
+
+    def alarms_statuses(self, stamps: np.ndarray) -> list[ComponentStatus]:
+        """The ``alarms`` status (the flood decision) at each of ``stamps`` [ns]."""
+        flood = self.flood
+        assert flood is not None
+        at = np.searchsorted(flood.stamps, stamps, 'right') - 1
+        a = self.core.config.alarm
+        out = []
+        for j in at.tolist():
+            state = flood.at(j)
+            status = flood.status_before if j < 0 else alarm_flood.status(state, a)
+            out.append(self.core.alarms_component(status, state))
+        return out
 
     def blind_statuses(self, stamps: np.ndarray) -> list[ComponentStatus]:
         """The sensors alarm's status at each of ``stamps`` [ns]."""
@@ -1299,6 +1504,7 @@ def _snapshots(m: _Made) -> list[Snapshot]:
     stamps = m.stamps()
     tides = _tide_statuses(core, window, tide, stamps, m.depth_before, m.tide_before, m.depth_word)
     blinds = m.blind_statuses(stamps)
+    alarms = m.alarms_statuses(stamps)
     columns = [_line_statuses(m, k, stamps) for k in range(len(m.results))]
     tick_at = np.searchsorted(window.ticks, stamps, 'right') - 1
     logger = ComponentStatus(
@@ -1309,6 +1515,7 @@ def _snapshots(m: _Made) -> list[Snapshot]:
         statuses = [col[n] for col in columns]
         statuses.append(tides[n])
         statuses.append(blinds[n])
+        statuses.append(alarms[n])
         statuses.append(logger)
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))
@@ -1646,6 +1853,7 @@ def _snapshot_columns(m: _Made) -> SnapshotColumns | list[Snapshot]:
     tides = _tide_statuses(core, window, tide, stamps, m.depth_before, m.tide_before, m.depth_word)
     groups.append((tides, 1))
     groups.append((m.blind_statuses(stamps), 1))
+    groups.append((m.alarms_statuses(stamps), 1))
     logger = ComponentStatus(
         'catenary_monitor: logger', core.state.logger[0], core.state.logger[1], core.logger_id, ()
     )
@@ -1744,13 +1952,16 @@ def run_log(
     are the pieces' in order, then the events' (not merged in time: see
     :class:`SnapshotColumns`).
     """
+    window, events, marks = _leave_out_coalesced(core, window, list(events))
     pieces: list[WindowResult] = []
     extra: list[Snapshot | SnapshotColumns] = []
     others: list[Change] = []
+    journal: list[AlarmEvent] = []
     lo: Optional[int] = None
     for event in [*events, None]:
         hi = None if event is None else event.stamp_ns
         pieces.append(advance(core, slice_window(window, lo, hi), snapshots))
+        journal += pieces[-1].alarm_events
         if isinstance(event, Start):
             core = MonitorCore(
                 core.config, event.stamp_ns, _ids(core), core.depth_id, core.logger_id
@@ -1758,9 +1969,11 @@ def run_log(
         elif event is not None:
             step = core.step(event)
             others += list(step.transitions)
+            journal += step.alarm_events
             if snapshots and step.snapshot is not None:
                 extra.append(step.snapshot)
         lo = hi
+    _keep_marks(core, marks, events)
     lines = [concat_lines([p.lines[k] for p in pieces]) for k in range(len(core.state.lines))]
     tide = [tr for p in pieces for tr in p.tide]
     others = sorted(
@@ -1777,9 +1990,80 @@ def run_log(
             min(p.start_ns for p in pieces),
             max(p.end_ns for p in pieces),
             others,
+            alarm_events=journal,
         ),
         core,
     )
+
+
+def _leave_out_coalesced(
+    core: MonitorCore, window: Window, events: list[Any]
+) -> tuple[Window, list[Any], list[Coalesced]]:
+    """The window without the samples the node coalesced (:class:`Coalesced` records: each
+    leaves out its input's samples stamped after it and at most its ``last_ns``, and the core
+    carries the newest bound into the next window), the other events, and the records."""
+    marks = [e for e in events if isinstance(e, Coalesced)]
+    if marks:
+        events = [e for e in events if not isinstance(e, Coalesced)]
+    carried = [line.coalesced_until for line in core.state.lines]
+    if not marks and max(carried + [core.state.depth_coalesced_until]) < 0:
+        return window, events, marks
+    index = {line.config.name: k for k, line in enumerate(core.state.lines)}
+    keep = [
+        _kept(column[0], carried[k], [m for m in marks if index.get(m.line or '') == k])
+        for k, column in enumerate(window.tensions)
+    ]
+    d_keep = _kept(
+        window.depth[0], core.state.depth_coalesced_until, [m for m in marks if m.line is None]
+    )
+
+    def cut(array: Optional[np.ndarray], kept: Optional[np.ndarray]) -> Optional[np.ndarray]:
+        return array if array is None or kept is None else array[kept]
+
+    tension_stamps = window.tension_stamps
+    if tension_stamps is not None:
+        tension_stamps = [cut(s, kept) for s, kept in zip(tension_stamps, keep)]
+    return (
+        Window(
+            [
+                column if kept is None else (column[0][kept], column[1][kept])
+                for column, kept in zip(window.tensions, keep)
+            ],
+            window.depth if d_keep is None else (window.depth[0][d_keep], window.depth[1][d_keep]),
+            window.ticks,
+            tension_stamps,
+            cut(window.depth_stamps, d_keep),
+        ),
+        events,
+        marks,
+    )
+
+
+def _keep_marks(core: MonitorCore, marks: list[Coalesced], events: list[Any]) -> None:
+    """What the core keeps of the window's coalescing records (those since its last start):
+    each input's newest bound, and the newest stamp."""
+    starts = [e.stamp_ns for e in events if isinstance(e, Start)]
+    kept = [m for m in marks if not starts or m.stamp_ns > max(starts)]
+    if not kept:
+        return
+    last = core.state.last_ns
+    for mark in kept:
+        core.step(mark)
+    core.state.last_ns = max(last, max(m.stamp_ns for m in kept))
+
+
+def _kept(t: np.ndarray, carried: int, marks: list[Coalesced]) -> Optional[np.ndarray]:
+    """Which samples stamped ``t`` [ns] stay: not those at most ``carried`` nor inside a
+    record's ``(stamp_ns, last_ns]`` (None: all of them)."""
+    out = t <= carried
+    if marks:
+        starts = np.array([m.stamp_ns for m in marks], np.int64)
+        ends = np.array([m.last_ns for m in marks], np.int64)
+        order = np.argsort(starts, kind='stable')
+        starts, ends = starts[order], ends[order]
+        at = np.searchsorted(starts, t, 'left') - 1  # the newest record before each sample
+        out |= (at >= 0) & (t <= ends[np.maximum(at, 0)])
+    return ~out if out.any() else None
 
 
 def _ids(core: MonitorCore) -> dict[str, str]:
@@ -1847,4 +2131,5 @@ def recompute(
         from_log,
         start,
         list(events),
+        alarm_events=result.alarm_events,
     )
