@@ -1144,8 +1144,15 @@ class MonitorCore:
             )
             line.values = _with_fatigue(line.values, line.fatigue_values)
             return
+        loads: dict[str, Any] = {} if lc.point_loads is None else {'point_loads': lc.point_loads}
         r = solve(
-            lc.weight, h, tension=t, anchor_distance=lc.anchor_distance, mbl=lc.mbl, ea=lc.ea
+            lc.weight,
+            h,
+            tension=t,
+            anchor_distance=lc.anchor_distance,
+            mbl=lc.mbl,
+            ea=lc.ea,
+            **loads,
         )
         line.values = (
             t,
@@ -1169,7 +1176,11 @@ class MonitorCore:
         self._add_derived([line])
 
     def _solve_many(self, which: Sequence[int]) -> None:
-        """Solve several lines at the newest depth in one vectorized call."""
+        """Solve several lines at the newest depth in one vectorized call (a line with point
+        loads by itself: the scalar path)."""
+        for k in [k for k in which if self.state.lines[k].config.point_loads is not None]:
+            self._solve_one(self.state.lines[k])
+        which = [k for k in which if self.state.lines[k].config.point_loads is None]
         if not which:
             return
         lines = [self.state.lines[k] for k in which]
@@ -1447,12 +1458,15 @@ def _column(cfgs: Sequence[LineConfig], key: str) -> np.ndarray:
 
 def _wants_bounds(depth_accuracy: float) -> Any:
     """Whether a line has bounds: a tension accuracy, or a depth accuracy for all."""
-    return lambda c: depth_accuracy > 0.0 or c.tension_accuracy is not None
+    return lambda c: (
+        depth_accuracy > 0.0 or c.tension_accuracy is not None
+    ) and c.point_loads is None
 
 
 def _wants_holding(c: LineConfig) -> bool:
-    """Whether a line has holding values: a chain length or an anchor holding."""
-    return c.chain_length is not None or c.anchor_holding is not None
+    """Whether a line has holding values: a chain length or an anchor holding (not with point
+    loads: the plain chain's formulas)."""
+    return (c.chain_length is not None or c.anchor_holding is not None) and c.point_loads is None
 
 
 #: The values :func:`holding_values` gives (core/monitor/holding.py).

@@ -89,7 +89,8 @@ from catenary_monitor.core.monitor.plausible import (
     status_messages,
 )
 from catenary_monitor.core.physics import catenary as cat
-from catenary_monitor.core.physics import elastic, fused_kernel
+from catenary_monitor.core.physics import elastic, fused_kernel, point_loads
+from catenary_monitor.core.physics.solve import solve
 from catenary_monitor.core.physics.solve import ALL_KEYS, Status
 
 try:  # three of the loops below in C, next to this file (optional: else the numpy passes)
@@ -124,7 +125,7 @@ __all__ = [
 ]
 
 #: Model names by :attr:`LineResult.model_codes` (as the ``/diagnostics`` key ``model``).
-MODEL_NAMES = (NO_MODEL, elastic.INEXTENSIBLE, elastic.ELASTIC)
+MODEL_NAMES = (NO_MODEL, elastic.INEXTENSIBLE, elastic.ELASTIC, point_loads.MODEL)
 _INCONSISTENT = CONDITIONS.index('inconsistent')
 #: Step kinds in :attr:`LineResult.kind` and :attr:`LineResult.step_kind`.
 KIND_DEPTH, KIND_TENSION, KIND_TICK = 0, 1, 2
@@ -192,14 +193,15 @@ class LineResult:
     step_kind: np.ndarray
     step_level: np.ndarray
     transitions: list[Transition] = field(default_factory=list)
-    elastic: Optional[np.ndarray] = None
+    elastic: Optional[np.ndarray] = None  # where the line's other model answered:
+    other_model: int = 2  # its MODEL_NAMES index (the elastic chain, or 3: point loads)
 
     @property
     def model_codes(self) -> np.ndarray:
         """Per update: index into :data:`MODEL_NAMES` (0, ``none``, before the first depth)."""
         code = np.ones(len(self.t_ns), np.int64)
         if self.elastic is not None:
-            code[self.elastic] = 2
+            code[self.elastic] = self.other_model
         code[self.status == NO_DEPTH] = 0
         return code
 
@@ -419,6 +421,32 @@ def _solve_updates_elastic(
             if k not in _NOT_SOLVED:
                 out[k][has] = getattr(res, k)
     return out, status, used
+
+
+def _solve_updates_loads(
+    line: LineConfig, tension: np.ndarray, depth: np.ndarray
+) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+    """:func:`solve_updates` for a line with point loads: the core's scalar solve() per
+    element (core/physics/point_loads.py); also where that model answered."""
+    n = len(tension)
+    out = {k: np.full(n, np.nan) for k in VALUE_FIELDS}
+    out['depth'], out['top_tension'] = depth.copy(), tension.copy()
+    status = np.full(n, NO_DEPTH, dtype=np.int64)
+    has = ~np.isnan(depth)
+    for i in np.flatnonzero(has).tolist():
+        res = solve(
+            line.weight,
+            float(depth[i]),
+            tension=float(tension[i]),
+            anchor_distance=line.anchor_distance,
+            mbl=line.mbl,
+            point_loads=line.point_loads,
+        )
+        status[i] = res.status
+        for k in VALUE_FIELDS:
+            if k not in _NOT_SOLVED:
+                out[k][i] = getattr(res, k)
+    return out, status, has.copy()
 
 
 def critical_parameters(line: LineConfig, depth: np.ndarray) -> np.ndarray:
@@ -910,11 +938,12 @@ def _add_derived(core: MonitorCore, lc: LineConfig, values: dict[str, np.ndarray
     """The bounds and the holding values from the nominal values, as the core adds them
     (all NaN, without their passes, for a line with neither accuracies nor holding data)."""
     n = len(values['top_tension'])
-    if core.config.alarm.depth_accuracy > 0.0 or lc.tension_accuracy is not None:
+    plain = lc.point_loads is None  # (bounds and holding: the plain chain's formulas)
+    if plain and (core.config.alarm.depth_accuracy > 0.0 or lc.tension_accuracy is not None):
         values.update(bound_values([lc], core.config.alarm.depth_accuracy, values))
     else:
         values.update({key: np.full(n, np.nan) for key in uncertainty.FIELDS})
-    if lc.chain_length is not None or lc.anchor_holding is not None:
+    if plain and (lc.chain_length is not None or lc.anchor_holding is not None):
         values.update(holding_values([lc], values, core.config.alarm.drag_tolerance))
     else:
         values.update({key: np.full(n, np.nan) for key in HOLDING_FIELDS})
@@ -933,6 +962,8 @@ def _solve_at(
     used: Optional[np.ndarray] = None
     if lc.ea is not None:
         values, status, used = _solve_updates_elastic(lc, tension, h)
+    elif lc.point_loads is not None:  # rare: solve() element by element
+        values, status, used = _solve_updates_loads(lc, tension, h)
     elif fused_kernel.AVAILABLE:  # solve_updates' kernel path, which needs no critical parameter
         values, status = _solve_updates_kernel(lc, tension, h, keep=True)
     else:
@@ -1070,6 +1101,7 @@ def _advance_line(
         series.levels,
         series.transitions,
         used,
+        3 if line.config.point_loads is not None else 2,
     )
     _write_back(line, series, values, status, used, window.sample_ns(k), tv)
     line.fatigue = fatigue_end
@@ -1098,7 +1130,8 @@ def _write_back(
         line.status = int(status[-1])
         table = status_messages(line.config)
         line.status_message = '' if line.status == NO_DEPTH else table[line.status]
-        code = 0 if line.status == NO_DEPTH else (2 if used is not None and used[-1] else 1)
+        other = 3 if line.config.point_loads is not None else 2
+        code = 0 if line.status == NO_DEPTH else (other if used is not None and used[-1] else 1)
         line.model = MODEL_NAMES[code]
 
 
@@ -1937,6 +1970,7 @@ def concat_lines(parts: list[LineResult]) -> LineResult:
         cat_([p.step_level for p in parts]),
         [tr for p in parts for tr in p.transitions],
         used,
+        parts[0].other_model,
     )
 
 
