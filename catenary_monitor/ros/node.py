@@ -848,9 +848,8 @@ class CatenaryMonitor(Node):
                 if why == 'age'
                 else f'the folder above log_max_total_size {self.config.log_max_total_size:g} B'
             )
-            self.get_logger().warning(
-                f'log retention: deleted {path.name} ({size / 2**20:.1f} MiB): {rule}'
-            )
+            shown = f'{size / 2**20:.1f} MiB' if size >= 2**20 else f'{size / 1024:.1f} KiB'
+            self.get_logger().warning(f'log retention: deleted {path.name} ({shown}): {rule}')
             record = {'kind': 'log_deleted', 'path': str(path), 'bytes': size, 'reason': why}
             self._write(
                 EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), self._stamp()
