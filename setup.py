@@ -115,8 +115,15 @@ setup(
             # Two rainflow counts (ASTM E1049-85) the streamed fatigue count is tested against.
             'rainflow>=3.2',
             'fatpack>=0.7',
+            # The fleet replay (the fleet extra) and DuckDB, which answers docs/fleet.md's
+            # questions over its dataset in the tests.
+            'dask[distributed]>=2024.1',
+            'pyarrow>=14',
+            'duckdb>=1.0',
         ],
         'peers': ['moorpy', 'pycatenary'],
+        # catenary-monitor fleet: many docks' logs replayed on Dask, results as Parquet.
+        'fleet': ['dask[distributed]>=2024.1', 'pyarrow>=14'],
     },
     ext_modules=EXTENSIONS,
     zip_safe=False,
