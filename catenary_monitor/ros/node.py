@@ -84,7 +84,10 @@ from catenary_monitor.core.monitor.acknowledge import (
     parse_request,
     publisher_identity,
 )
+from catenary_monitor.core.monitor.alarm_journal import AlarmEvent
 from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.monitor.shelving import SHELVE_TOPIC
+from catenary_monitor.core.monitor.shelving import parse_request as parse_shelve_request
 from catenary_monitor.core.monitor.health import clock_stopped
 from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,
@@ -101,6 +104,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     LoggerHealth,
     MonitorCore,
     Reconfigure,
+    Shelve,
     Snapshot,
     Start,
     Step,
@@ -121,6 +125,7 @@ _PARAM_TYPES = {
     'bool': Parameter.Type.BOOL,
     'string': Parameter.Type.STRING,
     'string_array': Parameter.Type.STRING_ARRAY,
+    'double_array': Parameter.Type.DOUBLE_ARRAY,
 }
 _RELIABLE = QoSProfile(depth=10)
 #: The message class of each input type (core.config.parameters.TENSION_TYPES, DEPTH_TYPES).
@@ -194,7 +199,9 @@ def _descriptor(spec: ParamSpec, name: str) -> ParameterDescriptor:
         read_only=spec.read_only,
     )
     # An optional parameter (default NaN: not set) cannot carry a ROS range; config checks it.
-    if (spec.min is not None or spec.max is not None) and spec.default == spec.default:
+    if spec.type == 'double_array':  # each element's range is config's to check
+        constraints.append(f'each element in [{spec.min:g}, {spec.max:g}]')
+    elif (spec.min is not None or spec.max is not None) and spec.default == spec.default:
         low = -sys.float_info.max if spec.min is None else float(spec.min)
         high = sys.float_info.max if spec.max is None else float(spec.max)
         if not spec.optional:  # rclpy's range check refuses NaN, an optional's "not given"
@@ -265,8 +272,10 @@ class CatenaryMonitor(Node):
         values = all_parameters(config)
         for name, spec in expand_parameters([line.name for line in config.lines]):
             value = values[name]
-            if spec.type == 'string_array':
+            if spec.type in ('string_array', 'double_array'):
                 value = list(value)
+            if spec.type == 'double_array' and not value:  # [] would be typed a byte array
+                value = Parameter.Type.DOUBLE_ARRAY
             self.declare_parameter(name, value, _descriptor(spec, name), ignore_override=True)
         for line in config.lines:
             if line.ea is not None:
@@ -301,9 +310,7 @@ class CatenaryMonitor(Node):
         if not force and wall - self._fatigue_saved < fatigue_store.SAVE_PERIOD:
             return
         self._fatigue_saved = wall
-        lines = {
-            line.config.name: to_record(line.fatigue) for line in self.core.state.lines
-        }
+        lines = {line.config.name: to_record(line.fatigue) for line in self.core.state.lines}
         extra = {'config_hash': config_hash(self.config), 'saved_ns': self._last_ns}
         try:
             path = fatigue_store.save(self._log_dir(), lines, extra)
@@ -504,6 +511,9 @@ class CatenaryMonitor(Node):
         self._output_cdr = OutputEncoder(self._output)
         self._ack_sub = self.create_subscription(
             String, ACKNOWLEDGE_TOPIC, self._on_acknowledge, _RELIABLE
+        )
+        self._shelve_sub = self.create_subscription(
+            String, SHELVE_TOPIC, self._on_shelve, _RELIABLE
         )
         self._diag_timer = self.create_timer(1.0 / cfg.alarm.diagnostic_rate, self._on_period)
         self._period_ns = int(1e9 / cfg.alarm.diagnostic_rate)
@@ -746,13 +756,7 @@ class CatenaryMonitor(Node):
         """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event, with
         its publisher as the ROS graph names it; refused (one warning line) for an unknown
         line, and, with ``acknowledge_from_ros`` false, unless only consoles publish."""
-        endpoints = [
-            (f'{ns.rstrip("/")}/{name}', bytes(gid))
-            for name, ns, gid in (
-                (e.node_name, e.node_namespace, e.endpoint_gid)
-                for e in self.get_publishers_info_by_topic(ACKNOWLEDGE_TOPIC)
-            )
-        ]
+        endpoints = self._publishers_on(ACKNOWLEDGE_TOPIC)
         publisher = publisher_identity(endpoints)
         if not self.config.acknowledge_from_ros:
             refusal = console_only_refusal(endpoints)
@@ -776,6 +780,49 @@ class CatenaryMonitor(Node):
         self._record(Acknowledge(self._stamp(), line, origin, publisher))
         self.get_logger().info(f'ACKNOWLEDGED {line or "all"} by {origin} ({publisher})')
 
+    def _publishers_on(self, topic: str) -> list[tuple[str, bytes]]:
+        """The publishers on ``topic`` as the ROS graph names them: (node's full name, GID)."""
+        return [
+            (f'{ns.rstrip("/")}/{name}', bytes(gid))
+            for name, ns, gid in (
+                (e.node_name, e.node_namespace, e.endpoint_gid)
+                for e in self.get_publishers_info_by_topic(topic)
+            )
+        ]
+
+    @_guarded
+    def _on_shelve(self, msg: String) -> None:
+        """An operator's shelving request (``LINE[.CONDITION] SECONDS [ORIGIN]``), checked as an
+        acknowledgement is (its publisher named, ``acknowledge_from_ros`` false: consoles only,
+        an unknown alarm refused here); then one recorded core event, whose answer (shelved,
+        unshelved, or refused by the core's rules) is one log line."""
+        endpoints = self._publishers_on(SHELVE_TOPIC)
+        publisher = publisher_identity(endpoints)
+        if not self.config.acknowledge_from_ros:
+            refusal = console_only_refusal(endpoints)
+            if refusal is not None:
+                self.get_logger().warning(f'shelve refused: {refusal}', throttle_duration_sec=10.0)
+                return
+        try:
+            request = parse_shelve_request(msg.data)
+        except ValueError as err:
+            self.get_logger().warning(f'shelve refused: {err}', throttle_duration_sec=10.0)
+            return
+        if request.alarm not in self.core.index and request.alarm != SENSORS:
+            self.get_logger().warning(
+                f'shelve refused: unknown alarm {bounded_text(request.alarm, 64)!r} (alarms: '
+                f'{", ".join(self._names)}, {SENSORS})',
+                throttle_duration_sec=10.0,
+            )
+            return
+        event = Shelve(self._stamp(), *request, publisher)
+        step = self._record(event)
+        text = f'SHELVE {step.note} ({publisher})'
+        if ': refused: ' in step.note:
+            self.get_logger().warning(text)
+        else:
+            self.get_logger().info(text)
+
     @_guarded
     def _on_log_timer(self) -> None:
         """Flush the MCAP chunk when due (bounded loss on SIGKILL); report logger changes."""
@@ -795,9 +842,8 @@ class CatenaryMonitor(Node):
                 if why == 'age'
                 else f'the folder above log_max_total_size {self.config.log_max_total_size:g} B'
             )
-            self.get_logger().warning(
-                f'log retention: deleted {path.name} ({size / 2**20:.1f} MiB): {rule}'
-            )
+            shown = f'{size / 2**20:.1f} MiB' if size >= 2**20 else f'{size / 1024:.1f} KiB'
+            self.get_logger().warning(f'log retention: deleted {path.name} ({shown}): {rule}')
             record = {'kind': 'log_deleted', 'path': str(path), 'bytes': size, 'reason': why}
             self._write(
                 EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), self._stamp()
@@ -832,10 +878,10 @@ class CatenaryMonitor(Node):
                 EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), event.stamp_ns
             )
 
-    def _record(self, event: Event) -> None:
+    def _record(self, event: Event) -> Step:
         """Record a non-input event, then run it through the core."""
         self._write_record(event)
-        self._run(event)
+        return self._run(event)
 
     def _run(self, event: Event) -> Step:
         """One core step; publish and log its outputs and snapshot, report its transitions."""
@@ -846,6 +892,8 @@ class CatenaryMonitor(Node):
             self._write(self._output_topics[out.line], data, step.stamp_ns)
         for change in step.transitions:
             self._report(change)
+        for record in step.alarm_events:
+            self._report_alarm(record)
         if step.snapshot is not None:
             self._publish_diagnostics(step.snapshot)
         return step
@@ -866,6 +914,23 @@ class CatenaryMonitor(Node):
             self.get_logger().info(text)
         else:
             self.get_logger().warning(text)
+
+    def _report_alarm(self, record: AlarmEvent) -> None:
+        """One line per alarm-management record the level changes do not say: a shelf that
+        expired, chattering that starts or stops."""
+        if record.kind == 'unshelved' and record.by == 'expired':
+            self.get_logger().warning(
+                f'SHELVE {record.alarm}: shelf expired after {record.time - record.value:.0f} s; '
+                'the alarm is annunciated again'
+            )
+        elif record.kind == 'chattering':
+            a = self.config.alarm
+            self.get_logger().warning(
+                f'CHATTERING {record.alarm}: {a.chatter_count:g} level changes or more within '
+                f'{a.chatter_window:g} s'
+            )
+        elif record.kind == 'chattering_end':
+            self.get_logger().info(f'CHATTERING {record.alarm}: no longer chattering')
 
     # ------------------------------------------------------------------ output
     def _write(self, topic: str, data: bytes, stamp_ns: int) -> None:

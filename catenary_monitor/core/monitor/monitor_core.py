@@ -1144,8 +1144,15 @@ class MonitorCore:
             )
             line.values = _with_fatigue(line.values, line.fatigue_values)
             return
+        loads: dict[str, Any] = {} if lc.point_loads is None else {'point_loads': lc.point_loads}
         r = solve(
-            lc.weight, h, tension=t, anchor_distance=lc.anchor_distance, mbl=lc.mbl, ea=lc.ea
+            lc.weight,
+            h,
+            tension=t,
+            anchor_distance=lc.anchor_distance,
+            mbl=lc.mbl,
+            ea=lc.ea,
+            **loads,
         )
         line.values = (
             t,
@@ -1169,7 +1176,11 @@ class MonitorCore:
         self._add_derived([line])
 
     def _solve_many(self, which: Sequence[int]) -> None:
-        """Solve several lines at the newest depth in one vectorized call."""
+        """Solve several lines at the newest depth in one vectorized call (a line with point
+        loads by itself: the scalar path)."""
+        for k in [k for k in which if self.state.lines[k].config.point_loads is not None]:
+            self._solve_one(self.state.lines[k])
+        which = [k for k in which if self.state.lines[k].config.point_loads is None]
         if not which:
             return
         lines = [self.state.lines[k] for k in which]
@@ -1366,9 +1377,12 @@ class MonitorCore:
         )
         return ComponentStatus(f'{NODE_NAME}: alarms', status[0], status[1], NODE_NAME, values)
 
-    def guard_components(self, now: float) -> list[ComponentStatus]:
-        """The statuses after the logger and the dock: the runtime-change flag, the ROS clock
-        and the intake, each once it applies (events only change them)."""
+    def guard_components(
+        self, now: float, max_damage: Optional[float] = None
+    ) -> list[ComponentStatus]:
+        """The statuses after the logger and the dock: the runtime-change flag, the ROS clock,
+        the fatigue store and the intake, each once it applies (events only change them; the
+        twin gives the worst line's damage at the snapshot, ``max_damage``)."""
         out = []
         flag = self.parameters_component(now)
         if flag is not None:
@@ -1376,7 +1390,7 @@ class MonitorCore:
         if self.state.clock_seen:
             out.append(ComponentStatus(f'{NODE_NAME}: clock', *self.state.clock, NODE_NAME, ()))
         if self.state.fatigue_seen:
-            out.append(self.fatigue_component())
+            out.append(self.fatigue_component(max_damage))
         if self.state.intake_seen:
             dropped = self.intake_dropped()
             names = [line.config.name for line in self.state.lines] + ['depth']
@@ -1399,11 +1413,13 @@ class MonitorCore:
             )
         return out
 
-    def fatigue_component(self) -> ComponentStatus:
+    def fatigue_component(self, max_damage: Optional[float] = None) -> ComponentStatus:
         """The ``catenary_monitor: fatigue`` status: the fatigue store's level and message,
-        ``store_state`` (:data:`FATIGUE_STORE_STATES`) and the worst line's ``fatigue_damage``."""
-        damages = [line.fatigue_values[0] for line in self.state.lines]
-        values = (('store_state', self.state.fatigue_word), ('max_damage', repr(max(damages))))
+        ``store_state`` (:data:`FATIGUE_STORE_STATES`) and the worst line's ``fatigue_damage``
+        (``max_damage``: the twin gives it as it was at the snapshot)."""
+        if max_damage is None:
+            max_damage = max(line.fatigue_values[0] for line in self.state.lines)
+        values = (('store_state', self.state.fatigue_word), ('max_damage', repr(max_damage)))
         return ComponentStatus(f'{NODE_NAME}: fatigue', *self.state.fatigue, NODE_NAME, values)
 
     def parameters_component(self, now: float) -> Optional[ComponentStatus]:
@@ -1447,12 +1463,16 @@ def _column(cfgs: Sequence[LineConfig], key: str) -> np.ndarray:
 
 def _wants_bounds(depth_accuracy: float) -> Any:
     """Whether a line has bounds: a tension accuracy, or a depth accuracy for all."""
-    return lambda c: depth_accuracy > 0.0 or c.tension_accuracy is not None
+    return (
+        lambda c: (depth_accuracy > 0.0 or c.tension_accuracy is not None)
+        and c.point_loads is None
+    )
 
 
 def _wants_holding(c: LineConfig) -> bool:
-    """Whether a line has holding values: a chain length or an anchor holding."""
-    return c.chain_length is not None or c.anchor_holding is not None
+    """Whether a line has holding values: a chain length or an anchor holding (not with point
+    loads: the plain chain's formulas)."""
+    return (c.chain_length is not None or c.anchor_holding is not None) and c.point_loads is None
 
 
 #: The values :func:`holding_values` gives (core/monitor/holding.py).

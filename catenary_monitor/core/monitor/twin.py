@@ -89,7 +89,8 @@ from catenary_monitor.core.monitor.plausible import (
     status_messages,
 )
 from catenary_monitor.core.physics import catenary as cat
-from catenary_monitor.core.physics import elastic, fused_kernel
+from catenary_monitor.core.physics import elastic, fused_kernel, point_loads
+from catenary_monitor.core.physics.solve import solve
 from catenary_monitor.core.physics.solve import ALL_KEYS, Status
 
 try:  # three of the loops below in C, next to this file (optional: else the numpy passes)
@@ -124,7 +125,7 @@ __all__ = [
 ]
 
 #: Model names by :attr:`LineResult.model_codes` (as the ``/diagnostics`` key ``model``).
-MODEL_NAMES = (NO_MODEL, elastic.INEXTENSIBLE, elastic.ELASTIC)
+MODEL_NAMES = (NO_MODEL, elastic.INEXTENSIBLE, elastic.ELASTIC, point_loads.MODEL)
 _INCONSISTENT = CONDITIONS.index('inconsistent')
 #: Step kinds in :attr:`LineResult.kind` and :attr:`LineResult.step_kind`.
 KIND_DEPTH, KIND_TENSION, KIND_TICK = 0, 1, 2
@@ -192,14 +193,15 @@ class LineResult:
     step_kind: np.ndarray
     step_level: np.ndarray
     transitions: list[Transition] = field(default_factory=list)
-    elastic: Optional[np.ndarray] = None
+    elastic: Optional[np.ndarray] = None  # where the line's other model answered:
+    other_model: int = 2  # its MODEL_NAMES index (the elastic chain, or 3: point loads)
 
     @property
     def model_codes(self) -> np.ndarray:
         """Per update: index into :data:`MODEL_NAMES` (0, ``none``, before the first depth)."""
         code = np.ones(len(self.t_ns), np.int64)
         if self.elastic is not None:
-            code[self.elastic] = 2
+            code[self.elastic] = self.other_model
         code[self.status == NO_DEPTH] = 0
         return code
 
@@ -419,6 +421,32 @@ def _solve_updates_elastic(
             if k not in _NOT_SOLVED:
                 out[k][has] = getattr(res, k)
     return out, status, used
+
+
+def _solve_updates_loads(
+    line: LineConfig, tension: np.ndarray, depth: np.ndarray
+) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+    """:func:`solve_updates` for a line with point loads: the core's scalar solve() per
+    element (core/physics/point_loads.py); also where that model answered."""
+    n = len(tension)
+    out = {k: np.full(n, np.nan) for k in VALUE_FIELDS}
+    out['depth'], out['top_tension'] = depth.copy(), tension.copy()
+    status = np.full(n, NO_DEPTH, dtype=np.int64)
+    has = ~np.isnan(depth)
+    for i in np.flatnonzero(has).tolist():
+        res = solve(
+            line.weight,
+            float(depth[i]),
+            tension=float(tension[i]),
+            anchor_distance=line.anchor_distance,
+            mbl=line.mbl,
+            point_loads=line.point_loads,
+        )
+        status[i] = res.status
+        for k in VALUE_FIELDS:
+            if k not in _NOT_SOLVED:
+                out[k][i] = getattr(res, k)
+    return out, status, has.copy()
 
 
 def critical_parameters(line: LineConfig, depth: np.ndarray) -> np.ndarray:
@@ -910,11 +938,12 @@ def _add_derived(core: MonitorCore, lc: LineConfig, values: dict[str, np.ndarray
     """The bounds and the holding values from the nominal values, as the core adds them
     (all NaN, without their passes, for a line with neither accuracies nor holding data)."""
     n = len(values['top_tension'])
-    if core.config.alarm.depth_accuracy > 0.0 or lc.tension_accuracy is not None:
+    plain = lc.point_loads is None  # (bounds and holding: the plain chain's formulas)
+    if plain and (core.config.alarm.depth_accuracy > 0.0 or lc.tension_accuracy is not None):
         values.update(bound_values([lc], core.config.alarm.depth_accuracy, values))
     else:
         values.update({key: np.full(n, np.nan) for key in uncertainty.FIELDS})
-    if lc.chain_length is not None or lc.anchor_holding is not None:
+    if plain and (lc.chain_length is not None or lc.anchor_holding is not None):
         values.update(holding_values([lc], values, core.config.alarm.drag_tolerance))
     else:
         values.update({key: np.full(n, np.nan) for key in HOLDING_FIELDS})
@@ -933,6 +962,8 @@ def _solve_at(
     used: Optional[np.ndarray] = None
     if lc.ea is not None:
         values, status, used = _solve_updates_elastic(lc, tension, h)
+    elif lc.point_loads is not None:  # rare: solve() element by element
+        values, status, used = _solve_updates_loads(lc, tension, h)
     elif fused_kernel.AVAILABLE:  # solve_updates' kernel path, which needs no critical parameter
         values, status = _solve_updates_kernel(lc, tension, h, keep=True)
     else:
@@ -1025,9 +1056,10 @@ def _advance_line(
     tide: _Tide,
     sensors: _Sensors,
     dock: Optional[_Dock] = None,
-) -> tuple[LineResult, LevelSeries, _Steps, alarm_ack.AckSeries]:
+) -> tuple[LineResult, LevelSeries, _Steps, alarm_ack.AckSeries, np.ndarray]:
     """One line through the window; leaves the line's state in the core as after the steps
-    (the core's depth and tide still as before the window)."""
+    (the core's depth and tide still as before the window). The last item: the line's fatigue
+    damage after each of its tension samples."""
     line = core.state.lines[k]
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
@@ -1070,12 +1102,13 @@ def _advance_line(
         series.levels,
         series.transitions,
         used,
+        3 if line.config.point_loads is not None else 2,
     )
     _write_back(line, series, values, status, used, window.sample_ns(k), tv)
     line.fatigue = fatigue_end
     if len(tt):
         line.fatigue_values = tuple(float(fatigue[key][-1]) for key in fatigue_rule.FIELDS)
-    return result, series, steps, acks
+    return result, series, steps, acks, np.asarray(fatigue[fatigue_rule.FIELDS[0]], np.float64)
 
 
 def _write_back(
@@ -1098,7 +1131,8 @@ def _write_back(
         line.status = int(status[-1])
         table = status_messages(line.config)
         line.status_message = '' if line.status == NO_DEPTH else table[line.status]
-        code = 0 if line.status == NO_DEPTH else (2 if used is not None and used[-1] else 1)
+        other = 3 if line.config.point_loads is not None else 2
+        code = 0 if line.status == NO_DEPTH else (other if used is not None and used[-1] else 1)
         line.model = MODEL_NAMES[code]
 
 
@@ -1147,13 +1181,15 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
     tide, tide_transitions = _decide_tide(core, window, sensors)
     blind = _decide_blind(core, window, tide)
     dock = _decide_dock_window(core, window, tide)
-    results, series, steps, acks = [], [], [], []
-    for k in range(len(core.state.lines)):
-        r, s, st, a = _advance_line(core, k, window, tide, sensors, dock)
+    results, series, steps, acks, damage = [], [], [], [], []
+    for k, line in enumerate(core.state.lines):
+        before = line.fatigue_values[0]
+        r, s, st, a, d = _advance_line(core, k, window, tide, sensors, dock)
         results.append(r)
         series.append(s)
         steps.append(st)
         acks.append(a)
+        damage.append(_Damage(window.tensions[k][0], d, before))
     journal, flood = _window_journal(core, window, tide, blind, series, steps, acks)
     times = [c[0] for c in (*given.tensions, given.depth, (given.ticks, None)) if len(c[0])]
     start = int(min(t[0] for t in times)) if times else core.state.last_ns
@@ -1164,7 +1200,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         made = build(
             _Made(
                 core, window, tide, results, series, steps, depth_before, tide_before,
-                lines_before, acks, dock, sensors, depth_word, blind, flood,
+                lines_before, acks, dock, sensors, depth_word, blind, flood, damage,
             )  # fmt: skip
         )
         snaps = [made] if isinstance(made, SnapshotColumns) else list(made)
@@ -1430,6 +1466,14 @@ def _decide_flood(
     return flood, log
 
 
+class _Damage(NamedTuple):
+    """A line's fatigue damage through the window: after each tension sample (stamps ns)."""
+
+    times: np.ndarray
+    damage: np.ndarray
+    before: float
+
+
 class _Made(NamedTuple):
     """What a window's recompute made, from which its snapshots are built."""
 
@@ -1448,6 +1492,21 @@ class _Made(NamedTuple):
     depth_word: str = 'ok'
     blind: Optional[_Blind] = None
     flood: Optional[_Flood] = None
+    damage: Optional[list['_Damage']] = None
+
+    def max_damage(self, stamps: np.ndarray) -> list[Optional[float]]:
+        """The worst line's fatigue damage as the core held it at each of ``stamps`` [ns]
+        (after the tension samples at or before the stamp), for the ``fatigue`` status."""
+        if not self.damage:
+            return [None] * len(stamps)
+        worst = np.full(len(stamps), -np.inf)
+        for d in self.damage:
+            at = np.searchsorted(d.times, stamps, 'right') - 1
+            value = np.where(
+                at >= 0, d.damage[np.maximum(at, 0)] if len(d.damage) else 0, d.before
+            )
+            worst = np.fmax(worst, value)
+        return [float(v) for v in worst]
 
     def stamps(self) -> np.ndarray:
         """The stamps of the window's snapshots (:func:`_snapshot_stamps`)."""
@@ -1510,6 +1569,7 @@ def _snapshots(m: _Made) -> list[Snapshot]:
     logger = ComponentStatus(
         'catenary_monitor: logger', core.state.logger[0], core.state.logger[1], core.logger_id, ()
     )
+    worst = m.max_damage(stamps)
     out = []
     for n, stamp in enumerate(stamps.tolist()):
         statuses = [col[n] for col in columns]
@@ -1519,7 +1579,7 @@ def _snapshots(m: _Made) -> list[Snapshot]:
         statuses.append(logger)
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))
-        statuses += core.guard_components(stamp * 1e-9)
+        statuses += core.guard_components(stamp * 1e-9, worst[n])
         out.append(Snapshot(stamp, tuple(statuses)))
     return out
 
@@ -1839,7 +1899,8 @@ def _snapshot_columns(m: _Made) -> SnapshotColumns | list[Snapshot]:
     core, window, tide, dock = m.core, m.window, m.tide, m.dock
     stamps = m.stamps()
     n = len(stamps)
-    guards = [core.guard_components(stamp * 1e-9) for stamp in stamps.tolist()]
+    worst = m.max_damage(stamps)
+    guards = [core.guard_components(stamp * 1e-9, w) for stamp, w in zip(stamps.tolist(), worst)]
     shapes = {tuple((g.name, len(g.values)) for g in row) for row in guards}
     if len(shapes) > 1:
         return _snapshots(m)
@@ -1937,6 +1998,7 @@ def concat_lines(parts: list[LineResult]) -> LineResult:
         cat_([p.step_level for p in parts]),
         [tr for p in parts for tr in p.transitions],
         used,
+        parts[0].other_model,
     )
 
 
