@@ -101,8 +101,12 @@ setup(
             # Independent readers of the MCAP logs and the bag folder (issue 10).
             'rosbags>=0.10',
             'pymcap-cli',
+            # NREL's lumped-mass mooring model: the dynamic reference (docs/dynamics.md).
+            'moordyn>=2.3',
         ],
         'peers': ['moorpy', 'pycatenary'],
+        # catenary-monitor bench-dynamics and the MoorDyn scenes (docs/dynamics.md)
+        'dynamics': ['moordyn>=2.3'],
     },
     ext_modules=EXTENSIONS,
     zip_safe=False,

@@ -158,8 +158,9 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
     assert [t for t, _ in outputs] == r.t_ns.tolist()
     fields = outputs[0][1].layout.dim[0].label.split(',')
     assert fields[11:14] == ['status', 'level', 'time_to_uplift']  # appended, then the bounds
-    assert fields[14:-2] == list(BOUNDS + HOLDING)  # and the holding values
-    assert fields[-2:] == ['sensor_state', *LENGTH_FIELDS]  # appended last
+    assert fields[14:21] == list(BOUNDS + HOLDING)  # and the holding values
+    assert fields[21:23] == ['sensor_state', *LENGTH_FIELDS]  # appended
+    assert fields[23:] == ['wave_tension', 'peak_tension', 'dynamic_uplift', 'time_to_uplift_view']
     got = np.array([m.data for _, m in outputs])
     np.testing.assert_array_equal(
         got[:, fields.index('time_to_uplift')], r.values['time_to_uplift']

@@ -86,6 +86,15 @@ def _num(text: Optional[str]) -> Optional[float]:
     return value if math.isfinite(value) else None
 
 
+def _forecast_state(text: Optional[str]) -> str:
+    """What a time to uplift says: ``unknown`` (NaN: the trend not known yet, or no solve),
+    ``not coming`` (inf: the tide not rising), ``lifted`` (0) or ``forecast``."""
+    value = _num(text)
+    if value is None:
+        return 'not coming' if text is not None and text.strip() == 'inf' else 'unknown'
+    return 'lifted' if value <= 0.0 else 'forecast'
+
+
 def _finite(value: float) -> Optional[float]:
     return value if math.isfinite(value) else None
 
@@ -380,8 +389,13 @@ def _line_view(
             'drag_margin',  # N, holding minus horizontal load; None without anchor_holding
             'implied_anchor_distance',  # m, from the chain length; None without it
             'tide_margin_at_length',  # m, the chain length held; None without it
+            'wave_tension',  # N, the wave-frequency tension (half-range over wave_window)
+            'dynamic_uplift',  # N, the uplift at the waves' peak tension (what ERROR takes)
         ):
             view[key] = _num(v.get(key))
+        # time_to_uplift is None both when unknown (NaN) and when not coming (inf): say which
+        view['time_to_uplift_state'] = _forecast_state(v.get('time_to_uplift'))
+        view['time_to_uplift_view'] = v.get('time_to_uplift_view', 'none')
     if output is not None:
         rx, values = output
         for key in ('top_tension', 'anchor_margin', 'uplift_force', 'safety_factor'):

@@ -25,11 +25,15 @@ grounded_length``. Per line (SI):
     suspended part's span, lifted or not, elastic with ``ea``). Compared with the installed
     ``anchor_distance`` it shows a dragged anchor (or a wrong chain length).
 ``tide_margin_at_length`` (m)
-    The depth rise at which that chain, its length and the implied span held (the hook stays
-    where it is), lifts its anchor (:func:`catenary_monitor.core.physics.fixed_length.lift_depth`)
-    minus the depth now; negative while the anchor is lifted. ``tide_margin`` holds the
-    horizontal tension instead; a chain of fixed length gains pretension as the tide rises,
-    so this one is usually the nearer. Needs ``chain_length``.
+    The depth rise at which that chain, its length and its span held (the hook stays where it
+    is: the installed ``anchor_distance``, or where the params give the dock's geometry the
+    span of the live dock estimate), lifts its anchor
+    (:func:`catenary_monitor.core.physics.fixed_length.lift_depth`) minus the depth now;
+    negative while the anchor is lifted. ``tide_margin`` holds the horizontal tension instead;
+    a chain of fixed length gains pretension as the tide rises, so this one is usually the
+    nearer, and the time to uplift counts down to the nearer of the two. The lift depth is a
+    property of the geometry, not of one reading: the gauge's noise enters only as the depth
+    subtracted (and cancels in the forecast). Needs ``chain_length``.
 
 NaN where the data are not given or the line has no solve.
 """
@@ -62,11 +66,12 @@ def holding(
     horizontal: Any,
     suspended: Any,
     uplift: Any,
+    span: Any = np.nan,
 ) -> dict[str, np.ndarray]:
     """:data:`FIELDS` and :data:`LENGTH_FIELDS` -> arrays from the line data (NaN: not given;
     ``ea`` inf: inextensible) and the nominal solve: hook ``tension`` (N), ``depth`` (m, hook
     height added), ``horizontal`` tension (N), ``suspended`` length (m) and ``uplift`` force
-    (N)."""
+    (N); ``span`` (m) the hook's horizontal distance to the anchor (NaN: the implied one)."""
     arrays = np.broadcast_arrays(
         *(
             np.asarray(v, dtype=float)
@@ -82,10 +87,11 @@ def holding(
                 horizontal,
                 suspended,
                 uplift,
+                span,
             )
         )
     )
-    w, ea, length, a_hold, a_weight, mu, t, h, r, s, v = arrays
+    w, ea, length, a_hold, a_weight, mu, t, h, r, s, v, x = arrays
     if np.isnan(length).all() and np.isnan(a_hold).all():  # nothing configured: all NaN
         return {key: np.full(t.shape, np.nan) for key in FIELDS + LENGTH_FIELDS}
     with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
@@ -103,7 +109,8 @@ def holding(
             implied[need] = fixed_length.span_from_tension(
                 w[need], h[need], length[need], t[need], ea[need]
             )
-            lift[need] = fixed_length.lift_depth(w[need], length[need], implied[need], ea[need])
+            x = np.where(np.isnan(x), implied, x)
+            lift[need] = fixed_length.lift_depth(w[need], length[need], x[need], ea[need])
     return {
         'grounded_length': grounded,
         'holding_capacity': capacity,

@@ -52,6 +52,7 @@ from catenary_monitor.core.monitor import acknowledge as alarm_ack
 from catenary_monitor.core.monitor import dock_watch as dock_live
 from catenary_monitor.core.monitor import holding as holding_rule
 from catenary_monitor.core.monitor import sensor_state, tide_table, tide_trend, uncertainty
+from catenary_monitor.core.monitor import wave_window
 from catenary_monitor.core.monitor.alarms import (
     CONDITIONS,
     RANK,
@@ -63,6 +64,7 @@ from catenary_monitor.core.monitor.alarms import (
     diagnostic_values,
     quiet_change,
 )
+from catenary_monitor.core.monitor.alarms import VIEW_TEXT
 from catenary_monitor.core.monitor.health import (
     BUSY_WINDOW,
     INTAKE_WINDOW,
@@ -107,6 +109,8 @@ __all__ = [
     'line_status',
     'bound_values',
     'holding_values',
+    'derived_values',
+    'view_word',
     'output_values',
     'tide_component',
     'sensors_component',
@@ -126,7 +130,9 @@ NODE_NAME = 'catenary_monitor'
 #: (:mod:`~catenary_monitor.core.monitor.holding`) and ``sensor_state``, the line's sensor state
 #: code as of the newest tick (:data:`catenary_monitor.core.monitor.sensor_state.LINE_STATES`: 0
 #: ok, 1 stuck, 2 spike, 3 over_mbl, 4 slack, 5 suspected_parted), then ``tide_margin_at_length``
-#: [m] (:data:`catenary_monitor.core.monitor.holding.LENGTH_FIELDS`).
+#: [m] (:data:`catenary_monitor.core.monitor.holding.LENGTH_FIELDS`), then ``wave_tension``,
+#: ``peak_tension`` and ``dynamic_uplift`` [N] and ``time_to_uplift_view`` (1 chain length held,
+#: 0 horizontal tension held).
 OUTPUT_FIELDS = (
     'top_tension',
     'depth',
@@ -151,6 +157,12 @@ OUTPUT_FIELDS = (
     'sensor_state',
     # The tide margin of a chain of fixed length, its hook held: core/monitor/holding.py.
     *holding_rule.LENGTH_FIELDS,
+    # Wave-frequency tension and the dynamic uplift (core/monitor/wave_window.py,
+    # core/monitor/uncertainty.py), then which view the time to uplift counts down (1 the chain
+    # length held, 0 the horizontal tension held: core/monitor/tide_trend.py).
+    *wave_window.FIELDS,
+    'dynamic_uplift',
+    'time_to_uplift_view',
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -312,6 +324,10 @@ class LineState:
     )  # the tension sensor's per-sample memory
     sensor_code: int = sensor_state.OK  # sensor state decided at the newest tick
     parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
+    # The wave window of its readings (core.monitor.wave_window) and its values at the newest.
+    wave: wave_window.WaveState = field(default_factory=wave_window.WaveState.empty)
+    peak_tension: float = _NAN  # N
+    wave_tension: float = _NAN  # N
 
     def inputs(
         self, depth_s: float, depth_stale: bool, rate: float = _NAN, table: bool = False
@@ -343,6 +359,8 @@ class LineState:
             sensor_state=float(self.sensor_code),
             sensor_tension=self.tension,
             mbl=self.config.mbl,
+            dynamic_uplift=v[_AT['dynamic_uplift']],
+            uplift_view=v[_AT['time_to_uplift_view']],
         )
 
 
@@ -498,6 +516,9 @@ class MonitorCore:
             a.tension_resolution,
             a.tension_rate_max * line.config.mbl,
             a.stamp_jitter,
+        )
+        line.peak_tension, line.wave_tension = wave_window.step(
+            line.wave, line.tension_s, line.tension, line.config.mbl, a.wave_window
         )
         self._solve_one(line)
         changes = self._step_lines([ev.line], ev.stamp_ns)
@@ -785,6 +806,7 @@ class MonitorCore:
                 '',
                 NO_MODEL,
             )
+            self._add_derived([line])
             return
         r = solve(
             lc.weight, h, tension=t, anchor_distance=lc.anchor_distance, mbl=lc.mbl, ea=lc.ea
@@ -801,7 +823,7 @@ class MonitorCore:
             r.safety_factor,
             r.anchor_angle_deg,
             r.suspended_length,
-            self._uplift_times([r.tide_margin], [r.uplift_force])[0],
+            _NAN,  # time_to_uplift: _add_derived
         )
         line.values = _with_sensor(line.values + _NAN_VALUES[len(line.values) :], line.sensor_code)
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
@@ -832,7 +854,7 @@ class MonitorCore:
         columns = [tension.tolist(), h.tolist()] + [
             np.asarray(getattr(r, k)).tolist() for k in _SOLVED
         ]
-        columns.append(self._uplift_times(columns[6], columns[5]))
+        columns.append([_NAN] * len(lines))  # time_to_uplift: _add_derived
         models = np.broadcast_to(np.asarray(r.model, dtype=object), tension.shape)
         messages, status = r.message, np.asarray(r.status).tolist()
         for i, line in enumerate(lines):
@@ -847,25 +869,26 @@ class MonitorCore:
         self._add_derived(lines)
 
     def _add_derived(self, lines: Sequence[LineState]) -> None:
-        """The bounds and the holding values of freshly solved lines (from their values);
-        lines without accuracies or holding data keep NaN (what the functions give them)."""
-        accuracy = self.config.alarm.depth_accuracy
-        for fields, compute, wanted in (
-            (uncertainty.FIELDS, _bounds_of(accuracy), _wants_bounds(accuracy)),
-            (holding_rule.FIELDS + holding_rule.LENGTH_FIELDS, holding_values, _wants_holding),
-        ):
-            some = [line for line in lines if wanted(line.config)]
-            if not some:
-                continue
-            named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
-            derived = compute([line.config for line in some], named)
-            for j, line in enumerate(some):
-                v = list(line.values)
-                for key in fields:
-                    v[_AT[key]] = float(derived[key][j])
-                line.values = tuple(v)
+        """The wave values, the dynamic uplift, the bounds, the holding values and the time to
+        uplift of freshly solved lines (from their values; :func:`derived_values`)."""
+        named = {k: np.array([line.values[i] for line in lines]) for k, i in _AT.items()}
+        named['peak_tension'] = np.array([line.peak_tension for line in lines])
+        named['wave_tension'] = np.array([line.wave_tension for line in lines])
+        cfgs = [line.config for line in lines]
+        derived = derived_values(cfgs, self.config.alarm, named)
+        margin, view = tide_trend.nearer_margin(
+            named['tide_margin'], derived['tide_margin_at_length']
+        )
+        derived['time_to_uplift'] = np.array(self._uplift_times(margin, named['uplift_force']))
+        derived['time_to_uplift_view'] = view
+        at = [(_AT[key], column.tolist()) for key, column in derived.items()]
+        for j, line in enumerate(lines):
+            v = list(line.values)
+            for i, column in at:
+                v[i] = column[j]
+            line.values = tuple(v)
 
-    def _uplift_times(self, margins: Sequence[float], forces: Sequence[float]) -> list[float]:
+    def _uplift_times(self, margins: Any, forces: Any) -> list[float]:
         """Each line's time to uplift [s]: on the tide table's forecast from the newest depth
         sample where there is a table (core.tide_table), else at the tide's trend."""
         a = self.config.alarm
@@ -1025,18 +1048,54 @@ def _column(cfgs: Sequence[LineConfig], key: str) -> np.ndarray:
     return np.array([none if getattr(c, key) is None else getattr(c, key) for c in cfgs])
 
 
-def _wants_bounds(depth_accuracy: float) -> Any:
-    """Whether a line has bounds: a tension accuracy, or a depth accuracy for all."""
-    return lambda c: depth_accuracy > 0.0 or c.tension_accuracy is not None
-
-
 def _wants_holding(c: LineConfig) -> bool:
     """Whether a line has holding values: a chain length or an anchor holding."""
     return c.chain_length is not None or c.anchor_holding is not None
 
 
-def _bounds_of(depth_accuracy: float) -> Any:
-    return lambda cfgs, named: bound_values(cfgs, depth_accuracy, named)
+def derived_values(
+    cfgs: Sequence[LineConfig], alarm: Any, named: dict[str, np.ndarray]
+) -> dict[str, np.ndarray]:
+    """What the core adds to a solve (the core and its batch twin both call this), per element
+    of the nominal values ``named`` (VALUE_FIELDS -> arrays, with ``peak_tension`` and
+    ``wave_tension`` from the wave window), each element's line in ``cfgs``: the wave values,
+    ``dynamic_uplift``, the bounds (:mod:`.uncertainty`) and the holding values
+    (:mod:`.holding`; NaN for lines with neither ``chain_length`` nor ``anchor_holding``)."""
+    n = len(named['top_tension'])
+    out = {key: np.asarray(named[key], dtype=float) for key in wave_window.FIELDS}
+    tension = uncertainty.dynamic_tension(
+        named['peak_tension'], named['wave_tension'], alarm.wave_allowance
+    )
+    dyn_named = dict(named, top_tension=tension)
+    out.update(bound_values(cfgs, alarm.depth_accuracy, dyn_named))
+    out['dynamic_uplift'] = uncertainty.dynamic_uplift(
+        _column(cfgs, 'weight'),
+        _column(cfgs, 'anchor_distance'),
+        _column(cfgs, 'mbl'),
+        _column(cfgs, 'ea'),
+        tension,
+        named['depth'],
+        named['uplift_force'],
+    )
+    keys = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS
+    if len(cfgs) == 1:  # one line for every element (the twin)
+        if _wants_holding(cfgs[0]):
+            out.update(holding_values(cfgs, named))
+        else:
+            out.update({key: np.full(n, np.nan) for key in keys})
+        return out
+    per = list(cfgs)  # one config per element (the core)
+    some = [k for k, c in enumerate(per) if _wants_holding(c)]
+    values = {key: np.full(n, np.nan) for key in keys}
+    if some:
+        idx = np.array(some)
+        part = holding_values(
+            [per[k] for k in some], {key: np.asarray(col)[idx] for key, col in named.items()}
+        )
+        for key in keys:
+            values[key][idx] = part[key]
+    out.update(values)
+    return out
 
 
 def bound_values(
@@ -1052,7 +1111,7 @@ def bound_values(
         _column(cfgs, 'ea'),
         named['top_tension'],
         named['depth'],
-        _column(cfgs, 'tension_accuracy'),
+        np.array([c.sensor_accuracy for c in cfgs]),
         depth_accuracy,
         named['uplift_force'],
     )
@@ -1075,6 +1134,7 @@ def holding_values(
         named['horizontal_tension'],
         named['suspended_length'],
         named['uplift_force'],
+        _column(cfgs, 'anchor_distance'),
     )
 
 
@@ -1100,7 +1160,8 @@ def line_status(
     """One line's ``DiagnosticStatus``: the contract keys (SI strings ``float()`` reads back
     exactly), then ``measured_tension``, ``tension_age`` [s], ``anchor_distance``,
     ``allowed_uplift``, ``anchor_angle_deg``, ``solver_status``, ``model``, ``sensor_state``
-    (:func:`catenary_monitor.core.monitor.sensor_state.line_word`), then ``extra``
+    (:func:`catenary_monitor.core.monitor.sensor_state.line_word`), ``time_to_uplift_view``
+    (:func:`view_word`), then ``extra``
     (the alarm's acknowledgement keys: :func:`.acknowledge.diagnostic_values`; with the dock
     model, :func:`line_dock_values`)."""
     named = dict(zip(VALUE_FIELDS, values))
@@ -1113,11 +1174,18 @@ def line_status(
         ('solver_status', str(int(status))),
         ('model', model),
         ('sensor_state', sensor_word),
+        ('time_to_uplift_view', view_word(named['time_to_uplift_view'])),
         *extra,
     ]
     return ComponentStatus(
         f'{NODE_NAME}: {config.name}', level, message, hardware_id, tuple(pairs)
     )
+
+
+def view_word(view: float) -> str:
+    """Which view a time to uplift counts down (``/diagnostics`` ``time_to_uplift_view``):
+    ``chain length held``, ``horizontal tension held`` or ``none`` (no solve)."""
+    return VIEW_TEXT.get(float(view), 'none')
 
 
 def line_dock_values(latched: bool, dock: Sequence[float]) -> tuple[tuple[str, str], ...]:
