@@ -72,6 +72,8 @@ setup(
         ('share/' + package_name, ['package.xml']),
         ('share/' + package_name + '/config', glob('config/*.yaml')),
         ('share/' + package_name + '/foxglove', glob('foxglove/*.json')),
+        ('share/' + package_name + '/launch', glob('launch/*.launch.xml')),
+        ('share/' + package_name + '/deploy', glob('deploy/*.service')),
     ],
     python_requires='>=3.10',
     install_requires=[
@@ -82,8 +84,17 @@ setup(
         'matplotlib>=3.7',
         'mcap>=1.1',
         'mcap-ros2-support>=0.5',
+        # The MCAP reader's own chunk decompression (io/mcap_read.py).
+        'zstandard',
+        'lz4',
+        # The console's HTTP/1.1 framing (pure Python, no dependencies).
+        'h11>=0.14',
         'ros-jazzy-rclpy[fastrtps]',
         'ros-jazzy-common-interfaces',
+        # The sensors' own messages (WrenchStamped, FluidPressure, Range) and replay's /clock.
+        'ros-jazzy-geometry-msgs',
+        'ros-jazzy-sensor-msgs',
+        'ros-jazzy-rosgraph-msgs',
     ],
     extras_require={
         # The test suite also checks the peers (MoorPy, pycatenary): nothing there is skipped.
@@ -98,9 +109,12 @@ setup(
             'selenium>=4.10',
             'moorpy',
             'pycatenary',
-            # Independent readers of the MCAP logs and the bag folder (issue 10).
+            # Independent readers of the MCAP logs and the bag folder.
             'rosbags>=0.10',
             'pymcap-cli',
+            # Two rainflow counts (ASTM E1049-85) the streamed fatigue count is tested against.
+            'rainflow>=3.2',
+            'fatpack>=0.7',
             # NREL's lumped-mass mooring model: the dynamic reference (docs/dynamics.md).
             'moordyn>=2.3',
         ],

@@ -5,8 +5,8 @@ every line: one static equilibrium (surge, sway, yaw) under each of a set of loa
 directions, a yaw moment, wind and waves), by :func:`catenary_monitor.core.body.equilibrium.
 solve_equilibrium` from rest and by MoorPy's ``System.solveEquilibrium`` on the same system (one
 free body, DOFs 0, 1, 5; its tolerance 1e-4 m), interleaved, medians of ``--repeats`` rounds;
-and the live dock estimate of one tick (``core.body.live.decide_dock`` with one tick, as the
-node runs it) and per tick when replay does a whole log at once. The machines are shared and
+and the live dock estimate of one tick (``core.monitor.dock_watch.decide_dock`` with one tick,
+as the node runs it) and per tick when replay does a whole log at once. The machines are shared and
 noisy: compare the ratios.
 """
 

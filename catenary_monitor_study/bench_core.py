@@ -40,7 +40,7 @@ from catenary_monitor.core.physics.solve import solve
 W = 1300.0  # the paper's dock chain
 SIZES = (1_000, 100_000, 1_000_000)
 REGIMES = ('dock', 'sweep')
-#: Targets of issue 13, printed beside the figures (never asserted: benchmarks, not tests).
+#: The speed targets, printed beside the figures (never asserted: benchmarks, not tests).
 TARGET_VECTOR, TARGET_SCALAR, TARGET_MOORPY = 8.0, 4.0, 30.0
 
 

@@ -37,9 +37,9 @@ from catenary_monitor.cli.status_line import StatusLine
 
 W_DOCK, H_DOCK = 1300.0, 20.85  # the paper's floating dock: U3 chain 81 mm, g = 10
 GOOD = 1e-12  # the project's accuracy target
-FAIL = 1e-6  # above this the answer counts as a failure (issue 5)
+FAIL = 1e-6  # above this the answer counts as a failure
 TINY = 1e-17  # errors are shown no smaller than this
-#: The dock's regime within the sweep (issue 13): h/a from 1e-4 to 1, x/x_min from 0.02 to 1.
+#: The dock's regime within the sweep: h/a from 1e-4 to 1, x/x_min from 0.02 to 1.
 DOCK_HA, DOCK_XR = (1e-4, 1.0), (0.02, 1.0)
 
 

@@ -21,7 +21,7 @@ grid); ``read_s`` is a read-only pass of the same log and ``solve_alarm_s`` the 
 summary run. The peak RSS of the command itself (summary, ``--csv``, ``--out``) is measured in
 child processes (``os.wait4``); ``--no-rss`` skips it.
 
-Targets (issue 4): replay >= 1e6 messages/s and >= 20 times the baseline (checked against the
+Targets: replay >= 1e6 messages/s and >= 20 times the baseline (checked against the
 minimal one, the conservative choice). The machines are shared: read the ratios first.
 """
 
@@ -338,7 +338,7 @@ def run(
         'csv_rows': rows,
         'csv_bytes': csv_bytes,
         'replay_msg_per_s': round(rate),
-        # issue 13: read, recompute, levels and summary (no output file), same median run
+        # read, recompute, levels and summary (no output file), same median run
         'replay_summary_s': round(summary_s, 3),
         'replay_summary_msg_per_s': round(n / summary_s),
         'target_summary_rate_met': n / summary_s >= 2e6,

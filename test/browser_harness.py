@@ -333,3 +333,35 @@ class DiagnosticsPublisher(_TestNode):
             st.values = [KeyValue(key=k, value=v) for k, v in values.items()]
             msg.status.append(st)
         self.pub.publish(msg)
+
+
+class AckRecorder(_TestNode):
+    """Stands in for the monitor on ``/catenary_monitor/acknowledge``: keeps every message's
+    text (what would be acknowledged), so a console that refuses publishes nothing here."""
+
+    def __init__(self) -> None:
+        from rclpy.qos import QoSProfile
+        from std_msgs.msg import String
+
+        from catenary_monitor.core.monitor.acknowledge import ACKNOWLEDGE_TOPIC
+
+        super().__init__('ack_recorder')
+        self.messages: list[str] = []
+        self.node.create_subscription(
+            String, ACKNOWLEDGE_TOPIC, lambda m: self.messages.append(m.data), QoSProfile(depth=50)
+        )
+        self.thread.start()
+
+    def wait_for_publisher(self, timeout: float = 30.0) -> None:
+        """Until a console's acknowledgement publisher has matched this subscription."""
+        from catenary_monitor.core.monitor.acknowledge import ACKNOWLEDGE_TOPIC
+
+        wait_for(
+            'the console\'s acknowledgement publisher',
+            lambda: self.node.count_publishers(ACKNOWLEDGE_TOPIC) > 0,
+            timeout,
+        )
+        time.sleep(0.5)  # matched both ways
+
+    def wait(self, count: int, timeout: float = 10.0) -> None:
+        wait_for(f'{count} acknowledgement messages', lambda: len(self.messages) >= count, timeout)

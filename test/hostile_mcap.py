@@ -1,7 +1,10 @@
 """Hand-built MCAP files for the damage tests: records packed with struct, no writer library.
 
 ``hostile_file`` builds the crafted file of issue 10: a 69 KB zstd chunk that declares (or
-holds) 2 GiB of zeros, then a good chunk of Float64 messages.
+holds) 2 GiB of zeros, then a good chunk of Float64 messages. The files every command that
+reads logs must survive in bounded time and memory: ``declares_2gib_file`` (66 KB),
+``empty_records_file`` (three zstd chunks of 255 MiB of empty records, under 1 MB; or lz4,
+3.3 MB) and ``many_channels_file`` (100 000 Channel records).
 """
 
 from __future__ import annotations
@@ -117,6 +120,133 @@ def hostile_file(path: Path, kind: str, values: list[float], finished: bool = Fa
         parts += [good, bad[: len(bad) // 2]]
     else:
         parts += [bad, good]
+    if finished:
+        parts += [
+            record(0x0F, struct.pack('<I', 0)),
+            record(0x02, struct.pack('<QQI', 0, 0, 0)),
+            MAGIC,
+        ]
+    path.write_bytes(b''.join(parts))
+    return path
+
+
+# ---------------------------------------------------------------- bounded work in every command
+#: Uncompressed size of each chunk of :func:`empty_records_file`: just inside MAX_CHUNK_BYTES.
+CHUNK_255 = 255 << 20
+_PIECE = 8 << 20  # B of records handed to the compressor at a time
+
+
+def _empty_records_piece(kind: str, channel_id: int) -> bytes:
+    """About 8 MiB of "empty" records: Message records with no payload, or 9-byte private
+    records of length 0 (opcode 0x80, which readers skip)."""
+    if kind == 'messages':
+        one = record(0x05, struct.pack('<HIQQ', channel_id, 0, 1_000, 1_000))
+    elif kind == 'private':
+        one = record(0x80, b'')
+    else:
+        raise ValueError(kind)
+    return one * (_PIECE // len(one))
+
+
+def _filler(size: int) -> bytes:
+    """A private record of ``size`` incompressible bytes (keeps a chunk under 1000x)."""
+    import random
+
+    return record(0x81, random.Random(size).randbytes(size))
+
+
+def empty_records_chunk(
+    compression: str, kind: str = 'messages', channel_id: int = 1, usize: int = CHUNK_255
+) -> bytes:
+    """A Chunk record of about ``usize`` B of empty records, compressed (streamed: never
+    ``usize`` B in memory) so that its ratio stays under the reader's 1000x (zstd needs an
+    incompressible filler for that), without Message Index records."""
+    import lz4.frame
+    import zstandard
+
+    filler = _filler(usize // 880) if compression == 'zstd' else b''
+    piece = _empty_records_piece(kind, channel_id)
+    n_pieces = (usize - len(filler)) // len(piece)
+    crc = zlib.crc32(filler)
+    out: list[bytes] = []
+    if compression == 'zstd':
+        size = len(filler) + n_pieces * len(piece)
+        obj = zstandard.ZstdCompressor().compressobj(size=size)
+        out.append(obj.compress(filler))
+        for _ in range(n_pieces):
+            out.append(obj.compress(piece))
+            crc = zlib.crc32(piece, crc)
+        out.append(obj.flush())
+    elif compression == 'lz4':
+        comp = lz4.frame.LZ4FrameCompressor()
+        out.append(comp.begin())
+        for _ in range(n_pieces):
+            out.append(comp.compress(piece))
+            crc = zlib.crc32(piece, crc)
+        out.append(comp.flush())
+    else:
+        raise ValueError(compression)
+    size = len(filler) + n_pieces * len(piece)
+    data = b''.join(out)
+    head = struct.pack('<QQQI', 1_000, 1_000, size, crc)
+    body = head + string(compression) + struct.pack('<Q', len(data)) + data
+    return record(0x06, body)
+
+
+def good_topics_chunk(topics: list[str], t0: int, n: int = 4) -> bytes:
+    """A zstd chunk of ``n`` Float64 messages per channel (ids 1.. in ``topics`` order)."""
+    import zstandard
+
+    records = b''.join(
+        message(10.0 + k, t0 + 10 * k + c, channel_id=c + 1, seq=k)
+        for k in range(n)
+        for c in range(len(topics))
+    )
+    data = zstandard.ZstdCompressor().compress(records)
+    return chunk(records, 'zstd', data, len(records), t0, t0 + 10 * n)
+
+
+def empty_records_file(
+    path: Path,
+    compression: str,
+    topics: tuple[str, ...] = (TOPIC,),
+    kind: str = 'messages',
+    chunks: int = 3,
+    usize: int = CHUNK_255,
+) -> Path:
+    """``chunks`` chunks of ``usize`` B of empty records (on the first topic's channel) between
+    good Float64 chunks on ``topics``; unfinished (no summary)."""
+    parts = [MAGIC, header(), schema()]
+    parts += [channel(i + 1, topic=t) for i, t in enumerate(topics)]
+    parts.append(good_topics_chunk(list(topics), 1_000))
+    bad = empty_records_chunk(compression, kind, 1, usize)
+    parts += [bad] * chunks
+    parts.append(good_topics_chunk(list(topics), 2_000))
+    path.write_bytes(b''.join(parts))
+    return path
+
+
+def declares_2gib_file(path: Path, topics: tuple[str, ...] = (TOPIC,)) -> Path:
+    """The 66 KB file: one zstd chunk declaring (and holding) 2 GiB of zeros, between good
+    chunks on ``topics``; unfinished."""
+    bad = chunk(b'', 'zstd', zeros_zstd(GIB2, True), GIB2, 0, 0, crc=False)
+    parts = [MAGIC, header(), schema()]
+    parts += [channel(i + 1, topic=t) for i, t in enumerate(topics)]
+    parts += [good_topics_chunk(list(topics), 1_000), bad, good_topics_chunk(list(topics), 2_000)]
+    path.write_bytes(b''.join(parts))
+    return path
+
+
+def many_channels_file(
+    path: Path, topics: tuple[str, ...] = (TOPIC,), n: int = 100_000, finished: bool = False
+) -> Path:
+    """A file of ``n`` Channel records (ids wrap around the 16-bit id space, so every id is
+    defined, some twice) after the real ``topics`` (ids 1..), then good chunks."""
+    parts = [MAGIC, header(), schema()]
+    parts += [channel(i + 1, topic=t) for i, t in enumerate(topics)]
+    first = len(topics) + 1
+    parts += [channel((first + i) & 0xFFFF, topic=f'/spam/{i}') for i in range(n)]
+    parts += [good_topics_chunk(list(topics), 1_000), good_topics_chunk(list(topics), 2_000)]
     if finished:
         parts += [
             record(0x0F, struct.pack('<I', 0)),

@@ -581,6 +581,10 @@ def test_diagnostic_values_keys_and_exact_strings():
         'drag_margin',
         'implied_anchor_distance',
         'tide_margin_at_length',
+        'drag_state',
+        'fatigue_damage',
+        'fatigue_damage_rate',
+        'fatigue_life_left',
         'wave_tension',
         'peak_tension',
         'dynamic_uplift',
@@ -634,7 +638,9 @@ def test_margin_codes_match_the_scalar() -> None:
             ],
             n,
         )
-    for key in ('uplift_force', 'uplift_force_upper', 'inconsistent', 'sensor_state'):
+    keys = ('uplift_force', 'uplift_force_upper', 'inconsistent', 'sensor_state', 'drag_state')
+    keys += ('fatigue_damage',)
+    for key in keys:
         x[key] = np.zeros(n)
     x['dynamic_uplift'] = np.full(n, np.nan)
     stale = rng.random(n) < 0.3

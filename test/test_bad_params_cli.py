@@ -29,6 +29,7 @@ NEEDLE = {
     'dangling_link': 'No such file',
     'pipe': 'not a regular file',
     'huge': 'more than a params file holds',
+    'duplicate': "'line_01.mbl' is given twice, at line 5 and line 7",
 }
 
 
@@ -55,6 +56,11 @@ def bad_file(tmp: Path, case: str) -> Path:
         os.symlink(tmp / 'nowhere', path)
     elif case == 'pipe':  # nobody writes: reading it would block
         os.mkfifo(path)
+    elif case == 'duplicate':  # a copy-paste slip: rcl would monitor the line with 1 N
+        path.write_bytes(
+            head + b'    lines: [line_01]\n    line_01:\n      mbl: 4.8e6\n      weight: 1300.0\n'
+            b'      mbl: 1.0\n      anchor_distance: 120.0\n'
+        )
     elif case == 'huge':  # sparse: 17 MiB of zeros, no disk used
         with open(path, 'wb') as f:
             f.truncate(17 * 1024 * 1024)

@@ -1,4 +1,4 @@
-"""The vectorized twin (core.batch.advance) against the monitor core itself, event by event.
+"""The vectorized twin (core.monitor.twin.advance) against the monitor core itself, event by event.
 
 The scalar :class:`MonitorCore` is the oracle: the same events are stepped through it one at a
 time and handed to ``advance`` as columns (in one window or several), and every output, level,
@@ -203,8 +203,15 @@ def compare(config, tensions, depth, ticks, cuts=(), check_snapshots=True):
     assert sorted(got_tr, key=lambda c: (c.transition.time, c.component)) == sorted(
         want_tr, key=lambda c: (c.transition.time, c.component)
     )
+    # The alarm journal: the same records, in the core's order (with equal stamps the twin
+    # decides every event of a stamp at once: the same records of each alarm).
+    want_j = [e for s in steps for e in s.alarm_events]
+    got_j = [e for r in results for e in r.alarm_events]
     if not check_snapshots:
+        key = lambda e: (e.time, e.alarm, e.kind)  # noqa: E731
+        assert sorted(map(key, got_j)) == sorted(map(key, want_j))
         return steps
+    assert got_j == want_j
     # Snapshots: the same stamps, the same statuses.
     want_sn = [s.snapshot for s in steps if s.snapshot is not None]
     got_sn = [sn for r in results for sn in r.snapshots]
@@ -604,7 +611,10 @@ def test_run_log_steps_clock_and_intake_events_as_the_core_does():
     for g, w in zip(result.snapshots, want):
         assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
     assert result.others == [
-        c for s in steps for c in s.transitions if c.component in ('clock', 'intake', 'sensors')
+        c
+        for s in steps
+        for c in s.transitions
+        if c.component in ('clock', 'intake', 'sensors', 'alarms')
     ]
     got = [
         (c.component, int(c.transition.new))

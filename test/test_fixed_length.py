@@ -1,5 +1,6 @@
-"""core.fixed_length: the fixed-length chain at a span (the dock model's line, problem 5 with EA),
-against the core's problem 5, 40-digit mpmath and MoorPy; its stiffness against differences."""
+"""core.physics.fixed_length: the fixed-length chain at a span (the dock model's line, problem 5
+with EA), against the core's problem 5, 40-digit mpmath and MoorPy; its stiffness against
+differences."""
 
 import math
 import os

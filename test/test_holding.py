@@ -4,6 +4,7 @@ holding under uplift, a dragged anchor seen in implied_anchor_distance, the drag
 
 import math
 
+import numpy as np
 import pytest
 
 from catenary_monitor import solve
@@ -28,16 +29,9 @@ def run(line, depth, tensions, **alarm):
 
 
 def hou_line(lm, x=11.0, **extra):
-    return LineConfig(
-        name='hou',
-        weight=25.0,
-        anchor_distance=x,
-        mbl=1e6,
-        chain_length=lm,
-        anchor_holding=ANCHOR * LAMBDA_A,
-        chain_friction=LAMBDA_C,
-        **extra,
-    )
+    data = dict(anchor_holding=ANCHOR * LAMBDA_A, chain_friction=LAMBDA_C)
+    data.update(extra)
+    return LineConfig(name='hou', weight=25.0, anchor_distance=x, mbl=1e6, chain_length=lm, **data)
 
 
 @pytest.mark.parametrize(
@@ -199,3 +193,188 @@ def test_on_a_rising_tide_the_margin_at_length_counts_down_to_the_lift():
         assert o['tide_margin_at_length'] + h == pytest.approx(lift, rel=1e-12, abs=1e-9)
         assert o['tide_margin'] > o['tide_margin_at_length']  # R held: the later lift
     assert o['tide_margin_at_length'] == pytest.approx(1.0515 - rate * 7140, abs=1e-3)  # 7140 s on
+
+
+def _holding_scenes(n, seed):
+    """Chains of the dock's kind and far beyond: grounded and lifted, inextensible and
+    elastic, holding data given or not (NaN), a few solves missing (NaN)."""
+    import numpy as np
+
+    from catenary_monitor.core.physics import fixed_length
+
+    rng = np.random.default_rng(seed)
+    w = 10.0 ** rng.uniform(1, 4, n)
+    h = 10.0 ** rng.uniform(0, 2.5, n)
+    length = h * 10.0 ** rng.uniform(0.05, 1.5, n)
+    ea = np.where(rng.random(n) < 0.5, np.inf, w * length * 10.0 ** rng.uniform(1, 6, n))
+    slack = np.asarray(fixed_length.slack_span(w, h, length, ea))
+    reach = np.where(np.isinf(ea), fixed_length.taut_span(h, length), 1.3 * length)
+    span = slack + (reach - slack) * rng.uniform(0.01, 0.999, n)
+    st = fixed_length.statics_at_span(w, h, length, span, ea)
+    given = rng.random((4, n)) < 0.7
+    holding = np.where(given[0], w * h * rng.uniform(1, 50, n), np.nan)
+    anchor_weight = np.where(given[1], holding * rng.uniform(0.2, 3, n), np.nan)
+    friction = np.where(given[2], rng.uniform(0.3, 1.5, n), np.nan)
+    length = np.where(given[3] | np.isnan(holding), length, np.nan)
+    r = np.where(rng.random(n) < 0.05, np.nan, st.horizontal_tension)
+    return (
+        w,
+        ea,
+        length,
+        holding,
+        anchor_weight,
+        friction,
+        st.top_tension,
+        h,
+        r,
+        st.suspended_length,
+        st.uplift_force,
+    )
+
+
+@pytest.mark.parametrize('seed', [1, 2])
+def test_the_plain_float_holding_path_gives_the_array_path_numbers(seed):
+    """holding_scalar (the monitor's per-sample path, about 20x faster on one line) against
+    holding() on the same scenes as one array. The implied span agrees to a few ulps; the lift
+    depth, at the same span and at the implied one, to the problem's own conditioning (near the
+    taut limit a relative change e of the span moves it by about e / (2 (1 - span / length));
+    the elastic chain's Newton in R is as sensitive, and the array path itself differs by as
+    much between batch sizes, as it iterates until every element has converged); NaN where
+    NaN."""
+    import numpy as np
+
+    from catenary_monitor.core.monitor.holding import (
+        FIELDS,
+        LENGTH_FIELDS,
+        holding,
+        holding_scalar,
+    )
+    from catenary_monitor.core.physics import fixed_length
+
+    scenes = _holding_scenes(2000, seed)
+    w, ea, length, h = scenes[0], scenes[1], scenes[2], scenes[7]
+    vec = holding(*scenes)
+    implied = vec['implied_anchor_distance']
+    lift = fixed_length.lift_depth(w, length, implied, ea)
+    lifted = 0
+    for i in range(len(w)):
+        one = holding_scalar(*(float(c[i]) for c in scenes))
+        lifted += scenes[-1][i] > 0
+        if np.isfinite(implied[i]):
+            assert one['implied_anchor_distance'] == pytest.approx(implied[i], rel=1e-15, abs=0)
+            at_same = fixed_length.lift_depth_scalar(w[i], length[i], implied[i], ea[i])
+            cond = 1.0 / (1.0 - implied[i] / length[i])
+            assert at_same == pytest.approx(lift[i], rel=2e-15 * cond, abs=0) or (
+                math.isnan(at_same) and math.isnan(lift[i])
+            )
+        for key in FIELDS + LENGTH_FIELDS:
+            want = float(vec[key][i])
+            scale = abs(want)
+            if key == 'tide_margin_at_length':
+                scale = (abs(lift[i]) + h[i]) / (1.0 - implied[i] / length[i])
+            if math.isnan(want):
+                assert math.isnan(one[key]), (i, key, one[key])
+            else:
+                assert abs(one[key] - want) <= 1e-14 * scale, (i, key, one[key], want)
+    assert 200 < lifted < 1800  # both regimes are in the sweep (no pass by construction)
+    assert np.isfinite(vec['tide_margin_at_length']).sum() > 500
+
+
+def test_the_core_takes_the_plain_float_path_on_a_tension_and_the_array_path_on_a_depth(
+    monkeypatch,
+):
+    """A tension event (one line: plain floats, the array path never called) and a depth
+    event (every line: the array path) give the same holding values for the same tension and
+    depth."""
+    import dataclasses
+
+    from catenary_monitor.core.monitor import holding as holding_rule
+
+    calls = []
+    array_path = holding_rule.holding
+    monkeypatch.setattr(holding_rule, 'holding', lambda *a: calls.append(1) or array_path(*a))
+    line = hou_line(20.5)
+    other = dataclasses.replace(line, name='b', tension_topic='')
+    core = MonitorCore(MonitorConfig(lines=(line, other)), 0)
+    core.step(Depth(1, 14.0))
+    one = core.step(Tension(2, 0, 120.0 + 25.0 * 14.0)).outputs[0].values
+    core.step(Tension(3, 1, 120.0 + 25.0 * 14.0))
+    assert calls == []
+    both = core.step(Depth(4, 14.0)).outputs
+    assert calls == [1]
+    for k in (
+        'grounded_length',
+        'holding_capacity',
+        'implied_anchor_distance',
+        'tide_margin_at_length',
+    ):
+        i = OUTPUT_FIELDS.index(k)
+        assert math.isfinite(one[i]), k
+        assert one[i] == pytest.approx(both[0].values[i], rel=1e-13)
+        assert both[0].values[i] == both[1].values[i]
+
+
+def _storm(spans, line, **alarm):
+    """The core and its twin through one tension a second at those spans (Hou's depth 13 m,
+    a tick a second): the core's outputs and transitions, and the twin's."""
+    from catenary_monitor.core.monitor.monitor_core import Tick
+    from catenary_monitor.core.monitor.twin import recompute
+
+    config = MonitorConfig(lines=(line,), alarm=AlarmConfig(clear_hold=0.0, **alarm))
+    tensions = [solve(25.0, 13.0, chain_length=21.0, anchor_distance=x).top_tension for x in spans]
+    core = MonitorCore(config, 0)
+    core.step(Depth(1, 13.0))
+    outs, changes = [], []
+    for k, t in enumerate(tensions):
+        step = core.step(Tension(10**9 * (k + 1), 0, t))
+        outs.append(dict(zip(OUTPUT_FIELDS, step.outputs[0].values)))
+        changes += [c.transition for c in step.transitions if c.component == 'hou']
+        changes += [
+            c.transition
+            for c in core.step(Tick(10**9 * (k + 1) + 5)).transitions
+            if c.component == 'hou'
+        ]
+    stamps = [10**9 * (k + 1) for k in range(len(spans))]
+    result = recompute(
+        config,
+        {'hou': (np.array(stamps, np.int64), np.array(tensions))},
+        (np.array([1], np.int64), np.array([13.0])),
+        tick_ns=np.array(stamps, np.int64) + 5,
+        start_ns=0,
+    )
+    return outs, changes, result.lines[0]
+
+
+def test_a_dragging_anchor_in_a_storm_raises_its_error():
+    """Hou's ship (chain 21 m, 13 m deep, anchor 11 m away) in a scripted storm: the span opens
+    from 11 m to 14 m while the anchor slides; past 13.4 m the load exceeds the holding (40 +
+    chain friction) with the anchor 2.4 m beyond its place: drag_state 2 and the ERROR, live and
+    in replay alike; it clears once the anchor holds again."""
+    spans = list(np.linspace(11.0, 14.0, 31)) + [14.0] * 5 + [11.2] * 5
+    line = hou_line(21.0, allowed_uplift=1e9, anchor_holding=40.0)
+    outs, changes, replayed = _storm(spans, line)
+    states = [o['drag_state'] for o in outs]
+    assert states[0] == 0.0 and 2.0 in states and states[-1] == 0.0
+    first = states.index(2.0)
+    assert outs[first]['drag_margin'] < 0 and outs[first]['implied_anchor_distance'] > 12.0
+    assert 1.0 not in states[:first]  # the span is beyond the tolerance when the load passes
+    errors = [c for c in changes if c.new == Level.ERROR]
+    assert errors and 'anchor dragging: horizontal load' in errors[0].message
+    assert 'beyond its installed 11.0 m' in errors[0].message
+    assert changes[-1].new in (Level.OK, Level.WARN)
+    assert np.array_equal(replayed.values['drag_state'], np.array(states))
+    assert [(t.time, t.new, t.message) for t in replayed.transitions] == [
+        (t.time, t.new, t.message) for t in changes
+    ]
+
+
+def test_a_steady_overload_without_drag_warns_but_raises_no_error():
+    """The load above a conservative holding (30 < 37.1) with the anchor where it was
+    installed: overloaded (drag_state 1), the drag-margin WARN, no ERROR."""
+    line = hou_line(21.0, allowed_uplift=1e9, anchor_holding=30.0, chain_friction=0.0)
+    outs, changes, replayed = _storm([11.0] * 40, line)
+    assert {o['drag_state'] for o in outs} == {1.0}
+    assert all(o['drag_margin'] < 0 for o in outs)
+    assert Level.ERROR not in [c.new for c in changes]
+    assert changes[-1].new == Level.WARN and 'anchor may drag' in changes[-1].message
+    assert [t.new for t in replayed.transitions] == [t.new for t in changes]

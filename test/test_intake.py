@@ -1,5 +1,6 @@
-"""The intake status against configured sample rates (core.monitor, core.health): samples
-that never reached the node, counted whatever the executor can see."""
+"""The intake status against configured sample rates (core.monitor.monitor_core,
+core.monitor.health): samples that never reached the node, counted whatever the executor can
+see."""
 
 from __future__ import annotations
 

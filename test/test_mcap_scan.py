@@ -219,6 +219,9 @@ def test_gather_and_columns_match_numpy() -> None:
         def skip(self, *args: Any) -> None:
             self.skips.append(args)
 
+        def bad_payload(self, offset: int, bad: int) -> None:
+            self.skips.append(('bad_payload', offset, bad))
+
     block = mcap_read._Block(buf, offsets, lengths, channels, 0)
     results = []
     for scan in (SCAN, None):
@@ -261,3 +264,39 @@ def test_read_ahead_gives_the_same_windows_and_stops_with_its_caller(
     assert any(t.name == 'mcap-read-ahead' for t in threading.enumerate())
     windows.close()
     assert not any(t.name == 'mcap-read-ahead' for t in threading.enumerate())
+
+
+@pytest.mark.c_extension
+def test_walk_matches_the_python_walk() -> None:
+    """The C walk and the Python one (with its runs of equal records) give the same Message
+    starts and stop at the same byte: runs, definitions in between, private records, a record
+    that is not one, a record cut by the end, a full output array."""
+    h = __import__('hostile_mcap')
+    msg = [h.message(float(i), 100 + i, seq=i) for i in range(50)]
+    private = h.record(0x80, b'xyz')
+    empty = h.record(0x05, struct.pack('<HIQQ', 1, 0, 5, 5))
+    bufs = {
+        'run': b''.join(msg),
+        'mixed': b''.join(msg[:10]) + h.schema() + h.channel() + private * 7 + b''.join(msg),
+        'empty_run': empty * 300 + private * 300 + empty,
+        'alternating': (empty + private) * 40,
+        'bad_op': b''.join(msg[:5]) + h.record(0x33, b'') + b''.join(msg[:5]),
+        'short_message': b''.join(msg[:3]) + h.record(0x05, b'\x01' * 10),
+        'cut': b''.join(msg[:8])[:-5],
+        'bad_channel': b''.join(msg[:4]) + h.record(0x04, b'\x01\x00') + b''.join(msg[:4]),
+    }
+    for name, buf in bufs.items():
+        got = []
+        for scan in (SCAN, None):
+            mcap_read._scan = scan
+            scanner = mcap_read._Scanner.__new__(mcap_read._Scanner)
+            scanner.schemas, scanner.summary_schemas, scanner.channels = {}, {}, {}
+            scanner.known_lut = np.zeros(1 << 16, bool)
+            scanner.topic_lut = np.full(1 << 16, -1, np.int64)
+            scanner.accepted, scanner.topic_names, scanner.topic_index = set(), [], {}
+            scanner.accept = lambda channel: True
+            offsets, stop = scanner._walk(buf, 0, len(buf))
+            got.append((offsets.tolist(), stop, sorted(scanner.channels)))
+        assert got[0] == got[1], name
+    out = np.empty(3, np.int64)
+    assert SCAN.walk(bufs['run'], 0, len(bufs['run']), out) == (3, 3 * 43, 3)

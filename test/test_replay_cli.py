@@ -87,14 +87,16 @@ def test_csv_json_mcap_png(scene, capsys):
     storm = summary['lines']['line_02']
     assert storm['worst']['uplift_force']['value'] > 50e3
     assert any(e['worst'] == 'ERROR' for e in storm['episodes'])
-    # The other components as the lines: the tide (with its dropouts) and the sensors alarm.
-    assert list(summary['components']) == ['tide', 'sensors']
+    # The other components as the lines: the tide (with its dropouts), the sensors alarm and
+    # the alarm system's flood status.
+    assert list(summary['components']) == ['tide', 'sensors', 'alarms']
     tide = summary['components']['tide']
     assert tide['transitions'] == len(ref.tide) and tide['final_level'] == ref.tide[-1].new.name
     episodes = LineResult('tide', *[np.zeros(0)] * 8, ref.tide).episodes(ref.end_ns)
     assert tide['episodes'] == episodes and episodes[0]['worst'] == 'STALE'  # a depth dropout
-    sensors = [c.transition for c in ref.others if c.component == 'sensors']
-    assert summary['components']['sensors']['transitions'] == len(sensors)
+    for name in ('sensors', 'alarms'):
+        changes = [c.transition for c in ref.others if c.component == name]
+        assert summary['components'][name]['transitions'] == len(changes)
     # CSV: the contract columns, one row per tension message, in time order.
     with open(tmp / 'out.csv', newline='') as f:
         rows = list(csv.DictReader(f))
@@ -158,9 +160,10 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
     assert [t for t, _ in outputs] == r.t_ns.tolist()
     fields = outputs[0][1].layout.dim[0].label.split(',')
     assert fields[11:14] == ['status', 'level', 'time_to_uplift']  # appended, then the bounds
-    assert fields[14:21] == list(BOUNDS + HOLDING)  # and the holding values
-    assert fields[21:23] == ['sensor_state', *LENGTH_FIELDS]  # appended
-    assert fields[23:] == ['wave_tension', 'peak_tension', 'dynamic_uplift', 'time_to_uplift_view']
+    k = 14 + len(BOUNDS + HOLDING)
+    assert fields[14:k] == list(BOUNDS + HOLDING)  # and the holding values
+    assert fields[k : k + 3] == ['sensor_state', *LENGTH_FIELDS, 'drag_state']  # appended
+    assert fields[-4:] == ['wave_tension', 'peak_tension', 'dynamic_uplift', 'time_to_uplift_view']
     got = np.array([m.data for _, m in outputs])
     np.testing.assert_array_equal(
         got[:, fields.index('time_to_uplift')], r.values['time_to_uplift']
@@ -176,6 +179,7 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
         'catenary_monitor: line_03',
         'catenary_monitor: tide',
         'catenary_monitor: sensors',
+        'catenary_monitor: alarms',
         'catenary_monitor: logger',
     ]
     keys = {kv.key for kv in diags[-1][1].status[1].values}
@@ -206,8 +210,11 @@ def test_csv_all_columns_and_stdout_summary(scene, capsys):
     assert code == 0
     with open(tmp / 'all.csv', newline='') as f:
         header = next(csv.reader(f))
-        models = {row[-1] for row in csv.reader(f)}
-    assert header[:2] == ['time', 'line'] and header[-3:] == ['status', 'level', 'model']
+        models = {row[header.index('model')] for row in csv.reader(f)}
+    assert header[:2] == ['time', 'line']
+    k = header.index('status')
+    assert header[k : k + 4] == ['status', 'level', 'model', 'drag_state']
+    assert header[k + 4 : k + 7] == ['fatigue_damage', 'fatigue_damage_rate', 'fatigue_life_left']
     assert {'tide_margin', 'load_margin', 'safety_factor', 'horizontal_tension'} <= set(header)
     assert 'time_to_uplift' in header
     assert 'inextensible catenary' in models and models <= {'none', 'inextensible catenary'}
@@ -441,21 +448,22 @@ def test_offline_replay_imports_without_rclpy():
 
 def test_topic_names_resolve_like_the_node(tmp_path):
     from catenary_monitor.core.config.parameters import resolve_topic
-    from catenary_monitor.ros.playback import float64_topics
+    from catenary_monitor.ros.playback import input_topics_of_log
 
     assert resolve_topic('/tide/depth') == '/tide/depth'
     assert resolve_topic('mooring/a/tension') == '/mooring/a/tension'
     assert resolve_topic('~/a/tension') == '/catenary_monitor/a/tension'
-    # --publish without a params file plays every Float64 topic (summary, or a scan when the
-    # file has none).
+    # --publish without a params file plays every topic of an input type (summary, or a scan
+    # when the file has none).
     config = dock_config(2)
     tensions, depth = generate(config, seconds=5.0, seed=2, dropouts=False)
     log = write_log(tmp_path / 'a.mcap', config, tensions, depth)
     want = ['/mooring/line_01/tension', '/mooring/line_02/tension', '/tide/depth']
-    assert sorted(float64_topics([log])) == want
+    assert sorted(input_topics_of_log([log])) == want
+    assert set(input_topics_of_log([log]).values()) == {'std_msgs/msg/Float64'}
     cut = tmp_path / 'cut.mcap'
     cut.write_bytes(log.read_bytes()[:-200])
-    assert sorted(float64_topics([cut])) == want
+    assert sorted(input_topics_of_log([cut])) == want
 
 
 def test_bench_replay_command_runs():

@@ -5,7 +5,8 @@ import numpy as np
 from replay_data import dock_config, generate
 
 from catenary_monitor.core.monitor.holding import FIELDS as HOLDING
-from catenary_monitor.core.monitor.holding import LENGTH_FIELDS
+from catenary_monitor.core.monitor.fatigue import FIELDS as FATIGUE
+from catenary_monitor.core.monitor.holding import DRAG_FIELDS, LENGTH_FIELDS
 from catenary_monitor.core.monitor.twin import (
     KIND_TENSION,
     NO_DEPTH,
@@ -17,12 +18,8 @@ from catenary_monitor.core.monitor.twin import (
 from catenary_monitor.core.monitor.uncertainty import FIELDS as BOUNDS
 from catenary_monitor.core.physics.solve import solve
 
-DERIVED = BOUNDS + HOLDING + LENGTH_FIELDS + (  # from the solve, by the monitor
-    'wave_tension',
-    'peak_tension',
-    'dynamic_uplift',
-    'time_to_uplift_view',
-)
+DERIVED = BOUNDS + HOLDING + LENGTH_FIELDS + DRAG_FIELDS + FATIGUE  # by the monitor
+DERIVED += ('wave_tension', 'peak_tension', 'dynamic_uplift', 'time_to_uplift_view')
 
 
 def test_solve_updates_is_bit_identical_to_solve_on_arrays():

@@ -124,7 +124,8 @@ def _publish_scenario(pubs, depth_pub, ack_pub):
     """About 9 s of inputs: see the module docstring."""
     from std_msgs.msg import Float64, String
 
-    acks = {78: 'line_02 replay test', 50: 'nope', 150: 'all replay test'}
+    # the last claims a 1 MB origin: stored bounded
+    acks = {78: 'line_02 replay test', 50: 'nope', 150: 'all replay test ' + 'x' * 1_000_000}
 
     rng = np.random.default_rng(5)
     start = time.monotonic()
@@ -197,6 +198,13 @@ def _run_node(params: Path, out_path: Path) -> tuple[int, str]:
         assert depth_pub.get_subscription_count(), 'the node did not subscribe in 60 s'
         _publish_scenario(pubs, depth_pub, ack_pub)
         time.sleep(1.0)
+        (me,) = [
+            e
+            for e in client.get_publishers_info_by_topic('/catenary_monitor/acknowledge')
+            if e.node_name == 'replay_node_test'
+        ]
+        gid = '.'.join(f'{b:02x}' for b in bytes(me.endpoint_gid)[:16])
+        (out_path.parent / 'ack_publisher').write_text(f'/replay_node_test gid {gid}')
         client.destroy_node()
     finally:
         if proc.poll() is None:
@@ -248,8 +256,20 @@ TEXT_KEYS = {
     'alarm_state',
     'alarm_condition',
     'acknowledged_by',
+    'acknowledged_publisher',
     'sensor_state',
     'tide_forecast',
+    'store_state',
+    # Alarm management: shelving, chattering, the flood status.
+    'shelved',
+    'shelved_condition',
+    'shelved_by',
+    'shelved_publisher',
+    'chattering',
+    'flood',
+    'first_out',
+    'unshelvable_conditions',
+    'shelve_answer',
 }
 
 
@@ -306,11 +326,27 @@ def test_replay_of_a_live_node_log_redoes_every_step(tmp_path, form):
     # The acknowledgements: recorded (the unknown line refused), replayed, seen on /diagnostics.
     from catenary_monitor.core.monitor.monitor_core import Acknowledge
 
+    from catenary_monitor.core.monitor.acknowledge import ORIGIN_LIMIT
+
     acks = [e for e in result.events if isinstance(e, Acknowledge)]
+    bounded = 'replay test ' + 'x' * (ORIGIN_LIMIT - 15) + '...'
     assert [(e.line, e.origin) for e in acks] == [
         ('line_02', 'replay test'),
-        (None, 'replay test'),
+        (None, bounded),
     ], text
+    # the publisher as the middleware names it (node and GID) in the event record
+    publisher = (log_dir.parent / 'ack_publisher').read_text()
+    assert [e.publisher for e in acks] == [publisher, publisher]
+    values = {
+        (st.name, kv.key): kv.value
+        for _, array in arrays
+        for st in array.status
+        for kv in st.values
+        if kv.key in ('acknowledged_by', 'acknowledged_publisher') and kv.value
+    }
+    assert values[('catenary_monitor: line_02', 'acknowledged_publisher')] == publisher
+    assert max(len(v) for v in values.values()) <= ORIGIN_LIMIT
+    assert max(len(line) for line in text.splitlines()) < 1000  # the node's log, too
     states = {
         (st.name, kv.value)
         for _, array in arrays

@@ -251,10 +251,12 @@ def test_depth_sensor_states(state, level, what):
 def test_a_state_for_every_code_and_a_word_for_every_state():
     assert (
         sensor_state.LINE_STATES[sensor_state.OK] == 'ok'
-        and len(set(sensor_state.LINE_STATES)) == 6
+        and len(set(sensor_state.LINE_STATES)) == 7
     )
-    for code in range(1, 6):
+    for code in range(1, 7):
         assert sensor_state.line_message(code, 1e6, MBL)
+    for code in range(1, len(sensor_state.DEPTH_STATES)):
+        assert sensor_state.depth_message(code, 20.0, AlarmConfig())
     assert sensor_state.line_word(sensor_state.OK, 'inconsistent') == 'inconsistent'
     assert sensor_state.line_word(sensor_state.SLACK, 'inconsistent') == 'slack'
     assert math.isinf(sensor_state.Memory().changed)

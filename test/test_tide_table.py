@@ -1,4 +1,4 @@
-"""The tide table (core.tide_table): time_to_uplift on the table's own forecast.
+"""The tide table (core.monitor.tide_table): time_to_uplift on the table's own forecast.
 
 A tide that follows its table exactly, the horizontal tension held: at every depth sample the
 published ``time_to_uplift`` is the first crossing of the critical depth (the catenary closed

@@ -1,4 +1,5 @@
-"""The tide's trend and each line's time to uplift (core.tide_trend, the core, its batch twin).
+"""The tide's trend and each line's time to uplift (core.monitor.tide_trend, the core, its
+vectorized twin).
 
 * the scalar trend (``step``) and its vectorized twin (``series``) give the same bits, in any
   windows;
@@ -7,7 +8,7 @@
   waves on the depth and the tension (the dock heaving with them: every sample) and with gauge
   noise on the depth (which the solver turns into noise on the horizontal tension and so on the
   margin: the median of each minute);
-* the core and ``batch.advance`` agree event by event over such a tide (values, the new WARN
+* the core and ``twin.advance`` agree event by event over such a tide (values, the new WARN
   and the ERROR after it, snapshots, the state left behind).
 """
 
@@ -54,7 +55,7 @@ def tide_scene(seconds, noise=0.0, wave=0.0, seed=0):
 
 def one_line(tension_accuracy=None, **alarm):
     # The scene's tension is noise-free and moves by less than the default resolution per
-    # sample: resolution 0 keeps it from reading as a stuck sensor (core.sensor).
+    # sample: resolution 0 keeps it from reading as a stuck sensor (core.monitor.sensor_state).
     alarm.setdefault('tension_resolution', 0.0)
     line = LineConfig(
         name='line_11',

@@ -303,11 +303,21 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
     return found
 
 
+def long_running(args: argparse.Namespace) -> bool:
+    """True for a command that serves until stopped (``run``, ``demo``, ``console``,
+    ``replay --publish``): its parser sets ``long_running`` (True, or a test of the args)."""
+    keep = getattr(args, 'long_running', False)
+    return bool(keep(args) if callable(keep) else keep)
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     if hasattr(signal, 'SIGPIPE'):  # `... | head`: end quietly, as Unix tools do (no traceback)
         signal.signal(signal.SIGPIPE, signal.SIG_DFL)
     parser = build_parser()
     args = parser.parse_args(argv)
+    if hasattr(signal, 'SIGPIPE') and long_running(args):
+        # A server survives any client that goes away (a closed socket is an error, not death).
+        signal.signal(signal.SIGPIPE, signal.SIG_IGN)
     try:
         return int(args.func(args) or 0)
     except UsageError as exc:

@@ -18,8 +18,10 @@ Playback::
 
     catenary-monitor replay LOG.mcap --publish [--params-file FILE] [--rate X] [--loop]
 
-publishes the recorded inputs (``std_msgs/Float64``) on their topics with their recorded timing
-scaled by X (:mod:`catenary_monitor.ros.playback`, needs rclpy).
+publishes the recorded inputs (as recorded: ``std_msgs/Float64``, ``WrenchStamped``,
+``FluidPressure``, ``Range``) on their topics with their recorded timing scaled by X, and
+``/clock`` with the log's time, which a node with ``use_sim_time`` follows
+(:mod:`catenary_monitor.ros.playback`, needs rclpy).
 
 Exit status: 0 done; 2 bad arguments, params file, missing file, not MCAP, or a topic with an
 unexpected type (one line naming it); 3 no message on any requested topic (empty log).
@@ -50,8 +52,9 @@ from catenary_monitor.io.mcap_read import (
     EmptyLogError,
     McapReadError,
     ReadReport,
+    TopicTypeError,
+    iter_windows,
     not_mcap,
-    read_float64_topics,
 )
 from catenary_monitor.replay.driver import (
     EXIT_EMPTY,
@@ -61,7 +64,6 @@ from catenary_monitor.replay.driver import (
     input_topics,
     load_config,
     log_parameters,
-    read_inputs,
 )
 
 __all__ = ['register', 'cmd_replay']
@@ -110,28 +112,37 @@ class Progress:
         self.line.end()
 
 
-def _publish_columns(
+def _publish_messages(
     paths: Sequence[Path], config: Optional[MonitorConfig]
-) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], ReadReport]:
-    """What ``--publish`` plays (topic -> column) and the read report: the params file's
-    tension and depth topics, or every Float64 topic of the log without a params file."""
-    from catenary_monitor.ros.playback import float64_topics
+) -> tuple[dict[str, tuple[np.ndarray, list[bytes], str]], ReadReport]:
+    """What ``--publish`` plays (topic -> (log times, CDR payloads, type)) and the read
+    report: the params file's tension and depth topics with their configured types, or every
+    topic of an input type without a params file."""
+    from catenary_monitor.ros.playback import input_topics_of_log
 
     if config is not None:
-        tensions, depth, report = read_inputs(paths, config)
         names, depth_topic = input_topics(config)
-        columns = {names[n]: tensions[n] for n in names}
-        columns[depth_topic] = depth
-        return columns, report
-    topics = float64_topics(paths)
-    if not topics:
-        raise ReplayError('empty log: no std_msgs/msg/Float64 topic to publish', EXIT_EMPTY)
+        types = {names[line.name]: line.tension_type for line in config.lines}
+        types[depth_topic] = config.depth_type
+    else:
+        types = input_topics_of_log(paths)
+        if not types:
+            raise ReplayError('empty log: no input topic (Float64, WrenchStamped, '
+                              'FluidPressure, Range) to publish', EXIT_EMPTY)  # fmt: skip
+    report = ReadReport()
     try:
-        return read_float64_topics(paths, topics)
+        window = next(iter_windows(paths, [], [], None, report, typed=types))
+    except TopicTypeError as err:
+        raise ReplayError(f'unexpected message type: {err} (check the params file topics)')
     except EmptyLogError as err:
         raise ReplayError(f'empty log: {err}', EXIT_EMPTY) from err
     except McapReadError as err:
         raise ReplayError(str(err)) from err
+    out = {}
+    for topic, type_name in types.items():
+        times, payloads = window.raw.get(topic, (np.zeros(0, np.int64), []))
+        out[topic] = (times, payloads, type_name)
+    return out, report
 
 
 def cmd_replay(args: argparse.Namespace) -> int:
@@ -142,9 +153,9 @@ def cmd_replay(args: argparse.Namespace) -> int:
 
             paths = expand(args.logs)
             config = load_config(args.params_file) if args.params_file else None
-            columns, report = _publish_columns(paths, config)
+            messages, report = _publish_messages(paths, config)
             return publish(
-                columns,
+                messages,
                 report,
                 rate=args.rate,
                 loop=args.loop,
@@ -545,4 +556,4 @@ def register(sub: Any) -> None:
         metavar='S',
         help='--publish: wait up to S s until every topic has a subscriber',
     )
-    p.set_defaults(func=cmd_replay)
+    p.set_defaults(func=cmd_replay, long_running=lambda a: bool(a.publish))

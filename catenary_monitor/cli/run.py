@@ -14,17 +14,23 @@ __all__ = ['register']
 
 
 DISCOVERY = 'ROS_AUTOMATIC_DISCOVERY_RANGE'
+PEERS = 'ROS_STATIC_PEERS'
 
 
 def limit_discovery(environ: MutableMapping[str, str]) -> str:
     """Set ``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`` unless the user set it; the start line
-    that says which range the node runs with (docs/node.md, Security)."""
+    that says which range the node runs with and the static peers it names (docs/deploy.md,
+    docs/node.md Security)."""
+    peers = [p.strip() for p in environ.get(PEERS, '').split(';') if p.strip()]
+    named = f', static peers {", ".join(peers)} (from {PEERS})' if peers else ''
     if environ.get(DISCOVERY):
-        return f'DDS discovery range {environ[DISCOVERY]} (from {DISCOVERY})'
+        return f'DDS discovery range {environ[DISCOVERY]} (from {DISCOVERY}){named}'
     environ[DISCOVERY] = 'LOCALHOST'
+    if peers:
+        return f'DDS discovery limited to this host ({DISCOVERY}=LOCALHOST){named}'
     return (
-        f'DDS discovery limited to this host ({DISCOVERY}=LOCALHOST; set it, e.g. to SUBNET, '
-        'to reach other machines)'
+        f'DDS discovery limited to this host ({DISCOVERY}=LOCALHOST; name the sensors\' '
+        f'computers in {PEERS}, or set {DISCOVERY}=SUBNET, to reach other machines)'
     )
 
 
@@ -81,7 +87,7 @@ def register(sub: Any) -> None:
         metavar='ARG',
         help='the rest is passed to ROS (e.g. -p clear_hold:=10.0)',
     )
-    p.set_defaults(func=cmd_run)
+    p.set_defaults(func=cmd_run, long_running=True)
 
     p = sub.add_parser(
         'demo',
@@ -111,4 +117,4 @@ def register(sub: Any) -> None:
         help='port of the operator\'s console (default %(default)s; busy or 0: any free port)',
     )
     p.add_argument('--no-console', action='store_true', help='do not start the console')
-    p.set_defaults(func=cmd_demo)
+    p.set_defaults(func=cmd_demo, long_running=True)

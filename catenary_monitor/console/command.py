@@ -1,18 +1,23 @@
 """``catenary-monitor console``: serve the operator's page, live or over a recorded log.
 
-Live: ``catenary-monitor console [--params-file F] [--port 8080] [--bind 127.0.0.1]``.
+Live: ``catenary-monitor console [--params-file F] [--port 8080] [--bind 127.0.0.1]
+[--token-file FILE | --read-only] [--tls-cert F --tls-key F]``.
 Replay: ``catenary-monitor console --log FILE|DIR [--params-file F]``. Prints the URL on one line
 (``console: http://HOST:PORT/ ...``) and serves until Ctrl-C or SIGTERM. Exit 2 with one line on a
-bad params file, an unreadable log or a port in use.
+bad params file, token file or certificate, an unreadable log, a port in use, or a bind beyond
+loopback with neither ``--token-file`` nor ``--read-only``.
 """
 
 from __future__ import annotations
 
 import argparse
+import ipaddress
 import signal
+import socket
+import ssl
 import sys
 import threading
-from typing import Any
+from typing import Any, Optional
 
 __all__ = ['register', 'cmd_console']
 
@@ -53,7 +58,11 @@ def cmd_console(args: argparse.Namespace) -> int:
 
         source = LiveSource(config, args.ros_args)
     try:
-        server = ConsoleServer(source, args.bind, args.port)
+        access = _access(args)
+    except _Refused as err:
+        return _fail(str(err))
+    try:
+        server = ConsoleServer(source, args.bind, args.port, **access)
     except OSError as err:
         return _fail(
             f'cannot listen on {args.bind}:{args.port}: {err.strerror or err} '
@@ -66,6 +75,10 @@ def cmd_console(args: argparse.Namespace) -> int:
         source.start()
     server.start()
     what = 'live' if source.mode == 'live' else f'replay of {", ".join(args.log)}'
+    if server.access == 'token':
+        what += f'; {len(access["operators"].names)} operators sign in to act'
+    elif server.access == 'read-only':
+        what += '; read-only'
     print(f'console: {server.url} ({what}; Ctrl-C stops)', flush=True)
     try:
         while not stop.wait(0.5):
@@ -75,6 +88,67 @@ def cmd_console(args: argparse.Namespace) -> int:
         if source.mode == 'live':
             source.stop()
     return 0
+
+
+class _Refused(Exception):
+    """A console that must not start as asked: ``str()`` is one line."""
+
+
+def is_loopback(bind: str) -> bool:
+    """True when ``bind`` (an address or a host name) is reachable from this PC only."""
+    try:
+        return ipaddress.ip_address(bind.strip('[]')).is_loopback
+    except ValueError:
+        pass
+    try:
+        found = socket.getaddrinfo(bind, None)
+    except OSError:
+        return False
+    return bool(found) and all(ipaddress.ip_address(f[4][0]).is_loopback for f in found)
+
+
+def _access(args: argparse.Namespace) -> dict[str, Any]:
+    """The server's access settings (operators, read-only, TLS) from the command line; a bind
+    beyond loopback needs ``--token-file`` or ``--read-only``."""
+    from catenary_monitor.console.operators import TokenFileError, load_operators
+
+    operators = None
+    if args.token_file:
+        try:
+            operators, warning = load_operators(args.token_file)
+        except TokenFileError as err:
+            raise _Refused(str(err)) from None
+        if warning:
+            print(f'catenary-monitor console: warning: {warning}', file=sys.stderr)
+    elif not args.read_only and not args.log and not is_loopback(args.bind):
+        raise _Refused(
+            f'--bind {args.bind} reaches beyond this PC: give --token-file FILE (operators '
+            'who may acknowledge) or --read-only'
+        )
+    tls = _tls(args.tls_cert, args.tls_key)
+    if operators is not None and tls is None and not is_loopback(args.bind):
+        print(
+            'catenary-monitor console: warning: tokens cross the network in clear text '
+            '(give --tls-cert and --tls-key)',
+            file=sys.stderr,
+        )
+    return {'operators': operators, 'read_only': bool(args.read_only or args.log), 'tls': tls}
+
+
+def _tls(cert: Optional[str], key: Optional[str]) -> Optional[ssl.SSLContext]:
+    """A TLS server context (TLS 1.2 at least) from a certificate and its key, or None."""
+    if not cert and not key:
+        return None
+    if not (cert and key):
+        raise _Refused('--tls-cert and --tls-key go together')
+    context = ssl.SSLContext(ssl.PROTOCOL_TLS_SERVER)
+    context.minimum_version = ssl.TLSVersion.TLSv1_2
+    try:
+        context.load_cert_chain(cert, key)
+    except (OSError, ssl.SSLError) as err:
+        reason = getattr(err, 'strerror', None) or getattr(err, 'reason', None) or err
+        raise _Refused(f'cannot use the certificate {cert} with the key {key}: {reason}')
+    return context
 
 
 def _write_layout(args: argparse.Namespace) -> int:
@@ -124,8 +198,22 @@ def register(sub: Any) -> None:
         '--bind',
         default='127.0.0.1',
         metavar='ADDR',
-        help='address to listen on (default %(default)s: this PC only; 0.0.0.0 for the network)',
+        help='address to listen on (default %(default)s: this PC only; beyond loopback, e.g. '
+        '0.0.0.0, needs --token-file or --read-only)',
     )
+    p.add_argument(
+        '--token-file',
+        metavar='FILE',
+        help='operators who may acknowledge: one NAME:TOKEN a line; every state-changing '
+        'request then needs "Authorization: Bearer TOKEN" (the page asks for it)',
+    )
+    p.add_argument(
+        '--read-only',
+        action='store_true',
+        help='nobody acknowledges from this console (the page only shows)',
+    )
+    p.add_argument('--tls-cert', metavar='FILE', help='serve HTTPS with this certificate (PEM)')
+    p.add_argument('--tls-key', metavar='FILE', help='the private key of --tls-cert (PEM)')
     p.add_argument(
         '--log', nargs='+', metavar='FILE|DIR', help='replay a recorded MCAP log (files or dirs)'
     )
@@ -142,4 +230,4 @@ def register(sub: Any) -> None:
         metavar='ARG',
         help='the rest is passed to ROS',
     )
-    p.set_defaults(func=cmd_console)
+    p.set_defaults(func=cmd_console, long_running=True)

@@ -153,6 +153,7 @@ def console_config(
         'tide_margin_warn': alarm.tide_margin_warn if alarm else 1.0,
         'uplift_time_warn': alarm.uplift_time_warn if alarm else 1800.0,
         'drag_margin_warn': alarm.drag_margin_warn if alarm else 0.0,
+        'fatigue_damage_warn': alarm.fatigue_damage_warn if alarm else 0.5,
         'tension_timeout': alarm.tension_timeout if alarm else 5.0,
         'period_s': 1.0 / rate,
         'silence_limit_s': silence_limit(rate),
@@ -389,6 +390,9 @@ def _line_view(
             'drag_margin',  # N, holding minus horizontal load; None without anchor_holding
             'implied_anchor_distance',  # m, from the chain length; None without it
             'tide_margin_at_length',  # m, the chain length held; None without it
+            'drag_state',  # 0 holding, 1 overloaded, 2 dragging; None unknown
+            'fatigue_damage',  # Miner's damage so far
+            'fatigue_life_left',  # s at the last day's rate; None unknown or unlimited
             'wave_tension',  # N, the wave-frequency tension (half-range over wave_window)
             'dynamic_uplift',  # N, the uplift at the waves' peak tension (what ERROR takes)
         ):

@@ -1,17 +1,18 @@
-"""The console's HTTP server: the page, its JSON API and a Server-Sent Events stream.
+"""The console's HTTP application: the page, its JSON API, a Server-Sent Events stream and the
+one policy every state-changing request passes.
 
-Standard library only (``http.server.ThreadingHTTPServer``): the console serves one page to a
-few browsers on the dock PC, so a framework would add dependencies and nothing the page needs.
-Live updates go one way (monitor -> page), which is what Server-Sent Events are (a long GET,
-``text/event-stream``, reconnected by the browser itself); the one request that changes state,
-an acknowledgement, is a plain POST.
+The transport (:mod:`.http_transport`: asyncio and h11, every request read whole, every wait
+bounded) hands this module complete requests only. Live updates go one way (monitor -> page),
+which is what Server-Sent Events are (a long GET, ``text/event-stream``, reconnected by the
+browser itself); a request that changes state is a POST.
 
-Routes:
+Routes (:data:`PAGES`, :data:`ACTIONS`):
 
 ``GET /``, ``GET /static/NAME``
     the page and its assets (package data; nothing from the internet);
 ``GET /api/config``
-    lines (heading, MBL, ...), thresholds, the monitor's period, the mode (``live``/``replay``);
+    lines (heading, MBL, ...), thresholds, the monitor's period, the mode (``live``/``replay``)
+    and ``access`` (``open``, ``token`` or ``read-only``);
 ``GET /api/frame[?t=S]``
     the page's state now (replay: at log time S);
 ``GET /api/trend?line=NAME[&t=S][&span=S]``
@@ -19,15 +20,19 @@ Routes:
 ``GET /api/stream``
     live only: a frame at every change (at most 20 per second) and at least every 0.5 s;
 ``POST /api/ack``
-    ``{"line": "NAME" | "all"}``: the console publishes the acknowledgement to the monitor.
+    ``{"line": "NAME" | "all"}``: the console publishes the acknowledgement to the monitor;
+``POST /api/operator``
+    sign in: the operator a bearer token names (changes nothing).
 
-Acknowledgements are refused (403) unless the request comes from the console's own page: the
-``Host`` header must name this server (``127.0.0.1``, ``localhost`` or ``[::1]`` with its port,
-or the ``--bind`` address; any host when bound to all interfaces), the ``Origin`` header must be
-present and equal ``http://HOST``, and the body must be ``application/json`` (which a
-cross-site form cannot send without a CORS preflight, which is never answered). So another web
-site open in the operator's browser cannot acknowledge an alarm, nor can a page that reaches the
-console through DNS rebinding.
+Every route of :data:`ACTIONS` passes :meth:`ConsoleServer.authorize` first: refused (403) on a
+``--read-only`` console and unless the request comes from the console's own page (the ``Host``
+header names this server: ``127.0.0.1``, ``localhost`` or ``[::1]`` with its port, or the
+``--bind`` address, any host when bound to all interfaces; the ``Origin`` header is present and
+equals ``SCHEME://HOST``; the body is ``application/json``, which a cross-site form cannot send
+without a CORS preflight, never answered); with a token file, refused (401) without
+``Authorization: Bearer TOKEN`` of one of its operators. So another web site open in the
+operator's browser cannot act, nor a page that reaches the console through DNS rebinding, nor,
+with a token file, anyone without a token.
 """
 
 from __future__ import annotations
@@ -35,17 +40,19 @@ from __future__ import annotations
 import json
 import math
 import socket
+import ssl
 import threading
 import time
+from dataclasses import dataclass
 from http import HTTPStatus
-from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from importlib import resources
-from typing import Any, Optional, Protocol
-from urllib.parse import parse_qs, urlsplit
+from typing import Any, Callable, Iterator, Mapping, Optional, Protocol
 
 from catenary_monitor.console.frames import AckError
+from catenary_monitor.console.http_transport import HttpError, HttpTransport, Request, Response
+from catenary_monitor.console.operators import Operators
 
-__all__ = ['Source', 'ConsoleServer', 'STATIC_FILES']
+__all__ = ['Source', 'ConsoleServer', 'Actor', 'STATIC_FILES', 'PAGES', 'ACTIONS']
 
 #: The page's files (package data under console/static) and their content types.
 STATIC_FILES = {
@@ -53,7 +60,10 @@ STATIC_FILES = {
     'console.js': 'text/javascript; charset=utf-8',
     'console.css': 'text/css; charset=utf-8',
 }
-_CSP = "default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'self'"
+_CSP = (
+    "default-src 'self'; img-src 'self' data:; style-src 'self'; script-src 'self'; "
+    "frame-ancestors 'none'"
+)
 
 
 class Source(Protocol):
@@ -93,15 +103,33 @@ def _static(name: str) -> bytes:
 
 
 class ConsoleServer:
-    """The HTTP server of one console on ``bind:port`` (port 0: any free port)."""
+    """The console's HTTP application on ``bind:port`` (port 0: any free port).
 
-    def __init__(self, source: Source, bind: str = '127.0.0.1', port: int = 8080) -> None:
+    ``operators``: the token file's operators (every state-changing request then needs a valid
+    ``Authorization: Bearer TOKEN``); ``read_only``: every state-changing request is refused;
+    ``tls``: serve HTTPS with this context. Binding happens here (OSError: the port is taken).
+    """
+
+    def __init__(
+        self,
+        source: Source,
+        bind: str = '127.0.0.1',
+        port: int = 8080,
+        *,
+        operators: Optional[Operators] = None,
+        read_only: bool = False,
+        tls: Optional[ssl.SSLContext] = None,
+    ) -> None:
         self.source = source
         self.bind = bind
+        self.operators = operators
+        self.read_only = read_only
+        self.scheme = 'https' if tls is not None else 'http'
         self.stopping = threading.Event()
-        self.httpd = ThreadingHTTPServer((bind, port), _handler(self))
-        self.httpd.daemon_threads = True
-        self.port = int(self.httpd.server_address[1])
+        family = socket.AF_INET6 if ':' in bind else socket.AF_INET
+        sock = socket.create_server((bind, port), family=family, backlog=128)
+        self.port = int(sock.getsockname()[1])
+        self.transport = HttpTransport(self, sock, tls)
         self.any_host = bind in ('0.0.0.0', '::', '')
         names = {'127.0.0.1', 'localhost', '[::1]', bind if ':' not in bind else f'[{bind}]'}
         self.hosts = {f'{n}:{self.port}' for n in names}
@@ -110,136 +138,210 @@ class ConsoleServer:
     @property
     def url(self) -> str:
         host = '127.0.0.1' if self.any_host else self.bind
-        return f'http://{host}:{self.port}/'
+        host = f'[{host}]' if ':' in host else host
+        return f'{self.scheme}://{host}:{self.port}/'
+
+    @property
+    def access(self) -> str:
+        """``read-only``, ``token`` (operators sign in) or ``open`` (this PC's page acts)."""
+        return 'read-only' if self.read_only else ('token' if self.operators else 'open')
 
     def serve_forever(self) -> None:
-        self.httpd.serve_forever(poll_interval=0.2)
+        self.transport.start().join()
 
     def start(self) -> threading.Thread:
         """Serve in a daemon thread."""
-        thread = threading.Thread(target=self.serve_forever, name='http', daemon=True)
-        thread.start()
-        return thread
+        return self.transport.start()
 
     def shutdown(self) -> None:
         self.stopping.set()
-        self.httpd.shutdown()
-        self.httpd.server_close()
+        self.transport.stop()
 
-    def refusal(self, headers: Any) -> Optional[str]:
-        """Why a state-changing request must be refused (None: it comes from our page)."""
-        host = headers.get('Host', '')
+    # ------------------------------------------------------------------ the policy
+    def refusal(self, headers: Mapping[str, str]) -> Optional[str]:
+        """Why a state-changing request must be refused as not coming from this console's page
+        (None: it does). ``headers``: lower-case names."""
+        host = headers.get('host', '')
         if not self.any_host and host not in self.hosts:
-            return f'Host {host!r} is not this console'
-        origin = headers.get('Origin')
+            return f'Host {host[:80]!r} is not this console'
+        origin = headers.get('origin')
         if origin is None:
-            return 'no Origin header: acknowledge from the console page'
-        if origin != f'http://{host}':
-            return f'request from another origin ({origin}) refused'
-        if headers.get('Content-Type', '').split(';')[0].strip() != 'application/json':
+            return 'no Origin header: act from the console page'
+        if origin != f'{self.scheme}://{host}':
+            return f'request from another origin ({origin[:80]}) refused'
+        if headers.get('content-type', '').split(';')[0].strip() != 'application/json':
             return 'the body must be application/json'
         return None
 
+    def authorize(self, request: Request) -> Actor:
+        """Who is acting, for every state-changing request (every route of :data:`ACTIONS`
+        passes here first): refused (403) on a read-only console, from another origin, a
+        foreign Host or without a JSON body; with a token file, refused (401) without a valid
+        bearer token. The actor's ``origin`` names the operator, the console and the client."""
+        if self.read_only:
+            raise HttpError(403, 'this console is read-only (started with --read-only)')
+        refusal = self.refusal(request.headers)
+        if refusal is not None:
+            raise HttpError(403, refusal)
+        where = f'console {self.hostname} client {request.client}'
+        if self.operators is None:
+            return Actor('', where)
+        name = self.operators.who(request.headers.get('authorization'))
+        if name is None:
+            raise HttpError(
+                401,
+                'sign in: a valid operator token is needed (Authorization: Bearer TOKEN)',
+                [('WWW-Authenticate', 'Bearer realm="catenary-monitor console"')],
+            )
+        return Actor(name, f'{name} via {where}')
 
-def _handler(server: ConsoleServer) -> type:
-    class Handler(BaseHTTPRequestHandler):
-        server_version = 'catenary-console'
-        protocol_version = 'HTTP/1.1'
+    # ------------------------------------------------------------------ the transport's side
+    def body_limit(self, method: str, path: str) -> int:
+        if method == 'POST':
+            if path in ACTIONS:
+                return ACTIONS[path][0]
+            if path in PAGES:
+                raise HttpError(405, f'{path} is read with GET', [('Allow', 'GET')])
+            raise HttpError(404, f'no such action: {path[:100]}')
+        if method == 'GET':
+            if path in ACTIONS:
+                raise HttpError(405, f'{path} takes a POST', [('Allow', 'POST')])
+            return 0
+        raise HttpError(405, f'method {method[:20]} not allowed', [('Allow', 'GET, POST')])
 
-        def log_message(self, format: str, *args: Any) -> None:  # noqa: A002 - stdlib name
-            pass  # one line per request would drown the terminal
+    def error_body(self, status: int, message: str) -> tuple[bytes, str, list]:
+        return _json({'error': message}), 'application/json', _HEADERS
 
-        def _send(self, status: int, body: bytes, ctype: str = 'application/json') -> None:
-            self.send_response(status)
-            self.send_header('Content-Type', ctype)
-            self.send_header('Content-Length', str(len(body)))
-            self.send_header('Cache-Control', 'no-store')
-            self.send_header('X-Content-Type-Options', 'nosniff')
-            self.send_header('Content-Security-Policy', _CSP)
-            self.end_headers()
-            self.wfile.write(body)
+    def handle(self, request: Request) -> Response:
+        try:
+            if request.method == 'POST':
+                limit, action = ACTIONS[request.path]
+                return action(self, request, self.authorize(request))
+            page = PAGES.get(request.path)
+            if page is None and request.path.startswith('/static/'):
+                page = _static_page
+            if page is None:
+                raise HttpError(404, f'no such page: {request.path[:100]}')
+            return page(self, request)
+        except ValueError as err:
+            raise HttpError(400, str(err)) from None
 
-        def _error(self, status: int, message: str) -> None:
-            self._send(status, _json({'error': message}))
+    def events(self) -> Iterator[bytes]:
+        """The live event stream: a frame at every change (at most 20 per second) and at least
+        every 0.5 s, until the server stops (or the client goes away)."""
+        version, last = -1, 0.0
+        while not self.stopping.is_set():
+            version = self.source.wait(version, 0.5)
+            wait = 0.05 - (time.monotonic() - last)
+            if wait > 0:
+                time.sleep(wait)
+            last = time.monotonic()
+            yield b'data: ' + _json(self.source.frame()) + b'\n\n'
 
-        def do_GET(self) -> None:  # noqa: N802 - stdlib name
-            url = urlsplit(self.path)
-            query = {k: v[-1] for k, v in parse_qs(url.query).items()}
-            path = url.path
-            try:
-                if path in ('/', '/index.html'):
-                    self._send(200, _static('index.html'), STATIC_FILES['index.html'])
-                elif path.startswith('/static/') and path[8:] in STATIC_FILES:
-                    self._send(200, _static(path[8:]), STATIC_FILES[path[8:]])
-                elif path == '/favicon.ico':
-                    self._send(204, b'', 'image/x-icon')
-                elif path == '/api/config':
-                    self._send(200, _json(server.source.config_json()))
-                elif path == '/api/frame':
-                    self._send(200, _json(server.source.frame(_time(query.get('t')))))
-                elif path == '/api/trend':
-                    span = _time(query.get('span')) or 3600.0
-                    data = server.source.trend(
-                        query.get('line', ''), _time(query.get('t')), min(span, 7200.0)
-                    )
-                    self._send(200, _json(data))
-                elif path == '/api/stream':
-                    self._stream()
-                else:
-                    self._error(404, f'no such page: {path}')
-            except (BrokenPipeError, ConnectionResetError):
-                pass
-            except ValueError as err:
-                self._error(400, str(err))
 
-        def _stream(self) -> None:
-            if server.source.mode != 'live':
-                self._error(409, 'replay has no live stream: use /api/frame?t=')
-                return
-            self.send_response(200)
-            self.send_header('Content-Type', 'text/event-stream')
-            self.send_header('Cache-Control', 'no-store')
-            self.send_header('Connection', 'close')
-            self.end_headers()
-            self.close_connection = True
-            version, last = -1, 0.0
-            while not server.stopping.is_set():
-                version = server.source.wait(version, 0.5)
-                wait = 0.05 - (time.monotonic() - last)
-                if wait > 0:
-                    time.sleep(wait)
-                last = time.monotonic()
-                self.wfile.write(b'data: ' + _json(server.source.frame()) + b'\n\n')
-                self.wfile.flush()
+@dataclass(frozen=True)
+class Actor:
+    """Who acts: the operator's name (empty without a token file) and the ``origin`` the
+    monitor records (``NAME via console HOST client ADDRESS``, or ``console HOST client
+    ADDRESS``)."""
 
-        def do_POST(self) -> None:  # noqa: N802 - stdlib name
-            path = urlsplit(self.path).path
-            if path != '/api/ack':
-                self._error(404, f'no such action: {path}')
-                return
-            length = int(self.headers.get('Content-Length') or 0)
-            body = self.rfile.read(min(length, 4096)) if length else b''
-            refusal = server.refusal(self.headers)
-            if refusal is not None:
-                self._error(403, refusal)
-                return
-            try:
-                line = str(json.loads(body or b'{}').get('line', ''))
-            except (ValueError, AttributeError):
-                self._error(400, 'body must be {"line": "NAME" | "all"}')
-                return
-            if not line or any(c.isspace() for c in line):
-                self._error(400, 'body must be {"line": "NAME" | "all"}')
-                return
-            origin = f'console {server.hostname} client {self.client_address[0]}'
-            try:
-                sent = server.source.acknowledge(line, origin)
-            except AckError as err:
-                self._error(err.status, str(err))
-                return
-            self._send(int(HTTPStatus.ACCEPTED), _json({'sent': sent}))
+    name: str
+    origin: str
 
-    return Handler
+
+_HEADERS = [
+    ('Cache-Control', 'no-store'),
+    ('X-Content-Type-Options', 'nosniff'),
+    ('Content-Security-Policy', _CSP),
+    ('Referrer-Policy', 'no-referrer'),
+]
+
+
+def _ok(body: bytes, ctype: str = 'application/json', status: int = 200) -> Response:
+    return Response(status, body, ctype, list(_HEADERS))
+
+
+def _index(server: ConsoleServer, request: Request) -> Response:
+    return _ok(_static('index.html'), STATIC_FILES['index.html'])
+
+
+def _static_page(server: ConsoleServer, request: Request) -> Response:
+    name = request.path[len('/static/') :]
+    if name not in STATIC_FILES:
+        raise HttpError(404, f'no such file: {name[:100]}')
+    return _ok(_static(name), STATIC_FILES[name])
+
+
+def _config(server: ConsoleServer, request: Request) -> Response:
+    return _ok(_json({**server.source.config_json(), 'access': server.access}))
+
+
+def _frame(server: ConsoleServer, request: Request) -> Response:
+    return _ok(_json(server.source.frame(_time(request.query.get('t')))))
+
+
+def _trend(server: ConsoleServer, request: Request) -> Response:
+    span = _time(request.query.get('span')) or 3600.0
+    line = request.query.get('line', '')
+    data = server.source.trend(line, _time(request.query.get('t')), min(span, 7200.0))
+    return _ok(_json(data))
+
+
+def _stream(server: ConsoleServer, request: Request) -> Response:
+    if server.source.mode != 'live':
+        raise HttpError(409, 'replay has no live stream: use /api/frame?t=')
+    return Response(200, b'', 'text/event-stream', list(_HEADERS), stream=server.events())
+
+
+def _favicon(server: ConsoleServer, request: Request) -> Response:
+    return _ok(b'', 'image/x-icon', 204)
+
+
+def _line_request(request: Request) -> str:
+    """The line of a ``{"line": "NAME" | "all"}`` body (400 otherwise)."""
+    try:
+        line = json.loads(request.body or b'{}').get('line', '')
+    except (ValueError, AttributeError, RecursionError):
+        line = None
+    if not isinstance(line, str) or not line or len(line) > 128 or not line.isprintable():
+        raise HttpError(400, 'body must be {"line": "NAME" | "all"}')
+    if any(c.isspace() for c in line):
+        raise HttpError(400, 'body must be {"line": "NAME" | "all"}')
+    return line
+
+
+def _acknowledge(server: ConsoleServer, request: Request, actor: Actor) -> Response:
+    line = _line_request(request)
+    try:
+        sent = server.source.acknowledge(line, actor.origin)
+    except AckError as err:
+        raise HttpError(err.status, str(err)) from None
+    return _ok(_json({'sent': sent, 'operator': actor.name}), status=int(HTTPStatus.ACCEPTED))
+
+
+def _operator(server: ConsoleServer, request: Request, actor: Actor) -> Response:
+    """Sign in: who the token names (the page then shows the operator and enables its
+    actions); changes nothing."""
+    return _ok(_json({'operator': actor.name, 'access': server.access}))
+
+
+#: GET routes: path -> handler(server, request) (``/static/NAME`` besides).
+PAGES: dict[str, Callable[[ConsoleServer, Request], Response]] = {
+    '/': _index,
+    '/index.html': _index,
+    '/favicon.ico': _favicon,
+    '/api/config': _config,
+    '/api/frame': _frame,
+    '/api/trend': _trend,
+    '/api/stream': _stream,
+}
+#: The state-changing routes (POST): path -> (largest body in bytes, handler(server, request,
+#: actor)). The server calls :meth:`ConsoleServer.authorize` before every one of them: a new
+#: action is added here and nowhere else.
+ACTIONS: dict[str, tuple[int, Callable[[ConsoleServer, Request, Actor], Response]]] = {
+    '/api/ack': (1024, _acknowledge),
+    '/api/operator': (1024, _operator),
+}
 
 
 def _time(text: Optional[str]) -> Optional[float]:

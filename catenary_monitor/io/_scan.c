@@ -2,7 +2,7 @@
  *
  * Optional, like the solve kernel: where it is not built, the reader runs its numpy passes,
  * which give the same offsets, reports and columns (test/test_mcap_scan.py runs the reader's
- * damage tests both ways).  Three functions, each one pass over a batch's records:
+ * damage tests both ways).  Four functions, each one pass over a batch's records:
  *
  *   locate(buf, file, table, starts, sizes, g_out, bad_out, gaps_out) -> (n_g, n_gaps)
  *       the Message Index check of _Scanner._locate_messages: every entry must point inside
@@ -17,6 +17,13 @@
  *       _extract_float64 and _split_topics: the log times and values of the CDR Float64
  *       records grouped by topic index (file order within each), their count per topic and
  *       the number of records that are not a 12-byte CDR Float64.
+ *   walk(buf, start, end, out) -> (n, stop, status)
+ *       _Scanner._walk: the records of buf[start:end] one after the other, the starts of the
+ *       Message records (22 B of head at least) into out (int64) until it is full; it stops
+ *       where a Schema or Channel record starts (status 1: Python registers it and walks on),
+ *       at a record that is not one (opcode 0, an unknown opcode below 0x80, a Message record
+ *       too short for its head) or that runs past end (status 2), at end (status 0), or when
+ *       out is full (status 3).
  *
  * Buffers come through the buffer protocol (numpy arrays, bytes, mmap); the caller (Python)
  * allocates the outputs and checks dtypes and sizes.
@@ -274,7 +281,49 @@ done:
     return result;
 }
 
+static PyObject *py_walk(PyObject *self, PyObject *args) {
+    PyObject *o_buf, *o_out;
+    Py_ssize_t start, end;
+    if (!PyArg_ParseTuple(args, "OnnO", &o_buf, &start, &end, &o_out)) return NULL;
+    Views v = {.n = 0};
+    PyObject *result = NULL;
+    Py_buffer *buf = view(&v, o_buf, 0, 0, "buf");
+    Py_buffer *out = buf ? view(&v, o_out, 1, 0, "out") : NULL;
+    if (!out) goto done;
+    if (start < 0 || end > buf->len || start > end) {
+        PyErr_SetString(PyExc_ValueError, "walk: start/end outside buf");
+        goto done;
+    }
+    const uint8_t *a = (const uint8_t *)buf->buf;
+    int64_t *o = (int64_t *)out->buf;
+    const Py_ssize_t cap = out->len / 8;
+    Py_ssize_t n = 0, pos = start;
+    int status = 0;
+    while (pos + 9 <= end) {
+        const uint8_t op = a[pos];
+        const uint64_t length = rd_u64(a + pos + 1);
+        if (length > (uint64_t)(end - pos - 9) || op == 0 || (op > 0x0F && op < 0x80)) {
+            status = 2;
+            break;
+        }
+        if (op == OP_MESSAGE) {
+            if (length < 22) { status = 2; break; }
+            if (n == cap) { status = 3; break; }
+            o[n++] = pos;
+        } else if (op == 0x03 || op == 0x04) {
+            status = 1;
+            break;
+        }
+        pos += 9 + (Py_ssize_t)length;
+    }
+    result = Py_BuildValue("nni", n, pos, status);
+done:
+    release(&v);
+    return result;
+}
+
 static PyMethodDef methods[] = {
+    {"walk", py_walk, METH_VARARGS, "Walk records; Message starts out (see top)."},
     {"locate", py_locate, METH_VARARGS, "Check a batch's Message Index entries (see top)."},
     {"gather", py_gather, METH_VARARGS, "The width bytes at each position, back to back."},
     {"float64_columns", py_float64_columns, METH_VARARGS,

@@ -38,6 +38,20 @@ With ``bag_metadata`` (the default) the folder is a rosbag2 bag: ``metadata.yaml
 each rotation) and on :meth:`close`. It lists the folder's finished files only, so bag readers
 open the folder at any time; the file being written joins it when it is finished.
 
+Retention and free space
+------------------------
+With ``max_total_bytes`` and/or ``max_age`` (0: keep all), the folder's finished ``*.mcap``
+files are deleted oldest first (by modification time, the end of a file) once the folder's MCAP
+files exceed ``max_total_bytes`` with the open one counted at the size it may reach before it
+rotates (``max_bytes`` plus a chunk: the bound holds between two checks), or once a file ended
+more than ``max_age`` seconds ago. The file being written is never touched, nor a file another
+process holds locked (a second logger's open file). Each deletion is kept in
+:attr:`McapLogger.deleted` (path, bytes, why) for the caller to report, and ``metadata.yaml`` is
+rewritten at once, so it only ever lists files that exist. The check runs when a file is
+finished and every ``retention_period`` seconds in :meth:`tick`. With ``min_free_bytes``,
+:attr:`McapLogger.warning` says so while the file system holds less than that free (checked as
+often): a warning before anything is lost to a full disk.
+
 Disk errors
 -----------
 No file-system error escapes: an unwritable directory, a full disk or a failing flush sets
@@ -165,6 +179,14 @@ class McapLogger:
         file was opened at once.
     bag_metadata
         Keep the folder's rosbag2 ``metadata.yaml`` current.
+    max_total_bytes, max_age
+        Retention (0: keep all): the folder's MCAP files at most this many bytes (B), finished
+        files at most this old (s, wall clock); oldest finished files deleted first, never the
+        open one.
+    min_free_bytes
+        :attr:`warning` while the file system of ``log_dir`` has less free space (B; 0: none).
+    retention_period
+        How often (s) :meth:`tick` applies the retention and checks the free space.
 
     Attributes
     ----------
@@ -183,6 +205,11 @@ class McapLogger:
         CDR payload bytes handed to the writer, per topic (same accounting).
     files : list[pathlib.Path]
         Files that were finished with a summary.
+    deleted : list[tuple[pathlib.Path, int, str]]
+        Files deleted by the retention and not yet taken by the caller: path, bytes, why
+        (``size`` or ``age``); :meth:`take_deleted` empties it.
+    warning : str or None
+        Low free space on the log's file system (None: enough, or not checked).
     """
 
     def __init__(
@@ -202,6 +229,10 @@ class McapLogger:
         create_dir: bool = True,
         error_hold: float = 2.0,
         bag_metadata: bool = True,
+        max_total_bytes: int = 0,
+        max_age: float = 0.0,
+        min_free_bytes: int = 0,
+        retention_period: float = 5.0,
     ) -> None:
         if compression not in _COMPRESSION:
             raise ValueError(f"compression must be 'zstd', 'lz4' or 'none', got {compression!r}")
@@ -236,6 +267,20 @@ class McapLogger:
         self.vanished = 0
         self._bag_cache: dict[str, _bag.FileInfo | None] = {}
         self._sticky_until = float('-inf')
+        for name, limit in (('max_total_bytes', max_total_bytes), ('max_age', max_age),
+                            ('min_free_bytes', min_free_bytes)):  # fmt: skip
+            if not limit >= 0:
+                raise ValueError(f'{name} must be >= 0, got {limit!r}')
+        self.max_total_bytes = int(max_total_bytes)
+        self.max_age = float(max_age)
+        self.min_free_bytes = int(min_free_bytes)
+        self.retention_period = float(retention_period)
+        self._next_retention = float('-inf')
+        self.deleted: list[tuple[Path, int, str]] = []
+        self.deleted_files = 0
+        self.deleted_bytes = 0
+        self.warning: str | None = None
+        self.free_bytes: int | None = None
 
         self.error: str | None = None
         self.last_error: str | None = None
@@ -458,8 +503,104 @@ class McapLogger:
             return self._flush_if_due(now)
 
     def tick(self) -> bool:
-        """Timer hook: same as ``flush_if_due()`` with the logger's clock."""
-        return self.flush_if_due()
+        """Timer hook: ``flush_if_due()`` with the logger's clock; every ``retention_period``
+        the retention and the free-space check."""
+        flushed = self.flush_if_due()
+        with self._lock:
+            now = self._clock()
+            if now >= self._next_retention:
+                self._next_retention = now + self.retention_period
+                self.apply_retention()
+        return flushed
+
+    def take_deleted(self) -> list[tuple[Path, int, str]]:
+        """The retention's deletions since the last call (path, bytes, ``size`` or ``age``)."""
+        with self._lock:
+            out, self.deleted = self.deleted, []
+            return out
+
+    def apply_retention(self) -> None:
+        """Delete the oldest finished MCAP files beyond ``max_total_bytes`` or ``max_age``
+        (never the open file, nor one another process holds locked); check the free space."""
+        with self._lock:
+            self._check_free_space()
+            if not (self.max_total_bytes or self.max_age):
+                return
+            try:
+                files = self._retention_candidates()
+            except OSError:
+                return
+            # The open file counted at the size it may reach before it rotates (plus a chunk):
+            # the folder stays under the bound until the next check, however long that is.
+            reserve = max(self._open_size(), self.max_bytes + self.chunk_size)
+            total = sum(size for _, size, _ in files) + reserve
+            wall = self._wall_clock()
+            gone = False
+            for path, size, mtime in files:  # oldest first
+                why = None
+                if self.max_age and wall - mtime > self.max_age:
+                    why = 'age'
+                elif self.max_total_bytes and total > self.max_total_bytes:
+                    why = 'size'
+                if why is None or _locked_elsewhere(path):
+                    continue
+                try:
+                    path.unlink()
+                except FileNotFoundError:
+                    continue
+                except OSError as exc:
+                    self.metadata_error = f'retention cannot delete {path}: {exc}'
+                    continue
+                total -= size
+                gone = True
+                self._bag_cache.pop(path.name, None)
+                self.deleted.append((path, size, why))
+                self.deleted_files += 1
+                self.deleted_bytes += size
+            if gone:
+                self._write_bag_metadata()
+
+    def _retention_candidates(self) -> list[tuple[Path, int, float]]:
+        """The folder's MCAP files but the open one: (path, bytes, mtime), oldest first."""
+        current = self.current_path
+        out = []
+        with os.scandir(self.log_dir) as entries:
+            for entry in entries:
+                if not entry.name.endswith('.mcap') or not entry.is_file(follow_symlinks=False):
+                    continue
+                path = self.log_dir / entry.name
+                if current is not None and path == current:
+                    continue
+                st = entry.stat(follow_symlinks=False)
+                out.append((path, int(st.st_size), float(st.st_mtime)))
+        out.sort(key=lambda item: (item[2], item[0].name))
+        return out
+
+    def _open_size(self) -> int:
+        if self._file is None:
+            return 0
+        try:
+            return int(self._file.stream.tell())
+        except (OSError, ValueError):
+            return self._flushed_size
+
+    def _check_free_space(self) -> None:
+        """:attr:`warning` from the free space of ``log_dir``'s file system."""
+        if not self.min_free_bytes:
+            return
+        try:
+            st = os.statvfs(self.log_dir)
+        except (OSError, AttributeError):
+            return
+        self.free_bytes = int(st.f_bavail * st.f_frsize)
+        if self.free_bytes >= self.min_free_bytes:
+            self.warning = None
+            return
+        self.warning = (
+            f'low disk space: {self.free_bytes / 2**20:.0f} MiB free for the MCAP log in '
+            f'{self.log_dir} (warning below {self.min_free_bytes / 2**20:.0f} MiB): logging '
+            'stops when the disk is full; free space or set log_max_total_size'
+        )
 
     def flush(self) -> bool:
         """End the open chunk, write it and fsync now. Returns False on error."""
@@ -502,7 +643,11 @@ class McapLogger:
                 'file_bytes_B': str(self.file_bytes),
                 'files_finished': str(len(self.files)),
                 'files_vanished': str(self.vanished),
+                'files_deleted': str(self.deleted_files),
+                'deleted_bytes_B': str(self.deleted_bytes),
+                'free_bytes_B': '' if self.free_bytes is None else str(self.free_bytes),
                 'error': self.error or '',
+                'warning': self.warning or '',
                 'bag_metadata_error': self.metadata_error or '',
             }
 
@@ -741,6 +886,7 @@ class McapLogger:
         self._clear_pending()
         for info in self._topics.values():
             info.channel_id = 0
+        self._next_retention = float('-inf')  # a file finished: the retention at the next tick
 
     def _fail(self, what: str, exc: BaseException) -> None:
         """Abandon the current file after an error; its unflushed messages are lost."""
@@ -790,6 +936,24 @@ def _lock_quietly(stream: IO[bytes]) -> None:
         fcntl.flock(stream.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
     except (ImportError, OSError):
         pass
+
+
+def _locked_elsewhere(path: Path) -> bool:
+    """Whether another process holds ``path`` locked (a live writer's open file)."""
+    try:
+        import fcntl
+    except ImportError:
+        return False
+    try:
+        with open(path, 'rb') as f:
+            try:
+                fcntl.flock(f.fileno(), fcntl.LOCK_SH | fcntl.LOCK_NB)
+            except OSError:
+                return True
+            fcntl.flock(f.fileno(), fcntl.LOCK_UN)
+    except OSError:
+        return False
+    return False
 
 
 def _close_quietly(stream: IO[bytes]) -> None:

@@ -50,6 +50,7 @@ from typing import (
     TYPE_CHECKING,
     Any,
     Callable,
+    Generator,
     Iterable,
     Iterator,
     NamedTuple,
@@ -461,6 +462,20 @@ class _Scanner:
     def skip(self, offset: int, kind: str, reason: str, lost: int | None = None) -> None:
         self.report.skips.append(Skip(self.path, offset, kind, reason, lost))
 
+    def bad_payload(self, offset: int, bad: int) -> None:
+        """Report ``bad`` records that are not a CDR Float64 in the chunk at ``offset``: one
+        Skip per chunk (a chunk walked in pieces adds to its one)."""
+        skips = self.report.skips
+        last = skips[-1] if skips else None
+        if last is not None and (last.path, last.offset, last.kind) == (
+            self.path,
+            offset,
+            'bad_payload',
+        ):
+            bad += last.messages_lost or 0
+            skips.pop()
+        self.skip(offset, 'bad_payload', f'{bad} message(s) not a 12-byte CDR Float64', bad)
+
     def finish(self) -> None:
         for channel_id, (count, offset) in sorted(self.unknown.items()):
             self.skip(
@@ -596,11 +611,9 @@ class _Scanner:
                 recovered = ''
                 if op == _OP_CHUNK:
                     yield from self._flush_top()
-                    piece = self._partial_chunk(pos)
-                    if piece is not None:
-                        batch.append(piece)
                     yield from self._flush_batch(batch)
                     batch = []
+                    yield from self._cut_chunk(pos)
                     recovered = (
                         f'; {self._recovered} message record(s) recovered from the cut '
                         'chunk without CRC check'
@@ -615,6 +628,11 @@ class _Scanner:
             body = pos + 9
             if op == _OP_CHUNK:
                 yield from self._flush_top()
+                if self._streamed(pos, end):  # too large to hold: decoded and walked in pieces
+                    yield from self._flush_batch(batch)
+                    batch, batch_bytes = [], 0
+                    pos = yield from self._big_chunk(pos, end)
+                    continue
                 pos, piece = self._chunk(pos, end)
                 if piece is not None:
                     batch.append(piece)
@@ -630,6 +648,8 @@ class _Scanner:
             try:
                 if op == _OP_MESSAGE:
                     self._top_messages.append(pos)
+                    if len(self._top_messages) >= _TOP_GROUP:
+                        yield from self._flush_top()
                 elif op == _OP_SCHEMA:
                     self._add_schema(data, body, end)
                 elif op == _OP_CHANNEL:
@@ -653,6 +673,7 @@ class _Scanner:
         block = self._select(self.data, offsets, int(offsets[0]))
         if block is not None:
             yield block
+        _release(self.data, int(offsets[0]))
 
     def _flush_batch(self, pieces: list[_Piece]) -> Iterator[_Block]:
         if not pieces:
@@ -739,56 +760,207 @@ class _Scanner:
         self.file_report.chunks += 1
         return after, _Piece(records, pos, indexes)
 
-    def _partial_chunk(self, pos: int) -> _Piece | None:
-        """The decodable start of a chunk cut by the end of the file (walked, not indexed)."""
+    def _streamed(self, pos: int, end: int) -> bool:
+        """Whether the Chunk record at ``pos`` declares more than :data:`WHOLE_CHUNK_BYTES`
+        uncompressed (decoded in pieces, never whole)."""
+        header = _chunk_header(self.data, pos + 9, end)
+        return header is not None and header[0] > WHOLE_CHUNK_BYTES
+
+    def _big_chunk(self, pos: int, end: int) -> Generator[_Block, None, int]:
+        """A chunk too large to hold, in bounded memory: checked in a first streaming pass
+        (decodes to exactly its size, CRC), then decoded again and walked piece by piece
+        (:meth:`_walk_pieces`). Returns where the file's walk goes on."""
+        data = self.data
+        after, indexes = self._message_indexes(end)
+        header = _chunk_header(data, pos + 9, end)
+        assert header is not None  # _streamed read it
+        usize, crc, compression, rec_start, rec_end = header
+        problem = chunk_size_problem(usize, rec_end - rec_start, compression)
+        if problem is not None:
+            problem = f'chunk {problem}'
+        else:
+            problem = _stream_problem(data, rec_start, rec_end, compression, usize, crc)
+        if problem is not None:
+            self.skip(pos, 'corrupt_chunk', problem, self._lost_in(indexes))
+            return after
+        self.file_report.chunks += 1
+        pieces = decompressed_pieces(
+            data, rec_start, rec_end, compression, usize, max(_READ_STEP, self.batch_bytes)
+        )
+        walked, _ = yield from self._walk_pieces(pieces, pos, usize, False)
+        if walked != usize:
+            self.skip(
+                pos,
+                'corrupt_chunk',
+                f'chunk records unreadable from byte {walked} of {usize}; the messages '
+                'before it are used',
+            )
+        _release(data, pos)
+        return after
+
+    def _cut_chunk(self, pos: int) -> Iterator[_Block]:
+        """The decodable start of a chunk cut by the end of the file (walked, not indexed; no
+        CRC to check), decoded and walked piece by piece."""
         data = self.data
         self._recovered = 0
         header = _chunk_header(data, pos + 9, len(data), partial=True)
         if header is None:
-            return None
+            return
         usize, _, compression, rec_start, rec_end = header
         if chunk_size_problem(usize, rec_end - rec_start, compression) is not None:
-            return None  # implausible: nothing is decompressed (reported as the cut)
-        try:
-            records = _decompress_partial(
-                data, rec_start, min(rec_end, len(data)), compression, usize
+            return  # implausible: nothing is decompressed (reported as the cut)
+        pieces = decompressed_pieces(
+            data,
+            rec_start,
+            min(rec_end, len(data)),
+            compression,
+            usize,
+            max(_READ_STEP, self.batch_bytes),
+        )
+        _, self._recovered = yield from self._walk_pieces(pieces, pos, usize, True)
+        if self._recovered:
+            self.file_report.chunks += 1
+
+    def _walk_pieces(
+        self, pieces: Iterator[bytes | memoryview], pos: int, size: int, cut: bool
+    ) -> Generator[_Block, None, tuple[int, int]]:
+        """Walk a chunk's records from its decompressed ``pieces`` (``size`` B declared), about
+        a reader batch at a time, yielding the accepted messages of each stretch as a block;
+        a record that a stretch cuts waits for the next. A record longer than
+        :data:`LONG_RECORD_BYTES` is dropped as it streams past (never held; reported when it
+        is a Message, Schema or Channel). ``cut``: the pieces end in a decoder error or too
+        early (the chunk was cut by the end of the file). Returns (bytes walked up to the
+        first that is not a record, or ``size``; Message records found)."""
+        pending: list[bytes | memoryview] = []
+        have = done = drop = found = 0
+        need = self.batch_bytes
+        source = iter(pieces)
+        while True:
+            try:
+                piece: bytes | memoryview | None = next(source)
+            except StopIteration:
+                piece = None
+            except Exception:  # noqa: BLE001 - a cut chunk ends in a decoder error
+                if not cut:
+                    raise
+                piece = None
+            if piece is not None:
+                if drop:
+                    cut_off = min(drop, len(piece))
+                    piece, drop, done = piece[cut_off:], drop - cut_off, done + cut_off
+                if len(piece):
+                    pending.append(piece)
+                    have += len(piece)
+                if have < need:
+                    continue
+            if not pending:
+                return done, found
+            buf = pending[0] if len(pending) == 1 else b''.join(pending)
+            offsets, stop = self._walk(buf, 0, len(buf))
+            found += len(offsets)
+            if len(offsets):
+                block = self._select(buf, offsets, pos)
+                if block is not None:
+                    yield block
+            pending, have, need = [], 0, self.batch_bytes
+            want = _record_want(buf, stop)
+            if stop == len(buf):
+                done += stop
+            elif want == 0 or done + stop + want > size or piece is None:
+                return done + stop, found  # not a record, or one past the chunk's end
+            elif want > LONG_RECORD_BYTES:
+                self._long_record(buf, stop, pos, want)
+                drop, done = want - (len(buf) - stop), done + len(buf)
+            else:
+                pending, have = [buf[stop:]], len(buf) - stop
+                need, done = max(want, self.batch_bytes), done + stop
+            if piece is None and not pending:
+                return done, found
+
+    def _long_record(self, buf: bytes | memoryview, at: int, pos: int, want: int) -> None:
+        """Report a record of a streamed chunk too long to hold (dropped unread)."""
+        op = buf[at]
+        if op in (_OP_MESSAGE, _OP_SCHEMA, _OP_CHANNEL):
+            what = {_OP_MESSAGE: 'Message', _OP_SCHEMA: 'Schema', _OP_CHANNEL: 'Channel'}[op]
+            self.skip(
+                pos,
+                'corrupt_chunk',
+                f'a {what} record of {want} B dropped unread (more than the '
+                f'{LONG_RECORD_BYTES} B a record of a large chunk may hold)',
             )
-        except Exception:  # noqa: BLE001 - whatever cannot be decoded is simply not recovered
-            return None
-        found: list[int] = []
-        self._walk(records[:usize], 0, min(len(records), usize), found)
-        self._recovered = len(found)
-        if not found:
-            return None
-        self.file_report.chunks += 1
-        return _Piece(records[:usize], pos, [], partial=True)
 
-    def _walk(self, buf: bytes | memoryview, start: int, end: int, found: list[int]) -> int:
-        """Walk records in ``buf[start:end]``; collect Message offsets; return where it stopped.
-
-        Schema and Channel records are registered on the way.
-        """
-        unpack = _RECORD_HEAD.unpack_from
+    def _walk(self, buf: bytes | memoryview, start: int, end: int) -> tuple[np.ndarray, int]:
+        """Walk the records of ``buf[start:end]``: the starts of its Message records (int64, in
+        order) and where the walk stopped (``end`` when every record fit). Schema and Channel
+        records are registered on the way; a record that is not one (or a bad Schema or
+        Channel) stops the walk. One C loop (``_scan.walk``) where built, else a Python loop
+        that takes a run of equal records (same opcode and length) in numpy passes."""
+        parts: list[np.ndarray] = []
         pos = start
+        while pos + 9 <= end:
+            if _scan is not None:
+                out = np.empty(min((end - pos) // _MESSAGE_MIN + 1, 1 << 20), np.int64)
+                n, pos, status = _scan.walk(buf, pos, end, out)
+                if n:
+                    parts.append(out[:n].copy())
+                if status == 3:
+                    continue  # out was full
+                if status != 1:
+                    break
+            else:
+                pos, stopped_at_definition = self._walk_py(buf, pos, end, parts)
+                if not stopped_at_definition:
+                    break
+            op, length = _RECORD_HEAD.unpack_from(buf, pos)
+            try:  # a Schema or Channel record
+                if op == _OP_SCHEMA:
+                    self._add_schema(buf, pos + 9, pos + 9 + length)
+                else:
+                    self._add_channel(buf, pos + 9, pos + 9 + length)
+            except _BadRecord:
+                break
+            pos += 9 + length
+        if not parts:
+            return np.empty(0, np.int64), pos
+        return (parts[0] if len(parts) == 1 else np.concatenate(parts)), pos
+
+    @staticmethod
+    def _walk_py(
+        buf: bytes | memoryview, pos: int, end: int, parts: list[np.ndarray]
+    ) -> tuple[int, bool]:
+        """:meth:`_walk`'s loop without the C one: up to the next Schema or Channel record
+        (True) or to where the walk stops (False). A record equal in opcode and length to the
+        one before it starts a run, measured in numpy passes of growing size (so a chunk of
+        millions of equal records costs a few passes, and records that differ cost no more
+        than one comparison each)."""
+        unpack = _RECORD_HEAD.unpack_from
+        arr = np.frombuffer(buf, np.uint8)
+        found: list[int] = []
+        last: tuple[int, int] = (-1, -1)
         while pos + 9 <= end:
             op, length = unpack(buf, pos)
             stop = pos + 9 + length
             if stop > end or op == 0 or (op not in _KNOWN_OPS and op < 0x80):
-                return pos
+                break
+            if op == _OP_SCHEMA or op == _OP_CHANNEL:
+                parts.append(np.asarray(found, np.int64))
+                return pos, True
+            if op == _OP_MESSAGE and length < 22:
+                break
+            if (op, length) == last:
+                run = _equal_run(arr, pos, end, 9 + length)
+                if op == _OP_MESSAGE:
+                    parts.append(np.asarray(found, np.int64))
+                    parts.append(pos + (9 + length) * np.arange(run, dtype=np.int64))
+                    found = []
+                pos += run * (9 + length)
+                continue
             if op == _OP_MESSAGE:
-                if length < 22:
-                    return pos
                 found.append(pos)
-            elif op == _OP_SCHEMA or op == _OP_CHANNEL:
-                try:
-                    if op == _OP_SCHEMA:
-                        self._add_schema(buf, pos + 9, stop)
-                    else:
-                        self._add_channel(buf, pos + 9, stop)
-                except _BadRecord:
-                    return pos
+            last = (op, length)
             pos = stop
-        return pos
+        parts.append(np.asarray(found, np.int64))
+        return pos, False
 
     def _locate_messages(self, pieces: list[_Piece]) -> tuple[bytes | memoryview, np.ndarray]:
         """Concatenate decompressed chunks; return the buffer and its Message record offsets.
@@ -896,28 +1068,33 @@ class _Scanner:
         """Walk the byte ranges that no checked index entry covers; return the buffer and
         every Message record start (sorted)."""
         k = len(pieces)
-        found: list[int] = []
+        found: list[np.ndarray] = []
         rewalk: set[int] = set()
         for a, b in gaps.tolist():
             piece = int(np.searchsorted(starts, a, 'right')) - 1
-            stop = self._walk(buf, a, b, found)
+            offsets, stop = self._walk(buf, a, b)
+            found.append(offsets)
             if stop != b:
                 if indexed[piece]:
                     rewalk.add(piece)  # the index and the records disagree: trust neither
                 else:
                     self._unreadable(pieces[piece], stop - int(starts[piece]), int(sizes[piece]))
+        walked = np.concatenate(found) if found else np.empty(0, np.int64)
         if rewalk:
             drop = np.zeros(k, bool)
             drop[list(rewalk)] = True
             g = g[~drop[np.searchsorted(starts, g, 'right') - 1]]
-            found = [f for f in found if not drop[int(np.searchsorted(starts, f, 'right')) - 1]]
+            walked = walked[~drop[np.searchsorted(starts, walked, 'right') - 1]]
+            found = [walked]
             for piece in sorted(rewalk):
                 a, b = int(starts[piece]), int(piece_ends[piece])
-                stop = self._walk(buf, a, b, found)
+                offsets, stop = self._walk(buf, a, b)
+                found.append(offsets)
                 if stop != b:
                     self._unreadable(pieces[piece], stop - a, b - a)
-        if found:
-            g = np.concatenate((g, np.asarray(found, np.int64)))
+            walked = np.concatenate(found)
+        if len(walked):
+            g = np.concatenate((g, walked))
             g.sort(kind='stable')
         return buf, g
 
@@ -1073,6 +1250,67 @@ MAX_CHUNK_BYTES = 256 << 20
 MAX_CHUNK_RATIO = 1000
 _RATIO_SLACK = 4096  # B: a tiny chunk may compress by more than the ratio
 _READ_STEP = 1 << 20  # B decompressed per step of a bounded streaming read
+#: Chunks declaring more (B uncompressed) are decoded in pieces and walked as they come, never
+#: held whole: the node's chunks are 0.5-2 MiB, rosbag2's 4 MiB.
+WHOLE_CHUNK_BYTES = 16 << 20
+#: A record of a chunk decoded in pieces longer than this (B) is dropped as it streams past:
+#: no Float64 or event record comes near it, and holding it would undo the bound.
+LONG_RECORD_BYTES = 16 << 20
+_TOP_GROUP = 1 << 16  # top-level Message records handed on together (unchunked files)
+
+
+def _record_want(buf: bytes | memoryview, at: int) -> int:
+    """The bytes (head included) of the record at ``at`` that the end of ``buf`` cuts (9 when
+    not even its head is there), or 0 when what is there cannot be a record."""
+    if len(buf) - at < 9:
+        return 9
+    op, length = _RECORD_HEAD.unpack_from(buf, at)
+    if op == 0 or (op not in _KNOWN_OPS and op < 0x80) or (op == _OP_MESSAGE and length < 22):
+        return 0
+    if at + 9 + length <= len(buf):
+        return 0  # whole, and refused (a bad Schema or Channel)
+    return 9 + length
+
+
+def _stream_problem(
+    data: bytes, start: int, end: int, compression: str, usize: int, crc: int
+) -> str | None:
+    """Why a chunk's records (``data[start:end]``, ``usize`` B declared) cannot be used, or
+    None: decoded in a streaming pass (bounded memory) and discarded."""
+    total = running = 0
+    try:
+        if compression == 'zstd':  # into one reused buffer: no allocation per piece
+            import zstandard
+
+            view = memoryview(data)[start:end]
+            reader = zstandard.ZstdDecompressor().stream_reader(view, read_across_frames=True)
+            space = memoryview(bytearray(_STREAM_STEP))
+            pieces: Iterable[bytes | memoryview] = iter(
+                lambda: space[: reader.readinto(space[: max(1, usize + 1 - total)])], space[:0]
+            )
+        else:
+            pieces = decompressed_pieces(data, start, end, compression, usize + 1, _STREAM_STEP)
+        for piece in pieces:
+            total += len(piece)
+            if crc:
+                running = zlib.crc32(piece[: max(0, usize - (total - len(piece)))], running)
+            if total > usize:
+                break
+    except Exception as exc:  # noqa: BLE001 - any decoder error means a corrupt chunk
+        return f'{compression} chunk cannot be decompressed: {type(exc).__name__}: {exc}'
+    if total > usize:
+        return (
+            f'{compression} chunk cannot be decompressed: {compression} data decompresses to '
+            f'more than the {usize} B declared'
+        )
+    if total != usize:
+        return f'chunk decompresses to {total} B, header says {usize} B'
+    if crc and running != crc:
+        return 'chunk CRC mismatch'
+    return None
+
+
+_STREAM_STEP = 8 << 20  # B per piece of the checking pass of a chunk decoded in pieces
 
 
 def chunk_size_problem(usize: int, compressed: int, compression: str) -> str | None:
@@ -1140,29 +1378,9 @@ def _bounded(
     McapReadError; a decoder error after some output returns what was decoded only when
     ``exceeded`` is None (a cut chunk)."""
     out = bytearray()
-    view = memoryview(data)[start:end]
     try:
-        if compression == 'zstd':
-            import zstandard
-
-            reader = zstandard.ZstdDecompressor().stream_reader(view, read_across_frames=True)
-            while len(out) < limit:
-                piece = reader.read(min(_READ_STEP, limit - len(out)))
-                if not piece:
-                    break
-                out += piece
-        else:
-            import lz4.frame
-
-            lz4_dec = lz4.frame.LZ4FrameDecompressor()
-            pending = bytes(view)
-            while len(out) < limit and not lz4_dec.eof:
-                step = min(_READ_STEP, limit - len(out))
-                piece = lz4_dec.decompress(pending, max_length=step)
-                pending = b''
-                if not piece:
-                    break
-                out += piece
+        for piece in decompressed_pieces(data, start, end, compression, limit):
+            out += piece
     except Exception:  # noqa: BLE001 - a cut chunk ends in a decoder error
         if exceeded is not None or not out:
             raise
@@ -1171,6 +1389,51 @@ def _bounded(
             f'{compression} data decompresses to more than the {exceeded} B declared'
         )
     return bytes(out)
+
+
+def decompressed_pieces(
+    data: bytes | memoryview,
+    start: int,
+    end: int,
+    compression: str,
+    limit: int,
+    step: int = _READ_STEP,
+) -> Iterator[bytes | memoryview]:
+    """The decompressed bytes of ``data[start:end]`` as pieces of at most ``step`` B, at most
+    ``limit`` B in all: a chunk decoded in bounded memory whatever it declares. A decoder
+    error is raised where it occurs (after the pieces before it)."""
+    view = memoryview(data)[start:end]
+    produced = 0
+    piece: bytes | memoryview
+    if compression == '':
+        while produced < min(limit, len(view)):
+            piece = view[produced : produced + min(step, limit - produced)]
+            produced += len(piece)
+            yield piece
+    elif compression == 'zstd':
+        import zstandard
+
+        reader = zstandard.ZstdDecompressor().stream_reader(view, read_across_frames=True)
+        while produced < limit:
+            piece = reader.read(min(step, limit - produced))
+            if not piece:
+                return
+            produced += len(piece)
+            yield piece
+    elif compression == 'lz4':
+        import lz4.frame
+
+        lz4_dec = lz4.frame.LZ4FrameDecompressor()
+        pending = bytes(view)
+        while produced < limit and not lz4_dec.eof:
+            piece = lz4_dec.decompress(pending, max_length=min(step, limit - produced))
+            pending = b''
+            if not piece:
+                return
+            produced += len(piece)
+            yield piece
+    else:
+        raise McapReadError(f'unsupported chunk compression {compression!r}')
 
 
 def _decompress_partial(
@@ -1200,6 +1463,22 @@ def _release(data: bytes, upto: int) -> None:
         end = upto - upto % mmap.PAGESIZE
         if end > 0:
             data.madvise(mmap.MADV_DONTNEED, 0, end)
+
+
+def _equal_run(arr: np.ndarray, pos: int, end: int, step: int) -> int:
+    """How many records of ``step`` B from ``pos`` (before ``end``) have the 9-byte head of the
+    one at ``pos`` (opcode and length): at least 1, measured in passes of growing size."""
+    most = (end - pos) // step
+    head = arr[pos : pos + 9]
+    done, size = 1, 16
+    while done < most:
+        upto = min(most, done + size)
+        heads = as_strided(arr[pos + done * step :], (upto - done, 9), (step, 1), writeable=False)
+        differs = np.flatnonzero((heads != head).any(axis=1))
+        if len(differs):
+            return done + int(differs[0])
+        done, size = upto, size * 4
+    return done
 
 
 def _gather(arr: np.ndarray, positions: np.ndarray, width: int) -> np.ndarray:
@@ -1314,9 +1593,17 @@ class FileBlocks:
     file: int
 
 
-def _float64_accept(wanted: set[str], raw: set[str], path: str) -> Callable[[_Channel], bool]:
+def _float64_accept(
+    wanted: set[str], raw: set[str], path: str, typed: Optional[dict[str, str]] = None
+) -> Callable[[_Channel], bool]:
     def accept(channel: _Channel) -> bool:
         if channel.topic in raw:
+            expected = (typed or {}).get(channel.topic)
+            if expected is not None and (
+                channel.schema_name != expected or channel.encoding != 'cdr'
+            ):
+                shown = channel.schema_name or '<no schema>'
+                raise TopicTypeError(channel.topic, shown, expected, path)
             return True
         if channel.topic not in wanted:
             return False
@@ -1337,12 +1624,14 @@ def iter_file_blocks(
     raw_topics: list[str],
     report: ReadReport,
     batch_bytes: int | None = None,
+    typed: Optional[dict[str, str]] = None,
 ) -> Iterator[FileBlocks]:
     """The batches of one file (file order) as :class:`FileBlocks`: the Float64 ``topics``
-    decoded into columns, the ``raw_topics`` (any type) as bytes; damage goes to ``report``
-    exactly as :func:`read_float64_topics` reports it."""
+    decoded into columns, the ``raw_topics`` as bytes (of the type ``typed`` names for a
+    topic, else any); damage goes to ``report`` exactly as :func:`read_float64_topics`
+    reports it."""
     raw_set = set(raw_topics)
-    accept = _float64_accept(set(topics), raw_set, str(path))
+    accept = _float64_accept(set(topics), raw_set, str(path), typed)
     scanner = _Scanner(path, accept, report, frozenset(raw_set))
     if batch_bytes is not None:
         scanner.batch_bytes = min(scanner.batch_bytes, batch_bytes)
@@ -1396,19 +1685,12 @@ def _block_columns(scanner: '_Scanner', block: '_Block') -> Columns:
             counts,
         )
         if bad:
-            scanner.skip(
-                block.file_offset,
-                'bad_payload',
-                f'{bad} message(s) not a 12-byte CDR Float64',
-                bad,
-            )
+            scanner.bad_payload(block.file_offset, bad)
         scanner.file_report.messages += good
         return _slices_by_topic(names, counts, t, v)
     t, v, topic_of_row, bad = _extract_float64(block, scanner.topic_lut)
     if bad:
-        scanner.skip(
-            block.file_offset, 'bad_payload', f'{bad} message(s) not a 12-byte CDR Float64', bad
-        )
+        scanner.bad_payload(block.file_offset, bad)
     scanner.file_report.messages += len(t)
     first = int(topic_of_row[0]) if len(t) else -1
     if len(t) and np.all(topic_of_row == first):
@@ -1417,13 +1699,15 @@ def _block_columns(scanner: '_Scanner', block: '_Block') -> Columns:
 
 
 def _decode_file(
-    args: tuple[str, int, list[str], list[str], int | None]
+    args: tuple[str, int, list[str], list[str], int | None, Optional[dict[str, str]]]
 ) -> tuple[list[FileBlocks], ReadReport, tuple[str, tuple[Any, ...]] | None]:
     """Worker of ``jobs > 1``: a whole file's batches, its report, or the error it raised."""
-    path, index, topics, raw_topics, batch = args
+    path, index, topics, raw_topics, batch, typed = args
     report = ReadReport()
     try:
-        blocks = list(iter_file_blocks(Path(path), index, topics, raw_topics, report, batch))
+        blocks = list(
+            iter_file_blocks(Path(path), index, topics, raw_topics, report, batch, typed)
+        )
     except TopicTypeError as err:
         return [], report, ('type', (err.topic, err.type_name, err.expected, err.path))
     except McapReadError as err:
@@ -1445,6 +1729,7 @@ def _parallel_blocks(
     report: ReadReport,
     jobs: int,
     batch: int | None,
+    typed: Optional[dict[str, str]] = None,
 ) -> Iterator[FileBlocks]:
     """:func:`iter_file_blocks` of every file, decoded by ``jobs`` worker processes (at most
     ``jobs + 1`` files in flight), handed on in file order."""
@@ -1458,7 +1743,7 @@ def _parallel_blocks(
         def submit() -> None:
             nxt = next(todo, None)
             if nxt is not None:
-                task = (str(nxt[1]), nxt[0], topics, raw_topics, batch)
+                task = (str(nxt[1]), nxt[0], topics, raw_topics, batch, typed)
                 pending.append(pool.apply_async(_decode_file, (task,)))
 
         for _ in range(jobs + 1):
@@ -1556,6 +1841,7 @@ def iter_windows(
     window_messages: int | None = 1 << 18,
     report: ReadReport | None = None,
     jobs: int = 1,
+    typed: Optional[dict[str, str]] = None,
 ) -> Iterator[LogWindow]:
     """Stream a log (one file, a rotated set, directories) as :class:`LogWindow` s in time
     order, merged across topics and files, each of about ``window_messages`` messages (None:
@@ -1567,12 +1853,17 @@ def iter_windows(
     sorts them (stable on time, file order at equal stamps); a log whose files or chunks overlap
     in time so much that a message comes after its window was handed out raises
     :class:`UnorderedLogError` (read it with ``window_messages=None``). ``jobs > 1`` decodes
-    files in that many worker processes (the hand-out stays in order). Raises as
-    :func:`read_float64_topics` (TopicTypeError, EmptyLogError at the end, McapReadError).
+    files in that many worker processes (the hand-out stays in order). ``typed``: raw topics
+    that are inputs of a given type (``topic -> type name``; e.g. a stamped sensor message):
+    their type is checked as the Float64 topics' is, and they count as inputs (the report's
+    messages, EmptyLogError). Raises as :func:`read_float64_topics` (TopicTypeError,
+    EmptyLogError at the end, McapReadError).
     """
-    wanted = _unique(topics)
-    raw_wanted = [t for t in _unique(raw_topics) if t not in wanted]
-    if not wanted:
+    typed = dict(typed or {})
+    wanted = [t for t in _unique(topics) if t not in typed]
+    raw_wanted = [t for t in _unique([*raw_topics, *typed]) if t not in wanted]
+    inputs = wanted + list(typed)
+    if not inputs:
         raise ValueError('topics must name at least one topic')
     report = ReadReport() if report is None else report
     files = order_by_start(expand_paths(paths))
@@ -1580,18 +1871,18 @@ def iter_windows(
     done_before = [sum(sizes[:i]) for i in range(len(files))]
     pending = _Pending(wanted, raw_wanted)
     handed: int | None = None  # every message before this was handed out
-    counts = {t: 0 for t in wanted}
+    counts = {t: 0 for t in inputs}
     # reader batches of about a window (43 B per Float64 record decompressed)
     batch = None if window_messages is None else max(1 << 16, 40 * window_messages)
     if jobs > 1 and len(files) > 1:
         source: Iterator[FileBlocks] = _parallel_blocks(
-            files, wanted, raw_wanted, report, jobs, batch
+            files, wanted, raw_wanted, report, jobs, batch, typed
         )
     else:
         source = _read_ahead(
             b
             for i, p in enumerate(files)
-            for b in iter_file_blocks(p, i, wanted, raw_wanted, report, batch)
+            for b in iter_file_blocks(p, i, wanted, raw_wanted, report, batch, typed)
         )
     for blocks in source:
         low = pending.add(blocks)
@@ -1607,21 +1898,28 @@ def iter_windows(
             handed = low
             if not n:
                 continue
-            for t in wanted:
-                counts[t] += len(columns[t][0])
+            _count(counts, columns, raw)
             done = done_before[blocks.file] + blocks.position
             yield LogWindow(columns, raw, low, False, done, n)
     columns, raw, n = pending.take(None)
-    for t in wanted:
-        counts[t] += len(columns[t][0])
+    _count(counts, columns, raw)
     _reorder_report(report, [str(p) for p in expand_paths(paths)])
-    for topic in wanted:
+    for topic in inputs:
         report.messages[topic] = counts[topic]
         if counts[topic] == 0:
             report.missing_topics.append(topic)
-    if all(counts[t] == 0 for t in wanted):
-        raise EmptyLogError(wanted, report)
+    if all(counts[t] == 0 for t in inputs):
+        raise EmptyLogError(inputs, report)
     yield LogWindow(columns, raw, None, True, sum(sizes), n)
+
+
+def _count(counts: dict[str, int], columns: dict[str, Any], raw: dict[str, Any]) -> None:
+    """Add a window's messages per input topic (Float64 columns and typed raw topics)."""
+    for topic in counts:
+        if topic in columns:
+            counts[topic] += len(columns[topic][0])
+        elif topic in raw:
+            counts[topic] += len(raw[topic][0])
 
 
 #: Batches a reader thread may decode ahead of the windows handed out (0: no thread).

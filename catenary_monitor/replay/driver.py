@@ -27,6 +27,7 @@ Errors a user can act on are :class:`ReplayError` (one line, with the command's 
 from __future__ import annotations
 
 import json
+from functools import partial
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Iterator, NamedTuple, Optional, Protocol, Sequence
@@ -40,6 +41,7 @@ from catenary_monitor.core.config.parameters import (
     load_params_file,
     resolve_topic,
 )
+from catenary_monitor.core.monitor import readings
 from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,
     NODE_NAME,
@@ -58,7 +60,7 @@ from catenary_monitor.core.monitor.twin import (
     tick_grid,
 )
 from catenary_monitor.core.physics import fused_kernel
-from catenary_monitor.io import mcap_read
+from catenary_monitor.io import mcap_read, sensor_cdr
 from catenary_monitor.io.cdr import string_message, string_text
 from catenary_monitor.io.mcap_read import (
     EmptyLogError,
@@ -155,10 +157,65 @@ def _events(window: LogWindow) -> tuple[bool, np.ndarray, list[Any]]:
     return True, np.sort(np.concatenate(ticks)), others
 
 
-def _inputs(config: MonitorConfig, window: LogWindow) -> tuple[list[Any], Any]:
-    """The window's tension columns (config order) and depth column."""
-    lines = [window.columns[resolve_topic(line.tension_topic)] for line in config.lines]
-    return lines, window.columns[resolve_topic(config.depth_topic)]
+def typed_inputs(config: MonitorConfig) -> dict[str, str]:
+    """The input topics of a stamped type (resolved topic -> type name): read as raw
+    messages and decoded (:mod:`catenary_monitor.io.sensor_cdr`), the others as Float64
+    columns."""
+    out = {
+        resolve_topic(line.tension_topic): line.tension_type
+        for line in config.lines
+        if line.tension_type in readings.STAMPED
+    }
+    if config.depth_type in readings.STAMPED:
+        out[resolve_topic(config.depth_topic)] = config.depth_type
+    return out
+
+
+class Inputs(NamedTuple):
+    """A window's inputs in SI (:mod:`catenary_monitor.core.monitor.readings`): tension columns
+    (config order) and the depth column as (arrival ns, value), and the header stamps (ns)
+    beside each column of a stamped type (None: taken at arrival; all None: no stamped
+    input)."""
+
+    tensions: list[Any]
+    depth: Any
+    tension_stamps: Optional[list[Optional[np.ndarray]]]
+    depth_stamps: Optional[np.ndarray]
+
+
+def _column(
+    window: LogWindow, topic: str, type_name: str, convert: Callable[[dict[str, Any]], Any]
+) -> tuple[Any, Optional[np.ndarray]]:
+    """One input's column in SI, and its header stamps (None for Float64)."""
+    if type_name not in readings.STAMPED:
+        t, v = window.columns[topic]
+        return (t, np.asarray(convert({'value': v}), np.float64)), None
+    times, payloads = window.raw.get(topic, (np.zeros(0, np.int64), []))
+    decoded = sensor_cdr.decode(type_name, payloads)
+    value = np.asarray(convert(decoded.fields), np.float64).reshape(-1)
+    return (times[decoded.ok], value), decoded.stamps
+
+
+def _inputs(config: MonitorConfig, window: LogWindow) -> Inputs:
+    """The window's inputs (:class:`Inputs`), each read as its type says."""
+    tensions, stamps = [], []
+    for line in config.lines:
+        column, st = _column(
+            window,
+            resolve_topic(line.tension_topic),
+            line.tension_type,
+            partial(readings.tension_si, line),
+        )
+        tensions.append(column)
+        stamps.append(st)
+    depth, d_stamps = _column(
+        window,
+        resolve_topic(config.depth_topic),
+        config.depth_type,
+        lambda f: readings.depth_si(config, f),
+    )
+    stamped = any(s is not None for s in stamps) or d_stamps is not None
+    return Inputs(tensions, depth, stamps if stamped else None, d_stamps)
 
 
 def stream(
@@ -220,14 +277,18 @@ def _stream(
     lines_topics = [resolve_topic(line.tension_topic) for line in config.lines]
     topics = [resolve_topic(config.depth_topic), *lines_topics]
     raw = [EVENTS_TOPIC] if ticks != 'grid' else []
+    typed = typed_inputs(config)
     core: Optional[MonitorCore] = None
     grid_k = 0  # next grid tick index
     try:
-        for window in iter_windows(paths, topics, raw, window_messages, report, jobs):
+        for window in iter_windows(
+            paths, topics, raw, window_messages, report, jobs, typed=typed
+        ):
             seen, tick_ns, others = _events(window) if raw else (False, np.zeros(0, np.int64), [])
             if not follow_log:
                 others = [e for e in others if not isinstance(e, Reconfigure)]
-            tensions, depth = _inputs(config, window)
+            inputs = _inputs(config, window)
+            tensions, depth = inputs.tensions, inputs.depth
             if core is None:
                 firsts = [int(c[0][0]) for c in (*tensions, depth) if len(c[0])]
                 starts = [e.stamp_ns for e in others if isinstance(e, Start)]
@@ -254,7 +315,7 @@ def _stream(
                 tick_ns, grid_k = _grid(
                     state, window, tensions, depth, grid_k, config.alarm.diagnostic_rate
                 )
-            whole = Window(tensions, depth, tick_ns)
+            whole = Window(tensions, depth, tick_ns, inputs.tension_stamps, inputs.depth_stamps)
             for part, part_events in _parts(whole, others, TICKS_PER_PART if snapshots else 0):
                 result, core = run_log(core, part, part_events, snapshots)
                 replay = ReplayResult(
@@ -268,6 +329,7 @@ def _stream(
                     bool(state.ticks_from_log),
                     state.start_ns or 0,
                     part_events,
+                    alarm_events=result.alarm_events,
                 )
                 sink(replay, part)
             state.windows += 1
@@ -405,9 +467,27 @@ def log_parameters(paths: Sequence[Path]) -> Optional[tuple[str, dict[str, Any]]
 def read_inputs(
     paths: Sequence[Path], config: MonitorConfig
 ) -> tuple[dict[str, tuple[np.ndarray, np.ndarray]], tuple[np.ndarray, np.ndarray], ReadReport]:
-    """The whole input columns of a log, not replayed (``whatif --log``, ``replay --publish``):
-    tension columns per line, the depth column and the read report."""
+    """The whole input columns of a log in SI, not replayed (``whatif --log``): tension
+    columns per line, the depth column (each as its type says: :func:`_inputs`) and the read
+    report."""
     topics, depth_topic = input_topics(config)
+    typed = typed_inputs(config)
+    if typed:
+        report = ReadReport()
+        try:
+            window = next(
+                iter_windows(
+                    paths, [depth_topic, *topics.values()], [], None, report, typed=typed
+                )
+            )
+        except TopicTypeError as err:
+            raise ReplayError(f'unexpected message type: {err} (check the params file topics)')
+        except EmptyLogError as err:
+            raise ReplayError(f'empty log: {err}; nothing to replay', EXIT_EMPTY) from err
+        except McapReadError as err:
+            raise ReplayError(str(err)) from err
+        inputs = _inputs(config, window)
+        return dict(zip(topics, inputs.tensions)), inputs.depth, report
     try:
         columns, report = read_float64_topics(paths, [depth_topic, *topics.values()])
     except TopicTypeError as err:
@@ -416,8 +496,12 @@ def read_inputs(
         raise ReplayError(f'empty log: {err}; nothing to replay', EXIT_EMPTY) from err
     except McapReadError as err:
         raise ReplayError(str(err)) from err
-    tensions = {name: columns[topic] for name, topic in topics.items()}
-    return tensions, columns[depth_topic], report
+    tensions = {
+        name: (t, np.asarray(readings.tension_si(config.line(name), {'value': v}), np.float64))
+        for name, (t, v) in ((n, columns[topic]) for n, topic in topics.items())
+    }
+    dt, dv = columns[depth_topic]
+    return tensions, (dt, np.asarray(readings.depth_si(config, {'value': dv}))), report
 
 
 class Sink(Protocol):
@@ -558,6 +642,7 @@ def _joined(parts: list[ReplayResult], state: StreamState) -> ReplayResult:
         parts[0].ticks_from_log,
         parts[0].started_ns,
         [e for p in parts for e in p.events],
+        alarm_events=[e for p in parts for e in p.alarm_events],
     )
 
 

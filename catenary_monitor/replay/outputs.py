@@ -1,7 +1,7 @@
 """Replay outputs: CSV rows, an MCAP results log, PNG charts and the summary (text or JSON).
 
-No rclpy: the MCAP messages are encoded by :mod:`catenary_monitor.cdr` and written by
-:mod:`catenary_monitor.mcap_fast`.
+No rclpy: the MCAP messages are encoded by :mod:`catenary_monitor.io.cdr` and written by
+:mod:`catenary_monitor.io.mcap_column_writer`.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 
 from catenary_monitor import __version__
 from catenary_monitor.core.config.parameters import MonitorConfig, config_hash, config_to_params
-from catenary_monitor.core.monitor import sensor_state
+from catenary_monitor.core.monitor import holding, sensor_state
 from catenary_monitor.core.monitor.alarms import VIEW_TEXT
 from catenary_monitor.core.monitor.alarms import Level
 from catenary_monitor.core.monitor.monitor_core import (
@@ -50,6 +50,7 @@ from catenary_monitor.io.cdr import (
     status_header,
     string_message,
 )
+from catenary_monitor.core.physics.result import Status
 from catenary_monitor.io.csv_columns import FloatColumn, IntColumn, LabelColumn, write_rows
 from catenary_monitor.io.mcap_column_writer import ColumnWriter
 from catenary_monitor.io.ros_schemas import (
@@ -78,7 +79,8 @@ __all__ = [
 #: ``time_to_uplift_view`` ``chain length held``, ``horizontal tension held`` or ``none``;
 #: ``sensor_state``
 #: the line's sensor state word (``ok``, ``stuck``, ``spike``, ``over_mbl``, ``slack``,
-#: ``suspected_parted``).
+#: ``suspected_parted``); ``drag_state`` the anchor's (``holding``, ``overloaded``,
+#: ``dragging``, ``unknown``).
 CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('time', 9),
     ('line', None),
@@ -108,10 +110,15 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('peak_tension', 3),
     ('dynamic_uplift', 3),
     ('time_to_uplift_view', None),
-    ('sensor_state', None),  # core.sensor.LINE_STATES word
+    ('sensor_state', None),  # core.monitor.sensor_state.LINE_STATES word
     ('status', None),
     ('level', None),
     ('model', None),
+    ('drag_state', None),  # core.monitor.holding.DRAG_STATES word, or unknown
+    # Chain fatigue (core/monitor/fatigue.py): Miner's damage, its rate (1/s), life left (s).
+    ('fatigue_damage', 12),
+    ('fatigue_damage_rate', 12),
+    ('fatigue_life_left', 0),
 )
 #: The default columns (the issue's contract), in this order.
 CSV_COLUMNS = (
@@ -125,7 +132,7 @@ CSV_COLUMNS = (
     'level',
 )
 _LEVELS = [lv.name for lv in sorted(Level)]
-_STATUS_LABELS = [str(s) for s in range(NO_DEPTH, 11)]
+_STATUS_LABELS = [str(s) for s in range(NO_DEPTH, max(Status) + 1)]  # every solver code
 
 Progress = Optional[Callable[[str, float], None]]
 
@@ -200,6 +207,9 @@ def write_csv(
         elif name == 'sensor_state':
             codes = values[name].astype(np.int64)
             out_columns.append(LabelColumn(name, codes, list(sensor_state.LINE_STATES)))
+        elif name == 'drag_state':
+            codes = np.where(np.isnan(values[name]), 3, values[name]).astype(np.int64)
+            out_columns.append(LabelColumn(name, codes, [*holding.DRAG_STATES, 'unknown']))
         elif name == 'time_to_uplift_view':
             view = values[name]
             codes = np.where(np.isnan(view), 0, np.where(view == 1.0, 2, 1)).astype(np.int64)
@@ -724,8 +734,9 @@ class Tally:
         self.end_ns: Optional[int] = None
         self.ticks = 0
         self.ticks_from_log = False
-        #: The other components' transitions (the tide, the sensors alarm, the dock model).
-        self.components: dict[str, list[Any]] = {'tide': [], 'sensors': []}
+        #: The other components' transitions (the tide, the sensors alarm, the alarm flood
+        #: status, the dock model).
+        self.components: dict[str, list[Any]] = {'tide': [], 'sensors': [], 'alarms': []}
 
     def add(self, result: ReplayResult) -> None:
         """Take the next window's results."""

@@ -37,6 +37,7 @@ from typing import Any, Optional, Sequence
 
 import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from rclpy.clock import Clock, ClockType
 from rclpy.event_handler import SubscriptionEventCallbacks
@@ -46,6 +47,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, qos_profile_sensor_data
 from rclpy.serialization import deserialize_message, serialize_message
 from rclpy.signals import SignalHandlerOptions
+from sensor_msgs.msg import FluidPressure, Range
 from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension, String
 
 from catenary_monitor import __version__
@@ -62,7 +64,15 @@ from catenary_monitor.core.config.parameters import (
     load_params_file,
     runtime_change_refusal,
 )
-from catenary_monitor.core.monitor.acknowledge import ACKNOWLEDGE_TOPIC, SENSORS, parse_request
+from catenary_monitor.core.monitor import readings
+from catenary_monitor.core.monitor.acknowledge import (
+    ACKNOWLEDGE_TOPIC,
+    SENSORS,
+    bounded_text,
+    console_only_refusal,
+    parse_request,
+    publisher_identity,
+)
 from catenary_monitor.core.monitor.alarms import Level
 from catenary_monitor.core.monitor.health import clock_stopped
 from catenary_monitor.core.monitor.monitor_core import (
@@ -74,6 +84,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     ClockHealth,
     Depth,
     Event,
+    FatigueStore,
     Intake,
     LoggerHealth,
     MonitorCore,
@@ -85,7 +96,9 @@ from catenary_monitor.core.monitor.monitor_core import (
     Tick,
     event_record,
 )
+from catenary_monitor.core.monitor.fatigue import to_record
 from catenary_monitor.core.physics import elastic
+from catenary_monitor.io import fatigue_store
 from catenary_monitor.io.mcap_log import McapLogger
 from catenary_monitor.io.mcap_recover import RecoverResult, recover_in_child, unfinished_files
 
@@ -98,6 +111,13 @@ _PARAM_TYPES = {
     'string_array': Parameter.Type.STRING_ARRAY,
 }
 _RELIABLE = QoSProfile(depth=10)
+#: The message class of each input type (core.config.parameters.TENSION_TYPES, DEPTH_TYPES).
+_MESSAGE_CLASSES: dict[str, Any] = {
+    'std_msgs/msg/Float64': Float64,
+    readings.WRENCH: WrenchStamped,
+    readings.FLUID_PRESSURE: FluidPressure,
+    readings.RANGE: Range,
+}
 #: The input subscriptions: sensor-data QoS (best effort) with a deeper queue than its 5, so a
 #: node held off the CPU for up to about 2 s at 50 Hz loses no sample (bench-soak measured
 #: 0.7 % lost with depth 5 on a loaded machine).
@@ -175,9 +195,13 @@ class CatenaryMonitor(Node):
         self._log_setup_error = ''
         self._logger_known = False
         self._logger_error: Optional[str] = None
+        self._logger_warning: Optional[str] = None
         self.callback_errors = 0
         self._recovered: queue.Queue[RecoverResult] = queue.Queue()
         self.recovery: list[RecoverResult] = []
+        # The fatigue store, read before this run's first log file exists (a new folder).
+        names = [line.name for line in self.config.lines]
+        self._fatigue_found = fatigue_store.load(self._log_dir(), names)
         self.log = self._open_log()
         self._init_intake()
         self._create_interfaces()
@@ -190,6 +214,7 @@ class CatenaryMonitor(Node):
             logger_id=self._log_dir(),
         )
         self._write_record(Start(start))
+        self._load_fatigue()
         self._check_logger()
         self._clock_ros, self._clock_wall = start, time.monotonic()
         self._clock_state: Optional[bool] = None  # stopped? (None: not reported yet)
@@ -226,6 +251,47 @@ class CatenaryMonitor(Node):
     def _log_dir(self) -> str:
         return os.path.expanduser(self.config.log_dir)
 
+    # ------------------------------------------------------------------ fatigue store
+    def _load_fatigue(self) -> None:
+        """Read the fatigue store beside the log: one recorded FatigueStore event (each line's
+        stored count, so replay carries the same), one log line unless it was read clean."""
+        names = [line.name for line in self.config.lines]
+        found = self._fatigue_found
+        lines = tuple((name, found.lines.get(name)) for name in names)
+        if found.state in ('loaded', 'new'):
+            self.get_logger().info(found.message)
+        else:
+            self.get_logger().warning(f'FATIGUE {found.state}: {found.message}')
+        self._record(FatigueStore(self._stamp(), found.state, found.message, lines))
+        self._fatigue_saved = time.monotonic()
+        self._fatigue_failed: Optional[str] = None
+
+    def _save_fatigue(self, force: bool = False) -> None:
+        """Write the store every SAVE_PERIOD (and at the end); a failed write is a recorded
+        FatigueStore event (WARN) and one line, a write that works again another."""
+        wall = time.monotonic()
+        if not force and wall - self._fatigue_saved < fatigue_store.SAVE_PERIOD:
+            return
+        self._fatigue_saved = wall
+        lines = {
+            line.config.name: to_record(line.fatigue) for line in self.core.state.lines
+        }
+        extra = {'config_hash': config_hash(self.config), 'saved_ns': self._last_ns}
+        try:
+            path = fatigue_store.save(self._log_dir(), lines, extra)
+        except (OSError, ValueError) as err:
+            if self._fatigue_failed is None:
+                text = f'fatigue store not written: {_one_line(err)}'
+                self.get_logger().error(text)
+                self._record(FatigueStore(self._stamp(), 'write_failed', text))
+            self._fatigue_failed = str(err)
+            return
+        if self._fatigue_failed is not None:
+            self._fatigue_failed = None
+            text = f'fatigue store {path} written again'
+            self.get_logger().info(text)
+            self._record(FatigueStore(self._stamp(), 'saved', text))
+
     def _open_log(self) -> Optional[McapLogger]:
         """The MCAP logger (never raises on disk errors: those become its ``error``)."""
         try:
@@ -241,6 +307,9 @@ class CatenaryMonitor(Node):
                 max_seconds=self.config.log_rotate_duration,
                 create_dir=self.config.log_create_dir,
                 retry_period=1.0,
+                max_total_bytes=int(self.config.log_max_total_size),
+                max_age=self.config.log_max_age,
+                min_free_bytes=int(self.config.log_min_free_space),
             )
             log.add_metadata(NODE_NAME, self._metadata(self.config))
             if unfinished:
@@ -361,7 +430,7 @@ class CatenaryMonitor(Node):
         self._output_pubs: list[Any] = []
         for k, line in enumerate(cfg.lines):
             sub = self.create_subscription(
-                Float64,
+                _MESSAGE_CLASSES[line.tension_type],
                 line.tension_topic,
                 self._sample_callback(partial(self._on_tension, k), k),
                 _SAMPLES,
@@ -369,14 +438,14 @@ class CatenaryMonitor(Node):
                 raw=True,
             )
             self._tension_topics.append(sub.topic_name)
-            self._register(sub.topic_name, 'std_msgs/msg/Float64', 'sensor_data')
+            self._register(sub.topic_name, line.tension_type, 'sensor_data')
             pub = self.create_publisher(Float64MultiArray, f'~/{line.name}/outputs', _RELIABLE)
             self._output_pubs.append(pub)
             self._output_topics.append(pub.topic_name)
             self._register(pub.topic_name, 'std_msgs/msg/Float64MultiArray', 'default')
         n = len(cfg.lines)
         sub = self.create_subscription(
-            Float64,
+            _MESSAGE_CLASSES[cfg.depth_type],
             cfg.depth_topic,
             self._sample_callback(self._on_depth, n),
             _SAMPLES,
@@ -384,7 +453,7 @@ class CatenaryMonitor(Node):
             raw=True,
         )
         self._depth_topic = sub.topic_name
-        self._register(self._depth_topic, 'std_msgs/msg/Float64', 'sensor_data')
+        self._register(self._depth_topic, cfg.depth_type, 'sensor_data')
         self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', _RELIABLE)
         self._register('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', 'default')
         self._register(EVENTS_TOPIC, 'std_msgs/msg/String', 'default')
@@ -412,24 +481,29 @@ class CatenaryMonitor(Node):
 
     @_guarded
     def _on_tension(self, line: int, data: bytes) -> None:
-        """A hook tension sample (N): log it, one core event, publish what it says."""
+        """A hook tension sample: log the message as it came, one core event (the reading in
+        N, at its header stamp where it has one), publish what it says."""
         t0 = time.perf_counter()
         self._received[line] += 1
         stamp = self._stamp()
         self._write(self._tension_topics[line], data, stamp)
-        self._run(Tension(stamp, line, deserialize_message(data, Float64).data))
+        lc = self.config.lines[line]
+        fields, sample_ns = _fields(data, lc.tension_type)
+        self._run(Tension(stamp, line, float(readings.tension_si(lc, fields)), sample_ns))
         took = time.perf_counter() - t0
         self._busy += took
         self._busy_tick += took
 
     @_guarded
     def _on_depth(self, data: bytes) -> None:
-        """A depth sample (m): log it, one core event, publish what it says."""
+        """A depth sample: log the message as it came, one core event (the depth in m, at its
+        header stamp where it has one), publish what it says."""
         t0 = time.perf_counter()
         self._received[-1] += 1
         stamp = self._stamp()
         self._write(self._depth_topic, data, stamp)
-        self._run(Depth(stamp, deserialize_message(data, Float64).data))
+        fields, sample_ns = _fields(data, self.config.depth_type)
+        self._run(Depth(stamp, float(readings.depth_si(self.config, fields)), sample_ns))
         took = time.perf_counter() - t0
         self._busy += took
         self._busy_tick += took
@@ -509,7 +583,24 @@ class CatenaryMonitor(Node):
 
     @_guarded
     def _on_acknowledge(self, msg: String) -> None:
-        """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event."""
+        """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event, with
+        its publisher as the ROS graph names it; refused (one warning line) for an unknown
+        line, and, with ``acknowledge_from_ros`` false, unless only consoles publish."""
+        endpoints = [
+            (f'{ns.rstrip("/")}/{name}', bytes(gid))
+            for name, ns, gid in (
+                (e.node_name, e.node_namespace, e.endpoint_gid)
+                for e in self.get_publishers_info_by_topic(ACKNOWLEDGE_TOPIC)
+            )
+        ]
+        publisher = publisher_identity(endpoints)
+        if not self.config.acknowledge_from_ros:
+            refusal = console_only_refusal(endpoints)
+            if refusal is not None:
+                self.get_logger().warning(
+                    f'acknowledge refused: {refusal}', throttle_duration_sec=10.0
+                )
+                return
         try:
             line, origin = parse_request(msg.data)
         except ValueError as err:
@@ -517,36 +608,61 @@ class CatenaryMonitor(Node):
             return
         if line is not None and line not in self.core.index and line != SENSORS:
             self.get_logger().warning(
-                f'acknowledge refused: unknown line {line!r} (lines: {", ".join(self._names)}; '
-                f'{SENSORS}: the sensors alarm)'
+                f'acknowledge refused: unknown line {bounded_text(line, 64)!r} (lines: '
+                f'{", ".join(self._names)}; {SENSORS}: the sensors alarm)',
+                throttle_duration_sec=10.0,
             )
             return
-        self._record(Acknowledge(self._stamp(), line, origin))
-        self.get_logger().info(f'ACKNOWLEDGED {line or "all"} by {origin}')
+        self._record(Acknowledge(self._stamp(), line, origin, publisher))
+        self.get_logger().info(f'ACKNOWLEDGED {line or "all"} by {origin} ({publisher})')
 
     @_guarded
     def _on_log_timer(self) -> None:
         """Flush the MCAP chunk when due (bounded loss on SIGKILL); report logger changes."""
         if self.log is not None:
             self.log.tick()
+            self._report_deleted()
         self._check_logger()
         self._report_recovery()
+        self._save_fatigue()
+
+    def _report_deleted(self) -> None:
+        """One log line and one events-channel record per file the retention deleted."""
+        assert self.log is not None
+        for path, size, why in self.log.take_deleted():
+            rule = (
+                f'older than log_max_age {self.config.log_max_age:g} s'
+                if why == 'age'
+                else f'the folder above log_max_total_size {self.config.log_max_total_size:g} B'
+            )
+            self.get_logger().warning(
+                f'log retention: deleted {path.name} ({size / 2**20:.1f} MiB): {rule}'
+            )
+            record = {'kind': 'log_deleted', 'path': str(path), 'bytes': size, 'reason': why}
+            self._write(
+                EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), self._stamp()
+            )
 
     def _check_logger(self) -> None:
         """A LoggerHealth event whenever the logger's error changes (and once at start)."""
         error: Optional[str]
         path: Optional[str]
+        warning: Optional[str] = None
         if self.log is None:
             error, path = self._log_setup_error or 'no logger', None
         else:
             current = self.log.current_path
             error, path = self.log.error, str(current) if current else None
-        if self._logger_known and error == self._logger_error:
+            warning = self.log.warning
+        if self._logger_known and (error, warning) == (self._logger_error, self._logger_warning):
             return
         self._logger_known, self._logger_error = True, error
         if error:
             self.get_logger().error(f'MCAP log not written: {error}')
-        self._record(LoggerHealth(self._stamp(), error, path))
+        elif warning and warning != self._logger_warning:
+            self.get_logger().warning(warning)
+        self._logger_warning = warning
+        self._record(LoggerHealth(self._stamp(), error, path, warning))
 
     def _write_record(self, event: Any) -> None:
         """Log a record of a non-input event (or the start) on the events channel."""
@@ -658,8 +774,27 @@ class CatenaryMonitor(Node):
             self._report_intake(time.monotonic(), force=True)
         except Exception as exc:  # noqa: BLE001 - closing the log matters more
             self.get_logger().error(f'last intake counts not recorded: {exc}')
+        try:
+            self._save_fatigue(force=True)
+        except Exception as exc:  # noqa: BLE001 - closing the log matters more
+            self.get_logger().error(f'fatigue store not written at the end: {exc}')
         if self.log is not None:
             self.log.close()
+
+
+def _fields(data: bytes, type_name: str) -> tuple[dict[str, float], Optional[int]]:
+    """A raw input message's fields (core.monitor.readings) and its header stamp in ns (None
+    for a type without a header)."""
+    msg = deserialize_message(data, _MESSAGE_CLASSES[type_name])
+    if type_name == 'std_msgs/msg/Float64':
+        return {'value': msg.data}, None
+    stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
+    if type_name == readings.WRENCH:
+        f = msg.wrench.force
+        return {'x': f.x, 'y': f.y, 'z': f.z}, stamp
+    if type_name == readings.FLUID_PRESSURE:
+        return {'fluid_pressure': msg.fluid_pressure}, stamp
+    return {'range': msg.range, 'min_range': msg.min_range, 'max_range': msg.max_range}, stamp
 
 
 def _has_events_executor() -> bool:

@@ -1,18 +1,26 @@
-"""``catenary-monitor replay LOG --publish``: play recorded inputs onto ROS (rclpy).
+"""``catenary-monitor replay LOG --publish``: play recorded inputs onto ROS (rclpy), with /clock.
 
-Publishes every recorded ``std_msgs/msg/Float64`` input (the params file's tension and depth
-topics, or, without a params file, every Float64 topic of the log) on its topic, in log-time
-order, at its recorded time offset divided by ``--rate``: a live node can be tested against a
-real log on a machine without rosbag2. Publishers are reliable, keep-last 100 (they match the
-node's best-effort sensor-data subscriptions too). The payload is the recorded value re-encoded
-as CDR (12 bytes), published as serialized bytes.
+Publishes every recorded input message (the params file's tension and depth topics, each of
+its configured type; without a params file, every topic of a type the monitor reads:
+``std_msgs/msg/Float64``, ``geometry_msgs/msg/WrenchStamped``, ``sensor_msgs/msg/FluidPressure``,
+``sensor_msgs/msg/Range``) on its topic, as recorded (the CDR bytes, header stamps
+included), in log-time order, at its recorded time offset divided by ``--rate``: a live node
+can be tested against a real log on a machine without rosbag2. Publishers are reliable,
+keep-last 100 (they match the node's best-effort sensor-data subscriptions too).
+
+``/clock`` (``rosgraph_msgs/msg/Clock``, as ``ros2 bag play --clock``) carries the log's time:
+the recorded log time of each message just before it is published, and in between, every
+:data:`CLOCK_PERIOD` s of wall time, the log time the playback has reached (start + elapsed x
+rate). A node started with ``use_sim_time`` then judges the playback in log time: at ``--rate
+10`` its timeouts, hold times and trends run ten times faster, as they ran in the recording.
+The clock never goes backwards within a pass; ``--loop`` starts it again at the log's start.
 
 Timing: a wall-clock schedule (``time.monotonic``) fixed at the start of each pass, so a late
 message does not delay the following ones; the lateness is reported at the end (median, p99,
 max). ``--loop`` starts the next pass one median message gap after the last message.
 SIGINT/SIGTERM stop playback between two messages; exit 0.
 
-The command line (:mod:`catenary_monitor.cli.replay`) picks and reads the columns; this module
+The command line (:mod:`catenary_monitor.cli.replay`) picks and reads the messages; this module
 only plays them (the ROS layer imports nothing from the command line).
 """
 
@@ -27,17 +35,31 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from catenary_monitor.io.cdr import float64_payloads
-from catenary_monitor.io.mcap_read import FLOAT64_TYPE, ReadReport, iter_messages
+from catenary_monitor.io.mcap_read import ReadReport, iter_messages
 
-__all__ = ['float64_topics', 'publish']
+__all__ = ['CLOCK_PERIOD', 'INPUT_TYPES', 'CLOCK_TOPIC', 'input_topics_of_log', 'publish']
+
+#: Wall time between two /clock messages while no input message is due [s] (40 Hz, as
+#: ``ros2 bag play --clock``'s default).
+CLOCK_PERIOD = 0.025
+CLOCK_TOPIC = '/clock'
+#: The types the monitor reads, which playback publishes.
+INPUT_TYPES = (
+    'std_msgs/msg/Float64',
+    'geometry_msgs/msg/WrenchStamped',
+    'sensor_msgs/msg/FluidPressure',
+    'sensor_msgs/msg/Range',
+)
+
+Messages = dict[str, tuple[np.ndarray, list[bytes], str]]  # topic -> (log ns, CDR, type)
 
 
-def float64_topics(paths: Sequence[Path]) -> list[str]:
-    """Every topic logged as ``std_msgs/msg/Float64`` (summary if present, else a scan)."""
+def input_topics_of_log(paths: Sequence[Path]) -> dict[str, str]:
+    """Every topic of an input type (:data:`INPUT_TYPES`) -> its type (summary if present,
+    else a scan)."""
     from mcap.reader import make_reader
 
-    topics: list[str] = []
+    topics: dict[str, str] = {}
     for path in paths:
         summary = None
         try:
@@ -48,17 +70,24 @@ def float64_topics(paths: Sequence[Path]) -> list[str]:
         if summary is not None and summary.channels:
             for ch in summary.channels.values():
                 schema = summary.schemas.get(ch.schema_id)
-                if schema is not None and schema.name == FLOAT64_TYPE and ch.topic not in topics:
-                    topics.append(ch.topic)
+                if schema is not None and schema.name in INPUT_TYPES:
+                    topics.setdefault(ch.topic, schema.name)
             continue
         for msg in iter_messages(path, None, ReadReport()):
-            if msg.schema_name == FLOAT64_TYPE and msg.topic not in topics:
-                topics.append(msg.topic)
+            if msg.schema_name in INPUT_TYPES:
+                topics.setdefault(msg.topic, msg.schema_name)
     return topics
 
 
+def _message_class(type_name: str) -> Any:
+    """The rclpy message class of an input type, or of ``rosgraph_msgs/msg/Clock``."""
+    package, _, name = type_name.split('/')
+    module = __import__(f'{package}.msg', fromlist=[name])
+    return getattr(module, name)
+
+
 def publish(
-    columns: dict[str, tuple[np.ndarray, np.ndarray]],
+    messages: Messages,
     report: ReadReport,
     *,
     rate: float = 1.0,
@@ -66,31 +95,36 @@ def publish(
     wait: float = 0.0,
     quiet: bool = False,
 ) -> int:
-    """Play the input ``columns`` (topic -> (log times ns, values)) read with ``report``;
-    returns the exit status (see :mod:`catenary_monitor.cli.replay`)."""
-    topics = [t for t, (ts, _) in columns.items() if len(ts)]
-    t_ns = np.concatenate([columns[t][0] for t in topics])
-    which = np.concatenate([np.full(len(columns[t][0]), k) for k, t in enumerate(topics)])
-    values = np.concatenate([columns[t][1] for t in topics])
+    """Play ``messages`` (topic -> (log times ns, CDR payloads, type name)) read with
+    ``report``, with /clock; returns the exit status (see :mod:`catenary_monitor.cli.replay`).
+    """
+    topics = [t for t, (ts, _, _) in messages.items() if len(ts)]
+    types = [messages[t][2] for t in topics]
+    t_ns = np.concatenate([messages[t][0] for t in topics])
+    which = np.concatenate([np.full(len(messages[t][0]), k) for k, t in enumerate(topics)])
+    payloads_all = [p for t in topics for p in messages[t][1]]
     order = np.argsort(t_ns, kind='stable')
-    t_ns, which, values = t_ns[order], which[order], values[order]
+    t_ns, which = t_ns[order], which[order]
+    payloads = [payloads_all[i] for i in order.tolist()]
     offsets = (t_ns - t_ns[0]) * 1e-9 / rate
-    payloads = [bytes(row) for row in float64_payloads(values)]
     if not quiet:
         skipped = '' if report.complete else f'; damaged input, skipped: {len(report.skips)}'
         print(
             f'replay --publish: {len(t_ns)} messages on {len(topics)} topic(s), '
-            f'{offsets[-1]:.1f} s at rate {rate:g}{skipped}',
+            f'{offsets[-1]:.1f} s at rate {rate:g}, /clock from the log{skipped}',
             file=sys.stderr,
         )
-    return _play(topics, which, offsets, payloads, loop, wait, quiet)
+    return _play(topics, types, which, t_ns, offsets, payloads, rate, loop, wait, quiet)
 
 
 def _play(
     topics: list[str],
+    types: list[str],
     which: np.ndarray,
+    t_ns: np.ndarray,
     offsets: np.ndarray,
     payloads: list[bytes],
+    rate: float,
     loop: bool,
     wait: float,
     quiet: bool,
@@ -98,7 +132,7 @@ def _play(
     import rclpy
     from rclpy.qos import QoSProfile
     from rclpy.signals import SignalHandlerOptions
-    from std_msgs.msg import Float64
+    from rosgraph_msgs.msg import Clock
 
     stop = threading.Event()
 
@@ -111,24 +145,32 @@ def _play(
     node = rclpy.create_node('catenary_monitor_replay')
     try:
         qos = QoSProfile(depth=100)
-        pubs = [node.create_publisher(Float64, t, qos) for t in topics]
+        pubs = [node.create_publisher(_message_class(ty), t, qos) for t, ty in zip(topics, types)]
+        clock_pub = node.create_publisher(Clock, CLOCK_TOPIC, qos)
+        clock = Clock()
+
+        def tick(log_ns: int) -> None:
+            clock.clock.sec, clock.clock.nanosec = divmod(int(log_ns), 1_000_000_000)
+            clock_pub.publish(clock)
+
         deadline = time.monotonic() + wait
         while wait > 0 and not stop.is_set() and time.monotonic() < deadline:
             if all(p.get_subscription_count() > 0 for p in pubs):
                 break
             stop.wait(0.05)
         gap = float(np.median(np.diff(offsets))) if len(offsets) > 1 else 0.0
-        which_l = which.tolist()
-        offsets_l = offsets.tolist()
+        which_l, offsets_l, times_l = which.tolist(), offsets.tolist(), t_ns.tolist()
+        first = times_l[0]
         passes = 0
         late: list[float] = []
         while not stop.is_set():
             start = time.monotonic()
-            for k, off, data in zip(which_l, offsets_l, payloads):
+            tick(first)
+            for k, off, log_ns, data in zip(which_l, offsets_l, times_l, payloads):
                 due = start + off
-                now = time.monotonic()
-                if due > now and stop.wait(due - now):
+                if _wait_ticking(stop, start, due, first, rate, tick):
                     break
+                tick(log_ns)
                 pubs[k].publish(data)
                 late.append(time.monotonic() - due)
             passes += 1
@@ -149,3 +191,18 @@ def _play(
         node.destroy_node()
         rclpy.try_shutdown()
     return 0
+
+
+def _wait_ticking(
+    stop: threading.Event, start: float, due: float, first_ns: int, rate: float, tick: Any
+) -> bool:
+    """Wait until ``due`` (monotonic s), publishing /clock every :data:`CLOCK_PERIOD` at the
+    log time reached (``first_ns`` + elapsed x ``rate``); True when stopped meanwhile."""
+    while True:
+        now = time.monotonic()
+        if now >= due:
+            return False
+        if stop.wait(min(due - now, CLOCK_PERIOD)):
+            return True
+        now = min(time.monotonic(), due)
+        tick(first_ns + int((now - start) * rate * 1e9))

@@ -1,4 +1,4 @@
-"""Alternative catenary solvers, side by side behind one interface (issue 5).
+"""Alternative catenary solvers, side by side behind one interface.
 
 Every method is a :class:`~catenary_monitor_study.methods.base.Method`: a name, the problem it
 solves and a scalar function (plus a vectorized one where the method allows).  Signatures, all SI:

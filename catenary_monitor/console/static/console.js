@@ -13,6 +13,7 @@ const S = {
   audio: null, mutedUntil: 0, lastBeep: 0, knownErrors: new Set(), beeps: 0,
   lastMessage: 0, serverLost: false, configPending: false, replay: { t: 0, playing: false, speed: 10, last: 0 },
   trendAt: 0, bench: location.search.includes('bench=1') ? [] : null,
+  operator: null,  // the signed-in operator's name (a token console); the token is in sessionStorage
 };
 window.cmConsole = S;  // for the tests and the latency benchmark
 
@@ -51,6 +52,7 @@ async function start() {
   buildLines();
   bindPickers();
   $('ack-all').addEventListener('click', () => acknowledge('all'));
+  bindAccess();
   $('tab-active').addEventListener('click', () => showTab('active'));
   $('tab-history').addEventListener('click', () => showTab('history'));
   $('sound').addEventListener('click', soundButton);
@@ -172,7 +174,8 @@ function buildTiles() {
       <dt class="x-tidel" title="${TIDE_L}">tide to lift, chain length held</dt><dd class="v-tidel x-tidel" title="${TIDE_L}"></dd>
       <dt class="x-upper" title="the anchor's force bounded: waves and sensor accuracy">uplift ≤ (waves, accuracy)</dt><dd class="v-upper x-upper"></dd>
       <dt class="x-wave" title="wave-frequency tension: half the range of the readings over wave_window">wave tension</dt><dd class="v-wave x-wave"></dd>
-      <dt class="x-drag">drag margin</dt><dd class="v-drag x-drag"></dd></dl>
+      <dt class="x-drag">drag margin</dt><dd class="v-drag x-drag"></dd>
+      <dt class="x-fatigue" title="Miner's damage of the chain (1: the S-N curve's failure) and the life left at the last day's rate">fatigue</dt><dd class="v-fatigue x-fatigue"></dd></dl>
       <div class="msg"></div><div class="foot"><span class="v-model" title="the model that answered"></span> · <span class="age"></span><span class="alarm-st"></span><span class="sensor old"></span></div>`;
     t.querySelector('.name').textContent = line.name;
     const warn = line.mbl ? 1 / S.config.safety_factor_warn : null;
@@ -260,9 +263,19 @@ function renderTile(view, lost, frame) {
   const vu = t.querySelector('.v-upper');
   vu.textContent = shown(up) ? `${num(up, 1, KN)} kN` : '';
   vu.className = 'v-upper x-upper ' + (shown(up) && up > (cfg.allowed_uplift || 0) ? 'warn' : '');
-  const vd = t.querySelector('.v-drag');
-  vd.textContent = shown(drag) ? `${num(drag, 1, KN)} kN` : '';
-  vd.className = 'v-drag x-drag ' + (shown(drag) && drag < (S.config.drag_margin_warn || 0) ? 'warn' : '');
+  // drag_state (docs/holding.md): 0 holding, 1 overloaded, 2 dragging (an ERROR).
+  const vd = t.querySelector('.v-drag'), dstate = view.drag_state;
+  const dword = dstate === 2 ? ' · DRAGGING' : dstate === 1 ? ' · overloaded' : '';
+  vd.textContent = shown(drag) ? `${num(drag, 1, KN)} kN${dword}` : '';
+  vd.className = 'v-drag x-drag ' + (dstate === 2 ? 'bad' :
+    (shown(drag) && drag < (S.config.drag_margin_warn || 0) ? 'warn' : ''));
+  // Chain fatigue (docs/fatigue.md): Miner's damage and the life left at the last day's rate.
+  const dmg = view.fatigue_damage, life = view.fatigue_life_left;
+  t.querySelectorAll('.x-fatigue').forEach((e) => { e.hidden = !shown(dmg); });
+  const vf = t.querySelector('.v-fatigue');
+  const years = shown(life) ? ` · ${life / 31557600 > 2 ? (life / 31557600).toFixed(1) + ' y' : (life / 86400).toFixed(1) + ' d'} left` : '';
+  vf.textContent = shown(dmg) ? `D ${dmg.toPrecision(3)}${years}` : '';
+  vf.className = 'v-fatigue x-fatigue ' + (shown(dmg) && dmg >= (S.config.fatigue_damage_warn || 1) ? 'warn' : '');
   setText(t.querySelector('.v-model'), (view.model || 'no model').replace(' catenary', ''));
   const msg = lost ? `monitor silent: last known ${view.level} at ${clock(frame.snapshot_t)}` : view.message;
   t.querySelector('.msg').textContent = msg;
@@ -349,7 +362,7 @@ let alarmKey = '', historyKey = '';
 function renderAlarms(frame, lost) {
   // Rebuilt only when something in the list changed (a button must not move under a click).
   const replay = S.config.mode !== 'live';
-  const key = JSON.stringify([lost, S.tab, frame.alarms]);
+  const key = JSON.stringify([lost, S.tab, canAct(), frame.alarms]);
   if (key !== alarmKey) { alarmKey = key; renderActive(frame, lost, replay); }
   const last = frame.history[frame.history.length - 1];
   const hkey = JSON.stringify([frame.history.length, last]);
@@ -396,11 +409,11 @@ function renderActive(frame, lost, replay) {
     td[5].title = a.state === 'acknowledged' && a.acknowledged_by ? `by ${a.acknowledged_by} at ${clock(a.acknowledged_at)}` : '';
     const b = td[6].firstChild;
     b.hidden = a.state === 'acknowledged';
-    b.disabled = replay || lost;
+    b.disabled = replay || lost || !canAct();
     if (body.children[i] !== tr) body.insertBefore(tr, body.children[i] || null);
   });
   $('n-active').textContent = `(${frame.alarms.length})`;
-  $('ack-all').disabled = replay || lost || !frame.alarms.some((a) => a.state !== 'acknowledged');
+  $('ack-all').disabled = replay || lost || !canAct() || !frame.alarms.some((a) => a.state !== 'acknowledged');
   $('no-alarms').hidden = S.tab !== 'active' || frame.alarms.length > 0;
 }
 
@@ -433,13 +446,79 @@ function showTab(tab) {
 
 async function acknowledge(line) {
   const box = $('ack-error');
-  const res = await fetch('/api/ack', { method: 'POST', headers: { 'Content-Type': 'application/json' },
-    body: JSON.stringify({ line }) });
+  const res = await act('/api/ack', { line });
   if (res.ok) { box.hidden = true; return; }
   let text = `acknowledge failed (${res.status})`;
   try { text += `: ${(await res.json()).error}`; } catch (e) { /* not JSON */ }
   box.textContent = text;
   box.hidden = false;
+}
+
+// ---------------------------------------------------------------- access: who may act
+// The console says how it is served (config.access): 'open' (this PC's page acts), 'token'
+// (operators sign in with their token: every action carries "Authorization: Bearer TOKEN"; the
+// page is read-only until then) or 'read-only'. The token stays in this tab (sessionStorage):
+// never in the URL, a cookie or a log.
+const TOKEN_KEY = 'catenary-console-token';
+
+function canAct() {
+  const c = S.config;
+  return !!c && c.mode === 'live' && c.access !== 'read-only' && (c.access !== 'token' || !!S.operator);
+}
+
+// Every state-changing request goes through here (a POST of JSON, with the token if any).
+async function act(path, body, token) {
+  const headers = { 'Content-Type': 'application/json' };
+  const t = token || sessionStorage.getItem(TOKEN_KEY);
+  if (t) headers.Authorization = `Bearer ${t}`;
+  const res = await fetch(path, { method: 'POST', headers, body: JSON.stringify(body) });
+  if (res.status === 401 && !token) { sessionStorage.removeItem(TOKEN_KEY); setOperator(null); }
+  return res;
+}
+
+function setOperator(name) {
+  S.operator = name;
+  const b = $('operator');
+  const c = S.config;
+  document.body.dataset.access = c.access;
+  document.body.dataset.operator = name || '';
+  b.hidden = c.mode !== 'live' || c.access === 'open';
+  b.disabled = c.access === 'read-only';
+  b.classList.toggle('signed', !!name);
+  b.textContent = c.access === 'read-only' ? 'read-only console' : (name ? `operator ${name} · sign out` : 'read-only: sign in');
+  if (!canAct()) $('ack-all').disabled = true;
+  if (S.frame) renderAlarms(S.frame, isLost(S.frame));
+}
+
+async function signIn(ev) {
+  ev.preventDefault();
+  const token = $('token').value.trim();
+  $('token').value = '';
+  const res = await act('/api/operator', {}, token);
+  if (!res.ok) {
+    let text = `sign-in refused (${res.status})`;
+    try { text += `: ${(await res.json()).error}`; } catch (e) { /* not JSON */ }
+    $('signin-error').textContent = text;
+    return;
+  }
+  sessionStorage.setItem(TOKEN_KEY, token);
+  $('signin').hidden = true;
+  $('signin-error').textContent = '';
+  setOperator((await res.json()).operator);
+}
+
+function bindAccess() {
+  $('operator').addEventListener('click', () => {
+    if (S.operator) { sessionStorage.removeItem(TOKEN_KEY); setOperator(null); return; }
+    $('signin').hidden = false;
+    $('token').focus();
+  });
+  $('signin').addEventListener('submit', signIn);
+  $('signin-cancel').addEventListener('click', () => { $('signin').hidden = true; $('signin-error').textContent = ''; });
+  setOperator(null);
+  if (S.config.access === 'token' && sessionStorage.getItem(TOKEN_KEY)) {
+    act('/api/operator', {}).then(async (res) => { if (res.ok) setOperator((await res.json()).operator); });
+  }
 }
 
 // ---------------------------------------------------------------- tide

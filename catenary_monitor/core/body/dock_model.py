@@ -56,7 +56,7 @@ class DockModel:
     hook_height: np.ndarray
     mbl: np.ndarray
     allowed_uplift: np.ndarray
-    accuracy: np.ndarray  # N, the tension sensor's accuracy (LineConfig.sensor_accuracy)
+    accuracy: np.ndarray  # N, tension accuracy (+- bound; the estimate's sigma_T): sensor_accuracy
     dock: DockConfig
 
     @classmethod

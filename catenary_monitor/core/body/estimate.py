@@ -5,9 +5,11 @@ the live core does one at a time).
 
 Each measured hook tension T_i implies a span ``s_i`` (closed form for the fixed-length chain,
 :func:`catenary_monitor.core.physics.fixed_length.span_and_sensitivity`) with the standard
-deviation
-``sigma_s = sigma_T / (dT/ds)`` (``sigma_T`` the sensor's ``tension_accuracy``; a slack reading
-says nothing about the span and gets no weight). The offset ``q = (X, Y, psi)`` minimizes
+deviation ``sigma_s = sigma_T / (dT/ds)``. ``sigma_T`` is the sensor's ``tension_accuracy``: that
+parameter is a bound (a reading within +- it of the true tension), taken here as the reading's
+standard deviation, which no error within the bound exceeds, so the normalized residuals are
+never overstated. A slack reading says nothing about the span and gets no weight. The offset
+``q = (X, Y, psi)`` minimizes
 
     sum_i (s_i - |A_i - (X, Y) - R(psi) p_i|)^2 / sigma_s,i^2
 

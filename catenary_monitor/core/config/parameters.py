@@ -26,6 +26,11 @@ from catenary_monitor.core.config.tide_constituents import Constituent, parse_ta
 
 __all__ = [
     'REQUIRED',
+    'ALARM_CONDITIONS',
+    'FLOAT64',
+    'TENSION_TYPES',
+    'DEPTH_TYPES',
+    'AXES',
     'DEFAULT_TENSION_ACCURACY',
     'ParamSpec',
     'PARAMETERS',
@@ -89,7 +94,7 @@ class ParamSpec(NamedTuple):
     scope: str = 'global'
     read_only: bool = False
     optional: bool = False
-    group: str = ''  # '' the monitor's table (README); 'dock' docs/dock_body.md's; 'holding'
+    group: str = ''  # '' the monitor's table (docs/node.md); 'dock' docs/dock_body.md's; 'holding'
     # docs/holding.md's
 
     def full_name(self, line: str | None = None) -> str:
@@ -104,8 +109,14 @@ class ParamSpec(NamedTuple):
 
 
 _L = 'line'
+#: The default message type of the inputs.
+FLOAT64 = 'std_msgs/msg/Float64'
+#: The message types each input accepts.
+TENSION_TYPES = (FLOAT64, 'geometry_msgs/msg/WrenchStamped')
+DEPTH_TYPES = (FLOAT64, 'sensor_msgs/msg/FluidPressure', 'sensor_msgs/msg/Range')
+AXES = ('x', 'y', 'z', 'norm')
 _NOT_GIVEN = math.nan
-#: The one source of truth for every parameter: the node declares these, the README renders them.
+#: The one source of truth for every parameter: the node declares these, the docs render them.
 PARAMETERS: tuple[ParamSpec, ...] = (
     ParamSpec(
         'lines',
@@ -113,7 +124,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         REQUIRED,
         (
             'Names of the monitored chains (a letter, then letters, digits, _; not tide, sensors,'
-            ' logger, dock, parameters, clock, intake, all); each NAME gets the NAME.* '
+            ' alarms, logger, dock, parameters, clock, intake, fatigue, all); each NAME gets the '
+            'NAME.* '
             'parameters below'
         ),
         '',
@@ -125,7 +137,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'depth_topic',
         'string',
         '/tide/depth',
-        'std_msgs/Float64 topic with the water depth at the hooks (m)',
+        'Topic of the depth sensor (its message type: depth_type); the depth at the hooks (m)',
         '',
         None,
         None,
@@ -162,6 +174,38 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         read_only=True,
     ),
     ParamSpec(
+        'log_max_total_size',
+        'double',
+        0.0,
+        'Retention: the log folder\'s MCAP files are kept under this size, the oldest finished '
+        'files deleted first, never the open one (0: keep all; at least 2 x log_rotate_size)',
+        'B',
+        0.0,
+        1.0e15,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_max_age',
+        'double',
+        0.0,
+        'Retention: a finished MCAP log file is deleted this long after it ended (0: keep all)',
+        's',
+        0.0,
+        3.2e9,
+        read_only=True,
+    ),
+    ParamSpec(
+        'log_min_free_space',
+        'double',
+        1073741824.0,
+        'The logger status is WARN while the log\'s file system has less free space than this '
+        '(before a full disk stops the logging; 0: not checked)',
+        'B',
+        0.0,
+        1.0e15,
+        read_only=True,
+    ),
+    ParamSpec(
         'log_create_dir',
         'bool',
         True,
@@ -184,6 +228,19 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         read_only=True,
     ),
     ParamSpec(
+        'acknowledge_from_ros',
+        'bool',
+        True,
+        'Accept alarm acknowledgements on /catenary_monitor/acknowledge from any publisher; '
+        'false: only from a console (a node catenary_console_*, the only publisher on the '
+        'topic): where operators acknowledge through the authenticated console (docs/node.md, '
+        'Security)',
+        '',
+        None,
+        None,
+        read_only=True,
+    ),
+    ParamSpec(
         'runtime_change_warn_time',
         'double',
         3600.0,
@@ -193,6 +250,77 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.0,
         31536000.0,
         read_only=True,
+    ),
+    ParamSpec(
+        'depth_type',
+        'string',
+        FLOAT64,
+        'Message type of depth_topic: std_msgs/msg/Float64 (the depth, stamped at arrival), '
+        'sensor_msgs/msg/FluidPressure (a pressure gauge) or sensor_msgs/msg/Range (a radar '
+        'or sonar gauge looking down), the latter two at their header stamps',
+        '',
+        None,
+        None,
+        read_only=True,
+        group='inputs',
+    ),
+    ParamSpec(
+        'water_density',
+        'double',
+        1025.0,
+        'FluidPressure: density of the water above the gauge (1025 sea water, 1000 fresh)',
+        'kg/m^3',
+        900.0,
+        1300.0,
+        read_only=True,
+        group='inputs',
+    ),
+    ParamSpec(
+        'atmospheric_pressure',
+        'double',
+        101325.0,
+        'FluidPressure: the air pressure the gauge reads at the surface (0 for a gauge that '
+        'reports pressure relative to the air)',
+        'Pa',
+        0.0,
+        200000.0,
+        read_only=True,
+        group='inputs',
+    ),
+    ParamSpec(
+        'gauge_height',
+        'double',
+        0.0,
+        'FluidPressure and Range: the gauge\'s height above the seabed (depth = gauge_height + '
+        '(pressure - atmospheric_pressure) / (water_density g); depth = gauge_height - range)',
+        'm',
+        -100.0,
+        12000.0,
+        read_only=True,
+        group='inputs',
+    ),
+    ParamSpec(
+        'depth_offset',
+        'double',
+        0.0,
+        'Added to every depth reading (the datum: from the gauge\'s zero to the depth at the '
+        'hooks)',
+        'm',
+        -1000.0,
+        1000.0,
+        read_only=True,
+        group='inputs',
+    ),
+    ParamSpec(
+        'stamp_ahead_max',
+        'double',
+        1.0,
+        'A stamped sample whose header stamp is this far ahead of the monitor\'s clock at its '
+        'arrival is refused (sensor state bad_stamp), as is one stamped before the one before',
+        's',
+        0.0,
+        3600.0,
+        group='inputs',
     ),
     # Per line.
     ParamSpec(
@@ -242,7 +370,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'tension_topic',
         'string',
         '/mooring/{line}/tension',
-        'std_msgs/Float64 topic with the measured hook tension (N)',
+        'Topic of the line\'s load cell (its message type: NAME.tension_type)',
         '',
         None,
         None,
@@ -258,6 +386,45 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.0,
         1.0e12,
         _L,
+    ),
+    # Inputs as the sensors' drivers publish them (core/monitor/readings.py; docs/node.md).
+    ParamSpec(
+        'tension_type',
+        'string',
+        FLOAT64,
+        'Message type of NAME.tension_topic: std_msgs/msg/Float64 (the reading, stamped at '
+        'arrival) or geometry_msgs/msg/WrenchStamped (one force axis, at its header stamp)',
+        '',
+        None,
+        None,
+        _L,
+        read_only=True,
+        group='inputs',
+    ),
+    ParamSpec(
+        'tension_axis',
+        'string',
+        'norm',
+        'With a WrenchStamped: the tension is its force x, y, z or norm (the vector\'s length)',
+        '',
+        None,
+        None,
+        _L,
+        read_only=True,
+        group='inputs',
+    ),
+    ParamSpec(
+        'tension_scale',
+        'double',
+        1.0,
+        'The tension is the reading x this (1000 for a load cell in kN; negative for an axis '
+        'that reads tension below zero; not 0)',
+        'N/unit',
+        -1.0e9,
+        1.0e9,
+        _L,
+        read_only=True,
+        group='inputs',
     ),
     # Dock geometry (the dock model, core/body): optional; NaN means not given.
     ParamSpec(
@@ -310,13 +477,64 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'tension_accuracy',
         'double',
         _NOT_GIVEN,
-        'Accuracy of the tension sensor: a reading is within +- this of the true tension; '
-        'not set: 0.5 % of NAME.mbl (a load pin rated near half the MBL, +-1 % of its rating)',
+        'Stated accuracy of the tension sensor, a bound: a reading is within +- this of the true '
+        'tension (the margin bounds take the worst case within it; the dock estimate takes it '
+        'as a reading\'s standard deviation); not set: 0.5 % of NAME.mbl (a load pin rated near '
+        'half the MBL, +-1 % of its rating)',
         'N',
         1.0,
         1.0e9,
         _L,
         optional=True,
+    ),
+    # Chain fatigue (core/monitor/fatigue.py, docs/fatigue.md): seed 001's S-N curve.
+    ParamSpec(
+        'fatigue_m',
+        'double',
+        3.36,
+        'S-N curve N (delta_sigma / 1 MPa)^m = 10^log_a: m (seed 001, anchor chain)',
+        '',
+        1.0,
+        20.0,
+        _L,
+        group='fatigue',
+    ),
+    ParamSpec(
+        'fatigue_log_a',
+        'double',
+        13.6451,
+        'S-N curve N (delta_sigma / 1 MPa)^m = 10^log_a: log10 a (seed 001, anchor chain)',
+        '',
+        1.0,
+        40.0,
+        _L,
+        group='fatigue',
+    ),
+    ParamSpec(
+        'fatigue_stress_per_tension',
+        'double',
+        _NOT_GIVEN,
+        'Stress range per tension range of a link; not set: seed 001\'s 80.5 Pa/N for its '
+        '12 421 kN chain scaled to this MBL (80.5 x 12421e3 / mbl: the same stress at the '
+        'same fraction of MBL)',
+        'Pa/N',
+        1.0e-6,
+        1.0e9,
+        _L,
+        optional=True,
+        group='fatigue',
+    ),
+    ParamSpec(
+        'fatigue_damage_initial',
+        'double',
+        0.0,
+        'Miner damage the chain had when monitoring began (used only where the fatigue store '
+        'holds none for the line)',
+        '',
+        0.0,
+        10.0,
+        _L,
+        group='fatigue',
     ),
     # Holding (docs/holding.md): optional; NaN means not given (no holding values).
     ParamSpec(
@@ -569,8 +787,9 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'depth_accuracy',
         'double',
         0.02,
-        'Accuracy of the depth sensor: a reading is within +- this of the true depth (0.02: '
-        'a radar or pressure tide gauge, about 1 cm, and the hooks\' survey)',
+        'Stated accuracy of the depth sensor, a bound: a reading is within +- this of the true '
+        'depth (the margin bounds take the worst case within it; 0: exact; 0.02: a radar or '
+        'pressure tide gauge, about 1 cm, and the hooks\' survey)',
         'm',
         0.0,
         100.0,
@@ -615,6 +834,27 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.0,
         1.0e8,
         group='holding',
+    ),
+    ParamSpec(
+        'drag_tolerance',
+        'double',
+        1.0,
+        'ERROR (anchor dragging) when the load exceeds the holding and the implied anchor '
+        'distance is beyond the installed one by more than this',
+        'm',
+        0.0,
+        1000.0,
+        group='holding',
+    ),
+    ParamSpec(
+        'fatigue_damage_warn',
+        'double',
+        0.5,
+        'WARN when a line\'s cumulative Miner damage reaches this (1: the S-N curve\'s failure)',
+        '',
+        0.0,
+        10.0,
+        group='fatigue',
     ),
     ParamSpec(
         'load_margin_warn',
@@ -726,6 +966,64 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.01,
         100.0,
     ),
+    # Alarm management (ISA-18.2 / IEC 62682, EEMUA 191): shelving, chattering, floods.
+    ParamSpec(
+        'shelve_max',
+        'double',
+        28800.0,
+        'Longest an operator may shelve an alarm (one shift; 0: shelving disabled)',
+        's',
+        0.0,
+        604800.0,
+    ),
+    ParamSpec(
+        'unshelvable_conditions',
+        'string_array',
+        ('uplift',),
+        'Alarm conditions no operator may shelve (uplift, input, sensor_error, stale, '
+        'anchor_margin, ...); a shelved alarm still annunciates them',
+        '',
+        None,
+        None,
+    ),
+    ParamSpec(
+        'chatter_count',
+        'double',
+        3.0,
+        'An alarm with this many level changes or more within chatter_window is chattering '
+        '(a whole number)',
+        '',
+        2.0,
+        1000.0,
+    ),
+    ParamSpec(
+        'chatter_window',
+        'double',
+        60.0,
+        'The window of the chattering count',
+        's',
+        1.0,
+        86400.0,
+    ),
+    ParamSpec(
+        'flood_count',
+        'double',
+        10.0,
+        'More than this many alarms raised within flood_window is an alarm flood (a whole '
+        'number)',
+        '',
+        1.0,
+        10000.0,
+    ),
+    ParamSpec(
+        'flood_window',
+        'double',
+        600.0,
+        'The window of the flood count',
+        's',
+        1.0,
+        86400.0,
+    ),
     # The dock as one body (core/body): loads by the seed paper's formulas (docs/dock_body.md).
     *(
         ParamSpec(
@@ -828,10 +1126,41 @@ _PER_LINE = {p.name: p for p in PARAMETERS if p.scope == 'line'}
 ROS_BUILTIN_PARAMETERS = frozenset({'use_sim_time', 'start_type_description_service'})
 _ROS_BUILTIN_PREFIXES = ('qos_overrides.',)
 
+#: Every condition of a line's alarm (core.monitor.alarms.CONDITIONS, then ``stale``): the names
+#: of ``unshelvable_conditions`` and of a shelved condition (test_shelving checks they agree).
+ALARM_CONDITIONS = (
+    'uplift',
+    'input',
+    'anchor_margin',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'time_to_uplift',
+    'inconsistent',
+    'uplift_possible',
+    'drag_margin',
+    'sensor_error',
+    'sensor_warn',
+    'dragging',
+    'fatigue',
+    'stale',
+)
+
 _LINE_NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*\Z')
 #: Names of the monitor's own statuses (``catenary_monitor: tide``, ...) and of the
 #: acknowledgement of every alarm (``all``): no line may take one.
-RESERVED_NAMES = ('tide', 'sensors', 'logger', 'dock', 'parameters', 'clock', 'intake', 'all')
+RESERVED_NAMES = (
+    'tide',
+    'sensors',
+    'alarms',
+    'logger',
+    'dock',
+    'parameters',
+    'clock',
+    'intake',
+    'fatigue',
+    'all',
+)
 
 
 def _check_line_name(name: object) -> None:
@@ -908,6 +1237,10 @@ def _check_topic(full_name: str, topic: str) -> None:
         raise ConfigError(full_name, f'{topic!r} is not a valid ROS topic name')
 
 
+def _PER_LINE_DEFAULT(name: str) -> Any:  # noqa: N802 - read as a constant
+    return _PER_LINE[name].default
+
+
 @dataclass(frozen=True)
 class LineConfig:
     """One anchor chain. SI units: weight N/m (submerged), distances m, forces N.
@@ -935,6 +1268,13 @@ class LineConfig:
     anchor_holding: float | None = None
     anchor_weight: float | None = None
     chain_friction: float | None = None
+    fatigue_m: float = _PER_LINE_DEFAULT('fatigue_m')
+    fatigue_log_a: float = _PER_LINE_DEFAULT('fatigue_log_a')
+    fatigue_stress_per_tension: float | None = None
+    fatigue_damage_initial: float = 0.0
+    tension_type: str = FLOAT64
+    tension_axis: str = 'norm'
+    tension_scale: float = 1.0
 
     def __post_init__(self) -> None:
         _check_line_name(self.name)
@@ -953,8 +1293,22 @@ class LineConfig:
                 value = None  # (heading keeps NaN for "not set", as the console reads it)
             object.__setattr__(self, key, value)
         _check_topic(f'{self.name}.tension_topic', self.tension_topic)
+        _check_choice(f'{self.name}.tension_type', self.tension_type, TENSION_TYPES)
+        _check_choice(f'{self.name}.tension_axis', self.tension_axis, AXES)
+        if self.tension_scale == 0.0:
+            raise ConfigError(
+                f'{self.name}.tension_scale', 'must not be 0 (1 for a load cell in N)'
+            )
         if self.ea == 0.0:
             object.__setattr__(self, 'ea', None)
+
+    @property
+    def stress_per_tension(self) -> float:
+        """Pa of stress range per N of tension range: ``fatigue_stress_per_tension``, or seed
+        001's 80.5 Pa/N for its 12 421 kN chain scaled to this line's MBL."""
+        if self.fatigue_stress_per_tension is not None:
+            return self.fatigue_stress_per_tension
+        return 80.5 * 12421.0e3 / self.mbl
 
     @property
     def sensor_accuracy(self) -> float:
@@ -967,6 +1321,11 @@ class LineConfig:
 
 def _default(name: str) -> Any:
     return _GLOBAL[name].default
+
+
+def _check_choice(full_name: str, value: str, choices: tuple[str, ...]) -> None:
+    if value not in choices:
+        raise ConfigError(full_name, f'{value!r} is not one of {", ".join(choices)}')
 
 
 @dataclass(frozen=True)
@@ -989,6 +1348,8 @@ class AlarmConfig:
     wave_allowance: float = _default('wave_allowance')
     drag_margin_warn: float = _default('drag_margin_warn')
     drag_margin_deadband: float = _default('drag_margin_deadband')
+    drag_tolerance: float = _default('drag_tolerance')
+    fatigue_damage_warn: float = _default('fatigue_damage_warn')
     tension_resolution: float = _default('tension_resolution')
     depth_resolution: float = _default('depth_resolution')
     stuck_time: float = _default('stuck_time')
@@ -1000,6 +1361,7 @@ class AlarmConfig:
     parted_window: float = _default('parted_window')
     depth_min: float = _default('depth_min')
     depth_max: float = _default('depth_max')
+    stamp_ahead_max: float = _default('stamp_ahead_max')
     tension_sample_rate: float = _default('tension_sample_rate')
     depth_sample_rate: float = _default('depth_sample_rate')
     tide_table: str = _default('tide_table')
@@ -1017,11 +1379,27 @@ class AlarmConfig:
     tension_timeout: float = _default('tension_timeout')
     depth_timeout: float = _default('depth_timeout')
     diagnostic_rate: float = _default('diagnostic_rate')
+    shelve_max: float = _default('shelve_max')
+    unshelvable_conditions: tuple[str, ...] = _default('unshelvable_conditions')
+    chatter_count: float = _default('chatter_count')
+    chatter_window: float = _default('chatter_window')
+    flood_count: float = _default('flood_count')
+    flood_window: float = _default('flood_window')
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
             value = _check(f.name, _GLOBAL[f.name], getattr(self, f.name))
             object.__setattr__(self, f.name, value)
+        for name in ('chatter_count', 'flood_count'):
+            if getattr(self, name) != int(getattr(self, name)):
+                raise ConfigError(name, f'must be a whole number, got {getattr(self, name)!r}')
+        for cond in self.unshelvable_conditions:
+            if cond not in ALARM_CONDITIONS:
+                raise ConfigError(
+                    'unshelvable_conditions',
+                    f'unknown alarm condition {cond!r} '
+                    f'(conditions: {", ".join(ALARM_CONDITIONS)})',
+                )
         try:
             table = parse_table(self.tide_table)
         except ValueError as err:
@@ -1071,9 +1449,18 @@ _TOP_LEVEL = (
     'log_dir',
     'log_rotate_size',
     'log_rotate_duration',
+    'log_max_total_size',
+    'log_max_age',
+    'log_min_free_space',
     'log_create_dir',
     'allow_runtime_changes',
+    'acknowledge_from_ros',
     'runtime_change_warn_time',
+    'depth_type',
+    'water_density',
+    'atmospheric_pressure',
+    'gauge_height',
+    'depth_offset',
 )
 
 #: Per-line parameters that place a line on the dock (all given on every line, or none).
@@ -1089,10 +1476,19 @@ class MonitorConfig:
     depth_topic: str = _default('depth_topic')
     log_dir: str = _default('log_dir')
     allow_runtime_changes: bool = _default('allow_runtime_changes')
+    acknowledge_from_ros: bool = _default('acknowledge_from_ros')
     runtime_change_warn_time: float = _default('runtime_change_warn_time')  # s
     log_rotate_size: float = _default('log_rotate_size')  # MiB
     log_rotate_duration: float = _default('log_rotate_duration')  # s
     log_create_dir: bool = _default('log_create_dir')
+    log_max_total_size: float = _default('log_max_total_size')  # B
+    log_max_age: float = _default('log_max_age')  # s
+    log_min_free_space: float = _default('log_min_free_space')  # B
+    depth_type: str = _default('depth_type')
+    water_density: float = _default('water_density')  # kg/m^3
+    atmospheric_pressure: float = _default('atmospheric_pressure')  # Pa
+    gauge_height: float = _default('gauge_height')  # m
+    depth_offset: float = _default('depth_offset')  # m
     alarm: AlarmConfig = field(default_factory=AlarmConfig)
     dock: DockConfig = field(default_factory=DockConfig)
 
@@ -1112,6 +1508,14 @@ class MonitorConfig:
         for key in _TOP_LEVEL:
             object.__setattr__(self, key, _check(key, _GLOBAL[key], getattr(self, key)))
         _check_topic('depth_topic', self.depth_topic)
+        _check_choice('depth_type', self.depth_type, DEPTH_TYPES)
+        rotate = self.log_rotate_size * 2**20
+        if 0.0 < self.log_max_total_size < 2.0 * rotate:
+            raise ConfigError(
+                'log_max_total_size',
+                f'{self.log_max_total_size:g} B is below 2 x log_rotate_size ({2 * rotate:g} B): '
+                'the open file and a finished one must fit',
+            )
         if not self.log_dir:
             raise ConfigError('log_dir', 'must not be empty')
         _check_geometry(self.lines)
@@ -1318,8 +1722,12 @@ NON_DECIDING = frozenset(
         'log_dir',
         'log_rotate_size',
         'log_rotate_duration',
+        'log_max_total_size',
+        'log_max_age',
+        'log_min_free_space',
         'log_create_dir',
         'allow_runtime_changes',
+        'acknowledge_from_ros',
     }
 )
 
@@ -1334,7 +1742,7 @@ def config_hash(config: MonitorConfig) -> str:
 
 def parameters_markdown(group: str = '') -> str:
     """The parameter table as Markdown: name, default (doubles unless noted), unit, range,
-    description; ``group`` ``''`` the monitor's (README), ``'dock'`` the dock model's,
+    description; ``group`` ``''`` the monitor's (docs/node.md), ``'dock'`` the dock model's,
     ``'holding'`` the holding's (docs/holding.md)."""
     rows = ['| parameter | default | unit | range | description |', '|---|---|---|---|---|']
     for spec in PARAMETERS:
@@ -1345,6 +1753,8 @@ def parameters_markdown(group: str = '') -> str:
             default = 'required'
         elif spec.optional:
             default = 'not set (NaN)'
+        elif isinstance(spec.default, tuple):
+            default = f'`[{", ".join(spec.default)}]`'
         else:
             default = f'`{spec.default_for("NAME")!r}`'
         if spec.type != 'double':

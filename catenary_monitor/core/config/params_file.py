@@ -2,7 +2,9 @@
 
 No rclpy here. The live node gets its parameters from ``rcl_yaml_param_parser`` (C, on libyaml
 events) and rclpy's ``Node``; :func:`read_params_file` mirrors both, so that a file is accepted
-here exactly when rcl accepts it, and gives the values and types of ``node._parameter_overrides``.
+here exactly when rcl accepts it, and gives the values and types of ``node._parameter_overrides``
+-- with one departure: a file that gives one of the node's parameters twice within a section is
+refused (:func:`check_given_once`), where rcl silently takes the later value.
 
 **rcl (parse.c, rules of ROS 2 Jazzy, rcl 9.2).** One walk over the YAML events with rcl's state:
 
@@ -72,6 +74,8 @@ __all__ = [
     'fully_qualified_name',
     'parameters_for_node',
     'read_params_file',
+    'check_given_once',
+    'section_applies',
 ]
 
 PARAMS_KEY = 'ros__parameters'
@@ -423,8 +427,12 @@ class _Walk:
         self.node_ns, self.param_ns = _Namespace('/'), _Namespace('.')
         self.nodes: dict[str, _Node] = {}
         self.node: _Node | None = None
+        self.section = ''
         self.index = 0
         self.line = 0
+        self.key_line = 0  # line of the last parameter key not given its value yet (0: none)
+        # (section, parameter, line of its key) each time a parameter key is given a value
+        self.given: list[tuple[str, str, int]] = []
 
     def feed(self, event: Any) -> None:
         self.line = event.start_mark.line + 1
@@ -449,6 +457,7 @@ class _Walk:
             raise ParamsFileError('No key', self.line)
         name = _c_string(raw)
         if self.level == _PARAMS_LEVEL:
+            self.key_line = self.line
             self.parameter_key(name)
         elif not name.startswith(PARAMS_KEY):
             self.node_ns.add(name)
@@ -461,6 +470,7 @@ class _Walk:
         name = self.node_ns.text
         check_section_name(name)
         self.node = self.nodes.setdefault(name, _Node())
+        self.section = name
         self.node_ns.remove()
         self.level += 1
 
@@ -484,6 +494,9 @@ class _Walk:
             raise ParamsFileError('No value', self.line)
         kind, value = rcl_scalar(event.value, event.style, event.tag)
         slot = self.node.slot(self.index)
+        if self.key_line and self.index < len(self.node.names):
+            self.given.append((self.section, self.node.names[self.index], self.key_line))
+        self.key_line = 0
         if not self.is_seq:
             slot.scalars[kind] = value
             return
@@ -526,6 +539,9 @@ class _Walk:
 
     def alias(self, event: Any) -> None:
         raise ParamsFileError('Will not support aliasing', self.line)
+
+    def entries(self) -> list[tuple[str, dict[str, Any]]]:
+        return [(name, node.parameters()) for name, node in self.nodes.items()]
 
 
 _HANDLERS: dict[str, Callable[[_Walk, Any], None]] = {
@@ -647,6 +663,11 @@ def parse_params(data: bytes) -> list[tuple[str, dict[str, Any]]]:
 
     Raises ParamsFileError (one line) for any file rcl refuses (``syntax`` set for YAML errors).
     """
+    return _walk(data).entries()
+
+
+def _walk(data: bytes) -> _Walk:
+    """The event walk over a whole file (ParamsFileError as :func:`parse_params`)."""
     import yaml
 
     walk, compat = _Walk(), _LibyamlCompat(data)
@@ -656,7 +677,26 @@ def parse_params(data: bytes) -> list[tuple[str, dict[str, Any]]]:
             walk.feed(event)
     except yaml.YAMLError as err:
         raise ParamsFileError(f'YAML syntax: {err}', syntax=True) from None
-    return [(name, node.parameters()) for name, node in walk.nodes.items()]
+    return walk
+
+
+def check_given_once(given: Iterable[tuple[str, str, int]], sections: Iterable[str]) -> None:
+    """ParamsFileError naming the first parameter that one of ``sections`` (those applying to the
+    node) gives a value twice, with the lines of both: rcl takes the later value silently (per
+    value type), which turned a copy-paste slip into a line monitored with an MBL of 1 N. A
+    section repeated under the same name is one section (rcl merges them); a parameter set in
+    two different sections (``/**`` and ``catenary_monitor``) is rclpy's override, allowed."""
+    applying = set(sections)
+    first: dict[tuple[str, str], int] = {}
+    for section, name, line in given:
+        if section not in applying:
+            continue
+        if (section, name) in first:
+            raise ParamsFileError(
+                f'parameter {name!r} is given twice, at line {first[section, name]} and line '
+                f'{line} (give each parameter once)'
+            )
+        first[section, name] = line
 
 
 # --- rclpy: which entries a node gets ----------------------------------------------------------
@@ -678,12 +718,17 @@ def parameters_for_node(
     entries: Iterable[tuple[str, dict[str, Any]]], node_name: str, node_namespace: str = '/'
 ) -> dict[str, Any]:
     """The parameters rclpy hands node ``node_namespace/node_name``: matching entries merged."""
-    fqn = fully_qualified_name(node_name, node_namespace)
     merged: dict[str, Any] = {}
     for name, parameters in entries:
-        if _section_pattern(name).fullmatch(fqn):
+        if section_applies(name, node_name, node_namespace):
             merged.update(parameters)
     return merged
+
+
+def section_applies(section: str, node_name: str, node_namespace: str = '/') -> bool:
+    """Whether rclpy hands section ``section``'s parameters to ``node_namespace/node_name``."""
+    fqn = fully_qualified_name(node_name, node_namespace)
+    return _section_pattern(section).fullmatch(fqn) is not None
 
 
 #: Larger than any params file (the 12-line dock's is 4 KiB): refused rather than parsed.
@@ -714,11 +759,15 @@ def read_params_file(
     """Flat ``{dotted name: value}`` of a params file for one node, exactly as rclpy has them.
 
     Values are bool, int, float, str, lists of one of those, or None (NOT_SET). Raises
-    ParamsFileError (one line) for an unreadable file or one rcl refuses.
+    ParamsFileError (one line) for an unreadable file, one rcl refuses, or one that gives a
+    parameter of the node twice (:func:`check_given_once`; rcl would take the later value).
     """
     data = _read_bytes(Path(path))
     try:
-        entries = parse_params(data)
+        walk = _walk(data)
+        entries = walk.entries()
+        mine = [name for name, _ in entries if section_applies(name, node_name, node_namespace)]
+        check_given_once(walk.given, mine)
     except ParamsFileError as err:
         prefix = 'cannot read ' if err.syntax else ''
         raise ParamsFileError(f'{prefix}{str(path)!r}: {err}', syntax=err.syntax) from None

@@ -32,6 +32,13 @@ Conditions, each with its own latch:
     ``uplift`` ERROR then says so), held for ``warn_clear_hold``; NaN holds.
 ``drag_margin`` (WARN; with ``anchor_holding``, :mod:`catenary_monitor.core.monitor.holding`)
     as the margins above with ``drag_margin_warn`` and ``drag_margin_deadband`` (N).
+``dragging`` (ERROR; with ``anchor_holding``, :mod:`catenary_monitor.core.monitor.holding`)
+    raised when the line's ``drag_state`` is ``dragging`` (the load beyond the holding and the
+    implied anchor distance beyond the installed one by ``drag_tolerance``) for ``on_delay``;
+    cleared after ``clear_hold`` of ``holding`` or ``overloaded``; NaN holds.
+``fatigue`` (WARN; :mod:`catenary_monitor.core.monitor.fatigue`)
+    raised when the line's cumulative Miner damage reaches ``fatigue_damage_warn`` for
+    ``on_delay``; cleared below it (the damage only grows: a new chain, a new store).
 ``sensor_error`` (ERROR), ``sensor_warn`` (WARN; :mod:`catenary_monitor.core.monitor.sensor_state`)
     raised when the line's ``sensor_state`` (decided at ticks) is an ERROR state (``over_mbl``,
     ``slack``, ``suspected_parted``), resp. a WARN state (``stuck``, ``spike``), for
@@ -92,6 +99,7 @@ __all__ = [
     'LineAlarm',
     'LevelSeries',
     'CONDITIONS',
+    'ERROR_CONDITIONS',
     'DIAGNOSTIC_KEYS',
     'RANK',
     'replay_levels',
@@ -125,14 +133,19 @@ CONDITIONS = (
     'safety_factor',
     'time_to_uplift',
     'inconsistent',
-    # Margins with uncertainty and holding (issue 12, items 3 and 4).
+    # Margins within the sensors' accuracy, and holding.
     'uplift_possible',
     'drag_margin',
-    # Sensor sanity (issue 12, item 2): core/sensor_state.py.
+    # Sensor sanity: core/monitor/sensor_state.py.
     'sensor_error',
     'sensor_warn',
+    # Hou et al.'s third regime, the anchor dragging: core/monitor/holding.py.
+    'dragging',
+    # Chain fatigue (Miner's damage): core/monitor/fatigue.py.
+    'fatigue',
 )
-_ERRORS = ('uplift', 'input', 'sensor_error')
+#: The conditions that raise an ERROR (the others a WARN).
+ERROR_CONDITIONS = _ERRORS = ('uplift', 'input', 'sensor_error', 'dragging')
 _WARNS = tuple(c for c in CONDITIONS if c not in _ERRORS)
 _ERROR_AT = tuple(CONDITIONS.index(c) for c in _ERRORS)
 # The warnings with a threshold and a deadband.
@@ -179,9 +192,13 @@ class AlarmInputs:
     uplift_force_upper: float = math.nan  # N, the uplift force's bound within sensor accuracy
     drag_margin: float = math.nan  # N, holding capacity minus horizontal load
     holding_capacity: float = math.nan  # N, anchor and grounded chain (for the message)
-    sensor_state: float = 0.0  # core.sensor line state code (0 ok)
+    sensor_state: float = 0.0  # core.monitor.sensor_state line state code (0 ok)
     sensor_tension: float = math.nan  # N, the newest tension the state was decided on
     mbl: float = math.nan  # N, the line's MBL (for the message)
+    drag_state: float = math.nan  # core.holding code (2 dragging), NaN unknown
+    implied_anchor_distance: float = math.nan  # m (for the message)
+    fatigue_damage: float = math.nan  # Miner's damage so far
+    fatigue_life_left: float = math.nan  # s at the last day's rate (for the message)
     dynamic_uplift: float = math.nan  # N, the uplift at the wave window's peak (wave_window)
     uplift_view: float = math.nan  # 1: time_to_uplift is the chain length's, 0: R held's
 
@@ -206,6 +223,7 @@ class AlarmState:
     entered: tuple[float, ...] = (math.nan,) * 4  # s, when each severity rank was last entered
     input_message: str = ''  # last impossible-input sentence, while its alarm holds
     suppressed: bool = True  # STALE only by a common cause (suppressed by design)
+    stale: bool = True  # an input stale or never received (the level may still be ERROR)
 
 
 class Transition(NamedTuple):
@@ -251,11 +269,12 @@ class LineAlarm:
 
     config: AlarmConfig = field(default_factory=AlarmConfig)
     allowed_uplift: float = 0.0
+    anchor_distance: float = math.nan  # m, installed (for the dragging message)
 
     @classmethod
     def for_line(cls, line: LineConfig, config: AlarmConfig) -> LineAlarm:
         """Rules for ``line`` under ``config``."""
-        return cls(config, line.allowed_uplift)
+        return cls(config, line.allowed_uplift, line.anchor_distance)
 
     @property
     def uplift_clear_level(self) -> float:
@@ -319,6 +338,7 @@ class LineAlarm:
             entered=entered,
             input_message=input_message if active[1] else '',
             suppressed=suppressed,
+            stale=stale,
         )
         return new, events
 
@@ -344,6 +364,11 @@ class LineAlarm:
             )
         elif cond == 'inconsistent':
             breach, clear = x.inconsistent == 1.0, x.inconsistent == 0.0
+        elif cond == 'dragging':
+            breach, clear = x.drag_state == 2.0, x.drag_state < 2.0
+        elif cond == 'fatigue':
+            warn = self.config.fatigue_damage_warn
+            breach, clear = x.fatigue_damage >= warn, x.fatigue_damage < warn
         elif cond in _SENSOR:
             hit, ok = _sensor_codes(cond, np.asarray(x.sensor_state))
             breach, clear = bool(hit), bool(ok)
@@ -400,6 +425,8 @@ class LineAlarm:
                 )
         if active[CONDITIONS.index('sensor_error')]:
             parts.append(_sensor_text(x, 'sensor_error', hold_e))
+        if active[_DRAGGING]:
+            parts.append(self._dragging_text(x, hold_e))
         for name, is_stale, stamp, timeout in (
             ('tension', stale_t, x.tension_stamp, self.config.tension_timeout),
             ('depth', stale_d, x.depth_stamp, self.config.depth_timeout),
@@ -425,6 +452,8 @@ class LineAlarm:
                     parts.append(self._uplift_time_text(x, hold_w))
             elif up and cond == 'uplift_possible':
                 parts.append(self._uplift_possible_text(x, hold_w))
+            elif up and cond == 'fatigue':
+                parts.append(self._fatigue_text(x))
             elif up and cond == 'drag_margin':
                 text = self._warn_text(cond, x.drag_margin, hold_w)
                 holding = _fmt(x.holding_capacity, 1e3)
@@ -476,6 +505,28 @@ class LineAlarm:
             f'at >= {_duration(high)})'
         )
 
+    def _fatigue_text(self, x: AlarmInputs) -> str:
+        """The message of the ``fatigue`` condition (the damage, the life left in days)."""
+        warn, life = self.config.fatigue_damage_warn, x.fatigue_life_left
+        left = 'unknown' if life != life else _life(life)
+        return (
+            f'chain fatigue: Miner damage {x.fatigue_damage:.3g} >= {warn:g} '
+            f'(life left {left} at the last day\'s rate)'
+        )
+
+    def _dragging_text(self, x: AlarmInputs, hold: float) -> str:
+        """The message of the ``dragging`` condition (load and holding in kN, span in m)."""
+        if x.drag_state == 2.0:
+            load = x.holding_capacity - x.drag_margin
+            beyond = x.implied_anchor_distance - self.anchor_distance
+            return (
+                f'anchor dragging: horizontal load {_fmt(load, 1e3)} kN > holding '
+                f'{_fmt(x.holding_capacity, 1e3)} kN and the chain puts the anchor '
+                f'{_fmt(beyond, 1.0, 2)} m beyond its installed {_fmt(self.anchor_distance)} m '
+                f'(implied {_fmt(x.implied_anchor_distance, 1.0, 2)} m)'
+            )
+        return f'anchor dragging alarm held (clears after {hold:g} s of the anchor holding)'
+
     def _uplift_possible_text(self, x: AlarmInputs, hold: float) -> str:
         """The message of the ``uplift_possible`` condition (bound and nominal in kN)."""
         upper, allowed = x.uplift_force_upper, self.allowed_uplift
@@ -491,6 +542,7 @@ class LineAlarm:
 
 
 _SENSOR = ('sensor_error', 'sensor_warn')
+_DRAGGING = CONDITIONS.index('dragging')
 
 #: Which view answered a time to uplift (``uplift_view``), for messages and /diagnostics.
 VIEW_TEXT = {0.0: 'horizontal tension held', 1.0: 'chain length held'}
@@ -520,6 +572,14 @@ def _sensor_text(x: AlarmInputs, cond: str, hold: float) -> str:
     if bool(breach):
         return sensor_state.line_message(int(code), x.sensor_tension, x.mbl)
     return f'sensor alarm held (clears after {hold:g} s of sane readings)'
+
+
+def _life(seconds: float) -> str:
+    """A fatigue life for the operator: days, years beyond two years."""
+    if seconds == math.inf:
+        return 'unlimited'
+    days = seconds / 86400.0
+    return f'{days / 365.25:.1f} years' if days > 730.0 else f'{days:.1f} days'
 
 
 def _duration(seconds: float) -> str:
@@ -606,6 +666,10 @@ _INPUT_FIELDS = (
     'sensor_state',
     'sensor_tension',
     'mbl',
+    'drag_state',
+    'implied_anchor_distance',
+    'fatigue_damage',
+    'fatigue_life_left',
     'dynamic_uplift',
     'uplift_view',
 )
@@ -683,7 +747,7 @@ class LevelSeries:
         self._stale_t, self._stale_d, self._active = stale_t, stale_d, active
         self._latches, self._initial = latches, initial
         n = times.size
-        err = active['uplift'] | active['input'] | active['sensor_error']
+        err = active['uplift'] | active['input'] | active['sensor_error'] | active['dragging']
         warn = np.zeros(n, dtype=bool)
         for cond in _WARNS:
             warn |= active[cond]
@@ -694,7 +758,11 @@ class LevelSeries:
         own = stale_t & ~np.isnan(x['tension_stamp'])
         #: Per update: STALE only by a common cause (suppressed by design).
         self.suppressed = (levels == Level.STALE) & ~own
+        #: Per update: an input stale or never received.
+        self.stale = stale_t | stale_d
         self._bad: np.ndarray | None = None  # updates with a solver status, when first asked
+        #: The updates at which the level changed (one per transition, in order).
+        self.changed_at = np.zeros(0, np.int64)
         self.transitions, self._entered = self._walk()
 
     def _held(self, i: int) -> str:
@@ -737,6 +805,7 @@ class LevelSeries:
     def _walk(self) -> tuple[list[Transition], tuple[float, ...]]:
         """Transitions (with messages and episode durations) from the initial state."""
         changed = np.flatnonzero(np.diff(self.levels, prepend=np.int8(self._initial.level)))
+        self.changed_at = changed
         transitions: list[Transition] = []
         entered, old = self._initial.entered, self._initial.level
         for i in changed.tolist():
@@ -762,6 +831,7 @@ class LevelSeries:
             entered=self._entered,
             input_message=held,
             suppressed=bool(self.suppressed[-1]),
+            stale=bool(self.stale[-1]),
         )
 
 
@@ -912,6 +982,10 @@ def _classify_columns(
     )
     for cond in _SENSOR:
         out[cond] = codes(cond, *_sensor_codes(cond, x['sensor_state']))
+    drag = x['drag_state']
+    out['dragging'] = codes('dragging', drag == 2.0, drag < 2.0)
+    damage, warn = x['fatigue_damage'], cfg.fatigue_damage_warn
+    out['fatigue'] = codes('fatigue', damage >= warn, damage < warn)
     return out
 
 
@@ -939,6 +1013,12 @@ DIAGNOSTIC_KEYS = (
     'implied_anchor_distance',
     # The tide margin at fixed chain length (core/monitor/holding.py).
     'tide_margin_at_length',
+    # The anchor's drag state code (core/monitor/holding.py).
+    'drag_state',
+    # Chain fatigue (core/monitor/fatigue.py): Miner's damage, its rate (1/s), life left (s).
+    'fatigue_damage',
+    'fatigue_damage_rate',
+    'fatigue_life_left',
     # Wave-frequency tension and the dynamic uplift (core/monitor/wave_window.py).
     'wave_tension',
     'peak_tension',

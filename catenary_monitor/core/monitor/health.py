@@ -124,11 +124,17 @@ def sensors_status(
     return Level.OK, 'every sensor reporting'
 
 
-def logger_status(error: Optional[str], path: Optional[str]) -> tuple[Level, str]:
-    """Level and message of the MCAP logger: ERROR while it cannot write, else OK."""
+def logger_status(
+    error: Optional[str], path: Optional[str], warning: Optional[str] = None
+) -> tuple[Level, str]:
+    """Level and message of the MCAP logger: ERROR while it cannot write, WARN with a
+    ``warning`` (low disk space), else OK."""
     if error:
         return Level.ERROR, f'MCAP log not written: {error}'
-    return Level.OK, f'logging to {path}' if path else 'logging'
+    where = f'logging to {path}' if path else 'logging'
+    if warning:
+        return Level.WARN, f'{warning} ({where})'
+    return Level.OK, where
 
 
 def parameters_status(messages: tuple[str, ...], until: float, now: float) -> tuple[Level, str]:

@@ -24,10 +24,20 @@ grounded_length``. Per line (SI):
     (:func:`catenary_monitor.core.physics.fixed_length.span_from_tension`: grounded length plus the
     suspended part's span, lifted or not, elastic with ``ea``). Compared with the installed
     ``anchor_distance`` it shows a dragged anchor (or a wrong chain length).
+``drag_state`` (code)
+    Hou et al. 2005's third regime, the anchor dragging (seed 001), by this rule: ``2``
+    (:data:`DRAGGING`) when the horizontal load exceeds the holding capacity (``drag_margin <
+    0``) **and** the chain puts the anchor more than ``drag_tolerance`` beyond its installed
+    ``anchor_distance`` (``implied_anchor_distance - anchor_distance > drag_tolerance``): the
+    load is more than the anchor holds and the hook-anchor span has opened, so either the
+    anchor is moving or only an anchor holding more than its configured capacity stops it.
+    ``1`` (:data:`OVERLOADED`) when the load exceeds the holding but the span has not opened
+    beyond the tolerance (a steady overload of an anchor that has not moved: the capacity is
+    conservative); ``0`` (:data:`HOLDING`) otherwise. NaN without ``anchor_holding``; never 2
+    without ``chain_length`` (the span is not known).
 ``tide_margin_at_length`` (m)
     The depth rise at which that chain, its length and its span held (the hook stays where it
-    is: the installed ``anchor_distance``, or where the params give the dock's geometry the
-    span of the live dock estimate), lifts its anchor
+    is installed, ``anchor_distance``), lifts its anchor
     (:func:`catenary_monitor.core.physics.fixed_length.lift_depth`) minus the depth now;
     negative while the anchor is lifted. ``tide_margin`` holds the horizontal tension instead;
     a chain of fixed length gains pretension as the tide rises, so this one is usually the
@@ -40,18 +50,35 @@ NaN where the data are not given or the line has no solve.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 
 from catenary_monitor.core.physics import fixed_length
 
-__all__ = ['FIELDS', 'LENGTH_FIELDS', 'holding']
+__all__ = [
+    'FIELDS',
+    'LENGTH_FIELDS',
+    'DRAG_FIELDS',
+    'HOLDING',
+    'OVERLOADED',
+    'DRAGGING',
+    'DRAG_STATES',
+    'holding',
+    'holding_scalar',
+    'drag_word',
+]
 
 #: The holding values' names (per-line outputs, /diagnostics values, replay CSV), in order.
 FIELDS = ('grounded_length', 'holding_capacity', 'drag_margin', 'implied_anchor_distance')
 #: Appended after them (the per-line outputs end with it, after ``sensor_state``).
 LENGTH_FIELDS = ('tide_margin_at_length',)
+#: Appended at the end of the per-line outputs: the anchor's drag state (:data:`DRAG_STATES`).
+DRAG_FIELDS = ('drag_state',)
+#: ``drag_state`` codes and their words (``/diagnostics`` and the console show the word).
+HOLDING, OVERLOADED, DRAGGING = 0, 1, 2
+DRAG_STATES = ('holding', 'overloaded', 'dragging')
 
 
 def holding(
@@ -66,12 +93,14 @@ def holding(
     horizontal: Any,
     suspended: Any,
     uplift: Any,
-    span: Any = np.nan,
+    anchor_distance: Any = np.nan,
+    tolerance: float = np.inf,
 ) -> dict[str, np.ndarray]:
-    """:data:`FIELDS` and :data:`LENGTH_FIELDS` -> arrays from the line data (NaN: not given;
-    ``ea`` inf: inextensible) and the nominal solve: hook ``tension`` (N), ``depth`` (m, hook
-    height added), ``horizontal`` tension (N), ``suspended`` length (m) and ``uplift`` force
-    (N); ``span`` (m) the hook's horizontal distance to the anchor (NaN: the implied one)."""
+    """:data:`FIELDS`, :data:`LENGTH_FIELDS` and :data:`DRAG_FIELDS` -> arrays from the line
+    data (NaN: not given; ``ea`` inf: inextensible) and the nominal solve: hook ``tension`` (N),
+    ``depth`` (m, hook height added), ``horizontal`` tension (N), ``suspended`` length (m) and
+    ``uplift`` force (N); the installed ``anchor_distance`` (m) and ``drag_tolerance`` (m)
+    decide ``drag_state``."""
     arrays = np.broadcast_arrays(
         *(
             np.asarray(v, dtype=float)
@@ -87,13 +116,13 @@ def holding(
                 horizontal,
                 suspended,
                 uplift,
-                span,
+                anchor_distance,
             )
         )
     )
-    w, ea, length, a_hold, a_weight, mu, t, h, r, s, v, x = arrays
+    w, ea, length, a_hold, a_weight, mu, t, h, r, s, v, x0 = arrays
     if np.isnan(length).all() and np.isnan(a_hold).all():  # nothing configured: all NaN
-        return {key: np.full(t.shape, np.nan) for key in FIELDS + LENGTH_FIELDS}
+        return {key: np.full(t.shape, np.nan) for key in FIELDS + LENGTH_FIELDS + DRAG_FIELDS}
     with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
         solved = ~np.isnan(r)
         lifted = v > 0.0
@@ -109,12 +138,116 @@ def holding(
             implied[need] = fixed_length.span_from_tension(
                 w[need], h[need], length[need], t[need], ea[need]
             )
-            x = np.where(np.isnan(x), implied, x)
-            lift[need] = fixed_length.lift_depth(w[need], length[need], x[need], ea[need])
+            span = np.where(np.isnan(x0), implied, x0)  # the hook where it is installed
+            lift[need] = fixed_length.lift_depth(w[need], length[need], span[need], ea[need])
+        margin = capacity - r
+        over = margin < 0.0
+        state = np.where(over, np.where(implied - x0 > tolerance, DRAGGING, OVERLOADED), HOLDING)
+        state = np.where(np.isnan(margin), np.nan, state.astype(float))
     return {
         'grounded_length': grounded,
         'holding_capacity': capacity,
-        'drag_margin': capacity - r,
+        'drag_margin': margin,
         'implied_anchor_distance': implied,
         'tide_margin_at_length': lift - h,
+        'drag_state': state,
     }
+
+
+def drag_word(code: float) -> str:
+    """The word of a ``drag_state`` code (``unknown`` for NaN)."""
+    return DRAG_STATES[int(code)] if code == code else 'unknown'
+
+
+def holding_scalar(
+    w: float,
+    ea: float,
+    chain_length: float,
+    anchor_holding: float,
+    anchor_weight: float,
+    chain_friction: float,
+    tension: float,
+    depth: float,
+    horizontal: float,
+    suspended: float,
+    uplift: float,
+    anchor_distance: float = math.nan,
+    tolerance: float = math.inf,
+) -> dict[str, float]:
+    """:func:`holding` of one line in plain floats (the monitor's per-sample path, an order of
+    magnitude faster on one element): the same formulas in the same order, the fixed-length
+    chain by :func:`~catenary_monitor.core.physics.fixed_length.span_from_tension_scalar` and
+    :func:`~catenary_monitor.core.physics.fixed_length.lift_depth_scalar`. Where plain floats
+    raise (an overflow, a root of a negative number) the array path answers instead, so the
+    numbers are the array path's to rounding (test_holding)."""
+    args = (
+        w,
+        ea,
+        chain_length,
+        anchor_holding,
+        anchor_weight,
+        chain_friction,
+        tension,
+        depth,
+        horizontal,
+        suspended,
+        uplift,
+        anchor_distance,
+    )
+    floats = [float(v) for v in args] + [float(tolerance)]
+    try:
+        return _holding_floats(*floats)
+    except (ValueError, OverflowError, ZeroDivisionError):
+        array_path: Any = holding
+        arrays = array_path(*([v] for v in floats[:-1]), tolerance)
+        return {key: float(v[0]) for key, v in arrays.items()}
+
+
+def _holding_floats(
+    w: float,
+    ea: float,
+    length: float,
+    a_hold: float,
+    a_weight: float,
+    mu: float,
+    t: float,
+    h: float,
+    r: float,
+    s: float,
+    v: float,
+    x0: float,
+    tolerance: float,
+) -> dict[str, float]:
+    """:func:`holding_scalar` itself (raises where :mod:`math` does)."""
+    nan = math.nan
+    if length != length and a_hold != a_hold:  # nothing configured: all NaN
+        return dict.fromkeys(FIELDS + LENGTH_FIELDS + DRAG_FIELDS, nan)
+    solved = r == r
+    lifted = v > 0.0
+    grounded = 0.0 if lifted else _maximum0(length - s)
+    grounded = grounded if solved and length == length else nan
+    if lifted:
+        anchor = 0.0 if a_weight != a_weight else a_hold * _maximum0(1.0 - v / a_weight)
+    else:
+        anchor = a_hold
+    chain = 0.0 if (mu != mu or grounded != grounded) else w * mu * grounded
+    capacity = anchor + chain if solved and a_hold == a_hold else nan
+    implied = lift = nan
+    if solved and length == length:
+        implied = fixed_length.span_from_tension_scalar(w, h, length, t, ea)
+        lift = fixed_length.lift_depth_scalar(w, length, implied, ea)
+    margin = capacity - r
+    state = float(DRAGGING if implied - x0 > tolerance else OVERLOADED) if margin < 0.0 else 0.0
+    return {
+        'grounded_length': grounded,
+        'holding_capacity': capacity,
+        'drag_margin': margin,
+        'implied_anchor_distance': implied,
+        'tide_margin_at_length': lift - h,
+        'drag_state': nan if margin != margin else state,
+    }
+
+
+def _maximum0(x: float) -> float:
+    """``np.maximum(x, 0.0)`` of one float (NaN stays NaN)."""
+    return x if (x != x or x >= 0.0) else 0.0

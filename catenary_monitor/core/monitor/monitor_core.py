@@ -7,8 +7,9 @@ tide and logger statuses, and turns each event into one :class:`Step`:
   :class:`Tick` (the periodic step, at ``diagnostic_rate``), :class:`LoggerHealth` (the MCAP
   logger's state changed), :class:`Reconfigure` (accepted parameter change) and
   :class:`Acknowledge` (an operator acknowledged a line's alarm, or all:
-  :mod:`catenary_monitor.core.monitor.acknowledge`), each with its time ``stamp_ns`` (ns on the
-  monitor's clock; events come in time order).
+  :mod:`catenary_monitor.core.monitor.acknowledge`) and :class:`Shelve` (an operator shelved or
+  unshelved an alarm: :mod:`catenary_monitor.core.monitor.shelving`), each with its time
+  ``stamp_ns`` (ns on the monitor's clock; events come in time order).
 
 What an event does, in this order (the one schedule the node, replay and the tests share):
 
@@ -17,24 +18,27 @@ What an event does, in this order (the one schedule the node, replay and the tes
    is stale (older than ``depth_timeout``), one decision that every line then takes;
 3. lines are solved (``solve(..., ea=line.ea)``): a tension event solves its line at the newest
    depth (``depth + hook_height``); a depth event solves every line that has a tension;
-4. alarms are stepped (:class:`~catenary_monitor.core.monitor.alarms.LineAlarm`): the solved line
-at a
-   tension event, every line at a depth event or a tick; each stepped line's acknowledgement
-   state follows its level (:func:`catenary_monitor.core.monitor.acknowledge.step`);
-5. a diagnostic snapshot is taken when the event is a tick or when any level changed: never two
+4. alarms are stepped (:class:`~catenary_monitor.core.monitor.alarms.LineAlarm`): the solved
+   line at a tension event, every line at a depth event or a tick; each stepped line's
+   acknowledgement state follows its level
+   (:func:`catenary_monitor.core.monitor.acknowledge.step`);
+5. the alarm flood is decided when the event raised an alarm and at a tick
+   (:mod:`catenary_monitor.core.monitor.alarm_flood`);
+6. a diagnostic snapshot is taken when the event is a tick or when any level changed: never two
    per event, so the statuses of one snapshot always agree.
 
 The :class:`Step` carries the outputs of the lines solved (:data:`OUTPUT_FIELDS`), the snapshot
-(or None) and the level transitions. A line is never OK while blind: before its first tension
-and before the first depth it is STALE and says what is missing. Times in the alarm logic are
-seconds (``stamp_ns * 1e-9``); forces N, lengths m.
+(or None), the level transitions and the alarm journal's records
+(:mod:`catenary_monitor.core.monitor.alarm_journal`). A line is never OK while blind: before
+its first tension and before the first depth it is STALE and says what is missing. Times in the
+alarm logic are seconds (``stamp_ns * 1e-9``); forces N, lengths m.
 """
 
 from __future__ import annotations
 
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, NamedTuple, Optional, Sequence, Union
 
 import numpy as np
@@ -49,10 +53,19 @@ from catenary_monitor.core.config.parameters import (
     runtime_change_messages,
 )
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
+from catenary_monitor.core.monitor import alarm_flood, shelving
 from catenary_monitor.core.monitor import dock_watch as dock_live
+from catenary_monitor.core.monitor import fatigue as fatigue_rule
 from catenary_monitor.core.monitor import holding as holding_rule
-from catenary_monitor.core.monitor import sensor_state, tide_table, tide_trend, uncertainty
-from catenary_monitor.core.monitor import wave_window
+from catenary_monitor.core.monitor import (
+    readings,
+    sensor_state,
+    tide_table,
+    tide_trend,
+    uncertainty,
+    wave_window,
+)
+from catenary_monitor.core.monitor.alarm_journal import AlarmEvent, entries
 from catenary_monitor.core.monitor.alarms import (
     CONDITIONS,
     RANK,
@@ -76,9 +89,12 @@ from catenary_monitor.core.monitor.health import (
     sensors_status,
     tide_status,
 )
-from catenary_monitor.core.monitor.plausible import reading_status, reading_status_array
+from catenary_monitor.core.monitor.plausible import (
+    reading_status,
+    reading_status_array,
+    status_messages,
+)
 from catenary_monitor.core.physics import elastic
-from catenary_monitor.core.physics.result import STATUS_MESSAGES
 from catenary_monitor.core.physics.solve import solve
 
 __all__ = [
@@ -96,8 +112,10 @@ __all__ = [
     'Reconfigure',
     'Start',
     'Acknowledge',
+    'Shelve',
     'ClockHealth',
     'Intake',
+    'FatigueStore',
     'Event',
     'LineOutput',
     'ComponentStatus',
@@ -109,6 +127,8 @@ __all__ = [
     'line_status',
     'bound_values',
     'holding_values',
+    'HOLDING_FIELDS',
+    'holding_one',
     'derived_values',
     'view_word',
     'output_values',
@@ -148,15 +168,18 @@ OUTPUT_FIELDS = (
     'status',
     'level',
     'time_to_uplift',
-    # Margins with the sensors' accuracy (issue 12, item 3): core/monitor/uncertainty.py.
+    # Margins with the sensors' accuracy: core/monitor/uncertainty.py.
     *uncertainty.FIELDS,
-    # Holding and the anchor distance the chain implies (issue 12, item 4):
-    # core/monitor/holding.py.
+    # Holding and the anchor distance the chain implies: core/monitor/holding.py.
     *holding_rule.FIELDS,
-    # Sensor sanity (issue 12, item 2): core/sensor_state.py.
+    # Sensor sanity: core/monitor/sensor_state.py.
     'sensor_state',
     # The tide margin of a chain of fixed length, its hook held: core/monitor/holding.py.
     *holding_rule.LENGTH_FIELDS,
+    # The anchor's drag state (0 holding, 1 overloaded, 2 dragging): core/monitor/holding.py.
+    *holding_rule.DRAG_FIELDS,
+    # Chain fatigue (Miner's damage, its rate over the last day, the life left): fatigue.py.
+    *fatigue_rule.FIELDS,
     # Wave-frequency tension and the dynamic uplift (core/monitor/wave_window.py,
     # core/monitor/uncertainty.py), then which view the time to uplift counts down (1 the chain
     # length held, 0 the horizontal tension held: core/monitor/tide_trend.py).
@@ -178,7 +201,17 @@ _NAN = math.nan
 _INCONSISTENT = CONDITIONS.index('inconsistent')
 _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
 #: The statuses on /diagnostics that are not lines (``catenary_monitor: NAME``).
-COMPONENTS = ('tide', 'sensors', 'logger', 'dock', 'parameters', 'clock', 'intake')
+COMPONENTS = (
+    'tide',
+    'sensors',
+    'alarms',
+    'logger',
+    'dock',
+    'parameters',
+    'clock',
+    'intake',
+    'fatigue',
+)
 #: The components whose STALE is a consequence of blind inputs, announced by the sensors alarm.
 _CONSEQUENCES = ('tide', 'dock')
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
@@ -188,18 +221,22 @@ _SENSOR_AT = VALUE_FIELDS.index('sensor_state')  # not a solved value: kept by _
 
 class Tension(NamedTuple):
     """A hook tension sample [N] of line number ``line`` (config order), received at
-    ``stamp_ns``."""
+    ``stamp_ns``; ``sample_ns`` the sensor's header stamp (None: a message without one, taken
+    at its arrival)."""
 
     stamp_ns: int
     line: int
     value: float
+    sample_ns: Optional[int] = None
 
 
 class Depth(NamedTuple):
-    """A tide depth sample [m] at the hooks, received at ``stamp_ns``."""
+    """A tide depth sample [m] at the hooks, received at ``stamp_ns``; ``sample_ns`` as for
+    :class:`Tension`."""
 
     stamp_ns: int
     value: float
+    sample_ns: Optional[int] = None
 
 
 class Tick(NamedTuple):
@@ -209,11 +246,13 @@ class Tick(NamedTuple):
 
 
 class LoggerHealth(NamedTuple):
-    """The MCAP logger's state at ``stamp_ns``: ``error`` (None while it writes) and its file."""
+    """The MCAP logger's state at ``stamp_ns``: ``error`` (None while it writes), its file and
+    a ``warning`` (low disk space; None: none)."""
 
     stamp_ns: int
     error: Optional[str]
     path: Optional[str]
+    warning: Optional[str] = None
 
 
 class Start(NamedTuple):
@@ -230,11 +269,28 @@ class Reconfigure(NamedTuple):
 
 
 class Acknowledge(NamedTuple):
-    """An operator acknowledged line ``line``'s alarm (None: every line) from ``origin``."""
+    """An operator acknowledged line ``line``'s alarm (None: every line) from ``origin`` (as
+    the message claims), published by ``publisher`` (the middleware's identity of the sender:
+    node and GID; empty when unknown)."""
 
     stamp_ns: int
     line: Optional[str]
     origin: str
+    publisher: str = ''
+
+
+class Shelve(NamedTuple):
+    """An operator shelved ``alarm`` (a line, or ``sensors``) or one ``condition`` of it
+    (:data:`~catenary_monitor.core.monitor.acknowledge.WHOLE`: the whole alarm) for
+    ``seconds`` (0: unshelve it), from ``origin`` (as claimed), published by ``publisher``
+    (the middleware's identity of the sender; '' from the console's page)."""
+
+    stamp_ns: int
+    alarm: str
+    condition: str
+    seconds: float
+    origin: str
+    publisher: str = ''
 
 
 class ClockHealth(NamedTuple):
@@ -257,7 +313,44 @@ class Intake(NamedTuple):
     period: float
 
 
-Event = Union[Tension, Depth, Tick, LoggerHealth, Reconfigure, Acknowledge, ClockHealth, Intake]
+class FatigueStore(NamedTuple):
+    """The fatigue store at ``stamp_ns`` (core/monitor/fatigue.py; the node keeps it beside
+    its log): its ``state`` (:data:`FATIGUE_STORE_STATES`), one-line ``message``, and, when it
+    was read at start, each line's stored state (``(name, record or None)``: None, from
+    ``NAME.fatigue_damage_initial``); ``lines`` None only changes the status (a write that
+    failed or worked again)."""
+
+    stamp_ns: int
+    state: str
+    message: str
+    lines: Optional[tuple[tuple[str, Any], ...]] = None
+
+
+#: The fatigue store's states and their levels: read at start (``loaded``), none yet in a new
+#: log folder (``new``), none where logs are (``missing``), unreadable (``damaged``), a save that
+#: failed (``write_failed``).
+FATIGUE_STORE_STATES = {
+    'loaded': Level.OK,
+    'new': Level.OK,
+    'saved': Level.OK,
+    'missing': Level.WARN,
+    'damaged': Level.WARN,
+    'write_failed': Level.WARN,
+}
+
+
+Event = Union[
+    Tension,
+    Depth,
+    Tick,
+    LoggerHealth,
+    Reconfigure,
+    Acknowledge,
+    Shelve,
+    ClockHealth,
+    Intake,
+    FatigueStore,
+]
 
 
 class LineOutput(NamedTuple):
@@ -293,14 +386,17 @@ class Change(NamedTuple):
 
 class Step(NamedTuple):
     """What one event did: the outputs of the lines solved, the snapshot (or None), the
-    transitions; ``kind`` is ``tension``, ``depth``, ``tick``, ``logger``, ``configure`` or
-    ``acknowledge``."""
+    transitions, the alarm journal's records and, for a shelving request, the monitor's answer
+    (``note``); ``kind`` is ``tension``, ``depth``, ``tick``, ``logger``, ``configure``,
+    ``acknowledge``, ``shelve``, ``clock`` or ``intake``."""
 
     stamp_ns: int
     kind: str
     outputs: tuple[LineOutput, ...]
     snapshot: Optional[Snapshot]
     transitions: tuple[Change, ...]
+    alarm_events: tuple[AlarmEvent, ...] = ()
+    note: str = ''
 
 
 @dataclass
@@ -324,6 +420,10 @@ class LineState:
     )  # the tension sensor's per-sample memory
     sensor_code: int = sensor_state.OK  # sensor state decided at the newest tick
     parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
+    fatigue: fatigue_rule.FatigueState = fatigue_rule.FatigueState()  # the streamed count
+    fatigue_values: tuple[float, ...] = (0.0, _NAN, _NAN)  # fatigue_rule.FIELDS now
+    sample_ns: int = -1  # ns, the newest accepted sample's stamp (header or arrival; -1: none)
+    stamp_refused: float = -math.inf  # s, when a sample's stamp was last refused (arrival)
     # The wave window of its readings (core.monitor.wave_window) and its values at the newest.
     wave: wave_window.WaveState = field(default_factory=wave_window.WaveState.empty)
     peak_tension: float = _NAN  # N
@@ -359,6 +459,10 @@ class LineState:
             sensor_state=float(self.sensor_code),
             sensor_tension=self.tension,
             mbl=self.config.mbl,
+            drag_state=v[_AT['drag_state']],
+            implied_anchor_distance=v[_AT['implied_anchor_distance']],
+            fatigue_damage=self.fatigue_values[0],
+            fatigue_life_left=self.fatigue_values[2],
             dynamic_uplift=v[_AT['dynamic_uplift']],
             uplift_view=v[_AT['time_to_uplift_view']],
         )
@@ -366,6 +470,12 @@ class LineState:
 
 def _stamp_s(stamp_ns: int) -> float:
     return stamp_ns * 1e-9
+
+
+def _jitter(alarm: Any, sample_ns: Optional[int]) -> float:
+    """How far off a reading's stamp may be [s]: ``stamp_jitter`` for a reading stamped at its
+    arrival (delivery bunches samples), 0 for one at the sensor's own header stamp."""
+    return alarm.stamp_jitter if sample_ns is None else 0.0
 
 
 @dataclass
@@ -399,6 +509,8 @@ class CoreState:
     trend: tide_trend.TrendState = field(default_factory=tide_trend.TrendState)  # tide rate
     depth_memory: sensor_state.Memory = field(default_factory=sensor_state.Memory)
     depth_code: int = sensor_state.OK  # the depth sensor's state at the newest tick
+    depth_sample_ns: int = -1  # ns, the newest accepted depth sample's stamp (-1: none)
+    depth_refused: float = -math.inf  # s, when a depth sample's stamp was last refused
     sensor_times: np.ndarray = field(default_factory=lambda: np.zeros(0))  # s, the ticks the
     # suspected_parted test still needs
     # The sensors' common-cause alarm (blind start, silent depth sensor): one, not per line.
@@ -419,6 +531,18 @@ class CoreState:
     intake_checked: list[tuple[bool, ...]] = field(default_factory=list)
     intake_heard: list[bool] = field(default_factory=list)
     intake_seen: bool = False
+    # The alarm system (core.alarm_flood): the flood status, the raises it counts.
+    alarms: tuple[Level, str] = (Level.OK, '')
+    alarms_entered: float = _NAN
+    flood: alarm_flood.Flood = field(default_factory=alarm_flood.initial)
+    # The answer to the newest shelving request, and how many were answered.
+    shelve_answer: str = ''
+    shelve_requests: int = 0
+    # The fatigue store's status (a FatigueStore event seen: the node keeps one).
+    fatigue: tuple[Level, str] = (Level.OK, '')
+    fatigue_word: str = ''
+    fatigue_entered: float = 0.0
+    fatigue_seen: bool = False
 
 
 class MonitorCore:
@@ -436,7 +560,7 @@ class MonitorCore:
         in the root namespace); ``depth_id`` the depth topic; ``logger_id`` the log directory.
     """
 
-    __slots__ = ('config', 'index', 'depth_id', 'logger_id', 'dock_model', 'state')
+    __slots__ = ('config', 'index', 'depth_id', 'logger_id', 'dock_model', 'curves', 'state')
 
     def __init__(
         self,
@@ -456,9 +580,12 @@ class MonitorCore:
                 ids.get(lc.name, resolve_topic(lc.tension_topic)),
                 LineAlarm.for_line(lc, config.alarm).initial(start),
                 ack=alarm_ack.initial(start),
+                fatigue=fatigue_rule.initial(lc.fatigue_damage_initial),
+                fatigue_values=(lc.fatigue_damage_initial, _NAN, _NAN),
             )
             for lc in config.lines
         ]
+        self.curves = [fatigue_rule.Curve.of(lc) for lc in config.lines]
         self.index = {line.config.name: k for k, line in enumerate(lines)}
         self.depth_id = depth_id or resolve_topic(config.depth_topic)
         self.logger_id = logger_id
@@ -480,8 +607,11 @@ class MonitorCore:
             parameters_entered=start,
             clock_entered=start,
             intake_entered=start,
+            fatigue_entered=start,
         )
         self.state.sensors = self._sensors_now(start)
+        self.state.alarms = alarm_flood.status(self.state.flood, config.alarm)
+        self.state.alarms_entered = start
 
     # ------------------------------------------------------------------ events
     def step(self, event: Event) -> Step:
@@ -499,62 +629,108 @@ class MonitorCore:
             return self._on_reconfigure(event)
         if isinstance(event, Acknowledge):
             return self._on_acknowledge(event)
+        if isinstance(event, Shelve):
+            return self._on_shelve(event)
         if isinstance(event, ClockHealth):
             return self._on_clock(event)
         if isinstance(event, Intake):
             return self._on_intake(event)
+        if isinstance(event, FatigueStore):
+            return self._on_fatigue_store(event)
         raise TypeError(f'not a monitor event: {event!r}')
 
     def _on_tension(self, ev: Tension) -> Step:
         line = self.state.lines[ev.line]
-        line.tension, line.tension_s = float(ev.value), _stamp_s(ev.stamp_ns)
         a = self.config.alarm
+        sample_ns = ev.stamp_ns if ev.sample_ns is None else int(ev.sample_ns)
+        if ev.sample_ns is not None and readings.stamp_fault(
+            ev.stamp_ns, sample_ns, line.sample_ns, a.stamp_ahead_max
+        ):
+            line.stamp_refused = _stamp_s(ev.stamp_ns)  # refused: not a reading (bad_stamp)
+            return Step(ev.stamp_ns, 'tension', (), None, ())
+        line.sample_ns = sample_ns
+        line.tension, line.tension_s = float(ev.value), _stamp_s(sample_ns)
         line.sensor_memory = sensor_state.sample(
             line.sensor_memory,
             line.tension_s,
             line.tension,
             a.tension_resolution,
             a.tension_rate_max * line.config.mbl,
-            a.stamp_jitter,
+            _jitter(a, ev.sample_ns),
+        )
+        line.fatigue, line.fatigue_values = fatigue_rule.step(
+            line.fatigue, line.tension_s, line.tension, self.curves[ev.line]
         )
         line.peak_tension, line.wave_tension = wave_window.step(
             line.wave, line.tension_s, line.tension, line.config.mbl, a.wave_window
         )
         self._solve_one(line)
-        changes = self._step_lines([ev.line], ev.stamp_ns)
-        return self._finish(ev.stamp_ns, 'tension', [ev.line], changes)
+        log: list[AlarmEvent] = []
+        changes = self._step_lines([ev.line], ev.stamp_ns, log)
+        return self._finish(ev.stamp_ns, 'tension', [ev.line], changes, log)
 
     def _on_depth(self, ev: Depth) -> Step:
-        self.state.depth, self.state.depth_s = float(ev.value), _stamp_s(ev.stamp_ns)
-        window = self.config.alarm.tide_trend_window
-        self.state.trend = tide_trend.step(self.state.trend, ev.stamp_ns, self.state.depth, window)
         a = self.config.alarm
+        sample_ns = ev.stamp_ns if ev.sample_ns is None else int(ev.sample_ns)
+        if ev.sample_ns is not None and readings.stamp_fault(
+            ev.stamp_ns, sample_ns, self.state.depth_sample_ns, a.stamp_ahead_max
+        ):
+            self.state.depth_refused = _stamp_s(ev.stamp_ns)
+            return Step(ev.stamp_ns, 'depth', (), None, ())
+        self.state.depth_sample_ns = sample_ns
+        self.state.depth, self.state.depth_s = float(ev.value), _stamp_s(sample_ns)
+        window = a.tide_trend_window
+        self.state.trend = tide_trend.step(self.state.trend, sample_ns, self.state.depth, window)
         self.state.depth_memory = sensor_state.sample(
             self.state.depth_memory,
             self.state.depth_s,
             self.state.depth,
             a.depth_resolution,
             a.depth_rate_max,
-            a.stamp_jitter,
+            _jitter(a, ev.sample_ns),
         )
+        log: list[AlarmEvent] = []
         changes = self._decide_tide(ev.stamp_ns)
-        changes += self._decide_blind(ev.stamp_ns)
+        changes += self._decide_blind(ev.stamp_ns, log)
         solved = [k for k, line in enumerate(self.state.lines) if line.tension_s == line.tension_s]
         self._solve_many(solved)
-        changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns)
-        return self._finish(ev.stamp_ns, 'depth', solved, changes)
+        changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns, log)
+        return self._finish(ev.stamp_ns, 'depth', solved, changes, log)
 
     def _on_tick(self, ev: Tick) -> Step:
+        log: list[AlarmEvent] = []
         self._decide_sensors(ev.stamp_ns)
         changes = self._decide_tide(ev.stamp_ns)
-        changes += self._decide_blind(ev.stamp_ns)
+        changes += self._decide_blind(ev.stamp_ns, log)
         if self.dock_model is not None:
             changes += self._decide_dock(ev.stamp_ns)
-        changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns)
-        return Step(ev.stamp_ns, 'tick', (), self.snapshot(ev.stamp_ns), tuple(changes))
+        changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns, log)
+        changes += self._decide_flood(ev.stamp_ns, log, tick=True)
+        snapshot = self.snapshot(ev.stamp_ns)
+        return Step(ev.stamp_ns, 'tick', (), snapshot, tuple(changes), tuple(log))
+
+    def _on_fatigue_store(self, ev: FatigueStore) -> Step:
+        """The fatigue store: each line's stored count taken where it was read (a line the
+        store lacks, or whose record is damaged, from ``NAME.fatigue_damage_initial``), and
+        the store's status, shown at once."""
+        if ev.lines is not None:
+            stored = dict(ev.lines)
+            for line, curve in zip(self.state.lines, self.curves):
+                state = fatigue_rule.from_record(stored.get(line.config.name), curve)
+                if state is None:
+                    state = fatigue_rule.initial(line.config.fatigue_damage_initial)
+                line.fatigue = state
+                damage = state.damage()
+                line.fatigue_values = (damage, _NAN, fatigue_rule.life_left(damage, _NAN))
+                line.values = _with_fatigue(line.values, line.fatigue_values)
+        self.state.fatigue_seen = True
+        self.state.fatigue_word = ev.state
+        level = FATIGUE_STORE_STATES.get(ev.state, Level.WARN)
+        changes = self._set_component('fatigue', (level, ev.message), ev.stamp_ns)
+        return Step(ev.stamp_ns, 'fatigue', (), self.snapshot(ev.stamp_ns), tuple(changes))
 
     def _on_logger(self, ev: LoggerHealth) -> Step:
-        new = logger_status(ev.error, ev.path)
+        new = logger_status(ev.error, ev.path, ev.warning)
         changes = self._set_component('logger', new, ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'logger', [], changes)
 
@@ -562,12 +738,127 @@ class MonitorCore:
         """Acknowledge one line's alarm (or every line's; an unknown name changes nothing);
         the snapshot shows it at once."""
         now = _stamp_s(ev.stamp_ns)
+        log: list[AlarmEvent] = []
         for line in self.state.lines:
             if ev.line is None or ev.line == line.config.name:
-                line.ack = alarm_ack.acknowledge(line.ack, now, ev.origin)
+                old = line.ack
+                line.ack = alarm_ack.acknowledge(old, now, ev.origin, ev.publisher)
+                log += entries(line.config.name, old, line.ack, now)
         if ev.line is None or ev.line == alarm_ack.SENSORS:
-            self.state.sensors_ack = alarm_ack.acknowledge(self.state.sensors_ack, now, ev.origin)
-        return Step(ev.stamp_ns, 'acknowledge', (), self.snapshot(ev.stamp_ns), ())
+            old = self.state.sensors_ack
+            self.state.sensors_ack = alarm_ack.acknowledge(old, now, ev.origin, ev.publisher)
+            log += entries(alarm_ack.SENSORS, old, self.state.sensors_ack, now)
+        snapshot = self.snapshot(ev.stamp_ns)
+        return Step(ev.stamp_ns, 'acknowledge', (), snapshot, (), tuple(log))
+
+    def _on_shelve(self, ev: Shelve) -> Step:
+        """Shelve or unshelve an alarm (core.shelving's rules) or refuse to; the answer is the
+        step's ``note`` and the ``alarms`` status's ``shelve_answer``, shown at once."""
+        now = _stamp_s(ev.stamp_ns)
+        a = self.config.alarm
+        request = shelving.ShelveRequest(ev.alarm, ev.condition, ev.seconds, ev.origin)
+        k = self.index.get(ev.alarm)
+        line = None if k is None else self.state.lines[k]
+        active = None if line is None else [latch.active for latch in line.state.latches]
+        names = [ln.config.name for ln in self.state.lines]
+        target = ev.alarm if ev.condition == alarm_ack.WHOLE else f'{ev.alarm}.{ev.condition}'
+        refused = shelving.refusal(request, names, a, active)
+        log: list[AlarmEvent] = []
+        if refused is not None:
+            answer = f'{target}: refused: {refused}'
+            by = alarm_ack.bounded_text(ev.origin)
+            log.append(AlarmEvent(now, ev.alarm, 'refused', condition=refused, by=by))
+        else:
+            old = self.state.sensors_ack if line is None else line.ack
+            new, answer = self._shelf(old, line, ev, now, target)
+            if line is None:
+                self.state.sensors_ack = new
+            else:
+                line.ack = new
+            log += entries(ev.alarm, old, new, now, self._raised_condition(line, new), ev.origin)
+        self.state.shelve_answer = answer
+        self.state.shelve_requests += 1
+        changes = self._decide_flood(ev.stamp_ns, log)
+        snapshot = self.snapshot(ev.stamp_ns)
+        return Step(ev.stamp_ns, 'shelve', (), snapshot, tuple(changes), tuple(log), answer)
+
+    def _shelf(
+        self,
+        old: alarm_ack.AckState,
+        line: Optional[LineState],
+        ev: Shelve,
+        now: float,
+        target: str,
+    ) -> tuple[alarm_ack.AckState, str]:
+        """The alarm after an accepted shelving request, and the answer."""
+        level, suppressed = (
+            (self.state.sensors[0], False)
+            if line is None
+            else (line.state.level, line.state.suppressed)
+        )
+        if ev.seconds == 0.0:
+            if not alarm_ack.shelved(old):
+                return old, f'{target}: not shelved, nothing to unshelve'
+            masked = self._masked(line, old)
+            new = alarm_ack.unshelve(old, now, level, masked, suppressed)
+            return new, f'{ev.alarm} unshelved by {ev.origin}'
+        until = now + ev.seconds
+        masked = self._masked(line, replace(old, shelved_condition=ev.condition))
+        new = alarm_ack.shelve(
+            old, now, until, ev.condition, ev.origin, masked, suppressed, ev.publisher
+        )
+        return new, f'{target} shelved for {ev.seconds:g} s by {ev.origin}'
+
+    def _masked(self, line: Optional[LineState], ack: alarm_ack.AckState) -> Level:
+        """The level ``ack``'s shelf leaves visible of ``line`` (None: the sensors alarm, whose
+        one condition a shelf hides)."""
+        if line is None:
+            return Level.OK
+        hidden = shelving.hidden_conditions(
+            ack.shelved_condition, self.config.alarm.unshelvable_conditions
+        )
+        latches = [latch.active for latch in line.state.latches]
+        return shelving.masked_level(latches, line.state.stale, hidden)
+
+    def _raised_condition(self, line: Optional[LineState], ack: alarm_ack.AckState) -> str:
+        """The condition a raise of ``line``'s alarm names: the visible one under its shelf."""
+        if line is None:
+            return alarm_ack.condition(ack.level, ())
+        hidden = (
+            shelving.hidden_conditions(
+                ack.shelved_condition, self.config.alarm.unshelvable_conditions
+            )
+            if alarm_ack.shelved(ack)
+            else frozenset()
+        )
+        latches = [
+            latch.active and c not in hidden for c, latch in zip(CONDITIONS, line.state.latches)
+        ]
+        return alarm_ack.condition(ack.level, latches)
+
+    def _chatter(self) -> tuple[int, float]:
+        """The chattering rule: (chatter_count, chatter_window [s])."""
+        a = self.config.alarm
+        return int(a.chatter_count), a.chatter_window
+
+    def _decide_flood(
+        self, stamp_ns: int, log: list[AlarmEvent], tick: bool = False
+    ) -> list[Change]:
+        """The flood decision (core.alarm_flood) after an event that raised an alarm, or at a
+        tick; its start and end go to the journal ``log``."""
+        raised = [(e.time, e.alarm) for e in log if e.kind == 'raised']
+        if not raised and not tick:
+            return []
+        now = _stamp_s(stamp_ns)
+        old = self.state.flood
+        new = alarm_flood.decide(old, raised, now, self.config.alarm)
+        self.state.flood = new
+        if new.since == new.since and old.since != old.since:
+            name, at = new.first_out
+            log.append(AlarmEvent(now, alarm_flood.NAME, 'flood', 'WARN', by=name, value=at))
+        elif old.since == old.since and new.since != new.since:
+            log.append(AlarmEvent(now, alarm_flood.NAME, 'flood_end', value=now - old.since))
+        return self._set_component('alarms', alarm_flood.status(new, self.config.alarm), stamp_ns)
 
     def _on_clock(self, ev: ClockHealth) -> Step:
         """The ROS clock's state; always a snapshot (the node sends these on a wall-clock
@@ -673,6 +964,7 @@ class MonitorCore:
         if config.alarm.tide_trend_window != self.config.alarm.tide_trend_window:
             self.state.trend = tide_trend.TrendState()  # other bins: the trend starts again
         self.config = config
+        self.curves = [fatigue_rule.Curve.of(lc) for lc in config.lines]
         for line, lc in zip(self.state.lines, config.lines):
             line.config, line.alarm = lc, LineAlarm.for_line(lc, config.alarm)
         self.dock_model = DockModel.from_config(config) if config.has_dock_model else None
@@ -690,7 +982,7 @@ class MonitorCore:
         return self._set_component('tide', new, stamp_ns)
 
     def _sensors_now(self, now: float) -> tuple[Level, str]:
-        """The sensors' common-cause alarm at ``now`` [s] (core.health.sensors_status)."""
+        """The sensors' common-cause alarm at ``now`` [s] (core.monitor.health.sensors_status)."""
         a = self.config.alarm
         waiting = [
             line.config.name for line in self.state.lines if line.tension_s != line.tension_s
@@ -706,19 +998,24 @@ class MonitorCore:
             a.depth_timeout,
         )
 
-    def _decide_blind(self, stamp_ns: int) -> list[Change]:
+    def _decide_blind(self, stamp_ns: int, log: list[AlarmEvent]) -> list[Change]:
         """The sensors' common-cause alarm, after the tide's decision, and its
-        acknowledgement state."""
+        acknowledgement state (its records to the journal ``log``)."""
         now = _stamp_s(stamp_ns)
         self.state.sensors_waiting = sum(
             line.tension_s != line.tension_s for line in self.state.lines
         )
         changes = self._set_component('sensors', self._sensors_now(now), stamp_ns)
-        self.state.sensors_ack = alarm_ack.step(self.state.sensors_ack, self.state.sensors[0], now)
+        old = self.state.sensors_ack
+        masked = Level.OK if alarm_ack.shelved(old) else None
+        level = self.state.sensors[0]
+        new = alarm_ack.step(old, level, now, False, masked, bool(changes), self._chatter())
+        self.state.sensors_ack = new
+        log += entries(alarm_ack.SENSORS, old, new, now, alarm_ack.condition(new.level, ()))
         return changes
 
     def _decide_sensors(self, stamp_ns: int) -> None:
-        """Every line's and the depth sensor's state at a tick (core.sensor)."""
+        """Every line's and the depth sensor's state at a tick (core.monitor.sensor_state)."""
         a = self.config.alarm
         now = np.array([_stamp_s(stamp_ns)])
         lines = self.state.lines
@@ -745,6 +1042,7 @@ class MonitorCore:
             seen,
             np.array([self.state.depth]),
             np.array([self.state.depth_memory.changed]),
+            np.array([[line.stamp_refused for line in lines]]),
         )
         for k, line in enumerate(lines):
             line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
@@ -758,11 +1056,12 @@ class MonitorCore:
                 np.array([dm.changed]),
                 np.array([dm.spiked]),
                 changed,
+                np.array([self.state.depth_refused]),
             )[0]
         )
 
     def _decide_dock(self, stamp_ns: int) -> list[Change]:
-        """The dock estimate from every line's newest tension (core.body.live): the dock
+        """The dock estimate from every line's newest tension (core.monitor.dock_watch): the dock
         status, and what each line's ``inconsistent`` alarm condition sees."""
         assert self.dock_model is not None
         now = _stamp_s(stamp_ns)
@@ -827,7 +1126,7 @@ class MonitorCore:
         )
         line.values = _with_sensor(line.values + _NAN_VALUES[len(line.values) :], line.sensor_code)
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
-        code = reading_status(t, h, lc.mbl)
+        code = reading_status(t, h, lc.mbl, lc.weight)
         if code:
             _implausible(line, code)
         self._add_derived([line])
@@ -862,26 +1161,46 @@ class MonitorCore:
             line.values = _with_sensor(line.values, line.sensor_code)
             line.status, line.status_message = int(status[i]), str(messages[i])
             line.model = str(models[i])
-        codes = reading_status_array(tension, h, [c.mbl for c in cfgs]).tolist()
+        codes = reading_status_array(
+            tension, h, [c.mbl for c in cfgs], [c.weight for c in cfgs]
+        ).tolist()
         for line, code in zip(lines, codes):
             if code:
                 _implausible(line, code)
         self._add_derived(lines)
 
     def _add_derived(self, lines: Sequence[LineState]) -> None:
-        """The wave values, the dynamic uplift, the bounds, the holding values and the time to
-        uplift of freshly solved lines (from their values; :func:`derived_values`)."""
+        """The fatigue values, the wave values, the dynamic uplift, the bounds, the holding
+        values and the time to uplift of freshly solved lines (from their values;
+        :func:`derived_values`, the holding of one line in plain floats: :func:`holding_one`)."""
+        for line in lines:
+            line.values = _with_fatigue(line.values, line.fatigue_values)
         named = {k: np.array([line.values[i] for line in lines]) for k, i in _AT.items()}
         named['peak_tension'] = np.array([line.peak_tension for line in lines])
         named['wave_tension'] = np.array([line.wave_tension for line in lines])
         cfgs = [line.config for line in lines]
-        derived = derived_values(cfgs, self.config.alarm, named)
+        tolerance = self.config.alarm.drag_tolerance
+        derived = derived_values(cfgs, self.config.alarm, named, holding=False)
+        some = [k for k, line in enumerate(lines) if _wants_holding(line.config)]
+        held: dict[str, Any] = {key: np.full(len(lines), np.nan) for key in HOLDING_FIELDS}
+        if len(some) == 1:  # a tension event: plain floats
+            one = holding_one(cfgs[some[0]], lines[some[0]].values, tolerance)
+            for key in HOLDING_FIELDS:
+                held[key][some[0]] = one[key]
+        elif some:
+            idx = np.array(some)
+            part = holding_values(
+                [cfgs[k] for k in some], {k: v[idx] for k, v in named.items()}, tolerance
+            )
+            for key in HOLDING_FIELDS:
+                held[key][idx] = part[key]
+        derived.update(held)
         margin, view = tide_trend.nearer_margin(
             named['tide_margin'], derived['tide_margin_at_length']
         )
         derived['time_to_uplift'] = np.array(self._uplift_times(margin, named['uplift_force']))
         derived['time_to_uplift_view'] = view
-        at = [(_AT[key], column.tolist()) for key, column in derived.items()]
+        at = [(_AT[key], np.asarray(column).tolist()) for key, column in derived.items()]
         for j, line in enumerate(lines):
             v = list(line.values)
             for i, column in at:
@@ -890,7 +1209,7 @@ class MonitorCore:
 
     def _uplift_times(self, margins: Any, forces: Any) -> list[float]:
         """Each line's time to uplift [s]: on the tide table's forecast from the newest depth
-        sample where there is a table (core.tide_table), else at the tide's trend."""
+        sample where there is a table (core.monitor.tide_table), else at the tide's trend."""
         a = self.config.alarm
         if a.constituents:
             times = tide_table.uplift_times(
@@ -905,9 +1224,11 @@ class MonitorCore:
         rate, excess = self.state.trend.rate, self.state.trend.excess
         return [tide_trend.time_to_uplift(m, f, rate, excess) for m, f in zip(margins, forces)]
 
-    def _step_lines(self, which: Any, stamp_ns: int) -> list[Change]:
-        """Step the alarms of the given lines at ``stamp_ns``; their transitions."""
+    def _step_lines(self, which: Any, stamp_ns: int, log: list[AlarmEvent]) -> list[Change]:
+        """Step the alarms of the given lines at ``stamp_ns``; their transitions (their
+        alarms' records to the journal ``log``)."""
         now = _stamp_s(stamp_ns)
+        chatter = self._chatter()
         changes = []
         for k in which:
             line = self.state.lines[k]
@@ -921,17 +1242,32 @@ class MonitorCore:
                 ),
                 now,
             )
-            line.ack = alarm_ack.step(line.ack, line.state.level, now, line.state.suppressed)
+            old = line.ack
+            flip = any(not ev.suppressed for ev in events)
+            masked = self._masked(line, old) if alarm_ack.shelved(old) else None
+            level, quiet = line.state.level, line.state.suppressed
+            line.ack = alarm_ack.step(old, level, now, quiet, masked, flip, chatter)
+            if line.ack is not old:
+                condition = self._raised_condition(line, line.ack)
+                log += entries(line.config.name, old, line.ack, now, condition)
             changes += [Change(line.config.name, ev) for ev in events]
         return changes
 
     def _finish(
-        self, stamp_ns: int, kind: str, solved: Sequence[int], changes: list[Change]
+        self,
+        stamp_ns: int,
+        kind: str,
+        solved: Sequence[int],
+        changes: list[Change],
+        log: Sequence[AlarmEvent] = (),
     ) -> Step:
-        """The Step of an input event: outputs of the solved lines, a snapshot on a change."""
+        """The Step of an input event: outputs of the solved lines, the flood decision if it
+        raised an alarm, a snapshot on a change."""
+        log = list(log)
+        changes = changes + self._decide_flood(stamp_ns, log)
         outputs = tuple(self.output(k) for k in solved)
         snapshot = self.snapshot(stamp_ns) if changes else None
-        return Step(stamp_ns, kind, outputs, snapshot, tuple(changes))
+        return Step(stamp_ns, kind, outputs, snapshot, tuple(changes), tuple(log))
 
     # ------------------------------------------------------------------ views
     def output(self, k: int) -> LineOutput:
@@ -983,6 +1319,7 @@ class MonitorCore:
                 self.state.sensors, self.state.sensors_ack, self.state.sensors_waiting
             )
         )
+        statuses.append(self.alarms_component(self.state.alarms, self.state.flood))
         level, message = self.state.logger
         statuses.append(
             ComponentStatus(f'{NODE_NAME}: logger', level, message, self.logger_id, ())
@@ -991,6 +1328,17 @@ class MonitorCore:
             statuses.append(dock_component(self.state.dock, self.state.dock_values))
         statuses += self.guard_components(now)
         return Snapshot(stamp_ns, tuple(statuses))
+
+    def alarms_component(
+        self, status: tuple[Level, str], flood: alarm_flood.Flood
+    ) -> ComponentStatus:
+        """The ``catenary_monitor: alarms`` status: the flood decision ``status`` and ``flood``
+        (:mod:`catenary_monitor.core.monitor.alarm_flood`), the shelving rules and the answer
+        to the newest shelving request."""
+        values = alarm_flood.values(
+            flood, self.config.alarm, self.state.shelve_answer, self.state.shelve_requests
+        )
+        return ComponentStatus(f'{NODE_NAME}: alarms', status[0], status[1], NODE_NAME, values)
 
     def guard_components(self, now: float) -> list[ComponentStatus]:
         """The statuses after the logger and the dock: the runtime-change flag, the ROS clock
@@ -1001,6 +1349,8 @@ class MonitorCore:
             out.append(flag)
         if self.state.clock_seen:
             out.append(ComponentStatus(f'{NODE_NAME}: clock', *self.state.clock, NODE_NAME, ()))
+        if self.state.fatigue_seen:
+            out.append(self.fatigue_component())
         if self.state.intake_seen:
             dropped = self.intake_dropped()
             names = [line.config.name for line in self.state.lines] + ['depth']
@@ -1018,6 +1368,13 @@ class MonitorCore:
             )
         return out
 
+    def fatigue_component(self) -> ComponentStatus:
+        """The ``catenary_monitor: fatigue`` status: the fatigue store's level and message,
+        ``store_state`` (:data:`FATIGUE_STORE_STATES`) and the worst line's ``fatigue_damage``."""
+        damages = [line.fatigue_values[0] for line in self.state.lines]
+        values = (('store_state', self.state.fatigue_word), ('max_damage', repr(max(damages))))
+        return ComponentStatus(f'{NODE_NAME}: fatigue', *self.state.fatigue, NODE_NAME, values)
+
     def parameters_component(self, now: float) -> Optional[ComponentStatus]:
         """The runtime-change status at ``now`` [s] (None when runtime changes are not
         allowed and none was made): WARN naming the changes until their flag expires."""
@@ -1034,11 +1391,20 @@ def _with_sensor(values: tuple[float, ...], code: int) -> tuple[float, ...]:
     return values[:_SENSOR_AT] + (float(code),) + values[_SENSOR_AT + 1 :]
 
 
+_FATIGUE_AT = VALUE_FIELDS.index(fatigue_rule.FIELDS[0])
+
+
+def _with_fatigue(values: tuple[float, ...], fatigue: tuple[float, ...]) -> tuple[float, ...]:
+    """``values`` with the line's fatigue values in their places."""
+    end = _FATIGUE_AT + len(fatigue)
+    return values[:_FATIGUE_AT] + tuple(fatigue) + values[end:]
+
+
 def _implausible(line: LineState, code: int) -> None:
-    """An implausible reading (core.plausible): its status and sentence, no solved values
+    """An implausible reading (core.monitor.plausible): its status and sentence, no solved values
     (the measured tension and depth kept, as for every impossible input)."""
     line.values = line.values[:2] + _NAN_VALUES[2:_SENSOR_AT] + line.values[_SENSOR_AT:]
-    line.status, line.status_message = code, STATUS_MESSAGES[code]
+    line.status, line.status_message = code, status_messages(line.config)[code]
     line.model = elastic.INEXTENSIBLE
 
 
@@ -1053,21 +1419,25 @@ def _wants_holding(c: LineConfig) -> bool:
     return c.chain_length is not None or c.anchor_holding is not None
 
 
+#: The values :func:`holding_values` gives (core/monitor/holding.py).
+HOLDING_FIELDS = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS + holding_rule.DRAG_FIELDS
+
+
 def derived_values(
-    cfgs: Sequence[LineConfig], alarm: Any, named: dict[str, np.ndarray]
+    cfgs: Sequence[LineConfig], alarm: Any, named: dict[str, np.ndarray], holding: bool = True
 ) -> dict[str, np.ndarray]:
     """What the core adds to a solve (the core and its batch twin both call this), per element
     of the nominal values ``named`` (VALUE_FIELDS -> arrays, with ``peak_tension`` and
-    ``wave_tension`` from the wave window), each element's line in ``cfgs``: the wave values,
-    ``dynamic_uplift``, the bounds (:mod:`.uncertainty`) and the holding values
-    (:mod:`.holding`; NaN for lines with neither ``chain_length`` nor ``anchor_holding``)."""
+    ``wave_tension`` from the wave window), each element's line in ``cfgs`` (one config for
+    all, or one per element): the wave values, ``dynamic_uplift``, the bounds
+    (:mod:`.uncertainty`) and, with ``holding``, the holding values (:mod:`.holding`; NaN for
+    lines with neither ``chain_length`` nor ``anchor_holding``)."""
     n = len(named['top_tension'])
     out = {key: np.asarray(named[key], dtype=float) for key in wave_window.FIELDS}
     tension = uncertainty.dynamic_tension(
         named['peak_tension'], named['wave_tension'], alarm.wave_allowance
     )
-    dyn_named = dict(named, top_tension=tension)
-    out.update(bound_values(cfgs, alarm.depth_accuracy, dyn_named))
+    out.update(bound_values(cfgs, alarm.depth_accuracy, dict(named, top_tension=tension)))
     out['dynamic_uplift'] = uncertainty.dynamic_uplift(
         _column(cfgs, 'weight'),
         _column(cfgs, 'anchor_distance'),
@@ -1077,24 +1447,14 @@ def derived_values(
         named['depth'],
         named['uplift_force'],
     )
-    keys = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS
-    if len(cfgs) == 1:  # one line for every element (the twin)
-        if _wants_holding(cfgs[0]):
-            out.update(holding_values(cfgs, named))
-        else:
-            out.update({key: np.full(n, np.nan) for key in keys})
+    if not holding:
         return out
-    per = list(cfgs)  # one config per element (the core)
-    some = [k for k, c in enumerate(per) if _wants_holding(c)]
-    values = {key: np.full(n, np.nan) for key in keys}
-    if some:
-        idx = np.array(some)
-        part = holding_values(
-            [per[k] for k in some], {key: np.asarray(col)[idx] for key, col in named.items()}
-        )
-        for key in keys:
-            values[key][idx] = part[key]
-    out.update(values)
+    if len(cfgs) == 1 and _wants_holding(cfgs[0]):  # one line for every element (the twin)
+        out.update(holding_values(cfgs, named, alarm.drag_tolerance))
+    elif len(cfgs) == 1:
+        out.update({key: np.full(n, np.nan) for key in HOLDING_FIELDS})
+    else:
+        raise ValueError('derived_values: the holding of several lines is the core\'s')
     return out
 
 
@@ -1118,10 +1478,10 @@ def bound_values(
 
 
 def holding_values(
-    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray]
+    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray], tolerance: float = math.inf
 ) -> dict[str, np.ndarray]:
-    """The holding values (:data:`catenary_monitor.core.monitor.holding.FIELDS`), as
-    :func:`bound_values`."""
+    """The holding values (:data:`HOLDING_FIELDS`), as :func:`bound_values`; ``tolerance``
+    is ``drag_tolerance`` (m)."""
     return holding_rule.holding(
         _column(cfgs, 'weight'),
         _column(cfgs, 'ea'),
@@ -1135,6 +1495,34 @@ def holding_values(
         named['suspended_length'],
         named['uplift_force'],
         _column(cfgs, 'anchor_distance'),
+        tolerance,
+    )
+
+
+def holding_one(
+    lc: LineConfig, values: Sequence[float], tolerance: float = math.inf
+) -> dict[str, float]:
+    """:func:`holding_values` of one line's :data:`VALUE_FIELDS` values in plain floats
+    (:func:`catenary_monitor.core.monitor.holding.holding_scalar`: the same numbers to
+    rounding, an order of magnitude faster than one-element arrays)."""
+
+    def given(v: Optional[float]) -> float:
+        return _NAN if v is None else v
+
+    return holding_rule.holding_scalar(
+        lc.weight,
+        math.inf if lc.ea is None else lc.ea,
+        given(lc.chain_length),
+        given(lc.anchor_holding),
+        given(lc.anchor_weight),
+        given(lc.chain_friction),
+        values[_AT['top_tension']],
+        values[_AT['depth']],
+        values[_AT['horizontal_tension']],
+        values[_AT['suspended_length']],
+        values[_AT['uplift_force']],
+        lc.anchor_distance,
+        tolerance,
     )
 
 
@@ -1310,14 +1698,34 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
     if isinstance(event, Tick):
         return {'kind': 'tick'}
     if isinstance(event, LoggerHealth):
-        return {'kind': 'logger', 'error': event.error, 'path': event.path}
+        record = {'kind': 'logger', 'error': event.error, 'path': event.path}
+        if event.warning is not None:
+            record['warning'] = event.warning
+        return record
     if isinstance(event, Reconfigure):
         return {'kind': 'configure', 'parameters': config_to_params(event.config)}
     if isinstance(event, Acknowledge):
         line = alarm_ack.ALL_LINES if event.line is None else event.line
-        return {'kind': 'acknowledge', 'line': line, 'origin': event.origin}
+        return {
+            'kind': 'acknowledge',
+            'line': line,
+            'origin': alarm_ack.bounded_text(event.origin),
+            'publisher': alarm_ack.bounded_text(event.publisher),
+        }
+    if isinstance(event, Shelve):
+        return {
+            'kind': 'shelve',
+            'alarm': event.alarm,
+            'condition': event.condition,
+            'seconds': event.seconds,
+            'origin': alarm_ack.bounded_text(event.origin),
+            'publisher': alarm_ack.bounded_text(event.publisher),
+        }
     if isinstance(event, ClockHealth):
         return {'kind': 'clock', 'stopped_for': event.stopped_for}
+    if isinstance(event, FatigueStore):
+        lines = None if event.lines is None else dict(event.lines)
+        return {'kind': 'fatigue', 'state': event.state, 'message': event.message, 'lines': lines}
     if isinstance(event, Intake):
         return {
             'kind': 'intake',
@@ -1340,7 +1748,9 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
         if kind == 'tick':
             return Tick(stamp_ns)
         if kind == 'logger':
-            return LoggerHealth(stamp_ns, record.get('error'), record.get('path'))
+            return LoggerHealth(
+                stamp_ns, record.get('error'), record.get('path'), record.get('warning')
+            )
         if kind == 'configure':
             return Reconfigure(stamp_ns, config_from_params(record['parameters']))
         if kind == 'clock':
@@ -1354,12 +1764,33 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
                 float(record['busy']),
                 float(record['period']),
             )
+        if kind == 'shelve':
+            seconds = float(record['seconds'])
+            if not math.isfinite(seconds) or seconds < 0.0:
+                return None
+            return Shelve(
+                stamp_ns,
+                alarm_ack.bounded_text(str(record['alarm'])),
+                alarm_ack.bounded_text(str(record.get('condition') or alarm_ack.WHOLE)),
+                seconds,
+                alarm_ack.bounded_text(str(record.get('origin', ''))),
+                alarm_ack.bounded_text(str(record.get('publisher', ''))),
+            )
+        if kind == 'fatigue':
+            lines = record.get('lines')
+            return FatigueStore(
+                stamp_ns,
+                str(record['state']),
+                str(record['message']),
+                None if lines is None else tuple((str(k), v) for k, v in dict(lines).items()),
+            )
         if kind == 'acknowledge':
             line = str(record['line'])
             return Acknowledge(
                 stamp_ns,
-                None if line == alarm_ack.ALL_LINES else line,
-                str(record.get('origin', '')),
+                None if line == alarm_ack.ALL_LINES else alarm_ack.bounded_text(line),
+                alarm_ack.bounded_text(str(record.get('origin', ''))),
+                alarm_ack.bounded_text(str(record.get('publisher', ''))),
             )
     except (ValueError, KeyError, TypeError):
         return None

@@ -11,8 +11,17 @@ Bounds
 * **Tension** above ``MAX_TENSION_PER_MBL`` x the line's MBL (10 x): a chain parts at its MBL,
   so a reading ten times above it is a measurement fault, whatever the safety margin of the
   MBL given; the safety-factor alarm covers every real overload below that.
+* **Tension off by orders of magnitude below** (:attr:`Status.WRONG_UNITS`): 100 times or more
+  below the hanging chain's own weight ``w * h`` (``UNITS_FACTOR``), or at or below ``w * h``
+  where 1000 times the reading (a load cell in kN read as N) would lie between ``w * h`` and
+  the MBL. A chain cannot hang with less than its own weight at the hook, so such a reading is
+  a scale (or a parted chain); the message names the line's ``tension_scale``. A negative
+  reading stays the solver's ``T <= w*h``.
 * **Depth** (with the hook height) above ``MAX_DEPTH`` = 12 000 m: deeper than any sea
   (Challenger Deep, about 10 935 m).
+
+Both tension sentences end with "wrong units?" and the parameter to check
+(:func:`status_messages`: the status table of one line).
 """
 
 from __future__ import annotations
@@ -22,20 +31,32 @@ from typing import Any
 
 import numpy as np
 
-from catenary_monitor.core.physics.result import Status
+from catenary_monitor.core.config.parameters import LineConfig
+from catenary_monitor.core.physics.result import STATUS_MESSAGES, Status
 
-__all__ = ['MAX_DEPTH', 'MAX_TENSION_PER_MBL', 'reading_status', 'reading_status_array']
+__all__ = [
+    'MAX_DEPTH',
+    'MAX_TENSION_PER_MBL',
+    'UNITS_FACTOR',
+    'KN',
+    'reading_status',
+    'reading_status_array',
+    'status_messages',
+    'units_hint',
+]
 
 MAX_DEPTH = 12_000.0  # m
 MAX_TENSION_PER_MBL = 10.0  # -, tension bound as a multiple of the MBL
+UNITS_FACTOR = 100.0  # -, a tension this many times below w * h is off by orders of magnitude
+KN = 1000.0  # N per kN: the scale a load cell in kN needs
 
 
-def reading_status(tension: float, depth: float, mbl: float) -> int:
+def reading_status(tension: float, depth: float, mbl: float, weight: float = math.nan) -> int:
     """0, or the Status of an implausible finite reading.
 
-    Parameters: hook tension [N], depth at the hook [m], minimum breaking load [N].
-    An implausible depth wins over an implausible tension; non-finite readings give 0 (the
-    solver reports them).
+    Parameters: hook tension [N], depth at the hook [m], minimum breaking load [N], the
+    chain's submerged weight [N/m] (NaN: no check below). An implausible depth wins over an
+    implausible tension; non-finite readings give 0 (the solver reports them).
     """
     if not (math.isfinite(tension) and math.isfinite(depth)):
         return 0
@@ -43,22 +64,67 @@ def reading_status(tension: float, depth: float, mbl: float) -> int:
         return int(Status.IMPLAUSIBLE_DEPTH)
     if tension > MAX_TENSION_PER_MBL * mbl:
         return int(Status.IMPLAUSIBLE_TENSION)
+    hanging = weight * depth
+    if (
+        depth > 0.0
+        and tension >= 0.0
+        and (tension * UNITS_FACTOR <= hanging or (tension <= hanging < KN * tension <= mbl))
+    ):
+        return int(Status.WRONG_UNITS)
     return 0
 
 
-def reading_status_array(tension: Any, depth: Any, mbl: Any) -> np.ndarray:
+def reading_status_array(tension: Any, depth: Any, mbl: Any, weight: Any = math.nan) -> np.ndarray:
     """:func:`reading_status` element by element (int64 array of the broadcast shape)."""
     t, h = np.asarray(tension, dtype=float), np.asarray(depth, dtype=float)
-    if t.shape == h.shape and t.size and np.ndim(mbl) == 0:  # the usual case, in two passes
-        limit = MAX_TENSION_PER_MBL * float(mbl)
-        if not np.fmax.reduce(h, axis=None) > MAX_DEPTH:  # NaN only if every value is NaN
-            if not np.fmax.reduce(t, axis=None) > limit:
-                return np.zeros(t.shape, dtype=np.int64)
+    w = np.asarray(weight, dtype=float)
     with np.errstate(invalid='ignore'):
         finite = np.isfinite(t) & np.isfinite(h)
         deep = finite & (h > MAX_DEPTH)
         strong = finite & ~deep & (t > MAX_TENSION_PER_MBL * np.asarray(mbl, dtype=float))
-    out = np.zeros(np.broadcast(t, h).shape, dtype=np.int64)
+        hanging = w * h
+        weak = (
+            finite
+            & ~deep
+            & ~strong
+            & (h > 0.0)
+            & (t >= 0.0)
+            & (
+                (t * UNITS_FACTOR <= hanging)
+                | ((t <= hanging) & (hanging < KN * t) & (KN * t <= np.asarray(mbl, float)))
+            )
+        )
+    out = np.zeros(np.broadcast(t, h, w).shape, dtype=np.int64)
     out[deep] = Status.IMPLAUSIBLE_DEPTH
     out[strong] = Status.IMPLAUSIBLE_TENSION
+    out[weak] = Status.WRONG_UNITS
+    return out
+
+
+def units_hint(line: LineConfig, low: bool) -> str:
+    """ "wrong units?" and the parameter to check, for a reading too low (``low``) or too high."""
+    name, scale = f'{line.name}.tension_scale', line.tension_scale
+    if low:
+        return (
+            f'wrong units? a load cell in kN needs {name}: {KN:g} (it is {scale:g}; the '
+            'tension is the reading x the scale, in N)'
+        )
+    return (
+        f'wrong units? check {name} (it is {scale:g}; the tension is the reading x the scale, '
+        'in N)'
+    )
+
+
+def status_messages(line: LineConfig) -> dict[int, str]:
+    """The status sentences of ``line``: :data:`STATUS_MESSAGES` with the implausible tension's
+    and the wrong units' naming the line's scale parameter."""
+    out = dict(STATUS_MESSAGES)
+    out[Status.IMPLAUSIBLE_TENSION] = (
+        f'{STATUS_MESSAGES[Status.IMPLAUSIBLE_TENSION]}: {units_hint(line, False)}'
+    )
+    out[Status.WRONG_UNITS] = (
+        'hook tension 100 times or more below the hanging chain\'s own weight w*h, or below it '
+        f'where 1000 times the reading would fit the chain (or a parted chain): '
+        f'{units_hint(line, True)}'
+    )
     return out

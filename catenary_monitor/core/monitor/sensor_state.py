@@ -24,6 +24,9 @@ batch twin) that share the arithmetic, so live and replay decide alike:
                                  rose; held ``sensor_hold`` after last seen
   ``slack`` (4)           ERROR  tension <= w * h (the hanging chain's own weight at
                                  the depth at the hook)
+  ``bad_stamp`` (6)       WARN   a sample refused for its header stamp (ahead of the
+                                 monitor's clock by ``stamp_ahead_max``, or before
+                                 the one before) within ``sensor_hold``
   ``spike`` (2)           WARN   a spiked sample within ``sensor_hold``
   ``stuck`` (1)           WARN   no change beyond the resolution for ``stuck_time``
                                  while the dock moves (another line or the depth
@@ -32,8 +35,9 @@ batch twin) that share the arithmetic, so live and replay decide alike:
   ======================  =====  ===================================================
 
   The depth sensor: ``out_of_range`` (ERROR, depth outside ``[depth_min, depth_max]``, the
-  chart range), ``spike`` (WARN, within ``sensor_hold``), ``stuck`` (WARN, no change beyond
-  ``depth_resolution`` for ``stuck_time`` while a line's tension changed since), ``ok``.
+  chart range), ``bad_stamp`` (WARN, as a line's), ``spike`` (WARN, within ``sensor_hold``),
+  ``stuck`` (WARN, no change beyond ``depth_resolution`` for ``stuck_time`` while a line's
+  tension changed since), ``ok``.
 """
 
 from __future__ import annotations
@@ -59,6 +63,8 @@ __all__ = [
     'SLACK',
     'PARTED',
     'OUT_OF_RANGE',
+    'BAD_STAMP',
+    'DEPTH_BAD_STAMP',
     'ERROR_STATES',
     'Memory',
     'LineLimits',
@@ -75,16 +81,23 @@ __all__ = [
 ]
 
 #: Line states by code (the ``sensor_state`` output field is the code, /diagnostics the word).
-LINE_STATES = ('ok', 'stuck', 'spike', 'over_mbl', 'slack', 'suspected_parted')
-OK, STUCK, SPIKE, OVER_MBL, SLACK, PARTED = range(6)
+LINE_STATES = ('ok', 'stuck', 'spike', 'over_mbl', 'slack', 'suspected_parted', 'bad_stamp')
+OK, STUCK, SPIKE, OVER_MBL, SLACK, PARTED, BAD_STAMP = range(7)
 #: Depth sensor states by code.
-DEPTH_STATES = ('ok', 'stuck', 'spike', 'out_of_range')
+DEPTH_STATES = ('ok', 'stuck', 'spike', 'out_of_range', 'bad_stamp')
 OUT_OF_RANGE = 3
+DEPTH_BAD_STAMP = 4
 #: The depth sensor's ``sensor_state`` word before its first sample (no state to decide yet).
 NO_DATA = 'no_data'
 #: Line states that are an ERROR (the others but ``ok`` are WARN).
 ERROR_STATES = (OVER_MBL, SLACK, PARTED)
 _NEVER = -math.inf
+#: The message of ``bad_stamp`` (``what``: tension or depth).
+BAD_STAMP_TEXT = (
+    '{what} samples refused for their header stamps (ahead of the monitor\'s clock by more '
+    'than stamp_ahead_max, or going backwards): check the sensor computer\'s clock '
+    'synchronization (chrony, PTP) and its driver\'s stamping'
+)
 
 
 class Memory(NamedTuple):
@@ -226,10 +239,12 @@ def decide_lines(
     parted_seen: np.ndarray,
     depth: np.ndarray,
     depth_changed: np.ndarray,
+    refused: np.ndarray | None = None,
 ) -> np.ndarray:
     """Line state codes (int8, shape (ticks, lines)) at ticks ``now`` [s] from each line's
     newest tension [N] and its stamp [s], its memory's ``changed`` and ``spiked`` [s], when
-    the parted pattern was last seen [s], the newest depth [m] and the depth's ``changed``.
+    the parted pattern was last seen [s], the newest depth [m] and the depth's ``changed``,
+    and when a sample's stamp was last refused [s] (None: never).
     ``cfg`` is the :class:`~catenary_monitor.core.config.parameters.AlarmConfig`."""
     t_now = now[:, None]
     hold = getattr(cfg, 'sensor_hold')
@@ -245,6 +260,9 @@ def decide_lines(
     code = np.full(tension.shape, OK, np.int8)
     for mask, c in ((stuck, STUCK), (spike, SPIKE), (slack, SLACK), (parted, PARTED)):
         code[mask] = c
+    if refused is not None:
+        with np.errstate(invalid='ignore'):
+            code[(t_now - refused <= hold) & ~(over | slack | parted)] = BAD_STAMP
     code[over] = OVER_MBL
     return code
 
@@ -257,10 +275,11 @@ def decide_depth(
     mem_changed: np.ndarray,
     mem_spiked: np.ndarray,
     line_changed: np.ndarray,
+    refused: np.ndarray | None = None,
 ) -> np.ndarray:
     """Depth sensor state codes (int8 per tick) from the newest depth [m] and its stamp [s],
-    the depth memory's ``changed`` and ``spiked`` [s] and each line's ``changed`` (ticks,
-    lines) [s]."""
+    the depth memory's ``changed`` and ``spiked`` [s], each line's ``changed`` (ticks,
+    lines) [s] and when a depth sample's stamp was last refused [s] (None: never)."""
     with np.errstate(invalid='ignore'):
         reporting = np.isfinite(depth) & (now - depth_s <= getattr(cfg, 'depth_timeout'))
         out = reporting & (
@@ -275,6 +294,9 @@ def decide_depth(
     code = np.full(len(now), OK, np.int8)
     code[stuck] = STUCK
     code[spike] = SPIKE
+    if refused is not None:
+        with np.errstate(invalid='ignore'):
+            code[now - refused <= getattr(cfg, 'sensor_hold')] = DEPTH_BAD_STAMP
     code[out] = OUT_OF_RANGE
     return code
 
@@ -293,6 +315,7 @@ def line_message(code: int, tension: float, mbl: float) -> str:
         'or failed sensor: check the chain, the stopper and the load cell',
         PARTED: f'suspected parted line: tension collapsed to {kn} while the other lines rose: '
         'check the chain and the anchor at once',
+        BAD_STAMP: BAD_STAMP_TEXT.format(what='tension'),
     }.get(int(code), '')
 
 
@@ -306,6 +329,7 @@ def depth_message(code: int, depth: float, cfg: object) -> str:
         'and electrical noise',
         OUT_OF_RANGE: f'depth {depth:.2f} m outside the chart range [{lo:g}, {hi:g}] m: check '
         'the depth sensor\'s datum, offset and scaling (or the range)',
+        DEPTH_BAD_STAMP: BAD_STAMP_TEXT.format(what='depth'),
     }.get(int(code), '')
 
 

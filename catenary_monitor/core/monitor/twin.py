@@ -33,9 +33,17 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
+from catenary_monitor.core.monitor import alarm_flood, shelving
 from catenary_monitor.core.monitor import dock_watch as dock_live
-from catenary_monitor.core.monitor import sensor_state, tide_table, tide_trend
-from catenary_monitor.core.monitor import wave_window
+from catenary_monitor.core.monitor import fatigue as fatigue_rule
+from catenary_monitor.core.monitor import (
+    readings,
+    sensor_state,
+    tide_table,
+    tide_trend,
+    wave_window,
+)
+from catenary_monitor.core.monitor.alarm_journal import AlarmEvent, entries, raised
 from catenary_monitor.core.monitor.alarms import (
     DIAGNOSTIC_KEYS,
     RANK,
@@ -73,10 +81,14 @@ from catenary_monitor.core.monitor.monitor_core import (
     tide_with_sensor,
     view_word,
 )
-from catenary_monitor.core.monitor.plausible import MAX_DEPTH, reading_status_array
+from catenary_monitor.core.monitor.plausible import (
+    MAX_DEPTH,
+    reading_status_array,
+    status_messages,
+)
 from catenary_monitor.core.physics import catenary as cat
 from catenary_monitor.core.physics import elastic, fused_kernel
-from catenary_monitor.core.physics.solve import ALL_KEYS, STATUS_MESSAGES, Status
+from catenary_monitor.core.physics.solve import ALL_KEYS, Status
 
 try:  # three of the loops below in C, next to this file (optional: else the numpy passes)
     from catenary_monitor.core.monitor import _twin_loops as _loops  # type: ignore[attr-defined]
@@ -122,16 +134,38 @@ _EMPTY: Column = (np.zeros(0, np.int64), np.zeros(0))
 @dataclass
 class Window:
     """Events of a stretch of log, each column sorted by time (ns): ``tensions`` per line
-    (config order), ``depth``, and the ``ticks``."""
+    (config order), ``depth``, and the ``ticks``. ``tension_stamps`` (per line) and
+    ``depth_stamps``: the header stamps (ns) of a stamped input's samples, beside its column
+    (None: taken at arrival, the column's time)."""
 
     tensions: list[Column]
     depth: Column = _EMPTY
     ticks: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    tension_stamps: Optional[list[Optional[np.ndarray]]] = None
+    depth_stamps: Optional[np.ndarray] = None
 
     @property
     def messages(self) -> int:
         """Input messages in the window."""
         return sum(len(t) for t, _ in self.tensions) + len(self.depth[0])
+
+    def stamped(self, k: Optional[int]) -> bool:
+        """Whether line ``k``'s samples (None: the depth's) carry header stamps."""
+        if k is None:
+            return self.depth_stamps is not None
+        return self.tension_stamps is not None and self.tension_stamps[k] is not None
+
+    def sample_ns(self, k: Optional[int]) -> np.ndarray:
+        """The reading times (ns) of line ``k``'s samples (None: the depth's): the header
+        stamps of a stamped input, else the arrival times."""
+        if k is None:
+            return self.depth[0] if self.depth_stamps is None else self.depth_stamps
+        stamps = None if self.tension_stamps is None else self.tension_stamps[k]
+        return self.tensions[k][0] if stamps is None else stamps
+
+    def sample_s(self, k: Optional[int]) -> np.ndarray:
+        """:meth:`sample_ns` in s."""
+        return self.sample_ns(k) * 1e-9
 
 
 @dataclass
@@ -219,6 +253,8 @@ class WindowResult:
     start_ns: int
     end_ns: int
     others: list[Change] = field(default_factory=list)  # e.g. the logger's
+    #: The alarm journal's records (core.alarm_journal), in time order (keyword only).
+    alarm_events: list[AlarmEvent] = field(default_factory=list, kw_only=True)
 
     @property
     def updates(self) -> int:
@@ -244,7 +280,7 @@ def solve_updates(
     tension : hook tension T (N) per update.
     depth : depth h (m) per update, hook height already added; NaN means no depth yet.
     a_crit : catenary parameter (m) of the critical no-uplift chain at that depth
-        (:func:`catenary_monitor.catenary.critical_parameter`), per update.
+        (:func:`catenary_monitor.core.physics.catenary.critical_parameter`), per update.
 
     Returns
     -------
@@ -478,8 +514,8 @@ def _tide_at(core: MonitorCore, tide: _Tide, i: int) -> tuple[Level, str]:
 
 @dataclass
 class _Sensors:
-    """The sensor states at the window's ticks (core.sensor): each line's code (ticks, lines)
-    and the depth sensor's (ticks), and the codes before the window."""
+    """The sensor states at the window's ticks (core.monitor.sensor_state): each line's code
+    (ticks, lines) and the depth sensor's (ticks), and the codes before the window."""
 
     codes: np.ndarray
     depth_codes: np.ndarray
@@ -487,9 +523,9 @@ class _Sensors:
     before_depth: int
 
 
-def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
-    """Every tick's sensor states (the arrays the core hands core.sensor one tick at a time);
-    leaves the core's sensor memories as after the window."""
+def _decide_sensors_window(core: MonitorCore, window: Window, refusals: '_Refusals') -> _Sensors:
+    """Every tick's sensor states (the arrays the core hands core.monitor.sensor_state one tick
+    at a time); leaves the core's sensor memories as after the window."""
     a, ticks = core.config.alarm, window.ticks
     lines = core.state.lines
     n, m = len(ticks), len(lines)
@@ -498,26 +534,35 @@ def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
     now = ticks * 1e-9
     tension, tension_s = np.empty((n, m)), np.empty((n, m))
     changed, spiked = np.empty((n, m)), np.empty((n, m))
+    refused = np.empty((n, m))
     for k, line in enumerate(lines):
         tt, tv = window.tensions[k]
+        ts = window.sample_s(k)
         mem = line.sensor_memory
         rate = a.tension_rate_max * line.config.mbl
+        jitter = 0.0 if window.stamped(k) else a.stamp_jitter
         ch, sp, line.sensor_memory = sensor_state.samples(
-            mem, tt * 1e-9, tv, a.tension_resolution, rate, a.stamp_jitter
+            mem, ts, tv, a.tension_resolution, rate, jitter
         )
         j = np.searchsorted(tt, ticks, 'right') - 1  # tensions go before a tick at one stamp
         tension[:, k] = _pick(j, tv, line.tension)
-        tension_s[:, k] = _pick(j, tt * 1e-9, line.tension_s)
+        tension_s[:, k] = _pick(j, ts, line.tension_s)
         changed[:, k] = _pick(j, ch, mem.changed)
         spiked[:, k] = _pick(j, sp, mem.spiked)
+        r = refusals.lines[k]
+        refused[:, k] = _pick(np.searchsorted(r, ticks, 'right') - 1, r * 1e-9, line.stamp_refused)
     dd, dv = window.depth
+    ds = window.sample_s(None)
     dmem = core.state.depth_memory
+    jitter = 0.0 if window.stamped(None) else a.stamp_jitter
     dch, dsp, core.state.depth_memory = sensor_state.samples(
-        dmem, dd * 1e-9, dv, a.depth_resolution, a.depth_rate_max, a.stamp_jitter
+        dmem, ds, dv, a.depth_resolution, a.depth_rate_max, jitter
     )
     j = np.searchsorted(dd, ticks, 'right') - 1  # depth goes before a tick at one stamp
-    depth, depth_s = _pick(j, dv, core.state.depth), _pick(j, dd * 1e-9, core.state.depth_s)
+    depth, depth_s = _pick(j, dv, core.state.depth), _pick(j, ds, core.state.depth_s)
     d_changed, d_spiked = _pick(j, dch, dmem.changed), _pick(j, dsp, dmem.spiked)
+    r = refusals.depth
+    d_refused = _pick(np.searchsorted(r, ticks, 'right') - 1, r * 1e-9, core.state.depth_refused)
     if n == 0:
         return _Sensors(np.zeros((0, m), np.int8), np.zeros(0, np.int8), before, before_depth)
     times = np.concatenate([core.state.sensor_times, now])
@@ -542,8 +587,11 @@ def _decide_sensors_window(core: MonitorCore, window: Window) -> _Sensors:
         seen,
         depth,
         d_changed,
+        refused,
     )
-    depth_codes = sensor_state.decide_depth(a, now, depth, depth_s, d_changed, d_spiked, changed)
+    depth_codes = sensor_state.decide_depth(
+        a, now, depth, depth_s, d_changed, d_spiked, changed, d_refused
+    )
     for k, line in enumerate(lines):
         line.sensor_code, line.parted_seen = int(codes[-1, k]), float(seen[-1, k])
     core.state.depth_code = int(depth_codes[-1])
@@ -561,7 +609,8 @@ def _decide_tide(
     have = d_idx >= 0
     j = np.maximum(d_idx, 0)
     depth = np.where(have, dv[j] if len(dv) else math.nan, core.state.depth)
-    depth_s = np.where(have, dd[j] * 1e-9 if len(dd) else math.nan, core.state.depth_s)
+    ds = window.sample_s(None)
+    depth_s = np.where(have, ds[j] if len(dd) else math.nan, core.state.depth_s)
     now = times * 1e-9
     timeout = core.config.alarm.depth_timeout
     with np.errstate(invalid='ignore'):
@@ -574,7 +623,9 @@ def _decide_tide(
         level, np.where(code == sensor_state.OUT_OF_RANGE, Level.ERROR, Level.WARN), code
     )
     window_s = core.config.alarm.tide_trend_window
-    rates, excess, trend = tide_trend.series(core.state.trend, dd, dv, window_s)
+    rates, excess, trend = tide_trend.series(
+        core.state.trend, window.sample_ns(None), dv, window_s
+    )
     tide = _Tide(times, depth, depth_s, level, stale, rates, excess, trend, code, kinds)
     transitions = []
     old, entered = core.state.tide[0], core.state.tide_entered
@@ -589,7 +640,8 @@ def _decide_tide(
 
 @dataclass
 class _Blind:
-    """The sensors' common-cause alarm at the tide's decisions (core.health.sensors_status)."""
+    """The sensors' common-cause alarm at the tide's decisions
+    (core.monitor.health.sensors_status)."""
 
     waiting: np.ndarray  # (decisions, lines) bool: the line has had no tension yet
     levels: np.ndarray  # int8 Level per decision
@@ -642,13 +694,43 @@ def _decide_blind(core: MonitorCore, window: Window, tide: _Tide) -> _Blind:
         t = float(times[i] * 1e-9)
         blind.transitions.append(Transition(t, old, new[0], new[1], t - entered))
         old, entered = new[0], t
-    blind.acks = alarm_ack.replay_acks(core.state.sensors_ack, times * 1e-9, levels)
+    shelf = alarm_ack.shelved(core.state.sensors_ack)
+    blind.acks = alarm_ack.replay_acks(
+        core.state.sensors_ack,
+        times * 1e-9,
+        levels,
+        masked=np.zeros(len(levels), np.int8) if shelf else None,
+        flip_at=_changed(levels, core.state.sensors[0]),
+        chatter=_chatter(core),
+    )
     if len(times):
         core.state.sensors = _blind_at(core, tide, blind, len(times) - 1)
         core.state.sensors_waiting = int(waiting[-1].sum())
     core.state.sensors_entered = entered
     core.state.sensors_ack = blind.acks.final
     return blind
+
+
+def _chatter(core: MonitorCore) -> tuple[int, float]:
+    """The chattering rule: (chatter_count, chatter_window [s])."""
+    a = core.config.alarm
+    return int(a.chatter_count), a.chatter_window
+
+
+def _journal(
+    name: str, acks: alarm_ack.AckSeries, times_ns: np.ndarray, condition: Any
+) -> list[tuple[int, AlarmEvent]]:
+    """The journal records of an alarm's states over the window, with their step stamps
+    [ns]; ``condition(i, state)`` is the condition a raise at step ``i`` names."""
+    out: list[tuple[int, AlarmEvent]] = []
+    old = acks.before
+    for new, i in zip(acks.states, acks.changes.tolist()):
+        if new is not old:
+            stamp = int(times_ns[i])
+            cond = condition(i, new) if raised(old, new) else ''
+            out += [(stamp, e) for e in entries(name, old, new, stamp * 1e-9, cond)]
+        old = new
+    return out
 
 
 def _write_tide(
@@ -664,7 +746,9 @@ def _write_tide(
     core.state.trend = tide.trend
     dd, dv = window.depth
     if len(dd):
-        core.state.depth, core.state.depth_s = float(dv[-1]), float(dd[-1] * 1e-9)
+        last = int(window.sample_ns(None)[-1])
+        core.state.depth, core.state.depth_s = float(dv[-1]), float(last * 1e-9)
+        core.state.depth_sample_ns = last
 
 
 @dataclass
@@ -701,7 +785,7 @@ def _decide_dock_window(core: MonitorCore, window: Window, tide: _Tide) -> Optio
         tt, tv = window.tensions[k]
         j = np.searchsorted(tt, ticks, 'right') - 1  # tensions go before a tick at one stamp
         tension[:, k] = _pick(j, tv, line.tension)
-        tension_s[:, k] = _pick(j, tt * 1e-9, line.tension_s)
+        tension_s[:, k] = _pick(j, window.sample_s(k), line.tension_s)
     decision, core.state.dock_smoothing = dock_live.decide_dock(
         model, core.config, now, depth, depth_ok, tension, tension_s, core.state.dock_smoothing
     )
@@ -810,7 +894,7 @@ def _solve_line(
     )
     a = core.config.alarm
     if a.constituents:
-        now = _pick(d_idx, window.depth[0] * 1e-9, core.state.depth_s)
+        now = _pick(d_idx, window.sample_s(None), core.state.depth_s)
         values['time_to_uplift'] = tide_table.uplift_times(
             a.constituents,
             a.tide_table_epoch,
@@ -847,15 +931,15 @@ def _solve_at(
         a_depth = critical_parameters(lc, dv + lc.hook_height)
         a_before = critical_parameters(lc, np.array([core.state.depth + lc.hook_height]))[0]
         values, status = solve_updates(lc, tension, h, _pick(d_idx, a_depth, a_before))
-    _mark_implausible(values, status, used, reading_status_array(tension, h, lc.mbl))
+    _mark_implausible(values, status, used, reading_status_array(tension, h, lc.mbl, lc.weight))
     return values, status, used
 
 
 def _mark_implausible(
     values: dict[str, np.ndarray], status: np.ndarray, used: Optional[np.ndarray], code: np.ndarray
 ) -> None:
-    """Implausible readings (core.plausible), as the core marks them: their status, no solved
-    values (the measured tension and depth kept), the inextensible model named."""
+    """Implausible readings (core.monitor.plausible), as the core marks them: their status, no
+    solved values (the measured tension and depth kept), the inextensible model named."""
     hit = code != 0
     if not hit.any():
         return
@@ -896,6 +980,10 @@ def _line_inputs(
             'uplift_force_upper',
             'drag_margin',
             'holding_capacity',
+            'drag_state',
+            'implied_anchor_distance',
+            'fatigue_damage',
+            'fatigue_life_left',
             'dynamic_uplift',
             'time_to_uplift_view',
         )
@@ -906,8 +994,8 @@ def _line_inputs(
     inputs['uplift_view'] = inputs.pop('time_to_uplift_view')
     inputs['tide_rate'] = _pick(steps.d_idx, tide.rates, core.state.trend.rate)
     inputs['tide_forecast'] = 1.0 if core.config.alarm.constituents else 0.0
-    inputs['tension_stamp'] = _pick(steps.t_idx, tt * 1e-9, line.tension_s)
-    inputs['depth_stamp'] = _pick(steps.d_idx, window.depth[0] * 1e-9, core.state.depth_s)
+    inputs['tension_stamp'] = _pick(steps.t_idx, window.sample_s(k), line.tension_s)
+    inputs['depth_stamp'] = _pick(steps.d_idx, window.sample_s(None), core.state.depth_s)
     inputs['depth_stale'] = _pick(
         steps.dk_idx, tide.stale.astype(np.float64), float(core.state.depth_stale)
     ).astype(bool)
@@ -938,8 +1026,9 @@ def _advance_line(
     line = core.state.lines[k]
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
+    times = window.sample_s(k)  # the reading times, as the core's tension_s
     peaks, waves, wave_state = wave_window.series(
-        line.wave, tt * 1e-9, tv, line.config.mbl, core.config.alarm.wave_window
+        line.wave, times, tv, line.config.mbl, core.config.alarm.wave_window
     )
     values, status, used = _solve_line(
         core, line, steps, tv, window, tide, sensors, k, (peaks, waves)
@@ -947,11 +1036,29 @@ def _advance_line(
     line.wave = wave_state
     if len(tt):
         line.peak_tension, line.wave_tension = float(peaks[-1]), float(waves[-1])
+    fatigue, fatigue_end = fatigue_rule.series(line.fatigue, times, tv, core.curves[k])
+    at = steps.t_idx[steps.solved]
+    for j, key in enumerate(fatigue_rule.FIELDS):
+        values[key] = _pick(at, fatigue[key], line.fatigue_values[j])
     inputs = _line_inputs(core, line, steps, tide, values, status, window, tt, dock, k, sensors)
     series = replay_levels(
-        steps.times * 1e-9, inputs, line.alarm, STATUS_MESSAGES, initial=line.state
+        steps.times * 1e-9, inputs, line.alarm, status_messages(line.config), initial=line.state
     )
-    acks = alarm_ack.replay_acks(line.ack, steps.times * 1e-9, series.levels, series.suppressed)
+    masked = None
+    unshelvable = core.config.alarm.unshelvable_conditions
+    if alarm_ack.shelved(line.ack):
+        hidden = shelving.hidden_conditions(line.ack.shelved_condition, unshelvable)
+        masked = shelving.masked_levels(series._active, series.stale, hidden)
+    quiet = np.array([tr.suppressed for tr in series.transitions], bool)
+    acks = alarm_ack.replay_acks(
+        line.ack,
+        steps.times * 1e-9,
+        series.levels,
+        series.suppressed,
+        masked,
+        series.changed_at[~quiet] if len(quiet) else None,
+        _chatter(core),
+    )
     line.ack = acks.final
     where = np.flatnonzero(steps.solved)
     result = LineResult(
@@ -967,7 +1074,10 @@ def _advance_line(
         series.transitions,
         used,
     )
-    _write_back(line, series, values, status, used, tt, tv)
+    _write_back(line, series, values, status, used, window.sample_ns(k), tv)
+    line.fatigue = fatigue_end
+    if len(tt):
+        line.fatigue_values = tuple(float(fatigue[key][-1]) for key in fatigue_rule.FIELDS)
     return result, series, steps, acks
 
 
@@ -980,14 +1090,17 @@ def _write_back(
     tt: np.ndarray,
     tv: np.ndarray,
 ) -> None:
-    """The line's state after its last step in the window."""
+    """The line's state after its last step in the window (``tt``: its samples' reading
+    times, ns)."""
     line.state = series.final_state()
     if len(tt):
         line.tension, line.tension_s = float(tv[-1]), float(tt[-1] * 1e-9)
+        line.sample_ns = int(tt[-1])
     if len(status):
         line.values = tuple(float(values[key][-1]) for key in VALUE_FIELDS)
         line.status = int(status[-1])
-        line.status_message = '' if line.status == NO_DEPTH else STATUS_MESSAGES[line.status]
+        table = status_messages(line.config)
+        line.status_message = '' if line.status == NO_DEPTH else table[line.status]
         code = 0 if line.status == NO_DEPTH else (2 if used is not None and used[-1] else 1)
         line.model = MODEL_NAMES[code]
 
@@ -1005,6 +1118,8 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
             f'window has {len(window.tensions)} tension columns for '
             f'{len(core.state.lines)} lines'
         )
+    given = window
+    window, refusals = _accept(core, window)
     depth_before = (
         core.state.depth,
         core.state.depth_s,
@@ -1031,7 +1146,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         for line in core.state.lines
     ]
     depth_word = depth_state_word(core.state.depth_s, core.state.depth_code)
-    sensors = _decide_sensors_window(core, window)
+    sensors = _decide_sensors_window(core, window, refusals)
     tide, tide_transitions = _decide_tide(core, window, sensors)
     blind = _decide_blind(core, window, tide)
     dock = _decide_dock_window(core, window, tide)
@@ -1042,7 +1157,8 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         series.append(s)
         steps.append(st)
         acks.append(a)
-    times = [c[0] for c in (*window.tensions, window.depth, (window.ticks, None)) if len(c[0])]
+    journal, flood = _window_journal(core, window, tide, blind, series, steps, acks)
+    times = [c[0] for c in (*given.tensions, given.depth, (given.ticks, None)) if len(c[0])]
     start = int(min(t[0] for t in times)) if times else core.state.last_ns
     end = int(max(t[-1] for t in times)) if times else core.state.last_ns
     snaps: list[Snapshot | SnapshotColumns] = []
@@ -1051,15 +1167,98 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         made = build(
             _Made(
                 core, window, tide, results, series, steps, depth_before, tide_before,
-                lines_before, acks, dock, sensors, depth_word, blind,
+                lines_before, acks, dock, sensors, depth_word, blind, flood,
             )  # fmt: skip
         )
         snaps = [made] if isinstance(made, SnapshotColumns) else list(made)
     _write_tide(core, window, tide, tide_transitions)
+    _write_refusals(core, refusals)
     core.state.last_ns = max(core.state.last_ns, end)
     others = [Change('sensors', tr) for tr in blind.transitions]
     others += [] if dock is None else [Change('dock', tr) for tr in dock.transitions]
-    return WindowResult(results, tide_transitions, snaps, start, end, others)
+    others += [Change(alarm_flood.NAME, tr) for tr in flood.transitions]
+    return WindowResult(results, tide_transitions, snaps, start, end, others, alarm_events=journal)
+
+
+def _window_journal(
+    core: MonitorCore,
+    window: Window,
+    tide: _Tide,
+    blind: _Blind,
+    series: list[LevelSeries],
+    steps: list[_Steps],
+    acks: list[alarm_ack.AckSeries],
+) -> tuple[list[AlarmEvent], _Flood]:
+    """The window's alarm journal (the sensors alarm, each line's, the flood's) in the core's
+    order (time; within one event the sensors, the lines, the flood), and the flood decisions."""
+    unshelvable = core.config.alarm.unshelvable_conditions
+    ranked: list[tuple[int, int, AlarmEvent]] = []
+    sensors = _journal(
+        alarm_ack.SENSORS, blind.acks, tide.times, lambda i, a: alarm_ack.condition(a.level, ())
+    )
+    ranked += [(t, -1, e) for t, e in sensors]
+    for k, line in enumerate(core.state.lines):
+        condition = _raised_condition(series[k], unshelvable)
+        ranked += [
+            (t, k, e) for t, e in _journal(line.config.name, acks[k], steps[k].times, condition)
+        ]
+    raises = [(t, k, e.alarm) for t, k, e in ranked if e.kind == 'raised']
+    flood, flood_log = _decide_flood(core, window, raises)
+    ranked += [(t, len(core.state.lines), e) for t, e in flood_log]
+    ranked.sort(key=lambda r: (r[0], r[1]))
+    return [e for _, _, e in ranked], flood
+
+
+@dataclass
+class _Refusals:
+    """The arrival times (ns) of the samples refused for their header stamps in a window
+    (:func:`catenary_monitor.core.monitor.readings.stamp_faults`): per line, and the depth's."""
+
+    lines: list[np.ndarray]
+    depth: np.ndarray
+
+
+def _accept(core: MonitorCore, window: Window) -> tuple[Window, _Refusals]:
+    """The window without the stamped samples the core refuses (a header stamp ahead of the
+    clock, or going backwards: they are no reading, as :meth:`MonitorCore.step` takes them),
+    and when those arrived."""
+    ahead_max = core.config.alarm.stamp_ahead_max
+    none = np.zeros(0, np.int64)
+
+    def split(
+        column: Column, stamps: Optional[np.ndarray], last: int
+    ) -> tuple[Column, Optional[np.ndarray], np.ndarray]:
+        if stamps is None or not len(stamps):
+            return column, stamps, none
+        bad = readings.stamp_faults(column[0], stamps, last, ahead_max) != 0
+        if not bad.any():
+            return column, stamps, none
+        ok = ~bad
+        return (column[0][ok], column[1][ok]), stamps[ok], column[0][bad]
+
+    if window.tension_stamps is None and window.depth_stamps is None:
+        return window, _Refusals([none] * len(window.tensions), none)
+    tensions, stamps, refused = [], [], []
+    for k, line in enumerate(core.state.lines):
+        own = None if window.tension_stamps is None else window.tension_stamps[k]
+        column, st, r = split(window.tensions[k], own, line.sample_ns)
+        tensions.append(column)
+        stamps.append(st)
+        refused.append(r)
+    depth, d_stamps, d_refused = split(
+        window.depth, window.depth_stamps, core.state.depth_sample_ns
+    )
+    kept = Window(tensions, depth, window.ticks, stamps, d_stamps)
+    return kept, _Refusals(refused, d_refused)
+
+
+def _write_refusals(core: MonitorCore, refusals: _Refusals) -> None:
+    """When a sample was last refused for its stamp, per line and the depth, after the window."""
+    for line, r in zip(core.state.lines, refusals.lines):
+        if len(r):
+            line.stamp_refused = float(r[-1] * 1e-9)
+    if len(refusals.depth):
+        core.state.depth_refused = float(refusals.depth[-1] * 1e-9)
 
 
 # --- snapshots -----------------------------------------------------------------------------------
@@ -1098,11 +1297,14 @@ def _snapshot_stamps(
     tide_before: tuple[Level, str],
     lines_before: list[_Before],
     blind: Optional[_Blind] = None,
+    flood: Optional[_Flood] = None,
 ) -> np.ndarray:
     """The stamps of the window's snapshots: its ticks and every level change [ns]."""
     parts = [window.ticks, tide.times[_changed(tide.level, tide_before[0])]]
     if blind is not None:
         parts.append(tide.times[_changed(blind.levels, blind.before[0][0])])
+    if flood is not None:
+        parts.append(flood.stamps[flood.changes])
     parts += [r.step_ns[_changed(r.step_level, b.level)] for r, b in zip(results, lines_before)]
     return np.unique(np.concatenate(parts))
 
@@ -1118,13 +1320,14 @@ def _tide_statuses(
 ) -> list[ComponentStatus]:
     """The tide status at each of ``stamps`` [ns]."""
     dd, dv = window.depth
+    ds = window.sample_s(None)
     tide_at = np.searchsorted(tide.times, stamps, 'right') - 1
     depth_at = np.searchsorted(dd, stamps, 'right') - 1
     out = []
     for n, stamp in enumerate(stamps.tolist()):
         i, j = int(tide_at[n]), int(depth_at[n])
         depth = float(dv[j]) if j >= 0 else depth_before[0]
-        depth_s = float(dd[j] * 1e-9) if j >= 0 else depth_before[1]
+        depth_s = float(ds[j]) if j >= 0 else depth_before[1]
         rate = float(tide.rates[j]) if j >= 0 else depth_before[3]
         state = tide_before if i < 0 else _tide_at(core, tide, i)
         word = depth_word if i < 0 else depth_state_word(depth_s, int(tide.sensor[i]))
@@ -1132,6 +1335,102 @@ def _tide_statuses(
         forecast = forecast_word(core.config, rate)
         out.append(tide_component(state, core.depth_id, depth, age, rate, word, forecast))
     return out
+
+
+def _raised_condition(series: LevelSeries, unshelvable: Any) -> Any:
+    """The condition a raise of the line's alarm at step ``i`` names (the visible one under
+    the alarm's shelf), as the core's ``_raised_condition``."""
+
+    def condition(i: int, ack: alarm_ack.AckState) -> str:
+        latches = series.active_at(i)
+        if alarm_ack.shelved(ack):
+            hidden = shelving.hidden_conditions(ack.shelved_condition, unshelvable)
+            latches = [on and c not in hidden for c, on in zip(CONDITIONS, latches)]
+        return alarm_ack.condition(ack.level, latches)
+
+    return condition
+
+
+class _Flood(NamedTuple):
+    """The flood decisions of a window (core.alarm_flood): decision stamps [ns] (raises and
+    ticks), per decision the window's oldest raise and count, the flood's start decision (-1:
+    the flood before the window, or none), the raises counted (times [s], alarms), the flood
+    before the window, and the status's transitions."""
+
+    stamps: np.ndarray
+    lo: np.ndarray
+    counted: np.ndarray
+    start: np.ndarray
+    times: np.ndarray
+    names: list[str]
+    before: alarm_flood.Flood
+    status_before: tuple[Level, str]
+    transitions: list[Transition]
+    changes: np.ndarray  # the decisions at which the status's level changed
+
+    def at(self, j: int) -> alarm_flood.Flood:
+        """The flood decision ``j`` (-1: as before the window)."""
+        if j < 0:
+            return self.before
+        lo, hi = int(self.lo[j]), int(self.lo[j] + self.counted[j])
+        recent = tuple(zip(self.times[lo:hi].tolist(), self.names[lo:hi]))
+        start = int(self.start[j])
+        if start == -2:  # no flood
+            return alarm_flood.Flood(recent)
+        if start < 0:
+            return alarm_flood.Flood(recent, self.before.since, self.before.first_out)
+        first = int(self.lo[start])
+        since = float(self.stamps[start] * 1e-9)
+        return alarm_flood.Flood(recent, since, (self.names[first], float(self.times[first])))
+
+
+def _decide_flood(
+    core: MonitorCore, window: Window, raises: list[tuple[int, int, str]]
+) -> tuple[_Flood, list[tuple[int, AlarmEvent]]]:
+    """The flood decisions at the window's raises (stamp ns, rank, alarm) and ticks, their
+    journal records; leaves the core's flood state as after the window."""
+    a = core.config.alarm
+    raises = sorted(raises)
+    before, status_before = core.state.flood, core.state.alarms
+    stamps = np.unique(np.concatenate([np.array([r[0] for r in raises], np.int64), window.ticks]))
+    times = np.concatenate(
+        [np.array([t for t, _ in before.recent]), np.array([r[0] for r in raises]) * 1e-9]
+    )
+    names = [n for _, n in before.recent] + [r[2] for r in raises]
+    # Raises up to each decision by their stamps (ns: two events 1 ns apart share a float s).
+    hi = len(before.recent) + np.searchsorted(
+        np.array([r[0] for r in raises], np.int64), stamps, 'right'
+    )
+    lo, count = alarm_flood.counts(times, hi, stamps * 1e-9, a.flood_window)
+    flooded = count > a.flood_count
+    was = np.concatenate([[before.since == before.since], flooded[:-1]])
+    starts = flooded & ~was
+    episode = np.cumsum(starts)
+    first = np.flatnonzero(starts)
+    start = np.where(episode > 0, first[np.maximum(episode - 1, 0)] if len(first) else -1, -1)
+    start = np.where(flooded, start, -2)
+    changes = np.flatnonzero(flooded != was)
+    flood = _Flood(stamps, lo, count, start, times, names, before, status_before, [], changes)
+    log: list[tuple[int, AlarmEvent]] = []
+    old, entered = status_before, core.state.alarms_entered
+    for j in changes.tolist():
+        now = float(stamps[j] * 1e-9)
+        state = flood.at(j)
+        new = alarm_flood.status(state, a)
+        flood.transitions.append(Transition(now, old[0], new[0], new[1], now - entered))
+        if flooded[j]:
+            name, at = state.first_out
+            event = AlarmEvent(now, alarm_flood.NAME, 'flood', 'WARN', by=name, value=at)
+        else:
+            ended = now - flood.at(j - 1).since
+            event = AlarmEvent(now, alarm_flood.NAME, 'flood_end', value=ended)
+        log.append((int(stamps[j]), event))
+        old, entered = new, now
+    if len(stamps):
+        core.state.flood = flood.at(len(stamps) - 1)
+        core.state.alarms = alarm_flood.status(core.state.flood, a)
+    core.state.alarms_entered = entered
+    return flood, log
 
 
 class _Made(NamedTuple):
@@ -1151,12 +1450,27 @@ class _Made(NamedTuple):
     sensors: Optional[_Sensors] = None
     depth_word: str = 'ok'
     blind: Optional[_Blind] = None
+    flood: Optional[_Flood] = None
 
     def stamps(self) -> np.ndarray:
         """The stamps of the window's snapshots (:func:`_snapshot_stamps`)."""
         return _snapshot_stamps(
-            self.window, self.tide, self.results, self.tide_before, self.lines_before, self.blind
-        )
+            self.window, self.tide, self.results, self.tide_before, self.lines_before, self.blind,
+            self.flood,
+        )  # fmt: skip
+
+    def alarms_statuses(self, stamps: np.ndarray) -> list[ComponentStatus]:
+        """The ``alarms`` status (the flood decision) at each of ``stamps`` [ns]."""
+        flood = self.flood
+        assert flood is not None
+        at = np.searchsorted(flood.stamps, stamps, 'right') - 1
+        a = self.core.config.alarm
+        out = []
+        for j in at.tolist():
+            state = flood.at(j)
+            status = flood.status_before if j < 0 else alarm_flood.status(state, a)
+            out.append(self.core.alarms_component(status, state))
+        return out
 
     def blind_statuses(self, stamps: np.ndarray) -> list[ComponentStatus]:
         """The sensors alarm's status at each of ``stamps`` [ns]."""
@@ -1177,11 +1491,11 @@ class _Made(NamedTuple):
         LineState, LineResult, LevelSeries, _Steps, np.ndarray, _Before,
         alarm_ack.AckSeries, Optional[_Dock], Optional[_Sensors],
     ]:  # fmt: skip
-        """Line ``k``'s state, result, levels, steps, tension times, state before the window,
-        acknowledgements, and the window's dock and sensor states."""
+        """Line ``k``'s state, result, levels, steps, tension reading times, state before the
+        window, acknowledgements, and the window's dock and sensor states."""
         return (
             self.core.state.lines[k], self.results[k], self.series[k], self.steps[k],
-            self.window.tensions[k][0], self.lines_before[k], self.acks[k], self.dock,
+            self.window.sample_ns(k), self.lines_before[k], self.acks[k], self.dock,
             self.sensors,
         )  # fmt: skip
 
@@ -1193,6 +1507,7 @@ def _snapshots(m: _Made) -> list[Snapshot]:
     stamps = m.stamps()
     tides = _tide_statuses(core, window, tide, stamps, m.depth_before, m.tide_before, m.depth_word)
     blinds = m.blind_statuses(stamps)
+    alarms = m.alarms_statuses(stamps)
     columns = [_line_statuses(m, k, stamps) for k in range(len(m.results))]
     tick_at = np.searchsorted(window.ticks, stamps, 'right') - 1
     logger = ComponentStatus(
@@ -1203,6 +1518,7 @@ def _snapshots(m: _Made) -> list[Snapshot]:
         statuses = [col[n] for col in columns]
         statuses.append(tides[n])
         statuses.append(blinds[n])
+        statuses.append(alarms[n])
         statuses.append(logger)
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))
@@ -1456,7 +1772,7 @@ def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
     names = [*MODEL_NAMES, before.model]  # -1: the model before the window
     models = [names[c] for c in _take(r.model_codes, s, -1, np.int64).tolist()]
     t = _at(steps.t_idx, at)
-    ts = _take(tt * 1e-9, t, float(before.tension_s))
+    ts = _take(m.window.sample_s(k), t, float(before.tension_s))
     age = stamps * 1e-9 - ts
     words, extra_keys, extra = _word_columns(m, k, at, _at(steps.k_idx, at))
     ack_keys, ack_columns = _ack_columns(acks, before, at, conditions)
@@ -1542,6 +1858,7 @@ def _snapshot_columns(m: _Made) -> SnapshotColumns | list[Snapshot]:
     tides = _tide_statuses(core, window, tide, stamps, m.depth_before, m.tide_before, m.depth_word)
     groups.append((tides, 1))
     groups.append((m.blind_statuses(stamps), 1))
+    groups.append((m.alarms_statuses(stamps), 1))
     logger = ComponentStatus(
         'catenary_monitor: logger', core.state.logger[0], core.state.logger[1], core.logger_id, ()
     )
@@ -1592,7 +1909,14 @@ def slice_window(window: Window, lo: Optional[int], hi: Optional[int]) -> Window
 
     tensions = [(t[cut(t)], v[cut(t)]) for t, v in window.tensions]
     dt, dv = window.depth
-    return Window(tensions, (dt[cut(dt)], dv[cut(dt)]), window.ticks[cut(window.ticks)])
+    stamps = None
+    if window.tension_stamps is not None:
+        pairs = zip(window.tension_stamps, window.tensions)
+        stamps = [None if s is None else s[cut(t)] for s, (t, _) in pairs]
+    d_stamps = None if window.depth_stamps is None else window.depth_stamps[cut(dt)]
+    return Window(
+        tensions, (dt[cut(dt)], dv[cut(dt)]), window.ticks[cut(window.ticks)], stamps, d_stamps
+    )
 
 
 def concat_lines(parts: list[LineResult]) -> LineResult:
@@ -1636,10 +1960,12 @@ def run_log(
     pieces: list[WindowResult] = []
     extra: list[Snapshot | SnapshotColumns] = []
     others: list[Change] = []
+    journal: list[AlarmEvent] = []
     lo: Optional[int] = None
     for event in [*events, None]:
         hi = None if event is None else event.stamp_ns
         pieces.append(advance(core, slice_window(window, lo, hi), snapshots))
+        journal += pieces[-1].alarm_events
         if isinstance(event, Start):
             core = MonitorCore(
                 core.config, event.stamp_ns, _ids(core), core.depth_id, core.logger_id
@@ -1647,6 +1973,7 @@ def run_log(
         elif event is not None:
             step = core.step(event)
             others += list(step.transitions)
+            journal += step.alarm_events
             if snapshots and step.snapshot is not None:
                 extra.append(step.snapshot)
         lo = hi
@@ -1666,6 +1993,7 @@ def run_log(
             min(p.start_ns for p in pieces),
             max(p.end_ns for p in pieces),
             others,
+            alarm_events=journal,
         ),
         core,
     )
@@ -1736,4 +2064,5 @@ def recompute(
         from_log,
         start,
         list(events),
+        alarm_events=result.alarm_events,
     )

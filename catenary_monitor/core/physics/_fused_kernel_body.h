@@ -1,4 +1,4 @@
-/* One block of problem 3/4 lanes (see _kernels.c).  Included once per instruction set with
+/* One block of problem 3/4 lanes (see _fused_kernel.c).  Included once per instruction set with
  * SFX(name) giving the suffixed name and CM_SIMD the loop pragma; every loop over lanes is
  * straight-line code with selects, so GCC vectorizes it with glibc's libmvec. */
 

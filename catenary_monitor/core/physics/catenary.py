@@ -35,6 +35,7 @@ FAST_STEPS = 2
 # : Iteration cap; never reached on the physical domain (residual counts:
 # test/test_methods_scalar.py).
 MAXITER = 60
+_EPS = float(np.finfo(float).eps)
 
 _MATH = SimpleNamespace(
     sqrt=math.sqrt,
@@ -695,3 +696,79 @@ def _d_cosh_minus_sinh(z: np.ndarray) -> np.ndarray:
         )
     )
     return np.where(np.abs(z) < 0.5, series, z * np.cosh(z) - np.sinh(z))
+
+
+def taut_parameter_from_length_scalar(h: float, x: float, length: float) -> tuple[float, bool]:
+    """:func:`taut_parameter_from_length` for one element in plain floats (the monitor's
+    per-sample path): the same start, Newton step, stopping test and series, in the same
+    operation order. Raises what :mod:`math` raises (ValueError, OverflowError,
+    ZeroDivisionError) where numpy would give NaN or inf: the caller hands those to the array
+    path."""
+    sqrt, log = math.sqrt, math.log
+    chord = sqrt((length - h) * (length + h))
+    km1 = (chord - x) / x
+    k = 1.0 + km1
+    d = _maximum(sqrt(6.0 * _maximum(km1, 0.0)), log(2.0 * k) + log(log(2.0 * k) + 1.0))
+    eps4 = 4.0 * _EPS
+    done = False
+    for _ in range(4 * MAXITER):
+        f = _sinh_minus_x_scalar(d) / d - km1
+        fp = _d_cosh_minus_sinh_scalar(d) / (d * d)
+        new = d - f / fp
+        falls = new < d
+        done = abs(new - d) <= eps4 * d or not falls
+        d = new if falls else d
+        if done:
+            break
+    return x / (2.0 * d), done
+
+
+def _maximum(a: float, b: float) -> float:
+    """``np.maximum`` of two floats (NaN if either is)."""
+    return a if (a != a or a >= b) else b
+
+
+def _sinh_minus_x_scalar(z: float) -> float:
+    """:func:`_sinh_minus_x` of one float."""
+    if not abs(z) < 0.5:
+        return math.sinh(z) - z
+    z2 = z * z
+    return (
+        z
+        * z2
+        / 6.0
+        * (
+            1.0
+            + z2
+            / 20.0
+            * (
+                1.0
+                + z2
+                / 42.0
+                * (1.0 + z2 / 72.0 * (1.0 + z2 / 110.0 * (1.0 + z2 / 156.0 * (1.0 + z2 / 210.0))))
+            )
+        )
+    )
+
+
+def _d_cosh_minus_sinh_scalar(z: float) -> float:
+    """:func:`_d_cosh_minus_sinh` of one float."""
+    if not abs(z) < 0.5:
+        return z * math.cosh(z) - math.sinh(z)
+    z2 = z * z
+    return (
+        z
+        * z2
+        / 3.0
+        * (
+            1.0
+            + z2
+            / 10.0
+            * (
+                1.0
+                + z2
+                / 28.0
+                * (1.0 + z2 / 54.0 * (1.0 + z2 / 88.0 * (1.0 + z2 / 130.0 * (1.0 + z2 / 180.0))))
+            )
+        )
+    )

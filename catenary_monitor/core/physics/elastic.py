@@ -659,7 +659,7 @@ class SimpleRigid:
         self.__dict__.update(d)
 
 
-#: Lines of the report (README): submerged weight [N/m] and axial stiffness EA [N].
+#: Lines of the report (docs/elastic.md): submerged weight [N/m] and axial stiffness EA [N].
 #: U3 studlink chain 81 mm: EA ~ 1.01e8 d^2 kN (d in m), the usual studlink estimate; the
 #: paper's w = 1.3 kN/m.  Steel wire of similar strength (six-strand 76 mm): metallic area
 #: ~0.58 pi d^2/4, effective modulus ~90 GPa, ~0.25 kN/m in water.  Polyester 160 mm:

@@ -624,3 +624,57 @@ def _elastic_lift_depth(
             break
     z = q / r
     return r / w * (z * z / (np.sqrt(1.0 + z * z) + 1.0)) + q * length / (2.0 * ea)
+
+
+def span_from_tension_scalar(w: float, h: float, length: float, t: float, ea: float) -> float:
+    """:func:`span_from_tension` of one chain in plain floats (the same closed forms in the same
+    order, the branch taken instead of both evaluated). Raises what :mod:`math` raises where
+    numpy gives NaN or inf (the caller then uses the array path)."""
+    sqrt, asinh = math.sqrt, math.asinh
+    ta, d = anchor_end_tension(w, h, t, ea, cat._MATH)
+    wl = w * length
+    va = 0.5 * (d * (t + ta) / wl - wl)
+    inv_ea = 1.0 / ea
+    if va > 0.0:  # lifted
+        r = sqrt(cat._maximum((ta - va) * (ta + va), 0.0))
+        return float(r / w * asinh((wl * ta - va * d) / (r * r)) + r * length * inv_ea)
+    v = sqrt(d * (t + ta))
+    return float((length - v / w) + ta / w * asinh(v / ta) + ta * length * inv_ea)
+
+
+def lift_depth_scalar(w: float, length: float, span: float, ea: float = math.inf) -> float:
+    """:func:`lift_depth` of one chain in plain floats (the monitor's per-sample path: the same
+    iterations, start and stopping tests). Raises what :mod:`math` raises where numpy gives NaN
+    or inf."""
+    if not (w > 0.0 and span > 0.0 and span < length and ea > 0.0):
+        return math.nan
+    a, _ = cat.taut_parameter_from_length_scalar(0.0, 2.0 * span, 2.0 * length)
+    if math.isfinite(ea):
+        return _elastic_lift_depth_scalar(w, length, span, ea, w * a)
+    half = math.sinh(0.5 * span / a)
+    return 2.0 * a * half * half
+
+
+def _elastic_lift_depth_scalar(
+    w: float, length: float, span: float, ea: float, r_rigid: float
+) -> float:
+    """:func:`_elastic_lift_depth` of one chain (it stops at this element's own convergence,
+    where the array path goes on until every element has: a few ulps apart)."""
+    asinh, sqrt = math.asinh, math.sqrt
+    q = w * length
+    lo, hi = 0.0, r_rigid
+    r = r_rigid * (1.0 - 0.5 * r_rigid * length / (ea * span))
+    r = r if lo < r < hi else 0.5 * hi
+    for _ in range(MAXITER):
+        z = q / r
+        f = r / w * asinh(z) + r * length / ea - span
+        lo, hi = (r if f < 0.0 else lo), (r if f > 0.0 else hi)
+        fp = (asinh(z) - z / sqrt(1.0 + z * z)) / w + length / ea
+        new = r - f / fp
+        new = new if lo < new < hi else 0.5 * (lo + hi)
+        done = abs(new - r) <= T_STEP_TOL * r
+        r = new
+        if done:
+            break
+    z = q / r
+    return r / w * (z * z / (sqrt(1.0 + z * z) + 1.0)) + q * length / (2.0 * ea)

@@ -1,6 +1,6 @@
 """The fused C kernel for problems 3 and 4 (hook tension given) with their margins, if built.
 
-``_kernels.c`` computes, in one pass over blocks of 256 elements, what
+``_fused_kernel.c`` computes, in one pass over blocks of 256 elements, what
 :func:`catenary_monitor.core.physics.inextensible.solve_inextensible` computes for a measured
 tension: validation and status, the grounded chain, the uplift solve, the uplift state and the
 three margins, with the formulas of :mod:`catenary_monitor.core.physics.catenary` (same start,

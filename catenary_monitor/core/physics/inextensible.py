@@ -76,7 +76,7 @@ def solve_inextensible(
     -----
     Every input may be an array; arrays broadcast and are solved in vectorized code.  The
     relative error against a 50-digit reference is below 1e-12 wherever the problem is
-    well-conditioned (see README, "Accuracy").  With all-scalar ``tension`` or ``horizontal``
+    well-conditioned (docs/solver.md, "Accuracy").  With all-scalar ``tension`` or ``horizontal``
     inputs a plain-float path gives the same numbers to rounding, an order of magnitude faster.
     """
     if _ONE is not None:  # one element of problem 3 or 4 in plain numbers: the C kernel

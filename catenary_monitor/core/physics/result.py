@@ -27,6 +27,7 @@ class Status(IntEnum):
     IMPLAUSIBLE_TENSION = 11  # a reading, see core/monitor/plausible.py
     IMPLAUSIBLE_DEPTH = 12
     OUT_OF_RANGE = 13  # a result float64 cannot hold (never status 0 with inf or NaN)
+    WRONG_UNITS = 14  # a reading off by orders of magnitude, see core/monitor/plausible.py
 
 
 STATUS_MESSAGES: dict[int, str] = {
@@ -57,6 +58,10 @@ STATUS_MESSAGES: dict[int, str] = {
     ),
     Status.OUT_OF_RANGE: (
         'a result is beyond float64 range (inf or NaN): the inputs are too extreme to solve'
+    ),
+    Status.WRONG_UNITS: (
+        'hook tension 100 times or more below the hanging chain\'s own weight w*h, or below it '
+        'where 1000 times the reading would fit the chain: wrong units? check the tension scale'
     ),
 }
 

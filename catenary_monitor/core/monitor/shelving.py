@@ -1,0 +1,165 @@
+"""Shelving an alarm (ISA-18.2 / IEC 62682): requests, the rules, what a shelf hides.
+
+An operator shelves a line's alarm, or one condition of it, for a bounded time
+(``shelve_max``): the shelved conditions are still computed, logged and shown, but not
+annunciated. Conditions in ``unshelvable_conditions`` (default: ``uplift``, the lifted anchor's
+ERROR) are never hidden: a request naming one is refused, a whole-alarm shelf never covers one,
+and a whole-alarm shelf asked while one is active is refused. The states themselves (the shelf
+on the alarm, its expiry returning the alarm unacknowledged) are
+:mod:`catenary_monitor.core.monitor.acknowledge`'s; the monitor core applies the requests
+(:class:`~catenary_monitor.core.monitor.monitor_core.Shelve` events) and records them.
+
+Requests: ``std_msgs/msg/String`` on :data:`SHELVE_TOPIC`, data ``LINE SECONDS [ORIGIN...]``
+or ``LINE.CONDITION SECONDS [ORIGIN...]`` (``sensors`` for the sensors' common-cause alarm;
+0 seconds unshelves). Conditions are the names of ``alarm_condition``
+(:data:`catenary_monitor.core.config.parameters.ALARM_CONDITIONS`: ``uplift``, ``input``,
+``stale``, ``anchor_margin``, ...). Times in s.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Mapping, NamedTuple, Optional, Sequence
+
+import numpy as np
+
+from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, AlarmConfig
+from catenary_monitor.core.monitor.acknowledge import SENSORS, WHOLE
+from catenary_monitor.core.monitor.alarms import CONDITIONS, ERROR_CONDITIONS, Level
+
+__all__ = [
+    'SHELVE_TOPIC',
+    'ShelveRequest',
+    'parse_request',
+    'hidden_conditions',
+    'masked_level',
+    'masked_levels',
+    'refusal',
+    'label',
+]
+
+#: The node's shelving topic (std_msgs/msg/String: ``LINE[.CONDITION] SECONDS [ORIGIN...]``).
+SHELVE_TOPIC = '/catenary_monitor/shelve'
+_ERRORS = ERROR_CONDITIONS
+#: Longest origin kept from a request (characters): the rest is cut, never stored.
+ORIGIN_MAX = 200
+
+
+class ShelveRequest(NamedTuple):
+    """A shelving request: the alarm (a line name or ``sensors``), the condition
+    (:data:`~catenary_monitor.core.monitor.acknowledge.WHOLE` for the whole alarm), the
+    duration [s] (0: unshelve) and who asked."""
+
+    alarm: str
+    condition: str
+    seconds: float
+    origin: str
+
+
+def parse_request(text: str) -> ShelveRequest:
+    """The request of a shelving message's text (ValueError with one line when it is not
+    ``LINE[.CONDITION] SECONDS [ORIGIN...]``); the origin defaults to ``ros``, is cut to
+    :data:`ORIGIN_MAX` characters and keeps printable characters only."""
+    parts = text.strip().split(None, 2)
+    usage = 'expected "LINE[.CONDITION] SECONDS [ORIGIN]" (0 seconds unshelves)'
+    if len(parts) < 2:
+        raise ValueError(f'incomplete shelving request {text[:80]!r}: {usage}')
+    target, seconds_text = parts[0], parts[1]
+    try:
+        seconds = float(seconds_text)
+    except ValueError:
+        raise ValueError(f'not a duration: {seconds_text[:40]!r}: {usage}') from None
+    if not math.isfinite(seconds) or seconds < 0.0:
+        raise ValueError(f'the duration must be finite and >= 0 s, got {seconds_text[:40]!r}')
+    alarm, _, condition = target.partition('.')
+    origin = ''.join(c for c in (parts[2] if len(parts) > 2 else 'ros') if c.isprintable())
+    return ShelveRequest(alarm, condition or WHOLE, seconds, origin[:ORIGIN_MAX].strip() or 'ros')
+
+
+def hidden_conditions(condition: str, unshelvable: Sequence[str]) -> frozenset[str]:
+    """The conditions a shelf of ``condition`` (:data:`WHOLE` or one) hides: never an
+    unshelvable one."""
+    if condition == WHOLE:
+        return frozenset(c for c in ALARM_CONDITIONS if c not in unshelvable)
+    return frozenset({condition}) - frozenset(unshelvable)
+
+
+def masked_level(active: Sequence[bool], stale: bool, hidden: frozenset[str]) -> Level:
+    """The line's level without the ``hidden`` conditions (``active``: the latches' flags in
+    :data:`~catenary_monitor.core.monitor.alarms.CONDITIONS` order; ``stale``: an input stale),
+    by the level rule ERROR > STALE > WARN > OK."""
+    up = {cond for cond, on in zip(CONDITIONS, active) if on and cond not in hidden}
+    if up & set(_ERRORS):
+        return Level.ERROR
+    if stale and 'stale' not in hidden:
+        return Level.STALE
+    return Level.WARN if up else Level.OK
+
+
+def masked_levels(
+    active: Mapping[str, np.ndarray], stale: np.ndarray, hidden: frozenset[str]
+) -> np.ndarray:
+    """:func:`masked_level` per step (int8): ``active`` condition -> bool per step."""
+    n = len(stale)
+    err = np.zeros(n, bool)
+    warn = np.zeros(n, bool)
+    for cond in CONDITIONS:
+        if cond in hidden:
+            continue
+        if cond in _ERRORS:
+            err |= active[cond]
+        else:
+            warn |= active[cond]
+    levels = np.where(warn, np.int8(Level.WARN), np.int8(Level.OK))
+    if 'stale' not in hidden:
+        np.copyto(levels, np.int8(Level.STALE), where=stale)
+    np.copyto(levels, np.int8(Level.ERROR), where=err)
+    return levels
+
+
+def label(condition: str) -> str:
+    """A condition as an operator reads it: ``uplift ERROR``, ``stale STALE``,
+    ``anchor_margin WARN``."""
+    level = 'ERROR' if condition in _ERRORS else ('STALE' if condition == 'stale' else 'WARN')
+    return f'{condition} {level}'
+
+
+def refusal(
+    request: ShelveRequest,
+    lines: Sequence[str],
+    config: AlarmConfig,
+    active: Optional[Sequence[bool]] = None,
+) -> Optional[str]:
+    """Why ``request`` is refused (one line), or None: an unknown alarm or condition, every
+    alarm at once, too long, shelving disabled, an unshelvable condition, or a whole-alarm
+    shelf over an active unshelvable condition (``active``: the line's latch flags)."""
+    alarm, cond = request.alarm, request.condition
+    if alarm == 'all':
+        return 'shelve one alarm at a time (LINE or LINE.CONDITION), not all'
+    if alarm not in lines and alarm != SENSORS:
+        return f'unknown alarm {alarm!r} (alarms: {", ".join([*lines, SENSORS])})'
+    if request.seconds == 0.0:
+        return None  # unshelving is always allowed
+    if config.shelve_max == 0.0:
+        return 'shelving is disabled (shelve_max 0 s)'
+    if request.seconds > config.shelve_max:
+        return f'{request.seconds:g} s is longer than shelve_max ({config.shelve_max:g} s)'
+    unshelvable = ', '.join(config.unshelvable_conditions) or 'none'
+    if alarm == SENSORS:
+        return None if cond == WHOLE else 'the sensors alarm has no conditions: shelve "sensors"'
+    if cond != WHOLE and cond not in ALARM_CONDITIONS:
+        return f'unknown condition {cond!r} (conditions: {", ".join(ALARM_CONDITIONS)})'
+    if cond in config.unshelvable_conditions:
+        return (
+            f'{alarm}: the {label(cond)} cannot be shelved '
+            f'(unshelvable_conditions: {unshelvable})'
+        )
+    if cond == WHOLE and active is not None:
+        for name, on in zip(CONDITIONS, active):
+            if on and name in config.unshelvable_conditions:
+                return (
+                    f'{alarm}: its active {label(name)} cannot be shelved '
+                    f'(unshelvable_conditions: {unshelvable}); shelve one other condition '
+                    f'as {alarm}.CONDITION'
+                )
+    return None
