@@ -40,6 +40,7 @@ def register(sub: Any) -> None:
     """Add the benchmark sub-commands to the ``catenary-monitor`` parser."""
     from catenary_monitor_study import (
         bench_body,
+        bench_dynamics,
         bench_console,
         bench_core,
         bench_methods,
@@ -49,6 +50,7 @@ def register(sub: Any) -> None:
 
     bench_console.register(sub)
     bench_body.register(sub)
+    bench_dynamics.register(sub)
     bench_soak.register(sub)
     for module in (bench_core, bench_methods, bench_replay):
         module.register(sub)

@@ -141,8 +141,8 @@ def test_slow_tide_rise_uplift_and_error_against_moordyn(tmp_path, moordyn):
     segments: with 40 (3 m each) MoorDyn's own discretization near the touchdown is 0.45 kN."""
     rise = 2.1 / 300.0
     chain = moordyn.Chain(segments=80)
-    hook = (lambda t: (121.06, 0.0), lambda t: (22.2 + rise * t, rise))
-    rec = moordyn.run_line(chain, *hook, 240.0)
+    hook = (lambda t: (121.06, 0.0), lambda t: (22.1 + rise * t, rise))
+    rec = moordyn.run_line(chain, *hook, 270.0)
     config, bag = moordyn_bag(tmp_path, rec, allowed=20e3)
     rows = replay_csv(tmp_path, config, bag)
     uplift = column(rows, 'uplift_force', 'line_11')

@@ -235,7 +235,8 @@ def _holding_floats(
     implied = lift = nan
     if solved and length == length:
         implied = fixed_length.span_from_tension_scalar(w, h, length, t, ea)
-        lift = fixed_length.lift_depth_scalar(w, length, implied, ea)
+        span = implied if x0 != x0 else x0  # the hook where it is installed
+        lift = fixed_length.lift_depth_scalar(w, length, span, ea)
     margin = capacity - r
     state = float(DRAGGING if implied - x0 > tolerance else OVERLOADED) if margin < 0.0 else 0.0
     return {
