@@ -214,6 +214,7 @@ def test_csv_all_columns_and_stdout_summary(scene, capsys):
     k = header.index('status')
     assert header[k : k + 4] == ['status', 'level', 'model', 'drag_state']
     assert header[k + 4 : k + 7] == ['fatigue_damage', 'fatigue_damage_rate', 'fatigue_life_left']
+    assert header[k + 7 : k + 9] == ['channels_healthy', 'channel_states']
     assert {'tide_margin', 'load_margin', 'safety_factor', 'horizontal_tension'} <= set(header)
     assert 'time_to_uplift' in header
     assert 'inextensible catenary' in models and models <= {'none', 'inextensible catenary'}

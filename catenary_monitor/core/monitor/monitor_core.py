@@ -53,6 +53,7 @@ from catenary_monitor.core.config.parameters import (
     runtime_change_messages,
 )
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
+from catenary_monitor.core.monitor import channels
 from catenary_monitor.core.monitor import alarm_flood, shelving
 from catenary_monitor.core.monitor import dock_watch as dock_live
 from catenary_monitor.core.monitor import fatigue as fatigue_rule
@@ -175,6 +176,8 @@ OUTPUT_FIELDS = (
     *holding_rule.DRAG_FIELDS,
     # Chain fatigue (Miner's damage, its rate over the last day, the life left): fatigue.py.
     *fatigue_rule.FIELDS,
+    # A line measured by several channels: the healthy count and their states, channels.py.
+    *channels.FIELDS,
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -217,6 +220,7 @@ class Tension(NamedTuple):
     line: int
     value: float
     sample_ns: Optional[int] = None
+    channel: int = 0  # a line of several channels (NAME.tension_topics): which one
 
 
 class Depth(NamedTuple):
@@ -428,6 +432,8 @@ class LineState:
     coalesced_until: int = -1  # ns: this line's samples stamped up to it were not stepped
     fatigue: fatigue_rule.FatigueState = fatigue_rule.FatigueState()  # the streamed count
     fatigue_values: tuple[float, ...] = (0.0, _NAN, _NAN)  # fatigue_rule.FIELDS now
+    channels: Optional[channels.ChannelState] = None  # a line of several channels
+    channel_values: tuple[float, ...] = (_NAN, _NAN)  # channels.FIELDS now
     sample_ns: int = -1  # ns, the newest accepted sample's stamp (header or arrival; -1: none)
     stamp_refused: float = -math.inf  # s, when a sample's stamp was last refused (arrival)
 
@@ -465,6 +471,8 @@ class LineState:
             implied_anchor_distance=v[_AT['implied_anchor_distance']],
             fatigue_damage=self.fatigue_values[0],
             fatigue_life_left=self.fatigue_values[2],
+            channels_healthy=self.channel_values[0],
+            channel_states=self.channel_values[1],
         )
 
 
@@ -583,6 +591,7 @@ class MonitorCore:
                 ack=alarm_ack.initial(start),
                 fatigue=fatigue_rule.initial(lc.fatigue_damage_initial),
                 fatigue_values=(lc.fatigue_damage_initial, _NAN, _NAN),
+                channels=channels.initial(len(lc.channel_topics)) if lc.channel_topics else None,
             )
             for lc in config.lines
         ]
@@ -656,8 +665,14 @@ class MonitorCore:
         ):
             line.stamp_refused = _stamp_s(ev.stamp_ns)  # refused: not a reading (bad_stamp)
             return Step(ev.stamp_ns, 'tension', (), None, ())
+        value = float(ev.value)
+        if line.channels is not None:  # the tension from the healthy channels
+            line.channels, value, healthy, code = channels.step(
+                line.channels, ev.channel, _stamp_s(sample_ns), value, channel_limits(self, line)
+            )
+            line.channel_values = (float(healthy), code)
         line.sample_ns = sample_ns
-        line.tension, line.tension_s = float(ev.value), _stamp_s(sample_ns)
+        line.tension, line.tension_s = value, _stamp_s(sample_ns)
         line.sensor_memory = sensor_state.sample(
             line.sensor_memory,
             line.tension_s,
@@ -1143,6 +1158,7 @@ class MonitorCore:
                 NO_MODEL,
             )
             line.values = _with_fatigue(line.values, line.fatigue_values)
+            _with_channels(line)
             return
         loads: dict[str, Any] = {} if lc.point_loads is None else {'point_loads': lc.point_loads}
         r = solve(
@@ -1222,6 +1238,7 @@ class MonitorCore:
         lines without accuracies or holding data keep NaN (what the functions give them)."""
         for line in lines:
             line.values = _with_fatigue(line.values, line.fatigue_values)
+            _with_channels(line)
         accuracy = self.config.alarm.depth_accuracy
         tolerance = self.config.alarm.drag_tolerance
         for fields, compute, wanted in (
@@ -1440,6 +1457,27 @@ def _with_fatigue(values: tuple[float, ...], fatigue: tuple[float, ...]) -> tupl
     """``values`` with the line's fatigue values in their places."""
     end = _FATIGUE_AT + len(fatigue)
     return values[:_FATIGUE_AT] + tuple(fatigue) + values[end:]
+
+
+_CHANNELS_AT = VALUE_FIELDS.index(channels.FIELDS[0])
+
+
+def _with_channels(line: LineState) -> None:
+    """The line's values with its channels' values in their places."""
+    v, end = line.values, _CHANNELS_AT + len(channels.FIELDS)
+    line.values = v[:_CHANNELS_AT] + tuple(line.channel_values) + v[end:]
+
+
+def channel_limits(core: MonitorCore, line: LineState) -> channels.Limits:
+    """The channel rules of a line (core.channels.Limits)."""
+    a = core.config.alarm
+    return channels.Limits(
+        a.tension_timeout,
+        a.stuck_time,
+        a.tension_resolution,
+        a.channel_tolerance,
+        int(line.config.min_channels),
+    )
 
 
 def _implausible(line: LineState, code: int) -> None:
