@@ -271,8 +271,8 @@ class CatenaryMonitor(Node):
             value = values[name]
             if spec.type in ('string_array', 'double_array'):
                 value = list(value)
-            if spec.type == 'double_array' and not value:  # [] would be typed a byte array
-                value = Parameter.Type.DOUBLE_ARRAY
+            if spec.type in ('double_array', 'string_array') and not value:
+                value = _PARAM_TYPES[spec.type]  # ([] would be typed a byte array)
             self.declare_parameter(name, value, _descriptor(spec, name), ignore_override=True)
         for line in config.lines:
             if line.ea is not None:

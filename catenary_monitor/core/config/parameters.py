@@ -1258,6 +1258,8 @@ def _check(full_name: str, spec: ParamSpec, value: Any) -> Any:
             )
         return value
     if spec.type == 'string_array':
+        if value is None and spec.default == ():  # rcl reads an empty YAML list [] as "not set"
+            return ()
         if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
             raise ConfigError(full_name, f'expected a list of strings, got {value!r}')
         return tuple(value)
