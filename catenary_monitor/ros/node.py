@@ -84,7 +84,10 @@ from catenary_monitor.core.monitor.acknowledge import (
     parse_request,
     publisher_identity,
 )
+from catenary_monitor.core.monitor.alarm_journal import AlarmEvent
 from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.monitor.shelving import SHELVE_TOPIC
+from catenary_monitor.core.monitor.shelving import parse_request as parse_shelve_request
 from catenary_monitor.core.monitor.health import clock_stopped
 from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,
@@ -101,6 +104,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     LoggerHealth,
     MonitorCore,
     Reconfigure,
+    Shelve,
     Snapshot,
     Start,
     Step,
@@ -149,14 +153,13 @@ INTAKE_HEARTBEAT = 60.0
 INTAKE_RATE_HEARTBEAT = 10.0
 #: The most samples one callback takes off an input's queue (the queue holds _SAMPLES.depth).
 DRAIN_MAX = 1000
-#: Samples that waited longer than this [s] when their callback ran mean the node is behind:
-#: the older ones of the input's waiting samples are then coalesced (logged, not stepped) and
-#: only the newest is stepped; a shorter hiccup is caught up with, sample by sample.
-COALESCE_AFTER = 0.25
-#: ... and so do samples waiting while the sample callbacks took more than this share of the
-#: last CATCH_UP_WINDOW [s] of wall time: catching up would take the time the timers need.
-CATCH_UP_BUSY = 0.5
-CATCH_UP_WINDOW = 0.25
+#: Samples that waited longer than this [s] when their callback ran are not stepped but
+#: coalesced (logged, counted, left out); a shorter hiccup (a node held off the CPU by other
+#: processes) is caught up with, sample by sample, ...
+COALESCE_AFTER = 1.0
+#: ... within this much time of steps per callback [s] (at the recent cost of one): the newest
+#: samples that fit are stepped, the older ones coalesced.
+STEP_BUDGET = 0.05
 #: A sample callback runs the periodic tick (the watchdog) itself once its timer is this many
 #: periods late (waiting in the executor's queue behind a flood's callbacks).
 LATE_TIMER = 1.25
@@ -307,9 +310,7 @@ class CatenaryMonitor(Node):
         if not force and wall - self._fatigue_saved < fatigue_store.SAVE_PERIOD:
             return
         self._fatigue_saved = wall
-        lines = {
-            line.config.name: to_record(line.fatigue) for line in self.core.state.lines
-        }
+        lines = {line.config.name: to_record(line.fatigue) for line in self.core.state.lines}
         extra = {'config_hash': config_hash(self.config), 'saved_ns': self._last_ns}
         try:
             path = fatigue_store.save(self._log_dir(), lines, extra)
@@ -440,10 +441,9 @@ class CatenaryMonitor(Node):
         self._lost_unseen = [0] * n  # samples DDS reported lost, their gap not seen yet
         self._gap_unreported = [0] * n  # samples of seen gaps DDS has not reported (yet)
         self._intake_due = False  # a sample was not handled while the intake said OK
+        self._step_cost = 1e-4  # s of wall time one sample's step takes (moving average)
         self._busy = 0.0  # s of wall time in the sample callbacks since the last Intake event
         self._busy_tick = 0.0  # the same since the last watchdog period
-        self._busy_recent, self._recent_start = 0.0, time.monotonic()  # ... _busy_share()'s
-        self._recent_share = 0.0
         self._intake_wall = time.monotonic()
         self._intake_sent = False
         a = self.config.alarm
@@ -520,6 +520,9 @@ class CatenaryMonitor(Node):
         self._ack_sub = self.create_subscription(
             String, ACKNOWLEDGE_TOPIC, self._on_acknowledge, _RELIABLE
         )
+        self._shelve_sub = self.create_subscription(
+            String, SHELVE_TOPIC, self._on_shelve, _RELIABLE
+        )
         self._diag_timer = self.create_timer(1.0 / cfg.alarm.diagnostic_rate, self._on_period)
         self._period_ns = int(1e9 / cfg.alarm.diagnostic_rate)
         self._tick_ns = self._now_ns()  # the newest tick's stamp
@@ -556,58 +559,54 @@ class CatenaryMonitor(Node):
         self._take(k, data, info.get('received_timestamp'))
 
     def _take(self, k: int, data: bytes, received_ns: Optional[int]) -> None:
-        """Log ``data`` and the samples waiting behind it on input ``k``, and step them: each
-        one while the oldest waited at most :data:`COALESCE_AFTER` and the callbacks took at
-        most :data:`CATCH_UP_BUSY` of the time (a hiccup the node catches up with), else only
-        the newest.
+        """Log ``data`` and the samples waiting behind it on input ``k``, and step what the
+        node can handle of them, newest first (:meth:`_to_step`): after a hiccup, all of them.
 
-        The older ones are then coalesced: a :class:`Coalesced` record stamped before them
-        tells replay to leave them out, as the node does, and they are counted (Intake
-        ``coalesced``); the node never works through a backlog it cannot keep up with."""
+        The older ones it cannot handle are coalesced: a :class:`Coalesced` record stamped
+        before them tells replay to leave them out, as the node does, and they are counted
+        (Intake ``coalesced``); the node never works through a backlog it cannot keep up
+        with."""
         t0 = time.perf_counter()
         batch = [(data, received_ns)] + self._drain(k)
         n = len(batch)
+        keep = self._to_step(batch)
         topic = self._depth_topic if k == len(self._names) else self._tension_topics[k]
         step = self._step_depth if k == len(self._names) else self._step_tension
-        if n > 1 and (self._busy_share() > CATCH_UP_BUSY or self._behind(batch)):
+        if keep < n:
             line = None if k == len(self._names) else self._names[k]
-            stamps = [self._stamp() for _ in range(n + 1)]
-            self._record(Coalesced(stamps[0], line, stamps[-2], n - 1))
+            stamps = [self._stamp() for _ in range(n - keep + 1)]
+            self._record(Coalesced(stamps[0], line, stamps[-1], n - keep))
             for (raw, _), stamp in zip(batch, stamps[1:]):
                 self._write(topic, raw, stamp)
-            self._coalesced[k] += n - 1
+            self._coalesced[k] += n - keep
             self._intake_due = True
-            step(k, stamps[-1], batch[-1][0])
-        else:
-            for raw, _ in batch:
-                stamp = self._stamp()
-                self._write(topic, raw, stamp)
-                step(k, stamp, raw)
+        for raw, _ in batch[n - keep :]:
+            t1 = time.perf_counter()
+            stamp = self._stamp()
+            self._write(topic, raw, stamp)
+            step(k, stamp, raw)
+            self._step_cost += 0.1 * (time.perf_counter() - t1 - self._step_cost)
         took = time.perf_counter() - t0
         self._busy += took
         self._busy_tick += took
-        self._busy_recent += took
         self._timers_late()
 
-    def _busy_share(self) -> float:
-        """Share of wall time the sample callbacks took over the last
-        :data:`CATCH_UP_WINDOW` or so (the one before, until this one has run half its
-        length)."""
-        now = time.monotonic()
-        elapsed = now - self._recent_start
-        if elapsed >= CATCH_UP_WINDOW:
-            self._recent_share = self._busy_recent / elapsed
-            self._busy_recent, self._recent_start, elapsed = 0.0, now, 0.0
-        if elapsed < 0.5 * CATCH_UP_WINDOW:
-            return self._recent_share
-        return self._busy_recent / elapsed
-
-    @staticmethod
-    def _behind(batch: list[tuple[bytes, Optional[int]]]) -> bool:
-        """Whether the oldest sample of ``batch`` (with a reception time) waited longer than
-        :data:`COALESCE_AFTER` (unknown: yes)."""
-        times = [t for _, t in batch if isinstance(t, int) and t > 0]
-        return not times or time.time_ns() - min(times) > COALESCE_AFTER * 1e9
+    def _to_step(self, batch: list[tuple[bytes, Optional[int]]]) -> int:
+        """How many of the newest samples of ``batch`` to step: those that waited at most
+        :data:`COALESCE_AFTER` (the newest always), as many as :data:`STEP_BUDGET` of steps
+        takes at the recent cost of one, less as the batch fills the input's queue (none but
+        the newest from half of it: the samples behind must be taken and logged in time)."""
+        n = len(batch)
+        if n == 1:
+            return 1
+        now, fresh = time.time_ns(), 0
+        for _, received in reversed(batch):
+            if isinstance(received, int) and now - received > COALESCE_AFTER * 1e9:
+                break
+            fresh += 1
+        room = max(0.0, 1.0 - n / (0.5 * _SAMPLES.depth))
+        budget = room * STEP_BUDGET / max(self._step_cost, 1e-6)
+        return max(1, min(fresh, int(budget)))
 
     def _step_tension(self, k: int, stamp: int, raw: bytes) -> None:
         """One core event of a hook tension sample as it came (the reading in N, at its header
@@ -774,13 +773,7 @@ class CatenaryMonitor(Node):
         """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event, with
         its publisher as the ROS graph names it; refused (one warning line) for an unknown
         line, and, with ``acknowledge_from_ros`` false, unless only consoles publish."""
-        endpoints = [
-            (f'{ns.rstrip("/")}/{name}', bytes(gid))
-            for name, ns, gid in (
-                (e.node_name, e.node_namespace, e.endpoint_gid)
-                for e in self.get_publishers_info_by_topic(ACKNOWLEDGE_TOPIC)
-            )
-        ]
+        endpoints = self._publishers_on(ACKNOWLEDGE_TOPIC)
         publisher = publisher_identity(endpoints)
         if not self.config.acknowledge_from_ros:
             refusal = console_only_refusal(endpoints)
@@ -804,6 +797,49 @@ class CatenaryMonitor(Node):
         self._record(Acknowledge(self._stamp(), line, origin, publisher))
         self.get_logger().info(f'ACKNOWLEDGED {line or "all"} by {origin} ({publisher})')
 
+    def _publishers_on(self, topic: str) -> list[tuple[str, bytes]]:
+        """The publishers on ``topic`` as the ROS graph names them: (node's full name, GID)."""
+        return [
+            (f'{ns.rstrip("/")}/{name}', bytes(gid))
+            for name, ns, gid in (
+                (e.node_name, e.node_namespace, e.endpoint_gid)
+                for e in self.get_publishers_info_by_topic(topic)
+            )
+        ]
+
+    @_guarded
+    def _on_shelve(self, msg: String) -> None:
+        """An operator's shelving request (``LINE[.CONDITION] SECONDS [ORIGIN]``), checked as an
+        acknowledgement is (its publisher named, ``acknowledge_from_ros`` false: consoles only,
+        an unknown alarm refused here); then one recorded core event, whose answer (shelved,
+        unshelved, or refused by the core's rules) is one log line."""
+        endpoints = self._publishers_on(SHELVE_TOPIC)
+        publisher = publisher_identity(endpoints)
+        if not self.config.acknowledge_from_ros:
+            refusal = console_only_refusal(endpoints)
+            if refusal is not None:
+                self.get_logger().warning(f'shelve refused: {refusal}', throttle_duration_sec=10.0)
+                return
+        try:
+            request = parse_shelve_request(msg.data)
+        except ValueError as err:
+            self.get_logger().warning(f'shelve refused: {err}', throttle_duration_sec=10.0)
+            return
+        if request.alarm not in self.core.index and request.alarm != SENSORS:
+            self.get_logger().warning(
+                f'shelve refused: unknown alarm {bounded_text(request.alarm, 64)!r} (alarms: '
+                f'{", ".join(self._names)}, {SENSORS})',
+                throttle_duration_sec=10.0,
+            )
+            return
+        event = Shelve(self._stamp(), *request, publisher)
+        step = self._record(event)
+        text = f'SHELVE {step.note} ({publisher})'
+        if ': refused: ' in step.note:
+            self.get_logger().warning(text)
+        else:
+            self.get_logger().info(text)
+
     @_guarded
     def _on_log_timer(self) -> None:
         """Flush the MCAP chunk when due (bounded loss on SIGKILL); report logger changes."""
@@ -823,9 +859,8 @@ class CatenaryMonitor(Node):
                 if why == 'age'
                 else f'the folder above log_max_total_size {self.config.log_max_total_size:g} B'
             )
-            self.get_logger().warning(
-                f'log retention: deleted {path.name} ({size / 2**20:.1f} MiB): {rule}'
-            )
+            shown = f'{size / 2**20:.1f} MiB' if size >= 2**20 else f'{size / 1024:.1f} KiB'
+            self.get_logger().warning(f'log retention: deleted {path.name} ({shown}): {rule}')
             record = {'kind': 'log_deleted', 'path': str(path), 'bytes': size, 'reason': why}
             self._write(
                 EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), self._stamp()
@@ -860,10 +895,10 @@ class CatenaryMonitor(Node):
                 EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), event.stamp_ns
             )
 
-    def _record(self, event: Event) -> None:
+    def _record(self, event: Event) -> Step:
         """Record a non-input event, then run it through the core."""
         self._write_record(event)
-        self._run(event)
+        return self._run(event)
 
     def _run(self, event: Event) -> Step:
         """One core step; publish and log its outputs and snapshot, report its transitions."""
@@ -874,6 +909,8 @@ class CatenaryMonitor(Node):
             self._write(self._output_topics[out.line], data, step.stamp_ns)
         for change in step.transitions:
             self._report(change)
+        for record in step.alarm_events:
+            self._report_alarm(record)
         if step.snapshot is not None:
             self._publish_diagnostics(step.snapshot)
         return step
@@ -894,6 +931,23 @@ class CatenaryMonitor(Node):
             self.get_logger().info(text)
         else:
             self.get_logger().warning(text)
+
+    def _report_alarm(self, record: AlarmEvent) -> None:
+        """One line per alarm-management record the level changes do not say: a shelf that
+        expired, chattering that starts or stops."""
+        if record.kind == 'unshelved' and record.by == 'expired':
+            self.get_logger().warning(
+                f'SHELVE {record.alarm}: shelf expired after {record.time - record.value:.0f} s; '
+                'the alarm is annunciated again'
+            )
+        elif record.kind == 'chattering':
+            a = self.config.alarm
+            self.get_logger().warning(
+                f'CHATTERING {record.alarm}: {a.chatter_count:g} level changes or more within '
+                f'{a.chatter_window:g} s'
+            )
+        elif record.kind == 'chattering_end':
+            self.get_logger().info(f'CHATTERING {record.alarm}: no longer chattering')
 
     # ------------------------------------------------------------------ output
     def _write(self, topic: str, data: bytes, stamp_ns: int) -> None:

@@ -1394,9 +1394,12 @@ class MonitorCore:
         )
         return ComponentStatus(f'{NODE_NAME}: alarms', status[0], status[1], NODE_NAME, values)
 
-    def guard_components(self, now: float) -> list[ComponentStatus]:
-        """The statuses after the logger and the dock: the runtime-change flag, the ROS clock
-        and the intake, each once it applies (events only change them)."""
+    def guard_components(
+        self, now: float, max_damage: Optional[float] = None
+    ) -> list[ComponentStatus]:
+        """The statuses after the logger and the dock: the runtime-change flag, the ROS clock,
+        the fatigue store and the intake, each once it applies (events only change them; the
+        twin gives the worst line's damage at the snapshot, ``max_damage``)."""
         out = []
         flag = self.parameters_component(now)
         if flag is not None:
@@ -1404,7 +1407,7 @@ class MonitorCore:
         if self.state.clock_seen:
             out.append(ComponentStatus(f'{NODE_NAME}: clock', *self.state.clock, NODE_NAME, ()))
         if self.state.fatigue_seen:
-            out.append(self.fatigue_component())
+            out.append(self.fatigue_component(max_damage))
         if self.state.intake_seen:
             dropped = self.intake_dropped()
             names = [line.config.name for line in self.state.lines] + ['depth']
@@ -1427,11 +1430,13 @@ class MonitorCore:
             )
         return out
 
-    def fatigue_component(self) -> ComponentStatus:
+    def fatigue_component(self, max_damage: Optional[float] = None) -> ComponentStatus:
         """The ``catenary_monitor: fatigue`` status: the fatigue store's level and message,
-        ``store_state`` (:data:`FATIGUE_STORE_STATES`) and the worst line's ``fatigue_damage``."""
-        damages = [line.fatigue_values[0] for line in self.state.lines]
-        values = (('store_state', self.state.fatigue_word), ('max_damage', repr(max(damages))))
+        ``store_state`` (:data:`FATIGUE_STORE_STATES`) and the worst line's ``fatigue_damage``
+        (``max_damage``: the twin gives it as it was at the snapshot)."""
+        if max_damage is None:
+            max_damage = max(line.fatigue_values[0] for line in self.state.lines)
+        values = (('store_state', self.state.fatigue_word), ('max_damage', repr(max_damage)))
         return ComponentStatus(f'{NODE_NAME}: fatigue', *self.state.fatigue, NODE_NAME, values)
 
     def parameters_component(self, now: float) -> Optional[ComponentStatus]:
@@ -1496,9 +1501,10 @@ def _column(cfgs: Sequence[LineConfig], key: str) -> np.ndarray:
 
 def _wants_bounds(depth_accuracy: float) -> Any:
     """Whether a line has bounds: a tension accuracy, or a depth accuracy for all."""
-    return lambda c: (
-        depth_accuracy > 0.0 or c.tension_accuracy is not None
-    ) and c.point_loads is None
+    return (
+        lambda c: (depth_accuracy > 0.0 or c.tension_accuracy is not None)
+        and c.point_loads is None
+    )
 
 
 def _wants_holding(c: LineConfig) -> bool:

@@ -1065,9 +1065,10 @@ def _advance_line(
     tide: _Tide,
     sensors: _Sensors,
     dock: Optional[_Dock] = None,
-) -> tuple[LineResult, LevelSeries, _Steps, alarm_ack.AckSeries]:
+) -> tuple[LineResult, LevelSeries, _Steps, alarm_ack.AckSeries, np.ndarray]:
     """One line through the window; leaves the line's state in the core as after the steps
-    (the core's depth and tide still as before the window)."""
+    (the core's depth and tide still as before the window). The last item: the line's fatigue
+    damage after each of its tension samples."""
     line = core.state.lines[k]
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
@@ -1122,7 +1123,7 @@ def _advance_line(
         line.fatigue_values = tuple(float(fatigue[key][-1]) for key in fatigue_rule.FIELDS)
         if fused is not None:
             line.channel_values = (float(fused[0][-1]), float(fused[1][-1]))
-    return result, series, steps, acks
+    return result, series, steps, acks, np.asarray(fatigue[fatigue_rule.FIELDS[0]], np.float64)
 
 
 def _write_back(
@@ -1196,13 +1197,15 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
     tide, tide_transitions = _decide_tide(core, window, sensors)
     blind = _decide_blind(core, window, tide)
     dock = _decide_dock_window(core, window, tide)
-    results, series, steps, acks = [], [], [], []
-    for k in range(len(core.state.lines)):
-        r, s, st, a = _advance_line(core, k, window, tide, sensors, dock)
+    results, series, steps, acks, damage = [], [], [], [], []
+    for k, line in enumerate(core.state.lines):
+        before = line.fatigue_values[0]
+        r, s, st, a, d = _advance_line(core, k, window, tide, sensors, dock)
         results.append(r)
         series.append(s)
         steps.append(st)
         acks.append(a)
+        damage.append(_Damage(window.tensions[k][0], d, before))
     journal, flood = _window_journal(core, window, tide, blind, series, steps, acks)
     times = [c[0] for c in (*given.tensions, given.depth, (given.ticks, None)) if len(c[0])]
     start = int(min(t[0] for t in times)) if times else core.state.last_ns
@@ -1213,7 +1216,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         made = build(
             _Made(
                 core, window, tide, results, series, steps, depth_before, tide_before,
-                lines_before, acks, dock, sensors, depth_word, blind, flood,
+                lines_before, acks, dock, sensors, depth_word, blind, flood, damage,
             )  # fmt: skip
         )
         snaps = [made] if isinstance(made, SnapshotColumns) else list(made)
@@ -1516,6 +1519,14 @@ def _decide_flood(
     return flood, log
 
 
+class _Damage(NamedTuple):
+    """A line's fatigue damage through the window: after each tension sample (stamps ns)."""
+
+    times: np.ndarray
+    damage: np.ndarray
+    before: float
+
+
 class _Made(NamedTuple):
     """What a window's recompute made, from which its snapshots are built."""
 
@@ -1534,6 +1545,21 @@ class _Made(NamedTuple):
     depth_word: str = 'ok'
     blind: Optional[_Blind] = None
     flood: Optional[_Flood] = None
+    damage: Optional[list['_Damage']] = None
+
+    def max_damage(self, stamps: np.ndarray) -> list[Optional[float]]:
+        """The worst line's fatigue damage as the core held it at each of ``stamps`` [ns]
+        (after the tension samples at or before the stamp), for the ``fatigue`` status."""
+        if not self.damage:
+            return [None] * len(stamps)
+        worst = np.full(len(stamps), -np.inf)
+        for d in self.damage:
+            at = np.searchsorted(d.times, stamps, 'right') - 1
+            value = np.where(
+                at >= 0, d.damage[np.maximum(at, 0)] if len(d.damage) else 0, d.before
+            )
+            worst = np.fmax(worst, value)
+        return [float(v) for v in worst]
 
     def stamps(self) -> np.ndarray:
         """The stamps of the window's snapshots (:func:`_snapshot_stamps`)."""
@@ -1596,6 +1622,7 @@ def _snapshots(m: _Made) -> list[Snapshot]:
     logger = ComponentStatus(
         'catenary_monitor: logger', core.state.logger[0], core.state.logger[1], core.logger_id, ()
     )
+    worst = m.max_damage(stamps)
     out = []
     for n, stamp in enumerate(stamps.tolist()):
         statuses = [col[n] for col in columns]
@@ -1605,7 +1632,7 @@ def _snapshots(m: _Made) -> list[Snapshot]:
         statuses.append(logger)
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))
-        statuses += core.guard_components(stamp * 1e-9)
+        statuses += core.guard_components(stamp * 1e-9, worst[n])
         out.append(Snapshot(stamp, tuple(statuses)))
     return out
 
@@ -1925,7 +1952,8 @@ def _snapshot_columns(m: _Made) -> SnapshotColumns | list[Snapshot]:
     core, window, tide, dock = m.core, m.window, m.tide, m.dock
     stamps = m.stamps()
     n = len(stamps)
-    guards = [core.guard_components(stamp * 1e-9) for stamp in stamps.tolist()]
+    worst = m.max_damage(stamps)
+    guards = [core.guard_components(stamp * 1e-9, w) for stamp, w in zip(stamps.tolist(), worst)]
     shapes = {tuple((g.name, len(g.values)) for g in row) for row in guards}
     if len(shapes) > 1:
         return _snapshots(m)
