@@ -88,6 +88,15 @@ def _num(text: Optional[str]) -> Optional[float]:
     return value if math.isfinite(value) else None
 
 
+def _forecast_state(text: Optional[str]) -> str:
+    """What a time to uplift says: ``unknown`` (NaN: the trend not known yet, or no solve),
+    ``not coming`` (inf: the tide not rising), ``lifted`` (0) or ``forecast``."""
+    value = _num(text)
+    if value is None:
+        return 'not coming' if text is not None and text.strip() == 'inf' else 'unknown'
+    return 'lifted' if value <= 0.0 else 'forecast'
+
+
 def _finite(value: float) -> Optional[float]:
     return value if math.isfinite(value) else None
 
@@ -482,8 +491,13 @@ def _line_view(
             'drag_state',  # 0 holding, 1 overloaded, 2 dragging; None unknown
             'fatigue_damage',  # Miner's damage so far
             'fatigue_life_left',  # s at the last day's rate; None unknown or unlimited
+            'wave_tension',  # N, the wave-frequency tension (half-range over wave_window)
+            'dynamic_uplift',  # N, the uplift at the waves' peak tension (what ERROR takes)
         ):
             view[key] = _num(v.get(key))
+        # time_to_uplift is None both when unknown (NaN) and when not coming (inf): say which
+        view['time_to_uplift_state'] = _forecast_state(v.get('time_to_uplift'))
+        view['time_to_uplift_view'] = v.get('time_to_uplift_view', 'none')
     if output is not None:
         rx, values = output
         for key in ('top_tension', 'anchor_margin', 'uplift_force', 'safety_factor'):

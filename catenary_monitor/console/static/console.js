@@ -178,7 +178,8 @@ function buildTiles() {
       <dt>safety factor</dt><dd class="v-sf"></dd><dt>uplift in</dt><dd class="v-ttu"></dd>
       <dt title="${TIDE_R}">tide to lift, R held</dt><dd class="v-tide" title="${TIDE_R}"></dd>
       <dt class="x-tidel" title="${TIDE_L}">tide to lift, chain length held</dt><dd class="v-tidel x-tidel" title="${TIDE_L}"></dd>
-      <dt class="x-upper">uplift ≤ (accuracy)</dt><dd class="v-upper x-upper"></dd>
+      <dt class="x-upper" title="the anchor's force bounded: waves and sensor accuracy">uplift ≤ (waves, accuracy)</dt><dd class="v-upper x-upper"></dd>
+      <dt class="x-wave" title="wave-frequency tension: half the range of the readings over wave_window">wave tension</dt><dd class="v-wave x-wave"></dd>
       <dt class="x-drag">drag margin</dt><dd class="v-drag x-drag"></dd>
       <dt class="x-fatigue" title="Miner's damage of the chain (1: the S-N curve's failure) and the life left at the last day's rate">fatigue</dt><dd class="v-fatigue x-fatigue"></dd></dl>
       <div class="msg"></div><div class="foot"><span class="v-model" title="the model that answered"></span> · <span class="age"></span><span class="alarm-st"></span><span class="sensor old"></span></div>`;
@@ -242,7 +243,13 @@ function renderTile(view, lost, frame) {
   // Time to uplift at the tide's trend (null: the tide is not bringing uplift closer).
   const ttu = view.time_to_uplift;
   const tt = t.querySelector('.v-ttu');
-  tt.textContent = ttu === null || ttu === undefined ? '—' : ttu <= 0 ? 'lifted' : ago(ttu);
+  // Unknown (NaN: no trend yet) is not "never" (inf: the tide is not rising).
+  const state = view.time_to_uplift_state;
+  tt.textContent = ttu === null || ttu === undefined
+    ? (state === 'not coming' ? 'not coming' : 'unknown, trend not known yet')
+    : ttu <= 0 ? 'lifted' : ago(ttu) + (view.time_to_uplift_view === 'chain length held' ? ' (chain length)' : '');
+  tt.title = view.time_to_uplift_view && view.time_to_uplift_view !== 'none'
+    ? `time to uplift, ${view.time_to_uplift_view}` : 'time to uplift';
   tt.className = 'v-ttu ' + (ttu !== null && ttu !== undefined && ttu < S.config.uplift_time_warn ? 'warn' : '');
   // The two tide margins: R held (always), chain length held (where finite: chain_length set).
   const shown = (v) => v !== null && v !== undefined;
@@ -257,6 +264,8 @@ function renderTile(view, lost, frame) {
   const up = view.uplift_force_upper, drag = view.drag_margin;
   t.querySelectorAll('.x-upper').forEach((e) => { e.hidden = !shown(up); });
   t.querySelectorAll('.x-drag').forEach((e) => { e.hidden = !shown(drag); });
+  t.querySelectorAll('.x-wave').forEach((e) => { e.hidden = !shown(view.wave_tension); });
+  t.querySelector('.v-wave').textContent = shown(view.wave_tension) ? `± ${num(view.wave_tension, 1, KN)} kN` : '';
   const vu = t.querySelector('.v-upper');
   vu.textContent = shown(up) ? `${num(up, 1, KN)} kN` : '';
   vu.className = 'v-upper x-upper ' + (shown(up) && up > (cfg.allowed_uplift || 0) ? 'warn' : '');
