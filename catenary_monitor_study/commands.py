@@ -21,7 +21,12 @@ def cmd_bench_latency(args: argparse.Namespace) -> int:
     from catenary_monitor_study.bench_latency import run_bench
 
     return run_bench(
-        lines=args.lines, rate=args.rate, duration=args.duration, json_out=args.json, ea=args.ea
+        lines=args.lines,
+        rate=args.rate,
+        duration=args.duration,
+        json_out=args.json,
+        ea=args.ea,
+        params_file=args.params_file,
     )
 
 
@@ -42,6 +47,8 @@ def register(sub: Any) -> None:
         bench_body,
         bench_console,
         bench_core,
+        bench_flood,
+        bench_step,
         bench_methods,
         bench_replay,
         bench_soak,
@@ -50,6 +57,8 @@ def register(sub: Any) -> None:
     bench_console.register(sub)
     bench_body.register(sub)
     bench_soak.register(sub)
+    bench_flood.register(sub)
+    bench_step.register(sub)
     for module in (bench_core, bench_methods, bench_replay):
         module.register(sub)
     # bench runs as a library user's process (glibc defaults; --keep-freed-memory to compare)
@@ -60,10 +69,13 @@ def register(sub: Any) -> None:
         'bench-latency',
         help='latency and CPU of the node vs a bare echo node',
         description='Measure tension message -> published result latency '
-        'across processes (median, p99) for the monitor and for a '
-        'bare rclpy echo node in the same run, and the CPU use.',
+        'across processes (median, p99) for the monitor (the paper\'s dock) and for a '
+        'bare rclpy echo node in the same run, the CPU use, and that every sample was '
+        'logged and stepped.',
     )
-    p.add_argument('--lines', type=int, default=12, help='number of lines (default: 12)')
+    p.add_argument(
+        '--lines', type=int, default=12, help='the dock\'s first N lines (default: 12)'
+    )
     p.add_argument('--rate', type=float, default=20.0, help='rate per line [Hz] (default: 20)')
     p.add_argument(
         '--duration', type=float, default=20.0, help='measuring time per node [s] (default: 20)'
@@ -75,6 +87,9 @@ def register(sub: Any) -> None:
         metavar='N',
         help='axial stiffness EA [N] on every line: measures the elastic model '
         '(e.g. 6.63e8 for the U3 81 mm chain; default: inextensible)',
+    )
+    p.add_argument(
+        '--params-file', metavar='F', help="the monitor's lines (default: the paper's dock)"
     )
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench_latency)

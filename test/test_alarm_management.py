@@ -128,8 +128,9 @@ def test_shelve_requests_parse_and_are_bounded():
     r = shelving.parse_request('line_11.anchor_margin 600 console dock-pc client 10.0.0.7')
     assert r == ('line_11', 'anchor_margin', 600.0, 'console dock-pc client 10.0.0.7')
     assert shelving.parse_request('line_11 0') == ('line_11', ALL, 0.0, 'ros')
-    long = shelving.parse_request('line_11 60 ' + 'x' * 1_000_000 + '\x07')
-    assert len(long.origin) == shelving.ORIGIN_MAX
+    long = shelving.parse_request('line_11 60 ' + 'x' * 1_000_000)
+    assert len(long.origin) == ack.ORIGIN_LIMIT and long.origin.endswith('...')
+    assert shelving.parse_request('line_11 60 a\x07b\n c').origin == 'a?b c'
     for bad in ('', 'line_11', 'line_11 soon', 'line_11 -5', 'line_11 nan', 'line_11 inf'):
         with pytest.raises(ValueError):
             shelving.parse_request(bad)

@@ -36,6 +36,7 @@ from catenary_monitor.core.monitor.twin import (
     advance,
     recompute,
     run_log,
+    slice_window,
     tick_grid,
 )
 from catenary_monitor.core.physics.result import Status
@@ -711,3 +712,75 @@ def test_the_state_comparison_sees_every_field():
             assert_same_state(other, core)
     with pytest.raises(AttributeError):
         core.forgotten = 1.0  # type: ignore[attr-defined]
+
+
+def _coalescing_records(config, tensions, depth, seed):
+    """What a node that fell behind records: stretches of each input's samples left out
+    (``Coalesced`` at 1 ns before the first of each stretch, naming the last), the newest
+    sample after each stretch stepped. Returns the records, their stamps' JSON round trip
+    checked."""
+    import json
+
+    from catenary_monitor.core.monitor.monitor_core import (
+        Coalesced,
+        event_record,
+        parse_event_record,
+    )
+
+    rng = np.random.default_rng(seed)
+    columns = [(line.name, tensions[line.name][0]) for line in config.lines]
+    columns.append((None, depth[0]))
+    records = []
+    for name, t in columns:
+        i = 3
+        while i < len(t) - 12:
+            n = int(rng.integers(1, 9))
+            records.append(Coalesced(int(t[i]) - 1, name, int(t[i + n - 1]), n))
+            i += n + int(rng.integers(2, 40))
+    records.sort(key=lambda e: e.stamp_ns)
+    assert [parse_event_record(r.stamp_ns, json.dumps(event_record(r))) for r in records] == (
+        records
+    )
+    return records
+
+
+@pytest.mark.parametrize('cuts', [0, 7])
+def test_run_log_leaves_out_what_the_node_coalesced_as_the_core_does(cuts):
+    """A coalescing node's records (stretches of every input's samples logged but not
+    stepped): the core, handed every sample, steps only the others; the twin, handed the
+    whole columns and the records in one window or in windows cut inside the stretches,
+    gives the same outputs, snapshots and final state (the bound carried across windows)."""
+    config = dock_config(3)
+    tensions, depth = generate(config, seconds=90.0, seed=5, depth_rate=3.0)
+    ticks = ticks_for(tensions, depth)
+    records = _coalescing_records(config, tensions, depth, seed=5)
+    core = MonitorCore(config, T0_NS)
+    merged = sorted(events_of(config, tensions, depth, ticks) + records, key=lambda e: e.stamp_ns)
+    steps = [core.step(ev) for ev in merged]
+    left_out = sum(r.samples for r in records)
+    assert sum(s.kind == 'coalesced' for s in steps) == left_out + len(records)
+    empty = (np.zeros(0, np.int64), np.zeros(0))
+    whole = Window([tensions.get(line.name, empty) for line in config.lines], depth, ticks)
+    inside = [r.last_ns for r in records[5 :: max(1, len(records) // max(cuts, 1))]][:cuts]
+    bounds = [None, *sorted(inside), None]
+    twin, results = MonitorCore(config, T0_NS), []
+    for lo, hi in zip(bounds[:-1], bounds[1:]):
+        part = [
+            r
+            for r in records
+            if (lo is None or r.stamp_ns >= lo) and (hi is None or r.stamp_ns < hi)
+        ]
+        result, twin = run_log(twin, slice_window(whole, lo, hi), part, snapshots=True)
+        results.append(result)
+    for k, line in enumerate(config.lines):
+        want = [(s.stamp_ns, o.values) for s in steps for o in s.outputs if o.line == k]
+        got = np.concatenate([r.lines[k].t_ns for r in results])
+        assert got.tolist() == [w[0] for w in want], line.name
+        assert len(want) < len(tensions[line.name][0]) + len(depth[0])
+    want_sn = [s.snapshot for s in steps if s.snapshot is not None]
+    got_sn = [sn for r in results for sn in r.snapshots]
+    assert [s.stamp_ns for s in got_sn] == [s.stamp_ns for s in want_sn]
+    for g, w in zip(got_sn, want_sn):
+        assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
+    assert_same_state(twin, core)
+    assert core.state.depth_coalesced_until > 0

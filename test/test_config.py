@@ -241,11 +241,14 @@ def test_table_covers_every_config_field_and_contract_names():
 
 def test_every_parameter_is_described_with_a_valid_range():
     for spec in PARAMETERS:
-        assert spec.description and spec.type in {'double', 'bool', 'string', 'string_array'}
-        if spec.type == 'double':
+        types = {'double', 'bool', 'string', 'string_array', 'double_array'}
+        assert spec.description and spec.type in types
+        if spec.type in ('double', 'double_array'):
             assert spec.min is not None and spec.max is not None and spec.min < spec.max
             if spec.optional:  # NaN: not given
                 assert spec.default != spec.default
+            elif spec.type == 'double_array':
+                assert all(spec.min <= v <= spec.max for v in spec.default)
             elif spec.default is not REQUIRED:
                 assert spec.min <= spec.default <= spec.max
 

@@ -75,5 +75,47 @@ def test_without_rates_the_values_are_as_before():
     core.step(Intake(_at(1.0), (1, 1), (0, 0), 0.01, 1.0))
     core.step(Intake(_at(11.0), (2, 10), (0, 0), 0.01, 10.0))
     keys = [k for k, _ in _status(core).values]
-    assert keys == ['messages_dropped', 'line_01.messages_dropped', 'depth.messages_dropped']
+    assert keys == [
+        'messages_dropped',
+        'line_01.messages_dropped',
+        'depth.messages_dropped',
+        'messages_coalesced',
+        'messages_handled',
+    ]
     assert core.state.intake[0] == Level.OK
+    assert dict(_status(core).values)['messages_handled'] == '14'
+
+
+def test_coalesced_samples_are_dropped_from_the_decisions_and_said_so():
+    """A node that coalesced (logged every sample, stepped the newest of each line): the
+    samples not stepped count as dropped, per line and in the share, and the message says
+    they were logged and how many were lost before the node."""
+    core = MonitorCore(dock_config(2), T0_NS)
+    core.step(Intake(_at(1.0), (200, 200, 1), (0, 0, 0), 0.1, 1.0))
+    assert _status(core).level == Level.OK
+    core.step(Intake(_at(2.0), (60, 200, 1), (0, 3, 0), 0.9, 1.0, (140, 0, 0)))
+    status = _status(core)
+    values = dict(status.values)
+    assert status.level == Level.ERROR, status  # 143 of 805 not stepped: 18 %
+    assert values['messages_dropped'] == '143'
+    assert values['line_01.messages_dropped'] == '140'
+    assert values['line_02.messages_dropped'] == '3'
+    assert values['messages_coalesced'] == '140' and values['messages_handled'] == '662'
+    assert status.message.startswith(
+        'node cannot keep up: 18 % of tension and depth samples dropped in the last 60 s '
+        '(143 of 805); 140 coalesced (logged, the newer sample of their input handled '
+        'instead), 3 lost before the node'
+    ), status.message
+    assert 'none dropped' not in status.message
+    core.step(Intake(_at(3.0), (200, 200, 1), (0, 0, 0), 0.1, 1.0, (0, 0, 0)))
+    assert _status(core).level == Level.ERROR  # the window still holds them
+
+
+def test_coalesced_samples_are_not_missing_against_the_sample_rate():
+    """Samples taken and coalesced reached the node: not counted missing too."""
+    core = MonitorCore(dock_config(1, tension_sample_rate=200.0), T0_NS)
+    core.step(Intake(_at(1.0), (200, 1), (0, 0), 0.1, 1.0))
+    core.step(Intake(_at(11.0), (500, 10), (0, 0), 9.0, 10.0, (1500, 0)))
+    values = dict(_status(core).values)
+    assert values['messages_missing'] == '0'
+    assert values['messages_dropped'] == values['messages_coalesced'] == '1500'

@@ -330,3 +330,103 @@ def test_the_log_reader_decodes_the_stamped_types_as_rclpy_encodes_them(frame):
     assert got.stamps.tolist() == [5 * 10**9]
     want = [np.float32(4.25), np.float32(0.3), np.float32(30.0)]
     assert [got.fields[k][0] for k in ('range', 'min_range', 'max_range')] == want
+
+
+def test_replay_of_a_rosbag2_recording_of_stamped_sensors_equals_the_core(tmp_path):
+    """A bag written by rosbags' rosbag2 writer (MCAP storage), as ``ros2 bag record`` of the
+    drivers' topics would be: WrenchStamped tensions in kN and a FluidPressure depth, received
+    late and in bunches. Replay reads their types and header stamps and decides as the core
+    does event by event on the same arrivals, stamps and readings."""
+    from geometry_msgs.msg import WrenchStamped
+    from rclpy.serialization import serialize_message
+    from rosbags.rosbag2 import StoragePlugin
+    from rosbags.rosbag2 import Writer as BagWriter
+    from rosbags.typesys import Stores, get_typestore
+    from sensor_msgs.msg import FluidPressure
+
+    from catenary_monitor.replay.driver import replay_log
+
+    base, cols, depth = stamped_scene(seed=8)
+    lines = tuple(
+        LineConfig(
+            lc.name, lc.weight, lc.anchor_distance, lc.mbl, lc.allowed_uplift, lc.hook_height,
+            tension_type=readings.WRENCH, tension_axis='y', tension_scale=1000.0,
+        )
+        for lc in base.lines
+    )  # fmt: skip
+    config = MonitorConfig(
+        lines=lines, depth_type=readings.FLUID_PRESSURE, gauge_height=2.0, alarm=base.alarm
+    )
+    store = get_typestore(Stores.ROS2_JAZZY)
+    bag = tmp_path / 'bag'
+    with BagWriter(bag, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        conns = [
+            writer.add_connection(lc.tension_topic, readings.WRENCH, typestore=store)
+            for lc in lines
+        ]
+        dconn = writer.add_connection(
+            config.depth_topic, readings.FLUID_PRESSURE, typestore=store
+        )
+        rows = []
+        for k, lc in enumerate(lines):
+            for a, v, s in zip(*cols[lc.name]):
+                m = WrenchStamped()
+                m.header.stamp.sec, m.header.stamp.nanosec = divmod(int(s), 10**9)
+                m.header.frame_id = f'pin_{k}'
+                m.wrench.force.y = float(v) / 1000.0 if math.isfinite(v) else float(v)
+                rows.append((int(a), conns[k], serialize_message(m)))
+        for a, v, s in zip(*depth):
+            p = FluidPressure(fluid_pressure=101325.0 + 1025.0 * readings.G * (float(v) - 2.0))
+            p.header.stamp.sec, p.header.stamp.nanosec = divmod(int(s), 10**9)
+            rows.append((int(a), dconn, serialize_message(p)))
+        for a, conn, data in sorted(rows, key=lambda r: r[0]):
+            writer.write(conn, a, data)
+    replay = replay_log(sorted(bag.glob('*.mcap')), config, snapshots=True)
+    # The oracle: the core on the same arrivals, stamps and readings (from the messages).
+    from catenary_monitor.io.sensor_cdr import decode
+
+    ticks = replay.result.tick_ns
+    evs = []
+    by_topic = {}
+    for a, conn, data in rows:
+        by_topic.setdefault(conn.topic, []).append((a, data))
+    for k, lc in enumerate(lines):
+        items = sorted(by_topic[lc.tension_topic])
+        d = decode(readings.WRENCH, [x for _, x in items])
+        value = readings.tension_si(lc, d.fields)
+        evs += [(a, 1, k, Tension(a, k, float(t), int(s)))
+                for (a, _), t, s in zip(items, value, d.stamps)]  # fmt: skip
+    items = sorted(by_topic[config.depth_topic])
+    d = decode(readings.FLUID_PRESSURE, [x for _, x in items])
+    value = readings.depth_si(config, d.fields)
+    evs += [(a, 0, 0, Depth(a, float(h), int(s))) for (a, _), h, s in zip(items, value, d.stamps)]
+    evs += [(int(t), 2, 0, Tick(int(t))) for t in ticks]
+    evs.sort(key=lambda e: e[:3])
+    core = MonitorCore(config, replay.result.started_ns)
+    steps = [core.step(e[3]) for e in evs]
+    want = [s.snapshot for s in steps if s.snapshot is not None]
+    got = replay.result.snapshots
+    assert [s.stamp_ns for s in got] == [s.stamp_ns for s in want]
+    for g, w in zip(got, want):
+        assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
+    words = {dict(st.values).get('sensor_state') for s in want for st in s.statuses}
+    assert 'bad_stamp' in words  # the refused stamps of the scene, from the bag too
+    # replay --out: the results log holds the inputs as SI Float64 readings and says so in its
+    # recorded parameters (scale 1, Float64), so it reads back in N, not 1000 times that.
+    from replay_data import params_yaml
+
+    from catenary_monitor.cli.main import main as cli
+    from catenary_monitor.replay.driver import log_parameters, read_inputs
+
+    out = tmp_path / 'out.mcap'
+    params = params_yaml(config, tmp_path / 'dock.yaml')
+    args = ['replay', str(bag), '--params-file', str(params), '--out', str(out), '--quiet']
+    assert cli(args) == 0
+    recorded = config_from_params(log_parameters([out])[1])
+    assert {lc.tension_type for lc in recorded.lines} == {'std_msgs/msg/Float64'}
+    assert recorded.lines[0].tension_scale == 1.0 and recorded.depth_type.endswith('Float64')
+    tensions, depth_col, _ = read_inputs([out], recorded)
+    first = lines[0].name
+    want = replay.tensions[first][1]
+    np.testing.assert_array_equal(tensions[first][1], want)
+    assert 300e3 < np.nanmedian(want) < 2e6

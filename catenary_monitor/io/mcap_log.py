@@ -43,9 +43,9 @@ Retention and free space
 With ``max_total_bytes`` and/or ``max_age`` (0: keep all), the folder's finished ``*.mcap``
 files are deleted oldest first (by modification time, the end of a file) once the folder's MCAP
 files exceed ``max_total_bytes`` with the open one counted at the size it may reach before it
-rotates (``max_bytes`` plus a chunk: the bound holds between two checks), or once a file ended
-more than ``max_age`` seconds ago. The file being written is never touched, nor a file another
-process holds locked (a second logger's open file). Each deletion is kept in
+rotates (``max_bytes``, a sixteenth more for its summary: the bound holds between two checks),
+or once a file ended more than ``max_age`` seconds ago. The file being written is never touched,
+nor a file another process holds locked (a second logger's open file). Each deletion is kept in
 :attr:`McapLogger.deleted` (path, bytes, why) for the caller to report, and ``metadata.yaml`` is
 rewritten at once, so it only ever lists files that exist. The check runs when a file is
 finished and every ``retention_period`` seconds in :meth:`tick`. With ``min_free_bytes``,
@@ -530,9 +530,11 @@ class McapLogger:
                 files = self._retention_candidates()
             except OSError:
                 return
-            # The open file counted at the size it may reach before it rotates (plus a chunk):
-            # the folder stays under the bound until the next check, however long that is.
-            reserve = max(self._open_size(), self.max_bytes + self.chunk_size)
+            # The open file counted at the size it may reach: it rotates once its bytes (its
+            # pending messages uncompressed) reach max_bytes, then its summary is added (a
+            # sixteenth, and 4 KiB for the next file's start): the folder stays under the bound
+            # until the next check.
+            reserve = max(self._open_size(), self.max_bytes) + self.max_bytes // 16 + 4096
             total = sum(size for _, size, _ in files) + reserve
             wall = self._wall_clock()
             gone = False

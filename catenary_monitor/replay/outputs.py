@@ -6,6 +6,8 @@ No rclpy: the MCAP messages are encoded by :mod:`catenary_monitor.io.cdr` and wr
 
 from __future__ import annotations
 
+import dataclasses
+
 import datetime as _dt
 import functools
 import json
@@ -16,7 +18,12 @@ from typing import IO, Any, Callable, Optional, Sequence
 import numpy as np
 
 from catenary_monitor import __version__
-from catenary_monitor.core.config.parameters import MonitorConfig, config_hash, config_to_params
+from catenary_monitor.core.config.parameters import (
+    FLOAT64,
+    MonitorConfig,
+    config_hash,
+    config_to_params,
+)
 from catenary_monitor.core.monitor import holding, sensor_state
 from catenary_monitor.core.monitor.alarms import Level
 from catenary_monitor.core.monitor.monitor_core import (
@@ -324,6 +331,16 @@ def write_mcap(
     return sink.finish(progress)
 
 
+def si_inputs(config: MonitorConfig) -> MonitorConfig:
+    """``config`` reading SI values in ``std_msgs/Float64`` (what the results log holds as
+    inputs): every input type Float64, ``tension_scale`` 1, ``depth_offset`` 0."""
+    lines = tuple(
+        dataclasses.replace(lc, tension_type=FLOAT64, tension_axis='norm', tension_scale=1.0)
+        for lc in config.lines
+    )
+    return dataclasses.replace(config, lines=lines, depth_type=FLOAT64, depth_offset=0.0)
+
+
 class McapSink:
     """The results log written as the replay goes: :meth:`write` each window's results (in
     time order), then :meth:`finish`."""
@@ -368,6 +385,10 @@ class McapSink:
         self.diag_id = channel('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', QOS_DEFAULT)
         self.event_id = channel(EVENTS_TOPIC, 'std_msgs/msg/String', QOS_DEFAULT)
         self.started = False
+        # The inputs are written as their SI readings in std_msgs/Float64 at arrival: the
+        # parameters recorded say so (types Float64, scale 1, offset 0), so the file reads back
+        # as it is (a stamped input's header stamps are not kept: replay the original log).
+        config = si_inputs(config)
         w.add_metadata(
             NODE_NAME,
             {

@@ -12,10 +12,20 @@ would share a reading), used as the MCAP log time of everything the event produc
 that are not input messages (ticks, logger changes, parameter changes) are recorded on the
 MCAP-only channel ``/catenary_monitor/events``, so replay redoes every step exactly.
 
+Intake: a sample callback takes every sample waiting on its input (the one the executor handed
+over, then the subscription's queue until it is empty) and logs each one. While the node keeps
+up that is one sample per callback, stepped at once; after a hiccup (the oldest waited at most
+:data:`COALESCE_AFTER`) each is stepped in turn. When the node is behind, only the newest is
+stepped and the older ones are coalesced: logged, counted, and recorded (a :class:`Coalesced`
+record before them) so that replay leaves out exactly those; never a queue worked through late.
+So the executor's queue never holds more than about one round of callbacks, and the timers (the
+periodic tick, ``/diagnostics``) keep their time whatever the input rate.
+
 A wall-clock (steady) watchdog runs once a second whatever the ROS clock does: with
 ``use_sim_time`` it reports a ROS clock that stopped (ClockHealth events, each with a
 ``/diagnostics`` array), and it hands the core the intake counts (Intake events: samples
-received, samples lost before the node took them, time spent in the sample callbacks).
+handled, coalesced, and lost before the node took them, time spent in the sample callbacks);
+the first sample not handled brings the counts forward (at once, or at the next periodic tick).
 
 Run it as ``monitor --ros-args --params-file FILE`` (``ros2 run catenary_monitor monitor ...``),
 ``python -m catenary_monitor.ros.node --ros-args --params-file FILE`` or
@@ -28,6 +38,7 @@ import json
 import os
 import queue
 import signal
+import struct
 import sys
 import threading
 import time
@@ -73,7 +84,10 @@ from catenary_monitor.core.monitor.acknowledge import (
     parse_request,
     publisher_identity,
 )
+from catenary_monitor.core.monitor.alarm_journal import AlarmEvent
 from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.monitor.shelving import SHELVE_TOPIC
+from catenary_monitor.core.monitor.shelving import parse_request as parse_shelve_request
 from catenary_monitor.core.monitor.health import clock_stopped
 from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,
@@ -82,6 +96,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     Acknowledge,
     Change,
     ClockHealth,
+    Coalesced,
     Depth,
     Event,
     FatigueStore,
@@ -89,6 +104,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     LoggerHealth,
     MonitorCore,
     Reconfigure,
+    Shelve,
     Snapshot,
     Start,
     Step,
@@ -109,6 +125,7 @@ _PARAM_TYPES = {
     'bool': Parameter.Type.BOOL,
     'string': Parameter.Type.STRING,
     'string_array': Parameter.Type.STRING_ARRAY,
+    'double_array': Parameter.Type.DOUBLE_ARRAY,
 }
 _RELIABLE = QoSProfile(depth=10)
 #: The message class of each input type (core.config.parameters.TENSION_TYPES, DEPTH_TYPES).
@@ -119,11 +136,12 @@ _MESSAGE_CLASSES: dict[str, Any] = {
     readings.RANGE: Range,
 }
 #: The input subscriptions: sensor-data QoS (best effort) with a deeper queue than its 5, so a
-#: node held off the CPU for up to about 2 s at 50 Hz loses no sample (bench-soak measured
-#: 0.7 % lost with depth 5 on a loaded machine).
+#: node held off the CPU for up to 5 s at 200 Hz loses no sample before it is logged
+#: (bench-soak measured 0.7 % lost with depth 5 on a loaded machine; bench-flood, 12 x 200 Hz
+#: at a load of 14 on 2 cores, 4 % with 100 and none with 1000, the RSS unchanged).
 _SAMPLES = QoSProfile(
     history=qos_profile_sensor_data.history,
-    depth=100,
+    depth=1000,
     reliability=qos_profile_sensor_data.reliability,
     durability=qos_profile_sensor_data.durability,
 )
@@ -133,6 +151,18 @@ WATCHDOG_PERIOD = 1.0
 INTAKE_HEARTBEAT = 60.0
 #: The same with a sample rate configured: the counts are checked against it this often [s].
 INTAKE_RATE_HEARTBEAT = 10.0
+#: The most samples one callback takes off an input's queue (the queue holds _SAMPLES.depth).
+DRAIN_MAX = 1000
+#: Samples that waited longer than this [s] when their callback ran are not stepped but
+#: coalesced (logged, counted, left out); a shorter hiccup (a node held off the CPU by other
+#: processes) is caught up with, sample by sample, ...
+COALESCE_AFTER = 1.0
+#: ... within this much time of steps per callback [s] (at the recent cost of one): the newest
+#: samples that fit are stepped, the older ones coalesced.
+STEP_BUDGET = 0.05
+#: A sample callback runs the periodic tick (the watchdog) itself once its timer is this many
+#: periods late (waiting in the executor's queue behind a flood's callbacks).
+LATE_TIMER = 1.25
 
 
 def _events_executor_wanted() -> bool:
@@ -169,7 +199,9 @@ def _descriptor(spec: ParamSpec, name: str) -> ParameterDescriptor:
         read_only=spec.read_only,
     )
     # An optional parameter (default NaN: not set) cannot carry a ROS range; config checks it.
-    if (spec.min is not None or spec.max is not None) and spec.default == spec.default:
+    if spec.type == 'double_array':  # each element's range is config's to check
+        constraints.append(f'each element in [{spec.min:g}, {spec.max:g}]')
+    elif (spec.min is not None or spec.max is not None) and spec.default == spec.default:
         low = -sys.float_info.max if spec.min is None else float(spec.min)
         high = sys.float_info.max if spec.max is None else float(spec.max)
         if not spec.optional:  # rclpy's range check refuses NaN, an optional's "not given"
@@ -191,6 +223,9 @@ class CatenaryMonitor(Node):
         )
         self.config = self._declare_parameters(log_dir)
         self._node_clock = self.get_clock()  # not _clock: rclpy's Node owns that name
+        # use_sim_time cannot change at runtime (refused): without it the node clock is the
+        # system clock, read without building an rclpy Time each time.
+        self._system_time = not self.get_parameter('use_sim_time').value
         self._last_ns = 0
         self._log_setup_error = ''
         self._logger_known = False
@@ -237,8 +272,10 @@ class CatenaryMonitor(Node):
         values = all_parameters(config)
         for name, spec in expand_parameters([line.name for line in config.lines]):
             value = values[name]
-            if spec.type == 'string_array':
+            if spec.type in ('string_array', 'double_array'):
                 value = list(value)
+            if spec.type == 'double_array' and not value:  # [] would be typed a byte array
+                value = Parameter.Type.DOUBLE_ARRAY
             self.declare_parameter(name, value, _descriptor(spec, name), ignore_override=True)
         for line in config.lines:
             if line.ea is not None:
@@ -273,9 +310,7 @@ class CatenaryMonitor(Node):
         if not force and wall - self._fatigue_saved < fatigue_store.SAVE_PERIOD:
             return
         self._fatigue_saved = wall
-        lines = {
-            line.config.name: to_record(line.fatigue) for line in self.core.state.lines
-        }
+        lines = {line.config.name: to_record(line.fatigue) for line in self.core.state.lines}
         extra = {'config_hash': config_hash(self.config), 'saved_ns': self._last_ns}
         try:
             path = fatigue_store.save(self._log_dir(), lines, extra)
@@ -400,7 +435,13 @@ class CatenaryMonitor(Node):
         n = len(self.config.lines) + 1
         self._received = [0] * n
         self._dropped = [0] * n
+        self._coalesced = [0] * n
         self._last_seq: list[Optional[int]] = [None] * n
+        self._unsequenced = [0] * n  # samples taken without a sequence number since _last_seq
+        self._lost_unseen = [0] * n  # samples DDS reported lost, their gap not seen yet
+        self._gap_unreported = [0] * n  # samples of seen gaps DDS has not reported (yet)
+        self._intake_due = False  # a sample was not handled while the intake said OK
+        self._step_cost = 1e-4  # s of wall time one sample's step takes (moving average)
         self._busy = 0.0  # s of wall time in the sample callbacks since the last Intake event
         self._busy_tick = 0.0  # the same since the last watchdog period
         self._intake_wall = time.monotonic()
@@ -412,11 +453,12 @@ class CatenaryMonitor(Node):
         # publisher's sequence numbers (gaps = samples lost) only with the other executor.
         self._with_info = not (_events_executor_wanted() and _has_events_executor())
 
-    def _sample_callback(self, handler: Any, k: int) -> Any:
-        """The subscription callback for input ``k`` (sequence-checked where possible)."""
+    def _sample_callback(self, k: int) -> Any:
+        """The subscription callback for input ``k`` (with the MessageInfo where the executor
+        can hand it over)."""
         if self._with_info:
-            return partial(self._on_sample_info, handler, k)
-        return handler
+            return partial(self._on_sample_info, k)
+        return partial(self._on_sample, k)
 
     def _sample_events(self, k: int) -> SubscriptionEventCallbacks:
         return SubscriptionEventCallbacks(message_lost=partial(self._on_lost, k))
@@ -428,15 +470,17 @@ class CatenaryMonitor(Node):
         self._tension_topics: list[str] = []
         self._output_topics: list[str] = []
         self._output_pubs: list[Any] = []
+        self._subs: list[Any] = []
         for k, line in enumerate(cfg.lines):
             sub = self.create_subscription(
                 _MESSAGE_CLASSES[line.tension_type],
                 line.tension_topic,
-                self._sample_callback(partial(self._on_tension, k), k),
+                self._sample_callback(k),
                 _SAMPLES,
                 event_callbacks=self._sample_events(k),
                 raw=True,
             )
+            self._subs.append(sub)
             self._tension_topics.append(sub.topic_name)
             self._register(sub.topic_name, line.tension_type, 'sensor_data')
             pub = self.create_publisher(Float64MultiArray, f'~/{line.name}/outputs', _RELIABLE)
@@ -447,11 +491,12 @@ class CatenaryMonitor(Node):
         sub = self.create_subscription(
             _MESSAGE_CLASSES[cfg.depth_type],
             cfg.depth_topic,
-            self._sample_callback(self._on_depth, n),
+            self._sample_callback(n),
             _SAMPLES,
             event_callbacks=self._sample_events(n),
             raw=True,
         )
+        self._subs.append(sub)
         self._depth_topic = sub.topic_name
         self._register(self._depth_topic, cfg.depth_type, 'sensor_data')
         self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', _RELIABLE)
@@ -463,72 +508,180 @@ class CatenaryMonitor(Node):
                 label=','.join(OUTPUT_FIELDS), size=len(OUTPUT_FIELDS), stride=len(OUTPUT_FIELDS)
             )
         ]
+        self._output_cdr = OutputEncoder(self._output)
         self._ack_sub = self.create_subscription(
             String, ACKNOWLEDGE_TOPIC, self._on_acknowledge, _RELIABLE
         )
+        self._shelve_sub = self.create_subscription(
+            String, SHELVE_TOPIC, self._on_shelve, _RELIABLE
+        )
         self._diag_timer = self.create_timer(1.0 / cfg.alarm.diagnostic_rate, self._on_period)
+        self._period_ns = int(1e9 / cfg.alarm.diagnostic_rate)
+        self._tick_ns = self._now_ns()  # the newest tick's stamp
+        self._watchdog_wall = time.monotonic()
         # Wall-clock timers: they run while a simulated ROS clock stands still.
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self._log_timer = self.create_timer(0.25, self._on_log_timer, clock=steady)
-        self._watchdog = self.create_timer(WATCHDOG_PERIOD, self._on_watchdog, clock=steady)
+        self._watchdog = self.create_timer(WATCHDOG_PERIOD, self._on_watchdog_timer, clock=steady)
 
     # ------------------------------------------------------------------ callbacks
+    def _now_ns(self) -> int:
+        """The node clock [ns] (the system clock read directly unless ``use_sim_time``)."""
+        if self._system_time:
+            return time.time_ns()
+        return self._node_clock.now().nanoseconds
+
     def _stamp(self) -> int:
         """A distinct, increasing event stamp (ns): the node clock, or 1 ns after the last one."""
-        now = self._node_clock.now().nanoseconds
+        now = self._now_ns()
         self._last_ns = now if now > self._last_ns else self._last_ns + 1
         return self._last_ns
 
     @_guarded
-    def _on_tension(self, line: int, data: bytes) -> None:
-        """A hook tension sample: log the message as it came, one core event (the reading in
-        N, at its header stamp where it has one), publish what it says."""
-        t0 = time.perf_counter()
-        self._received[line] += 1
-        stamp = self._stamp()
-        self._write(self._tension_topics[line], data, stamp)
-        lc = self.config.lines[line]
-        fields, sample_ns = _fields(data, lc.tension_type)
-        self._run(Tension(stamp, line, float(readings.tension_si(lc, fields)), sample_ns))
-        took = time.perf_counter() - t0
-        self._busy += took
-        self._busy_tick += took
+    def _on_sample(self, k: int, data: bytes) -> None:
+        """A sample of input ``k`` (a line, then the depth), and every one waiting behind it
+        (:meth:`_take`)."""
+        self._unsequenced[k] += 1
+        self._take(k, data, None)
 
     @_guarded
-    def _on_depth(self, data: bytes) -> None:
-        """A depth sample: log the message as it came, one core event (the depth in m, at its
-        header stamp where it has one), publish what it says."""
+    def _on_sample_info(self, k: int, data: bytes, info: Any) -> None:
+        """The same with its MessageInfo (the SingleThreadedExecutor)."""
+        self._count_sequence(k, info.get('publication_sequence_number'))
+        self._take(k, data, info.get('received_timestamp'))
+
+    def _take(self, k: int, data: bytes, received_ns: Optional[int]) -> None:
+        """Log ``data`` and the samples waiting behind it on input ``k``, and step what the
+        node can handle of them, newest first (:meth:`_to_step`): after a hiccup, all of them.
+
+        The older ones it cannot handle are coalesced: a :class:`Coalesced` record stamped
+        before them tells replay to leave them out, as the node does, and they are counted
+        (Intake ``coalesced``); the node never works through a backlog it cannot keep up
+        with."""
         t0 = time.perf_counter()
-        self._received[-1] += 1
-        stamp = self._stamp()
-        self._write(self._depth_topic, data, stamp)
-        fields, sample_ns = _fields(data, self.config.depth_type)
-        self._run(Depth(stamp, float(readings.depth_si(self.config, fields)), sample_ns))
+        batch = [(data, received_ns)] + self._drain(k)
+        n = len(batch)
+        keep = self._to_step(batch)
+        topic = self._depth_topic if k == len(self._names) else self._tension_topics[k]
+        step = self._step_depth if k == len(self._names) else self._step_tension
+        if keep < n:
+            line = None if k == len(self._names) else self._names[k]
+            stamps = [self._stamp() for _ in range(n - keep + 1)]
+            self._record(Coalesced(stamps[0], line, stamps[-1], n - keep))
+            for (raw, _), stamp in zip(batch, stamps[1:]):
+                self._write(topic, raw, stamp)
+            self._coalesced[k] += n - keep
+            self._intake_due = True
+        for raw, _ in batch[n - keep :]:
+            t1 = time.perf_counter()
+            stamp = self._stamp()
+            self._write(topic, raw, stamp)
+            step(k, stamp, raw)
+            self._step_cost += 0.1 * (time.perf_counter() - t1 - self._step_cost)
         took = time.perf_counter() - t0
         self._busy += took
         self._busy_tick += took
+        self._timers_late()
 
-    def _on_sample_info(self, handler: Any, k: int, data: bytes, info: Any) -> None:
-        """A sample with its MessageInfo: a gap in the publisher's sequence numbers counts
-        the samples lost before the node took them (a restarted publisher starts again)."""
-        seq = info.get('publication_sequence_number')
+    def _to_step(self, batch: list[tuple[bytes, Optional[int]]]) -> int:
+        """How many of the newest samples of ``batch`` to step: those that waited at most
+        :data:`COALESCE_AFTER` (the newest always), as many as :data:`STEP_BUDGET` of steps
+        takes at the recent cost of one, less as the batch fills the input's queue (none but
+        the newest from half of it: the samples behind must be taken and logged in time)."""
+        n = len(batch)
+        if n == 1:
+            return 1
+        now, fresh = time.time_ns(), 0
+        for _, received in reversed(batch):
+            if isinstance(received, int) and now - received > COALESCE_AFTER * 1e9:
+                break
+            fresh += 1
+        room = max(0.0, 1.0 - n / (0.5 * _SAMPLES.depth))
+        budget = room * STEP_BUDGET / max(self._step_cost, 1e-6)
+        return max(1, min(fresh, int(budget)))
+
+    def _step_tension(self, k: int, stamp: int, raw: bytes) -> None:
+        """One core event of a hook tension sample as it came (the reading in N, at its header
+        stamp where it has one); publish what it says."""
+        self._received[k] += 1
+        lc = self.config.lines[k]
+        fields, sample_ns = _fields(raw, lc.tension_type)
+        self._run(Tension(stamp, k, float(readings.tension_si(lc, fields)), sample_ns))
+
+    def _step_depth(self, k: int, stamp: int, raw: bytes) -> None:
+        """The same for a depth sample (the depth in m)."""
+        self._received[k] += 1
+        fields, sample_ns = _fields(raw, self.config.depth_type)
+        self._run(Depth(stamp, float(readings.depth_si(self.config, fields)), sample_ns))
+
+    def _drain(self, k: int) -> list[tuple[bytes, Optional[int]]]:
+        """Every sample waiting on input ``k``'s subscription (up to :data:`DRAIN_MAX`), with
+        its reception time [ns] and its publisher's sequence number counted."""
+        sub = self._subs[k]
+        out: list[tuple[bytes, Optional[int]]] = []
+        with sub.handle:
+            while len(out) < DRAIN_MAX:
+                taken = sub.handle.take_message(sub.msg_type, sub.raw)
+                if taken is None:
+                    break
+                data, info = taken
+                out.append((data, info.get('received_timestamp')))
+                self._count_sequence(k, info.get('publication_sequence_number'))
+        return out
+
+    def _count_sequence(self, k: int, seq: Any) -> None:
+        """A gap in the publisher's sequence numbers counts the samples lost before the node
+        took them, less those taken without a number in between (the EventsExecutor hands a
+        callback its sample without one); a restarted publisher (the numbers start again) is
+        not a loss."""
+        if not isinstance(seq, int):
+            self._unsequenced[k] += 1
+            return
         last = self._last_seq[k]
-        if isinstance(seq, int):
-            if last is not None and seq > last + 1:
-                self._dropped[k] += seq - last - 1
-            self._last_seq[k] = seq
-        handler(data)
+        if last is not None:
+            gap = seq - last - 1 - self._unsequenced[k]
+            if gap > 0:
+                counted = min(gap, self._lost_unseen[k])  # DDS reported these already
+                self._lost_unseen[k] -= counted
+                self._gap_unreported[k] += gap - counted
+                self._dropped[k] += gap - counted
+                self._intake_due = True
+        self._last_seq[k], self._unsequenced[k] = seq, 0
 
     def _on_lost(self, k: int, info: Any) -> None:
-        """A QoS message-lost event of input ``k`` (what DDS reports lost)."""
-        self._dropped[k] += int(info.total_count_change)
+        """A QoS message-lost event of input ``k`` (what DDS reports lost): counted now, and
+        not again when the gap it leaves in the sequence numbers is seen."""
+        lost = int(info.total_count_change)
+        seen = min(lost, self._gap_unreported[k])  # their gap was counted already
+        self._gap_unreported[k] -= seen
+        self._lost_unseen[k] += lost - seen
+        self._dropped[k] += lost - seen
+        self._intake_due = True
 
     @_guarded
+    def _on_watchdog_timer(self) -> None:
+        """The watchdog's timer (none when a sample callback ran it lately)."""
+        if time.monotonic() - self._watchdog_wall >= 0.5 * WATCHDOG_PERIOD:
+            self._on_watchdog()
+
     def _on_watchdog(self) -> None:
         """Wall-clock checks: the ROS clock advances, and the intake counts."""
         wall = time.monotonic()
+        self._watchdog_wall = wall
         self._check_clock(wall)
         self._report_intake(wall)
+
+    def _timers_late(self) -> None:
+        """Report the intake counts at once when a sample was not handled while the intake
+        status said OK; run the periodic tick and the watchdog here when their timers are late
+        by a quarter period (:data:`LATE_TIMER`): a flood's callbacks wait ahead of them in
+        the executor's queue, and /diagnostics must keep its time."""
+        if self._intake_due and self.core.state.intake[0] == Level.OK:
+            self._report_intake(time.monotonic(), force=True)
+        if self._now_ns() - self._tick_ns >= LATE_TIMER * self._period_ns:
+            self._tick()
+        if time.monotonic() - self._watchdog_wall >= LATE_TIMER * WATCHDOG_PERIOD:
+            self._on_watchdog()
 
     def _check_clock(self, wall: float) -> None:
         """With ``use_sim_time``: a ClockHealth event (and /diagnostics) every watchdog
@@ -561,6 +714,7 @@ class CatenaryMonitor(Node):
         self._busy_tick = 0.0
         quiet = (
             not any(self._dropped)
+            and not any(self._coalesced)
             and busy_share < 0.5
             and self.core.state.intake[0] == Level.OK
             and wall - self._intake_wall < self._intake_heartbeat
@@ -569,30 +723,40 @@ class CatenaryMonitor(Node):
             return
         period = wall - self._intake_wall
         event = Intake(
-            self._stamp(), tuple(self._received), tuple(self._dropped), self._busy, period
+            self._stamp(),
+            tuple(self._received),
+            tuple(self._dropped),
+            self._busy,
+            period,
+            tuple(self._coalesced),
         )
         n = len(self._received)
         self._received, self._dropped, self._busy = [0] * n, [0] * n, 0.0
-        self._intake_wall, self._intake_sent = wall, True
+        self._coalesced = [0] * n
+        self._intake_wall, self._intake_sent, self._intake_due = wall, True, False
         self._record(event)
 
     @_guarded
     def _on_period(self) -> None:
-        """The periodic tick: staleness and hold-time clears; /diagnostics at a steady rate."""
-        self._record(Tick(self._stamp()))
+        """The periodic tick's timer (none when a sample callback ran it lately)."""
+        if self._now_ns() - self._tick_ns >= 0.5 * self._period_ns:
+            self._tick()
+
+    def _tick(self) -> None:
+        """The periodic tick: staleness and hold-time clears; /diagnostics at a steady rate.
+        The intake counts come first when a sample was not handled while the intake status
+        said OK, so it says otherwise within one period."""
+        if self._intake_due and self.core.state.intake[0] == Level.OK:
+            self._report_intake(time.monotonic(), force=True)
+        self._tick_ns = self._stamp()
+        self._record(Tick(self._tick_ns))
 
     @_guarded
     def _on_acknowledge(self, msg: String) -> None:
         """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event, with
         its publisher as the ROS graph names it; refused (one warning line) for an unknown
         line, and, with ``acknowledge_from_ros`` false, unless only consoles publish."""
-        endpoints = [
-            (f'{ns.rstrip("/")}/{name}', bytes(gid))
-            for name, ns, gid in (
-                (e.node_name, e.node_namespace, e.endpoint_gid)
-                for e in self.get_publishers_info_by_topic(ACKNOWLEDGE_TOPIC)
-            )
-        ]
+        endpoints = self._publishers_on(ACKNOWLEDGE_TOPIC)
         publisher = publisher_identity(endpoints)
         if not self.config.acknowledge_from_ros:
             refusal = console_only_refusal(endpoints)
@@ -616,6 +780,49 @@ class CatenaryMonitor(Node):
         self._record(Acknowledge(self._stamp(), line, origin, publisher))
         self.get_logger().info(f'ACKNOWLEDGED {line or "all"} by {origin} ({publisher})')
 
+    def _publishers_on(self, topic: str) -> list[tuple[str, bytes]]:
+        """The publishers on ``topic`` as the ROS graph names them: (node's full name, GID)."""
+        return [
+            (f'{ns.rstrip("/")}/{name}', bytes(gid))
+            for name, ns, gid in (
+                (e.node_name, e.node_namespace, e.endpoint_gid)
+                for e in self.get_publishers_info_by_topic(topic)
+            )
+        ]
+
+    @_guarded
+    def _on_shelve(self, msg: String) -> None:
+        """An operator's shelving request (``LINE[.CONDITION] SECONDS [ORIGIN]``), checked as an
+        acknowledgement is (its publisher named, ``acknowledge_from_ros`` false: consoles only,
+        an unknown alarm refused here); then one recorded core event, whose answer (shelved,
+        unshelved, or refused by the core's rules) is one log line."""
+        endpoints = self._publishers_on(SHELVE_TOPIC)
+        publisher = publisher_identity(endpoints)
+        if not self.config.acknowledge_from_ros:
+            refusal = console_only_refusal(endpoints)
+            if refusal is not None:
+                self.get_logger().warning(f'shelve refused: {refusal}', throttle_duration_sec=10.0)
+                return
+        try:
+            request = parse_shelve_request(msg.data)
+        except ValueError as err:
+            self.get_logger().warning(f'shelve refused: {err}', throttle_duration_sec=10.0)
+            return
+        if request.alarm not in self.core.index and request.alarm != SENSORS:
+            self.get_logger().warning(
+                f'shelve refused: unknown alarm {bounded_text(request.alarm, 64)!r} (alarms: '
+                f'{", ".join(self._names)}, {SENSORS})',
+                throttle_duration_sec=10.0,
+            )
+            return
+        event = Shelve(self._stamp(), *request, publisher)
+        step = self._record(event)
+        text = f'SHELVE {step.note} ({publisher})'
+        if ': refused: ' in step.note:
+            self.get_logger().warning(text)
+        else:
+            self.get_logger().info(text)
+
     @_guarded
     def _on_log_timer(self) -> None:
         """Flush the MCAP chunk when due (bounded loss on SIGKILL); report logger changes."""
@@ -635,9 +842,8 @@ class CatenaryMonitor(Node):
                 if why == 'age'
                 else f'the folder above log_max_total_size {self.config.log_max_total_size:g} B'
             )
-            self.get_logger().warning(
-                f'log retention: deleted {path.name} ({size / 2**20:.1f} MiB): {rule}'
-            )
+            shown = f'{size / 2**20:.1f} MiB' if size >= 2**20 else f'{size / 1024:.1f} KiB'
+            self.get_logger().warning(f'log retention: deleted {path.name} ({shown}): {rule}')
             record = {'kind': 'log_deleted', 'path': str(path), 'bytes': size, 'reason': why}
             self._write(
                 EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), self._stamp()
@@ -672,21 +878,22 @@ class CatenaryMonitor(Node):
                 EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), event.stamp_ns
             )
 
-    def _record(self, event: Event) -> None:
+    def _record(self, event: Event) -> Step:
         """Record a non-input event, then run it through the core."""
         self._write_record(event)
-        self._run(event)
+        return self._run(event)
 
     def _run(self, event: Event) -> Step:
         """One core step; publish and log its outputs and snapshot, report its transitions."""
         step = self.core.step(event)
         for out in step.outputs:
-            self._output.data = list(out.values)
-            data = serialize_message(self._output)
+            data = self._output_cdr(out.values)
             self._output_pubs[out.line].publish(data)
             self._write(self._output_topics[out.line], data, step.stamp_ns)
         for change in step.transitions:
             self._report(change)
+        for record in step.alarm_events:
+            self._report_alarm(record)
         if step.snapshot is not None:
             self._publish_diagnostics(step.snapshot)
         return step
@@ -707,6 +914,23 @@ class CatenaryMonitor(Node):
             self.get_logger().info(text)
         else:
             self.get_logger().warning(text)
+
+    def _report_alarm(self, record: AlarmEvent) -> None:
+        """One line per alarm-management record the level changes do not say: a shelf that
+        expired, chattering that starts or stops."""
+        if record.kind == 'unshelved' and record.by == 'expired':
+            self.get_logger().warning(
+                f'SHELVE {record.alarm}: shelf expired after {record.time - record.value:.0f} s; '
+                'the alarm is annunciated again'
+            )
+        elif record.kind == 'chattering':
+            a = self.config.alarm
+            self.get_logger().warning(
+                f'CHATTERING {record.alarm}: {a.chatter_count:g} level changes or more within '
+                f'{a.chatter_window:g} s'
+            )
+        elif record.kind == 'chattering_end':
+            self.get_logger().info(f'CHATTERING {record.alarm}: no longer chattering')
 
     # ------------------------------------------------------------------ output
     def _write(self, topic: str, data: bytes, stamp_ns: int) -> None:
@@ -765,6 +989,7 @@ class CatenaryMonitor(Node):
         self.config = config
         self._record(Reconfigure(self._stamp(), config))
         self._diag_timer.timer_period_ns = int(1e9 / config.alarm.diagnostic_rate)
+        self._period_ns = self._diag_timer.timer_period_ns
         if self.log is not None:
             self.log.add_metadata(NODE_NAME, self._metadata(config))
 
@@ -782,12 +1007,42 @@ class CatenaryMonitor(Node):
             self.log.close()
 
 
+_FLOAT64_LE = struct.Struct('<d')
+
+
+def float64_value(raw: bytes) -> float:
+    """The value of a serialized ``std_msgs/Float64`` (little-endian CDR read in place)."""
+    if len(raw) == 12 and raw[:2] == b'\x00\x01':
+        return float(_FLOAT64_LE.unpack_from(raw, 4)[0])
+    return float(deserialize_message(raw, Float64).data)
+
+
+class OutputEncoder:
+    """Serialized outputs (``Float64MultiArray``) from their values: the layout, which never
+    changes, serialized once; the values packed after it (little-endian CDR; rclpy's
+    serializer where it is not)."""
+
+    def __init__(self, template: Float64MultiArray) -> None:
+        self.template = template
+        n = len(OUTPUT_FIELDS)
+        template.data = [0.0] * n
+        whole = serialize_message(template)
+        self.prefix = whole[: -8 * n] if whole[:2] == b'\x00\x01' else None
+        self.pack = struct.Struct(f'<{n}d').pack
+
+    def __call__(self, values: Sequence[float]) -> bytes:
+        if self.prefix is None or len(values) != len(OUTPUT_FIELDS):
+            self.template.data = list(values)
+            return serialize_message(self.template)
+        return self.prefix + self.pack(*values)
+
+
 def _fields(data: bytes, type_name: str) -> tuple[dict[str, float], Optional[int]]:
     """A raw input message's fields (core.monitor.readings) and its header stamp in ns (None
     for a type without a header)."""
-    msg = deserialize_message(data, _MESSAGE_CLASSES[type_name])
     if type_name == 'std_msgs/msg/Float64':
-        return {'value': msg.data}, None
+        return {'value': float64_value(data)}, None
+    msg = deserialize_message(data, _MESSAGE_CLASSES[type_name])
     stamp = msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
     if type_name == readings.WRENCH:
         f = msg.wrench.force

@@ -476,7 +476,8 @@ function setOperator(name) {
   b.hidden = c.mode !== 'live' || c.access === 'open';
   b.disabled = c.access === 'read-only';
   b.classList.toggle('signed', !!name);
-  b.textContent = c.access === 'read-only' ? 'read-only console' : (name ? `operator ${name} · sign out` : 'read-only: sign in');
+  b.textContent = c.access === 'read-only' ? 'read-only console' : (name ? `${name} · sign out` : 'read-only: sign in');
+  b.title = name ? `operator ${name} acknowledges from this page: click to sign out` : 'operators sign in with their token to acknowledge';
   if (!canAct()) $('ack-all').disabled = true;
   if (S.frame) renderAlarms(S.frame, isLost(S.frame));
 }
@@ -487,8 +488,8 @@ async function signIn(ev) {
   $('token').value = '';
   const res = await act('/api/operator', {}, token);
   if (!res.ok) {
-    let text = `sign-in refused (${res.status})`;
-    try { text += `: ${(await res.json()).error}`; } catch (e) { /* not JSON */ }
+    let text = res.status === 401 ? 'sign-in refused: not an operator token of this console' : `sign-in refused (${res.status})`;
+    if (res.status !== 401) try { text += `: ${(await res.json()).error}`; } catch (e) { /* not JSON */ }
     $('signin-error').textContent = text;
     return;
   }

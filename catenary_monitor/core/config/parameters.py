@@ -479,6 +479,30 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         _L,
         optional=True,
     ),
+    # Point loads on the chain (core/physics/point_loads.py, docs/point_loads.md).
+    ParamSpec(
+        'point_load_positions',
+        'double_array',
+        (),
+        'Clump weights and buoys on the chain: their places, m along the chain from the anchor '
+        '(one per entry of point_load_weights; empty: none)',
+        'm',
+        0.0,
+        1.0e4,
+        _L,
+        group='point_loads',
+    ),
+    ParamSpec(
+        'point_load_weights',
+        'double_array',
+        (),
+        'Submerged weight of each point load: > 0 a clump weight (sinker), < 0 a buoy',
+        'N',
+        -1.0e8,
+        1.0e8,
+        _L,
+        group='point_loads',
+    ),
     # Chain fatigue (core/monitor/fatigue.py, docs/fatigue.md): seed 001's S-N curve.
     ParamSpec(
         'fatigue_m',
@@ -710,8 +734,9 @@ PARAMETERS: tuple[ParamSpec, ...] = (
             (
                 'stamp_jitter',
                 0.25,
-                'spike: a reading\'s stamp may be off by this much (delivery bunches samples); '
-                'a step is compared with the rate x (dt + this)',
+                'spike: a Float64 reading\'s arrival stamp may be off by this much (delivery '
+                'bunches samples); a step is compared with the rate x (dt + this); stamped '
+                'inputs use their header stamps and no jitter',
                 's',
                 0.0,
                 10.0,
@@ -1200,6 +1225,22 @@ def _check(full_name: str, spec: ParamSpec, value: Any) -> Any:
         if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
             raise ConfigError(full_name, f'expected a list of strings, got {value!r}')
         return tuple(value)
+    if spec.type == 'double_array':
+        if value is None:  # rcl reads an empty YAML list [] as "not set"
+            return ()
+        if not isinstance(value, (list, tuple)) or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) for v in value
+        ):
+            raise ConfigError(
+                full_name, f'expected a list of numbers ({spec.unit}), got {value!r}'
+            )
+        out = tuple(float(v) for v in value)
+        for v in out:
+            if not math.isfinite(v) or not spec.min <= v <= spec.max:  # type: ignore[operator]
+                raise ConfigError(
+                    full_name, f'{v!r} out of range [{spec.min!r}, {spec.max!r}] {spec.unit}'
+                )
+        return out
     raise AssertionError(f'unknown parameter type {spec.type!r}')  # table bug, not user error
 
 
@@ -1239,6 +1280,8 @@ class LineConfig:
     anchor_holding: float | None = None
     anchor_weight: float | None = None
     chain_friction: float | None = None
+    point_load_positions: tuple[float, ...] = ()
+    point_load_weights: tuple[float, ...] = ()
     fatigue_m: float = _PER_LINE_DEFAULT('fatigue_m')
     fatigue_log_a: float = _PER_LINE_DEFAULT('fatigue_log_a')
     fatigue_stress_per_tension: float | None = None
@@ -1272,6 +1315,14 @@ class LineConfig:
             )
         if self.ea == 0.0:
             object.__setattr__(self, 'ea', None)
+        _check_point_loads(self)
+
+    @property
+    def point_loads(self) -> Optional[tuple[tuple[float, ...], tuple[float, ...]]]:
+        """``(positions, weights)`` of the chain's point loads, or None."""
+        if not self.point_load_positions:
+            return None
+        return self.point_load_positions, self.point_load_weights
 
     @property
     def stress_per_tension(self) -> float:
@@ -1280,6 +1331,40 @@ class LineConfig:
         if self.fatigue_stress_per_tension is not None:
             return self.fatigue_stress_per_tension
         return 80.5 * 12421.0e3 / self.mbl
+
+
+def _check_point_loads(line: LineConfig) -> None:
+    """Point loads: one weight per position, inside the chain, no axial stiffness, and no
+    buoy lifting more than the chain and clumps below it weigh (it would lift the anchor by
+    itself)."""
+    name, pos, wts = line.name, line.point_load_positions, line.point_load_weights
+    if len(pos) != len(wts):
+        raise ConfigError(
+            f'{name}.point_load_weights',
+            f'{len(wts)} weights for {len(pos)} positions (point_load_positions): one each',
+        )
+    if not pos:
+        return
+    if line.ea is not None:
+        raise ConfigError(
+            f'{name}.ea',
+            'point loads are solved with the inextensible chain: set ea to 0 or remove them',
+        )
+    for p, w in zip(pos, wts):
+        if w == 0.0:
+            raise ConfigError(f'{name}.point_load_weights', 'a point load of 0 N: remove it')
+        if line.chain_length is not None and p >= line.chain_length:
+            raise ConfigError(
+                f'{name}.point_load_positions',
+                f'{p!r} m is beyond the chain (chain_length {line.chain_length!r} m)',
+            )
+        below = line.weight * p + sum(v for q, v in zip(pos, wts) if q < p and v > 0.0)
+        if w < 0.0 and -w >= below:
+            raise ConfigError(
+                f'{name}.point_load_weights',
+                f'a buoy of {-w:g} N at {p:g} m lifts more than the chain below it weighs '
+                f'({below:g} N): it would lift the anchor by itself',
+            )
 
 
 def _default(name: str) -> Any:
@@ -1517,6 +1602,13 @@ def _check_geometry(lines: tuple[LineConfig, ...]) -> None:
     if not any(line.hook_x is not None or line.hook_y is not None for line in lines):
         return
     for line in lines:
+        if line.point_loads is not None:
+            raise ConfigError(
+                f'{line.name}.point_load_positions',
+                'the dock as one body (hook_x, hook_y given) does not model point loads: '
+                'remove the point loads or the dock geometry',
+            )
+    for line in lines:
         for key in GEOMETRY:
             if not _set(getattr(line, key)):
                 raise ConfigError(
@@ -1722,6 +1814,8 @@ def parameters_markdown(group: str = '') -> str:
             default += f' ({spec.type.replace("_", " ")})'
         span = '' if spec.min is None else f'{spec.min:g} – {spec.max:g}'
         ro = ' (read-only)' if spec.read_only else ''
+        if spec.type == 'double_array':
+            default = '`[]` (double array)'
         rows.append(f'| `{name}` | {default} | {spec.unit} | {span} | {spec.description}{ro} |')
     return '\n'.join(rows) + '\n'
 

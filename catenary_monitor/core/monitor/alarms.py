@@ -365,8 +365,7 @@ class LineAlarm:
             warn = self.config.fatigue_damage_warn
             breach, clear = x.fatigue_damage >= warn, x.fatigue_damage < warn
         elif cond in _SENSOR:
-            hit, ok = _sensor_codes(cond, np.asarray(x.sensor_state))
-            breach, clear = bool(hit), bool(ok)
+            breach, clear = _sensor_code(cond, float(x.sensor_state))
         elif cond == 'uplift_possible':
             nominal = x.uplift_force > self.allowed_uplift
             upper = x.uplift_force_upper
@@ -530,6 +529,16 @@ def _sensor_codes(cond: str, code: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         errors = errors | (code == state)
     breach = errors if cond == 'sensor_error' else ~errors & (code > 0)
     return breach, ~breach & np.isfinite(code)
+
+
+def _sensor_code(cond: str, code: float) -> tuple[bool, bool]:
+    """:func:`_sensor_codes` of one code (the per-sample path: no arrays)."""
+    errors = code in _ERROR_CODES
+    breach = errors if cond == 'sensor_error' else not errors and code > 0
+    return breach, not breach and math.isfinite(code)
+
+
+_ERROR_CODES = frozenset(float(c) for c in sensor_state.ERROR_STATES)
 
 
 def _sensor_text(x: AlarmInputs, cond: str, hold: float) -> str:

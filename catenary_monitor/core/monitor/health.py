@@ -206,24 +206,29 @@ def intake_status(
     window: float,
     was_ok: bool = True,
     missing: int = 0,
+    coalesced: int = 0,
 ) -> tuple[Level, str]:
     """Level and message of the sample intake over the last ``window`` [s].
 
-    ``received`` / ``dropped``: tension and depth samples handled / lost before the node
-    handled them (publisher sequence gaps, QoS message-lost events); ``missing``: samples not
-    seen against the configured sample rates (:func:`missing_samples`), counted with the
-    dropped ones; ``busy``: share of wall time spent in callbacks over the last
-    :data:`BUSY_WINDOW` (NaN: unknown). ERROR when at least :data:`DROPPED_ERROR_SHARE` of the
-    samples were dropped, WARN on any drop or when the node is busy :data:`BUSY_WARN_SHARE` of
-    the time (:data:`BUSY_CLEAR_SHARE` while the status is not OK, ``was_ok`` False), else OK.
+    ``received``: tension and depth samples handled (stepped); ``dropped``: lost before the
+    node took them (publisher sequence gaps, QoS message-lost events); ``missing``: samples not
+    seen against the configured sample rates (:func:`missing_samples`), counted with the lost
+    ones; ``coalesced``: taken and logged but not stepped, because a newer sample of the same
+    input came before the node could (the node handles the newest of each input at once and
+    leaves the older ones out: counted, never queued); ``busy``: share of wall time spent in
+    callbacks over the last :data:`BUSY_WINDOW` (NaN: unknown). Every sample not handled
+    counts as dropped: ERROR when at least :data:`DROPPED_ERROR_SHARE` of the samples were,
+    WARN on any, or when the node is busy :data:`BUSY_WARN_SHARE` of the time
+    (:data:`BUSY_CLEAR_SHARE` while the status is not OK, ``was_ok`` False), else OK.
     """
     counted = dropped
-    dropped += missing
+    lost = dropped + missing
+    dropped = lost + coalesced
     total = received + dropped
     share = dropped / total if total else 0.0
     busy_text = '' if busy != busy else f'; busy {100.0 * busy:.0f} % of the time'
     idle = busy != busy or busy < BUSY_CLEAR_SHARE
-    if missing and not counted and idle and share >= DROPPED_ERROR_SHARE:
+    if missing and not counted and not coalesced and idle and share >= DROPPED_ERROR_SHARE:
         return Level.ERROR, (
             f'{100.0 * share:.0f} % of tension and depth samples missing in the last '
             f'{window:g} s ({missing} of {total} expected at the sample rates): a sensor '
@@ -231,6 +236,11 @@ def intake_status(
         )
     if missing:
         busy_text = f'; {missing} of them missing against the sample rates{busy_text}'
+    if coalesced:
+        busy_text = (
+            f'; {coalesced} coalesced (logged, the newer sample of their input handled '
+            f'instead), {lost} lost before the node{busy_text}'
+        )
     if dropped and share >= DROPPED_ERROR_SHARE:
         return Level.ERROR, (
             f'node cannot keep up: {100.0 * share:.0f} % of tension and depth samples '

@@ -113,6 +113,7 @@ __all__ = [
     'Shelve',
     'ClockHealth',
     'Intake',
+    'Coalesced',
     'FatigueStore',
     'Event',
     'LineOutput',
@@ -291,14 +292,29 @@ class ClockHealth(NamedTuple):
 
 class Intake(NamedTuple):
     """Samples since the previous Intake event: per line, then the depth, ``received``
-    (handled) and ``dropped`` (lost before the node handled them); ``busy`` [s] of wall time
-    spent in callbacks over ``period`` [s] of wall time."""
+    (handled: stepped), ``dropped`` (lost before the node took them) and ``coalesced`` (taken
+    and logged, not stepped: a newer sample of the same input was handled instead; empty:
+    none, as in logs from before coalescing); ``busy`` [s] of wall time spent in callbacks
+    over ``period`` [s] of wall time."""
 
     stamp_ns: int
     received: tuple[int, ...]
     dropped: tuple[int, ...]
     busy: float
     period: float
+    coalesced: tuple[int, ...] = ()
+
+
+class Coalesced(NamedTuple):
+    """The node took ``samples`` samples of line ``line`` (a name; None: the depth) faster than
+    it could handle them: they are logged, stamped after ``stamp_ns`` and at most ``last_ns``,
+    and not stepped (the newer sample that follows them is). Recorded before them, so replay
+    leaves out exactly the samples the node left out."""
+
+    stamp_ns: int
+    line: Optional[str]
+    last_ns: int
+    samples: int
 
 
 class FatigueStore(NamedTuple):
@@ -338,6 +354,7 @@ Event = Union[
     ClockHealth,
     Intake,
     FatigueStore,
+    Coalesced,
 ]
 
 
@@ -408,6 +425,7 @@ class LineState:
     )  # the tension sensor's per-sample memory
     sensor_code: int = sensor_state.OK  # sensor state decided at the newest tick
     parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
+    coalesced_until: int = -1  # ns: this line's samples stamped up to it were not stepped
     fatigue: fatigue_rule.FatigueState = fatigue_rule.FatigueState()  # the streamed count
     fatigue_values: tuple[float, ...] = (0.0, _NAN, _NAN)  # fatigue_rule.FIELDS now
     sample_ns: int = -1  # ns, the newest accepted sample's stamp (header or arrival; -1: none)
@@ -513,6 +531,7 @@ class CoreState:
     intake_checked: list[tuple[bool, ...]] = field(default_factory=list)
     intake_heard: list[bool] = field(default_factory=list)
     intake_seen: bool = False
+    depth_coalesced_until: int = -1  # ns: depth samples stamped up to it were not stepped
     # The alarm system (core.alarm_flood): the flood status, the raises it counts.
     alarms: tuple[Level, str] = (Level.OK, '')
     alarms_entered: float = _NAN
@@ -597,12 +616,19 @@ class MonitorCore:
 
     # ------------------------------------------------------------------ events
     def step(self, event: Event) -> Step:
-        """Apply one event (see the module docstring for the schedule); return what it did."""
+        """Apply one event (see the module docstring for the schedule); return what it did.
+
+        A tension or depth sample that a :class:`Coalesced` record left out is not stepped
+        (an empty Step of kind ``coalesced``, the core unchanged)."""
+        if isinstance(event, (Tension, Depth)) and self.coalesced(event):
+            return Step(event.stamp_ns, 'coalesced', (), None, ())
         self.state.last_ns = event.stamp_ns
         if isinstance(event, Tension):
             return self._on_tension(event)
         if isinstance(event, Depth):
             return self._on_depth(event)
+        if isinstance(event, Coalesced):
+            return self._on_coalesced(event)
         if isinstance(event, Tick):
             return self._on_tick(event)
         if isinstance(event, LoggerHealth):
@@ -867,6 +893,7 @@ class MonitorCore:
         ]
         received = sum(sum(c.received) for c in counts)
         dropped = sum(sum(c.dropped) for c in counts)
+        coalesced = sum(sum(c.coalesced) for c in counts)
         recent = [c for c in counts if ev.stamp_ns - c.stamp_ns < int(BUSY_WINDOW * 1e9)]
         period = sum(c.period for c in recent)
         busy = sum(c.busy for c in recent) / period if period > 0 else _NAN
@@ -877,19 +904,31 @@ class MonitorCore:
             INTAKE_WINDOW,
             self.state.intake[0] == Level.OK,
             sum(self.intake_missing()),
+            coalesced,
         )
         changes = self._set_component('intake', new, ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'intake', [], changes)
 
     def intake_dropped(self) -> list[int]:
-        """Samples dropped per line, then the depth, in the last :data:`INTAKE_WINDOW`: those
-        counted and those missing against the sample rates."""
+        """Samples not handled per line, then the depth, in the last :data:`INTAKE_WINDOW`:
+        those counted lost, those coalesced (logged, not stepped) and those missing against
+        the sample rates."""
         n = len(self.state.lines) + 1
         counted = [
             sum(c.dropped[k] for c in self.state.intake_counts if len(c.dropped) == n)
             for k in range(n)
         ]
-        return [c + m for c, m in zip(counted, self.intake_missing())]
+        coalesced = self.intake_coalesced()
+        return [c + j + m for c, j, m in zip(counted, coalesced, self.intake_missing())]
+
+    def intake_coalesced(self) -> list[int]:
+        """Samples coalesced (taken and logged, a newer one stepped instead) per line, then the
+        depth, in the last :data:`INTAKE_WINDOW`."""
+        n = len(self.state.lines) + 1
+        return [
+            sum(c.coalesced[k] for c in self.state.intake_counts if len(c.coalesced) == n)
+            for k in range(n)
+        ]
 
     def intake_missing(self) -> list[int]:
         """Samples missing per line, then the depth, in the last :data:`INTAKE_WINDOW`: the
@@ -909,9 +948,28 @@ class MonitorCore:
                 if len(c.received) == n
             ]
             span = sum(c.period for c, ok in pairs if ok)
-            got = sum(c.received[k] + c.dropped[k] for c, ok in pairs if ok)
+            got = sum(
+                c.received[k] + c.dropped[k] + (c.coalesced[k] if len(c.coalesced) == n else 0)
+                for c, ok in pairs
+                if ok
+            )
             out.append(missing_samples(rates[k], span, got))
         return out
+
+    def coalesced(self, ev: Union[Tension, Depth]) -> bool:
+        """Whether a :class:`Coalesced` record left this sample out (it is not stepped)."""
+        if isinstance(ev, Depth):
+            return ev.stamp_ns <= self.state.depth_coalesced_until
+        return ev.stamp_ns <= self.state.lines[ev.line].coalesced_until
+
+    def _on_coalesced(self, ev: Coalesced) -> Step:
+        """Leave out the samples the record names (an unknown line name changes nothing)."""
+        if ev.line is None:
+            self.state.depth_coalesced_until = max(self.state.depth_coalesced_until, ev.last_ns)
+        elif ev.line in self.index:
+            line = self.state.lines[self.index[ev.line]]
+            line.coalesced_until = max(line.coalesced_until, ev.last_ns)
+        return Step(ev.stamp_ns, 'coalesced', (), None, ())
 
     def _on_reconfigure(self, ev: Reconfigure) -> Step:
         """Take the new configuration; flag what changed (WARN on the ``parameters`` status
@@ -1086,8 +1144,15 @@ class MonitorCore:
             )
             line.values = _with_fatigue(line.values, line.fatigue_values)
             return
+        loads: dict[str, Any] = {} if lc.point_loads is None else {'point_loads': lc.point_loads}
         r = solve(
-            lc.weight, h, tension=t, anchor_distance=lc.anchor_distance, mbl=lc.mbl, ea=lc.ea
+            lc.weight,
+            h,
+            tension=t,
+            anchor_distance=lc.anchor_distance,
+            mbl=lc.mbl,
+            ea=lc.ea,
+            **loads,
         )
         line.values = (
             t,
@@ -1111,7 +1176,11 @@ class MonitorCore:
         self._add_derived([line])
 
     def _solve_many(self, which: Sequence[int]) -> None:
-        """Solve several lines at the newest depth in one vectorized call."""
+        """Solve several lines at the newest depth in one vectorized call (a line with point
+        loads by itself: the scalar path)."""
+        for k in [k for k in which if self.state.lines[k].config.point_loads is not None]:
+            self._solve_one(self.state.lines[k])
+        which = [k for k in which if self.state.lines[k].config.point_loads is None]
         if not which:
             return
         lines = [self.state.lines[k] for k in which]
@@ -1308,9 +1377,12 @@ class MonitorCore:
         )
         return ComponentStatus(f'{NODE_NAME}: alarms', status[0], status[1], NODE_NAME, values)
 
-    def guard_components(self, now: float) -> list[ComponentStatus]:
-        """The statuses after the logger and the dock: the runtime-change flag, the ROS clock
-        and the intake, each once it applies (events only change them)."""
+    def guard_components(
+        self, now: float, max_damage: Optional[float] = None
+    ) -> list[ComponentStatus]:
+        """The statuses after the logger and the dock: the runtime-change flag, the ROS clock,
+        the fatigue store and the intake, each once it applies (events only change them; the
+        twin gives the worst line's damage at the snapshot, ``max_damage``)."""
         out = []
         flag = self.parameters_component(now)
         if flag is not None:
@@ -1318,7 +1390,7 @@ class MonitorCore:
         if self.state.clock_seen:
             out.append(ComponentStatus(f'{NODE_NAME}: clock', *self.state.clock, NODE_NAME, ()))
         if self.state.fatigue_seen:
-            out.append(self.fatigue_component())
+            out.append(self.fatigue_component(max_damage))
         if self.state.intake_seen:
             dropped = self.intake_dropped()
             names = [line.config.name for line in self.state.lines] + ['depth']
@@ -1331,16 +1403,23 @@ class MonitorCore:
                 values += (('messages_missing', str(sum(missing))),) + tuple(
                     (f'{name}.messages_missing', str(m)) for name, m in zip(names, missing)
                 )
+            handled = sum(sum(c.received) for c in self.state.intake_counts)
+            values += (
+                ('messages_coalesced', str(sum(self.intake_coalesced()))),
+                ('messages_handled', str(handled)),
+            )
             out.append(
                 ComponentStatus(f'{NODE_NAME}: intake', *self.state.intake, NODE_NAME, values)
             )
         return out
 
-    def fatigue_component(self) -> ComponentStatus:
+    def fatigue_component(self, max_damage: Optional[float] = None) -> ComponentStatus:
         """The ``catenary_monitor: fatigue`` status: the fatigue store's level and message,
-        ``store_state`` (:data:`FATIGUE_STORE_STATES`) and the worst line's ``fatigue_damage``."""
-        damages = [line.fatigue_values[0] for line in self.state.lines]
-        values = (('store_state', self.state.fatigue_word), ('max_damage', repr(max(damages))))
+        ``store_state`` (:data:`FATIGUE_STORE_STATES`) and the worst line's ``fatigue_damage``
+        (``max_damage``: the twin gives it as it was at the snapshot)."""
+        if max_damage is None:
+            max_damage = max(line.fatigue_values[0] for line in self.state.lines)
+        values = (('store_state', self.state.fatigue_word), ('max_damage', repr(max_damage)))
         return ComponentStatus(f'{NODE_NAME}: fatigue', *self.state.fatigue, NODE_NAME, values)
 
     def parameters_component(self, now: float) -> Optional[ComponentStatus]:
@@ -1384,12 +1463,16 @@ def _column(cfgs: Sequence[LineConfig], key: str) -> np.ndarray:
 
 def _wants_bounds(depth_accuracy: float) -> Any:
     """Whether a line has bounds: a tension accuracy, or a depth accuracy for all."""
-    return lambda c: depth_accuracy > 0.0 or c.tension_accuracy is not None
+    return (
+        lambda c: (depth_accuracy > 0.0 or c.tension_accuracy is not None)
+        and c.point_loads is None
+    )
 
 
 def _wants_holding(c: LineConfig) -> bool:
-    """Whether a line has holding values: a chain length or an anchor holding."""
-    return c.chain_length is not None or c.anchor_holding is not None
+    """Whether a line has holding values: a chain length or an anchor holding (not with point
+    loads: the plain chain's formulas)."""
+    return (c.chain_length is not None or c.anchor_holding is not None) and c.point_loads is None
 
 
 #: The values :func:`holding_values` gives (core/monitor/holding.py).
@@ -1669,9 +1752,13 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
             'kind': 'intake',
             'received': list(event.received),
             'dropped': list(event.dropped),
+            'coalesced': list(event.coalesced),
             'busy': event.busy,
             'period': event.period,
         }
+    if isinstance(event, Coalesced):
+        where = {'input': 'depth'} if event.line is None else {'line': event.line}
+        return {'kind': 'coalesced', **where, 'last_ns': event.last_ns, 'samples': event.samples}
     return None
 
 
@@ -1701,7 +1788,11 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
                 tuple(int(x) for x in record['dropped']),
                 float(record['busy']),
                 float(record['period']),
+                tuple(int(x) for x in record.get('coalesced', ())),
             )
+        if kind == 'coalesced':
+            line = None if record.get('input') == 'depth' else str(record['line'])
+            return Coalesced(stamp_ns, line, int(record['last_ns']), int(record['samples']))
         if kind == 'shelve':
             seconds = float(record['seconds'])
             if not math.isfinite(seconds) or seconds < 0.0:

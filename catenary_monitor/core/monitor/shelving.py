@@ -24,7 +24,7 @@ from typing import Mapping, NamedTuple, Optional, Sequence
 import numpy as np
 
 from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, AlarmConfig
-from catenary_monitor.core.monitor.acknowledge import SENSORS, WHOLE
+from catenary_monitor.core.monitor.acknowledge import REQUEST_LIMIT, SENSORS, WHOLE, bounded_text
 from catenary_monitor.core.monitor.alarms import CONDITIONS, ERROR_CONDITIONS, Level
 
 __all__ = [
@@ -41,8 +41,6 @@ __all__ = [
 #: The node's shelving topic (std_msgs/msg/String: ``LINE[.CONDITION] SECONDS [ORIGIN...]``).
 SHELVE_TOPIC = '/catenary_monitor/shelve'
 _ERRORS = ERROR_CONDITIONS
-#: Longest origin kept from a request (characters): the rest is cut, never stored.
-ORIGIN_MAX = 200
 
 
 class ShelveRequest(NamedTuple):
@@ -58,9 +56,11 @@ class ShelveRequest(NamedTuple):
 
 def parse_request(text: str) -> ShelveRequest:
     """The request of a shelving message's text (ValueError with one line when it is not
-    ``LINE[.CONDITION] SECONDS [ORIGIN...]``); the origin defaults to ``ros``, is cut to
-    :data:`ORIGIN_MAX` characters and keeps printable characters only."""
-    parts = text.strip().split(None, 2)
+    ``LINE[.CONDITION] SECONDS [ORIGIN...]``), as an acknowledgement's is read: only its first
+    :data:`~catenary_monitor.core.monitor.acknowledge.REQUEST_LIMIT` characters, the origin
+    (default ``ros``) and the names bounded
+    (:func:`~catenary_monitor.core.monitor.acknowledge.bounded_text`)."""
+    parts = text[:REQUEST_LIMIT].strip().split(None, 2)
     usage = 'expected "LINE[.CONDITION] SECONDS [ORIGIN]" (0 seconds unshelves)'
     if len(parts) < 2:
         raise ValueError(f'incomplete shelving request {text[:80]!r}: {usage}')
@@ -71,9 +71,9 @@ def parse_request(text: str) -> ShelveRequest:
         raise ValueError(f'not a duration: {seconds_text[:40]!r}: {usage}') from None
     if not math.isfinite(seconds) or seconds < 0.0:
         raise ValueError(f'the duration must be finite and >= 0 s, got {seconds_text[:40]!r}')
-    alarm, _, condition = target.partition('.')
-    origin = ''.join(c for c in (parts[2] if len(parts) > 2 else 'ros') if c.isprintable())
-    return ShelveRequest(alarm, condition or WHOLE, seconds, origin[:ORIGIN_MAX].strip() or 'ros')
+    alarm, _, condition = bounded_text(target, 120).partition('.')
+    origin = bounded_text(parts[2]) if len(parts) > 2 else 'ros'
+    return ShelveRequest(alarm, condition or WHOLE, seconds, origin or 'ros')
 
 
 def hidden_conditions(condition: str, unshelvable: Sequence[str]) -> frozenset[str]:

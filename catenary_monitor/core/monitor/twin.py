@@ -62,6 +62,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     OUTPUT_FIELDS,
     VALUE_FIELDS,
     Change,
+    Coalesced,
     ComponentStatus,
     LineState,
     MonitorCore,
@@ -88,7 +89,8 @@ from catenary_monitor.core.monitor.plausible import (
     status_messages,
 )
 from catenary_monitor.core.physics import catenary as cat
-from catenary_monitor.core.physics import elastic, fused_kernel
+from catenary_monitor.core.physics import elastic, fused_kernel, point_loads
+from catenary_monitor.core.physics.solve import solve
 from catenary_monitor.core.physics.solve import ALL_KEYS, Status
 
 try:  # three of the loops below in C, next to this file (optional: else the numpy passes)
@@ -123,7 +125,7 @@ __all__ = [
 ]
 
 #: Model names by :attr:`LineResult.model_codes` (as the ``/diagnostics`` key ``model``).
-MODEL_NAMES = (NO_MODEL, elastic.INEXTENSIBLE, elastic.ELASTIC)
+MODEL_NAMES = (NO_MODEL, elastic.INEXTENSIBLE, elastic.ELASTIC, point_loads.MODEL)
 _INCONSISTENT = CONDITIONS.index('inconsistent')
 #: Step kinds in :attr:`LineResult.kind` and :attr:`LineResult.step_kind`.
 KIND_DEPTH, KIND_TENSION, KIND_TICK = 0, 1, 2
@@ -191,14 +193,15 @@ class LineResult:
     step_kind: np.ndarray
     step_level: np.ndarray
     transitions: list[Transition] = field(default_factory=list)
-    elastic: Optional[np.ndarray] = None
+    elastic: Optional[np.ndarray] = None  # where the line's other model answered:
+    other_model: int = 2  # its MODEL_NAMES index (the elastic chain, or 3: point loads)
 
     @property
     def model_codes(self) -> np.ndarray:
         """Per update: index into :data:`MODEL_NAMES` (0, ``none``, before the first depth)."""
         code = np.ones(len(self.t_ns), np.int64)
         if self.elastic is not None:
-            code[self.elastic] = 2
+            code[self.elastic] = self.other_model
         code[self.status == NO_DEPTH] = 0
         return code
 
@@ -418,6 +421,32 @@ def _solve_updates_elastic(
             if k not in _NOT_SOLVED:
                 out[k][has] = getattr(res, k)
     return out, status, used
+
+
+def _solve_updates_loads(
+    line: LineConfig, tension: np.ndarray, depth: np.ndarray
+) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
+    """:func:`solve_updates` for a line with point loads: the core's scalar solve() per
+    element (core/physics/point_loads.py); also where that model answered."""
+    n = len(tension)
+    out = {k: np.full(n, np.nan) for k in VALUE_FIELDS}
+    out['depth'], out['top_tension'] = depth.copy(), tension.copy()
+    status = np.full(n, NO_DEPTH, dtype=np.int64)
+    has = ~np.isnan(depth)
+    for i in np.flatnonzero(has).tolist():
+        res = solve(
+            line.weight,
+            float(depth[i]),
+            tension=float(tension[i]),
+            anchor_distance=line.anchor_distance,
+            mbl=line.mbl,
+            point_loads=line.point_loads,
+        )
+        status[i] = res.status
+        for k in VALUE_FIELDS:
+            if k not in _NOT_SOLVED:
+                out[k][i] = getattr(res, k)
+    return out, status, has.copy()
 
 
 def critical_parameters(line: LineConfig, depth: np.ndarray) -> np.ndarray:
@@ -909,11 +938,12 @@ def _add_derived(core: MonitorCore, lc: LineConfig, values: dict[str, np.ndarray
     """The bounds and the holding values from the nominal values, as the core adds them
     (all NaN, without their passes, for a line with neither accuracies nor holding data)."""
     n = len(values['top_tension'])
-    if core.config.alarm.depth_accuracy > 0.0 or lc.tension_accuracy is not None:
+    plain = lc.point_loads is None  # (bounds and holding: the plain chain's formulas)
+    if plain and (core.config.alarm.depth_accuracy > 0.0 or lc.tension_accuracy is not None):
         values.update(bound_values([lc], core.config.alarm.depth_accuracy, values))
     else:
         values.update({key: np.full(n, np.nan) for key in uncertainty.FIELDS})
-    if lc.chain_length is not None or lc.anchor_holding is not None:
+    if plain and (lc.chain_length is not None or lc.anchor_holding is not None):
         values.update(holding_values([lc], values, core.config.alarm.drag_tolerance))
     else:
         values.update({key: np.full(n, np.nan) for key in HOLDING_FIELDS})
@@ -932,6 +962,8 @@ def _solve_at(
     used: Optional[np.ndarray] = None
     if lc.ea is not None:
         values, status, used = _solve_updates_elastic(lc, tension, h)
+    elif lc.point_loads is not None:  # rare: solve() element by element
+        values, status, used = _solve_updates_loads(lc, tension, h)
     elif fused_kernel.AVAILABLE:  # solve_updates' kernel path, which needs no critical parameter
         values, status = _solve_updates_kernel(lc, tension, h, keep=True)
     else:
@@ -1024,9 +1056,10 @@ def _advance_line(
     tide: _Tide,
     sensors: _Sensors,
     dock: Optional[_Dock] = None,
-) -> tuple[LineResult, LevelSeries, _Steps, alarm_ack.AckSeries]:
+) -> tuple[LineResult, LevelSeries, _Steps, alarm_ack.AckSeries, np.ndarray]:
     """One line through the window; leaves the line's state in the core as after the steps
-    (the core's depth and tide still as before the window)."""
+    (the core's depth and tide still as before the window). The last item: the line's fatigue
+    damage after each of its tension samples."""
     line = core.state.lines[k]
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
@@ -1069,12 +1102,13 @@ def _advance_line(
         series.levels,
         series.transitions,
         used,
+        3 if line.config.point_loads is not None else 2,
     )
     _write_back(line, series, values, status, used, window.sample_ns(k), tv)
     line.fatigue = fatigue_end
     if len(tt):
         line.fatigue_values = tuple(float(fatigue[key][-1]) for key in fatigue_rule.FIELDS)
-    return result, series, steps, acks
+    return result, series, steps, acks, np.asarray(fatigue[fatigue_rule.FIELDS[0]], np.float64)
 
 
 def _write_back(
@@ -1097,7 +1131,8 @@ def _write_back(
         line.status = int(status[-1])
         table = status_messages(line.config)
         line.status_message = '' if line.status == NO_DEPTH else table[line.status]
-        code = 0 if line.status == NO_DEPTH else (2 if used is not None and used[-1] else 1)
+        other = 3 if line.config.point_loads is not None else 2
+        code = 0 if line.status == NO_DEPTH else (other if used is not None and used[-1] else 1)
         line.model = MODEL_NAMES[code]
 
 
@@ -1146,13 +1181,15 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
     tide, tide_transitions = _decide_tide(core, window, sensors)
     blind = _decide_blind(core, window, tide)
     dock = _decide_dock_window(core, window, tide)
-    results, series, steps, acks = [], [], [], []
-    for k in range(len(core.state.lines)):
-        r, s, st, a = _advance_line(core, k, window, tide, sensors, dock)
+    results, series, steps, acks, damage = [], [], [], [], []
+    for k, line in enumerate(core.state.lines):
+        before = line.fatigue_values[0]
+        r, s, st, a, d = _advance_line(core, k, window, tide, sensors, dock)
         results.append(r)
         series.append(s)
         steps.append(st)
         acks.append(a)
+        damage.append(_Damage(window.tensions[k][0], d, before))
     journal, flood = _window_journal(core, window, tide, blind, series, steps, acks)
     times = [c[0] for c in (*given.tensions, given.depth, (given.ticks, None)) if len(c[0])]
     start = int(min(t[0] for t in times)) if times else core.state.last_ns
@@ -1163,7 +1200,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         made = build(
             _Made(
                 core, window, tide, results, series, steps, depth_before, tide_before,
-                lines_before, acks, dock, sensors, depth_word, blind, flood,
+                lines_before, acks, dock, sensors, depth_word, blind, flood, damage,
             )  # fmt: skip
         )
         snaps = [made] if isinstance(made, SnapshotColumns) else list(made)
@@ -1429,6 +1466,14 @@ def _decide_flood(
     return flood, log
 
 
+class _Damage(NamedTuple):
+    """A line's fatigue damage through the window: after each tension sample (stamps ns)."""
+
+    times: np.ndarray
+    damage: np.ndarray
+    before: float
+
+
 class _Made(NamedTuple):
     """What a window's recompute made, from which its snapshots are built."""
 
@@ -1447,6 +1492,21 @@ class _Made(NamedTuple):
     depth_word: str = 'ok'
     blind: Optional[_Blind] = None
     flood: Optional[_Flood] = None
+    damage: Optional[list['_Damage']] = None
+
+    def max_damage(self, stamps: np.ndarray) -> list[Optional[float]]:
+        """The worst line's fatigue damage as the core held it at each of ``stamps`` [ns]
+        (after the tension samples at or before the stamp), for the ``fatigue`` status."""
+        if not self.damage:
+            return [None] * len(stamps)
+        worst = np.full(len(stamps), -np.inf)
+        for d in self.damage:
+            at = np.searchsorted(d.times, stamps, 'right') - 1
+            value = np.where(
+                at >= 0, d.damage[np.maximum(at, 0)] if len(d.damage) else 0, d.before
+            )
+            worst = np.fmax(worst, value)
+        return [float(v) for v in worst]
 
     def stamps(self) -> np.ndarray:
         """The stamps of the window's snapshots (:func:`_snapshot_stamps`)."""
@@ -1509,6 +1569,7 @@ def _snapshots(m: _Made) -> list[Snapshot]:
     logger = ComponentStatus(
         'catenary_monitor: logger', core.state.logger[0], core.state.logger[1], core.logger_id, ()
     )
+    worst = m.max_damage(stamps)
     out = []
     for n, stamp in enumerate(stamps.tolist()):
         statuses = [col[n] for col in columns]
@@ -1518,7 +1579,7 @@ def _snapshots(m: _Made) -> list[Snapshot]:
         statuses.append(logger)
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))
-        statuses += core.guard_components(stamp * 1e-9)
+        statuses += core.guard_components(stamp * 1e-9, worst[n])
         out.append(Snapshot(stamp, tuple(statuses)))
     return out
 
@@ -1838,7 +1899,8 @@ def _snapshot_columns(m: _Made) -> SnapshotColumns | list[Snapshot]:
     core, window, tide, dock = m.core, m.window, m.tide, m.dock
     stamps = m.stamps()
     n = len(stamps)
-    guards = [core.guard_components(stamp * 1e-9) for stamp in stamps.tolist()]
+    worst = m.max_damage(stamps)
+    guards = [core.guard_components(stamp * 1e-9, w) for stamp, w in zip(stamps.tolist(), worst)]
     shapes = {tuple((g.name, len(g.values)) for g in row) for row in guards}
     if len(shapes) > 1:
         return _snapshots(m)
@@ -1936,6 +1998,7 @@ def concat_lines(parts: list[LineResult]) -> LineResult:
         cat_([p.step_level for p in parts]),
         [tr for p in parts for tr in p.transitions],
         used,
+        parts[0].other_model,
     )
 
 
@@ -1951,6 +2014,7 @@ def run_log(
     are the pieces' in order, then the events' (not merged in time: see
     :class:`SnapshotColumns`).
     """
+    window, events, marks = _leave_out_coalesced(core, window, list(events))
     pieces: list[WindowResult] = []
     extra: list[Snapshot | SnapshotColumns] = []
     others: list[Change] = []
@@ -1971,6 +2035,7 @@ def run_log(
             if snapshots and step.snapshot is not None:
                 extra.append(step.snapshot)
         lo = hi
+    _keep_marks(core, marks, events)
     lines = [concat_lines([p.lines[k] for p in pieces]) for k in range(len(core.state.lines))]
     tide = [tr for p in pieces for tr in p.tide]
     others = sorted(
@@ -1991,6 +2056,76 @@ def run_log(
         ),
         core,
     )
+
+
+def _leave_out_coalesced(
+    core: MonitorCore, window: Window, events: list[Any]
+) -> tuple[Window, list[Any], list[Coalesced]]:
+    """The window without the samples the node coalesced (:class:`Coalesced` records: each
+    leaves out its input's samples stamped after it and at most its ``last_ns``, and the core
+    carries the newest bound into the next window), the other events, and the records."""
+    marks = [e for e in events if isinstance(e, Coalesced)]
+    if marks:
+        events = [e for e in events if not isinstance(e, Coalesced)]
+    carried = [line.coalesced_until for line in core.state.lines]
+    if not marks and max(carried + [core.state.depth_coalesced_until]) < 0:
+        return window, events, marks
+    index = {line.config.name: k for k, line in enumerate(core.state.lines)}
+    keep = [
+        _kept(column[0], carried[k], [m for m in marks if index.get(m.line or '') == k])
+        for k, column in enumerate(window.tensions)
+    ]
+    d_keep = _kept(
+        window.depth[0], core.state.depth_coalesced_until, [m for m in marks if m.line is None]
+    )
+
+    def cut(array: Optional[np.ndarray], kept: Optional[np.ndarray]) -> Optional[np.ndarray]:
+        return array if array is None or kept is None else array[kept]
+
+    tension_stamps = window.tension_stamps
+    if tension_stamps is not None:
+        tension_stamps = [cut(s, kept) for s, kept in zip(tension_stamps, keep)]
+    return (
+        Window(
+            [
+                column if kept is None else (column[0][kept], column[1][kept])
+                for column, kept in zip(window.tensions, keep)
+            ],
+            window.depth if d_keep is None else (window.depth[0][d_keep], window.depth[1][d_keep]),
+            window.ticks,
+            tension_stamps,
+            cut(window.depth_stamps, d_keep),
+        ),
+        events,
+        marks,
+    )
+
+
+def _keep_marks(core: MonitorCore, marks: list[Coalesced], events: list[Any]) -> None:
+    """What the core keeps of the window's coalescing records (those since its last start):
+    each input's newest bound, and the newest stamp."""
+    starts = [e.stamp_ns for e in events if isinstance(e, Start)]
+    kept = [m for m in marks if not starts or m.stamp_ns > max(starts)]
+    if not kept:
+        return
+    last = core.state.last_ns
+    for mark in kept:
+        core.step(mark)
+    core.state.last_ns = max(last, max(m.stamp_ns for m in kept))
+
+
+def _kept(t: np.ndarray, carried: int, marks: list[Coalesced]) -> Optional[np.ndarray]:
+    """Which samples stamped ``t`` [ns] stay: not those at most ``carried`` nor inside a
+    record's ``(stamp_ns, last_ns]`` (None: all of them)."""
+    out = t <= carried
+    if marks:
+        starts = np.array([m.stamp_ns for m in marks], np.int64)
+        ends = np.array([m.last_ns for m in marks], np.int64)
+        order = np.argsort(starts, kind='stable')
+        starts, ends = starts[order], ends[order]
+        at = np.searchsorted(starts, t, 'left') - 1  # the newest record before each sample
+        out |= (at >= 0) & (t <= ends[np.maximum(at, 0)])
+    return ~out if out.any() else None
 
 
 def _ids(core: MonitorCore) -> dict[str, str]:

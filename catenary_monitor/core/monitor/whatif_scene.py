@@ -162,16 +162,28 @@ def hanging_tensions(config: MonitorConfig, depth: float, names: list[str]) -> d
     distance in still water at ``depth`` (m, plus its ``hook_height``); lines without one, or
     whose chain cannot reach (taut), are left out."""
     from catenary_monitor.core.physics.fixed_length import statics_at_span
+    from catenary_monitor.core.physics.solve import solve
 
     out: dict[str, float] = {}
     for line in config.lines:
         if line.name not in names or line.chain_length is None:
             continue
         ea = math.inf if line.ea is None else line.ea
-        state = statics_at_span(
-            line.weight, depth + line.hook_height, line.chain_length, line.anchor_distance, ea
-        )
-        tension = float(state.top_tension)
+        if line.point_loads is not None:  # problem 5 with the clumps and buoys
+            tension = float(
+                solve(
+                    line.weight,
+                    depth + line.hook_height,
+                    chain_length=line.chain_length,
+                    anchor_distance=line.anchor_distance,
+                    point_loads=line.point_loads,
+                ).top_tension
+            )
+        else:
+            state = statics_at_span(
+                line.weight, depth + line.hook_height, line.chain_length, line.anchor_distance, ea
+            )
+            tension = float(state.top_tension)
         if math.isfinite(tension):
             out[line.name] = tension
     return out

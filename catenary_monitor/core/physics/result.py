@@ -28,6 +28,7 @@ class Status(IntEnum):
     IMPLAUSIBLE_DEPTH = 12
     OUT_OF_RANGE = 13  # a result float64 cannot hold (never status 0 with inf or NaN)
     WRONG_UNITS = 14  # a reading off by orders of magnitude, see core/monitor/plausible.py
+    NOT_MODELLED = 15  # point loads: a scene the static model does not follow (point_loads.py)
 
 
 STATUS_MESSAGES: dict[int, str] = {
@@ -62,6 +63,10 @@ STATUS_MESSAGES: dict[int, str] = {
     Status.WRONG_UNITS: (
         'hook tension 100 times or more below the hanging chain\'s own weight w*h, or below it '
         'where 1000 times the reading would fit the chain: wrong units? check the tension scale'
+    ),
+    Status.NOT_MODELLED: (
+        'point loads: a buoy would lift a hump of chain off the seabed or the chain would pass '
+        'through it (not modelled by the static chain with point loads)'
     ),
 }
 

@@ -21,7 +21,10 @@ from __future__ import annotations
 import functools
 from typing import TYPE_CHECKING, Any, Optional
 
+import numpy as np
+
 from catenary_monitor.core.physics import elastic, fixed_length, fused_kernel
+from catenary_monitor.core.physics import point_loads as point_loads_mod
 from catenary_monitor.core.physics.inextensible import ArrayLike, solve_inextensible
 from catenary_monitor.core.physics.result import (
     ALL_KEYS,
@@ -43,6 +46,7 @@ def solve(
     chain_length: Optional[ArrayLike] = None,
     mbl: Optional[ArrayLike] = None,
     ea: Optional[Any] = None,
+    point_loads: Any = None,
 ) -> SolveResult:
     """Solve the anchor-chain catenary for the minimum anchor distance, uplift and margins.
 
@@ -57,6 +61,10 @@ def solve(
     mbl : minimum breaking load [N]; adds ``safety_factor = mbl / top_tension``.
     ea : axial stiffness EA [N] (> 0; ``inf`` is the inextensible chain); with ``tension`` or
         ``chain_length``.
+    point_loads : ``(positions, weights)``: clump weights (weight > 0 N, submerged) and buoys
+        (< 0) at those arc lengths from the anchor [m]; with ``tension`` or ``chain_length``
+        and ``anchor_distance``, inextensible (:mod:`catenary_monitor.core.physics.point_loads`;
+        arrays are solved element by element).
 
     Returns
     -------
@@ -70,6 +78,10 @@ def solve(
     well-conditioned (docs/solver.md).  With all-scalar inputs a plain-float path gives the same
     numbers to rounding, an order of magnitude faster.
     """
+    if point_loads is not None and len(point_loads[0]):
+        return _with_loads(
+            weight, depth, tension, horizontal, anchor_distance, chain_length, mbl, ea, point_loads
+        )
     if _ONE is not None:  # one element of problem 3 or 4 in plain numbers: the C kernel
         try:
             one = _ONE(
@@ -108,6 +120,55 @@ def solve(
     return in_range(
         elastic.solve_with_correction(weight, depth, tension, anchor_distance, ea=ea, mbl=mbl)[0]
     )
+
+
+def _with_loads(
+    weight: Any,
+    depth: Any,
+    tension: Any,
+    horizontal: Any,
+    anchor_distance: Any,
+    chain_length: Any,
+    mbl: Any,
+    ea: Any,
+    point_loads: tuple[Any, Any],
+) -> SolveResult:
+    """solve() with point loads: element by element (point_loads.solve_result)."""
+    positions, weights = (np.atleast_1d(np.asarray(v, float)) for v in point_loads)
+    if positions.shape != weights.shape or positions.ndim != 1:
+        raise ValueError(
+            'point_loads: positions and weights must be two 1-D sequences of one length'
+        )
+    if (
+        horizontal is not None
+        or anchor_distance is None
+        or (tension is None) == (chain_length is None)
+    ):
+        raise ValueError(
+            'point_loads are solved for a hook tension or a chain length at an anchor distance'
+        )
+    if ea is not None and np.any(np.isfinite(np.asarray(ea, float))):
+        raise ValueError('point_loads are solved with the inextensible chain (no ea)')
+    loads = point_loads_mod.PointLoads.of(positions.tolist(), weights.tolist())
+    given = [weight, depth, tension if tension is not None else chain_length, anchor_distance]
+    given.append(np.nan if mbl is None else mbl)
+    arrays = np.broadcast_arrays(*(np.asarray(v, float) for v in given))
+    shape = arrays[0].shape
+    results = [
+        point_loads_mod.solve_result(
+            w, h, t if tension is not None else None, x, t if tension is None else None,
+            None if mbl is None else m, loads,
+        )
+        for w, h, t, x, m in zip(*(a.ravel().tolist() for a in arrays))
+    ]  # fmt: skip
+    if not shape:
+        return results[0]
+    first = results[0]
+    columns: Any = {
+        k: np.array([getattr(r, k) for r in results]).reshape(shape) for k in ALL_KEYS
+    }
+    status = np.array([r.status for r in results]).reshape(shape)
+    return first._replace(**columns, status=status)
 
 
 _ONE = fused_kernel._k.solve_one if fused_kernel.AVAILABLE else None
