@@ -73,6 +73,7 @@ _CHUNK_SIZE = 1 << 20  # B, chunks of the recovered file (uncompressed)
 _DEFINITIONS_BYTES = 64 << 20
 _KEPT_RECORD_BYTES = 64 << 20  # B, the largest Metadata or Attachment record copied
 _HEADS = 1 << 20  # top-level record heads read looking for the first chunk
+_BATCH_BYTES = 2 << 20  # B of decompressed chunks the reader hands on at a time
 
 
 class _Bad(Exception):
@@ -420,6 +421,7 @@ def _rewrite(path: Path, out: IO[bytes], result: RecoverResult, name: str) -> No
     file with the records copied as they are."""
     report = ReadReport()
     scanner = _Scanner(path, lambda channel: True, report)
+    scanner.batch_bytes = _BATCH_BYTES
     profile, library = _header(scanner.data)
     writer = ColumnWriter(
         out,
