@@ -206,3 +206,6 @@ class ReplaySource:
         raise AckError(
             'replay is read-only: the acknowledgements shown are the recorded ones', 409
         )
+
+    def shelve(self, alarm: str, condition: str, seconds: float, origin: str) -> dict[str, Any]:
+        raise AckError('replay is read-only: the shelves shown are the recorded ones', 409)

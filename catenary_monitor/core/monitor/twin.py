@@ -41,7 +41,7 @@ from catenary_monitor.core.monitor import (
     sensor_state,
     tide_table,
     tide_trend,
-    uncertainty,
+    wave_window,
 )
 from catenary_monitor.core.monitor.alarm_journal import AlarmEvent, entries, raised
 from catenary_monitor.core.monitor.alarms import (
@@ -68,20 +68,19 @@ from catenary_monitor.core.monitor.monitor_core import (
     MonitorCore,
     Snapshot,
     Start,
-    bound_values,
 )
 from catenary_monitor.core.monitor.monitor_core import depth_word as depth_state_word
 from catenary_monitor.core.monitor.monitor_core import (
     dock_component,
     forecast_word,
-    HOLDING_FIELDS,
-    holding_values,
+    derived_values,
     line_dock_values,
     line_status,
     sensor_limits,
     sensors_component,
     tide_component,
     tide_with_sensor,
+    view_word,
 )
 from catenary_monitor.core.monitor.plausible import (
     MAX_DEPTH,
@@ -387,8 +386,8 @@ def _solve_updates_kernel(
         out['depth'], out['top_tension'] = h, t
         return out, status
     out['depth'], out['top_tension'] = h.copy(), t.copy()
-    out['time_to_uplift'] = np.full(len(t), np.nan)  # set by the caller, from the tide's trend
-    out['sensor_state'] = np.full(len(t), np.nan)  # set by the caller, from the ticks
+    for key in VALUE_FIELDS:  # the caller's: the tide's forecast, the ticks, the derived values
+        out.setdefault(key, np.full(len(t), np.nan))
     return out, status
 
 
@@ -905,14 +904,23 @@ def _solve_line(
     tide: _Tide,
     sensors: _Sensors,
     k: int,
+    waves: tuple[np.ndarray, np.ndarray],
 ) -> tuple[dict[str, np.ndarray], np.ndarray, Optional[np.ndarray]]:
     """Values, status and elastic flags at the line's solved steps, with the time to uplift
-    at the tide's trend of the newest depth sample and the sensor state of the newest tick."""
+    at the tide's trend of the newest depth sample and the sensor state of the newest tick;
+    ``waves`` the wave window's peak and wave tension after each tension sample."""
     values, status, used = _solve_at(core, line, steps, tv, window)
     values['sensor_state'] = _pick(
         steps.k_idx[steps.solved], sensors.codes[:, k].astype(np.float64), sensors.before[k]
     )
     d_idx = steps.d_idx[steps.solved]
+    t_idx = steps.t_idx[steps.solved]
+    values['peak_tension'] = _pick(t_idx, waves[0], line.peak_tension)
+    values['wave_tension'] = _pick(t_idx, waves[1], line.wave_tension)
+    values.update(derived_values([line.config], core.config.alarm, values))
+    margin, values['time_to_uplift_view'] = tide_trend.nearer_margin(
+        values['tide_margin'], values['tide_margin_at_length']
+    )
     a = core.config.alarm
     if a.constituents:
         now = _pick(d_idx, window.sample_s(None), core.state.depth_s)
@@ -921,32 +929,16 @@ def _solve_line(
             a.tide_table_epoch,
             a.tide_forecast_horizon,
             now,
-            values['tide_margin'],
+            margin,
             values['uplift_force'],
         )
     else:
         rate = _pick(d_idx, tide.rates, core.state.trend.rate)
         excess = _pick(d_idx, tide.excess, core.state.trend.excess)
         values['time_to_uplift'] = tide_trend.uplift_times(
-            values['tide_margin'], values['uplift_force'], rate, excess
+            margin, values['uplift_force'], rate, excess
         )
-    _add_derived(core, line.config, values)
     return values, status, used
-
-
-def _add_derived(core: MonitorCore, lc: LineConfig, values: dict[str, np.ndarray]) -> None:
-    """The bounds and the holding values from the nominal values, as the core adds them
-    (all NaN, without their passes, for a line with neither accuracies nor holding data)."""
-    n = len(values['top_tension'])
-    plain = lc.point_loads is None  # (bounds and holding: the plain chain's formulas)
-    if plain and (core.config.alarm.depth_accuracy > 0.0 or lc.tension_accuracy is not None):
-        values.update(bound_values([lc], core.config.alarm.depth_accuracy, values))
-    else:
-        values.update({key: np.full(n, np.nan) for key in uncertainty.FIELDS})
-    if plain and (lc.chain_length is not None or lc.anchor_holding is not None):
-        values.update(holding_values([lc], values, core.config.alarm.drag_tolerance))
-    else:
-        values.update({key: np.full(n, np.nan) for key in HOLDING_FIELDS})
 
 
 def _solve_at(
@@ -1023,11 +1015,14 @@ def _line_inputs(
             'implied_anchor_distance',
             'fatigue_damage',
             'fatigue_life_left',
+            'dynamic_uplift',
+            'time_to_uplift_view',
         )
     }
     inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
         np.int64
     )
+    inputs['uplift_view'] = inputs.pop('time_to_uplift_view')
     inputs['tide_rate'] = _pick(steps.d_idx, tide.rates, core.state.trend.rate)
     inputs['tide_forecast'] = 1.0 if core.config.alarm.constituents else 0.0
     inputs['tension_stamp'] = _pick(steps.t_idx, window.sample_s(k), line.tension_s)
@@ -1063,8 +1058,16 @@ def _advance_line(
     line = core.state.lines[k]
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
-    values, status, used = _solve_line(core, line, steps, tv, window, tide, sensors, k)
     times = window.sample_s(k)  # the reading times, as the core's tension_s
+    peaks, waves, wave_state = wave_window.series(
+        line.wave, times, tv, line.config.mbl, core.config.alarm.wave_window
+    )
+    values, status, used = _solve_line(
+        core, line, steps, tv, window, tide, sensors, k, (peaks, waves)
+    )
+    line.wave = wave_state
+    if len(tt):
+        line.peak_tension, line.wave_tension = float(peaks[-1]), float(waves[-1])
     fatigue, fatigue_end = fatigue_rule.series(line.fatigue, times, tv, core.curves[k])
     at = steps.t_idx[steps.solved]
     for j, key in enumerate(fatigue_rule.FIELDS):
@@ -1846,6 +1849,7 @@ def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
         _same(list(map(str, status.tolist()))),
         _same(models),
         _same(words),
+        _same([view_word(v) for v in values['time_to_uplift_view'].tolist()]),
     ]
     columns += [f if isinstance(f, str) else _same(f) for f in ack_columns]
     columns += [_same([row[e] for row in extra]) for e in range(len(extra_keys))]
@@ -1859,6 +1863,7 @@ def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
         'solver_status',
         'model',
         'sensor_state',
+        'time_to_uplift_view',
         *ack_keys,
         *extra_keys,
     )
