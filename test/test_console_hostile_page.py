@@ -110,7 +110,7 @@ def test_hostile_page_reloads_and_operator_sign_in(tmp_path: Path) -> None:
         button.click()
         driver.find_element('id', 'token').send_keys('a1b2c3d4e5f6a7b8c9d0')
         driver.find_element('id', 'signin-go').click()
-        wait_for('signed in', lambda: button.text == 'operator alice · sign out', 10.0)
+        wait_for('signed in', lambda: button.text == 'alice · sign out', 10.0)
         assert driver.execute_script('return canAct()') is True
         status = driver.execute_async_script(
             "const done = arguments[0]; act('/api/ack', {line: 'line_11'})"

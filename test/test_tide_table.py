@@ -67,7 +67,8 @@ def scene(seconds=6 * 3600.0, step=60.0):
 
 
 def config(**alarm):
-    line = LineConfig(name='line_11', weight=W, anchor_distance=X, mbl=4.8e6)
+    # exact sensors: the forecast's warning is the first (no bound within accuracy before it)
+    line = LineConfig(name='line_11', weight=W, anchor_distance=X, mbl=4.8e6, tension_accuracy=1.0)
     alarm = {
         'tide_table': TABLE,
         'tide_table_epoch': EPOCH,
@@ -78,6 +79,7 @@ def config(**alarm):
         'tension_timeout': 120.0,
         'anchor_margin_warn': 0.0,
         'tide_margin_warn': 0.0,
+        'depth_accuracy': 0.0,
         **alarm,
     }
     return MonitorConfig(lines=(line,), alarm=AlarmConfig(**alarm))

@@ -31,6 +31,7 @@ __all__ = [
     'TENSION_TYPES',
     'DEPTH_TYPES',
     'AXES',
+    'DEFAULT_TENSION_ACCURACY',
     'ParamSpec',
     'PARAMETERS',
     'ROS_BUILTIN_PARAMETERS',
@@ -54,6 +55,12 @@ __all__ = [
     'parameters_markdown',
     'resolve_topic',
 ]
+
+
+#: A line's tension accuracy where ``NAME.tension_accuracy`` is not set, as a share of its MBL:
+#: a load pin is rated near the line's working load (about half the MBL: the MEG4 working load
+#: limit) and calibrated to about +-1 % of its rating (docs/node.md, "Sensor accuracies").
+DEFAULT_TENSION_ACCURACY = 0.005
 
 
 class _Required:
@@ -472,7 +479,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         _NOT_GIVEN,
         'Stated accuracy of the tension sensor, a bound: a reading is within +- this of the true '
         'tension (the margin bounds take the worst case within it; the dock estimate takes it '
-        'as a reading\'s standard deviation)',
+        'as a reading\'s standard deviation); not set: 0.5 % of NAME.mbl (a load pin rated near '
+        'half the MBL, +-1 % of its rating)',
         'N',
         1.0,
         1.0e9,
@@ -803,12 +811,33 @@ PARAMETERS: tuple[ParamSpec, ...] = (
     ParamSpec(
         'depth_accuracy',
         'double',
-        0.0,
+        0.02,
         'Stated accuracy of the depth sensor, a bound: a reading is within +- this of the true '
-        'depth (the margin bounds take the worst case within it; 0: exact)',
+        'depth (the margin bounds take the worst case within it; 0: exact; 0.02: a radar or '
+        'pressure tide gauge, about 1 cm, and the hooks\' survey)',
         'm',
         0.0,
         100.0,
+    ),
+    ParamSpec(
+        'wave_window',
+        'double',
+        30.0,
+        'Wave-frequency tension: each line\'s peak and half-range (wave_tension) over this '
+        'window of its newest readings',
+        's',
+        1.0,
+        3600.0,
+    ),
+    ParamSpec(
+        'wave_allowance',
+        'double',
+        0.3,
+        'The dynamic uplift (and the bounds) take the window\'s peak tension plus this x '
+        'wave_tension: the anchor\'s dynamic force beyond the quasi-static (MoorDyn study)',
+        '',
+        0.0,
+        10.0,
     ),
     ParamSpec(
         'drag_margin_warn',
@@ -1332,6 +1361,14 @@ class LineConfig:
             return self.fatigue_stress_per_tension
         return 80.5 * 12421.0e3 / self.mbl
 
+    @property
+    def sensor_accuracy(self) -> float:
+        """The tension sensor's accuracy [N]: ``tension_accuracy``, or where it is not set
+        :data:`DEFAULT_TENSION_ACCURACY` of the MBL."""
+        if self.tension_accuracy is not None:
+            return self.tension_accuracy
+        return DEFAULT_TENSION_ACCURACY * self.mbl
+
 
 def _check_point_loads(line: LineConfig) -> None:
     """Point loads: one weight per position, inside the chain, no axial stiffness, and no
@@ -1392,6 +1429,8 @@ class AlarmConfig:
     uplift_time_warn: float = _default('uplift_time_warn')
     uplift_time_deadband: float = _default('uplift_time_deadband')
     depth_accuracy: float = _default('depth_accuracy')
+    wave_window: float = _default('wave_window')
+    wave_allowance: float = _default('wave_allowance')
     drag_margin_warn: float = _default('drag_margin_warn')
     drag_margin_deadband: float = _default('drag_margin_deadband')
     drag_tolerance: float = _default('drag_tolerance')

@@ -106,6 +106,8 @@ __all__ = [
     'diagnostic_values',
     'quiet_change',
     'SUPPRESSED_NOTE',
+    'VIEW_TEXT',
+    'uplift_seen',
 ]
 
 
@@ -197,6 +199,8 @@ class AlarmInputs:
     implied_anchor_distance: float = math.nan  # m (for the message)
     fatigue_damage: float = math.nan  # Miner's damage so far
     fatigue_life_left: float = math.nan  # s at the last day's rate (for the message)
+    dynamic_uplift: float = math.nan  # N, the uplift at the wave window's peak (wave_window)
+    uplift_view: float = math.nan  # 1: time_to_uplift is the chain length's, 0: R held's
 
 
 class Latch(NamedTuple):
@@ -352,9 +356,10 @@ class LineAlarm:
         if cond == 'input':
             return _BREACH if x.status != 0 else (_HOLD if stale else _CLEAR)
         if cond == 'uplift':
-            breach = x.uplift_force > self.allowed_uplift
+            force = uplift_seen(x.uplift_force, x.dynamic_uplift)
+            breach = force > self.allowed_uplift
             level = self.uplift_clear_level
-            clear = x.uplift_force <= level and (
+            clear = force <= level and (
                 level > 0.0 or x.anchor_margin >= self.config.uplift_clear_margin
             )
         elif cond == 'inconsistent':
@@ -367,7 +372,7 @@ class LineAlarm:
         elif cond in _SENSOR:
             breach, clear = _sensor_code(cond, float(x.sensor_state))
         elif cond == 'uplift_possible':
-            nominal = x.uplift_force > self.allowed_uplift
+            nominal = uplift_seen(x.uplift_force, x.dynamic_uplift) > self.allowed_uplift
             upper = x.uplift_force_upper
             breach = upper > self.allowed_uplift and not nominal
             clear = upper <= self.allowed_uplift or nominal
@@ -390,9 +395,15 @@ class LineAlarm:
         parts = []
         hold_e, hold_w = self.config.clear_hold, self.config.warn_clear_hold
         if active[0]:
-            f, allowed = x.uplift_force, self.allowed_uplift
+            f, allowed = uplift_seen(x.uplift_force, x.dynamic_uplift), self.allowed_uplift
             if f > allowed:
-                parts.append(f'anchor uplift {_fmt(f, 1e3)} kN > allowed {_fmt(allowed, 1e3)} kN')
+                text = f'anchor uplift {_fmt(f, 1e3)} kN > allowed {_fmt(allowed, 1e3)} kN'
+                if f - x.uplift_force > max(1.0, 1e-6 * f):  # not a rounding apart
+                    text += (
+                        f' (dynamic: at the waves\' peak tension; quasi-static '
+                        f'{_fmt(x.uplift_force, 1e3)} kN)'
+                    )
+                parts.append(text)
             else:
                 level = self.uplift_clear_level
                 text = (
@@ -464,9 +475,15 @@ class LineAlarm:
         return f'{label} {v}{unit}, warning held (clears after {hold:g} s at >= {hi}{unit})'
 
     def _uplift_time_text(self, x: AlarmInputs, hold: float) -> str:
-        """The message of the ``time_to_uplift`` condition (minutes, the tide's rate in m/h)."""
+        """The message of the ``time_to_uplift`` condition (minutes, the tide's rate in m/h,
+        which view answered: the chain's length held or the horizontal tension held)."""
         low, high = self._warn_limits('time_to_uplift')
         value = x.time_to_uplift
+        if value != value:
+            return (
+                f'time to uplift unknown (trend not known yet), warning held (clears after '
+                f'{hold:g} s at >= {_duration(high)})'
+            )
         if value < low:
             if not value > 0.0:
                 return (
@@ -474,9 +491,14 @@ class LineAlarm:
                     f'allowed {_fmt(self.allowed_uplift, 1e3)} kN)'
                 )
             rate = x.tide_rate * 3600.0
+            view = VIEW_TEXT.get(x.uplift_view, '')
+            view = f' ({view})' if view else ''
             if x.tide_forecast == 1.0:
-                return f'anchor uplift in {_duration(value)} on the tide table\'s forecast'
-            return f'anchor uplift in {_duration(value)} if the tide keeps rising {rate:.2f} m/h'
+                return f'anchor uplift in {_duration(value)} on the tide table\'s forecast{view}'
+            return (
+                f'anchor uplift in {_duration(value)} if the tide keeps rising {rate:.2f} m/h'
+                f'{view}'
+            )
         return (
             f'time to uplift {_duration(value)}, warning held (clears after {hold:g} s '
             f'at >= {_duration(high)})'
@@ -520,6 +542,17 @@ class LineAlarm:
 
 _SENSOR = ('sensor_error', 'sensor_warn')
 _DRAGGING = CONDITIONS.index('dragging')
+
+#: Which view answered a time to uplift (``uplift_view``), for messages and /diagnostics.
+VIEW_TEXT = {0.0: 'horizontal tension held', 1.0: 'chain length held'}
+
+
+def uplift_seen(nominal: float, dynamic: float) -> float:
+    """The uplift the ERROR takes [N]: the dynamic uplift where known (it is at least the
+    nominal, taken at the wave window's peak tension), else the nominal."""
+    if dynamic != dynamic:
+        return nominal
+    return dynamic if nominal != nominal else max(nominal, dynamic)  # as np.fmax
 
 
 def _sensor_codes(cond: str, code: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -646,6 +679,8 @@ _INPUT_FIELDS = (
     'implied_anchor_distance',
     'fatigue_damage',
     'fatigue_life_left',
+    'dynamic_uplift',
+    'uplift_view',
 )
 
 
@@ -934,7 +969,7 @@ def _classify_columns(
 
     cfg = alarm.config
     level_up = alarm.uplift_clear_level
-    f = x['uplift_force']
+    f = np.fmax(x['uplift_force'], x['dynamic_uplift'])
     up_clear = f <= level_up
     if not level_up > 0.0:
         up_clear &= x['anchor_margin'] >= cfg.uplift_clear_margin
@@ -993,6 +1028,10 @@ DIAGNOSTIC_KEYS = (
     'fatigue_damage',
     'fatigue_damage_rate',
     'fatigue_life_left',
+    # Wave-frequency tension and the dynamic uplift (core/monitor/wave_window.py).
+    'wave_tension',
+    'peak_tension',
+    'dynamic_uplift',
 )
 
 

@@ -41,7 +41,7 @@ from catenary_monitor.core.monitor import (
     sensor_state,
     tide_table,
     tide_trend,
-    uncertainty,
+    wave_window,
 )
 from catenary_monitor.core.monitor.alarm_journal import AlarmEvent, entries, raised
 from catenary_monitor.core.monitor.alarms import (
@@ -68,20 +68,19 @@ from catenary_monitor.core.monitor.monitor_core import (
     MonitorCore,
     Snapshot,
     Start,
-    bound_values,
 )
 from catenary_monitor.core.monitor.monitor_core import depth_word as depth_state_word
 from catenary_monitor.core.monitor.monitor_core import (
     dock_component,
     forecast_word,
-    HOLDING_FIELDS,
-    holding_values,
+    derived_values,
     line_dock_values,
     line_status,
     sensor_limits,
     sensors_component,
     tide_component,
     tide_with_sensor,
+    view_word,
 )
 from catenary_monitor.core.monitor.plausible import (
     MAX_DEPTH,
@@ -387,8 +386,8 @@ def _solve_updates_kernel(
         out['depth'], out['top_tension'] = h, t
         return out, status
     out['depth'], out['top_tension'] = h.copy(), t.copy()
-    out['time_to_uplift'] = np.full(len(t), np.nan)  # set by the caller, from the tide's trend
-    out['sensor_state'] = np.full(len(t), np.nan)  # set by the caller, from the ticks
+    for key in VALUE_FIELDS:  # the caller's: the tide's forecast, the ticks, the derived values
+        out.setdefault(key, np.full(len(t), np.nan))
     return out, status
 
 
@@ -905,14 +904,23 @@ def _solve_line(
     tide: _Tide,
     sensors: _Sensors,
     k: int,
+    waves: tuple[np.ndarray, np.ndarray],
 ) -> tuple[dict[str, np.ndarray], np.ndarray, Optional[np.ndarray]]:
     """Values, status and elastic flags at the line's solved steps, with the time to uplift
-    at the tide's trend of the newest depth sample and the sensor state of the newest tick."""
+    at the tide's trend of the newest depth sample and the sensor state of the newest tick;
+    ``waves`` the wave window's peak and wave tension after each tension sample."""
     values, status, used = _solve_at(core, line, steps, tv, window)
     values['sensor_state'] = _pick(
         steps.k_idx[steps.solved], sensors.codes[:, k].astype(np.float64), sensors.before[k]
     )
     d_idx = steps.d_idx[steps.solved]
+    t_idx = steps.t_idx[steps.solved]
+    values['peak_tension'] = _pick(t_idx, waves[0], line.peak_tension)
+    values['wave_tension'] = _pick(t_idx, waves[1], line.wave_tension)
+    values.update(derived_values([line.config], core.config.alarm, values))
+    margin, values['time_to_uplift_view'] = tide_trend.nearer_margin(
+        values['tide_margin'], values['tide_margin_at_length']
+    )
     a = core.config.alarm
     if a.constituents:
         now = _pick(d_idx, window.sample_s(None), core.state.depth_s)
@@ -921,32 +929,16 @@ def _solve_line(
             a.tide_table_epoch,
             a.tide_forecast_horizon,
             now,
-            values['tide_margin'],
+            margin,
             values['uplift_force'],
         )
     else:
         rate = _pick(d_idx, tide.rates, core.state.trend.rate)
         excess = _pick(d_idx, tide.excess, core.state.trend.excess)
         values['time_to_uplift'] = tide_trend.uplift_times(
-            values['tide_margin'], values['uplift_force'], rate, excess
+            margin, values['uplift_force'], rate, excess
         )
-    _add_derived(core, line.config, values)
     return values, status, used
-
-
-def _add_derived(core: MonitorCore, lc: LineConfig, values: dict[str, np.ndarray]) -> None:
-    """The bounds and the holding values from the nominal values, as the core adds them
-    (all NaN, without their passes, for a line with neither accuracies nor holding data)."""
-    n = len(values['top_tension'])
-    plain = lc.point_loads is None  # (bounds and holding: the plain chain's formulas)
-    if plain and (core.config.alarm.depth_accuracy > 0.0 or lc.tension_accuracy is not None):
-        values.update(bound_values([lc], core.config.alarm.depth_accuracy, values))
-    else:
-        values.update({key: np.full(n, np.nan) for key in uncertainty.FIELDS})
-    if plain and (lc.chain_length is not None or lc.anchor_holding is not None):
-        values.update(holding_values([lc], values, core.config.alarm.drag_tolerance))
-    else:
-        values.update({key: np.full(n, np.nan) for key in HOLDING_FIELDS})
 
 
 def _solve_at(
@@ -1023,11 +1015,14 @@ def _line_inputs(
             'implied_anchor_distance',
             'fatigue_damage',
             'fatigue_life_left',
+            'dynamic_uplift',
+            'time_to_uplift_view',
         )
     }
     inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
         np.int64
     )
+    inputs['uplift_view'] = inputs.pop('time_to_uplift_view')
     inputs['tide_rate'] = _pick(steps.d_idx, tide.rates, core.state.trend.rate)
     inputs['tide_forecast'] = 1.0 if core.config.alarm.constituents else 0.0
     inputs['tension_stamp'] = _pick(steps.t_idx, window.sample_s(k), line.tension_s)
@@ -1056,14 +1051,23 @@ def _advance_line(
     tide: _Tide,
     sensors: _Sensors,
     dock: Optional[_Dock] = None,
-) -> tuple[LineResult, LevelSeries, _Steps, alarm_ack.AckSeries]:
+) -> tuple[LineResult, LevelSeries, _Steps, alarm_ack.AckSeries, np.ndarray]:
     """One line through the window; leaves the line's state in the core as after the steps
-    (the core's depth and tide still as before the window)."""
+    (the core's depth and tide still as before the window). The last item: the line's fatigue
+    damage after each of its tension samples."""
     line = core.state.lines[k]
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
-    values, status, used = _solve_line(core, line, steps, tv, window, tide, sensors, k)
     times = window.sample_s(k)  # the reading times, as the core's tension_s
+    peaks, waves, wave_state = wave_window.series(
+        line.wave, times, tv, line.config.mbl, core.config.alarm.wave_window
+    )
+    values, status, used = _solve_line(
+        core, line, steps, tv, window, tide, sensors, k, (peaks, waves)
+    )
+    line.wave = wave_state
+    if len(tt):
+        line.peak_tension, line.wave_tension = float(peaks[-1]), float(waves[-1])
     fatigue, fatigue_end = fatigue_rule.series(line.fatigue, times, tv, core.curves[k])
     at = steps.t_idx[steps.solved]
     for j, key in enumerate(fatigue_rule.FIELDS):
@@ -1107,7 +1111,7 @@ def _advance_line(
     line.fatigue = fatigue_end
     if len(tt):
         line.fatigue_values = tuple(float(fatigue[key][-1]) for key in fatigue_rule.FIELDS)
-    return result, series, steps, acks
+    return result, series, steps, acks, np.asarray(fatigue[fatigue_rule.FIELDS[0]], np.float64)
 
 
 def _write_back(
@@ -1180,13 +1184,15 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
     tide, tide_transitions = _decide_tide(core, window, sensors)
     blind = _decide_blind(core, window, tide)
     dock = _decide_dock_window(core, window, tide)
-    results, series, steps, acks = [], [], [], []
-    for k in range(len(core.state.lines)):
-        r, s, st, a = _advance_line(core, k, window, tide, sensors, dock)
+    results, series, steps, acks, damage = [], [], [], [], []
+    for k, line in enumerate(core.state.lines):
+        before = line.fatigue_values[0]
+        r, s, st, a, d = _advance_line(core, k, window, tide, sensors, dock)
         results.append(r)
         series.append(s)
         steps.append(st)
         acks.append(a)
+        damage.append(_Damage(window.tensions[k][0], d, before))
     journal, flood = _window_journal(core, window, tide, blind, series, steps, acks)
     times = [c[0] for c in (*given.tensions, given.depth, (given.ticks, None)) if len(c[0])]
     start = int(min(t[0] for t in times)) if times else core.state.last_ns
@@ -1197,7 +1203,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         made = build(
             _Made(
                 core, window, tide, results, series, steps, depth_before, tide_before,
-                lines_before, acks, dock, sensors, depth_word, blind, flood,
+                lines_before, acks, dock, sensors, depth_word, blind, flood, damage,
             )  # fmt: skip
         )
         snaps = [made] if isinstance(made, SnapshotColumns) else list(made)
@@ -1463,6 +1469,14 @@ def _decide_flood(
     return flood, log
 
 
+class _Damage(NamedTuple):
+    """A line's fatigue damage through the window: after each tension sample (stamps ns)."""
+
+    times: np.ndarray
+    damage: np.ndarray
+    before: float
+
+
 class _Made(NamedTuple):
     """What a window's recompute made, from which its snapshots are built."""
 
@@ -1481,6 +1495,21 @@ class _Made(NamedTuple):
     depth_word: str = 'ok'
     blind: Optional[_Blind] = None
     flood: Optional[_Flood] = None
+    damage: Optional[list['_Damage']] = None
+
+    def max_damage(self, stamps: np.ndarray) -> list[Optional[float]]:
+        """The worst line's fatigue damage as the core held it at each of ``stamps`` [ns]
+        (after the tension samples at or before the stamp), for the ``fatigue`` status."""
+        if not self.damage:
+            return [None] * len(stamps)
+        worst = np.full(len(stamps), -np.inf)
+        for d in self.damage:
+            at = np.searchsorted(d.times, stamps, 'right') - 1
+            value = np.where(
+                at >= 0, d.damage[np.maximum(at, 0)] if len(d.damage) else 0, d.before
+            )
+            worst = np.fmax(worst, value)
+        return [float(v) for v in worst]
 
     def stamps(self) -> np.ndarray:
         """The stamps of the window's snapshots (:func:`_snapshot_stamps`)."""
@@ -1543,6 +1572,7 @@ def _snapshots(m: _Made) -> list[Snapshot]:
     logger = ComponentStatus(
         'catenary_monitor: logger', core.state.logger[0], core.state.logger[1], core.logger_id, ()
     )
+    worst = m.max_damage(stamps)
     out = []
     for n, stamp in enumerate(stamps.tolist()):
         statuses = [col[n] for col in columns]
@@ -1552,7 +1582,7 @@ def _snapshots(m: _Made) -> list[Snapshot]:
         statuses.append(logger)
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))
-        statuses += core.guard_components(stamp * 1e-9)
+        statuses += core.guard_components(stamp * 1e-9, worst[n])
         out.append(Snapshot(stamp, tuple(statuses)))
     return out
 
@@ -1819,6 +1849,7 @@ def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
         _same(list(map(str, status.tolist()))),
         _same(models),
         _same(words),
+        _same([view_word(v) for v in values['time_to_uplift_view'].tolist()]),
     ]
     columns += [f if isinstance(f, str) else _same(f) for f in ack_columns]
     columns += [_same([row[e] for row in extra]) for e in range(len(extra_keys))]
@@ -1832,6 +1863,7 @@ def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
         'solver_status',
         'model',
         'sensor_state',
+        'time_to_uplift_view',
         *ack_keys,
         *extra_keys,
     )
@@ -1872,7 +1904,8 @@ def _snapshot_columns(m: _Made) -> SnapshotColumns | list[Snapshot]:
     core, window, tide, dock = m.core, m.window, m.tide, m.dock
     stamps = m.stamps()
     n = len(stamps)
-    guards = [core.guard_components(stamp * 1e-9) for stamp in stamps.tolist()]
+    worst = m.max_damage(stamps)
+    guards = [core.guard_components(stamp * 1e-9, w) for stamp, w in zip(stamps.tolist(), worst)]
     shapes = {tuple((g.name, len(g.values)) for g in row) for row in guards}
     if len(shapes) > 1:
         return _snapshots(m)
