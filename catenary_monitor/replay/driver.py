@@ -73,6 +73,7 @@ from catenary_monitor.io.mcap_read import (
     iter_windows,
     read_float64_topics,
 )
+from catenary_monitor.io.mcap_summary import read_metadata
 
 __all__ = [
     'EXIT_EMPTY',
@@ -443,43 +444,19 @@ def log_parameters(paths: Sequence[Path]) -> Optional[tuple[str, dict[str, Any]]
     the files: the parameters the node started with (it writes one at start and one on every
     parameter change, which replay follows from the events channel), or None.
 
-    Finished files answer from their summary; an unfinished file from its first MiB (where
-    the node's logger writes the record).
+    Read in bounded time and memory whatever the files hold
+    (:func:`catenary_monitor.io.mcap_summary.read_metadata`: the summary's index of a finished
+    file, else the heads of an unfinished file's top-level records; no chunk decompressed). A
+    record whose parameters are not a JSON object is passed over.
     """
-    import io
-
-    from mcap.reader import NonSeekingReader, make_reader
-
     for path in paths:
-        records = []
-        try:
-            with open(path, 'rb') as f:
-                reader = make_reader(f)
-                try:
-                    summary = reader.get_summary()
-                except Exception:  # noqa: BLE001 - no footer: the writer was killed
-                    summary = None
-                if summary is not None:
-                    records = list(reader.iter_metadata())
-                else:
-                    f.seek(0)
-                    head = NonSeekingReader(io.BytesIO(f.read(1 << 20)))
-                    try:
-                        for record in head.iter_metadata():
-                            records.append(record)
-                    except Exception:  # noqa: BLE001 - the cut at 1 MiB, or damage
-                        pass
-        except Exception:  # noqa: BLE001 - an unreadable summary: no parameters from it
-            continue
-        for record in records:
-            if record.name == NODE_NAME and 'parameters' in record.metadata:
-                try:
-                    return (
-                        record.metadata.get('config_hash', ''),
-                        json.loads(record.metadata['parameters']),
-                    )
-                except ValueError:
-                    continue
+        for record in read_metadata(path, NODE_NAME):
+            try:
+                parameters = json.loads(record['parameters'])
+            except (KeyError, ValueError, RecursionError):
+                continue
+            if isinstance(parameters, dict):
+                return record.get('config_hash', ''), parameters
     return None
 
 

@@ -1921,6 +1921,6 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
                 alarm_ack.bounded_text(str(record.get('origin', ''))),
                 alarm_ack.bounded_text(str(record.get('publisher', ''))),
             )
-    except (ValueError, KeyError, TypeError):
+    except (ValueError, KeyError, TypeError, RecursionError):  # a damaged or crafted record
         return None
     return None
