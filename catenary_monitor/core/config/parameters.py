@@ -1204,6 +1204,7 @@ ALARM_CONDITIONS = (
     'sensor_warn',
     'dragging',
     'fatigue',
+    'channel',
     'stale',
 )
 
