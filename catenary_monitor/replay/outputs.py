@@ -126,6 +126,9 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('fatigue_damage', 12),
     ('fatigue_damage_rate', 12),
     ('fatigue_life_left', 0),
+    # A line of several channels (core/monitor/channels.py): healthy count, states code.
+    ('channels_healthy', 0),
+    ('channel_states', 0),
 )
 #: The default columns (the issue's contract), in this order.
 CSV_COLUMNS = (
