@@ -22,7 +22,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Mapping, NamedTuple, Optional
 
-from catenary_monitor.core.config.tide_constituents import Constituent, parse_table
+from catenary_monitor.core.config.tide_constituents import (
+    MAX_CONSTITUENTS,
+    MAX_TABLE_CHARS,
+    Constituent,
+    parse_table,
+)
 
 __all__ = [
     'REQUIRED',
@@ -693,8 +698,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'tide_table',
         'string',
         '',
-        'Tide table: constituents "NAME AMPLITUDE PHASE SPEED; ..." (m, deg, deg/h); '
-        'empty: none (the trend)',
+        'Tide table: constituents "NAME AMPLITUDE PHASE SPEED; ..." (m, deg, deg/h), at most '
+        f'{MAX_CONSTITUENTS} ({MAX_TABLE_CHARS} characters); empty: none (the trend)',
         '',
         None,
         None,
