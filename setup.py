@@ -115,6 +115,8 @@ setup(
             # Two rainflow counts (ASTM E1049-85) the streamed fatigue count is tested against.
             'rainflow>=3.2',
             'fatpack>=0.7',
+            # NREL's lumped-mass mooring model: the dynamic reference (docs/dynamics.md).
+            'moordyn>=2.3',
             # The fleet replay (the fleet extra) and DuckDB, which answers docs/fleet.md's
             # questions over its dataset in the tests.
             'dask[distributed]>=2024.1',
@@ -122,6 +124,8 @@ setup(
             'duckdb>=1.0',
         ],
         'peers': ['moorpy', 'pycatenary'],
+        # catenary-monitor bench-dynamics and the MoorDyn scenes (docs/dynamics.md)
+        'dynamics': ['moordyn>=2.3'],
         # catenary-monitor fleet: many docks' logs replayed on Dask, results as Parquet.
         'fleet': ['dask[distributed]>=2024.1', 'pyarrow>=14'],
     },

@@ -39,7 +39,8 @@ __all__ = ['run_bench', 'echo_main', 'dock_params']
 
 
 def echo_main(lines: int) -> int:
-    """The baseline: a bare rclpy node that republishes each line's Float64 unchanged."""
+    """The baseline: a bare rclpy node that republishes each line's Float64 unchanged, on the
+    executor the monitor runs."""
     import rclpy
     from rclpy.executors import ExternalShutdownException
     from rclpy.qos import QoSProfile, qos_profile_sensor_data
@@ -59,15 +60,33 @@ def echo_main(lines: int) -> int:
             _republish(pub),
             qos_profile_sensor_data,
         )
+    executor = _executor()
+    executor.add_node(node)
     try:
         while not stop.is_set():
-            rclpy.spin_once(node, timeout_sec=0.2)
+            executor.spin_once(timeout_sec=0.2)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:
+        executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
     return 0
+
+
+def _executor() -> Any:
+    """The executor the monitor runs (ros.node): rclpy's EventsExecutor where available and
+    not ``CATENARY_MONITOR_EXECUTOR=single``, else the SingleThreadedExecutor."""
+    from rclpy.executors import SingleThreadedExecutor
+
+    if os.environ.get('CATENARY_MONITOR_EXECUTOR', 'events') != 'single':
+        try:
+            from rclpy.experimental import EventsExecutor
+
+            return EventsExecutor()
+        except ImportError:
+            pass
+    return SingleThreadedExecutor()
 
 
 def _republish(pub: Any) -> Callable[[Any], None]:

@@ -49,7 +49,6 @@ DAY_NS = 86_400 * 10**9
 
 #: Every column of the messages dataset: the replay CSV's, all of them.
 MESSAGE_COLUMNS = tuple(name for name, _ in CSV_ALL)
-_WORDS = {'line', 'level', 'model', 'sensor_state', 'drag_state'}
 
 #: The daily table's per-line extremes: (column, message field, 'min' or 'max', with its time).
 DAILY_FIELDS: tuple[tuple[str, str, str, bool], ...] = (
@@ -129,8 +128,9 @@ class PartWriter:
             if day not in self.writers:
                 self.tmp.mkdir(parents=True, exist_ok=True)
                 path = self.tmp / f'{_date(day)}.parquet'
+                words = [f.name for f in table.schema if pa.types.is_dictionary(f.type)]
                 writer = pq.ParquetWriter(
-                    path, table.schema, use_dictionary=sorted(_WORDS), compression='zstd'
+                    path, table.schema, use_dictionary=words, compression='zstd'
                 )  # dictionaries for the words only: on the floats they cost 7 times the time
                 self.writers[day] = (path, writer)
             self.writers[day][1].write_table(table.slice(lo, hi - lo))

@@ -153,14 +153,13 @@ INTAKE_HEARTBEAT = 60.0
 INTAKE_RATE_HEARTBEAT = 10.0
 #: The most samples one callback takes off an input's queue (the queue holds _SAMPLES.depth).
 DRAIN_MAX = 1000
-#: Samples that waited longer than this [s] when their callback ran mean the node is behind:
-#: the older ones of the input's waiting samples are then coalesced (logged, not stepped) and
-#: only the newest is stepped; a shorter hiccup is caught up with, sample by sample.
-COALESCE_AFTER = 0.25
-#: ... and so do samples waiting while the sample callbacks took more than this share of the
-#: last CATCH_UP_WINDOW [s] of wall time: catching up would take the time the timers need.
-CATCH_UP_BUSY = 0.5
-CATCH_UP_WINDOW = 0.25
+#: Samples that waited longer than this [s] when their callback ran are not stepped but
+#: coalesced (logged, counted, left out); a shorter hiccup (a node held off the CPU by other
+#: processes) is caught up with, sample by sample, ...
+COALESCE_AFTER = 1.0
+#: ... within this much time of steps per callback [s] (at the recent cost of one): the newest
+#: samples that fit are stepped, the older ones coalesced.
+STEP_BUDGET = 0.05
 #: A sample callback runs the periodic tick (the watchdog) itself once its timer is this many
 #: periods late (waiting in the executor's queue behind a flood's callbacks).
 LATE_TIMER = 1.25
@@ -275,8 +274,8 @@ class CatenaryMonitor(Node):
             value = values[name]
             if spec.type in ('string_array', 'double_array'):
                 value = list(value)
-            if spec.type == 'double_array' and not value:  # [] would be typed a byte array
-                value = Parameter.Type.DOUBLE_ARRAY
+            if spec.type in ('double_array', 'string_array') and not value:
+                value = _PARAM_TYPES[spec.type]  # ([] would be typed a byte array)
             self.declare_parameter(name, value, _descriptor(spec, name), ignore_override=True)
         for line in config.lines:
             if line.ea is not None:
@@ -442,10 +441,9 @@ class CatenaryMonitor(Node):
         self._lost_unseen = [0] * n  # samples DDS reported lost, their gap not seen yet
         self._gap_unreported = [0] * n  # samples of seen gaps DDS has not reported (yet)
         self._intake_due = False  # a sample was not handled while the intake said OK
+        self._step_cost = 1e-4  # s of wall time one sample's step takes (moving average)
         self._busy = 0.0  # s of wall time in the sample callbacks since the last Intake event
         self._busy_tick = 0.0  # the same since the last watchdog period
-        self._busy_recent, self._recent_start = 0.0, time.monotonic()  # ... _busy_share()'s
-        self._recent_share = 0.0
         self._intake_wall = time.monotonic()
         self._intake_sent = False
         a = self.config.alarm
@@ -473,10 +471,18 @@ class CatenaryMonitor(Node):
         self._output_topics: list[str] = []
         self._output_pubs: list[Any] = []
         self._subs: list[Any] = []
+        self._channel_topics: dict[tuple[int, int], str] = {}
         for k, line in enumerate(cfg.lines):
+            for j, topic in enumerate(line.channel_topics[1:], start=1):
+                # a load cell's further channels (core.channels; channel 0 is the line's input)
+                extra = self.create_subscription(
+                    Float64, topic, partial(self._on_channel, k, j), _SAMPLES, raw=True
+                )
+                self._channel_topics[(k, j)] = extra.topic_name
+                self._register(extra.topic_name, readings.FLOAT64, 'sensor_data')
             sub = self.create_subscription(
                 _MESSAGE_CLASSES[line.tension_type],
-                line.tension_topic,
+                line.topics[0],
                 self._sample_callback(k),
                 _SAMPLES,
                 event_callbacks=self._sample_events(k),
@@ -553,58 +559,54 @@ class CatenaryMonitor(Node):
         self._take(k, data, info.get('received_timestamp'))
 
     def _take(self, k: int, data: bytes, received_ns: Optional[int]) -> None:
-        """Log ``data`` and the samples waiting behind it on input ``k``, and step them: each
-        one while the oldest waited at most :data:`COALESCE_AFTER` and the callbacks took at
-        most :data:`CATCH_UP_BUSY` of the time (a hiccup the node catches up with), else only
-        the newest.
+        """Log ``data`` and the samples waiting behind it on input ``k``, and step what the
+        node can handle of them, newest first (:meth:`_to_step`): after a hiccup, all of them.
 
-        The older ones are then coalesced: a :class:`Coalesced` record stamped before them
-        tells replay to leave them out, as the node does, and they are counted (Intake
-        ``coalesced``); the node never works through a backlog it cannot keep up with."""
+        The older ones it cannot handle are coalesced: a :class:`Coalesced` record stamped
+        before them tells replay to leave them out, as the node does, and they are counted
+        (Intake ``coalesced``); the node never works through a backlog it cannot keep up
+        with."""
         t0 = time.perf_counter()
         batch = [(data, received_ns)] + self._drain(k)
         n = len(batch)
+        keep = self._to_step(batch)
         topic = self._depth_topic if k == len(self._names) else self._tension_topics[k]
         step = self._step_depth if k == len(self._names) else self._step_tension
-        if n > 1 and (self._busy_share() > CATCH_UP_BUSY or self._behind(batch)):
+        if keep < n:
             line = None if k == len(self._names) else self._names[k]
-            stamps = [self._stamp() for _ in range(n + 1)]
-            self._record(Coalesced(stamps[0], line, stamps[-2], n - 1))
+            stamps = [self._stamp() for _ in range(n - keep + 1)]
+            self._record(Coalesced(stamps[0], line, stamps[-1], n - keep))
             for (raw, _), stamp in zip(batch, stamps[1:]):
                 self._write(topic, raw, stamp)
-            self._coalesced[k] += n - 1
+            self._coalesced[k] += n - keep
             self._intake_due = True
-            step(k, stamps[-1], batch[-1][0])
-        else:
-            for raw, _ in batch:
-                stamp = self._stamp()
-                self._write(topic, raw, stamp)
-                step(k, stamp, raw)
+        for raw, _ in batch[n - keep :]:
+            t1 = time.perf_counter()
+            stamp = self._stamp()
+            self._write(topic, raw, stamp)
+            step(k, stamp, raw)
+            self._step_cost += 0.1 * (time.perf_counter() - t1 - self._step_cost)
         took = time.perf_counter() - t0
         self._busy += took
         self._busy_tick += took
-        self._busy_recent += took
         self._timers_late()
 
-    def _busy_share(self) -> float:
-        """Share of wall time the sample callbacks took over the last
-        :data:`CATCH_UP_WINDOW` or so (the one before, until this one has run half its
-        length)."""
-        now = time.monotonic()
-        elapsed = now - self._recent_start
-        if elapsed >= CATCH_UP_WINDOW:
-            self._recent_share = self._busy_recent / elapsed
-            self._busy_recent, self._recent_start, elapsed = 0.0, now, 0.0
-        if elapsed < 0.5 * CATCH_UP_WINDOW:
-            return self._recent_share
-        return self._busy_recent / elapsed
-
-    @staticmethod
-    def _behind(batch: list[tuple[bytes, Optional[int]]]) -> bool:
-        """Whether the oldest sample of ``batch`` (with a reception time) waited longer than
-        :data:`COALESCE_AFTER` (unknown: yes)."""
-        times = [t for _, t in batch if isinstance(t, int) and t > 0]
-        return not times or time.time_ns() - min(times) > COALESCE_AFTER * 1e9
+    def _to_step(self, batch: list[tuple[bytes, Optional[int]]]) -> int:
+        """How many of the newest samples of ``batch`` to step: those that waited at most
+        :data:`COALESCE_AFTER` (the newest always), as many as :data:`STEP_BUDGET` of steps
+        takes at the recent cost of one, less as the batch fills the input's queue (none but
+        the newest from half of it: the samples behind must be taken and logged in time)."""
+        n = len(batch)
+        if n == 1:
+            return 1
+        now, fresh = time.time_ns(), 0
+        for _, received in reversed(batch):
+            if isinstance(received, int) and now - received > COALESCE_AFTER * 1e9:
+                break
+            fresh += 1
+        room = max(0.0, 1.0 - n / (0.5 * _SAMPLES.depth))
+        budget = room * STEP_BUDGET / max(self._step_cost, 1e-6)
+        return max(1, min(fresh, int(budget)))
 
     def _step_tension(self, k: int, stamp: int, raw: bytes) -> None:
         """One core event of a hook tension sample as it came (the reading in N, at its header
@@ -613,6 +615,15 @@ class CatenaryMonitor(Node):
         lc = self.config.lines[k]
         fields, sample_ns = _fields(raw, lc.tension_type)
         self._run(Tension(stamp, k, float(readings.tension_si(lc, fields)), sample_ns))
+
+    @_guarded
+    def _on_channel(self, k: int, j: int, raw: bytes) -> None:
+        """A sample of channel ``j`` of line ``k``'s load cell: logged, one core event."""
+        stamp = self._stamp()
+        self._write(self._channel_topics[(k, j)], raw, stamp)
+        fields, _ = _fields(raw, readings.FLOAT64)
+        value = float(readings.tension_si(self.config.lines[k], fields))
+        self._run(Tension(stamp, k, value, None, j))
 
     def _step_depth(self, k: int, stamp: int, raw: bytes) -> None:
         """The same for a depth sample (the depth in m)."""
