@@ -6,9 +6,9 @@ folder's ``catenary_monitor.yaml``), then replays the fleet with ``catenary-moni
 a fresh local cluster of 1 worker and of 2 workers (``--workers-list``), each into a fresh
 results folder, in the same run. Reports per run the cluster's start (the workers' imports
 included) and the replay after it, the replay's messages per second, the speed-up against 1
-worker, and checks that every run's messages dataset is identical to the first's (row for row). From the
-measured rate per worker it prints what 100 docks x 1 year of 12 lines at 20 Hz would cost on
-N workers.
+worker, and checks that every run's messages dataset is identical to the first's (row for
+row). From the measured rate per worker it prints what 100 docks x 1 year of 12 lines at 20 Hz
+would cost on N workers.
 
 The machines are shared: run it when nothing else is running and read the ratio first.
 """
@@ -198,4 +198,3 @@ def register(sub: Any) -> None:
     p.add_argument('--keep', metavar='DIR', help='generate and keep the fleet and results here')
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench_fleet)
-
