@@ -70,7 +70,8 @@ def test_a_silent_channel_is_named_live_and_replay_agrees(client, tmp_path):
     finally:
         client.feed('/tide/depth', None)
         assert stop(proc) == 0
-    outputs = list(iter_messages(sorted(log_dir.glob('*.mcap')), ['/catenary_monitor/cell/outputs']))
+    files = sorted(log_dir.glob('*.mcap'))
+    outputs = list(iter_messages(files, ['/catenary_monitor/cell/outputs']))
     live = [deserialize_message(m.data, Float64MultiArray).data for m in outputs]
     at = OUTPUT_FIELDS.index('top_tension')
     config = config_from_params(load_params_file(params))

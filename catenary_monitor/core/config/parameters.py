@@ -22,7 +22,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Mapping, NamedTuple, Optional
 
-from catenary_monitor.core.config.tide_constituents import Constituent, parse_table
+from catenary_monitor.core.config.tide_constituents import (
+    MAX_CONSTITUENTS,
+    MAX_TABLE_CHARS,
+    Constituent,
+    parse_table,
+)
 
 __all__ = [
     'REQUIRED',
@@ -231,10 +236,10 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'acknowledge_from_ros',
         'bool',
         True,
-        'Accept alarm acknowledgements on /catenary_monitor/acknowledge from any publisher; '
-        'false: only from a console (a node catenary_console_*, the only publisher on the '
-        'topic): where operators acknowledge through the authenticated console (docs/node.md, '
-        'Security)',
+        'Accept alarm acknowledgements (/catenary_monitor/acknowledge) and shelving requests '
+        '(/catenary_monitor/shelve) from any publisher; false: only from a console (a node '
+        'catenary_console_*, the only publisher on the topic): where operators act through the '
+        'authenticated console (docs/node.md, Security)',
         '',
         None,
         None,
@@ -693,8 +698,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'tide_table',
         'string',
         '',
-        'Tide table: constituents "NAME AMPLITUDE PHASE SPEED; ..." (m, deg, deg/h); '
-        'empty: none (the trend)',
+        'Tide table: constituents "NAME AMPLITUDE PHASE SPEED; ..." (m, deg, deg/h), at most '
+        f'{MAX_CONSTITUENTS} ({MAX_TABLE_CHARS} characters); empty: none (the trend)',
         '',
         None,
         None,
@@ -1204,6 +1209,7 @@ ALARM_CONDITIONS = (
     'sensor_warn',
     'dragging',
     'fatigue',
+    'channel',
     'stale',
 )
 
