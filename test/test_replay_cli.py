@@ -163,7 +163,8 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
     k = 14 + len(BOUNDS + HOLDING)
     assert fields[14:k] == list(BOUNDS + HOLDING)  # and the holding values
     assert fields[k : k + 3] == ['sensor_state', *LENGTH_FIELDS, 'drag_state']  # appended
-    assert fields[-4:] == ['wave_tension', 'peak_tension', 'dynamic_uplift', 'time_to_uplift_view']
+    waves = ['wave_tension', 'peak_tension', 'dynamic_uplift', 'time_to_uplift_view']
+    assert fields[-6:] == [*waves, 'span', 'span_source']  # appended
     got = np.array([m.data for _, m in outputs])
     np.testing.assert_array_equal(
         got[:, fields.index('time_to_uplift')], r.values['time_to_uplift']

@@ -201,6 +201,7 @@ class AlarmInputs:
     fatigue_life_left: float = math.nan  # s at the last day's rate (for the message)
     dynamic_uplift: float = math.nan  # N, the uplift at the wave window's peak (wave_window)
     uplift_view: float = math.nan  # 1: time_to_uplift is the chain length's, 0: R held's
+    span: float = math.nan  # m, the span the line was solved at (for the dragging message)
 
 
 class Latch(NamedTuple):
@@ -517,11 +518,17 @@ class LineAlarm:
         """The message of the ``dragging`` condition (load and holding in kN, span in m)."""
         if x.drag_state == 2.0:
             load = x.holding_capacity - x.drag_margin
-            beyond = x.implied_anchor_distance - self.anchor_distance
+            installed = x.span != x.span or x.span == self.anchor_distance
+            span = self.anchor_distance if installed else x.span
+            where = (
+                f'its installed {_fmt(span)} m'
+                if installed
+                else f'the {_fmt(span, 1.0, 2)} m the dock estimate gives'
+            )
             return (
                 f'anchor dragging: horizontal load {_fmt(load, 1e3)} kN > holding '
                 f'{_fmt(x.holding_capacity, 1e3)} kN and the chain puts the anchor '
-                f'{_fmt(beyond, 1.0, 2)} m beyond its installed {_fmt(self.anchor_distance)} m '
+                f'{_fmt(x.implied_anchor_distance - span, 1.0, 2)} m beyond {where} '
                 f'(implied {_fmt(x.implied_anchor_distance, 1.0, 2)} m)'
             )
         return f'anchor dragging alarm held (clears after {hold:g} s of the anchor holding)'
@@ -681,6 +688,7 @@ _INPUT_FIELDS = (
     'fatigue_life_left',
     'dynamic_uplift',
     'uplift_view',
+    'span',
 )
 
 
