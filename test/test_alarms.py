@@ -588,6 +588,8 @@ def test_diagnostic_values_keys_and_exact_strings():
         'wave_tension',
         'peak_tension',
         'dynamic_uplift',
+        'channels_healthy',
+        'channel_states',
     ]
     assert all(isinstance(v, str) and float(v) == float(fields_[k]) for k, v in values)
     from_object = dict(diagnostic_values(SimpleNamespace(depth=20.85)))
@@ -639,7 +641,7 @@ def test_margin_codes_match_the_scalar() -> None:
             n,
         )
     keys = ('uplift_force', 'uplift_force_upper', 'inconsistent', 'sensor_state', 'drag_state')
-    keys += ('fatigue_damage',)
+    keys += ('fatigue_damage', 'channel_states', 'channels_healthy')
     for key in keys:
         x[key] = np.zeros(n)
     x['dynamic_uplift'] = np.full(n, np.nan)

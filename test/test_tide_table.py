@@ -171,3 +171,24 @@ def test_node_md_tide_parameter_table_is_generated():
     page = (Path(__file__).resolve().parents[1] / 'docs' / 'node.md').read_text()
     begin, end = '<!-- tide-parameters:begin -->\n', '<!-- tide-parameters:end -->'
     assert page.split(begin, 1)[1].split(end, 1)[0] == parameters_markdown('tide')
+
+
+def test_a_table_past_its_bounds_is_refused_before_it_is_parsed():
+    """200 constituents (a full harmonic analysis has about 150) and 65 536 characters: a
+    100 000-constituent or 10 MB table is one ConfigError in microseconds, not minutes."""
+    import time
+
+    from catenary_monitor.core.config.tide_constituents import MAX_CONSTITUENTS, parse_table
+
+    one = 'M2 0.01 10.0 28.98; '
+    assert len(parse_table(one * MAX_CONSTITUENTS)) == MAX_CONSTITUENTS
+    for text, needle in [
+        (one * (MAX_CONSTITUENTS + 1), '201 constituents, more than the 200'),
+        (one * 100_000, 'characters, more than the 65536'),
+        ('M2 0.01 10.0 28.98' + ' ' * 10_000_000, 'characters, more than the 65536'),
+    ]:
+        start = time.process_time()
+        with pytest.raises(ConfigError, match='tide_table') as info:
+            config(tide_table=text)
+        assert needle in str(info.value)
+        assert time.process_time() - start < 0.5

@@ -26,6 +26,7 @@ Errors a user can act on are :class:`ReplayError` (one line, with the command's 
 
 from __future__ import annotations
 
+import copy
 import json
 from functools import partial
 from dataclasses import dataclass
@@ -126,7 +127,9 @@ class NoEventsChannel(LookupError):
 
 @dataclass
 class StreamState:
-    """What the stream knows after its first window, and the figures of the run."""
+    """What the stream knows after its first window, and the figures of the run; with the
+    core and the next grid tick, all a later piece of the same log needs to go on
+    (:func:`stream`'s ``resume``)."""
 
     start_ns: Optional[int] = None
     start_from_record: bool = False
@@ -135,6 +138,8 @@ class StreamState:
     messages: int = 0
     bytes_done: int = 0
     bytes_total: int = 0
+    core: Optional[MonitorCore] = None  # the core after the last window
+    grid_k: int = 0  # the next grid tick's index
 
 
 def _events(window: LogWindow) -> tuple[bool, np.ndarray, list[Any]]:
@@ -163,7 +168,7 @@ def typed_inputs(config: MonitorConfig) -> dict[str, str]:
     messages and decoded (:mod:`catenary_monitor.io.sensor_cdr`), the others as Float64
     columns."""
     out = {
-        resolve_topic(line.tension_topic): line.tension_type
+        resolve_topic(line.topics[0]): line.tension_type
         for line in config.lines
         if line.tension_type in readings.STAMPED
     }
@@ -182,6 +187,7 @@ class Inputs(NamedTuple):
     depth: Any
     tension_stamps: Optional[list[Optional[np.ndarray]]]
     depth_stamps: Optional[np.ndarray]
+    channels: Optional[list[Optional[np.ndarray]]] = None  # a line's samples' channels
 
 
 def _column(
@@ -199,16 +205,26 @@ def _column(
 
 def _inputs(config: MonitorConfig, window: LogWindow) -> Inputs:
     """The window's inputs (:class:`Inputs`), each read as its type says."""
-    tensions, stamps = [], []
+    tensions: list[Any] = []
+    stamps: list[Optional[np.ndarray]] = []
+    chans: list[Optional[np.ndarray]] = []
     for line in config.lines:
-        column, st = _column(
-            window,
-            resolve_topic(line.tension_topic),
-            line.tension_type,
-            partial(readings.tension_si, line),
-        )
+        convert = partial(readings.tension_si, line)
+        if line.channel_topics:  # every channel's samples merged in time order (stable)
+            parts = [window.columns[resolve_topic(t)] for t in line.channel_topics]
+            times = np.concatenate([t for t, _ in parts])
+            order = np.argsort(times, kind='stable')
+            raw = np.concatenate([v for _, v in parts])[order]
+            idx = np.concatenate([np.full(len(t), j, np.int64) for j, (t, _) in enumerate(parts)])
+            value = np.asarray(convert({'value': raw}), np.float64)
+            tensions.append((times[order], value))
+            stamps.append(None)
+            chans.append(idx[order])
+            continue
+        column, st = _column(window, resolve_topic(line.topics[0]), line.tension_type, convert)
         tensions.append(column)
         stamps.append(st)
+        chans.append(None)
     depth, d_stamps = _column(
         window,
         resolve_topic(config.depth_topic),
@@ -216,7 +232,8 @@ def _inputs(config: MonitorConfig, window: LogWindow) -> Inputs:
         lambda f: readings.depth_si(config, f),
     )
     stamped = any(s is not None for s in stamps) or d_stamps is not None
-    return Inputs(tensions, depth, stamps if stamped else None, d_stamps)
+    channels = chans if any(c is not None for c in chans) else None
+    return Inputs(tensions, depth, stamps if stamped else None, d_stamps, channels)
 
 
 def stream(
@@ -231,9 +248,18 @@ def stream(
     jobs: int = 1,
     report: Optional[ReadReport] = None,
     progress: Optional[Callable[[StreamState], None]] = None,
+    resume: Optional[StreamState] = None,
+    goes_on: bool = False,
 ) -> StreamState:
     """Replay ``paths`` window by window; ``sink(result, window)`` gets each window's
     :class:`ReplayResult` (its ticks, events, start) and its input :class:`Window`.
+
+    A log replayed in pieces (consecutive files, every stamp of one before every stamp of the
+    next): ``resume`` is the state the previous piece returned (its core goes on; it is not
+    changed); ``goes_on``: more pieces follow (a piece without any input is then no error).
+    Grid ticks of the gap between two pieces come with the next piece, before its inputs, as
+    in one stream. The pieces' results are those of the whole log
+    (:mod:`catenary_monitor.replay.fleet_tasks`).
 
     ``ticks``: ``auto`` takes the node's recorded ticks when the log has them, else a grid at
     ``diagnostic_rate``; ``log`` requires them; ``grid`` ignores them. ``follow_log``: apply
@@ -257,6 +283,8 @@ def stream(
             jobs,
             report,
             progress,
+            resume,
+            goes_on,
         )
 
 
@@ -271,19 +299,27 @@ def _stream(
     jobs: int,
     report: Optional[ReadReport],
     progress: Optional[Callable[[StreamState], None]],
+    resume: Optional[StreamState] = None,
+    goes_on: bool = False,
 ) -> StreamState:
     """:func:`stream` itself."""
-    state = StreamState()
-    state.bytes_total = sum(p.stat().st_size for p in paths)
-    lines_topics = [resolve_topic(line.tension_topic) for line in config.lines]
+    state = StreamState() if resume is None else copy.deepcopy(resume)
+    state.bytes_done, state.bytes_total = 0, sum(p.stat().st_size for p in paths)
+    lines_topics = [resolve_topic(t) for line in config.lines for t in line.topics]
     topics = [resolve_topic(config.depth_topic), *lines_topics]
     raw = [EVENTS_TOPIC] if ticks != 'grid' else []
     typed = typed_inputs(config)
-    core: Optional[MonitorCore] = None
-    grid_k = 0  # next grid tick index
+    core, grid_k = state.core, state.grid_k
     try:
         for window in iter_windows(
-            paths, topics, raw, window_messages, report, jobs, typed=typed
+            paths,
+            topics,
+            raw,
+            window_messages,
+            report,
+            jobs,
+            typed=typed,
+            allow_empty=goes_on or resume is not None,
         ):
             seen, tick_ns, others = _events(window) if raw else (False, np.zeros(0, np.int64), [])
             if not follow_log:
@@ -300,7 +336,7 @@ def _stream(
                     ]
                 elif firsts:
                     state.start_ns = min(firsts)
-                elif not window.final:
+                elif not window.final or goes_on:
                     raise Restart('no input message and no start record in the first window')
                 state.ticks_from_log = seen
                 if ticks == 'log' and not seen:
@@ -314,9 +350,16 @@ def _stream(
                 raise Restart('events records after a first window without any')
             if not state.ticks_from_log:
                 tick_ns, grid_k = _grid(
-                    state, window, tensions, depth, grid_k, config.alarm.diagnostic_rate
+                    state, window, tensions, depth, grid_k, config.alarm.diagnostic_rate, goes_on
                 )
-            whole = Window(tensions, depth, tick_ns, inputs.tension_stamps, inputs.depth_stamps)
+            whole = Window(
+                tensions,
+                depth,
+                tick_ns,
+                inputs.tension_stamps,
+                inputs.depth_stamps,
+                inputs.channels,
+            )
             for part, part_events in _parts(whole, others, TICKS_PER_PART if snapshots else 0):
                 result, core = run_log(core, part, part_events, snapshots)
                 replay = ReplayResult(
@@ -336,6 +379,7 @@ def _stream(
             state.windows += 1
             state.messages += window.messages
             state.bytes_done = window.bytes_done
+            state.core, state.grid_k = core, grid_k
             if progress is not None:
                 progress(state)
     except UnorderedLogError as err:
@@ -366,15 +410,17 @@ def _grid(
     depth: Any,
     k0: int,
     rate_hz: float,
+    goes_on: bool = False,
 ) -> tuple[np.ndarray, int]:
     """The grid ticks of a window (:func:`tick_grid` from ``k0``) below the window's end, or up
-    to the last input message in the final window; and the next k."""
+    to the last input message in the final window (none in a final window without input
+    when the log ``goes_on`` in another piece); and the next k."""
     start = state.start_ns or 0
     period = 1e9 / rate_hz
     if window.final:
         lasts = [int(c[0][-1]) for c in (*tensions, depth) if len(c[0])]
         if not lasts:
-            if state.windows:
+            if state.windows and not goes_on:
                 raise Restart('the last window has no input message')
             return np.zeros(0, np.int64), k0
         end = max(lasts)
@@ -396,7 +442,7 @@ def _grid(
 def input_topics(config: MonitorConfig) -> tuple[dict[str, str], str]:
     """(line name -> resolved tension topic, resolved depth topic)."""
     return (
-        {line.name: resolve_topic(line.tension_topic) for line in config.lines},
+        {line.name: resolve_topic(line.topics[0]) for line in config.lines},
         resolve_topic(config.depth_topic),
     )
 

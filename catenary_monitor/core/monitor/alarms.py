@@ -39,6 +39,12 @@ Conditions, each with its own latch:
 ``fatigue`` (WARN; :mod:`catenary_monitor.core.monitor.fatigue`)
     raised when the line's cumulative Miner damage reaches ``fatigue_damage_warn`` for
     ``on_delay``; cleared below it (the damage only grows: a new chain, a new store).
+``channel`` (WARN; a line measured by several channels, :mod:`.channels`)
+    raised when a channel is silent, stuck or out of line while enough others are healthy (the
+    tension then comes from them); cleared once every channel is healthy again for
+    ``warn_clear_hold``. Fewer healthy channels than ``NAME.min_channels``: the line is blind
+    (STALE, the message naming the channels and why), and its NaN tension is not an impossible
+    input.
 ``sensor_error`` (ERROR), ``sensor_warn`` (WARN; :mod:`catenary_monitor.core.monitor.sensor_state`)
     raised when the line's ``sensor_state`` (decided at ticks) is an ERROR state (``over_mbl``,
     ``slack``, ``suspected_parted``), resp. a WARN state (``stuck``, ``spike``), for
@@ -84,6 +90,7 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig
 from catenary_monitor.core.monitor import sensor_state
+from catenary_monitor.core.monitor.channels import describe
 
 try:  # the latch's loop in C (core/_loops.c; optional: else the numpy passes)
     from catenary_monitor.core.monitor import _twin_loops as _loops  # type: ignore[attr-defined]
@@ -143,6 +150,8 @@ CONDITIONS = (
     'dragging',
     # Chain fatigue (Miner's damage): core/monitor/fatigue.py.
     'fatigue',
+    # A load cell's channel failed (the tension from the others): core/monitor/channels.py.
+    'channel',
 )
 #: The conditions that raise an ERROR (the others a WARN).
 ERROR_CONDITIONS = _ERRORS = ('uplift', 'input', 'sensor_error', 'dragging')
@@ -201,6 +210,8 @@ class AlarmInputs:
     fatigue_life_left: float = math.nan  # s at the last day's rate (for the message)
     dynamic_uplift: float = math.nan  # N, the uplift at the wave window's peak (wave_window)
     uplift_view: float = math.nan  # 1: time_to_uplift is the chain length's, 0: R held's
+    channels_healthy: float = math.nan  # a line of several channels: how many are healthy
+    channel_states: float = math.nan  # their states (core.channels code; NaN: one channel)
     span: float = math.nan  # m, the span the line was solved at (for the dragging message)
 
 
@@ -271,11 +282,23 @@ class LineAlarm:
     config: AlarmConfig = field(default_factory=AlarmConfig)
     allowed_uplift: float = 0.0
     anchor_distance: float = math.nan  # m, installed (for the dragging message)
+    channel_names: tuple[str, ...] = ()  # a line of several channels: their topics
+    min_channels: int = 1
 
     @classmethod
     def for_line(cls, line: LineConfig, config: AlarmConfig) -> LineAlarm:
         """Rules for ``line`` under ``config``."""
-        return cls(config, line.allowed_uplift, line.anchor_distance)
+        return cls(
+            config,
+            line.allowed_uplift,
+            line.anchor_distance,
+            line.channel_topics,
+            int(line.min_channels),
+        )
+
+    def blind(self, healthy: float) -> bool:
+        """Fewer healthy channels than ``min_channels`` (a line of several channels)."""
+        return bool(self.channel_names) and healthy < self.min_channels
 
     @property
     def uplift_clear_level(self) -> float:
@@ -344,9 +367,10 @@ class LineAlarm:
         return new, events
 
     def _stale(self, x: AlarmInputs, now: float) -> tuple[bool, bool]:
-        """(tension stale or never received, depth stale or never received)."""
+        """(tension stale, never received or blind, depth stale or never received)."""
         ts, ds = x.tension_stamp, x.depth_stamp
         stale_t = ts != ts or now - ts > self.config.tension_timeout
+        stale_t = stale_t or self.blind(x.channels_healthy)
         if ds != ds:
             return stale_t, True
         if x.depth_stale is None:
@@ -355,6 +379,8 @@ class LineAlarm:
 
     def _classify(self, cond: str, x: AlarmInputs, stale: bool) -> int:
         if cond == 'input':
+            if self.blind(x.channels_healthy):  # no tension to judge: blind, not impossible
+                return _HOLD
             return _BREACH if x.status != 0 else (_HOLD if stale else _CLEAR)
         if cond == 'uplift':
             force = uplift_seen(x.uplift_force, x.dynamic_uplift)
@@ -370,6 +396,9 @@ class LineAlarm:
         elif cond == 'fatigue':
             warn = self.config.fatigue_damage_warn
             breach, clear = x.fatigue_damage >= warn, x.fatigue_damage < warn
+        elif cond == 'channel':
+            failed = x.channel_states > 0.0 and not self.blind(x.channels_healthy)
+            breach, clear = failed, x.channel_states == 0.0
         elif cond in _SENSOR:
             breach, clear = _sensor_code(cond, float(x.sensor_state))
         elif cond == 'uplift_possible':
@@ -427,8 +456,11 @@ class LineAlarm:
             parts.append(_sensor_text(x, 'sensor_error', hold_e))
         if active[_DRAGGING]:
             parts.append(self._dragging_text(x, hold_e))
+        blind = self.blind(x.channels_healthy)
+        if blind:
+            parts.append(self._channels_text(x, True))
         for name, is_stale, stamp, timeout in (
-            ('tension', stale_t, x.tension_stamp, self.config.tension_timeout),
+            ('tension', stale_t and not blind, x.tension_stamp, self.config.tension_timeout),
             ('depth', stale_d, x.depth_stamp, self.config.depth_timeout),
         ):
             if not is_stale:
@@ -454,6 +486,9 @@ class LineAlarm:
                 parts.append(self._uplift_possible_text(x, hold_w))
             elif up and cond == 'fatigue':
                 parts.append(self._fatigue_text(x))
+            elif up and cond == 'channel':
+                if not blind:
+                    parts.append(self._channels_text(x, False, hold_w))
             elif up and cond == 'drag_margin':
                 text = self._warn_text(cond, x.drag_margin, hold_w)
                 holding = _fmt(x.holding_capacity, 1e3)
@@ -504,6 +539,22 @@ class LineAlarm:
             f'time to uplift {_duration(value)}, warning held (clears after {hold:g} s '
             f'at >= {_duration(high)})'
         )
+
+    def _channels_text(self, x: AlarmInputs, blind: bool, hold: float = 0.0) -> str:
+        """The channels' message: blind (fewer healthy than min_channels) or one failed."""
+        n, healthy = len(self.channel_names), x.channels_healthy
+        failed = describe(x.channel_states, self.channel_names) or 'none failed'
+        if blind:
+            return (
+                f'{_count(healthy)} of {n} load-cell channels healthy (min_channels '
+                f'{self.min_channels}): {failed}'
+            )
+        if x.channel_states > 0.0:
+            return (
+                f'load-cell channel {failed}: tension from the other {_count(healthy)} '
+                '(regression on their shared history)'
+            )
+        return f'channel warning held (clears after {hold:g} s of every channel healthy)'
 
     def _fatigue_text(self, x: AlarmInputs) -> str:
         """The message of the ``fatigue`` condition (the damage, the life left in days)."""
@@ -588,6 +639,10 @@ def _sensor_text(x: AlarmInputs, cond: str, hold: float) -> str:
     if bool(breach):
         return sensor_state.line_message(int(code), x.sensor_tension, x.mbl)
     return f'sensor alarm held (clears after {hold:g} s of sane readings)'
+
+
+def _count(value: float) -> str:
+    return 'no' if value != value else str(int(value))
 
 
 def _life(seconds: float) -> str:
@@ -688,6 +743,8 @@ _INPUT_FIELDS = (
     'fatigue_life_left',
     'dynamic_uplift',
     'uplift_view',
+    'channels_healthy',
+    'channel_states',
     'span',
 )
 
@@ -940,6 +997,8 @@ def _stale_columns(
     ts, ds = x['tension_stamp'], x['depth_stamp']
     with np.errstate(invalid='ignore'):
         stale_t = np.isnan(ts) | (t - ts > cfg.tension_timeout)
+        if alarm.channel_names:  # a blind line of several channels
+            stale_t = stale_t | _blind_column(alarm, x)
         if depth_stale is None:
             stale_d = np.isnan(ds) | (t - ds > cfg.depth_timeout)
         else:
@@ -983,7 +1042,7 @@ def _classify_columns(
         up_clear &= x['anchor_margin'] >= cfg.uplift_clear_margin
     out = {
         'uplift': codes('uplift', f > alarm.allowed_uplift, up_clear),
-        'input': codes('input', status != 0, status == 0),
+        'input': codes('input', (status != 0) & ~_blind_column(alarm, x), status == 0),
     }
     for cond in _MARGINS:
         low, high = alarm._warn_limits(cond)
@@ -1003,7 +1062,17 @@ def _classify_columns(
     out['dragging'] = codes('dragging', drag == 2.0, drag < 2.0)
     damage, warn = x['fatigue_damage'], cfg.fatigue_damage_warn
     out['fatigue'] = codes('fatigue', damage >= warn, damage < warn)
+    states = x['channel_states']
+    blind = _blind_column(alarm, x)
+    out['channel'] = codes('channel', (states > 0.0) & ~blind, states == 0.0)
     return out
+
+
+def _blind_column(alarm: LineAlarm, x: dict[str, np.ndarray]) -> np.ndarray:
+    """Per update: the line is blind (fewer healthy channels than min_channels)."""
+    if not alarm.channel_names:
+        return np.zeros(x['channels_healthy'].shape, bool)
+    return x['channels_healthy'] < alarm.min_channels
 
 
 # --- diagnostics values -------------------------------------------------------------------------
@@ -1040,6 +1109,9 @@ DIAGNOSTIC_KEYS = (
     'wave_tension',
     'peak_tension',
     'dynamic_uplift',
+    # A line of several channels (core/monitor/channels.py): healthy count, states code.
+    'channels_healthy',
+    'channel_states',
 )
 
 

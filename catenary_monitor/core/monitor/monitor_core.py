@@ -53,6 +53,7 @@ from catenary_monitor.core.config.parameters import (
     runtime_change_messages,
 )
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
+from catenary_monitor.core.monitor import channels
 from catenary_monitor.core.monitor import alarm_flood, shelving
 from catenary_monitor.core.monitor import dock_watch as dock_live
 from catenary_monitor.core.monitor import fatigue as fatigue_rule
@@ -189,6 +190,8 @@ OUTPUT_FIELDS = (
     *wave_window.FIELDS,
     'dynamic_uplift',
     'time_to_uplift_view',
+    # A line measured by several channels: the healthy count and their states, channels.py.
+    *channels.FIELDS,
     # The span the line was solved at, and where it came from (core/monitor/dock_watch.py).
     'span',
     'span_source',
@@ -234,6 +237,7 @@ class Tension(NamedTuple):
     line: int
     value: float
     sample_ns: Optional[int] = None
+    channel: int = 0  # a line of several channels (NAME.tension_topics): which one
 
 
 class Depth(NamedTuple):
@@ -445,6 +449,8 @@ class LineState:
     coalesced_until: int = -1  # ns: this line's samples stamped up to it were not stepped
     fatigue: fatigue_rule.FatigueState = fatigue_rule.FatigueState()  # the streamed count
     fatigue_values: tuple[float, ...] = (0.0, _NAN, _NAN)  # fatigue_rule.FIELDS now
+    channels: Optional[channels.ChannelState] = None  # a line of several channels
+    channel_values: tuple[float, ...] = (_NAN, _NAN)  # channels.FIELDS now
     sample_ns: int = -1  # ns, the newest accepted sample's stamp (header or arrival; -1: none)
     stamp_refused: float = -math.inf  # s, when a sample's stamp was last refused (arrival)
     # The wave window of its readings (core.monitor.wave_window) and its values at the newest.
@@ -496,6 +502,8 @@ class LineState:
             fatigue_life_left=self.fatigue_values[2],
             dynamic_uplift=v[_AT['dynamic_uplift']],
             uplift_view=v[_AT['time_to_uplift_view']],
+            channels_healthy=self.channel_values[0],
+            channel_states=self.channel_values[1],
             span=v[_AT['span']],
         )
 
@@ -615,6 +623,7 @@ class MonitorCore:
                 ack=alarm_ack.initial(start),
                 fatigue=fatigue_rule.initial(lc.fatigue_damage_initial),
                 fatigue_values=(lc.fatigue_damage_initial, _NAN, _NAN),
+                channels=channels.initial(len(lc.channel_topics)) if lc.channel_topics else None,
             )
             for lc in config.lines
         ]
@@ -688,8 +697,14 @@ class MonitorCore:
         ):
             line.stamp_refused = _stamp_s(ev.stamp_ns)  # refused: not a reading (bad_stamp)
             return Step(ev.stamp_ns, 'tension', (), None, ())
+        value = float(ev.value)
+        if line.channels is not None:  # the tension from the healthy channels
+            line.channels, value, healthy, code = channels.step(
+                line.channels, ev.channel, _stamp_s(sample_ns), value, channel_limits(self, line)
+            )
+            line.channel_values = (float(healthy), code)
         line.sample_ns = sample_ns
-        line.tension, line.tension_s = float(ev.value), _stamp_s(sample_ns)
+        line.tension, line.tension_s = value, _stamp_s(sample_ns)
         line.sensor_memory = sensor_state.sample(
             line.sensor_memory,
             line.tension_s,
@@ -1265,6 +1280,7 @@ class MonitorCore:
         :func:`derived_values`, the holding of one line in plain floats: :func:`holding_one`)."""
         for line in lines:
             line.values = _with_fatigue(line.values, line.fatigue_values)
+            _with_channels(line)
         named = {k: np.array([line.values[i] for line in lines]) for k, i in _AT.items()}
         named['peak_tension'] = np.array([line.peak_tension for line in lines])
         named['wave_tension'] = np.array([line.wave_tension for line in lines])
@@ -1506,6 +1522,27 @@ def _with_fatigue(values: tuple[float, ...], fatigue: tuple[float, ...]) -> tupl
     """``values`` with the line's fatigue values in their places."""
     end = _FATIGUE_AT + len(fatigue)
     return values[:_FATIGUE_AT] + tuple(fatigue) + values[end:]
+
+
+_CHANNELS_AT = VALUE_FIELDS.index(channels.FIELDS[0])
+
+
+def _with_channels(line: LineState) -> None:
+    """The line's values with its channels' values in their places."""
+    v, end = line.values, _CHANNELS_AT + len(channels.FIELDS)
+    line.values = v[:_CHANNELS_AT] + tuple(line.channel_values) + v[end:]
+
+
+def channel_limits(core: MonitorCore, line: LineState) -> channels.Limits:
+    """The channel rules of a line (core.channels.Limits)."""
+    a = core.config.alarm
+    return channels.Limits(
+        a.tension_timeout,
+        a.stuck_time,
+        a.tension_resolution,
+        a.channel_tolerance,
+        int(line.config.min_channels),
+    )
 
 
 def _implausible(line: LineState, code: int) -> None:

@@ -33,6 +33,7 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
+from catenary_monitor.core.monitor import channels
 from catenary_monitor.core.monitor import alarm_flood, shelving
 from catenary_monitor.core.monitor import dock_watch as dock_live
 from catenary_monitor.core.monitor import fatigue as fatigue_rule
@@ -68,6 +69,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     MonitorCore,
     Snapshot,
     Start,
+    channel_limits,
 )
 from catenary_monitor.core.monitor.monitor_core import depth_word as depth_state_word
 from catenary_monitor.core.monitor.monitor_core import (
@@ -145,6 +147,11 @@ class Window:
     ticks: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     tension_stamps: Optional[list[Optional[np.ndarray]]] = None
     depth_stamps: Optional[np.ndarray] = None
+    #: A line of several channels: per line, each sample's channel (int64; None: one channel);
+    #: its column holds every channel's samples merged in time order.
+    channels: Optional[list[Optional[np.ndarray]]] = None
+    #: Filled by :func:`advance` once the channels are fused: line -> (healthy, states) columns.
+    channel_values: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
     @property
     def messages(self) -> int:
@@ -1067,6 +1074,8 @@ def _line_inputs(
             'fatigue_life_left',
             'dynamic_uplift',
             'time_to_uplift_view',
+            'channels_healthy',
+            'channel_states',
             'span',
         )
     }
@@ -1123,6 +1132,10 @@ def _advance_line(
     at = steps.t_idx[steps.solved]
     for j, key in enumerate(fatigue_rule.FIELDS):
         values[key] = _pick(at, fatigue[key], line.fatigue_values[j])
+    fused = window.channel_values.get(k)
+    for j, key in enumerate(channels.FIELDS):
+        column = fused[j] if fused is not None else np.zeros(0)
+        values[key] = _pick(at, column, line.channel_values[j])
     inputs = _line_inputs(core, line, steps, tide, values, status, window, tt, dock, k, sensors)
     series = replay_levels(
         steps.times * 1e-9, inputs, line.alarm, status_messages(line.config), initial=line.state
@@ -1162,6 +1175,8 @@ def _advance_line(
     line.fatigue = fatigue_end
     if len(tt):
         line.fatigue_values = tuple(float(fatigue[key][-1]) for key in fatigue_rule.FIELDS)
+        if fused is not None:
+            line.channel_values = (float(fused[0][-1]), float(fused[1][-1]))
     return result, series, steps, acks, np.asarray(fatigue[fatigue_rule.FIELDS[0]], np.float64)
 
 
@@ -1205,6 +1220,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         )
     given = window
     window, refusals = _accept(core, window)
+    window = _fuse_channels(core, window)
     depth_before = (
         core.state.depth,
         core.state.depth_s,
@@ -1335,8 +1351,45 @@ def _accept(core: MonitorCore, window: Window) -> tuple[Window, _Refusals]:
     depth, d_stamps, d_refused = split(
         window.depth, window.depth_stamps, core.state.depth_sample_ns
     )
-    kept = Window(tensions, depth, window.ticks, stamps, d_stamps)
+    kept = Window(tensions, depth, window.ticks, stamps, d_stamps, window.channels)
     return kept, _Refusals(refused, d_refused)
+
+
+def _fuse_channels(core: MonitorCore, window: Window) -> Window:
+    """The window with each line of several channels as one tension column: the core's
+    channel step (core.channels) over its merged samples, in order (such lines are rare: a
+    Python loop); the healthy counts and states go to ``channel_values``."""
+    if window.channels is None or not any(c is not None for c in window.channels):
+        return window
+    tensions = list(window.tensions)
+    values: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    for k, line in enumerate(core.state.lines):
+        idx = window.channels[k]
+        if idx is None or line.channels is None:
+            continue
+        tt, raw = window.tensions[k]
+        times = window.sample_s(k)
+        fused, healthy, states = np.empty(len(tt)), np.empty(len(tt)), np.empty(len(tt))
+        limits = channel_limits(core, line)
+        state = line.channels
+        for i in range(len(tt)):
+            state, fused[i], count, states[i] = channels.step(
+                state, int(idx[i]), float(times[i]), float(raw[i]), limits
+            )
+            healthy[i] = count
+        line.channels = state
+        tensions[k] = (tt, fused)
+        values[k] = (healthy, states)
+    out = Window(
+        tensions,
+        window.depth,
+        window.ticks,
+        window.tension_stamps,
+        window.depth_stamps,
+        window.channels,
+    )
+    out.channel_values = values
+    return out
 
 
 def _write_refusals(core: MonitorCore, refusals: _Refusals) -> None:
@@ -2030,8 +2083,17 @@ def slice_window(window: Window, lo: Optional[int], hi: Optional[int]) -> Window
         pairs = zip(window.tension_stamps, window.tensions)
         stamps = [None if s is None else s[cut(t)] for s, (t, _) in pairs]
     d_stamps = None if window.depth_stamps is None else window.depth_stamps[cut(dt)]
+    chans = None
+    if window.channels is not None:
+        pairs_c = zip(window.channels, window.tensions)
+        chans = [None if c is None else c[cut(t)] for c, (t, _) in pairs_c]
     return Window(
-        tensions, (dt[cut(dt)], dv[cut(dt)]), window.ticks[cut(window.ticks)], stamps, d_stamps
+        tensions,
+        (dt[cut(dt)], dv[cut(dt)]),
+        window.ticks[cut(window.ticks)],
+        stamps,
+        d_stamps,
+        chans,
     )
 
 
@@ -2145,6 +2207,9 @@ def _leave_out_coalesced(
     tension_stamps = window.tension_stamps
     if tension_stamps is not None:
         tension_stamps = [cut(s, kept) for s, kept in zip(tension_stamps, keep)]
+    chans = window.channels
+    if chans is not None:
+        chans = [cut(c, kept) for c, kept in zip(chans, keep)]
     return (
         Window(
             [
@@ -2155,6 +2220,7 @@ def _leave_out_coalesced(
             window.ticks,
             tension_stamps,
             cut(window.depth_stamps, d_keep),
+            chans,
         ),
         events,
         marks,
