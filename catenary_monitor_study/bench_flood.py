@@ -206,7 +206,7 @@ def analyse(
     samples sent before it (negative indexes: in the node's counts, those that reached it,
     but not in the flood's figures)."""
     from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, VALUE_FIELDS
-    from catenary_monitor.io.mcap_read import read_float64_topics
+    from catenary_monitor.io.mcap_read import iter_messages, read_float64_topics
     from catenary_monitor.replay.driver import replay_log
 
     files = sorted(log_dir.glob('*.mcap'))
@@ -239,6 +239,11 @@ def analyse(
         (d[0] for d in diagnostics if d[1] != 0 and d[0] >= first_missed - period), np.inf
     )
     last = next((d for d in reversed(diagnostics) if d[0] <= flood_end + 2.0), None)
+    logged_at = np.array(
+        [m.log_time_ns * 1e-9 for m in iter_messages(files, ['/diagnostics'])], float
+    )
+    logged_at = logged_at[(logged_at >= t0) & (logged_at <= flood_end + 2.0)]
+    log_gap = float(np.diff(np.concatenate([[t0], logged_at])).max()) if logged_at.size else np.inf
     # What the node counted (its intake records) and what its last status said.
     records = _node_records(files)
     intake = [r for r in records if r['kind'] == 'intake']
@@ -284,6 +289,7 @@ def analyse(
         'diagnostic_period_s': period,
         'max_gap_s': float(gaps.max()),
         'max_gap_periods': float(gaps.max() / period),
+        'max_gap_in_log_s': log_gap,
         'first_not_stepped_s': None if first_missed == np.inf else first_missed - t0,
         'intake_alarm_after_s': (
             None if first_missed == np.inf or alarm_at == np.inf else alarm_at - first_missed
@@ -414,10 +420,20 @@ def flood(
             return {'error': f'the publisher did not start ({start})'}
         t0 = float(start['t0'])
         cpu0, wall0 = _cpu_seconds(monitor.pid), time.monotonic()
+        rss, flooding = [_rss_mb(monitor.pid)], threading.Event()
+
+        def sample_rss() -> None:
+            while not flooding.wait(1.0):
+                rss.append(_rss_mb(monitor.pid))
+
+        sampler = threading.Thread(target=sample_rss, daemon=True)
+        sampler.start()
         end = json.loads(publisher.stdout.readline() or '{}')  # type: ignore[union-attr]
         cpu = (_cpu_seconds(monitor.pid) - cpu0) / (time.monotonic() - wall0)
         flood_end = time.time()
-        rss = _rss_mb(monitor.pid)
+        flooding.set()
+        sampler.join(5.0)
+        rss.append(_rss_mb(monitor.pid))
         time.sleep(3.0)  # the last intake counts and diagnostics
     finally:
         try:
@@ -447,7 +463,9 @@ def flood(
         'cpus': os.cpu_count(),
         'load': os.getloadavg()[0],
         'node_cpu_share': cpu,
-        'node_rss_mb': rss,
+        'node_rss_mb': rss[-1],
+        'node_rss_start_mb': rss[0],
+        'node_rss_max_mb': max(rss),
         'node_exit': monitor.returncode,
         **analyse(
             config, logs, end['sent'], t0, rate, burst, seen, flood_end, end.get('primed')
@@ -471,19 +489,30 @@ def report(r: dict[str, Any]) -> str:
     lines = [
         f'flood: {r["lines"]} lines x {r["rate_hz"]:g} Hz for {r["duration_s"]:g} s{burst} '
         f'({r["lines"] * r["rate_hz"]:g} samples/s), {r["cpus"]} CPUs, load {r["load"]:.2f}',
-        f'node: {pct * r["node_cpu_share"]:.0f} % of one core, RSS {r["node_rss_mb"]:.0f} MB',
+        f'node: {pct * r["node_cpu_share"]:.0f} % of one core; RSS {r["node_rss_start_mb"]:.0f} '
+        f'MB at the start, {r["node_rss_max_mb"]:.0f} MB at most, {r["node_rss_mb"]:.0f} MB at '
+        'the end',
         f'samples: {r["sent"]} sent, {r["logged"]} logged, {r["stepped"]} stepped, '
         f'{r["not_stepped"]} not stepped ({pct * r["share_not_stepped"]:.1f} %)',
         f'node counted: {counted["received"]} stepped, {counted["coalesced"]} coalesced, '
         f'{counted["dropped"]} lost; {r["coalescing_records"]} coalescing records',
         f'/diagnostics: {r["diagnostics_received"]} received, longest gap '
         f'{r["max_gap_s"]:.2f} s ({r["max_gap_periods"]:.2f} periods of '
-        f'{r["diagnostic_period_s"]:g} s)',
+        f'{r["diagnostic_period_s"]:g} s; {r["max_gap_in_log_s"]:.2f} s between two the node '
+        'logged)',
         (
             'every sample stepped'
             if first is None
             else f'first sample not stepped at {first:.2f} s; intake alarm '
-            + ('never' if alarm is None else f'{alarm:.2f} s later')
+            + (
+                'never'
+                if alarm is None
+                else (
+                    f'{alarm:.2f} s later'
+                    if alarm >= 0
+                    else f'already up ({-alarm:.2f} s before: the node was busy)'
+                )
+            )
         ),
         f'last intake status: {r["last_intake_message"]}',
         f'live = replay: {"yes" if not r["replay_mismatches"] else r["replay_mismatches"]} '
