@@ -115,8 +115,12 @@ setup(
             # Two rainflow counts (ASTM E1049-85) the streamed fatigue count is tested against.
             'rainflow>=3.2',
             'fatpack>=0.7',
+            # NREL's lumped-mass mooring model: the dynamic reference (docs/dynamics.md).
+            'moordyn>=2.3',
         ],
         'peers': ['moorpy', 'pycatenary'],
+        # catenary-monitor bench-dynamics and the MoorDyn scenes (docs/dynamics.md)
+        'dynamics': ['moordyn>=2.3'],
     },
     ext_modules=EXTENSIONS,
     zip_safe=False,

@@ -45,6 +45,7 @@ def register(sub: Any) -> None:
     """Add the benchmark sub-commands to the ``catenary-monitor`` parser."""
     from catenary_monitor_study import (
         bench_body,
+        bench_dynamics,
         bench_console,
         bench_core,
         bench_flood,
@@ -56,6 +57,7 @@ def register(sub: Any) -> None:
 
     bench_console.register(sub)
     bench_body.register(sub)
+    bench_dynamics.register(sub)
     bench_soak.register(sub)
     bench_flood.register(sub)
     bench_step.register(sub)

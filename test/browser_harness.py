@@ -142,9 +142,9 @@ _LONG = (
 
 def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
     """The demo's storm as the monitor publishes it: line_11 lifted (ERROR, unacknowledged, a
-    long message), line_10 WARN unacknowledged, line_12 WARN acknowledged, the rest OK, every
-    optional value set (bound, drag margin, tide margin at length but on line_01), the intake
-    WARN."""
+    long message), line_10 WARN unacknowledged and chattering, line_12 WARN acknowledged,
+    line_09 WARN shelved, the rest OK, every optional value set (bound, drag margin, tide margin
+    at length but on line_01), the intake WARN, and an alarm flood whose first out is line_11."""
     from catenary_monitor.console.frames import Status
 
     out: dict[str, Any] = {}
@@ -152,10 +152,10 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
         level, state, msg = 'OK', 'normal', 'ok'
         if name == 'line_11':
             level, state, msg = 'ERROR', 'unacknowledged', _LONG
-        elif name in ('line_10', 'line_12'):
+        elif name in ('line_09', 'line_10', 'line_12'):
             level, msg = 'WARN', 'anchor margin 3.10 m < 5.00 m; anchor uplift in 42 min if the '
             msg += 'tide keeps rising 0.31 m/h'
-            state = 'unacknowledged' if name == 'line_10' else 'acknowledged'
+            state = {'line_09': 'shelved', 'line_10': 'unacknowledged'}.get(name, 'acknowledged')
         lifted = name == 'line_11'
         values = {
             'top_tension': 2.4e6 if lifted else 0.9e6 + 4e4 * k,
@@ -176,12 +176,32 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
             'acknowledged_at': repr(now - 30.0),
             'model': 'elastic catenary',
             'sensor_state': 'ok',
+            'shelved': 'true' if name == 'line_09' else 'false',
+            'shelved_until': repr(now + 1800.0) if name == 'line_09' else 'nan',
+            'shelved_condition': 'all' if name == 'line_09' else '',
+            'shelved_by': 'console dockpc client 127.0.0.1' if name == 'line_09' else '',
+            'chattering': 'true' if name == 'line_10' else 'false',
         }
         out[name] = Status(level, msg, {k: str(v) for k, v in values.items()})
     out['tide'] = Status('OK', 'depth 21.95 m', {'depth': '21.95', 'rate': repr(0.31 / 3600)})
     out['logger'] = Status('OK', 'writing /var/log/catenary_monitor/2026-12-02.mcap', {})
     out['intake'] = Status(
         'WARN', 'node cannot keep up: 312 samples dropped in the last 60 s (queue 50)', {}
+    )
+    out['alarms'] = Status(
+        'WARN',
+        'ALARM FLOOD: 14 alarms raised in the last 600 s (more than 10); first out: line_11',
+        {
+            'flood': 'true',
+            'alarms_in_window': '14',
+            'flood_since': repr(now - 80.0),
+            'first_out': 'line_11',
+            'first_out_at': repr(now - 95.0),
+            'shelve_max': '28800.0',
+            'unshelvable_conditions': 'uplift',
+            'shelve_answer': 'line_09 shelved for 1800 s by console dockpc client 127.0.0.1',
+            'shelve_requests': '1',
+        },
     )
     return out
 
@@ -204,6 +224,7 @@ class DemoSource:
         self.config = config_from_params(flat)
         self.names = [line.name for line in self.config.lines]
         self.version = 0
+        self.shelves: list[tuple[str, str, float, str]] = []  # the requests the page sent
         self.history = History()
         t0 = time.time()
         self.history.feed(t0 - 200.0, demo_statuses(self.names, t0 - 200.0), self.names)
@@ -248,6 +269,16 @@ class DemoSource:
 
     def acknowledge(self, line: str, origin: str) -> str:
         return f'{line} {origin}'
+
+    def shelve(self, alarm: str, condition: str, seconds: float, origin: str) -> dict[str, Any]:
+        """Take a shelving request as the monitor would answer it (no state changes)."""
+        self.shelves.append((alarm, condition, seconds, origin))
+        target = alarm if condition == 'all' else f'{alarm}.{condition}'
+        if condition == 'uplift' or (alarm == 'line_11' and condition == 'all'):
+            from catenary_monitor.console.frames import AckError
+
+            raise AckError(f'{target}: refused: {alarm}: the uplift ERROR cannot be shelved', 409)
+        return {'sent': f'{target} {seconds:g} {origin}', 'answer': f'{target} shelved'}
 
     def wait(self, version: int, timeout: float) -> int:
         time.sleep(min(timeout, 0.5))

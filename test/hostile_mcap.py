@@ -206,6 +206,12 @@ def good_topics_chunk(topics: list[str], t0: int, n: int = 4) -> bytes:
     return chunk(records, 'zstd', data, len(records), t0, t0 + 10 * n)
 
 
+def metadata(name: str, values: dict[str, str]) -> bytes:
+    """A Metadata record (the node writes ``catenary_monitor`` with its parameters)."""
+    body = b''.join(string(k) + string(v) for k, v in values.items())
+    return record(0x0C, string(name) + struct.pack('<I', len(body)) + body)
+
+
 def empty_records_file(
     path: Path,
     compression: str,
@@ -213,10 +219,12 @@ def empty_records_file(
     kind: str = 'messages',
     chunks: int = 3,
     usize: int = CHUNK_255,
+    head: bytes = b'',
 ) -> Path:
     """``chunks`` chunks of ``usize`` B of empty records (on the first topic's channel) between
-    good Float64 chunks on ``topics``; unfinished (no summary)."""
-    parts = [MAGIC, header(), schema()]
+    good Float64 chunks on ``topics``; unfinished (no summary). ``head``: records put after the
+    Header (a Metadata record)."""
+    parts = [MAGIC, header(), head, schema()]
     parts += [channel(i + 1, topic=t) for i, t in enumerate(topics)]
     parts.append(good_topics_chunk(list(topics), 1_000))
     bad = empty_records_chunk(compression, kind, 1, usize)
@@ -226,11 +234,13 @@ def empty_records_file(
     return path
 
 
-def declares_2gib_file(path: Path, topics: tuple[str, ...] = (TOPIC,)) -> Path:
+def declares_2gib_file(
+    path: Path, topics: tuple[str, ...] = (TOPIC,), head: bytes = b''
+) -> Path:
     """The 66 KB file: one zstd chunk declaring (and holding) 2 GiB of zeros, between good
     chunks on ``topics``; unfinished."""
     bad = chunk(b'', 'zstd', zeros_zstd(GIB2, True), GIB2, 0, 0, crc=False)
-    parts = [MAGIC, header(), schema()]
+    parts = [MAGIC, header(), head, schema()]
     parts += [channel(i + 1, topic=t) for i, t in enumerate(topics)]
     parts += [good_topics_chunk(list(topics), 1_000), bad, good_topics_chunk(list(topics), 2_000)]
     path.write_bytes(b''.join(parts))
@@ -238,11 +248,15 @@ def declares_2gib_file(path: Path, topics: tuple[str, ...] = (TOPIC,)) -> Path:
 
 
 def many_channels_file(
-    path: Path, topics: tuple[str, ...] = (TOPIC,), n: int = 100_000, finished: bool = False
+    path: Path,
+    topics: tuple[str, ...] = (TOPIC,),
+    n: int = 100_000,
+    finished: bool = False,
+    head: bytes = b'',
 ) -> Path:
     """A file of ``n`` Channel records (ids wrap around the 16-bit id space, so every id is
     defined, some twice) after the real ``topics`` (ids 1..), then good chunks."""
-    parts = [MAGIC, header(), schema()]
+    parts = [MAGIC, header(), head, schema()]
     parts += [channel(i + 1, topic=t) for i, t in enumerate(topics)]
     first = len(topics) + 1
     parts += [channel((first + i) & 0xFFFF, topic=f'/spam/{i}') for i in range(n)]

@@ -585,6 +585,11 @@ def test_diagnostic_values_keys_and_exact_strings():
         'fatigue_damage',
         'fatigue_damage_rate',
         'fatigue_life_left',
+        'wave_tension',
+        'peak_tension',
+        'dynamic_uplift',
+        'channels_healthy',
+        'channel_states',
     ]
     assert all(isinstance(v, str) and float(v) == float(fields_[k]) for k, v in values)
     from_object = dict(diagnostic_values(SimpleNamespace(depth=20.85)))
@@ -636,9 +641,10 @@ def test_margin_codes_match_the_scalar() -> None:
             n,
         )
     keys = ('uplift_force', 'uplift_force_upper', 'inconsistent', 'sensor_state', 'drag_state')
-    keys += ('fatigue_damage',)
+    keys += ('fatigue_damage', 'channel_states', 'channels_healthy')
     for key in keys:
         x[key] = np.zeros(n)
+    x['dynamic_uplift'] = np.full(n, np.nan)
     stale = rng.random(n) < 0.3
     status = np.zeros(n, np.int64)
     quiet = {cond: x[cond].copy() for cond in alarms._MARGINS}

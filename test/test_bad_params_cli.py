@@ -101,3 +101,29 @@ def test_bad_params_file_exits_2_with_one_line(tmp_path, log, command, case):
     assert NEEDLE[case] in lines[0], lines[0]
     if 'lines' not in NEEDLE[case] or command in ('run', 'node', 'replay', 'equilibrium'):
         assert path.name in lines[0], lines[0]
+
+
+@pytest.mark.parametrize('command', ['run', 'node', 'replay'])
+def test_a_tide_table_past_its_bounds_stops_every_command_at_once(tmp_path, log, command):
+    """A 100 000-constituent table (2.6 MB) once made replay take minutes and run deaf to
+    Ctrl-C: now one line and exit 2 before any work (the CPU time of the child is measured)."""
+    import resource
+
+    table = '; '.join(f'C{i} 0.01 10.0 28.98' for i in range(100_000))
+    path = tmp_path / 'tide.yaml'
+    path.write_text(
+        'catenary_monitor:\n  ros__parameters:\n    lines: [a]\n    a:\n      weight: 1300.0\n'
+        '      anchor_distance: 120.0\n      mbl: 4.8e6\n'
+        f'    tide_table: "{table}"\n'
+    )
+    argv = [a.format(f=path, log=log) for a in COMMANDS[command]]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    r = subprocess.run(
+        [sys.executable, *argv], capture_output=True, text=True, env=child_env(), timeout=60
+    )
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 2 and len(lines) == 1, r.stderr
+    assert "'tide_table'" in lines[0] and 'more than the 65536' in lines[0], lines[0]
+    assert cpu < 5.0, cpu

@@ -117,6 +117,7 @@ def live_run(tmp_path_factory: Any) -> Any:
             lambda: [s for s in watcher.seen if s == (2, 'true')],
             30.0,
         )
+        seen['shelving'] = _shelve_in_the_page(driver)
         before_loss = driver.execute_script('return cmConsole.beeps')
         stop(monitor, signal.SIGTERM)
         t_kill = time.monotonic()
@@ -136,6 +137,39 @@ def live_run(tmp_path_factory: Any) -> Any:
             if proc is not None:
                 stop(proc)
         driver.quit()
+
+
+def _shelve_in_the_page(driver: Any) -> dict[str, Any]:
+    """Shelving from the page, answered by the monitor: the lifted line as a whole (refused:
+    its uplift ERROR), then line_01 for 10 min (listed as shelved), then unshelved."""
+    from selenium.webdriver.support.ui import Select
+
+    out: dict[str, Any] = {}
+    answer = driver.find_element('id', 'shelve-answer')
+
+    def shelve(line: str) -> None:
+        Select(driver.find_element('id', 'shelve-line')).select_by_value(line)
+        Select(driver.find_element('id', 'shelve-condition')).select_by_value('all')
+        Select(driver.find_element('id', 'shelve-duration')).select_by_value('600')
+        driver.find_element('id', 'shelve-go').click()
+
+    shelve('line_11')
+    out['refused'] = wait_for(
+        'the refusal', lambda: 'refused' in answer.text and answer.text, 30.0
+    )
+    shelve('line_01')
+    out['shelved'] = wait_for(
+        'the answer', lambda: 'shelved for' in answer.text and answer.text, 30.0
+    )
+    driver.find_element('id', 'tab-shelved').click()
+    listed = "return [...document.querySelectorAll('#shelved [data-shelved-line]')].map(r => r.dataset.shelvedLine)"  # noqa: E501
+    out['listed'] = wait_for(
+        'line_01 in the shelved list', lambda: driver.execute_script(listed), 30.0
+    )
+    driver.find_element('css selector', '[data-unshelve="line_01"]').click()
+    wait_for('the shelved list empty', lambda: not driver.execute_script(listed), 30.0)
+    driver.find_element('id', 'tab-active').click()
+    return out
 
 
 def test_live_page_storm_acknowledge_and_monitor_loss(live_run: Any) -> None:
@@ -164,6 +198,21 @@ def test_live_page_storm_acknowledge_and_monitor_loss(live_run: Any) -> None:
     acks = [r for r in records if r['kind'] == 'acknowledge']
     assert acks and acks[0]['line'] == 'line_11', records[-5:]
     assert acks[0]['origin'].startswith('console ') and '127.0.0.1' in acks[0]['origin']
+    # Shelving from the page, decided by the monitor: the uplift ERROR refused with a message,
+    # line_01 shelved and unshelved, each request recorded with who made it.
+    shelving = seen['shelving']
+    assert 'line_11: refused: line_11: its active uplift ERROR cannot be shelved' in (
+        shelving['refused']
+    ), shelving
+    assert shelving['shelved'].startswith('line_01 shelved for 600 s by console ')
+    assert shelving['listed'] == ['line_01']
+    shelves = [r for r in records if r['kind'] == 'shelve']
+    assert [(r['alarm'], r['seconds']) for r in shelves] == [
+        ('line_11', 600.0),
+        ('line_01', 600.0),
+        ('line_01', 0.0),
+    ]
+    assert all(r['origin'].startswith('console ') for r in shelves)
 
 
 def test_replay_console_scrubs_the_recorded_storm(live_run: Any) -> None:

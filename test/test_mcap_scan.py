@@ -295,6 +295,7 @@ def test_walk_matches_the_python_walk() -> None:
             scanner.topic_lut = np.full(1 << 16, -1, np.int64)
             scanner.accepted, scanner.topic_names, scanner.topic_index = set(), [], {}
             scanner.accept = lambda channel: True
+            scanner.on_definition = None
             offsets, stop = scanner._walk(buf, 0, len(buf))
             got.append((offsets.tolist(), stop, sorted(scanner.channels)))
         assert got[0] == got[1], name

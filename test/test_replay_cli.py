@@ -163,6 +163,10 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
     k = 14 + len(BOUNDS + HOLDING)
     assert fields[14:k] == list(BOUNDS + HOLDING)  # and the holding values
     assert fields[k : k + 3] == ['sensor_state', *LENGTH_FIELDS, 'drag_state']  # appended
+    waves = ['wave_tension', 'peak_tension', 'dynamic_uplift', 'time_to_uplift_view']
+    w = fields.index('wave_tension')
+    assert fields[w : w + 4] == waves  # appended, then the channels' (appended last)
+    assert fields[-2:] == ['channels_healthy', 'channel_states']
     got = np.array([m.data for _, m in outputs])
     np.testing.assert_array_equal(
         got[:, fields.index('time_to_uplift')], r.values['time_to_uplift']
@@ -214,6 +218,7 @@ def test_csv_all_columns_and_stdout_summary(scene, capsys):
     k = header.index('status')
     assert header[k : k + 4] == ['status', 'level', 'model', 'drag_state']
     assert header[k + 4 : k + 7] == ['fatigue_damage', 'fatigue_damage_rate', 'fatigue_life_left']
+    assert header[k + 7 : k + 9] == ['channels_healthy', 'channel_states']
     assert {'tide_margin', 'load_margin', 'safety_factor', 'horizontal_tension'} <= set(header)
     assert 'time_to_uplift' in header
     assert 'inextensible catenary' in models and models <= {'none', 'inextensible catenary'}

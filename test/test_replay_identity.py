@@ -5,6 +5,7 @@ import numpy as np
 from replay_data import dock_config, generate
 
 from catenary_monitor.core.monitor.holding import FIELDS as HOLDING
+from catenary_monitor.core.monitor.channels import FIELDS as CHANNELS
 from catenary_monitor.core.monitor.fatigue import FIELDS as FATIGUE
 from catenary_monitor.core.monitor.holding import DRAG_FIELDS, LENGTH_FIELDS
 from catenary_monitor.core.monitor.twin import (
@@ -18,7 +19,8 @@ from catenary_monitor.core.monitor.twin import (
 from catenary_monitor.core.monitor.uncertainty import FIELDS as BOUNDS
 from catenary_monitor.core.physics.solve import solve
 
-DERIVED = BOUNDS + HOLDING + LENGTH_FIELDS + DRAG_FIELDS + FATIGUE  # by the monitor
+DERIVED = BOUNDS + HOLDING + LENGTH_FIELDS + DRAG_FIELDS + FATIGUE + CHANNELS  # monitor's
+DERIVED += ('wave_tension', 'peak_tension', 'dynamic_uplift', 'time_to_uplift_view')
 
 
 def test_solve_updates_is_bit_identical_to_solve_on_arrays():

@@ -38,26 +38,28 @@ BUNCH_S = 1.0  # ... in bunches, once a second
 
 def delivered(sample_ns, k, lag=LAG_S, bunch=BUNCH_S):
     """Arrival times (ns) of samples taken at ``sample_ns``: held ``lag`` and delivered in
-    bunches every ``bunch`` s, a few us apart (input ``k`` offset so no two share a stamp)."""
+    bunches every ``bunch`` s, a few ns apart (input ``k`` < 16 offset so no two inputs share
+    a stamp: the twin sees events of one stamp at once, test_batch.compare)."""
     due = sample_ns + int(lag * 1e9)
     arrival = (due // int(bunch * 1e9) + 1) * int(bunch * 1e9)
-    return arrival + np.arange(len(sample_ns), dtype=np.int64) * 10 + (k + 1) * 1000
+    return arrival + np.arange(len(sample_ns), dtype=np.int64) * 16 + k  # distinct: k < 16
 
 
-def stamped_scene(seed=3, bad=True):
+def stamped_scene(seed=3, bad=True, seconds=90.0):
     """A storm's tensions and depth as (arrival, value, header stamp) columns, lagging and
     bunched; with ``bad`` two tension samples stamped 10 s ahead and one going backwards, and
     one depth sample ahead."""
     config = dock_config(3, tension_timeout=6.0, depth_timeout=8.0)
-    tensions, depth = generate(config, seconds=90.0, seed=seed)
+    tensions, depth = generate(config, seconds=seconds, seed=seed)
     cols = {}
     for k, (name, (t, v)) in enumerate(tensions.items()):
         stamp = t.copy()
         arrival = delivered(stamp, k)
+        n = len(stamp)
         if bad and k == 1:
-            stamp[100] += 10_000_000_000  # 10 s ahead
-            stamp[400] += 10_000_000_000
-            stamp[600] = stamp[598] - 1  # backwards
+            stamp[n // 9] += 10_000_000_000  # 10 s ahead
+            stamp[4 * n // 9] += 10_000_000_000
+            stamp[6 * n // 9] = stamp[6 * n // 9 - 2] - 1  # backwards
         cols[name] = (arrival, v, stamp)
     td, dv = depth
     dstamp = td.copy()
@@ -346,7 +348,7 @@ def test_replay_of_a_rosbag2_recording_of_stamped_sensors_equals_the_core(tmp_pa
 
     from catenary_monitor.replay.driver import replay_log
 
-    base, cols, depth = stamped_scene(seed=8)
+    base, cols, depth = stamped_scene(seed=8, seconds=40.0)
     lines = tuple(
         LineConfig(
             lc.name, lc.weight, lc.anchor_distance, lc.mbl, lc.allowed_uplift, lc.hook_height,

@@ -67,7 +67,8 @@ def scene(seconds=6 * 3600.0, step=60.0):
 
 
 def config(**alarm):
-    line = LineConfig(name='line_11', weight=W, anchor_distance=X, mbl=4.8e6)
+    # exact sensors: the forecast's warning is the first (no bound within accuracy before it)
+    line = LineConfig(name='line_11', weight=W, anchor_distance=X, mbl=4.8e6, tension_accuracy=1.0)
     alarm = {
         'tide_table': TABLE,
         'tide_table_epoch': EPOCH,
@@ -78,6 +79,7 @@ def config(**alarm):
         'tension_timeout': 120.0,
         'anchor_margin_warn': 0.0,
         'tide_margin_warn': 0.0,
+        'depth_accuracy': 0.0,
         **alarm,
     }
     return MonitorConfig(lines=(line,), alarm=AlarmConfig(**alarm))
@@ -169,3 +171,24 @@ def test_node_md_tide_parameter_table_is_generated():
     page = (Path(__file__).resolve().parents[1] / 'docs' / 'node.md').read_text()
     begin, end = '<!-- tide-parameters:begin -->\n', '<!-- tide-parameters:end -->'
     assert page.split(begin, 1)[1].split(end, 1)[0] == parameters_markdown('tide')
+
+
+def test_a_table_past_its_bounds_is_refused_before_it_is_parsed():
+    """200 constituents (a full harmonic analysis has about 150) and 65 536 characters: a
+    100 000-constituent or 10 MB table is one ConfigError in microseconds, not minutes."""
+    import time
+
+    from catenary_monitor.core.config.tide_constituents import MAX_CONSTITUENTS, parse_table
+
+    one = 'M2 0.01 10.0 28.98; '
+    assert len(parse_table(one * MAX_CONSTITUENTS)) == MAX_CONSTITUENTS
+    for text, needle in [
+        (one * (MAX_CONSTITUENTS + 1), '201 constituents, more than the 200'),
+        (one * 100_000, 'characters, more than the 65536'),
+        ('M2 0.01 10.0 28.98' + ' ' * 10_000_000, 'characters, more than the 65536'),
+    ]:
+        start = time.process_time()
+        with pytest.raises(ConfigError, match='tide_table') as info:
+            config(tide_table=text)
+        assert needle in str(info.value)
+        assert time.process_time() - start < 0.5

@@ -53,11 +53,17 @@ def tide_scene(seconds, noise=0.0, wave=0.0, seed=0):
     return t, (t_ns, depth), (t_ns + 300_000_000, tension)
 
 
-def one_line(**alarm):
+def one_line(tension_accuracy=None, **alarm):
     # The scene's tension is noise-free and moves by less than the default resolution per
     # sample: resolution 0 keeps it from reading as a stuck sensor (core.monitor.sensor_state).
     alarm.setdefault('tension_resolution', 0.0)
-    line = LineConfig(name='line_11', weight=W, anchor_distance=X, mbl=4.8e6)
+    line = LineConfig(
+        name='line_11',
+        weight=W,
+        anchor_distance=X,
+        mbl=4.8e6,
+        tension_accuracy=tension_accuracy,
+    )
     return MonitorConfig(lines=(line,), alarm=AlarmConfig(**alarm))
 
 
@@ -76,7 +82,7 @@ def test_time_to_uplift_against_the_exact_crossing(noise, wave, window):
         core.step(Depth(int(dt[k]), float(dv[k])))
         out = core.step(Tension(int(tt[k]), 0, float(tv[k]))).outputs[0].values
         got[t[k]] = out[ttu]
-    assert all(math.isinf(got[s]) for s in t[t < 0.45 * window])  # unknown: half a window
+    assert all(math.isnan(got[s]) for s in t[t < 0.45 * window])  # unknown: half a window
     for s in (1800.0, 3600.0, 5400.0, 7200.0):
         exact = CROSS_S - (s + 0.3)
         if noise:  # the median of the minute
@@ -96,7 +102,7 @@ def test_time_to_uplift_against_the_exact_crossing(noise, wave, window):
 
 def test_falling_tide_and_a_lifted_anchor():
     assert tide_trend.time_to_uplift(2.0, 0.0, -1e-4, 0.0) == math.inf
-    assert tide_trend.time_to_uplift(2.0, 0.0, math.nan, math.nan) == math.inf
+    assert math.isnan(tide_trend.time_to_uplift(2.0, 0.0, math.nan, math.nan))  # unknown
     assert tide_trend.time_to_uplift(-0.1, 5e3, 1e-4, 0.0) == 0.0
     assert tide_trend.time_to_uplift(0.5, 0.0, 1e-4, -0.6) == 0.0  # the tide's level is past
     assert math.isnan(tide_trend.time_to_uplift(math.nan, math.nan, 1e-4, 0.0))
@@ -106,7 +112,7 @@ def test_falling_tide_and_a_lifted_anchor():
         np.array([-1e-4, math.nan, 1e-4, 1e-4, 1e-4, 1e-4]),
         np.array([0.0, math.nan, 0.0, -0.6, 0.0, 0.2]),
     )
-    np.testing.assert_array_equal(got[:5], [math.inf, math.inf, 0.0, 0.0, math.nan])
+    np.testing.assert_array_equal(got[:5], [math.inf, math.nan, 0.0, 0.0, math.nan])
     assert got[5] == 1.2 / 1e-4
 
 
@@ -145,6 +151,8 @@ def test_the_core_and_its_twin_agree_on_a_rising_tide():
         depth_timeout=4.0,
         anchor_margin_warn=0.0,
         tide_margin_warn=0.0,
+        tension_accuracy=1.0,  # exact sensors: the time-to-uplift warning is the first
+        depth_accuracy=0.0,
     )
     ticks = depth[0][::5] + 600_000_000
     cuts = [T0_NS + int(s * 1e9) for s in (400.0, 1234.5, 3000.0, 3000.2, 8000.0, 9500.0)]

@@ -119,6 +119,8 @@ def _core(accuracy=30e3, depth_accuracy=0.2):
             tide_margin_warn=0.0,
             warn_clear_hold=0.0,
             clear_hold=0.0,
+            wave_window=1.0,  # readings 2 s apart: each its own window (no wave allowance)
+            uplift_time_warn=0.0,  # no trend here: its warning would hold, unknown
         ),
     )
     return MonitorCore(cfg, 0)
@@ -134,26 +136,33 @@ def test_uplift_possible_warns_and_the_error_stays_on_the_nominal():
     h = 20.85
     tc = _critical_tension(h)
     core.step(Depth(1, h))
-    step = core.step(Tension(2, 0, tc - 10e3))  # nominal below uplift, the bound above
+    step = core.step(Tension(2_000_000_000, 0, tc - 10e3))  # nominal below uplift, bound above
     out = dict(zip(OUTPUT_FIELDS, step.outputs[0].values))
     assert out['uplift_force'] == 0.0 and out['uplift_force_upper'] > 0.0
     assert out['anchor_margin_lower'] < 0.0 < out['anchor_margin']
     assert core.state.lines[0].state.level == Level.WARN
     assert 'uplift possible within sensor accuracy' in core.state.lines[0].state.message
-    core.step(Tension(3, 0, tc + 50e3))  # nominal uplift: the ERROR, the WARN gives way
+    core.step(Tension(4_000_000_000, 0, tc + 50e3))  # nominal uplift: ERROR, the WARN gives way
     state = core.state.lines[0].state
     assert state.level == Level.ERROR and 'within sensor accuracy' not in state.message
-    core.step(Tension(4, 0, tc - 200e3))  # far from uplift: both clear
+    core.step(Tension(6_000_000_000, 0, tc - 200e3))  # far from uplift: both clear
     assert core.state.lines[0].state.level == Level.OK
 
 
-def test_without_accuracy_no_bounds_and_no_warning():
+def test_default_accuracies_give_bounds():
+    """Without tension_accuracy the line's load pin is taken at 0.5 % of its MBL: the bounds
+    are those of that accuracy (and never NaN for a solved line)."""
     core = _core(accuracy=None, depth_accuracy=0.0)
     core.step(Depth(1, 20.85))
-    step = core.step(Tension(2, 0, _critical_tension(20.85) - 10e3))
+    t = _critical_tension(20.85) - 10e3
+    step = core.step(Tension(2, 0, t))
     out = dict(zip(OUTPUT_FIELDS, step.outputs[0].values))
-    assert math.isnan(out['uplift_force_upper']) and math.isnan(out['anchor_margin_lower'])
-    assert core.state.lines[0].state.level == Level.OK
+    f0 = solve(W, 20.85, tension=t, anchor_distance=X).uplift_force
+    want = bounds(W, X, 4.827e6, math.inf, t, 20.85, 0.005 * 4.827e6, 0.0, f0)
+    assert out['uplift_force_upper'] == pytest.approx(float(want['uplift_force_upper']))
+    assert out['uplift_force_upper'] > 0.0 == out['uplift_force']
+    assert out['anchor_margin_lower'] == pytest.approx(float(want['anchor_margin_lower']))
+    assert AlarmConfig().depth_accuracy == 0.02
 
 
 @pytest.mark.parametrize('t', [2.5e5, 8e5])

@@ -36,7 +36,7 @@ DEMO_OVERRIDES = {
     'clear_hold': 6.0,
     'warn_clear_hold': 6.0,
     'tide_trend_window': 10.0,
-    'uplift_time_warn': 15.0,
+    'uplift_time_warn': 8.0,
     'uplift_time_deadband': 3.0,
     'anchor_margin_warn': 2.0,
 }

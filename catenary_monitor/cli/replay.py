@@ -502,6 +502,7 @@ def register(sub: Any) -> None:
         'top_tension, depth, min_anchor_distance, anchor_margin, uplift_force, '
         'level); also horizontal_tension, tide_margin, load_margin, safety_factor, '
         'time_to_uplift, the bounds, the holding values, tide_margin_at_length, '
+        'wave_tension, peak_tension, dynamic_uplift, time_to_uplift_view, '
         'sensor_state, status, model '
         '(docs/replay.md)',
     )

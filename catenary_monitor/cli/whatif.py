@@ -8,8 +8,9 @@ installed ``NAME.anchor_distance`` from the params file; a line with neither han
 (its ``NAME.chain_length`` at its anchor distance and this depth, in still water), and a line
 without a chain length either is an error naming it. The table's ``from`` column says which. The
 tide's rate is ``--tide-rate`` (m/s) or, with ``--log``, the monitor's trend at the log's last
-depth sample; without either the trend is unknown (``time_to_uplift`` inf, as the core has
-it then). Exit 2 with one line on bad input.
+depth sample; without either the trend is unknown (``time_to_uplift`` NaN, shown as
+``unknown``, as the core has it then; ``not coming`` is a tide that does not rise). Exit 2
+with one line on bad input.
 """
 
 from __future__ import annotations

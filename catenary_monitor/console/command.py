@@ -27,6 +27,10 @@ def _fail(message: str, code: int = 2) -> int:
     return code
 
 
+def _warn(message: str) -> None:
+    print(f'catenary-monitor console: {message}', file=sys.stderr, flush=True)
+
+
 def cmd_console(args: argparse.Namespace) -> int:
     """Start the console's source and HTTP server; serve until a signal."""
     from catenary_monitor.console.server import ConsoleServer
@@ -43,7 +47,9 @@ def cmd_console(args: argparse.Namespace) -> int:
         from catenary_monitor.console.log_source import LogError, ReplaySource, load_log
 
         try:
-            config, result, depth, files = load_log(args.log, args.params_file)
+            config, result, depth, files = load_log(
+                args.log, args.params_file, on_damage=_warn
+            )
         except LogError as err:
             return _fail(str(err), err.code)
         source = ReplaySource(config, result, depth, files)

@@ -19,7 +19,7 @@ from typing import Any, Iterable, Mapping, Optional, Sequence
 
 import numpy as np
 
-from catenary_monitor.core.config.parameters import MonitorConfig
+from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, MonitorConfig
 from catenary_monitor.core.monitor.acknowledge import SENSORS
 from catenary_monitor.core.monitor.monitor_core import NODE_NAME, OUTPUT_FIELDS
 
@@ -31,6 +31,8 @@ __all__ = [
     'console_config',
     'alarm_rows',
     'alarm_names',
+    'shelved_rows',
+    'flood_view',
     'History',
     'Trend',
     'bucket',
@@ -84,6 +86,15 @@ def _num(text: Optional[str]) -> Optional[float]:
     except ValueError:
         return None
     return value if math.isfinite(value) else None
+
+
+def _forecast_state(text: Optional[str]) -> str:
+    """What a time to uplift says: ``unknown`` (NaN: the trend not known yet, or no solve),
+    ``not coming`` (inf: the tide not rising), ``lifted`` (0) or ``forecast``."""
+    value = _num(text)
+    if value is None:
+        return 'not coming' if text is not None and text.strip() == 'inf' else 'unknown'
+    return 'lifted' if value <= 0.0 else 'forecast'
 
 
 def _finite(value: float) -> Optional[float]:
@@ -146,6 +157,7 @@ def console_config(
         'drag_margin_warn': alarm.drag_margin_warn if alarm else 0.0,
         'fatigue_damage_warn': alarm.fatigue_damage_warn if alarm else 0.5,
         'tension_timeout': alarm.tension_timeout if alarm else 5.0,
+        'alarm_conditions': list(ALARM_CONDITIONS),  # what an operator may name to shelve
         'period_s': 1.0 / rate,
         'silence_limit_s': silence_limit(rate),
         **extra,
@@ -175,9 +187,13 @@ def alarm_names(lines: Sequence[str]) -> list[str]:
 
 def alarm_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dict[str, Any]]:
     """The alarm list: one row per alarm (each line's, the sensors') that is neither
-    ``normal`` nor ``suppressed`` (by design: the sensors alarm stands for it), most urgent
-    first (unacknowledged, then returned-unacknowledged, then acknowledged; ERROR before STALE
-    before WARN; newest first)."""
+    ``normal`` nor ``suppressed`` (by design: the sensors alarm stands for it) nor ``shelved``
+    (listed apart: :func:`shelved_rows`), most urgent first (unacknowledged, then
+    returned-unacknowledged, then acknowledged; ERROR before STALE before WARN; newest first).
+    Each row says whether the alarm chatters, whether one of its conditions is shelved, and
+    whether it is the first out of the flood the monitor reports (:func:`flood_view`)."""
+    flood = flood_view(statuses)
+    first = flood['first_out'] if flood['flood'] else None
     rank_state = {'unacknowledged': 0, 'returned-unacknowledged': 1, 'acknowledged': 2}
     rank_level = {'ERROR': 0, 'STALE': 1, 'WARN': 2, 'OK': 3}
     rows: list[dict[str, Any]] = []
@@ -186,7 +202,7 @@ def alarm_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dic
         if st is None:
             continue
         state = st.values.get('alarm_state', 'normal')
-        if state in ('normal', 'suppressed'):
+        if state in ('normal', 'suppressed', 'shelved'):
             continue
         rows.append(
             {
@@ -198,6 +214,13 @@ def alarm_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dic
                 'message': st.message,
                 'acknowledged_by': st.values.get('acknowledged_by', ''),
                 'acknowledged_at': _num(st.values.get('acknowledged_at')),
+                'chattering': st.values.get('chattering') == 'true',
+                'shelved_condition': (
+                    st.values.get('shelved_condition', '')
+                    if st.values.get('shelved') == 'true'
+                    else ''
+                ),
+                'first_out': name == first,
             }
         )
     rows.sort(
@@ -210,13 +233,65 @@ def alarm_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dic
     return rows
 
 
+def shelved_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dict[str, Any]]:
+    """The shelved alarms (each line's, the sensors'), the soonest to return first: what is
+    shelved (``all`` or one condition), until when, by whom, and the alarm's level, condition,
+    state and message now (a shelved alarm is computed and shown, not annunciated)."""
+    rows = []
+    for name in alarm_names(lines):
+        st = statuses.get(name)
+        if st is None or st.values.get('shelved') != 'true':
+            continue
+        v = st.values
+        rows.append(
+            {
+                'line': name,
+                'condition': v.get('shelved_condition', ''),
+                'until': _num(v.get('shelved_until')),
+                'by': v.get('shelved_by', ''),
+                'level': st.level,
+                'alarm_condition': v.get('alarm_condition', ''),
+                'state': v.get('alarm_state', ''),
+                'message': st.message,
+                'chattering': v.get('chattering') == 'true',
+            }
+        )
+    rows.sort(key=lambda r: (r['until'] or 0.0, r['line']))
+    return rows
+
+
+def flood_view(statuses: Mapping[str, Status]) -> dict[str, Any]:
+    """The monitor's alarm-system status (``catenary_monitor: alarms``): the flood (on or off,
+    since, its first out), the alarms raised in its window, the message, the shelving rules
+    (``shelve_max`` s, ``unshelvable`` conditions) and the answer to the newest shelving
+    request; a monitor that publishes none gives no flood and no rules."""
+    st = statuses.get('alarms')
+    v = st.values if st is not None else {}
+    unshelvable = v.get('unshelvable_conditions', '')
+    return {
+        'flood': v.get('flood') == 'true',
+        'level': st.level if st is not None else 'OK',
+        'message': st.message if st is not None else '',
+        'count': int(v.get('alarms_in_window', '0') or 0),
+        'since': _num(v.get('flood_since')),
+        'first_out': v.get('first_out', ''),
+        'first_out_at': _num(v.get('first_out_at')),
+        'shelve_max': _num(v.get('shelve_max')),
+        'unshelvable': [c for c in unshelvable.split(',') if c],
+        'shelve_answer': v.get('shelve_answer', ''),
+        'shelve_requests': int(v.get('shelve_requests', '0') or 0),
+    }
+
+
 @dataclass
 class History:
     """The alarm history (audit trail) seen in consecutive ``/diagnostics`` arrays: raised,
-    raised again (severity rose), acknowledged (by whom), returned to normal, cleared."""
+    raised again (severity rose), acknowledged (by whom), returned to normal, cleared, shelved
+    (by whom, until when) and unshelved."""
 
     entries: list[dict[str, Any]] = field(default_factory=list)
     _last: dict[str, tuple[str, str, float]] = field(default_factory=dict)
+    _shelf: dict[str, float] = field(default_factory=dict)  # alarm -> shelved until [s]
 
     def feed(self, stamp: float, statuses: Mapping[str, Status], lines: Sequence[str]) -> None:
         """Compare one array (stamp s) with the previous and add what changed (the lines'
@@ -225,6 +300,7 @@ class History:
             st = statuses.get(name)
             if st is None:
                 continue
+            self._feed_shelf(stamp, name, st)
             state = st.values.get('alarm_state', 'normal')
             raised = _num(st.values.get('alarm_raised')) or 0.0
             old = self._last.get(name, ('normal', 'OK', 0.0))
@@ -249,12 +325,38 @@ class History:
         if len(self.entries) > HISTORY_LIMIT:
             del self.entries[: len(self.entries) - HISTORY_LIMIT]
 
+    def _feed_shelf(self, stamp: float, name: str, st: Status) -> None:
+        """A shelf put on (or renewed) or taken off since the previous array."""
+        v = st.values
+        until = _num(v.get('shelved_until')) if v.get('shelved') == 'true' else None
+        old = self._shelf.get(name)
+        if until == old:
+            return
+        if until is None:
+            self._shelf.pop(name, None)
+            event, by, condition = 'unshelved', '', ''
+        else:
+            self._shelf[name] = until
+            event, by = 'shelved', v.get('shelved_by', '')
+            condition = v.get('shelved_condition', '')
+        self.entries.append(
+            {
+                'time': stamp,
+                'line': name,
+                'event': event,
+                'level': st.level,
+                'condition': condition,
+                'message': st.message,
+                'by': by,
+            }
+        )
+
 
 def _history_event(old: tuple[str, str, float], new: tuple[str, str, float]) -> Optional[str]:
     """What happened between two alarm states of a line (None: nothing to record; suppressed
     by design counts as normal)."""
     (s0, _, r0), (s1, _, r1) = old, new
-    s0, s1 = ('normal' if s == 'suppressed' else s for s in (s0, s1))
+    s0, s1 = ('normal' if s in ('suppressed', 'shelved') else s for s in (s0, s1))
     if s1 == 'unacknowledged' and (s0 != 'unacknowledged' or r1 != r0):
         return 'raised' if s0 in ('normal', 'returned-unacknowledged') else 'raised again'
     if s0 == s1:
@@ -368,6 +470,11 @@ def _line_view(
             acknowledged=v.get('acknowledged', 'true') == 'true',
             alarm_condition=v.get('alarm_condition', ''),
             sensor_state=v.get('sensor_state', 'ok'),  # the core's word: ok, stuck, spike, ...
+            shelved=v.get('shelved') == 'true',
+            shelved_condition=v.get('shelved_condition', ''),
+            shelved_until=_num(v.get('shelved_until')),
+            shelved_by=v.get('shelved_by', ''),
+            chattering=v.get('chattering') == 'true',
         )
         for key in (
             'top_tension',
@@ -384,8 +491,13 @@ def _line_view(
             'drag_state',  # 0 holding, 1 overloaded, 2 dragging; None unknown
             'fatigue_damage',  # Miner's damage so far
             'fatigue_life_left',  # s at the last day's rate; None unknown or unlimited
+            'wave_tension',  # N, the wave-frequency tension (half-range over wave_window)
+            'dynamic_uplift',  # N, the uplift at the waves' peak tension (what ERROR takes)
         ):
             view[key] = _num(v.get(key))
+        # time_to_uplift is None both when unknown (NaN) and when not coming (inf): say which
+        view['time_to_uplift_state'] = _forecast_state(v.get('time_to_uplift'))
+        view['time_to_uplift_view'] = v.get('time_to_uplift_view', 'none')
     if output is not None:
         rx, values = output
         for key in ('top_tension', 'anchor_margin', 'uplift_force', 'safety_factor'):
@@ -446,6 +558,8 @@ def build_frame(
         },
         'monitor': monitor_rows(statuses),
         'alarms': alarm_rows(statuses, config_lines),
+        'shelved': shelved_rows(statuses, config_lines),
+        'flood': flood_view(statuses),
         'history': list(history[-200:]),
         **extra,
     }

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Any, Optional, Sequence
+from typing import Any, Callable, Optional, Sequence
 
 import numpy as np
 
@@ -43,10 +43,13 @@ class LogError(Exception):
 
 
 def load_log(
-    logs: Sequence[str], params_file: Optional[str]
+    logs: Sequence[str],
+    params_file: Optional[str],
+    on_damage: Optional[Callable[[str], None]] = None,
 ) -> tuple[MonitorConfig, ReplayResult, tuple[np.ndarray, np.ndarray], list[Path]]:
     """(configuration, every step with its snapshots, the depth column, the files) of a log:
-    the params file's configuration, else the one the node recorded."""
+    the params file's configuration, else the one the node recorded. ``on_damage`` gets one
+    line when parts of the log were skipped (damaged, or crafted: the reader's bounds)."""
     from catenary_monitor.core.config.parameters import ConfigError, config_from_params
     from catenary_monitor.io.mcap_read import expand_paths
     from catenary_monitor.replay.driver import (
@@ -69,13 +72,21 @@ def load_log(
                 raise LogError('the log holds no catenary_monitor parameters: give --params-file')
             config = config_from_params(recorded[1])
             follow = True
-        result, _, depth, _ = replay_log(paths, config, follow_log=follow, snapshots=True)
+        result, _, depth, report = replay_log(
+            paths, config, follow_log=follow, snapshots=True
+        )
     except FileNotFoundError as err:
         raise LogError(str(err)) from None
     except ReplayError as err:
         raise LogError(str(err), err.code) from None
     except ConfigError as err:
         raise LogError(f'the parameters recorded in the log are invalid: {err}') from None
+    if report.skips and on_damage is not None:
+        first = report.skips[0]
+        on_damage(
+            f'damaged log: {len(report.skips)} part(s) skipped, everything readable is shown '
+            f'(first: {first.path} @{first.offset}: {first.kind}: {first.reason})'
+        )
     return config, result, depth, paths
 
 
@@ -195,3 +206,6 @@ class ReplaySource:
         raise AckError(
             'replay is read-only: the acknowledgements shown are the recorded ones', 409
         )
+
+    def shelve(self, alarm: str, condition: str, seconds: float, origin: str) -> dict[str, Any]:
+        raise AckError('replay is read-only: the shelves shown are the recorded ones', 409)

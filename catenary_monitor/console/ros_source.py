@@ -30,10 +30,14 @@ from catenary_monitor.console.frames import (
     tide_trend,
 )
 from catenary_monitor.core.config.parameters import MonitorConfig
-from catenary_monitor.core.monitor.acknowledge import ACKNOWLEDGE_TOPIC, ALL_LINES, SENSORS
+from catenary_monitor.core.monitor.acknowledge import ACKNOWLEDGE_TOPIC, ALL_LINES, SENSORS, WHOLE
+from catenary_monitor.core.monitor.shelving import SHELVE_TOPIC
 from catenary_monitor.core.monitor.monitor_core import COMPONENTS, NODE_NAME, OUTPUT_FIELDS
 
-__all__ = ['LiveSource', 'AckError']
+__all__ = ['LiveSource', 'AckError', 'ANSWER_WAIT']
+
+#: Seconds a shelving request waits for the monitor's answer on /diagnostics.
+ANSWER_WAIT = 3.0
 
 _T = OUTPUT_FIELDS.index('top_tension')
 _F = OUTPUT_FIELDS.index('uplift_force')
@@ -82,6 +86,7 @@ class LiveSource:
             DiagnosticArray, '/diagnostics', self._on_diag, QoSProfile(depth=50)
         )
         self._ack_pub = node.create_publisher(String, ACKNOWLEDGE_TOPIC, QoSProfile(depth=10))
+        self._shelve_pub = node.create_publisher(String, SHELVE_TOPIC, QoSProfile(depth=10))
         self._String = String
         for name in self.names:
             self._subscribe(name)
@@ -221,6 +226,45 @@ class LiveSource:
         text = f'{line} {origin}'
         self._ack_pub.publish(self._String(data=text))
         return text
+
+    def shelve(self, alarm: str, condition: str, seconds: float, origin: str) -> dict[str, Any]:
+        """Publish one shelving request (``ALARM[.CONDITION] SECONDS ORIGIN``; 0 s unshelves),
+        then wait up to :data:`ANSWER_WAIT` s for the monitor's answer on ``/diagnostics``:
+        ``{"sent": text, "answer": the monitor's answer, or None}``; a refusal is an AckError
+        (409) carrying the monitor's own words."""
+        if alarm not in self.names and alarm != SENSORS:
+            raise AckError(f'unknown alarm {alarm!r}', 404)
+        if self._shelve_pub.get_subscription_count() == 0:
+            raise AckError(f'no monitor is listening on {SHELVE_TOPIC}', 503)
+        target = alarm if condition == WHOLE else f'{alarm}.{condition}'
+        with self.cond:
+            before = self._answers()[0]
+        text = f'{target} {seconds:g} {origin}'
+        self._shelve_pub.publish(self._String(data=text))
+        deadline = time.monotonic() + ANSWER_WAIT
+        with self.cond:
+            while True:
+                count, answer = self._answers()
+                if count > before and answer.startswith(target):
+                    break
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    return {'sent': text, 'answer': None}
+                self.cond.wait(left)
+        if ': refused: ' in answer:
+            raise AckError(answer, 409)
+        return {'sent': text, 'answer': answer}
+
+    def _answers(self) -> tuple[int, str]:
+        """(shelving requests the monitor answered, its newest answer), from ``/diagnostics``."""
+        st = self.statuses.get('alarms')
+        if st is None:
+            return 0, ''
+        try:
+            count = int(st.values.get('shelve_requests', '0'))
+        except ValueError:
+            count = 0
+        return count, st.values.get('shelve_answer', '')
 
 
 def _float(text: Optional[str]) -> Optional[float]:

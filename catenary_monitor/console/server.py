@@ -21,6 +21,10 @@ Routes (:data:`PAGES`, :data:`ACTIONS`):
     live only: a frame at every change (at most 20 per second) and at least every 0.5 s;
 ``POST /api/ack``
     ``{"line": "NAME" | "all"}``: the console publishes the acknowledgement to the monitor;
+``POST /api/shelve``
+    ``{"line": "NAME", "condition": "all" | CONDITION, "seconds": S}`` (0 s unshelves): the
+    console publishes the shelving request to the monitor and answers with the monitor's answer
+    (409 with its reason when the monitor refuses, e.g. the uplift ERROR);
 ``POST /api/operator``
     sign in: the operator a bearer token names (changes nothing).
 
@@ -79,6 +83,10 @@ class Source(Protocol):
     def trend(self, line: str, t: Optional[float], span: float) -> dict[str, Any]: ...
 
     def acknowledge(self, line: str, origin: str) -> str: ...
+
+    def shelve(
+        self, alarm: str, condition: str, seconds: float, origin: str
+    ) -> dict[str, Any]: ...
 
     def wait(self, version: int, timeout: float) -> int: ...
 
@@ -319,6 +327,32 @@ def _acknowledge(server: ConsoleServer, request: Request, actor: Actor) -> Respo
     return _ok(_json({'sent': sent, 'operator': actor.name}), status=int(HTTPStatus.ACCEPTED))
 
 
+def _shelve(server: ConsoleServer, request: Request, actor: Actor) -> Response:
+    """Shelve (or unshelve, 0 s) one alarm or one condition of it, in the actor's name; the
+    monitor decides and answers (409 with its reason when it refuses)."""
+    try:
+        body = json.loads(request.body or b'{}')
+    except (ValueError, RecursionError):
+        body = None
+    usage = 'body must be {"line": "NAME", "condition": "all" | CONDITION, "seconds": S}'
+    if not isinstance(body, dict):
+        raise HttpError(400, usage)
+    line = _line_request(request)
+    condition = body.get('condition', 'all')
+    seconds = body.get('seconds')
+    if not isinstance(condition, str) or not condition.isidentifier() or len(condition) > 64:
+        raise HttpError(400, usage)
+    if isinstance(seconds, bool) or not isinstance(seconds, (int, float)):
+        raise HttpError(400, usage)
+    if not math.isfinite(seconds) or seconds < 0:
+        raise HttpError(400, f'seconds must be finite and >= 0, got {seconds!r}')
+    try:
+        answer = server.source.shelve(line, condition, float(seconds), actor.origin)
+    except AckError as err:
+        raise HttpError(err.status, str(err)) from None
+    return _ok(_json({**answer, 'operator': actor.name}), status=int(HTTPStatus.ACCEPTED))
+
+
 def _operator(server: ConsoleServer, request: Request, actor: Actor) -> Response:
     """Sign in: who the token names (the page then shows the operator and enables its
     actions); changes nothing."""
@@ -340,6 +374,7 @@ PAGES: dict[str, Callable[[ConsoleServer, Request], Response]] = {
 #: action is added here and nowhere else.
 ACTIONS: dict[str, tuple[int, Callable[[ConsoleServer, Request, Actor], Response]]] = {
     '/api/ack': (1024, _acknowledge),
+    '/api/shelve': (1024, _shelve),
     '/api/operator': (1024, _operator),
 }
 

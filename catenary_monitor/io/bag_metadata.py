@@ -82,35 +82,31 @@ def qos_list(text: str | None) -> list[Any]:
 
 
 def file_info(path: str | os.PathLike[str]) -> FileInfo | None:
-    """Facts of a finished MCAP file from its summary; None if it has none or cannot be read."""
-    from mcap.reader import make_reader
+    """Facts of a finished MCAP file from its summary (read within bounds:
+    :func:`catenary_monitor.io.mcap_summary.read_summary`); None if it has none or cannot be
+    read."""
+    from catenary_monitor.io.mcap_summary import read_summary
 
     path = Path(path)
-    try:
-        with open(path, 'rb') as f:
-            summary = make_reader(f).get_summary()
-    except Exception:  # noqa: BLE001 - any reader error: no usable summary
+    summary = read_summary(path)
+    if summary is None or not summary.has_statistics:
         return None
-    if summary is None or summary.statistics is None:
-        return None
-    stats = summary.statistics
-    info = FileInfo(path.name, message_count=stats.message_count)
-    if stats.message_count:
-        info.starting_time_ns = stats.message_start_time
-        info.duration_ns = max(0, stats.message_end_time - stats.message_start_time)
+    info = FileInfo(path.name, message_count=summary.message_count)
+    if summary.message_count:
+        info.starting_time_ns = summary.start_ns
+        info.duration_ns = max(0, summary.end_ns - summary.start_ns)
     for cid, channel in summary.channels.items():
-        schema = summary.schemas.get(channel.schema_id)
         topic = info.topics.setdefault(
             channel.topic,
             TopicInfo(
                 channel.topic,
-                schema.name if schema is not None else '',
-                channel.message_encoding,
+                channel.schema_name,
+                channel.encoding,
                 qos_list(channel.metadata.get('offered_qos_profiles')),
                 channel.metadata.get('topic_type_hash', ''),
             ),
         )
-        topic.message_count += stats.channel_message_counts.get(cid, 0)
+        topic.message_count += summary.channel_counts.get(cid, 0)
     return info
 
 

@@ -27,6 +27,8 @@ import numpy as np
 from mcap.data_stream import RecordBuilder
 from mcap.opcode import Opcode
 from mcap.records import (
+    Attachment,
+    AttachmentIndex,
     Channel,
     Chunk,
     ChunkIndex,
@@ -101,6 +103,7 @@ class ColumnWriter:
         self._chunk_indexes = tempfile.TemporaryFile()  # the Chunk Index records, serialized
         self._chunk_count = 0
         self._metadata_indexes: list[MetadataIndex] = []
+        self._attachment_indexes: list[AttachmentIndex] = []
         self._counts: dict[int, int] = {}
         self._sequence: dict[int, int] = {}
         self._start: Optional[int] = None
@@ -120,9 +123,12 @@ class ColumnWriter:
         self.stream.write(data)
         return offset
 
-    def register_schema(self, name: str, encoding: str, data: bytes) -> int:
-        """Add a Schema; returns its id (1, 2, ...)."""
-        schema_id = len(self._schemas) + 1
+    def register_schema(
+        self, name: str, encoding: str, data: bytes, schema_id: Optional[int] = None
+    ) -> int:
+        """Add a Schema; returns its id (1, 2, ... unless ``schema_id`` is given)."""
+        if schema_id is None:
+            schema_id = len(self._schemas) + 1
         self._schemas[schema_id] = Schema(id=schema_id, name=name, encoding=encoding, data=data)
         return schema_id
 
@@ -132,9 +138,12 @@ class ColumnWriter:
         message_encoding: str,
         schema_id: int,
         metadata: Optional[Mapping[str, str]] = None,
+        channel_id: Optional[int] = None,
     ) -> int:
-        """Add a Channel; returns its id (1, 2, ...)."""
-        channel_id = len(self._channels) + 1
+        """Add a Channel; returns its id (1, 2, ... unless ``channel_id`` is given, as a copy of
+        a file keeps its ids: 65536 of them at most, where the ``mcap`` Writer stops at 65535)."""
+        if channel_id is None:
+            channel_id = len(self._channels) + 1
         self._channels[channel_id] = Channel(
             id=channel_id,
             topic=topic,
@@ -156,10 +165,34 @@ class ColumnWriter:
         self.stream.write(raw)
         self._metadata_indexes.append(MetadataIndex(offset=offset, length=len(raw), name=name))
 
+    def add_attachment(
+        self, name: str, media_type: str, data: bytes, log_time: int, create_time: int
+    ) -> None:
+        """An Attachment record (and its index in the summary)."""
+        record = Attachment(
+            log_time=log_time, create_time=create_time, name=name, media_type=media_type, data=data
+        )
+        builder = RecordBuilder()
+        record.write(builder)
+        raw = builder.end()
+        offset = self.stream.tell()
+        self.stream.write(raw)
+        self._attachment_indexes.append(
+            AttachmentIndex(
+                offset=offset,
+                length=len(raw),
+                log_time=log_time,
+                create_time=create_time,
+                data_size=len(data),
+                name=name,
+                media_type=media_type,
+            )
+        )
+
     def _define(self, channel_ids: Sequence[int]) -> None:
         for cid in channel_ids:
             channel = self._channels[cid]
-            if (0, channel.schema_id) not in self._written:
+            if channel.schema_id and (0, channel.schema_id) not in self._written:
                 self._record(self._schemas[channel.schema_id])
                 self._written.add((0, channel.schema_id))
             if (1, cid) not in self._written:
@@ -209,6 +242,27 @@ class ColumnWriter:
             self._chunk(rec.tobytes(), channel[lo:hi], log_time[lo:hi], offsets)
         self.messages += n
 
+    def write_records(
+        self,
+        data: bytes | memoryview,
+        channel: np.ndarray,
+        log_time: np.ndarray,
+        offsets: np.ndarray,
+    ) -> None:
+        """One chunk of whole Message records as they are (their sequence numbers kept):
+        ``data`` the records back to back, ``channel`` / ``log_time`` / ``offsets`` (in
+        ``data``) of each; every channel registered."""
+        n = len(offsets)
+        if n == 0:
+            return
+        channel = np.asarray(channel, np.uint16)
+        ids, counts = np.unique(channel, return_counts=True)
+        self._define(ids.tolist())
+        for cid, count in zip(ids.tolist(), counts.tolist()):
+            self._counts[cid] += count
+        self._chunk(data, channel, np.asarray(log_time, np.int64), np.asarray(offsets, np.int64))
+        self.messages += n
+
     def write_messages(
         self, channel_id: int, log_times: Sequence[int], payloads: Sequence[bytes]
     ) -> None:
@@ -251,7 +305,11 @@ class ColumnWriter:
         )
 
     def _chunk(
-        self, data: bytes, channel: np.ndarray, log_time: np.ndarray, offsets: np.ndarray
+        self,
+        data: bytes | memoryview,
+        channel: np.ndarray,
+        log_time: np.ndarray,
+        offsets: np.ndarray,
     ) -> None:
         if self.compression == 'zstd':
             compressed = self._zstd.compress(data)
@@ -260,7 +318,7 @@ class ColumnWriter:
 
             compressed = lz4.frame.compress(data)
         else:
-            compressed = data
+            compressed = bytes(data)
         start, end = int(log_time.min()), int(log_time.max())
         self._start = start if self._start is None else min(self._start, start)
         self._end = max(self._end, end)
@@ -351,12 +409,12 @@ class ColumnWriter:
                         message_count=self.messages,
                         schema_count=len(self._schemas),
                         channel_count=len(self._channels),
-                        attachment_count=0,
+                        attachment_count=len(self._attachment_indexes),
                         metadata_count=len(self._metadata_indexes),
                         chunk_count=self._chunk_count,
                         message_start_time=self._start or 0,
                         message_end_time=self._end,
-                        channel_message_counts=dict(self._counts),
+                        channel_message_counts={k: v for k, v in self._counts.items() if v},
                     )
                 ]
             ),
@@ -369,6 +427,7 @@ class ColumnWriter:
             shutil.copyfileobj(self._chunk_indexes, self.stream, 1 << 20)
             pos += length
         self._chunk_indexes.close()
+        group(Opcode.ATTACHMENT_INDEX, encode(self._attachment_indexes))
         group(Opcode.METADATA_INDEX, encode(self._metadata_indexes))
         offset_start = pos
         self.stream.write(encode(offsets))

@@ -98,6 +98,8 @@ _OP_MESSAGE = 0x05
 _OP_CHUNK = 0x06
 _OP_MESSAGE_INDEX = 0x07
 _OP_CHUNK_INDEX = 0x08
+_OP_ATTACHMENT = 0x09
+_OP_METADATA = 0x0C
 _OP_STATISTICS = 0x0B
 _OP_DATA_END = 0x0F
 _KNOWN_OPS = frozenset(range(0x01, 0x10))
@@ -457,6 +459,11 @@ class _Scanner:
         self.stats_counts: dict[int, int] | None = None
         self._top_messages: list[int] = []
         self._recovered = 0
+        self.cut_chunk_at: int | None = None  # offset of a Chunk record the file's end cuts
+        # For a caller that copies the file (recovery): every Schema and Channel record body
+        # as it is met, (opcode, buf, start, end); top-level Metadata and Attachment records.
+        self.on_definition: Callable[[int, bytes | memoryview, int, int], None] | None = None
+        self.on_record: Callable[[int, bytes, int, int], None] | None = None
 
     # -- reporting
     def skip(self, offset: int, kind: str, reason: str, lost: int | None = None) -> None:
@@ -498,9 +505,13 @@ class _Scanner:
     def _add_schema(self, buf: bytes | memoryview, pos: int, end: int) -> None:
         schema_id, name = _parse_schema(buf, pos, end)
         self.schemas[schema_id] = name
+        if self.on_definition is not None:
+            self.on_definition(_OP_SCHEMA, buf, pos, end)
 
     def _add_channel(self, buf: bytes | memoryview, pos: int, end: int) -> None:
         self._register(*_parse_channel(buf, pos, end))
+        if self.on_definition is not None:
+            self.on_definition(_OP_CHANNEL, buf, pos, end)
 
     def _register(self, channel_id: int, schema_id: int, topic: str, encoding: str) -> None:
         """Make a channel known; the data section's definition wins over the summary's."""
@@ -610,6 +621,7 @@ class _Scanner:
                     continue
                 recovered = ''
                 if op == _OP_CHUNK:
+                    self.cut_chunk_at = pos
                     yield from self._flush_top()
                     yield from self._flush_batch(batch)
                     batch = []
@@ -654,6 +666,8 @@ class _Scanner:
                     self._add_schema(data, body, end)
                 elif op == _OP_CHANNEL:
                     self._add_channel(data, body, end)
+                elif op in (_OP_METADATA, _OP_ATTACHMENT) and self.on_record is not None:
+                    self.on_record(op, data, body, end)
                 elif op == _OP_HEADER:
                     self.file_report.profile, _ = _string(data, body, end)
                 elif op == _OP_FOOTER or op == _OP_DATA_END:

@@ -1,12 +1,17 @@
 """Finish MCAP files left unfinished (writer killed): summary, indexes, statistics, CRCs.
 
 A file whose writer was SIGKILLed has no summary and no footer and may end inside a chunk.
-:func:`recover_file` walks its records one at a time (memory bounded by one chunk), keeps every
-Schema, Channel, Metadata and Attachment record and every complete message (also those of a
-chunk cut by the end of the file, decompressed as far as it goes), and writes them again with
-the ``mcap`` library's :class:`~mcap.writer.Writer` (same profile, same chunk compression):
-chunk indexes, message indexes, statistics, summary offsets and CRCs come from the library. A
-``recovery`` Metadata record says what was done.
+:func:`recover_file` walks it with the log reader (:class:`catenary_monitor.io.mcap_read._Scanner`:
+its damage rules and its bounds -- a chunk checked before use, one too large to hold decoded in
+pieces, a damaged region skipped to the next chunk, the complete records of a chunk cut by the
+end of the file), and writes every Message record it finds, as it is (sequence numbers, stamps
+and bytes kept), into new chunks of about 1 MiB with the :class:`ColumnWriter` (same profile,
+same chunk compression, channel and schema ids kept): chunk and message indexes, statistics,
+summary and CRCs are the writer's. The first definition of every schema and channel id, and
+the top-level Metadata and Attachment records, are kept; a message on a ``cdr`` channel too
+short to hold a CDR encapsulation header (4 B) is dropped and counted. A ``recovery`` Metadata
+record says what was done. Memory is bounded by a reader batch and the definitions kept; time
+by the work of reading the file.
 
 Steps, so that a crash at any point leaves a readable state and a rerun finishes the job:
 the new file is written to ``.NAME.recover-tmp`` in the same folder and fsynced; it is read
@@ -14,8 +19,7 @@ back (CRC-validated summary, message count checked); the original is kept as
 ``NAME.unfinished`` (a hard link; copied where links are not supported); the new file replaces
 ``NAME`` atomically (``os.replace``) and the folder is fsynced. A finished file (valid footer
 and magic at its end) is left alone (``already_finished``), so recovering twice changes
-nothing. Chunks are checked as :mod:`catenary_monitor.io.mcap_read` checks them (size bounds,
-bounded decompression, CRC): a damaged chunk is skipped and reported, the rest is used.
+nothing.
 
 For a folder, :func:`recover_path` also writes the folder's rosbag2 ``metadata.yaml``
 (:mod:`catenary_monitor.io.bag_metadata`).
@@ -27,22 +31,21 @@ import datetime as _dt
 import os
 import shutil
 import struct
-import zlib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import IO, Iterator, Optional
+from typing import IO, Optional
 
-from mcap.writer import CompressionType, IndexType, Writer
+import numpy as np
 
 from catenary_monitor.io import bag_metadata
+from catenary_monitor.io.mcap_column_writer import ColumnWriter
 from catenary_monitor.io.mcap_read import (
     MAGIC,
-    MAX_CHUNK_BYTES,
+    McapReadError,
+    ReadReport,
     _chunk_header,
-    _decompress,
-    _decompress_partial,
-    _find_chunk,
-    chunk_size_problem,
+    _gather,
+    _Scanner,
 )
 
 __all__ = [
@@ -60,12 +63,17 @@ BACKUP_SUFFIX = '.unfinished'
 
 _HEAD = struct.Struct('<BQ')
 _FOOTER_LEN = 9 + 20
-_OP_HEADER, _OP_FOOTER, _OP_SCHEMA, _OP_CHANNEL, _OP_MESSAGE = 0x01, 0x02, 0x03, 0x04, 0x05
-_OP_CHUNK, _OP_ATTACHMENT, _OP_METADATA, _OP_DATA_END = 0x06, 0x09, 0x0C, 0x0F
+_OP_HEADER, _OP_FOOTER, _OP_SCHEMA, _OP_CHANNEL = 0x01, 0x02, 0x03, 0x04
+_OP_CHUNK, _OP_METADATA, _OP_DATA_END = 0x06, 0x0C, 0x0F
 _KNOWN = frozenset(range(0x01, 0x10))
-_COMPRESSION = {'zstd': CompressionType.ZSTD, 'lz4': CompressionType.LZ4, '': CompressionType.NONE}
-_NO_ATTACHMENT_INDEX = IndexType.CHUNK | IndexType.MESSAGE | IndexType.METADATA
+_COMPRESSION = ('zstd', 'lz4', '')
 _CHUNK_SIZE = 1 << 20  # B, chunks of the recovered file (uncompressed)
+#: Bytes of Schema and Channel record bodies a recovery keeps (100 000 channels of rosbag2's
+#: kind take about 60 MB): a file's definitions can come 1000-fold from compressed chunks.
+_DEFINITIONS_BYTES = 64 << 20
+_KEPT_RECORD_BYTES = 64 << 20  # B, the largest Metadata or Attachment record copied
+_HEADS = 1 << 20  # top-level record heads read looking for the first chunk
+_BATCH_BYTES = 2 << 20  # B of decompressed chunks the reader hands on at a time
 
 
 class _Bad(Exception):
@@ -195,7 +203,7 @@ def recover_file(path: str | os.PathLike[str], keep_original: bool = True) -> Re
                 result.error = 'being written by a running logger (locked): left alone'
                 return result
             with open(tmp, 'wb') as out:
-                _rewrite(src, out, result, path.name)
+                _rewrite(path, out, result, path.name)
                 out.flush()
                 os.fsync(out.fileno())
         _check_written(tmp, result.messages)
@@ -258,142 +266,195 @@ def _check_written(tmp: Path, messages: int) -> None:
         )
 
 
-class _Rewriter:
-    """Re-emits records into a Writer; maps the original schema and channel ids to new ones."""
+class _Copy:
+    """What a recovery carries from the original into the new file (a :class:`ColumnWriter`):
+    the first definition of every schema and channel id (at most :data:`_DEFINITIONS_BYTES`
+    of them), top-level Metadata and Attachment records, and the Message records of the
+    blocks the reader hands on, copied as they are into chunks of about 1 MiB."""
 
-    def __init__(self, out: IO[bytes], result: RecoverResult) -> None:
-        self.out = out
+    def __init__(self, writer: ColumnWriter, result: RecoverResult) -> None:
+        self.writer = writer
         self.result = result
-        self.writer: Writer | None = None
-        self.profile = ''
-        self.library = ''
-        self.compression = 'zstd'
-        self.attachments = False
         self.schemas: dict[int, tuple[str, str, bytes]] = {}
-        self.schema_ids: dict[int, int] = {}
-        self.channels: dict[int, int] = {}
-        self.unknown = 0
+        self.channels: dict[int, tuple[str, str, int, dict[str, str]]] = {}
+        self.registered: set[int] = set()
+        self.budget = _DEFINITIONS_BYTES
+        self.refused = 0  # definitions past the budget
+        self.undefined = 0  # messages on them
+        self.short = 0  # messages on cdr channels too short for a CDR encapsulation header
 
-    def start(self) -> Writer:
-        if self.writer is None:
-            self.writer = Writer(
-                self.out,
-                chunk_size=_CHUNK_SIZE,
-                compression=_COMPRESSION.get(self.compression, CompressionType.ZSTD),
-                # No empty Attachment Index group: pymcap-cli's doctor reports its Summary
-                # Offset as pointing to a missing group (docs/mcap_log.md).
-                index_types=IndexType.ALL if self.attachments else _NO_ATTACHMENT_INDEX,
-            )
-            library = self.library + '; finished by catenary_monitor.mcap_recover'
-            self.writer.start(profile=self.profile, library=library.lstrip('; '))
-        return self.writer
+    def definition(self, op: int, buf: bytes | memoryview, pos: int, end: int) -> None:
+        """A Schema or Channel record body (the reader parsed it already)."""
+        (key,) = struct.unpack_from('<H', buf, pos)
+        known = self.schemas if op == _OP_SCHEMA else self.channels
+        if key in known or (op == _OP_SCHEMA and key == 0):
+            return
+        if end - pos > self.budget:
+            self.refused += 1
+            return
+        self.budget -= end - pos
+        try:
+            if op == _OP_SCHEMA:
+                name, p = _string(buf, pos + 2, end)
+                encoding, p = _string(buf, p, end)
+                self.schemas[key] = (name, encoding, _bytes(buf, p, end))
+            else:
+                (sid,) = struct.unpack_from('<H', buf, pos + 2)
+                topic, p = _string(buf, pos + 4, end)
+                encoding, p = _string(buf, p, end)
+                self.channels[key] = (topic, encoding, sid, _string_map(buf, p, end))
+        except (_Bad, struct.error):
+            self.refused += 1
 
-    def schema(self, buf: bytes, pos: int, end: int) -> None:
-        (sid,) = struct.unpack_from('<H', buf, pos)
-        name, p = _string(buf, pos + 2, end)
-        encoding, p = _string(buf, p, end)
-        data = _bytes(buf, p, end)
-        if sid and sid not in self.schemas:
-            self.schemas[sid] = (name, encoding, data)
+    def record(self, op: int, data: bytes, pos: int, end: int) -> None:
+        """A top-level Metadata or Attachment record body."""
+        try:
+            if end - pos > _KEPT_RECORD_BYTES:
+                raise _Bad(f'{end - pos} B, more than the {_KEPT_RECORD_BYTES} B kept')
+            if op == _OP_METADATA:
+                name, p = _string(data, pos, end)
+                self.writer.add_metadata(name, _string_map(data, p, end))
+                return
+            log_time, create_time = struct.unpack_from('<QQ', data, pos)
+            name, p = _string(data, pos + 16, end)
+            media, p = _string(data, p, end)
+            (size,) = struct.unpack_from('<Q', data, p)
+            if p + 8 + size > end:
+                raise _Bad('attachment data runs past its record')
+            body = bytes(data[p + 8 : p + 8 + size])
+            self.writer.add_attachment(name, media, body, log_time, create_time)
+        except (_Bad, struct.error) as exc:
+            self.result.damaged.append(f'@{pos - 9}: record (opcode 0x{op:02x}) not kept: {exc}')
 
-    def _schema_id(self, sid: int) -> int:
-        if sid == 0 or sid not in self.schemas:
-            return 0
-        if sid not in self.schema_ids:
-            name, encoding, data = self.schemas[sid]
-            self.schema_ids[sid] = self.start().register_schema(name, encoding, data)
-        return self.schema_ids[sid]
-
-    def channel(self, buf: bytes, pos: int, end: int) -> None:
-        cid, sid = struct.unpack_from('<HH', buf, pos)
-        topic, p = _string(buf, pos + 4, end)
-        encoding, p = _string(buf, p, end)
-        metadata = _string_map(buf, p, end)
+    def _register(self, cid: int) -> bool:
+        """Define channel ``cid`` (and its schema) in the new file; False if it is unknown."""
+        if cid in self.registered:
+            return True
         if cid not in self.channels:
-            self.channels[cid] = self.start().register_channel(
-                topic, encoding, self._schema_id(sid), metadata
-            )
-
-    def message(self, buf: bytes, pos: int, end: int) -> bool:
-        if end - pos < 22:
-            raise _Bad('Message record too short')
-        cid, seq, log_time, publish_time = struct.unpack_from('<HIQQ', buf, pos)
-        new = self.channels.get(cid)
-        if new is None:
-            self.unknown += 1
             return False
-        self.start().add_message(new, log_time, bytes(buf[pos + 22 : end]), publish_time, seq)
-        self.result.messages += 1
+        topic, encoding, sid, metadata = self.channels[cid]
+        if sid in self.schemas:
+            name, schema_encoding, data = self.schemas[sid]
+            self.writer.register_schema(name, schema_encoding, data, schema_id=sid)
+        else:
+            sid = 0  # lost, or none: a channel without schema
+        self.writer.register_channel(topic, encoding, sid, metadata, channel_id=cid)
+        self.registered.add(cid)
         return True
 
-    def metadata(self, buf: bytes, pos: int, end: int) -> None:
-        name, p = _string(buf, pos, end)
-        self.start().add_metadata(name, _string_map(buf, p, end))
+    def block(
+        self,
+        buf: bytes | memoryview,
+        offsets: np.ndarray,
+        lengths: np.ndarray,
+        channels: np.ndarray,
+    ) -> None:
+        """Copy a block's Message records (file order) into chunks of about 1 MiB."""
+        ok = np.zeros(1 << 16, bool)
+        cdr = np.zeros(1 << 16, bool)
+        for cid in np.unique(channels).tolist():
+            ok[cid] = self._register(cid)
+            cdr[cid] = ok[cid] and self.channels[cid][1] == 'cdr'
+        keep = ok[channels]
+        self.undefined += int(np.count_nonzero(~keep))
+        short = keep & cdr[channels] & (lengths < 22 + 4)
+        self.short += int(np.count_nonzero(short))
+        keep &= ~short
+        if not keep.all():
+            offsets, lengths, channels = offsets[keep], lengths[keep], channels[keep]
+        if not len(offsets):
+            return
+        arr = np.frombuffer(buf, np.uint8)
+        times = _gather(arr, offsets + 15, 8).view('<u8').ravel().astype(np.int64)
+        data, placed = _records(buf, arr, offsets, 9 + lengths)
+        group = placed // _CHUNK_SIZE
+        cuts = [0, *(np.flatnonzero(np.diff(group)) + 1).tolist(), len(placed)]
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            lo = int(placed[a])
+            hi = int(placed[b]) if b < len(placed) else len(data)
+            self.writer.write_records(data[lo:hi], channels[a:b], times[a:b], placed[a:b] - lo)
 
-    def attachment(self, buf: bytes, pos: int, end: int) -> None:
-        log_time, create_time = struct.unpack_from('<QQ', buf, pos)
-        name, p = _string(buf, pos + 16, end)
-        media, p = _string(buf, p, end)
-        (size,) = struct.unpack_from('<Q', buf, p)
-        if p + 8 + size > end:
-            raise _Bad('attachment data runs past its record')
-        data = bytes(buf[p + 8 : p + 8 + size])
-        self.start().add_attachment(create_time, log_time, name, media, data)
-
-    def records(self, buf: bytes, start: int, end: int) -> tuple[int, int]:
-        """Re-emit the records of a chunk's content; return (messages, where it stopped)."""
-        pos, count = start, 0
-        while pos + 9 <= end:
-            op, length = _HEAD.unpack_from(buf, pos)
-            stop = pos + 9 + length
-            if stop > end or op not in _KNOWN:
-                break
-            try:
-                if op == _OP_MESSAGE:
-                    count += self.message(buf, pos + 9, stop)
-                elif op == _OP_SCHEMA:
-                    self.schema(buf, pos + 9, stop)
-                elif op == _OP_CHANNEL:
-                    self.channel(buf, pos + 9, stop)
-            except (_Bad, struct.error):
-                break
-            pos = stop
-        return count, pos
+    def finish(self) -> None:
+        """Define the channels no message used (their records are kept too)."""
+        for cid in sorted(self.channels):
+            self._register(cid)
+        if self.refused:
+            self.result.damaged.append(
+                f'{self.refused} Schema or Channel record(s) not kept (damaged, or past the '
+                f'{_DEFINITIONS_BYTES} B of definitions kept)'
+            )
+        if self.undefined:
+            self.result.damaged.append(
+                f'{self.undefined} message(s) on channels without a kept Channel record'
+            )
+            self.result.lost += self.undefined
+        if self.short:
+            self.result.damaged.append(
+                f'{self.short} message(s) too short to be CDR (no encapsulation header) '
+                'dropped'
+            )
+            self.result.lost += self.short
 
 
-def _rewrite(src: IO[bytes], out: IO[bytes], result: RecoverResult, name: str) -> None:
-    """Walk the original's records (bounded memory) and write the finished file."""
-    src.seek(0, os.SEEK_END)
-    size = src.tell()
-    rw = _Rewriter(out, result)
-    rw.compression, rw.attachments = _prescan(src, size)
-    for op, at, body, cut in _records(src, size, result):
-        if op == _OP_HEADER:
-            try:
-                rw.profile, p = _string(body, 0, len(body))
-                rw.library, _ = _string(body, p, len(body))
-            except _Bad:
-                pass
-            continue
-        try:
-            if op == _OP_CHUNK:
-                _chunk(rw, body, at, cut, result)
-            elif op == _OP_SCHEMA:
-                rw.schema(body, 0, len(body))
-            elif op == _OP_CHANNEL:
-                rw.channel(body, 0, len(body))
-            elif op == _OP_MESSAGE:
-                rw.message(body, 0, len(body))
-            elif op == _OP_METADATA:
-                rw.metadata(body, 0, len(body))
-            elif op == _OP_ATTACHMENT:
-                rw.attachment(body, 0, len(body))
-        except (_Bad, struct.error) as exc:
-            result.damaged.append(f'@{at}: unreadable record (opcode 0x{op:02x}): {exc}')
-    if rw.unknown:
-        result.damaged.append(f'{rw.unknown} message(s) on channels whose Channel record was lost')
-        result.lost += rw.unknown
-    writer = rw.start()
+def _records(
+    buf: bytes | memoryview, arr: np.ndarray, offsets: np.ndarray, sizes: np.ndarray
+) -> tuple[bytes | memoryview, np.ndarray]:
+    """The records at ``offsets`` (``sizes`` B each, in order) back to back, and where each
+    starts there: a view when they are already back to back, else a copy."""
+    ends = offsets + sizes
+    placed = np.zeros(len(offsets), np.int64)
+    np.cumsum(sizes[:-1], out=placed[1:])
+    first, last = int(offsets[0]), int(ends[-1])
+    if np.array_equal(offsets[1:], ends[:-1]):
+        return memoryview(buf)[first:last], placed
+    if last - first <= 4 * int(placed[-1] + sizes[-1]):
+        mark = np.zeros(last - first + 1, np.int8)
+        mark[offsets - first] += 1
+        mark[ends - first] -= 1
+        return arr[first:last][np.cumsum(mark[:-1]) > 0].tobytes(), placed
+    view = memoryview(buf)
+    return b''.join(view[a:b] for a, b in zip(offsets.tolist(), ends.tolist())), placed
+
+
+def _rewrite(path: Path, out: IO[bytes], result: RecoverResult, name: str) -> None:
+    """Walk the original with the reader (its damage rules and bounds) and write the finished
+    file with the records copied as they are."""
+    report = ReadReport()
+    scanner = _Scanner(path, lambda channel: True, report)
+    scanner.batch_bytes = _BATCH_BYTES
+    profile, library = _header(scanner.data)
+    writer = ColumnWriter(
+        out,
+        compression=_first_compression(scanner.data) or 'none',
+        chunk_bytes=_CHUNK_SIZE,
+        profile=profile,
+        library=(library + '; finished by catenary_monitor.mcap_recover').lstrip('; '),
+    )
+    copy = _Copy(writer, result)
+    scanner.on_definition = copy.definition
+    scanner.on_record = copy.record
+    try:
+        for block in scanner.blocks():
+            copy.block(block.buf, block.offsets, block.lengths, block.channels)
+    except McapReadError as exc:
+        result.damaged.append(f'@0: {exc}')
+    scanner.finish()
+    copy.finish()
+    result.chunks = scanner.file_report.chunks
+    for skip in report.skips:
+        if skip.kind == 'truncated' and skip.offset == scanner.cut_chunk_at:
+            result.salvaged_from_cut_chunk = scanner._recovered
+            text = (
+                f'@{skip.offset}: file ends inside a chunk; {scanner._recovered} complete '
+                'message(s) salvaged from it'
+            )
+        else:
+            text = f'@{skip.offset}: {skip.reason}'
+        if skip.messages_lost:
+            text += f' ({skip.messages_lost} message(s) lost)'
+            result.lost += skip.messages_lost
+        result.damaged.append(text)
+    result.messages = writer.messages
     stamp = _dt.datetime.now(_dt.timezone.utc).strftime('%Y-%m-%dT%H:%M:%SZ')
     writer.add_metadata(
         'recovery',
@@ -408,132 +469,42 @@ def _rewrite(src: IO[bytes], out: IO[bytes], result: RecoverResult, name: str) -
     writer.finish()
 
 
-def _prescan(src: IO[bytes], size: int) -> tuple[str, bool]:
-    """(compression of the first Chunk ('zstd' if none), whether Attachment records exist),
-    reading record heads only."""
-    pos, compression, attachments = len(MAGIC), '', False
-    while pos + 9 <= size:
-        src.seek(pos)
-        op, length = _HEAD.unpack(src.read(9))
-        if op == _OP_CHUNK and not compression:
-            head = src.read(min(length, 64))
-            header = _chunk_header(head, 0, len(head), partial=True)
+def _header(data: bytes) -> tuple[str, str]:
+    """(profile, library) of the file's Header record ('' where it has none)."""
+    if len(data) < len(MAGIC) + 9:
+        return '', ''
+    op, length = _HEAD.unpack_from(data, len(MAGIC))
+    end = len(MAGIC) + 9 + length
+    if op != _OP_HEADER or end > len(data) or length > 1 << 20:
+        return '', ''
+    try:
+        profile, p = _string(data, len(MAGIC) + 9, end)
+        library, _ = _string(data, p, end)
+    except (_Bad, struct.error):
+        return '', ''
+    return profile, library
+
+
+def _first_compression(data: bytes) -> str:
+    """The compression of the file's first Chunk record ('' if none is found among the first
+    :data:`_HEADS` top-level records): the new file's chunks are compressed alike."""
+    pos = len(MAGIC)
+    for _ in range(_HEADS):
+        if pos + 9 > len(data):
+            break
+        op, length = _HEAD.unpack_from(data, pos)
+        if op == _OP_CHUNK:
+            header = _chunk_header(data, pos + 9, min(len(data), pos + 9 + length), partial=True)
             if header is not None and header[2] in _COMPRESSION:
-                compression = header[2] or 'none'
-        attachments |= op == _OP_ATTACHMENT
+                return header[2] or 'none'
+            break
         if op not in _KNOWN or op in (_OP_DATA_END, _OP_FOOTER):
             break
         pos += 9 + length
-    return ('' if compression == 'none' else compression or 'zstd'), attachments
+    return ''
 
 
-def _records(
-    src: IO[bytes], size: int, result: RecoverResult
-) -> Iterator[tuple[int, int, bytes, bool]]:
-    """Top-level records ``(opcode, offset, body, cut)`` up to the Data End / Footer or the
-    end of the file; ``cut`` marks the last record if the file ends inside it. A damaged
-    region is skipped to the next plausible Chunk (reported in ``result.damaged``)."""
-    pos = len(MAGIC)
-    while pos + 9 <= size:
-        src.seek(pos)
-        op, length = _HEAD.unpack(src.read(9))
-        end = pos + 9 + length
-        if op not in _KNOWN and op < 0x80:
-            pos = _resync(src, pos, size, f'invalid opcode 0x{op:02x}', result)
-            continue
-        if op in (_OP_DATA_END, _OP_FOOTER):
-            return
-        if end > size:
-            # Cut by the end of the file (the writer died in it), or a damaged length: then a
-            # valid chunk follows somewhere (the reader's rule, io/mcap_read.py).
-            found = _next_chunk(src, pos, size)
-            if found >= 0:
-                reason = f'record (opcode 0x{op:02x}) runs past the end'
-                pos = _resync(src, pos, size, reason, result)
-                continue
-            if op != _OP_CHUNK:
-                what = 'a Message Index (no message lost)' if op == 0x07 else 'a record'
-                result.damaged.append(
-                    f'@{pos}: file ends inside {what} (opcode 0x{op:02x}, {length} B)'
-                )
-                return
-            if size - pos - 9 > MAX_CHUNK_BYTES + 4096:
-                pos = _resync(src, pos, size, 'chunk length past the end of the file', result)
-                continue
-            yield op, pos, src.read(size - pos - 9), True
-            return
-        if length > MAX_CHUNK_BYTES + 4096:
-            pos = _resync(src, pos, size, f'record of {length} B (implausible)', result)
-            continue
-        if op >= 0x80:
-            pos = end  # a private record: not kept
-            continue
-        yield op, pos, src.read(length), False
-        pos = end
-    if pos < size:
-        result.damaged.append(f'@{pos}: file ends inside a record header ({size - pos} B)')
-
-
-def _next_chunk(src: IO[bytes], pos: int, size: int) -> int:
-    """Offset of the next plausible Chunk record after ``pos``, or -1. The file is searched
-    through a read-only memory map (page cache, not a copy)."""
-    import mmap
-
-    with mmap.mmap(src.fileno(), size, access=mmap.ACCESS_READ) as data:
-        return _find_chunk(data, pos + 1)  # type: ignore[arg-type]
-
-
-def _resync(src: IO[bytes], pos: int, size: int, reason: str, result: RecoverResult) -> int:
-    """Offset of the next plausible Chunk record after ``pos`` (or ``size``); reported."""
-    found = _next_chunk(src, pos, size)
-    if found < 0:
-        result.damaged.append(f'@{pos}: {reason}; nothing readable after it')
-        return size
-    result.damaged.append(f'@{pos}: {reason}; skipped {found - pos} B to the next chunk')
-    return found
-
-
-def _chunk(rw: _Rewriter, body: bytes, at: int, cut: bool, result: RecoverResult) -> None:
-    """Re-emit a chunk's records: whole if it checks out, as far as it decodes if ``cut``."""
-    header = _chunk_header(body, 0, len(body), partial=cut)
-    if header is None:
-        result.damaged.append(f'@{at}: chunk header inconsistent with its length')
-        return
-    usize, crc, compression, start, end = header
-    problem = chunk_size_problem(usize, end - start, compression)
-    if problem is not None:
-        result.damaged.append(f'@{at}: chunk {problem}')
-        return
-    if cut:
-        try:
-            records = _decompress_partial(body, start, min(end, len(body)), compression, usize)
-        except Exception:  # noqa: BLE001 - nothing of the cut chunk decodes
-            records = b''
-        count, _ = rw.records(bytes(records), 0, min(len(records), usize))
-        result.salvaged_from_cut_chunk = count
-        result.chunks += 1 if count else 0
-        result.damaged.append(
-            f'@{at}: file ends inside a chunk; {count} complete message(s) salvaged from it'
-        )
-        return
-    try:
-        records = bytes(_decompress(body, start, end, compression, usize))
-    except Exception as exc:  # noqa: BLE001 - any decoder error: a damaged chunk
-        result.damaged.append(f'@{at}: {compression} chunk cannot be decompressed: {exc}')
-        return
-    if len(records) != usize:
-        result.damaged.append(f'@{at}: chunk decompresses to {len(records)} B, not {usize} B')
-        return
-    if crc and zlib.crc32(records) != crc:
-        result.damaged.append(f'@{at}: chunk CRC mismatch')
-        return
-    result.chunks += 1
-    _, stop = rw.records(records, 0, len(records))
-    if stop != len(records):
-        result.damaged.append(f'@{at}: chunk records unreadable from byte {stop} of {usize}')
-
-
-def _string(buf: bytes, pos: int, end: int) -> tuple[str, int]:
+def _string(buf: bytes | memoryview, pos: int, end: int) -> tuple[str, int]:
     if pos + 4 > end:
         raise _Bad('string length runs past its record')
     (n,) = struct.unpack_from('<I', buf, pos)
@@ -542,7 +513,7 @@ def _string(buf: bytes, pos: int, end: int) -> tuple[str, int]:
     return bytes(buf[pos + 4 : pos + 4 + n]).decode('utf-8', 'replace'), pos + 4 + n
 
 
-def _bytes(buf: bytes, pos: int, end: int) -> bytes:
+def _bytes(buf: bytes | memoryview, pos: int, end: int) -> bytes:
     if pos + 4 > end:
         raise _Bad('byte array length runs past its record')
     (n,) = struct.unpack_from('<I', buf, pos)
@@ -551,7 +522,7 @@ def _bytes(buf: bytes, pos: int, end: int) -> bytes:
     return bytes(buf[pos + 4 : pos + 4 + n])
 
 
-def _string_map(buf: bytes, pos: int, end: int) -> dict[str, str]:
+def _string_map(buf: bytes | memoryview, pos: int, end: int) -> dict[str, str]:
     if pos + 4 > end:
         raise _Bad('map length runs past its record')
     (n,) = struct.unpack_from('<I', buf, pos)

@@ -73,6 +73,7 @@ from catenary_monitor.io.mcap_read import (
     iter_windows,
     read_float64_topics,
 )
+from catenary_monitor.io.mcap_summary import read_metadata
 
 __all__ = [
     'EXIT_EMPTY',
@@ -162,7 +163,7 @@ def typed_inputs(config: MonitorConfig) -> dict[str, str]:
     messages and decoded (:mod:`catenary_monitor.io.sensor_cdr`), the others as Float64
     columns."""
     out = {
-        resolve_topic(line.tension_topic): line.tension_type
+        resolve_topic(line.topics[0]): line.tension_type
         for line in config.lines
         if line.tension_type in readings.STAMPED
     }
@@ -181,6 +182,7 @@ class Inputs(NamedTuple):
     depth: Any
     tension_stamps: Optional[list[Optional[np.ndarray]]]
     depth_stamps: Optional[np.ndarray]
+    channels: Optional[list[Optional[np.ndarray]]] = None  # a line's samples' channels
 
 
 def _column(
@@ -198,16 +200,26 @@ def _column(
 
 def _inputs(config: MonitorConfig, window: LogWindow) -> Inputs:
     """The window's inputs (:class:`Inputs`), each read as its type says."""
-    tensions, stamps = [], []
+    tensions: list[Any] = []
+    stamps: list[Optional[np.ndarray]] = []
+    chans: list[Optional[np.ndarray]] = []
     for line in config.lines:
-        column, st = _column(
-            window,
-            resolve_topic(line.tension_topic),
-            line.tension_type,
-            partial(readings.tension_si, line),
-        )
+        convert = partial(readings.tension_si, line)
+        if line.channel_topics:  # every channel's samples merged in time order (stable)
+            parts = [window.columns[resolve_topic(t)] for t in line.channel_topics]
+            times = np.concatenate([t for t, _ in parts])
+            order = np.argsort(times, kind='stable')
+            raw = np.concatenate([v for _, v in parts])[order]
+            idx = np.concatenate([np.full(len(t), j, np.int64) for j, (t, _) in enumerate(parts)])
+            value = np.asarray(convert({'value': raw}), np.float64)
+            tensions.append((times[order], value))
+            stamps.append(None)
+            chans.append(idx[order])
+            continue
+        column, st = _column(window, resolve_topic(line.topics[0]), line.tension_type, convert)
         tensions.append(column)
         stamps.append(st)
+        chans.append(None)
     depth, d_stamps = _column(
         window,
         resolve_topic(config.depth_topic),
@@ -215,7 +227,8 @@ def _inputs(config: MonitorConfig, window: LogWindow) -> Inputs:
         lambda f: readings.depth_si(config, f),
     )
     stamped = any(s is not None for s in stamps) or d_stamps is not None
-    return Inputs(tensions, depth, stamps if stamped else None, d_stamps)
+    channels = chans if any(c is not None for c in chans) else None
+    return Inputs(tensions, depth, stamps if stamped else None, d_stamps, channels)
 
 
 def stream(
@@ -274,7 +287,7 @@ def _stream(
     """:func:`stream` itself."""
     state = StreamState()
     state.bytes_total = sum(p.stat().st_size for p in paths)
-    lines_topics = [resolve_topic(line.tension_topic) for line in config.lines]
+    lines_topics = [resolve_topic(t) for line in config.lines for t in line.topics]
     topics = [resolve_topic(config.depth_topic), *lines_topics]
     raw = [EVENTS_TOPIC] if ticks != 'grid' else []
     typed = typed_inputs(config)
@@ -315,7 +328,14 @@ def _stream(
                 tick_ns, grid_k = _grid(
                     state, window, tensions, depth, grid_k, config.alarm.diagnostic_rate
                 )
-            whole = Window(tensions, depth, tick_ns, inputs.tension_stamps, inputs.depth_stamps)
+            whole = Window(
+                tensions,
+                depth,
+                tick_ns,
+                inputs.tension_stamps,
+                inputs.depth_stamps,
+                inputs.channels,
+            )
             for part, part_events in _parts(whole, others, TICKS_PER_PART if snapshots else 0):
                 result, core = run_log(core, part, part_events, snapshots)
                 replay = ReplayResult(
@@ -395,7 +415,7 @@ def _grid(
 def input_topics(config: MonitorConfig) -> tuple[dict[str, str], str]:
     """(line name -> resolved tension topic, resolved depth topic)."""
     return (
-        {line.name: resolve_topic(line.tension_topic) for line in config.lines},
+        {line.name: resolve_topic(line.topics[0]) for line in config.lines},
         resolve_topic(config.depth_topic),
     )
 
@@ -424,43 +444,19 @@ def log_parameters(paths: Sequence[Path]) -> Optional[tuple[str, dict[str, Any]]
     the files: the parameters the node started with (it writes one at start and one on every
     parameter change, which replay follows from the events channel), or None.
 
-    Finished files answer from their summary; an unfinished file from its first MiB (where
-    the node's logger writes the record).
+    Read in bounded time and memory whatever the files hold
+    (:func:`catenary_monitor.io.mcap_summary.read_metadata`: the summary's index of a finished
+    file, else the heads of an unfinished file's top-level records; no chunk decompressed). A
+    record whose parameters are not a JSON object is passed over.
     """
-    import io
-
-    from mcap.reader import NonSeekingReader, make_reader
-
     for path in paths:
-        records = []
-        try:
-            with open(path, 'rb') as f:
-                reader = make_reader(f)
-                try:
-                    summary = reader.get_summary()
-                except Exception:  # noqa: BLE001 - no footer: the writer was killed
-                    summary = None
-                if summary is not None:
-                    records = list(reader.iter_metadata())
-                else:
-                    f.seek(0)
-                    head = NonSeekingReader(io.BytesIO(f.read(1 << 20)))
-                    try:
-                        for record in head.iter_metadata():
-                            records.append(record)
-                    except Exception:  # noqa: BLE001 - the cut at 1 MiB, or damage
-                        pass
-        except Exception:  # noqa: BLE001 - an unreadable summary: no parameters from it
-            continue
-        for record in records:
-            if record.name == NODE_NAME and 'parameters' in record.metadata:
-                try:
-                    return (
-                        record.metadata.get('config_hash', ''),
-                        json.loads(record.metadata['parameters']),
-                    )
-                except ValueError:
-                    continue
+        for record in read_metadata(path, NODE_NAME):
+            try:
+                parameters = json.loads(record['parameters'])
+            except (KeyError, ValueError, RecursionError):
+                continue
+            if isinstance(parameters, dict):
+                return record.get('config_hash', ''), parameters
     return None
 
 

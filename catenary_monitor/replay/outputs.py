@@ -25,6 +25,7 @@ from catenary_monitor.core.config.parameters import (
     config_to_params,
 )
 from catenary_monitor.core.monitor import holding, sensor_state
+from catenary_monitor.core.monitor.alarms import VIEW_TEXT
 from catenary_monitor.core.monitor.alarms import Level
 from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,
@@ -80,8 +81,10 @@ __all__ = [
 
 #: Every CSV column, in order, with its decimals (None: a label). Units: s, N, m, -.
 #: ``time`` is exact (ns); forces have 3 decimals (1 mN), lengths 3 (1 mm), the safety factor 3,
-#: ``time_to_uplift`` 3 (s; ``inf`` when no uplift is coming); the bounds and holding values
-#: (forces, lengths) 3 (``nan`` where the line has no accuracy or holding data); ``sensor_state``
+#: ``time_to_uplift`` 3 (s; ``inf`` when no uplift is coming, ``nan`` while unknown); the bounds
+#: and holding values (forces, lengths) 3 (``nan`` where the line has no solve or holding data);
+#: ``time_to_uplift_view`` ``chain length held``, ``horizontal tension held`` or ``none``;
+#: ``sensor_state``
 #: the line's sensor state word (``ok``, ``stuck``, ``spike``, ``over_mbl``, ``slack``,
 #: ``suspected_parted``); ``drag_state`` the anchor's (``holding``, ``overloaded``,
 #: ``dragging``, ``unknown``).
@@ -108,6 +111,12 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('drag_margin', 3),
     ('implied_anchor_distance', 3),
     ('tide_margin_at_length', 3),
+    # The wave window and the dynamic uplift (core/monitor/wave_window.py), and which view the
+    # time to uplift counts down (a word: core.monitor.monitor_core.view_word).
+    ('wave_tension', 3),
+    ('peak_tension', 3),
+    ('dynamic_uplift', 3),
+    ('time_to_uplift_view', None),
     ('sensor_state', None),  # core.monitor.sensor_state.LINE_STATES word
     ('status', None),
     ('level', None),
@@ -117,6 +126,9 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('fatigue_damage', 12),
     ('fatigue_damage_rate', 12),
     ('fatigue_life_left', 0),
+    # A line of several channels (core/monitor/channels.py): healthy count, states code.
+    ('channels_healthy', 0),
+    ('channel_states', 0),
 )
 #: The default columns (the issue's contract), in this order.
 CSV_COLUMNS = (
@@ -208,6 +220,11 @@ def write_csv(
         elif name == 'drag_state':
             codes = np.where(np.isnan(values[name]), 3, values[name]).astype(np.int64)
             out_columns.append(LabelColumn(name, codes, [*holding.DRAG_STATES, 'unknown']))
+        elif name == 'time_to_uplift_view':
+            view = values[name]
+            codes = np.where(np.isnan(view), 0, np.where(view == 1.0, 2, 1)).astype(np.int64)
+            labels = ['none', VIEW_TEXT[0.0], VIEW_TEXT[1.0]]
+            out_columns.append(LabelColumn(name, codes, labels))
         else:
             out_columns.append(FloatColumn(name, values[name], decimals or 0))
     n = len(t)

@@ -274,8 +274,8 @@ class CatenaryMonitor(Node):
             value = values[name]
             if spec.type in ('string_array', 'double_array'):
                 value = list(value)
-            if spec.type == 'double_array' and not value:  # [] would be typed a byte array
-                value = Parameter.Type.DOUBLE_ARRAY
+            if spec.type in ('double_array', 'string_array') and not value:
+                value = _PARAM_TYPES[spec.type]  # ([] would be typed a byte array)
             self.declare_parameter(name, value, _descriptor(spec, name), ignore_override=True)
         for line in config.lines:
             if line.ea is not None:
@@ -471,10 +471,18 @@ class CatenaryMonitor(Node):
         self._output_topics: list[str] = []
         self._output_pubs: list[Any] = []
         self._subs: list[Any] = []
+        self._channel_topics: dict[tuple[int, int], str] = {}
         for k, line in enumerate(cfg.lines):
+            for j, topic in enumerate(line.channel_topics[1:], start=1):
+                # a load cell's further channels (core.channels; channel 0 is the line's input)
+                extra = self.create_subscription(
+                    Float64, topic, partial(self._on_channel, k, j), _SAMPLES, raw=True
+                )
+                self._channel_topics[(k, j)] = extra.topic_name
+                self._register(extra.topic_name, readings.FLOAT64, 'sensor_data')
             sub = self.create_subscription(
                 _MESSAGE_CLASSES[line.tension_type],
-                line.tension_topic,
+                line.topics[0],
                 self._sample_callback(k),
                 _SAMPLES,
                 event_callbacks=self._sample_events(k),
@@ -609,6 +617,15 @@ class CatenaryMonitor(Node):
         lc = self.config.lines[k]
         fields, sample_ns = _fields(raw, lc.tension_type)
         self._run(Tension(stamp, k, float(readings.tension_si(lc, fields)), sample_ns))
+
+    @_guarded
+    def _on_channel(self, k: int, j: int, raw: bytes) -> None:
+        """A sample of channel ``j`` of line ``k``'s load cell: logged, one core event."""
+        stamp = self._stamp()
+        self._write(self._channel_topics[(k, j)], raw, stamp)
+        fields, _ = _fields(raw, readings.FLOAT64)
+        value = float(readings.tension_si(self.config.lines[k], fields))
+        self._run(Tension(stamp, k, value, None, j))
 
     def _step_depth(self, k: int, stamp: int, raw: bytes) -> None:
         """The same for a depth sample (the depth in m)."""

@@ -35,7 +35,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from catenary_monitor.io.mcap_read import ReadReport, iter_messages
+from catenary_monitor.io.mcap_read import ReadReport
+from catenary_monitor.io.mcap_summary import channels_of
 
 __all__ = ['CLOCK_PERIOD', 'INPUT_TYPES', 'CLOCK_TOPIC', 'input_topics_of_log', 'publish']
 
@@ -55,27 +56,13 @@ Messages = dict[str, tuple[np.ndarray, list[bytes], str]]  # topic -> (log ns, C
 
 
 def input_topics_of_log(paths: Sequence[Path]) -> dict[str, str]:
-    """Every topic of an input type (:data:`INPUT_TYPES`) -> its type (summary if present,
-    else a scan)."""
-    from mcap.reader import make_reader
-
+    """Every topic of an input type (:data:`INPUT_TYPES`) -> its type (the summary if the file
+    has one, else the reader's walk of its channels; bounded either way)."""
     topics: dict[str, str] = {}
     for path in paths:
-        summary = None
-        try:
-            with open(path, 'rb') as f:
-                summary = make_reader(f).get_summary()
-        except Exception:  # noqa: BLE001 - damaged file: scan it
-            summary = None
-        if summary is not None and summary.channels:
-            for ch in summary.channels.values():
-                schema = summary.schemas.get(ch.schema_id)
-                if schema is not None and schema.name in INPUT_TYPES:
-                    topics.setdefault(ch.topic, schema.name)
-            continue
-        for msg in iter_messages(path, None, ReadReport()):
-            if msg.schema_name in INPUT_TYPES:
-                topics.setdefault(msg.topic, msg.schema_name)
+        for channel in channels_of(path).values():
+            if channel.schema_name in INPUT_TYPES:
+                topics.setdefault(channel.topic, channel.schema_name)
     return topics
 
 

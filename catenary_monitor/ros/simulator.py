@@ -1,31 +1,32 @@
 """Dock simulator for the demo: the seed paper's floating dock through a compressed storm.
 
 Console script ``dock_simulator`` (or ``python -m catenary_monitor.ros.simulator``). It publishes,
-as
-a sensor driver would, ``std_msgs/Float64`` hook tensions (N) on every line's tension topic and
-the tide depth (m) on the depth topic, with sensor-data QoS, then exits by itself.
+as a sensor driver would, ``std_msgs/Float64`` hook tensions (N) on every line's tension topic
+and the tide depth (m) on the depth topic, with sensor-data QoS, then exits by itself.
 
-The episode (:class:`Scenario`, pure: no rclpy) is the paper's dock (config/floating_dock.yaml):
+The episode (:class:`Scenario`, pure: no rclpy) is the paper's dock (config/floating_dock.yaml)
+as one body (:mod:`catenary_monitor.core.body`): every tension comes from the chains' geometry,
+the dock at rest where its chains balance the load, so its warnings are the ones a real dock
+would give:
 
-* tide: semi-diurnal (M2, 12.42 h) compressed into the episode, amplitude 1.0 m around the
-  paper's 20.85 m, rising from low water at the start to high water half-way;
-* load: every chain at the paper's pretension R = 372 kN (table 2) when calm; a storm builds,
-  pauses a little below line 11's uplift while the tide rises (``hold``, ``hold_level``: the
-  rising tide brings the uplift closer, the monitor's time-to-uplift warning), builds again,
-  holds and eases. Line 11 reaches the table-3 typhoon load R = 1584.6 kN (hook tension about
-  1623 kN at x = 121.06 m), which lifts its anchor; its neighbours 10 and 12 take a little more,
-  the lee lines 2-6 a little less;
-* wave-frequency fluctuation: each line's horizontal tension swings sinusoidally (period
-  ``wave_period``, amplitude growing with the storm) plus 0.3 % noise, so the monitor's alarms
-  meet an oscillating load near their thresholds.
-
-The hook tension published is the catenary's top tension for that horizontal load at the
-current depth and installed anchor distance (``catenary_monitor.solve(horizontal=...)``).
+* tide: semi-diurnal (M2, 12.42 h) compressed into the episode, amplitude 0.5 m around the
+  paper's 20.85 m, rising from low water at the start to high water half-way: the chains have a
+  fixed length and their hooks rise with it, so every pretension grows with the tide;
+* load: a storm from port (wind, current and waves from 270 deg, its centre 30 m forward of
+  midship, so the forward port lines 10-12 take the most and line 11 first). It builds, pauses
+  while the tide rises (line 11 at the edge of lifting: the monitor's bound warns first),
+  builds again to a load (0.7 MN) that lifts the port sinkers, holds and eases;
+* the dock's static equilibrium (:func:`~catenary_monitor.core.body.equilibrium.solve_equilibrium`)
+  under that load at that tide, solved on a 0.25 s grid of the episode and interpolated;
+* wave-frequency motion: the dock sways about its equilibrium (period ``wave_period``,
+  amplitude growing with the storm), each line's tension that of its chain at the moved hook
+  (:func:`~catenary_monitor.core.body.dock_model.line_states`), plus 0.3 % sensor noise.
 """
 
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 import sys
 from dataclasses import dataclass
@@ -33,24 +34,27 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from catenary_monitor.core.body.dock_model import DockModel, line_states
+from catenary_monitor.core.body.equilibrium import EquilibriumStatus, solve_equilibrium
+from catenary_monitor.core.body.loads import push_direction
 from catenary_monitor.core.config.parameters import (
     ConfigError,
     MonitorConfig,
     config_from_params,
     load_params_file,
 )
-from catenary_monitor.core.physics.solve import solve
 
 __all__ = ['Scenario', 'default_config_path', 'main']
 
-#: Paper, table 2: pretension (horizontal) of every chain [N].
-PRETENSION = 372e3
-#: Paper, table 3: typhoon horizontal load on line 11 [N].
-TYPHOON = 1584.6e3
 #: Paper: depth at mean tide [m].
 MEAN_DEPTH = 20.85
 #: M2 tide period [s] (compressed into the episode).
 M2_PERIOD = 12.42 * 3600.0
+#: The storm: from port (deg, clockwise from the bow), its centre this far forward [m], and
+#: its peak (N), which lifts the forward port sinkers at high water.
+STORM_FROM = 270.0
+STORM_ARM = 30.0
+STORM_PEAK = 0.7e6
 
 
 def default_config_path() -> str:
@@ -92,22 +96,25 @@ def _smooth(u: float) -> float:
 class Scenario:
     """The demo episode as pure functions of wall time ``t`` in [0, duration] (s).
 
-    ``storm_share`` maps line names to the fraction of the storm's extra load they take
-    (line 11: all of it, up to the typhoon load); lines not named take none.
+    ``config`` must give the dock's geometry (``hook_x``, ``hook_y``, ``heading``,
+    ``chain_length`` on every line), as config/floating_dock.yaml does.
     """
 
     config: MonitorConfig
     duration: float = 55.0
-    wave_period: float = 4.0  # s (wall), wave-frequency tension swing
-    wave_calm: float = 0.01  # relative swing amplitude when calm
-    wave_storm: float = 0.05  # relative swing amplitude at the storm peak
-    noise: float = 0.003  # relative noise (std)
-    tide_amplitude: float = 1.0  # m
+    wave_period: float = 4.0  # s (wall), the dock's wave-frequency sway
+    wave_calm: float = 0.03  # m, sway amplitude when calm
+    wave_storm: float = 0.15  # m, sway amplitude at the storm's peak
+    noise: float = 0.003  # relative sensor noise (std)
+    tide_amplitude: float = 0.5  # m
     build: tuple[float, float] = (0.12, 0.45)  # storm build from/to (fraction of duration)
     hold: tuple[float, float] = (0.25, 0.36)  # the build pauses (the tide rises) from/to
-    hold_level: float = 0.055  # storm intensity during the pause (line 11 about 1 m of tide short)
+    hold_level: float = 0.35  # storm intensity during the pause (line 11 at the edge)
     ease: tuple[float, float] = (0.60, 0.80)  # storm eases from/to
     seed: int = 11
+    grid: float = 0.25  # s, the equilibrium's grid
+    storm_peak: float = STORM_PEAK  # N
+    storm_arm: float = STORM_ARM  # m, the storm's centre forward of midship
 
     def storm(self, t: float) -> float:
         """Storm intensity 0..1 at time ``t``: up to ``hold_level`` by ``hold[0]``, kept there
@@ -129,35 +136,49 @@ class Scenario:
         """Simulated seconds of tide per wall second."""
         return M2_PERIOD / self.duration
 
-    def shares(self) -> np.ndarray:
-        """Storm share per line: the typhoon increment on line 11, a little on 10 and 12,
-        relief on the lee lines 2-6; lines named otherwise get none."""
-        table = {'line_11': 1.0, 'line_10': 0.02, 'line_12': 0.02}
-        for i in range(2, 7):
-            table[f'line_{i:02d}'] = -0.05
-        return np.array([table.get(line.name, 0.0) for line in self.config.lines])
+    def load(self, t: float) -> np.ndarray:
+        """The storm's load on the dock at ``t``: (Fx, Fy, Mz) [N, N, N m]."""
+        push = push_direction(STORM_FROM) * self.storm_peak * self.storm(t)
+        return np.array([push[0], push[1], self.storm_arm * push[1]])
 
-    def horizontal(self, t: float, rng: Optional[np.random.Generator] = None) -> np.ndarray:
-        """Horizontal tension of every line [N] at ``t``."""
-        s = self.storm(t)
-        mean = PRETENSION + s * self.shares() * (TYPHOON - PRETENSION)
-        amp = self.wave_calm + (self.wave_storm - self.wave_calm) * s
-        phase = np.arange(len(self.config.lines)) * 0.7
-        swing = amp * np.sin(2 * math.pi * t / self.wave_period + phase)
-        if rng is not None:
-            swing = swing + self.noise * rng.standard_normal(len(self.config.lines))
-        return mean * (1.0 + swing)
+    def offsets(self) -> np.ndarray:
+        """The dock's equilibrium offset (X, Y, psi) at every grid time (rows), solved once."""
+        return _offsets(self)
+
+    def offset(self, t: float) -> np.ndarray:
+        """The dock's equilibrium offset at ``t`` (interpolated on the grid)."""
+        table = self.offsets()
+        u = min(max(t / self.grid, 0.0), len(table) - 1.0)
+        k = min(int(u), len(table) - 2)
+        return table[k] + (u - k) * (table[k + 1] - table[k])
 
     def tensions(self, t: float, rng: Optional[np.random.Generator] = None) -> np.ndarray:
-        """Hook tension of every line [N] at ``t`` (catenary top tension for the load)."""
-        lines = self.config.lines
-        r = solve(
-            np.array([line.weight for line in lines]),
-            self.depth(t) + np.array([line.hook_height for line in lines]),
-            horizontal=self.horizontal(t, rng),
-            anchor_distance=np.array([line.anchor_distance for line in lines]),
-        )
-        return np.asarray(r.top_tension, dtype=float)
+        """Hook tension of every line [N] at ``t``: each chain at its hook, the dock at its
+        equilibrium moved by the waves' sway."""
+        amp = self.wave_calm + (self.wave_storm - self.wave_calm) * self.storm(t)
+        sway = amp * math.sin(2 * math.pi * t / self.wave_period)
+        q = self.offset(t) + np.array([0.0, sway, 0.0])
+        lines = line_states(_model(self.config), self.depth(t), q)
+        tension = np.asarray(lines.statics.top_tension, dtype=float)
+        if rng is not None:
+            tension = tension * (1.0 + self.noise * rng.standard_normal(len(tension)))
+        return tension
+
+
+@functools.lru_cache(maxsize=8)
+def _model(config: MonitorConfig) -> DockModel:
+    return DockModel.from_config(config)
+
+
+@functools.lru_cache(maxsize=8)
+def _offsets(scenario: Scenario) -> np.ndarray:
+    model = _model(scenario.config)
+    rows, q = [], np.zeros(3)
+    for t in np.arange(0.0, scenario.duration + 2 * scenario.grid, scenario.grid).tolist():
+        eq = solve_equilibrium(model, scenario.depth(t), scenario.load(t), start=q)
+        q = eq.offset if eq.status == EquilibriumStatus.CONVERGED else q
+        rows.append(q)
+    return np.array(rows)
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -181,7 +202,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except ConfigError as err:
         print(f'dock_simulator: {err}', file=sys.stderr)
         return 2
+    if not config.has_dock_model:
+        print(
+            'dock_simulator: the params file must give the dock\'s geometry (hook_x, hook_y, '
+            'heading, chain_length on every line): the tensions come from its equilibrium',
+            file=sys.stderr,
+        )
+        return 2
     scenario = Scenario(config, duration=args.duration)
+    scenario.offsets()  # the equilibrium on its grid, before the first sample
 
     from rclpy.executors import ExternalShutdownException
     from rclpy.qos import qos_profile_sensor_data

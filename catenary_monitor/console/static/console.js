@@ -55,6 +55,11 @@ async function start() {
   bindAccess();
   $('tab-active').addEventListener('click', () => showTab('active'));
   $('tab-history').addEventListener('click', () => showTab('history'));
+  $('tab-shelved').addEventListener('click', () => showTab('shelved'));
+  $('shelve-form').addEventListener('submit', (ev) => {
+    ev.preventDefault();
+    shelve($('shelve-line').value, $('shelve-condition').value, parseFloat($('shelve-duration').value));
+  });
   $('sound').addEventListener('click', soundButton);
   unlockAudio();
   document.addEventListener('click', () => { if (S.audio) S.audio.resume().then(updateSoundButton); }, { once: true });
@@ -72,6 +77,7 @@ function buildLines() {
   buildTiles();
   buildPlan();
   buildPickers();
+  buildShelveForm();
 }
 
 // A console started without --params-file learns the lines from /diagnostics after the page
@@ -172,7 +178,8 @@ function buildTiles() {
       <dt>safety factor</dt><dd class="v-sf"></dd><dt>uplift in</dt><dd class="v-ttu"></dd>
       <dt title="${TIDE_R}">tide to lift, R held</dt><dd class="v-tide" title="${TIDE_R}"></dd>
       <dt class="x-tidel" title="${TIDE_L}">tide to lift, chain length held</dt><dd class="v-tidel x-tidel" title="${TIDE_L}"></dd>
-      <dt class="x-upper">uplift ≤ (accuracy)</dt><dd class="v-upper x-upper"></dd>
+      <dt class="x-upper" title="the anchor's force bounded: waves and sensor accuracy">uplift ≤ (waves, accuracy)</dt><dd class="v-upper x-upper"></dd>
+      <dt class="x-wave" title="wave-frequency tension: half the range of the readings over wave_window">wave tension</dt><dd class="v-wave x-wave"></dd>
       <dt class="x-drag">drag margin</dt><dd class="v-drag x-drag"></dd>
       <dt class="x-fatigue" title="Miner's damage of the chain (1: the S-N curve's failure) and the life left at the last day's rate">fatigue</dt><dd class="v-fatigue x-fatigue"></dd></dl>
       <div class="msg"></div><div class="foot"><span class="v-model" title="the model that answered"></span> · <span class="age"></span><span class="alarm-st"></span><span class="sensor old"></span></div>`;
@@ -236,7 +243,13 @@ function renderTile(view, lost, frame) {
   // Time to uplift at the tide's trend (null: the tide is not bringing uplift closer).
   const ttu = view.time_to_uplift;
   const tt = t.querySelector('.v-ttu');
-  tt.textContent = ttu === null || ttu === undefined ? '—' : ttu <= 0 ? 'lifted' : ago(ttu);
+  // Unknown (NaN: no trend yet) is not "never" (inf: the tide is not rising).
+  const state = view.time_to_uplift_state;
+  tt.textContent = ttu === null || ttu === undefined
+    ? (state === 'not coming' ? 'not coming' : 'unknown, trend not known yet')
+    : ttu <= 0 ? 'lifted' : ago(ttu) + (view.time_to_uplift_view === 'chain length held' ? ' (chain length)' : '');
+  tt.title = view.time_to_uplift_view && view.time_to_uplift_view !== 'none'
+    ? `time to uplift, ${view.time_to_uplift_view}` : 'time to uplift';
   tt.className = 'v-ttu ' + (ttu !== null && ttu !== undefined && ttu < S.config.uplift_time_warn ? 'warn' : '');
   // The two tide margins: R held (always), chain length held (where finite: chain_length set).
   const shown = (v) => v !== null && v !== undefined;
@@ -251,6 +264,8 @@ function renderTile(view, lost, frame) {
   const up = view.uplift_force_upper, drag = view.drag_margin;
   t.querySelectorAll('.x-upper').forEach((e) => { e.hidden = !shown(up); });
   t.querySelectorAll('.x-drag').forEach((e) => { e.hidden = !shown(drag); });
+  t.querySelectorAll('.x-wave').forEach((e) => { e.hidden = !shown(view.wave_tension); });
+  t.querySelector('.v-wave').textContent = shown(view.wave_tension) ? `± ${num(view.wave_tension, 1, KN)} kN` : '';
   const vu = t.querySelector('.v-upper');
   vu.textContent = shown(up) ? `${num(up, 1, KN)} kN` : '';
   vu.className = 'v-upper x-upper ' + (shown(up) && up > (cfg.allowed_uplift || 0) ? 'warn' : '');
@@ -272,7 +287,11 @@ function renderTile(view, lost, frame) {
   t.querySelector('.msg').textContent = msg;
   t.querySelector('.msg').title = msg;
   renderAge(t, view);
-  setText(t.querySelector('.alarm-st'), view.alarm_state && view.alarm_state !== 'normal' ? ` · alarm ${view.alarm_state}` : '');
+  setText(t.querySelector('.alarm-st'), (view.alarm_state && view.alarm_state !== 'normal' ? ` · alarm ${view.alarm_state}` : '')
+    + (view.shelved ? ` · ${view.shelved_condition === 'all' ? '' : view.shelved_condition.replaceAll('_', ' ') + ' '}shelved until ${clock(view.shelved_until)}` : '')
+    + (view.chattering ? ' · chattering' : ''));
+  t.dataset.shelved = view.shelved ? 'true' : 'false';
+  t.dataset.chattering = view.chattering ? 'true' : 'false';
   // The load cell's sanity (stuck, spike, over_mbl, slack, suspected_parted; the dock model's
   // inconsistent, suspect): check the sensor. 'unchecked' (not judged by the dock model) is quiet.
   const sensor = view.sensor_state || 'ok';
@@ -358,11 +377,28 @@ function renderAlarms(frame, lost) {
   const last = frame.history[frame.history.length - 1];
   const hkey = JSON.stringify([frame.history.length, last]);
   if (hkey !== historyKey) { historyKey = hkey; renderHistory(frame); }
-  // EEMUA 191: 10 or more alarms raised in 10 minutes is a flood.
-  const raised = frame.history.filter((h) => h.event.startsWith('raised') && h.time > frame.now - 600).length;
-  $('flood').hidden = raised < 10;
-  $('flood').textContent = `ALARM FLOOD: ${raised} raised in 10 min`;
+  const skey = JSON.stringify([lost, S.tab, canAct(), frame.shelved]);
+  if (skey !== shelvedKey) { shelvedKey = skey; renderShelved(frame, lost, replay); }
+  renderFlood(frame, lost);
+  updateShelveForm(frame, lost, replay);
 }
+
+// The monitor's flood status (catenary_monitor: alarms, EEMUA 191): a banner naming the first
+// out while it lasts, and the count of the flood window beside the list's title.
+function renderFlood(frame, lost) {
+  const f = frame.flood || {};
+  const on = !!f.flood && !lost;
+  const banner = $('flood-banner');
+  banner.hidden = !on;
+  if (on) {
+    banner.dataset.flood = 'true';
+    setText(banner, `ALARM FLOOD since ${clock(f.since)}: ${f.count} alarms raised in the flood window`
+      + ` — first out: ${f.first_out} (raised ${clock(f.first_out_at)}); deal with it first`);
+  } else delete banner.dataset.flood;
+  $('flood').hidden = !on;
+  setText($('flood'), on ? `FLOOD: ${f.count} raised` : '');
+}
+let shelvedKey = '';
 
 const rowsByLine = new Map();
 function setText(node, text) { if (node.textContent !== text) node.textContent = text; }
@@ -373,9 +409,13 @@ function makeRow(line) {
   tr.children[0].className = 'when';
   tr.children[4].className = 'msg-cell';
   tr.children[4].appendChild(el('div'));
+  tr.children[6].className = 'actions';
   const b = el('button', { 'data-ack': line, title: `acknowledge ${line}` }, 'Ack');
   b.addEventListener('click', () => acknowledge(line));
   tr.children[6].appendChild(b);
+  const sh = el('button', { 'data-shelve': line, title: `shelve ${line}'s alarm (pick the condition and the time above)` }, 'Shelve');
+  sh.addEventListener('click', () => pickShelve(line));
+  tr.children[6].appendChild(sh);
   return tr;
 }
 
@@ -394,13 +434,18 @@ function renderActive(frame, lost, replay) {
     setText(td[1], a.line);
     setText(td[2], a.level);
     setText(td[3], a.condition.replaceAll('_', ' '));
-    setText(td[4].firstChild, a.message);
+    setText(td[4].firstChild, a.message + (a.shelved_condition ? ` (${a.shelved_condition.replaceAll('_', ' ')} shelved)` : ''));
     td[4].title = a.message;
-    setText(td[5], a.state.replace('-', ' '));
+    tr.dataset.firstOut = a.first_out ? 'true' : 'false';
+    tr.dataset.chattering = a.chattering ? 'true' : 'false';
+    td[5].textContent = a.state.replace('-', ' ');
+    if (a.chattering) td[5].appendChild(el('span', { class: 'chatter', title: 'chattering: many level changes in a short time (ISA-18.2)' }, 'chattering'));
+    if (a.first_out) td[5].appendChild(el('span', { class: 'first-out', title: 'the first alarm of the flood' }, 'FIRST OUT'));
     td[5].title = a.state === 'acknowledged' && a.acknowledged_by ? `by ${a.acknowledged_by} at ${clock(a.acknowledged_at)}` : '';
     const b = td[6].firstChild;
     b.hidden = a.state === 'acknowledged';
     b.disabled = replay || lost || !canAct();
+    td[6].children[1].disabled = replay || lost || !canAct();
     if (body.children[i] !== tr) body.insertBefore(tr, body.children[i] || null);
   });
   $('n-active').textContent = `(${frame.alarms.length})`;
@@ -429,8 +474,10 @@ function renderHistory(frame) {
 function showTab(tab) {
   S.tab = tab;
   $('tab-active').classList.toggle('on', tab === 'active');
+  $('tab-shelved').classList.toggle('on', tab === 'shelved');
   $('tab-history').classList.toggle('on', tab === 'history');
   $('alarms').hidden = tab !== 'active';
+  $('shelved').hidden = tab !== 'shelved';
   $('history').hidden = tab !== 'history';
   if (S.frame) renderAlarms(S.frame, isLost(S.frame));
 }
@@ -443,6 +490,108 @@ async function acknowledge(line) {
   try { text += `: ${(await res.json()).error}`; } catch (e) { /* not JSON */ }
   box.textContent = text;
   box.hidden = false;
+}
+
+// ---------------------------------------------------------------- shelving
+// An operator shelves a nuisance alarm (or one condition of it) for a while: the monitor keeps
+// computing and showing it, does not annunciate it, and brings it back unacknowledged if it is
+// still active when the shelf ends. The monitor decides (shelve_max, unshelvable_conditions)
+// and answers; the page only asks and shows the answer.
+const DURATIONS = [[600, '10 min'], [1800, '30 min'], [3600, '1 h'], [7200, '2 h'], [14400, '4 h'], [28800, '8 h']];
+
+function buildShelveForm() {
+  const line = $('shelve-line'), cond = $('shelve-condition');
+  const keep = [line.value, cond.value];
+  line.textContent = '';
+  for (const l of S.config.lines) line.appendChild(el('option', { value: l.name }, l.name));
+  line.appendChild(el('option', { value: 'sensors' }, 'sensors'));
+  cond.textContent = '';
+  cond.appendChild(el('option', { value: 'all' }, 'the whole alarm'));
+  for (const c of S.config.alarm_conditions || []) cond.appendChild(el('option', { value: c, 'data-condition': c }, c.replaceAll('_', ' ')));
+  if (keep[0]) line.value = keep[0];
+  if (keep[1]) cond.value = keep[1];
+  S.shelveRules = null;
+}
+
+// The monitor's rules (from its alarms status): durations up to shelve_max, the conditions it
+// never shelves marked and disabled.
+function updateShelveForm(frame, lost, replay) {
+  const f = frame.flood || {};
+  const rules = JSON.stringify([f.shelve_max, f.unshelvable]);
+  if (rules !== S.shelveRules) {
+    S.shelveRules = rules;
+    const dur = $('shelve-duration'), keep = dur.value;
+    dur.textContent = '';
+    const max = f.shelve_max === null || f.shelve_max === undefined ? Infinity : f.shelve_max;
+    for (const [s, label] of DURATIONS) if (s <= max) dur.appendChild(el('option', { value: s }, label));
+    if (!dur.children.length && max > 0) dur.appendChild(el('option', { value: max }, ago(max)));
+    if (keep) dur.value = keep;
+    for (const o of $('shelve-condition').options) {
+      const never = (f.unshelvable || []).includes(o.value);
+      o.disabled = never;
+      o.textContent = o.value === 'all' ? 'the whole alarm' : o.value.replaceAll('_', ' ') + (never ? ' (never shelved)' : '');
+    }
+  }
+  const off = replay || lost || !canAct() || !$('shelve-duration').children.length;
+  for (const id of ['shelve-line', 'shelve-condition', 'shelve-duration', 'shelve-go']) $(id).disabled = off;
+  if (f.shelve_answer && f.shelve_requests !== S.shelveSeen && !S.shelvePending) {
+    S.shelveSeen = f.shelve_requests;
+    showShelveAnswer(f.shelve_answer);
+  }
+}
+
+function pickShelve(line) {
+  $('shelve-line').value = line;
+  const row = (S.frame && S.frame.alarms || []).find((a) => a.line === line);
+  const c = row && row.condition && !['none', 'stale'].includes(row.condition) ? row.condition : 'all';
+  $('shelve-condition').value = c;
+  $('shelve-go').focus();
+}
+
+function showShelveAnswer(text, refused) {
+  const box = $('shelve-answer');
+  box.textContent = text;
+  box.classList.toggle('refused', !!refused || text.includes(': refused: '));
+}
+
+async function shelve(line, condition, seconds) {
+  S.shelvePending = true;
+  showShelveAnswer(seconds ? `shelving ${line}…` : `unshelving ${line}…`);
+  try {
+    const res = await act('/api/shelve', { line, condition, seconds });
+    let body = {};
+    try { body = await res.json(); } catch (e) { /* not JSON */ }
+    if (res.ok) showShelveAnswer(body.answer || `sent (${body.sent}); no answer from the monitor yet`);
+    else showShelveAnswer(`${seconds ? 'shelve' : 'unshelve'} refused (${res.status}): ${body.error || ''}`, true);
+    if (S.frame && S.frame.flood) S.shelveSeen = S.frame.flood.shelve_requests + (res.ok ? 1 : 0);
+  } finally { S.shelvePending = false; }
+}
+
+function renderShelved(frame, lost, replay) {
+  const body = $('shelved').querySelector('tbody');
+  body.textContent = '';
+  for (const r of frame.shelved || []) {
+    const tr = el('tr', { 'data-shelved-line': r.line, class: `lvl-${r.level}` });
+    tr.appendChild(el('td', { class: 'when', title: `until ${clock(r.until, true)}` }, clock(r.until)));
+    tr.appendChild(el('td', {}, r.line));
+    tr.appendChild(el('td', {}, r.condition === 'all' ? 'whole alarm' : r.condition.replaceAll('_', ' ')));
+    const lv = el('td', {}, r.level);
+    if (r.chattering) lv.appendChild(el('span', { class: 'chatter' }, 'chattering'));
+    tr.appendChild(lv);
+    const msg = el('td', { class: 'msg-cell', title: r.message });
+    msg.appendChild(el('div', {}, r.message));
+    tr.appendChild(msg);
+    tr.appendChild(el('td', {}, r.by));
+    const cell = el('td', { class: 'actions' });
+    const b = el('button', { 'data-unshelve': r.line, title: `unshelve ${r.line} now` }, 'Unshelve');
+    b.disabled = replay || lost || !canAct();
+    b.addEventListener('click', () => shelve(r.line, 'all', 0));
+    cell.appendChild(b);
+    tr.appendChild(cell);
+    body.appendChild(tr);
+  }
+  $('n-shelved').textContent = `(${(frame.shelved || []).length})`;
+  $('no-shelved').hidden = S.tab !== 'shelved' || (frame.shelved || []).length > 0;
 }
 
 // ---------------------------------------------------------------- access: who may act

@@ -56,7 +56,7 @@ class DockModel:
     hook_height: np.ndarray
     mbl: np.ndarray
     allowed_uplift: np.ndarray
-    accuracy: np.ndarray  # N, tension_accuracy (+- bound; the estimate's sigma_T; NaN: not given)
+    accuracy: np.ndarray  # N, tension accuracy (+- bound; the estimate's sigma_T): sensor_accuracy
     dock: DockConfig
 
     @classmethod
@@ -91,12 +91,7 @@ class DockModel:
             hook_height=col('hook_height'),
             mbl=col('mbl'),
             allowed_uplift=col('allowed_uplift'),
-            accuracy=np.array(
-                [
-                    math.nan if line.tension_accuracy is None else line.tension_accuracy
-                    for line in lines
-                ]
-            ),
+            accuracy=np.array([line.sensor_accuracy for line in lines]),
             dock=config.dock,
         )
 

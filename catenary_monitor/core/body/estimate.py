@@ -20,9 +20,10 @@ system state estimation) drops the line with the largest ``|z|`` above ``REMOVE_
 up to ``MAX_FLAGS`` times, as long as at least ``MIN_REDUNDANT`` readings remain (fewer cannot
 say which line is wrong); a dropped line's z is then its prediction residual. Whether a line is
 inconsistent is decided over time from these z (:mod:`catenary_monitor.core.monitor.dock_watch`).
-Only lines with a ``tension_accuracy`` are tested (without one, "beyond its accuracy" has no
-meaning); the others are weighted with the largest given accuracy (or all equally when none is
-given).
+Every line is tested at its sensor's accuracy (``tension_accuracy``, by default 0.5 % of its
+MBL: :attr:`~catenary_monitor.core.config.parameters.LineConfig.sensor_accuracy`); a model
+built with NaN accuracies tests none and weights them with the largest accuracy given (or
+equally).
 
 The environmental load is minus the restoring force and moment of every line at the fitted
 offset (the dock at rest: static equilibrium), and each line's expected tension is its model

@@ -22,7 +22,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Mapping, NamedTuple, Optional
 
-from catenary_monitor.core.config.tide_constituents import Constituent, parse_table
+from catenary_monitor.core.config.tide_constituents import (
+    MAX_CONSTITUENTS,
+    MAX_TABLE_CHARS,
+    Constituent,
+    parse_table,
+)
 
 __all__ = [
     'REQUIRED',
@@ -31,6 +36,7 @@ __all__ = [
     'TENSION_TYPES',
     'DEPTH_TYPES',
     'AXES',
+    'DEFAULT_TENSION_ACCURACY',
     'ParamSpec',
     'PARAMETERS',
     'ROS_BUILTIN_PARAMETERS',
@@ -54,6 +60,12 @@ __all__ = [
     'parameters_markdown',
     'resolve_topic',
 ]
+
+
+#: A line's tension accuracy where ``NAME.tension_accuracy`` is not set, as a share of its MBL:
+#: a load pin is rated near the line's working load (about half the MBL: the MEG4 working load
+#: limit) and calibrated to about +-1 % of its rating (docs/node.md, "Sensor accuracies").
+DEFAULT_TENSION_ACCURACY = 0.005
 
 
 class _Required:
@@ -472,12 +484,38 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         _NOT_GIVEN,
         'Stated accuracy of the tension sensor, a bound: a reading is within +- this of the true '
         'tension (the margin bounds take the worst case within it; the dock estimate takes it '
-        'as a reading\'s standard deviation)',
+        'as a reading\'s standard deviation); not set: 0.5 % of NAME.mbl (a load pin rated near '
+        'half the MBL, +-1 % of its rating)',
         'N',
         1.0,
         1.0e9,
         _L,
         optional=True,
+    ),
+    # A line measured by several channels (core/monitor/channels.py, docs/channels.md).
+    ParamSpec(
+        'tension_topics',
+        'string_array',
+        (),
+        'The topics of a load cell\'s channels (std_msgs/Float64, N each), instead of '
+        'tension_topic: the tension from the healthy channels (empty: tension_topic)',
+        '',
+        None,
+        None,
+        _L,
+        read_only=True,
+        group='channels',
+    ),
+    ParamSpec(
+        'min_channels',
+        'double',
+        1.0,
+        'Fewer healthy channels than this and the line is blind (STALE); a whole number',
+        '',
+        1.0,
+        16.0,
+        _L,
+        group='channels',
     ),
     # Point loads on the chain (core/physics/point_loads.py, docs/point_loads.md).
     ParamSpec(
@@ -660,8 +698,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'tide_table',
         'string',
         '',
-        'Tide table: constituents "NAME AMPLITUDE PHASE SPEED; ..." (m, deg, deg/h); '
-        'empty: none (the trend)',
+        'Tide table: constituents "NAME AMPLITUDE PHASE SPEED; ..." (m, deg, deg/h), at most '
+        f'{MAX_CONSTITUENTS} ({MAX_TABLE_CHARS} characters); empty: none (the trend)',
         '',
         None,
         None,
@@ -803,12 +841,33 @@ PARAMETERS: tuple[ParamSpec, ...] = (
     ParamSpec(
         'depth_accuracy',
         'double',
-        0.0,
+        0.02,
         'Stated accuracy of the depth sensor, a bound: a reading is within +- this of the true '
-        'depth (the margin bounds take the worst case within it; 0: exact)',
+        'depth (the margin bounds take the worst case within it; 0: exact; 0.02: a radar or '
+        'pressure tide gauge, about 1 cm, and the hooks\' survey)',
         'm',
         0.0,
         100.0,
+    ),
+    ParamSpec(
+        'wave_window',
+        'double',
+        30.0,
+        'Wave-frequency tension: each line\'s peak and half-range (wave_tension) over this '
+        'window of its newest readings',
+        's',
+        1.0,
+        3600.0,
+    ),
+    ParamSpec(
+        'wave_allowance',
+        'double',
+        0.3,
+        'The dynamic uplift (and the bounds) take the window\'s peak tension plus this x '
+        'wave_tension: the anchor\'s dynamic force beyond the quasi-static (MoorDyn study)',
+        '',
+        0.0,
+        10.0,
     ),
     ParamSpec(
         'drag_margin_warn',
@@ -841,6 +900,17 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.0,
         1000.0,
         group='holding',
+    ),
+    ParamSpec(
+        'channel_tolerance',
+        'double',
+        0.05,
+        'A load-cell channel is out of line when its estimate differs from the median of the '
+        'channels\' by more than this fraction of it (+ tension_resolution)',
+        '',
+        0.001,
+        1.0,
+        group='channels',
     ),
     ParamSpec(
         'fatigue_damage_warn',
@@ -1222,6 +1292,8 @@ def _check(full_name: str, spec: ParamSpec, value: Any) -> Any:
             )
         return value
     if spec.type == 'string_array':
+        if value is None and spec.default == ():  # rcl reads an empty YAML list [] as "not set"
+            return ()
         if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
             raise ConfigError(full_name, f'expected a list of strings, got {value!r}')
         return tuple(value)
@@ -1280,6 +1352,8 @@ class LineConfig:
     anchor_holding: float | None = None
     anchor_weight: float | None = None
     chain_friction: float | None = None
+    tension_topics: tuple[str, ...] = ()
+    min_channels: float = 1.0
     point_load_positions: tuple[float, ...] = ()
     point_load_weights: tuple[float, ...] = ()
     fatigue_m: float = _PER_LINE_DEFAULT('fatigue_m')
@@ -1316,6 +1390,17 @@ class LineConfig:
         if self.ea == 0.0:
             object.__setattr__(self, 'ea', None)
         _check_point_loads(self)
+        _check_channels(self)
+
+    @property
+    def channel_topics(self) -> tuple[str, ...]:
+        """The channels' topics when the line has several (else ``()``: ``tension_topic``)."""
+        return self.tension_topics if len(self.tension_topics) > 1 else ()
+
+    @property
+    def topics(self) -> tuple[str, ...]:
+        """Every tension topic of the line (its channels', or ``tension_topic``)."""
+        return self.tension_topics or (self.tension_topic,)
 
     @property
     def point_loads(self) -> Optional[tuple[tuple[float, ...], tuple[float, ...]]]:
@@ -1331,6 +1416,36 @@ class LineConfig:
         if self.fatigue_stress_per_tension is not None:
             return self.fatigue_stress_per_tension
         return 80.5 * 12421.0e3 / self.mbl
+
+    @property
+    def sensor_accuracy(self) -> float:
+        """The tension sensor's accuracy [N]: ``tension_accuracy``, or where it is not set
+        :data:`DEFAULT_TENSION_ACCURACY` of the MBL."""
+        if self.tension_accuracy is not None:
+            return self.tension_accuracy
+        return DEFAULT_TENSION_ACCURACY * self.mbl
+
+
+def _check_channels(line: LineConfig) -> None:
+    """Channels: valid, distinct topics; a whole min_channels no more than the channels."""
+    key = f'{line.name}.tension_topics'
+    object.__setattr__(line, 'tension_topics', tuple(line.tension_topics))
+    for topic in line.tension_topics:
+        _check_topic(key, topic)
+    if len(set(line.tension_topics)) != len(line.tension_topics):
+        raise ConfigError(key, 'a topic is given twice')
+    if len(line.tension_topics) > 16:
+        raise ConfigError(key, f'{len(line.tension_topics)} channels: at most 16')
+    if len(line.tension_topics) > 1 and line.tension_type != FLOAT64:
+        raise ConfigError(key, f'the channels of a load cell are {FLOAT64} topics')
+    n = max(len(line.tension_topics), 1)
+    if line.min_channels != int(line.min_channels):
+        raise ConfigError(f'{line.name}.min_channels', 'must be a whole number of channels')
+    if line.min_channels > n:
+        raise ConfigError(
+            f'{line.name}.min_channels',
+            f'{int(line.min_channels)} but the line has {n} channel(s) (tension_topics)',
+        )
 
 
 def _check_point_loads(line: LineConfig) -> None:
@@ -1392,10 +1507,13 @@ class AlarmConfig:
     uplift_time_warn: float = _default('uplift_time_warn')
     uplift_time_deadband: float = _default('uplift_time_deadband')
     depth_accuracy: float = _default('depth_accuracy')
+    wave_window: float = _default('wave_window')
+    wave_allowance: float = _default('wave_allowance')
     drag_margin_warn: float = _default('drag_margin_warn')
     drag_margin_deadband: float = _default('drag_margin_deadband')
     drag_tolerance: float = _default('drag_tolerance')
     fatigue_damage_warn: float = _default('fatigue_damage_warn')
+    channel_tolerance: float = _default('channel_tolerance')
     tension_resolution: float = _default('tension_resolution')
     depth_resolution: float = _default('depth_resolution')
     stuck_time: float = _default('stuck_time')
@@ -1567,12 +1685,12 @@ class MonitorConfig:
         _check_geometry(self.lines)
         seen = {self.depth_topic: 'depth_topic'}
         for line in self.lines:
-            other = seen.setdefault(line.tension_topic, f'{line.name}.tension_topic')
-            if other != f'{line.name}.tension_topic':
-                raise ConfigError(
-                    f'{line.name}.tension_topic',
-                    f'topic {line.tension_topic!r} is already used by {other}',
-                )
+            many = bool(line.tension_topics)
+            name = f'{line.name}.tension_topics' if many else f'{line.name}.tension_topic'
+            for topic in line.topics:
+                other = seen.setdefault(topic, name)
+                if other != name:
+                    raise ConfigError(name, f'topic {topic!r} is already used by {other}')
 
     def headings(self) -> list[float]:
         """Each line's heading (deg, clockwise from the bow, in [0, 360)): ``NAME.heading``

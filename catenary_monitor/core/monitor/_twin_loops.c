@@ -269,6 +269,8 @@ static PyObject *py_uplift_times(PyObject *self, PyObject *args) {
             out[i] = NAN;
         else if (m[i] <= 0.0 || f[i] > 0.0)
             out[i] = 0.0;
+        else if (r[i] != r[i])
+            out[i] = NAN;
         else if (!(r[i] > 0.0))
             out[i] = INFINITY;
         else

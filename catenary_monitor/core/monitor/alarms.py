@@ -39,6 +39,12 @@ Conditions, each with its own latch:
 ``fatigue`` (WARN; :mod:`catenary_monitor.core.monitor.fatigue`)
     raised when the line's cumulative Miner damage reaches ``fatigue_damage_warn`` for
     ``on_delay``; cleared below it (the damage only grows: a new chain, a new store).
+``channel`` (WARN; a line measured by several channels, :mod:`.channels`)
+    raised when a channel is silent, stuck or out of line while enough others are healthy (the
+    tension then comes from them); cleared once every channel is healthy again for
+    ``warn_clear_hold``. Fewer healthy channels than ``NAME.min_channels``: the line is blind
+    (STALE, the message naming the channels and why), and its NaN tension is not an impossible
+    input.
 ``sensor_error`` (ERROR), ``sensor_warn`` (WARN; :mod:`catenary_monitor.core.monitor.sensor_state`)
     raised when the line's ``sensor_state`` (decided at ticks) is an ERROR state (``over_mbl``,
     ``slack``, ``suspected_parted``), resp. a WARN state (``stuck``, ``spike``), for
@@ -84,6 +90,7 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig
 from catenary_monitor.core.monitor import sensor_state
+from catenary_monitor.core.monitor.channels import describe
 
 try:  # the latch's loop in C (core/_loops.c; optional: else the numpy passes)
     from catenary_monitor.core.monitor import _twin_loops as _loops  # type: ignore[attr-defined]
@@ -106,6 +113,8 @@ __all__ = [
     'diagnostic_values',
     'quiet_change',
     'SUPPRESSED_NOTE',
+    'VIEW_TEXT',
+    'uplift_seen',
 ]
 
 
@@ -141,6 +150,8 @@ CONDITIONS = (
     'dragging',
     # Chain fatigue (Miner's damage): core/monitor/fatigue.py.
     'fatigue',
+    # A load cell's channel failed (the tension from the others): core/monitor/channels.py.
+    'channel',
 )
 #: The conditions that raise an ERROR (the others a WARN).
 ERROR_CONDITIONS = _ERRORS = ('uplift', 'input', 'sensor_error', 'dragging')
@@ -197,6 +208,10 @@ class AlarmInputs:
     implied_anchor_distance: float = math.nan  # m (for the message)
     fatigue_damage: float = math.nan  # Miner's damage so far
     fatigue_life_left: float = math.nan  # s at the last day's rate (for the message)
+    dynamic_uplift: float = math.nan  # N, the uplift at the wave window's peak (wave_window)
+    uplift_view: float = math.nan  # 1: time_to_uplift is the chain length's, 0: R held's
+    channels_healthy: float = math.nan  # a line of several channels: how many are healthy
+    channel_states: float = math.nan  # their states (core.channels code; NaN: one channel)
 
 
 class Latch(NamedTuple):
@@ -266,11 +281,23 @@ class LineAlarm:
     config: AlarmConfig = field(default_factory=AlarmConfig)
     allowed_uplift: float = 0.0
     anchor_distance: float = math.nan  # m, installed (for the dragging message)
+    channel_names: tuple[str, ...] = ()  # a line of several channels: their topics
+    min_channels: int = 1
 
     @classmethod
     def for_line(cls, line: LineConfig, config: AlarmConfig) -> LineAlarm:
         """Rules for ``line`` under ``config``."""
-        return cls(config, line.allowed_uplift, line.anchor_distance)
+        return cls(
+            config,
+            line.allowed_uplift,
+            line.anchor_distance,
+            line.channel_topics,
+            int(line.min_channels),
+        )
+
+    def blind(self, healthy: float) -> bool:
+        """Fewer healthy channels than ``min_channels`` (a line of several channels)."""
+        return bool(self.channel_names) and healthy < self.min_channels
 
     @property
     def uplift_clear_level(self) -> float:
@@ -339,9 +366,10 @@ class LineAlarm:
         return new, events
 
     def _stale(self, x: AlarmInputs, now: float) -> tuple[bool, bool]:
-        """(tension stale or never received, depth stale or never received)."""
+        """(tension stale, never received or blind, depth stale or never received)."""
         ts, ds = x.tension_stamp, x.depth_stamp
         stale_t = ts != ts or now - ts > self.config.tension_timeout
+        stale_t = stale_t or self.blind(x.channels_healthy)
         if ds != ds:
             return stale_t, True
         if x.depth_stale is None:
@@ -350,11 +378,14 @@ class LineAlarm:
 
     def _classify(self, cond: str, x: AlarmInputs, stale: bool) -> int:
         if cond == 'input':
+            if self.blind(x.channels_healthy):  # no tension to judge: blind, not impossible
+                return _HOLD
             return _BREACH if x.status != 0 else (_HOLD if stale else _CLEAR)
         if cond == 'uplift':
-            breach = x.uplift_force > self.allowed_uplift
+            force = uplift_seen(x.uplift_force, x.dynamic_uplift)
+            breach = force > self.allowed_uplift
             level = self.uplift_clear_level
-            clear = x.uplift_force <= level and (
+            clear = force <= level and (
                 level > 0.0 or x.anchor_margin >= self.config.uplift_clear_margin
             )
         elif cond == 'inconsistent':
@@ -364,10 +395,13 @@ class LineAlarm:
         elif cond == 'fatigue':
             warn = self.config.fatigue_damage_warn
             breach, clear = x.fatigue_damage >= warn, x.fatigue_damage < warn
+        elif cond == 'channel':
+            failed = x.channel_states > 0.0 and not self.blind(x.channels_healthy)
+            breach, clear = failed, x.channel_states == 0.0
         elif cond in _SENSOR:
             breach, clear = _sensor_code(cond, float(x.sensor_state))
         elif cond == 'uplift_possible':
-            nominal = x.uplift_force > self.allowed_uplift
+            nominal = uplift_seen(x.uplift_force, x.dynamic_uplift) > self.allowed_uplift
             upper = x.uplift_force_upper
             breach = upper > self.allowed_uplift and not nominal
             clear = upper <= self.allowed_uplift or nominal
@@ -390,9 +424,15 @@ class LineAlarm:
         parts = []
         hold_e, hold_w = self.config.clear_hold, self.config.warn_clear_hold
         if active[0]:
-            f, allowed = x.uplift_force, self.allowed_uplift
+            f, allowed = uplift_seen(x.uplift_force, x.dynamic_uplift), self.allowed_uplift
             if f > allowed:
-                parts.append(f'anchor uplift {_fmt(f, 1e3)} kN > allowed {_fmt(allowed, 1e3)} kN')
+                text = f'anchor uplift {_fmt(f, 1e3)} kN > allowed {_fmt(allowed, 1e3)} kN'
+                if f - x.uplift_force > max(1.0, 1e-6 * f):  # not a rounding apart
+                    text += (
+                        f' (dynamic: at the waves\' peak tension; quasi-static '
+                        f'{_fmt(x.uplift_force, 1e3)} kN)'
+                    )
+                parts.append(text)
             else:
                 level = self.uplift_clear_level
                 text = (
@@ -415,8 +455,11 @@ class LineAlarm:
             parts.append(_sensor_text(x, 'sensor_error', hold_e))
         if active[_DRAGGING]:
             parts.append(self._dragging_text(x, hold_e))
+        blind = self.blind(x.channels_healthy)
+        if blind:
+            parts.append(self._channels_text(x, True))
         for name, is_stale, stamp, timeout in (
-            ('tension', stale_t, x.tension_stamp, self.config.tension_timeout),
+            ('tension', stale_t and not blind, x.tension_stamp, self.config.tension_timeout),
             ('depth', stale_d, x.depth_stamp, self.config.depth_timeout),
         ):
             if not is_stale:
@@ -442,6 +485,9 @@ class LineAlarm:
                 parts.append(self._uplift_possible_text(x, hold_w))
             elif up and cond == 'fatigue':
                 parts.append(self._fatigue_text(x))
+            elif up and cond == 'channel':
+                if not blind:
+                    parts.append(self._channels_text(x, False, hold_w))
             elif up and cond == 'drag_margin':
                 text = self._warn_text(cond, x.drag_margin, hold_w)
                 holding = _fmt(x.holding_capacity, 1e3)
@@ -464,9 +510,15 @@ class LineAlarm:
         return f'{label} {v}{unit}, warning held (clears after {hold:g} s at >= {hi}{unit})'
 
     def _uplift_time_text(self, x: AlarmInputs, hold: float) -> str:
-        """The message of the ``time_to_uplift`` condition (minutes, the tide's rate in m/h)."""
+        """The message of the ``time_to_uplift`` condition (minutes, the tide's rate in m/h,
+        which view answered: the chain's length held or the horizontal tension held)."""
         low, high = self._warn_limits('time_to_uplift')
         value = x.time_to_uplift
+        if value != value:
+            return (
+                f'time to uplift unknown (trend not known yet), warning held (clears after '
+                f'{hold:g} s at >= {_duration(high)})'
+            )
         if value < low:
             if not value > 0.0:
                 return (
@@ -474,13 +526,34 @@ class LineAlarm:
                     f'allowed {_fmt(self.allowed_uplift, 1e3)} kN)'
                 )
             rate = x.tide_rate * 3600.0
+            view = VIEW_TEXT.get(x.uplift_view, '')
+            view = f' ({view})' if view else ''
             if x.tide_forecast == 1.0:
-                return f'anchor uplift in {_duration(value)} on the tide table\'s forecast'
-            return f'anchor uplift in {_duration(value)} if the tide keeps rising {rate:.2f} m/h'
+                return f'anchor uplift in {_duration(value)} on the tide table\'s forecast{view}'
+            return (
+                f'anchor uplift in {_duration(value)} if the tide keeps rising {rate:.2f} m/h'
+                f'{view}'
+            )
         return (
             f'time to uplift {_duration(value)}, warning held (clears after {hold:g} s '
             f'at >= {_duration(high)})'
         )
+
+    def _channels_text(self, x: AlarmInputs, blind: bool, hold: float = 0.0) -> str:
+        """The channels' message: blind (fewer healthy than min_channels) or one failed."""
+        n, healthy = len(self.channel_names), x.channels_healthy
+        failed = describe(x.channel_states, self.channel_names) or 'none failed'
+        if blind:
+            return (
+                f'{_count(healthy)} of {n} load-cell channels healthy (min_channels '
+                f'{self.min_channels}): {failed}'
+            )
+        if x.channel_states > 0.0:
+            return (
+                f'load-cell channel {failed}: tension from the other {_count(healthy)} '
+                '(regression on their shared history)'
+            )
+        return f'channel warning held (clears after {hold:g} s of every channel healthy)'
 
     def _fatigue_text(self, x: AlarmInputs) -> str:
         """The message of the ``fatigue`` condition (the damage, the life left in days)."""
@@ -521,6 +594,17 @@ class LineAlarm:
 _SENSOR = ('sensor_error', 'sensor_warn')
 _DRAGGING = CONDITIONS.index('dragging')
 
+#: Which view answered a time to uplift (``uplift_view``), for messages and /diagnostics.
+VIEW_TEXT = {0.0: 'horizontal tension held', 1.0: 'chain length held'}
+
+
+def uplift_seen(nominal: float, dynamic: float) -> float:
+    """The uplift the ERROR takes [N]: the dynamic uplift where known (it is at least the
+    nominal, taken at the wave window's peak tension), else the nominal."""
+    if dynamic != dynamic:
+        return nominal
+    return dynamic if nominal != nominal else max(nominal, dynamic)  # as np.fmax
+
 
 def _sensor_codes(cond: str, code: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(breach, clear) of a sensor condition from line state codes (NaN: hold)."""
@@ -548,6 +632,10 @@ def _sensor_text(x: AlarmInputs, cond: str, hold: float) -> str:
     if bool(breach):
         return sensor_state.line_message(int(code), x.sensor_tension, x.mbl)
     return f'sensor alarm held (clears after {hold:g} s of sane readings)'
+
+
+def _count(value: float) -> str:
+    return 'no' if value != value else str(int(value))
 
 
 def _life(seconds: float) -> str:
@@ -646,6 +734,10 @@ _INPUT_FIELDS = (
     'implied_anchor_distance',
     'fatigue_damage',
     'fatigue_life_left',
+    'dynamic_uplift',
+    'uplift_view',
+    'channels_healthy',
+    'channel_states',
 )
 
 
@@ -897,6 +989,8 @@ def _stale_columns(
     ts, ds = x['tension_stamp'], x['depth_stamp']
     with np.errstate(invalid='ignore'):
         stale_t = np.isnan(ts) | (t - ts > cfg.tension_timeout)
+        if alarm.channel_names:  # a blind line of several channels
+            stale_t = stale_t | _blind_column(alarm, x)
         if depth_stale is None:
             stale_d = np.isnan(ds) | (t - ds > cfg.depth_timeout)
         else:
@@ -934,13 +1028,13 @@ def _classify_columns(
 
     cfg = alarm.config
     level_up = alarm.uplift_clear_level
-    f = x['uplift_force']
+    f = np.fmax(x['uplift_force'], x['dynamic_uplift'])
     up_clear = f <= level_up
     if not level_up > 0.0:
         up_clear &= x['anchor_margin'] >= cfg.uplift_clear_margin
     out = {
         'uplift': codes('uplift', f > alarm.allowed_uplift, up_clear),
-        'input': codes('input', status != 0, status == 0),
+        'input': codes('input', (status != 0) & ~_blind_column(alarm, x), status == 0),
     }
     for cond in _MARGINS:
         low, high = alarm._warn_limits(cond)
@@ -960,7 +1054,17 @@ def _classify_columns(
     out['dragging'] = codes('dragging', drag == 2.0, drag < 2.0)
     damage, warn = x['fatigue_damage'], cfg.fatigue_damage_warn
     out['fatigue'] = codes('fatigue', damage >= warn, damage < warn)
+    states = x['channel_states']
+    blind = _blind_column(alarm, x)
+    out['channel'] = codes('channel', (states > 0.0) & ~blind, states == 0.0)
     return out
+
+
+def _blind_column(alarm: LineAlarm, x: dict[str, np.ndarray]) -> np.ndarray:
+    """Per update: the line is blind (fewer healthy channels than min_channels)."""
+    if not alarm.channel_names:
+        return np.zeros(x['channels_healthy'].shape, bool)
+    return x['channels_healthy'] < alarm.min_channels
 
 
 # --- diagnostics values -------------------------------------------------------------------------
@@ -993,6 +1097,13 @@ DIAGNOSTIC_KEYS = (
     'fatigue_damage',
     'fatigue_damage_rate',
     'fatigue_life_left',
+    # Wave-frequency tension and the dynamic uplift (core/monitor/wave_window.py).
+    'wave_tension',
+    'peak_tension',
+    'dynamic_uplift',
+    # A line of several channels (core/monitor/channels.py): healthy count, states code.
+    'channels_healthy',
+    'channel_states',
 )
 
 

@@ -36,11 +36,14 @@ grounded_length``. Per line (SI):
     conservative); ``0`` (:data:`HOLDING`) otherwise. NaN without ``anchor_holding``; never 2
     without ``chain_length`` (the span is not known).
 ``tide_margin_at_length`` (m)
-    The depth rise at which that chain, its length and the implied span held (the hook stays
-    where it is), lifts its anchor (:func:`catenary_monitor.core.physics.fixed_length.lift_depth`)
-    minus the depth now; negative while the anchor is lifted. ``tide_margin`` holds the
-    horizontal tension instead; a chain of fixed length gains pretension as the tide rises,
-    so this one is usually the nearer. Needs ``chain_length``.
+    The depth rise at which that chain, its length and its span held (the hook stays where it
+    is installed, ``anchor_distance``), lifts its anchor
+    (:func:`catenary_monitor.core.physics.fixed_length.lift_depth`) minus the depth now;
+    negative while the anchor is lifted. ``tide_margin`` holds the horizontal tension instead;
+    a chain of fixed length gains pretension as the tide rises, so this one is usually the
+    nearer, and the time to uplift counts down to the nearer of the two. The lift depth is a
+    property of the geometry, not of one reading: the gauge's noise enters only as the depth
+    subtracted (and cancels in the forecast). Needs ``chain_length``.
 
 NaN where the data are not given or the line has no solve.
 """
@@ -135,7 +138,8 @@ def holding(
             implied[need] = fixed_length.span_from_tension(
                 w[need], h[need], length[need], t[need], ea[need]
             )
-            lift[need] = fixed_length.lift_depth(w[need], length[need], implied[need], ea[need])
+            span = np.where(np.isnan(x0), implied, x0)  # the hook where it is installed
+            lift[need] = fixed_length.lift_depth(w[need], length[need], span[need], ea[need])
         margin = capacity - r
         over = margin < 0.0
         state = np.where(over, np.where(implied - x0 > tolerance, DRAGGING, OVERLOADED), HOLDING)
@@ -231,7 +235,8 @@ def _holding_floats(
     implied = lift = nan
     if solved and length == length:
         implied = fixed_length.span_from_tension_scalar(w, h, length, t, ea)
-        lift = fixed_length.lift_depth_scalar(w, length, implied, ea)
+        span = implied if x0 != x0 else x0  # the hook where it is installed
+        lift = fixed_length.lift_depth_scalar(w, length, span, ea)
     margin = capacity - r
     state = float(DRAGGING if implied - x0 > tolerance else OVERLOADED) if margin < 0.0 else 0.0
     return {

@@ -53,6 +53,7 @@ from catenary_monitor.core.config.parameters import (
     runtime_change_messages,
 )
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
+from catenary_monitor.core.monitor import channels
 from catenary_monitor.core.monitor import alarm_flood, shelving
 from catenary_monitor.core.monitor import dock_watch as dock_live
 from catenary_monitor.core.monitor import fatigue as fatigue_rule
@@ -63,6 +64,7 @@ from catenary_monitor.core.monitor import (
     tide_table,
     tide_trend,
     uncertainty,
+    wave_window,
 )
 from catenary_monitor.core.monitor.alarm_journal import AlarmEvent, entries
 from catenary_monitor.core.monitor.alarms import (
@@ -76,6 +78,7 @@ from catenary_monitor.core.monitor.alarms import (
     diagnostic_values,
     quiet_change,
 )
+from catenary_monitor.core.monitor.alarms import VIEW_TEXT
 from catenary_monitor.core.monitor.health import (
     BUSY_WINDOW,
     INTAKE_WINDOW,
@@ -128,6 +131,8 @@ __all__ = [
     'holding_values',
     'HOLDING_FIELDS',
     'holding_one',
+    'derived_values',
+    'view_word',
     'output_values',
     'tide_component',
     'sensors_component',
@@ -147,7 +152,9 @@ NODE_NAME = 'catenary_monitor'
 #: (:mod:`~catenary_monitor.core.monitor.holding`) and ``sensor_state``, the line's sensor state
 #: code as of the newest tick (:data:`catenary_monitor.core.monitor.sensor_state.LINE_STATES`: 0
 #: ok, 1 stuck, 2 spike, 3 over_mbl, 4 slack, 5 suspected_parted), then ``tide_margin_at_length``
-#: [m] (:data:`catenary_monitor.core.monitor.holding.LENGTH_FIELDS`).
+#: [m] (:data:`catenary_monitor.core.monitor.holding.LENGTH_FIELDS`), then ``wave_tension``,
+#: ``peak_tension`` and ``dynamic_uplift`` [N] and ``time_to_uplift_view`` (1 chain length held,
+#: 0 horizontal tension held).
 OUTPUT_FIELDS = (
     'top_tension',
     'depth',
@@ -175,6 +182,14 @@ OUTPUT_FIELDS = (
     *holding_rule.DRAG_FIELDS,
     # Chain fatigue (Miner's damage, its rate over the last day, the life left): fatigue.py.
     *fatigue_rule.FIELDS,
+    # Wave-frequency tension and the dynamic uplift (core/monitor/wave_window.py,
+    # core/monitor/uncertainty.py), then which view the time to uplift counts down (1 the chain
+    # length held, 0 the horizontal tension held: core/monitor/tide_trend.py).
+    *wave_window.FIELDS,
+    'dynamic_uplift',
+    'time_to_uplift_view',
+    # A line measured by several channels: the healthy count and their states, channels.py.
+    *channels.FIELDS,
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -217,6 +232,7 @@ class Tension(NamedTuple):
     line: int
     value: float
     sample_ns: Optional[int] = None
+    channel: int = 0  # a line of several channels (NAME.tension_topics): which one
 
 
 class Depth(NamedTuple):
@@ -428,8 +444,14 @@ class LineState:
     coalesced_until: int = -1  # ns: this line's samples stamped up to it were not stepped
     fatigue: fatigue_rule.FatigueState = fatigue_rule.FatigueState()  # the streamed count
     fatigue_values: tuple[float, ...] = (0.0, _NAN, _NAN)  # fatigue_rule.FIELDS now
+    channels: Optional[channels.ChannelState] = None  # a line of several channels
+    channel_values: tuple[float, ...] = (_NAN, _NAN)  # channels.FIELDS now
     sample_ns: int = -1  # ns, the newest accepted sample's stamp (header or arrival; -1: none)
     stamp_refused: float = -math.inf  # s, when a sample's stamp was last refused (arrival)
+    # The wave window of its readings (core.monitor.wave_window) and its values at the newest.
+    wave: wave_window.WaveState = field(default_factory=wave_window.WaveState.empty)
+    peak_tension: float = _NAN  # N
+    wave_tension: float = _NAN  # N
 
     def inputs(
         self, depth_s: float, depth_stale: bool, rate: float = _NAN, table: bool = False
@@ -465,6 +487,10 @@ class LineState:
             implied_anchor_distance=v[_AT['implied_anchor_distance']],
             fatigue_damage=self.fatigue_values[0],
             fatigue_life_left=self.fatigue_values[2],
+            dynamic_uplift=v[_AT['dynamic_uplift']],
+            uplift_view=v[_AT['time_to_uplift_view']],
+            channels_healthy=self.channel_values[0],
+            channel_states=self.channel_values[1],
         )
 
 
@@ -583,6 +609,7 @@ class MonitorCore:
                 ack=alarm_ack.initial(start),
                 fatigue=fatigue_rule.initial(lc.fatigue_damage_initial),
                 fatigue_values=(lc.fatigue_damage_initial, _NAN, _NAN),
+                channels=channels.initial(len(lc.channel_topics)) if lc.channel_topics else None,
             )
             for lc in config.lines
         ]
@@ -656,8 +683,14 @@ class MonitorCore:
         ):
             line.stamp_refused = _stamp_s(ev.stamp_ns)  # refused: not a reading (bad_stamp)
             return Step(ev.stamp_ns, 'tension', (), None, ())
+        value = float(ev.value)
+        if line.channels is not None:  # the tension from the healthy channels
+            line.channels, value, healthy, code = channels.step(
+                line.channels, ev.channel, _stamp_s(sample_ns), value, channel_limits(self, line)
+            )
+            line.channel_values = (float(healthy), code)
         line.sample_ns = sample_ns
-        line.tension, line.tension_s = float(ev.value), _stamp_s(sample_ns)
+        line.tension, line.tension_s = value, _stamp_s(sample_ns)
         line.sensor_memory = sensor_state.sample(
             line.sensor_memory,
             line.tension_s,
@@ -668,6 +701,9 @@ class MonitorCore:
         )
         line.fatigue, line.fatigue_values = fatigue_rule.step(
             line.fatigue, line.tension_s, line.tension, self.curves[ev.line]
+        )
+        line.peak_tension, line.wave_tension = wave_window.step(
+            line.wave, line.tension_s, line.tension, line.config.mbl, a.wave_window
         )
         self._solve_one(line)
         log: list[AlarmEvent] = []
@@ -1142,7 +1178,7 @@ class MonitorCore:
                 '',
                 NO_MODEL,
             )
-            line.values = _with_fatigue(line.values, line.fatigue_values)
+            self._add_derived([line])
             return
         loads: dict[str, Any] = {} if lc.point_loads is None else {'point_loads': lc.point_loads}
         r = solve(
@@ -1166,7 +1202,7 @@ class MonitorCore:
             r.safety_factor,
             r.anchor_angle_deg,
             r.suspended_length,
-            self._uplift_times([r.tide_margin], [r.uplift_force])[0],
+            _NAN,  # time_to_uplift: _add_derived
         )
         line.values = _with_sensor(line.values + _NAN_VALUES[len(line.values) :], line.sensor_code)
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
@@ -1201,7 +1237,7 @@ class MonitorCore:
         columns = [tension.tolist(), h.tolist()] + [
             np.asarray(getattr(r, k)).tolist() for k in _SOLVED
         ]
-        columns.append(self._uplift_times(columns[6], columns[5]))
+        columns.append([_NAN] * len(lines))  # time_to_uplift: _add_derived
         models = np.broadcast_to(np.asarray(r.model, dtype=object), tension.shape)
         messages, status = r.message, np.asarray(r.status).tolist()
         for i, line in enumerate(lines):
@@ -1218,33 +1254,45 @@ class MonitorCore:
         self._add_derived(lines)
 
     def _add_derived(self, lines: Sequence[LineState]) -> None:
-        """The bounds and the holding values of freshly solved lines (from their values);
-        lines without accuracies or holding data keep NaN (what the functions give them)."""
+        """The fatigue values, the wave values, the dynamic uplift, the bounds, the holding
+        values and the time to uplift of freshly solved lines (from their values;
+        :func:`derived_values`, the holding of one line in plain floats: :func:`holding_one`)."""
         for line in lines:
             line.values = _with_fatigue(line.values, line.fatigue_values)
-        accuracy = self.config.alarm.depth_accuracy
+            _with_channels(line)
+        named = {k: np.array([line.values[i] for line in lines]) for k, i in _AT.items()}
+        named['peak_tension'] = np.array([line.peak_tension for line in lines])
+        named['wave_tension'] = np.array([line.wave_tension for line in lines])
+        cfgs = [line.config for line in lines]
         tolerance = self.config.alarm.drag_tolerance
-        for fields, compute, wanted in (
-            (uncertainty.FIELDS, _bounds_of(accuracy), _wants_bounds(accuracy)),
-            (HOLDING_FIELDS, _holding_of(tolerance), _wants_holding),
-        ):
-            some = [line for line in lines if wanted(line.config)]
-            if not some:
-                continue
-            derived: dict[str, Any]
-            if fields is HOLDING_FIELDS and len(some) == 1:  # a tension event: plain floats
-                one = holding_one(some[0].config, some[0].values, tolerance)
-                derived = {k: (v,) for k, v in one.items()}
-            else:
-                named = {k: np.array([line.values[i] for line in some]) for k, i in _AT.items()}
-                derived = compute([line.config for line in some], named)
-            for j, line in enumerate(some):
-                v = list(line.values)
-                for key in fields:
-                    v[_AT[key]] = float(derived[key][j])
-                line.values = tuple(v)
+        derived = derived_values(cfgs, self.config.alarm, named, holding=False)
+        some = [k for k, line in enumerate(lines) if _wants_holding(line.config)]
+        held: dict[str, Any] = {key: np.full(len(lines), np.nan) for key in HOLDING_FIELDS}
+        if len(some) == 1:  # a tension event: plain floats
+            one = holding_one(cfgs[some[0]], lines[some[0]].values, tolerance)
+            for key in HOLDING_FIELDS:
+                held[key][some[0]] = one[key]
+        elif some:
+            idx = np.array(some)
+            part = holding_values(
+                [cfgs[k] for k in some], {k: v[idx] for k, v in named.items()}, tolerance
+            )
+            for key in HOLDING_FIELDS:
+                held[key][idx] = part[key]
+        derived.update(held)
+        margin, view = tide_trend.nearer_margin(
+            named['tide_margin'], derived['tide_margin_at_length']
+        )
+        derived['time_to_uplift'] = np.array(self._uplift_times(margin, named['uplift_force']))
+        derived['time_to_uplift_view'] = view
+        at = [(_AT[key], np.asarray(column).tolist()) for key, column in derived.items()]
+        for j, line in enumerate(lines):
+            v = list(line.values)
+            for i, column in at:
+                v[i] = column[j]
+            line.values = tuple(v)
 
-    def _uplift_times(self, margins: Sequence[float], forces: Sequence[float]) -> list[float]:
+    def _uplift_times(self, margins: Any, forces: Any) -> list[float]:
         """Each line's time to uplift [s]: on the tide table's forecast from the newest depth
         sample where there is a table (core.monitor.tide_table), else at the tide's trend."""
         a = self.config.alarm
@@ -1447,6 +1495,27 @@ def _with_fatigue(values: tuple[float, ...], fatigue: tuple[float, ...]) -> tupl
     return values[:_FATIGUE_AT] + tuple(fatigue) + values[end:]
 
 
+_CHANNELS_AT = VALUE_FIELDS.index(channels.FIELDS[0])
+
+
+def _with_channels(line: LineState) -> None:
+    """The line's values with its channels' values in their places."""
+    v, end = line.values, _CHANNELS_AT + len(channels.FIELDS)
+    line.values = v[:_CHANNELS_AT] + tuple(line.channel_values) + v[end:]
+
+
+def channel_limits(core: MonitorCore, line: LineState) -> channels.Limits:
+    """The channel rules of a line (core.channels.Limits)."""
+    a = core.config.alarm
+    return channels.Limits(
+        a.tension_timeout,
+        a.stuck_time,
+        a.tension_resolution,
+        a.channel_tolerance,
+        int(line.config.min_channels),
+    )
+
+
 def _implausible(line: LineState, code: int) -> None:
     """An implausible reading (core.monitor.plausible): its status and sentence, no solved values
     (the measured tension and depth kept, as for every impossible input)."""
@@ -1461,14 +1530,6 @@ def _column(cfgs: Sequence[LineConfig], key: str) -> np.ndarray:
     return np.array([none if getattr(c, key) is None else getattr(c, key) for c in cfgs])
 
 
-def _wants_bounds(depth_accuracy: float) -> Any:
-    """Whether a line has bounds: a tension accuracy, or a depth accuracy for all."""
-    return (
-        lambda c: (depth_accuracy > 0.0 or c.tension_accuracy is not None)
-        and c.point_loads is None
-    )
-
-
 def _wants_holding(c: LineConfig) -> bool:
     """Whether a line has holding values: a chain length or an anchor holding (not with point
     loads: the plain chain's formulas)."""
@@ -1479,12 +1540,43 @@ def _wants_holding(c: LineConfig) -> bool:
 HOLDING_FIELDS = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS + holding_rule.DRAG_FIELDS
 
 
-def _holding_of(tolerance: float) -> Any:
-    return lambda cfgs, named: holding_values(cfgs, named, tolerance)
-
-
-def _bounds_of(depth_accuracy: float) -> Any:
-    return lambda cfgs, named: bound_values(cfgs, depth_accuracy, named)
+def derived_values(
+    cfgs: Sequence[LineConfig], alarm: Any, named: dict[str, np.ndarray], holding: bool = True
+) -> dict[str, np.ndarray]:
+    """What the core adds to a solve (the core and its batch twin both call this), per element
+    of the nominal values ``named`` (VALUE_FIELDS -> arrays, with ``peak_tension`` and
+    ``wave_tension`` from the wave window), each element's line in ``cfgs`` (one config for
+    all, or one per element): the wave values, ``dynamic_uplift``, the bounds
+    (:mod:`.uncertainty`) and, with ``holding``, the holding values (:mod:`.holding`; NaN for
+    lines with neither ``chain_length`` nor ``anchor_holding``)."""
+    n = len(named['top_tension'])
+    out = {key: np.asarray(named[key], dtype=float) for key in wave_window.FIELDS}
+    tension = uncertainty.dynamic_tension(
+        named['peak_tension'], named['wave_tension'], alarm.wave_allowance
+    )
+    out.update(bound_values(cfgs, alarm.depth_accuracy, dict(named, top_tension=tension)))
+    out['dynamic_uplift'] = uncertainty.dynamic_uplift(
+        _column(cfgs, 'weight'),
+        _column(cfgs, 'anchor_distance'),
+        _column(cfgs, 'mbl'),
+        _column(cfgs, 'ea'),
+        tension,
+        named['depth'],
+        named['uplift_force'],
+    )
+    plain = np.array([c.point_loads is None for c in cfgs])
+    if not plain.all():  # a chain with point loads: not the plain chain's bounds
+        for key in (*uncertainty.FIELDS, 'dynamic_uplift'):
+            out[key] = np.where(plain, out[key], np.nan)
+    if not holding:
+        return out
+    if len(cfgs) == 1 and _wants_holding(cfgs[0]):  # one line for every element (the twin)
+        out.update(holding_values(cfgs, named, alarm.drag_tolerance))
+    elif len(cfgs) == 1:
+        out.update({key: np.full(n, np.nan) for key in HOLDING_FIELDS})
+    else:
+        raise ValueError('derived_values: the holding of several lines is the core\'s')
+    return out
 
 
 def bound_values(
@@ -1500,7 +1592,7 @@ def bound_values(
         _column(cfgs, 'ea'),
         named['top_tension'],
         named['depth'],
-        _column(cfgs, 'tension_accuracy'),
+        np.array([c.sensor_accuracy for c in cfgs]),
         depth_accuracy,
         named['uplift_force'],
     )
@@ -1577,7 +1669,8 @@ def line_status(
     """One line's ``DiagnosticStatus``: the contract keys (SI strings ``float()`` reads back
     exactly), then ``measured_tension``, ``tension_age`` [s], ``anchor_distance``,
     ``allowed_uplift``, ``anchor_angle_deg``, ``solver_status``, ``model``, ``sensor_state``
-    (:func:`catenary_monitor.core.monitor.sensor_state.line_word`), then ``extra``
+    (:func:`catenary_monitor.core.monitor.sensor_state.line_word`), ``time_to_uplift_view``
+    (:func:`view_word`), then ``extra``
     (the alarm's acknowledgement keys: :func:`.acknowledge.diagnostic_values`; with the dock
     model, :func:`line_dock_values`)."""
     named = dict(zip(VALUE_FIELDS, values))
@@ -1590,11 +1683,18 @@ def line_status(
         ('solver_status', str(int(status))),
         ('model', model),
         ('sensor_state', sensor_word),
+        ('time_to_uplift_view', view_word(named['time_to_uplift_view'])),
         *extra,
     ]
     return ComponentStatus(
         f'{NODE_NAME}: {config.name}', level, message, hardware_id, tuple(pairs)
     )
+
+
+def view_word(view: float) -> str:
+    """Which view a time to uplift counts down (``/diagnostics`` ``time_to_uplift_view``):
+    ``chain length held``, ``horizontal tension held`` or ``none`` (no solve)."""
+    return VIEW_TEXT.get(float(view), 'none')
 
 
 def line_dock_values(latched: bool, dock: Sequence[float]) -> tuple[tuple[str, str], ...]:
@@ -1821,6 +1921,6 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
                 alarm_ack.bounded_text(str(record.get('origin', ''))),
                 alarm_ack.bounded_text(str(record.get('publisher', ''))),
             )
-    except (ValueError, KeyError, TypeError):
+    except (ValueError, KeyError, TypeError, RecursionError):  # a damaged or crafted record
         return None
     return None

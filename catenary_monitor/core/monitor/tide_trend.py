@@ -22,9 +22,13 @@ in sample order in both paths (``numpy.bincount`` adds sequentially), so the cor
 give the same bits: no running sums over the whole log, whose rounding grows with its length.
 Non-finite depth samples do not enter the bins (they still decide the tide's level).
 
-Each line's time to uplift (:func:`time_to_uplift`) is then ``(tide_margin + excess) / rate``:
-the margin counted from the tide's level, not from this sample's wave crest or trough, at the
-horizontal tension of the newest solve (the assumption of ``tide_margin``).
+Each line's time to uplift (:func:`time_to_uplift`) is then ``(margin + excess) / rate``: the
+margin counted from the tide's level, not from this sample's wave crest or trough. The margin is
+the nearer of two views (:func:`nearer_margin`): the horizontal tension of the newest solve held
+(``tide_margin``) and, with ``chain_length``, the chain's length and span held
+(``tide_margin_at_length``: a fixed depth minus the depth, so the gauge's noise cancels with the
+excess). Unknown (no trend yet, or after a gap) is NaN, distinct from inf (the tide is not
+rising: not coming).
 """
 
 from __future__ import annotations
@@ -39,7 +43,16 @@ try:  # uplift_times' loop in C (core/monitor/_twin_loops.c; optional: else the 
 except ImportError:  # not built
     _loops = None
 
-__all__ = ['BINS', 'TrendState', 'bin_ns', 'step', 'series', 'time_to_uplift', 'uplift_times']
+__all__ = [
+    'BINS',
+    'TrendState',
+    'bin_ns',
+    'step',
+    'series',
+    'nearer_margin',
+    'time_to_uplift',
+    'uplift_times',
+]
 
 #: Bins per trend window; the rate is known once BINS // 2 of them hold samples.
 BINS = 20
@@ -177,16 +190,31 @@ def series(
     return rates, excess, final
 
 
+def nearer_margin(tide_margin: np.ndarray, at_length: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The tide margin [m] the forecast counts down: the nearer of the R-held one
+    (``tide_margin``) and the chain length's (``tide_margin_at_length``, NaN without
+    ``chain_length``); and which view answered (1.0 the chain length's, 0.0 the R-held one,
+    NaN where the line has no margin)."""
+    with np.errstate(invalid='ignore'):
+        length = at_length < tide_margin
+    margin = np.where(length, at_length, tide_margin)
+    view = np.where(length, 1.0, np.where(np.isnan(tide_margin), math.nan, 0.0))
+    return margin, view
+
+
 def time_to_uplift(tide_margin: float, uplift_force: float, rate: float, excess: float) -> float:
-    """Time [s] until the anchor lifts if the tide keeps rising ``rate`` [m/s] with the
-    horizontal tension held: the margin from the tide's level (``tide_margin + excess``, m: the
-    wave and gauge noise of the depth sample taken out) over the rate; 0 while lifted (margin
-    <= 0 or uplift > 0 N) or once the tide's level is past uplift, inf when the tide is not
-    rising or its trend is unknown, NaN when the line is unsolved."""
+    """Time [s] until the anchor lifts if the tide keeps rising ``rate`` [m/s]: the margin
+    (:func:`nearer_margin`) from the tide's level (``tide_margin + excess``, m: the wave and
+    gauge noise of the depth sample taken out) over the rate; 0 while lifted (margin <= 0 or
+    uplift > 0 N) or once the tide's level is past uplift, inf when the tide is not rising
+    (not coming), NaN when the trend is unknown or the line is unsolved (unknown is not
+    "never")."""
     if tide_margin != tide_margin:
         return math.nan
     if tide_margin <= 0.0 or uplift_force > 0.0:
         return 0.0
+    if rate != rate:
+        return math.nan
     if not rate > 0.0:
         return math.inf
     return max(tide_margin + excess, 0.0) / rate
@@ -207,5 +235,6 @@ def uplift_times(
         up = rate > 0.0
         ahead = np.maximum(tide_margin + excess, 0.0)
         rising = np.where(up, ahead / np.where(up, rate, 1.0), math.inf)
+        rising = np.where(np.isnan(rate), math.nan, rising)
         out = np.where((tide_margin <= 0.0) | (uplift_force > 0.0), 0.0, rising)
     return np.where(np.isnan(tide_margin), math.nan, out)

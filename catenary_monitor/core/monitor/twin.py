@@ -33,6 +33,7 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
+from catenary_monitor.core.monitor import channels
 from catenary_monitor.core.monitor import alarm_flood, shelving
 from catenary_monitor.core.monitor import dock_watch as dock_live
 from catenary_monitor.core.monitor import fatigue as fatigue_rule
@@ -41,7 +42,7 @@ from catenary_monitor.core.monitor import (
     sensor_state,
     tide_table,
     tide_trend,
-    uncertainty,
+    wave_window,
 )
 from catenary_monitor.core.monitor.alarm_journal import AlarmEvent, entries, raised
 from catenary_monitor.core.monitor.alarms import (
@@ -68,20 +69,20 @@ from catenary_monitor.core.monitor.monitor_core import (
     MonitorCore,
     Snapshot,
     Start,
-    bound_values,
+    channel_limits,
 )
 from catenary_monitor.core.monitor.monitor_core import depth_word as depth_state_word
 from catenary_monitor.core.monitor.monitor_core import (
     dock_component,
     forecast_word,
-    HOLDING_FIELDS,
-    holding_values,
+    derived_values,
     line_dock_values,
     line_status,
     sensor_limits,
     sensors_component,
     tide_component,
     tide_with_sensor,
+    view_word,
 )
 from catenary_monitor.core.monitor.plausible import (
     MAX_DEPTH,
@@ -146,6 +147,11 @@ class Window:
     ticks: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     tension_stamps: Optional[list[Optional[np.ndarray]]] = None
     depth_stamps: Optional[np.ndarray] = None
+    #: A line of several channels: per line, each sample's channel (int64; None: one channel);
+    #: its column holds every channel's samples merged in time order.
+    channels: Optional[list[Optional[np.ndarray]]] = None
+    #: Filled by :func:`advance` once the channels are fused: line -> (healthy, states) columns.
+    channel_values: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
     @property
     def messages(self) -> int:
@@ -387,8 +393,8 @@ def _solve_updates_kernel(
         out['depth'], out['top_tension'] = h, t
         return out, status
     out['depth'], out['top_tension'] = h.copy(), t.copy()
-    out['time_to_uplift'] = np.full(len(t), np.nan)  # set by the caller, from the tide's trend
-    out['sensor_state'] = np.full(len(t), np.nan)  # set by the caller, from the ticks
+    for key in VALUE_FIELDS:  # the caller's: the tide's forecast, the ticks, the derived values
+        out.setdefault(key, np.full(len(t), np.nan))
     return out, status
 
 
@@ -905,14 +911,23 @@ def _solve_line(
     tide: _Tide,
     sensors: _Sensors,
     k: int,
+    waves: tuple[np.ndarray, np.ndarray],
 ) -> tuple[dict[str, np.ndarray], np.ndarray, Optional[np.ndarray]]:
     """Values, status and elastic flags at the line's solved steps, with the time to uplift
-    at the tide's trend of the newest depth sample and the sensor state of the newest tick."""
+    at the tide's trend of the newest depth sample and the sensor state of the newest tick;
+    ``waves`` the wave window's peak and wave tension after each tension sample."""
     values, status, used = _solve_at(core, line, steps, tv, window)
     values['sensor_state'] = _pick(
         steps.k_idx[steps.solved], sensors.codes[:, k].astype(np.float64), sensors.before[k]
     )
     d_idx = steps.d_idx[steps.solved]
+    t_idx = steps.t_idx[steps.solved]
+    values['peak_tension'] = _pick(t_idx, waves[0], line.peak_tension)
+    values['wave_tension'] = _pick(t_idx, waves[1], line.wave_tension)
+    values.update(derived_values([line.config], core.config.alarm, values))
+    margin, values['time_to_uplift_view'] = tide_trend.nearer_margin(
+        values['tide_margin'], values['tide_margin_at_length']
+    )
     a = core.config.alarm
     if a.constituents:
         now = _pick(d_idx, window.sample_s(None), core.state.depth_s)
@@ -921,32 +936,16 @@ def _solve_line(
             a.tide_table_epoch,
             a.tide_forecast_horizon,
             now,
-            values['tide_margin'],
+            margin,
             values['uplift_force'],
         )
     else:
         rate = _pick(d_idx, tide.rates, core.state.trend.rate)
         excess = _pick(d_idx, tide.excess, core.state.trend.excess)
         values['time_to_uplift'] = tide_trend.uplift_times(
-            values['tide_margin'], values['uplift_force'], rate, excess
+            margin, values['uplift_force'], rate, excess
         )
-    _add_derived(core, line.config, values)
     return values, status, used
-
-
-def _add_derived(core: MonitorCore, lc: LineConfig, values: dict[str, np.ndarray]) -> None:
-    """The bounds and the holding values from the nominal values, as the core adds them
-    (all NaN, without their passes, for a line with neither accuracies nor holding data)."""
-    n = len(values['top_tension'])
-    plain = lc.point_loads is None  # (bounds and holding: the plain chain's formulas)
-    if plain and (core.config.alarm.depth_accuracy > 0.0 or lc.tension_accuracy is not None):
-        values.update(bound_values([lc], core.config.alarm.depth_accuracy, values))
-    else:
-        values.update({key: np.full(n, np.nan) for key in uncertainty.FIELDS})
-    if plain and (lc.chain_length is not None or lc.anchor_holding is not None):
-        values.update(holding_values([lc], values, core.config.alarm.drag_tolerance))
-    else:
-        values.update({key: np.full(n, np.nan) for key in HOLDING_FIELDS})
 
 
 def _solve_at(
@@ -1023,11 +1022,16 @@ def _line_inputs(
             'implied_anchor_distance',
             'fatigue_damage',
             'fatigue_life_left',
+            'dynamic_uplift',
+            'time_to_uplift_view',
+            'channels_healthy',
+            'channel_states',
         )
     }
     inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
         np.int64
     )
+    inputs['uplift_view'] = inputs.pop('time_to_uplift_view')
     inputs['tide_rate'] = _pick(steps.d_idx, tide.rates, core.state.trend.rate)
     inputs['tide_forecast'] = 1.0 if core.config.alarm.constituents else 0.0
     inputs['tension_stamp'] = _pick(steps.t_idx, window.sample_s(k), line.tension_s)
@@ -1063,12 +1067,24 @@ def _advance_line(
     line = core.state.lines[k]
     tt, tv = window.tensions[k]
     steps = _line_steps(line, tt, window)
-    values, status, used = _solve_line(core, line, steps, tv, window, tide, sensors, k)
     times = window.sample_s(k)  # the reading times, as the core's tension_s
+    peaks, waves, wave_state = wave_window.series(
+        line.wave, times, tv, line.config.mbl, core.config.alarm.wave_window
+    )
+    values, status, used = _solve_line(
+        core, line, steps, tv, window, tide, sensors, k, (peaks, waves)
+    )
+    line.wave = wave_state
+    if len(tt):
+        line.peak_tension, line.wave_tension = float(peaks[-1]), float(waves[-1])
     fatigue, fatigue_end = fatigue_rule.series(line.fatigue, times, tv, core.curves[k])
     at = steps.t_idx[steps.solved]
     for j, key in enumerate(fatigue_rule.FIELDS):
         values[key] = _pick(at, fatigue[key], line.fatigue_values[j])
+    fused = window.channel_values.get(k)
+    for j, key in enumerate(channels.FIELDS):
+        column = fused[j] if fused is not None else np.zeros(0)
+        values[key] = _pick(at, column, line.channel_values[j])
     inputs = _line_inputs(core, line, steps, tide, values, status, window, tt, dock, k, sensors)
     series = replay_levels(
         steps.times * 1e-9, inputs, line.alarm, status_messages(line.config), initial=line.state
@@ -1108,6 +1124,8 @@ def _advance_line(
     line.fatigue = fatigue_end
     if len(tt):
         line.fatigue_values = tuple(float(fatigue[key][-1]) for key in fatigue_rule.FIELDS)
+        if fused is not None:
+            line.channel_values = (float(fused[0][-1]), float(fused[1][-1]))
     return result, series, steps, acks, np.asarray(fatigue[fatigue_rule.FIELDS[0]], np.float64)
 
 
@@ -1151,6 +1169,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         )
     given = window
     window, refusals = _accept(core, window)
+    window = _fuse_channels(core, window)
     depth_before = (
         core.state.depth,
         core.state.depth_s,
@@ -1281,8 +1300,45 @@ def _accept(core: MonitorCore, window: Window) -> tuple[Window, _Refusals]:
     depth, d_stamps, d_refused = split(
         window.depth, window.depth_stamps, core.state.depth_sample_ns
     )
-    kept = Window(tensions, depth, window.ticks, stamps, d_stamps)
+    kept = Window(tensions, depth, window.ticks, stamps, d_stamps, window.channels)
     return kept, _Refusals(refused, d_refused)
+
+
+def _fuse_channels(core: MonitorCore, window: Window) -> Window:
+    """The window with each line of several channels as one tension column: the core's
+    channel step (core.channels) over its merged samples, in order (such lines are rare: a
+    Python loop); the healthy counts and states go to ``channel_values``."""
+    if window.channels is None or not any(c is not None for c in window.channels):
+        return window
+    tensions = list(window.tensions)
+    values: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+    for k, line in enumerate(core.state.lines):
+        idx = window.channels[k]
+        if idx is None or line.channels is None:
+            continue
+        tt, raw = window.tensions[k]
+        times = window.sample_s(k)
+        fused, healthy, states = np.empty(len(tt)), np.empty(len(tt)), np.empty(len(tt))
+        limits = channel_limits(core, line)
+        state = line.channels
+        for i in range(len(tt)):
+            state, fused[i], count, states[i] = channels.step(
+                state, int(idx[i]), float(times[i]), float(raw[i]), limits
+            )
+            healthy[i] = count
+        line.channels = state
+        tensions[k] = (tt, fused)
+        values[k] = (healthy, states)
+    out = Window(
+        tensions,
+        window.depth,
+        window.ticks,
+        window.tension_stamps,
+        window.depth_stamps,
+        window.channels,
+    )
+    out.channel_values = values
+    return out
 
 
 def _write_refusals(core: MonitorCore, refusals: _Refusals) -> None:
@@ -1846,6 +1902,7 @@ def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
         _same(list(map(str, status.tolist()))),
         _same(models),
         _same(words),
+        _same([view_word(v) for v in values['time_to_uplift_view'].tolist()]),
     ]
     columns += [f if isinstance(f, str) else _same(f) for f in ack_columns]
     columns += [_same([row[e] for row in extra]) for e in range(len(extra_keys))]
@@ -1859,6 +1916,7 @@ def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
         'solver_status',
         'model',
         'sensor_state',
+        'time_to_uplift_view',
         *ack_keys,
         *extra_keys,
     )
@@ -1970,8 +2028,17 @@ def slice_window(window: Window, lo: Optional[int], hi: Optional[int]) -> Window
         pairs = zip(window.tension_stamps, window.tensions)
         stamps = [None if s is None else s[cut(t)] for s, (t, _) in pairs]
     d_stamps = None if window.depth_stamps is None else window.depth_stamps[cut(dt)]
+    chans = None
+    if window.channels is not None:
+        pairs_c = zip(window.channels, window.tensions)
+        chans = [None if c is None else c[cut(t)] for c, (t, _) in pairs_c]
     return Window(
-        tensions, (dt[cut(dt)], dv[cut(dt)]), window.ticks[cut(window.ticks)], stamps, d_stamps
+        tensions,
+        (dt[cut(dt)], dv[cut(dt)]),
+        window.ticks[cut(window.ticks)],
+        stamps,
+        d_stamps,
+        chans,
     )
 
 

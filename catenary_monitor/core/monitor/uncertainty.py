@@ -1,4 +1,11 @@
-"""Margins with the sensors' accuracy: the worst case over the box of true readings.
+"""Margins with the waves and the sensors' accuracy: the worst case over the box of true readings.
+
+The tension the bounds start from is the line's *dynamic tension* ``T_dyn = peak_tension +
+wave_allowance x wave_tension`` (:mod:`catenary_monitor.core.monitor.wave_window`: the largest
+reading of the last ``wave_window`` seconds plus an allowance for the anchor's dynamic force
+beyond the quasi-static; 0.3 covers every MoorDyn scene of docs/dynamics.md), not the one
+reading: the quasi-static solve at ``T_dyn`` is the ``dynamic_uplift`` (:func:`dynamic_uplift`),
+which the uplift ERROR takes, and the box below is built around ``T_dyn``.
 
 A tension reading is within ``+- tension_accuracy`` (N, per line) of the true hook tension and
 a depth reading within ``+- depth_accuracy`` (m) of the true depth: both are taken as bounds
@@ -27,7 +34,8 @@ Monotonicity (inextensible closed forms of :mod:`catenary_monitor.core.physics.c
   that the bounds contain the solve at random readings within the accuracy).
 
 A corner whose readings are impossible (e.g. ``T + dT <= w (h + dh)``) is left out. The bounds
-are NaN while the nominal solve has none, and when neither accuracy is given.
+are NaN only while the nominal solve has none: every line has a tension accuracy (by default
+0.5 % of its MBL) and the depth one (``depth_accuracy``, 0.02 m by default).
 """
 
 from __future__ import annotations
@@ -39,13 +47,44 @@ import numpy as np
 
 from catenary_monitor.core.physics.solve import solve
 
-__all__ = ['FIELDS', 'T_STAR', 'depth_candidates', 'bounds']
+__all__ = ['FIELDS', 'T_STAR', 'depth_candidates', 'bounds', 'dynamic_tension', 'dynamic_uplift']
 
 #: The bounds' names (per-line outputs, /diagnostics values, replay CSV), in output order.
 FIELDS = ('uplift_force_upper', 'anchor_margin_lower', 'tide_margin_lower')
 #: Root of ``t tanh t = 1``: where ``x_min`` (fixed T) and the tide margin turn in depth.
 T_STAR = 1.1996786402577338
 _K = math.cosh(T_STAR) - 1.0
+
+
+def dynamic_tension(peak: Any, wave: Any, allowance: float) -> np.ndarray:
+    """The tension [N] the dynamic uplift and the bounds take: the window's ``peak`` plus
+    ``allowance`` times its ``wave`` tension (N, :mod:`.wave_window`)."""
+    return np.asarray(peak, dtype=float) + allowance * np.asarray(wave, dtype=float)
+
+
+def dynamic_uplift(
+    w: Any, x: Any, mbl: Any, ea: Any, tension: Any, depth: Any, nominal_uplift: Any
+) -> np.ndarray:
+    """The uplift force [N] at the dynamic ``tension`` (:func:`dynamic_tension`) and the
+    measured ``depth`` (hook height added): at least the nominal (NaN where that is)."""
+    given = (w, x, mbl, ea, tension, depth, nominal_uplift)
+    arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in given))
+    w, x, mbl, ea, t, h, f0 = (a.ravel() for a in arrays)
+    out = np.full(len(t), np.nan)
+    k = np.flatnonzero(~np.isnan(f0) & ~np.isnan(t))
+    if k.size:
+        with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
+            r = solve(
+                w[k],
+                h[k],
+                tension=t[k],
+                anchor_distance=x[k],
+                mbl=mbl[k],
+                ea=None if np.all(np.isinf(ea[k])) else ea[k],
+            )
+        out[k] = np.fmax(np.asarray(r.uplift_force, dtype=float), f0[k])
+    out[np.isnan(f0)] = np.nan
+    return out.reshape(arrays[0].shape)
 
 
 def depth_candidates(w: Any, x: Any, tension: Any, depth: Any, d_h: Any) -> np.ndarray:

@@ -10,7 +10,7 @@ answer is the live monitor's decision for those readings:
   ``tide_rate`` (m/s) the depth samples of one ``tide_trend_window`` before the scene rise at
   that rate and reach ``depth`` at the scene, so the core's tide trend is that rate and
   ``time_to_uplift`` follows it (without it the trend is unknown and ``time_to_uplift`` is
-  inf, the core's rule for an unknown trend);
+  NaN, the core's rule for an unknown trend: unknown, not "never");
 * each line's hook tension (N) at the scene, and again ``on_delay`` before it (the scene has
   held long enough for a condition to raise);
 * a tick at the scene: the levels and messages are the core's after it.

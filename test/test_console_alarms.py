@@ -1,0 +1,136 @@
+"""Alarm management on the console's page, in Chromium: the monitor's flood banner naming the
+first out, the chattering and first-out marks, the shelved list (apart from the active one,
+unshelve), the shelve control (through the same policy as an acknowledgement: refused from
+another origin) and the monitor's refusal shown to the operator.
+
+The page is served from the demo's storm without ROS (``browser_harness.DemoSource``: line_11
+lifted and first out of a flood, line_10 chattering, line_09 shelved); the live path to the
+monitor is test_console_browser.py's.
+"""
+
+from __future__ import annotations
+
+import json
+import urllib.error
+import urllib.request
+from pathlib import Path
+from typing import Any
+
+import pytest
+from browser_harness import DemoSource, browser, rows, tiles, wait_for
+
+pytestmark = [pytest.mark.slow]
+
+
+@pytest.fixture
+def page(tmp_path: Path) -> Any:
+    from catenary_monitor.console.server import ConsoleServer
+
+    source = DemoSource()
+    server = ConsoleServer(source, '127.0.0.1', 0)
+    server.start()
+    driver = browser(tmp_path)
+    try:
+        driver.get(server.url)
+        wait_for('12 tiles, line_11 ERROR', lambda: tiles(driver).get('line_11') == 'ERROR', 60.0)
+        yield driver, source, server
+    finally:
+        driver.quit()
+        server.shutdown()
+
+
+def _js(driver: Any, script: str) -> Any:
+    return driver.execute_script(script)
+
+
+def test_flood_first_out_chattering_and_the_shelved_list(page: Any) -> None:
+    driver, source, server = page
+    script = (
+        "const b = document.getElementById('flood-banner');"
+        'return !b.hidden && b.dataset.flood && b.textContent'
+    )
+    banner = wait_for('the flood banner', lambda: _js(driver, script), 20.0)
+    assert 'ALARM FLOOD' in banner and 'first out: line_11' in banner
+    marks = _js(
+        driver,
+        "return [...document.querySelectorAll('#alarms tr[data-line]')]"
+        '.map(r => [r.dataset.line, r.dataset.firstOut, r.dataset.chattering])',
+    )
+    assert ['line_11', 'true', 'false'] in marks and ['line_10', 'false', 'true'] in marks
+    row = "return document.querySelector('#alarms tr[data-line=\"line_11\"]').textContent"
+    assert 'FIRST OUT' in _js(driver, row)
+    # A shelved alarm is not in the active list (no sound, not at its top), but listed apart.
+    assert 'line_09' not in rows(driver)
+    tile = "return document.querySelector('.tile[data-line=\"line_09\"]').dataset.shelved"
+    assert _js(driver, tile) == 'true'
+    driver.find_element('id', 'tab-shelved').click()
+    script = (
+        "return [...document.querySelectorAll('#shelved tr[data-shelved-line]')]"
+        '.map(r => r.dataset.shelvedLine)'
+    )
+    shelved = wait_for('the shelved list', lambda: _js(driver, script), 10.0)
+    assert shelved == ['line_09']
+    assert 'console dockpc' in _js(driver, "return document.getElementById('shelved').textContent")
+    driver.find_element('css selector', '[data-unshelve="line_09"]').click()
+    wait_for('the unshelve request', lambda: source.shelves, 10.0)
+    alarm, condition, seconds, origin = source.shelves[-1]
+    assert (alarm, condition, seconds) == ('line_09', 'all', 0.0)
+    assert origin.startswith('console ') and '127.0.0.1' in origin
+
+
+def test_shelve_control_sends_what_the_operator_picked_and_shows_refusals(page: Any) -> None:
+    driver, source, server = page
+    from selenium.webdriver.support.ui import Select
+
+    go = driver.find_element('id', 'shelve-go')
+    wait_for('the shelve control enabled', lambda: not go.get_property('disabled'), 20.0)
+    # The monitor's rules on the control: its unshelvable condition cannot be picked, and the
+    # durations stop at its shelve_max (8 h here).
+    uplift = driver.find_element('css selector', '#shelve-condition option[value="uplift"]')
+    assert uplift.get_property('disabled') and 'never shelved' in uplift.text
+    options = Select(driver.find_element('id', 'shelve-duration')).options
+    assert [o.get_attribute('value') for o in options][-1] == '28800'
+    # A row's Shelve button picks its alarm and condition; the operator picks 30 min.
+    driver.find_element('css selector', '[data-shelve="line_12"]').click()
+    Select(driver.find_element('id', 'shelve-duration')).select_by_value('1800')
+    driver.find_element('id', 'shelve-go').click()
+    wait_for('the shelve request', lambda: source.shelves, 10.0)
+    assert source.shelves[-1][:3] == ('line_12', 'anchor_margin', 1800.0)
+    box = driver.find_element('id', 'shelve-answer')
+    wait_for('the answer', lambda: 'line_12.anchor_margin shelved' in box.text, 10.0)
+    # Shelving the lifted line as a whole: the monitor refuses, the page says why.
+    Select(driver.find_element('id', 'shelve-line')).select_by_value('line_11')
+    Select(driver.find_element('id', 'shelve-condition')).select_by_value('all')
+    driver.find_element('id', 'shelve-go').click()
+    answer = wait_for(
+        'the refusal on the page',
+        lambda: 'refused' in (t := driver.find_element('id', 'shelve-answer').text) and t,
+        10.0,
+    )
+    assert 'the uplift ERROR cannot be shelved' in answer and '409' in answer
+    assert 'refused' in driver.find_element('id', 'shelve-answer').get_attribute('class')
+
+
+def test_a_shelve_request_from_another_origin_is_refused(page: Any) -> None:
+    """The same policy as an acknowledgement: another site's page cannot shelve an alarm."""
+    driver, source, server = page
+    body = json.dumps({'line': 'line_12', 'condition': 'all', 'seconds': 600}).encode()
+    request = urllib.request.Request(
+        f'{server.url}api/shelve',
+        data=body,
+        headers={'Content-Type': 'application/json', 'Origin': 'http://evil.example'},
+        method='POST',
+    )
+    with pytest.raises(urllib.error.HTTPError) as err:
+        urllib.request.urlopen(request, timeout=10)
+    assert err.value.code == 403
+    assert not source.shelves
+    # And a malformed body is a 400, never a traceback.
+    own = {'Content-Type': 'application/json', 'Origin': server.url.rstrip('/')}
+    for bad in (b'{"line": "line_12", "seconds": "soon"}', b'{"line": "line_12"}', b'[1]'):
+        request = urllib.request.Request(
+            f'{server.url}api/shelve', data=bad, headers=own, method='POST'
+        )
+        with pytest.raises(urllib.error.HTTPError) as err:
+            urllib.request.urlopen(request, timeout=10)
+        assert err.value.code == 400, bad
