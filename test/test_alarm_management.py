@@ -22,8 +22,10 @@ from catenary_monitor.core.monitor import alarm_flood, shelving
 from catenary_monitor.core.monitor.alarms import CONDITIONS, Level
 from catenary_monitor.core.monitor.monitor_core import (
     Acknowledge,
+    Depth,
     MonitorCore,
     Shelve,
+    Tension,
     Tick,
     event_record,
     parse_event_record,
@@ -187,29 +189,39 @@ def test_shelving_the_uplift_error_is_refused_with_a_message():
 
 
 def test_a_whole_line_shelf_hides_its_warning_until_it_expires():
-    config, tensions, depth, ticks = _storm_core()
+    """A line held in WARN (its anchor margin), shelved whole for 5 s: shown WARN and
+    ``shelved``, nothing waiting for an acknowledgement; at the first step after the expiry,
+    still WARN: unacknowledged again, raised then."""
+    config = dock_config(2, tension_timeout=5.0)
     core = MonitorCore(config, T0_NS)
-    events = events_of(config, tensions, depth, ticks)
-    t_shelve = None
-    for e in events:
-        step = core.step(e)
-        line = core.state.lines[0]
-        if t_shelve is None and line.state.level == Level.WARN and e.stamp_ns > T0_NS + 3 * S:
-            t_shelve = e.stamp_ns + 1
-            step = core.step(Shelve(t_shelve, 'line_01', ALL, 5.0, 'bridge'))
-            assert step.note == 'line_01 shelved for 5 s by bridge'
-            values = dict(_status(step, 'line_01').values)
-            assert values['alarm_state'] == 'shelved' and values['acknowledged'] == 'true'
-            assert float(values['shelved_until']) == pytest.approx(t_shelve * 1e-9 + 5.0)
-            assert values['shelved_by'] == 'bridge' and values['shelved_condition'] == 'all'
-            assert _status(step, 'line_01').level == Level.WARN  # computed and shown
-        if t_shelve is not None and isinstance(e, Tick) and e.stamp_ns > t_shelve + 5 * S:
-            break  # a tick steps every line
-    # The first step after the expiry: back unacknowledged if still active.
-    line = core.state.lines[0]
-    assert not ack.shelved(line.ack)
-    if line.state.level != Level.OK:
-        assert line.ack.state == ack.UNACKNOWLEDGED and line.ack.raised >= t_shelve * 1e-9 + 5
+
+    journal = []
+
+    def second(k):
+        t = T0_NS + k * S
+        for ev in (Depth(t + 1, 20.85), Tension(t + 2, 0, 450e3), Tension(t + 3, 1, 372e3)):
+            journal.extend(core.step(ev).alarm_events)  # line_01: anchor margin 4.1 m: WARN
+        return core.step(Tick(t + 4))
+
+    for k in range(1, 4):
+        step = second(k)
+    assert _status(step, 'line_01').level == Level.WARN
+    step = core.step(Shelve(T0_NS + 3 * S + 5, 'line_01', ALL, 5.0, 'bridge'))
+    assert step.note == 'line_01 shelved for 5 s by bridge'
+    values = dict(_status(step, 'line_01').values)
+    assert values['alarm_state'] == 'shelved' and values['acknowledged'] == 'true'
+    assert float(values['shelved_until']) == pytest.approx((T0_NS + 3 * S + 5) * 1e-9 + 5.0)
+    assert values['shelved_by'] == 'bridge' and values['shelved_condition'] == 'all'
+    assert _status(step, 'line_01').level == Level.WARN  # computed and shown
+    for k in range(4, 8):  # 4..7 s: the shelf holds
+        step = second(k)
+        assert dict(_status(step, 'line_01').values)['alarm_state'] == 'shelved'
+    step = second(8)  # the first steps after 8.000000005 s: back unacknowledged
+    values = dict(_status(step, 'line_01').values)
+    assert (values['alarm_state'], values['shelved']) == ('unacknowledged', 'false')
+    assert float(values['alarm_raised']) == pytest.approx((T0_NS + 8 * S + 2) * 1e-9)
+    kinds = [(e.kind, e.by) for e in journal if e.alarm == 'line_01']
+    assert ('unshelved', 'expired') in kinds and ('raised', '') in kinds
 
 
 def test_shelve_records_round_trip():

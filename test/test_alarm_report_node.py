@@ -3,10 +3,10 @@
 The monitor runs as a process on six lines; a test node publishes a scripted dock: a steady
 warning that is shelved over ROS and is still active when the shelf expires (it must come back
 unacknowledged), an acknowledged warning, a lifted anchor whose uplift ERROR an operator tries
-to shelve (refused with a message), a chattering load cell, and a storm that raises enough
-alarms to flood. Then ``catenary-monitor alarms LOG_DIR --json`` replays the log, and its
-figures must equal an independent count from the ``/diagnostics`` arrays the node recorded,
-read with rosbags (not this package's reader).
+to shelve (refused with a message), a chattering load cell (its link drops out and comes back),
+and a storm that raises enough alarms to flood. Then ``catenary-monitor alarms LOG_DIR --json``
+replays the log, and its figures must equal an independent count from the ``/diagnostics``
+arrays the node recorded, read with rosbags (not this package's reader).
 """
 
 from __future__ import annotations
@@ -107,16 +107,17 @@ def scripted_run(tmp_path_factory: Any) -> Any:
         facts['refusal'] = answer['values']['shelve_answer']
         shelve.publish(String(data='line_04 30 bridge watch'))
         client.wait_for(lambda: 'SHELVE line_04: refused' in output_of(proc), 10.0, 'refusal')
-        # A chattering load cell and a storm on two more lines: a flood.
+        # A chattering load cell (its link drops out for 3.6 s, then reports for 1.4 s: STALE
+        # and back, past tension_timeout) and a storm on two more lines: a flood.
         t0 = time.monotonic()
         k = 0
-        while time.monotonic() - t0 < 9.0:
-            high = k % 2 == 0
-            client.feed(_tension('line_05'), WARN_T if high else OK_T)
-            client.feed(_tension('line_06'), LIFT_T if high else OK_T)
-            client.feed(_tension('line_01'), OK_T if high else WARN_T)
+        while time.monotonic() - t0 < 12.0:
+            out = k % 2 == 0
+            client.feed(_tension('line_05'), None if out else OK_T)
+            client.feed(_tension('line_06'), LIFT_T if out else OK_T)
+            client.feed(_tension('line_01'), OK_T if out else WARN_T)
             k += 1
-            time.sleep(1.5)
+            time.sleep(3.6 if out else 1.4)
         for line in ('line_05', 'line_06', 'line_01', 'line_04', 'line_03'):
             client.feed(_tension(line), OK_T)
         # The shelf expired long ago with line_02 in WARN: back unacknowledged, raised then.

@@ -236,10 +236,10 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'acknowledge_from_ros',
         'bool',
         True,
-        'Accept alarm acknowledgements on /catenary_monitor/acknowledge from any publisher; '
-        'false: only from a console (a node catenary_console_*, the only publisher on the '
-        'topic): where operators acknowledge through the authenticated console (docs/node.md, '
-        'Security)',
+        'Accept alarm acknowledgements (/catenary_monitor/acknowledge) and shelving requests '
+        '(/catenary_monitor/shelve) from any publisher; false: only from a console (a node '
+        'catenary_console_*, the only publisher on the topic): where operators act through the '
+        'authenticated console (docs/node.md, Security)',
         '',
         None,
         None,
@@ -1209,6 +1209,7 @@ ALARM_CONDITIONS = (
     'sensor_warn',
     'dragging',
     'fatigue',
+    'channel',
     'stale',
 )
 
