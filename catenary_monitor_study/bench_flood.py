@@ -42,6 +42,7 @@ from typing import Any, Optional
 import numpy as np
 
 from catenary_monitor.cli.demo import child_env
+from catenary_monitor.core.config.parameters import ConfigError
 
 __all__ = ['run_flood', 'flood', 'publish_main', 'register', 'flood_params', 'analyse']
 
@@ -53,9 +54,11 @@ DEPTH, DEPTH_RATE = 20.85, 10.0
 INTAKE, SENSORS = 'catenary_monitor: intake', 'catenary_monitor: sensors'
 
 
-def flood_params(path: Path, params_file: Optional[str] = None) -> Any:
-    """The paper's dock (or ``params_file``) with the bench's topics, written to ``path``;
-    returns the configuration."""
+def flood_params(
+    path: Path, params_file: Optional[str] = None, extra: Optional[dict[str, Any]] = None
+) -> Any:
+    """The paper's dock (or ``params_file``) with the bench's topics and the ``extra``
+    parameters, written to ``path``; returns the configuration."""
     import dataclasses
 
     from catenary_monitor.core.config.parameters import (
@@ -72,8 +75,23 @@ def flood_params(path: Path, params_file: Optional[str] = None) -> Any:
         for line in config.lines
     )
     config = dataclasses.replace(config, lines=lines, depth_topic='/bench/depth')
+    if extra:
+        config = config_from_params({**config_to_params(config), **extra})
     path.write_text(params_file_text(config_to_params(config)))
     return config
+
+
+def parse_setting(text: str) -> tuple[str, Any]:
+    """``NAME=VALUE`` (a number, true/false, or a string) for ``--set``."""
+    name, sep, value = text.partition('=')
+    if not sep or not name:
+        raise argparse.ArgumentTypeError(f'--set {text!r}: expected NAME=VALUE')
+    if value.lower() in ('true', 'false'):
+        return name, value.lower() == 'true'
+    try:
+        return name, float(value)
+    except ValueError:
+        return name, value
 
 
 # --------------------------------------------------------------------------- the publisher
@@ -330,10 +348,15 @@ def run_flood(
     params_file: Optional[str] = None,
     json_out: bool = False,
     log_dir: Optional[str] = None,
+    extra: Optional[dict[str, Any]] = None,
 ) -> int:
     """Run one flood and print its figures; 0 when every check held (1 otherwise, 2 when it
     could not run)."""
-    result = flood(rate, duration, burst, params_file, log_dir)
+    try:
+        result = flood(rate, duration, burst, params_file, log_dir, extra=extra)
+    except ConfigError as err:
+        print(f'bench-flood: {err}', file=sys.stderr)
+        return 2
     if 'error' in result:
         print(f'bench-flood: {result["error"]}', file=sys.stderr)
         return 2
@@ -348,6 +371,7 @@ def flood(
     params_file: Optional[str] = None,
     log_dir: Optional[str] = None,
     domain: int = 131,
+    extra: Optional[dict[str, Any]] = None,
 ) -> dict[str, Any]:
     """One flood: its figures and checks (``error`` when it could not run). The node's log
     goes to ``log_dir`` (kept) or a temporary directory (removed)."""
@@ -359,7 +383,7 @@ def flood(
     env = child_env(domain)
     os.environ.update({k: env[k] for k in ('ROS_AUTOMATIC_DISCOVERY_RANGE', 'ROS_DOMAIN_ID')})
     tmp = Path(tempfile.mkdtemp(prefix='catenary_flood_'))
-    config = flood_params(tmp / 'params.yaml', params_file)
+    config = flood_params(tmp / 'params.yaml', params_file, extra)
     logs = Path(log_dir) if log_dir else tmp / 'log'
     monitor = subprocess.Popen(
         [
@@ -542,6 +566,14 @@ def register(sub: Any) -> None:
         help='send N samples of a line at once every N periods (default: 1, evenly spread)',
     )
     p.add_argument('--params-file', metavar='F', help='default: config/floating_dock.yaml')
+    p.add_argument(
+        '--set',
+        type=parse_setting,
+        action='append',
+        default=[],
+        metavar='NAME=VALUE',
+        help="a parameter of the node's (e.g. intake_step_budget=0); repeatable",
+    )
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.add_argument(
         '--log-dir', metavar='DIR', help="the node's log folder, kept (default: a temporary one)"
@@ -557,6 +589,7 @@ def _command(args: argparse.Namespace) -> int:
         args.params_file,
         json_out=args.json,
         log_dir=args.log_dir,
+        extra=dict(args.set),
     )
 
 
