@@ -71,6 +71,7 @@ __all__ = [
     'CSV_ALL',
     'CSV_COLUMNS',
     'NODE_NAME',
+    'message_columns',
     'write_csv',
     'write_mcap',
     'write_plots',
@@ -199,35 +200,19 @@ def write_csv(
             f'unknown CSV column(s) {sorted(unknown)}; known: '
             + ', '.join(name for name, _ in CSV_ALL)
         )
-    wanted = [(name, d) for name, d in CSV_ALL if name in set(columns)]
-    t, values, line, status, level = _tension_rows(result, [n for n, _ in wanted])
-    names = [r.name for r in result.lines]
+    decimals = dict(CSV_ALL)
     out_columns: list[Any] = []
-    for name, decimals in wanted:
+    n = 0
+    for name, column in message_columns(result, columns).items():
         if name == 'time':
-            out_columns.append(IntColumn(name, t, 9))
-        elif name == 'line':
-            out_columns.append(LabelColumn(name, line, names))
-        elif name == 'status':
-            out_columns.append(LabelColumn(name, status - NO_DEPTH, _STATUS_LABELS))
-        elif name == 'level':
-            out_columns.append(LabelColumn(name, level, _LEVELS))
-        elif name == 'model':
-            out_columns.append(LabelColumn(name, values['model'], list(MODEL_NAMES)))
-        elif name == 'sensor_state':
-            codes = values[name].astype(np.int64)
-            out_columns.append(LabelColumn(name, codes, list(sensor_state.LINE_STATES)))
-        elif name == 'drag_state':
-            codes = np.where(np.isnan(values[name]), 3, values[name]).astype(np.int64)
-            out_columns.append(LabelColumn(name, codes, [*holding.DRAG_STATES, 'unknown']))
-        elif name == 'time_to_uplift_view':
-            view = values[name]
-            codes = np.where(np.isnan(view), 0, np.where(view == 1.0, 2, 1)).astype(np.int64)
-            labels = ['none', VIEW_TEXT[0.0], VIEW_TEXT[1.0]]
-            out_columns.append(LabelColumn(name, codes, labels))
+            out_columns.append(IntColumn(name, column, 9))
+            n = len(column)
+        elif isinstance(column, tuple):
+            out_columns.append(LabelColumn(name, column[0], column[1]))
+            n = len(column[0])
         else:
-            out_columns.append(FloatColumn(name, values[name], decimals or 0))
-    n = len(t)
+            out_columns.append(FloatColumn(name, column, decimals[name] or 0))
+            n = len(column)
     step = max(1 << 18, n // 10)
     for lo in range(0, max(n, 1 if header else 0), step):
         hi = min(n, lo + step)
@@ -235,6 +220,40 @@ def write_csv(
         if progress is not None:
             progress('writing CSV', hi / max(n, 1))
     return n
+
+
+def message_columns(
+    result: ReplayResult, columns: Sequence[str] = CSV_COLUMNS
+) -> dict[str, Any]:
+    """The CSV's rows as columns (one per tension message, in time order), in :data:`CSV_ALL`
+    order: ``time`` int64 ns, a label column as (int codes, labels), the others float64 (SI,
+    full precision): what :func:`write_csv` prints and the fleet's dataset stores."""
+    wanted = [name for name, _ in CSV_ALL if name in set(columns)]
+    t, values, line, status, level = _tension_rows(result, wanted)
+    out: dict[str, Any] = {}
+    for name in wanted:
+        if name == 'time':
+            out[name] = t
+        elif name == 'line':
+            out[name] = (line, [r.name for r in result.lines])
+        elif name == 'status':
+            out[name] = (status - NO_DEPTH, _STATUS_LABELS)
+        elif name == 'level':
+            out[name] = (level, _LEVELS)
+        elif name == 'model':
+            out[name] = (values['model'], list(MODEL_NAMES))
+        elif name == 'sensor_state':
+            out[name] = (values[name].astype(np.int64), list(sensor_state.LINE_STATES))
+        elif name == 'drag_state':
+            codes = np.where(np.isnan(values[name]), 3, values[name]).astype(np.int64)
+            out[name] = (codes, [*holding.DRAG_STATES, 'unknown'])
+        elif name == 'time_to_uplift_view':
+            view = values[name]
+            codes = np.where(np.isnan(view), 0, np.where(view == 1.0, 2, 1)).astype(np.int64)
+            out[name] = (codes, ['none', VIEW_TEXT[0.0], VIEW_TEXT[1.0]])
+        else:
+            out[name] = values[name]
+    return out
 
 
 # ---------------------------------------------------------------------------- MCAP

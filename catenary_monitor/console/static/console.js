@@ -181,8 +181,8 @@ function buildTiles() {
       <dt class="x-upper" title="the anchor's force bounded: waves and sensor accuracy">uplift ≤ (waves, accuracy)</dt><dd class="v-upper x-upper"></dd>
       <dt class="x-wave" title="wave-frequency tension: half the range of the readings over wave_window">wave tension</dt><dd class="v-wave x-wave"></dd>
       <dt class="x-drag">drag margin</dt><dd class="v-drag x-drag"></dd>
-      <dt class="x-fatigue" title="Miner's damage of the chain (1: the S-N curve's failure) and the life left at the last day's rate">fatigue</dt><dd class="v-fatigue x-fatigue"></dd></dl>
-      <div class="msg"></div><div class="foot"><span class="v-model" title="the model that answered"></span> · <span class="age"></span><span class="alarm-st"></span><span class="sensor old"></span></div>`;
+</dl>
+      <div class="msg"></div><div class="foot"><span class="v-model" title="the model that answered"></span> · <span class="age"></span><span class="v-fatigue" title="chain fatigue: Miner's damage (1: the S-N curve's failure) and the life left at the last day's rate"></span><span class="alarm-st"></span><span class="sensor old"></span></div>`;
     t.querySelector('.name').textContent = line.name;
     const warn = line.mbl ? 1 / S.config.safety_factor_warn : null;
     const mark = t.querySelector('.mark');
@@ -277,11 +277,10 @@ function renderTile(view, lost, frame) {
     (shown(drag) && drag < (S.config.drag_margin_warn || 0) ? 'warn' : ''));
   // Chain fatigue (docs/fatigue.md): Miner's damage and the life left at the last day's rate.
   const dmg = view.fatigue_damage, life = view.fatigue_life_left;
-  t.querySelectorAll('.x-fatigue').forEach((e) => { e.hidden = !shown(dmg); });
   const vf = t.querySelector('.v-fatigue');
   const years = shown(life) ? ` · ${life / 31557600 > 2 ? (life / 31557600).toFixed(1) + ' y' : (life / 86400).toFixed(1) + ' d'} left` : '';
-  vf.textContent = shown(dmg) ? `D ${dmg.toPrecision(3)}${years}` : '';
-  vf.className = 'v-fatigue x-fatigue ' + (shown(dmg) && dmg >= (S.config.fatigue_damage_warn || 1) ? 'warn' : '');
+  vf.textContent = shown(dmg) ? ` · fatigue D ${dmg.toPrecision(3)}${years}` : '';
+  vf.className = 'v-fatigue ' + (shown(dmg) && dmg >= (S.config.fatigue_damage_warn || 1) ? 'warn' : '');
   setText(t.querySelector('.v-model'), (view.model || 'no model').replace(' catenary', ''));
   const msg = lost ? `monitor silent: last known ${view.level} at ${clock(frame.snapshot_t)}` : view.message;
   t.querySelector('.msg').textContent = msg;

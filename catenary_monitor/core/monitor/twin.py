@@ -2152,6 +2152,9 @@ def _leave_out_coalesced(
     tension_stamps = window.tension_stamps
     if tension_stamps is not None:
         tension_stamps = [cut(s, kept) for s, kept in zip(tension_stamps, keep)]
+    chans = window.channels
+    if chans is not None:
+        chans = [cut(c, kept) for c, kept in zip(chans, keep)]
     return (
         Window(
             [
@@ -2162,6 +2165,7 @@ def _leave_out_coalesced(
             window.ticks,
             tension_stamps,
             cut(window.depth_stamps, d_keep),
+            chans,
         ),
         events,
         marks,
