@@ -168,19 +168,22 @@ def test_a_killed_worker_loses_and_duplicates_nothing(fleet, cluster, tmp_path):
     killed = []
 
     def kill_one(progress: Any) -> None:
-        if killed or progress.tasks_done < 1:
+        """Mid-run: after the first piece and before the last, SIGKILL a worker (one replaying
+        a piece if there is one; any holds finished pieces' results that later ones need)."""
+        if killed or not 1 <= progress.tasks_done < progress.tasks_total:
             return
         client = get_client()
         busy = [w for w, keys in client.processing().items()
                 if any(str(k).startswith('fleet-piece') for k in keys)]  # fmt: skip
-        if busy:
-            pid = client.run(os.getpid, workers=busy[:1])[busy[0]]
-            os.kill(pid, signal.SIGKILL)
-            killed.append(pid)
+        worker = (busy or sorted(client.scheduler_info()['workers']))[0]
+        pid = client.run(os.getpid, workers=[worker])[worker]
+        os.kill(pid, signal.SIGKILL)
+        killed.append(pid)
 
     results = tmp_path / 'results'
     run = run_fleet(fleet['folders'], results, scheduler=cluster, progress=kill_one)
     assert killed and not run.failed, run.failed
+    assert run.workers_lost >= 1
     for dock, ref in fleet['refs'].items():
         _assert_rows_equal(results, dock, ref)
     assert not list((results / '_fleet').glob('tmp/*'))

@@ -745,6 +745,7 @@ class LineTally:
         self.worst: dict[str, Optional[dict[str, float]]] = {}
         self.transitions: list[Any] = []
         self.final: Optional[Level] = None
+        self.fatigue = math.nan  # Miner's damage after the last update (docs/fatigue.md)
 
     def add(self, r: LineResult) -> None:
         """Take the line's results of the next window."""
@@ -757,6 +758,8 @@ class LineTally:
         self.transitions += r.transitions
         if len(r.step_level):
             self.final = Level(int(r.step_level[-1]))
+        if len(r.t_ns):
+            self.fatigue = float(r.values['fatigue_damage'][-1])
 
     def as_dict(self, end_ns: int) -> dict[str, Any]:
         """The summary's entry (final level: after the last step; STALE, blind, without)."""
@@ -772,6 +775,7 @@ class LineTally:
             'transitions': len(self.transitions),
             'final_level': (Level.STALE if self.final is None else self.final).name,
             'episodes': episodes,
+            'fatigue_damage': None if self.fatigue != self.fatigue else self.fatigue,
         }
 
 
@@ -934,6 +938,8 @@ def summary_text(summary: dict[str, Any]) -> str:
             f'  worst load margin {_fmt(w["load_margin"], 1e3, "kN", "+.1f")}; '
             f'safety factor {_fmt(w["safety_factor"], 1, "", ".2f")}'
         )
+        if ln.get('fatigue_damage') is not None:
+            out.append(f'  fatigue damage at the end {ln["fatigue_damage"]:.4g} (Miner)')
         uplift = w['uplift_force']
         lifted = (
             'none (anchor never lifted)'
