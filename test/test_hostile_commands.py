@@ -49,7 +49,12 @@ if serve:  # the console: up when it prints its URL, then Ctrl-C
     wall = time.monotonic() - t0
     if p.poll() is None:
         p.send_signal(signal.SIGINT)
-    out, err = p.communicate(timeout=60)
+    try:
+        out, err = p.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        out, err = p.communicate()
+        err += 'TEST: did not stop within 60 s of SIGINT'
     out = first + out
 else:
     p = subprocess.run(argv, capture_output=True, text=True, timeout=120)
