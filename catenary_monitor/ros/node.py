@@ -116,7 +116,12 @@ from catenary_monitor.core.monitor.fatigue import to_record
 from catenary_monitor.core.physics import elastic
 from catenary_monitor.io import fatigue_store
 from catenary_monitor.io.mcap_log import McapLogger
-from catenary_monitor.io.mcap_recover import RecoverResult, recover_in_child, unfinished_files
+from catenary_monitor.io.mcap_recover import (
+    RECOVERED,
+    RecoverResult,
+    recover_in_child,
+    unfinished_files,
+)
 
 __all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'CatenaryMonitor', 'main']
 
@@ -378,10 +383,12 @@ class CatenaryMonitor(Node):
             done = True
             self.recovery.append(result)
             name = os.path.basename(result.path)
-            if result.status == 'recovered':
+            if result.status in RECOVERED:
                 kept = ''
                 if result.backup:
                     kept = f'; original kept as {os.path.basename(result.backup)}'
+                elif result.status == 'finished_in_place':
+                    kept = '; finished in place (no room for a copy)'
                 self.get_logger().warning(
                     f'recovered unfinished MCAP log {name}: {result.messages} messages, '
                     f'{len(result.damaged)} damaged part(s) skipped{kept}'
@@ -401,7 +408,7 @@ class CatenaryMonitor(Node):
         """The logger status's keys about start-up recovery."""
         if not self.recovery:
             return ()
-        ok = [r for r in self.recovery if r.status == 'recovered']
+        ok = [r for r in self.recovery if r.status in RECOVERED]
         return (
             ('files_recovered', str(len(ok))),
             ('files_not_recovered', str(len(self.recovery) - len(ok))),
@@ -845,9 +852,24 @@ class CatenaryMonitor(Node):
         if self.log is not None:
             self.log.tick()
             self._report_deleted()
+            self._report_finished_late()
         self._check_logger()
         self._report_recovery()
         self._save_fatigue()
+
+    def _report_finished_late(self) -> None:
+        """One log line and one events-channel record per file a write error (a full disk)
+        had left unfinished and the logger finished where it lies once space allowed."""
+        assert self.log is not None
+        for path in self.log.take_finished_late():
+            self.get_logger().warning(
+                f'MCAP log {path.name}, left unfinished by a write error, is finished now '
+                '(cut after its last whole chunk, summary written)'
+            )
+            record = {'kind': 'log_finished_late', 'path': str(path)}
+            self._write(
+                EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), self._stamp()
+            )
 
     def _report_deleted(self) -> None:
         """One log line and one events-channel record per file the retention deleted."""
