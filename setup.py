@@ -117,10 +117,17 @@ setup(
             'fatpack>=0.7',
             # NREL's lumped-mass mooring model: the dynamic reference (docs/dynamics.md).
             'moordyn>=2.3',
+            # The fleet replay (the fleet extra) and DuckDB, which answers docs/fleet.md's
+            # questions over its dataset in the tests.
+            'dask[distributed]>=2024.1',
+            'pyarrow>=14',
+            'duckdb>=1.0',
         ],
         'peers': ['moorpy', 'pycatenary'],
         # catenary-monitor bench-dynamics and the MoorDyn scenes (docs/dynamics.md)
         'dynamics': ['moordyn>=2.3'],
+        # catenary-monitor fleet: many docks' logs replayed on Dask, results as Parquet.
+        'fleet': ['dask[distributed]>=2024.1', 'pyarrow>=14'],
     },
     ext_modules=EXTENSIONS,
     zip_safe=False,

@@ -48,6 +48,7 @@ def register(sub: Any) -> None:
         bench_dynamics,
         bench_console,
         bench_core,
+        bench_fleet,
         bench_flood,
         bench_step,
         bench_methods,
@@ -61,6 +62,7 @@ def register(sub: Any) -> None:
     bench_soak.register(sub)
     bench_flood.register(sub)
     bench_step.register(sub)
+    bench_fleet.register(sub)
     for module in (bench_core, bench_methods, bench_replay):
         module.register(sub)
     # bench runs as a library user's process (glibc defaults; --keep-freed-memory to compare)

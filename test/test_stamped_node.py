@@ -135,12 +135,10 @@ def test_stamped_sensors_in_kn_live_and_replayed(tmp_path):
             continue
         for st in snap.statuses:
             live = entry.get(st.name)
-            if live is None or st.name.endswith(('logger', 'intake', 'fatigue')):
-                continue  # the node's own counters and store (test_replay_node's business)
+            if live is None or st.name.endswith(('logger', 'intake')):
+                continue  # the node's own counters
             assert live['level'] == int(st.level), (stamp, st.name)
             for key, value in st.values:
-                if key.startswith('fatigue_'):
-                    continue  # the fatigue store's (test_replay_node compares it)
                 got, want = live['values'][key], value
                 try:
                     assert math.isclose(float(got), float(want), rel_tol=1e-12) or (

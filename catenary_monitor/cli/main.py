@@ -283,11 +283,12 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
     those installed under the :data:`COMMAND_GROUP` entry points."""
     from importlib.metadata import entry_points
 
-    from catenary_monitor.cli import dock, log, replay, report_alarms, run, whatif
+    from catenary_monitor.cli import dock, fleet, log, replay, report_alarms, run, whatif
 
     found: list[Callable[[argparse._SubParsersAction], None]] = [
         run.register,
         replay.register,
+        fleet.register,
         report_alarms.register,
         dock.register,
         whatif.register,

@@ -1856,6 +1856,7 @@ def iter_windows(
     report: ReadReport | None = None,
     jobs: int = 1,
     typed: Optional[dict[str, str]] = None,
+    allow_empty: bool = False,
 ) -> Iterator[LogWindow]:
     """Stream a log (one file, a rotated set, directories) as :class:`LogWindow` s in time
     order, merged across topics and files, each of about ``window_messages`` messages (None:
@@ -1871,7 +1872,8 @@ def iter_windows(
     that are inputs of a given type (``topic -> type name``; e.g. a stamped sensor message):
     their type is checked as the Float64 topics' is, and they count as inputs (the report's
     messages, EmptyLogError). Raises as :func:`read_float64_topics` (TopicTypeError,
-    EmptyLogError at the end, McapReadError).
+    EmptyLogError at the end, McapReadError); ``allow_empty``: a log without any input message
+    is one final window of what it has (a piece of a longer log: its raw topics may matter).
     """
     typed = dict(typed or {})
     wanted = [t for t in _unique(topics) if t not in typed]
@@ -1922,7 +1924,7 @@ def iter_windows(
         report.messages[topic] = counts[topic]
         if counts[topic] == 0:
             report.missing_topics.append(topic)
-    if all(counts[t] == 0 for t in inputs):
+    if all(counts[t] == 0 for t in inputs) and not allow_empty:
         raise EmptyLogError(inputs, report)
     yield LogWindow(columns, raw, None, True, sum(sizes), n)
 

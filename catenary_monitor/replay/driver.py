@@ -26,6 +26,7 @@ Errors a user can act on are :class:`ReplayError` (one line, with the command's 
 
 from __future__ import annotations
 
+import copy
 import json
 from functools import partial
 from dataclasses import dataclass
@@ -126,7 +127,9 @@ class NoEventsChannel(LookupError):
 
 @dataclass
 class StreamState:
-    """What the stream knows after its first window, and the figures of the run."""
+    """What the stream knows after its first window, and the figures of the run; with the
+    core and the next grid tick, all a later piece of the same log needs to go on
+    (:func:`stream`'s ``resume``)."""
 
     start_ns: Optional[int] = None
     start_from_record: bool = False
@@ -135,6 +138,8 @@ class StreamState:
     messages: int = 0
     bytes_done: int = 0
     bytes_total: int = 0
+    core: Optional[MonitorCore] = None  # the core after the last window
+    grid_k: int = 0  # the next grid tick's index
 
 
 def _events(window: LogWindow) -> tuple[bool, np.ndarray, list[Any]]:
@@ -243,9 +248,18 @@ def stream(
     jobs: int = 1,
     report: Optional[ReadReport] = None,
     progress: Optional[Callable[[StreamState], None]] = None,
+    resume: Optional[StreamState] = None,
+    goes_on: bool = False,
 ) -> StreamState:
     """Replay ``paths`` window by window; ``sink(result, window)`` gets each window's
     :class:`ReplayResult` (its ticks, events, start) and its input :class:`Window`.
+
+    A log replayed in pieces (consecutive files, every stamp of one before every stamp of the
+    next): ``resume`` is the state the previous piece returned (its core goes on; it is not
+    changed); ``goes_on``: more pieces follow (a piece without any input is then no error).
+    Grid ticks of the gap between two pieces come with the next piece, before its inputs, as
+    in one stream. The pieces' results are those of the whole log
+    (:mod:`catenary_monitor.replay.fleet_tasks`).
 
     ``ticks``: ``auto`` takes the node's recorded ticks when the log has them, else a grid at
     ``diagnostic_rate``; ``log`` requires them; ``grid`` ignores them. ``follow_log``: apply
@@ -269,6 +283,8 @@ def stream(
             jobs,
             report,
             progress,
+            resume,
+            goes_on,
         )
 
 
@@ -283,19 +299,27 @@ def _stream(
     jobs: int,
     report: Optional[ReadReport],
     progress: Optional[Callable[[StreamState], None]],
+    resume: Optional[StreamState] = None,
+    goes_on: bool = False,
 ) -> StreamState:
     """:func:`stream` itself."""
-    state = StreamState()
-    state.bytes_total = sum(p.stat().st_size for p in paths)
+    state = StreamState() if resume is None else copy.deepcopy(resume)
+    state.bytes_done, state.bytes_total = 0, sum(p.stat().st_size for p in paths)
     lines_topics = [resolve_topic(t) for line in config.lines for t in line.topics]
     topics = [resolve_topic(config.depth_topic), *lines_topics]
     raw = [EVENTS_TOPIC] if ticks != 'grid' else []
     typed = typed_inputs(config)
-    core: Optional[MonitorCore] = None
-    grid_k = 0  # next grid tick index
+    core, grid_k = state.core, state.grid_k
     try:
         for window in iter_windows(
-            paths, topics, raw, window_messages, report, jobs, typed=typed
+            paths,
+            topics,
+            raw,
+            window_messages,
+            report,
+            jobs,
+            typed=typed,
+            allow_empty=goes_on or resume is not None,
         ):
             seen, tick_ns, others = _events(window) if raw else (False, np.zeros(0, np.int64), [])
             if not follow_log:
@@ -312,7 +336,7 @@ def _stream(
                     ]
                 elif firsts:
                     state.start_ns = min(firsts)
-                elif not window.final:
+                elif not window.final or goes_on:
                     raise Restart('no input message and no start record in the first window')
                 state.ticks_from_log = seen
                 if ticks == 'log' and not seen:
@@ -326,7 +350,7 @@ def _stream(
                 raise Restart('events records after a first window without any')
             if not state.ticks_from_log:
                 tick_ns, grid_k = _grid(
-                    state, window, tensions, depth, grid_k, config.alarm.diagnostic_rate
+                    state, window, tensions, depth, grid_k, config.alarm.diagnostic_rate, goes_on
                 )
             whole = Window(
                 tensions,
@@ -355,6 +379,7 @@ def _stream(
             state.windows += 1
             state.messages += window.messages
             state.bytes_done = window.bytes_done
+            state.core, state.grid_k = core, grid_k
             if progress is not None:
                 progress(state)
     except UnorderedLogError as err:
@@ -385,15 +410,17 @@ def _grid(
     depth: Any,
     k0: int,
     rate_hz: float,
+    goes_on: bool = False,
 ) -> tuple[np.ndarray, int]:
     """The grid ticks of a window (:func:`tick_grid` from ``k0``) below the window's end, or up
-    to the last input message in the final window; and the next k."""
+    to the last input message in the final window (none in a final window without input
+    when the log ``goes_on`` in another piece); and the next k."""
     start = state.start_ns or 0
     period = 1e9 / rate_hz
     if window.final:
         lasts = [int(c[0][-1]) for c in (*tensions, depth) if len(c[0])]
         if not lasts:
-            if state.windows:
+            if state.windows and not goes_on:
                 raise Restart('the last window has no input message')
             return np.zeros(0, np.int64), k0
         end = max(lasts)

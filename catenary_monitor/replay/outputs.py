@@ -24,6 +24,7 @@ from catenary_monitor.core.config.parameters import (
     config_hash,
     config_to_params,
 )
+from catenary_monitor.core.monitor import dock_watch as dock_live
 from catenary_monitor.core.monitor import holding, sensor_state
 from catenary_monitor.core.monitor.alarms import VIEW_TEXT
 from catenary_monitor.core.monitor.alarms import Level
@@ -71,6 +72,7 @@ __all__ = [
     'CSV_ALL',
     'CSV_COLUMNS',
     'NODE_NAME',
+    'message_columns',
     'write_csv',
     'write_mcap',
     'write_plots',
@@ -84,7 +86,8 @@ __all__ = [
 #: ``time_to_uplift`` 3 (s; ``inf`` when no uplift is coming, ``nan`` while unknown); the bounds
 #: and holding values (forces, lengths) 3 (``nan`` where the line has no solve or holding data);
 #: ``time_to_uplift_view`` ``chain length held``, ``horizontal tension held`` or ``none``;
-#: ``sensor_state``
+#: ``span`` the hook-anchor distance the line was solved at (m, 3 decimals) and
+#: ``span_source`` where it came from (``installed``, ``dock_estimate``); ``sensor_state``
 #: the line's sensor state word (``ok``, ``stuck``, ``spike``, ``over_mbl``, ``slack``,
 #: ``suspected_parted``); ``drag_state`` the anchor's (``holding``, ``overloaded``,
 #: ``dragging``, ``unknown``).
@@ -129,6 +132,9 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     # A line of several channels (core/monitor/channels.py): healthy count, states code.
     ('channels_healthy', 0),
     ('channel_states', 0),
+    # The span solved at and its source (core/monitor/dock_watch.py: a word).
+    ('span', 3),
+    ('span_source', None),
 )
 #: The default columns (the issue's contract), in this order.
 CSV_COLUMNS = (
@@ -199,35 +205,19 @@ def write_csv(
             f'unknown CSV column(s) {sorted(unknown)}; known: '
             + ', '.join(name for name, _ in CSV_ALL)
         )
-    wanted = [(name, d) for name, d in CSV_ALL if name in set(columns)]
-    t, values, line, status, level = _tension_rows(result, [n for n, _ in wanted])
-    names = [r.name for r in result.lines]
+    decimals = dict(CSV_ALL)
     out_columns: list[Any] = []
-    for name, decimals in wanted:
+    n = 0
+    for name, column in message_columns(result, columns).items():
         if name == 'time':
-            out_columns.append(IntColumn(name, t, 9))
-        elif name == 'line':
-            out_columns.append(LabelColumn(name, line, names))
-        elif name == 'status':
-            out_columns.append(LabelColumn(name, status - NO_DEPTH, _STATUS_LABELS))
-        elif name == 'level':
-            out_columns.append(LabelColumn(name, level, _LEVELS))
-        elif name == 'model':
-            out_columns.append(LabelColumn(name, values['model'], list(MODEL_NAMES)))
-        elif name == 'sensor_state':
-            codes = values[name].astype(np.int64)
-            out_columns.append(LabelColumn(name, codes, list(sensor_state.LINE_STATES)))
-        elif name == 'drag_state':
-            codes = np.where(np.isnan(values[name]), 3, values[name]).astype(np.int64)
-            out_columns.append(LabelColumn(name, codes, [*holding.DRAG_STATES, 'unknown']))
-        elif name == 'time_to_uplift_view':
-            view = values[name]
-            codes = np.where(np.isnan(view), 0, np.where(view == 1.0, 2, 1)).astype(np.int64)
-            labels = ['none', VIEW_TEXT[0.0], VIEW_TEXT[1.0]]
-            out_columns.append(LabelColumn(name, codes, labels))
+            out_columns.append(IntColumn(name, column, 9))
+            n = len(column)
+        elif isinstance(column, tuple):
+            out_columns.append(LabelColumn(name, column[0], column[1]))
+            n = len(column[0])
         else:
-            out_columns.append(FloatColumn(name, values[name], decimals or 0))
-    n = len(t)
+            out_columns.append(FloatColumn(name, column, decimals[name] or 0))
+            n = len(column)
     step = max(1 << 18, n // 10)
     for lo in range(0, max(n, 1 if header else 0), step):
         hi = min(n, lo + step)
@@ -235,6 +225,43 @@ def write_csv(
         if progress is not None:
             progress('writing CSV', hi / max(n, 1))
     return n
+
+
+def message_columns(
+    result: ReplayResult, columns: Sequence[str] = CSV_COLUMNS
+) -> dict[str, Any]:
+    """The CSV's rows as columns (one per tension message, in time order), in :data:`CSV_ALL`
+    order: ``time`` int64 ns, a label column as (int codes, labels), the others float64 (SI,
+    full precision): what :func:`write_csv` prints and the fleet's dataset stores."""
+    wanted = [name for name, _ in CSV_ALL if name in set(columns)]
+    t, values, line, status, level = _tension_rows(result, wanted)
+    out: dict[str, Any] = {}
+    for name in wanted:
+        if name == 'time':
+            out[name] = t
+        elif name == 'line':
+            out[name] = (line, [r.name for r in result.lines])
+        elif name == 'status':
+            out[name] = (status - NO_DEPTH, _STATUS_LABELS)
+        elif name == 'level':
+            out[name] = (level, _LEVELS)
+        elif name == 'model':
+            out[name] = (values['model'], list(MODEL_NAMES))
+        elif name == 'sensor_state':
+            out[name] = (values[name].astype(np.int64), list(sensor_state.LINE_STATES))
+        elif name == 'drag_state':
+            codes = np.where(np.isnan(values[name]), 3, values[name]).astype(np.int64)
+            out[name] = (codes, [*holding.DRAG_STATES, 'unknown'])
+        elif name == 'span_source':
+            codes = np.where(np.isnan(values[name]), 2, values[name]).astype(np.int64)
+            out[name] = (codes, [*dock_live.SPAN_SOURCES, 'none'])
+        elif name == 'time_to_uplift_view':
+            view = values[name]
+            codes = np.where(np.isnan(view), 0, np.where(view == 1.0, 2, 1)).astype(np.int64)
+            out[name] = (codes, ['none', VIEW_TEXT[0.0], VIEW_TEXT[1.0]])
+        else:
+            out[name] = values[name]
+    return out
 
 
 # ---------------------------------------------------------------------------- MCAP
@@ -718,6 +745,7 @@ class LineTally:
         self.worst: dict[str, Optional[dict[str, float]]] = {}
         self.transitions: list[Any] = []
         self.final: Optional[Level] = None
+        self.fatigue = math.nan  # Miner's damage after the last update (docs/fatigue.md)
 
     def add(self, r: LineResult) -> None:
         """Take the line's results of the next window."""
@@ -730,6 +758,8 @@ class LineTally:
         self.transitions += r.transitions
         if len(r.step_level):
             self.final = Level(int(r.step_level[-1]))
+        if len(r.t_ns):
+            self.fatigue = float(r.values['fatigue_damage'][-1])
 
     def as_dict(self, end_ns: int) -> dict[str, Any]:
         """The summary's entry (final level: after the last step; STALE, blind, without)."""
@@ -745,6 +775,7 @@ class LineTally:
             'transitions': len(self.transitions),
             'final_level': (Level.STALE if self.final is None else self.final).name,
             'episodes': episodes,
+            'fatigue_damage': None if self.fatigue != self.fatigue else self.fatigue,
         }
 
 
@@ -907,6 +938,8 @@ def summary_text(summary: dict[str, Any]) -> str:
             f'  worst load margin {_fmt(w["load_margin"], 1e3, "kN", "+.1f")}; '
             f'safety factor {_fmt(w["safety_factor"], 1, "", ".2f")}'
         )
+        if ln.get('fatigue_damage') is not None:
+            out.append(f'  fatigue damage at the end {ln["fatigue_damage"]:.4g} (Miner)')
         uplift = w['uplift_force']
         lifted = (
             'none (anchor never lifted)'

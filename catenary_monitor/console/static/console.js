@@ -178,11 +178,12 @@ function buildTiles() {
       <dt>safety factor</dt><dd class="v-sf"></dd><dt>uplift in</dt><dd class="v-ttu"></dd>
       <dt title="${TIDE_R}">tide to lift, R held</dt><dd class="v-tide" title="${TIDE_R}"></dd>
       <dt class="x-tidel" title="${TIDE_L}">tide to lift, chain length held</dt><dd class="v-tidel x-tidel" title="${TIDE_L}"></dd>
+      <dt class="x-span" title="${SPAN}">span</dt><dd class="v-span x-span" title="${SPAN}"></dd>
       <dt class="x-upper" title="the anchor's force bounded: waves and sensor accuracy">uplift ≤ (waves, accuracy)</dt><dd class="v-upper x-upper"></dd>
       <dt class="x-wave" title="wave-frequency tension: half the range of the readings over wave_window">wave tension</dt><dd class="v-wave x-wave"></dd>
       <dt class="x-drag">drag margin</dt><dd class="v-drag x-drag"></dd>
-      <dt class="x-fatigue" title="Miner's damage of the chain (1: the S-N curve's failure) and the life left at the last day's rate">fatigue</dt><dd class="v-fatigue x-fatigue"></dd></dl>
-      <div class="msg"></div><div class="foot"><span class="v-model" title="the model that answered"></span> · <span class="age"></span><span class="alarm-st"></span><span class="sensor old"></span></div>`;
+</dl>
+      <div class="msg"></div><div class="foot"><span class="v-model" title="the model that answered"></span> · <span class="age"></span><span class="v-fatigue" title="chain fatigue: Miner's damage (1: the S-N curve's failure) and the life left at the last day's rate"></span><span class="alarm-st"></span><span class="sensor old"></span></div>`;
     t.querySelector('.name').textContent = line.name;
     const warn = line.mbl ? 1 / S.config.safety_factor_warn : null;
     const mark = t.querySelector('.mark');
@@ -201,6 +202,9 @@ const TIDE_R = 'tide_margin: the tide rise that lifts the anchor with the horizo
   + 'where it is now (a dock free to drift under a steady load); the tide warning and the time to uplift follow it';
 const TIDE_L = 'tide_margin_at_length: the tide rise that lifts the anchor with the chain\'s length and '
   + 'span held (a dock at rest on chains of fixed length: the nearer one there)';
+
+const SPAN = 'span: the hook-anchor distance the line is solved at: from the dock estimate (the dock\'s '
+  + 'offset, every line\'s tension) where it has one for the line, else the installed anchor distance';
 
 function renderChip(view, level) {
   const chip = document.querySelector(`.chip[data-chip="${view.name}"]`);
@@ -260,6 +264,13 @@ function renderTile(view, lost, frame) {
   t.querySelectorAll('.x-tidel').forEach((e) => { e.hidden = !shown(view.tide_margin_at_length); });
   tidel.textContent = shown(view.tide_margin_at_length) ? `${num(view.tide_margin_at_length, 2)} m` : '';
   tidel.className = 'v-tidel x-tidel ' + (shown(view.tide_margin_at_length) && view.tide_margin_at_length < 0 ? 'bad' : '');
+  // The span solved at (docs/node.md): shown with the dock's geometry, its source beside it.
+  const placed = cfg.hook_x !== null && cfg.hook_x !== undefined;
+  t.querySelectorAll('.x-span').forEach((e) => { e.hidden = !(placed && shown(view.span)); });
+  const moved = shown(view.span) && cfg.anchor_distance ? view.span - cfg.anchor_distance : null;
+  t.querySelector('.v-span').textContent = !shown(view.span) ? '' : view.span_source === 'dock_estimate'
+    ? `${num(view.span, 2)} m (dock estimate, ${moved >= 0 ? '+' : ''}${num(moved, 2)})`
+    : `${num(view.span, 2)} m (installed)`;
   // The uplift bound within sensor accuracy and the drag margin: shown where configured.
   const up = view.uplift_force_upper, drag = view.drag_margin;
   t.querySelectorAll('.x-upper').forEach((e) => { e.hidden = !shown(up); });
@@ -277,11 +288,10 @@ function renderTile(view, lost, frame) {
     (shown(drag) && drag < (S.config.drag_margin_warn || 0) ? 'warn' : ''));
   // Chain fatigue (docs/fatigue.md): Miner's damage and the life left at the last day's rate.
   const dmg = view.fatigue_damage, life = view.fatigue_life_left;
-  t.querySelectorAll('.x-fatigue').forEach((e) => { e.hidden = !shown(dmg); });
   const vf = t.querySelector('.v-fatigue');
   const years = shown(life) ? ` · ${life / 31557600 > 2 ? (life / 31557600).toFixed(1) + ' y' : (life / 86400).toFixed(1) + ' d'} left` : '';
-  vf.textContent = shown(dmg) ? `D ${dmg.toPrecision(3)}${years}` : '';
-  vf.className = 'v-fatigue x-fatigue ' + (shown(dmg) && dmg >= (S.config.fatigue_damage_warn || 1) ? 'warn' : '');
+  vf.textContent = shown(dmg) ? ` · fatigue D ${dmg.toPrecision(3)}${years}` : '';
+  vf.className = 'v-fatigue ' + (shown(dmg) && dmg >= (S.config.fatigue_damage_warn || 1) ? 'warn' : '');
   setText(t.querySelector('.v-model'), (view.model || 'no model').replace(' catenary', ''));
   const msg = lost ? `monitor silent: last known ${view.level} at ${clock(frame.snapshot_t)}` : view.message;
   t.querySelector('.msg').textContent = msg;

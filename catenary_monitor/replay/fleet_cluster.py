@@ -1,0 +1,275 @@
+"""The fleet replay on Dask distributed: every dock's chain of pieces
+(:mod:`.fleet_tasks`) submitted at once, the docks side by side, on a local cluster of one-core
+workers or on an existing scheduler.
+
+Dask retries a task whose worker died (and redoes a lost result a later task needs: the piece
+finds its checkpoint and returns it); a dock whose log cannot be replayed in pieces is
+replayed again as one task; a dock that fails is named in one line and the others go on.
+"""
+
+from __future__ import annotations
+
+import logging
+import shutil
+import time
+import uuid
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Optional, Sequence
+
+from catenary_monitor.replay.fleet_dataset import remove_parts
+from catenary_monitor.replay.fleet_tasks import (
+    Carry,
+    DockPlan,
+    FleetError,
+    PieceRestart,
+    finish_dock,
+    finished_summary,
+    forget_from,
+    plan_dock,
+    resume_point,
+    run_piece,
+)
+
+__all__ = ['FleetRun', 'Progress', 'run_fleet']
+
+
+@dataclass
+class Progress:
+    """What the run has done so far (for a progress line)."""
+
+    tasks_done: int = 0
+    tasks_total: int = 0
+    messages: int = 0
+    elapsed: float = 0.0
+    notes: list[str] = field(default_factory=list)  # lines to print once (a worker lost, ...)
+
+
+@dataclass
+class FleetRun:
+    """The run's outcome: each finished dock's summary, each failed dock's one line."""
+
+    docks: dict[str, dict[str, Any]] = field(default_factory=dict)
+    failed: dict[str, str] = field(default_factory=dict)
+    tasks_run: int = 0
+    tasks_reused: int = 0  # pieces a previous run finished (resumed after them)
+    docks_up_to_date: list[str] = field(default_factory=list)
+    workers: int = 0
+    startup_seconds: float = 0.0  # the cluster ready, the workers' imports done
+    seconds: float = 0.0  # the replay after it
+    worker_cpu_seconds: float = 0.0  # CPU time the workers spent in it
+    messages: int = 0
+    workers_lost: int = 0
+
+
+def _messages(carry: Carry) -> int:
+    """A finished piece's input messages (a small result for the progress line)."""
+    return int(carry.piece_messages)
+
+
+class _Dock:
+    """One dock's futures in the run (``generation`` counts its fresh starts)."""
+
+    def __init__(self, plan: DockPlan) -> None:
+        self.plan = plan
+        self.generation = 0
+        self.futures: list[Any] = []
+        self.failed = False
+
+
+def run_fleet(
+    folders: Sequence[Path],
+    out: Path,
+    *,
+    workers: Optional[int] = None,
+    scheduler: Optional[str] = None,
+    progress: Optional[Callable[[Progress], None]] = None,
+) -> FleetRun:
+    """Replay every dock folder into the datasets under ``out`` on Dask: a local cluster of
+    ``workers`` one-core worker processes (default: the usable CPUs), or the cluster whose
+    scheduler is at ``scheduler`` (its workers must see ``out`` and the folders at the same
+    paths)."""
+    from distributed import Client, LocalCluster
+
+    run = FleetRun()
+    root = Path(out).resolve()
+    root.mkdir(parents=True, exist_ok=True)
+    docks = _plans(folders, run)
+    t0 = time.monotonic()
+    cluster = None
+    if scheduler:
+        client = Client(scheduler, timeout='30s')
+    else:
+        with warnings.catch_warnings():  # "port 8787 in use" of its HTTP server: harmless
+            warnings.simplefilter('ignore', UserWarning)
+            cluster = LocalCluster(
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                silence_logs=logging.CRITICAL,
+            )
+        client = Client(cluster)
+    try:
+        run.workers = len(client.scheduler_info()['workers'])
+        client.run(_warm)  # each worker imports the replay once, before the clock of the replay
+        run.startup_seconds = time.monotonic() - t0
+        cpu = client.run(time.process_time)
+        _drive(client, docks, root, run, progress, time.monotonic())
+        after = client.run(time.process_time)  # a restarted worker's clock starts again
+        run.worker_cpu_seconds = sum(
+            after[w] - cpu.get(w, 0.0) for w in after if after[w] >= cpu.get(w, 0.0)
+        )
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    shutil.rmtree(root / '_fleet' / 'tmp', ignore_errors=True)  # what killed tasks left
+    run.seconds = time.monotonic() - t0 - run.startup_seconds
+    return run
+
+
+def _warm() -> None:
+    """Import what the tasks need, and one core per worker (:func:`.fleet_tasks.one_core`)."""
+    from catenary_monitor.replay import fleet_tasks
+
+    fleet_tasks.one_core()
+
+
+def _plans(folders: Sequence[Path], run: FleetRun) -> list[_Dock]:
+    docks: list[_Dock] = []
+    seen: dict[str, str] = {}
+    for folder in folders:
+        name = Path(folder).resolve().name
+        if name in seen:
+            run.failed[f'{name} ({folder})'] = (
+                f'{folder}: a dock named {name} is given twice ({seen[name]}); the dock is '
+                'the folder\'s name'
+            )
+            continue
+        seen[name] = str(folder)
+        try:
+            docks.append(_Dock(plan_dock(Path(folder))))
+        except FleetError as err:
+            run.failed[name] = str(err)
+    return docks
+
+
+def _submit(client: Any, dock: _Dock, root: Path, token: str, run: FleetRun) -> list[Any]:
+    """Submit the dock's pieces from where a previous run stopped, and its end; returns the
+    futures to watch (each piece's message count, the end)."""
+    plan = dock.plan
+    start = resume_point(root, plan)
+    run.tasks_reused += start
+    remove_parts(root, plan.name, start)
+    forget_from(root, plan, start)
+    before: Any = ('checkpoint', start - 1) if start else None
+    watch = []
+    dock.futures = []
+    tag = f'{token}-{dock.generation}-{plan.name}'
+    for task in range(start, len(plan.pieces)):
+        before = client.submit(
+            run_piece, plan, task, before, str(root), key=f'fleet-piece-{tag}-{task}'
+        )
+        count = client.submit(_messages, before, key=f'fleet-count-{tag}-{task}')
+        dock.futures += [before, count]
+        watch.append(count)
+    end = client.submit(finish_dock, plan, before, str(root), key=f'fleet-dock-{tag}')
+    dock.futures.append(end)
+    watch.append(end)
+    return watch
+
+
+def _drive(
+    client: Any,
+    docks: list[_Dock],
+    root: Path,
+    run: FleetRun,
+    progress: Optional[Callable[[Progress], None]],
+    t0: float,
+) -> None:
+    from distributed import as_completed
+
+    token = uuid.uuid4().hex[:8]
+    state = Progress()
+    owner: dict[str, tuple[_Dock, int]] = {}
+    pending = as_completed()
+    for dock in docks:
+        summary = finished_summary(root, dock.plan)
+        if summary is not None:
+            run.docks[dock.plan.name] = summary
+            run.docks_up_to_date.append(dock.plan.name)
+            continue
+        for future in _submit(client, dock, root, token, run):
+            owner[future.key] = (dock, dock.generation)
+            pending.add(future)
+        state.tasks_total += len(dock.plan.pieces)
+    state.tasks_total -= run.tasks_reused
+    addresses = set(client.scheduler_info()['workers'])
+    next_look = 0.0
+    while not pending.is_empty():
+        for future in pending.next_batch(block=False) if pending.has_ready() else []:
+            dock, generation = owner.pop(future.key)
+            if generation != dock.generation or dock.failed:
+                continue  # an abandoned start of this dock, or a failed dock's rest
+            _collect(client, future, dock, root, token, run, state, owner, pending)
+        if time.monotonic() >= next_look or pending.is_empty():  # twice a second, and last
+            next_look = time.monotonic() + 0.5
+            addresses = _look_for_lost(client, addresses, run, state)
+        state.elapsed = time.monotonic() - t0
+        if progress is not None:
+            progress(state)
+            state.notes = []
+        if not pending.has_ready():
+            time.sleep(0.05)
+    run.messages = state.messages
+
+
+def _look_for_lost(client: Any, addresses: set[str], run: FleetRun, state: Progress) -> set[str]:
+    """The workers now; those gone since the last look are counted and named."""
+    now = set(client.scheduler_info()['workers'])
+    lost = addresses - now
+    if lost:
+        run.workers_lost += len(lost)
+        state.notes += [f'worker {a} lost: its tasks are done again' for a in sorted(lost)]
+    return now
+
+
+def _collect(
+    client: Any,
+    future: Any,
+    dock: _Dock,
+    root: Path,
+    token: str,
+    run: FleetRun,
+    state: Progress,
+    owner: dict[str, tuple[_Dock, int]],
+    pending: Any,
+) -> None:
+    """Take one finished future of ``dock``: count it, or restart or fail the dock."""
+    if future.status == 'finished':
+        result = future.result()
+        if isinstance(result, dict):  # the dock's end
+            run.docks[dock.plan.name] = result
+        else:
+            state.tasks_done += 1
+            run.tasks_run += 1
+            state.messages += int(result)
+        return
+    error = future.exception()
+    client.cancel(dock.futures)
+    if isinstance(error, PieceRestart) and len(dock.plan.pieces) > 1:
+        state.notes.append(f'{dock.plan.name}: {error}; replaying it as one task')
+        state.tasks_total -= len(dock.plan.pieces) - 1
+        dock.plan = plan_dock(Path(dock.plan.folder), serial=True)
+        dock.generation += 1
+        for fut in _submit(client, dock, root, token, run):
+            owner[fut.key] = (dock, dock.generation)
+            pending.add(fut)
+        return
+    dock.failed = True
+    text = str(error) if isinstance(error, (FleetError, PieceRestart)) else (
+        f'{type(error).__name__}: {error}'
+    )
+    run.failed[dock.plan.name] = text.splitlines()[0] if text else type(error).__name__

@@ -1,0 +1,79 @@
+"""A load cell of three channels in the live node (real rclpy, the monitor as its own process):
+a channel that falls silent is named in /diagnostics and the tension comes from the others;
+replaying the node's log folder gives the node's tensions (docs/channels.md)."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+from ros_harness import Client, callback_errors, start_monitor, stop, write_params
+from rclpy.serialization import deserialize_message
+from std_msgs.msg import Float64MultiArray
+
+from catenary_monitor.core.config.parameters import config_from_params, load_params_file
+from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS
+from catenary_monitor.io.mcap_read import iter_messages
+from catenary_monitor.replay.driver import expand, replay_log
+
+pytestmark = pytest.mark.ros
+
+TOPICS = ['/cell/a', '/cell/b', '/cell/c']
+LINE = 'catenary_monitor: cell'
+
+
+@pytest.fixture(autouse=True)
+def no_callback_errors():
+    callback_errors()
+    yield
+    errors = callback_errors()
+    assert not errors, errors[:3]
+
+
+@pytest.fixture(scope='module')
+def client():
+    c = Client('channels_node_test_client')
+    yield c
+    c.close()
+
+
+def test_a_silent_channel_is_named_live_and_replay_agrees(client, tmp_path):
+    lines = {
+        'cell': dict(
+            weight=1300.0,
+            anchor_distance=130.0,
+            mbl=4.827e6,
+            tension_topics=TOPICS,
+            min_channels=2.0,
+        )
+    }
+    params = write_params(tmp_path / 'params.yaml', lines, tension_timeout=1.0)
+    log_dir = tmp_path / 'log'
+    proc = start_monitor(params, log_dir)
+    try:
+        client.wait_matched(TOPICS, 30.0)
+        client.feed('/tide/depth', 20.85)
+        end = time.monotonic() + 3.0
+        k = 0
+        while time.monotonic() < end:  # all three, then b falls silent
+            for j, topic in enumerate(TOPICS):
+                if j != 1 or time.monotonic() < end - 1.5:
+                    client.publish(topic, 4.0e5 * (1.0 + 0.02 * (j - 1)) + 50.0 * (k % 7))
+            k += 1
+            time.sleep(0.05)
+        status = client.wait_status(
+            LINE, 15.0, 1, check=lambda s: '/cell/b silent' in s['message']
+        )
+        assert 'tension from the other 2' in status['message']
+        assert status['values']['channels_healthy'] == '2.0'
+    finally:
+        client.feed('/tide/depth', None)
+        assert stop(proc) == 0
+    files = sorted(log_dir.glob('*.mcap'))
+    outputs = list(iter_messages(files, ['/catenary_monitor/cell/outputs']))
+    live = [deserialize_message(m.data, Float64MultiArray).data for m in outputs]
+    at = OUTPUT_FIELDS.index('top_tension')
+    config = config_from_params(load_params_file(params))
+    r = replay_log(expand([str(log_dir)]), config).result.lines[0]
+    np.testing.assert_array_equal(r.values['top_tension'], [o[at] for o in live])
