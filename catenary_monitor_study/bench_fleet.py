@@ -19,6 +19,7 @@ import argparse
 import json
 import os
 import shutil
+import statistics
 import tempfile
 import time
 from pathlib import Path
@@ -77,53 +78,81 @@ def run(
     per_file: int = 200_000,
     workers_list: tuple[int, ...] = (1, 2),
     keep: Optional[Path] = None,
+    repeat: int = 3,
 ) -> dict[str, Any]:
-    """Generate the fleet, replay it once per worker count; returns the figures."""
-    from catenary_monitor.replay.fleet_cluster import run_fleet
-
+    """Generate the fleet, replay it ``repeat`` times per worker count (in turn); returns the
+    figures (per worker count, the median round)."""
     tmp = Path(keep) if keep else Path(tempfile.mkdtemp(prefix='bench_fleet_'))
+    load = os.getloadavg()
     try:
         facts = generate_fleet(tmp / 'docks', docks, files, per_file)
         folders = sorted((tmp / 'docks').iterdir())
-        runs = []
-        for n in workers_list:
-            results = tmp / f'results_{n}'
-            shutil.rmtree(results, ignore_errors=True)
-            t0 = time.perf_counter()
-            fleet = run_fleet(folders, results, workers=n)
-            wall = time.perf_counter() - t0
-            if fleet.failed:
-                raise RuntimeError(f'fleet failed: {fleet.failed}')
-            same = _same_rows(tmp / f'results_{workers_list[0]}', results)
-            runs.append({
-                'workers': n,
-                'wall_s': round(wall, 3),
-                'startup_s': round(fleet.startup_seconds, 3),
-                'replay_s': round(fleet.seconds, 3),
-                'messages': fleet.messages,
-                'messages_per_s': round(fleet.messages / fleet.seconds),
-                'identical_to_first': same,
-            })  # fmt: skip
+        rounds: dict[int, list[dict[str, Any]]] = {n: [] for n in workers_list}
+        first = tmp / f'results_{workers_list[0]}_0'
+        for k in range(repeat):  # the worker counts in turn: a change of load hits both
+            for n in workers_list:
+                rounds[n].append(_one_run(folders, tmp / f'results_{n}_{k}', n, first))
+        runs = [_median_run(n, rounds[n]) for n in workers_list]
         base = runs[0]['replay_s'] * runs[0]['workers']
         for r in runs:
             r['speedup'] = round(runs[0]['replay_s'] / r['replay_s'], 3)
             r['efficiency'] = round(base / (r['replay_s'] * r['workers']), 3)
-        per_worker = runs[0]['messages_per_s'] / runs[0]['workers']
+        per_cpu = statistics.median(
+            x['messages'] / x['worker_cpu_s'] for n in workers_list for x in rounds[n]
+        )
         return {
             'fleet': facts,
             'cpus': len(os.sched_getaffinity(0)),
+            'load_average': [list(load), list(os.getloadavg())],
+            'repeat': repeat,
             'runs': runs,
-            'per_worker_messages_per_s': round(per_worker),
-            'year_100_docks': _cost(per_worker),
+            'rounds': rounds,
+            'per_worker_messages_per_cpu_s': round(per_cpu),
+            'year_100_docks': _cost(per_cpu),
         }
     finally:
         if keep is None:
             shutil.rmtree(tmp, ignore_errors=True)
 
 
+def _one_run(folders: list[Path], results: Path, workers: int, first: Path) -> dict[str, Any]:
+    """One fleet run on a fresh local cluster into a fresh folder, compared with the first."""
+    from catenary_monitor.replay.fleet_cluster import run_fleet
+
+    shutil.rmtree(results, ignore_errors=True)
+    t0 = time.perf_counter()
+    fleet = run_fleet(folders, results, workers=workers)
+    wall = time.perf_counter() - t0
+    if fleet.failed:
+        raise RuntimeError(f'fleet failed: {fleet.failed}')
+    same = _same_rows(first, results)
+    if results != first:
+        shutil.rmtree(results, ignore_errors=True)
+    return {
+        'workers': workers,
+        'wall_s': round(wall, 3),
+        'startup_s': round(fleet.startup_seconds, 3),
+        'replay_s': round(fleet.seconds, 3),
+        'worker_cpu_s': round(fleet.worker_cpu_seconds, 3),
+        'messages': fleet.messages,
+        'messages_per_s': round(fleet.messages / fleet.seconds),
+        'identical_to_first': same,
+    }
+
+
+def _median_run(workers: int, rounds: list[dict[str, Any]]) -> dict[str, Any]:
+    """The round with the median replay time (and whether every round was identical)."""
+    ordered = sorted(rounds, key=lambda r: r['replay_s'])
+    out = dict(ordered[(len(ordered) - 1) // 2])
+    out['identical_to_first'] = all(r['identical_to_first'] for r in rounds)
+    out['replay_s_all'] = [r['replay_s'] for r in rounds]
+    return out
+
+
 def _cost(per_worker: float) -> dict[str, Any]:
-    """100 docks x 1 year (12 lines at 20 Hz) at the measured rate: worker-hours, and hours on
-    N workers (ideal scaling across docks: one chain per dock, 100 chains)."""
+    """100 docks x 1 year (12 lines at 20 Hz) at the measured rate per worker (messages per
+    CPU second: a worker with a core of its own): worker-hours, and hours on N workers (ideal
+    scaling across docks: one chain per dock, 100 chains)."""
     total = 100 * YEAR_MESSAGES
     worker_hours = total / per_worker / 3600.0
     return {
@@ -138,20 +167,23 @@ def _text(out: dict[str, Any]) -> str:
     f = out['fleet']
     lines = [
         f'fleet: {f["docks"]} docks, {f["files"]} files, {f["messages"] / 1e6:.1f} M messages, '
-        f'{f["bytes"] / 1e6:.0f} MB; {out["cpus"]} CPUs',
-        'workers  start s  replay s  M msg/s  speed-up  efficiency  identical',
+        f'{f["bytes"] / 1e6:.0f} MB; {out["cpus"]} CPUs, load average '
+        f'{out["load_average"][0][0]:.1f} before, {out["load_average"][1][0]:.1f} after',
+        f'median of {out["repeat"]} rounds (the worker counts in turn):',
+        'workers  start s  replay s  M msg/s  speed-up  efficiency  identical  rounds: replay s',
     ]
     for r in out['runs']:
         lines.append(
             f'{r["workers"]:>7}  {r["startup_s"]:>7.2f}  {r["replay_s"]:>8.2f}  '
             f'{r["messages_per_s"] / 1e6:>7.2f}  {r["speedup"]:>8.2f}  {r["efficiency"]:>10.2f}'
-            f'  {"yes" if r["identical_to_first"] else "NO"}'
+            f'  {"yes" if r["identical_to_first"] else "NO":>9}  '
+            + ' '.join(f'{x:.2f}' for x in r['replay_s_all'])
         )
     c = out['year_100_docks']
-    per = out['per_worker_messages_per_s']
+    per = out['per_worker_messages_per_cpu_s']
     lines.append(
-        f'per worker: {per / 1e6:.2f} M msg/s; 100 docks x 1 year ({c["messages"] / 1e12:.2f} '
-        f'T messages): {c["worker_hours"]:.0f} worker-hours = '
+        f'per worker: {per / 1e6:.2f} M messages per CPU second; 100 docks x 1 year '
+        f'({c["messages"] / 1e12:.2f} T messages): {c["worker_hours"]:.0f} worker-hours = '
         + ', '.join(f'{h:.1f} h on {n}' for n, h in c['hours_on'].items())
     )
     return '\n'.join(lines)
@@ -164,6 +196,7 @@ def cmd_bench_fleet(args: argparse.Namespace) -> int:
         per_file=args.messages_per_file,
         workers_list=tuple(args.workers_list),
         keep=Path(args.keep) if args.keep else None,
+        repeat=args.repeat,
     )
     print(json.dumps(out) if args.json else _text(out))
     return 0 if all(r['identical_to_first'] for r in out['runs']) else 1
@@ -195,6 +228,9 @@ def register(sub: Any) -> None:
         '--workers-list', type=_workers, default=[1, 2], metavar='N,M',
         help='worker counts to run, the first the baseline (default 1,2)',
     )  # fmt: skip
+    p.add_argument(
+        '--repeat', type=int, default=3, help='rounds of every worker count (default 3)'
+    )
     p.add_argument('--keep', metavar='DIR', help='generate and keep the fleet and results here')
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench_fleet)

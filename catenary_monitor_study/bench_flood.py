@@ -42,6 +42,7 @@ from typing import Any, Optional
 import numpy as np
 
 from catenary_monitor.cli.demo import child_env
+from catenary_monitor.core.config.parameters import ConfigError
 
 __all__ = ['run_flood', 'flood', 'publish_main', 'register', 'flood_params', 'analyse']
 
@@ -53,9 +54,11 @@ DEPTH, DEPTH_RATE = 20.85, 10.0
 INTAKE, SENSORS = 'catenary_monitor: intake', 'catenary_monitor: sensors'
 
 
-def flood_params(path: Path, params_file: Optional[str] = None) -> Any:
-    """The paper's dock (or ``params_file``) with the bench's topics, written to ``path``;
-    returns the configuration."""
+def flood_params(
+    path: Path, params_file: Optional[str] = None, extra: Optional[dict[str, Any]] = None
+) -> Any:
+    """The paper's dock (or ``params_file``) with the bench's topics and the ``extra``
+    parameters, written to ``path``; returns the configuration."""
     import dataclasses
 
     from catenary_monitor.core.config.parameters import (
@@ -72,8 +75,23 @@ def flood_params(path: Path, params_file: Optional[str] = None) -> Any:
         for line in config.lines
     )
     config = dataclasses.replace(config, lines=lines, depth_topic='/bench/depth')
+    if extra:
+        config = config_from_params({**config_to_params(config), **extra})
     path.write_text(params_file_text(config_to_params(config)))
     return config
+
+
+def parse_setting(text: str) -> tuple[str, Any]:
+    """``NAME=VALUE`` (a number, true/false, or a string) for ``--set``."""
+    name, sep, value = text.partition('=')
+    if not sep or not name:
+        raise argparse.ArgumentTypeError(f'--set {text!r}: expected NAME=VALUE')
+    if value.lower() in ('true', 'false'):
+        return name, value.lower() == 'true'
+    try:
+        return name, float(value)
+    except ValueError:
+        return name, value
 
 
 # --------------------------------------------------------------------------- the publisher
@@ -206,7 +224,7 @@ def analyse(
     samples sent before it (negative indexes: in the node's counts, those that reached it,
     but not in the flood's figures)."""
     from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, VALUE_FIELDS
-    from catenary_monitor.io.mcap_read import read_float64_topics
+    from catenary_monitor.io.mcap_read import iter_messages, read_float64_topics
     from catenary_monitor.replay.driver import replay_log
 
     files = sorted(log_dir.glob('*.mcap'))
@@ -239,6 +257,11 @@ def analyse(
         (d[0] for d in diagnostics if d[1] != 0 and d[0] >= first_missed - period), np.inf
     )
     last = next((d for d in reversed(diagnostics) if d[0] <= flood_end + 2.0), None)
+    logged_at = np.array(
+        [m.log_time_ns * 1e-9 for m in iter_messages(files, ['/diagnostics'])], float
+    )
+    logged_at = logged_at[(logged_at >= t0) & (logged_at <= flood_end + 2.0)]
+    log_gap = float(np.diff(np.concatenate([[t0], logged_at])).max()) if logged_at.size else np.inf
     # What the node counted (its intake records) and what its last status said.
     records = _node_records(files)
     intake = [r for r in records if r['kind'] == 'intake']
@@ -284,6 +307,7 @@ def analyse(
         'diagnostic_period_s': period,
         'max_gap_s': float(gaps.max()),
         'max_gap_periods': float(gaps.max() / period),
+        'max_gap_in_log_s': log_gap,
         'first_not_stepped_s': None if first_missed == np.inf else first_missed - t0,
         'intake_alarm_after_s': (
             None if first_missed == np.inf or alarm_at == np.inf else alarm_at - first_missed
@@ -324,10 +348,15 @@ def run_flood(
     params_file: Optional[str] = None,
     json_out: bool = False,
     log_dir: Optional[str] = None,
+    extra: Optional[dict[str, Any]] = None,
 ) -> int:
     """Run one flood and print its figures; 0 when every check held (1 otherwise, 2 when it
     could not run)."""
-    result = flood(rate, duration, burst, params_file, log_dir)
+    try:
+        result = flood(rate, duration, burst, params_file, log_dir, extra=extra)
+    except ConfigError as err:
+        print(f'bench-flood: {err}', file=sys.stderr)
+        return 2
     if 'error' in result:
         print(f'bench-flood: {result["error"]}', file=sys.stderr)
         return 2
@@ -342,6 +371,7 @@ def flood(
     params_file: Optional[str] = None,
     log_dir: Optional[str] = None,
     domain: int = 131,
+    extra: Optional[dict[str, Any]] = None,
 ) -> dict[str, Any]:
     """One flood: its figures and checks (``error`` when it could not run). The node's log
     goes to ``log_dir`` (kept) or a temporary directory (removed)."""
@@ -353,7 +383,7 @@ def flood(
     env = child_env(domain)
     os.environ.update({k: env[k] for k in ('ROS_AUTOMATIC_DISCOVERY_RANGE', 'ROS_DOMAIN_ID')})
     tmp = Path(tempfile.mkdtemp(prefix='catenary_flood_'))
-    config = flood_params(tmp / 'params.yaml', params_file)
+    config = flood_params(tmp / 'params.yaml', params_file, extra)
     logs = Path(log_dir) if log_dir else tmp / 'log'
     monitor = subprocess.Popen(
         [
@@ -414,10 +444,20 @@ def flood(
             return {'error': f'the publisher did not start ({start})'}
         t0 = float(start['t0'])
         cpu0, wall0 = _cpu_seconds(monitor.pid), time.monotonic()
+        rss, flooding = [_rss_mb(monitor.pid)], threading.Event()
+
+        def sample_rss() -> None:
+            while not flooding.wait(1.0):
+                rss.append(_rss_mb(monitor.pid))
+
+        sampler = threading.Thread(target=sample_rss, daemon=True)
+        sampler.start()
         end = json.loads(publisher.stdout.readline() or '{}')  # type: ignore[union-attr]
         cpu = (_cpu_seconds(monitor.pid) - cpu0) / (time.monotonic() - wall0)
         flood_end = time.time()
-        rss = _rss_mb(monitor.pid)
+        flooding.set()
+        sampler.join(5.0)
+        rss.append(_rss_mb(monitor.pid))
         time.sleep(3.0)  # the last intake counts and diagnostics
     finally:
         try:
@@ -447,7 +487,9 @@ def flood(
         'cpus': os.cpu_count(),
         'load': os.getloadavg()[0],
         'node_cpu_share': cpu,
-        'node_rss_mb': rss,
+        'node_rss_mb': rss[-1],
+        'node_rss_start_mb': rss[0],
+        'node_rss_max_mb': max(rss),
         'node_exit': monitor.returncode,
         **analyse(
             config, logs, end['sent'], t0, rate, burst, seen, flood_end, end.get('primed')
@@ -471,19 +513,30 @@ def report(r: dict[str, Any]) -> str:
     lines = [
         f'flood: {r["lines"]} lines x {r["rate_hz"]:g} Hz for {r["duration_s"]:g} s{burst} '
         f'({r["lines"] * r["rate_hz"]:g} samples/s), {r["cpus"]} CPUs, load {r["load"]:.2f}',
-        f'node: {pct * r["node_cpu_share"]:.0f} % of one core, RSS {r["node_rss_mb"]:.0f} MB',
+        f'node: {pct * r["node_cpu_share"]:.0f} % of one core; RSS {r["node_rss_start_mb"]:.0f} '
+        f'MB at the start, {r["node_rss_max_mb"]:.0f} MB at most, {r["node_rss_mb"]:.0f} MB at '
+        'the end',
         f'samples: {r["sent"]} sent, {r["logged"]} logged, {r["stepped"]} stepped, '
         f'{r["not_stepped"]} not stepped ({pct * r["share_not_stepped"]:.1f} %)',
         f'node counted: {counted["received"]} stepped, {counted["coalesced"]} coalesced, '
         f'{counted["dropped"]} lost; {r["coalescing_records"]} coalescing records',
         f'/diagnostics: {r["diagnostics_received"]} received, longest gap '
         f'{r["max_gap_s"]:.2f} s ({r["max_gap_periods"]:.2f} periods of '
-        f'{r["diagnostic_period_s"]:g} s)',
+        f'{r["diagnostic_period_s"]:g} s; {r["max_gap_in_log_s"]:.2f} s between two the node '
+        'logged)',
         (
             'every sample stepped'
             if first is None
             else f'first sample not stepped at {first:.2f} s; intake alarm '
-            + ('never' if alarm is None else f'{alarm:.2f} s later')
+            + (
+                'never'
+                if alarm is None
+                else (
+                    f'{alarm:.2f} s later'
+                    if alarm >= 0
+                    else f'already up ({-alarm:.2f} s before: the node was busy)'
+                )
+            )
         ),
         f'last intake status: {r["last_intake_message"]}',
         f'live = replay: {"yes" if not r["replay_mismatches"] else r["replay_mismatches"]} '
@@ -513,6 +566,14 @@ def register(sub: Any) -> None:
         help='send N samples of a line at once every N periods (default: 1, evenly spread)',
     )
     p.add_argument('--params-file', metavar='F', help='default: config/floating_dock.yaml')
+    p.add_argument(
+        '--set',
+        type=parse_setting,
+        action='append',
+        default=[],
+        metavar='NAME=VALUE',
+        help="a parameter of the node's (e.g. intake_step_budget=0); repeatable",
+    )
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.add_argument(
         '--log-dir', metavar='DIR', help="the node's log folder, kept (default: a temporary one)"
@@ -528,6 +589,7 @@ def _command(args: argparse.Namespace) -> int:
         args.params_file,
         json_out=args.json,
         log_dir=args.log_dir,
+        extra=dict(args.set),
     )
 
 

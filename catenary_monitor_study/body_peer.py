@@ -18,7 +18,7 @@ from catenary_monitor.core.body.dock_model import DockModel
 
 os.environ.setdefault('PYTHONBREAKPOINT', '0')
 
-__all__ = ['moorpy_system', 'moorpy_equilibrium', 'INEXTENSIBLE_EA']
+__all__ = ['moorpy_system', 'moorpy_equilibrium', 'moorpy_lines', 'INEXTENSIBLE_EA']
 
 #: EA [N] given to MoorPy for an inextensible chain (stretch ~1e-6 m at a few MN).
 INEXTENSIBLE_EA = 1e14
@@ -74,3 +74,16 @@ def moorpy_equilibrium(
     r6 = np.array(body.r6, dtype=float)
     tensions = np.array([float(line.TB) for line in ms.lineList])
     return np.array([r6[0], r6[1], r6[5]]), tensions, (ms, body)
+
+
+def moorpy_lines(system: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each line of a solved MoorPy ``System`` (or ``(system, body)``): the hook tension [N],
+    the anchor's vertical force (the uplift, >= 0) [N] and the hook's horizontal distance to
+    its anchor [m], all as MoorPy has them."""
+    ms = system[0] if isinstance(system, tuple) else system
+    top = np.array([float(line.TB) for line in ms.lineList])
+    uplift = np.array([max(float(line.fA[2]), 0.0) for line in ms.lineList])
+    span = np.array(
+        [math.hypot(*(np.asarray(line.rB)[:2] - np.asarray(line.rA)[:2])) for line in ms.lineList]
+    )
+    return top, uplift, span

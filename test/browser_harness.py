@@ -154,8 +154,8 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
     storm's longest message), line_08 WARN unacknowledged with a message as long, line_10 WARN
     unacknowledged and chattering, line_12 WARN acknowledged, line_09 WARN shelved, the rest OK
     (half of them with no tide trend yet), every optional value set (bound, drag margin and drag
-    state, tide margin at length but on line_01, wave tension, fatigue), the intake WARN, and an
-    alarm flood whose first out is line_11."""
+    state, tide margin at length but on line_01, wave tension, fatigue, the span from the dock
+    estimate), the intake WARN, and an alarm flood whose first out is line_11."""
     from catenary_monitor.console.frames import Status
 
     out: dict[str, Any] = {}
@@ -187,6 +187,9 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
             # line_01 without chain_length: no tide margin at length (nan)
             'tide_margin_at_length': -0.4 if lifted else (math.nan if k == 0 else 1.05),
             'wave_tension': 38.5e3 + 1e3 * k,
+            # the span solved at: the dock estimate's (moved) on all but line_01 (installed)
+            'span': 121.06 + (0.0 if k == 0 else 0.39 + 0.01 * k),
+            'span_source': 'installed' if k == 0 else 'dock_estimate',
             'dynamic_uplift': 161.0e3 if lifted else 0.0,
             'fatigue_damage': 3.2e-4 * (k + 1),
             'fatigue_life_left': 2.7e9 / (k + 1),

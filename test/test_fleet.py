@@ -168,19 +168,22 @@ def test_a_killed_worker_loses_and_duplicates_nothing(fleet, cluster, tmp_path):
     killed = []
 
     def kill_one(progress: Any) -> None:
-        if killed or progress.tasks_done < 1:
+        """Mid-run: after the first piece and before the last, SIGKILL a worker (one replaying
+        a piece if there is one; any holds finished pieces' results that later ones need)."""
+        if killed or not 1 <= progress.tasks_done < progress.tasks_total:
             return
         client = get_client()
         busy = [w for w, keys in client.processing().items()
                 if any(str(k).startswith('fleet-piece') for k in keys)]  # fmt: skip
-        if busy:
-            pid = client.run(os.getpid, workers=busy[:1])[busy[0]]
-            os.kill(pid, signal.SIGKILL)
-            killed.append(pid)
+        worker = (busy or sorted(client.scheduler_info()['workers']))[0]
+        pid = client.run(os.getpid, workers=[worker])[worker]
+        os.kill(pid, signal.SIGKILL)
+        killed.append(pid)
 
     results = tmp_path / 'results'
     run = run_fleet(fleet['folders'], results, scheduler=cluster, progress=kill_one)
     assert killed and not run.failed, run.failed
+    assert run.workers_lost >= 1
     for dock, ref in fleet['refs'].items():
         _assert_rows_equal(results, dock, ref)
     assert not list((results / '_fleet').glob('tmp/*'))
@@ -238,3 +241,23 @@ def test_docs_duckdb_queries_answer_over_the_dataset(fleet, tmp_path):
         margin = fleet['refs'][dock]['columns']['anchor_margin']
         assert closest[dock][2] == pytest.approx(np.nanmin(margin), abs=1e-9)
     assert all(answers), answers
+
+
+def test_files_that_overlap_in_time_make_the_dock_one_task(cluster, tmp_path):
+    """Two recorders in one folder (the tensions in one file, the tide in another, the same
+    hours): the chain finds the overlap and the dock is replayed again as one task, as
+    ``replay DIR`` does it."""
+    from replay_data import dock_config, generate, params_yaml, write_log
+
+    folder = tmp_path / 'dock_e'
+    folder.mkdir()
+    config = dock_config(3)
+    tensions, depth = generate(config, seconds=40.0, seed=5)
+    write_log(folder / 'a_tension.mcap', config, tensions, (np.zeros(0, np.int64), np.zeros(0)))
+    write_log(folder / 'b_tide.mcap', config, {}, depth)
+    params_yaml(config, folder / 'catenary_monitor.yaml')
+    assert len(plan_dock(folder).pieces) == 2
+    results = tmp_path / 'results'
+    run = run_fleet([folder], results, scheduler=cluster)
+    assert not run.failed and run.docks['dock_e']['one_task']
+    _assert_rows_equal(results, 'dock_e', _reference(folder))

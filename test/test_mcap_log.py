@@ -413,15 +413,16 @@ def test_full_disk_mid_file_is_recorded_not_raised(tmp_path: Path, monkeypatch) 
     log.close()
     assert log.dropped > 0
     assert log.dropped + log.messages_written['/a'] == 600
-    # The retry that failed at open left no file behind; the broken first file is readable.
+    # The retry that failed at open left no file behind; the first file, cut to its last
+    # flush when the disk filled, was finished where it lies once space allowed (here at
+    # close): its flushed messages, none of the chunk that failed (counted dropped).
     files = sorted(tmp_path.glob('*.mcap'))
     assert len(files) == 2
+    assert log.take_finished_late() == [files[0]] and not log.unfinished
     columns, report = read_float64_topics(files, ['/a'])
     got = columns['/a'][1].astype(int).tolist()
-    assert not report.files[0].finished and report.files[1].finished
-    # The logger counts the chunk that failed to write as dropped; the reader may still
-    # recover the part of it that reached the disk.
-    assert log.messages_written['/a'] <= len(got) <= len(accepted)
+    assert report.files[0].finished and report.files[1].finished and not report.skips
+    assert log.messages_written['/a'] == len(got) <= len(accepted)
     assert got == sorted(set(got)) and set(got) <= set(accepted)
     after_recovery = [int(m.decoded_message.data) for m in decoded(files[1])]
     assert after_recovery == accepted[-len(after_recovery) :] == got[-len(after_recovery) :]

@@ -165,8 +165,8 @@ def test_results_mcap_is_a_node_shaped_log(scene, capsys):
     assert fields[k : k + 3] == ['sensor_state', *LENGTH_FIELDS, 'drag_state']  # appended
     waves = ['wave_tension', 'peak_tension', 'dynamic_uplift', 'time_to_uplift_view']
     w = fields.index('wave_tension')
-    assert fields[w : w + 4] == waves  # appended, then the channels' (appended last)
-    assert fields[-2:] == ['channels_healthy', 'channel_states']
+    assert fields[w : w + 4] == waves  # appended, then the channels', then the span's
+    assert fields[-4:] == ['channels_healthy', 'channel_states', 'span', 'span_source']
     got = np.array([m.data for _, m in outputs])
     np.testing.assert_array_equal(
         got[:, fields.index('time_to_uplift')], r.values['time_to_uplift']

@@ -21,6 +21,7 @@ from catenary_monitor.core.physics.solve import solve
 
 DERIVED = BOUNDS + HOLDING + LENGTH_FIELDS + DRAG_FIELDS + FATIGUE + CHANNELS  # monitor's
 DERIVED += ('wave_tension', 'peak_tension', 'dynamic_uplift', 'time_to_uplift_view')
+DERIVED += ('span', 'span_source')  # the span solved at, set by the monitor
 
 
 def test_solve_updates_is_bit_identical_to_solve_on_arrays():

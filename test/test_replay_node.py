@@ -269,6 +269,8 @@ TEXT_KEYS = {
     'sensor_state',
     'tide_forecast',
     'store_state',
+    'time_to_uplift_view',
+    'span_source',
     # Alarm management: shelving, chattering, the flood status.
     'shelved',
     'shelved_condition',

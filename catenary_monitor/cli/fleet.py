@@ -96,7 +96,8 @@ def _table(run: Any) -> str:
     fresh = f', up to date: {" ".join(run.docks_up_to_date)}' if run.docks_up_to_date else ''
     out += [
         '',
-        f'{run.tasks_run} tasks on {run.workers} worker(s) in {run.seconds:.1f} s{reused}{fresh}'
+        f'{run.tasks_run} tasks on {run.workers} worker(s) in {run.seconds:.1f} s (cluster '
+        f'start {run.startup_seconds:.1f} s){reused}{fresh}'
         + (f'; {run.workers_lost} worker(s) lost, their tasks done again' if run.workers_lost
            else ''),  # fmt: skip
     ]
@@ -139,7 +140,9 @@ def cmd_fleet(args: argparse.Namespace) -> int:
             'up_to_date': run.docks_up_to_date,
             'workers': run.workers,
             'workers_lost': run.workers_lost,
+            'startup_seconds': round(run.startup_seconds, 3),
             'seconds': round(run.seconds, 3),
+            'worker_cpu_seconds': round(run.worker_cpu_seconds, 3),
             'messages': run.messages,
         }, allow_nan=False, default=lambda v: None))  # fmt: skip
     else:

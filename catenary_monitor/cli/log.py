@@ -4,15 +4,19 @@ PATH is one file or a folder (every ``*.mcap`` in it; its rosbag2 ``metadata.yam
 rewritten). Each unfinished file gets a summary, chunk and message indexes, statistics and CRCs
 (:mod:`catenary_monitor.io.mcap_recover`); its original is kept as ``NAME.unfinished`` unless
 ``--discard-original``. Finished files are left alone ("already finished"), so running it
-twice changes nothing.
+twice changes nothing. ``--out DIR`` writes the finished files to DIR instead (another disk when
+this one is full) and leaves the originals as they are; without it, a file whose copy does not
+fit on a full disk is finished in place ("finished in place": cut after its last whole chunk,
+its summary appended: a summary's room is all it needs).
 
 A file that a running logger is writing (it holds a lock on it) is left alone ("being
 written").
 
 Exit status: 0 every file is finished now, or being written by a running logger (damaged parts
 that were skipped are listed);
-2 PATH does not exist, or a folder without ``*.mcap`` files; 3 at least one file could not be
-finished (not MCAP, unreadable or unwritable: its line says why); 1 unexpected failure.
+2 PATH does not exist, a folder without ``*.mcap`` files, or no folder DIR; 3 at least one
+file could not be finished (not MCAP, unreadable or unwritable: its line says why); 1
+unexpected failure.
 """
 
 from __future__ import annotations
@@ -32,6 +36,7 @@ EXIT_NOT_FINISHED = 3
 
 _STATUS_TEXT = {
     'recovered': 'recovered',
+    'finished_in_place': 'finished in place',
     'already_finished': 'already finished',
     'in_use': 'being written',
     'not_mcap': 'NOT MCAP',
@@ -63,12 +68,19 @@ def register(sub: Any) -> None:
         action='store_true',
         help='do not keep the unfinished original as NAME.unfinished',
     )
+    r.add_argument(
+        '--out',
+        metavar='DIR',
+        help='write the finished files to DIR (another disk, when this one is full) and leave '
+        'the originals as they are; without it, a file whose copy does not fit is finished in '
+        'place (its summary appended)',
+    )
     r.set_defaults(func=cmd_recover)
 
 
 def cmd_recover(args: argparse.Namespace) -> int:
     """Recover PATH; print a table (or JSON); exit status as in the module docstring."""
-    from catenary_monitor.io.mcap_recover import recover_path
+    from catenary_monitor.io.mcap_recover import RECOVERED, recover_path
 
     path = Path(args.path)
     if not path.exists():
@@ -77,7 +89,12 @@ def cmd_recover(args: argparse.Namespace) -> int:
     if path.is_dir() and not any(path.glob('*.mcap')):
         print(f'catenary-monitor: no *.mcap file in {path}', file=sys.stderr)
         return 2
-    results, metadata = recover_path(path, keep_original=not args.discard_original)
+    if args.out is not None and not Path(args.out).is_dir():
+        print(f'catenary-monitor: --out {args.out}: no such folder', file=sys.stderr)
+        return 2
+    results, metadata = recover_path(
+        path, keep_original=not args.discard_original, out_dir=args.out
+    )
     failed = [r for r in results if r.status in ('failed', 'not_mcap')]
     if args.json:
         print(
@@ -97,8 +114,8 @@ def cmd_recover(args: argparse.Namespace) -> int:
                 (
                     Path(r.path).name,
                     _STATUS_TEXT.get(r.status, r.status),
-                    str(r.messages) if r.status == 'recovered' else '',
-                    str(len(r.damaged)) if r.status == 'recovered' else '',
+                    str(r.messages) if r.status in RECOVERED else '',
+                    str(len(r.damaged)) if r.status in RECOVERED else '',
                     note,
                 )
             )

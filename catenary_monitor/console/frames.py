@@ -493,8 +493,10 @@ def _line_view(
             'fatigue_life_left',  # s at the last day's rate; None unknown or unlimited
             'wave_tension',  # N, the wave-frequency tension (half-range over wave_window)
             'dynamic_uplift',  # N, the uplift at the waves' peak tension (what ERROR takes)
+            'span',  # m, the hook-anchor distance the line was solved at
         ):
             view[key] = _num(v.get(key))
+        view['span_source'] = v.get('span_source', 'none')  # installed, dock_estimate, none
         # time_to_uplift is None both when unknown (NaN) and when not coming (inf): say which
         view['time_to_uplift_state'] = _forecast_state(v.get('time_to_uplift'))
         view['time_to_uplift_view'] = v.get('time_to_uplift_view', 'none')

@@ -84,6 +84,7 @@ from mcap.well_known import MessageEncoding, SchemaEncoding
 from mcap.writer import LIBRARY_IDENTIFIER, CompressionType, IndexType, Writer
 
 from catenary_monitor.io import bag_metadata as _bag
+from catenary_monitor.io.mcap_finish import Definitions, finish_in_place
 from catenary_monitor.io.ros_schemas import (
     QOS_DEFAULT,
     QOS_LATCHED,
@@ -304,6 +305,11 @@ class McapLogger:
         self._pending_bytes = 0
         self._oldest_pending: float | None = None
         self._flushed_size = 0  # file size (B) after the last flush
+        # Files abandoned after a write error (a full disk): cut to their last flush, to be
+        # finished where they lie as soon as space allows (path -> (size, definitions)).
+        self.unfinished: dict[Path, tuple[int, Definitions]] = {}
+        self.finished_late: list[Path] = []  # finished since the caller last took them
+        self._next_finish = float('-inf')
         self._ensure_open(self._clock())
 
     # ------------------------------------------------------------------ public API
@@ -496,6 +502,8 @@ class McapLogger:
                 return False
             if self.error is not None and self._file is not None and now >= self._sticky_until:
                 self.error = None  # a vanished file's error, held for error_hold
+            if self.unfinished and now >= self._next_finish:
+                self._finish_abandoned(now)
             self._rotate_if_due(now)
             if self._file is None:
                 self._ensure_open(now)
@@ -512,6 +520,12 @@ class McapLogger:
                 self._next_retention = now + self.retention_period
                 self.apply_retention()
         return flushed
+
+    def take_finished_late(self) -> list[Path]:
+        """Files abandoned after a write error and finished since the last call."""
+        with self._lock:
+            out, self.finished_late = self.finished_late, []
+            return out
 
     def take_deleted(self) -> list[tuple[Path, int, str]]:
         """The retention's deletions since the last call (path, bytes, ``size`` or ``age``)."""
@@ -627,6 +641,8 @@ class McapLogger:
                 return
             self._check_place(self._clock(), reopen=False)
             self._finish_current()
+            if self.unfinished:
+                self._finish_abandoned(self._clock())
             self._closed = True
             self._write_bag_metadata()
 
@@ -644,6 +660,7 @@ class McapLogger:
                 'messages_dropped': str(self.dropped),
                 'file_bytes_B': str(self.file_bytes),
                 'files_finished': str(len(self.files)),
+                'files_unfinished': str(len(self.unfinished)),
                 'files_vanished': str(self.vanished),
                 'files_deleted': str(self.deleted_files),
                 'deleted_bytes_B': str(self.deleted_bytes),
@@ -902,15 +919,60 @@ class McapLogger:
         self._clear_pending()
         if f is not None:
             _close_quietly(f.stream)
-            try:
-                self._finished_bytes += f.path.stat().st_size
-            except OSError:
-                pass
+            self._abandon(f)
         self._file = None
         self._flushed_size = 0
         for info in self._topics.values():
             info.channel_id = 0
         self._next_retry = self._clock() + self.retry_period
+
+    def _abandon(self, f: _OpenFile) -> None:
+        """Keep a file a write error left unfinished: cut it to its last flush at once (the end
+        of a whole chunk and its indexes; a full disk gets that room back) and remember what it
+        defines, so :meth:`_finish_abandoned` can finish it where it lies later."""
+        known = Definitions()
+        for topic, info in self._topics.items():
+            sid = f.schema_ids.get(info.type_name)
+            if sid is not None:
+                known.schemas[sid] = (info.type_name, SchemaEncoding.ROS2, info.schema_text)
+            if info.channel_id and sid is not None:
+                known.channels[info.channel_id] = (
+                    topic,
+                    MessageEncoding.CDR,
+                    sid,
+                    dict(info.metadata),
+                )
+        size = self._flushed_size
+        try:
+            os.truncate(f.path, size)
+        except OSError:
+            size = min(size, f.path.stat().st_size) if f.path.exists() else size
+        self.unfinished[f.path] = (size, known)
+        self._finished_bytes += size
+        if self.error is not None:
+            self.error += (
+                f'; {f.path.name} cut to its last whole chunk ({size} B), to be finished as '
+                'soon as space allows'
+            )
+            self.last_error = self.error
+        self._next_finish = self._clock() + self.retry_period
+
+    def _finish_abandoned(self, now: float) -> None:
+        """Finish the abandoned files where they lie (a summary's room needed; retried every
+        ``retry_period`` while it fails)."""
+        for path, (size, known) in list(self.unfinished.items()):
+            try:
+                finish_in_place(path, size, known)
+            except FileNotFoundError:
+                del self.unfinished[path]  # deleted meanwhile: nothing left to finish
+                continue
+            except OSError:
+                self._next_finish = now + self.retry_period
+                return
+            del self.unfinished[path]
+            self.files.append(path)
+            self.finished_late.append(path)
+        self._write_bag_metadata()
 
     def _record_error(self, what: str, exc: BaseException) -> None:
         self.error = f'{what}: {exc}'

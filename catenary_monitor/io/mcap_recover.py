@@ -28,6 +28,7 @@ For a folder, :func:`recover_path` also writes the folder's rosbag2 ``metadata.y
 from __future__ import annotations
 
 import datetime as _dt
+import errno
 import os
 import shutil
 import struct
@@ -39,6 +40,7 @@ import numpy as np
 
 from catenary_monitor.io import bag_metadata
 from catenary_monitor.io.mcap_column_writer import ColumnWriter
+from catenary_monitor.io.mcap_finish import _Bad, _bytes, _string, _string_map, finish_in_place
 from catenary_monitor.io.mcap_read import (
     MAGIC,
     McapReadError,
@@ -49,6 +51,7 @@ from catenary_monitor.io.mcap_read import (
 )
 
 __all__ = [
+    'RECOVERED',
     'RecoverResult',
     'is_finished',
     'recover_file',
@@ -57,6 +60,9 @@ __all__ = [
     'unfinished_files',
     'BACKUP_SUFFIX',
 ]
+
+#: The statuses of a file that is finished now (a copy, or in place for lack of room).
+RECOVERED = ('recovered', 'finished_in_place')
 
 #: Suffix of the kept original of a recovered file (not ``*.mcap``: no reader picks it up).
 BACKUP_SUFFIX = '.unfinished'
@@ -68,6 +74,7 @@ _OP_CHUNK, _OP_METADATA, _OP_DATA_END = 0x06, 0x0C, 0x0F
 _KNOWN = frozenset(range(0x01, 0x10))
 _COMPRESSION = ('zstd', 'lz4', '')
 _CHUNK_SIZE = 1 << 20  # B, chunks of the recovered file (uncompressed)
+_NO_ROOM = (errno.ENOSPC, errno.EDQUOT)  # a copy that does not fit
 #: Bytes of Schema and Channel record bodies a recovery keeps (100 000 channels of rosbag2's
 #: kind take about 60 MB): a file's definitions can come 1000-fold from compressed chunks.
 _DEFINITIONS_BYTES = 64 << 20
@@ -76,20 +83,17 @@ _HEADS = 1 << 20  # top-level record heads read looking for the first chunk
 _BATCH_BYTES = 2 << 20  # B of decompressed chunks the reader hands on at a time
 
 
-class _Bad(Exception):
-    """A record whose fields do not fit its length."""
-
-
 @dataclass
 class RecoverResult:
     """What :func:`recover_file` did with one file.
 
-    status: ``recovered``, ``already_finished``, ``in_use`` (a running logger holds its lock:
-    left alone), ``not_mcap`` or ``failed`` (``error`` says why).
+    status: ``recovered``, ``finished_in_place`` (no room for a copy: the summary appended to
+    the file itself), ``already_finished``, ``in_use`` (a running logger holds its lock: left
+    alone), ``not_mcap`` or ``failed`` (``error`` says why).
     messages: messages in the finished file; chunks: chunks read from the original;
     damaged: one sentence per damaged part skipped (a cut tail included); lost: messages
     known lost in them (a lower bound: a cut tail's count is unknown); backup: the kept
-    original.
+    original; output: where the finished file was written when not in place (``--out``).
     """
 
     path: str
@@ -101,6 +105,7 @@ class RecoverResult:
     lost: int = 0
     backup: Optional[str] = None
     error: Optional[str] = None
+    output: Optional[str] = None
 
     def to_dict(self) -> dict[str, object]:
         return asdict(self)
@@ -158,9 +163,13 @@ def unfinished_files(folder: str | os.PathLike[str]) -> list[Path]:
 
 
 def recover_path(
-    path: str | os.PathLike[str], keep_original: bool = True
+    path: str | os.PathLike[str],
+    keep_original: bool = True,
+    out_dir: Optional[str | os.PathLike[str]] = None,
 ) -> tuple[list[RecoverResult], Optional[Path]]:
-    """Recover a file or every ``*.mcap`` of a folder; write the folder's ``metadata.yaml``.
+    """Recover a file or every ``*.mcap`` of a folder; write the folder's ``metadata.yaml``
+    (with ``out_dir``: the finished files go there, the originals are left as they are, and
+    ``out_dir`` gets the ``metadata.yaml``).
 
     Returns the results (in name order) and the metadata path (None for a single file whose
     folder holds no ``metadata.yaml`` yet, or if it could not be written).
@@ -174,7 +183,9 @@ def recover_path(
         bag = (folder / bag_metadata.METADATA_NAME).exists()
     else:
         raise FileNotFoundError(f'no such MCAP file or folder: {path}')
-    results = [recover_file(f, keep_original) for f in files]
+    if out_dir is not None:
+        folder, bag = Path(out_dir), True
+    results = [recover_file(f, keep_original, out_dir) for f in files]
     written = None
     if bag:
         try:
@@ -184,14 +195,26 @@ def recover_path(
     return results, written
 
 
-def recover_file(path: str | os.PathLike[str], keep_original: bool = True) -> RecoverResult:
-    """Finish one unfinished MCAP file in place (see the module docstring). Never raises for
-    a bad or unwritable file: the result's ``status`` and ``error`` say what happened."""
+def recover_file(
+    path: str | os.PathLike[str],
+    keep_original: bool = True,
+    out_dir: Optional[str | os.PathLike[str]] = None,
+) -> RecoverResult:
+    """Finish one unfinished MCAP file (see the module docstring); with ``out_dir``, the
+    finished copy is written there under the same name and the original is left as it is. When
+    the copy does not fit on the disk (``ENOSPC``, ``EDQUOT``) and no ``out_dir`` is given, the
+    file is finished where it lies instead (:func:`catenary_monitor.io.mcap_finish.
+    finish_in_place`: a summary's room; the chunk cut by the end of the file is dropped, no
+    original is kept). Never raises for a bad or unwritable file: the result's ``status`` and
+    ``error`` say what happened."""
     path = Path(path)
     if is_finished(path):
         return RecoverResult(str(path), 'already_finished')
     result = RecoverResult(str(path), 'recovered')
-    tmp = path.with_name(f'.{path.name}.recover-tmp')
+    where = path.parent if out_dir is None else Path(out_dir)
+    elsewhere = out_dir is not None and not _same_dir(where, path.parent)
+    final = where / path.name if elsewhere else path
+    tmp = where / f'.{path.name}.recover-tmp'
     try:
         with open(path, 'rb') as src:
             head = src.read(len(MAGIC))
@@ -202,23 +225,57 @@ def recover_file(path: str | os.PathLike[str], keep_original: bool = True) -> Re
                 result.status = 'in_use'
                 result.error = 'being written by a running logger (locked): left alone'
                 return result
+            if elsewhere and final.exists():
+                raise FileExistsError(f'{final} exists: not overwritten')
             with open(tmp, 'wb') as out:
                 _rewrite(path, out, result, path.name)
                 out.flush()
                 os.fsync(out.fileno())
         _check_written(tmp, result.messages)
-        if keep_original:
+        if keep_original and not elsewhere:
             backup = path.with_name(path.name + BACKUP_SUFFIX)
             _keep(path, backup)
             result.backup = str(backup)
-        os.replace(tmp, path)
-        bag_metadata.fsync_dir(path.parent)
+        os.replace(tmp, final)
+        bag_metadata.fsync_dir(final.parent)
+        result.output = str(final) if elsewhere else None
     except Exception as exc:  # noqa: BLE001 - reported per file, never a traceback
-        result.status, result.error = 'failed', f'{type(exc).__name__}: {exc}'
         try:
             tmp.unlink()
         except OSError:
             pass
+        if isinstance(exc, OSError) and exc.errno in _NO_ROOM and not elsewhere:
+            return _in_place(path, exc)
+        result.status, result.error = 'failed', f'{type(exc).__name__}: {exc}'
+        if isinstance(exc, OSError) and exc.errno in _NO_ROOM:
+            result.error += f' (no room in {where})'
+    return result
+
+
+def _same_dir(a: Path, b: Path) -> bool:
+    try:
+        return a.resolve() == b.resolve()
+    except OSError:
+        return False
+
+
+def _in_place(path: Path, why: OSError) -> RecoverResult:
+    """:func:`recover_file`'s answer to a disk too full for a copy: finished where it lies."""
+    result = RecoverResult(str(path), 'finished_in_place')
+    try:
+        result.messages, damaged = finish_in_place(path)
+    except Exception as exc:  # noqa: BLE001
+        result.status = 'failed'
+        result.error = (
+            f'no room for a copy ({why.strerror}) nor for a summary in place: '
+            f'{type(exc).__name__}: {exc}; free space, or write the copy elsewhere with --out DIR'
+        )
+        return result
+    result.damaged = [
+        f'no room for a copy ({why.strerror}): finished in place, the file cut after its last '
+        'whole chunk (a chunk the end of the file cut is dropped; no original kept)',
+        *damaged,
+    ]
     return result
 
 
@@ -502,39 +559,6 @@ def _first_compression(data: bytes) -> str:
             break
         pos += 9 + length
     return ''
-
-
-def _string(buf: bytes | memoryview, pos: int, end: int) -> tuple[str, int]:
-    if pos + 4 > end:
-        raise _Bad('string length runs past its record')
-    (n,) = struct.unpack_from('<I', buf, pos)
-    if pos + 4 + n > end:
-        raise _Bad(f'string of {n} B runs past its record')
-    return bytes(buf[pos + 4 : pos + 4 + n]).decode('utf-8', 'replace'), pos + 4 + n
-
-
-def _bytes(buf: bytes | memoryview, pos: int, end: int) -> bytes:
-    if pos + 4 > end:
-        raise _Bad('byte array length runs past its record')
-    (n,) = struct.unpack_from('<I', buf, pos)
-    if pos + 4 + n > end:
-        raise _Bad(f'byte array of {n} B runs past its record')
-    return bytes(buf[pos + 4 : pos + 4 + n])
-
-
-def _string_map(buf: bytes | memoryview, pos: int, end: int) -> dict[str, str]:
-    if pos + 4 > end:
-        raise _Bad('map length runs past its record')
-    (n,) = struct.unpack_from('<I', buf, pos)
-    p, stop = pos + 4, pos + 4 + n
-    if stop > end:
-        raise _Bad(f'map of {n} B runs past its record')
-    out: dict[str, str] = {}
-    while p < stop:
-        key, p = _string(buf, p, stop)
-        value, p = _string(buf, p, stop)
-        out[key] = value
-    return out
 
 
 def _main(argv: list[str]) -> int:

@@ -58,6 +58,7 @@ class FleetRun:
     workers: int = 0
     startup_seconds: float = 0.0  # the cluster ready, the workers' imports done
     seconds: float = 0.0  # the replay after it
+    worker_cpu_seconds: float = 0.0  # CPU time the workers spent in it
     messages: int = 0
     workers_lost: int = 0
 
@@ -114,7 +115,12 @@ def run_fleet(
         run.workers = len(client.scheduler_info()['workers'])
         client.run(_warm)  # each worker imports the replay once, before the clock of the replay
         run.startup_seconds = time.monotonic() - t0
+        cpu = client.run(time.process_time)
         _drive(client, docks, root, run, progress, time.monotonic())
+        after = client.run(time.process_time)  # a restarted worker's clock starts again
+        run.worker_cpu_seconds = sum(
+            after[w] - cpu.get(w, 0.0) for w in after if after[w] >= cpu.get(w, 0.0)
+        )
     finally:
         client.close()
         if cluster is not None:
@@ -201,25 +207,33 @@ def _drive(
         state.tasks_total += len(dock.plan.pieces)
     state.tasks_total -= run.tasks_reused
     addresses = set(client.scheduler_info()['workers'])
+    next_look = 0.0
     while not pending.is_empty():
         for future in pending.next_batch(block=False) if pending.has_ready() else []:
             dock, generation = owner.pop(future.key)
             if generation != dock.generation or dock.failed:
                 continue  # an abandoned start of this dock, or a failed dock's rest
             _collect(client, future, dock, root, token, run, state, owner, pending)
-        now = set(client.scheduler_info()['workers'])
-        lost = addresses - now
-        if lost:
-            run.workers_lost += len(lost)
-            state.notes += [f'worker {a} lost: its tasks are done again' for a in sorted(lost)]
-        addresses = now | addresses - lost
+        if time.monotonic() >= next_look or pending.is_empty():  # twice a second, and last
+            next_look = time.monotonic() + 0.5
+            addresses = _look_for_lost(client, addresses, run, state)
         state.elapsed = time.monotonic() - t0
         if progress is not None:
             progress(state)
             state.notes = []
         if not pending.has_ready():
-            time.sleep(0.1)
+            time.sleep(0.05)
     run.messages = state.messages
+
+
+def _look_for_lost(client: Any, addresses: set[str], run: FleetRun, state: Progress) -> set[str]:
+    """The workers now; those gone since the last look are counted and named."""
+    now = set(client.scheduler_info()['workers'])
+    lost = addresses - now
+    if lost:
+        run.workers_lost += len(lost)
+        state.notes += [f'worker {a} lost: its tasks are done again' for a in sorted(lost)]
+    return now
 
 
 def _collect(

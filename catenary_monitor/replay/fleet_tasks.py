@@ -162,7 +162,7 @@ def plan_dock(folder: Path, serial: bool = False) -> DockPlan:
     """The dock in ``folder`` (its name: the folder's): its ``*.mcap`` files in time order, a
     piece per file (``serial``, or files without a known first stamp: one piece). Raises
     :class:`FleetError`."""
-    folder = Path(folder)
+    folder = Path(folder).absolute()  # the workers may run elsewhere: absolute paths
     if not folder.is_dir():
         raise FleetError(f'{folder}: not a folder')
     candidates = sorted(folder.glob('*.mcap'))

@@ -24,6 +24,7 @@ from catenary_monitor.core.config.parameters import (
     config_hash,
     config_to_params,
 )
+from catenary_monitor.core.monitor import dock_watch as dock_live
 from catenary_monitor.core.monitor import holding, sensor_state
 from catenary_monitor.core.monitor.alarms import VIEW_TEXT
 from catenary_monitor.core.monitor.alarms import Level
@@ -85,7 +86,8 @@ __all__ = [
 #: ``time_to_uplift`` 3 (s; ``inf`` when no uplift is coming, ``nan`` while unknown); the bounds
 #: and holding values (forces, lengths) 3 (``nan`` where the line has no solve or holding data);
 #: ``time_to_uplift_view`` ``chain length held``, ``horizontal tension held`` or ``none``;
-#: ``sensor_state``
+#: ``span`` the hook-anchor distance the line was solved at (m, 3 decimals) and
+#: ``span_source`` where it came from (``installed``, ``dock_estimate``); ``sensor_state``
 #: the line's sensor state word (``ok``, ``stuck``, ``spike``, ``over_mbl``, ``slack``,
 #: ``suspected_parted``); ``drag_state`` the anchor's (``holding``, ``overloaded``,
 #: ``dragging``, ``unknown``).
@@ -130,6 +132,9 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     # A line of several channels (core/monitor/channels.py): healthy count, states code.
     ('channels_healthy', 0),
     ('channel_states', 0),
+    # The span solved at and its source (core/monitor/dock_watch.py: a word).
+    ('span', 3),
+    ('span_source', None),
 )
 #: The default columns (the issue's contract), in this order.
 CSV_COLUMNS = (
@@ -247,6 +252,9 @@ def message_columns(
         elif name == 'drag_state':
             codes = np.where(np.isnan(values[name]), 3, values[name]).astype(np.int64)
             out[name] = (codes, [*holding.DRAG_STATES, 'unknown'])
+        elif name == 'span_source':
+            codes = np.where(np.isnan(values[name]), 2, values[name]).astype(np.int64)
+            out[name] = (codes, [*dock_live.SPAN_SOURCES, 'none'])
         elif name == 'time_to_uplift_view':
             view = values[name]
             codes = np.where(np.isnan(view), 0, np.where(view == 1.0, 2, 1)).astype(np.int64)

@@ -116,7 +116,12 @@ from catenary_monitor.core.monitor.fatigue import to_record
 from catenary_monitor.core.physics import elastic
 from catenary_monitor.io import fatigue_store
 from catenary_monitor.io.mcap_log import McapLogger
-from catenary_monitor.io.mcap_recover import RecoverResult, recover_in_child, unfinished_files
+from catenary_monitor.io.mcap_recover import (
+    RECOVERED,
+    RecoverResult,
+    recover_in_child,
+    unfinished_files,
+)
 
 __all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'CatenaryMonitor', 'main']
 
@@ -155,14 +160,11 @@ INTAKE_RATE_HEARTBEAT = 10.0
 DRAIN_MAX = 1000
 #: Samples that waited longer than this [s] when their callback ran are not stepped but
 #: coalesced (logged, counted, left out); a shorter hiccup (a node held off the CPU by other
-#: processes) is caught up with, sample by sample, ...
+#: processes) is caught up with, sample by sample, within ``intake_step_budget`` of steps.
 COALESCE_AFTER = 1.0
-#: ... within this much time of steps per callback [s] (at the recent cost of one): the newest
-#: samples that fit are stepped, the older ones coalesced.
-STEP_BUDGET = 0.05
-#: A sample callback runs the periodic tick (the watchdog) itself once its timer is this many
-#: periods late (waiting in the executor's queue behind a flood's callbacks).
-LATE_TIMER = 1.25
+#: A sample callback runs the periodic tick (the watchdog) itself this many periods after the
+#: previous one (its timer waiting in the executor's queue behind a flood's callbacks).
+LATE_TIMER = 1.1
 
 
 def _events_executor_wanted() -> bool:
@@ -381,10 +383,12 @@ class CatenaryMonitor(Node):
             done = True
             self.recovery.append(result)
             name = os.path.basename(result.path)
-            if result.status == 'recovered':
+            if result.status in RECOVERED:
                 kept = ''
                 if result.backup:
                     kept = f'; original kept as {os.path.basename(result.backup)}'
+                elif result.status == 'finished_in_place':
+                    kept = '; finished in place (no room for a copy)'
                 self.get_logger().warning(
                     f'recovered unfinished MCAP log {name}: {result.messages} messages, '
                     f'{len(result.damaged)} damaged part(s) skipped{kept}'
@@ -404,7 +408,7 @@ class CatenaryMonitor(Node):
         """The logger status's keys about start-up recovery."""
         if not self.recovery:
             return ()
-        ok = [r for r in self.recovery if r.status == 'recovered']
+        ok = [r for r in self.recovery if r.status in RECOVERED]
         return (
             ('files_recovered', str(len(ok))),
             ('files_not_recovered', str(len(self.recovery) - len(ok))),
@@ -585,7 +589,9 @@ class CatenaryMonitor(Node):
             stamp = self._stamp()
             self._write(topic, raw, stamp)
             step(k, stamp, raw)
-            self._step_cost += 0.1 * (time.perf_counter() - t1 - self._step_cost)
+            # a moving average; one slow step (the log's chunk written out) counts 4x at most
+            spent = min(time.perf_counter() - t1, 4.0 * self._step_cost)
+            self._step_cost += 0.1 * (spent - self._step_cost)
         took = time.perf_counter() - t0
         self._busy += took
         self._busy_tick += took
@@ -593,7 +599,7 @@ class CatenaryMonitor(Node):
 
     def _to_step(self, batch: list[tuple[bytes, Optional[int]]]) -> int:
         """How many of the newest samples of ``batch`` to step: those that waited at most
-        :data:`COALESCE_AFTER` (the newest always), as many as :data:`STEP_BUDGET` of steps
+        :data:`COALESCE_AFTER` (the newest always), as many as ``intake_step_budget`` of steps
         takes at the recent cost of one, less as the batch fills the input's queue (none but
         the newest from half of it: the samples behind must be taken and logged in time)."""
         n = len(batch)
@@ -605,7 +611,7 @@ class CatenaryMonitor(Node):
                 break
             fresh += 1
         room = max(0.0, 1.0 - n / (0.5 * _SAMPLES.depth))
-        budget = room * STEP_BUDGET / max(self._step_cost, 1e-6)
+        budget = room * self.config.alarm.intake_step_budget / max(self._step_cost, 1e-6)
         return max(1, min(fresh, int(budget)))
 
     def _step_tension(self, k: int, stamp: int, raw: bytes) -> None:
@@ -691,7 +697,7 @@ class CatenaryMonitor(Node):
     def _timers_late(self) -> None:
         """Report the intake counts at once when a sample was not handled while the intake
         status said OK; run the periodic tick and the watchdog here when their timers are late
-        by a quarter period (:data:`LATE_TIMER`): a flood's callbacks wait ahead of them in
+        by a tenth of a period (:data:`LATE_TIMER`): a flood's callbacks wait ahead of them in
         the executor's queue, and /diagnostics must keep its time."""
         if self._intake_due and self.core.state.intake[0] == Level.OK:
             self._report_intake(time.monotonic(), force=True)
@@ -846,9 +852,24 @@ class CatenaryMonitor(Node):
         if self.log is not None:
             self.log.tick()
             self._report_deleted()
+            self._report_finished_late()
         self._check_logger()
         self._report_recovery()
         self._save_fatigue()
+
+    def _report_finished_late(self) -> None:
+        """One log line and one events-channel record per file a write error (a full disk)
+        had left unfinished and the logger finished where it lies once space allowed."""
+        assert self.log is not None
+        for path in self.log.take_finished_late():
+            self.get_logger().warning(
+                f'MCAP log {path.name}, left unfinished by a write error, is finished now '
+                '(cut after its last whole chunk, summary written)'
+            )
+            record = {'kind': 'log_finished_late', 'path': str(path)}
+            self._write(
+                EVENTS_TOPIC, serialize_message(String(data=json.dumps(record))), self._stamp()
+            )
 
     def _report_deleted(self) -> None:
         """One log line and one events-channel record per file the retention deleted."""

@@ -177,6 +177,7 @@ function buildTiles() {
       <dt>safety factor</dt><dd class="v-sf"></dd><dt>uplift in</dt><dd class="v-ttu"></dd>
       <dt title="${TIDE_R}">tide to lift, R held</dt><dd class="v-tide" title="${TIDE_R}"></dd>
       <dt class="x-tidel" title="${TIDE_L}">tide to lift, chain length held</dt><dd class="v-tidel x-tidel" title="${TIDE_L}"></dd>
+      <dt class="x-span" title="${SPAN}">span</dt><dd class="v-span x-span" title="${SPAN}"></dd>
       <dt class="x-upper" title="uplift bound: the anchor's force at most, with the waves (the window's peak tension) and the sensors' accuracy">uplift bound</dt><dd class="v-upper x-upper"></dd>
       <dt class="x-wave" title="wave-frequency tension: half the range of the readings over wave_window">wave tension</dt><dd class="v-wave x-wave"></dd>
       <dt class="x-drag">drag margin</dt><dd class="v-drag x-drag"></dd>
@@ -200,6 +201,9 @@ const TIDE_R = 'tide_margin: the tide rise that lifts the anchor with the horizo
   + 'where it is now (a dock free to drift under a steady load); the tide warning and the time to uplift follow it';
 const TIDE_L = 'tide_margin_at_length: the tide rise that lifts the anchor with the chain\'s length and '
   + 'span held (a dock at rest on chains of fixed length: the nearer one there)';
+
+const SPAN = 'span: the hook-anchor distance the line is solved at: from the dock estimate (the dock\'s '
+  + 'offset, every line\'s tension) where it has one for the line, else the installed anchor distance';
 
 function renderChip(view, level) {
   const chip = document.querySelector(`.chip[data-chip="${view.name}"]`);
@@ -261,6 +265,16 @@ function renderTile(view, lost, frame) {
   t.querySelectorAll('.x-tidel').forEach((e) => { e.hidden = !shown(view.tide_margin_at_length); });
   tidel.textContent = shown(view.tide_margin_at_length) ? `${num(view.tide_margin_at_length, 2)} m` : '';
   tidel.className = 'v-tidel x-tidel ' + (shown(view.tide_margin_at_length) && view.tide_margin_at_length < 0 ? 'bad' : '');
+  // The span solved at (docs/node.md): shown with the dock's geometry, its source beside it.
+  const placed = cfg.hook_x !== null && cfg.hook_x !== undefined;
+  t.querySelectorAll('.x-span').forEach((e) => { e.hidden = !(placed && shown(view.span)); });
+  const moved = shown(view.span) && cfg.anchor_distance ? view.span - cfg.anchor_distance : null;
+  // The source in the label, the move from the installed span beside the value (one row).
+  const estimated = view.span_source === 'dock_estimate';
+  setText(t.querySelector('dt.x-span'), estimated ? 'span, estimated' : 'span, installed');
+  t.querySelector('.v-span').textContent = !shown(view.span) ? '' : estimated
+    ? `${num(view.span, 2)} m (${moved >= 0 ? '+' : ''}${num(moved, 2)})`
+    : `${num(view.span, 2)} m`;
   // The uplift bound within sensor accuracy and the drag margin: shown where configured.
   const up = view.uplift_force_upper, drag = view.drag_margin;
   t.querySelectorAll('.x-upper').forEach((e) => { e.hidden = !shown(up); });

@@ -27,7 +27,9 @@ equally).
 
 The environmental load is minus the restoring force and moment of every line at the fitted
 offset (the dock at rest: static equilibrium), and each line's expected tension is its model
-tension at its fitted span: ``residual = measured - expected`` (an expected tension of ``inf``
+tension at its fitted span (``span``, the hook's distance to its anchor at the fitted offset,
+which the monitor solves the line's uplift at: :mod:`catenary_monitor.core.monitor.dock_watch`):
+``residual = measured - expected`` (an expected tension of ``inf``
 means the other lines put this hook beyond its chain's reach).
 """
 
@@ -70,6 +72,7 @@ class DockEstimate(NamedTuple):
     dropped: np.ndarray  # (n, m) bool: dropped from this estimate's fit
     used: np.ndarray  # (n, m) bool: in the final fit
     readings: np.ndarray  # (n,) int: readings with weight
+    span: np.ndarray  # (n, m) m, each hook's horizontal distance to its anchor at the offset
 
 
 def _rotation_arm(model: DockModel, psi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -227,6 +230,7 @@ def estimate_dock(
         dropped=flagged & valid[:, None],
         used=(weight > 0) & ~flagged & valid[:, None],
         readings=readings,
+        span=np.where(valid[:, None], span, nan),
     )
 
 

@@ -836,6 +836,16 @@ PARAMETERS: tuple[ParamSpec, ...] = (
                 0.0,
                 100000.0,
             ),
+            (
+                'intake_step_budget',
+                0.05,
+                'Intake: of the samples waiting on an input, the node steps the newest that '
+                'this much time of steps takes (at the recent cost of one) and coalesces the '
+                'older ones: logged and counted, not stepped (0: only the newest)',
+                's',
+                0.0,
+                1.0,
+            ),
         )
     ),
     ParamSpec(
@@ -1529,6 +1539,7 @@ class AlarmConfig:
     stamp_ahead_max: float = _default('stamp_ahead_max')
     tension_sample_rate: float = _default('tension_sample_rate')
     depth_sample_rate: float = _default('depth_sample_rate')
+    intake_step_budget: float = _default('intake_step_budget')
     tide_table: str = _default('tide_table')
     tide_table_epoch: float = _default('tide_table_epoch')
     tide_forecast_horizon: float = _default('tide_forecast_horizon')

@@ -212,6 +212,7 @@ class AlarmInputs:
     uplift_view: float = math.nan  # 1: time_to_uplift is the chain length's, 0: R held's
     channels_healthy: float = math.nan  # a line of several channels: how many are healthy
     channel_states: float = math.nan  # their states (core.channels code; NaN: one channel)
+    span: float = math.nan  # m, the span the line was solved at (for the dragging message)
 
 
 class Latch(NamedTuple):
@@ -568,11 +569,17 @@ class LineAlarm:
         """The message of the ``dragging`` condition (load and holding in kN, span in m)."""
         if x.drag_state == 2.0:
             load = x.holding_capacity - x.drag_margin
-            beyond = x.implied_anchor_distance - self.anchor_distance
+            installed = x.span != x.span or x.span == self.anchor_distance
+            span = self.anchor_distance if installed else x.span
+            where = (
+                f'its installed {_fmt(span)} m'
+                if installed
+                else f'the {_fmt(span, 1.0, 2)} m the dock estimate gives'
+            )
             return (
                 f'anchor dragging: horizontal load {_fmt(load, 1e3)} kN > holding '
                 f'{_fmt(x.holding_capacity, 1e3)} kN and the chain puts the anchor '
-                f'{_fmt(beyond, 1.0, 2)} m beyond its installed {_fmt(self.anchor_distance)} m '
+                f'{_fmt(x.implied_anchor_distance - span, 1.0, 2)} m beyond {where} '
                 f'(implied {_fmt(x.implied_anchor_distance, 1.0, 2)} m)'
             )
         return f'anchor dragging alarm held (clears after {hold:g} s of the anchor holding)'
@@ -738,6 +745,7 @@ _INPUT_FIELDS = (
     'uplift_view',
     'channels_healthy',
     'channel_states',
+    'span',
 )
 
 

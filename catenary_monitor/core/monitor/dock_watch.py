@@ -20,6 +20,16 @@ normal deviate while the line agrees with the others, and a drifting sensor's gr
 ``sqrt(2 dock_residual_time / dt)`` times its per-tick deviation. A line is flagged while
 ``|S| > dock_residual_limit``. Ticks where the line is not tested leave its average as it was.
 
+Each line's uplift is solved at the span the estimate gives it (:data:`SPAN_SOURCES`): the
+hook's horizontal distance to its anchor with the dock at the fitted offset
+(:attr:`~catenary_monitor.core.body.estimate.DockEstimate.span`), where the line was tested at
+this tick and agrees with the others (its smoothed statistic within ``dock_residual_limit``);
+else (no estimate, too few readings to test the line, its reading not used, the line
+disagreeing) at its installed ``anchor_distance``. The estimate is made at a tick from the
+lines' newest tensions; the spans it gives are taken by the lines' solves at the samples after
+that tick (a tick solves nothing itself), so a solve at a tension or depth sample uses the
+newest tick's estimate, in the core and in its twin alike.
+
 The ``dock`` status is STALE while no estimate can be made (fewer than three readings, or no
 usable depth) and OK otherwise; its message gives the offset and the load and names the lines
 flagged. A line's ``inconsistent`` alarm condition (WARN) is latched in
@@ -41,6 +51,11 @@ from catenary_monitor.core.monitor.plausible import MAX_DEPTH, reading_status_ar
 
 __all__ = [
     'LINE_INPUTS',
+    'SPAN_SOURCES',
+    'INSTALLED',
+    'DOCK_ESTIMATE',
+    'solve_spans',
+    'span_word',
     'DOCK_KEYS',
     'DockDecision',
     'Smoothing',
@@ -57,16 +72,22 @@ __all__ = [
 LINE_INPUTS = ('inconsistent', 'dock_residual', 'dock_expected', 'dock_sigma')
 #: Values of the ``catenary_monitor: dock`` status (SI; yaw in deg, REP 103).
 DOCK_KEYS = ('offset_x', 'offset_y', 'yaw_deg', 'load_x', 'load_y', 'load_mz', 'readings')
+#: Where a line's solve takes its span (``span_source``, the output's code is the index): the
+#: installed ``anchor_distance``, or the hook's distance to its anchor in the dock estimate.
+SPAN_SOURCES = ('installed', 'dock_estimate')
+INSTALLED, DOCK_ESTIMATE = 0, 1
 
 
 class DockDecision(NamedTuple):
     """``n`` tick decisions: the estimate, per tick the level, per tick and line the inputs
-    (the smoothed statistic S as ``dock_sigma``) and the flags."""
+    (the smoothed statistic S as ``dock_sigma``), the flags and the span each line's solves
+    take after the tick (:func:`solve_spans`)."""
 
     estimate: DockEstimate
     level: np.ndarray  # (n,) int8 Level
     line_inputs: np.ndarray  # (n, m, 4): LINE_INPUTS
     flagged: np.ndarray  # (n, m) bool: |S| > dock_residual_limit
+    span: np.ndarray  # (n, m) m, NaN: the installed anchor_distance
 
 
 class Smoothing(NamedTuple):
@@ -168,7 +189,19 @@ def decide_dock(
     flagged = np.abs(stat) > limit
     flag = np.where(flagged, 1.0, np.where(np.isfinite(stat), 0.0, math.nan))
     inputs = np.stack([flag, est.residual, est.expected, stat], axis=-1)
-    return DockDecision(est, level, inputs, flagged), state
+    return DockDecision(est, level, inputs, flagged, solve_spans(est.span, flag)), state
+
+
+def solve_spans(span: np.ndarray, flag: np.ndarray) -> np.ndarray:
+    """The span [m] each line's solves take after a tick: the estimate's ``span`` where the
+    line was tested and agrees (``flag`` 0.0, :data:`LINE_INPUTS`), else NaN (its installed
+    ``anchor_distance``)."""
+    return np.where((flag == 0.0) & np.isfinite(span), span, math.nan)
+
+
+def span_word(source: float) -> str:
+    """A ``span_source`` code's word (:data:`SPAN_SOURCES`; ``none`` for NaN)."""
+    return SPAN_SOURCES[int(source)] if source in (0.0, 1.0) else 'none'
 
 
 def _row(est: DockEstimate, i: int) -> DockEstimate:

@@ -154,7 +154,9 @@ NODE_NAME = 'catenary_monitor'
 #: ok, 1 stuck, 2 spike, 3 over_mbl, 4 slack, 5 suspected_parted), then ``tide_margin_at_length``
 #: [m] (:data:`catenary_monitor.core.monitor.holding.LENGTH_FIELDS`), then ``wave_tension``,
 #: ``peak_tension`` and ``dynamic_uplift`` [N] and ``time_to_uplift_view`` (1 chain length held,
-#: 0 horizontal tension held).
+#: 0 horizontal tension held), then ``span`` [m], the hook-anchor distance the line was solved
+#: at, and ``span_source`` (0 the installed ``anchor_distance``, 1 the dock estimate:
+#: :mod:`~catenary_monitor.core.monitor.dock_watch`).
 OUTPUT_FIELDS = (
     'top_tension',
     'depth',
@@ -190,6 +192,9 @@ OUTPUT_FIELDS = (
     'time_to_uplift_view',
     # A line measured by several channels: the healthy count and their states, channels.py.
     *channels.FIELDS,
+    # The span the line was solved at, and where it came from (core/monitor/dock_watch.py).
+    'span',
+    'span_source',
 )
 #: The solved quantities among them (every field but ``status`` and ``level``).
 VALUE_FIELDS = OUTPUT_FIELDS[:11] + OUTPUT_FIELDS[13:]
@@ -452,6 +457,14 @@ class LineState:
     wave: wave_window.WaveState = field(default_factory=wave_window.WaveState.empty)
     peak_tension: float = _NAN  # N
     wave_tension: float = _NAN  # N
+    # m, the span the newest dock estimate gives the line's solves (NaN: the installed one).
+    dock_span: float = _NAN
+
+    def span(self) -> tuple[float, float]:
+        """The span [m] the line's next solve takes and its ``span_source`` code."""
+        if self.dock_span == self.dock_span:
+            return self.dock_span, float(dock_live.DOCK_ESTIMATE)
+        return self.config.anchor_distance, float(dock_live.INSTALLED)
 
     def inputs(
         self, depth_s: float, depth_stale: bool, rate: float = _NAN, table: bool = False
@@ -491,6 +504,7 @@ class LineState:
             uplift_view=v[_AT['time_to_uplift_view']],
             channels_healthy=self.channel_values[0],
             channel_states=self.channel_values[1],
+            span=v[_AT['span']],
         )
 
 
@@ -1041,6 +1055,9 @@ class MonitorCore:
         for line, lc in zip(self.state.lines, config.lines):
             line.config, line.alarm = lc, LineAlarm.for_line(lc, config.alarm)
         self.dock_model = DockModel.from_config(config) if config.has_dock_model else None
+        if self.dock_model is None:  # no dock estimate: the installed spans
+            for line in self.state.lines:
+                line.dock_span = _NAN
 
     # ------------------------------------------------------------------ decisions
     def _decide_tide(self, stamp_ns: int) -> list[Change]:
@@ -1151,6 +1168,7 @@ class MonitorCore:
         )
         for k, line in enumerate(self.state.lines):
             line.dock = tuple(decision.line_inputs[0, k].tolist())
+            line.dock_span = float(decision.span[0, k])
         self.state.dock_values = dock_live.dock_values(decision, 0)
         new = (Level(int(decision.level[0])), dock_live.dock_message(self.dock_model, decision, 0))
         return self._set_component('dock', new, stamp_ns)
@@ -1171,9 +1189,10 @@ class MonitorCore:
         """Solve one line at the newest depth (the scalar fast path)."""
         lc, t = line.config, line.tension
         h = self.state.depth + lc.hook_height
+        span = line.span()
         if self.state.depth_s != self.state.depth_s:  # no depth yet: nothing to solve
             line.values, line.status, line.status_message, line.model = (
-                _with_sensor((t, h) + _NAN_VALUES[2:], line.sensor_code),
+                _with_span(_with_sensor((t, h) + _NAN_VALUES[2:], line.sensor_code), span),
                 NO_DEPTH,
                 '',
                 NO_MODEL,
@@ -1185,7 +1204,7 @@ class MonitorCore:
             lc.weight,
             h,
             tension=t,
-            anchor_distance=lc.anchor_distance,
+            anchor_distance=span[0],
             mbl=lc.mbl,
             ea=lc.ea,
             **loads,
@@ -1205,6 +1224,7 @@ class MonitorCore:
             _NAN,  # time_to_uplift: _add_derived
         )
         line.values = _with_sensor(line.values + _NAN_VALUES[len(line.values) :], line.sensor_code)
+        line.values = _with_span(line.values, span)
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
         code = reading_status(t, h, lc.mbl, lc.weight)
         if code:
@@ -1223,6 +1243,7 @@ class MonitorCore:
         cfgs = [line.config for line in lines]
         tension = np.array([line.tension for line in lines])
         h = self.state.depth + np.array([c.hook_height for c in cfgs])
+        spans = [line.span() for line in lines]
         ea = None
         if any(c.ea is not None for c in cfgs):
             ea = np.array([math.inf if c.ea is None else c.ea for c in cfgs])
@@ -1230,7 +1251,7 @@ class MonitorCore:
             np.array([c.weight for c in cfgs]),
             h,
             tension=tension,
-            anchor_distance=np.array([c.anchor_distance for c in cfgs]),
+            anchor_distance=np.array([span for span, _ in spans]),
             mbl=np.array([c.mbl for c in cfgs]),
             ea=ea,
         )
@@ -1242,7 +1263,7 @@ class MonitorCore:
         messages, status = r.message, np.asarray(r.status).tolist()
         for i, line in enumerate(lines):
             line.values = tuple(col[i] for col in columns) + _NAN_VALUES[len(columns) :]
-            line.values = _with_sensor(line.values, line.sensor_code)
+            line.values = _with_span(_with_sensor(line.values, line.sensor_code), spans[i])
             line.status, line.status_message = int(status[i]), str(messages[i])
             line.model = str(models[i])
         codes = reading_status_array(
@@ -1486,6 +1507,14 @@ def _with_sensor(values: tuple[float, ...], code: int) -> tuple[float, ...]:
     return values[:_SENSOR_AT] + (float(code),) + values[_SENSOR_AT + 1 :]
 
 
+_SPAN_AT = VALUE_FIELDS.index('span')
+
+
+def _with_span(values: tuple[float, ...], span: tuple[float, float]) -> tuple[float, ...]:
+    """``values`` with the span solved at [m] and its ``span_source`` code in their places."""
+    return values[:_SPAN_AT] + tuple(span) + values[_SPAN_AT + 2 :]
+
+
 _FATIGUE_AT = VALUE_FIELDS.index(fatigue_rule.FIELDS[0])
 
 
@@ -1530,6 +1559,21 @@ def _column(cfgs: Sequence[LineConfig], key: str) -> np.ndarray:
     return np.array([none if getattr(c, key) is None else getattr(c, key) for c in cfgs])
 
 
+def _span(cfgs: Sequence[LineConfig], named: dict[str, np.ndarray]) -> np.ndarray:
+    """Per element, the span [m] the values were solved at (``named['span']``), the line's
+    installed ``anchor_distance`` where it is not given (NaN)."""
+    installed = _column(cfgs, 'anchor_distance')
+    if 'span' not in named:
+        return installed
+    span = np.asarray(named['span'], dtype=float)
+    return np.where(np.isnan(span), installed, span)
+
+
+def _given_span(lc: LineConfig, span: float) -> float:
+    """:func:`_span` of one line in plain floats."""
+    return lc.anchor_distance if span != span else span
+
+
 def _wants_holding(c: LineConfig) -> bool:
     """Whether a line has holding values: a chain length or an anchor holding (not with point
     loads: the plain chain's formulas)."""
@@ -1545,10 +1589,11 @@ def derived_values(
 ) -> dict[str, np.ndarray]:
     """What the core adds to a solve (the core and its batch twin both call this), per element
     of the nominal values ``named`` (VALUE_FIELDS -> arrays, with ``peak_tension`` and
-    ``wave_tension`` from the wave window), each element's line in ``cfgs`` (one config for
-    all, or one per element): the wave values, ``dynamic_uplift``, the bounds
-    (:mod:`.uncertainty`) and, with ``holding``, the holding values (:mod:`.holding`; NaN for
-    lines with neither ``chain_length`` nor ``anchor_holding``)."""
+    ``wave_tension`` from the wave window; ``span`` the span solved at, else the installed
+    one), each element's line in ``cfgs`` (one config for all, or one per element): the wave
+    values, ``dynamic_uplift``, the bounds (:mod:`.uncertainty`) and, with ``holding``, the
+    holding values (:mod:`.holding`; NaN for lines with neither ``chain_length`` nor
+    ``anchor_holding``), all at that span."""
     n = len(named['top_tension'])
     out = {key: np.asarray(named[key], dtype=float) for key in wave_window.FIELDS}
     tension = uncertainty.dynamic_tension(
@@ -1557,7 +1602,7 @@ def derived_values(
     out.update(bound_values(cfgs, alarm.depth_accuracy, dict(named, top_tension=tension)))
     out['dynamic_uplift'] = uncertainty.dynamic_uplift(
         _column(cfgs, 'weight'),
-        _column(cfgs, 'anchor_distance'),
+        _span(cfgs, named),
         _column(cfgs, 'mbl'),
         _column(cfgs, 'ea'),
         tension,
@@ -1587,7 +1632,7 @@ def bound_values(
     config, or one per element); the core and its batch twin both call this."""
     return uncertainty.bounds(
         _column(cfgs, 'weight'),
-        _column(cfgs, 'anchor_distance'),
+        _span(cfgs, named),
         _column(cfgs, 'mbl'),
         _column(cfgs, 'ea'),
         named['top_tension'],
@@ -1615,7 +1660,7 @@ def holding_values(
         named['horizontal_tension'],
         named['suspended_length'],
         named['uplift_force'],
-        _column(cfgs, 'anchor_distance'),
+        _span(cfgs, named),
         tolerance,
     )
 
@@ -1642,7 +1687,7 @@ def holding_one(
         values[_AT['horizontal_tension']],
         values[_AT['suspended_length']],
         values[_AT['uplift_force']],
-        lc.anchor_distance,
+        _given_span(lc, values[_AT['span']]),
         tolerance,
     )
 
@@ -1670,7 +1715,8 @@ def line_status(
     exactly), then ``measured_tension``, ``tension_age`` [s], ``anchor_distance``,
     ``allowed_uplift``, ``anchor_angle_deg``, ``solver_status``, ``model``, ``sensor_state``
     (:func:`catenary_monitor.core.monitor.sensor_state.line_word`), ``time_to_uplift_view``
-    (:func:`view_word`), then ``extra``
+    (:func:`view_word`), ``span`` [m] and ``span_source`` (the span the line was solved at and
+    its source: :func:`catenary_monitor.core.monitor.dock_watch.span_word`), then ``extra``
     (the alarm's acknowledgement keys: :func:`.acknowledge.diagnostic_values`; with the dock
     model, :func:`line_dock_values`)."""
     named = dict(zip(VALUE_FIELDS, values))
@@ -1684,6 +1730,8 @@ def line_status(
         ('model', model),
         ('sensor_state', sensor_word),
         ('time_to_uplift_view', view_word(named['time_to_uplift_view'])),
+        ('span', repr(float(named['span']))),
+        ('span_source', dock_live.span_word(named['span_source'])),
         *extra,
     ]
     return ComponentStatus(

@@ -280,7 +280,11 @@ class WindowResult:
 
 
 def solve_updates(
-    line: LineConfig, tension: np.ndarray, depth: np.ndarray, a_crit: np.ndarray
+    line: LineConfig,
+    tension: np.ndarray,
+    depth: np.ndarray,
+    a_crit: np.ndarray,
+    span: Optional[np.ndarray] = None,
 ) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """Problems 3 and 4 for one line on arrays, with the critical parameter given per element.
 
@@ -291,6 +295,7 @@ def solve_updates(
     depth : depth h (m) per update, hook height already added; NaN means no depth yet.
     a_crit : catenary parameter (m) of the critical no-uplift chain at that depth
         (:func:`catenary_monitor.core.physics.catenary.critical_parameter`), per update.
+    span : the anchor distance (m) per update (None: the line's installed one).
 
     Returns
     -------
@@ -307,11 +312,12 @@ def solve_updates(
     does (``a_crit`` unused).
     """
     if line.ea is not None:
-        return _solve_updates_elastic(line, tension, depth)[:2]
+        return _solve_updates_elastic(line, tension, depth, span)[:2]
     if fused_kernel.AVAILABLE:  # the C kernel, as the core's scalar solve() (a_crit unused)
-        return _solve_updates_kernel(line, tension, depth)
+        return _solve_updates_kernel(line, tension, depth, span=span)
     n = len(tension)
-    w, x, mbl = line.weight, line.anchor_distance, line.mbl
+    w, mbl = line.weight, line.mbl
+    x_all: Any = line.anchor_distance if span is None else np.asarray(span, dtype=float)
     out = {k: np.full(n, np.nan) for k in VALUE_FIELDS}
     status = np.zeros(n, dtype=np.int64)
     with np.errstate(over='ignore', invalid='ignore', divide='ignore'):
@@ -327,6 +333,7 @@ def solve_updates(
         t = tension if all_ok else tension[ok]
         h = depth if all_ok else depth[ok]
         ac = a_crit if all_ok else a_crit[ok]
+        x = x_all if span is None or all_ok else x_all[ok]
         b = cat.two_prod_diff(t, w, h) / w
         x_min = b * cat.acosh1p(h / b)
         r = w * b
@@ -337,7 +344,7 @@ def solve_updates(
         if lift.size:
             m = lift.size
             state, _, conv = cat.lifted_from_tension(
-                np.full(m, w), b[lift], h[lift], np.full(m, x)
+                np.full(m, w), b[lift], h[lift], np.broadcast_to(x, b.shape)[lift]
             )
             r[lift] = state.horizontal_tension
             length[lift] = state.suspended_length
@@ -376,17 +383,23 @@ _ROWS = {k: ALL_KEYS.index(k) for k in VALUE_FIELDS if k in ALL_KEYS}
 
 
 def _solve_updates_kernel(
-    line: LineConfig, tension: np.ndarray, depth: np.ndarray, keep: bool = False
+    line: LineConfig,
+    tension: np.ndarray,
+    depth: np.ndarray,
+    keep: bool = False,
+    span: Optional[np.ndarray] = None,
 ) -> tuple[dict[str, np.ndarray], np.ndarray]:
     """:func:`solve_updates` through the C kernel (core/fused_kernel.py): one pass, every value.
 
     ``keep``: the inputs are the caller's to give (kept as the ``top_tension`` and ``depth``
-    columns, not copied), and the caller sets ``time_to_uplift`` and ``sensor_state``."""
+    columns, not copied), and the caller sets ``time_to_uplift`` and ``sensor_state``;
+    ``span``: the anchor distance per update (m; None: the installed one)."""
     t = np.ascontiguousarray(tension, dtype=float)
     h = np.ascontiguousarray(depth, dtype=float)
-    rows, status = fused_kernel.solve_arrays(
-        float(line.weight), h, t, float(line.anchor_distance), float(line.mbl), len(t)
+    x: Any = (
+        float(line.anchor_distance) if span is None else np.ascontiguousarray(span, dtype=float)
     )
+    rows, status = fused_kernel.solve_arrays(float(line.weight), h, t, x, float(line.mbl), len(t))
     status[np.isnan(h)] = NO_DEPTH
     out = {k: rows[i] for k, i in _ROWS.items()}
     if keep:
@@ -399,10 +412,10 @@ def _solve_updates_kernel(
 
 
 def _solve_updates_elastic(
-    line: LineConfig, tension: np.ndarray, depth: np.ndarray
+    line: LineConfig, tension: np.ndarray, depth: np.ndarray, span: Optional[np.ndarray] = None
 ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
     """:func:`solve_updates` for a line with ``ea``: ``elastic.solve_with_correction`` (the
-    rule picks the model).
+    rule picks the model), at ``span`` (m per update; None: the installed anchor distance).
 
     Also returns, per update, whether the elastic model answered.
     """
@@ -417,7 +430,7 @@ def _solve_updates_elastic(
             line.weight,
             depth[has],
             tension[has],
-            anchor_distance=line.anchor_distance,
+            anchor_distance=line.anchor_distance if span is None else span[has],
             ea=line.ea,
             mbl=line.mbl,
         )
@@ -430,10 +443,11 @@ def _solve_updates_elastic(
 
 
 def _solve_updates_loads(
-    line: LineConfig, tension: np.ndarray, depth: np.ndarray
+    line: LineConfig, tension: np.ndarray, depth: np.ndarray, span: Optional[np.ndarray] = None
 ) -> tuple[dict[str, np.ndarray], np.ndarray, np.ndarray]:
     """:func:`solve_updates` for a line with point loads: the core's scalar solve() per
-    element (core/physics/point_loads.py); also where that model answered."""
+    element (core/physics/point_loads.py), at ``span`` (m per update; None: the installed
+    anchor distance); also where that model answered."""
     n = len(tension)
     out = {k: np.full(n, np.nan) for k in VALUE_FIELDS}
     out['depth'], out['top_tension'] = depth.copy(), tension.copy()
@@ -444,7 +458,7 @@ def _solve_updates_loads(
             line.weight,
             float(depth[i]),
             tension=float(tension[i]),
-            anchor_distance=line.anchor_distance,
+            anchor_distance=line.anchor_distance if span is None else float(span[i]),
             mbl=line.mbl,
             point_loads=line.point_loads,
         )
@@ -455,14 +469,18 @@ def _solve_updates_loads(
     return out, status, has.copy()
 
 
-def critical_parameters(line: LineConfig, depth: np.ndarray) -> np.ndarray:
-    """Critical catenary parameter (m) per depth sample (depth already includes hook height)."""
+def critical_parameters(
+    line: LineConfig, depth: np.ndarray, span: Optional[np.ndarray] = None
+) -> np.ndarray:
+    """Critical catenary parameter (m) per depth sample (depth already includes hook height),
+    at ``span`` (m per sample; None: the installed anchor distance)."""
     a = np.full(len(depth), np.nan)
     good = np.isfinite(depth) & (depth > 0)
     if good.any():
         h = depth[good]
+        x = np.full(h.size, line.anchor_distance) if span is None else span[good]
         with np.errstate(over='ignore', invalid='ignore', divide='ignore'):
-            a[good], _ = cat.critical_parameter(h, np.full(h.size, line.anchor_distance))
+            a[good], _ = cat.critical_parameter(h, x)
     return a
 
 
@@ -795,6 +813,7 @@ class _Dock:
     levels: np.ndarray  # int8 per tick
     before: tuple[tuple[Level, str], tuple[tuple[str, str], ...], list[tuple[float, ...]]]
     transitions: list[Transition]
+    span_before: list[float]  # each line's dock_span before the window (m, NaN: installed)
 
 
 def _decide_dock_window(core: MonitorCore, window: Window, tide: _Tide) -> Optional[_Dock]:
@@ -805,12 +824,12 @@ def _decide_dock_window(core: MonitorCore, window: Window, tide: _Tide) -> Optio
     if model is None:
         return None
     before = (core.state.dock, core.state.dock_values, [line.dock for line in core.state.lines])
+    span_before = [line.dock_span for line in core.state.lines]
     ticks = window.ticks
     n = len(ticks)
     if n == 0:
-        return _Dock(
-            dock_live.DockDecision(*([None] * 4)), np.zeros(0, np.int8), before, []  # type: ignore
-        )
+        none = dock_live.DockDecision(*([None] * 5))  # type: ignore
+        return _Dock(none, np.zeros(0, np.int8), before, [], span_before)
     now = ticks * 1e-9
     at = np.searchsorted(tide.times, ticks, 'right') - 1  # the tick's own tide decision
     depth = tide.depth[at]
@@ -840,7 +859,8 @@ def _decide_dock_window(core: MonitorCore, window: Window, tide: _Tide) -> Optio
     core.state.dock_values = dock_live.dock_values(decision, n - 1)
     for k, line in enumerate(core.state.lines):
         line.dock = tuple(decision.line_inputs[-1, k].tolist())
-    return _Dock(decision, levels, before, transitions)
+        line.dock_span = float(decision.span[-1, k])
+    return _Dock(decision, levels, before, transitions, span_before)
 
 
 @dataclass
@@ -912,11 +932,15 @@ def _solve_line(
     sensors: _Sensors,
     k: int,
     waves: tuple[np.ndarray, np.ndarray],
+    dock: Optional[_Dock] = None,
 ) -> tuple[dict[str, np.ndarray], np.ndarray, Optional[np.ndarray]]:
     """Values, status and elastic flags at the line's solved steps, with the time to uplift
     at the tide's trend of the newest depth sample and the sensor state of the newest tick;
-    ``waves`` the wave window's peak and wave tension after each tension sample."""
-    values, status, used = _solve_at(core, line, steps, tv, window)
+    ``waves`` the wave window's peak and wave tension after each tension sample; each solve at
+    the span of the newest tick's dock estimate (``dock``; None: the installed span)."""
+    span = _spans(line, steps, dock, k)
+    values, status, used = _solve_at(core, line, steps, tv, window, span[0])
+    values['span'], values['span_source'] = span
     values['sensor_state'] = _pick(
         steps.k_idx[steps.solved], sensors.codes[:, k].astype(np.float64), sensors.before[k]
     )
@@ -948,23 +972,49 @@ def _solve_line(
     return values, status, used
 
 
+def _spans(
+    line: LineState, steps: _Steps, dock: Optional[_Dock], k: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The span [m] and ``span_source`` code at the line's solved steps: the newest tick's
+    dock estimate (:func:`dock_live.solve_spans`), the installed span where it gives none."""
+    n = int(np.count_nonzero(steps.solved))
+    installed = line.config.anchor_distance
+    if dock is None:
+        return np.full(n, installed), np.full(n, float(dock_live.INSTALLED))
+    column = dock.decision.span[:, k] if dock.decision.span is not None else np.zeros(0)
+    estimate = _pick(steps.k_idx[steps.solved], column, dock.span_before[k])
+    known = ~np.isnan(estimate)
+    source = np.where(known, float(dock_live.DOCK_ESTIMATE), float(dock_live.INSTALLED))
+    return np.where(known, estimate, installed), source
+
+
 def _solve_at(
-    core: MonitorCore, line: LineState, steps: _Steps, tv: np.ndarray, window: Window
+    core: MonitorCore,
+    line: LineState,
+    steps: _Steps,
+    tv: np.ndarray,
+    window: Window,
+    span: Optional[np.ndarray] = None,
 ) -> tuple[dict[str, np.ndarray], np.ndarray, Optional[np.ndarray]]:
-    """Values, status and elastic flags at the line's solved steps (the solver's part)."""
+    """Values, status and elastic flags at the line's solved steps (the solver's part), at
+    ``span`` [m] per solved step (None: the installed span)."""
     lc = line.config
     where = np.flatnonzero(steps.solved)
     tension = _pick(steps.t_idx[where], tv, line.tension)
     d_idx = steps.d_idx[where]
     dv = window.depth[1]
     h = _pick(d_idx, dv + lc.hook_height, core.state.depth + lc.hook_height)  # NaN: no depth yet
+    if span is not None and np.all(span == lc.anchor_distance):
+        span = None  # the installed span throughout: the constant's faster paths
     used: Optional[np.ndarray] = None
     if lc.ea is not None:
-        values, status, used = _solve_updates_elastic(lc, tension, h)
+        values, status, used = _solve_updates_elastic(lc, tension, h, span)
     elif lc.point_loads is not None:  # rare: solve() element by element
-        values, status, used = _solve_updates_loads(lc, tension, h)
+        values, status, used = _solve_updates_loads(lc, tension, h, span)
     elif fused_kernel.AVAILABLE:  # solve_updates' kernel path, which needs no critical parameter
-        values, status = _solve_updates_kernel(lc, tension, h, keep=True)
+        values, status = _solve_updates_kernel(lc, tension, h, keep=True, span=span)
+    elif span is not None:  # spans that change: the critical parameter per solve
+        values, status = solve_updates(lc, tension, h, critical_parameters(lc, h, span), span)
     else:
         a_depth = critical_parameters(lc, dv + lc.hook_height)
         a_before = critical_parameters(lc, np.array([core.state.depth + lc.hook_height]))[0]
@@ -1026,6 +1076,7 @@ def _line_inputs(
             'time_to_uplift_view',
             'channels_healthy',
             'channel_states',
+            'span',
         )
     }
     inputs['status'] = np.maximum(_pick(s, status.astype(np.float64), line.status), 0).astype(
@@ -1072,7 +1123,7 @@ def _advance_line(
         line.wave, times, tv, line.config.mbl, core.config.alarm.wave_window
     )
     values, status, used = _solve_line(
-        core, line, steps, tv, window, tide, sensors, k, (peaks, waves)
+        core, line, steps, tv, window, tide, sensors, k, (peaks, waves), dock
     )
     line.wave = wave_state
     if len(tt):
@@ -1903,6 +1954,8 @@ def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
         _same(models),
         _same(words),
         _same([view_word(v) for v in values['time_to_uplift_view'].tolist()]),
+        _reprs(values['span']),
+        _same([dock_live.span_word(v) for v in values['span_source'].tolist()]),
     ]
     columns += [f if isinstance(f, str) else _same(f) for f in ack_columns]
     columns += [_same([row[e] for row in extra]) for e in range(len(extra_keys))]
@@ -1917,6 +1970,8 @@ def _line_columns(m: _Made, k: int, stamps: np.ndarray) -> StatusColumns:
         'model',
         'sensor_state',
         'time_to_uplift_view',
+        'span',
+        'span_source',
         *ack_keys,
         *extra_keys,
     )
