@@ -15,8 +15,9 @@ wrapper that measures the child's peak RSS and CPU time (``getrusage``) and its 
 the URL line for the console, which then gets SIGINT). Each must exit as documented with no
 traceback and at most one line on stderr, use the good messages, name the damage, and stay
 under 300 MB and 10 s of CPU (the wall-time bound is a hang guard: on a machine shared with
-other test runs it is several times the CPU time). The fleet replay reads through the same
-driver (``catenary_monitor.replay.driver``) as ``replay``.
+other test runs it is several times the CPU time). ``fleet`` (which reads through the same
+driver, ``catenary_monitor.replay.driver``, as ``replay``) runs once over the four files as
+four dock folders, its cluster's processes counted in.
 """
 
 from __future__ import annotations
@@ -48,7 +49,12 @@ if serve:  # the console: up when it prints its URL, then Ctrl-C
     wall = time.monotonic() - t0
     if p.poll() is None:
         p.send_signal(signal.SIGINT)
-    out, err = p.communicate(timeout=60)
+    try:
+        out, err = p.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        out, err = p.communicate()
+        err += 'TEST: did not stop within 60 s of SIGINT'
     out = first + out
 else:
     p = subprocess.run(argv, capture_output=True, text=True, timeout=120)
@@ -141,3 +147,36 @@ def test_a_hostile_file_costs_one_line_bounded_memory_and_time(
     assert got['rss_mb'] < RSS_LIMIT_MB, got['rss_mb']
     assert got['cpu'] < CPU_LIMIT_S, got['cpu']
     assert got['wall'] < WALL_GUARD_S, got['wall']
+
+
+def test_the_fleet_replay_reads_the_hostile_files_through_the_same_driver(
+    files: dict[str, Path], tmp_path: Path
+) -> None:
+    """``catenary-monitor fleet``, one dock folder per hostile file, one worker: every dock's
+    good messages used and its damage named, in bounded memory (the cluster's processes
+    included) and CPU (the four files and the cluster's start together)."""
+    pytest.importorskip('distributed')
+    docks = []
+    for kind, src in files.items():
+        (tmp_path / kind).mkdir()
+        shutil.copyfile(src, tmp_path / kind / src.name)
+        docks.append(str(tmp_path / kind))
+    argv = [sys.executable, '-m', 'catenary_monitor', 'fleet', *docks, '--out',
+            str(tmp_path / 'results'), '--workers', '1', '--quiet']  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, '-c', WRAP, json.dumps(argv), 'run'],
+        capture_output=True,
+        text=True,
+        env=child_env(),
+        timeout=400,
+    )
+    got = json.loads(r.stdout)
+    assert got['rc'] == 0 and 'Traceback' not in got['err'], got['err']
+    for kind in files:
+        row = next(line for line in got['out'].splitlines() if line.startswith(kind))
+        assert ' 16 ' in row, got['out']  # the 16 good messages of each
+    assert got['out'].count('bad_payload') == 6 and 'corrupt_chunk' in got['out'], got['out']
+    print(f'fleet: {got["rss_mb"]:.0f} MB, {got["cpu"]:.2f} s CPU, {got["wall"]:.2f} s')
+    assert got['rss_mb'] < RSS_LIMIT_MB, got['rss_mb']
+    assert got['cpu'] < CPU_LIMIT_S * len(files), got['cpu']
+    assert got['wall'] < 4 * WALL_GUARD_S, got['wall']
