@@ -196,7 +196,7 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
             'tension_age': 0.4,
             'alarm_state': state,
             'alarm_raised': repr(now - 95.0 - k),
-            'alarm_condition': {'line_11': 'uplift', 'line_07': 'uplift'}.get(name, 'anchor_margin'),
+            'alarm_condition': 'uplift' if name in ('line_07', 'line_11') else 'anchor_margin',
             'acknowledged_by': 'console dockpc' if state == 'acknowledged' else '',
             'acknowledged_at': repr(now - 30.0),
             'model': 'elastic catenary',
