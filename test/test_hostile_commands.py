@@ -106,8 +106,8 @@ COMMANDS = {
 }
 
 
-def _run(command: str, path: Path) -> dict:
-    argv = [sys.executable, '-m', 'catenary_monitor', *COMMANDS[command]]
+def _run(command: str, path: Path, *extra: str) -> dict:
+    argv = [sys.executable, '-m', 'catenary_monitor', *COMMANDS[command], *extra]
     argv = [a.format(f=path) for a in argv]
     serve = 'serve' if command.startswith('console') else 'run'
     r = subprocess.run(
@@ -180,3 +180,30 @@ def test_the_fleet_replay_reads_the_hostile_files_through_the_same_driver(
     assert got['rss_mb'] < RSS_LIMIT_MB, got['rss_mb']
     assert got['cpu'] < CPU_LIMIT_S * len(files), got['cpu']
     assert got['wall'] < 4 * WALL_GUARD_S, got['wall']
+
+
+def _events_file(path: Path, kind: str) -> Path:
+    """Two chunks of 8 MiB of empty records on the events channel (which replay reads raw)."""
+    topics = ('/catenary_monitor/events', *TOPICS)
+    return hostile_mcap.empty_records_file(
+        path, 'lz4', topics, kind=kind, chunks=2, usize=8 << 20, head=_head()
+    )
+
+
+def test_empty_records_on_the_events_channel_are_counted_in_one_pass(tmp_path: Path) -> None:
+    got = _run('replay', _events_file(tmp_path / 'events.mcap', 'messages'))
+    assert got['rc'] == 0, got['err']
+    assert got['out'].count('too short to be CDR') == 2 and 'line_01: 8 tension' in got['out']
+    assert got['rss_mb'] < RSS_LIMIT_MB and got['cpu'] < CPU_LIMIT_S
+
+
+def test_a_flood_of_messages_at_one_log_time_is_refused_in_one_line(tmp_path: Path) -> None:
+    """480 000 events records of one stamp (the smallest payload CDR allows): a window cannot
+    end between them, so they would all be held; more than 4 windows of them are refused
+    (windows of 20 000 messages here: the rule is the same at the default 131 072)."""
+    path = _events_file(tmp_path / 'flood.mcap', 'cdr_headers')
+    got = _run('replay', path, '--window-messages', '20000')
+    lines = got['err'].strip().splitlines()
+    assert got['rc'] == 2 and len(lines) == 1, got['err']
+    assert 'wait at log time 1000 ns' in lines[0] and 'bounded memory' in lines[0], lines[0]
+    assert got['rss_mb'] < RSS_LIMIT_MB and got['cpu'] < CPU_LIMIT_S
