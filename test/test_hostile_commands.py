@@ -205,5 +205,5 @@ def test_a_flood_of_messages_at_one_log_time_is_refused_in_one_line(tmp_path: Pa
     got = _run('replay', path, '--window-messages', '20000')
     lines = got['err'].strip().splitlines()
     assert got['rc'] == 2 and len(lines) == 1, got['err']
-    assert 'wait at log time 1000 ns' in lines[0] and 'bounded memory' in lines[0], lines[0]
+    assert 'share log time 1000 ns' in lines[0] and 'bounded memory' in lines[0], lines[0]
     assert got['rss_mb'] < RSS_LIMIT_MB and got['cpu'] < CPU_LIMIT_S

@@ -1836,6 +1836,11 @@ class _Pending:
                 low = m if low is None else min(low, m)
         return low
 
+    def at(self, stamp: int) -> int:
+        """How many waiting messages have log time ``stamp``."""
+        n = sum(int(np.count_nonzero(t == stamp)) for parts in self.times.values() for t in parts)
+        return n + sum(1 for items in self.raw.values() for t, _ in items if t == stamp)
+
     def take(self, hi: int | None) -> tuple[dict[str, Any], dict[str, Any], int]:
         """Hand out every message before ``hi`` (all with None), sorted by time (stable)."""
         columns: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -1934,12 +1939,14 @@ def iter_windows(
             handed = low
             if not n:
                 if pending.count > FLOOD_WINDOWS * window_messages:
-                    raise LogFloodError(
-                        f'{files[blocks.file]}: {pending.count} messages wait at log time '
-                        f'{low} ns or after it, more than {FLOOD_WINDOWS} windows of '
-                        f'{window_messages}, and a window cannot end between messages of one '
-                        'stamp: not a log replay can stream in bounded memory'
-                    )
+                    same = pending.at(low)
+                    if same > FLOOD_WINDOWS * window_messages:
+                        raise LogFloodError(
+                            f'{files[blocks.file]}: {same} messages share log time {low} ns, '
+                            f'more than {FLOOD_WINDOWS} windows of {window_messages}, and a '
+                            'window cannot end between messages of one stamp: not a log '
+                            'replay can stream in bounded memory'
+                        )
                 continue
             _count(counts, columns, raw)
             done = done_before[blocks.file] + blocks.position
