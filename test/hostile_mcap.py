@@ -137,10 +137,12 @@ _PIECE = 8 << 20  # B of records handed to the compressor at a time
 
 
 def _empty_records_piece(kind: str, channel_id: int) -> bytes:
-    """About 8 MiB of "empty" records: Message records with no payload, or 9-byte private
-    records of length 0 (opcode 0x80, which readers skip)."""
+    """About 8 MiB of "empty" records: Message records with no payload (or only a CDR header),
+    or 9-byte private records of length 0 (opcode 0x80, which readers skip)."""
     if kind == 'messages':
         one = record(0x05, struct.pack('<HIQQ', channel_id, 0, 1_000, 1_000))
+    elif kind == 'cdr_headers':  # the smallest payload that may be CDR: its 4-byte header
+        one = record(0x05, struct.pack('<HIQQ', channel_id, 0, 1_000, 1_000) + b'\0\1\0\0')
     elif kind == 'private':
         one = record(0x80, b'')
     else:

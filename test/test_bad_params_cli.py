@@ -103,7 +103,7 @@ def test_bad_params_file_exits_2_with_one_line(tmp_path, log, command, case):
         assert path.name in lines[0], lines[0]
 
 
-@pytest.mark.parametrize('command', ['run', 'node', 'replay'])
+@pytest.mark.parametrize('command', ['run', 'replay'])
 def test_a_tide_table_past_its_bounds_stops_every_command_at_once(tmp_path, log, command):
     """A 100 000-constituent table (2.6 MB) once made replay take minutes and run deaf to
     Ctrl-C: now one line and exit 2 before any work (the CPU time of the child is measured)."""

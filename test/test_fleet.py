@@ -159,6 +159,11 @@ def test_fleet_equals_serial_replays_and_names_the_damage(fleet, cluster, tmp_pa
         rows = (msgs['line'].astype(str) == line) & (msgs['date'].astype(str) == str(date))
         assert n == rows.sum() and low == np.nanmin(msgs['anchor_margin'][rows])
     assert np.nansum(daily['seconds_error']) > 0
+    # every second of the log at one level, per line (across the midnight)
+    span = fleet['refs']['dock_c']['summary']['duration']
+    spent = sum(daily[f'seconds_{lv}'] for lv in ('ok', 'warn', 'error', 'stale'))
+    for line in ('line_01', 'line_02', 'line_03'):
+        assert spent[daily['line'].astype(str) == line].sum() == pytest.approx(span, abs=1e-6)
 
 
 def test_a_killed_worker_loses_and_duplicates_nothing(fleet, cluster, tmp_path):
@@ -241,3 +246,23 @@ def test_docs_duckdb_queries_answer_over_the_dataset(fleet, tmp_path):
         margin = fleet['refs'][dock]['columns']['anchor_margin']
         assert closest[dock][2] == pytest.approx(np.nanmin(margin), abs=1e-9)
     assert all(answers), answers
+
+
+def test_files_that_overlap_in_time_make_the_dock_one_task(cluster, tmp_path):
+    """Two recorders in one folder (the tensions in one file, the tide in another, the same
+    hours): the chain finds the overlap and the dock is replayed again as one task, as
+    ``replay DIR`` does it."""
+    from replay_data import dock_config, generate, params_yaml, write_log
+
+    folder = tmp_path / 'dock_e'
+    folder.mkdir()
+    config = dock_config(3)
+    tensions, depth = generate(config, seconds=40.0, seed=5)
+    write_log(folder / 'a_tension.mcap', config, tensions, (np.zeros(0, np.int64), np.zeros(0)))
+    write_log(folder / 'b_tide.mcap', config, {}, depth)
+    params_yaml(config, folder / 'catenary_monitor.yaml')
+    assert len(plan_dock(folder).pieces) == 2
+    results = tmp_path / 'results'
+    run = run_fleet([folder], results, scheduler=cluster)
+    assert not run.failed and run.docks['dock_e']['one_task']
+    _assert_rows_equal(results, 'dock_e', _reference(folder))

@@ -15,8 +15,9 @@ wrapper that measures the child's peak RSS and CPU time (``getrusage``) and its 
 the URL line for the console, which then gets SIGINT). Each must exit as documented with no
 traceback and at most one line on stderr, use the good messages, name the damage, and stay
 under 300 MB and 10 s of CPU (the wall-time bound is a hang guard: on a machine shared with
-other test runs it is several times the CPU time). The fleet replay reads through the same
-driver (``catenary_monitor.replay.driver``) as ``replay``.
+other test runs it is several times the CPU time). ``fleet`` (which reads through the same
+driver, ``catenary_monitor.replay.driver``, as ``replay``) runs once over the four files as
+four dock folders, its cluster's processes counted in.
 """
 
 from __future__ import annotations
@@ -48,7 +49,12 @@ if serve:  # the console: up when it prints its URL, then Ctrl-C
     wall = time.monotonic() - t0
     if p.poll() is None:
         p.send_signal(signal.SIGINT)
-    out, err = p.communicate(timeout=60)
+    try:
+        out, err = p.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        p.kill()
+        out, err = p.communicate()
+        err += 'TEST: did not stop within 60 s of SIGINT'
     out = first + out
 else:
     p = subprocess.run(argv, capture_output=True, text=True, timeout=120)
@@ -100,8 +106,8 @@ COMMANDS = {
 }
 
 
-def _run(command: str, path: Path) -> dict:
-    argv = [sys.executable, '-m', 'catenary_monitor', *COMMANDS[command]]
+def _run(command: str, path: Path, *extra: str) -> dict:
+    argv = [sys.executable, '-m', 'catenary_monitor', *COMMANDS[command], *extra]
     argv = [a.format(f=path) for a in argv]
     serve = 'serve' if command.startswith('console') else 'run'
     r = subprocess.run(
@@ -141,3 +147,63 @@ def test_a_hostile_file_costs_one_line_bounded_memory_and_time(
     assert got['rss_mb'] < RSS_LIMIT_MB, got['rss_mb']
     assert got['cpu'] < CPU_LIMIT_S, got['cpu']
     assert got['wall'] < WALL_GUARD_S, got['wall']
+
+
+def test_the_fleet_replay_reads_the_hostile_files_through_the_same_driver(
+    files: dict[str, Path], tmp_path: Path
+) -> None:
+    """``catenary-monitor fleet``, one dock folder per hostile file, one worker: every dock's
+    good messages used and its damage named, in bounded memory (the cluster's processes
+    included) and CPU (the four files and the cluster's start together)."""
+    pytest.importorskip('distributed')
+    docks = []
+    for kind, src in files.items():
+        (tmp_path / kind).mkdir()
+        shutil.copyfile(src, tmp_path / kind / src.name)
+        docks.append(str(tmp_path / kind))
+    argv = [sys.executable, '-m', 'catenary_monitor', 'fleet', *docks, '--out',
+            str(tmp_path / 'results'), '--workers', '1', '--quiet']  # fmt: skip
+    r = subprocess.run(
+        [sys.executable, '-c', WRAP, json.dumps(argv), 'run'],
+        capture_output=True,
+        text=True,
+        env=child_env(),
+        timeout=400,
+    )
+    got = json.loads(r.stdout)
+    assert got['rc'] == 0 and 'Traceback' not in got['err'], got['err']
+    for kind in files:
+        row = next(line for line in got['out'].splitlines() if line.startswith(kind))
+        assert ' 16 ' in row, got['out']  # the 16 good messages of each
+    assert got['out'].count('bad_payload') == 6 and 'corrupt_chunk' in got['out'], got['out']
+    print(f'fleet: {got["rss_mb"]:.0f} MB, {got["cpu"]:.2f} s CPU, {got["wall"]:.2f} s')
+    assert got['rss_mb'] < RSS_LIMIT_MB, got['rss_mb']
+    assert got['cpu'] < CPU_LIMIT_S * len(files), got['cpu']
+    assert got['wall'] < 4 * WALL_GUARD_S, got['wall']
+
+
+def _events_file(path: Path, kind: str) -> Path:
+    """Two chunks of 8 MiB of empty records on the events channel (which replay reads raw)."""
+    topics = ('/catenary_monitor/events', *TOPICS)
+    return hostile_mcap.empty_records_file(
+        path, 'lz4', topics, kind=kind, chunks=2, usize=8 << 20, head=_head()
+    )
+
+
+def test_empty_records_on_the_events_channel_are_counted_in_one_pass(tmp_path: Path) -> None:
+    got = _run('replay', _events_file(tmp_path / 'events.mcap', 'messages'))
+    assert got['rc'] == 0, got['err']
+    assert got['out'].count('too short to be CDR') == 2 and 'line_01: 8 tension' in got['out']
+    assert got['rss_mb'] < RSS_LIMIT_MB and got['cpu'] < CPU_LIMIT_S
+
+
+def test_a_flood_of_messages_at_one_log_time_is_refused_in_one_line(tmp_path: Path) -> None:
+    """480 000 events records of one stamp (the smallest payload CDR allows): a window cannot
+    end between them, so they would all be held; more than 4 windows of them are refused
+    (windows of 20 000 messages here: the rule is the same at the default 131 072)."""
+    path = _events_file(tmp_path / 'flood.mcap', 'cdr_headers')
+    got = _run('replay', path, '--window-messages', '20000')
+    lines = got['err'].strip().splitlines()
+    assert got['rc'] == 2 and len(lines) == 1, got['err']
+    assert 'share log time 1000 ns' in lines[0] and 'bounded memory' in lines[0], lines[0]
+    assert got['rss_mb'] < RSS_LIMIT_MB and got['cpu'] < CPU_LIMIT_S

@@ -432,3 +432,54 @@ def test_replay_of_a_rosbag2_recording_of_stamped_sensors_equals_the_core(tmp_pa
     want = replay.tensions[first][1]
     np.testing.assert_array_equal(tensions[first][1], want)
     assert 300e3 < np.nanmedian(want) < 2e6
+
+
+@pytest.mark.parametrize('cuts', [(), (T0_NS + 31_000_000_000, T0_NS + 62_500_000_000)])
+def test_the_twin_leaves_out_coalesced_stamped_samples_as_the_core_does(cuts):
+    """A coalescing node's records over stamped samples (lagging, bunched): the twin leaves
+    out the samples and their header stamps alike, in one window or three, as the core."""
+    from catenary_monitor.core.monitor.monitor_core import Coalesced
+    from catenary_monitor.core.monitor.twin import run_log, slice_window
+
+    config, cols, depth = stamped_scene(bad=False)
+    ticks = ticks_for(*plain(cols, depth))
+    rng = np.random.default_rng(4)
+    records = []
+    arrivals = [(line.name, cols[line.name][0]) for line in config.lines] + [(None, depth[0])]
+    for name, t in arrivals:
+        i = 3
+        while i < len(t) - 12:
+            n = int(rng.integers(1, 6))
+            # 8 ns before the first: the inputs' arrivals sit at offsets 0-5 of 16 ns
+            records.append(Coalesced(int(t[i]) - 8, name, int(t[i + n - 1]), n))
+            i += n + int(rng.integers(2, 30))
+    records.sort(key=lambda e: e.stamp_ns)
+    core = MonitorCore(config, T0_NS)
+    merged = sorted(events(config, cols, depth, ticks) + records, key=lambda e: e.stamp_ns)
+    steps = [core.step(ev) for ev in merged]
+    assert sum(s.kind == 'coalesced' for s in steps) == sum(r.samples for r in records) + len(
+        records
+    )
+    twin, bounds, got = MonitorCore(config, T0_NS), [None, *cuts, None], []
+    whole = window(config, cols, depth, ticks)
+    for lo, hi in zip(bounds[:-1], bounds[1:]):
+        part = [
+            r
+            for r in records
+            if (lo is None or r.stamp_ns >= lo) and (hi is None or r.stamp_ns < hi)
+        ]
+        result, twin = run_log(twin, slice_window(whole, lo, hi), part, snapshots=True)
+        got.append(result)
+    for k, line in enumerate(config.lines):
+        want = [(s.stamp_ns, o.values) for s in steps for o in s.outputs if o.line == k]
+        assert np.concatenate([r.lines[k].t_ns for r in got]).tolist() == [w[0] for w in want]
+        data = np.array([w[1] for w in want]).reshape(-1, len(OUTPUT_FIELDS))
+        for key in ('top_tension', 'depth', 'uplift_force', 'anchor_margin'):
+            values = np.concatenate([r.lines[k].values[key] for r in got])
+            assert_same_float(values, data[:, OUTPUT_FIELDS.index(key)], f'{line.name} {key}')
+    want_sn = [s.snapshot for s in steps if s.snapshot is not None]
+    got_sn = [sn for r in got for sn in r.snapshots]
+    assert [s.stamp_ns for s in got_sn] == [s.stamp_ns for s in want_sn]
+    for g, w in zip(got_sn, want_sn):
+        assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
+    assert_same_state(twin, core)

@@ -123,6 +123,7 @@ _FLOAT64_ROW = np.dtype(
 )
 _CDR_BE = 0x0000
 _CDR_LE = 0x0001
+_CDR_HEADER = 4  # B: every CDR payload starts with its encapsulation header
 
 PathLike = Union[str, 'os.PathLike[str]']
 
@@ -469,19 +470,21 @@ class _Scanner:
     def skip(self, offset: int, kind: str, reason: str, lost: int | None = None) -> None:
         self.report.skips.append(Skip(self.path, offset, kind, reason, lost))
 
-    def bad_payload(self, offset: int, bad: int) -> None:
-        """Report ``bad`` records that are not a CDR Float64 in the chunk at ``offset``: one
-        Skip per chunk (a chunk walked in pieces adds to its one)."""
+    def bad_payload(
+        self, offset: int, bad: int, what: str = 'not a 12-byte CDR Float64'
+    ) -> None:
+        """Report ``bad`` records whose payload is ``what`` in the chunk at ``offset``: one
+        Skip per chunk and kind of fault (a chunk walked in pieces adds to its one)."""
         skips = self.report.skips
         last = skips[-1] if skips else None
-        if last is not None and (last.path, last.offset, last.kind) == (
-            self.path,
-            offset,
-            'bad_payload',
+        if (
+            last is not None
+            and (last.path, last.offset, last.kind) == (self.path, offset, 'bad_payload')
+            and last.reason.endswith(what)
         ):
             bad += last.messages_lost or 0
             skips.pop()
-        self.skip(offset, 'bad_payload', f'{bad} message(s) not a 12-byte CDR Float64', bad)
+        self.skip(offset, 'bad_payload', f'{bad} message(s) {what}', bad)
 
     def finish(self) -> None:
         for channel_id, (count, offset) in sorted(self.unknown.items()):
@@ -1590,6 +1593,15 @@ def expand_paths(paths: PathLike | Iterable[PathLike]) -> list[Path]:
 
 
 # ---------------------------------------------------------------------------- streaming
+#: Windows' worth of messages that may wait at one log time (the node's stamps are distinct;
+#: a flood of messages of one stamp is refused, not held).
+FLOOD_WINDOWS = 4
+
+
+class LogFloodError(McapReadError):
+    """More messages share a log time than :data:`FLOOD_WINDOWS` windows hold."""
+
+
 class UnorderedLogError(McapReadError):
     """A message arrived with a log time before a window already handed out (the files, or
     the chunks of a file, overlap in time): the log cannot be streamed in windows."""
@@ -1658,6 +1670,14 @@ def iter_file_blocks(
             is_raw = np.isin(rows, raw_ids)
             if is_raw.any():
                 buf = block.buf
+                # Not even a CDR encapsulation header: damage, counted without a Python step
+                # each (a chunk of millions of empty records costs one numpy pass).
+                empty = is_raw & (block.lengths < 22 + _CDR_HEADER)
+                if empty.any():
+                    scanner.bad_payload(
+                        block.file_offset, int(np.count_nonzero(empty)), 'too short to be CDR'
+                    )
+                    is_raw &= ~empty
                 for off, length in zip(
                     block.offsets[is_raw].tolist(), block.lengths[is_raw].tolist()
                 ):
@@ -1666,7 +1686,7 @@ def iter_file_blocks(
                     raw.setdefault(topic, []).append(
                         (log_time, bytes(buf[off + _MESSAGE_MIN : off + 9 + length]))
                     )
-                keep = ~is_raw
+                keep = ~(is_raw | empty)
                 block = _Block(
                     block.buf,
                     block.offsets[keep],
@@ -1816,6 +1836,11 @@ class _Pending:
                 low = m if low is None else min(low, m)
         return low
 
+    def at(self, stamp: int) -> int:
+        """How many waiting messages have log time ``stamp``."""
+        n = sum(int(np.count_nonzero(t == stamp)) for parts in self.times.values() for t in parts)
+        return n + sum(1 for items in self.raw.values() for t, _ in items if t == stamp)
+
     def take(self, hi: int | None) -> tuple[dict[str, Any], dict[str, Any], int]:
         """Hand out every message before ``hi`` (all with None), sorted by time (stable)."""
         columns: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -1913,6 +1938,15 @@ def iter_windows(
             columns, raw, n = pending.take(low)
             handed = low
             if not n:
+                if pending.count > FLOOD_WINDOWS * window_messages:
+                    same = pending.at(low)
+                    if same > FLOOD_WINDOWS * window_messages:
+                        raise LogFloodError(
+                            f'{files[blocks.file]}: {same} messages share log time {low} ns, '
+                            f'more than {FLOOD_WINDOWS} windows of {window_messages}, and a '
+                            'window cannot end between messages of one stamp: not a log '
+                            'replay can stream in bounded memory'
+                        )
                 continue
             _count(counts, columns, raw)
             done = done_before[blocks.file] + blocks.position

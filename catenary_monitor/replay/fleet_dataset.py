@@ -159,7 +159,7 @@ class PartWriter:
         """Drop what was written (the task is skipped or done again)."""
         for _, writer in self.writers.values():
             writer.close()
-        self.writers = {}
+        self.writers, self.rows = {}, 0
         shutil.rmtree(self.tmp, ignore_errors=True)
 
 

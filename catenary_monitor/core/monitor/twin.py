@@ -1144,7 +1144,9 @@ def _advance_line(
     unshelvable = core.config.alarm.unshelvable_conditions
     if alarm_ack.shelved(line.ack):
         hidden = shelving.hidden_conditions(line.ack.shelved_condition, unshelvable)
-        masked = shelving.masked_levels(series._active, series.stale, hidden)
+        masked = shelving.masked_levels(
+            {c: series.active(c) for c in CONDITIONS}, series.stale, hidden
+        )
     quiet = np.array([tr.suppressed for tr in series.transitions], bool)
     acks = alarm_ack.replay_acks(
         line.ack,
