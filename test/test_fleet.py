@@ -159,6 +159,11 @@ def test_fleet_equals_serial_replays_and_names_the_damage(fleet, cluster, tmp_pa
         rows = (msgs['line'].astype(str) == line) & (msgs['date'].astype(str) == str(date))
         assert n == rows.sum() and low == np.nanmin(msgs['anchor_margin'][rows])
     assert np.nansum(daily['seconds_error']) > 0
+    # every second of the log at one level, per line (across the midnight)
+    span = fleet['refs']['dock_c']['summary']['duration']
+    spent = sum(daily[f'seconds_{lv}'] for lv in ('ok', 'warn', 'error', 'stale'))
+    for line in ('line_01', 'line_02', 'line_03'):
+        assert spent[daily['line'].astype(str) == line].sum() == pytest.approx(span, abs=1e-6)
 
 
 def test_a_killed_worker_loses_and_duplicates_nothing(fleet, cluster, tmp_path):
