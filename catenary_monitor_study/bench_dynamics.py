@@ -17,6 +17,9 @@ and its answers are compared, after a settling time, with MoorDyn's anchor force
 
 Prints a table (``--json``: one object), ``--plot`` charts the quasi-static excess against the
 period for each amplitude, one panel per depth offset (docs/dynamics.md shows it).
+
+``--dock`` runs the paper's whole dock instead, one body with its twelve chains, through a tide
+rise and a storm with waves (:mod:`catenary_monitor_study.dock_dynamics`).
 """
 
 from __future__ import annotations
@@ -173,6 +176,10 @@ def cmd_bench_dynamics(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         return 2
+    if args.dock:
+        return _dock(args)
+    if args.duration is None:
+        args.duration = 100.0
     rows = run_grid(args)
     if args.plot:
         _plot(rows, args.plot)
@@ -184,11 +191,42 @@ def cmd_bench_dynamics(args: argparse.Namespace) -> int:
     return 0
 
 
+def _dock(args: argparse.Namespace) -> int:
+    """``--dock``: the paper's dock in MoorDyn (catenary_monitor_study.dock_dynamics)."""
+    from catenary_monitor_study import dock_dynamics as dd
+
+    if args.params_file is None:
+        from catenary_monitor.ros.simulator import default_config_path
+
+        args.params_file = default_config_path()
+    scene = dd.DockScene(duration=args.duration or 300.0, segments=args.segments)
+    print('bench-dynamics: the dock in MoorDyn (about a minute)...', file=sys.stderr, flush=True)
+    out = dd.run_dock_scene(args.params_file, scene)
+    if args.plot:
+        dd.plot_dock(out, args.plot)
+    if args.json:
+        body = {k: v for k, v in out.items() if k != 'series'}
+        print(json.dumps(dd.finite(body), allow_nan=False))
+    else:
+        print(dd.dock_table(out))
+    return 0
+
+
 def _floats(text: str) -> list[float]:
     try:
         return [float(v) for v in text.split(',') if v.strip()]
     except ValueError:
         raise argparse.ArgumentTypeError(f'not a comma-separated list of numbers: {text!r}')
+
+
+def _duration(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'not a number of seconds: {text!r}')
+    if not 10.0 <= value <= 86400.0:
+        raise argparse.ArgumentTypeError(f'{value:g} s: from 10 to 86400 s')
+    return value
 
 
 def register(sub: Any) -> None:
@@ -204,7 +242,9 @@ def register(sub: Any) -> None:
         '--offsets', type=_floats, default=[-0.5, 0.0, 0.5], help='m from the lift depth'
     )
     p.add_argument('--lengths', type=_floats, default=[123.6847], help='chain lengths [m]')
-    p.add_argument('--duration', type=float, default=100.0, help='s per scene (100)')
+    p.add_argument(
+        '--duration', type=_duration, default=None, help='s per scene (100; --dock: 300)'
+    )
     p.add_argument(
         '--allowance', type=float, default=0.3, help="the monitor's wave_allowance (0.3)"
     )
@@ -215,6 +255,13 @@ def register(sub: Any) -> None:
         metavar='N',
         help="the load pin's accuracy (default: the monitor's, 0.5 %% of the MBL; 1: exact)",
     )
-    p.add_argument('--plot', metavar='PNG', help='chart the quasi-static excess')
+    p.add_argument(
+        '--dock',
+        action='store_true',
+        help="the paper's dock, 12 chains on one body, through a tide rise and a storm",
+    )
+    p.add_argument('--params-file', metavar='F', help='--dock: default config/floating_dock.yaml')
+    p.add_argument('--segments', type=int, default=20, help='--dock: segments per chain (20)')
+    p.add_argument('--plot', metavar='PNG', help='chart the quasi-static excess (--dock: a line)')
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench_dynamics)

@@ -1,5 +1,6 @@
-"""One chain in MoorDyn (NREL's lumped-mass mooring model), driven at its hook: the dynamic
-reference the monitor's quasi-static solve, bounds and alarms are checked against.
+"""One chain, or a whole dock, in MoorDyn (NREL's lumped-mass mooring model), driven at the
+hooks: the dynamic reference the monitor's quasi-static solve, bounds, alarms and dock estimate
+are checked against.
 
 The chain hangs from an anchor fixed on a flat seabed to a hook point that MoorDyn is told to
 follow (a coupled point): the tide moves the hook up, the dock's slow drift and its
@@ -9,6 +10,11 @@ hook height taken as 0) and the anchor's vertical reaction (the uplift: the firs
 vertical tension at the anchor, less the half segment's weight the anchor node carries, plus
 the seabed's contact force on it).
 
+:func:`run_dock` does the same for a dock of many chains: the dock is a MoorDyn body whose
+motion is prescribed (a coupled body: surge, sway, yaw, and heave for the tide), the hooks
+points on it, each anchor a fixed point; recorded per line as for one chain, with the dock's
+offset.
+
 MoorDyn prints a line per step on file descriptor 1: it is redirected to /dev/null while it
 runs. Units SI; the chain's mass per metre is its submerged weight over g plus the displaced
 water of its volume-equivalent diameter (1.8 x the nominal one, studless chain practice).
@@ -17,59 +23,35 @@ water of its volume-equivalent diameter (1.8 x the nominal one, studless chain p
 from __future__ import annotations
 
 import math
-import os
 import tempfile
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, NamedTuple
+from typing import Any, Callable, NamedTuple, Sequence
 
 import numpy as np
 
-__all__ = ['Chain', 'Record', 'run_line', 'available', 'PAPER_CHAIN']
+from catenary_monitor.ros.moordyn_dock import (
+    PAPER_CHAIN,
+    SEABED,
+    Chain,
+    MoorDynDock,
+    available,
+    line_type,
+    line_types_header,
+    options,
+    quiet,
+)
 
-G = 9.81  # m/s^2
-RHO = 1025.0  # kg/m^3, sea water
-SEABED = 40.0  # m below the water line of the model (the hook stays submerged)
-
-
-def available() -> bool:
-    """Whether the ``moordyn`` package is installed (the ``dynamics`` and ``test`` extras)."""
-    try:
-        import moordyn  # noqa: F401
-    except ImportError:
-        return False
-    return True
-
-
-@dataclass(frozen=True)
-class Chain:
-    """A studlink chain: submerged ``weight`` [N/m], unstretched ``length`` [m], axial stiffness
-    ``ea`` [N], nominal diameter [m], MoorDyn segments and the drag and added-mass coefficients
-    (normal and axial, on the volume-equivalent diameter)."""
-
-    weight: float = 1300.0
-    length: float = 123.6847
-    ea: float = 6.63e8
-    diameter: float = 0.081
-    segments: int = 40
-    cd: float = 1.333
-    ca: float = 1.0
-    cd_axial: float = 0.64
-    ca_axial: float = 0.5
-
-    @property
-    def volume_diameter(self) -> float:
-        """Volume-equivalent diameter [m] (1.8 x nominal)."""
-        return 1.8 * self.diameter
-
-    @property
-    def mass(self) -> float:
-        """Mass per metre [kg/m]: the submerged weight over g plus the displaced water."""
-        return self.weight / G + RHO * math.pi * self.volume_diameter**2 / 4.0
-
-
-#: The seed paper's line 11 (81 mm U3 chain, 1.3 kN/m, 123.68 m; docs/dock_body.md).
-PAPER_CHAIN = Chain()
+__all__ = [
+    'Chain',
+    'SEABED',
+    'Record',
+    'DockRecord',
+    'run_line',
+    'run_dock',
+    'storm_motion',
+    'available',
+    'PAPER_CHAIN',
+]
 
 
 class Record(NamedTuple):
@@ -84,14 +66,24 @@ class Record(NamedTuple):
     anchor_horizontal: np.ndarray
 
 
+class DockRecord(NamedTuple):
+    """MoorDyn's output for a dock at each step: time [s], the dock's offset (X, Y [m], yaw
+    [rad], as prescribed), the hooks' depth above the seabed [m], and per line (columns in the
+    model's order) the hook tension, the anchor's vertical reaction (>= 0) [N] and the hook's
+    horizontal distance to its anchor [m]."""
+
+    t: np.ndarray
+    offset: np.ndarray  # (n, 3)
+    depth: np.ndarray  # (n,)
+    tension: np.ndarray  # (n, m)
+    uplift: np.ndarray  # (n, m)
+    span: np.ndarray  # (n, m)
+
+
 def _input_file(chain: Chain, span: float, depth: float, dt: float) -> str:
     return f"""--------------------- MoorDyn Input File ------------------------------------
 catenary_monitor: one chain, hook driven
------------------------ LINE TYPES ------------------------------------------
-TypeName   Diam    Mass/m     EA     BA/-zeta    EI   Cd     Ca     CdAx    CaAx
-(name)     (m)     (kg/m)     (N)    (N-s/-)     (-)  (-)    (-)    (-)     (-)
-chain {chain.volume_diameter:.6f} {chain.mass:.6f} {chain.ea:.6e} -0.8 0 {chain.cd} {chain.ca} \
-{chain.cd_axial} {chain.ca_axial}
+{line_types_header()}{line_type(chain)}\
 ---------------------------- POINTS -----------------------------------------------
 ID   Attachment  X       Y     Z      Mass  Volume  CdA    Ca
 (#)   (-)        (m)     (m)   (m)    (kg)  (m^3)  (m^2)  (-)
@@ -101,18 +93,7 @@ ID   Attachment  X       Y     Z      Mass  Volume  CdA    Ca
 ID    LineType   AttachA  AttachB  UnstrLen  NumSegs  LineOutputs
 (#)   (name)     (#)      (#)      (m)       (-)      (-)
 1     chain      1        2        {chain.length:.6f}  {chain.segments}       -
----------------------- OPTIONS -----------------------------------------
-{dt}   dtM
-3.0e6    kbot
-3.0e5    cbot
-{SEABED}    WtrDpth
-{G}  g
-{RHO}  rho
-1.0  dtIC
-120.0 TmaxIC
-0.001 threshIC
-------------------------- need this line -------------------------------------
-"""
+{options(dt)}"""
 
 
 def run_line(
@@ -132,32 +113,110 @@ def run_line(
     x0, z0 = span(0.0)[0], depth(0.0)[0]
     seg = chain.length / chain.segments
     rows = []
-    with tempfile.TemporaryDirectory() as tmp:
+    with tempfile.TemporaryDirectory() as tmp, quiet():
         path = Path(tmp) / 'line.txt'
         path.write_text(_input_file(chain, x0, z0, dt))
-        saved, null = os.dup(1), os.open(os.devnull, os.O_WRONLY)
-        os.dup2(null, 1)
-        try:
-            system = moordyn.Create(str(path))
-            moordyn.Init(system, [x0, 0.0, -SEABED + z0], [span(0.0)[1], 0.0, depth(0.0)[1]])
-            line = moordyn.GetLine(system, 1)
-            n = moordyn.GetLineN(line)
-            t = 0.0
-            steps = int(round(duration / dt_out))
-            for k in range(1, steps + 1):
-                t_new = k * dt_out
-                (x, vx), (z, vz) = span(t_new), depth(t_new)
-                moordyn.Step(system, [x, 0.0, -SEABED + z], [vx, 0.0, vz], t, t_new - t)
-                t = t_new
-                anchor = moordyn.GetLineNodeTen(line, 0)
-                bed = moordyn.GetLineNodeSeabedForce(line, 0)
-                top = moordyn.GetLineNodeTen(line, n)
-                lift = anchor[2] - chain.weight * seg / 2.0 + bed[2]
-                rows.append((t, x, z, math.sqrt(sum(c * c for c in top)), lift, anchor[0]))
-            moordyn.Close(system)
-        finally:
-            os.dup2(saved, 1)
-            os.close(saved)
-            os.close(null)
+        system = moordyn.Create(str(path))
+        moordyn.Init(system, [x0, 0.0, -SEABED + z0], [span(0.0)[1], 0.0, depth(0.0)[1]])
+        line = moordyn.GetLine(system, 1)
+        n = moordyn.GetLineN(line)
+        t = 0.0
+        steps = int(round(duration / dt_out))
+        for k in range(1, steps + 1):
+            t_new = k * dt_out
+            (x, vx), (z, vz) = span(t_new), depth(t_new)
+            moordyn.Step(system, [x, 0.0, -SEABED + z], [vx, 0.0, vz], t, t_new - t)
+            t = t_new
+            anchor = moordyn.GetLineNodeTen(line, 0)
+            bed = moordyn.GetLineNodeSeabedForce(line, 0)
+            top = moordyn.GetLineNodeTen(line, n)
+            lift = anchor[2] - chain.weight * seg / 2.0 + bed[2]
+            rows.append((t, x, z, math.sqrt(sum(c * c for c in top)), lift, anchor[0]))
+        moordyn.Close(system)
     a = np.array(rows)
     return Record(a[:, 0], a[:, 1], a[:, 2], a[:, 3], np.maximum(a[:, 4], 0.0), a[:, 5])
+
+
+#: A dock's motion at time t [s]: ``(X, Y, yaw, depth)`` [m, m, rad, m] and their rates.
+Motion = Callable[[float], tuple[Sequence[float], Sequence[float]]]
+
+
+def run_dock(
+    model: Any,
+    motion: Motion,
+    duration: float,
+    chain: Chain = PAPER_CHAIN,
+    dt_out: float = 0.1,
+    dt: float = 1e-3,
+) -> DockRecord:
+    """Drive a dock (a :class:`~catenary_monitor.core.body.dock_model.DockModel`: hooks,
+    anchors, chain lengths and weights) through ``motion`` for ``duration`` s, each line a
+    ``chain`` of its own length and weight (``chain``'s EA, diameter, drag, segments); sampled
+    every ``dt_out`` s from the static state at t = 0 (REP 103 frames: the body's yaw is the
+    dock's, counter-clockwise seen from above)."""
+    q0, v0 = motion(0.0)
+    times, qs, tensions, uplifts = [], [], [], []
+    with MoorDynDock(model, q0, v0, chain, dt) as dock:
+        for k in range(1, int(round(duration / dt_out)) + 1):
+            t = k * dt_out
+            q, v = motion(t)
+            dock.step(t, q, v)
+            tension, uplift = dock.lines()
+            times.append(t)
+            qs.append([float(x) for x in q])
+            tensions.append(tension)
+            uplifts.append(uplift)
+    motion_rows = np.array(qs)
+    offset = motion_rows[:, :3]
+    return DockRecord(
+        np.array(times),
+        offset,
+        motion_rows[:, 3],
+        np.array(tensions),
+        np.array(uplifts),
+        _spans(model, offset),
+    )
+
+
+def _spans(model: Any, offset: np.ndarray) -> np.ndarray:
+    """Each hook's horizontal distance to its anchor [m] at the offsets (n, 3)."""
+    c, s = np.cos(offset[:, 2:3]), np.sin(offset[:, 2:3])
+    px, py = model.hook[:, 0], model.hook[:, 1]
+    hx = offset[:, 0:1] + c * px - s * py
+    hy = offset[:, 1:2] + s * px + c * py
+    return np.hypot(model.anchor[:, 0] - hx, model.anchor[:, 1] - hy)
+
+
+def _smooth(t: float, span: float) -> tuple[float, float]:
+    """A smooth step from 0 (t <= 0) to 1 (t >= span) and its rate [1/s]."""
+    u = min(max(t / span, 0.0), 1.0)
+    return u * u * (3.0 - 2.0 * u), (6.0 * u * (1.0 - u) / span if 0.0 < u < 1.0 else 0.0)
+
+
+def storm_motion(
+    depth: float,
+    rise: float,
+    drift: tuple[float, float],
+    drift_time: float,
+    amplitude: float,
+    period: float,
+    waves_from: float = 10.0,
+    heading: float = 90.0,
+) -> Motion:
+    """A storm at a dock: the tide rising ``rise`` [m/s] from ``depth`` [m]; the dock drifting
+    to ``drift`` (X, Y) [m] over ``drift_time`` s (a smooth step, from rest); wave-frequency
+    motion of ``amplitude`` [m] at ``period`` [s] along ``heading`` (deg clockwise from the
+    bow: 90 a beam sea, sway), building over one ``waves_from`` s from ``waves_from`` s on."""
+    w = 2.0 * math.pi / period
+    ux, uy = math.cos(math.radians(heading)), -math.sin(math.radians(heading))
+
+    def motion(t: float) -> tuple[Sequence[float], Sequence[float]]:
+        s, ds = _smooth(t, drift_time)
+        b, db = _smooth(t - waves_from, waves_from)
+        a = amplitude * b * math.sin(w * t)
+        da = amplitude * (db * math.sin(w * t) + b * w * math.cos(w * t))
+        q = (drift[0] * s + ux * a, drift[1] * s + uy * a, 0.0, depth + rise * t)
+        v = (drift[0] * ds + ux * da, drift[1] * ds + uy * da, 0.0, rise)
+        return q, v
+
+    return motion

@@ -190,3 +190,164 @@ def test_wave_motion_bound_and_error_against_moordyn(tmp_path, moordyn, amplitud
     assert upper.max() <= 1.5 * dyn.max(), (upper.max(), dyn.max())
     level = np.array([r['level'] for r in rows])
     assert first(rec.t, level == 'ERROR') <= first(rec.t, dyn > 100.0) + period
+
+
+# --- MoorDyn: the paper's dock, one body with its 12 chains, through a tide rise and a storm -----
+
+PERIOD = 8.0  # s, the storm's beam sea
+
+
+def moordyn_dock_config(allowed=20e3):
+    """The paper's dock (config/floating_dock.yaml) with MoorDyn's chain stiffness on every line
+    and an allowed uplift of ``allowed`` [N]."""
+    from dock_data import DOCK_YAML
+
+    from catenary_monitor.core.config.parameters import config_from_params, load_params_file
+
+    flat = load_params_file(DOCK_YAML)
+    for name in flat['lines']:
+        flat[f'{name}.ea'] = 6.63e8
+        flat[f'{name}.allowed_uplift'] = allowed
+    return config_from_params(flat)
+
+
+@pytest.fixture(scope='module')
+def dock_storm(moordyn):
+    """60 s of the dock in MoorDyn: the tide rising 10 mm/s from 21.0 m, the dock drifting
+    0.5 m to starboard over 30 s as the storm builds, a beam sea swaying it 0.3 m at 8 s from
+    10 s on. 20 segments of 6 m per chain (MoorDyn's own touchdown error ~0.4 kN: fine for
+    bounds and alarm times; ~10 s of MoorDyn)."""
+    from catenary_monitor.core.body.dock_model import DockModel
+
+    config = moordyn_dock_config()
+    motion = moordyn.storm_motion(21.0, 0.01, (0.0, -0.5), 30.0, 0.3, PERIOD)
+    chain = moordyn.Chain(segments=20)
+    return config, moordyn.run_dock(DockModel.from_config(config), motion, 60.0, chain)
+
+
+def test_dock_storm_uplift_bounds_alarms_and_estimate_against_moordyn(tmp_path, dock_storm):
+    """Through ``catenary-monitor replay`` of a rosbag2 recording (12 load pins at 10 Hz, the
+    gauge at 1 Hz): per line, ``uplift_force_upper`` at or above MoorDyn's anchor force in >= 95
+    % of the samples above 1 kN and its peak at most 1.5 x the dynamic peak; the first ERROR
+    no later than one wave period after MoorDyn's crossing of the allowed 20 kN, and none on a
+    line whose anchor MoorDyn never lifts; the span solved at within the waves' reach of
+    MoorDyn's; the dock estimate (the replay's /diagnostics) following the dock."""
+    from catenary_monitor.core.monitor.twin import recompute
+
+    config, rec = dock_storm
+    t_ns = T0_NS + np.rint(rec.t * 1e9).astype(np.int64)
+    tensions = {
+        line.name: (t_ns + 1000 * k, rec.tension[:, k]) for k, line in enumerate(config.lines)
+    }
+    depth = (t_ns[::10] - 50_000_000, rec.depth[::10])
+    rows = replay_csv(tmp_path, config, write_bag(tmp_path / 'bag', config, tensions, depth))
+    lifted_lines = grounded_lines = 0
+    for k, line in enumerate(config.lines):
+        dyn = rec.uplift[:, k]
+        upper = column(rows, 'uplift_force_upper', line.name)
+        level = np.array([r['level'] for r in rows if r['line'] == line.name])
+        error_at = first(rec.t, level == 'ERROR')
+        if dyn.max() == 0.0:
+            grounded_lines += 1
+            assert error_at == math.inf, line.name
+            continue
+        lifted = dyn > 1e3
+        assert np.mean(upper[lifted] >= dyn[lifted]) >= 0.95, line.name
+        assert upper.max() <= 1.5 * dyn.max(), (line.name, upper.max(), dyn.max())
+        crossing = first(rec.t, dyn > 20e3)
+        if crossing < math.inf:
+            lifted_lines += 1
+            assert error_at <= crossing + PERIOD, (line.name, error_at, crossing)
+        # the span solved at: the dock estimate's, within the waves' reach of MoorDyn's
+        words = np.array([r['span_source'] for r in rows if r['line'] == line.name])
+        after = rec.t > 1.5  # the first tick's estimate on
+        assert np.all(words[after] == 'dock_estimate'), line.name
+        span = column(rows, 'span', line.name)
+        assert np.max(np.abs(span - rec.span[:, k])[after]) < 0.25, line.name
+    assert lifted_lines >= 4 and grounded_lines >= 4, (lifted_lines, grounded_lines)
+    # the dock estimate at each tick against the dock's prescribed sway
+    snaps = recompute(config, tensions, depth, snapshots=True).snapshots
+    est = []
+    for snap in snaps:
+        values = {st.name: dict(st.values) for st in snap.statuses}['catenary_monitor: dock']
+        if values['offset_y'] != 'nan':
+            est.append(((snap.stamp_ns - T0_NS) * 1e-9, float(values['offset_y'])))
+    t, y = np.array(est).T
+    truth = np.interp(t, rec.t, rec.offset[:, 1])
+    calm = t < 10.0  # before the waves: the slow drift alone
+    assert calm.sum() >= 8 and np.max(np.abs(y - truth)[calm]) < 0.01
+    assert np.max(np.abs(y - truth)) < 0.2  # m, the chains' own dynamics in the waves
+
+
+def test_bench_dynamics_dock_runs_and_answers_in_json(moordyn, capsys):
+    """``catenary-monitor bench-dynamics --dock --duration 15 --json``: one object, a row per
+    line of the params, the dock estimate's figures (the long scene is docs/dynamics.md's)."""
+    import json
+
+    from catenary_monitor.cli.main import main
+
+    assert main(['bench-dynamics', '--dock', '--duration', '15', '--json']) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert [r['line'] for r in out['lines']] == [f'line_{k:02d}' for k in range(1, 13)]
+    assert out['scene']['duration'] == 15.0 and out['dock']['ticks'] >= 14
+    assert out['dock']['sway_error_calm_m'] < 0.01  # before the waves (from 20 s)
+    assert all(r['span_error_m'] is not None for r in out['lines'])
+
+
+def test_the_demo_on_moordyn_gives_the_storms_warnings(moordyn, tmp_path):
+    """``catenary-monitor demo --moordyn``: the simulator's storm with its tensions from MoorDyn
+    (the table the demo computes before the monitor starts) through the monitor with the demo's
+    params (the chain's EA on every line): line 11 among the first to ERROR, its WARN (the
+    bound) first; the lee side quiet; no line taken for a bad sensor. Not the static tensions:
+    MoorDyn's differ by the chains' dynamics."""
+    from catenary_monitor.cli.demo import DEMO_OVERRIDES, MOORDYN_EA
+    from catenary_monitor.core.config.parameters import config_from_params, load_params_file
+    from catenary_monitor.core.monitor.twin import recompute
+    from catenary_monitor.ros.simulator import MoorDynTensions, Scenario, default_config_path
+
+    params = {**load_params_file(default_config_path()), **DEMO_OVERRIDES}
+    params.update({f'{name}.ea': MOORDYN_EA for name in params['lines']})
+    cfg = config_from_params(params)
+    scenario = Scenario(cfg)
+    MoorDynTensions.compute(scenario).save(str(tmp_path / 'table.npz'))
+    source = MoorDynTensions.load(str(tmp_path / 'table.npz'), scenario)
+    rng = np.random.default_rng(scenario.seed)
+    t = np.arange(0.0, scenario.duration, 0.1)  # the demo's 10 Hz
+    rows = np.array([source.tensions(x, rng) for x in t])
+    static = np.array([scenario.tensions(x) for x in t])
+    assert np.max(np.abs(rows - static)) > 50e3  # the chains' dynamics, not the equilibrium
+    ns = T0_NS + np.rint(t * 1e9).astype(np.int64)
+    tensions = {line.name: (ns, rows[:, k]) for k, line in enumerate(cfg.lines)}
+    depth = (ns[::5] - 1000, np.array([scenario.depth(x) for x in t[::5]]))
+    result = recompute(cfg, tensions, depth, start_ns=T0_NS - 10**9, snapshots=True)
+    first_error = {
+        r.name: min((x.time for x in r.transitions if x.new.name == 'ERROR'), default=math.inf)
+        for r in result.lines
+    }
+    order = sorted(first_error, key=first_error.get)
+    port = {'line_09', 'line_10', 'line_11', 'line_12'}
+    assert 'line_11' in order[:3] and set(order[:3]) <= port, order
+    assert all(first_error[f'line_{k:02d}'] == math.inf for k in (1, 2, 3, 4)), first_error
+    line_11 = result.lines[[r.name for r in result.lines].index('line_11')]
+    tr = [x for x in line_11.transitions if 'STALE' not in (x.old.name, x.new.name)]
+    assert tr[0].new.name == 'WARN' and tr[1].new.name == 'ERROR', [x.message for x in tr]
+    words = {
+        dict(st.values).get('sensor_state')
+        for sn in result.snapshots
+        for st in sn.statuses
+        if not st.name.endswith(': tide')
+    }
+    assert 'inconsistent' not in words and 'suspect' not in words, words
+
+
+def test_the_simulator_refuses_a_bad_moordyn_table_in_one_line(tmp_path, capsys):
+    from catenary_monitor.ros.simulator import main
+
+    bad = tmp_path / 'table.npz'
+    np.savez(bad, times=np.arange(3.0), tensions=np.ones((3, 5)))  # 5 lines, not 12
+    assert main(['--dynamics', 'moordyn', '--moordyn-table', str(bad)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and 'not a table of 12 lines' in err[0], err
+    bad.write_bytes(b'not an npz')
+    assert main(['--dynamics', 'moordyn', '--moordyn-table', str(bad)]) == 2
+    assert capsys.readouterr().err.startswith('dock_simulator: --moordyn-table:')

@@ -2,7 +2,8 @@
 
 Starts the monitor (``python -m catenary_monitor.ros.node``) on config/floating_dock.yaml, the
 operator's console (``catenary-monitor console``, its URL printed; :func:`start_console`), then
-the dock simulator (``python -m catenary_monitor.ros.simulator``); prints each alarm transition
+the dock simulator (``python -m catenary_monitor.ros.simulator``; with ``moordyn``, its tensions
+from MoorDyn and the lines given MoorDyn's chain stiffness); prints each alarm transition
 the monitor reports as it happens; after the episode stops the console and the monitor with
 SIGINT (the MCAP file gets its summary), reads the log back and draws a PNG chart (matplotlib,
 Agg backend).
@@ -141,10 +142,20 @@ def start_console(
     return None, why
 
 
-def demo_params(params: str, out: Path) -> str:
-    """``params`` with :data:`DEMO_OVERRIDES`, written to ``out``/demo_params.yaml: the one
-    file the monitor, the console and the chart all read (the console's highlights use the
-    same thresholds as the monitor's alarms)."""
+#: With MoorDyn (``--moordyn``): its chains' axial stiffness [N] (the paper chain's estimate,
+#: config/floating_dock.yaml), given to every line so that the monitor's model is MoorDyn's
+#: chain (an inextensible model of elastic chains makes the lee lines disagree with the others),
+#: and the tension rate [Hz] (the elastic solve costs the node about five times the rigid one).
+MOORDYN_EA = 6.63e8
+MOORDYN_RATE = 10.0
+#: The MoorDyn tensions of the episode, computed before the monitor starts (beside the params).
+MOORDYN_TABLE = 'moordyn_tensions.npz'
+
+
+def demo_params(params: str, out: Path, ea: Optional[float] = None) -> str:
+    """``params`` with :data:`DEMO_OVERRIDES` (and ``ea`` [N] on every line where given),
+    written to ``out``/demo_params.yaml: the one file the monitor, the console and the chart
+    all read (the console's highlights use the same thresholds as the monitor's alarms)."""
     from catenary_monitor.core.config.parameters import (
         config_from_params,
         config_to_params,
@@ -152,7 +163,10 @@ def demo_params(params: str, out: Path) -> str:
         params_file_text,
     )
 
-    config = config_from_params({**load_params_file(params), **DEMO_OVERRIDES})
+    flat = {**load_params_file(params), **DEMO_OVERRIDES}
+    if ea is not None:
+        flat.update({f'{name}.ea': ea for name in flat['lines']})
+    config = config_from_params(flat)
     path = out / 'demo_params.yaml'
     path.write_text(params_file_text(config_to_params(config)))
     return str(path)
@@ -178,8 +192,14 @@ def _start_monitor(params: str, log_dir: Path, env: dict[str, str]) -> subproces
     )
 
 
-def _run_simulator(params: str, duration: float, env: dict[str, str]) -> Optional[str]:
-    """Drive the dock through the storm (blocks for ``duration`` s); its stderr if it failed."""
+def _run_simulator(
+    params: str, duration: float, env: dict[str, str], moordyn: bool = False
+) -> Optional[str]:
+    """Drive the dock through the storm (blocks for ``duration`` s; ``moordyn``: the tensions
+    from MoorDyn); its stderr if it failed."""
+    table = str(Path(params).parent / MOORDYN_TABLE)
+    dynamics = ['--dynamics', 'moordyn', '--moordyn-table', table, '--rate', str(MOORDYN_RATE)]
+    dynamics = dynamics if moordyn else []
     sim = subprocess.Popen(
         [
             sys.executable,
@@ -189,6 +209,7 @@ def _run_simulator(params: str, duration: float, env: dict[str, str]) -> Optiona
             params,
             '--duration',
             str(duration),
+            *dynamics,
         ],
         env=env,
         stdout=subprocess.DEVNULL,
@@ -202,6 +223,18 @@ def _run_simulator(params: str, duration: float, env: dict[str, str]) -> Optiona
             sim.send_signal(signal.SIGINT)
             sim.wait(10)
     return err if sim.returncode != 0 else None
+
+
+def _moordyn_table(params: str, duration: float, path: Path) -> float:
+    """The episode's tensions from MoorDyn into ``path`` (the simulator publishes them);
+    the seconds it took."""
+    from catenary_monitor.core.config.parameters import config_from_params, load_params_file
+    from catenary_monitor.ros.simulator import MoorDynTensions, Scenario
+
+    start = time.monotonic()
+    scenario = Scenario(config_from_params(load_params_file(params)), duration=duration)
+    MoorDynTensions.compute(scenario).save(str(path))
+    return time.monotonic() - start
 
 
 def _stop(proc: Optional[subprocess.Popen], wait: float) -> None:
@@ -241,13 +274,25 @@ def run_demo(
     duration: float = 55.0,
     params_file: Optional[str] = None,
     console_port: Optional[int] = 8080,
+    moordyn: bool = False,
 ) -> int:
-    """Run the demo; return 0 on success. Leaves the MCAP log and ``demo.png`` in ``out_dir``."""
+    """Run the demo; return 0 on success. Leaves the MCAP log and ``demo.png`` in ``out_dir``.
+    ``moordyn``: the tensions from MoorDyn (exit 2 with one line where it is not installed)."""
+    if moordyn:
+        from catenary_monitor.ros.moordyn_dock import available
+
+        if not available():
+            print(
+                'catenary_monitor demo: --moordyn needs MoorDyn '
+                '(pip install "catenary_monitor[dynamics]")',
+                file=sys.stderr,
+            )
+            return 2
     given = params_file or default_config_path()
     out = Path(out_dir).resolve()
     log_dir = out / 'log'
     log_dir.mkdir(parents=True, exist_ok=True)
-    params = demo_params(given, out)
+    params = demo_params(given, out, MOORDYN_EA if moordyn else None)
     before = set(log_dir.glob('*.mcap'))
     env = child_env()
     print(f'catenary_monitor demo: the floating dock of Hu & Tang (2004), 12 chains, {given}')
@@ -255,6 +300,16 @@ def run_demo(
         f'  a storm builds to the typhoon load on line_11 (R = 1584.6 kN), then eases; '
         f'{duration:g} s of wall time (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]})'
     )
+    if moordyn:
+        print(
+            f'  the hook tensions from MoorDyn (12 chains with inertia, drag and seabed '
+            f'contact; EA {MOORDYN_EA:g} N given to every line, {MOORDYN_RATE:g} Hz): '
+            'computing the episode...',
+            end='',
+            flush=True,
+        )
+        spent = _moordyn_table(params, duration, out / MOORDYN_TABLE)
+        print(f' {spent:.0f} s')
     monitor = _start_monitor(params, log_dir, env)
     t0 = time.time()
     origin = [t0]  # becomes the simulator's start: the printed times and the chart's
@@ -286,7 +341,7 @@ def run_demo(
             'since the simulator started, as on the chart)\n'
         )
         origin[0] = time.time()
-        sim_err = _run_simulator(params, duration, env)
+        sim_err = _run_simulator(params, duration, env, moordyn)
         if sim_err is not None:
             print(f'catenary_monitor demo: simulator failed:\n{sim_err}', file=sys.stderr)
             return 1

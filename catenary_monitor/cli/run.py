@@ -61,7 +61,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     from catenary_monitor.cli.demo import run_demo
 
     port = None if args.no_console else args.console_port
-    return run_demo(args.out_dir, duration=args.duration, console_port=port)
+    return run_demo(args.out_dir, duration=args.duration, console_port=port, moordyn=args.moordyn)
 
 
 def register(sub: Any) -> None:
@@ -117,4 +117,9 @@ def register(sub: Any) -> None:
         help='port of the operator\'s console (default %(default)s; busy or 0: any free port)',
     )
     p.add_argument('--no-console', action='store_true', help='do not start the console')
+    p.add_argument(
+        '--moordyn',
+        action='store_true',
+        help='the hook tensions from MoorDyn (the dynamics extra) instead of the equilibrium',
+    )
     p.set_defaults(func=cmd_demo, long_running=True)

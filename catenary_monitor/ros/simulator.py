@@ -21,6 +21,11 @@ would give:
 * wave-frequency motion: the dock sways about its equilibrium (period ``wave_period``,
   amplitude growing with the storm), each line's tension that of its chain at the moved hook
   (:func:`~catenary_monitor.core.body.dock_model.line_states`), plus 0.3 % sensor noise.
+
+``--dynamics moordyn`` (``catenary-monitor demo --moordyn``; the ``dynamics`` extra) takes the
+tensions from MoorDyn instead (:class:`MoorDynTensions`): the dock moved the same way, its
+twelve chains lumped-mass lines with inertia, drag and seabed contact (20 segments each, the
+paper chain's axial stiffness), stepped in real time; the same sensor noise.
 """
 
 from __future__ import annotations
@@ -30,7 +35,7 @@ import functools
 import math
 import sys
 from dataclasses import dataclass
-from typing import Optional, Sequence
+from typing import Any, Optional, Sequence
 
 import numpy as np
 
@@ -44,7 +49,7 @@ from catenary_monitor.core.config.parameters import (
     load_params_file,
 )
 
-__all__ = ['Scenario', 'default_config_path', 'main']
+__all__ = ['Scenario', 'MoorDynTensions', 'default_config_path', 'main']
 
 #: Paper: depth at mean tide [m].
 MEAN_DEPTH = 20.85
@@ -152,17 +157,89 @@ class Scenario:
         k = min(int(u), len(table) - 2)
         return table[k] + (u - k) * (table[k + 1] - table[k])
 
+    def position(self, t: float) -> np.ndarray:
+        """The dock at ``t``: its equilibrium moved by the waves' sway, (X, Y, psi) [m, m,
+        rad]."""
+        amp = self.wave_calm + (self.wave_storm - self.wave_calm) * self.storm(t)
+        sway = amp * math.sin(2 * math.pi * t / self.wave_period)
+        return self.offset(t) + np.array([0.0, sway, 0.0])
+
+    def motion(self, t: float, h: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
+        """The dock's motion at ``t`` as MoorDyn takes it: ``(X, Y, psi, depth)`` and its rates
+        (central differences over ``h`` s)."""
+
+        def at(x: float) -> np.ndarray:
+            return np.append(self.position(x), self.depth(x))
+
+        return at(t), (at(t + h) - at(t - h)) / (2.0 * h)
+
+    def noisy(self, tension: np.ndarray, rng: Optional[np.random.Generator]) -> np.ndarray:
+        """The load pins' readings of ``tension`` [N] (relative noise ``noise``; none without
+        ``rng``)."""
+        if rng is None:
+            return tension
+        return tension * (1.0 + self.noise * rng.standard_normal(len(tension)))
+
     def tensions(self, t: float, rng: Optional[np.random.Generator] = None) -> np.ndarray:
         """Hook tension of every line [N] at ``t``: each chain at its hook, the dock at its
         equilibrium moved by the waves' sway."""
-        amp = self.wave_calm + (self.wave_storm - self.wave_calm) * self.storm(t)
-        sway = amp * math.sin(2 * math.pi * t / self.wave_period)
-        q = self.offset(t) + np.array([0.0, sway, 0.0])
-        lines = line_states(_model(self.config), self.depth(t), q)
-        tension = np.asarray(lines.statics.top_tension, dtype=float)
-        if rng is not None:
-            tension = tension * (1.0 + self.noise * rng.standard_normal(len(tension)))
-        return tension
+        lines = line_states(_model(self.config), self.depth(t), self.position(t))
+        return self.noisy(np.asarray(lines.statics.top_tension, dtype=float), rng)
+
+
+class MoorDynTensions:
+    """The scenario's hook tensions from MoorDyn (:mod:`catenary_monitor.ros.moordyn_dock`):
+    the dock moved as :meth:`Scenario.motion` says, its chains dynamic. The whole episode is
+    computed once, every ``step`` s (MoorDyn is not real-time safe on a busy machine: a late
+    step would make the body jump), and looked up by time, interpolated; :meth:`save` and
+    :meth:`load` keep it in an ``.npz`` file (the demo computes it before the monitor starts).
+    """
+
+    def __init__(self, times: np.ndarray, table: np.ndarray, scenario: Scenario) -> None:
+        self.times, self.table, self.scenario = times, table, scenario
+
+    @classmethod
+    def compute(
+        cls, scenario: Scenario, segments: int = 20, step: float = 0.05
+    ) -> 'MoorDynTensions':
+        """Run MoorDyn over the episode (a few seconds of CPU for the demo's minute)."""
+        from catenary_monitor.ros.moordyn_dock import PAPER_CHAIN, Chain, MoorDynDock
+
+        chain = Chain(ea=PAPER_CHAIN.ea, segments=segments)
+        times = np.arange(0.0, scenario.duration + 2.0 * step, step)
+        q, v = scenario.motion(0.0)
+        rows = []
+        with MoorDynDock(_model(scenario.config), q, v, chain) as dock:
+            for t in times.tolist():
+                q, v = scenario.motion(t)
+                dock.step(t, q, v)
+                rows.append(dock.lines()[0])
+        return cls(times, np.array(rows), scenario)
+
+    def save(self, path: str) -> None:
+        """The table as ``.npz`` (``times`` s, ``tensions`` N, lines in config order)."""
+        np.savez(path, times=self.times, tensions=self.table)
+
+    @classmethod
+    def load(cls, path: str, scenario: Scenario) -> 'MoorDynTensions':
+        """A table :meth:`save` wrote; ValueError naming what is wrong with it."""
+        with np.load(path, allow_pickle=False) as data:
+            times = np.asarray(data['times'], dtype=float)
+            table = np.asarray(data['tensions'], dtype=float)
+        lines = len(scenario.config.lines)
+        if times.ndim != 1 or table.shape != (times.size, lines) or times.size < 2:
+            raise ValueError(f'{path}: not a table of {lines} lines\' tensions over time')
+        if not (np.all(np.isfinite(table)) and np.all(np.diff(times) > 0)):
+            raise ValueError(f'{path}: tensions not finite or times not increasing')
+        return cls(times, table, scenario)
+
+    def tensions(self, t: float, rng: Optional[np.random.Generator] = None) -> np.ndarray:
+        """Hook tension of every line [N] at ``t`` (the table interpolated, sensor noise
+        added)."""
+        u = float(np.clip(t, self.times[0], self.times[-1]))
+        k = min(int(np.searchsorted(self.times, u, 'right')) - 1, len(self.times) - 2)
+        w = (u - self.times[k]) / (self.times[k + 1] - self.times[k])
+        return self.scenario.noisy((1.0 - w) * self.table[k] + w * self.table[k + 1], rng)
 
 
 @functools.lru_cache(maxsize=8)
@@ -181,6 +258,21 @@ def _offsets(scenario: Scenario) -> np.ndarray:
     return np.array(rows)
 
 
+def _moordyn_source(scenario: Scenario, table: Optional[str]) -> 'MoorDynTensions | str':
+    """The MoorDyn tensions: the table file if given, else computed now; or a one-line
+    error."""
+    if table is not None:
+        try:
+            return MoorDynTensions.load(table, scenario)
+        except (OSError, ValueError, KeyError) as err:
+            return f'--moordyn-table: {err}'
+    from catenary_monitor.ros.moordyn_dock import available
+
+    if not available():
+        return '--dynamics moordyn needs MoorDyn (pip install "catenary_monitor[dynamics]")'
+    return MoorDynTensions.compute(scenario)
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Publish the scenario in real time until ``--duration`` has passed, then exit 0."""
     parser = argparse.ArgumentParser(prog='dock_simulator', description=__doc__.splitlines()[0])
@@ -192,6 +284,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument('--duration', type=float, default=55.0, help='episode length [s]')
     parser.add_argument('--rate', type=float, default=20.0, help='tension rate per line [Hz]')
     parser.add_argument('--depth-rate', type=float, default=2.0, help='depth rate [Hz]')
+    parser.add_argument(
+        '--dynamics',
+        choices=('static', 'moordyn'),
+        default='static',
+        help='the tensions from the dock\'s equilibrium (static) or from MoorDyn',
+    )
+    parser.add_argument(
+        '--moordyn-table',
+        metavar='NPZ',
+        help='with --dynamics moordyn: the tensions computed beforehand (demo), else computed',
+    )
     argv = list(sys.argv[1:] if argv is None else argv)
     import rclpy
     from rclpy.utilities import remove_ros_args
@@ -211,6 +314,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 2
     scenario = Scenario(config, duration=args.duration)
     scenario.offsets()  # the equilibrium on its grid, before the first sample
+    source: Any = scenario
+    if args.dynamics == 'moordyn':
+        source = _moordyn_source(scenario, args.moordyn_table)
+        if isinstance(source, str):
+            print(f'dock_simulator: {source}', file=sys.stderr)
+            return 2
 
     from rclpy.executors import ExternalShutdownException
     from rclpy.qos import qos_profile_sensor_data
@@ -236,13 +345,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         if t >= state['next_depth']:
             depth_pub.publish(Float64(data=scenario.depth(t)))
             state['next_depth'] += 1.0 / args.depth_rate
-        for pub, value in zip(pubs, scenario.tensions(t, rng).tolist()):
+        for pub, value in zip(pubs, source.tensions(t, rng).tolist()):
             pub.publish(Float64(data=value))
 
     node.create_timer(1.0 / args.rate, tick)
     node.get_logger().info(
         f'publishing {len(pubs)} lines at {args.rate:g} Hz for '
-        f'{scenario.duration:g} s (tide x{scenario.time_scale():.0f})'
+        f'{scenario.duration:g} s (tide x{scenario.time_scale():.0f}, '
+        f'{"MoorDyn" if source is not scenario else "static equilibrium"})'
     )
     try:
         while rclpy.ok() and not state['done']:
