@@ -457,6 +457,9 @@ def _params_file(config: MonitorConfig, path: Path) -> None:
 
 def cmd_bench_replay(args: argparse.Namespace) -> int:
     """Print the benchmark figures (table or JSON)."""
+    if args.workdir and not Path(args.workdir).is_dir():
+        print(f'bench-replay: --workdir {args.workdir}: no such directory', file=sys.stderr)
+        return 2
     r = run(
         args.messages,
         args.baseline_messages,
