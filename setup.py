@@ -105,6 +105,8 @@ setup(
             'flake8>=6',
             'mypy>=1.8',
             'pytest-timeout',
+            # Two test processes (-n 2 --dist loadfile, README): each its own DDS domain.
+            'pytest-xdist>=3',
             # The console's browser tests drive Debian's chromium through /usr/bin/chromedriver.
             'selenium>=4.10',
             'moorpy',

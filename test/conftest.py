@@ -6,7 +6,19 @@ import random
 import pytest
 
 os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-os.environ.setdefault('ROS_DOMAIN_ID', str(random.Random(os.getpid()).randint(100, 200)))
+
+
+def _domain() -> int:
+    """The DDS domain of this test session: ROS_DOMAIN_ID when given, else one of its own; under
+    pytest-xdist (-n N) the next ones, one per worker (the workers inherit the controller's),
+    so that two workers' nodes on the same topic names never meet."""
+    given = os.environ.get('ROS_DOMAIN_ID', '')
+    base = int(given) if given.isdigit() else random.Random(os.getpid()).randint(100, 200)
+    worker = os.environ.get('PYTEST_XDIST_WORKER', '')
+    return base + 1 + int(worker[2:]) % 16 if worker[2:].isdigit() else base
+
+
+os.environ['ROS_DOMAIN_ID'] = str(_domain())
 
 
 #: The C accelerators (setup.py): their sources, and the built module beside them.
@@ -22,14 +34,23 @@ def _build_extensions() -> None:
     import the package from this tree, not from where pip installed it); test_kernels,
     test_mcap_scan and test_batch_steps fail if one cannot be built. Nothing is built when
     CATENARY_MONITOR_NO_EXTENSIONS=1 (the no-compiler run, test_no_compiler.py)."""
-    import subprocess
-    import sys
-    import sysconfig
+    import fcntl
     from pathlib import Path
 
     if os.environ.get('CATENARY_MONITOR_NO_EXTENSIONS') == '1':
         return
     root = Path(__file__).resolve().parent.parent
+    (root / 'build').mkdir(exist_ok=True)
+    with open(root / 'build' / '.conftest.lock', 'w') as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # pytest-xdist's processes start together: one builds
+        _build_stale(root)
+
+
+def _build_stale(root) -> None:
+    import subprocess
+    import sys
+    import sysconfig
+
     suffix = sysconfig.get_config_var('EXT_SUFFIX')
     stale = []
     for module, sources in EXTENSIONS.items():
