@@ -144,7 +144,8 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
     """The demo's storm as the monitor publishes it: line_11 lifted (ERROR, unacknowledged, a
     long message), line_10 WARN unacknowledged and chattering, line_12 WARN acknowledged,
     line_09 WARN shelved, the rest OK, every optional value set (bound, drag margin, tide margin
-    at length but on line_01), the intake WARN, and an alarm flood whose first out is line_11."""
+    at length but on line_01), line_01's time to uplift unknown (NaN), the other OK lines' not
+    coming (inf), the intake WARN, and an alarm flood whose first out is line_11."""
     from catenary_monitor.console.frames import Status
 
     out: dict[str, Any] = {}
@@ -163,7 +164,11 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
             'uplift_force': 152.3e3 if lifted else 0.0,
             'safety_factor': 2.01 if lifted else 5.3,
             'tide_margin': -2.1 if lifted else 4.68,
-            'time_to_uplift': 0.0 if lifted else (2520.0 if level == 'WARN' else math.inf),
+            # unknown (nan: line_01's trend not known yet) is not "not coming" (inf)
+            'time_to_uplift': 0.0
+            if lifted
+            else (2520.0 if level == 'WARN' else (math.nan if k == 0 else math.inf)),
+            'time_to_uplift_view': 'none' if k == 0 else 'chain length held',
             'uplift_force_upper': 210.2e3 if lifted else 0.0,
             'drag_margin': 120.5e3 if lifted else 1.8e6,
             # line_01 without chain_length: no tide margin at length (nan)

@@ -254,7 +254,9 @@ function renderTile(view, lost, frame) {
     : ttu <= 0 ? 'lifted' : ago(ttu) + (view.time_to_uplift_view === 'chain length held' ? ' (chain length)' : '');
   tt.title = view.time_to_uplift_view && view.time_to_uplift_view !== 'none'
     ? `time to uplift, ${view.time_to_uplift_view}` : 'time to uplift';
-  tt.className = 'v-ttu ' + (ttu !== null && ttu !== undefined && ttu < S.config.uplift_time_warn ? 'warn' : '');
+  const known = ttu !== null && ttu !== undefined;
+  tt.className = 'v-ttu ' + (known && ttu < S.config.uplift_time_warn ? 'warn' : '') +
+    (tt.textContent.length > 12 ? ' wrap' : '');
   // The two tide margins: R held (always), chain length held (where finite: chain_length set).
   const shown = (v) => v !== null && v !== undefined;
   const tide = t.querySelector('.v-tide'), tidel = t.querySelector('.v-tidel');
