@@ -138,14 +138,24 @@ _LONG = (
     'within the sensors\' accuracy: bound 210.2 kN, nominal 152.3 kN; drag margin 120.5 kN '
     'below 200.0 kN: check the anchor and the chain on the seabed'
 )
+#: What the live storm's dynamic uplift ERROR says while its warnings are held (the live
+#: demo's longest messages: every alarm row carries one).
+_HELD = (
+    'anchor uplift 1.2 kN > allowed 0.0 kN (dynamic: at the waves\' peak tension; quasi-static '
+    '0.0 kN); anchor margin 5.06 m, warning held (clears after 6 s at >= 6.00 m); tide margin '
+    '1.93 m, warning held (clears after 6 s at >= 1.20 m); uplift possible within sensor '
+    'accuracy: up to 5.6 kN > allowed 0.0 kN (nominal 0.0 kN)'
+)
 
 
 def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
     """The demo's storm as the monitor publishes it: line_11 lifted (ERROR, unacknowledged, a
-    long message), line_10 WARN unacknowledged and chattering, line_12 WARN acknowledged,
-    line_09 WARN shelved, the rest OK, every optional value set (bound, drag margin, tide margin
-    at length but on line_01), line_01's time to uplift unknown (NaN), the other OK lines' not
-    coming (inf), the intake WARN, and an alarm flood whose first out is line_11."""
+    long message), line_07 ERROR acknowledged on its dynamic uplift and dragging (the live
+    storm's longest message), line_08 WARN unacknowledged with a message as long, line_10 WARN
+    unacknowledged and chattering, line_12 WARN acknowledged, line_09 WARN shelved, the rest OK
+    (half of them with no tide trend yet), every optional value set (bound, drag margin and drag
+    state, tide margin at length but on line_01, wave tension, fatigue, the span from the dock
+    estimate), the intake WARN, and an alarm flood whose first out is line_11."""
     from catenary_monitor.console.frames import Status
 
     out: dict[str, Any] = {}
@@ -153,30 +163,41 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
         level, state, msg = 'OK', 'normal', 'ok'
         if name == 'line_11':
             level, state, msg = 'ERROR', 'unacknowledged', _LONG
+        elif name == 'line_07':
+            level, state, msg = 'ERROR', 'acknowledged', _HELD
+        elif name == 'line_08':
+            level, state, msg = 'WARN', 'unacknowledged', _HELD.replace('anchor uplift', 'uplift')
         elif name in ('line_09', 'line_10', 'line_12'):
             level, msg = 'WARN', 'anchor margin 3.10 m < 5.00 m; anchor uplift in 42 min if the '
             msg += 'tide keeps rising 0.31 m/h'
             state = {'line_09': 'shelved', 'line_10': 'unacknowledged'}.get(name, 'acknowledged')
         lifted = name == 'line_11'
+        ttu = 0.0 if lifted else (2520.0 if level == 'WARN' else math.inf)
         values = {
             'top_tension': 2.4e6 if lifted else 0.9e6 + 4e4 * k,
             'anchor_margin': -12.4 if lifted else 20.0 - k,
             'uplift_force': 152.3e3 if lifted else 0.0,
             'safety_factor': 2.01 if lifted else 5.3,
             'tide_margin': -2.1 if lifted else 4.68,
-            # unknown (nan: line_01's trend not known yet) is not "not coming" (inf)
-            'time_to_uplift': 0.0
-            if lifted
-            else (2520.0 if level == 'WARN' else (math.nan if k == 0 else math.inf)),
+            # the live start: no tide trend yet (unknown, NaN) on the even lines that are OK
+            'time_to_uplift': math.nan if (level == 'OK' and k % 2) else ttu,
             'time_to_uplift_view': 'none' if k == 0 else 'chain length held',
             'uplift_force_upper': 210.2e3 if lifted else 0.0,
-            'drag_margin': 120.5e3 if lifted else 1.8e6,
+            'drag_margin': 120.5e3 if lifted else (-35.2e3 if name == 'line_07' else 1.8e6),
+            'drag_state': 2 if name == 'line_07' else 0,
             # line_01 without chain_length: no tide margin at length (nan)
             'tide_margin_at_length': -0.4 if lifted else (math.nan if k == 0 else 1.05),
+            'wave_tension': 38.5e3 + 1e3 * k,
+            # the span solved at: the dock estimate's (moved) on all but line_01 (installed)
+            'span': 121.06 + (0.0 if k == 0 else 0.39 + 0.01 * k),
+            'span_source': 'installed' if k == 0 else 'dock_estimate',
+            'dynamic_uplift': 161.0e3 if lifted else 0.0,
+            'fatigue_damage': 3.2e-4 * (k + 1),
+            'fatigue_life_left': 2.7e9 / (k + 1),
             'tension_age': 0.4,
             'alarm_state': state,
             'alarm_raised': repr(now - 95.0 - k),
-            'alarm_condition': 'uplift' if lifted else 'anchor_margin',
+            'alarm_condition': 'uplift' if name in ('line_07', 'line_11') else 'anchor_margin',
             'acknowledged_by': 'console dockpc' if state == 'acknowledged' else '',
             'acknowledged_at': repr(now - 30.0),
             'model': 'elastic catenary',

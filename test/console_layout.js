@@ -1,8 +1,8 @@
 // The console page's layout problems now, as sentences (empty: none), for the browser tests
 // (browser_harness.layout_problems runs it through selenium; arguments[0]: also require every
 // tile's level and the alarm list in the window without scrolling):
-// text cut by an element that hides its overflow (or clamps lines), an element of a tile outside
-// its tile, two panels or two tiles overlapping, a panel too small to use or out of the page's
+// text cut by an element that hides its overflow on that axis (or clamps lines), an element of a
+// tile outside its tile, two panels or two tiles overlapping, a panel too small to use or out of the page's
 // reach, a bar on top covering a panel, the page wider than the window.
 const must = arguments[0], out = [];
 window.scrollTo(0, 0);
@@ -23,9 +23,12 @@ if (page.scrollWidth > W + 1) out.push(`page ${page.scrollWidth} px wide in a ${
 for (const e of document.body.querySelectorAll('*')) {
   if (!shown(e) || e.closest('svg')) continue;
   const cs = getComputedStyle(e);
-  const hides = /hidden|clip/.test(cs.overflowX + cs.overflowY) || cs.webkitLineClamp !== 'none';
-  const cut = e.scrollHeight > e.clientHeight + 1 || e.scrollWidth > e.clientWidth + 1;
-  if (hides && cs.display !== 'inline' && cut) {
+  // Per axis: an axis that hides (or a line clamp) cuts what overflows it; an axis that scrolls
+  // (auto, scroll: the alarm list beyond its height) keeps its content within reach.
+  const clamps = cs.webkitLineClamp !== 'none';
+  const cutY = (/hidden|clip/.test(cs.overflowY) || clamps) && e.scrollHeight > e.clientHeight + 1;
+  const cutX = (/hidden|clip/.test(cs.overflowX) || clamps) && e.scrollWidth > e.clientWidth + 1;
+  if (cs.display !== 'inline' && (cutX || cutY)) {
     out.push(`${name(e)} cuts its content (${e.scrollWidth}x${e.scrollHeight} in `
       + `${e.clientWidth}x${e.clientHeight}): "${e.textContent.trim().slice(0, 60)}"`);
   }

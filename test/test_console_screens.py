@@ -99,8 +99,9 @@ def test_page_fits_every_screen(demo_page: Any) -> None:
 def test_tide_margins_and_time_to_uplift_on_the_tiles(demo_page: Any) -> None:
     """'tide to lift, R held' (tide_margin) on every tile; 'tide to lift, chain length held'
     (tide_margin_at_length) beside it where finite (line_01 has none). The time to uplift:
-    unknown (NaN, line_01) reads "unknown, trend not known yet", never "not coming" (inf, the
-    other OK lines); a forecast names the chain-length view; a lifted anchor reads "lifted"."""
+    unknown (NaN: the live start's even lines) reads "unknown", "trend not known yet" in its
+    title, never "not coming" (inf, the other OK lines); a forecast names the chain-length
+    view; a lifted anchor reads "lifted"."""
     rows = demo_page.execute_script(
         "return [...document.querySelectorAll('.tile')].map(t => [t.dataset.line,"
         " [...t.querySelectorAll('.vals dt')].filter(e => e.offsetParent)"
@@ -122,8 +123,10 @@ def test_tide_margins_and_time_to_uplift_on_the_tiles(demo_page: Any) -> None:
             " t.querySelector('.v-ttu').textContent + ' | ' + t.querySelector('.v-ttu').title])"
         )
     )
-    assert ttu['line_01'] == 'unknown, trend not known yet | time to uplift', ttu
-    assert ttu['line_02'] == 'not coming | time to uplift, chain length held', ttu
+    unknown = 'unknown | time to uplift unknown, trend not known yet: '
+    assert ttu['line_02'].startswith(unknown), ttu  # NaN
+    assert ttu['line_01'] == 'not coming | time to uplift', ttu  # inf, without chain_length
+    assert ttu['line_03'] == 'not coming | time to uplift, chain length held', ttu
     assert ttu['line_10'] == '42 min 0 s (chain length) | time to uplift, chain length held', ttu
     assert ttu['line_11'].startswith('lifted | '), ttu
 

@@ -172,14 +172,13 @@ function buildTiles() {
   for (const line of S.config.lines) {
     const t = el('div', { class: 'tile', 'data-line': line.name, 'data-level': 'STALE' });
     t.innerHTML = `<div class="tile-head"><span class="name"></span><span class="badge"></span></div>
-      <div class="bar"><div class="fill"></div><div class="mark"></div></div>
-      <div class="bar-label"></div>
+      <div class="bar"><div class="fill"></div><div class="mark"></div><div class="bar-label"></div></div>
       <dl class="vals"><dt>anchor margin</dt><dd class="v-margin"></dd><dt>uplift</dt><dd class="v-uplift"></dd>
       <dt>safety factor</dt><dd class="v-sf"></dd><dt>uplift in</dt><dd class="v-ttu"></dd>
       <dt title="${TIDE_R}">tide to lift, R held</dt><dd class="v-tide" title="${TIDE_R}"></dd>
       <dt class="x-tidel" title="${TIDE_L}">tide to lift, chain length held</dt><dd class="v-tidel x-tidel" title="${TIDE_L}"></dd>
       <dt class="x-span" title="${SPAN}">span</dt><dd class="v-span x-span" title="${SPAN}"></dd>
-      <dt class="x-upper" title="the anchor's force bounded: waves and sensor accuracy">uplift ≤ (waves, accuracy)</dt><dd class="v-upper x-upper"></dd>
+      <dt class="x-upper" title="uplift bound: the anchor's force at most, with the waves (the window's peak tension) and the sensors' accuracy">uplift bound</dt><dd class="v-upper x-upper"></dd>
       <dt class="x-wave" title="wave-frequency tension: half the range of the readings over wave_window">wave tension</dt><dd class="v-wave x-wave"></dd>
       <dt class="x-drag">drag margin</dt><dd class="v-drag x-drag"></dd>
 </dl>
@@ -250,12 +249,14 @@ function renderTile(view, lost, frame) {
   // Unknown (NaN: no trend yet) is not "never" (inf: the tide is not rising).
   const state = view.time_to_uplift_state;
   tt.textContent = ttu === null || ttu === undefined
-    ? (state === 'not coming' ? 'not coming' : 'unknown, trend not known yet')
+    ? (state === 'not coming' ? 'not coming' : 'unknown')
     : ttu <= 0 ? 'lifted' : ago(ttu) + (view.time_to_uplift_view === 'chain length held' ? ' (chain length)' : '');
-  tt.title = view.time_to_uplift_view && view.time_to_uplift_view !== 'none'
-    ? `time to uplift, ${view.time_to_uplift_view}` : 'time to uplift';
-  const known = ttu !== null && ttu !== undefined;
-  tt.className = 'v-ttu ' + (known && ttu < S.config.uplift_time_warn ? 'warn' : '') +
+  tt.title = (ttu === null || ttu === undefined) && state !== 'not coming'
+    ? 'time to uplift unknown, trend not known yet: the tide\'s trend needs half the trend window of depth (or the line has no solve)'
+    : view.time_to_uplift_view && view.time_to_uplift_view !== 'none'
+      ? `time to uplift, ${view.time_to_uplift_view}` : 'time to uplift';
+  // A time in words ('42 min 0 s (chain length)') wraps.
+  tt.className = 'v-ttu ' + (ttu !== null && ttu !== undefined && ttu < S.config.uplift_time_warn ? 'warn' : '') +
     (tt.textContent.length > 12 ? ' wrap' : '');
   // The two tide margins: R held (always), chain length held (where finite: chain_length set).
   const shown = (v) => v !== null && v !== undefined;
@@ -270,9 +271,12 @@ function renderTile(view, lost, frame) {
   const placed = cfg.hook_x !== null && cfg.hook_x !== undefined;
   t.querySelectorAll('.x-span').forEach((e) => { e.hidden = !(placed && shown(view.span)); });
   const moved = shown(view.span) && cfg.anchor_distance ? view.span - cfg.anchor_distance : null;
-  t.querySelector('.v-span').textContent = !shown(view.span) ? '' : view.span_source === 'dock_estimate'
-    ? `${num(view.span, 2)} m (dock estimate, ${moved >= 0 ? '+' : ''}${num(moved, 2)})`
-    : `${num(view.span, 2)} m (installed)`;
+  // The source in the label, the move from the installed span beside the value (one row).
+  const estimated = view.span_source === 'dock_estimate';
+  setText(t.querySelector('dt.x-span'), estimated ? 'span, estimated' : 'span, installed');
+  t.querySelector('.v-span').textContent = !shown(view.span) ? '' : estimated
+    ? `${num(view.span, 2)} m (${moved >= 0 ? '+' : ''}${num(moved, 2)})`
+    : `${num(view.span, 2)} m`;
   // The uplift bound within sensor accuracy and the drag margin: shown where configured.
   const up = view.uplift_force_upper, drag = view.drag_margin;
   t.querySelectorAll('.x-upper').forEach((e) => { e.hidden = !shown(up); });
@@ -285,7 +289,7 @@ function renderTile(view, lost, frame) {
   // drag_state (docs/holding.md): 0 holding, 1 overloaded, 2 dragging (an ERROR).
   const vd = t.querySelector('.v-drag'), dstate = view.drag_state;
   const dword = dstate === 2 ? ' · DRAGGING' : dstate === 1 ? ' · overloaded' : '';
-  vd.textContent = shown(drag) ? `${num(drag, 1, KN)} kN${dword}` : '';
+  vd.textContent = shown(drag) ? `${num(drag, 1, KN)}\u00a0kN${dword}` : '';
   vd.className = 'v-drag x-drag ' + (dstate === 2 ? 'bad' :
     (shown(drag) && drag < (S.config.drag_margin_warn || 0) ? 'warn' : ''));
   // Chain fatigue (docs/fatigue.md): Miner's damage and the life left at the last day's rate.
@@ -297,6 +301,8 @@ function renderTile(view, lost, frame) {
   setText(t.querySelector('.v-model'), (view.model || 'no model').replace(' catenary', ''));
   const msg = lost ? `monitor silent: last known ${view.level} at ${clock(frame.snapshot_t)}` : view.message;
   t.querySelector('.msg').textContent = msg;
+  // An OK line's message says nothing the badge does not ('ok'): no row for it.
+  t.querySelector('.msg').hidden = !lost && level === 'OK' && /^ok$/i.test(msg.trim());
   t.querySelector('.msg').title = msg;
   renderAge(t, view);
   setText(t.querySelector('.alarm-st'), (view.alarm_state && view.alarm_state !== 'normal' ? ` · alarm ${view.alarm_state}` : '')
