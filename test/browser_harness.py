@@ -181,6 +181,7 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
             'tide_margin': -2.1 if lifted else 4.68,
             # the live start: no tide trend yet (unknown, NaN) on the even lines that are OK
             'time_to_uplift': math.nan if (level == 'OK' and k % 2) else ttu,
+            'time_to_uplift_view': 'none' if k == 0 else 'chain length held',
             'uplift_force_upper': 210.2e3 if lifted else 0.0,
             'drag_margin': 120.5e3 if lifted else (-35.2e3 if name == 'line_07' else 1.8e6),
             'drag_state': 2 if name == 'line_07' else 0,

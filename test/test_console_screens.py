@@ -1,5 +1,5 @@
 """The console page in Debian's Chromium: on real screen sizes, when its server dies, without
-``--params-file``, and its two tide margins.
+``--params-file``, and its two tide margins and time to uplift (unknown is not "not coming").
 
 * Screens: the demo's storm (``browser_harness.DemoSource``: a long monitor message, every
   optional value) at 1280x720, 1366x768, 1920x937 and 2560x1440; read from the DOM: no text
@@ -96,9 +96,12 @@ def test_page_fits_every_screen(demo_page: Any) -> None:
     assert lines[1] > 3.0  # over two lines high
 
 
-def test_both_tide_margins_on_the_tiles(demo_page: Any) -> None:
+def test_tide_margins_and_time_to_uplift_on_the_tiles(demo_page: Any) -> None:
     """'tide to lift, R held' (tide_margin) on every tile; 'tide to lift, chain length held'
-    (tide_margin_at_length) beside it where finite (line_01 has none)."""
+    (tide_margin_at_length) beside it where finite (line_01 has none). The time to uplift:
+    unknown (NaN: the live start's even lines) reads "unknown", "trend not known yet" in its
+    title, never "not coming" (inf, the other OK lines); a forecast names the chain-length
+    view; a lifted anchor reads "lifted"."""
     rows = demo_page.execute_script(
         "return [...document.querySelectorAll('.tile')].map(t => [t.dataset.line,"
         " [...t.querySelectorAll('.vals dt')].filter(e => e.offsetParent)"
@@ -114,6 +117,18 @@ def test_both_tide_margins_on_the_tiles(demo_page: Any) -> None:
     order = [v.split(' = ')[0] for v in vals['line_02']]
     beside = order.index('tide to lift, R held') + 1
     assert order.index('tide to lift, chain length held') == beside
+    ttu = dict(
+        demo_page.execute_script(
+            "return [...document.querySelectorAll('.tile')].map(t => [t.dataset.line,"
+            " t.querySelector('.v-ttu').textContent + ' | ' + t.querySelector('.v-ttu').title])"
+        )
+    )
+    unknown = 'unknown | time to uplift unknown, trend not known yet: '
+    assert ttu['line_02'].startswith(unknown), ttu  # NaN
+    assert ttu['line_01'] == 'not coming | time to uplift', ttu  # inf, without chain_length
+    assert ttu['line_03'] == 'not coming | time to uplift, chain length held', ttu
+    assert ttu['line_10'] == '42 min 0 s (chain length) | time to uplift, chain length held', ttu
+    assert ttu['line_11'].startswith('lifted | '), ttu
 
 
 @pytest.mark.ros

@@ -275,6 +275,7 @@ def test_replay_leaves_the_read_ahead_its_core(threads, monkeypatch):
         return 'state'
 
     monkeypatch.setattr(driver, '_stream', fake)
+    monkeypatch.setattr(driver.mcap_read, 'READ_AHEAD', 1)  # a fleet worker in this process sets 0
     threads(2)
     assert driver.stream([], None, None) == 'state'
     assert driver.stream([], None, None, jobs=4) == 'state'

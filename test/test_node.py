@@ -101,6 +101,13 @@ def monitor(tmp_path_factory, client):
         # These tests step the tension (400 kN -> 1.6 MN, 1e300 N -> 400 kN in one sample),
         # which the sensor check calls a spike (test/test_sensor.py): not held here.
         sensor_hold=0.0,
+        # The wave window (default 30 s) would keep those steps' swing as wave tension, and the
+        # dynamic uplift it implies, for 30 s after them (test/test_uncertainty.py): 1 s here,
+        # so that each test's clear input clears within clear_hold.
+        wave_window=1.0,
+        # The uplift-time warning does not clear on an unknown forecast (docs/node.md); the
+        # flat tide fed at 10 Hz gives a known trend (not rising) 2.5 s after the start.
+        tide_trend_window=5.0,
     )
     proc = start_monitor(params, tmp / 'log')
     try:

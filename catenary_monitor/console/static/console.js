@@ -252,10 +252,12 @@ function renderTile(view, lost, frame) {
     ? (state === 'not coming' ? 'not coming' : 'unknown')
     : ttu <= 0 ? 'lifted' : ago(ttu) + (view.time_to_uplift_view === 'chain length held' ? ' (chain length)' : '');
   tt.title = (ttu === null || ttu === undefined) && state !== 'not coming'
-    ? 'time to uplift unknown: the tide\'s trend is not known yet (half the trend window of depth needed)'
+    ? 'time to uplift unknown, trend not known yet: the tide\'s trend needs half the trend window of depth (or the line has no solve)'
     : view.time_to_uplift_view && view.time_to_uplift_view !== 'none'
       ? `time to uplift, ${view.time_to_uplift_view}` : 'time to uplift';
-  tt.className = 'v-ttu ' + (ttu !== null && ttu !== undefined && ttu < S.config.uplift_time_warn ? 'warn' : '');
+  // A time in words ('42 min 0 s (chain length)') wraps.
+  tt.className = 'v-ttu ' + (ttu !== null && ttu !== undefined && ttu < S.config.uplift_time_warn ? 'warn' : '') +
+    (tt.textContent.length > 12 ? ' wrap' : '');
   // The two tide margins: R held (always), chain length held (where finite: chain_length set).
   const shown = (v) => v !== null && v !== undefined;
   const tide = t.querySelector('.v-tide'), tidel = t.querySelector('.v-tidel');
