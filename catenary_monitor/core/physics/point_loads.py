@@ -50,6 +50,8 @@ __all__ = [
     'min_anchor',
     'critical',
     'line_statics',
+    'span_at_tension',
+    'lift_depth',
 ]
 
 #: ``model`` of an answer with point loads.
@@ -562,3 +564,79 @@ def _state_at(
     if ans.status == int(Status.CHAIN_TOO_SHORT):
         return 'taut'
     return ans if ans.status == 0 else None
+
+
+def span_at_tension(
+    w: float, depth: float, length: float, tension: float, loads: PointLoads, start: float
+) -> float:
+    """The span [m] at which a chain of ``length`` with its point loads, at ``depth``, has hook
+    ``tension`` (the inverse of :func:`solve_length`: the holding's implied anchor distance).
+    Brent's method from a bracket grown around ``start`` (the installed span) within the
+    slack and taut spans; NaN where the tension does not fix the span (at most the slack
+    chain's) or a span on the way is not modelled."""
+    lo, hi = length - depth, math.sqrt((length - depth) * (length + depth))
+    if not (w > 0.0 and depth > 0.0 and lo > 0.0 and math.isfinite(tension)):
+        return math.nan
+
+    def excess(x: float) -> float:
+        a = solve_length(w, depth, length, x, loads)
+        if a.status == int(Status.CHAIN_TOO_SHORT):
+            return math.inf
+        if a.status:
+            raise ValueError('not modelled')
+        return a.tension - tension
+
+    try:
+        a, b = _bracket(excess, min(max(start, lo), hi), lo, hi)
+        if a != a:
+            return math.nan
+        return float(brentq(excess, a, b, xtol=1e-12, rtol=1e-13, maxiter=200))
+    except (ValueError, OverflowError, ZeroDivisionError):
+        return math.nan
+
+
+def _bracket(
+    f: Callable[[float], float], x: float, lo: float, hi: float
+) -> tuple[float, float]:
+    """``(a, b)`` within ``(lo, hi)`` around ``x`` where ``f`` changes sign (NaN, NaN: none):
+    steps from 0.25 m doubling toward the sign change."""
+    eps = 1e-9 * hi
+    lo, hi = lo + eps, hi - eps
+    x = min(max(x, lo), hi)
+    fx = f(x)
+    step = 0.25 if fx < 0.0 else -0.25
+    while True:
+        y = min(max(x + step, lo), hi)
+        fy = f(y)
+        if (fx < 0.0) != (fy < 0.0):
+            return (x, y) if x < y else (y, x)
+        if y in (lo, hi):
+            return math.nan, math.nan
+        x, fx, step = y, fy, step * 2.0
+
+
+def lift_depth(w: float, length: float, span: float, loads: PointLoads) -> float:
+    """The depth [m] at which a chain of ``length`` with its point loads, its hook ``span`` m
+    from the anchor, lifts the anchor: the whole chain hangs, horizontal at the anchor (the
+    holding's ``tide_margin_at_length``). NaN where there is none (``span >= length``) or the
+    chain would pass through the seabed on the way (a buoy's hump)."""
+    if not (w > 0.0 and 0.0 < span < length):
+        return math.nan
+
+    def reach(h_: float) -> float:
+        p = walk(w, h_, 0.0, loads, length=length)
+        return (-math.inf if p is None else p.x) - span
+
+    try:
+        hi = w * length
+        while reach(hi) < 0.0:
+            hi *= 4.0
+        lo = hi / 4.0
+        while reach(lo) > 0.0:
+            lo /= 4.0
+        p = walk(w, _root(reach, lo, hi), 0.0, loads, length=length)
+    except (ValueError, OverflowError, ZeroDivisionError):
+        return math.nan
+    if p is None or p.z_min < -1e-9 * max(abs(p.z), 1.0) or not p.z > 0.0:
+        return math.nan
+    return p.z
