@@ -49,6 +49,7 @@ __all__ = [
     'solve_result',
     'min_anchor',
     'critical',
+    'line_statics',
 ]
 
 #: ``model`` of an answer with point loads.
@@ -484,3 +485,80 @@ def solve_result(
         model=MODEL,
         method='two-segment catenaries at the point loads (seed 002), nested brentq',
     )
+
+
+#: Span step of :func:`line_statics`' difference quotients, relative to the span (the roots'
+#: RTOL of 1e-13 leaves ~1e-8 relative error in dR/ds, the truncation ~1e-10).
+SPAN_STEP = 1e-5
+
+
+def line_statics(
+    w: float, depth: float, length: float, span: float, loads: PointLoads
+) -> tuple[float, ...]:
+    """A fixed-length chain with point loads at ``span`` (the dock model's line):
+    ``(R, T, V, V_A, grounded length, suspended length, dR/ds, dT/ds, regime)`` in the order
+    and units of :class:`~catenary_monitor.core.physics.fixed_length.LineStatics` (regime a
+    ``LineRegime``). The state is :func:`solve_length`'s; the stiffnesses are central
+    differences of it over :data:`SPAN_STEP` of the span (one-sided next to the slack and taut
+    ends). SLACK: the chain hangs straight down from the hook (R = 0; T the weight of the
+    hanging chain and the loads on it); TAUT: the chain cannot reach (R = inf); a scene the
+    static model does not follow (:data:`NOT_MODELLED`): INVALID with NaN."""
+    from catenary_monitor.core.physics.fixed_length import LineRegime
+
+    nan = math.nan
+    state = _state_at(w, depth, length, span, loads)
+    if state is None:
+        return (nan,) * 8 + (float(LineRegime.INVALID),)
+    if state == 'slack':
+        hang = w * depth + sum(v for p, v in zip(*loads) if p > length - depth)
+        if not hang > 0.0:
+            return (nan,) * 8 + (float(LineRegime.INVALID),)
+        return (0.0, hang, hang, 0.0, length - depth, depth, 0.0, 0.0, float(LineRegime.SLACK))
+    if state == 'taut':
+        return (math.inf,) + (nan,) * 7 + (float(LineRegime.TAUT),)
+    assert isinstance(state, Answer)
+    ds = SPAN_STEP * max(span, 1.0)
+    hi, lo = _state_at(w, depth, length, span + ds, loads), _state_at(
+        w, depth, length, span - ds, loads
+    )
+    if isinstance(hi, Answer) and isinstance(lo, Answer):
+        a1, x1, a0, x0 = hi, span + ds, lo, span - ds
+    elif isinstance(hi, Answer):  # next to the slack end
+        a1, x1, a0, x0 = hi, span + ds, state, span
+    elif isinstance(lo, Answer):  # next to the taut end
+        a1, x1, a0, x0 = state, span, lo, span - ds
+    else:
+        a1, x1, a0, x0 = state, span, state, span
+    run = x1 - x0
+    dr = (a1.horizontal - a0.horizontal) / run if run else nan
+    dt = (a1.tension - a0.tension) / run if run else nan
+    ans = state
+    grounded = length - ans.suspended_length
+    regime = LineRegime.LIFTED if ans.uplift > 0.0 else LineRegime.GROUNDED
+    return (
+        ans.horizontal,
+        ans.tension,
+        ans.top_vertical,
+        ans.uplift,
+        grounded,
+        ans.suspended_length,
+        dr,
+        dt,
+        float(regime),
+    )
+
+
+def _state_at(
+    w: float, depth: float, length: float, span: float, loads: PointLoads
+) -> Optional[Any]:
+    """:func:`solve_length` at ``span``: its Answer, ``'slack'``, ``'taut'`` or None."""
+    if not (w > 0.0 and depth > 0.0 and length > depth and span >= 0.0):
+        return None
+    if span >= math.sqrt((length - depth) * (length + depth)):
+        return 'taut'  # beyond the straight chain's reach, whatever it carries
+    ans = solve_length(w, depth, length, span, loads)
+    if ans.status == int(Status.CHAIN_SLACK):
+        return 'slack'
+    if ans.status == int(Status.CHAIN_TOO_SHORT):
+        return 'taut'
+    return ans if ans.status == 0 else None
