@@ -2,7 +2,7 @@
 ``--params-file``, and its two tide margins and time to uplift (unknown is not "not coming").
 
 * Screens: the demo's storm (``browser_harness.DemoSource``: a long monitor message, every
-  optional value) at 1280x720, 1366x768, 1920x937 and 2560x1440; read from the DOM: no text
+  optional value, a load cell's channel rows) at 1280x720, 1366x768, 1920x937 and 2560x1440; read from the DOM: no text
   clipped, no two panels or tiles overlapping, every panel usable and reachable; at 1920x937
   every tile's level and the alarm list in the window without scrolling.
 * Server loss: the console process killed (SIGKILL) under the page; the banner shows, a tile's
@@ -94,6 +94,15 @@ def test_page_fits_every_screen(demo_page: Any) -> None:
     )
     assert lines[0].endswith('check the anchor and the chain on the seabed')
     assert lines[1] > 3.0  # over two lines high
+    # line_05's load cell: a row per channel, named by its topic's last part, its state
+    chans = driver.execute_script(
+        "return [...document.querySelectorAll('.tile[data-line=\"line_05\"] .v-ch')]"
+        '.map((e) => [e.previousElementSibling.textContent, e.textContent, e.className])'
+    )
+    assert [c[:2] for c in chans] == [
+        ['channel a', 'ok'], ['channel b', 'silent'], ['channel c', 'ok']
+    ]  # fmt: skip
+    assert 'warn' in chans[1][2] and 'warn' not in chans[0][2]
 
 
 def test_tide_margins_and_time_to_uplift_on_the_tiles(demo_page: Any) -> None:
