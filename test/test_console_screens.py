@@ -2,9 +2,10 @@
 ``--params-file``, and its two tide margins and time to uplift (unknown is not "not coming").
 
 * Screens: the demo's storm (``browser_harness.DemoSource``: a long monitor message, every
-  optional value, a load cell's channel rows) at 1280x720, 1366x768, 1920x937 and 2560x1440; read from the DOM: no text
-  clipped, no two panels or tiles overlapping, every panel usable and reachable; at 1920x937
-  every tile's level and the alarm list in the window without scrolling.
+  optional value, a load cell's channel rows) at 1280x720, 1366x768, 1920x937 and 2560x1440;
+  read from the DOM: no text clipped, no two panels or tiles overlapping, every panel usable
+  and reachable; at 1920x937 every tile's level and the alarm list in the window without
+  scrolling.
 * Server loss: the console process killed (SIGKILL) under the page; the banner shows, a tile's
   age and the clock keep counting by the browser's clock.
 * No ``--params-file``: the page loaded before the monitor is heard shows each line as soon as
