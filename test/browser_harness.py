@@ -155,7 +155,8 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
     unacknowledged and chattering, line_12 WARN acknowledged, line_09 WARN shelved, the rest OK
     (half of them with no tide trend yet), every optional value set (bound, drag margin and drag
     state, tide margin at length but on line_01, wave tension, fatigue, the span from the dock
-    estimate), the intake WARN, and an alarm flood whose first out is line_11."""
+    estimate; line_05 a load cell of three channels, one silent), the intake WARN, and an
+    alarm flood whose first out is line_11."""
     from catenary_monitor.console.frames import Status
 
     out: dict[str, Any] = {}
@@ -181,6 +182,7 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
             'tide_margin': -2.1 if lifted else 4.68,
             # the live start: no tide trend yet (unknown, NaN) on the even lines that are OK
             'time_to_uplift': math.nan if (level == 'OK' and k % 2) else ttu,
+            'time_to_uplift_view': 'none' if k == 0 else 'chain length held',
             'uplift_force_upper': 210.2e3 if lifted else 0.0,
             'drag_margin': 120.5e3 if lifted else (-35.2e3 if name == 'line_07' else 1.8e6),
             'drag_state': 2 if name == 'line_07' else 0,
@@ -207,6 +209,8 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
             'shelved_by': 'console dockpc client 127.0.0.1' if name == 'line_09' else '',
             'chattering': 'true' if name == 'line_10' else 'false',
         }
+        if name == 'line_05':  # a load cell of three channels, the second silent
+            values.update(channels_healthy=2.0, channel_states=5.0)
         out[name] = Status(level, msg, {k: str(v) for k, v in values.items()})
     out['tide'] = Status('OK', 'depth 21.95 m', {'depth': '21.95', 'rate': repr(0.31 / 3600)})
     out['logger'] = Status('OK', 'writing /var/log/catenary_monitor/2026-12-02.mcap', {})
@@ -246,6 +250,7 @@ class DemoSource:
         for name in flat['lines']:
             flat[f'{name}.tension_accuracy'] = 20e3
             flat[f'{name}.anchor_holding'] = 1.5e6
+        flat['line_05.tension_topics'] = ['/cell05/a', '/cell05/b', '/cell05/c']
         self.config = config_from_params(flat)
         self.names = [line.name for line in self.config.lines]
         self.version = 0

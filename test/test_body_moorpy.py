@@ -11,7 +11,7 @@ from catenary_monitor.core.body.dock_model import DockModel
 from catenary_monitor.core.body.equilibrium import EquilibriumStatus, solve_equilibrium
 from catenary_monitor.core.body.loads import environmental_load, push_direction
 from catenary_monitor.core.config.parameters import config_from_params, load_params_file
-from catenary_monitor_study.body_peer import moorpy_equilibrium, moorpy_system
+from catenary_monitor_study.body_peer import moorpy_equilibrium, moorpy_lines, moorpy_system
 
 TOL = 1e-4  # MoorPy's position tolerance [m] (solveEquilibrium(tol=...)), lines at 0.01 tol
 
@@ -51,3 +51,49 @@ def test_offsets_and_tensions_agree_with_moorpy(kind):
         st = eq.lines.statics
         slack = 2.02 * TOL * st.dt_ds + 1e-6 * st.top_tension
         assert np.all(np.abs(st.top_tension - t_mp) <= slack), (load, st.top_tension - t_mp)
+
+
+def _with_point_loads():
+    """The dock with a 40 kN clump weight 60 m up line_01 and a 20 kN buoy 70 m up line_06."""
+    flat = load_params_file(DOCK_YAML)
+    flat.update({'line_01.point_load_positions': [60.0], 'line_01.point_load_weights': [40e3]})
+    flat.update({'line_06.point_load_positions': [70.0], 'line_06.point_load_weights': [-20e3]})
+    return DockModel.from_config(config_from_params(flat, body_only=True))
+
+
+@pytest.mark.parametrize('phi', [30.0, 210.0, 270.0, 330.0])
+def test_point_loads_on_the_dock_agree_with_moorpy(phi):
+    """Clump weight and buoy (MoorPy: free points between line pieces): both chains grounded
+    and lifted across the rays, the clump down to half a metre above the seabed; the plain
+    chains' tolerance (MoorPy's free points solved to TOL / 100: at TOL their position error
+    alone moves a lifted chain's tension by ~3e-4)."""
+    model = _with_point_loads()
+    depth = 20.85
+    push = push_direction(phi)
+    load = np.array([push[0] * 1.0e6, push[1] * 1.0e6, 0.0])
+    q_mp, t_mp, system = moorpy_equilibrium(model, depth, load, tol=TOL / 100)
+    _, uplift_mp, _ = moorpy_lines(system)
+    eq = solve_equilibrium(model, depth, load)
+    assert eq.status == EquilibriumStatus.CONVERGED
+    assert abs(eq.offset_x - q_mp[0]) <= TOL and abs(eq.offset_y - q_mp[1]) <= TOL
+    assert abs(eq.offset[2] - q_mp[2]) <= TOL / np.max(np.hypot(*model.hook.T)) * 2
+    st = eq.lines.statics
+    slack = 2.02 * TOL * st.dt_ds + 1e-6 * st.top_tension
+    assert np.all(np.abs(st.top_tension - t_mp) <= slack), st.top_tension - t_mp
+    assert np.all(np.abs(st.uplift_force - uplift_mp) <= slack), st.uplift_force - uplift_mp
+
+
+def test_uplift_envelope_with_a_buoy_lifts_where_moorpy_does():
+    """The envelope's first lift from 180 deg (line_06, its buoy): MoorPy's anchor stays down
+    at 0.99 of that load and lifts at 1.01."""
+    from catenary_monitor.core.body.envelope import first_lift
+
+    model = _with_point_loads()
+    push = push_direction(180.0)
+    pattern = np.array([push[0], push[1], 0.0])
+    lift = first_lift(model, 20.85, pattern, 1e5, 1e7)
+    assert lift.status == 'lifts' and lift.line == 'line_06'
+    i = model.names.index('line_06')
+    for factor, lifted in ((0.99, False), (1.01, True)):
+        _, _, system = moorpy_equilibrium(model, 20.85, factor * lift.scale * pattern, TOL / 100)
+        assert bool(moorpy_lines(system)[1][i] > 10.0) is lifted, factor

@@ -202,3 +202,67 @@ def test_channels_doc_parameter_table_is_generated():
     page = (Path(__file__).resolve().parent.parent / 'docs' / 'channels.md').read_text()
     begin, end = '<!-- channels-parameters:begin -->\n', '<!-- channels-parameters:end -->'
     assert page.split(begin, 1)[1].split(end, 1)[0] == parameters_markdown('channels')
+
+
+def _channel_log(tmp_path, rows):
+    """An MCAP log of the three channels' topics (Float64) and a depth: (path, columns)."""
+    from replay_data import write_log
+
+    per_topic = MonitorConfig(
+        lines=tuple(
+            LineConfig(
+                name=f'ch{j}', weight=1300.0, anchor_distance=130.0, mbl=4.827e6,
+                tension_topic=topic,
+            )
+            for j, topic in enumerate(TOPICS)
+        )
+    )  # fmt: skip
+    columns = {
+        f'ch{j}': (
+            np.array([int(t * 1e9) + 10 for t, c, _ in rows if c == j], np.int64),
+            np.array([v for _, c, v in rows if c == j]),
+        )
+        for j in range(3)
+    }
+    depth = (np.array([1]), np.array([20.85]))
+    return write_log(tmp_path / 'cell.mcap', per_topic, columns, depth), columns
+
+
+def test_whatif_log_takes_a_load_cells_tension_from_every_channel(tmp_path):
+    """whatif --log: a three-channel line's newest tension is the monitor's, fused from every
+    channel (b silent: a's and c's readings with their learned shares), not channel a's raw
+    reading; below min_channels it is unknown and whatif says so in one line."""
+    import argparse
+
+    from replay_data import params_yaml
+
+    from catenary_monitor.cli.whatif import WhatIfError, _from_log, cmd_whatif
+
+    rows = _samples(400.0, {1: (200.0, 'silent')})
+    log, columns = _channel_log(tmp_path, rows)
+    core, outs, _, _, _ = _run(_config(), rows, 400.0)
+    last, _ = _from_log([str(log)], _config())
+    assert last['cell'] == outs[-1][1]['top_tension']
+    assert abs(last['cell'] - truth(rows[-1][0])) < 5 * NOISE
+    assert abs(columns['ch0'][1][-1] - truth(rows[-1][0])) > 10 * NOISE  # a's raw reading
+    blind, _ = _from_log([str(log)], _config(min_channels=3))
+    assert math.isnan(blind['cell'])
+    params = params_yaml(_config(min_channels=3), tmp_path / 'p.yaml')
+    args = argparse.Namespace(
+        params_file=str(params), depth='20.85', tension=[], anchor_distance=[],
+        tide_rate=None, log=[str(log)], json=False,
+    )  # fmt: skip
+    with pytest.raises(WhatIfError, match='line cell: its newest tension in --log is unknown'):
+        cmd_whatif(args)
+
+
+def test_replay_publish_plays_every_channel_of_a_load_cell(tmp_path):
+    """replay --publish with the params file: each channel's topic with all its samples (the
+    monitor listening to the playback then fuses them as live)."""
+    from catenary_monitor.cli.replay import _publish_messages
+
+    rows = _samples(60.0, {1: (30.0, 'silent')})
+    log, columns = _channel_log(tmp_path, rows)
+    messages, _ = _publish_messages([log], _config())
+    for j, topic in enumerate(TOPICS):
+        assert np.array_equal(messages[topic][0], columns[f'ch{j}'][0]), topic

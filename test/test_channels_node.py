@@ -1,9 +1,12 @@
 """A load cell of three channels in the live node (real rclpy, the monitor as its own process):
 a channel that falls silent is named in /diagnostics and the tension comes from the others;
-replaying the node's log folder gives the node's tensions (docs/channels.md)."""
+every channel's samples go through the node's intake (a burst on one coalesced as a single
+topic's would be) and are counted for the line; replaying the node's log folder gives the
+node's tensions (docs/channels.md)."""
 
 from __future__ import annotations
 
+import json
 import time
 
 import numpy as np
@@ -13,7 +16,8 @@ from rclpy.serialization import deserialize_message
 from std_msgs.msg import Float64MultiArray
 
 from catenary_monitor.core.config.parameters import config_from_params, load_params_file
-from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.monitor_core import EVENTS_TOPIC, OUTPUT_FIELDS
+from catenary_monitor.io.cdr import string_text
 from catenary_monitor.io.mcap_read import iter_messages
 from catenary_monitor.replay.driver import expand, replay_log
 
@@ -48,12 +52,16 @@ def test_a_silent_channel_is_named_live_and_replay_agrees(client, tmp_path):
             min_channels=2.0,
         )
     }
-    params = write_params(tmp_path / 'params.yaml', lines, tension_timeout=1.0)
+    params = write_params(
+        tmp_path / 'params.yaml', lines, tension_timeout=1.0, intake_step_budget=0.0
+    )
     log_dir = tmp_path / 'log'
     proc = start_monitor(params, log_dir)
     try:
         client.wait_matched(TOPICS, 30.0)
         client.feed('/tide/depth', 20.85)
+        for k in range(40):  # a burst on c: the node steps the newest of what waits
+            client.publish(TOPICS[2], 4.08e5 + 50.0 * (k % 7))
         end = time.monotonic() + 3.0
         k = 0
         while time.monotonic() < end:  # all three, then b falls silent
@@ -77,3 +85,14 @@ def test_a_silent_channel_is_named_live_and_replay_agrees(client, tmp_path):
     config = config_from_params(load_params_file(params))
     r = replay_log(expand([str(log_dir)]), config).result.lines[0]
     np.testing.assert_array_equal(r.values['top_tension'], [o[at] for o in live])
+    # the intake counts every channel's samples for the line: stepped or coalesced, each one
+    # the log holds (the counts of the node's Intake records, the last at its close)
+    logged = sum(1 for _ in iter_messages(files, TOPICS))
+    counted = [0, 0]
+    for m in iter_messages(files, [EVENTS_TOPIC]):
+        record = json.loads(string_text(m.data))
+        if record.get('kind') == 'intake':
+            counted[0] += record['received'][0]
+            counted[1] += (record['coalesced'] or [0])[0]
+    print('cell: stepped, coalesced, logged', counted, logged)
+    assert sum(counted) == logged

@@ -1,10 +1,11 @@
 """The console page in Debian's Chromium: on real screen sizes, when its server dies, without
-``--params-file``, and its two tide margins.
+``--params-file``, and its two tide margins and time to uplift (unknown is not "not coming").
 
 * Screens: the demo's storm (``browser_harness.DemoSource``: a long monitor message, every
-  optional value) at 1280x720, 1366x768, 1920x937 and 2560x1440; read from the DOM: no text
-  clipped, no two panels or tiles overlapping, every panel usable and reachable; at 1920x937
-  every tile's level and the alarm list in the window without scrolling.
+  optional value, a load cell's channel rows) at 1280x720, 1366x768, 1920x937 and 2560x1440;
+  read from the DOM: no text clipped, no two panels or tiles overlapping, every panel usable
+  and reachable; at 1920x937 every tile's level and the alarm list in the window without
+  scrolling.
 * Server loss: the console process killed (SIGKILL) under the page; the banner shows, a tile's
   age and the clock keep counting by the browser's clock.
 * No ``--params-file``: the page loaded before the monitor is heard shows each line as soon as
@@ -94,11 +95,23 @@ def test_page_fits_every_screen(demo_page: Any) -> None:
     )
     assert lines[0].endswith('check the anchor and the chain on the seabed')
     assert lines[1] > 3.0  # over two lines high
+    # line_05's load cell: a row per channel, named by its topic's last part, its state
+    chans = driver.execute_script(
+        "return [...document.querySelectorAll('.tile[data-line=\"line_05\"] .v-ch')]"
+        '.map((e) => [e.previousElementSibling.textContent, e.textContent, e.className])'
+    )
+    assert [c[:2] for c in chans] == [
+        ['channel a', 'ok'], ['channel b', 'silent'], ['channel c', 'ok']
+    ]  # fmt: skip
+    assert 'warn' in chans[1][2] and 'warn' not in chans[0][2]
 
 
-def test_both_tide_margins_on_the_tiles(demo_page: Any) -> None:
+def test_tide_margins_and_time_to_uplift_on_the_tiles(demo_page: Any) -> None:
     """'tide to lift, R held' (tide_margin) on every tile; 'tide to lift, chain length held'
-    (tide_margin_at_length) beside it where finite (line_01 has none)."""
+    (tide_margin_at_length) beside it where finite (line_01 has none). The time to uplift:
+    unknown (NaN: the live start's even lines) reads "unknown", "trend not known yet" in its
+    title, never "not coming" (inf, the other OK lines); a forecast names the chain-length
+    view; a lifted anchor reads "lifted"."""
     rows = demo_page.execute_script(
         "return [...document.querySelectorAll('.tile')].map(t => [t.dataset.line,"
         " [...t.querySelectorAll('.vals dt')].filter(e => e.offsetParent)"
@@ -114,6 +127,18 @@ def test_both_tide_margins_on_the_tiles(demo_page: Any) -> None:
     order = [v.split(' = ')[0] for v in vals['line_02']]
     beside = order.index('tide to lift, R held') + 1
     assert order.index('tide to lift, chain length held') == beside
+    ttu = dict(
+        demo_page.execute_script(
+            "return [...document.querySelectorAll('.tile')].map(t => [t.dataset.line,"
+            " t.querySelector('.v-ttu').textContent + ' | ' + t.querySelector('.v-ttu').title])"
+        )
+    )
+    unknown = 'unknown | time to uplift unknown, trend not known yet: '
+    assert ttu['line_02'].startswith(unknown), ttu  # NaN
+    assert ttu['line_01'] == 'not coming | time to uplift', ttu  # inf, without chain_length
+    assert ttu['line_03'] == 'not coming | time to uplift, chain length held', ttu
+    assert ttu['line_10'] == '42 min 0 s (chain length) | time to uplift, chain length held', ttu
+    assert ttu['line_11'].startswith('lifted | '), ttu
 
 
 @pytest.mark.ros

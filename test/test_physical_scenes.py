@@ -351,3 +351,22 @@ def test_the_simulator_refuses_a_bad_moordyn_table_in_one_line(tmp_path, capsys)
     bad.write_bytes(b'not an npz')
     assert main(['--dynamics', 'moordyn', '--moordyn-table', str(bad)]) == 2
     assert capsys.readouterr().err.startswith('dock_simulator: --moordyn-table:')
+
+
+def test_without_moordyn_the_demo_and_the_simulator_say_so_in_one_line(
+    tmp_path, capsys, monkeypatch
+):
+    """``demo --moordyn`` and ``--dynamics moordyn`` where MoorDyn is not installed: exit 2 and
+    one line naming the extra, before anything starts."""
+    from catenary_monitor.cli.demo import run_demo
+    from catenary_monitor.ros import moordyn_dock
+    from catenary_monitor.ros.simulator import main
+
+    monkeypatch.setattr(moordyn_dock, 'available', lambda: False)
+    assert run_demo(str(tmp_path / 'demo'), moordyn=True) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and 'needs MoorDyn' in err[0] and '[dynamics]' in err[0], err
+    assert not (tmp_path / 'demo').exists()
+    assert main(['--dynamics', 'moordyn']) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and 'needs MoorDyn' in err[0], err

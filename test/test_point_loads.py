@@ -248,3 +248,68 @@ def test_point_loads_doc_parameter_table_is_generated():
     page = (Path(__file__).resolve().parent.parent / 'docs' / 'point_loads.md').read_text()
     begin, end = '<!-- point-loads-parameters:begin -->\n', '<!-- point-loads-parameters:end -->'
     assert page.split(begin, 1)[1].split(end, 1)[0] == parameters_markdown('point_loads')
+
+
+def test_bounds_and_holding_of_a_line_with_point_loads_live_and_in_replay():
+    """A clump and a buoy on a line with a chain length and an anchor's holding: the bounds,
+    the dynamic uplift and every holding value are numbers (no NaN once solved), the core's
+    and the replay twin's to the bit; the implied anchor distance gives back the tension
+    (solve_length) and the tide margin at length is where that chain lifts its anchor."""
+    from catenary_monitor.core.monitor.holding import FIELDS as HOLD
+    from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore
+    from catenary_monitor.core.monitor.monitor_core import Tension, Tick
+    from catenary_monitor.core.monitor.twin import recompute
+
+    config = _loaded_config(
+        [40.0, 90.0], [60e3, -25e3], chain_length=125.0, anchor_holding=6e5, chain_friction=1.0
+    )
+    tensions = np.linspace(3.8e5, 9e5, 12)
+    stamps = (np.arange(tensions.size) + 1) * 10**9
+    core = MonitorCore(config, 0)
+    core.step(Depth(1, H_DEPTH))
+    outs = []
+    for t, v in zip(stamps.tolist(), tensions.tolist()):
+        outs.append(dict(zip(OUTPUT_FIELDS, core.step(Tension(t, 0, v)).outputs[0].values)))
+        core.step(Tick(t + 2))
+    keys = ('uplift_force_upper', 'anchor_margin_lower', 'tide_margin_lower', 'dynamic_uplift')
+    keys += (*HOLD, 'tide_margin_at_length', 'drag_state')
+    for key in keys:
+        assert all(math.isfinite(o[key]) for o in outs), key
+    replay = recompute(
+        config,
+        {'sinker': (stamps, tensions)},
+        (np.array([1], np.int64), np.array([H_DEPTH])),
+        tick_ns=stamps + 2,
+        start_ns=0,
+    )
+    r = replay.lines[0]
+    for key in keys:
+        assert np.array_equal(r.values[key][r.tension_rows], [o[key] for o in outs]), key
+    loads = pl.PointLoads.of([40.0, 90.0], [60e3, -25e3])
+    last = outs[-1]
+    back = pl.solve_length(W, H_DEPTH, 125.0, last['implied_anchor_distance'], loads)
+    assert back.tension == pytest.approx(tensions[-1], rel=1e-9)
+    lift = H_DEPTH + last['tide_margin_at_length']
+    assert pl.solve_length(W, lift - 1e-3, 125.0, 121.06, loads).uplift == 0.0
+    assert pl.solve_length(W, lift + 1e-3, 125.0, 121.06, loads).uplift > 0.0
+    assert last['uplift_force_upper'] >= last['dynamic_uplift'] >= last['uplift_force']
+    assert last['anchor_margin_lower'] <= last['anchor_margin']
+
+
+@pytest.mark.parametrize('tension', [4.5e5, 1.2e6])
+def test_point_load_bounds_contain_every_reading_within_the_accuracy(tension):
+    """uncertainty.loaded_bounds: the solve at random readings within +-dT and +-dh stays
+    inside the bounds (the uplift below its upper bound, both margins above their lower)."""
+    from catenary_monitor.core.monitor.uncertainty import loaded_bounds
+
+    loads = ([40.0, 90.0], [60e3, -25e3])
+    d_t, d_h, x = 2e4, 0.05, 121.06
+    nominal = pl.solve_tension(W, H_DEPTH, tension, x, pl.PointLoads.of(*loads)).uplift
+    b = loaded_bounds(W, x, 4.827e6, loads, tension, H_DEPTH, d_t, d_h, nominal)
+    rng = np.random.default_rng(7)
+    for t, h in zip(tension + rng.uniform(-d_t, d_t, 12), H_DEPTH + rng.uniform(-d_h, d_h, 12)):
+        a = pl.solve_tension(W, h, t, x, pl.PointLoads.of(*loads))
+        assert a.uplift <= b['uplift_force_upper'] * (1 + 1e-12)
+        assert x - a.min_anchor_distance >= b['anchor_margin_lower'] - 1e-9
+        tide = pl.walk(W, a.horizontal, 0.0, pl.PointLoads.of(*loads), span=x)
+        assert tide is None or tide.z - h >= b['tide_margin_lower'] - 1e-9

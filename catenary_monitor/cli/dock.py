@@ -48,7 +48,7 @@ def _model(params_file: str) -> Any:
     )
 
     try:
-        config = config_from_params(load_params_file(params_file))
+        config = config_from_params(load_params_file(params_file), body_only=True)
         return DockModel.from_config(config)
     except (ConfigError, ValueError) as err:
         raise UsageError(f'{params_file}: {err}') from None

@@ -45,6 +45,7 @@ from catenary_monitor.core.config.parameters import (
     MonitorConfig,
     config_from_params,
     config_hash,
+    resolve_topic,
 )
 from catenary_monitor.core.monitor.monitor_core import EVENTS_TOPIC
 from catenary_monitor.core.monitor.twin import COLUMNS
@@ -120,9 +121,13 @@ def _publish_messages(
     topic of an input type without a params file."""
     from catenary_monitor.ros.playback import input_topics_of_log
 
-    if config is not None:
-        names, depth_topic = input_topics(config)
-        types = {names[line.name]: line.tension_type for line in config.lines}
+    if config is not None:  # every channel of a load cell (NAME.tension_topics) too
+        _, depth_topic = input_topics(config)
+        types = {
+            resolve_topic(topic): line.tension_type
+            for line in config.lines
+            for topic in line.topics
+        }
         types[depth_topic] = config.depth_type
     else:
         types = input_topics_of_log(paths)

@@ -46,7 +46,8 @@ def _pairs(items: Optional[Sequence[str]], what: str) -> dict[str, float]:
 
 
 def _from_log(paths: Sequence[str], config: Any) -> tuple[dict[str, float], float]:
-    """The newest tension per line and the tide's trend (m/s) at the last depth sample."""
+    """The newest tension per line (a load cell's from all its channels, as the monitor fuses
+    them) and the tide's trend (m/s) at the last depth sample."""
     import numpy as np
 
     from catenary_monitor.core.monitor import tide_trend
@@ -150,6 +151,12 @@ def cmd_whatif(args: argparse.Namespace) -> int:
     rate = math.nan if args.tide_rate is None else float(args.tide_rate)
     if args.log:
         logged, log_rate = _from_log(args.log, config)
+        blind = [k for k, v in logged.items() if v != v and k not in tensions]
+        if blind:
+            raise WhatIfError(
+                f'line {blind[0]}: its newest tension in --log is unknown (a load cell below '
+                f'min_channels healthy channels): give --tension {blind[0]}=N'
+            )
         tensions = {**{k: v for k, v in logged.items()}, **tensions}
         rate = log_rate if args.tide_rate is None else rate
     names = [line.name for line in config.lines]

@@ -127,6 +127,7 @@ def console_config(
                     'allowed_uplift': line.allowed_uplift,
                     'hook_x': line.hook_x,
                     'hook_y': line.hook_y,
+                    'channels': list(line.tension_topics),  # a load cell's channels, or []
                 }
             )
     else:
@@ -494,6 +495,8 @@ def _line_view(
             'wave_tension',  # N, the wave-frequency tension (half-range over wave_window)
             'dynamic_uplift',  # N, the uplift at the waves' peak tension (what ERROR takes)
             'span',  # m, the hook-anchor distance the line was solved at
+            'channels_healthy',  # a load cell's healthy channels; None for one channel
+            'channel_states',  # their states, sum code_i 5^i (core.monitor.channels)
         ):
             view[key] = _num(v.get(key))
         view['span_source'] = v.get('span_source', 'none')  # installed, dock_estimate, none

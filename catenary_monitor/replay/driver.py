@@ -31,18 +31,28 @@ import json
 from functools import partial
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Callable, Iterator, NamedTuple, Optional, Protocol, Sequence
+from typing import (
+    Any,
+    Callable,
+    Iterator,
+    Mapping,
+    NamedTuple,
+    Optional,
+    Protocol,
+    Sequence,
+)
 
 import numpy as np
 
 from catenary_monitor.core.config.parameters import (
     ConfigError,
+    LineConfig,
     MonitorConfig,
     config_from_params,
     load_params_file,
     resolve_topic,
 )
-from catenary_monitor.core.monitor import readings
+from catenary_monitor.core.monitor import channels, readings
 from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,
     NODE_NAME,
@@ -203,6 +213,40 @@ def _column(
     return (times[decoded.ok], value), decoded.stamps
 
 
+def _merged(
+    line: LineConfig, columns: Mapping[str, tuple[np.ndarray, np.ndarray]]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A load cell's channel columns (Float64) merged in time order (stable): stamps (ns), each
+    sample's channel and its reading in N."""
+    parts = [columns[resolve_topic(t)] for t in line.channel_topics]
+    times = np.concatenate([t for t, _ in parts])
+    order = np.argsort(times, kind='stable')
+    raw = np.concatenate([v for _, v in parts])[order]
+    idx = np.concatenate([np.full(len(t), j, np.int64) for j, (t, _) in enumerate(parts)])
+    value = np.asarray(readings.tension_si(line, {'value': raw}), np.float64)
+    return times[order], idx[order], value
+
+
+def fused_tensions(
+    config: MonitorConfig, line: LineConfig, columns: Mapping[str, Any]
+) -> tuple[np.ndarray, np.ndarray]:
+    """A load cell's tension column from every channel, fused as the monitor fuses them
+    (:func:`catenary_monitor.core.monitor.channels.run` from the first sample): stamps (ns),
+    tension (N; NaN while blind)."""
+    times, idx, value = _merged(line, columns)
+    a = config.alarm
+    limits = channels.Limits(
+        a.tension_timeout,
+        a.stuck_time,
+        a.tension_resolution,
+        a.channel_tolerance,
+        int(line.min_channels),
+    )
+    start = channels.initial(len(line.channel_topics))
+    _, fused, _, _ = channels.run(start, idx, times * 1e-9, value, limits)
+    return times, fused
+
+
 def _inputs(config: MonitorConfig, window: LogWindow) -> Inputs:
     """The window's inputs (:class:`Inputs`), each read as its type says."""
     tensions: list[Any] = []
@@ -211,15 +255,10 @@ def _inputs(config: MonitorConfig, window: LogWindow) -> Inputs:
     for line in config.lines:
         convert = partial(readings.tension_si, line)
         if line.channel_topics:  # every channel's samples merged in time order (stable)
-            parts = [window.columns[resolve_topic(t)] for t in line.channel_topics]
-            times = np.concatenate([t for t, _ in parts])
-            order = np.argsort(times, kind='stable')
-            raw = np.concatenate([v for _, v in parts])[order]
-            idx = np.concatenate([np.full(len(t), j, np.int64) for j, (t, _) in enumerate(parts)])
-            value = np.asarray(convert({'value': raw}), np.float64)
-            tensions.append((times[order], value))
+            times, idx, value = _merged(line, window.columns)
+            tensions.append((times, value))
             stamps.append(None)
-            chans.append(idx[order])
+            chans.append(idx)
             continue
         column, st = _column(window, resolve_topic(line.topics[0]), line.tension_type, convert)
         tensions.append(column)
@@ -494,14 +533,13 @@ def read_inputs(
     columns per line, the depth column (each as its type says: :func:`_inputs`) and the read
     report."""
     topics, depth_topic = input_topics(config)
+    every = [resolve_topic(t) for line in config.lines for t in line.topics]  # each channel
     typed = typed_inputs(config)
     if typed:
         report = ReadReport()
         try:
             window = next(
-                iter_windows(
-                    paths, [depth_topic, *topics.values()], [], None, report, typed=typed
-                )
+                iter_windows(paths, [depth_topic, *every], [], None, report, typed=typed)
             )
         except TopicTypeError as err:
             raise ReplayError(f'unexpected message type: {err} (check the params file topics)')
@@ -510,9 +548,13 @@ def read_inputs(
         except McapReadError as err:
             raise ReplayError(str(err)) from err
         inputs = _inputs(config, window)
-        return dict(zip(topics, inputs.tensions)), inputs.depth, report
+        out = dict(zip(topics, inputs.tensions))
+        for line in config.lines:
+            if line.channel_topics:
+                out[line.name] = fused_tensions(config, line, window.columns)
+        return out, inputs.depth, report
     try:
-        columns, report = read_float64_topics(paths, [depth_topic, *topics.values()])
+        columns, report = read_float64_topics(paths, [depth_topic, *every])
     except TopicTypeError as err:
         raise ReplayError(f'unexpected message type: {err} (check the params file topics)')
     except EmptyLogError as err:
@@ -523,6 +565,9 @@ def read_inputs(
         name: (t, np.asarray(readings.tension_si(config.line(name), {'value': v}), np.float64))
         for name, (t, v) in ((n, columns[topic]) for n, topic in topics.items())
     }
+    for line in config.lines:
+        if line.channel_topics:
+            tensions[line.name] = fused_tensions(config, line, columns)
     dt, dv = columns[depth_topic]
     return tensions, (dt, np.asarray(readings.depth_si(config, {'value': dv}))), report
 

@@ -435,15 +435,18 @@ class CatenaryMonitor(Node):
             self.get_logger().error(f'cannot log {topic} to MCAP: {exc}')
 
     def _init_intake(self) -> None:
-        """Intake counters (per line, then the depth) since the last Intake event."""
+        """Intake counters (per line, then the depth) since the last Intake event, and each
+        subscription's sequence bookkeeping (the lines' first channels, the depth, then a
+        load cell's further channels: :meth:`_create_interfaces`)."""
         n = len(self.config.lines) + 1
+        s = n + sum(max(len(line.channel_topics) - 1, 0) for line in self.config.lines)
         self._received = [0] * n
         self._dropped = [0] * n
         self._coalesced = [0] * n
-        self._last_seq: list[Optional[int]] = [None] * n
-        self._unsequenced = [0] * n  # samples taken without a sequence number since _last_seq
-        self._lost_unseen = [0] * n  # samples DDS reported lost, their gap not seen yet
-        self._gap_unreported = [0] * n  # samples of seen gaps DDS has not reported (yet)
+        self._last_seq: list[Optional[int]] = [None] * s
+        self._unsequenced = [0] * s  # samples taken without a sequence number since _last_seq
+        self._lost_unseen = [0] * s  # samples DDS reported lost, their gap not seen yet
+        self._gap_unreported = [0] * s  # samples of seen gaps DDS has not reported (yet)
         self._intake_due = False  # a sample was not handled while the intake said OK
         self._step_cost = 1e-4  # s of wall time one sample's step takes (moving average)
         self._busy = 0.0  # s of wall time in the sample callbacks since the last Intake event
@@ -475,15 +478,7 @@ class CatenaryMonitor(Node):
         self._output_topics: list[str] = []
         self._output_pubs: list[Any] = []
         self._subs: list[Any] = []
-        self._channel_topics: dict[tuple[int, int], str] = {}
         for k, line in enumerate(cfg.lines):
-            for j, topic in enumerate(line.channel_topics[1:], start=1):
-                # a load cell's further channels (core.channels; channel 0 is the line's input)
-                extra = self.create_subscription(
-                    Float64, topic, partial(self._on_channel, k, j), _SAMPLES, raw=True
-                )
-                self._channel_topics[(k, j)] = extra.topic_name
-                self._register(extra.topic_name, readings.FLOAT64, 'sensor_data')
             sub = self.create_subscription(
                 _MESSAGE_CLASSES[line.tension_type],
                 line.topics[0],
@@ -511,6 +506,28 @@ class CatenaryMonitor(Node):
         self._subs.append(sub)
         self._depth_topic = sub.topic_name
         self._register(self._depth_topic, cfg.depth_type, 'sensor_data')
+        # input s: line s's first channel (s < n), the depth (n), then further channels
+        self._input_line = list(range(n + 1))
+        self._input_channel = [0] * (n + 1)
+        self._input_topic = [*self._tension_topics, self._depth_topic]
+        for k, line in enumerate(cfg.lines):
+            for j, topic in enumerate(line.channel_topics[1:], start=1):
+                # a load cell's further channels (core.channels), each an input of its own:
+                # drained, coalesced and counted (for its line) as the first is
+                s = len(self._subs)
+                extra = self.create_subscription(
+                    Float64,
+                    topic,
+                    self._sample_callback(s),
+                    _SAMPLES,
+                    event_callbacks=self._sample_events(s),
+                    raw=True,
+                )
+                self._subs.append(extra)
+                self._input_line.append(k)
+                self._input_channel.append(j)
+                self._input_topic.append(extra.topic_name)
+                self._register(extra.topic_name, readings.FLOAT64, 'sensor_data')
         self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', _RELIABLE)
         self._register('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', 'default')
         self._register(EVENTS_TOPIC, 'std_msgs/msg/String', 'default')
@@ -551,8 +568,8 @@ class CatenaryMonitor(Node):
 
     @_guarded
     def _on_sample(self, k: int, data: bytes) -> None:
-        """A sample of input ``k`` (a line, then the depth), and every one waiting behind it
-        (:meth:`_take`)."""
+        """A sample of input ``k`` (a line, the depth, a load cell's further channel), and
+        every one waiting behind it (:meth:`_take`)."""
         self._unsequenced[k] += 1
         self._take(k, data, None)
 
@@ -574,15 +591,15 @@ class CatenaryMonitor(Node):
         batch = [(data, received_ns)] + self._drain(k)
         n = len(batch)
         keep = self._to_step(batch)
-        topic = self._depth_topic if k == len(self._names) else self._tension_topics[k]
-        step = self._step_depth if k == len(self._names) else self._step_tension
+        topic, owner = self._input_topic[k], self._input_line[k]
+        step = self._step_depth if owner == len(self._names) else self._step_tension
         if keep < n:
-            line = None if k == len(self._names) else self._names[k]
+            line = None if owner == len(self._names) else self._names[owner]
             stamps = [self._stamp() for _ in range(n - keep + 1)]
             self._record(Coalesced(stamps[0], line, stamps[-1], n - keep))
             for (raw, _), stamp in zip(batch, stamps[1:]):
                 self._write(topic, raw, stamp)
-            self._coalesced[k] += n - keep
+            self._coalesced[owner] += n - keep
             self._intake_due = True
         for raw, _ in batch[n - keep :]:
             t1 = time.perf_counter()
@@ -614,22 +631,15 @@ class CatenaryMonitor(Node):
         budget = room * self.config.alarm.intake_step_budget / max(self._step_cost, 1e-6)
         return max(1, min(fresh, int(budget)))
 
-    def _step_tension(self, k: int, stamp: int, raw: bytes) -> None:
-        """One core event of a hook tension sample as it came (the reading in N, at its header
-        stamp where it has one); publish what it says."""
+    def _step_tension(self, s: int, stamp: int, raw: bytes) -> None:
+        """One core event of a hook tension sample of input ``s`` as it came (the reading in
+        N, at its header stamp where it has one; a load cell's channel: which one); publish
+        what it says."""
+        k, j = self._input_line[s], self._input_channel[s]
         self._received[k] += 1
         lc = self.config.lines[k]
-        fields, sample_ns = _fields(raw, lc.tension_type)
-        self._run(Tension(stamp, k, float(readings.tension_si(lc, fields)), sample_ns))
-
-    @_guarded
-    def _on_channel(self, k: int, j: int, raw: bytes) -> None:
-        """A sample of channel ``j`` of line ``k``'s load cell: logged, one core event."""
-        stamp = self._stamp()
-        self._write(self._channel_topics[(k, j)], raw, stamp)
-        fields, _ = _fields(raw, readings.FLOAT64)
-        value = float(readings.tension_si(self.config.lines[k], fields))
-        self._run(Tension(stamp, k, value, None, j))
+        fields, sample_ns = _fields(raw, lc.tension_type if j == 0 else readings.FLOAT64)
+        self._run(Tension(stamp, k, float(readings.tension_si(lc, fields)), sample_ns, j))
 
     def _step_depth(self, k: int, stamp: int, raw: bytes) -> None:
         """The same for a depth sample (the depth in m)."""
@@ -667,7 +677,7 @@ class CatenaryMonitor(Node):
                 counted = min(gap, self._lost_unseen[k])  # DDS reported these already
                 self._lost_unseen[k] -= counted
                 self._gap_unreported[k] += gap - counted
-                self._dropped[k] += gap - counted
+                self._dropped[self._input_line[k]] += gap - counted
                 self._intake_due = True
         self._last_seq[k], self._unsequenced[k] = seq, 0
 
@@ -678,7 +688,7 @@ class CatenaryMonitor(Node):
         seen = min(lost, self._gap_unreported[k])  # their gap was counted already
         self._gap_unreported[k] -= seen
         self._lost_unseen[k] += lost - seen
-        self._dropped[k] += lost - seen
+        self._dropped[self._input_line[k]] += lost - seen
         self._intake_due = True
 
     @_guarded

@@ -181,6 +181,7 @@ function buildTiles() {
       <dt class="x-upper" title="uplift bound: the anchor's force at most, with the waves (the window's peak tension) and the sensors' accuracy">uplift bound</dt><dd class="v-upper x-upper"></dd>
       <dt class="x-wave" title="wave-frequency tension: half the range of the readings over wave_window">wave tension</dt><dd class="v-wave x-wave"></dd>
       <dt class="x-drag">drag margin</dt><dd class="v-drag x-drag"></dd>
+      ${channelRows(line.channels || [])}
 </dl>
       <div class="msg"></div><div class="foot"><span class="v-model" title="the model that answered"></span> · <span class="age"></span><span class="v-fatigue" title="chain fatigue: Miner's damage (1: the S-N curve's failure) and the life left at the last day's rate"></span><span class="alarm-st"></span><span class="sensor old"></span></div>`;
     t.querySelector('.name').textContent = line.name;
@@ -193,6 +194,43 @@ function buildTiles() {
     chip.addEventListener('click', () => { selectLine(line.name); t.scrollIntoView({ block: 'nearest' }); });
     chips.appendChild(chip);
   }
+}
+
+// A load cell's channels (docs/channels.md): one row each, its state from channel_states.
+const CHANNEL_WORDS = ['ok', 'silent', 'stuck', 'out of line', 'none'];
+
+function channelRows(topics) {
+  if (topics.length < 2) return '';
+  // each channel named by what tells it from the others (its topic less their common folder)
+  let cut = topics[0].lastIndexOf('/') + 1;
+  while (cut > 0 && !topics.every((x) => x.startsWith(topics[0].slice(0, cut)))) {
+    cut = topics[0].lastIndexOf('/', cut - 2) + 1;
+  }
+  const esc = (x) => x.replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' })[c]);
+  return topics.map((topic, j) => {
+    const tip = `load-cell channel ${esc(topic)}`;
+    return `<dt class="x-ch" title="${tip}">channel ${esc(topic.slice(cut))}</dt><dd class="v-ch" data-ch="${j}" title="${tip}"></dd>`;
+  }).join('');
+}
+
+function channelStates(code, n) {
+  // channel_states: sum code_i 5^i in the order of tension_topics; null: unknown
+  if (code === null || code === undefined) return null;
+  const out = [];
+  let c = Math.round(code);
+  for (let j = 0; j < n; j++) { out.push(c % 5); c = Math.floor(c / 5); }
+  return out;
+}
+
+function renderChannels(t, view) {
+  const cells = t.querySelectorAll('.v-ch');
+  if (!cells.length) return;
+  const states = channelStates(view.channel_states, cells.length);
+  cells.forEach((dd, j) => {
+    const code = states ? states[j] : null;
+    dd.textContent = code === null ? 'unknown' : CHANNEL_WORDS[code] || 'unknown';
+    dd.className = 'v-ch ' + (code === null ? '' : code === 0 ? '' : 'warn');
+  });
 }
 
 // The two tide margins (docs/node.md): the monitor's (R held; its warning and time to uplift
@@ -252,10 +290,12 @@ function renderTile(view, lost, frame) {
     ? (state === 'not coming' ? 'not coming' : 'unknown')
     : ttu <= 0 ? 'lifted' : ago(ttu) + (view.time_to_uplift_view === 'chain length held' ? ' (chain length)' : '');
   tt.title = (ttu === null || ttu === undefined) && state !== 'not coming'
-    ? 'time to uplift unknown: the tide\'s trend is not known yet (half the trend window of depth needed)'
+    ? 'time to uplift unknown, trend not known yet: the tide\'s trend needs half the trend window of depth (or the line has no solve)'
     : view.time_to_uplift_view && view.time_to_uplift_view !== 'none'
       ? `time to uplift, ${view.time_to_uplift_view}` : 'time to uplift';
-  tt.className = 'v-ttu ' + (ttu !== null && ttu !== undefined && ttu < S.config.uplift_time_warn ? 'warn' : '');
+  // A time in words ('42 min 0 s (chain length)') wraps.
+  tt.className = 'v-ttu ' + (ttu !== null && ttu !== undefined && ttu < S.config.uplift_time_warn ? 'warn' : '') +
+    (tt.textContent.length > 12 ? ' wrap' : '');
   // The two tide margins: R held (always), chain length held (where finite: chain_length set).
   const shown = (v) => v !== null && v !== undefined;
   const tide = t.querySelector('.v-tide'), tidel = t.querySelector('.v-tidel');
@@ -290,6 +330,7 @@ function renderTile(view, lost, frame) {
   vd.textContent = shown(drag) ? `${num(drag, 1, KN)}\u00a0kN${dword}` : '';
   vd.className = 'v-drag x-drag ' + (dstate === 2 ? 'bad' :
     (shown(drag) && drag < (S.config.drag_margin_warn || 0) ? 'warn' : ''));
+  renderChannels(t, view);
   // Chain fatigue (docs/fatigue.md): Miner's damage and the life left at the last day's rate.
   const dmg = view.fatigue_damage, life = view.fatigue_life_left;
   const vf = t.querySelector('.v-fatigue');

@@ -32,6 +32,7 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import DockConfig, MonitorConfig
 from catenary_monitor.core.physics.fixed_length import LineRegime, LineStatics, statics_at_span
+from catenary_monitor.core.physics.point_loads import PointLoads, line_statics
 
 __all__ = ['DockModel', 'BodyLines', 'line_states', 'direction']
 
@@ -58,6 +59,8 @@ class DockModel:
     allowed_uplift: np.ndarray
     accuracy: np.ndarray  # N, tension accuracy (+- bound; the estimate's sigma_T): sensor_accuracy
     dock: DockConfig
+    #: Per line: its clump weights and buoys (None: a plain chain); () when no line has any.
+    loads: tuple[Optional[PointLoads], ...] = ()
 
     @classmethod
     def from_config(cls, config: MonitorConfig) -> DockModel:
@@ -93,12 +96,21 @@ class DockModel:
             allowed_uplift=col('allowed_uplift'),
             accuracy=np.array([line.sensor_accuracy for line in lines]),
             dock=config.dock,
+            loads=_point_loads(config),
         )
 
     @property
     def size(self) -> float:
         """Largest hook distance from the reference point [m] (1 if every hook is there)."""
         return float(max(np.max(np.hypot(self.hook[:, 0], self.hook[:, 1])), 1.0))
+
+
+def _point_loads(config: MonitorConfig) -> tuple[Optional[PointLoads], ...]:
+    loads = [
+        None if line.point_loads is None else PointLoads.of(*line.point_loads)
+        for line in config.lines
+    ]
+    return tuple(loads) if any(p is not None for p in loads) else ()
 
 
 class BodyLines(NamedTuple):
@@ -145,6 +157,8 @@ def line_states(
         with np.errstate(invalid='ignore'):
             t_start = near.statics.top_tension + near.statics.dt_ds * (span - near.span)
     st = statics_at_span(model.weight, h, model.chain_length, span, model.ea, t_start)
+    if model.loads:
+        st = _with_point_loads(model, h, span, st)
     r = st.horizontal_tension
     with np.errstate(invalid='ignore'):
         force = r[:, None] * unit
@@ -153,6 +167,23 @@ def line_states(
         restoring = np.array([force[:, 0].sum(), force[:, 1].sum(), moment.sum()])
         stiffness = _stiffness(st, span, unit, force, arm, jr)
     return BodyLines(st, h, span, unit, arm, force, restoring, stiffness)
+
+
+def _with_point_loads(
+    model: DockModel, h: np.ndarray, span: np.ndarray, st: LineStatics
+) -> LineStatics:
+    """``st`` with the lines that carry point loads solved with them
+    (:func:`~catenary_monitor.core.physics.point_loads.line_statics`)."""
+    cols = [np.array(c, copy=True) for c in st]
+    for i, loads in enumerate(model.loads):
+        if loads is None:
+            continue
+        w, length = float(model.weight[i]), float(model.chain_length[i])
+        values = line_statics(w, float(h[i]), length, float(span[i]), loads)
+        for c, v in zip(cols, values):
+            c[i] = v
+        cols[-1][i] = 0  # iterations: none of the elastic solve
+    return LineStatics(*cols)
 
 
 def _stiffness(

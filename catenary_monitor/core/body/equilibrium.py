@@ -310,12 +310,14 @@ def line_report(model: DockModel, lines: BodyLines) -> list[dict[str, object]]:
     """Every line's state at an offset, with the monitor's margins for its tension and span.
 
     ``anchor_distance`` is the span hook -> anchor now; the margins are those the monitor
-    computes (``solve(w, h, tension=T, anchor_distance=span, mbl=MBL, ea=EA)``), so
+    computes (``solve(w, h, tension=T, anchor_distance=span, mbl=MBL, ea=EA)``, with the line's
+    point loads where it has any), so
     ``anchor_margin`` < 0 is a lifted anchor. A slack line (no horizontal tension) has no
     suspended span: ``min_anchor_distance`` 0, ``anchor_margin`` the span, no ``tide_margin``
     (None: the tide margin holds R, which is 0).
     """
     from catenary_monitor.core.physics import catenary as cat
+    from catenary_monitor.core.physics.point_loads import critical
     from catenary_monitor.core.physics.solve import solve
 
     st = lines.statics
@@ -332,7 +334,8 @@ def line_report(model: DockModel, lines: BodyLines) -> list[dict[str, object]]:
         }
         for i, name in enumerate(model.names)
     ]
-    live = np.flatnonzero(~slack & np.isfinite(st.top_tension))
+    loaded = np.array([bool(model.loads) and model.loads[i] is not None for i in range(len(rows))])
+    live = np.flatnonzero(~slack & np.isfinite(st.top_tension) & ~loaded)
     if live.size:
         ea = model.ea[live]
         res = solve(
@@ -347,16 +350,33 @@ def line_report(model: DockModel, lines: BodyLines) -> list[dict[str, object]]:
             for key in LINE_KEYS[4:]:
                 if key != 'grounded_length':
                     rows[i][key] = float(np.asarray(getattr(res, key))[j])
+    for i in np.flatnonzero(~slack & np.isfinite(st.top_tension) & loaded).tolist():
+        res = solve(
+            model.weight[i],
+            lines.depth[i],
+            tension=st.top_tension[i],
+            anchor_distance=lines.span[i],
+            mbl=model.mbl[i],
+            point_loads=model.loads[i],
+        )
+        for key in LINE_KEYS[4:]:
+            if key != 'grounded_length':
+                rows[i][key] = float(getattr(res, key))
     for i in np.flatnonzero(slack).tolist():
         w, h, s, t = model.weight[i], lines.depth[i], lines.span[i], st.top_tension[i]
         a_crit = float(cat.critical_parameter(np.array([h]), np.array([s]))[0][0])
+        t_crit = w * (a_crit + h)
+        loads = model.loads[i] if model.loads else None
+        if loads is not None:  # the tension that lifts the anchor with its clumps and buoys
+            h_c, crit = critical(float(w), float(h), float(s), loads)
+            t_crit = math.hypot(h_c, crit.v)
         rows[i].update(
             horizontal_tension=0.0,
             uplift_force=0.0,
             min_anchor_distance=0.0,
             anchor_margin=float(s),
             tide_margin=None,
-            load_margin=float(w * (a_crit + h) - t),
+            load_margin=float(t_crit - t),
             safety_factor=float(model.mbl[i] / t),
             anchor_angle_deg=0.0,
             top_angle_deg=90.0,

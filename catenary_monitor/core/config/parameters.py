@@ -1667,6 +1667,9 @@ class MonitorConfig:
     depth_offset: float = _default('depth_offset')  # m
     alarm: AlarmConfig = field(default_factory=AlarmConfig)
     dock: DockConfig = field(default_factory=DockConfig)
+    #: Built for the dock as one body only (``equilibrium``, ``envelope``), not for the monitor:
+    #: lines with point loads may then be placed on the dock. Not a parameter.
+    body_only: bool = field(default=False, compare=False, repr=False)
 
     @property
     def has_dock_model(self) -> bool:
@@ -1694,7 +1697,7 @@ class MonitorConfig:
             )
         if not self.log_dir:
             raise ConfigError('log_dir', 'must not be empty')
-        _check_geometry(self.lines)
+        _check_geometry(self.lines, self.body_only)
         seen = {self.depth_topic: 'depth_topic'}
         for line in self.lines:
             many = bool(line.tension_topics)
@@ -1726,17 +1729,20 @@ def _set(value: Any) -> bool:
     return value is not None and value == value
 
 
-def _check_geometry(lines: tuple[LineConfig, ...]) -> None:
+def _check_geometry(lines: tuple[LineConfig, ...], body_only: bool = False) -> None:
     """A line with a hook position asks for the dock model: every line then needs all of
-    :data:`GEOMETRY` (``heading`` or ``chain_length`` alone are other features' business)."""
+    :data:`GEOMETRY` (``heading`` or ``chain_length`` alone are other features' business).
+    The monitor's live dock estimate does not take point loads (``body_only``: the offline
+    equilibrium and envelope do)."""
     if not any(line.hook_x is not None or line.hook_y is not None for line in lines):
         return
     for line in lines:
-        if line.point_loads is not None:
+        if line.point_loads is not None and not body_only:
             raise ConfigError(
                 f'{line.name}.point_load_positions',
-                'the dock as one body (hook_x, hook_y given) does not model point loads: '
-                'remove the point loads or the dock geometry',
+                "the monitor's live dock estimate (hook_x, hook_y given) does not model point "
+                'loads: remove the point loads or the dock geometry (catenary-monitor '
+                'equilibrium and envelope take both)',
             )
     for line in lines:
         for key in GEOMETRY:
@@ -1804,8 +1810,9 @@ def params_file_text(flat: Mapping[str, Any], node_name: str = 'catenary_monitor
     return '\n'.join(out) + '\n'
 
 
-def config_from_params(flat: Mapping[str, Any]) -> MonitorConfig:
-    """Validate flat (dotted) parameters and build the :class:`MonitorConfig`.
+def config_from_params(flat: Mapping[str, Any], *, body_only: bool = False) -> MonitorConfig:
+    """Validate flat (dotted) parameters and build the :class:`MonitorConfig` (``body_only``:
+    for the dock as one body, not the monitor; see :class:`MonitorConfig`).
 
     Raises :class:`ConfigError` for the first problem found: ``lines`` missing, empty, of the
     wrong type or with a bad or duplicate name; an unknown parameter; a missing required
@@ -1851,6 +1858,7 @@ def config_from_params(flat: Mapping[str, Any]) -> MonitorConfig:
         **{key: values[key] for key in _TOP_LEVEL},
         alarm=alarm,
         dock=dock,
+        body_only=body_only,
     )
 
 

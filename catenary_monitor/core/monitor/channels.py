@@ -37,7 +37,9 @@ Plain floats, one sample at a time: the live core and its vectorized twin run th
 from __future__ import annotations
 
 import math
-from typing import NamedTuple, Sequence
+from typing import Any, NamedTuple, Sequence
+
+import numpy as np
 
 __all__ = [
     'FIELDS',
@@ -52,6 +54,7 @@ __all__ = [
     'ChannelState',
     'initial',
     'step',
+    'run',
     'decode',
     'describe',
 ]
@@ -159,6 +162,22 @@ def step(
         new = _learn(new, t, fused)
     code = float(sum(c * 5**i for i, c in enumerate(codes)))
     return new, fused, len(healthy), code
+
+
+def run(
+    state: ChannelState, idx: Any, times: Any, values: Any, limits: Limits
+) -> tuple[ChannelState, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`step` over a line's channel samples merged in time order (channel ``idx``, time
+    ``times`` s, reading ``values`` N): the state after them and, per sample, the tension, the
+    healthy count and the ``channel_states`` code (the replay twin and ``whatif --log``)."""
+    n = len(values)
+    fused, healthy, codes = np.empty(n), np.empty(n), np.empty(n)
+    for i in range(n):
+        state, fused[i], count, codes[i] = step(
+            state, int(idx[i]), float(times[i]), float(values[i]), limits
+        )
+        healthy[i] = count
+    return state, fused, healthy, codes
 
 
 def _learn(state: ChannelState, t: float, tension: float) -> ChannelState:

@@ -46,16 +46,24 @@ grounded_length``. Per line (SI):
     subtracted (and cancels in the forecast). Needs ``chain_length``.
 
 NaN where the data are not given or the line has no solve.
+
+A chain with clump weights and buoys (:func:`holding_loaded`): the same values with its point
+loads: the implied anchor distance and the lift depth by
+:func:`~catenary_monitor.core.physics.point_loads.span_at_tension` and
+:func:`~catenary_monitor.core.physics.point_loads.lift_depth`, and a clump lying on the
+grounded chain (its place below the grounded length) adds ``chain_friction`` times its weight
+to the holding (one settling at the touchdown is left out: the seabed carries an unknown part
+of it).
 """
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, Optional
 
 import numpy as np
 
-from catenary_monitor.core.physics import fixed_length
+from catenary_monitor.core.physics import fixed_length, point_loads
 
 __all__ = [
     'FIELDS',
@@ -67,6 +75,7 @@ __all__ = [
     'DRAG_STATES',
     'holding',
     'holding_scalar',
+    'holding_loaded',
     'drag_word',
 ]
 
@@ -203,6 +212,45 @@ def holding_scalar(
         return {key: float(v[0]) for key, v in arrays.items()}
 
 
+def holding_loaded(
+    loads: point_loads.PointLoads,
+    w: float,
+    chain_length: float,
+    anchor_holding: float,
+    anchor_weight: float,
+    chain_friction: float,
+    tension: float,
+    depth: float,
+    horizontal: float,
+    suspended: float,
+    uplift: float,
+    anchor_distance: float = math.nan,
+    tolerance: float = math.inf,
+) -> dict[str, float]:
+    """:func:`holding_scalar` of a chain with point ``loads`` (inextensible; module docstring),
+    the nominal solve's values with those loads."""
+    f = float
+    try:
+        return _holding_floats(
+            f(w),
+            math.inf,
+            f(chain_length),
+            f(anchor_holding),
+            f(anchor_weight),
+            f(chain_friction),
+            f(tension),
+            f(depth),
+            f(horizontal),
+            f(suspended),
+            f(uplift),
+            f(anchor_distance),
+            f(tolerance),
+            loads=loads,
+        )
+    except (ValueError, OverflowError, ZeroDivisionError):
+        return dict.fromkeys(FIELDS + LENGTH_FIELDS + DRAG_FIELDS, math.nan)
+
+
 def _holding_floats(
     w: float,
     ea: float,
@@ -217,8 +265,11 @@ def _holding_floats(
     v: float,
     x0: float,
     tolerance: float,
+    *,
+    loads: Optional[point_loads.PointLoads] = None,
 ) -> dict[str, float]:
-    """:func:`holding_scalar` itself (raises where :mod:`math` does)."""
+    """:func:`holding_scalar` itself (raises where :mod:`math` does); ``loads``: the chain's
+    point loads (:func:`holding_loaded`)."""
     nan = math.nan
     if length != length and a_hold != a_hold:  # nothing configured: all NaN
         return dict.fromkeys(FIELDS + LENGTH_FIELDS + DRAG_FIELDS, nan)
@@ -231,9 +282,15 @@ def _holding_floats(
     else:
         anchor = a_hold
     chain = 0.0 if (mu != mu or grounded != grounded) else w * mu * grounded
+    if loads is not None and chain and grounded > 0.0:  # clumps lying on the grounded chain
+        chain += mu * sum(wk for p, wk in zip(*loads) if wk > 0.0 and p < grounded)
     capacity = anchor + chain if solved and a_hold == a_hold else nan
     implied = lift = nan
-    if solved and length == length:
+    if solved and length == length and loads is not None:
+        start = 0.5 * (length - h + math.sqrt((length - h) * (length + h))) if x0 != x0 else x0
+        implied = point_loads.span_at_tension(w, h, length, t, loads, start)
+        lift = point_loads.lift_depth(w, length, implied if x0 != x0 else x0, loads)
+    elif solved and length == length:
         implied = fixed_length.span_from_tension_scalar(w, h, length, t, ea)
         span = implied if x0 != x0 else x0  # the hook where it is installed
         lift = fixed_length.lift_depth_scalar(w, length, span, ea)

@@ -96,6 +96,7 @@ from catenary_monitor.core.monitor.plausible import (
     status_messages,
 )
 from catenary_monitor.core.physics import elastic
+from catenary_monitor.core.physics.point_loads import PointLoads
 from catenary_monitor.core.physics.solve import solve
 
 __all__ = [
@@ -1575,9 +1576,8 @@ def _given_span(lc: LineConfig, span: float) -> float:
 
 
 def _wants_holding(c: LineConfig) -> bool:
-    """Whether a line has holding values: a chain length or an anchor holding (not with point
-    loads: the plain chain's formulas)."""
-    return (c.chain_length is not None or c.anchor_holding is not None) and c.point_loads is None
+    """Whether a line has holding values: a chain length or an anchor holding."""
+    return c.chain_length is not None or c.anchor_holding is not None
 
 
 #: The values :func:`holding_values` gives (core/monitor/holding.py).
@@ -1609,10 +1609,8 @@ def derived_values(
         named['depth'],
         named['uplift_force'],
     )
-    plain = np.array([c.point_loads is None for c in cfgs])
-    if not plain.all():  # a chain with point loads: not the plain chain's bounds
-        for key in (*uncertainty.FIELDS, 'dynamic_uplift'):
-            out[key] = np.where(plain, out[key], np.nan)
+    if any(c.point_loads is not None for c in cfgs):  # with its clumps and buoys
+        _loaded_bounds(cfgs, alarm.depth_accuracy, dict(named, top_tension=tension), out)
     if not holding:
         return out
     if len(cfgs) == 1 and _wants_holding(cfgs[0]):  # one line for every element (the twin)
@@ -1622,6 +1620,35 @@ def derived_values(
     else:
         raise ValueError('derived_values: the holding of several lines is the core\'s')
     return out
+
+
+def _loaded_bounds(
+    cfgs: Sequence[LineConfig],
+    depth_accuracy: float,
+    named: dict[str, np.ndarray],
+    out: dict[str, np.ndarray],
+) -> None:
+    """The bounds and dynamic uplift in ``out`` of the elements whose line has point loads
+    (:func:`catenary_monitor.core.monitor.uncertainty.loaded_bounds`, element by element)."""
+    span = _span(cfgs, named)
+    for k in range(len(named['top_tension'])):
+        c = cfgs[k] if len(cfgs) > 1 else cfgs[0]
+        if c.point_loads is None:
+            continue
+        one = uncertainty.loaded_bounds(
+            c.weight,
+            float(span[k]),
+            c.mbl,
+            c.point_loads,
+            float(named['top_tension'][k]),
+            float(named['depth'][k]),
+            float(c.sensor_accuracy),
+            depth_accuracy,
+            float(named['uplift_force'][k]),
+        )
+        for key, value in one.items():
+            out[key] = np.array(out[key], dtype=float)
+            out[key][k] = value
 
 
 def bound_values(
@@ -1647,7 +1674,10 @@ def holding_values(
     cfgs: Sequence[LineConfig], named: dict[str, np.ndarray], tolerance: float = math.inf
 ) -> dict[str, np.ndarray]:
     """The holding values (:data:`HOLDING_FIELDS`), as :func:`bound_values`; ``tolerance``
-    is ``drag_tolerance`` (m)."""
+    is ``drag_tolerance`` (m). Lines with point loads element by element (:func:`holding_one`,
+    the core's own numbers)."""
+    if any(c.point_loads is not None for c in cfgs):
+        return _holding_by_element(cfgs, named, tolerance)
     return holding_rule.holding(
         _column(cfgs, 'weight'),
         _column(cfgs, 'ea'),
@@ -1665,15 +1695,50 @@ def holding_values(
     )
 
 
+def _holding_by_element(
+    cfgs: Sequence[LineConfig], named: dict[str, np.ndarray], tolerance: float
+) -> dict[str, np.ndarray]:
+    """:func:`holding_values` one element at a time through :func:`holding_one`."""
+    n = len(named['top_tension'])
+    out = {key: np.full(n, np.nan) for key in HOLDING_FIELDS}
+    for k in range(n):
+        values = [_NAN] * len(_AT)
+        for key, i in _AT.items():
+            if key in named:
+                values[i] = float(named[key][k])
+        one = holding_one(cfgs[k] if len(cfgs) > 1 else cfgs[0], values, tolerance)
+        for key in HOLDING_FIELDS:
+            out[key][k] = one[key]
+    return out
+
+
 def holding_one(
     lc: LineConfig, values: Sequence[float], tolerance: float = math.inf
 ) -> dict[str, float]:
     """:func:`holding_values` of one line's :data:`VALUE_FIELDS` values in plain floats
     (:func:`catenary_monitor.core.monitor.holding.holding_scalar`: the same numbers to
-    rounding, an order of magnitude faster than one-element arrays)."""
+    rounding, an order of magnitude faster than one-element arrays; a line with point loads:
+    :func:`~catenary_monitor.core.monitor.holding.holding_loaded`, the twin's too)."""
 
     def given(v: Optional[float]) -> float:
         return _NAN if v is None else v
+
+    if lc.point_loads is not None:
+        return holding_rule.holding_loaded(
+            PointLoads.of(*lc.point_loads),
+            lc.weight,
+            given(lc.chain_length),
+            given(lc.anchor_holding),
+            given(lc.anchor_weight),
+            given(lc.chain_friction),
+            values[_AT['top_tension']],
+            values[_AT['depth']],
+            values[_AT['horizontal_tension']],
+            values[_AT['suspended_length']],
+            values[_AT['uplift_force']],
+            _given_span(lc, values[_AT['span']]),
+            tolerance,
+        )
 
     return holding_rule.holding_scalar(
         lc.weight,

@@ -1370,16 +1370,10 @@ def _fuse_channels(core: MonitorCore, window: Window) -> Window:
         if idx is None or line.channels is None:
             continue
         tt, raw = window.tensions[k]
-        times = window.sample_s(k)
-        fused, healthy, states = np.empty(len(tt)), np.empty(len(tt)), np.empty(len(tt))
         limits = channel_limits(core, line)
-        state = line.channels
-        for i in range(len(tt)):
-            state, fused[i], count, states[i] = channels.step(
-                state, int(idx[i]), float(times[i]), float(raw[i]), limits
-            )
-            healthy[i] = count
-        line.channels = state
+        line.channels, fused, healthy, states = channels.run(
+            line.channels, idx, window.sample_s(k), raw, limits
+        )
         tensions[k] = (tt, fused)
         values[k] = (healthy, states)
     out = Window(

@@ -33,6 +33,12 @@ Monotonicity (inextensible closed forms of :mod:`catenary_monitor.core.physics.c
   tide margin and an elastic chain the bounds are the worst of these values (the tests check
   that the bounds contain the solve at random readings within the accuracy).
 
+A chain with clump weights and buoys (:func:`loaded_bounds`) has no such closed forms: its
+bounds are taken at ``T + dT`` too (the uplift grows and both margins fall with the hook
+tension, as for the plain chain: tested) and the worst over five depths evenly spread over
+``[h - dh, h + dh]`` (``dh`` is centimetres: a value turning inside the interval between two of
+them is missed by ``f'' (dh/4)^2 / 2``, far below the sensors' accuracy).
+
 A corner whose readings are impossible (e.g. ``T + dT <= w (h + dh)``) is left out. The bounds
 are NaN only while the nominal solve has none: every line has a tension accuracy (by default
 0.5 % of its MBL) and the depth one (``depth_accuracy``, 0.02 m by default).
@@ -47,7 +53,15 @@ import numpy as np
 
 from catenary_monitor.core.physics.solve import solve
 
-__all__ = ['FIELDS', 'T_STAR', 'depth_candidates', 'bounds', 'dynamic_tension', 'dynamic_uplift']
+__all__ = [
+    'FIELDS',
+    'T_STAR',
+    'depth_candidates',
+    'bounds',
+    'dynamic_tension',
+    'dynamic_uplift',
+    'loaded_bounds',
+]
 
 #: The bounds' names (per-line outputs, /diagnostics values, replay CSV), in output order.
 FIELDS = ('uplift_force_upper', 'anchor_margin_lower', 'tide_margin_lower')
@@ -202,3 +216,47 @@ def _peak(
     out = upper.copy()
     out[k] = np.fmax(upper[k], np.asarray(peak.uplift_force, dtype=float))
     return out
+
+
+def loaded_bounds(
+    w: float,
+    x: float,
+    mbl: float,
+    loads: Any,
+    tension: float,
+    depth: float,
+    d_t: float,
+    d_h: float,
+    nominal_uplift: float,
+) -> dict[str, float]:
+    """``dynamic_uplift`` and :data:`FIELDS` of one chain with point ``loads`` (``(positions,
+    weights)``), as :func:`dynamic_uplift` and :func:`bounds` in plain floats (module
+    docstring: five depths at ``T + dT``)."""
+    nan = math.nan
+    out = dict.fromkeys(('dynamic_uplift', *FIELDS), nan)
+    if nominal_uplift != nominal_uplift or tension != tension:
+        return out
+
+    def at(t: float, h: float) -> Any:
+        return solve(w, h, tension=t, anchor_distance=x, mbl=mbl, point_loads=loads)
+
+    out['dynamic_uplift'] = _fmax(float(at(tension, depth).uplift_force), nominal_uplift)
+    if d_t != d_t and not d_h > 0.0:
+        return out
+    t_up = tension + (0.0 if d_t != d_t else d_t)
+    spread = (-1.0, -0.5, 0.0, 0.5, 1.0) if d_h > 0.0 else (0.0,)
+    rs = [at(t_up, depth + f * d_h) for f in spread]
+    ups = [float(r.uplift_force) for r in rs if r.uplift_force == r.uplift_force]
+    anchor = [float(r.anchor_margin) for r in rs if r.anchor_margin == r.anchor_margin]
+    tide = [float(r.tide_margin) for r in rs if r.tide_margin == r.tide_margin]
+    out['uplift_force_upper'] = _fmax(max(ups) if ups else nan, nominal_uplift)
+    out['anchor_margin_lower'] = min(anchor) if anchor else nan
+    out['tide_margin_lower'] = min(tide) if tide else nan
+    return out
+
+
+def _fmax(a: float, b: float) -> float:
+    """``np.fmax`` of two floats (NaN only where both are)."""
+    if a != a:
+        return b
+    return a if b != b or a >= b else b

@@ -49,6 +49,9 @@ __all__ = [
     'solve_result',
     'min_anchor',
     'critical',
+    'line_statics',
+    'span_at_tension',
+    'lift_depth',
 ]
 
 #: ``model`` of an answer with point loads.
@@ -484,3 +487,156 @@ def solve_result(
         model=MODEL,
         method='two-segment catenaries at the point loads (seed 002), nested brentq',
     )
+
+
+#: Span step of :func:`line_statics`' difference quotients, relative to the span (the roots'
+#: RTOL of 1e-13 leaves ~1e-8 relative error in dR/ds, the truncation ~1e-10).
+SPAN_STEP = 1e-5
+
+
+def line_statics(
+    w: float, depth: float, length: float, span: float, loads: PointLoads
+) -> tuple[float, ...]:
+    """A fixed-length chain with point loads at ``span`` (the dock model's line):
+    ``(R, T, V, V_A, grounded length, suspended length, dR/ds, dT/ds, regime)`` in the order
+    and units of :class:`~catenary_monitor.core.physics.fixed_length.LineStatics` (regime a
+    ``LineRegime``). The state is :func:`solve_length`'s; the stiffnesses are central
+    differences of it over :data:`SPAN_STEP` of the span (one-sided next to the slack and taut
+    ends). SLACK: the chain hangs straight down from the hook (R = 0; T the weight of the
+    hanging chain and the loads on it); TAUT: the chain cannot reach (R = inf); a scene the
+    static model does not follow (:data:`NOT_MODELLED`): INVALID with NaN."""
+    from catenary_monitor.core.physics.fixed_length import LineRegime
+
+    nan = math.nan
+    state = _state_at(w, depth, length, span, loads)
+    if state is None:
+        return (nan,) * 8 + (float(LineRegime.INVALID),)
+    if state == 'slack':
+        hang = w * depth + sum(v for p, v in zip(*loads) if p > length - depth)
+        if not hang > 0.0:
+            return (nan,) * 8 + (float(LineRegime.INVALID),)
+        return (0.0, hang, hang, 0.0, length - depth, depth, 0.0, 0.0, float(LineRegime.SLACK))
+    if state == 'taut':
+        return (math.inf,) + (nan,) * 7 + (float(LineRegime.TAUT),)
+    assert isinstance(state, Answer)
+    ds = SPAN_STEP * max(span, 1.0)
+    hi, lo = _state_at(w, depth, length, span + ds, loads), _state_at(
+        w, depth, length, span - ds, loads
+    )
+    if isinstance(hi, Answer) and isinstance(lo, Answer):
+        a1, x1, a0, x0 = hi, span + ds, lo, span - ds
+    elif isinstance(hi, Answer):  # next to the slack end
+        a1, x1, a0, x0 = hi, span + ds, state, span
+    elif isinstance(lo, Answer):  # next to the taut end
+        a1, x1, a0, x0 = state, span, lo, span - ds
+    else:
+        a1, x1, a0, x0 = state, span, state, span
+    run = x1 - x0
+    dr = (a1.horizontal - a0.horizontal) / run if run else nan
+    dt = (a1.tension - a0.tension) / run if run else nan
+    ans = state
+    grounded = length - ans.suspended_length
+    regime = LineRegime.LIFTED if ans.uplift > 0.0 else LineRegime.GROUNDED
+    return (
+        ans.horizontal,
+        ans.tension,
+        ans.top_vertical,
+        ans.uplift,
+        grounded,
+        ans.suspended_length,
+        dr,
+        dt,
+        float(regime),
+    )
+
+
+def _state_at(
+    w: float, depth: float, length: float, span: float, loads: PointLoads
+) -> Optional[Any]:
+    """:func:`solve_length` at ``span``: its Answer, ``'slack'``, ``'taut'`` or None."""
+    if not (w > 0.0 and depth > 0.0 and length > depth and span >= 0.0):
+        return None
+    if span >= math.sqrt((length - depth) * (length + depth)):
+        return 'taut'  # beyond the straight chain's reach, whatever it carries
+    ans = solve_length(w, depth, length, span, loads)
+    if ans.status == int(Status.CHAIN_SLACK):
+        return 'slack'
+    if ans.status == int(Status.CHAIN_TOO_SHORT):
+        return 'taut'
+    return ans if ans.status == 0 else None
+
+
+def span_at_tension(
+    w: float, depth: float, length: float, tension: float, loads: PointLoads, start: float
+) -> float:
+    """The span [m] at which a chain of ``length`` with its point loads, at ``depth``, has hook
+    ``tension`` (the inverse of :func:`solve_length`: the holding's implied anchor distance).
+    Brent's method from a bracket grown around ``start`` (the installed span) within the
+    slack and taut spans; NaN where the tension does not fix the span (at most the slack
+    chain's) or a span on the way is not modelled."""
+    lo, hi = length - depth, math.sqrt((length - depth) * (length + depth))
+    if not (w > 0.0 and depth > 0.0 and lo > 0.0 and math.isfinite(tension)):
+        return math.nan
+
+    def excess(x: float) -> float:
+        a = solve_length(w, depth, length, x, loads)
+        if a.status == int(Status.CHAIN_TOO_SHORT):
+            return math.inf
+        if a.status:
+            raise ValueError('not modelled')
+        return a.tension - tension
+
+    try:
+        a, b = _bracket(excess, min(max(start, lo), hi), lo, hi)
+        if a != a:
+            return math.nan
+        return float(brentq(excess, a, b, xtol=1e-12, rtol=1e-13, maxiter=200))
+    except (ValueError, OverflowError, ZeroDivisionError):
+        return math.nan
+
+
+def _bracket(
+    f: Callable[[float], float], x: float, lo: float, hi: float
+) -> tuple[float, float]:
+    """``(a, b)`` within ``(lo, hi)`` around ``x`` where ``f`` changes sign (NaN, NaN: none):
+    steps from 0.25 m doubling toward the sign change."""
+    eps = 1e-9 * hi
+    lo, hi = lo + eps, hi - eps
+    x = min(max(x, lo), hi)
+    fx = f(x)
+    step = 0.25 if fx < 0.0 else -0.25
+    while True:
+        y = min(max(x + step, lo), hi)
+        fy = f(y)
+        if (fx < 0.0) != (fy < 0.0):
+            return (x, y) if x < y else (y, x)
+        if y in (lo, hi):
+            return math.nan, math.nan
+        x, fx, step = y, fy, step * 2.0
+
+
+def lift_depth(w: float, length: float, span: float, loads: PointLoads) -> float:
+    """The depth [m] at which a chain of ``length`` with its point loads, its hook ``span`` m
+    from the anchor, lifts the anchor: the whole chain hangs, horizontal at the anchor (the
+    holding's ``tide_margin_at_length``). NaN where there is none (``span >= length``) or the
+    chain would pass through the seabed on the way (a buoy's hump)."""
+    if not (w > 0.0 and 0.0 < span < length):
+        return math.nan
+
+    def reach(h_: float) -> float:
+        p = walk(w, h_, 0.0, loads, length=length)
+        return (-math.inf if p is None else p.x) - span
+
+    try:
+        hi = w * length
+        while reach(hi) < 0.0:
+            hi *= 4.0
+        lo = hi / 4.0
+        while reach(lo) > 0.0:
+            lo /= 4.0
+        p = walk(w, _root(reach, lo, hi), 0.0, loads, length=length)
+    except (ValueError, OverflowError, ZeroDivisionError):
+        return math.nan
+    if p is None or p.z_min < -1e-9 * max(abs(p.z), 1.0) or not p.z > 0.0:
+        return math.nan
+    return p.z
