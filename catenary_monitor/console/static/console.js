@@ -591,7 +591,10 @@ function updateShelveForm(frame, lost, replay) {
   }
   const off = replay || lost || !canAct() || !$('shelve-duration').children.length;
   for (const id of ['shelve-line', 'shelve-condition', 'shelve-duration', 'shelve-go']) $(id).disabled = off;
-  if (f.shelve_answer && f.shelve_requests !== S.shelveSeen && !S.shelvePending) {
+  // The monitor's newest answer, unless the frame predates our own request's (the count then
+  // still reads as it did before our request, and its answer is an older one).
+  const n = f.shelve_requests;
+  if (f.shelve_answer && n !== S.shelveSeen && n !== S.shelveBefore && !S.shelvePending) {
     S.shelveSeen = f.shelve_requests;
     showShelveAnswer(f.shelve_answer);
   }
@@ -620,7 +623,10 @@ async function shelve(line, condition, seconds) {
     try { body = await res.json(); } catch (e) { /* not JSON */ }
     if (res.ok) showShelveAnswer(body.answer || `sent (${body.sent}); no answer from the monitor yet`);
     else showShelveAnswer(`${seconds ? 'shelve' : 'unshelve'} refused (${res.status}): ${body.error || ''}`, true);
-    if (S.frame && S.frame.flood) S.shelveSeen = S.frame.flood.shelve_requests + (res.ok ? 1 : 0);
+    if (S.frame && S.frame.flood) {
+      S.shelveBefore = S.frame.flood.shelve_requests;
+      S.shelveSeen = S.shelveBefore + (res.ok ? 1 : 0);
+    }
   } finally { S.shelvePending = false; }
 }
 
