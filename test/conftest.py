@@ -99,3 +99,25 @@ def pytest_collection_modifyitems(items):
     for item in items:
         if 'isa' in getattr(item, 'fixturenames', ()):
             item.add_marker(pytest.mark.c_extension)
+
+
+@pytest.fixture
+def no_callback_errors():
+    """A monitor that logged an exception in a callback fails the test, even if it went on (the
+    node tests' modules use it: ``pytest.mark.usefixtures('no_callback_errors')``)."""
+    from ros_harness import callback_errors
+
+    callback_errors()
+    yield
+    errors = callback_errors()
+    assert not errors, errors[:3]
+
+
+@pytest.fixture(scope='module')
+def client(request):
+    """One test node (ros_harness.Client) per test module that asks for it, named after it."""
+    from ros_harness import Client
+
+    c = Client(f'{request.module.__name__}_client')
+    yield c
+    c.close()

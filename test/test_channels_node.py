@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 import pytest
-from ros_harness import Client, callback_errors, start_monitor, stop, write_params
+from ros_harness import start_monitor, stop, write_params
 from rclpy.serialization import deserialize_message
 from std_msgs.msg import Float64MultiArray
 
@@ -21,25 +21,10 @@ from catenary_monitor.io.cdr import string_text
 from catenary_monitor.io.mcap_read import iter_messages
 from catenary_monitor.replay.driver import expand, replay_log
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.usefixtures('no_callback_errors')]
 
 TOPICS = ['/cell/a', '/cell/b', '/cell/c']
 LINE = 'catenary_monitor: cell'
-
-
-@pytest.fixture(autouse=True)
-def no_callback_errors():
-    callback_errors()
-    yield
-    errors = callback_errors()
-    assert not errors, errors[:3]
-
-
-@pytest.fixture(scope='module')
-def client():
-    c = Client('channels_node_test_client')
-    yield c
-    c.close()
 
 
 def test_a_silent_channel_is_named_live_and_replay_agrees(client, tmp_path):

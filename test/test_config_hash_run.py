@@ -24,13 +24,6 @@ pytestmark = pytest.mark.ros
 LINES = {'h1': dict(weight=1300.0, anchor_distance=120.0, mbl=4.827e6)}
 
 
-@pytest.fixture(scope='module')
-def client():
-    c = Client('config_hash_client')
-    yield c
-    c.close()
-
-
 def _run(client: Client, params: Path, out: Path, *extra: str) -> None:
     """``catenary-monitor run`` until it has handled a depth and a tension, then SIGTERM."""
     cmd = [sys.executable, '-m', 'catenary_monitor', 'run', '--params-file', str(params), *extra]

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import rainflow
-from ros_harness import Client, callback_errors, start_monitor, stop, write_params
+from ros_harness import start_monitor, stop, write_params
 from rclpy.serialization import deserialize_message
 from std_msgs.msg import Float64, Float64MultiArray
 
@@ -20,25 +20,10 @@ from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS
 from catenary_monitor.io.mcap_read import iter_messages
 from catenary_monitor.replay.driver import expand, replay_log
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.usefixtures('no_callback_errors')]
 
 TOPIC, OUT = '/mooring/ch/tension', '/catenary_monitor/ch/outputs'
 FATIGUE = 'catenary_monitor: fatigue'
-
-
-@pytest.fixture(autouse=True)
-def no_callback_errors():
-    callback_errors()
-    yield
-    errors = callback_errors()
-    assert not errors, errors[:3]
-
-
-@pytest.fixture(scope='module')
-def client():
-    c = Client('fatigue_node_test_client')
-    yield c
-    c.close()
 
 
 def _logged(log_dir: Path, topic: str) -> list:

@@ -16,20 +16,12 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
-from ros_harness import (
-    Client,
-    callback_errors,
-    child_env,
-    output_of,
-    start_monitor,
-    stop,
-    write_params,
-)
+from ros_harness import child_env, output_of, start_monitor, stop, write_params
 from scipy.optimize import brentq
 
 from catenary_monitor import solve
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.usefixtures('no_callback_errors')]
 
 W = 1300.0  # N/m, the paper's chain
 DEPTH = 20.85  # m
@@ -67,22 +59,6 @@ def out_topic(line: str) -> str:
 
 def name(line: str) -> str:
     return f'catenary_monitor: {line}'
-
-
-@pytest.fixture(autouse=True)
-def no_callback_errors():
-    """A monitor that logged an exception in a callback fails the test, even if it went on."""
-    callback_errors()
-    yield
-    errors = callback_errors()
-    assert not errors, errors[:3]
-
-
-@pytest.fixture(scope='module')
-def client():
-    c = Client()
-    yield c
-    c.close()
 
 
 @pytest.fixture(scope='module')

@@ -17,20 +17,13 @@ import time
 from pathlib import Path
 
 import pytest
-from ros_harness import Client, child_env, output_of, start_monitor, stop, write_params
+from ros_harness import child_env, output_of, start_monitor, stop, write_params
 
 pytestmark = pytest.mark.ros
 
 W, DEPTH, MBL = 1300.0, 20.85, 4.827e6
 CLOCK, INTAKE = 'catenary_monitor: clock', 'catenary_monitor: intake'
 OK, ERROR = 0, 2
-
-
-@pytest.fixture(scope='module')
-def client():
-    c = Client('node_guard_client')
-    yield c
-    c.close()
 
 
 def _lines(n):

@@ -12,31 +12,16 @@ from pathlib import Path
 
 import pytest
 from mcap_readers import check_folder
-from ros_harness import Client, callback_errors, output_of, start_monitor, stop, write_params
+from ros_harness import output_of, start_monitor, stop, write_params
 
 from catenary_monitor.io.mcap_read import iter_messages
 from catenary_monitor.io.mcap_recover import BACKUP_SUFFIX, is_finished
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.usefixtures('no_callback_errors')]
 
 W, MBL, DEPTH = 1300.0, 4.827e6, 20.85
 OK, ERROR = 0, 2
 LOGGER = 'catenary_monitor: logger'
-
-
-@pytest.fixture(autouse=True)
-def no_callback_errors():
-    callback_errors()
-    yield
-    errors = callback_errors()
-    assert not errors, errors[:3]
-
-
-@pytest.fixture(scope='module')
-def client():
-    c = Client('node_log_test_client')
-    yield c
-    c.close()
 
 
 def wait_output(proc, text: str, timeout: float) -> str:

@@ -14,7 +14,7 @@ import json
 import time
 
 import pytest
-from ros_harness import Client, output_of, start_monitor, stop, write_params
+from ros_harness import output_of, start_monitor, stop, write_params
 
 from catenary_monitor.core.monitor.monitor_core import EVENTS_TOPIC
 from catenary_monitor.io.mcap_read import iter_messages
@@ -26,13 +26,6 @@ LINES = {'up': dict(weight=W, anchor_distance=121.06, mbl=MBL)}
 UP, TIDE = 'catenary_monitor: up', 'catenary_monitor: tide'
 FLAG = 'catenary_monitor: parameters'
 OK, WARN, ERROR = 0, 1, 2
-
-
-@pytest.fixture(scope='module')
-def client():
-    c = Client('runtime_change_client')
-    yield c
-    c.close()
 
 
 def _start(client, tmp, **extra):

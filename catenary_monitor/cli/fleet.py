@@ -27,6 +27,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from catenary_monitor.cli.replay import count_arg
 from catenary_monitor.cli.status_line import StatusLine
 from catenary_monitor.cli.table import format_table
 
@@ -150,16 +151,6 @@ def cmd_fleet(args: argparse.Namespace) -> int:
     return 2 if run.failed else 0
 
 
-def _count(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'not an integer: {text!r}') from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f'must be at least 1, got {text!r}')
-    return value
-
-
 def register(sub: Any) -> None:
     """Add the ``fleet`` sub-command to the ``catenary-monitor`` parser."""
     p = sub.add_parser(
@@ -177,7 +168,7 @@ def register(sub: Any) -> None:
     where = p.add_mutually_exclusive_group()
     where.add_argument(
         '--workers',
-        type=_count,
+        type=count_arg,
         metavar='N',
         help='a local cluster of N one-core worker processes (default: the usable CPUs)',
     )

@@ -455,7 +455,8 @@ def _positive(text: str) -> float:
     return value
 
 
-def _jobs(text: str) -> int:
+def count_arg(text: str) -> int:
+    """An argparse type: a whole number of at least 1 (jobs, workers)."""
     try:
         value = int(text)
     except ValueError:
@@ -513,7 +514,7 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         '--jobs',
-        type=_jobs,
+        type=count_arg,
         default=1,
         metavar='N',
         help='decode the files of a rotated set or directory in N processes (the alarm '
@@ -521,7 +522,7 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         '--window-messages',
-        type=_jobs,
+        type=count_arg,
         default=None,
         metavar='M',
         help='input messages per replay window: the memory bound (default 131072; 65536 with '
