@@ -15,6 +15,7 @@ import re
 import shutil
 import signal
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -266,3 +267,47 @@ def test_files_that_overlap_in_time_make_the_dock_one_task(cluster, tmp_path):
     run = run_fleet([folder], results, scheduler=cluster)
     assert not run.failed and run.docks['dock_e']['one_task']
     _assert_rows_equal(results, 'dock_e', _reference(folder))
+
+
+class _Future:
+    """What :func:`fleet_cluster._collect` reads of a Dask future."""
+
+    def __init__(self, status: str) -> None:
+        self.status, self.key = status, f'fleet-count-t-0-dock_x-{status}'
+
+    def exception(self) -> None:
+        raise AssertionError('a lost or cancelled future has no exception to wait for')
+
+
+@pytest.mark.parametrize('status', ['lost', 'pending'])
+def test_a_result_lost_after_it_was_done_is_waited_for_again(status):
+    """A piece done, then its worker killed before the count was read: Dask computes it again
+    (the future is ``lost``, then ``pending``); the run waits for it, the dock does not fail
+    (CI saw 'dock_c: NoneType: None' once)."""
+    from catenary_monitor.replay import fleet_cluster
+
+    dock = fleet_cluster._Dock(SimpleNamespace(name='dock_x', pieces=()))
+    run, owner, pending = fleet_cluster.FleetRun(), {}, []
+
+    class _Pending:
+        add = pending.append
+
+    future = _Future(status)
+    fleet_cluster._collect(None, future, dock, Path('.'), 't', run,
+                           fleet_cluster.Progress(), owner, _Pending())  # fmt: skip
+    assert pending == [future] and owner == {future.key: (dock, 0)}
+    assert not run.failed and not dock.failed
+
+
+def test_a_future_cancelled_elsewhere_fails_its_dock_in_words():
+    from catenary_monitor.replay import fleet_cluster
+
+    class _Client:
+        cancelled: list[Any] = []
+        cancel = cancelled.append
+
+    dock = fleet_cluster._Dock(SimpleNamespace(name='dock_x', pieces=()))
+    run = fleet_cluster.FleetRun()
+    fleet_cluster._collect(_Client(), _Future('cancelled'), dock, Path('.'), 't', run,
+                           fleet_cluster.Progress(), {}, None)  # fmt: skip
+    assert dock.failed and 'cancelled (not by this run)' in run.failed['dock_x']

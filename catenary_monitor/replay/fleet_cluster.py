@@ -257,7 +257,11 @@ def _collect(
             run.tasks_run += 1
             state.messages += int(result)
         return
-    error = future.exception()
+    if future.status in ('pending', 'lost'):  # done, then its result lost with its worker:
+        owner[future.key] = (dock, dock.generation)  # Dask computes it again; wait for that
+        pending.add(future)
+        return
+    error = future.exception() if future.status == 'error' else None
     client.cancel(dock.futures)
     if isinstance(error, PieceRestart) and len(dock.plan.pieces) > 1:
         state.notes.append(f'{dock.plan.name}: {error}; replaying it as one task')
@@ -269,7 +273,10 @@ def _collect(
             pending.add(fut)
         return
     dock.failed = True
-    text = str(error) if isinstance(error, (FleetError, PieceRestart)) else (
-        f'{type(error).__name__}: {error}'
-    )
+    if error is None:
+        text = f'task {future.key} {future.status} (not by this run)'
+    elif isinstance(error, (FleetError, PieceRestart)):
+        text = str(error)
+    else:
+        text = f'{type(error).__name__}: {error}'
     run.failed[dock.plan.name] = text.splitlines()[0] if text else type(error).__name__
