@@ -19,13 +19,20 @@ SECONDS = 20.0  # of log time, played in 2 s at --rate 10
 @pytest.mark.timeout(120)
 def test_a_sim_time_node_follows_the_playbacks_clock(tmp_path):
     from rosgraph_msgs.msg import Clock
+    from std_msgs.msg import Float64
 
-    config = dock_config(2, tension_timeout=2.0, depth_timeout=5.0)
+    # The log has three lines, the monitor watches two: the third's only subscriber is this
+    # test's client, so --wait-subscribers waits for the client too (its /clock subscription
+    # found with it), not only for the monitor (under load the client once matched 1.7 s late
+    # and missed the first /clock ticks).
+    alarm = dict(tension_timeout=2.0, depth_timeout=5.0)
+    config = dock_config(3, **alarm)
     tensions, depth = generate(
         config, seconds=SECONDS, rate=10.0, depth_rate=2.0, seed=4, dropouts=False
     )
     log = write_log(tmp_path / 'play.mcap', config, tensions, depth)
-    params = params_yaml(config, tmp_path / 'params.yaml')
+    params = params_yaml(dock_config(2, **alarm), tmp_path / 'params.yaml')
+    played_params = params_yaml(config, tmp_path / 'played.yaml')
     first = min(int(c[0][0]) for c in (*tensions.values(), depth))
     last = max(int(c[0][-1]) for c in (*tensions.values(), depth))
     monitor = start_monitor(params, tmp_path / 'live', '-p', 'use_sim_time:=true')
@@ -38,13 +45,14 @@ def test_a_sim_time_node_follows_the_playbacks_clock(tmp_path):
             clocks.append((time.monotonic(), msg.clock.sec * 10**9 + msg.clock.nanosec))
 
     client.node.create_subscription(Clock, '/clock', on_clock, 100)
+    client.node.create_subscription(Float64, config.lines[2].tension_topic, lambda m: None, 100)
     env = dict(os.environ)
     env['PYTHONPATH'] = os.pathsep.join(p for p in (str(ROOT), env.get('PYTHONPATH')) if p)
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     try:
         client.wait_for(lambda: client.diagnostics, 30.0, 'the monitor up')
         cmd = [sys.executable, '-m', 'catenary_monitor.cli', 'replay', str(log), '--publish',
-               '--params-file', str(params), '--rate', '10',
+               '--params-file', str(played_params), '--rate', '10',
                '--wait-subscribers', '20']  # fmt: skip
         t0 = time.monotonic()
         played = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=60)
