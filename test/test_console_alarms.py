@@ -72,7 +72,12 @@ def test_flood_first_out_chattering_and_the_shelved_list(page: Any) -> None:
     shelved = wait_for('the shelved list', lambda: _js(driver, script), 10.0)
     assert shelved == ['line_09']
     assert 'console dockpc' in _js(driver, "return document.getElementById('shelved').textContent")
-    driver.find_element('css selector', '[data-unshelve="line_09"]').click()
+    # The row is updated in place as frames come (its message changes every frame): the button
+    # under the operator's pointer stays the same element (it was rebuilt, and a click lost).
+    button = driver.find_element('css selector', '[data-unshelve="line_09"]')
+    time.sleep(2.5)
+    assert driver.execute_script('return document.contains(arguments[0])', button)
+    button.click()
     wait_for('the unshelve request', lambda: source.shelves, 10.0)
     alarm, condition, seconds, origin = source.shelves[-1]
     assert (alarm, condition, seconds) == ('line_09', 'all', 0.0)

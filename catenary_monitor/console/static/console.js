@@ -630,31 +630,47 @@ async function shelve(line, condition, seconds) {
   } finally { S.shelvePending = false; }
 }
 
+function makeShelvedRow(r) {
+  const tr = el('tr', { 'data-shelved-line': r.line, 'data-shelved-condition': r.condition });
+  for (let k = 0; k < 7; k++) tr.appendChild(el('td'));
+  tr.children[0].className = 'when';
+  tr.children[4].className = 'msg-cell';
+  tr.children[4].appendChild(el('div'));
+  tr.children[6].className = 'actions';
+  const b = el('button', { 'data-unshelve': r.line, title: `unshelve ${r.line} now` }, 'Unshelve');
+  b.addEventListener('click', () => shelve(r.line, 'all', 0));
+  tr.children[6].appendChild(b);
+  return tr;
+}
+
 function renderShelved(frame, lost, replay) {
+  // Rows are kept per line and condition and updated in place, as the active list's: the
+  // messages change every frame, and a rebuilt row would take the Unshelve button from under
+  // a click.
   const body = $('shelved').querySelector('tbody');
-  body.textContent = '';
-  for (const r of frame.shelved || []) {
-    const tr = el('tr', { 'data-shelved-line': r.line, class: `lvl-${r.level}` });
-    tr.appendChild(el('td', { class: 'when', title: `until ${clock(r.until, true)}` }, clock(r.until)));
-    tr.appendChild(el('td', {}, r.line));
-    tr.appendChild(el('td', {}, r.condition === 'all' ? 'whole alarm' : r.condition.replaceAll('_', ' ')));
-    const lv = el('td', {}, r.level);
-    if (r.chattering) lv.appendChild(el('span', { class: 'chatter' }, 'chattering'));
-    tr.appendChild(lv);
-    const msg = el('td', { class: 'msg-cell', title: r.message });
-    msg.appendChild(el('div', {}, r.message));
-    tr.appendChild(msg);
-    tr.appendChild(el('td', {}, r.by));
-    const cell = el('td', { class: 'actions' });
-    const b = el('button', { 'data-unshelve': r.line, title: `unshelve ${r.line} now` }, 'Unshelve');
-    b.disabled = replay || lost || !canAct();
-    b.addEventListener('click', () => shelve(r.line, 'all', 0));
-    cell.appendChild(b);
-    tr.appendChild(cell);
-    body.appendChild(tr);
-  }
-  $('n-shelved').textContent = `(${(frame.shelved || []).length})`;
-  $('no-shelved').hidden = S.tab !== 'shelved' || (frame.shelved || []).length > 0;
+  const want = frame.shelved || [];
+  const keyOf = (line, condition) => `${line}\u0000${condition}`;
+  const have = new Map([...body.children].map((tr) => [keyOf(tr.dataset.shelvedLine, tr.dataset.shelvedCondition), tr]));
+  const wanted = new Set(want.map((r) => keyOf(r.line, r.condition)));
+  for (const [key, tr] of have) if (!wanted.has(key)) { tr.remove(); have.delete(key); }
+  want.forEach((r, i) => {
+    const tr = have.get(keyOf(r.line, r.condition)) || makeShelvedRow(r);
+    tr.className = `lvl-${r.level}`;
+    const td = tr.children;
+    setText(td[0], clock(r.until));
+    td[0].title = `until ${clock(r.until, true)}`;
+    setText(td[1], r.line);
+    setText(td[2], r.condition === 'all' ? 'whole alarm' : r.condition.replaceAll('_', ' '));
+    td[3].textContent = r.level;
+    if (r.chattering) td[3].appendChild(el('span', { class: 'chatter' }, 'chattering'));
+    setText(td[4].firstChild, r.message);
+    td[4].title = r.message;
+    setText(td[5], r.by);
+    td[6].firstChild.disabled = replay || lost || !canAct();
+    if (body.children[i] !== tr) body.insertBefore(tr, body.children[i] || null);
+  });
+  $('n-shelved').textContent = `(${want.length})`;
+  $('no-shelved').hidden = S.tab !== 'shelved' || want.length > 0;
 }
 
 // ---------------------------------------------------------------- access: who may act
