@@ -1,18 +1,25 @@
 """Publish std_msgs/Float64 tensions on /mooring/NAME/tension for NAME in argv[1] (comma
 separated) at argv[2] Hz each, and a depth at 10 Hz, for argv[3] s (sensor-data QoS): a
-node-intake load for test_node_guard. Prints ``sent N`` at the end."""
+node-intake load for test_node_guard. Prints ``sent N`` at the end; SIGTERM ends it early,
+cleanly (its participant leaves the graph: Fast DDS segfaulted now and then in the teardown of a
+monitor stopped just after a flood publisher was SIGKILLed)."""
 
+import signal
 import sys
+import threading
 import time
 
 import rclpy
+from rclpy.signals import SignalHandlerOptions
 from rclpy.qos import qos_profile_sensor_data
 from std_msgs.msg import Float64
 
 
 def main() -> None:
     names, rate, duration = sys.argv[1].split(','), float(sys.argv[2]), float(sys.argv[3])
-    rclpy.init()
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
     node = rclpy.create_node('flood_publisher')
     pubs = [
         node.create_publisher(Float64, f'/mooring/{n}/tension', qos_profile_sensor_data)
@@ -24,7 +31,7 @@ def main() -> None:
         time.sleep(0.05)
     tension, level = Float64(data=1500e3), Float64(data=20.85)
     t0, sent, k, d = time.monotonic(), 0, 0, 0
-    while (now := time.monotonic() - t0) < duration:
+    while (now := time.monotonic() - t0) < duration and not stop.is_set():
         while k < int(now * rate):
             for p in pubs:
                 p.publish(tension)

@@ -28,6 +28,7 @@ def child_env() -> dict[str, str]:
     env['PYTHONPATH'] = os.pathsep.join(p for p in (PACKAGE_ROOT, env.get('PYTHONPATH')) if p)
     env.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     env['PYTHONUNBUFFERED'] = '1'
+    env['PYTHONFAULTHANDLER'] = '1'  # a crash prints every thread's Python stack to the .out
     env['RCUTILS_LOGGING_BUFFERED_STREAM'] = '0'
     return env
 

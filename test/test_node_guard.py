@@ -90,6 +90,16 @@ def _flood(names, rate, duration):
     )
 
 
+def _end(flood):
+    """Stop the flood cleanly (SIGTERM), killed only if it does not end in 10 s."""
+    flood.terminate()
+    try:
+        flood.wait(10)
+    except subprocess.TimeoutExpired:
+        flood.kill()
+        flood.wait(10)
+
+
 def _dropped(status):
     return int(status['values']['messages_dropped'])
 
@@ -113,8 +123,7 @@ def test_an_overflowing_intake_is_counted_and_reported(client, tmp_path, monkeyp
             assert 'cannot keep up' in s['message'] or _dropped(s) > 0, s
         print('intake:', s['level'], s['message'], s['values'].get('messages_missing'))
     finally:
-        flood.kill()
-        flood.wait(10)
+        _end(flood)
         assert stop(proc) == 0
 
 
@@ -135,8 +144,7 @@ def test_samples_missing_against_the_sample_rate_are_counted(
         assert int(s['values']['l00.messages_missing']) > 0, s
         assert int(s['values']['messages_dropped']) >= int(s['values']['messages_missing']), s
     finally:
-        flood.kill()
-        flood.wait(10)
+        _end(flood)
         assert stop(proc) == 0
 
 
@@ -164,8 +172,7 @@ def test_a_normal_rate_drops_nothing(client, tmp_path, monkeypatch):
         assert s['values']['l00.messages_dropped'] == '0', s
     finally:
         if flood.poll() is None:
-            flood.kill()
-            flood.wait(10)
+            _end(flood)
         assert stop(proc) == 0
     files = sorted((tmp_path / 'log').glob('*.mcap'))
     records = [
