@@ -71,8 +71,11 @@ def test_a_sim_time_node_follows_the_playbacks_clock(tmp_path):
     # ten times faster than the wall clock.
     assert ticks[0] == first and ticks[-1] == last
     assert all(b >= a for a, b in zip(ticks, ticks[1:]))
-    span_wall = clock_wall[-1] - clock_wall[0]
-    assert (last - first) * 1e-9 / span_wall == pytest.approx(10.0, rel=0.2)
+    # (the rate from the fourth of the ticks on: the first ones may come late together, by
+    # reliable repair, when the client's reader matched the playback's writer after it began)
+    k0 = len(ticks) // 4
+    span_wall = clock_wall[-1] - clock_wall[k0]
+    assert (last - ticks[k0]) * 1e-9 / span_wall == pytest.approx(10.0, rel=0.2)
     assert wall < SECONDS / 2
     # The monitor judged it in log time: its /diagnostics are stamped in the log's time (a
     # year before the wall clock), one tick per second of log time, not of wall time.
