@@ -10,8 +10,8 @@ import threading
 import time
 
 import rclpy
-from rclpy.signals import SignalHandlerOptions
 from rclpy.qos import qos_profile_sensor_data
+from rclpy.signals import SignalHandlerOptions
 from std_msgs.msg import Float64
 
 
