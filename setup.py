@@ -36,7 +36,7 @@ fused_kernel = Extension(
     optional=True,
 )
 
-# The MCAP reader's per-record loops: index check, gathers, Float64 columns (io/mcap_read.py).
+# The MCAP reader's per-record loops: index check, gathers, Float64 columns (io/mcap_scan.py).
 scan = Extension(
     'catenary_monitor.io._scan',
     sources=['catenary_monitor/io/_scan.c'],
@@ -84,7 +84,7 @@ setup(
         'matplotlib>=3.7',
         'mcap>=1.1',
         'mcap-ros2-support>=0.5',
-        # The MCAP reader's own chunk decompression (io/mcap_read.py).
+        # The MCAP reader's own chunk decompression (io/mcap_scan.py).
         'zstandard',
         'lz4',
         # The console's HTTP/1.1 framing (pure Python, no dependencies).

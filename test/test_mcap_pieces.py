@@ -1,4 +1,4 @@
-"""Chunks too large to hold, decoded in pieces (io/mcap_read.py ``_big_chunk``, ``_cut_chunk``).
+"""Chunks too large to hold, decoded in pieces (io/mcap_scan.py ``_big_chunk``, ``_cut_chunk``).
 
 A chunk declaring more than ``WHOLE_CHUNK_BYTES`` is checked in a first streaming pass (size,
 CRC) and then decoded again and walked piece by piece, a record cut between pieces waiting for
@@ -18,8 +18,9 @@ import hostile_mcap
 import numpy as np
 import pytest
 
-import catenary_monitor.io.mcap_read as mcap_read
-from catenary_monitor.io.mcap_read import ReadReport, iter_windows, read_float64_topics
+import catenary_monitor.io.mcap_scan as mcap_scan
+from catenary_monitor.io.mcap_read import iter_windows, read_float64_topics
+from catenary_monitor.io.mcap_scan import ReadReport
 
 from test_mcap_read import (  # noqa: F401 - rerun with every chunk decoded in pieces
     TOPICS,
@@ -36,10 +37,10 @@ from test_mcap_read import (  # noqa: F401 - rerun with every chunk decoded in p
 
 def _pieces(monkeypatch: pytest.MonkeyPatch, on: bool) -> None:
     """Every chunk decoded in pieces of a few dozen bytes (``on``), or every chunk whole."""
-    monkeypatch.setattr(mcap_read, 'WHOLE_CHUNK_BYTES', 0 if on else 1 << 40)
-    monkeypatch.setattr(mcap_read, '_BATCH_BYTES', 97 if on else 8 << 20)
-    monkeypatch.setattr(mcap_read, '_READ_STEP', 37 if on else 1 << 20)
-    monkeypatch.setattr(mcap_read, '_STREAM_STEP', 53 if on else 8 << 20)
+    monkeypatch.setattr(mcap_scan, 'WHOLE_CHUNK_BYTES', 0 if on else 1 << 40)
+    monkeypatch.setattr(mcap_scan, '_BATCH_BYTES', 97 if on else 8 << 20)
+    monkeypatch.setattr(mcap_scan, '_READ_STEP', 37 if on else 1 << 20)
+    monkeypatch.setattr(mcap_scan, '_STREAM_STEP', 53 if on else 8 << 20)
 
 
 @pytest.fixture(autouse=True)
@@ -98,8 +99,8 @@ def test_pieces_give_what_whole_chunks_give(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, walk: str
 ) -> None:
     if walk == 'numpy':
-        monkeypatch.setattr(mcap_read, '_scan', None)
-    elif mcap_read._scan is None:
+        monkeypatch.setattr(mcap_scan, '_scan', None)
+    elif mcap_scan._scan is None:
         pytest.skip('io/_scan.c is not built')
     own = write_own_log(tmp_path / 'own', 400, chunk_size=2500, compression='zstd')
     bag = write_rosbag2_style(tmp_path / 'bag.mcap', sample_messages(400), compression='lz4')
@@ -127,9 +128,9 @@ def test_equal_records_in_pieces_without_the_c_walk(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Millions of equal records cost a few numpy passes, not a Python step each."""
-    monkeypatch.setattr(mcap_read, '_scan', None)
+    monkeypatch.setattr(mcap_scan, '_scan', None)
     _pieces(monkeypatch, False)
-    monkeypatch.setattr(mcap_read, 'WHOLE_CHUNK_BYTES', 1 << 20)
+    monkeypatch.setattr(mcap_scan, 'WHOLE_CHUNK_BYTES', 1 << 20)
     path = hostile_mcap.empty_records_file(
         tmp_path / 'empty.mcap', 'lz4', (hostile_mcap.TOPIC,), chunks=1, usize=64 << 20
     )
@@ -144,7 +145,7 @@ def test_equal_records_in_pieces_without_the_c_walk(
 def test_a_record_too_long_to_hold_is_dropped_and_reported(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setattr(mcap_read, 'LONG_RECORD_BYTES', 1000)
+    monkeypatch.setattr(mcap_scan, 'LONG_RECORD_BYTES', 1000)
     h = hostile_mcap
     records = (
         h.message(1.0, 10)

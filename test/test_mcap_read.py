@@ -18,12 +18,11 @@ from mcap.writer import CompressionType, IndexType, Writer
 from catenary_monitor.io.mcap_log import McapLogger
 from catenary_monitor.io.mcap_read import (
     EmptyLogError,
-    McapReadError,
-    ReadReport,
     TopicTypeError,
     iter_messages,
     read_float64_topics,
 )
+from catenary_monitor.io.mcap_scan import McapReadError, ReadReport
 from catenary_monitor.io.ros_schemas import (
     QOS_DEFAULT,
     QOS_LATCHED,

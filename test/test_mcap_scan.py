@@ -17,7 +17,9 @@ import pytest
 from mcap.reader import make_reader
 
 import catenary_monitor.io.mcap_read as mcap_read
-from catenary_monitor.io.mcap_read import ReadReport, iter_windows, read_float64_topics
+import catenary_monitor.io.mcap_scan as mcap_scan
+from catenary_monitor.io.mcap_read import iter_windows, read_float64_topics
+from catenary_monitor.io.mcap_scan import ReadReport
 
 from test_mcap_hostile import KINDS, hostile  # noqa: F401 - the fixture, for the tests below
 from test_mcap_hostile import (  # noqa: F401 - rerun on the numpy path
@@ -39,13 +41,13 @@ from test_mcap_read import (  # noqa: F401 - rerun on the numpy path
     write_rosbag2_style,
 )
 
-SCAN = mcap_read._scan
+SCAN = mcap_scan._scan
 
 
 @pytest.fixture(autouse=True)
 def numpy_path(monkeypatch: pytest.MonkeyPatch) -> None:
     """Every test of this file starts on the numpy path (the imported ones stay there)."""
-    monkeypatch.setattr(mcap_read, '_scan', None)
+    monkeypatch.setattr(mcap_scan, '_scan', None)
 
 
 @pytest.mark.c_extension
@@ -77,13 +79,13 @@ def _read(path: Path, windows: bool) -> Any:
 
 
 def _both(path: Path, windows: bool = False) -> Any:
-    mcap_read._scan = None
+    mcap_scan._scan = None
     expected = _read(path, windows)
-    mcap_read._scan = SCAN
+    mcap_scan._scan = SCAN
     try:
         got = _read(path, windows)
     finally:
-        mcap_read._scan = None
+        mcap_scan._scan = None
     assert got == expected
     return got
 
@@ -200,10 +202,10 @@ def test_gather_and_columns_match_numpy() -> None:
     lut[1:4] = [2, 0, 1]
     arr = np.frombuffer(buf, np.uint8)
     for width in (2, 8, 11, 43):
-        mcap_read._scan = SCAN
-        fast = mcap_read._gather(arr, offsets[offsets + width <= len(buf)], width)
-        mcap_read._scan = None
-        slow = mcap_read._gather(arr, offsets[offsets + width <= len(buf)], width)
+        mcap_scan._scan = SCAN
+        fast = mcap_scan.gather(arr, offsets[offsets + width <= len(buf)], width)
+        mcap_scan._scan = None
+        slow = mcap_scan.gather(arr, offsets[offsets + width <= len(buf)], width)
         assert np.array_equal(fast, slow)
     with pytest.raises(IndexError):
         SCAN.gather(arr, np.array([len(buf) - 1], np.int64), 2, np.empty(2, np.uint8))
@@ -213,7 +215,7 @@ def test_gather_and_columns_match_numpy() -> None:
         topic_names = ['a', 'b', 'c']
 
         def __init__(self) -> None:
-            self.file_report = mcap_read.FileReport('x', 0)
+            self.file_report = mcap_scan.FileReport('x', 0)
             self.skips: list[tuple[Any, ...]] = []
 
         def skip(self, *args: Any) -> None:
@@ -222,12 +224,12 @@ def test_gather_and_columns_match_numpy() -> None:
         def bad_payload(self, offset: int, bad: int) -> None:
             self.skips.append(('bad_payload', offset, bad))
 
-    block = mcap_read._Block(buf, offsets, lengths, channels, 0)
+    block = mcap_scan.Block(buf, offsets, lengths, channels, 0)
     results = []
     for scan in (SCAN, None):
-        mcap_read._scan = scan
+        mcap_scan._scan = scan
         scanner = Scanner()
-        columns = mcap_read._block_columns(scanner, block)  # type: ignore[arg-type]
+        columns = mcap_scan.block_columns(scanner, block)  # type: ignore[arg-type]
         results.append(
             (
                 {k: (t.tolist(), v.tolist()) for k, (t, v) in columns.items()},
@@ -288,8 +290,8 @@ def test_walk_matches_the_python_walk() -> None:
     for name, buf in bufs.items():
         got = []
         for scan in (SCAN, None):
-            mcap_read._scan = scan
-            scanner = mcap_read._Scanner.__new__(mcap_read._Scanner)
+            mcap_scan._scan = scan
+            scanner = mcap_scan.Scanner.__new__(mcap_scan.Scanner)
             scanner.schemas, scanner.summary_schemas, scanner.channels = {}, {}, {}
             scanner.known_lut = np.zeros(1 << 16, bool)
             scanner.topic_lut = np.full(1 << 16, -1, np.int64)

@@ -79,10 +79,10 @@ def test_it_installs_without_a_compiler_and_runs_on_numpy(installed):
         'import catenary_monitor as cm\n'
         'from catenary_monitor.core.physics import fused_kernel\n'
         'from catenary_monitor.core.monitor import twin, sensor_state, tide_trend, alarms\n'
-        'from catenary_monitor.io import mcap_read\n'
+        'from catenary_monitor.io import mcap_scan\n'
         'print(cm.__file__)\n'
         'print(fused_kernel.AVAILABLE, twin._loops, sensor_state._loops, tide_trend._loops,'
-        ' alarms._loops, mcap_read._scan)\n'
+        ' alarms._loops, mcap_scan._scan)\n'
         'print(cm.solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06).uplift_force)\n'
     )
     out = subprocess.run(

@@ -25,9 +25,10 @@ from catenary_monitor.core.monitor.monitor_core import (
     Tick,
     event_record,
 )
-from catenary_monitor.io import mcap_read
+from catenary_monitor.io import mcap_read, mcap_scan
 from catenary_monitor.io.cdr import string_message
-from catenary_monitor.io.mcap_read import ReadReport, iter_messages
+from catenary_monitor.io.mcap_read import iter_messages
+from catenary_monitor.io.mcap_scan import ReadReport
 from catenary_monitor.replay import outputs as out
 from catenary_monitor.replay.driver import input_topics, replay_log
 
@@ -164,7 +165,7 @@ def _same(ref, got):
 @pytest.fixture
 def tiny_batches(monkeypatch):
     """Reader batches of one small chunk: windows can end anywhere."""
-    monkeypatch.setattr(mcap_read, '_BATCH_BYTES', 1)
+    monkeypatch.setattr(mcap_scan, '_BATCH_BYTES', 1)
 
 
 @pytest.mark.parametrize('window', ['1', '23', '400', '5000'])

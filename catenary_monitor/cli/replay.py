@@ -51,12 +51,11 @@ from catenary_monitor.core.monitor.monitor_core import EVENTS_TOPIC
 from catenary_monitor.core.monitor.twin import COLUMNS
 from catenary_monitor.io.mcap_read import (
     EmptyLogError,
-    McapReadError,
-    ReadReport,
     TopicTypeError,
     iter_windows,
     not_mcap,
 )
+from catenary_monitor.io.mcap_scan import McapReadError, ReadReport
 from catenary_monitor.replay.driver import (
     EXIT_EMPTY,
     ReplayError,

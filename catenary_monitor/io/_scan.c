@@ -1,11 +1,11 @@
-/* The MCAP reader's per-record loops in C (catenary_monitor/io/mcap_read.py).
+/* The MCAP reader's per-record loops in C (catenary_monitor/io/mcap_scan.py).
  *
  * Optional, like the solve kernel: where it is not built, the reader runs its numpy passes,
  * which give the same offsets, reports and columns (test/test_mcap_scan.py runs the reader's
  * damage tests both ways).  Four functions, each one pass over a batch's records:
  *
  *   locate(buf, file, table, starts, sizes, g_out, bad_out, gaps_out) -> (n_g, n_gaps)
- *       the Message Index check of _Scanner._locate_messages: every entry must point inside
+ *       the Message Index check of Scanner._locate_messages: every entry must point inside
  *       its chunk at a Message record of its channel, records must not overlap; a chunk with a
  *       failing entry is "bad" (walked instead).  Writes the covered record starts in buffer
  *       order (g_out), the bad chunks (bad_out, 0/1) and the byte ranges that no covered
@@ -18,7 +18,7 @@
  *       records grouped by topic index (file order within each), their count per topic and
  *       the number of records that are not a 12-byte CDR Float64.
  *   walk(buf, start, end, out) -> (n, stop, status)
- *       _Scanner._walk: the records of buf[start:end] one after the other, the starts of the
+ *       Scanner._walk: the records of buf[start:end] one after the other, the starts of the
  *       Message records (22 B of head at least) into out (int64) until it is full; it stops
  *       where a Schema or Channel record starts (status 1: Python registers it and walks on),
  *       at a record that is not one (opcode 0, an unknown opcode below 0x80, a Message record

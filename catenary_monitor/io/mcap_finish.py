@@ -37,7 +37,16 @@ from mcap.records import (
     SummaryOffset,
 )
 
-from catenary_monitor.io.mcap_read import MAGIC, ReadReport, _chunk_header, _find_chunk, _Scanner
+from catenary_monitor.io.mcap_records import (
+    MAGIC,
+    BadRecord,
+    chunk_header,
+    find_chunk,
+    read_bytes,
+    read_string,
+    read_string_map,
+)
+from catenary_monitor.io.mcap_scan import ReadReport, Scanner
 
 __all__ = ['Definitions', 'finish_in_place', 'whole_records_end']
 
@@ -78,7 +87,7 @@ def whole_records_end(data: bytes | mmap.mmap) -> int:
         if op in (_OP_DATA_END, _OP_FOOTER):
             break
         if (op not in _KNOWN and op < 0x80) or pos + 9 + length > n:
-            found = _find_chunk(data, pos + 1)  # type: ignore[arg-type]
+            found = find_chunk(data, pos + 1)  # type: ignore[arg-type]
             if found < 0:
                 break
             pos = found
@@ -126,7 +135,7 @@ def _index(data: mmap.mmap, end: int) -> tuple[_Index, Definitions]:
         op, length = _HEAD.unpack_from(data, pos)
         stop = pos + 9 + length
         if (op not in _KNOWN and op < 0x80) or stop > end:
-            found = _find_chunk(data, pos + 1)  # type: ignore[arg-type]
+            found = find_chunk(data, pos + 1)  # type: ignore[arg-type]
             index.damaged.append(f'@{pos}: not a record; left in place, not indexed')
             if not 0 <= found < end:
                 break
@@ -151,7 +160,7 @@ def _index(data: mmap.mmap, end: int) -> tuple[_Index, Definitions]:
 def _chunk(data: mmap.mmap, pos: int, stop: int, end: int, index: _Index) -> int:
     """Index the Chunk record at ``pos`` and the Message Index records after it; return where
     the walk goes on."""
-    header = _chunk_header(data, pos + 9, stop)  # type: ignore[arg-type]
+    header = chunk_header(data, pos + 9, stop)  # type: ignore[arg-type]
     if header is None:
         index.damaged.append(f'@{pos}: chunk header inconsistent; left in place, not indexed')
         return stop
@@ -195,22 +204,22 @@ def _definition(op: int, body: bytes, into: Definitions) -> None:
     try:
         (key,) = struct.unpack_from('<H', body, 0)
         if op == _OP_SCHEMA and key and key not in into.schemas:
-            name, p = _string(body, 2, len(body))
-            encoding, p = _string(body, p, len(body))
-            into.schemas[key] = (name, encoding, _bytes(body, p, len(body)))
+            name, p = read_string(body, 2, len(body))
+            encoding, p = read_string(body, p, len(body))
+            into.schemas[key] = (name, encoding, read_bytes(body, p, len(body)))
         elif op == _OP_CHANNEL and key not in into.channels:
             (sid,) = struct.unpack_from('<H', body, 2)
-            topic, p = _string(body, 4, len(body))
-            encoding, p = _string(body, p, len(body))
-            into.channels[key] = (topic, encoding, sid, _string_map(body, p, len(body)))
-    except (_Bad, struct.error):
+            topic, p = read_string(body, 4, len(body))
+            encoding, p = read_string(body, p, len(body))
+            into.channels[key] = (topic, encoding, sid, read_string_map(body, p, len(body)))
+    except (BadRecord, struct.error):
         pass
 
 
 def _walk_definitions(path: Path, into: Definitions, index: _Index) -> None:
     """The definitions inside the chunks (and, where the file has no Message Index records or
     has unchunked messages, the message counts), from the reader's walk of the (cut) file."""
-    scanner = _Scanner(path, lambda channel: True, ReadReport())
+    scanner = Scanner(path, lambda channel: True, ReadReport())
     scanner.on_definition = lambda op, buf, a, b: _definition(op, bytes(buf[a:b]), into)
     counts: dict[int, int] = {}
     times: list[tuple[int, int]] = []
@@ -287,43 +296,6 @@ def _append_summary(f: IO[bytes], at: int, index: _Index, defs: Definitions) -> 
     f.write(out)
     f.flush()
     os.fsync(f.fileno())
-
-
-class _Bad(Exception):
-    """A record whose fields do not fit its length."""
-
-
-def _string(buf: bytes | memoryview, pos: int, end: int) -> tuple[str, int]:
-    if pos + 4 > end:
-        raise _Bad('string length runs past its record')
-    (n,) = struct.unpack_from('<I', buf, pos)
-    if pos + 4 + n > end:
-        raise _Bad(f'string of {n} B runs past its record')
-    return bytes(buf[pos + 4 : pos + 4 + n]).decode('utf-8', 'replace'), pos + 4 + n
-
-
-def _bytes(buf: bytes | memoryview, pos: int, end: int) -> bytes:
-    if pos + 4 > end:
-        raise _Bad('byte array length runs past its record')
-    (n,) = struct.unpack_from('<I', buf, pos)
-    if pos + 4 + n > end:
-        raise _Bad(f'byte array of {n} B runs past its record')
-    return bytes(buf[pos + 4 : pos + 4 + n])
-
-
-def _string_map(buf: bytes | memoryview, pos: int, end: int) -> dict[str, str]:
-    if pos + 4 > end:
-        raise _Bad('map length runs past its record')
-    (n,) = struct.unpack_from('<I', buf, pos)
-    p, stop = pos + 4, pos + 4 + n
-    if stop > end:
-        raise _Bad(f'map of {n} B runs past its record')
-    out: dict[str, str] = {}
-    while p < stop:
-        key, p = _string(buf, p, stop)
-        value, p = _string(buf, p, stop)
-        out[key] = value
-    return out
 
 
 def _encode(records: Sequence[Any]) -> bytes:

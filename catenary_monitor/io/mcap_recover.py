@@ -1,7 +1,7 @@
 """Finish MCAP files left unfinished (writer killed): summary, indexes, statistics, CRCs.
 
 A file whose writer was SIGKILLed has no summary and no footer and may end inside a chunk.
-:func:`recover_file` walks it with the log reader (:class:`catenary_monitor.io.mcap_read._Scanner`:
+:func:`recover_file` walks it with the log reader (:class:`catenary_monitor.io.mcap_scan.Scanner`:
 its damage rules and its bounds -- a chunk checked before use, one too large to hold decoded in
 pieces, a damaged region skipped to the next chunk, the complete records of a chunk cut by the
 end of the file), and writes every Message record it finds, as it is (sequence numbers, stamps
@@ -40,15 +40,16 @@ import numpy as np
 
 from catenary_monitor.io import bag_metadata
 from catenary_monitor.io.mcap_column_writer import ColumnWriter
-from catenary_monitor.io.mcap_finish import _Bad, _bytes, _string, _string_map, finish_in_place
-from catenary_monitor.io.mcap_read import (
+from catenary_monitor.io.mcap_finish import finish_in_place
+from catenary_monitor.io.mcap_records import (
     MAGIC,
-    McapReadError,
-    ReadReport,
-    _chunk_header,
-    _gather,
-    _Scanner,
+    BadRecord,
+    chunk_header,
+    read_bytes,
+    read_string,
+    read_string_map,
 )
+from catenary_monitor.io.mcap_scan import McapReadError, ReadReport, Scanner, gather
 
 __all__ = [
     'RECOVERED',
@@ -352,35 +353,35 @@ class _Copy:
         self.budget -= end - pos
         try:
             if op == _OP_SCHEMA:
-                name, p = _string(buf, pos + 2, end)
-                encoding, p = _string(buf, p, end)
-                self.schemas[key] = (name, encoding, _bytes(buf, p, end))
+                name, p = read_string(buf, pos + 2, end)
+                encoding, p = read_string(buf, p, end)
+                self.schemas[key] = (name, encoding, read_bytes(buf, p, end))
             else:
                 (sid,) = struct.unpack_from('<H', buf, pos + 2)
-                topic, p = _string(buf, pos + 4, end)
-                encoding, p = _string(buf, p, end)
-                self.channels[key] = (topic, encoding, sid, _string_map(buf, p, end))
-        except (_Bad, struct.error):
+                topic, p = read_string(buf, pos + 4, end)
+                encoding, p = read_string(buf, p, end)
+                self.channels[key] = (topic, encoding, sid, read_string_map(buf, p, end))
+        except (BadRecord, struct.error):
             self.refused += 1
 
     def record(self, op: int, data: bytes, pos: int, end: int) -> None:
         """A top-level Metadata or Attachment record body."""
         try:
             if end - pos > _KEPT_RECORD_BYTES:
-                raise _Bad(f'{end - pos} B, more than the {_KEPT_RECORD_BYTES} B kept')
+                raise BadRecord(f'{end - pos} B, more than the {_KEPT_RECORD_BYTES} B kept')
             if op == _OP_METADATA:
-                name, p = _string(data, pos, end)
-                self.writer.add_metadata(name, _string_map(data, p, end))
+                name, p = read_string(data, pos, end)
+                self.writer.add_metadata(name, read_string_map(data, p, end))
                 return
             log_time, create_time = struct.unpack_from('<QQ', data, pos)
-            name, p = _string(data, pos + 16, end)
-            media, p = _string(data, p, end)
+            name, p = read_string(data, pos + 16, end)
+            media, p = read_string(data, p, end)
             (size,) = struct.unpack_from('<Q', data, p)
             if p + 8 + size > end:
-                raise _Bad('attachment data runs past its record')
+                raise BadRecord('attachment data runs past its record')
             body = bytes(data[p + 8 : p + 8 + size])
             self.writer.add_attachment(name, media, body, log_time, create_time)
-        except (_Bad, struct.error) as exc:
+        except (BadRecord, struct.error) as exc:
             self.result.damaged.append(f'@{pos - 9}: record (opcode 0x{op:02x}) not kept: {exc}')
 
     def _register(self, cid: int) -> bool:
@@ -422,7 +423,7 @@ class _Copy:
         if not len(offsets):
             return
         arr = np.frombuffer(buf, np.uint8)
-        times = _gather(arr, offsets + 15, 8).view('<u8').ravel().astype(np.int64)
+        times = gather(arr, offsets + 15, 8).view('<u8').ravel().astype(np.int64)
         data, placed = _records(buf, arr, offsets, 9 + lengths)
         group = placed // _CHUNK_SIZE
         cuts = [0, *(np.flatnonzero(np.diff(group)) + 1).tolist(), len(placed)]
@@ -477,7 +478,7 @@ def _rewrite(path: Path, out: IO[bytes], result: RecoverResult, name: str) -> No
     """Walk the original with the reader (its damage rules and bounds) and write the finished
     file with the records copied as they are."""
     report = ReadReport()
-    scanner = _Scanner(path, lambda channel: True, report)
+    scanner = Scanner(path, lambda channel: True, report)
     scanner.batch_bytes = _BATCH_BYTES
     profile, library = _header(scanner.data)
     writer = ColumnWriter(
@@ -500,9 +501,9 @@ def _rewrite(path: Path, out: IO[bytes], result: RecoverResult, name: str) -> No
     result.chunks = scanner.file_report.chunks
     for skip in report.skips:
         if skip.kind == 'truncated' and skip.offset == scanner.cut_chunk_at:
-            result.salvaged_from_cut_chunk = scanner._recovered
+            result.salvaged_from_cut_chunk = scanner.recovered
             text = (
-                f'@{skip.offset}: file ends inside a chunk; {scanner._recovered} complete '
+                f'@{skip.offset}: file ends inside a chunk; {scanner.recovered} complete '
                 'message(s) salvaged from it'
             )
         else:
@@ -535,9 +536,9 @@ def _header(data: bytes) -> tuple[str, str]:
     if op != _OP_HEADER or end > len(data) or length > 1 << 20:
         return '', ''
     try:
-        profile, p = _string(data, len(MAGIC) + 9, end)
-        library, _ = _string(data, p, end)
-    except (_Bad, struct.error):
+        profile, p = read_string(data, len(MAGIC) + 9, end)
+        library, _ = read_string(data, p, end)
+    except (BadRecord, struct.error):
         return '', ''
     return profile, library
 
@@ -551,7 +552,7 @@ def _first_compression(data: bytes) -> str:
             break
         op, length = _HEAD.unpack_from(data, pos)
         if op == _OP_CHUNK:
-            header = _chunk_header(data, pos + 9, min(len(data), pos + 9 + length), partial=True)
+            header = chunk_header(data, pos + 9, min(len(data), pos + 9 + length), partial=True)
             if header is not None and header[2] in _COMPRESSION:
                 return header[2] or 'none'
             break

@@ -14,7 +14,7 @@ every record is parsed within bounds and no chunk is ever decompressed:
   stepped over by their length), at most :data:`MAX_HEADS` records; each record at most
   :data:`MAX_METADATA_BYTES`.
 * :func:`channels_of` -- every channel of a file: the summary's, else the reader's tolerant
-  walk of the file with no message selected (:mod:`catenary_monitor.io.mcap_read`: its chunks
+  walk of the file with no message selected (:mod:`catenary_monitor.io.mcap_scan`: its chunks
   bounded as for reading).
 """
 
@@ -28,7 +28,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterator, Optional
 
-from catenary_monitor.io.mcap_read import MAGIC
+from catenary_monitor.io.mcap_records import MAGIC, BadRecord, read_string, read_string_map
 
 __all__ = [
     'ChannelInfo',
@@ -53,10 +53,6 @@ _HEAD = struct.Struct('<BQ')
 _OP_FOOTER, _OP_SCHEMA, _OP_CHANNEL, _OP_CHUNK = 0x02, 0x03, 0x04, 0x06
 _OP_STATISTICS, _OP_METADATA, _OP_METADATA_INDEX, _OP_DATA_END = 0x0B, 0x0C, 0x0D, 0x0F
 _FOOTER = 9 + 20
-
-
-class _Bad(Exception):
-    """A record whose fields do not fit its length."""
 
 
 @dataclass(frozen=True)
@@ -94,7 +90,7 @@ def read_summary(path: str | os.PathLike[str]) -> Optional[FileSummary]:
             return None
         try:
             return _parse_summary(data, *section)
-        except (_Bad, struct.error, UnicodeError):
+        except (BadRecord, struct.error, UnicodeError):
             return None
 
 
@@ -113,7 +109,7 @@ def read_metadata(
         if section is not None:
             try:
                 summary = _parse_summary(data, *section)
-            except (_Bad, struct.error, UnicodeError):
+            except (BadRecord, struct.error, UnicodeError):
                 summary = None
         if summary is not None and summary.metadata_index:
             places: Iterator[int] = (at for n, at, _ in summary.metadata_index if n == name)
@@ -134,13 +130,13 @@ def channels_of(path: str | os.PathLike[str]) -> dict[int, ChannelInfo]:
     summary = read_summary(path)
     if summary is not None and summary.channels:
         return summary.channels
-    from catenary_monitor.io import mcap_read
+    from catenary_monitor.io.mcap_scan import McapReadError, ReadReport, Scanner
 
-    scanner = mcap_read._Scanner(Path(path), lambda channel: False, mcap_read.ReadReport())
+    scanner = Scanner(Path(path), lambda channel: False, ReadReport())
     try:
         for _ in scanner.blocks():
             pass
-    except mcap_read.McapReadError:
+    except McapReadError:
         return {}
     return {
         cid: ChannelInfo(cid, ch.topic, ch.schema_name, ch.encoding)
@@ -202,17 +198,17 @@ def _parse_summary(data: mmap.mmap, start: int, end: int) -> FileSummary:
         op, length = _HEAD.unpack_from(data, pos)
         body, stop = pos + 9, pos + 9 + length
         if stop > end:
-            raise _Bad('a summary record runs past the section')
+            raise BadRecord('a summary record runs past the section')
         if op == _OP_SCHEMA:
             (sid,) = struct.unpack_from('<H', data, body)
-            schemas.setdefault(sid, _string(data, body + 2, stop)[0])
+            schemas.setdefault(sid, read_string(data, body + 2, stop)[0])
         elif op == _OP_CHANNEL:
             channels.append(_channel(data, body, stop))
         elif op == _OP_STATISTICS:
             _statistics(data, body, stop, summary)
         elif op == _OP_METADATA_INDEX:
             at, size = struct.unpack_from('<QQ', data, body)
-            summary.metadata_index.append((_string(data, body + 16, stop)[0], at, size))
+            summary.metadata_index.append((read_string(data, body + 16, stop)[0], at, size))
         pos = stop
     for cid, sid, topic, encoding, metadata in channels:
         if cid not in summary.channels:
@@ -223,12 +219,12 @@ def _parse_summary(data: mmap.mmap, start: int, end: int) -> FileSummary:
 
 def _statistics(data: mmap.mmap, body: int, stop: int, summary: FileSummary) -> None:
     if stop - body < 46:
-        raise _Bad('Statistics record too short')
+        raise BadRecord('Statistics record too short')
     summary.message_count = struct.unpack_from('<Q', data, body)[0]
     summary.start_ns, summary.end_ns = struct.unpack_from('<QQ', data, body + 26)
     (size,) = struct.unpack_from('<I', data, body + 42)
     if body + 46 + size > stop or size % 10:
-        raise _Bad('Statistics channel counts run past the record')
+        raise BadRecord('Statistics channel counts run past the record')
     for k in range(body + 46, body + 46 + size, 10):
         cid, count = struct.unpack_from('<HQ', data, k)
         summary.channel_counts[cid] = count
@@ -239,11 +235,11 @@ def _channel(
     data: mmap.mmap, body: int, stop: int
 ) -> tuple[int, int, str, str, dict[str, str]]:
     if stop - body < 16:
-        raise _Bad('Channel record too short')
+        raise BadRecord('Channel record too short')
     cid, sid = struct.unpack_from('<HH', data, body)
-    topic, p = _string(data, body + 4, stop)
-    encoding, p = _string(data, p, stop)
-    return cid, sid, topic, encoding, _string_map(data, p, stop)
+    topic, p = read_string(data, body + 4, stop)
+    encoding, p = read_string(data, p, stop)
+    return cid, sid, topic, encoding, read_string_map(data, p, stop, keep_first=True)
 
 
 def _metadata_heads(data: mmap.mmap) -> Iterator[int]:
@@ -272,31 +268,7 @@ def _metadata_at(data: mmap.mmap, at: int) -> Optional[tuple[str, dict[str, str]
     if op != _OP_METADATA or length > MAX_METADATA_BYTES or at + 9 + length > len(data):
         return None
     try:
-        name, p = _string(data, at + 9, at + 9 + length)
-        return name, _string_map(data, p, at + 9 + length)
-    except (_Bad, struct.error, UnicodeError):
+        name, p = read_string(data, at + 9, at + 9 + length)
+        return name, read_string_map(data, p, at + 9 + length, keep_first=True)
+    except (BadRecord, struct.error, UnicodeError):
         return None
-
-
-def _string(data: mmap.mmap, pos: int, end: int) -> tuple[str, int]:
-    if pos + 4 > end:
-        raise _Bad('string length runs past its record')
-    (size,) = struct.unpack_from('<I', data, pos)
-    if pos + 4 + size > end:
-        raise _Bad(f'string of {size} B runs past its record')
-    return data[pos + 4 : pos + 4 + size].decode('utf-8', 'replace'), pos + 4 + size
-
-
-def _string_map(data: mmap.mmap, pos: int, end: int) -> dict[str, str]:
-    if pos + 4 > end:
-        raise _Bad('map length runs past its record')
-    (size,) = struct.unpack_from('<I', data, pos)
-    p, stop = pos + 4, pos + 4 + size
-    if stop > end:
-        raise _Bad(f'map of {size} B runs past its record')
-    out: dict[str, str] = {}
-    while p < stop:
-        key, p = _string(data, p, stop)
-        value, p = _string(data, p, stop)
-        out.setdefault(key, value)
-    return out

@@ -76,14 +76,13 @@ from catenary_monitor.io.cdr import string_message, string_text
 from catenary_monitor.io.mcap_read import (
     EmptyLogError,
     LogWindow,
-    McapReadError,
-    ReadReport,
     TopicTypeError,
     UnorderedLogError,
     expand_paths,
     iter_windows,
     read_float64_topics,
 )
+from catenary_monitor.io.mcap_scan import McapReadError, ReadReport
 from catenary_monitor.io.mcap_summary import read_metadata
 
 __all__ = [

@@ -51,7 +51,8 @@ from catenary_monitor.core.config.parameters import (
 )
 from catenary_monitor.core.physics import fused_kernel
 from catenary_monitor.io import mcap_read
-from catenary_monitor.io.mcap_read import McapReadError, ReadReport, first_log_time, not_mcap
+from catenary_monitor.io.mcap_read import first_log_time, not_mcap
+from catenary_monitor.io.mcap_scan import McapReadError, ReadReport
 from catenary_monitor.replay.driver import (
     WINDOW_MESSAGES,
     ReplayError,

@@ -35,7 +35,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from catenary_monitor.io.mcap_read import ReadReport
+from catenary_monitor.io.mcap_scan import ReadReport
 from catenary_monitor.io.mcap_summary import channels_of
 
 __all__ = ['CLOCK_PERIOD', 'INPUT_TYPES', 'CLOCK_TOPIC', 'input_topics_of_log', 'publish']
