@@ -44,7 +44,15 @@ import numpy as np
 from catenary_monitor.cli.demo import child_env
 from catenary_monitor.core.config.parameters import ConfigError
 
-__all__ = ['run_flood', 'flood', 'publish_main', 'register', 'flood_params', 'analyse']
+__all__ = [
+    'run_flood',
+    'flood',
+    'publish_main',
+    'register',
+    'flood_params',
+    'analyse',
+    'logged_outputs',
+]
 
 #: Tension of sample i: BASE + STEP * i (N): the paper's pretension, each sample its own value;
 #: the priming samples before the flood are i - PRIMING (negative indexes).
@@ -195,7 +203,7 @@ def _node_records(files: list[Path]) -> list[dict[str, Any]]:
     return out
 
 
-def _logged_outputs(files: list[Path], topic: str) -> tuple[np.ndarray, np.ndarray]:
+def logged_outputs(files: list[Path], topic: str) -> tuple[np.ndarray, np.ndarray]:
     """(log time ns, the output arrays) of one line's outputs topic."""
     from rclpy.serialization import deserialize_message
     from std_msgs.msg import Float64MultiArray
@@ -239,7 +247,7 @@ def analyse(
         index = np.rint((columns[topic][1] - BASE) / STEP).astype(np.int64)
         logged += int((index >= 0).sum())
         logged_all += len(index)
-        out_t, out = _logged_outputs(files, f'/catenary_monitor/{name}/outputs')
+        out_t, out = logged_outputs(files, f'/catenary_monitor/{name}/outputs')
         outputs[name] = (out_t, out)
         handled = np.rint((out[:, 0] - BASE) / STEP).astype(np.int64) if len(out) else index[:0]
         handled = np.unique(handled)  # a depth event's output repeats the line's tension

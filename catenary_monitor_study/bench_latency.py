@@ -364,7 +364,7 @@ def _logged(log_dir: Path, config: Any, measured: list[float]) -> dict[str, int]
     the monitor's log, how many it stepped (an output carries them) and coalesced (logged, not
     stepped)."""
     from catenary_monitor.io.mcap_read import read_float64_topics
-    from catenary_monitor_study.bench_flood import _logged_outputs
+    from catenary_monitor_study.bench_flood import logged_outputs
 
     files = sorted(log_dir.glob('*.mcap'))
     topics = [line.tension_topic for line in config.lines]
@@ -373,7 +373,7 @@ def _logged(log_dir: Path, config: Any, measured: list[float]) -> dict[str, int]
     logged = sum(int(((v >= lo) & (v <= hi)).sum()) for _, v in columns.values())
     stepped = 0
     for line in config.lines:
-        _, out = _logged_outputs(files, f'/catenary_monitor/{line.name}/outputs')
+        _, out = logged_outputs(files, f'/catenary_monitor/{line.name}/outputs')
         if len(out):
             mine = out[:, 0]
             stepped += len(np.unique(mine[(mine >= lo) & (mine <= hi)]))

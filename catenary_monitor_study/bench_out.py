@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any, Optional
 
 from catenary_monitor.cli.allocator import keep_freed_memory
-from catenary_monitor.replay.outputs import McapSink, _snapshot_payloads
+from catenary_monitor.replay.outputs import McapSink, snapshot_payloads
 from catenary_monitor.core.monitor.twin import COLUMNS
 from catenary_monitor.replay.driver import WINDOW_MESSAGES, input_topics, load_config, stream
 
@@ -74,7 +74,7 @@ def snapshots(log: Path, params: Path) -> None:
             def take(result: Any, window: Any) -> None:
                 if mode:
                     t = time.perf_counter()
-                    _, payloads = _snapshot_payloads(result)
+                    _, payloads = snapshot_payloads(result)
                     encode[0] += time.perf_counter() - t
                     count[0] += len(payloads)
 

@@ -301,3 +301,50 @@ def test_cli_and_console_never_import_each_other():
         if {_layer(name), _layer(target)} == {'cli', 'console'}
     ]
     assert not bad, '\n'.join(bad)
+
+
+def _c_extension(package: str, name: str) -> bool:
+    """``package.name`` is one of the C accelerators built from ``name.c`` beside its wrapper."""
+    return package in MODULES and (MODULES[package].parent / f'{name}.c').is_file()
+
+
+def private_imports(name: str) -> list[str]:
+    """``from x import _y`` (and ``import x._y``) in ``name``'s source, where ``_y`` is a private
+    name of another module, resolved as :func:`imports_of` does. A C extension imported by a
+    module of its own package is its wrapper's, not another module's private name."""
+    tree = ast.parse(MODULES[name].read_text(encoding='utf-8'), str(MODULES[name]))
+    package = name if _is_package(name) else name.rpartition('.')[0]
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                parts = alias.name.split('.')
+                for i, part in enumerate(parts[1:], 1):
+                    if part.startswith('_') and not part.startswith('__'):
+                        owner = '.'.join(parts[:i])
+                        if not (owner == package and _c_extension(owner, part)):
+                            found.append(f'import {alias.name}')
+                        break
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = name.split('.') if _is_package(name) else name.split('.')[:-1]
+                if node.level - 1 > 0:
+                    base = base[: -(node.level - 1)]
+                target = '.'.join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ''
+            for alias in node.names:
+                if not alias.name.startswith('_') or alias.name.startswith('__'):
+                    continue
+                if target == package and _c_extension(target, alias.name):
+                    continue
+                found.append(f'from {target} import {alias.name}')
+    return found
+
+
+def test_no_private_imports_across_modules():
+    """No module takes another module's private name (``from x import _y``): what two modules
+    share is public, named once where it belongs."""
+    assert private_imports('catenary_monitor.io.mcap_scan') == []  # its own _scan is allowed
+    bad = [f'{name}: {line}' for name in MODULES for line in private_imports(name)]
+    assert not bad, 'private names imported across modules:\n' + '\n'.join(bad)

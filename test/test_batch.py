@@ -149,7 +149,7 @@ def assert_columns_give(items, want):
     ``--out`` encodes both to the same DiagnosticArray bytes."""
     from types import SimpleNamespace
 
-    from catenary_monitor.replay.outputs import _snapshot_payloads
+    from catenary_monitor.replay.outputs import snapshot_payloads
 
     flat = []
     for item in items:
@@ -157,8 +157,8 @@ def assert_columns_give(items, want):
     flat.sort(key=lambda s: s.stamp_ns)
     assert flat == list(want)
     assert any(isinstance(item, SnapshotColumns) for item in items) or not want
-    got = _snapshot_payloads(SimpleNamespace(snapshots=items))
-    assert got == _snapshot_payloads(SimpleNamespace(snapshots=list(want)))
+    got = snapshot_payloads(SimpleNamespace(snapshots=items))
+    assert got == snapshot_payloads(SimpleNamespace(snapshots=list(want)))
 
 
 def run_columns(twin, window, events, want):

@@ -79,6 +79,7 @@ __all__ = [
     'summary_dict',
     'summary_text',
     'output_topic',
+    'snapshot_payloads',
 ]
 
 #: Every CSV column, in order, with its decimals (None: a label). Units: s, N, m, -.
@@ -283,7 +284,7 @@ def _event_payloads(result: ReplayResult, start: bool = True) -> tuple[list[int]
     return stamps, payloads
 
 
-def _snapshot_payloads(result: ReplayResult) -> tuple[list[int], list[bytes]]:
+def snapshot_payloads(result: ReplayResult) -> tuple[list[int], list[bytes]]:
     """Every snapshot of the replay as a DiagnosticArray in CDR (stamps ns, payloads), in time
     order (a stable sort: as :func:`catenary_monitor.core.monitor.twin.run_log` orders Snapshots).
     """
@@ -478,7 +479,7 @@ class McapSink:
         named['status'] = np.concatenate([r.status for r in result.lines]).astype(np.float64)
         named['level'] = np.concatenate([r.level for r in result.lines]).astype(np.float64)
         columns = [named[key] for key in OUTPUT_FIELDS]
-        stamps, payloads = _snapshot_payloads(result)
+        stamps, payloads = snapshot_payloads(result)
         diag_t = np.asarray(stamps, np.int64)
         ev_stamps, ev_payloads = _event_payloads(result, start=not self.started)
         self.started = True

@@ -486,7 +486,7 @@ def solve_chain_length(
     when ``Lm <= h`` (an elastic chain shorter than the depth is not a mooring).
     """
     from catenary_monitor.core.physics.elastic import solve_with_correction
-    from catenary_monitor.core.physics.inextensible import _keys
+    from catenary_monitor.core.physics.inextensible import result_keys
     from catenary_monitor.core.physics.result import ALL_KEYS, SolveResult, Status
 
     inputs = [weight, depth, chain_length, anchor_distance, ea] + ([] if mbl is None else [mbl])
@@ -542,7 +542,7 @@ def solve_chain_length(
             out['grounded_length'][good] = st.grounded_length[conv]
             model[good] = np.asarray(res.model, dtype=object)
             status[good] = np.asarray(res.status)
-    keys = _keys('chain_length', True, m is not None)
+    keys = result_keys('chain_length', True, m is not None)
     fields: dict[str, Any] = {}
     for k in ALL_KEYS:
         flat = out[k] if k in keys else np.full(w.size, np.nan)

@@ -187,7 +187,7 @@ def _solve_tension_kernel(
         else:
             args.append(np.ascontiguousarray(np.broadcast_to(a, shape)).reshape(n))
     if not shape:  # every input 0-d (but not all plain floats: e.g. float32 or 0-d arrays)
-        keys = _keys('tension', anchor_distance is not None, mbl is not None)
+        keys = result_keys('tension', anchor_distance is not None, mbl is not None)
         rows, status = fused_kernel.solve_arrays(args[0], args[1], args[2], args[3], args[4], n)
         values: dict[str, Any] = dict(zip(ALL_KEYS, (float(v) for v in rows[:, 0])))
         return SolveResult(**values, status=int(status[0]), problem='tension', keys=keys)
@@ -230,7 +230,7 @@ def _flat_inputs(*given: Any) -> Optional[tuple[list[Any], int]]:
 def _row_plan(has_x: bool, has_mbl: bool) -> tuple[tuple[str, ...], int, tuple[int, ...]]:
     """The keys that apply, the kernel's row mask for them, and per key of ``ALL_KEYS`` its
     row in the kernel's output (-1: NaN, not computed)."""
-    keys = _keys('tension', has_x, has_mbl)
+    keys = result_keys('tension', has_x, has_mbl)
     where = tuple(keys.index(k) if k in keys else -1 for k in ALL_KEYS)
     return keys, fused_kernel.row_mask(keys), where
 
@@ -253,7 +253,8 @@ def _kernel_result(
 
 
 @functools.lru_cache(maxsize=None)
-def _keys(problem: str, has_x: bool, has_mbl: bool) -> tuple[str, ...]:
+def result_keys(problem: str, has_x: bool, has_mbl: bool) -> tuple[str, ...]:
+    """The :class:`SolveResult` fields a ``problem`` fills (given an anchor distance, an MBL)."""
     skip = set()
     if not has_x:
         skip |= {'anchor_margin', 'tide_margin', 'load_margin'}
@@ -351,7 +352,7 @@ def _solve_valid(problem: str, full: dict[str, np.ndarray], scalar: bool) -> Sol
         conv &= _fill_margins(out, w, h, x)
     if 'mbl' in a:
         out['safety_factor'] = a['mbl'] / out['top_tension']
-    keys = _keys(problem, x is not None, 'mbl' in a)
+    keys = result_keys(problem, x is not None, 'mbl' in a)
     # never status 0 with inf or NaN: a solved element whose results under- or overflowed
     # (a margin of +inf excepted, INF_MARGINS: result.in_range)
     beyond = np.zeros(n, dtype=bool)
@@ -467,7 +468,7 @@ def _solve_scalar(
         status = Status.MBL
     else:
         status = Status.OK
-    keys = _keys(problem, x is not None, mbl is not None)
+    keys = result_keys(problem, x is not None, mbl is not None)
     if status:
         return _new_tuple(SolveResult, _NAN12 + (int(status), problem, keys) + _TAIL)
     if by_tension:
@@ -540,7 +541,7 @@ if fused_kernel.AVAILABLE:  # the kernel builds the SolveResult of a one-element
         tuple(
             (
                 'tension',
-                _keys('tension', has_x, has_mbl),
+                result_keys('tension', has_x, has_mbl),
                 SolveResult._field_defaults['model'],
                 SolveResult._field_defaults['method'],
             )

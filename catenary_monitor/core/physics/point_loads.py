@@ -441,11 +441,11 @@ def solve_result(
     """One element of :func:`catenary_monitor.solve` with point loads, as a SolveResult: the
     hook ``tension`` (problems 3, 4) or the ``chain_length`` (problem 5) at
     ``anchor_distance``."""
-    from catenary_monitor.core.physics.inextensible import _keys  # the plain chain's keys
+    from catenary_monitor.core.physics.inextensible import result_keys  # the plain chain's keys
 
     w, h, x = float(weight), float(depth), float(anchor_distance)
     problem = 'tension' if tension is not None else 'chain_length'
-    keys = _keys(problem, True, mbl is not None)
+    keys = result_keys(problem, True, mbl is not None)
     nan: Any = dict.fromkeys(ALL_KEYS, math.nan)
     if not all(math.isfinite(v) for v in (w, h, x, tension if tension is not None else 1.0)):
         return SolveResult(**nan, status=int(Status.NON_FINITE), problem=problem, keys=keys)
