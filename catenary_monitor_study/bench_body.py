@@ -147,7 +147,7 @@ def _table(r: dict[str, Any]) -> str:
 def cmd_bench_body(args: argparse.Namespace) -> int:
     """Run and print the benchmark."""
     if args.params_file is None:
-        from catenary_monitor.ros.simulator import default_config_path
+        from catenary_monitor.sim.scenario import default_config_path
 
         args.params_file = default_config_path()
     result = run(args.params_file, repeats=args.repeats, ticks=args.ticks)

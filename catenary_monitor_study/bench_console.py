@@ -86,7 +86,7 @@ def run_bench(rate: float = 10.0, duration: float = 20.0, json_out: bool = False
 
     from catenary_monitor.cli.demo import child_env, start_console
     from catenary_monitor.core.config.parameters import config_from_params, load_params_file
-    from catenary_monitor.ros.simulator import default_config_path
+    from catenary_monitor.sim.scenario import default_config_path
 
     params = default_config_path()
     config = config_from_params(load_params_file(params))

@@ -196,7 +196,7 @@ def _dock(args: argparse.Namespace) -> int:
     from catenary_monitor_study import dock_dynamics as dd
 
     if args.params_file is None:
-        from catenary_monitor.ros.simulator import default_config_path
+        from catenary_monitor.sim.scenario import default_config_path
 
         args.params_file = default_config_path()
     scene = dd.DockScene(duration=args.duration or 300.0, segments=args.segments)

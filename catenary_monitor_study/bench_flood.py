@@ -75,7 +75,7 @@ def flood_params(
         load_params_file,
         params_file_text,
     )
-    from catenary_monitor.ros.simulator import default_config_path
+    from catenary_monitor.sim.scenario import default_config_path
 
     config = config_from_params(load_params_file(params_file or default_config_path()))
     lines = tuple(

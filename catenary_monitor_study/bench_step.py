@@ -90,7 +90,7 @@ def run(
 ) -> dict[str, Any]:
     """The figures: CPU µs per sample of each variant (medians over ``rounds``)."""
     from catenary_monitor.core.config.parameters import config_from_params, load_params_file
-    from catenary_monitor.ros.simulator import default_config_path
+    from catenary_monitor.sim.scenario import default_config_path
 
     config = config_from_params(load_params_file(params_file or default_config_path()))
     events = _events(config, samples)

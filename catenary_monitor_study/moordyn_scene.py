@@ -29,7 +29,7 @@ from typing import Any, Callable, NamedTuple, Sequence
 
 import numpy as np
 
-from catenary_monitor.ros.moordyn_dock import (
+from catenary_monitor.sim.moordyn_dock import (
     PAPER_CHAIN,
     SEABED,
     Chain,

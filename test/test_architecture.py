@@ -2,7 +2,8 @@
 
 Layers: the core's rooms ``physics`` <- ``config`` <- ``body`` <- ``monitor`` (pure numpy), and
 ``io`` (MCAP, CDR, CSV; independent of the core) <- ``replay`` (core + io) <- ``ros`` (rclpy)
-<- the shells ``cli`` and ``console``, which never import each other; the methods study
+<- the shells ``cli`` and ``console``, which never import each other; ``sim`` (the demo's
+episode and MoorDyn, core only, no rclpy) under ``ros`` and the shells; the methods study
 (``catenary_monitor_study``) sits on top and the monitor never imports it. Imports are read with
 ``ast``: module-level and function-level, absolute and relative; ``from pkg import name`` counts as
 an import of the submodule ``pkg.name`` when there is one, else of ``pkg`` (a package ``__init__``
@@ -69,7 +70,7 @@ def imports_of(name: str) -> frozenset[str]:
 
 def _layer(name: str) -> str:
     """``top`` (the package __init__), a room of the core (``physics``, ``config``, ``body``,
-    ``monitor``), ``io``, ``replay``, ``ros``, ``cli``, ``console`` or ``study``."""
+    ``monitor``), ``io``, ``sim``, ``replay``, ``ros``, ``cli``, ``console`` or ``study``."""
     if _within(name, 'catenary_monitor_study'):
         return 'study'
     if name == 'catenary_monitor':
@@ -81,7 +82,7 @@ def _layer(name: str) -> str:
     for room in CORE_ROOMS:
         if _within(name, f'catenary_monitor.core.{room}'):
             return room
-    for layer in ('io', 'replay', 'ros', 'cli', 'console'):
+    for layer in ('io', 'sim', 'replay', 'ros', 'cli', 'console'):
         if _within(name, f'catenary_monitor.{layer}'):
             return layer
     raise AssertionError(f'{name}: module outside the known layers')
@@ -100,11 +101,12 @@ ALLOWED = {
     'body': {'physics', 'config', 'body'},
     'monitor': CORE,
     'io': {'io'},
+    'sim': {*CORE, 'sim'},
     'replay': {'top', *CORE, 'io', 'replay'},
-    'ros': {'top', *CORE, 'io', 'ros'},
-    'cli': {'top', *CORE, 'io', 'replay', 'ros', 'cli'},
-    'console': {'top', *CORE, 'io', 'replay', 'ros', 'console'},
-    'study': {'top', *CORE, 'io', 'replay', 'ros', 'cli', 'console', 'study'},
+    'ros': {'top', *CORE, 'io', 'sim', 'ros'},
+    'cli': {'top', *CORE, 'io', 'sim', 'replay', 'ros', 'cli'},
+    'console': {'top', *CORE, 'io', 'sim', 'replay', 'ros', 'console'},
+    'study': {'top', *CORE, 'io', 'sim', 'replay', 'ros', 'cli', 'console', 'study'},
 }
 
 
@@ -151,7 +153,7 @@ def test_core_and_io_import_no_ros_package_anywhere():
     bad = [
         f'{name} imports {target}'
         for name in MODULES
-        if _layer(name) in (*CORE, 'io', 'replay')
+        if _layer(name) in (*CORE, 'io', 'sim', 'replay')
         for target in sorted(imports_of(name))
         if target.split('.')[0] in ROS_PACKAGES
     ]
@@ -173,7 +175,7 @@ print(json.dumps({'failed': failed, 'file': sys.modules['catenary_monitor'].__fi
 
 
 def test_core_and_io_import_without_ros():
-    names = [n for n in MODULES if _layer(n) in (*CORE, 'io', 'replay')]
+    names = [n for n in MODULES if _layer(n) in (*CORE, 'io', 'sim', 'replay')]
     assert len(names) > 10
     p = subprocess.run(
         [sys.executable, '-c', _IMPORT_ALL, ','.join(ROS_PACKAGES), *names],
@@ -264,13 +266,13 @@ def test_no_import_cycles():
 
 
 def test_every_package_says_what_it_holds_and_may_import():
-    """Each sub-package of the core, and replay, opens with a paragraph naming its rooms."""
+    """Each sub-package of the core, sim and replay open with a paragraph naming its rooms."""
     for name in MODULES:
         if not _is_package(name) or not _within(name, 'catenary_monitor'):
             continue
         doc = ast.get_docstring(ast.parse(MODULES[name].read_text(encoding='utf-8')))
         assert doc and len(doc) > 80, f'{name}: no docstring saying what it holds'
-        if _layer(name) in (*CORE, 'replay') and name != 'catenary_monitor.core':
+        if _layer(name) in (*CORE, 'sim', 'replay') and name != 'catenary_monitor.core':
             assert (
                 'may import' in doc.lower()
             ), f'{name}: its docstring does not say what it may import'

@@ -303,7 +303,7 @@ def test_the_demo_on_moordyn_gives_the_storms_warnings(moordyn, tmp_path):
     from catenary_monitor.cli.demo import DEMO_OVERRIDES, MOORDYN_EA
     from catenary_monitor.core.config.parameters import config_from_params, load_params_file
     from catenary_monitor.core.monitor.twin import recompute
-    from catenary_monitor.ros.simulator import MoorDynTensions, Scenario, default_config_path
+    from catenary_monitor.sim.scenario import MoorDynTensions, Scenario, default_config_path
 
     params = {**load_params_file(default_config_path()), **DEMO_OVERRIDES}
     params.update({f'{name}.ea': MOORDYN_EA for name in params['lines']})
@@ -359,7 +359,7 @@ def test_without_moordyn_the_demo_and_the_simulator_say_so_in_one_line(
     """``demo --moordyn`` and ``--dynamics moordyn`` where MoorDyn is not installed: exit 2 and
     one line naming the extra, before anything starts."""
     from catenary_monitor.cli.demo import run_demo
-    from catenary_monitor.ros import moordyn_dock
+    from catenary_monitor.sim import moordyn_dock
     from catenary_monitor.ros.simulator import main
 
     monkeypatch.setattr(moordyn_dock, 'available', lambda: False)

@@ -267,7 +267,7 @@ def demo_record():
     with the demo's overrides (the batch twin): (config, result)."""
     from catenary_monitor.cli.demo import DEMO_OVERRIDES
     from catenary_monitor.core.config.parameters import config_from_params, load_params_file
-    from catenary_monitor.ros.simulator import Scenario, default_config_path
+    from catenary_monitor.sim.scenario import Scenario, default_config_path
 
     params = load_params_file(default_config_path())
     params.update(DEMO_OVERRIDES)

@@ -24,7 +24,7 @@ from typing import Any, NamedTuple, Optional
 
 import numpy as np
 
-from catenary_monitor.ros.simulator import default_config_path
+from catenary_monitor.sim.scenario import default_config_path
 
 __all__ = ['run_demo', 'start_console', 'DEMO_OVERRIDES']
 
@@ -229,7 +229,7 @@ def _moordyn_table(params: str, duration: float, path: Path) -> float:
     """The episode's tensions from MoorDyn into ``path`` (the simulator publishes them);
     the seconds it took."""
     from catenary_monitor.core.config.parameters import config_from_params, load_params_file
-    from catenary_monitor.ros.simulator import MoorDynTensions, Scenario
+    from catenary_monitor.sim.scenario import MoorDynTensions, Scenario
 
     start = time.monotonic()
     scenario = Scenario(config_from_params(load_params_file(params)), duration=duration)
@@ -279,7 +279,7 @@ def run_demo(
     """Run the demo; return 0 on success. Leaves the MCAP log and ``demo.png`` in ``out_dir``.
     ``moordyn``: the tensions from MoorDyn (exit 2 with one line where it is not installed)."""
     if moordyn:
-        from catenary_monitor.ros.moordyn_dock import available
+        from catenary_monitor.sim.moordyn_dock import available
 
         if not available():
             print(

@@ -167,7 +167,7 @@ def _write_layout(args: argparse.Namespace) -> int:
         config_from_params,
         load_params_file,
     )
-    from catenary_monitor.ros.simulator import default_config_path
+    from catenary_monitor.sim.scenario import default_config_path
 
     path = args.params_file or default_config_path()
     try:

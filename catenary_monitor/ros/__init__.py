@@ -1,2 +1,2 @@
-"""ROS 2 wiring (rclpy): the live node, the dock simulator (and its optional MoorDyn source,
-moordyn_dock.py) and log playback onto ROS."""
+"""ROS 2 wiring (rclpy): the live node, the dock simulator (the episode of
+:mod:`catenary_monitor.sim` published as sensors) and log playback onto ROS."""
