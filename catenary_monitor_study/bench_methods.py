@@ -1,6 +1,6 @@
 """``catenary-monitor bench-methods``: every method on one chart, and where each one fails.
 
-One run on this machine measures, for every method of :mod:`catenary_monitor.methods` over a
+One run on this machine measures, for every method of :mod:`catenary_monitor_study.methods` over a
 fixed scene sweep (the paper dock, w = 1300 N/m, h = 20.85 m, with the anchor-end parameter
 ``h/a`` from 1e-9 to 1e4 and the anchor distance ``x/x_min`` from 1e-3 to 1 - 1e-6, plus the
 seed tables):

@@ -31,7 +31,7 @@ _IMG = re.compile(r'<img\s[^>]*\bsrc="([^"]+)"')
 _CODE = re.compile(r'`([^`]+)`')
 #: a path into the repository: a known top folder (or a room of the package), then a file
 _PATH = re.compile(
-    r'(?<![\w./-])((?:catenary_monitor_study|catenary_monitor|core|io|ros|cli|console|replay'
+    r'(?<![\w./-])((?:catenary_monitor_study|catenary_monitor|core|io|sim|ros|cli|console|replay'
     r'|test|docs|config|tools)/[\w./-]*\.(?:py|c|h|md|yaml|sh|js|json|png|csv))(?![\w-])'
     r'(?:::(\w+))?'
 )

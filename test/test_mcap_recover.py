@@ -60,7 +60,7 @@ def test_recovered_file_keeps_profile_schemas_channel_metadata_and_records(tmp_p
         summary = reader.get_summary()
         names = [m.name for m in reader.iter_metadata()]
     assert header.profile == 'ros2'
-    assert 'finished by catenary_monitor.mcap_recover' in header.library
+    assert 'finished by catenary_monitor.io.mcap_recover' in header.library
     assert {c.topic for c in summary.channels.values()} == set(TOPICS)
     for c in summary.channels.values():
         assert c.message_encoding == 'cdr'

@@ -111,7 +111,10 @@ class ColumnWriter:
         self.messages = 0
         stream.write(MAGIC)
         self._record(
-            Header(profile, library or f'catenary_monitor.mcap_fast; ' f'{LIBRARY_IDENTIFIER}')
+            Header(
+                profile,
+                library or f'catenary_monitor.io.mcap_column_writer; {LIBRARY_IDENTIFIER}',
+            )
         )
 
     # ------------------------------------------------------------------ set-up records

@@ -6,7 +6,7 @@ Foxglove and ``ros2 bag info/play``:
 
 * header profile ``"ros2"`` (CONVENTIONS C11);
 * one Schema per type: ``encoding="ros2msg"``, ``name="pkg/msg/Type"``, data = the concatenated
-  ``.msg`` text rosbag2 writes (C12, :func:`catenary_monitor.ros_schemas.message_definition`);
+  ``.msg`` text rosbag2 writes (C12, :func:`catenary_monitor.io.ros_schemas.message_definition`);
 * one Channel per topic: ``message_encoding="cdr"``, metadata ``offered_qos_profiles`` (rosbag2
   YAML, optional) and ``topic_type_hash`` when the ROS wheels provide it (C13);
 * chunk compression only (zstd, lz4 or none), message indexes and the summary are kept (C16);
@@ -18,7 +18,7 @@ The mcap writer holds the open chunk in memory. The logger ends the chunk, flush
 (by default) ``fsync``\\ s it as soon as the oldest unflushed message is ``flush_period`` seconds
 old. The check runs in :meth:`McapLogger.write` and in :meth:`McapLogger.tick`; call ``tick()``
 from a timer (period <= ``flush_period``) so that the last messages before a quiet spell are
-flushed too. After a SIGKILL the file has no summary; :mod:`catenary_monitor.mcap_read` reads
+flushed too. After a SIGKILL the file has no summary; :mod:`catenary_monitor.io.mcap_read` reads
 every complete chunk of it. Call :meth:`McapLogger.close` from the node's ``finally:`` block
 (SIGINT/SIGTERM) to write the summary.
 
@@ -113,7 +113,7 @@ _COMPRESSION = {
 # is reported by pymcap-cli's doctor as pointing to a missing group.
 _INDEX_TYPES = IndexType.CHUNK | IndexType.MESSAGE | IndexType.METADATA
 _U64 = 1 << 64
-_LIBRARY = f'catenary_monitor.mcap_log; {LIBRARY_IDENTIFIER}'
+_LIBRARY = f'catenary_monitor.io.mcap_log; {LIBRARY_IDENTIFIER}'
 # Record overhead of one Message record in a chunk: opcode 1 + length 8 + header 22 bytes.
 _MESSAGE_OVERHEAD = 31
 
@@ -353,7 +353,7 @@ class McapLogger:
         ------
         ValueError
             If the topic is already registered with another type.
-        catenary_monitor.ros_schemas.SchemaNotFoundError
+        catenary_monitor.io.ros_schemas.SchemaNotFoundError
             If the ``.msg`` definition of ``type_name`` is not installed.
         """
         if not topic:

@@ -486,7 +486,7 @@ def _rewrite(path: Path, out: IO[bytes], result: RecoverResult, name: str) -> No
         compression=_first_compression(scanner.data) or 'none',
         chunk_bytes=_CHUNK_SIZE,
         profile=profile,
-        library=(library + '; finished by catenary_monitor.mcap_recover').lstrip('; '),
+        library=(library + '; finished by catenary_monitor.io.mcap_recover').lstrip('; '),
     )
     copy = _Copy(writer, result)
     scanner.on_definition = copy.definition
@@ -518,7 +518,7 @@ def _rewrite(path: Path, out: IO[bytes], result: RecoverResult, name: str) -> No
         'recovery',
         {
             'original': name,
-            'finished_by': 'catenary_monitor.mcap_recover',
+            'finished_by': 'catenary_monitor.io.mcap_recover',
             'finished_at': stamp,
             'messages': str(result.messages),
             'damaged_parts': str(len(result.damaged)),

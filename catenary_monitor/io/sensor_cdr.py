@@ -6,7 +6,7 @@ and the fields :mod:`catenary_monitor.core.monitor.readings` turns into a tensio
 (``x``, ``y``, ``z`` of the force; ``fluid_pressure``; ``range``, ``min_range``, ``max_range``).
 CDR (XCDR1) little or big endian: after the 4-byte encapsulation, the header (``int32 sec``,
 ``uint32 nanosec``, ``string frame_id``), then the message's own fields, each aligned to its
-size counted from the end of the encapsulation. ``test/test_stamped_log.py`` checks the
+size counted from the end of the encapsulation. ``test/test_stamped_inputs.py`` checks the
 decoding against ``rclpy.serialization``.
 """
 

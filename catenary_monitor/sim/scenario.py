@@ -60,7 +60,6 @@ def default_config_path() -> str:
     here = Path(__file__).resolve().parent
     name = 'floating_dock.yaml'
     candidates = [
-        here / 'data' / name,
         here.parents[1] / 'config' / name,
         Path(sys.prefix) / 'share' / 'catenary_monitor' / 'config' / name,
     ]
