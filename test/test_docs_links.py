@@ -313,3 +313,10 @@ def test_the_checker_sees_what_is_broken(tmp_path):
     assert 'twin defines no nothing' in problems and 'twin.advance' not in problems
     assert resolve_dotted('catenary_monitor.core.monitor.monitor_core.MonitorCore.step') == ''
     assert 'has no nope' in resolve_dotted('core.monitor.monitor_core.MonitorCore.nope')
+
+
+def test_readme_is_a_newcomers_page():
+    """The README stays short (the depth lives in docs/) and names a Python that setup.py allows."""
+    readme = ROOT.joinpath('README.md').read_text(encoding='utf-8')
+    assert len(readme.encode('utf-8')) <= 10_000
+    assert 'Python 3.10 to 3.13' in readme
