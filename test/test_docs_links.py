@@ -316,7 +316,7 @@ def test_the_checker_sees_what_is_broken(tmp_path):
 
 
 def test_readme_is_a_newcomers_page():
-    """The README stays short (the depth lives in docs/) and names a Python that setup.py allows."""
+    """The README stays short (the depth lives in docs/) and names the Pythons setup.py allows."""
     readme = ROOT.joinpath('README.md').read_text(encoding='utf-8')
     assert len(readme.encode('utf-8')) <= 10_000
     assert 'Python 3.10 to 3.13' in readme
