@@ -116,6 +116,28 @@ def test_falling_tide_and_a_lifted_anchor():
     assert got[5] == 1.2 / 1e-4
 
 
+def test_the_uplift_column_form_equals_the_scalar():
+    """tide_trend.uplift_times equals time_to_uplift element by element: lifted, falling or
+    unknown tides, NaN margins and excesses, signed zeros, infinities."""
+    rng = np.random.default_rng(10)
+    odd = [np.nan, np.inf, -np.inf, 0.0, -0.0, 1e-300]
+    n = 4000
+    cols = [
+        rng.normal(0.5, 1.0, n),
+        rng.choice([0.0, 0.0, 5e3], n),
+        rng.normal(1e-4, 1e-4, n),
+        rng.normal(0.0, 0.2, n),
+    ]
+    for c in cols:
+        hit = rng.random(n) < 0.1
+        c[hit] = rng.choice(odd, int(hit.sum()))
+    want = [tide_trend.time_to_uplift(*v) for v in zip(*(c.tolist() for c in cols))]
+    got = tide_trend.uplift_times(*cols)
+    assert np.array_equal(got, want, equal_nan=True)
+    number = ~np.isnan(got)
+    assert np.array_equal(np.signbit(got[number]), np.signbit(np.array(want)[number]))
+
+
 def test_trend_series_equals_step_in_any_windows():
     rng = np.random.default_rng(3)
     n = 6000

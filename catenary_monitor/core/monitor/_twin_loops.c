@@ -1,6 +1,5 @@
-/* Seven loops of the vectorized replay (catenary_monitor/core/monitor/twin.py, alarms.py,
- * sensor_state.py, fatigue.py,
- * tide_trend.py) in C.
+/* Four loops of the vectorized replay (catenary_monitor/core/monitor/twin.py, fatigue.py) in
+ * C.
  *
  * Optional, like the solve kernel: where it is not built, those modules run their numpy
  * passes, which give the same arrays (test/test_batch_steps.py compares them, and each loop
@@ -18,17 +17,6 @@
  *       the newest tension, depth, non-tension and tick step within its kind (int64, -1:
  *       none yet); whether the line is solved there (a tension; a depth once a tension is
  *       known, `known` or one in the window) and the index of the newest solved step.
- *   samples(values, stamps, value, stamp, changed, spiked, resolution, rate, jitter, ch, sp)
- *       -> (value, stamp, changed, spiked)
- *       sensor_state.samples: a sensor memory (value, stamp, changed, spiked) through its readings
- *       (float64; non-finite ones skipped): when it last changed beyond the resolution and
- *       when it last spiked after each (ch, sp), and the memory after the last.
- *   uplift_times(tide_margin, uplift_force, rate, excess, out)
- *       tide_trend.uplift_times: tide_trend.time_to_uplift per element (float64).
- *   latch(codes, t, on_delay, hold, active, since, out) -> (active, since)
- *       alarms._latch_series: one condition's latch after each update (out, bool) from its
- *       codes (int8: 0 hold, 1 breach, 2 clear) at times t [s], stepped as alarms._step from
- *       (active, since) (since NaN: None); returns the latch after the last update.
  *   fatigue(t, tension, scale, m, inv_a, limit, residue, halves, n_res, marks, n_marks, closed,
  *           fixed,
  *           residue_max, mark_every, rate_window, rate_min_span, damage, rate, life)
@@ -206,131 +194,6 @@ done:
     return result;
 }
 
-static double maximum(double a, double b) { /* np.maximum: NaN if either is NaN */
-    return (a != a || b != b) ? NAN : (a > b ? a : b);
-}
-
-static PyObject *py_samples(PyObject *self, PyObject *args) {
-    PyObject *o[4];
-    double value, stamp, changed, spiked, res, rate, jitter;
-    if (!PyArg_ParseTuple(args, "OOdddddddOO", &o[0], &o[1], &value, &stamp, &changed, &spiked,
-                          &res, &rate, &jitter, &o[2], &o[3]))
-        return NULL;
-    Py_buffer b[4];
-    const char *names[4] = {"values", "stamps", "ch", "sp"};
-    int got = 0;
-    PyObject *result = NULL;
-    for (; got < 4; got++)
-        if (get(o[got], &b[got], got >= 2, 8, names[got]) < 0) goto done;
-    const Py_ssize_t n = b[0].len / 8;
-    if (b[1].len != b[0].len || b[2].len != b[0].len || b[3].len != b[0].len) {
-        PyErr_SetString(PyExc_ValueError, "samples: columns differ in length");
-        goto done;
-    }
-    const double *v = b[0].buf, *t = b[1].buf;
-    double *ch = b[2].buf, *sp = b[3].buf;
-    double q = res > 0.0 ? floor(value / res) : value; /* the reading's resolution step */
-    for (Py_ssize_t i = 0; i < n; i++) {
-        const double x = v[i];
-        if (isfinite(x)) {
-            const double qx = res > 0.0 ? floor(x / res) : x;
-            const int change = !(qx == q);
-            const int spike = fabs(x - value) > rate * ((t[i] - stamp) + jitter) + res;
-            changed = maximum(changed, change ? t[i] : -INFINITY);
-            spiked = maximum(spiked, spike ? t[i] : -INFINITY);
-            value = x, stamp = t[i], q = qx;
-        }
-        ch[i] = changed, sp[i] = spiked;
-    }
-    result = Py_BuildValue("(dddd)", value, stamp, changed, spiked);
-done:
-    for (int g = 0; g < got; g++) PyBuffer_Release(&b[g]);
-    return result;
-}
-
-static PyObject *py_uplift_times(PyObject *self, PyObject *args) {
-    PyObject *o[5];
-    if (!PyArg_ParseTuple(args, "OOOOO", &o[0], &o[1], &o[2], &o[3], &o[4])) return NULL;
-    Py_buffer b[5];
-    const char *names[5] = {"tide_margin", "uplift_force", "rate", "excess", "out"};
-    int got = 0;
-    PyObject *result = NULL;
-    for (; got < 5; got++)
-        if (get(o[got], &b[got], got == 4, 8, names[got]) < 0) goto done;
-    for (int g = 1; g < 5; g++)
-        if (b[g].len != b[0].len) {
-            PyErr_SetString(PyExc_ValueError, "uplift_times: columns differ in length");
-            goto done;
-        }
-    const double *m = b[0].buf, *f = b[1].buf, *r = b[2].buf, *e = b[3].buf;
-    double *out = b[4].buf;
-    for (Py_ssize_t i = 0, n = b[0].len / 8; i < n; i++) {
-        if (m[i] != m[i])
-            out[i] = NAN;
-        else if (m[i] <= 0.0 || f[i] > 0.0)
-            out[i] = 0.0;
-        else if (r[i] != r[i])
-            out[i] = NAN;
-        else if (!(r[i] > 0.0))
-            out[i] = INFINITY;
-        else
-            out[i] = maximum(m[i] + e[i], 0.0) / r[i];
-    }
-    Py_INCREF(Py_None);
-    result = Py_None;
-done:
-    for (int g = 0; g < got; g++) PyBuffer_Release(&b[g]);
-    return result;
-}
-
-static PyObject *py_latch(PyObject *self, PyObject *args) {
-    PyObject *o_codes, *o_t, *o_out;
-    double on_delay, hold, since;
-    int active;
-    if (!PyArg_ParseTuple(args, "OOddpdO", &o_codes, &o_t, &on_delay, &hold, &active, &since,
-                          &o_out))
-        return NULL;
-    Py_buffer bc, bt, bo;
-    PyObject *result = NULL;
-    if (get(o_codes, &bc, 0, 1, "codes") < 0) return NULL;
-    if (get(o_t, &bt, 0, 8, "t") < 0) { PyBuffer_Release(&bc); return NULL; }
-    if (get(o_out, &bo, 1, 1, "out") < 0) {
-        PyBuffer_Release(&bc);
-        PyBuffer_Release(&bt);
-        return NULL;
-    }
-    const int8_t *codes = bc.buf;
-    const double *t = bt.buf;
-    uint8_t *out = bo.buf;
-    const Py_ssize_t n = bc.len;
-    if (bt.len != 8 * n || bo.len != n) {
-        PyErr_SetString(PyExc_ValueError, "latch: codes, t and out differ in length");
-        goto done;
-    }
-    int pending = since == since; /* alarms._step: since is None -> not pending */
-    for (Py_ssize_t i = 0; i < n; i++) {
-        const double now = t[i];
-        if (codes[i] != (active ? 2 : 1)) {
-            pending = 0;
-        } else {
-            if (!pending || since > now) since = now;
-            pending = 1;
-            if (now - since >= (active ? hold : on_delay)) {
-                active = !active;
-                pending = 0;
-            }
-        }
-        out[i] = (uint8_t)active;
-    }
-    result = pending ? Py_BuildValue("(Od)", active ? Py_True : Py_False, since)
-                     : Py_BuildValue("(OO)", active ? Py_True : Py_False, Py_None);
-done:
-    PyBuffer_Release(&bc);
-    PyBuffer_Release(&bt);
-    PyBuffer_Release(&bo);
-    return result;
-}
-
 /* fatigue.cycle_damage: (|range| * scale)^m * inv_a */
 static double cycle_damage(double range, double scale, double m, double inv_a) {
     return pow(fabs(range) * scale, m) * inv_a;
@@ -431,9 +294,6 @@ static PyMethodDef methods[] = {
     {"merge3", py_merge3, METH_VARARGS, "Merge sorted depth, tension and tick times."},
     {"pick", py_pick, METH_VARARGS, "column[idx], before where idx == -1 (float64)."},
     {"newest", py_newest, METH_VARARGS, "Per step: the newest index of each kind."},
-    {"samples", py_samples, METH_VARARGS, "A sensor memory through its readings."},
-    {"uplift_times", py_uplift_times, METH_VARARGS, "Time to uplift per element."},
-    {"latch", py_latch, METH_VARARGS, "One condition's latch after each update."},
     {"fatigue", py_fatigue, METH_VARARGS, "Streamed rainflow and Miner's damage per sample."},
     {NULL, NULL, 0, NULL},
 };
