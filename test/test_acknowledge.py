@@ -14,7 +14,7 @@ from replay_data import (  # noqa: F401 - the oracle's helpers
 )
 
 from catenary_monitor.core.monitor import acknowledge as ack
-from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.monitor.monitor_core import (
     Acknowledge,
     MonitorCore,

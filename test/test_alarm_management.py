@@ -19,7 +19,8 @@ from catenary_monitor.core.config.parameters import (
 )
 from catenary_monitor.core.monitor import acknowledge as ack
 from catenary_monitor.core.monitor import alarm_flood, shelving
-from catenary_monitor.core.monitor.alarms import CONDITIONS, Level
+from catenary_monitor.core.monitor.alarms import CONDITIONS
+from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.monitor.monitor_core import (
     Acknowledge,
     Depth,

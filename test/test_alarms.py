@@ -17,12 +17,12 @@ from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig
 from catenary_monitor.core.monitor.alarms import (
     DIAGNOSTIC_KEYS,
     AlarmInputs,
-    Level,
     LineAlarm,
     Transition,
     diagnostic_values,
     replay_levels,
 )
+from catenary_monitor.core.rules.level import Level
 
 ROOT = Path(__file__).resolve().parents[1]
 # A line well inside every limit (SI): no uplift, margins above their warning thresholds.

@@ -1,4 +1,4 @@
-"""A line measured by several channels (core/monitor/channels.py): a three-channel load cell whose
+"""A line measured by several channels (core/rules/channels.py): a three-channel load cell whose
 channels fail one at a time, through the monitor core and its replay twin."""
 
 import math
@@ -12,8 +12,8 @@ from catenary_monitor.core.config.parameters import (
     LineConfig,
     MonitorConfig,
 )
-from catenary_monitor.core.monitor import channels
-from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.rules import channels
+from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.monitor.monitor_core import (
     OUTPUT_FIELDS,
     Depth,

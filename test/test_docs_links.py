@@ -48,7 +48,7 @@ RETIRED = {
     'replay_output': 'replay.outputs',
     'mcap_fast': 'io.mcap_column_writer',
     'fastcsv': 'io.csv_columns',
-    'sensor': 'core.monitor.sensor_state',
+    'sensor': 'core.rules.sensor_state',
 }
 
 
@@ -283,8 +283,8 @@ def test_the_example_params_name_files_and_modules_that_exist(config):
 
 def test_the_checker_sees_what_is_broken(tmp_path):
     """The checker itself: GitHub's slugs, and a broken link, anchor, path and name found."""
-    assert github_slug('Sensor sanity (`core/monitor/sensor_state.py`)') == (
-        'sensor-sanity-coremonitorsensor_statepy'
+    assert github_slug('Sensor sanity (`core/rules/sensor_state.py`)') == (
+        'sensor-sanity-corerulessensor_statepy'
     )
     assert github_slug('A common cause is one alarm: `catenary_monitor: sensors`') == (
         'a-common-cause-is-one-alarm-catenary_monitor-sensors'

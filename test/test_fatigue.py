@@ -1,4 +1,4 @@
-"""Chain fatigue (core/monitor/fatigue.py): the streamed rainflow count against ASTM E1049-85's
+"""Chain fatigue (core/rules/fatigue.py): the streamed rainflow count against ASTM E1049-85's
 worked example and two independent libraries (rainflow, fatpack), the seed's S-N example, the
 rate over the last day and the state that survives restarts."""
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import rainflow
 
-from catenary_monitor.core.monitor import fatigue
+from catenary_monitor.core.rules import fatigue
 
 #: ASTM E1049-85 (2011) section 5.4.4, Fig. 6 and Table 4: the series and its rainflow count.
 ASTM_SERIES = [-2.0, 1.0, -3.0, 5.0, -1.0, 3.0, -4.0, 4.0, -2.0]

@@ -1,4 +1,4 @@
-"""Holding (core/monitor/holding.py) through the monitor core: seed 001's rule, Hou et al. 2005's
+"""Holding (core/rules/holding.py) through the monitor core: seed 001's rule, Hou et al. 2005's
 table (w = 25 kgf/m, dm = 11 m, anchor 2500 kgf; consistent units kgf and m), a sinker's
 holding under uplift, a dragged anchor seen in implied_anchor_distance, the drag WARN."""
 
@@ -9,7 +9,7 @@ import pytest
 
 from catenary_monitor import solve
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore, Tension
 
 LAMBDA_A, LAMBDA_C = 3.0, 0.75  # a holding coefficient and a chain friction (seed 001's form)
@@ -243,12 +243,7 @@ def test_the_plain_float_holding_path_gives_the_array_path_numbers(seed):
     NaN."""
     import numpy as np
 
-    from catenary_monitor.core.monitor.holding import (
-        FIELDS,
-        LENGTH_FIELDS,
-        holding,
-        holding_scalar,
-    )
+    from catenary_monitor.core.rules.holding import FIELDS, LENGTH_FIELDS, holding, holding_scalar
     from catenary_monitor.core.physics import fixed_length
 
     scenes = _holding_scenes(2000, seed)
@@ -288,7 +283,7 @@ def test_the_core_takes_the_plain_float_path_on_a_tension_and_the_array_path_on_
     depth."""
     import dataclasses
 
-    from catenary_monitor.core.monitor import holding as holding_rule
+    from catenary_monitor.core.rules import holding as holding_rule
 
     calls = []
     array_path = holding_rule.holding

@@ -1,12 +1,12 @@
 """The intake status against configured sample rates (core.monitor.monitor_core,
-core.monitor.health): samples that never reached the node, counted whatever the executor can
+core.rules.health): samples that never reached the node, counted whatever the executor can
 see."""
 
 from __future__ import annotations
 
 from replay_data import T0_NS, dock_config
 
-from catenary_monitor.core.monitor.health import missing_samples
+from catenary_monitor.core.rules.health import missing_samples
 from catenary_monitor.core.monitor.monitor_core import Intake, Level, MonitorCore
 
 

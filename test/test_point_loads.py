@@ -255,7 +255,7 @@ def test_bounds_and_holding_of_a_line_with_point_loads_live_and_in_replay():
     the dynamic uplift and every holding value are numbers (no NaN once solved), the core's
     and the replay twin's to the bit; the implied anchor distance gives back the tension
     (solve_length) and the tide margin at length is where that chain lifts its anchor."""
-    from catenary_monitor.core.monitor.holding import FIELDS as HOLD
+    from catenary_monitor.core.rules.holding import FIELDS as HOLD
     from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore
     from catenary_monitor.core.monitor.monitor_core import Tension, Tick
     from catenary_monitor.core.monitor.twin import recompute
@@ -300,7 +300,7 @@ def test_bounds_and_holding_of_a_line_with_point_loads_live_and_in_replay():
 def test_point_load_bounds_contain_every_reading_within_the_accuracy(tension):
     """uncertainty.loaded_bounds: the solve at random readings within +-dT and +-dh stays
     inside the bounds (the uplift below its upper bound, both margins above their lower)."""
-    from catenary_monitor.core.monitor.uncertainty import loaded_bounds
+    from catenary_monitor.core.rules.uncertainty import loaded_bounds
 
     loads = ([40.0, 90.0], [60e3, -25e3])
     d_t, d_h, x = 2e4, 0.05, 121.06

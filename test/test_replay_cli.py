@@ -17,11 +17,11 @@ import pytest
 from replay_data import core_steps, dock_config, generate, params_yaml, write_log
 
 from catenary_monitor.cli.main import main
-from catenary_monitor.core.monitor.alarms import Level
-from catenary_monitor.core.monitor.holding import FIELDS as HOLDING
-from catenary_monitor.core.monitor.holding import LENGTH_FIELDS
+from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.rules.holding import FIELDS as HOLDING
+from catenary_monitor.core.rules.holding import LENGTH_FIELDS
 from catenary_monitor.core.monitor.twin import LineResult, recompute
-from catenary_monitor.core.monitor.uncertainty import FIELDS as BOUNDS
+from catenary_monitor.core.rules.uncertainty import FIELDS as BOUNDS
 
 ROOT = Path(__file__).resolve().parents[1]
 CONTRACT = [

@@ -4,10 +4,10 @@ tension message, and the latch fast path. (The twin against the core itself: tes
 import numpy as np
 from replay_data import dock_config, generate
 
-from catenary_monitor.core.monitor.holding import FIELDS as HOLDING
-from catenary_monitor.core.monitor.channels import FIELDS as CHANNELS
-from catenary_monitor.core.monitor.fatigue import FIELDS as FATIGUE
-from catenary_monitor.core.monitor.holding import DRAG_FIELDS, LENGTH_FIELDS
+from catenary_monitor.core.rules.holding import FIELDS as HOLDING
+from catenary_monitor.core.rules.channels import FIELDS as CHANNELS
+from catenary_monitor.core.rules.fatigue import FIELDS as FATIGUE
+from catenary_monitor.core.rules.holding import DRAG_FIELDS, LENGTH_FIELDS
 from catenary_monitor.core.monitor.twin import (
     KIND_TENSION,
     NO_DEPTH,
@@ -16,7 +16,7 @@ from catenary_monitor.core.monitor.twin import (
     recompute,
     solve_updates,
 )
-from catenary_monitor.core.monitor.uncertainty import FIELDS as BOUNDS
+from catenary_monitor.core.rules.uncertainty import FIELDS as BOUNDS
 from catenary_monitor.core.physics.solve import solve
 
 DERIVED = BOUNDS + HOLDING + LENGTH_FIELDS + DRAG_FIELDS + FATIGUE + CHANNELS  # monitor's

@@ -1,4 +1,4 @@
-"""Samples taken at their header stamps (core/monitor/readings.py): the core against its twin,
+"""Samples taken at their header stamps (core/rules/readings.py): the core against its twin,
 stamps that lag arrival and come in bunches, stamps refused (ahead of the clock, backwards),
 and the readings of each message type against their definitions.
 
@@ -19,7 +19,7 @@ from catenary_monitor.core.config.parameters import (
     MonitorConfig,
     config_from_params,
 )
-from catenary_monitor.core.monitor import readings, sensor_state
+from catenary_monitor.core.rules import readings, sensor_state
 from catenary_monitor.core.monitor.monitor_core import (
     OUTPUT_FIELDS,
     VALUE_FIELDS,

@@ -1,4 +1,4 @@
-"""The tide's trend and each line's time to uplift (core.monitor.tide_trend, the core, its
+"""The tide's trend and each line's time to uplift (core.rules.tide_trend, the core, its
 vectorized twin).
 
 * the scalar trend (``step``) and its vectorized twin (``series``) give the same bits, in any
@@ -21,7 +21,7 @@ from replay_data import T0_NS
 from test_batch import compare
 
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor import tide_trend
+from catenary_monitor.core.rules import tide_trend
 from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore, Tension
 
 W, X = 1300.0, 120.0  # chain weight N/m, anchor distance m
@@ -55,7 +55,7 @@ def tide_scene(seconds, noise=0.0, wave=0.0, seed=0):
 
 def one_line(tension_accuracy=None, **alarm):
     # The scene's tension is noise-free and moves by less than the default resolution per
-    # sample: resolution 0 keeps it from reading as a stuck sensor (core.monitor.sensor_state).
+    # sample: resolution 0 keeps it from reading as a stuck sensor (core.rules.sensor_state).
     alarm.setdefault('tension_resolution', 0.0)
     line = LineConfig(
         name='line_11',

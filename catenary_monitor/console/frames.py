@@ -439,7 +439,7 @@ class Trend:
 
 def tide_trend(statuses: Mapping[str, Status]) -> dict:
     """The tide's trend as the monitor decided it (the ``rate`` value [m/s] of the tide's
-    ``/diagnostics`` status, :mod:`catenary_monitor.core.monitor.tide_trend`): rate in m/h and
+    ``/diagnostics`` status, :mod:`catenary_monitor.core.rules.tide_trend`): rate in m/h and
     whether it is rising, falling or steady (|rate| < 0.05 m/h); unknown while the monitor says
     nan."""
     tide = statuses.get('tide')
@@ -496,7 +496,7 @@ def _line_view(
             'dynamic_uplift',  # N, the uplift at the waves' peak tension (what ERROR takes)
             'span',  # m, the hook-anchor distance the line was solved at
             'channels_healthy',  # a load cell's healthy channels; None for one channel
-            'channel_states',  # their states, sum code_i 5^i (core.monitor.channels)
+            'channel_states',  # their states, sum code_i 5^i (core.rules.channels)
         ):
             view[key] = _num(v.get(key))
         view['span_source'] = v.get('span_source', 'none')  # installed, dock_estimate, none

@@ -52,7 +52,7 @@ from catenary_monitor.core.config.parameters import (
     load_params_file,
     resolve_topic,
 )
-from catenary_monitor.core.monitor import channels, readings
+from catenary_monitor.core.rules import channels, readings
 from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,
     NODE_NAME,
@@ -188,7 +188,7 @@ def typed_inputs(config: MonitorConfig) -> dict[str, str]:
 
 
 class Inputs(NamedTuple):
-    """A window's inputs in SI (:mod:`catenary_monitor.core.monitor.readings`): tension columns
+    """A window's inputs in SI (:mod:`catenary_monitor.core.rules.readings`): tension columns
     (config order) and the depth column as (arrival ns, value), and the header stamps (ns)
     beside each column of a stamped type (None: taken at arrival; all None: no stamped
     input)."""
@@ -231,7 +231,7 @@ def fused_tensions(
     config: MonitorConfig, line: LineConfig, columns: Mapping[str, Any]
 ) -> tuple[np.ndarray, np.ndarray]:
     """A load cell's tension column from every channel, fused as the monitor fuses them
-    (:func:`catenary_monitor.core.monitor.channels.run` from the first sample): stamps (ns),
+    (:func:`catenary_monitor.core.rules.channels.run` from the first sample): stamps (ns),
     tension (N; NaN while blind)."""
     times, idx, value = _merged(line, columns)
     a = config.alarm

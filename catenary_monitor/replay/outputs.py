@@ -24,10 +24,10 @@ from catenary_monitor.core.config.parameters import (
     config_hash,
     config_to_params,
 )
-from catenary_monitor.core.monitor import dock_watch as dock_live
-from catenary_monitor.core.monitor import holding, sensor_state
+from catenary_monitor.core.rules import dock_watch as dock_live
+from catenary_monitor.core.rules import holding, sensor_state
 from catenary_monitor.core.monitor.alarms import VIEW_TEXT
-from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,
     NODE_NAME,
@@ -104,8 +104,8 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('load_margin', 3),
     ('safety_factor', 3),
     ('time_to_uplift', 3),  # s
-    # The bounds within sensor accuracy (core/monitor/uncertainty.py) and holding
-    # (core/monitor/holding.py).
+    # The bounds within sensor accuracy (core/rules/uncertainty.py) and holding
+    # (core/rules/holding.py).
     ('uplift_force_upper', 3),
     ('anchor_margin_lower', 3),
     ('tide_margin_lower', 3),
@@ -114,25 +114,25 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('drag_margin', 3),
     ('implied_anchor_distance', 3),
     ('tide_margin_at_length', 3),
-    # The wave window and the dynamic uplift (core/monitor/wave_window.py), and which view the
+    # The wave window and the dynamic uplift (core/rules/wave_window.py), and which view the
     # time to uplift counts down (a word: core.monitor.monitor_core.view_word).
     ('wave_tension', 3),
     ('peak_tension', 3),
     ('dynamic_uplift', 3),
     ('time_to_uplift_view', None),
-    ('sensor_state', None),  # core.monitor.sensor_state.LINE_STATES word
+    ('sensor_state', None),  # core.rules.sensor_state.LINE_STATES word
     ('status', None),
     ('level', None),
     ('model', None),
-    ('drag_state', None),  # core.monitor.holding.DRAG_STATES word, or unknown
-    # Chain fatigue (core/monitor/fatigue.py): Miner's damage, its rate (1/s), life left (s).
+    ('drag_state', None),  # core.rules.holding.DRAG_STATES word, or unknown
+    # Chain fatigue (core/rules/fatigue.py): Miner's damage, its rate (1/s), life left (s).
     ('fatigue_damage', 12),
     ('fatigue_damage_rate', 12),
     ('fatigue_life_left', 0),
-    # A line of several channels (core/monitor/channels.py): healthy count, states code.
+    # A line of several channels (core/rules/channels.py): healthy count, states code.
     ('channels_healthy', 0),
     ('channel_states', 0),
-    # The span solved at and its source (core/monitor/dock_watch.py: a word).
+    # The span solved at and its source (core/rules/dock_watch.py: a word).
     ('span', 3),
     ('span_source', None),
 )

@@ -75,7 +75,7 @@ from catenary_monitor.core.config.parameters import (
     load_params_file,
     runtime_change_refusal,
 )
-from catenary_monitor.core.monitor import readings
+from catenary_monitor.core.rules import readings
 from catenary_monitor.core.monitor.acknowledge import (
     ACKNOWLEDGE_TOPIC,
     SENSORS,
@@ -85,10 +85,10 @@ from catenary_monitor.core.monitor.acknowledge import (
     publisher_identity,
 )
 from catenary_monitor.core.monitor.alarm_journal import AlarmEvent
-from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.monitor.shelving import SHELVE_TOPIC
 from catenary_monitor.core.monitor.shelving import parse_request as parse_shelve_request
-from catenary_monitor.core.monitor.health import clock_stopped
+from catenary_monitor.core.rules.health import clock_stopped
 from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,
     NODE_NAME,
@@ -112,7 +112,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     Tick,
     event_record,
 )
-from catenary_monitor.core.monitor.fatigue import to_record
+from catenary_monitor.core.rules.fatigue import to_record
 from catenary_monitor.core.physics import elastic
 from catenary_monitor.io import fatigue_store
 from catenary_monitor.io.mcap_log import McapLogger
@@ -1086,7 +1086,7 @@ class OutputEncoder:
 
 
 def _fields(data: bytes, type_name: str) -> tuple[dict[str, float], Optional[int]]:
-    """A raw input message's fields (core.monitor.readings) and its header stamp in ns (None
+    """A raw input message's fields (core.rules.readings) and its header stamp in ns (None
     for a type without a header)."""
     if type_name == 'std_msgs/msg/Float64':
         return {'value': float64_value(data)}, None

@@ -19,7 +19,7 @@ covariance of q); the largest-normalized-residual test (Schweppe; the bad-data t
 system state estimation) drops the line with the largest ``|z|`` above ``REMOVE_Z`` and refits,
 up to ``MAX_FLAGS`` times, as long as at least ``MIN_REDUNDANT`` readings remain (fewer cannot
 say which line is wrong); a dropped line's z is then its prediction residual. Whether a line is
-inconsistent is decided over time from these z (:mod:`catenary_monitor.core.monitor.dock_watch`).
+inconsistent is decided over time from these z (:mod:`catenary_monitor.core.rules.dock_watch`).
 Every line is tested at its sensor's accuracy (``tension_accuracy``, by default 0.5 % of its
 MBL: :attr:`~catenary_monitor.core.config.parameters.LineConfig.sensor_accuracy`); a model
 built with NaN accuracies tests none and weights them with the largest accuracy given (or
@@ -28,7 +28,7 @@ equally).
 The environmental load is minus the restoring force and moment of every line at the fitted
 offset (the dock at rest: static equilibrium), and each line's expected tension is its model
 tension at its fitted span (``span``, the hook's distance to its anchor at the fitted offset,
-which the monitor solves the line's uplift at: :mod:`catenary_monitor.core.monitor.dock_watch`):
+which the monitor solves the line's uplift at: :mod:`catenary_monitor.core.rules.dock_watch`):
 ``residual = measured - expected`` (an expected tension of ``inf``
 means the other lines put this hook beyond its chain's reach).
 """

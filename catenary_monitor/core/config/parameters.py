@@ -392,7 +392,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         1.0e12,
         _L,
     ),
-    # Inputs as the sensors' drivers publish them (core/monitor/readings.py; docs/node.md).
+    # Inputs as the sensors' drivers publish them (core/rules/readings.py; docs/node.md).
     ParamSpec(
         'tension_type',
         'string',
@@ -492,7 +492,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         _L,
         optional=True,
     ),
-    # A line measured by several channels (core/monitor/channels.py, docs/channels.md).
+    # A line measured by several channels (core/rules/channels.py, docs/channels.md).
     ParamSpec(
         'tension_topics',
         'string_array',
@@ -541,7 +541,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         _L,
         group='point_loads',
     ),
-    # Chain fatigue (core/monitor/fatigue.py, docs/fatigue.md): seed 001's S-N curve.
+    # Chain fatigue (core/rules/fatigue.py, docs/fatigue.md): seed 001's S-N curve.
     ParamSpec(
         'fatigue_m',
         'double',
@@ -693,7 +693,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.0,
         86400.0,
     ),
-    # The tide table (core/monitor/tide_table.py; table in docs/node.md).
+    # The tide table (core/rules/tide_table.py; table in docs/node.md).
     ParamSpec(
         'tide_table',
         'string',
@@ -725,7 +725,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         604800.0,
         group='tide',
     ),
-    # Sensor sanity (core/monitor/sensor_state.py; table in docs/node.md).
+    # Sensor sanity (core/rules/sensor_state.py; table in docs/node.md).
     *(
         ParamSpec(name, 'double', default, text, unit, lo, hi, group='sensor')
         for name, default, text, unit, lo, hi in (

@@ -2,7 +2,7 @@
 
 One alarm per line, and one for the sensors' common causes (:data:`SENSORS`: the depth sensor
 silent, lines that never reported since the start;
-:func:`catenary_monitor.core.monitor.health.sensors_status`).
+:func:`catenary_monitor.core.rules.health.sensors_status`).
 A line's alarm is *active* while its level is not OK (WARN, STALE or ERROR), except while it is
 **suppressed by design**: the line is STALE only because of a common cause (no depth, or no
 tension ever received: :attr:`~catenary_monitor.core.monitor.alarms.AlarmState.suppressed`), which
@@ -59,7 +59,8 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from catenary_monitor.core.monitor.alarms import CONDITIONS, ERROR_CONDITIONS, RANK, Level
+from catenary_monitor.core.monitor.alarms import CONDITIONS, ERROR_CONDITIONS
+from catenary_monitor.core.rules.level import RANK, Level
 
 _NAN = math.nan
 

@@ -53,12 +53,12 @@ from catenary_monitor.core.config.parameters import (
     runtime_change_messages,
 )
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
-from catenary_monitor.core.monitor import channels
+from catenary_monitor.core.rules import channels
 from catenary_monitor.core.monitor import alarm_flood, shelving
-from catenary_monitor.core.monitor import dock_watch as dock_live
-from catenary_monitor.core.monitor import fatigue as fatigue_rule
-from catenary_monitor.core.monitor import holding as holding_rule
-from catenary_monitor.core.monitor import (
+from catenary_monitor.core.rules import dock_watch as dock_live
+from catenary_monitor.core.rules import fatigue as fatigue_rule
+from catenary_monitor.core.rules import holding as holding_rule
+from catenary_monitor.core.rules import (
     readings,
     sensor_state,
     tide_table,
@@ -69,17 +69,16 @@ from catenary_monitor.core.monitor import (
 from catenary_monitor.core.monitor.alarm_journal import AlarmEvent, entries
 from catenary_monitor.core.monitor.alarms import (
     CONDITIONS,
-    RANK,
     AlarmInputs,
     AlarmState,
-    Level,
     LineAlarm,
     Transition,
     diagnostic_values,
     quiet_change,
 )
+from catenary_monitor.core.rules.level import RANK, Level
 from catenary_monitor.core.monitor.alarms import VIEW_TEXT
-from catenary_monitor.core.monitor.health import (
+from catenary_monitor.core.rules.health import (
     BUSY_WINDOW,
     INTAKE_WINDOW,
     clock_status,
@@ -90,7 +89,7 @@ from catenary_monitor.core.monitor.health import (
     sensors_status,
     tide_status,
 )
-from catenary_monitor.core.monitor.plausible import (
+from catenary_monitor.core.rules.plausible import (
     reading_status,
     reading_status_array,
     status_messages,
@@ -147,17 +146,17 @@ __all__ = [
 NODE_NAME = 'catenary_monitor'
 #: Element order of each line's outputs (``/catenary_monitor/NAME/outputs``), SI units;
 #: ``status`` is the solver code (:data:`NO_DEPTH` before the first depth), ``level`` 0-3;
-#: ``time_to_uplift`` [s] (:mod:`~catenary_monitor.core.monitor.tide_trend`) was appended after
+#: ``time_to_uplift`` [s] (:mod:`~catenary_monitor.core.rules.tide_trend`) was appended after
 #: them so the older indexes stay, then the bounds
-#: (:mod:`~catenary_monitor.core.monitor.uncertainty`), the holding values
-#: (:mod:`~catenary_monitor.core.monitor.holding`) and ``sensor_state``, the line's sensor state
-#: code as of the newest tick (:data:`catenary_monitor.core.monitor.sensor_state.LINE_STATES`: 0
+#: (:mod:`~catenary_monitor.core.rules.uncertainty`), the holding values
+#: (:mod:`~catenary_monitor.core.rules.holding`) and ``sensor_state``, the line's sensor state
+#: code as of the newest tick (:data:`catenary_monitor.core.rules.sensor_state.LINE_STATES`: 0
 #: ok, 1 stuck, 2 spike, 3 over_mbl, 4 slack, 5 suspected_parted), then ``tide_margin_at_length``
-#: [m] (:data:`catenary_monitor.core.monitor.holding.LENGTH_FIELDS`), then ``wave_tension``,
+#: [m] (:data:`catenary_monitor.core.rules.holding.LENGTH_FIELDS`), then ``wave_tension``,
 #: ``peak_tension`` and ``dynamic_uplift`` [N] and ``time_to_uplift_view`` (1 chain length held,
 #: 0 horizontal tension held), then ``span`` [m], the hook-anchor distance the line was solved
 #: at, and ``span_source`` (0 the installed ``anchor_distance``, 1 the dock estimate:
-#: :mod:`~catenary_monitor.core.monitor.dock_watch`).
+#: :mod:`~catenary_monitor.core.rules.dock_watch`).
 OUTPUT_FIELDS = (
     'top_tension',
     'depth',
@@ -173,27 +172,27 @@ OUTPUT_FIELDS = (
     'status',
     'level',
     'time_to_uplift',
-    # Margins with the sensors' accuracy: core/monitor/uncertainty.py.
+    # Margins with the sensors' accuracy: core/rules/uncertainty.py.
     *uncertainty.FIELDS,
-    # Holding and the anchor distance the chain implies: core/monitor/holding.py.
+    # Holding and the anchor distance the chain implies: core/rules/holding.py.
     *holding_rule.FIELDS,
-    # Sensor sanity: core/monitor/sensor_state.py.
+    # Sensor sanity: core/rules/sensor_state.py.
     'sensor_state',
-    # The tide margin of a chain of fixed length, its hook held: core/monitor/holding.py.
+    # The tide margin of a chain of fixed length, its hook held: core/rules/holding.py.
     *holding_rule.LENGTH_FIELDS,
-    # The anchor's drag state (0 holding, 1 overloaded, 2 dragging): core/monitor/holding.py.
+    # The anchor's drag state (0 holding, 1 overloaded, 2 dragging): core/rules/holding.py.
     *holding_rule.DRAG_FIELDS,
     # Chain fatigue (Miner's damage, its rate over the last day, the life left): fatigue.py.
     *fatigue_rule.FIELDS,
-    # Wave-frequency tension and the dynamic uplift (core/monitor/wave_window.py,
-    # core/monitor/uncertainty.py), then which view the time to uplift counts down (1 the chain
-    # length held, 0 the horizontal tension held: core/monitor/tide_trend.py).
+    # Wave-frequency tension and the dynamic uplift (core/rules/wave_window.py,
+    # core/rules/uncertainty.py), then which view the time to uplift counts down (1 the chain
+    # length held, 0 the horizontal tension held: core/rules/tide_trend.py).
     *wave_window.FIELDS,
     'dynamic_uplift',
     'time_to_uplift_view',
     # A line measured by several channels: the healthy count and their states, channels.py.
     *channels.FIELDS,
-    # The span the line was solved at, and where it came from (core/monitor/dock_watch.py).
+    # The span the line was solved at, and where it came from (core/rules/dock_watch.py).
     'span',
     'span_source',
 )
@@ -340,7 +339,7 @@ class Coalesced(NamedTuple):
 
 
 class FatigueStore(NamedTuple):
-    """The fatigue store at ``stamp_ns`` (core/monitor/fatigue.py; the node keeps it beside
+    """The fatigue store at ``stamp_ns`` (core/rules/fatigue.py; the node keeps it beside
     its log): its ``state`` (:data:`FATIGUE_STORE_STATES`), one-line ``message``, and, when it
     was read at start, each line's stored state (``(name, record or None)``: None, from
     ``NAME.fatigue_damage_initial``); ``lines`` None only changes the status (a write that
@@ -454,7 +453,7 @@ class LineState:
     channel_values: tuple[float, ...] = (_NAN, _NAN)  # channels.FIELDS now
     sample_ns: int = -1  # ns, the newest accepted sample's stamp (header or arrival; -1: none)
     stamp_refused: float = -math.inf  # s, when a sample's stamp was last refused (arrival)
-    # The wave window of its readings (core.monitor.wave_window) and its values at the newest.
+    # The wave window of its readings (core.rules.wave_window) and its values at the newest.
     wave: wave_window.WaveState = field(default_factory=wave_window.WaveState.empty)
     peak_tension: float = _NAN  # N
     wave_tension: float = _NAN  # N
@@ -986,7 +985,7 @@ class MonitorCore:
         shortfall against ``tension_sample_rate`` / ``depth_sample_rate`` over the report
         periods in which the input was heard (not the first: it began before the first
         sample), beyond the tolerance of
-        :func:`~catenary_monitor.core.monitor.health.missing_samples`.
+        :func:`~catenary_monitor.core.rules.health.missing_samples`.
         """
         n = len(self.state.lines) + 1
         a = self.config.alarm
@@ -1073,7 +1072,7 @@ class MonitorCore:
         return self._set_component('tide', new, stamp_ns)
 
     def _sensors_now(self, now: float) -> tuple[Level, str]:
-        """The sensors' common-cause alarm at ``now`` [s] (core.monitor.health.sensors_status)."""
+        """The sensors' common-cause alarm at ``now`` [s] (core.rules.health.sensors_status)."""
         a = self.config.alarm
         waiting = [
             line.config.name for line in self.state.lines if line.tension_s != line.tension_s
@@ -1106,7 +1105,7 @@ class MonitorCore:
         return changes
 
     def _decide_sensors(self, stamp_ns: int) -> None:
-        """Every line's and the depth sensor's state at a tick (core.monitor.sensor_state)."""
+        """Every line's and the depth sensor's state at a tick (core.rules.sensor_state)."""
         a = self.config.alarm
         now = np.array([_stamp_s(stamp_ns)])
         lines = self.state.lines
@@ -1152,7 +1151,7 @@ class MonitorCore:
         )
 
     def _decide_dock(self, stamp_ns: int) -> list[Change]:
-        """The dock estimate from every line's newest tension (core.monitor.dock_watch): the dock
+        """The dock estimate from every line's newest tension (core.rules.dock_watch): the dock
         status, and what each line's ``inconsistent`` alarm condition sees."""
         assert self.dock_model is not None
         now = _stamp_s(stamp_ns)
@@ -1316,7 +1315,7 @@ class MonitorCore:
 
     def _uplift_times(self, margins: Any, forces: Any) -> list[float]:
         """Each line's time to uplift [s]: on the tide table's forecast from the newest depth
-        sample where there is a table (core.monitor.tide_table), else at the tide's trend."""
+        sample where there is a table (core.rules.tide_table), else at the tide's trend."""
         a = self.config.alarm
         if a.constituents:
             times = tide_table.uplift_times(
@@ -1547,7 +1546,7 @@ def channel_limits(core: MonitorCore, line: LineState) -> channels.Limits:
 
 
 def _implausible(line: LineState, code: int) -> None:
-    """An implausible reading (core.monitor.plausible): its status and sentence, no solved values
+    """An implausible reading (core.rules.plausible): its status and sentence, no solved values
     (the measured tension and depth kept, as for every impossible input)."""
     line.values = line.values[:2] + _NAN_VALUES[2:_SENSOR_AT] + line.values[_SENSOR_AT:]
     line.status, line.status_message = code, status_messages(line.config)[code]
@@ -1580,7 +1579,7 @@ def _wants_holding(c: LineConfig) -> bool:
     return c.chain_length is not None or c.anchor_holding is not None
 
 
-#: The values :func:`holding_values` gives (core/monitor/holding.py).
+#: The values :func:`holding_values` gives (core/rules/holding.py).
 HOLDING_FIELDS = holding_rule.FIELDS + holding_rule.LENGTH_FIELDS + holding_rule.DRAG_FIELDS
 
 
@@ -1629,7 +1628,7 @@ def _loaded_bounds(
     out: dict[str, np.ndarray],
 ) -> None:
     """The bounds and dynamic uplift in ``out`` of the elements whose line has point loads
-    (:func:`catenary_monitor.core.monitor.uncertainty.loaded_bounds`, element by element)."""
+    (:func:`catenary_monitor.core.rules.uncertainty.loaded_bounds`, element by element)."""
     span = _span(cfgs, named)
     for k in range(len(named['top_tension'])):
         c = cfgs[k] if len(cfgs) > 1 else cfgs[0]
@@ -1654,7 +1653,7 @@ def _loaded_bounds(
 def bound_values(
     cfgs: Sequence[LineConfig], depth_accuracy: float, named: dict[str, np.ndarray]
 ) -> dict[str, np.ndarray]:
-    """The bounds (:data:`catenary_monitor.core.monitor.uncertainty.FIELDS`) per element of the
+    """The bounds (:data:`catenary_monitor.core.rules.uncertainty.FIELDS`) per element of the
     nominal values ``named`` (VALUE_FIELDS -> arrays), each element's line in ``cfgs`` (one
     config, or one per element); the core and its batch twin both call this."""
     return uncertainty.bounds(
@@ -1716,9 +1715,9 @@ def holding_one(
     lc: LineConfig, values: Sequence[float], tolerance: float = math.inf
 ) -> dict[str, float]:
     """:func:`holding_values` of one line's :data:`VALUE_FIELDS` values in plain floats
-    (:func:`catenary_monitor.core.monitor.holding.holding_scalar`: the same numbers to
+    (:func:`catenary_monitor.core.rules.holding.holding_scalar`: the same numbers to
     rounding, an order of magnitude faster than one-element arrays; a line with point loads:
-    :func:`~catenary_monitor.core.monitor.holding.holding_loaded`, the twin's too)."""
+    :func:`~catenary_monitor.core.rules.holding.holding_loaded`, the twin's too)."""
 
     def given(v: Optional[float]) -> float:
         return _NAN if v is None else v
@@ -1779,9 +1778,9 @@ def line_status(
     """One line's ``DiagnosticStatus``: the contract keys (SI strings ``float()`` reads back
     exactly), then ``measured_tension``, ``tension_age`` [s], ``anchor_distance``,
     ``allowed_uplift``, ``anchor_angle_deg``, ``solver_status``, ``model``, ``sensor_state``
-    (:func:`catenary_monitor.core.monitor.sensor_state.line_word`), ``time_to_uplift_view``
+    (:func:`catenary_monitor.core.rules.sensor_state.line_word`), ``time_to_uplift_view``
     (:func:`view_word`), ``span`` [m] and ``span_source`` (the span the line was solved at and
-    its source: :func:`catenary_monitor.core.monitor.dock_watch.span_word`), then ``extra``
+    its source: :func:`catenary_monitor.core.rules.dock_watch.span_word`), then ``extra``
     (the alarm's acknowledgement keys: :func:`.acknowledge.diagnostic_values`; with the dock
     model, :func:`line_dock_values`)."""
     named = dict(zip(VALUE_FIELDS, values))
@@ -1862,7 +1861,7 @@ def tide_with_sensor(
 def depth_word(depth_s: float, code: int) -> str:
     """The depth sensor's ``sensor_state`` word: ``no_data`` before the first depth sample
     (``depth_s`` NaN), else its state
-    (:data:`catenary_monitor.core.monitor.sensor_state.DEPTH_STATES`).
+    (:data:`catenary_monitor.core.rules.sensor_state.DEPTH_STATES`).
     """
     return sensor_state.NO_DATA if depth_s != depth_s else sensor_state.DEPTH_STATES[code]
 
@@ -1871,7 +1870,7 @@ def sensors_component(
     state: tuple[Level, str], ack: alarm_ack.AckState, waiting: int
 ) -> ComponentStatus:
     """The ``catenary_monitor: sensors`` status: the common-cause alarm's level and message
-    (:func:`catenary_monitor.core.monitor.health.sensors_status`), ``lines_waiting`` (lines with no
+    (:func:`catenary_monitor.core.rules.health.sensors_status`), ``lines_waiting`` (lines with no
     tension since the start) and the alarm's acknowledgement keys
     (:func:`.acknowledge.diagnostic_values`)."""
     values = (('lines_waiting', str(waiting)),) + tuple(
@@ -1901,9 +1900,9 @@ def tide_component(
     forecast: str = 'unknown',
 ) -> ComponentStatus:
     """The tide's ``DiagnosticStatus``: values ``depth`` [m], ``depth_age`` [s] and ``rate``
-    [m/s], the trend (:mod:`~catenary_monitor.core.monitor.tide_trend`; nan while unknown), and the
+    [m/s], the trend (:mod:`~catenary_monitor.core.rules.tide_trend`; nan while unknown), and the
     depth sensor's ``sensor_state``
-    (:data:`catenary_monitor.core.monitor.sensor_state.DEPTH_STATES`) and
+    (:data:`catenary_monitor.core.rules.sensor_state.DEPTH_STATES`) and
     ``tide_forecast``, what the times to uplift follow (:func:`forecast_word`)."""
     return ComponentStatus(
         f'{NODE_NAME}: tide',

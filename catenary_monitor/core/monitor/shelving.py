@@ -25,7 +25,8 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, AlarmConfig
 from catenary_monitor.core.monitor.acknowledge import REQUEST_LIMIT, SENSORS, WHOLE, bounded_text
-from catenary_monitor.core.monitor.alarms import CONDITIONS, ERROR_CONDITIONS, Level
+from catenary_monitor.core.monitor.alarms import CONDITIONS, ERROR_CONDITIONS
+from catenary_monitor.core.rules.level import Level
 
 __all__ = [
     'SHELVE_TOPIC',

@@ -33,28 +33,21 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
 from catenary_monitor.core.monitor import acknowledge as alarm_ack
-from catenary_monitor.core.monitor import channels
+from catenary_monitor.core.rules import channels
 from catenary_monitor.core.monitor import alarm_flood, shelving
-from catenary_monitor.core.monitor import dock_watch as dock_live
-from catenary_monitor.core.monitor import fatigue as fatigue_rule
-from catenary_monitor.core.monitor import (
-    readings,
-    sensor_state,
-    tide_table,
-    tide_trend,
-    wave_window,
-)
+from catenary_monitor.core.rules import dock_watch as dock_live
+from catenary_monitor.core.rules import fatigue as fatigue_rule
+from catenary_monitor.core.rules import readings, sensor_state, tide_table, tide_trend, wave_window
 from catenary_monitor.core.monitor.alarm_journal import AlarmEvent, entries, raised
 from catenary_monitor.core.monitor.alarms import (
     DIAGNOSTIC_KEYS,
-    RANK,
-    Level,
     LevelSeries,
     Transition,
     quiet_change,
     replay_levels,
 )
-from catenary_monitor.core.monitor.health import sensors_status, tide_status
+from catenary_monitor.core.rules.level import RANK, Level
+from catenary_monitor.core.rules.health import sensors_status, tide_status
 from catenary_monitor.core.monitor.monitor_core import (
     CONDITIONS,
     NO_DEPTH,
@@ -84,11 +77,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     tide_with_sensor,
     view_word,
 )
-from catenary_monitor.core.monitor.plausible import (
-    MAX_DEPTH,
-    reading_status_array,
-    status_messages,
-)
+from catenary_monitor.core.rules.plausible import MAX_DEPTH, reading_status_array, status_messages
 from catenary_monitor.core.physics import catenary as cat
 from catenary_monitor.core.physics import elastic, fused_kernel, point_loads
 from catenary_monitor.core.physics.solve import solve
@@ -568,7 +557,7 @@ def _tide_at(core: MonitorCore, tide: _Tide, i: int) -> tuple[Level, str]:
 
 @dataclass
 class _Sensors:
-    """The sensor states at the window's ticks (core.monitor.sensor_state): each line's code
+    """The sensor states at the window's ticks (core.rules.sensor_state): each line's code
     (ticks, lines) and the depth sensor's (ticks), and the codes before the window."""
 
     codes: np.ndarray
@@ -578,7 +567,7 @@ class _Sensors:
 
 
 def _decide_sensors_window(core: MonitorCore, window: Window, refusals: '_Refusals') -> _Sensors:
-    """Every tick's sensor states (the arrays the core hands core.monitor.sensor_state one tick
+    """Every tick's sensor states (the arrays the core hands core.rules.sensor_state one tick
     at a time); leaves the core's sensor memories as after the window."""
     a, ticks = core.config.alarm, window.ticks
     lines = core.state.lines
@@ -695,7 +684,7 @@ def _decide_tide(
 @dataclass
 class _Blind:
     """The sensors' common-cause alarm at the tide's decisions
-    (core.monitor.health.sensors_status)."""
+    (core.rules.health.sensors_status)."""
 
     waiting: np.ndarray  # (decisions, lines) bool: the line has had no tension yet
     levels: np.ndarray  # int8 Level per decision
@@ -1026,7 +1015,7 @@ def _solve_at(
 def _mark_implausible(
     values: dict[str, np.ndarray], status: np.ndarray, used: Optional[np.ndarray], code: np.ndarray
 ) -> None:
-    """Implausible readings (core.monitor.plausible), as the core marks them: their status, no
+    """Implausible readings (core.rules.plausible), as the core marks them: their status, no
     solved values (the measured tension and depth kept), the inextensible model named."""
     hit = code != 0
     if not hit.any():
@@ -1317,7 +1306,7 @@ def _window_journal(
 @dataclass
 class _Refusals:
     """The arrival times (ns) of the samples refused for their header stamps in a window
-    (:func:`catenary_monitor.core.monitor.readings.stamp_faults`): per line, and the depth's."""
+    (:func:`catenary_monitor.core.rules.readings.stamp_faults`): per line, and the depth's."""
 
     lines: list[np.ndarray]
     depth: np.ndarray

@@ -1,7 +1,7 @@
 """Margins with the waves and the sensors' accuracy: the worst case over the box of true readings.
 
 The tension the bounds start from is the line's *dynamic tension* ``T_dyn = peak_tension +
-wave_allowance x wave_tension`` (:mod:`catenary_monitor.core.monitor.wave_window`: the largest
+wave_allowance x wave_tension`` (:mod:`catenary_monitor.core.rules.wave_window`: the largest
 reading of the last ``wave_window`` seconds plus an allowance for the anchor's dynamic force
 beyond the quasi-static; 0.3 covers every MoorDyn scene of docs/dynamics.md), not the one
 reading: the quasi-static solve at ``T_dyn`` is the ``dynamic_uplift`` (:func:`dynamic_uplift`),
