@@ -1,4 +1,4 @@
-"""Alarm acknowledgement (core/monitor/acknowledge.py): ISA-18.2 states, through the monitor
+"""Alarm acknowledgement (core/alarms/acknowledge.py): ISA-18.2 states, through the monitor
 core."""
 
 import json
@@ -13,7 +13,7 @@ from replay_data import (  # noqa: F401 - the oracle's helpers
     generate,
 )
 
-from catenary_monitor.core.monitor import acknowledge as ack
+from catenary_monitor.core.alarms import acknowledge as ack
 from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.monitor.monitor_core import (
     Acknowledge,

@@ -14,7 +14,7 @@ import pytest
 from replay_data import dock_config
 from ros_harness import child_env
 
-from catenary_monitor.core.monitor.alarm_journal import AlarmEvent
+from catenary_monitor.core.alarms.journal import AlarmEvent
 from catenary_monitor.core.monitor.monitor_core import Start
 from catenary_monitor.replay.alarm_report import AlarmReport
 

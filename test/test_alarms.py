@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig
-from catenary_monitor.core.monitor.alarms import (
+from catenary_monitor.core.alarms.latches import (
     DIAGNOSTIC_KEYS,
     AlarmInputs,
     LineAlarm,
@@ -600,7 +600,7 @@ def test_diagnostic_values_keys_and_exact_strings():
 def test_core_modules_import_without_rclpy():
     code = (
         "import sys; sys.modules['rclpy'] = None; "
-        "import catenary_monitor.core.config.parameters, catenary_monitor.core.monitor.alarms; "
+        "import catenary_monitor.core.config.parameters, catenary_monitor.core.alarms.latches; "
         "print('ok')"
     )
     out = subprocess.run(
@@ -619,7 +619,7 @@ def test_margin_codes_match_the_scalar() -> None:
     """The warnings with a deadband classified on columns give LineAlarm._classify's code for
     every update: values at, below and between the limits, NaN and infinities, stale and fresh
     inputs; None where the latch is down and nothing breaches."""
-    from catenary_monitor.core.monitor import alarms
+    from catenary_monitor.core.alarms import latches as alarms
 
     alarm = alarms.LineAlarm(AlarmConfig(), 0.0)
     rng = np.random.default_rng(11)
@@ -666,7 +666,7 @@ def test_the_latch_column_loop_equals_the_scalar_step():
     """alarms._latch_series (the latch's column loop) equals repeated alarms._step, from latches
     up or down, pending (since a past update's stamp) or not, through equal stamps and zero
     delays."""
-    from catenary_monitor.core.monitor import alarms
+    from catenary_monitor.core.alarms import latches as alarms
 
     rng = np.random.default_rng(5)
     for trial in range(2000):

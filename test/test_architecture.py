@@ -88,7 +88,7 @@ def _layer(name: str) -> str:
 
 
 #: The core's rooms, bottom first: each may import those before it.
-CORE_ROOMS = ('physics', 'config', 'body', 'rules', 'monitor')
+CORE_ROOMS = ('physics', 'config', 'body', 'rules', 'alarms', 'monitor')
 CORE = set(CORE_ROOMS)
 
 #: What each layer may import of the project. The top level is the numerical core's face
@@ -99,6 +99,7 @@ ALLOWED = {
     'config': {'physics', 'config'},
     'body': {'physics', 'config', 'body'},
     'rules': {'physics', 'config', 'body', 'rules'},
+    'alarms': {'physics', 'config', 'body', 'rules', 'alarms'},
     'monitor': CORE,
     'io': {'io'},
     'replay': {'top', *CORE, 'io', 'replay'},

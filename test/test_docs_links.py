@@ -6,7 +6,7 @@ sorted by role (``batch``, ``kernels``, ...) is reported with its new name.
 
 Read from the Markdown text and the sources' syntax trees, with no import of the package (no
 ROS needed): links ``[t](target)``, ``![t](target)`` and ``<img src=...>`` outside fenced code
-blocks; paths such as ``core/monitor/alarms.py`` or ``test/test_batch.py::test_x`` anywhere
+blocks; paths such as ``core/alarms/latches.py`` or ``test/test_batch.py::test_x`` anywhere
 outside fenced code blocks. docs/CHANGES.md is history (it names modules as they were called):
 its links only. The shipped params files (config/*.yaml) are held to the same in their comments.
 Web links are not fetched.
@@ -294,9 +294,9 @@ def test_the_checker_sees_what_is_broken(tmp_path):
     page.write_text(
         '# Title\n\n## Title\n\n[ok](#title-1) [bad](#nowhere) [gone](missing.md)\n'
         '```\n[in a code block](ignored.md) core/none.py\n```\n'
-        'see `core/monitor/alarms.py`, core/monitor/nothing.py and '
-        'test/test_docs_links.py::test_not_here; `core.monitor.alarms.LineAlarm`, '
-        '`catenary_monitor.core.monitor.alarms.NoSuch`, `catenary_monitor.nothing.x`, '
+        'see `core/alarms/latches.py`, core/monitor/nothing.py and '
+        'test/test_docs_links.py::test_not_here; `core.alarms.latches.LineAlarm`, '
+        '`catenary_monitor.core.alarms.latches.NoSuch`, `catenary_monitor.nothing.x`, '
         '`batch.advance`, `twin.advance(core, window)`, `twin.nothing`, `np.empty`\n',
         encoding='utf-8',
     )
@@ -305,9 +305,9 @@ def test_the_checker_sees_what_is_broken(tmp_path):
     assert 'ignored' not in problems and 'core/none.py' not in problems  # in a code block
     assert 'no file core/monitor/nothing.py' in problems
     assert 'has no test test_not_here' in problems
-    assert 'alarms defines no NoSuch' in problems
+    assert 'latches defines no NoSuch' in problems
     assert 'catenary_monitor defines no nothing' in problems
-    assert 'core/monitor/alarms.py' not in problems
+    assert 'core/alarms/latches.py' not in problems
     assert 'LineAlarm' not in problems and 'np.empty' not in problems
     assert 'batch.advance: batch is now core.monitor.twin' in problems
     assert 'twin defines no nothing' in problems and 'twin.advance' not in problems

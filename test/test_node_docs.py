@@ -26,7 +26,7 @@ def test_core_and_node_cli_import_without_rclpy():
         "import sys; sys.modules['rclpy'] = None\n"
         "import catenary_monitor.cli.main, catenary_monitor.ros.simulator\n"
         "import catenary_monitor.core.rules.health\n"
-        "import catenary_monitor.core.config.parameters, catenary_monitor.core.monitor.alarms\n"
+        "import catenary_monitor.core.config.parameters, catenary_monitor.core.alarms.latches\n"
     )
     subprocess.run(
         [sys.executable, '-c', code],

@@ -20,7 +20,7 @@ from scipy.optimize import brentq
 from sensor_bag import column, replay_csv, write_bag
 
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor.alarms import CONDITIONS
+from catenary_monitor.core.alarms.latches import CONDITIONS
 from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.monitor.monitor_core import MonitorCore, Tension
 from catenary_monitor.core.monitor.twin import tick_grid

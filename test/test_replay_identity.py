@@ -68,7 +68,7 @@ def test_rows_per_tension_message():
 def test_latch_fast_path_without_breach():
     """alarms._latch_series returns at once when no update breaches (most conditions of most
     lines in a real log); it equals the scalar latch step, with and without breaches."""
-    from catenary_monitor.core.monitor import alarms
+    from catenary_monitor.core.alarms import latches as alarms
 
     rng = np.random.default_rng(0)
     t = np.cumsum(rng.uniform(0, 1, 400))

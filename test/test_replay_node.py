@@ -337,7 +337,7 @@ def test_replay_of_a_live_node_log_redoes_every_step(tmp_path, form):
     # The acknowledgements: recorded (the unknown line refused), replayed, seen on /diagnostics.
     from catenary_monitor.core.monitor.monitor_core import Acknowledge
 
-    from catenary_monitor.core.monitor.acknowledge import ORIGIN_LIMIT
+    from catenary_monitor.core.alarms.acknowledge import ORIGIN_LIMIT
 
     acks = [e for e in result.events if isinstance(e, Acknowledge)]
     bounded = 'replay test ' + 'x' * (ORIGIN_LIMIT - 15) + '...'

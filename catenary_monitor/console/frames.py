@@ -1,7 +1,7 @@
 """What the console page shows, built from what the monitor published (no rclpy, no HTTP).
 
 The console decides nothing: levels, messages, alarm states and acknowledgements come from the
-monitor's ``/diagnostics`` (:mod:`catenary_monitor.core.monitor.acknowledge` made them) and the
+monitor's ``/diagnostics`` (:mod:`catenary_monitor.core.alarms.acknowledge` made them) and the
 values from its per-line outputs. This module turns those into one JSON-ready *frame* for the page
 (:func:`build_frame`), the alarm list (:func:`alarm_rows`), the alarm history (by comparing
 consecutive arrays, :class:`History`) and trend series bucketed for a chart (:class:`Trend`,
@@ -20,7 +20,7 @@ from typing import Any, Iterable, Mapping, Optional, Sequence
 import numpy as np
 
 from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, MonitorConfig
-from catenary_monitor.core.monitor.acknowledge import SENSORS
+from catenary_monitor.core.alarms.acknowledge import SENSORS
 from catenary_monitor.core.monitor.monitor_core import NODE_NAME, OUTPUT_FIELDS
 
 __all__ = [

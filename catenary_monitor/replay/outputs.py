@@ -26,7 +26,7 @@ from catenary_monitor.core.config.parameters import (
 )
 from catenary_monitor.core.rules import dock_watch as dock_live
 from catenary_monitor.core.rules import holding, sensor_state
-from catenary_monitor.core.monitor.alarms import VIEW_TEXT
+from catenary_monitor.core.alarms.latches import VIEW_TEXT
 from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,

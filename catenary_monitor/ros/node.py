@@ -76,7 +76,7 @@ from catenary_monitor.core.config.parameters import (
     runtime_change_refusal,
 )
 from catenary_monitor.core.rules import readings
-from catenary_monitor.core.monitor.acknowledge import (
+from catenary_monitor.core.alarms.acknowledge import (
     ACKNOWLEDGE_TOPIC,
     SENSORS,
     bounded_text,
@@ -84,10 +84,10 @@ from catenary_monitor.core.monitor.acknowledge import (
     parse_request,
     publisher_identity,
 )
-from catenary_monitor.core.monitor.alarm_journal import AlarmEvent
+from catenary_monitor.core.alarms.journal import AlarmEvent
 from catenary_monitor.core.rules.level import Level
-from catenary_monitor.core.monitor.shelving import SHELVE_TOPIC
-from catenary_monitor.core.monitor.shelving import parse_request as parse_shelve_request
+from catenary_monitor.core.alarms.shelving import SHELVE_TOPIC
+from catenary_monitor.core.alarms.shelving import parse_request as parse_shelve_request
 from catenary_monitor.core.rules.health import clock_stopped
 from catenary_monitor.core.monitor.monitor_core import (
     EVENTS_TOPIC,

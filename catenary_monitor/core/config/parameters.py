@@ -32,6 +32,8 @@ from catenary_monitor.core.config.tide_constituents import (
 __all__ = [
     'REQUIRED',
     'ALARM_CONDITIONS',
+    'COMPONENTS',
+    'RESERVED_NAMES',
     'FLOAT64',
     'TENSION_TYPES',
     'DEPTH_TYPES',
@@ -1202,8 +1204,9 @@ _PER_LINE = {p.name: p for p in PARAMETERS if p.scope == 'line'}
 ROS_BUILTIN_PARAMETERS = frozenset({'use_sim_time', 'start_type_description_service'})
 _ROS_BUILTIN_PREFIXES = ('qos_overrides.',)
 
-#: Every condition of a line's alarm (core.monitor.alarms.CONDITIONS, then ``stale``): the names
-#: of ``unshelvable_conditions`` and of a shelved condition (test_shelving checks they agree).
+#: Every condition of a line's alarm, the one list of their names: the latched ones in message
+#: order, ERRORs then WARNs (:data:`catenary_monitor.core.alarms.latches.CONDITIONS`), then
+#: ``stale`` (no latch); the names of ``unshelvable_conditions`` and of a shelved condition.
 ALARM_CONDITIONS = (
     'uplift',
     'input',
@@ -1213,20 +1216,24 @@ ALARM_CONDITIONS = (
     'safety_factor',
     'time_to_uplift',
     'inconsistent',
+    # Margins within the sensors' accuracy, and holding.
     'uplift_possible',
     'drag_margin',
+    # Sensor sanity: core/rules/sensor_state.py.
     'sensor_error',
     'sensor_warn',
+    # Hou et al.'s third regime, the anchor dragging: core/rules/holding.py.
     'dragging',
+    # Chain fatigue (Miner's damage): core/rules/fatigue.py.
     'fatigue',
+    # A load cell's channel failed (the tension from the others): core/rules/channels.py.
     'channel',
     'stale',
 )
 
 _LINE_NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*\Z')
-#: Names of the monitor's own statuses (``catenary_monitor: tide``, ...) and of the
-#: acknowledgement of every alarm (``all``): no line may take one.
-RESERVED_NAMES = (
+#: The monitor's own statuses on /diagnostics (``catenary_monitor: tide``, ...), not lines.
+COMPONENTS = (
     'tide',
     'sensors',
     'alarms',
@@ -1236,8 +1243,10 @@ RESERVED_NAMES = (
     'clock',
     'intake',
     'fatigue',
-    'all',
 )
+#: The names no line may take: the components', and ``all`` (the acknowledgement of every
+#: alarm, :data:`catenary_monitor.core.alarms.acknowledge.ALL_LINES`).
+RESERVED_NAMES = (*COMPONENTS, 'all')
 
 
 def _check_line_name(name: object) -> None:

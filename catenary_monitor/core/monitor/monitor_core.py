@@ -7,8 +7,8 @@ tide and logger statuses, and turns each event into one :class:`Step`:
   :class:`Tick` (the periodic step, at ``diagnostic_rate``), :class:`LoggerHealth` (the MCAP
   logger's state changed), :class:`Reconfigure` (accepted parameter change) and
   :class:`Acknowledge` (an operator acknowledged a line's alarm, or all:
-  :mod:`catenary_monitor.core.monitor.acknowledge`) and :class:`Shelve` (an operator shelved or
-  unshelved an alarm: :mod:`catenary_monitor.core.monitor.shelving`), each with its time
+  :mod:`catenary_monitor.core.alarms.acknowledge`) and :class:`Shelve` (an operator shelved or
+  unshelved an alarm: :mod:`catenary_monitor.core.alarms.shelving`), each with its time
   ``stamp_ns`` (ns on the monitor's clock; events come in time order).
 
 What an event does, in this order (the one schedule the node, replay and the tests share):
@@ -18,18 +18,18 @@ What an event does, in this order (the one schedule the node, replay and the tes
    is stale (older than ``depth_timeout``), one decision that every line then takes;
 3. lines are solved (``solve(..., ea=line.ea)``): a tension event solves its line at the newest
    depth (``depth + hook_height``); a depth event solves every line that has a tension;
-4. alarms are stepped (:class:`~catenary_monitor.core.monitor.alarms.LineAlarm`): the solved
+4. alarms are stepped (:class:`~catenary_monitor.core.alarms.latches.LineAlarm`): the solved
    line at a tension event, every line at a depth event or a tick; each stepped line's
    acknowledgement state follows its level
-   (:func:`catenary_monitor.core.monitor.acknowledge.step`);
+   (:func:`catenary_monitor.core.alarms.acknowledge.step`);
 5. the alarm flood is decided when the event raised an alarm and at a tick
-   (:mod:`catenary_monitor.core.monitor.alarm_flood`);
+   (:mod:`catenary_monitor.core.alarms.flood`);
 6. a diagnostic snapshot is taken when the event is a tick or when any level changed: never two
    per event, so the statuses of one snapshot always agree.
 
 The :class:`Step` carries the outputs of the lines solved (:data:`OUTPUT_FIELDS`), the snapshot
 (or None), the level transitions and the alarm journal's records
-(:mod:`catenary_monitor.core.monitor.alarm_journal`). A line is never OK while blind: before
+(:mod:`catenary_monitor.core.alarms.journal`). A line is never OK while blind: before
 its first tension and before the first depth it is STALE and says what is missing. Times in the
 alarm logic are seconds (``stamp_ns * 1e-9``); forces N, lengths m.
 """
@@ -52,9 +52,9 @@ from catenary_monitor.core.config.parameters import (
     resolve_topic,
     runtime_change_messages,
 )
-from catenary_monitor.core.monitor import acknowledge as alarm_ack
+from catenary_monitor.core.alarms import acknowledge as alarm_ack
 from catenary_monitor.core.rules import channels
-from catenary_monitor.core.monitor import alarm_flood, shelving
+from catenary_monitor.core.alarms import flood as alarm_flood, shelving
 from catenary_monitor.core.rules import dock_watch as dock_live
 from catenary_monitor.core.rules import fatigue as fatigue_rule
 from catenary_monitor.core.rules import holding as holding_rule
@@ -66,8 +66,8 @@ from catenary_monitor.core.rules import (
     uncertainty,
     wave_window,
 )
-from catenary_monitor.core.monitor.alarm_journal import AlarmEvent, entries
-from catenary_monitor.core.monitor.alarms import (
+from catenary_monitor.core.alarms.journal import AlarmEvent, entries
+from catenary_monitor.core.alarms.latches import (
     CONDITIONS,
     AlarmInputs,
     AlarmState,
@@ -77,7 +77,7 @@ from catenary_monitor.core.monitor.alarms import (
     quiet_change,
 )
 from catenary_monitor.core.rules.level import RANK, Level
-from catenary_monitor.core.monitor.alarms import VIEW_TEXT
+from catenary_monitor.core.alarms.latches import VIEW_TEXT
 from catenary_monitor.core.rules.health import (
     BUSY_WINDOW,
     INTAKE_WINDOW,
@@ -105,7 +105,6 @@ __all__ = [
     'NO_DEPTH',
     'NO_MODEL',
     'EVENTS_TOPIC',
-    'COMPONENTS',
     'Tension',
     'Depth',
     'Tick',
@@ -209,18 +208,6 @@ EVENTS_TOPIC = f'/{NODE_NAME}/events'
 _NAN = math.nan
 _INCONSISTENT = CONDITIONS.index('inconsistent')
 _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
-#: The statuses on /diagnostics that are not lines (``catenary_monitor: NAME``).
-COMPONENTS = (
-    'tide',
-    'sensors',
-    'alarms',
-    'logger',
-    'dock',
-    'parameters',
-    'clock',
-    'intake',
-    'fatigue',
-)
 #: The components whose STALE is a consequence of blind inputs, announced by the sensors alarm.
 _CONSEQUENCES = ('tide', 'dock')
 _NAN_VALUES = (_NAN,) * len(VALUE_FIELDS)
@@ -291,7 +278,7 @@ class Acknowledge(NamedTuple):
 
 class Shelve(NamedTuple):
     """An operator shelved ``alarm`` (a line, or ``sensors``) or one ``condition`` of it
-    (:data:`~catenary_monitor.core.monitor.acknowledge.WHOLE`: the whole alarm) for
+    (:data:`~catenary_monitor.core.alarms.acknowledge.WHOLE`: the whole alarm) for
     ``seconds`` (0: unshelve it), from ``origin`` (as claimed), published by ``publisher``
     (the middleware's identity of the sender; '' from the console's page)."""
 
@@ -1439,7 +1426,7 @@ class MonitorCore:
         self, status: tuple[Level, str], flood: alarm_flood.Flood
     ) -> ComponentStatus:
         """The ``catenary_monitor: alarms`` status: the flood decision ``status`` and ``flood``
-        (:mod:`catenary_monitor.core.monitor.alarm_flood`), the shelving rules and the answer
+        (:mod:`catenary_monitor.core.alarms.flood`), the shelving rules and the answer
         to the newest shelving request."""
         values = alarm_flood.values(
             flood, self.config.alarm, self.state.shelve_answer, self.state.shelve_requests

@@ -32,14 +32,14 @@ from typing import Any, NamedTuple, Optional
 import numpy as np
 
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
-from catenary_monitor.core.monitor import acknowledge as alarm_ack
+from catenary_monitor.core.alarms import acknowledge as alarm_ack
 from catenary_monitor.core.rules import channels
-from catenary_monitor.core.monitor import alarm_flood, shelving
+from catenary_monitor.core.alarms import flood as alarm_flood, shelving
 from catenary_monitor.core.rules import dock_watch as dock_live
 from catenary_monitor.core.rules import fatigue as fatigue_rule
 from catenary_monitor.core.rules import readings, sensor_state, tide_table, tide_trend, wave_window
-from catenary_monitor.core.monitor.alarm_journal import AlarmEvent, entries, raised
-from catenary_monitor.core.monitor.alarms import (
+from catenary_monitor.core.alarms.journal import AlarmEvent, entries, raised
+from catenary_monitor.core.alarms.latches import (
     DIAGNOSTIC_KEYS,
     LevelSeries,
     Transition,

@@ -33,7 +33,7 @@ newest tick's estimate, in the core and in its twin alike.
 The ``dock`` status is STALE while no estimate can be made (fewer than three readings, or no
 usable depth) and OK otherwise; its message gives the offset and the load and names the lines
 flagged. A line's ``inconsistent`` alarm condition (WARN) is latched in
-:mod:`catenary_monitor.core.monitor.alarms` (``on_delay``, ``warn_clear_hold``).
+:mod:`catenary_monitor.core.alarms.latches` (``on_delay``, ``warn_clear_hold``).
 """
 
 from __future__ import annotations

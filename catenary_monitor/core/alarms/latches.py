@@ -70,7 +70,7 @@ received yet"), never OK before its inputs are known.
 received since the start, or no depth / the depth stale: every line shares the depth), not
 because its own tension went stale after it reported, is ``suppressed``: its message says so
 (``blind: no depth received yet (suppressed by design: alarm on sensors)``), its alarm is not
-active (:mod:`catenary_monitor.core.monitor.acknowledge`) and its changes into and out of that
+active (:mod:`catenary_monitor.core.alarms.acknowledge`) and its changes into and out of that
 STALE are not announced (:attr:`Transition.suppressed`): the one ``sensors`` alarm reports the
 cause (:func:`catenary_monitor.core.rules.health.sensors_status`).
 
@@ -88,7 +88,7 @@ from typing import Any, Mapping, NamedTuple, Sequence
 
 import numpy as np
 
-from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig
+from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, AlarmConfig, LineConfig
 from catenary_monitor.core.rules.level import RANK, Level
 from catenary_monitor.core.rules import sensor_state
 from catenary_monitor.core.rules.channels import describe
@@ -112,29 +112,9 @@ __all__ = [
 ]
 
 
-#: Latched conditions, in message order: ERRORs, then WARNs.
-CONDITIONS = (
-    'uplift',
-    'input',
-    'anchor_margin',
-    'tide_margin',
-    'load_margin',
-    'safety_factor',
-    'time_to_uplift',
-    'inconsistent',
-    # Margins within the sensors' accuracy, and holding.
-    'uplift_possible',
-    'drag_margin',
-    # Sensor sanity: core/rules/sensor_state.py.
-    'sensor_error',
-    'sensor_warn',
-    # Hou et al.'s third regime, the anchor dragging: core/rules/holding.py.
-    'dragging',
-    # Chain fatigue (Miner's damage): core/rules/fatigue.py.
-    'fatigue',
-    # A load cell's channel failed (the tension from the others): core/rules/channels.py.
-    'channel',
-)
+#: Latched conditions, in message order: ERRORs, then WARNs (every alarm condition but
+#: ``stale``, which has no latch).
+CONDITIONS = tuple(c for c in ALARM_CONDITIONS if c != 'stale')
 #: The conditions that raise an ERROR (the others a WARN).
 ERROR_CONDITIONS = _ERRORS = ('uplift', 'input', 'sensor_error', 'dragging')
 _WARNS = tuple(c for c in CONDITIONS if c not in _ERRORS)
