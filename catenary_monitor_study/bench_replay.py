@@ -42,7 +42,8 @@ from typing import Any, Optional
 import numpy as np
 
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
-from catenary_monitor.core.monitor.monitor_core import Depth, MonitorCore, Tension, Tick
+from catenary_monitor.core.monitor.events import Depth, Tension, Tick
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 from catenary_monitor.core.physics.solve import solve
 from catenary_monitor.io.cdr import float64_payloads
 from catenary_monitor.io.mcap_column_writer import ColumnWriter

@@ -15,13 +15,13 @@ from replay_data import (  # noqa: F401 - the oracle's helpers
 
 from catenary_monitor.core.alarms import acknowledge as ack
 from catenary_monitor.core.rules.level import Level
-from catenary_monitor.core.monitor.monitor_core import (
+from catenary_monitor.core.monitor.events import (
     Acknowledge,
-    MonitorCore,
     Tick,
     event_record,
     parse_event_record,
 )
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 
 S = 10**9
 

@@ -21,16 +21,16 @@ from catenary_monitor.core.alarms import acknowledge as ack
 from catenary_monitor.core.alarms import flood as alarm_flood, shelving
 from catenary_monitor.core.alarms.latches import CONDITIONS
 from catenary_monitor.core.rules.level import Level
-from catenary_monitor.core.monitor.monitor_core import (
+from catenary_monitor.core.monitor.events import (
     Acknowledge,
     Depth,
-    MonitorCore,
     Shelve,
     Tension,
     Tick,
     event_record,
     parse_event_record,
 )
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 from catenary_monitor.core.monitor.twin import Window, run_log
 
 S = 10**9

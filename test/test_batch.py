@@ -16,18 +16,9 @@ from hypothesis import strategies as st
 from replay_data import T0_NS, core_steps, dock_config, events_of, generate
 
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
-from catenary_monitor.core.monitor.monitor_core import (
-    OUTPUT_FIELDS,
-    VALUE_FIELDS,
-    Acknowledge,
-    CoreState,
-    Depth,
-    LineState,
-    MonitorCore,
-    Reconfigure,
-    Tension,
-    Tick,
-)
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS, VALUE_FIELDS, CoreState, LineState
+from catenary_monitor.core.monitor.events import Acknowledge, Depth, Reconfigure, Tension, Tick
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 from catenary_monitor.core.monitor.twin import (
     COLUMNS,
     KIND_TENSION,
@@ -572,7 +563,7 @@ def test_run_log_steps_clock_and_intake_events_as_the_core_does():
     transitions as the core; drops age out of the 60 s window."""
     import json
 
-    from catenary_monitor.core.monitor.monitor_core import (
+    from catenary_monitor.core.monitor.events import (
         ClockHealth,
         Intake,
         event_record,
@@ -721,11 +712,7 @@ def _coalescing_records(config, tensions, depth, seed):
     checked."""
     import json
 
-    from catenary_monitor.core.monitor.monitor_core import (
-        Coalesced,
-        event_record,
-        parse_event_record,
-    )
+    from catenary_monitor.core.monitor.events import Coalesced, event_record, parse_event_record
 
     rng = np.random.default_rng(seed)
     columns = [(line.name, tensions[line.name][0]) for line in config.lines]

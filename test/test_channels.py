@@ -14,13 +14,9 @@ from catenary_monitor.core.config.parameters import (
 )
 from catenary_monitor.core.rules import channels
 from catenary_monitor.core.rules.level import Level
-from catenary_monitor.core.monitor.monitor_core import (
-    OUTPUT_FIELDS,
-    Depth,
-    MonitorCore,
-    Tension,
-    Tick,
-)
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.events import Depth, Tension, Tick
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 from catenary_monitor.core.monitor.twin import Window, run_log
 
 TOPICS = ('/cell/a', '/cell/b', '/cell/c')

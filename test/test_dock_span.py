@@ -23,13 +23,9 @@ from sensor_bag import column, replay_csv, write_bag
 
 from catenary_monitor.core.body.dock_model import DockModel
 from catenary_monitor.core.config.parameters import config_from_params, load_params_file
-from catenary_monitor.core.monitor.monitor_core import (
-    OUTPUT_FIELDS,
-    MonitorCore,
-    Reconfigure,
-    Tension,
-    Tick,
-)
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
+from catenary_monitor.core.monitor.events import Reconfigure, Tension, Tick
 from catenary_monitor.core.monitor.twin import tick_grid
 from catenary_monitor.core.physics.solve import solve
 

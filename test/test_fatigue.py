@@ -182,8 +182,10 @@ def test_the_monitor_counts_every_tension_and_its_replay_agrees():
     """Every tension sample through MonitorCore: fatigue_damage in the outputs is the
     independent rainflow + Miner count of the samples so far (1e-9); the vectorized twin
     (replay) gives the same bits; the seed's curve scaled to this MBL."""
-    from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore
-    from catenary_monitor.core.monitor.monitor_core import Tension, Tick
+    from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+    from catenary_monitor.core.monitor.events import Depth
+    from catenary_monitor.core.monitor.monitor_core import MonitorCore
+    from catenary_monitor.core.monitor.events import Tension, Tick
     from catenary_monitor.core.monitor.twin import recompute
 
     config = _config()
@@ -219,9 +221,10 @@ def test_the_store_carries_the_count_across_a_restart_and_replay_follows(tmp_pat
     """Run, save the store, restart (a new core and the store's FatigueStore event): the count
     goes on as if never stopped; replaying the log's events (Start, FatigueStore) gives the
     restarted core's bits."""
-    from catenary_monitor.core.monitor.monitor_core import Depth, FatigueStore, MonitorCore
-    from catenary_monitor.core.monitor.monitor_core import Start, Tension, event_record
-    from catenary_monitor.core.monitor.monitor_core import parse_event_record
+    from catenary_monitor.core.monitor.events import Depth, FatigueStore
+    from catenary_monitor.core.monitor.monitor_core import MonitorCore
+    from catenary_monitor.core.monitor.events import Start, Tension, event_record
+    from catenary_monitor.core.monitor.events import parse_event_record
     from catenary_monitor.core.monitor.twin import Window, run_log
     from catenary_monitor.io import fatigue_store
 

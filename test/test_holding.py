@@ -10,7 +10,9 @@ import pytest
 from catenary_monitor import solve
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
 from catenary_monitor.core.rules.level import Level
-from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore, Tension
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.events import Depth, Tension
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 
 LAMBDA_A, LAMBDA_C = 3.0, 0.75  # a holding coefficient and a chain friction (seed 001's form)
 ANCHOR = 2500.0  # kgf, Hou's anchor
@@ -312,7 +314,7 @@ def test_the_core_takes_the_plain_float_path_on_a_tension_and_the_array_path_on_
 def _storm(spans, line, **alarm):
     """The core and its twin through one tension a second at those spans (Hou's depth 13 m,
     a tick a second): the core's outputs and transitions, and the twin's."""
-    from catenary_monitor.core.monitor.monitor_core import Tick
+    from catenary_monitor.core.monitor.events import Tick
     from catenary_monitor.core.monitor.twin import recompute
 
     config = MonitorConfig(lines=(line,), alarm=AlarmConfig(clear_hold=0.0, **alarm))

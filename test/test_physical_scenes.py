@@ -22,7 +22,8 @@ from sensor_bag import column, replay_csv, write_bag
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
 from catenary_monitor.core.alarms.latches import CONDITIONS
 from catenary_monitor.core.rules.level import Level
-from catenary_monitor.core.monitor.monitor_core import MonitorCore, Tension
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
+from catenary_monitor.core.monitor.events import Tension
 from catenary_monitor.core.monitor.twin import tick_grid
 
 os.environ.setdefault('PYTHONBREAKPOINT', '0')  # MoorPy calls breakpoint() on some errors

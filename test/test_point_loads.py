@@ -163,8 +163,10 @@ def test_the_monitor_and_its_replay_solve_a_line_with_a_clump_and_a_buoy():
     the same values (solve() with point_loads, equal to the bit), the point-load model named,
     a lifted anchor's ERROR; the plain line beside it unchanged."""
     from catenary_monitor import solve
-    from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore
-    from catenary_monitor.core.monitor.monitor_core import Tension, Tick
+    from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+    from catenary_monitor.core.monitor.events import Depth
+    from catenary_monitor.core.monitor.monitor_core import MonitorCore
+    from catenary_monitor.core.monitor.events import Tension, Tick
     from catenary_monitor.core.monitor.twin import recompute
 
     config = _loaded_config([40.0, 90.0], [60e3, -25e3])
@@ -256,8 +258,10 @@ def test_bounds_and_holding_of_a_line_with_point_loads_live_and_in_replay():
     and the replay twin's to the bit; the implied anchor distance gives back the tension
     (solve_length) and the tide margin at length is where that chain lifts its anchor."""
     from catenary_monitor.core.rules.holding import FIELDS as HOLD
-    from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore
-    from catenary_monitor.core.monitor.monitor_core import Tension, Tick
+    from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+    from catenary_monitor.core.monitor.events import Depth
+    from catenary_monitor.core.monitor.monitor_core import MonitorCore
+    from catenary_monitor.core.monitor.events import Tension, Tick
     from catenary_monitor.core.monitor.twin import recompute
 
     config = _loaded_config(

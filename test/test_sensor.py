@@ -11,7 +11,7 @@ from test_batch import compare, ticks_for
 
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
 from catenary_monitor.core.rules import sensor_state
-from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 from catenary_monitor.core.monitor.twin import recompute
 from catenary_monitor.core.physics.solve import solve
 

@@ -22,7 +22,9 @@ from test_batch import compare
 
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
 from catenary_monitor.core.rules import tide_trend
-from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore, Tension
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.events import Depth, Tension
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 
 W, X = 1300.0, 120.0  # chain weight N/m, anchor distance m
 H = 150e3  # horizontal tension held, N

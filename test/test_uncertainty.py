@@ -10,7 +10,9 @@ import pytest
 from catenary_monitor import solve
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
 from catenary_monitor.core.rules.level import Level
-from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore, Tension
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.events import Depth, Tension
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 from catenary_monitor.core.rules.uncertainty import T_STAR, bounds
 
 W, X = 1300.0, 120.0

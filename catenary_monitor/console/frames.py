@@ -21,7 +21,8 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, MonitorConfig
 from catenary_monitor.core.alarms.acknowledge import SENSORS
-from catenary_monitor.core.monitor.monitor_core import NODE_NAME, OUTPUT_FIELDS
+from catenary_monitor.core.monitor.events import NODE_NAME
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 
 __all__ = [
     'AckError',

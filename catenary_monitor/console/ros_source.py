@@ -32,7 +32,8 @@ from catenary_monitor.console.frames import (
 from catenary_monitor.core.alarms.acknowledge import ACKNOWLEDGE_TOPIC, ALL_LINES, SENSORS, WHOLE
 from catenary_monitor.core.alarms.shelving import SHELVE_TOPIC
 from catenary_monitor.core.config.parameters import COMPONENTS, MonitorConfig
-from catenary_monitor.core.monitor.monitor_core import NODE_NAME, OUTPUT_FIELDS
+from catenary_monitor.core.monitor.events import NODE_NAME
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 
 __all__ = ['LiveSource', 'AckError', 'ANSWER_WAIT']
 

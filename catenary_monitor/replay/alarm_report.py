@@ -28,7 +28,7 @@ import numpy as np
 from catenary_monitor.core.config.parameters import MonitorConfig
 from catenary_monitor.core.alarms.acknowledge import SENSORS
 from catenary_monitor.core.alarms.journal import AlarmEvent
-from catenary_monitor.core.monitor.monitor_core import Start
+from catenary_monitor.core.monitor.events import Start
 from catenary_monitor.core.monitor.twin import ReplayResult, Window
 
 __all__ = ['AlarmReport', 'TARGETS', 'STANDING_S', 'PERIOD_S', 'report_text']

@@ -53,15 +53,15 @@ from catenary_monitor.core.config.parameters import (
     resolve_topic,
 )
 from catenary_monitor.core.rules import channels, readings
-from catenary_monitor.core.monitor.monitor_core import (
+from catenary_monitor.core.monitor.events import (
     EVENTS_TOPIC,
     NODE_NAME,
-    MonitorCore,
     Reconfigure,
     Start,
     Tick,
     parse_event_record,
 )
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 from catenary_monitor.core.monitor.twin import (
     ReplayResult,
     Window,

@@ -28,7 +28,7 @@ from catenary_monitor.core.rules import dock_watch as dock_live
 from catenary_monitor.core.rules import holding, sensor_state
 from catenary_monitor.core.alarms.latches import VIEW_TEXT
 from catenary_monitor.core.rules.level import Level
-from catenary_monitor.core.monitor.monitor_core import (
+from catenary_monitor.core.monitor.events import (
     EVENTS_TOPIC,
     NODE_NAME,
     Event,
@@ -115,7 +115,7 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('implied_anchor_distance', 3),
     ('tide_margin_at_length', 3),
     # The wave window and the dynamic uplift (core/rules/wave_window.py), and which view the
-    # time to uplift counts down (a word: core.monitor.monitor_core.view_word).
+    # time to uplift counts down (a word: core.monitor.status.view_word).
     ('wave_tension', 3),
     ('peak_tension', 3),
     ('dynamic_uplift', 3),

@@ -89,12 +89,10 @@ from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.alarms.shelving import SHELVE_TOPIC
 from catenary_monitor.core.alarms.shelving import parse_request as parse_shelve_request
 from catenary_monitor.core.rules.health import clock_stopped
-from catenary_monitor.core.monitor.monitor_core import (
+from catenary_monitor.core.monitor.events import (
     EVENTS_TOPIC,
     NODE_NAME,
-    OUTPUT_FIELDS,
     Acknowledge,
-    Change,
     ClockHealth,
     Coalesced,
     Depth,
@@ -102,16 +100,16 @@ from catenary_monitor.core.monitor.monitor_core import (
     FatigueStore,
     Intake,
     LoggerHealth,
-    MonitorCore,
     Reconfigure,
     Shelve,
-    Snapshot,
     Start,
-    Step,
     Tension,
     Tick,
     event_record,
 )
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.status import Change, Snapshot
+from catenary_monitor.core.monitor.monitor_core import MonitorCore, Step
 from catenary_monitor.core.rules.fatigue import to_record
 from catenary_monitor.core.physics import elastic
 from catenary_monitor.io import fatigue_store

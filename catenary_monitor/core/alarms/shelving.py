@@ -7,7 +7,7 @@ ERROR) are never hidden: a request naming one is refused, a whole-alarm shelf ne
 and a whole-alarm shelf asked while one is active is refused. The states themselves (the shelf
 on the alarm, its expiry returning the alarm unacknowledged) are
 :mod:`catenary_monitor.core.alarms.acknowledge`'s; the monitor core applies the requests
-(:class:`~catenary_monitor.core.monitor.monitor_core.Shelve` events) and records them.
+(:class:`~catenary_monitor.core.monitor.events.Shelve` events) and records them.
 
 Requests: ``std_msgs/msg/String`` on :data:`SHELVE_TOPIC`, data ``LINE SECONDS [ORIGIN...]``
 or ``LINE.CONDITION SECONDS [ORIGIN...]`` (``sensors`` for the sensors' common-cause alarm;

@@ -5,7 +5,7 @@ columns.
 (tension samples per line, depth samples, ticks: columns of receive times in ns and values) and
 leaves the core in exactly the state that stepping it event by event would leave (alarm
 states, newest inputs and results, tide), returning what those steps did: every line's solved
-updates (:data:`~catenary_monitor.core.monitor.monitor_core.OUTPUT_FIELDS`), every level transition
+updates (:data:`~catenary_monitor.core.monitor.state.OUTPUT_FIELDS`), every level transition
 and, on request, every diagnostic snapshot. It exists only because it is measured faster (replay of
 a day of log in seconds); ``test/test_batch.py`` feeds the same events to both and compares
 every step.
@@ -48,35 +48,30 @@ from catenary_monitor.core.alarms.latches import (
 )
 from catenary_monitor.core.rules.level import RANK, Level
 from catenary_monitor.core.rules.health import sensors_status, tide_status
-from catenary_monitor.core.monitor.monitor_core import (
-    CONDITIONS,
+from catenary_monitor.core.alarms.latches import CONDITIONS
+from catenary_monitor.core.monitor.state import (
     NO_DEPTH,
     NO_MODEL,
-    NODE_NAME,
     OUTPUT_FIELDS,
     VALUE_FIELDS,
-    Change,
-    Coalesced,
-    ComponentStatus,
     LineState,
-    MonitorCore,
-    Snapshot,
-    Start,
-    channel_limits,
 )
-from catenary_monitor.core.monitor.monitor_core import depth_word as depth_state_word
-from catenary_monitor.core.monitor.monitor_core import (
+from catenary_monitor.core.monitor.events import NODE_NAME, Coalesced, Start
+from catenary_monitor.core.monitor.status import Change, ComponentStatus, Snapshot
+from catenary_monitor.core.monitor.monitor_core import MonitorCore, channel_limits
+from catenary_monitor.core.monitor.status import depth_word as depth_state_word
+from catenary_monitor.core.monitor.status import (
     dock_component,
     forecast_word,
-    derived_values,
     line_dock_values,
     line_status,
-    sensor_limits,
     sensors_component,
     tide_component,
     tide_with_sensor,
     view_word,
 )
+from catenary_monitor.core.monitor.derived import derived_values
+from catenary_monitor.core.monitor.monitor_core import sensor_limits
 from catenary_monitor.core.rules.plausible import MAX_DEPTH, reading_status_array, status_messages
 from catenary_monitor.core.physics import catenary as cat
 from catenary_monitor.core.physics import elastic, fused_kernel, point_loads
