@@ -44,10 +44,10 @@ scan = Extension(
     optional=True,
 )
 
-# The vectorized twin's schedule loops (core/monitor/twin.py): the step merge, step indexes, picks.
+# The vectorized twin's schedule loops (core/twin/schedule.py): step merge, step indexes, picks.
 twin_loops = Extension(
-    'catenary_monitor.core.monitor._twin_loops',
-    sources=['catenary_monitor/core/monitor/_twin_loops.c'],
+    'catenary_monitor.core.twin._twin_loops',
+    sources=['catenary_monitor/core/twin/_twin_loops.c'],
     extra_compile_args=['-O2', '-ffp-contract=off'],
     optional=True,
 )

@@ -50,7 +50,7 @@ def run_scene(
     ``wave_allowance`` ``allowance`` and ``tension_accuracy`` ``accuracy`` (N, None: its
     default)."""
     from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
-    from catenary_monitor.core.monitor.twin import recompute
+    from catenary_monitor.core.twin.engine import recompute
     from catenary_monitor.core.physics.fixed_length import lift_depth
     from catenary_monitor_study.moordyn_scene import Chain, run_line
 

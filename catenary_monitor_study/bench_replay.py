@@ -364,7 +364,7 @@ def run(
 def _streamed(log: Path, config: MonitorConfig, csv: Any = None, mcap: Any = None) -> Any:
     """The streamed replay of the command (ticks on a grid) into a summary tally and, if
     given, a CSV or a results MCAP; returns (tally, CSV rows or MCAP messages)."""
-    from catenary_monitor.core.monitor.twin import COLUMNS
+    from catenary_monitor.core.twin.window import COLUMNS
     from catenary_monitor.replay import outputs as out
     from catenary_monitor.replay.driver import input_topics, stream
 

@@ -31,7 +31,8 @@ from catenary_monitor.core.monitor.events import (
     parse_event_record,
 )
 from catenary_monitor.core.monitor.monitor_core import MonitorCore
-from catenary_monitor.core.monitor.twin import Window, run_log
+from catenary_monitor.core.twin.window import Window
+from catenary_monitor.core.twin.engine import run_log
 
 S = 10**9
 ALL = ack.WHOLE

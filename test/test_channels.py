@@ -17,7 +17,8 @@ from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 from catenary_monitor.core.monitor.events import Depth, Tension, Tick
 from catenary_monitor.core.monitor.monitor_core import MonitorCore
-from catenary_monitor.core.monitor.twin import Window, run_log
+from catenary_monitor.core.twin.window import Window
+from catenary_monitor.core.twin.engine import run_log
 
 TOPICS = ('/cell/a', '/cell/b', '/cell/c')
 GAIN = (1.04, 0.97, 0.99)  # an eccentric link: each gauge carries its own share

@@ -186,7 +186,7 @@ def test_the_monitor_counts_every_tension_and_its_replay_agrees():
     from catenary_monitor.core.monitor.events import Depth
     from catenary_monitor.core.monitor.monitor_core import MonitorCore
     from catenary_monitor.core.monitor.events import Tension, Tick
-    from catenary_monitor.core.monitor.twin import recompute
+    from catenary_monitor.core.twin.engine import recompute
 
     config = _config()
     line = config.lines[0]
@@ -225,7 +225,8 @@ def test_the_store_carries_the_count_across_a_restart_and_replay_follows(tmp_pat
     from catenary_monitor.core.monitor.monitor_core import MonitorCore
     from catenary_monitor.core.monitor.events import Start, Tension, event_record
     from catenary_monitor.core.monitor.events import parse_event_record
-    from catenary_monitor.core.monitor.twin import Window, run_log
+    from catenary_monitor.core.twin.window import Window
+    from catenary_monitor.core.twin.engine import run_log
     from catenary_monitor.io import fatigue_store
 
     config = _config(fatigue_damage_initial=0.125)

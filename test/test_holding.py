@@ -315,7 +315,7 @@ def _storm(spans, line, **alarm):
     """The core and its twin through one tension a second at those spans (Hou's depth 13 m,
     a tick a second): the core's outputs and transitions, and the twin's."""
     from catenary_monitor.core.monitor.events import Tick
-    from catenary_monitor.core.monitor.twin import recompute
+    from catenary_monitor.core.twin.engine import recompute
 
     config = MonitorConfig(lines=(line,), alarm=AlarmConfig(clear_hold=0.0, **alarm))
     tensions = [solve(25.0, 13.0, chain_length=21.0, anchor_distance=x).top_tension for x in spans]

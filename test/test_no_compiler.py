@@ -78,11 +78,11 @@ def test_it_installs_without_a_compiler_and_runs_on_numpy(installed):
     code = (
         'import catenary_monitor as cm\n'
         'from catenary_monitor.core.physics import fused_kernel\n'
-        'from catenary_monitor.core.monitor import twin\n'
+        'from catenary_monitor.core.twin import schedule\n'
         'from catenary_monitor.core.rules import fatigue\n'
         'from catenary_monitor.io import mcap_read\n'
         'print(cm.__file__)\n'
-        'print(fused_kernel.AVAILABLE, twin._loops, fatigue._fatigue_loop, mcap_read._scan)\n'
+        'print(fused_kernel.AVAILABLE, schedule._loops, fatigue._fatigue_loop, mcap_read._scan)\n'
         'print(cm.solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06).uplift_force)\n'
     )
     out = subprocess.run(

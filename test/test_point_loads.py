@@ -167,7 +167,7 @@ def test_the_monitor_and_its_replay_solve_a_line_with_a_clump_and_a_buoy():
     from catenary_monitor.core.monitor.events import Depth
     from catenary_monitor.core.monitor.monitor_core import MonitorCore
     from catenary_monitor.core.monitor.events import Tension, Tick
-    from catenary_monitor.core.monitor.twin import recompute
+    from catenary_monitor.core.twin.engine import recompute
 
     config = _loaded_config([40.0, 90.0], [60e3, -25e3])
     tensions = np.linspace(3.8e5, 1.7e6, 40)
@@ -262,7 +262,7 @@ def test_bounds_and_holding_of_a_line_with_point_loads_live_and_in_replay():
     from catenary_monitor.core.monitor.events import Depth
     from catenary_monitor.core.monitor.monitor_core import MonitorCore
     from catenary_monitor.core.monitor.events import Tension, Tick
-    from catenary_monitor.core.monitor.twin import recompute
+    from catenary_monitor.core.twin.engine import recompute
 
     config = _loaded_config(
         [40.0, 90.0], [60e3, -25e3], chain_length=125.0, anchor_holding=6e5, chain_friction=1.0

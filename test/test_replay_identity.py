@@ -8,14 +8,10 @@ from catenary_monitor.core.rules.holding import FIELDS as HOLDING
 from catenary_monitor.core.rules.channels import FIELDS as CHANNELS
 from catenary_monitor.core.rules.fatigue import FIELDS as FATIGUE
 from catenary_monitor.core.rules.holding import DRAG_FIELDS, LENGTH_FIELDS
-from catenary_monitor.core.monitor.twin import (
-    KIND_TENSION,
-    NO_DEPTH,
-    VALUE_FIELDS,
-    critical_parameters,
-    recompute,
-    solve_updates,
-)
+from catenary_monitor.core.twin.window import KIND_TENSION
+from catenary_monitor.core.monitor.state import NO_DEPTH, VALUE_FIELDS
+from catenary_monitor.core.twin.solve_columns import critical_parameters, solve_updates
+from catenary_monitor.core.twin.engine import recompute
 from catenary_monitor.core.rules.uncertainty import FIELDS as BOUNDS
 from catenary_monitor.core.physics.solve import solve
 

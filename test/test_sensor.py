@@ -1,6 +1,6 @@
-"""Sensor sanity (core/sensor_state.py): each line state and each depth state raised by its pattern
-and cleared after, live (the core event by event) and replay (the batch twin) agreeing on every
-output, level, message and snapshot; the demo's storm raises none."""
+"""Sensor sanity (core/rules/sensor_state.py): each line state and each depth state raised by its
+pattern and cleared after, live (the core event by event) and replay (the batch twin) agreeing on
+every output, level, message and snapshot; the demo's storm raises none."""
 
 import math
 
@@ -12,7 +12,7 @@ from test_batch import compare, ticks_for
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
 from catenary_monitor.core.rules import sensor_state
 from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
-from catenary_monitor.core.monitor.twin import recompute
+from catenary_monitor.core.twin.engine import recompute
 from catenary_monitor.core.physics.solve import solve
 
 W, X, MBL, DEPTH = 1300.0, 120.0, 4.827e6, 20.85

@@ -23,7 +23,8 @@ from catenary_monitor.core.rules import readings, sensor_state
 from catenary_monitor.core.monitor.state import OUTPUT_FIELDS, VALUE_FIELDS
 from catenary_monitor.core.monitor.events import Depth, Tension, Tick
 from catenary_monitor.core.monitor.monitor_core import MonitorCore
-from catenary_monitor.core.monitor.twin import KIND_TENSION, Window, advance
+from catenary_monitor.core.twin.window import KIND_TENSION, Window
+from catenary_monitor.core.twin.engine import advance
 from catenary_monitor.core.physics.result import Status
 from catenary_monitor.core.physics.solve import solve
 
@@ -434,7 +435,8 @@ def test_the_twin_leaves_out_coalesced_stamped_samples_as_the_core_does(cuts):
     """A coalescing node's records over stamped samples (lagging, bunched): the twin leaves
     out the samples and their header stamps alike, in one window or three, as the core."""
     from catenary_monitor.core.monitor.events import Coalesced
-    from catenary_monitor.core.monitor.twin import run_log, slice_window
+    from catenary_monitor.core.twin.engine import run_log
+    from catenary_monitor.core.twin.window import slice_window
 
     config, cols, depth = stamped_scene(bad=False)
     ticks = ticks_for(*plain(cols, depth))

@@ -8,7 +8,7 @@ vectorized twin).
   waves on the depth and the tension (the dock heaving with them: every sample) and with gauge
   noise on the depth (which the solver turns into noise on the horizontal tension and so on the
   margin: the median of each minute);
-* the core and ``twin.advance`` agree event by event over such a tide (values, the new WARN
+* the core and ``engine.advance`` agree event by event over such a tide (values, the new WARN
   and the ERROR after it, snapshots, the state left behind).
 """
 

@@ -48,7 +48,7 @@ from catenary_monitor.core.config.parameters import (
     resolve_topic,
 )
 from catenary_monitor.core.monitor.events import EVENTS_TOPIC
-from catenary_monitor.core.monitor.twin import COLUMNS
+from catenary_monitor.core.twin.window import COLUMNS
 from catenary_monitor.io.mcap_read import (
     EmptyLogError,
     McapReadError,

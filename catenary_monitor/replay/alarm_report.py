@@ -29,7 +29,8 @@ from catenary_monitor.core.config.parameters import MonitorConfig
 from catenary_monitor.core.alarms.acknowledge import SENSORS
 from catenary_monitor.core.alarms.journal import AlarmEvent
 from catenary_monitor.core.monitor.events import Start
-from catenary_monitor.core.monitor.twin import ReplayResult, Window
+from catenary_monitor.core.twin.engine import ReplayResult
+from catenary_monitor.core.twin.window import Window
 
 __all__ = ['AlarmReport', 'TARGETS', 'STANDING_S', 'PERIOD_S', 'report_text']
 

@@ -5,7 +5,7 @@ all call it: :func:`drive` for outputs written window by window, :func:`replay_l
 
 :func:`stream` walks the log (every file of a rotated set or directory, in time order, merged
 across topics) in windows of log time (:func:`catenary_monitor.io.mcap_read.iter_windows`),
-hands each window to :func:`catenary_monitor.core.monitor.twin.run_log` with the core that the
+hands each window to :func:`catenary_monitor.core.twin.engine.run_log` with the core that the
 previous window left (``advance`` leaves it exactly as stepping would), and gives each
 window's results to the caller, which writes them (summary tally, CSV rows, MCAP, plot
 envelopes). Every column of a window, ticks and events included, is cut at the same time
@@ -62,14 +62,8 @@ from catenary_monitor.core.monitor.events import (
     parse_event_record,
 )
 from catenary_monitor.core.monitor.monitor_core import MonitorCore
-from catenary_monitor.core.monitor.twin import (
-    ReplayResult,
-    Window,
-    concat_lines,
-    run_log,
-    slice_window,
-    tick_grid,
-)
+from catenary_monitor.core.twin.engine import ReplayResult, run_log
+from catenary_monitor.core.twin.window import Window, concat_lines, slice_window, tick_grid
 from catenary_monitor.core.physics import fused_kernel
 from catenary_monitor.io import mcap_read, sensor_cdr
 from catenary_monitor.io.cdr import string_message, string_text

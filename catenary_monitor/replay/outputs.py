@@ -36,17 +36,15 @@ from catenary_monitor.core.monitor.events import (
     Tick,
     event_record,
 )
-from catenary_monitor.core.monitor.twin import (
+from catenary_monitor.core.twin.window import (
     MODEL_NAMES,
-    NO_DEPTH,
-    OUTPUT_FIELDS,
-    VALUE_FIELDS,
     LineResult,
-    ReplayResult,
     SnapshotColumns,
     StatusColumns,
     worst,
 )
+from catenary_monitor.core.monitor.state import NO_DEPTH, OUTPUT_FIELDS, VALUE_FIELDS
+from catenary_monitor.core.twin.engine import ReplayResult
 from catenary_monitor.io.cdr import (
     diagnostic_array_bodies,
     diagnostic_array_parts,
@@ -285,7 +283,7 @@ def _event_payloads(result: ReplayResult, start: bool = True) -> tuple[list[int]
 
 def _snapshot_payloads(result: ReplayResult) -> tuple[list[int], list[bytes]]:
     """Every snapshot of the replay as a DiagnosticArray in CDR (stamps ns, payloads), in time
-    order (a stable sort: as :func:`catenary_monitor.core.monitor.twin.run_log` orders Snapshots).
+    order (a stable sort: as :func:`catenary_monitor.core.twin.engine.run_log` orders Snapshots).
     """
     headers: dict[tuple[int, str, str, str, int], Any] = {}
     stamps: list[int] = []

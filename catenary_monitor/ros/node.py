@@ -510,7 +510,7 @@ class CatenaryMonitor(Node):
         self._input_topic = [*self._tension_topics, self._depth_topic]
         for k, line in enumerate(cfg.lines):
             for j, topic in enumerate(line.channel_topics[1:], start=1):
-                # a load cell's further channels (core.channels), each an input of its own:
+                # a load cell's further channels (core.rules.channels), each an input of its own:
                 # drained, coalesced and counted (for its line) as the first is
                 s = len(self._subs)
                 extra = self.create_subscription(

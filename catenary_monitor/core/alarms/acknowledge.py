@@ -34,7 +34,7 @@ stops being active, ``unacknowledged`` becomes ``returned-unacknowledged`` and `
 becomes ``normal``. An acknowledgement turns ``unacknowledged`` into ``acknowledged`` and
 ``returned-unacknowledged`` into ``normal``; it never clears an active alarm: only the condition
 does. :func:`step` is idempotent (same level, same activity: no change), which is what lets the
-vectorized twin (:mod:`catenary_monitor.core.monitor.twin`) apply it only where its inputs change.
+vectorized twin (:mod:`catenary_monitor.core.twin.engine`) apply it only where its inputs change.
 
 **Shelving** (:func:`shelve`, :func:`unshelve`; requests and rules in
 :mod:`catenary_monitor.core.alarms.shelving`): the alarm follows the level its shelf leaves

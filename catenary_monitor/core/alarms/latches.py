@@ -166,14 +166,14 @@ class AlarmInputs:
     sensor_state: float = 0.0  # core.rules.sensor_state line state code (0 ok)
     sensor_tension: float = math.nan  # N, the newest tension the state was decided on
     mbl: float = math.nan  # N, the line's MBL (for the message)
-    drag_state: float = math.nan  # core.holding code (2 dragging), NaN unknown
+    drag_state: float = math.nan  # core.rules.holding code (2 dragging), NaN unknown
     implied_anchor_distance: float = math.nan  # m (for the message)
     fatigue_damage: float = math.nan  # Miner's damage so far
     fatigue_life_left: float = math.nan  # s at the last day's rate (for the message)
     dynamic_uplift: float = math.nan  # N, the uplift at the wave window's peak (wave_window)
     uplift_view: float = math.nan  # 1: time_to_uplift is the chain length's, 0: R held's
     channels_healthy: float = math.nan  # a line of several channels: how many are healthy
-    channel_states: float = math.nan  # their states (core.channels code; NaN: one channel)
+    channel_states: float = math.nan  # their states (core.rules.channels code; NaN: one channel)
     span: float = math.nan  # m, the span the line was solved at (for the dragging message)
 
 

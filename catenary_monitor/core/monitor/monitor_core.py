@@ -372,8 +372,8 @@ class MonitorCore:
         return Step(ev.stamp_ns, 'acknowledge', (), snapshot, (), tuple(log))
 
     def _on_shelve(self, ev: Shelve) -> Step:
-        """Shelve or unshelve an alarm (core.shelving's rules) or refuse to; the answer is the
-        step's ``note`` and the ``alarms`` status's ``shelve_answer``, shown at once."""
+        """Shelve or unshelve an alarm (core.alarms.shelving's rules) or refuse to; the answer is
+        the step's ``note`` and the ``alarms`` status's ``shelve_answer``, shown at once."""
         now = _stamp_s(ev.stamp_ns)
         a = self.config.alarm
         request = shelving.ShelveRequest(ev.alarm, ev.condition, ev.seconds, ev.origin)
@@ -464,7 +464,7 @@ class MonitorCore:
     def _decide_flood(
         self, stamp_ns: int, log: list[AlarmEvent], tick: bool = False
     ) -> list[Change]:
-        """The flood decision (core.alarm_flood) after an event that raised an alarm, or at a
+        """The flood decision (core.alarms.flood) after an event that raised an alarm, or at a
         tick; its start and end go to the journal ``log``."""
         raised = [(e.time, e.alarm) for e in log if e.kind == 'raised']
         if not raised and not tick:
@@ -1012,7 +1012,7 @@ class MonitorCore:
 
 
 def channel_limits(core: MonitorCore, line: LineState) -> channels.Limits:
-    """The channel rules of a line (core.channels.Limits)."""
+    """The channel rules of a line (core.rules.channels.Limits)."""
     a = core.config.alarm
     return channels.Limits(
         a.tension_timeout,

@@ -334,7 +334,7 @@ CorePart = TypeVar('CorePart', TidePart, SensorPart, BlindPart, DockPart, FloodP
 class CoreState:
     """Everything the core's decisions carry from one event to the next (its lines' too).
 
-    The vectorized twin (:mod:`catenary_monitor.core.monitor.twin`) reads and writes the core
+    The vectorized twin (:mod:`catenary_monitor.core.twin.engine`) reads and writes the core
     only through this object, and test/test_batch.py compares every field (dataclass fields,
     each line's included) after the same events: state added here and not carried by the twin
     fails there. Times in s (Unix, the monitor's clock) unless named ``_ns``.
@@ -384,7 +384,7 @@ class CoreState:
     intake_heard: list[bool] = field(default_factory=list)
     intake_seen: bool = False
     depth_coalesced_until: int = -1  # ns: depth samples stamped up to it were not stepped
-    # The alarm system (core.alarm_flood): the flood status, the raises it counts.
+    # The alarm system (core.alarms.flood): the flood status, the raises it counts.
     alarms: tuple[Level, str] = (Level.OK, '')
     alarms_entered: float = _NAN
     flood: alarm_flood.Flood = field(default_factory=alarm_flood.initial)

@@ -117,7 +117,7 @@ class SolveResult(NamedTuple):
     problem: str  # 'tension', 'horizontal' or 'chain_length'
     keys: tuple[str, ...] = ()
     model: Any = 'inextensible catenary'  # str; per element (object array) for arrays
-    method: str = 'closed form + safeguarded Newton (catenary_monitor.catenary)'
+    method: str = 'closed form + safeguarded Newton (catenary_monitor.core.physics.catenary)'
 
     @property
     def ok(self) -> Any:

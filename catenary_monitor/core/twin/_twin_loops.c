@@ -1,4 +1,4 @@
-/* Three loops of the vectorized twin's schedule (catenary_monitor/core/monitor/twin.py) in C.
+/* Three loops of the vectorized twin's schedule (catenary_monitor/core/twin/engine.py) in C.
  *
  * Optional, like the solve kernel: where it is not built, twin.py runs its numpy passes,
  * which give the same arrays (test/test_batch_steps.py compares them).
