@@ -245,17 +245,23 @@ def test_the_plain_float_holding_path_gives_the_array_path_numbers(seed):
     NaN."""
     import numpy as np
 
-    from catenary_monitor.core.rules.holding import FIELDS, LENGTH_FIELDS, holding, holding_scalar
+    from catenary_monitor.core.rules.holding import (
+        FIELDS,
+        LENGTH_FIELDS,
+        HoldingInputs,
+        holding,
+        holding_scalar,
+    )
     from catenary_monitor.core.physics import fixed_length
 
     scenes = _holding_scenes(2000, seed)
     w, ea, length, h = scenes[0], scenes[1], scenes[2], scenes[7]
-    vec = holding(*scenes)
+    vec = holding(HoldingInputs(*scenes))
     implied = vec['implied_anchor_distance']
     lift = fixed_length.lift_depth(w, length, implied, ea)
     lifted = 0
     for i in range(len(w)):
-        one = holding_scalar(*(float(c[i]) for c in scenes))
+        one = holding_scalar(HoldingInputs(*(float(c[i]) for c in scenes)))
         lifted += scenes[-1][i] > 0
         if np.isfinite(implied[i]):
             assert one['implied_anchor_distance'] == pytest.approx(implied[i], rel=1e-15, abs=0)

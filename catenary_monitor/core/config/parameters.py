@@ -1438,7 +1438,7 @@ class LineConfig:
         return 80.5 * 12421.0e3 / self.mbl
 
     @property
-    def sensor_accuracy(self) -> float:
+    def tension_accuracy_or_default(self) -> float:
         """The tension sensor's accuracy [N]: ``tension_accuracy``, or where it is not set
         :data:`DEFAULT_TENSION_ACCURACY` of the MBL."""
         if self.tension_accuracy is not None:

@@ -129,7 +129,7 @@ def _loaded_bounds(
             c.point_loads,
             float(named['top_tension'][k]),
             float(named['depth'][k]),
-            float(c.sensor_accuracy),
+            float(c.tension_accuracy_or_default),
             depth_accuracy,
             float(named['uplift_force'][k]),
         )
@@ -151,7 +151,7 @@ def bound_values(
         _column(cfgs, 'ea'),
         named['top_tension'],
         named['depth'],
-        np.array([c.sensor_accuracy for c in cfgs]),
+        np.array([c.tension_accuracy_or_default for c in cfgs]),
         depth_accuracy,
         named['uplift_force'],
     )
@@ -165,7 +165,7 @@ def holding_values(
     the core's own numbers)."""
     if any(c.point_loads is not None for c in cfgs):
         return _holding_by_element(cfgs, named, tolerance)
-    return holding_rule.holding(
+    line = holding_rule.HoldingInputs(
         _column(cfgs, 'weight'),
         _column(cfgs, 'ea'),
         _column(cfgs, 'chain_length'),
@@ -178,8 +178,8 @@ def holding_values(
         named['suspended_length'],
         named['uplift_force'],
         _span(cfgs, named),
-        tolerance,
     )
+    return holding_rule.holding(line, tolerance)
 
 
 def _holding_by_element(
@@ -210,24 +210,7 @@ def holding_one(
     def given(v: Optional[float]) -> float:
         return _NAN if v is None else v
 
-    if lc.point_loads is not None:
-        return holding_rule.holding_loaded(
-            PointLoads.of(*lc.point_loads),
-            lc.weight,
-            given(lc.chain_length),
-            given(lc.anchor_holding),
-            given(lc.anchor_weight),
-            given(lc.chain_friction),
-            values[VALUE_INDEX['top_tension']],
-            values[VALUE_INDEX['depth']],
-            values[VALUE_INDEX['horizontal_tension']],
-            values[VALUE_INDEX['suspended_length']],
-            values[VALUE_INDEX['uplift_force']],
-            _given_span(lc, values[VALUE_INDEX['span']]),
-            tolerance,
-        )
-
-    return holding_rule.holding_scalar(
+    line = holding_rule.HoldingInputs(
         lc.weight,
         math.inf if lc.ea is None else lc.ea,
         given(lc.chain_length),
@@ -240,8 +223,10 @@ def holding_one(
         values[VALUE_INDEX['suspended_length']],
         values[VALUE_INDEX['uplift_force']],
         _given_span(lc, values[VALUE_INDEX['span']]),
-        tolerance,
     )
+    if lc.point_loads is not None:
+        return holding_rule.holding_loaded(PointLoads.of(*lc.point_loads), line, tolerance)
+    return holding_rule.holding_scalar(line, tolerance)
 
 
 def add_derived(
