@@ -78,9 +78,9 @@ def derived_values(
     of the nominal values ``named`` (VALUE_FIELDS -> arrays, with ``peak_tension`` and
     ``wave_tension`` from the wave window; ``span`` the span solved at, else the installed
     one), each element's line in ``cfgs`` (one config for all, or one per element): the wave
-    values, ``dynamic_uplift``, the bounds (:mod:`.uncertainty`) and, with ``holding``, the
-    holding values (:mod:`.holding`; NaN for lines with neither ``chain_length`` nor
-    ``anchor_holding``), all at that span."""
+    values, ``dynamic_uplift``, the bounds (:mod:`catenary_monitor.core.rules.uncertainty`)
+    and, with ``holding``, the holding values (:mod:`~catenary_monitor.core.rules.holding`;
+    NaN for lines with neither ``chain_length`` nor ``anchor_holding``), all at that span."""
     n = len(named['top_tension'])
     out = {key: np.asarray(named[key], dtype=float) for key in wave_window.FIELDS}
     tension = uncertainty.dynamic_tension(

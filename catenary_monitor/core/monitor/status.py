@@ -87,8 +87,9 @@ def line_status(
     (:func:`catenary_monitor.core.rules.sensor_state.line_word`), ``time_to_uplift_view``
     (:func:`view_word`), ``span`` [m] and ``span_source`` (the span the line was solved at and
     its source: :func:`catenary_monitor.core.rules.dock_watch.span_word`), then ``extra``
-    (the alarm's acknowledgement keys: :func:`.acknowledge.diagnostic_values`; with the dock
-    model, :func:`line_dock_values`)."""
+    (the alarm's acknowledgement keys:
+    :func:`~catenary_monitor.core.alarms.acknowledge.diagnostic_values`; with the dock model,
+    :func:`line_dock_values`)."""
     named = dict(zip(VALUE_FIELDS, values))
     pairs = diagnostic_values(named) + [
         ('measured_tension', repr(float(values[0]))),
@@ -168,7 +169,7 @@ def sensors_component(
     """The ``catenary_monitor: sensors`` status: the common-cause alarm's level and message
     (:func:`catenary_monitor.core.rules.health.sensors_status`), ``lines_waiting`` (lines with no
     tension since the start) and the alarm's acknowledgement keys
-    (:func:`.acknowledge.diagnostic_values`)."""
+    (:func:`~catenary_monitor.core.alarms.acknowledge.diagnostic_values`)."""
     values = (('lines_waiting', str(waiting)),) + tuple(
         alarm_ack.diagnostic_values(ack, state[0], ())
     )
