@@ -5,7 +5,7 @@ every line: one static equilibrium (surge, sway, yaw) under each of a set of loa
 directions, a yaw moment, wind and waves), by :func:`catenary_monitor.core.body.equilibrium.
 solve_equilibrium` from rest and by MoorPy's ``System.solveEquilibrium`` on the same system (one
 free body, DOFs 0, 1, 5; its tolerance 1e-4 m), interleaved, medians of ``--repeats`` rounds;
-and the live dock estimate of one tick (``core.monitor.dock_watch.decide_dock`` with one tick,
+and the live dock estimate of one tick (``core.rules.dock_watch.decide_dock`` with one tick,
 as the node runs it) and per tick when replay does a whole log at once. The machines are shared and
 noisy: compare the ratios.
 """
@@ -88,7 +88,7 @@ def run(params_file: str, repeats: int = 5, ticks: int = 600) -> dict[str, Any]:
 def _estimate_figures(config: Any, model: Any, ticks: int) -> dict[str, float]:
     """The live dock estimate: ms per tick one at a time, and per tick over a whole log."""
     from catenary_monitor.core.body.equilibrium import solve_equilibrium
-    from catenary_monitor.core.monitor import dock_watch
+    from catenary_monitor.core.rules import dock_watch
 
     rng = np.random.default_rng(1)
     eq = solve_equilibrium(model, 20.85, np.array([0.0, -1.5e6, 0.0]))

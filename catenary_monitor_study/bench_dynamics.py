@@ -44,13 +44,12 @@ def run_scene(
     period: float,
     duration: float,
     allowance: float = 0.3,
-    accuracy: Optional[float] = None,
+    tension_accuracy: Optional[float] = None,
 ) -> dict[str, Any]:
     """One scene's figures (module docstring); SI in, kN in the figures; the monitor with
-    ``wave_allowance`` ``allowance`` and ``tension_accuracy`` ``accuracy`` (N, None: its
-    default)."""
+    ``wave_allowance`` ``allowance`` and ``tension_accuracy`` (N, None: its default)."""
     from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
-    from catenary_monitor.core.monitor.twin import recompute
+    from catenary_monitor.core.twin.engine import recompute
     from catenary_monitor.core.physics.fixed_length import lift_depth
     from catenary_monitor_study.moordyn_scene import Chain, run_line
 
@@ -70,7 +69,7 @@ def run_scene(
         anchor_distance=span,
         mbl=4.827e6,
         ea=chain.ea,
-        tension_accuracy=accuracy,
+        tension_accuracy=tension_accuracy,
     )
     config = MonitorConfig(lines=(line,), alarm=AlarmConfig(wave_allowance=allowance))
     t0 = 1_763_900_000_000_000_000

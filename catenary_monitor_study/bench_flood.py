@@ -191,7 +191,7 @@ def _rss_mb(pid: int) -> float:
 
 
 def _node_records(files: list[Path]) -> list[dict[str, Any]]:
-    from catenary_monitor.core.monitor.monitor_core import EVENTS_TOPIC
+    from catenary_monitor.core.monitor.events import EVENTS_TOPIC
     from catenary_monitor.io.cdr import string_text
     from catenary_monitor.io.mcap_read import iter_messages
 
@@ -231,7 +231,7 @@ def analyse(
     """The figures and checks of one flood (see the module docstring); ``primed``: the
     samples sent before it (negative indexes: in the node's counts, those that reached it,
     but not in the flood's figures)."""
-    from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, VALUE_FIELDS
+    from catenary_monitor.core.monitor.state import OUTPUT_FIELDS, VALUE_FIELDS
     from catenary_monitor.io.mcap_read import iter_messages, read_float64_topics
     from catenary_monitor.replay.driver import replay_log
 

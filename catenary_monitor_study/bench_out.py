@@ -23,7 +23,7 @@ from typing import Any, Optional
 
 from catenary_monitor.cli.allocator import keep_freed_memory
 from catenary_monitor.replay.outputs import McapSink, snapshot_payloads
-from catenary_monitor.core.monitor.twin import COLUMNS
+from catenary_monitor.core.twin.window import COLUMNS
 from catenary_monitor.replay.driver import WINDOW_MESSAGES, input_topics, load_config, stream
 
 

@@ -42,7 +42,8 @@ from typing import Any, Optional
 import numpy as np
 
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
-from catenary_monitor.core.monitor.monitor_core import Depth, MonitorCore, Tension, Tick
+from catenary_monitor.core.monitor.events import Depth, Tension, Tick
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 from catenary_monitor.core.physics.solve import solve
 from catenary_monitor.io.cdr import float64_payloads
 from catenary_monitor.io.mcap_column_writer import ColumnWriter
@@ -363,7 +364,7 @@ def run(
 def _streamed(log: Path, config: MonitorConfig, csv: Any = None, mcap: Any = None) -> Any:
     """The streamed replay of the command (ticks on a grid) into a summary tally and, if
     given, a CSV or a results MCAP; returns (tally, CSV rows or MCAP messages)."""
-    from catenary_monitor.core.monitor.twin import COLUMNS
+    from catenary_monitor.core.twin.window import COLUMNS
     from catenary_monitor.replay import outputs as out
     from catenary_monitor.replay.driver import input_topics, stream
 

@@ -27,7 +27,7 @@ __all__ = ['run', 'register']
 
 
 def _events(config: Any, n: int, seed: int = 1) -> list[Any]:
-    from catenary_monitor.core.monitor.monitor_core import Tension
+    from catenary_monitor.core.monitor.events import Tension
 
     rng = np.random.default_rng(seed)
     lines = len(config.lines)
@@ -38,23 +38,25 @@ def _events(config: Any, n: int, seed: int = 1) -> list[Any]:
 @contextlib.contextmanager
 def _holding_on_arrays() -> Iterator[None]:
     """The core's holding values through ``holding_values`` on one-element arrays."""
-    from catenary_monitor.core.monitor import monitor_core
+    from catenary_monitor.core.monitor import derived
+    from catenary_monitor.core.monitor.state import VALUE_INDEX
 
     def on_arrays(lc: Any, values: Any, tolerance: float = np.inf) -> dict[str, float]:
-        named = {k: np.array([values[i]]) for k, i in monitor_core._AT.items()}
-        derived = monitor_core.holding_values([lc], named, tolerance)
-        return {k: float(v[0]) for k, v in derived.items()}
+        named = {k: np.array([values[i]]) for k, i in VALUE_INDEX.items()}
+        held = derived.holding_values([lc], named, tolerance)
+        return {k: float(v[0]) for k, v in held.items()}
 
-    plain = monitor_core.holding_one
-    monitor_core.holding_one = on_arrays
+    plain = derived.holding_one
+    derived.holding_one = on_arrays
     try:
         yield
     finally:
-        monitor_core.holding_one = plain
+        derived.holding_one = plain
 
 
 def _stepper(config: Any, events: list[Any], arrays: bool) -> Callable[[], None]:
-    from catenary_monitor.core.monitor.monitor_core import Depth, MonitorCore
+    from catenary_monitor.core.monitor.events import Depth
+    from catenary_monitor.core.monitor.monitor_core import MonitorCore
 
     core = MonitorCore(config, 10**18)
     core.step(Depth(10**18 + 1, 20.85))

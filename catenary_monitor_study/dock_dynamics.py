@@ -4,9 +4,9 @@ in MoorDyn, through a tide rise and a storm with waves, against the monitor's re
 The dock's motion is prescribed (:func:`catenary_monitor_study.moordyn_scene.storm_motion`):
 the tide rising, the dock drifting to starboard as the storm builds, a beam sea swaying it.
 MoorDyn gives every hook's tension and every anchor's vertical force; the tensions (10 Hz) and
-the hooks' depth (1 Hz) go through the monitor's replay (:func:`~catenary_monitor.core.monitor
-.twin.recompute`: the node's decisions on the same samples) with the params' lines, MoorDyn's
-chain stiffness and an allowed uplift. Per line:
+the hooks' depth (1 Hz) go through the monitor's replay
+(:func:`~catenary_monitor.core.twin.engine.recompute`: the node's decisions on the same samples)
+with the params' lines, MoorDyn's chain stiffness and an allowed uplift. Per line:
 
 * ``dyn_peak_kN``, ``qs_peak_kN``, ``bound_peak_kN``: the largest anchor force, quasi-static
   uplift and ``uplift_force_upper``; ``peak_ratio`` the bound's over the anchor's;
@@ -67,7 +67,7 @@ def run_dock_scene(params_file: str, scene: DockScene) -> dict[str, Any]:
     """MoorDyn and the monitor's replay on one scene: the figures (module docstring), and the
     series the chart takes (``series``: not JSON)."""
     from catenary_monitor.core.body.dock_model import DockModel
-    from catenary_monitor.core.monitor.twin import recompute
+    from catenary_monitor.core.twin.engine import recompute
     from catenary_monitor_study.moordyn_scene import PAPER_CHAIN, Chain, run_dock, storm_motion
 
     config = _config(params_file, scene.allowed, PAPER_CHAIN.ea)

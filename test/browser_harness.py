@@ -404,7 +404,7 @@ class AckRecorder(_TestNode):
         from rclpy.qos import QoSProfile
         from std_msgs.msg import String
 
-        from catenary_monitor.core.monitor.acknowledge import ACKNOWLEDGE_TOPIC
+        from catenary_monitor.core.alarms.acknowledge import ACKNOWLEDGE_TOPIC
 
         super().__init__('ack_recorder')
         self.messages: list[str] = []
@@ -415,7 +415,7 @@ class AckRecorder(_TestNode):
 
     def wait_for_publisher(self, timeout: float = 30.0) -> None:
         """Until a console's acknowledgement publisher has matched this subscription."""
-        from catenary_monitor.core.monitor.acknowledge import ACKNOWLEDGE_TOPIC
+        from catenary_monitor.core.alarms.acknowledge import ACKNOWLEDGE_TOPIC
 
         wait_for(
             'the console\'s acknowledgement publisher',

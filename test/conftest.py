@@ -25,7 +25,8 @@ os.environ['ROS_DOMAIN_ID'] = str(_domain())
 EXTENSIONS = {
     'catenary_monitor/core/physics/_fused_kernel': ('_fused_kernel.c', '_fused_kernel_body.h'),
     'catenary_monitor/io/_scan': ('_scan.c',),
-    'catenary_monitor/core/monitor/_twin_loops': ('_twin_loops.c',),
+    'catenary_monitor/core/twin/_twin_loops': ('_twin_loops.c',),
+    'catenary_monitor/core/rules/_fatigue_loop': ('_fatigue_loop.c',),
 }
 
 

@@ -13,7 +13,7 @@ import numpy as np
 from replay_data import dock_config, generate, params_yaml
 
 from catenary_monitor.core.config.parameters import config_hash, config_to_params
-from catenary_monitor.core.monitor.monitor_core import (
+from catenary_monitor.core.monitor.events import (
     EVENTS_TOPIC,
     NODE_NAME,
     Acknowledge,

@@ -9,7 +9,8 @@ from typing import Any
 import numpy as np
 
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor.monitor_core import Depth, MonitorCore, Tension, Tick
+from catenary_monitor.core.monitor.events import Depth, Tension, Tick
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 
 T0_NS = 1_763_900_000_000_000_000  # 2025-11-23, an epoch-like receive time
 

@@ -1,4 +1,4 @@
-"""Alarm acknowledgement (core/monitor/acknowledge.py): ISA-18.2 states, through the monitor
+"""Alarm acknowledgement (core/alarms/acknowledge.py): ISA-18.2 states, through the monitor
 core."""
 
 import json
@@ -13,15 +13,15 @@ from replay_data import (  # noqa: F401 - the oracle's helpers
     generate,
 )
 
-from catenary_monitor.core.monitor import acknowledge as ack
-from catenary_monitor.core.monitor.alarms import Level
-from catenary_monitor.core.monitor.monitor_core import (
+from catenary_monitor.core.alarms import acknowledge as ack
+from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.monitor.events import (
     Acknowledge,
-    MonitorCore,
     Tick,
     event_record,
     parse_event_record,
 )
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 
 S = 10**9
 

@@ -14,7 +14,7 @@ import time
 import pytest
 from ros_harness import Client, output_of, start_monitor, stop, write_params
 
-from catenary_monitor.core.monitor.acknowledge import (
+from catenary_monitor.core.alarms.acknowledge import (
     ACKNOWLEDGE_TOPIC,
     ORIGIN_LIMIT,
     bounded_text,

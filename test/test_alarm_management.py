@@ -1,5 +1,5 @@
 """Alarm management (ISA-18.2 / EEMUA 191): shelving, chattering, floods and the alarm journal,
-in the core (core/monitor/acknowledge.py, shelving.py, alarm_flood.py, alarm_journal.py) and
+in the core (core/alarms/acknowledge.py, shelving.py, flood.py, journal.py) and
 in its vectorized twin, which must decide alike (the core stepped event by event is the
 oracle)."""
 
@@ -17,20 +17,22 @@ from catenary_monitor.core.config.parameters import (
     config_from_params,
     config_to_params,
 )
-from catenary_monitor.core.monitor import acknowledge as ack
-from catenary_monitor.core.monitor import alarm_flood, shelving
-from catenary_monitor.core.monitor.alarms import CONDITIONS, Level
-from catenary_monitor.core.monitor.monitor_core import (
+from catenary_monitor.core.alarms import acknowledge as ack
+from catenary_monitor.core.alarms import flood as alarm_flood, shelving
+from catenary_monitor.core.alarms.latches import CONDITIONS
+from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.monitor.events import (
     Acknowledge,
     Depth,
-    MonitorCore,
     Shelve,
     Tension,
     Tick,
     event_record,
     parse_event_record,
 )
-from catenary_monitor.core.monitor.twin import Window, run_log
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
+from catenary_monitor.core.twin.window import Window
+from catenary_monitor.core.twin.engine import run_log
 
 S = 10**9
 ALL = ack.WHOLE

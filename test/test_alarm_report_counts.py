@@ -14,8 +14,8 @@ import pytest
 from replay_data import dock_config
 from ros_harness import child_env
 
-from catenary_monitor.core.monitor.alarm_journal import AlarmEvent
-from catenary_monitor.core.monitor.monitor_core import Start
+from catenary_monitor.core.alarms.journal import AlarmEvent
+from catenary_monitor.core.monitor.events import Start
 from catenary_monitor.replay.alarm_report import AlarmReport
 
 T0 = 1_764_000_000.0  # a multiple of 600 s: periods start at T0, T0 + 600, ...

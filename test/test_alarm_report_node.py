@@ -23,7 +23,7 @@ from typing import Any
 import pytest
 from ros_harness import Client, child_env, output_of, start_monitor, stop, write_params
 
-from catenary_monitor.core.monitor.shelving import SHELVE_TOPIC
+from catenary_monitor.core.alarms.shelving import SHELVE_TOPIC
 
 LINES = [f'line_0{k}' for k in range(1, 7)]
 OK_T, WARN_T, LIFT_T = 372e3, 450e3, 500e3  # N: anchor margin 15.5 m, 4.1 m (< 5), uplift

@@ -14,15 +14,15 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig
-from catenary_monitor.core.monitor.alarms import (
+from catenary_monitor.core.alarms.latches import (
     DIAGNOSTIC_KEYS,
     AlarmInputs,
-    Level,
     LineAlarm,
     Transition,
     diagnostic_values,
     replay_levels,
 )
+from catenary_monitor.core.rules.level import Level
 
 ROOT = Path(__file__).resolve().parents[1]
 # A line well inside every limit (SI): no uplift, margins above their warning thresholds.
@@ -600,7 +600,7 @@ def test_diagnostic_values_keys_and_exact_strings():
 def test_core_modules_import_without_rclpy():
     code = (
         "import sys; sys.modules['rclpy'] = None; "
-        "import catenary_monitor.core.config.parameters, catenary_monitor.core.monitor.alarms; "
+        "import catenary_monitor.core.config.parameters, catenary_monitor.core.alarms.latches; "
         "print('ok')"
     )
     out = subprocess.run(
@@ -619,7 +619,7 @@ def test_margin_codes_match_the_scalar() -> None:
     """The warnings with a deadband classified on columns give LineAlarm._classify's code for
     every update: values at, below and between the limits, NaN and infinities, stale and fresh
     inputs; None where the latch is down and nothing breaches."""
-    from catenary_monitor.core.monitor import alarms
+    from catenary_monitor.core.alarms import latches as alarms
 
     alarm = alarms.LineAlarm(AlarmConfig(), 0.0)
     rng = np.random.default_rng(11)
@@ -660,3 +660,26 @@ def test_margin_codes_match_the_scalar() -> None:
         assert got[cond] is not None and got[cond].tolist() == want, cond
     none = alarms._classify_columns(alarm, {**x, **quiet}, status, stale, down)
     assert all(none[cond] is None for cond in alarms._MARGINS)
+
+
+def test_the_latch_column_loop_equals_the_scalar_step():
+    """alarms._latch_series (the latch's column loop) equals repeated alarms._step, from latches
+    up or down, pending (since a past update's stamp) or not, through equal stamps and zero
+    delays."""
+    from catenary_monitor.core.alarms import latches as alarms
+
+    rng = np.random.default_rng(5)
+    for trial in range(2000):
+        n = int(rng.integers(1, 50))
+        t = 10.0 + np.cumsum(rng.choice([0.0, 0.3, 1.0, 2.5], n))
+        codes = rng.choice(3, n, p=rng.dirichlet([1, 1, 1])).astype(np.int8)
+        since = None if trial % 2 else float(t[0] - rng.uniform(0.0, 4.0))
+        start = alarms.Latch(bool(trial % 3 == 0), since)
+        on_delay, hold = float(rng.choice([0.0, 0.5, 2.0])), float(rng.choice([0.0, 1.0, 3.0]))
+        latch, want = start, []
+        for code, now in zip(codes.tolist(), t.tolist()):
+            latch = alarms._step(latch, code, now, on_delay, hold)
+            want.append(latch.active)
+        active, end = alarms._latch_series(codes, t, on_delay, hold, start)
+        assert active.dtype == bool and active.tolist() == want, trial
+        assert end == latch, trial

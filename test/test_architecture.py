@@ -1,13 +1,15 @@
 """The layering of the package, checked from the source: who may import whom, and no cycles.
 
-Layers: the core's rooms ``physics`` <- ``config`` <- ``body`` <- ``monitor`` (pure numpy), and
-``io`` (MCAP, CDR, CSV; independent of the core) <- ``replay`` (core + io) <- ``ros`` (rclpy)
-<- the shells ``cli`` and ``console``, which never import each other; ``sim`` (the demo's
-episode and MoorDyn, core only, no rclpy) under ``ros`` and the shells; the methods study
-(``catenary_monitor_study``) sits on top and the monitor never imports it. Imports are read with
-``ast``: module-level and function-level, absolute and relative; ``from pkg import name`` counts as
-an import of the submodule ``pkg.name`` when there is one, else of ``pkg`` (a package ``__init__``
-is a module of the graph under the package's name).
+Layers: the core's rooms ``physics`` <- ``config`` <- ``body`` <- ``rules`` <- ``alarms`` <-
+``monitor`` <- ``twin`` (pure numpy), and ``io`` (MCAP, CDR, CSV; independent of the core) <-
+``replay`` (core + io) <- ``ros`` (rclpy) <- the shells ``cli`` and ``console``, which never
+import each other; ``sim`` (the demo's episode and MoorDyn, core only, no rclpy) under ``ros`` and
+the shells; the methods study (``catenary_monitor_study``) sits on top and the monitor never
+imports it. Imports are read with ``ast``: module-level and function-level, absolute and
+relative; ``from pkg import name`` counts as an import of the submodule ``pkg.name`` when there
+is one, else of ``pkg`` (a package ``__init__`` is a module of the graph under the package's
+name). No module imports another's private name (``from x import _y``) but a C extension beside
+it.
 """
 
 import ast
@@ -69,8 +71,8 @@ def imports_of(name: str) -> frozenset[str]:
 
 
 def _layer(name: str) -> str:
-    """``top`` (the package __init__), a room of the core (``physics``, ``config``, ``body``,
-    ``monitor``), ``io``, ``sim``, ``replay``, ``ros``, ``cli``, ``console`` or ``study``."""
+    """``top`` (the package __init__), a room of the core (:data:`CORE_ROOMS`), ``io``, ``sim``,
+    ``replay``, ``ros``, ``cli``, ``console`` or ``study``."""
     if _within(name, 'catenary_monitor_study'):
         return 'study'
     if name == 'catenary_monitor':
@@ -88,18 +90,17 @@ def _layer(name: str) -> str:
     raise AssertionError(f'{name}: module outside the known layers')
 
 
-#: The core's rooms, bottom first: each may import those before it.
-CORE_ROOMS = ('physics', 'config', 'body', 'monitor')
+#: The core's rooms, bottom first: each may import those before it (its floors), never one
+#: after it: the chain models, the parameters, the dock as a body, the per-line rules, alarm
+#: management, the event schedule (MonitorCore), the vectorized twin.
+CORE_ROOMS = ('physics', 'config', 'body', 'rules', 'alarms', 'monitor', 'twin')
 CORE = set(CORE_ROOMS)
 
 #: What each layer may import of the project. The top level is the numerical core's face
 #: (``catenary_monitor.solve``, ``whatif``); io imports nothing from the core.
 ALLOWED = {
     'top': {'top', *CORE},
-    'physics': {'physics'},
-    'config': {'physics', 'config'},
-    'body': {'physics', 'config', 'body'},
-    'monitor': CORE,
+    **{room: set(CORE_ROOMS[: i + 1]) for i, room in enumerate(CORE_ROOMS)},
     'io': {'io'},
     'sim': {*CORE, 'sim'},
     'replay': {'top', *CORE, 'io', 'replay'},

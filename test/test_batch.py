@@ -1,4 +1,4 @@
-"""The vectorized twin (core.monitor.twin.advance) against the monitor core itself, event by event.
+"""The vectorized twin (core.twin.engine.advance) against the monitor core itself, event by event.
 
 The scalar :class:`MonitorCore` is the oracle: the same events are stepped through it one at a
 time and handed to ``advance`` as columns (in one window or several), and every output, level,
@@ -16,29 +16,18 @@ from hypothesis import strategies as st
 from replay_data import T0_NS, core_steps, dock_config, events_of, generate
 
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
-from catenary_monitor.core.monitor.monitor_core import (
-    OUTPUT_FIELDS,
-    VALUE_FIELDS,
-    Acknowledge,
-    CoreState,
-    Depth,
-    LineState,
-    MonitorCore,
-    Reconfigure,
-    Tension,
-    Tick,
-)
-from catenary_monitor.core.monitor.twin import (
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS, VALUE_FIELDS, CoreState, LineState
+from catenary_monitor.core.monitor.events import Acknowledge, Depth, Reconfigure, Tension, Tick
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
+from catenary_monitor.core.twin.window import (
     COLUMNS,
     KIND_TENSION,
     SnapshotColumns,
     Window,
-    advance,
-    recompute,
-    run_log,
     slice_window,
     tick_grid,
 )
+from catenary_monitor.core.twin.engine import advance, recompute, run_log
 from catenary_monitor.core.physics.result import Status
 
 
@@ -572,7 +561,7 @@ def test_run_log_steps_clock_and_intake_events_as_the_core_does():
     transitions as the core; drops age out of the 60 s window."""
     import json
 
-    from catenary_monitor.core.monitor.monitor_core import (
+    from catenary_monitor.core.monitor.events import (
         ClockHealth,
         Intake,
         event_record,
@@ -652,9 +641,9 @@ def test_run_log_steps_clock_and_intake_events_as_the_core_does():
 
 
 def test_worst_is_the_first_extreme_ignoring_nan():
-    """twin.worst: the smallest margin and the largest force, the first of equal ones, NaN
+    """window.worst: the smallest margin and the largest force, the first of equal ones, NaN
     ignored (where the other values are infinite too), None where every value is NaN."""
-    from catenary_monitor.core.monitor import twin
+    from catenary_monitor.core.twin import window
 
     nan, inf = math.nan, math.inf
     v = np.array([nan, 3.0, -inf, -inf, nan])
@@ -663,14 +652,14 @@ def test_worst_is_the_first_extreme_ignoring_nan():
     values['top_tension'] = np.array([nan, -inf, nan, -inf, nan])
     t = np.arange(5, dtype=np.int64) * 1_000_000_000
     empty = np.zeros(0)
-    result = twin.LineResult('a', t, t, values, t, t, t, t, t)
-    out = twin.worst(result)
+    result = window.LineResult('a', t, t, values, t, t, t, t, t)
+    out = window.worst(result)
     assert out['anchor_margin'] == {'value': -inf, 'time': 2.0}
     assert out['uplift_force'] == {'value': 3.0, 'time': 1.0}
     assert out['top_tension'] == {'value': -inf, 'time': 1.0}  # np.nanargmax gave index 0: NaN
     assert out['safety_factor'] is None
-    nothing = twin.LineResult('a', empty, empty, {key: empty for key in values}, *[empty] * 5)
-    assert all(w is None for w in twin.worst(nothing).values())
+    nothing = window.LineResult('a', empty, empty, {key: empty for key in values}, *[empty] * 5)
+    assert all(w is None for w in window.worst(nothing).values())
 
 
 def test_the_state_comparison_sees_every_field():
@@ -714,6 +703,46 @@ def test_the_state_comparison_sees_every_field():
         core.forgotten = 1.0  # type: ignore[attr-defined]
 
 
+def test_the_twin_writes_the_core_only_through_its_typed_door(monkeypatch):
+    """The twin's door: each part is a NamedTuple of its state's own fields, with their
+    annotations; and a window through ``advance`` sets no field of the core's state or of a
+    line's from the twin's modules (only ``take`` does, in core/monitor/state.py)."""
+    import sys
+
+    from catenary_monitor.core.monitor import state as door
+
+    for parts, target in (
+        (door.CorePart.__constraints__, CoreState),
+        (door.LinePart.__constraints__, LineState),
+    ):
+        own = {f.name: f.type for f in dataclasses.fields(target)}
+        seen = set()
+        for part in parts:
+            for name, annotation in part.__annotations__.items():
+                text = getattr(annotation, '__forward_arg__', annotation)  # NamedTuple's
+                assert own.get(name) == text, (part.__name__, name)
+                assert name not in seen, name  # each field in one part
+                seen.add(name)
+    writers = set()
+
+    def watch(cls):
+        plain = cls.__setattr__
+
+        def setattr_(self, name, value):
+            writers.add(sys._getframe(1).f_globals['__name__'])
+            plain(self, name, value)
+
+        monkeypatch.setattr(cls, '__setattr__', setattr_)
+
+    config = dock_config(3)
+    tensions, depth = generate(config, seconds=30.0, seed=2)
+    core = MonitorCore(config, T0_NS)
+    watch(CoreState)
+    watch(LineState)
+    advance(core, window_of(config, tensions, depth, ticks_for(tensions, depth)))
+    assert writers and not any(w.startswith('catenary_monitor.core.twin') for w in writers)
+
+
 def _coalescing_records(config, tensions, depth, seed):
     """What a node that fell behind records: stretches of each input's samples left out
     (``Coalesced`` at 1 ns before the first of each stretch, naming the last), the newest
@@ -721,11 +750,7 @@ def _coalescing_records(config, tensions, depth, seed):
     checked."""
     import json
 
-    from catenary_monitor.core.monitor.monitor_core import (
-        Coalesced,
-        event_record,
-        parse_event_record,
-    )
+    from catenary_monitor.core.monitor.events import Coalesced, event_record, parse_event_record
 
     rng = np.random.default_rng(seed)
     columns = [(line.name, tensions[line.name][0]) for line in config.lines]

@@ -12,14 +12,9 @@ from replay_data import T0_NS, dock_config, generate
 from test_batch import compare
 
 from catenary_monitor.console.frames import History, alarm_rows, statuses_by_name
-from catenary_monitor.core.monitor.monitor_core import (
-    Acknowledge,
-    Depth,
-    MonitorCore,
-    Tension,
-    Tick,
-)
-from catenary_monitor.core.monitor.twin import tick_grid
+from catenary_monitor.core.monitor.events import Acknowledge, Depth, Tension, Tick
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
+from catenary_monitor.core.twin.window import tick_grid
 
 S = 10**9
 NOTE = ' (suppressed by design: alarm on sensors)'

@@ -1,4 +1,4 @@
-"""A line measured by several channels (core/monitor/channels.py): a three-channel load cell whose
+"""A line measured by several channels (core/rules/channels.py): a three-channel load cell whose
 channels fail one at a time, through the monitor core and its replay twin."""
 
 import math
@@ -12,16 +12,13 @@ from catenary_monitor.core.config.parameters import (
     LineConfig,
     MonitorConfig,
 )
-from catenary_monitor.core.monitor import channels
-from catenary_monitor.core.monitor.alarms import Level
-from catenary_monitor.core.monitor.monitor_core import (
-    OUTPUT_FIELDS,
-    Depth,
-    MonitorCore,
-    Tension,
-    Tick,
-)
-from catenary_monitor.core.monitor.twin import Window, run_log
+from catenary_monitor.core.rules import channels
+from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.events import Depth, Tension, Tick
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
+from catenary_monitor.core.twin.window import Window
+from catenary_monitor.core.twin.engine import run_log
 
 TOPICS = ('/cell/a', '/cell/b', '/cell/c')
 GAIN = (1.04, 0.97, 0.99)  # an eccentric link: each gauge carries its own share

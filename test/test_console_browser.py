@@ -189,7 +189,7 @@ def test_live_page_storm_acknowledge_and_monitor_loss(live_run: Any) -> None:
     assert seen['beeps_on_loss']  # losing the monitor is an alarm of its own, audible
     assert 'MONITOR SILENT' in seen['banner_text'] or 'UNREACHABLE' in seen['banner_text']
     # The monitor's log holds the acknowledgement, with its origin.
-    from catenary_monitor.core.monitor.monitor_core import EVENTS_TOPIC
+    from catenary_monitor.core.monitor.events import EVENTS_TOPIC
     from catenary_monitor.io.cdr import string_text
     from catenary_monitor.io.mcap_read import iter_messages
 

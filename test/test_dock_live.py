@@ -11,9 +11,10 @@ from test_batch import compare, ticks_for
 
 from catenary_monitor.core.body.dock_model import DockModel
 from catenary_monitor.core.body.estimate import estimate_dock
-from catenary_monitor.core.monitor.alarms import CONDITIONS
-from catenary_monitor.core.monitor.monitor_core import MonitorCore, Tick
-from catenary_monitor.core.monitor.twin import recompute
+from catenary_monitor.core.alarms.latches import CONDITIONS
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
+from catenary_monitor.core.monitor.events import Tick
+from catenary_monitor.core.twin.engine import recompute
 
 DRIFTING = 8  # line_09, on the windward side of the generated wind
 

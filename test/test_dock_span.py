@@ -23,14 +23,10 @@ from sensor_bag import column, replay_csv, write_bag
 
 from catenary_monitor.core.body.dock_model import DockModel
 from catenary_monitor.core.config.parameters import config_from_params, load_params_file
-from catenary_monitor.core.monitor.monitor_core import (
-    OUTPUT_FIELDS,
-    MonitorCore,
-    Reconfigure,
-    Tension,
-    Tick,
-)
-from catenary_monitor.core.monitor.twin import tick_grid
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
+from catenary_monitor.core.monitor.events import Reconfigure, Tension, Tick
+from catenary_monitor.core.twin.window import tick_grid
 from catenary_monitor.core.physics.solve import solve
 
 STEP_S = 20.0  # s at each load
@@ -222,7 +218,7 @@ def test_the_twins_solve_at_changing_spans_equals_solve(monkeypatch, config, ker
     """The twin's solve of one line's updates at a span per update (the C kernel's path and
     the numpy one, inextensible and elastic) equals solve() on the same arrays."""
     from catenary_monitor.core.physics import fused_kernel
-    from catenary_monitor.core.monitor.twin import critical_parameters, solve_updates
+    from catenary_monitor.core.twin.solve_columns import critical_parameters, solve_updates
 
     if kernel and not fused_kernel.AVAILABLE:
         pytest.skip('the C kernel is not built')

@@ -1,12 +1,12 @@
 """The docs point at things that exist: every relative link of README.md and docs/*.md reaches
 a file (and a heading of it, as GitHub slugs headings), every source path they name exists, and
 every module or attribute they name in inline code (``catenary_monitor.x.y``, ``core.x.y``, or
-``twin.advance`` by a module's last name) is defined; a module name retired when the core was
+``engine.advance`` by a module's last name) is defined; a module name retired when the core was
 sorted by role (``batch``, ``kernels``, ...) is reported with its new name.
 
 Read from the Markdown text and the sources' syntax trees, with no import of the package (no
 ROS needed): links ``[t](target)``, ``![t](target)`` and ``<img src=...>`` outside fenced code
-blocks; paths such as ``core/monitor/alarms.py`` or ``test/test_batch.py::test_x`` anywhere
+blocks; paths such as ``core/alarms/latches.py`` or ``test/test_batch.py::test_x`` anywhere
 outside fenced code blocks. docs/CHANGES.md is history (it names modules as they were called):
 its links only. The shipped params files (config/*.yaml) are held to the same in their comments.
 Web links are not fetched.
@@ -36,19 +36,21 @@ _PATH = re.compile(
     r'(?:::(\w+))?'
 )
 _DOTTED = re.compile(r'^((?:catenary_monitor_study|catenary_monitor|core)(?:\.\w+)+)(?:\(.*\))?$')
-#: a dotted name from a module named by its last part alone (``twin.advance``)
+#: a dotted name from a module named by its last part alone (``engine.advance``)
 _SHORT = re.compile(r'^([A-Za-z_]\w*(?:\.\w+)+)(?:\(.*\))?$')
 #: module names retired when the core was sorted by role: the docs use the new ones
 RETIRED = {
-    'batch': 'core.monitor.twin',
+    'batch': 'core.twin.engine',
     'kernels': 'core.physics.fused_kernel',
     '_kernels': 'core.physics._fused_kernel',
-    '_steps': 'core.monitor._twin_loops',
+    '_steps': 'core.twin._twin_loops',
     'replay_stream': 'replay.driver',
     'replay_output': 'replay.outputs',
     'mcap_fast': 'io.mcap_column_writer',
     'fastcsv': 'io.csv_columns',
-    'sensor': 'core.monitor.sensor_state',
+    'sensor': 'core.rules.sensor_state',
+    'alarm_flood': 'core.alarms.flood',
+    'alarm_journal': 'core.alarms.journal',
 }
 
 
@@ -283,8 +285,8 @@ def test_the_example_params_name_files_and_modules_that_exist(config):
 
 def test_the_checker_sees_what_is_broken(tmp_path):
     """The checker itself: GitHub's slugs, and a broken link, anchor, path and name found."""
-    assert github_slug('Sensor sanity (`core/monitor/sensor_state.py`)') == (
-        'sensor-sanity-coremonitorsensor_statepy'
+    assert github_slug('Sensor sanity (`core/rules/sensor_state.py`)') == (
+        'sensor-sanity-corerulessensor_statepy'
     )
     assert github_slug('A common cause is one alarm: `catenary_monitor: sensors`') == (
         'a-common-cause-is-one-alarm-catenary_monitor-sensors'
@@ -294,10 +296,10 @@ def test_the_checker_sees_what_is_broken(tmp_path):
     page.write_text(
         '# Title\n\n## Title\n\n[ok](#title-1) [bad](#nowhere) [gone](missing.md)\n'
         '```\n[in a code block](ignored.md) core/none.py\n```\n'
-        'see `core/monitor/alarms.py`, core/monitor/nothing.py and '
-        'test/test_docs_links.py::test_not_here; `core.monitor.alarms.LineAlarm`, '
-        '`catenary_monitor.core.monitor.alarms.NoSuch`, `catenary_monitor.nothing.x`, '
-        '`batch.advance`, `twin.advance(core, window)`, `twin.nothing`, `np.empty`\n',
+        'see `core/alarms/latches.py`, core/monitor/nothing.py and '
+        'test/test_docs_links.py::test_not_here; `core.alarms.latches.LineAlarm`, '
+        '`catenary_monitor.core.alarms.latches.NoSuch`, `catenary_monitor.nothing.x`, '
+        '`batch.advance`, `engine.advance(core, window)`, `engine.nothing`, `np.empty`\n',
         encoding='utf-8',
     )
     problems = '\n'.join(_problems(page))
@@ -305,12 +307,12 @@ def test_the_checker_sees_what_is_broken(tmp_path):
     assert 'ignored' not in problems and 'core/none.py' not in problems  # in a code block
     assert 'no file core/monitor/nothing.py' in problems
     assert 'has no test test_not_here' in problems
-    assert 'alarms defines no NoSuch' in problems
+    assert 'latches defines no NoSuch' in problems
     assert 'catenary_monitor defines no nothing' in problems
-    assert 'core/monitor/alarms.py' not in problems
+    assert 'core/alarms/latches.py' not in problems
     assert 'LineAlarm' not in problems and 'np.empty' not in problems
-    assert 'batch.advance: batch is now core.monitor.twin' in problems
-    assert 'twin defines no nothing' in problems and 'twin.advance' not in problems
+    assert 'batch.advance: batch is now core.twin.engine' in problems
+    assert 'engine defines no nothing' in problems and 'engine.advance' not in problems
     assert resolve_dotted('catenary_monitor.core.monitor.monitor_core.MonitorCore.step') == ''
     assert 'has no nope' in resolve_dotted('core.monitor.monitor_core.MonitorCore.nope')
 

@@ -1,4 +1,4 @@
-"""Chain fatigue (core/monitor/fatigue.py): the streamed rainflow count against ASTM E1049-85's
+"""Chain fatigue (core/rules/fatigue.py): the streamed rainflow count against ASTM E1049-85's
 worked example and two independent libraries (rainflow, fatpack), the seed's S-N example, the
 rate over the last day and the state that survives restarts."""
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import rainflow
 
-from catenary_monitor.core.monitor import fatigue
+from catenary_monitor.core.rules import fatigue
 
 #: ASTM E1049-85 (2011) section 5.4.4, Fig. 6 and Table 4: the series and its rainflow count.
 ASTM_SERIES = [-2.0, 1.0, -3.0, 5.0, -1.0, 3.0, -4.0, 4.0, -2.0]
@@ -182,9 +182,11 @@ def test_the_monitor_counts_every_tension_and_its_replay_agrees():
     """Every tension sample through MonitorCore: fatigue_damage in the outputs is the
     independent rainflow + Miner count of the samples so far (1e-9); the vectorized twin
     (replay) gives the same bits; the seed's curve scaled to this MBL."""
-    from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore
-    from catenary_monitor.core.monitor.monitor_core import Tension, Tick
-    from catenary_monitor.core.monitor.twin import recompute
+    from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+    from catenary_monitor.core.monitor.events import Depth
+    from catenary_monitor.core.monitor.monitor_core import MonitorCore
+    from catenary_monitor.core.monitor.events import Tension, Tick
+    from catenary_monitor.core.twin.engine import recompute
 
     config = _config()
     line = config.lines[0]
@@ -219,10 +221,12 @@ def test_the_store_carries_the_count_across_a_restart_and_replay_follows(tmp_pat
     """Run, save the store, restart (a new core and the store's FatigueStore event): the count
     goes on as if never stopped; replaying the log's events (Start, FatigueStore) gives the
     restarted core's bits."""
-    from catenary_monitor.core.monitor.monitor_core import Depth, FatigueStore, MonitorCore
-    from catenary_monitor.core.monitor.monitor_core import Start, Tension, event_record
-    from catenary_monitor.core.monitor.monitor_core import parse_event_record
-    from catenary_monitor.core.monitor.twin import Window, run_log
+    from catenary_monitor.core.monitor.events import Depth, FatigueStore
+    from catenary_monitor.core.monitor.monitor_core import MonitorCore
+    from catenary_monitor.core.monitor.events import Start, Tension, event_record
+    from catenary_monitor.core.monitor.events import parse_event_record
+    from catenary_monitor.core.twin.window import Window
+    from catenary_monitor.core.twin.engine import run_log
     from catenary_monitor.io import fatigue_store
 
     config = _config(fatigue_damage_initial=0.125)

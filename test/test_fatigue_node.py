@@ -16,7 +16,7 @@ from rclpy.serialization import deserialize_message
 from std_msgs.msg import Float64, Float64MultiArray
 
 from catenary_monitor.core.config.parameters import config_from_params, load_params_file
-from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 from catenary_monitor.io.mcap_read import iter_messages
 from catenary_monitor.replay.driver import expand, replay_log
 

@@ -1,4 +1,4 @@
-"""Holding (core/monitor/holding.py) through the monitor core: seed 001's rule, Hou et al. 2005's
+"""Holding (core/rules/holding.py) through the monitor core: seed 001's rule, Hou et al. 2005's
 table (w = 25 kgf/m, dm = 11 m, anchor 2500 kgf; consistent units kgf and m), a sinker's
 holding under uplift, a dragged anchor seen in implied_anchor_distance, the drag WARN."""
 
@@ -9,8 +9,10 @@ import pytest
 
 from catenary_monitor import solve
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor.alarms import Level
-from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore, Tension
+from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.events import Depth, Tension
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 
 LAMBDA_A, LAMBDA_C = 3.0, 0.75  # a holding coefficient and a chain friction (seed 001's form)
 ANCHOR = 2500.0  # kgf, Hou's anchor
@@ -243,9 +245,10 @@ def test_the_plain_float_holding_path_gives_the_array_path_numbers(seed):
     NaN."""
     import numpy as np
 
-    from catenary_monitor.core.monitor.holding import (
+    from catenary_monitor.core.rules.holding import (
         FIELDS,
         LENGTH_FIELDS,
+        HoldingInputs,
         holding,
         holding_scalar,
     )
@@ -253,12 +256,12 @@ def test_the_plain_float_holding_path_gives_the_array_path_numbers(seed):
 
     scenes = _holding_scenes(2000, seed)
     w, ea, length, h = scenes[0], scenes[1], scenes[2], scenes[7]
-    vec = holding(*scenes)
+    vec = holding(HoldingInputs(*scenes))
     implied = vec['implied_anchor_distance']
     lift = fixed_length.lift_depth(w, length, implied, ea)
     lifted = 0
     for i in range(len(w)):
-        one = holding_scalar(*(float(c[i]) for c in scenes))
+        one = holding_scalar(HoldingInputs(*(float(c[i]) for c in scenes)))
         lifted += scenes[-1][i] > 0
         if np.isfinite(implied[i]):
             assert one['implied_anchor_distance'] == pytest.approx(implied[i], rel=1e-15, abs=0)
@@ -288,7 +291,7 @@ def test_the_core_takes_the_plain_float_path_on_a_tension_and_the_array_path_on_
     depth."""
     import dataclasses
 
-    from catenary_monitor.core.monitor import holding as holding_rule
+    from catenary_monitor.core.rules import holding as holding_rule
 
     calls = []
     array_path = holding_rule.holding
@@ -317,8 +320,8 @@ def test_the_core_takes_the_plain_float_path_on_a_tension_and_the_array_path_on_
 def _storm(spans, line, **alarm):
     """The core and its twin through one tension a second at those spans (Hou's depth 13 m,
     a tick a second): the core's outputs and transitions, and the twin's."""
-    from catenary_monitor.core.monitor.monitor_core import Tick
-    from catenary_monitor.core.monitor.twin import recompute
+    from catenary_monitor.core.monitor.events import Tick
+    from catenary_monitor.core.twin.engine import recompute
 
     config = MonitorConfig(lines=(line,), alarm=AlarmConfig(clear_hold=0.0, **alarm))
     tensions = [solve(25.0, 13.0, chain_length=21.0, anchor_distance=x).top_tension for x in spans]

@@ -1,13 +1,15 @@
 """The intake status against configured sample rates (core.monitor.monitor_core,
-core.monitor.health): samples that never reached the node, counted whatever the executor can
+core.rules.health): samples that never reached the node, counted whatever the executor can
 see."""
 
 from __future__ import annotations
 
 from replay_data import T0_NS, dock_config
 
-from catenary_monitor.core.monitor.health import missing_samples
-from catenary_monitor.core.monitor.monitor_core import Intake, Level, MonitorCore
+from catenary_monitor.core.rules.health import missing_samples
+from catenary_monitor.core.monitor.events import Intake
+from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 
 
 def _at(s: float) -> int:

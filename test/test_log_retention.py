@@ -19,8 +19,8 @@ import yaml
 from mcap_readers import check_folder, rosbags_count
 
 from catenary_monitor.core.config.parameters import ConfigError, MonitorConfig, LineConfig
-from catenary_monitor.core.monitor.alarms import Level
-from catenary_monitor.core.monitor.health import logger_status
+from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.rules.health import logger_status
 from catenary_monitor.io.mcap_log import McapLogger
 
 T0 = 1_795_000_000_000_000_000  # ns

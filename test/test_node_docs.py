@@ -25,8 +25,8 @@ def test_core_and_node_cli_import_without_rclpy():
     code = (
         "import sys; sys.modules['rclpy'] = None\n"
         "import catenary_monitor.cli.main, catenary_monitor.ros.simulator\n"
-        "import catenary_monitor.core.monitor.health\n"
-        "import catenary_monitor.core.config.parameters, catenary_monitor.core.monitor.alarms\n"
+        "import catenary_monitor.core.rules.health\n"
+        "import catenary_monitor.core.config.parameters, catenary_monitor.core.alarms.latches\n"
     )
     subprocess.run(
         [sys.executable, '-c', code],
@@ -47,7 +47,7 @@ def _outputs_table() -> list[tuple[int, str, str]]:
 
 def test_node_doc_outputs_table_is_the_codes_output_fields():
     """The outputs are listed once, in docs/node.md, in the code's order and no more or less."""
-    from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS
+    from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 
     table = _outputs_table()
     assert [i for i, _, _ in table] == list(range(len(table)))
@@ -55,7 +55,7 @@ def test_node_doc_outputs_table_is_the_codes_output_fields():
 
 
 def test_node_doc_sensor_state_codes_are_the_codes():
-    from catenary_monitor.core.monitor.sensor_state import LINE_STATES
+    from catenary_monitor.core.rules.sensor_state import LINE_STATES
 
     meaning = {field: text for _, field, text in _outputs_table()}['sensor_state']
     assert meaning.count('`') // 2 >= len(LINE_STATES)

@@ -65,7 +65,7 @@ def _node_tension_outputs(log_dir, config):
 
 
 def test_a_flooded_node_stays_on_time_counts_what_it_coalesced_and_replays_the_same(tmp_path):
-    from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS
+    from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
     from catenary_monitor_study.bench_flood import flood_params
 
     log_dir = tmp_path / 'log'
@@ -121,7 +121,7 @@ def test_the_outputs_encoded_in_place_decode_as_rclpy_serializes_them():
     from rclpy.serialization import deserialize_message, serialize_message
     from std_msgs.msg import Float64, Float64MultiArray, MultiArrayDimension
 
-    from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS
+    from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
     from catenary_monitor.ros.node import OutputEncoder, float64_value
 
     n = len(OUTPUT_FIELDS)

@@ -156,7 +156,7 @@ def test_a_normal_rate_drops_nothing(client, tmp_path, monkeypatch):
     from rclpy.serialization import deserialize_message
     from std_msgs.msg import String
 
-    from catenary_monitor.core.monitor.monitor_core import EVENTS_TOPIC
+    from catenary_monitor.core.monitor.events import EVENTS_TOPIC
     from catenary_monitor.io.mcap_read import iter_messages
 
     monkeypatch.setenv('CATENARY_MONITOR_EXECUTOR', 'single')

@@ -20,9 +20,11 @@ from scipy.optimize import brentq
 from sensor_bag import column, replay_csv, write_bag
 
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor.alarms import CONDITIONS, Level
-from catenary_monitor.core.monitor.monitor_core import MonitorCore, Tension
-from catenary_monitor.core.monitor.twin import tick_grid
+from catenary_monitor.core.alarms.latches import CONDITIONS
+from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
+from catenary_monitor.core.monitor.events import Tension
+from catenary_monitor.core.twin.window import tick_grid
 
 os.environ.setdefault('PYTHONBREAKPOINT', '0')  # MoorPy calls breakpoint() on some errors
 W, L, X = 1300.0, 122.6247, 120.0  # the paper dock's chain at its installed span
@@ -232,7 +234,7 @@ def test_dock_storm_uplift_bounds_alarms_and_estimate_against_moordyn(tmp_path, 
     no later than one wave period after MoorDyn's crossing of the allowed 20 kN, and none on a
     line whose anchor MoorDyn never lifts; the span solved at within the waves' reach of
     MoorDyn's; the dock estimate (the replay's /diagnostics) following the dock."""
-    from catenary_monitor.core.monitor.twin import recompute
+    from catenary_monitor.core.twin.engine import recompute
 
     config, rec = dock_storm
     t_ns = T0_NS + np.rint(rec.t * 1e9).astype(np.int64)
@@ -302,7 +304,7 @@ def test_the_demo_on_moordyn_gives_the_storms_warnings(moordyn, tmp_path):
     MoorDyn's differ by the chains' dynamics."""
     from catenary_monitor.cli.demo import DEMO_OVERRIDES, MOORDYN_EA
     from catenary_monitor.core.config.parameters import config_from_params, load_params_file
-    from catenary_monitor.core.monitor.twin import recompute
+    from catenary_monitor.core.twin.engine import recompute
     from catenary_monitor.sim.scenario import MoorDynTensions, Scenario, default_config_path
 
     params = {**load_params_file(default_config_path()), **DEMO_OVERRIDES}

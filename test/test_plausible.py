@@ -1,4 +1,4 @@
-"""The plausibility bounds of a reading (core/monitor/plausible.py): scalar and array alike, and
+"""The plausibility bounds of a reading (core/rules/plausible.py): scalar and array alike, and
 the status sentences name the bounds the code applies."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from catenary_monitor.core.monitor.plausible import (
+from catenary_monitor.core.rules.plausible import (
     MAX_DEPTH,
     MAX_TENSION_PER_MBL,
     reading_status,

@@ -163,9 +163,11 @@ def test_the_monitor_and_its_replay_solve_a_line_with_a_clump_and_a_buoy():
     the same values (solve() with point_loads, equal to the bit), the point-load model named,
     a lifted anchor's ERROR; the plain line beside it unchanged."""
     from catenary_monitor import solve
-    from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore
-    from catenary_monitor.core.monitor.monitor_core import Tension, Tick
-    from catenary_monitor.core.monitor.twin import recompute
+    from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+    from catenary_monitor.core.monitor.events import Depth
+    from catenary_monitor.core.monitor.monitor_core import MonitorCore
+    from catenary_monitor.core.monitor.events import Tension, Tick
+    from catenary_monitor.core.twin.engine import recompute
 
     config = _loaded_config([40.0, 90.0], [60e3, -25e3])
     tensions = np.linspace(3.8e5, 1.7e6, 40)
@@ -255,10 +257,12 @@ def test_bounds_and_holding_of_a_line_with_point_loads_live_and_in_replay():
     the dynamic uplift and every holding value are numbers (no NaN once solved), the core's
     and the replay twin's to the bit; the implied anchor distance gives back the tension
     (solve_length) and the tide margin at length is where that chain lifts its anchor."""
-    from catenary_monitor.core.monitor.holding import FIELDS as HOLD
-    from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore
-    from catenary_monitor.core.monitor.monitor_core import Tension, Tick
-    from catenary_monitor.core.monitor.twin import recompute
+    from catenary_monitor.core.rules.holding import FIELDS as HOLD
+    from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+    from catenary_monitor.core.monitor.events import Depth
+    from catenary_monitor.core.monitor.monitor_core import MonitorCore
+    from catenary_monitor.core.monitor.events import Tension, Tick
+    from catenary_monitor.core.twin.engine import recompute
 
     config = _loaded_config(
         [40.0, 90.0], [60e3, -25e3], chain_length=125.0, anchor_holding=6e5, chain_friction=1.0
@@ -300,7 +304,7 @@ def test_bounds_and_holding_of_a_line_with_point_loads_live_and_in_replay():
 def test_point_load_bounds_contain_every_reading_within_the_accuracy(tension):
     """uncertainty.loaded_bounds: the solve at random readings within +-dT and +-dh stays
     inside the bounds (the uplift below its upper bound, both margins above their lower)."""
-    from catenary_monitor.core.monitor.uncertainty import loaded_bounds
+    from catenary_monitor.core.rules.uncertainty import loaded_bounds
 
     loads = ([40.0, 90.0], [60e3, -25e3])
     d_t, d_h, x = 2e4, 0.05, 121.06

@@ -17,11 +17,12 @@ import pytest
 from replay_data import core_steps, dock_config, generate, params_yaml, write_log
 
 from catenary_monitor.cli.main import main
-from catenary_monitor.core.monitor.alarms import Level
-from catenary_monitor.core.monitor.holding import FIELDS as HOLDING
-from catenary_monitor.core.monitor.holding import LENGTH_FIELDS
-from catenary_monitor.core.monitor.twin import LineResult, recompute
-from catenary_monitor.core.monitor.uncertainty import FIELDS as BOUNDS
+from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.rules.holding import FIELDS as HOLDING
+from catenary_monitor.core.rules.holding import LENGTH_FIELDS
+from catenary_monitor.core.twin.window import LineResult
+from catenary_monitor.core.twin.engine import recompute
+from catenary_monitor.core.rules.uncertainty import FIELDS as BOUNDS
 
 ROOT = Path(__file__).resolve().parents[1]
 CONTRACT = [
@@ -438,7 +439,7 @@ def test_offline_replay_imports_without_rclpy():
     """Offline replay needs no ROS: its modules import with rclpy unavailable."""
     code = (
         'import sys; sys.modules["rclpy"] = None\n'
-        'import catenary_monitor.core.monitor.twin, catenary_monitor.cli.replay, '
+        'import catenary_monitor.core.twin.engine, catenary_monitor.cli.replay, '
         'catenary_monitor.replay.outputs, catenary_monitor.io.csv_columns, '
         'catenary_monitor.io.cdr, '
         'catenary_monitor.io.mcap_column_writer, catenary_monitor_study.bench_replay\n'

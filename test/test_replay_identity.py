@@ -4,19 +4,15 @@ tension message, and the latch fast path. (The twin against the core itself: tes
 import numpy as np
 from replay_data import dock_config, generate
 
-from catenary_monitor.core.monitor.holding import FIELDS as HOLDING
-from catenary_monitor.core.monitor.channels import FIELDS as CHANNELS
-from catenary_monitor.core.monitor.fatigue import FIELDS as FATIGUE
-from catenary_monitor.core.monitor.holding import DRAG_FIELDS, LENGTH_FIELDS
-from catenary_monitor.core.monitor.twin import (
-    KIND_TENSION,
-    NO_DEPTH,
-    VALUE_FIELDS,
-    critical_parameters,
-    recompute,
-    solve_updates,
-)
-from catenary_monitor.core.monitor.uncertainty import FIELDS as BOUNDS
+from catenary_monitor.core.rules.holding import FIELDS as HOLDING
+from catenary_monitor.core.rules.channels import FIELDS as CHANNELS
+from catenary_monitor.core.rules.fatigue import FIELDS as FATIGUE
+from catenary_monitor.core.rules.holding import DRAG_FIELDS, LENGTH_FIELDS
+from catenary_monitor.core.twin.window import KIND_TENSION
+from catenary_monitor.core.monitor.state import NO_DEPTH, VALUE_FIELDS
+from catenary_monitor.core.twin.solve_columns import critical_parameters, solve_updates
+from catenary_monitor.core.twin.engine import recompute
+from catenary_monitor.core.rules.uncertainty import FIELDS as BOUNDS
 from catenary_monitor.core.physics.solve import solve
 
 DERIVED = BOUNDS + HOLDING + LENGTH_FIELDS + DRAG_FIELDS + FATIGUE + CHANNELS  # monitor's
@@ -68,7 +64,7 @@ def test_rows_per_tension_message():
 def test_latch_fast_path_without_breach():
     """alarms._latch_series returns at once when no update breaches (most conditions of most
     lines in a real log); it equals the scalar latch step, with and without breaches."""
-    from catenary_monitor.core.monitor import alarms
+    from catenary_monitor.core.alarms import latches as alarms
 
     rng = np.random.default_rng(0)
     t = np.cumsum(rng.uniform(0, 1, 400))

@@ -6,7 +6,7 @@ import functools
 import numpy as np
 import pytest
 
-from catenary_monitor.core.monitor.twin import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 from catenary_monitor.io.cdr import (
     diagnostic_array,
     diagnostic_array_bodies,

@@ -33,7 +33,7 @@ import numpy as np
 import pytest
 
 from catenary_monitor.core.config.parameters import config_hash
-from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, VALUE_FIELDS
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS, VALUE_FIELDS
 from catenary_monitor.core.physics.result import Status
 from catenary_monitor.io.mcap_read import iter_messages
 from catenary_monitor.replay.driver import load_config, log_parameters, replay_log
@@ -335,9 +335,9 @@ def test_replay_of_a_live_node_log_redoes_every_step(tmp_path, form):
         for got, want in zip(array.status, snap.statuses):
             _assert_status_equal(got, want, f'{stamp} {got.name}')
     # The acknowledgements: recorded (the unknown line refused), replayed, seen on /diagnostics.
-    from catenary_monitor.core.monitor.monitor_core import Acknowledge
+    from catenary_monitor.core.monitor.events import Acknowledge
 
-    from catenary_monitor.core.monitor.acknowledge import ORIGIN_LIMIT
+    from catenary_monitor.core.alarms.acknowledge import ORIGIN_LIMIT
 
     acks = [e for e in result.events if isinstance(e, Acknowledge)]
     bounded = 'replay test ' + 'x' * (ORIGIN_LIMIT - 15) + '...'
@@ -393,8 +393,8 @@ def test_replay_of_a_live_node_log_redoes_every_step(tmp_path, form):
 def test_output_layout_is_the_nodes():
     """The node publishes the core's layout; replay writes it too."""
     from catenary_monitor.replay.outputs import output_topic
-    from catenary_monitor.core.monitor import monitor_core
+    from catenary_monitor.core.monitor.events import NODE_NAME
     from catenary_monitor.ros import node
 
-    assert node.OUTPUT_FIELDS is monitor_core.OUTPUT_FIELDS
-    assert output_topic('l1') == f'/{monitor_core.NODE_NAME}/l1/outputs'
+    assert node.OUTPUT_FIELDS is OUTPUT_FIELDS
+    assert output_topic('l1') == f'/{NODE_NAME}/l1/outputs'

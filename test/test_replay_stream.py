@@ -17,7 +17,7 @@ import pytest
 from replay_data import dock_config, generate, params_yaml
 
 from catenary_monitor.cli.main import main
-from catenary_monitor.core.monitor.monitor_core import (
+from catenary_monitor.core.monitor.events import (
     EVENTS_TOPIC,
     Acknowledge,
     LoggerHealth,

@@ -16,7 +16,7 @@ import time
 import pytest
 from ros_harness import output_of, start_monitor, stop, write_params
 
-from catenary_monitor.core.monitor.monitor_core import EVENTS_TOPIC
+from catenary_monitor.core.monitor.events import EVENTS_TOPIC
 from catenary_monitor.io.mcap_read import iter_messages
 
 pytestmark = pytest.mark.ros

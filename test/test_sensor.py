@@ -1,6 +1,6 @@
-"""Sensor sanity (core/sensor_state.py): each line state and each depth state raised by its pattern
-and cleared after, live (the core event by event) and replay (the batch twin) agreeing on every
-output, level, message and snapshot; the demo's storm raises none."""
+"""Sensor sanity (core/rules/sensor_state.py): each line state and each depth state raised by its
+pattern and cleared after, live (the core event by event) and replay (the batch twin) agreeing on
+every output, level, message and snapshot; the demo's storm raises none."""
 
 import math
 
@@ -10,9 +10,9 @@ from replay_data import T0_NS
 from test_batch import compare, ticks_for
 
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor import sensor_state
-from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS
-from catenary_monitor.core.monitor.twin import recompute
+from catenary_monitor.core.rules import sensor_state
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.twin.engine import recompute
 from catenary_monitor.core.physics.solve import solve
 
 W, X, MBL, DEPTH = 1300.0, 120.0, 4.827e6, 20.85
@@ -353,3 +353,26 @@ def test_moved_since_is_the_other_lines_newest_change():
             with np.errstate(invalid='ignore'):
                 want[:, k] = np.maximum(newest, depth) > changed[:, k]
         assert np.array_equal(sensor_state._moved_since(changed, depth), want), trial
+
+
+def test_the_memory_column_loop_equals_the_scalar_sample():
+    """sensor_state.samples (the memory's column loop) equals repeated sensor_state.sample,
+    memory included: steps within and across the resolution, spikes, non-finite readings,
+    equal stamps, a fresh memory (NaN reading, never changed) and one with history."""
+    rng = np.random.default_rng(9)
+    for trial in range(600):
+        n = int(rng.integers(0, 40))
+        stamps = 100.0 + np.cumsum(rng.choice([0.0, 0.05, 0.5, 3.0], n))
+        values = 1e5 + np.cumsum(rng.choice([0.0, 3.0, -40.0, 2e4], n))
+        bad = rng.random(n) < 0.15
+        values[bad] = rng.choice([np.nan, np.inf, -np.inf], int(bad.sum()))
+        mem = sensor_state.Memory() if trial % 2 else sensor_state.Memory(1e5, 99.0, 50.0, -np.inf)
+        resolution = float(rng.choice([0.0, 10.0, 100.0]))
+        want_ch, want_sp, m = [], [], mem
+        for stamp, value in zip(stamps.tolist(), values.tolist()):
+            m = sensor_state.sample(m, stamp, value, resolution, 500.0, 0.1)
+            want_ch.append(m.changed)
+            want_sp.append(m.spiked)
+        ch, sp, end = sensor_state.samples(mem, stamps, values, resolution, 500.0, 0.1)
+        assert ch.tolist() == want_ch and sp.tolist() == want_sp, trial
+        assert end == m, trial

@@ -1,4 +1,4 @@
-"""Samples taken at their header stamps (core/monitor/readings.py): the core against its twin,
+"""Samples taken at their header stamps (core/rules/readings.py): the core against its twin,
 stamps that lag arrival and come in bunches, stamps refused (ahead of the clock, backwards),
 and the readings of each message type against their definitions.
 
@@ -19,16 +19,12 @@ from catenary_monitor.core.config.parameters import (
     MonitorConfig,
     config_from_params,
 )
-from catenary_monitor.core.monitor import readings, sensor_state
-from catenary_monitor.core.monitor.monitor_core import (
-    OUTPUT_FIELDS,
-    VALUE_FIELDS,
-    Depth,
-    MonitorCore,
-    Tension,
-    Tick,
-)
-from catenary_monitor.core.monitor.twin import KIND_TENSION, Window, advance
+from catenary_monitor.core.rules import readings, sensor_state
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS, VALUE_FIELDS
+from catenary_monitor.core.monitor.events import Depth, Tension, Tick
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
+from catenary_monitor.core.twin.window import KIND_TENSION, Window
+from catenary_monitor.core.twin.engine import advance
 from catenary_monitor.core.physics.result import Status
 from catenary_monitor.core.physics.solve import solve
 
@@ -438,8 +434,9 @@ def test_replay_of_a_rosbag2_recording_of_stamped_sensors_equals_the_core(tmp_pa
 def test_the_twin_leaves_out_coalesced_stamped_samples_as_the_core_does(cuts):
     """A coalescing node's records over stamped samples (lagging, bunched): the twin leaves
     out the samples and their header stamps alike, in one window or three, as the core."""
-    from catenary_monitor.core.monitor.monitor_core import Coalesced
-    from catenary_monitor.core.monitor.twin import run_log, slice_window
+    from catenary_monitor.core.monitor.events import Coalesced
+    from catenary_monitor.core.twin.engine import run_log
+    from catenary_monitor.core.twin.window import slice_window
 
     config, cols, depth = stamped_scene(bad=False)
     ticks = ticks_for(*plain(cols, depth))

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from ros_harness import Client, output_of, start_monitor, stop, write_params
 
-from catenary_monitor.core.monitor.readings import G
+from catenary_monitor.core.rules.readings import G
 from catenary_monitor.core.physics.solve import solve
 from catenary_monitor.replay.driver import expand, load_config, replay_log
 

@@ -1,4 +1,4 @@
-"""The tide table (core.monitor.tide_table): time_to_uplift on the table's own forecast.
+"""The tide table (core.rules.tide_table): time_to_uplift on the table's own forecast.
 
 A tide that follows its table exactly, the horizontal tension held: at every depth sample the
 published ``time_to_uplift`` is the first crossing of the critical depth (the catenary closed
@@ -23,8 +23,8 @@ from catenary_monitor.core.config.parameters import (
     MonitorConfig,
 )
 from catenary_monitor.core.config.tide_constituents import parse_table
-from catenary_monitor.core.monitor import tide_table
-from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS
+from catenary_monitor.core.rules import tide_table
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 
 TABLE = 'M2 0.9 40.0 28.9841042; S2 0.3 100.0 30.0; K1 0.25 10.0 15.0410686'
 EPOCH = T0_NS * 1e-9 - 29400.0  # the record starts near low water

@@ -1,4 +1,4 @@
-"""The tide's trend and each line's time to uplift (core.monitor.tide_trend, the core, its
+"""The tide's trend and each line's time to uplift (core.rules.tide_trend, the core, its
 vectorized twin).
 
 * the scalar trend (``step``) and its vectorized twin (``series``) give the same bits, in any
@@ -8,7 +8,7 @@ vectorized twin).
   waves on the depth and the tension (the dock heaving with them: every sample) and with gauge
   noise on the depth (which the solver turns into noise on the horizontal tension and so on the
   margin: the median of each minute);
-* the core and ``twin.advance`` agree event by event over such a tide (values, the new WARN
+* the core and ``engine.advance`` agree event by event over such a tide (values, the new WARN
   and the ERROR after it, snapshots, the state left behind).
 """
 
@@ -21,8 +21,10 @@ from replay_data import T0_NS
 from test_batch import compare
 
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor import tide_trend
-from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore, Tension
+from catenary_monitor.core.rules import tide_trend
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.events import Depth, Tension
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 
 W, X = 1300.0, 120.0  # chain weight N/m, anchor distance m
 H = 150e3  # horizontal tension held, N
@@ -55,7 +57,7 @@ def tide_scene(seconds, noise=0.0, wave=0.0, seed=0):
 
 def one_line(tension_accuracy=None, **alarm):
     # The scene's tension is noise-free and moves by less than the default resolution per
-    # sample: resolution 0 keeps it from reading as a stuck sensor (core.monitor.sensor_state).
+    # sample: resolution 0 keeps it from reading as a stuck sensor (core.rules.sensor_state).
     alarm.setdefault('tension_resolution', 0.0)
     line = LineConfig(
         name='line_11',
@@ -114,6 +116,28 @@ def test_falling_tide_and_a_lifted_anchor():
     )
     np.testing.assert_array_equal(got[:5], [math.inf, math.nan, 0.0, 0.0, math.nan])
     assert got[5] == 1.2 / 1e-4
+
+
+def test_the_uplift_column_form_equals_the_scalar():
+    """tide_trend.uplift_times equals time_to_uplift element by element: lifted, falling or
+    unknown tides, NaN margins and excesses, signed zeros, infinities."""
+    rng = np.random.default_rng(10)
+    odd = [np.nan, np.inf, -np.inf, 0.0, -0.0, 1e-300]
+    n = 4000
+    cols = [
+        rng.normal(0.5, 1.0, n),
+        rng.choice([0.0, 0.0, 5e3], n),
+        rng.normal(1e-4, 1e-4, n),
+        rng.normal(0.0, 0.2, n),
+    ]
+    for c in cols:
+        hit = rng.random(n) < 0.1
+        c[hit] = rng.choice(odd, int(hit.sum()))
+    want = [tide_trend.time_to_uplift(*v) for v in zip(*(c.tolist() for c in cols))]
+    got = tide_trend.uplift_times(*cols)
+    assert np.array_equal(got, want, equal_nan=True)
+    number = ~np.isnan(got)
+    assert np.array_equal(np.signbit(got[number]), np.signbit(np.array(want)[number]))
 
 
 def test_trend_series_equals_step_in_any_windows():

@@ -1,4 +1,4 @@
-"""Margins with the sensors' accuracy (core/monitor/uncertainty.py): the monotonicity the bounds
+"""Margins with the sensors' accuracy (core/rules/uncertainty.py): the monotonicity the bounds
 rest on, bounds that contain the solve at readings perturbed within the accuracy (the core's scalar
 solve as the reference), and the uplift-within-accuracy WARN through the monitor core."""
 
@@ -9,9 +9,11 @@ import pytest
 
 from catenary_monitor import solve
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
-from catenary_monitor.core.monitor.alarms import Level
-from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore, Tension
-from catenary_monitor.core.monitor.uncertainty import T_STAR, bounds
+from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.events import Depth, Tension
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
+from catenary_monitor.core.rules.uncertainty import T_STAR, bounds
 
 W, X = 1300.0, 120.0
 

@@ -13,7 +13,9 @@ from replay_data import T0_NS, dock_config, generate, params_yaml, write_log
 
 import catenary_monitor
 from catenary_monitor import solve
-from catenary_monitor.core.monitor.monitor_core import OUTPUT_FIELDS, Depth, MonitorCore, Tension
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.events import Depth, Tension
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -47,8 +47,8 @@ from catenary_monitor.core.config.parameters import (
     config_hash,
     resolve_topic,
 )
-from catenary_monitor.core.monitor.monitor_core import EVENTS_TOPIC
-from catenary_monitor.core.monitor.twin import COLUMNS
+from catenary_monitor.core.monitor.events import EVENTS_TOPIC
+from catenary_monitor.core.twin.window import COLUMNS
 from catenary_monitor.io.mcap_read import (
     EmptyLogError,
     TopicTypeError,

@@ -50,7 +50,7 @@ def _from_log(paths: Sequence[str], config: Any) -> tuple[dict[str, float], floa
     them) and the tide's trend (m/s) at the last depth sample."""
     import numpy as np
 
-    from catenary_monitor.core.monitor import tide_trend
+    from catenary_monitor.core.rules import tide_trend
     from catenary_monitor.replay.driver import ReplayError, expand, read_inputs
 
     try:

@@ -3,7 +3,7 @@
 Panels: Diagnostics - Summary and Detail on ``/diagnostics`` (every line, the tide, the
 logger); a Plot of a chosen line's hook tension, uplift force and anchor margin from its
 numeric ``/catenary_monitor/NAME/outputs`` (``data[0]``, ``data[5]``, ``data[4]``: the order of
-:data:`~catenary_monitor.core.monitor.monitor_core.OUTPUT_FIELDS`) and of the depth; a State
+:data:`~catenary_monitor.core.monitor.state.OUTPUT_FIELDS`) and of the depth; a State
 Transitions panel of every line's ``DiagnosticStatus.level`` (OK, WARN, ERROR, STALE labels).
 Generated from a configuration (``catenary-monitor console --foxglove-layout OUT.json``); the
 package ships the one of config/floating_dock.yaml in ``share/catenary_monitor/foxglove``.
@@ -14,7 +14,8 @@ from __future__ import annotations
 from typing import Any, Optional
 
 from catenary_monitor.core.config.parameters import MonitorConfig
-from catenary_monitor.core.monitor.monitor_core import NODE_NAME, OUTPUT_FIELDS
+from catenary_monitor.core.monitor.events import NODE_NAME
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 
 __all__ = ['layout']
 

@@ -1,7 +1,7 @@
 """What the console page shows, built from what the monitor published (no rclpy, no HTTP).
 
 The console decides nothing: levels, messages, alarm states and acknowledgements come from the
-monitor's ``/diagnostics`` (:mod:`catenary_monitor.core.monitor.acknowledge` made them) and the
+monitor's ``/diagnostics`` (:mod:`catenary_monitor.core.alarms.acknowledge` made them) and the
 values from its per-line outputs. This module turns those into one JSON-ready *frame* for the page
 (:func:`build_frame`), the alarm list (:func:`alarm_rows`), the alarm history (by comparing
 consecutive arrays, :class:`History`) and trend series bucketed for a chart (:class:`Trend`,
@@ -20,8 +20,9 @@ from typing import Any, Iterable, Mapping, Optional, Sequence
 import numpy as np
 
 from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, MonitorConfig
-from catenary_monitor.core.monitor.acknowledge import SENSORS
-from catenary_monitor.core.monitor.monitor_core import NODE_NAME, OUTPUT_FIELDS
+from catenary_monitor.core.alarms.acknowledge import SENSORS
+from catenary_monitor.core.monitor.events import NODE_NAME
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 
 __all__ = [
     'AckError',
@@ -439,7 +440,7 @@ class Trend:
 
 def tide_trend(statuses: Mapping[str, Status]) -> dict:
     """The tide's trend as the monitor decided it (the ``rate`` value [m/s] of the tide's
-    ``/diagnostics`` status, :mod:`catenary_monitor.core.monitor.tide_trend`): rate in m/h and
+    ``/diagnostics`` status, :mod:`catenary_monitor.core.rules.tide_trend`): rate in m/h and
     whether it is rising, falling or steady (|rate| < 0.05 m/h); unknown while the monitor says
     nan."""
     tide = statuses.get('tide')
@@ -496,7 +497,7 @@ def _line_view(
             'dynamic_uplift',  # N, the uplift at the waves' peak tension (what ERROR takes)
             'span',  # m, the hook-anchor distance the line was solved at
             'channels_healthy',  # a load cell's healthy channels; None for one channel
-            'channel_states',  # their states, sum code_i 5^i (core.monitor.channels)
+            'channel_states',  # their states, sum code_i 5^i (core.rules.channels)
         ):
             view[key] = _num(v.get(key))
         view['span_source'] = v.get('span_source', 'none')  # installed, dock_estimate, none

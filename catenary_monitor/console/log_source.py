@@ -28,8 +28,9 @@ from catenary_monitor.console.frames import (
     tide_trend,
 )
 from catenary_monitor.core.config.parameters import MonitorConfig
-from catenary_monitor.core.monitor.monitor_core import VALUE_FIELDS, Snapshot, output_values
-from catenary_monitor.core.monitor.twin import ReplayResult
+from catenary_monitor.core.monitor.state import VALUE_FIELDS, output_values
+from catenary_monitor.core.monitor.status import Snapshot
+from catenary_monitor.core.twin.engine import ReplayResult
 
 __all__ = ['LogError', 'load_log', 'ReplaySource']
 

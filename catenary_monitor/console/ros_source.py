@@ -29,10 +29,11 @@ from catenary_monitor.console.frames import (
     statuses_by_name,
     tide_trend,
 )
-from catenary_monitor.core.config.parameters import MonitorConfig
-from catenary_monitor.core.monitor.acknowledge import ACKNOWLEDGE_TOPIC, ALL_LINES, SENSORS, WHOLE
-from catenary_monitor.core.monitor.shelving import SHELVE_TOPIC
-from catenary_monitor.core.monitor.monitor_core import COMPONENTS, NODE_NAME, OUTPUT_FIELDS
+from catenary_monitor.core.alarms.acknowledge import ACKNOWLEDGE_TOPIC, ALL_LINES, SENSORS, WHOLE
+from catenary_monitor.core.alarms.shelving import SHELVE_TOPIC
+from catenary_monitor.core.config.parameters import COMPONENTS, MonitorConfig
+from catenary_monitor.core.monitor.events import NODE_NAME
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 
 __all__ = ['LiveSource', 'AckError', 'ANSWER_WAIT']
 

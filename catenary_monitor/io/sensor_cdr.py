@@ -2,7 +2,7 @@
 
 ``geometry_msgs/msg/WrenchStamped``, ``sensor_msgs/msg/FluidPressure`` and
 ``sensor_msgs/msg/Range`` as the node logs them and rosbag2 records them: the header stamp (ns)
-and the fields :mod:`catenary_monitor.core.monitor.readings` turns into a tension or a depth
+and the fields :mod:`catenary_monitor.core.rules.readings` turns into a tension or a depth
 (``x``, ``y``, ``z`` of the force; ``fluid_pressure``; ``range``, ``min_range``, ``max_range``).
 CDR (XCDR1) little or big endian: after the 4-byte encapsulation, the header (``int32 sec``,
 ``uint32 nanosec``, ``string frame_id``), then the message's own fields, each aligned to its

@@ -5,7 +5,7 @@ The logs are replayed by the one replay driver (:mod:`catenary_monitor.replay.dr
 monitor core and its twin decide every alarm, shelf, chattering and flood again from the
 recorded inputs and operator events, exactly as the node did live; :class:`AlarmReport` is a
 sink that only counts their journal records
-(:mod:`catenary_monitor.core.monitor.alarm_journal`), window by window: its memory is a few
+(:mod:`catenary_monitor.core.alarms.journal`), window by window: its memory is a few
 counters per alarm and one per 10-minute period, whatever the length of the logs.
 
 Figures, overall and per alarm (each line's and the sensors'): alarms raised (annunciated; a
@@ -26,10 +26,11 @@ from typing import Any, Iterable, Optional, Sequence
 import numpy as np
 
 from catenary_monitor.core.config.parameters import MonitorConfig
-from catenary_monitor.core.monitor.acknowledge import SENSORS
-from catenary_monitor.core.monitor.alarm_journal import AlarmEvent
-from catenary_monitor.core.monitor.monitor_core import Start
-from catenary_monitor.core.monitor.twin import ReplayResult, Window
+from catenary_monitor.core.alarms.acknowledge import SENSORS
+from catenary_monitor.core.alarms.journal import AlarmEvent
+from catenary_monitor.core.monitor.events import Start
+from catenary_monitor.core.twin.engine import ReplayResult
+from catenary_monitor.core.twin.window import Window
 
 __all__ = ['AlarmReport', 'TARGETS', 'STANDING_S', 'PERIOD_S', 'report_text']
 

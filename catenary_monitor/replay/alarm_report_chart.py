@@ -15,7 +15,7 @@ import io
 from pathlib import Path
 from typing import Any, Optional
 
-from catenary_monitor.core.monitor.acknowledge import SENSORS
+from catenary_monitor.core.alarms.acknowledge import SENSORS
 
 __all__ = ['draw_chart', 'chart_png', 'write_html']
 

@@ -5,7 +5,7 @@ all call it: :func:`drive` for outputs written window by window, :func:`replay_l
 
 :func:`stream` walks the log (every file of a rotated set or directory, in time order, merged
 across topics) in windows of log time (:func:`catenary_monitor.io.mcap_read.iter_windows`),
-hands each window to :func:`catenary_monitor.core.monitor.twin.run_log` with the core that the
+hands each window to :func:`catenary_monitor.core.twin.engine.run_log` with the core that the
 previous window left (``advance`` leaves it exactly as stepping would), and gives each
 window's results to the caller, which writes them (summary tally, CSV rows, MCAP, plot
 envelopes). Every column of a window, ticks and events included, is cut at the same time
@@ -52,24 +52,18 @@ from catenary_monitor.core.config.parameters import (
     load_params_file,
     resolve_topic,
 )
-from catenary_monitor.core.monitor import channels, readings
-from catenary_monitor.core.monitor.monitor_core import (
+from catenary_monitor.core.rules import channels, readings
+from catenary_monitor.core.monitor.events import (
     EVENTS_TOPIC,
     NODE_NAME,
-    MonitorCore,
     Reconfigure,
     Start,
     Tick,
     parse_event_record,
 )
-from catenary_monitor.core.monitor.twin import (
-    ReplayResult,
-    Window,
-    concat_lines,
-    run_log,
-    slice_window,
-    tick_grid,
-)
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
+from catenary_monitor.core.twin.engine import ReplayResult, run_log
+from catenary_monitor.core.twin.window import Window, concat_lines, slice_window, tick_grid
 from catenary_monitor.core.physics import fused_kernel
 from catenary_monitor.io import mcap_read, sensor_cdr
 from catenary_monitor.io.cdr import string_message, string_text
@@ -187,7 +181,7 @@ def typed_inputs(config: MonitorConfig) -> dict[str, str]:
 
 
 class Inputs(NamedTuple):
-    """A window's inputs in SI (:mod:`catenary_monitor.core.monitor.readings`): tension columns
+    """A window's inputs in SI (:mod:`catenary_monitor.core.rules.readings`): tension columns
     (config order) and the depth column as (arrival ns, value), and the header stamps (ns)
     beside each column of a stamped type (None: taken at arrival; all None: no stamped
     input)."""
@@ -230,7 +224,7 @@ def fused_tensions(
     config: MonitorConfig, line: LineConfig, columns: Mapping[str, Any]
 ) -> tuple[np.ndarray, np.ndarray]:
     """A load cell's tension column from every channel, fused as the monitor fuses them
-    (:func:`catenary_monitor.core.monitor.channels.run` from the first sample): stamps (ns),
+    (:func:`catenary_monitor.core.rules.channels.run` from the first sample): stamps (ns),
     tension (N; NaN while blind)."""
     times, idx, value = _merged(line, columns)
     a = config.alarm

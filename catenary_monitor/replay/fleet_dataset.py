@@ -28,7 +28,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.rules.level import Level
 from catenary_monitor.replay.outputs import CSV_ALL, message_columns
 
 __all__ = [

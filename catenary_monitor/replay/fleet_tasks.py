@@ -72,7 +72,7 @@ from catenary_monitor.replay.fleet_dataset import (
     window_columns,
 )
 from catenary_monitor.replay.outputs import Tally
-from catenary_monitor.core.monitor.twin import LineResult
+from catenary_monitor.core.twin.window import LineResult
 
 __all__ = [
     'PARAMS_FILE',

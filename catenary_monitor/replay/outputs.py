@@ -24,11 +24,11 @@ from catenary_monitor.core.config.parameters import (
     config_hash,
     config_to_params,
 )
-from catenary_monitor.core.monitor import dock_watch as dock_live
-from catenary_monitor.core.monitor import holding, sensor_state
-from catenary_monitor.core.monitor.alarms import VIEW_TEXT
-from catenary_monitor.core.monitor.alarms import Level
-from catenary_monitor.core.monitor.monitor_core import (
+from catenary_monitor.core.rules import dock_watch as dock_live
+from catenary_monitor.core.rules import holding, sensor_state
+from catenary_monitor.core.alarms.latches import VIEW_TEXT
+from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.monitor.events import (
     EVENTS_TOPIC,
     NODE_NAME,
     Event,
@@ -36,17 +36,15 @@ from catenary_monitor.core.monitor.monitor_core import (
     Tick,
     event_record,
 )
-from catenary_monitor.core.monitor.twin import (
+from catenary_monitor.core.twin.window import (
     MODEL_NAMES,
-    NO_DEPTH,
-    OUTPUT_FIELDS,
-    VALUE_FIELDS,
     LineResult,
-    ReplayResult,
     SnapshotColumns,
     StatusColumns,
     worst,
 )
+from catenary_monitor.core.monitor.state import NO_DEPTH, OUTPUT_FIELDS, VALUE_FIELDS
+from catenary_monitor.core.twin.engine import ReplayResult
 from catenary_monitor.io.cdr import (
     diagnostic_array_bodies,
     diagnostic_array_parts,
@@ -105,8 +103,8 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('load_margin', 3),
     ('safety_factor', 3),
     ('time_to_uplift', 3),  # s
-    # The bounds within sensor accuracy (core/monitor/uncertainty.py) and holding
-    # (core/monitor/holding.py).
+    # The bounds within sensor accuracy (core/rules/uncertainty.py) and holding
+    # (core/rules/holding.py).
     ('uplift_force_upper', 3),
     ('anchor_margin_lower', 3),
     ('tide_margin_lower', 3),
@@ -115,25 +113,25 @@ CSV_ALL: tuple[tuple[str, Optional[int]], ...] = (
     ('drag_margin', 3),
     ('implied_anchor_distance', 3),
     ('tide_margin_at_length', 3),
-    # The wave window and the dynamic uplift (core/monitor/wave_window.py), and which view the
-    # time to uplift counts down (a word: core.monitor.monitor_core.view_word).
+    # The wave window and the dynamic uplift (core/rules/wave_window.py), and which view the
+    # time to uplift counts down (a word: core.monitor.status.view_word).
     ('wave_tension', 3),
     ('peak_tension', 3),
     ('dynamic_uplift', 3),
     ('time_to_uplift_view', None),
-    ('sensor_state', None),  # core.monitor.sensor_state.LINE_STATES word
+    ('sensor_state', None),  # core.rules.sensor_state.LINE_STATES word
     ('status', None),
     ('level', None),
     ('model', None),
-    ('drag_state', None),  # core.monitor.holding.DRAG_STATES word, or unknown
-    # Chain fatigue (core/monitor/fatigue.py): Miner's damage, its rate (1/s), life left (s).
+    ('drag_state', None),  # core.rules.holding.DRAG_STATES word, or unknown
+    # Chain fatigue (core/rules/fatigue.py): Miner's damage, its rate (1/s), life left (s).
     ('fatigue_damage', 12),
     ('fatigue_damage_rate', 12),
     ('fatigue_life_left', 0),
-    # A line of several channels (core/monitor/channels.py): healthy count, states code.
+    # A line of several channels (core/rules/channels.py): healthy count, states code.
     ('channels_healthy', 0),
     ('channel_states', 0),
-    # The span solved at and its source (core/monitor/dock_watch.py: a word).
+    # The span solved at and its source (core/rules/dock_watch.py: a word).
     ('span', 3),
     ('span_source', None),
 )
@@ -286,7 +284,7 @@ def _event_payloads(result: ReplayResult, start: bool = True) -> tuple[list[int]
 
 def snapshot_payloads(result: ReplayResult) -> tuple[list[int], list[bytes]]:
     """Every snapshot of the replay as a DiagnosticArray in CDR (stamps ns, payloads), in time
-    order (a stable sort: as :func:`catenary_monitor.core.monitor.twin.run_log` orders Snapshots).
+    order (a stable sort: as :func:`catenary_monitor.core.twin.engine.run_log` orders Snapshots).
     """
     headers: dict[tuple[int, str, str, str, int], Any] = {}
     stamps: list[int] = []

@@ -75,8 +75,8 @@ from catenary_monitor.core.config.parameters import (
     load_params_file,
     runtime_change_refusal,
 )
-from catenary_monitor.core.monitor import readings
-from catenary_monitor.core.monitor.acknowledge import (
+from catenary_monitor.core.rules import readings
+from catenary_monitor.core.alarms.acknowledge import (
     ACKNOWLEDGE_TOPIC,
     SENSORS,
     bounded_text,
@@ -84,17 +84,15 @@ from catenary_monitor.core.monitor.acknowledge import (
     parse_request,
     publisher_identity,
 )
-from catenary_monitor.core.monitor.alarm_journal import AlarmEvent
-from catenary_monitor.core.monitor.alarms import Level
-from catenary_monitor.core.monitor.shelving import SHELVE_TOPIC
-from catenary_monitor.core.monitor.shelving import parse_request as parse_shelve_request
-from catenary_monitor.core.monitor.health import clock_stopped
-from catenary_monitor.core.monitor.monitor_core import (
+from catenary_monitor.core.alarms.journal import AlarmEvent
+from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.alarms.shelving import SHELVE_TOPIC
+from catenary_monitor.core.alarms.shelving import parse_request as parse_shelve_request
+from catenary_monitor.core.rules.health import clock_stopped
+from catenary_monitor.core.monitor.events import (
     EVENTS_TOPIC,
     NODE_NAME,
-    OUTPUT_FIELDS,
     Acknowledge,
-    Change,
     ClockHealth,
     Coalesced,
     Depth,
@@ -102,17 +100,17 @@ from catenary_monitor.core.monitor.monitor_core import (
     FatigueStore,
     Intake,
     LoggerHealth,
-    MonitorCore,
     Reconfigure,
     Shelve,
-    Snapshot,
     Start,
-    Step,
     Tension,
     Tick,
     event_record,
 )
-from catenary_monitor.core.monitor.fatigue import to_record
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.status import Change, Snapshot
+from catenary_monitor.core.monitor.monitor_core import MonitorCore, Step
+from catenary_monitor.core.rules.fatigue import to_record
 from catenary_monitor.core.physics import elastic
 from catenary_monitor.io import fatigue_store
 from catenary_monitor.io.mcap_log import McapLogger
@@ -512,7 +510,7 @@ class CatenaryMonitor(Node):
         self._input_topic = [*self._tension_topics, self._depth_topic]
         for k, line in enumerate(cfg.lines):
             for j, topic in enumerate(line.channel_topics[1:], start=1):
-                # a load cell's further channels (core.channels), each an input of its own:
+                # a load cell's further channels (core.rules.channels), each an input of its own:
                 # drained, coalesced and counted (for its line) as the first is
                 s = len(self._subs)
                 extra = self.create_subscription(
@@ -1086,7 +1084,7 @@ class OutputEncoder:
 
 
 def _fields(data: bytes, type_name: str) -> tuple[dict[str, float], Optional[int]]:
-    """A raw input message's fields (core.monitor.readings) and its header stamp in ns (None
+    """A raw input message's fields (core.rules.readings) and its header stamp in ns (None
     for a type without a header)."""
     if type_name == 'std_msgs/msg/Float64':
         return {'value': float64_value(data)}, None

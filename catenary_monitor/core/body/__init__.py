@@ -7,7 +7,7 @@ of the dock's offset and load from the measured tensions (pure numpy, no rclpy, 
 * :mod:`.envelope` the smallest load (and wind) from each direction that lifts an anchor;
 * :mod:`.estimate` offset and load from measured tensions, residuals, inconsistent lines.
 
-The monitor's live use of the estimate is :mod:`catenary_monitor.core.monitor.dock_watch`.
+The monitor's live use of the estimate is :mod:`catenary_monitor.core.rules.dock_watch`.
 May import :mod:`catenary_monitor.core.physics` and :mod:`~catenary_monitor.core.config`.
 See docs/dock_body.md.
 """

@@ -57,7 +57,7 @@ class DockModel:
     hook_height: np.ndarray
     mbl: np.ndarray
     allowed_uplift: np.ndarray
-    accuracy: np.ndarray  # N, tension accuracy (+- bound; the estimate's sigma_T): sensor_accuracy
+    tension_accuracy: np.ndarray  # N, +- bound (the estimate's sigma_T), or its default
     dock: DockConfig
     #: Per line: its clump weights and buoys (None: a plain chain); () when no line has any.
     loads: tuple[Optional[PointLoads], ...] = ()
@@ -94,7 +94,7 @@ class DockModel:
             hook_height=col('hook_height'),
             mbl=col('mbl'),
             allowed_uplift=col('allowed_uplift'),
-            accuracy=np.array([line.sensor_accuracy for line in lines]),
+            tension_accuracy=np.array([line.tension_accuracy_or_default for line in lines]),
             dock=config.dock,
             loads=_point_loads(config),
         )

@@ -19,16 +19,16 @@ covariance of q); the largest-normalized-residual test (Schweppe; the bad-data t
 system state estimation) drops the line with the largest ``|z|`` above ``REMOVE_Z`` and refits,
 up to ``MAX_FLAGS`` times, as long as at least ``MIN_REDUNDANT`` readings remain (fewer cannot
 say which line is wrong); a dropped line's z is then its prediction residual. Whether a line is
-inconsistent is decided over time from these z (:mod:`catenary_monitor.core.monitor.dock_watch`).
+inconsistent is decided over time from these z (:mod:`catenary_monitor.core.rules.dock_watch`).
 Every line is tested at its sensor's accuracy (``tension_accuracy``, by default 0.5 % of its
-MBL: :attr:`~catenary_monitor.core.config.parameters.LineConfig.sensor_accuracy`); a model
-built with NaN accuracies tests none and weights them with the largest accuracy given (or
+MBL: :attr:`~catenary_monitor.core.config.parameters.LineConfig.tension_accuracy_or_default`);
+a model built with NaN accuracies tests none and weights them with the largest accuracy given (or
 equally).
 
 The environmental load is minus the restoring force and moment of every line at the fitted
 offset (the dock at rest: static equilibrium), and each line's expected tension is its model
 tension at its fitted span (``span``, the hook's distance to its anchor at the fitted offset,
-which the monitor solves the line's uplift at: :mod:`catenary_monitor.core.monitor.dock_watch`):
+which the monitor solves the line's uplift at: :mod:`catenary_monitor.core.rules.dock_watch`):
 ``residual = measured - expected`` (an expected tension of ``inf``
 means the other lines put this hook beyond its chain's reach).
 """
@@ -178,14 +178,15 @@ def estimate_dock(
     depth = np.asarray(depth, dtype=float)
     n, m = tensions.shape
     h = depth[:, None] + model.hook_height[None, :]
-    given = np.isfinite(model.accuracy)
-    default = float(np.max(model.accuracy[given])) if given.any() else 1.0
-    sigma_t = np.where(given, model.accuracy, default)[None, :]
+    given = np.isfinite(model.tension_accuracy)
+    default = float(np.max(model.tension_accuracy[given])) if given.any() else 1.0
+    tension_accuracy = np.where(given, model.tension_accuracy, default)[None, :]
     with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
         s_meas, dt_ds = span_and_sensitivity(
             model.weight, h, model.chain_length, np.where(usable, tensions, np.nan), model.ea
         )
-        weight = np.where(usable & np.isfinite(s_meas) & (dt_ds > 0), (dt_ds / sigma_t) ** 2, 0.0)
+        fits = usable & np.isfinite(s_meas) & (dt_ds > 0)
+        weight = np.where(fits, (dt_ds / tension_accuracy) ** 2, 0.0)
         weight = np.where(np.isfinite(weight), weight, 0.0)
         readings = np.sum(weight > 0, axis=1)
         enough = readings >= MIN_LINES

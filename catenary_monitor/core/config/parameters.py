@@ -32,6 +32,8 @@ from catenary_monitor.core.config.tide_constituents import (
 __all__ = [
     'REQUIRED',
     'ALARM_CONDITIONS',
+    'COMPONENTS',
+    'RESERVED_NAMES',
     'FLOAT64',
     'TENSION_TYPES',
     'DEPTH_TYPES',
@@ -392,7 +394,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         1.0e12,
         _L,
     ),
-    # Inputs as the sensors' drivers publish them (core/monitor/readings.py; docs/node.md).
+    # Inputs as the sensors' drivers publish them (core/rules/readings.py; docs/node.md).
     ParamSpec(
         'tension_type',
         'string',
@@ -492,7 +494,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         _L,
         optional=True,
     ),
-    # A line measured by several channels (core/monitor/channels.py, docs/channels.md).
+    # A line measured by several channels (core/rules/channels.py, docs/channels.md).
     ParamSpec(
         'tension_topics',
         'string_array',
@@ -541,7 +543,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         _L,
         group='point_loads',
     ),
-    # Chain fatigue (core/monitor/fatigue.py, docs/fatigue.md): seed 001's S-N curve.
+    # Chain fatigue (core/rules/fatigue.py, docs/fatigue.md): seed 001's S-N curve.
     ParamSpec(
         'fatigue_m',
         'double',
@@ -693,7 +695,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.0,
         86400.0,
     ),
-    # The tide table (core/monitor/tide_table.py; table in docs/node.md).
+    # The tide table (core/rules/tide_table.py; table in docs/node.md).
     ParamSpec(
         'tide_table',
         'string',
@@ -725,7 +727,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         604800.0,
         group='tide',
     ),
-    # Sensor sanity (core/monitor/sensor_state.py; table in docs/node.md).
+    # Sensor sanity (core/rules/sensor_state.py; table in docs/node.md).
     *(
         ParamSpec(name, 'double', default, text, unit, lo, hi, group='sensor')
         for name, default, text, unit, lo, hi in (
@@ -1202,8 +1204,9 @@ _PER_LINE = {p.name: p for p in PARAMETERS if p.scope == 'line'}
 ROS_BUILTIN_PARAMETERS = frozenset({'use_sim_time', 'start_type_description_service'})
 _ROS_BUILTIN_PREFIXES = ('qos_overrides.',)
 
-#: Every condition of a line's alarm (core.monitor.alarms.CONDITIONS, then ``stale``): the names
-#: of ``unshelvable_conditions`` and of a shelved condition (test_shelving checks they agree).
+#: Every condition of a line's alarm, the one list of their names: the latched ones in message
+#: order, ERRORs then WARNs (:data:`catenary_monitor.core.alarms.latches.CONDITIONS`), then
+#: ``stale`` (no latch); the names of ``unshelvable_conditions`` and of a shelved condition.
 ALARM_CONDITIONS = (
     'uplift',
     'input',
@@ -1213,20 +1216,24 @@ ALARM_CONDITIONS = (
     'safety_factor',
     'time_to_uplift',
     'inconsistent',
+    # Margins within the sensors' accuracy, and holding.
     'uplift_possible',
     'drag_margin',
+    # Sensor sanity: core/rules/sensor_state.py.
     'sensor_error',
     'sensor_warn',
+    # Hou et al.'s third regime, the anchor dragging: core/rules/holding.py.
     'dragging',
+    # Chain fatigue (Miner's damage): core/rules/fatigue.py.
     'fatigue',
+    # A load cell's channel failed (the tension from the others): core/rules/channels.py.
     'channel',
     'stale',
 )
 
 _LINE_NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*\Z')
-#: Names of the monitor's own statuses (``catenary_monitor: tide``, ...) and of the
-#: acknowledgement of every alarm (``all``): no line may take one.
-RESERVED_NAMES = (
+#: The monitor's own statuses on /diagnostics (``catenary_monitor: tide``, ...), not lines.
+COMPONENTS = (
     'tide',
     'sensors',
     'alarms',
@@ -1236,8 +1243,10 @@ RESERVED_NAMES = (
     'clock',
     'intake',
     'fatigue',
-    'all',
 )
+#: The names no line may take: the components', and ``all`` (the acknowledgement of every
+#: alarm, :data:`catenary_monitor.core.alarms.acknowledge.ALL_LINES`).
+RESERVED_NAMES = (*COMPONENTS, 'all')
 
 
 def _check_line_name(name: object) -> None:
@@ -1429,7 +1438,7 @@ class LineConfig:
         return 80.5 * 12421.0e3 / self.mbl
 
     @property
-    def sensor_accuracy(self) -> float:
+    def tension_accuracy_or_default(self) -> float:
         """The tension sensor's accuracy [N]: ``tension_accuracy``, or where it is not set
         :data:`DEFAULT_TENSION_ACCURACY` of the MBL."""
         if self.tension_accuracy is not None:

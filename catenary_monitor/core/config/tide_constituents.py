@@ -1,6 +1,6 @@
 """The ``tide_table`` parameter: harmonic constituents ``NAME AMPLITUDE PHASE SPEED`` (m, deg,
 deg/h) separated by ``;``, e.g. ``"M2 1.0 112.3 28.9841042; S2 0.33 141.0 30.0"``. The forecast
-on them is :mod:`catenary_monitor.core.monitor.tide_table`.
+on them is :mod:`catenary_monitor.core.rules.tide_table`.
 """
 
 from __future__ import annotations

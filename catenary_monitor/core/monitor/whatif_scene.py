@@ -29,14 +29,9 @@ import math
 from typing import Any, Mapping, NamedTuple, Optional
 
 from catenary_monitor.core.config.parameters import MonitorConfig
-from catenary_monitor.core.monitor.monitor_core import (
-    OUTPUT_FIELDS,
-    Depth,
-    Event,
-    MonitorCore,
-    Tension,
-    Tick,
-)
+from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
+from catenary_monitor.core.monitor.events import Depth, Event, Tension, Tick
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
 
 __all__ = [
     'LineScene',

@@ -555,7 +555,10 @@ def solve_chain_length(
         problem='chain_length',
         keys=keys,
         model=str(model[0]) if scalar else model.reshape(shape),
-        method='fixed-length elastic chain: safeguarded Newton in T (core.fixed_length)',
+        method=(
+            'fixed-length elastic chain: safeguarded Newton in T '
+            '(catenary_monitor.core.physics.fixed_length)'
+        ),
     )
 
 

@@ -24,10 +24,10 @@ class Status(IntEnum):
     CHAIN_SLACK = 8
     MBL = 9
     NO_CONVERGENCE = 10
-    IMPLAUSIBLE_TENSION = 11  # a reading, see core/monitor/plausible.py
+    IMPLAUSIBLE_TENSION = 11  # a reading, see core/rules/plausible.py
     IMPLAUSIBLE_DEPTH = 12
     OUT_OF_RANGE = 13  # a result float64 cannot hold (never status 0 with inf or NaN)
-    WRONG_UNITS = 14  # a reading off by orders of magnitude, see core/monitor/plausible.py
+    WRONG_UNITS = 14  # a reading off by orders of magnitude, see core/rules/plausible.py
     NOT_MODELLED = 15  # point loads: a scene the static model does not follow (point_loads.py)
 
 
@@ -117,7 +117,7 @@ class SolveResult(NamedTuple):
     problem: str  # 'tension', 'horizontal' or 'chain_length'
     keys: tuple[str, ...] = ()
     model: Any = 'inextensible catenary'  # str; per element (object array) for arrays
-    method: str = 'closed form + safeguarded Newton (catenary_monitor.catenary)'
+    method: str = 'closed form + safeguarded Newton (catenary_monitor.core.physics.catenary)'
 
     @property
     def ok(self) -> Any:

@@ -6,7 +6,7 @@ arrays over ticks; the core passes one): which readings count (:func:`readings`)
 each line's alarm sees (:data:`LINE_INPUTS`).
 
 A reading counts when its line has a tension no older than ``tension_timeout``, finite, above
-``w h`` and plausible (:mod:`catenary_monitor.core.monitor.plausible`; otherwise the line's own
+``w h`` and plausible (:mod:`catenary_monitor.core.rules.plausible`; otherwise the line's own
 status is an impossible input), and the depth is known, not stale, positive and plausible.
 
 A line flagged at one tick is left out of the next tick's fit, until it agrees again.
@@ -33,7 +33,7 @@ newest tick's estimate, in the core and in its twin alike.
 The ``dock`` status is STALE while no estimate can be made (fewer than three readings, or no
 usable depth) and OK otherwise; its message gives the offset and the load and names the lines
 flagged. A line's ``inconsistent`` alarm condition (WARN) is latched in
-:mod:`catenary_monitor.core.monitor.alarms` (``on_delay``, ``warn_clear_hold``).
+:mod:`catenary_monitor.core.alarms.latches` (``on_delay``, ``warn_clear_hold``).
 """
 
 from __future__ import annotations
@@ -46,8 +46,8 @@ import numpy as np
 from catenary_monitor.core.body.dock_model import DockModel
 from catenary_monitor.core.body.estimate import MIN_LINES, DockEstimate, estimate_dock
 from catenary_monitor.core.config.parameters import MonitorConfig
-from catenary_monitor.core.monitor.alarms import Level
-from catenary_monitor.core.monitor.plausible import MAX_DEPTH, reading_status_array
+from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.rules.plausible import MAX_DEPTH, reading_status_array
 
 __all__ = [
     'LINE_INPUTS',

@@ -10,8 +10,8 @@ from __future__ import annotations
 import math
 from typing import Optional, Sequence
 
-from catenary_monitor.core.monitor.alarms import Level
-from catenary_monitor.core.monitor.plausible import MAX_DEPTH
+from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.rules.plausible import MAX_DEPTH
 
 __all__ = [
     'tide_status',
@@ -39,7 +39,7 @@ def tide_status(depth: float, stamp: float, now: float, timeout: float) -> tuple
     -------
     (Level.STALE, ...) before the first sample and when the newest one is older than
     ``timeout``; (Level.ERROR, ...) when the sample is not a positive finite number or is above
-    :data:`~catenary_monitor.core.monitor.plausible.MAX_DEPTH` (12 000 m); else
+    :data:`~catenary_monitor.core.rules.plausible.MAX_DEPTH` (12 000 m); else
     (Level.OK, ...).
     """
     if math.isnan(stamp):

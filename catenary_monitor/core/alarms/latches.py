@@ -18,34 +18,35 @@ Conditions, each with its own latch:
     *_deadband`` has held for ``warn_clear_hold``.
 ``time_to_uplift`` (WARN)
     the same with ``uplift_time_warn`` and ``uplift_time_deadband`` (s): the anchor lifts within
-    that time if the tide keeps its trend (:mod:`catenary_monitor.core.monitor.tide_trend`); inf
+    that time if the tide keeps its trend (:mod:`catenary_monitor.core.rules.tide_trend`); inf
     (no uplift coming) clears, NaN holds.
-``inconsistent`` (WARN; the dock model only, :mod:`catenary_monitor.core.monitor.dock_watch`)
+``inconsistent`` (WARN; the dock model only, :mod:`catenary_monitor.core.rules.dock_watch`)
     raised when the dock estimate flags the line's tension as irreconcilable with the other
     lines (its smoothed normalized residual beyond ``dock_residual_limit``) for ``on_delay``;
     cleared after ``warn_clear_hold`` of consistency; held while the line is not tested.
 ``uplift_possible`` (WARN; with ``tension_accuracy`` or ``depth_accuracy``,
-:mod:`catenary_monitor.core.monitor.uncertainty`)
+:mod:`catenary_monitor.core.rules.uncertainty`)
     raised when ``uplift_force_upper > allowed_uplift`` while the nominal ``uplift_force`` is
     not (uplift possible within sensor accuracy) for ``on_delay``; cleared when the bound is
     back at or below ``allowed_uplift``, or when the nominal value itself is above it (the
     ``uplift`` ERROR then says so), held for ``warn_clear_hold``; NaN holds.
-``drag_margin`` (WARN; with ``anchor_holding``, :mod:`catenary_monitor.core.monitor.holding`)
+``drag_margin`` (WARN; with ``anchor_holding``, :mod:`catenary_monitor.core.rules.holding`)
     as the margins above with ``drag_margin_warn`` and ``drag_margin_deadband`` (N).
-``dragging`` (ERROR; with ``anchor_holding``, :mod:`catenary_monitor.core.monitor.holding`)
+``dragging`` (ERROR; with ``anchor_holding``, :mod:`catenary_monitor.core.rules.holding`)
     raised when the line's ``drag_state`` is ``dragging`` (the load beyond the holding and the
     implied anchor distance beyond the installed one by ``drag_tolerance``) for ``on_delay``;
     cleared after ``clear_hold`` of ``holding`` or ``overloaded``; NaN holds.
-``fatigue`` (WARN; :mod:`catenary_monitor.core.monitor.fatigue`)
+``fatigue`` (WARN; :mod:`catenary_monitor.core.rules.fatigue`)
     raised when the line's cumulative Miner damage reaches ``fatigue_damage_warn`` for
     ``on_delay``; cleared below it (the damage only grows: a new chain, a new store).
-``channel`` (WARN; a line measured by several channels, :mod:`.channels`)
+``channel`` (WARN; a line measured by several channels,
+:mod:`catenary_monitor.core.rules.channels`)
     raised when a channel is silent, stuck or out of line while enough others are healthy (the
     tension then comes from them); cleared once every channel is healthy again for
     ``warn_clear_hold``. Fewer healthy channels than ``NAME.min_channels``: the line is blind
     (STALE, the message naming the channels and why), and its NaN tension is not an impossible
     input.
-``sensor_error`` (ERROR), ``sensor_warn`` (WARN; :mod:`catenary_monitor.core.monitor.sensor_state`)
+``sensor_error`` (ERROR), ``sensor_warn`` (WARN; :mod:`catenary_monitor.core.rules.sensor_state`)
     raised when the line's ``sensor_state`` (decided at ticks) is an ERROR state (``over_mbl``,
     ``slack``, ``suspected_parted``), resp. a WARN state (``stuck``, ``spike``), for
     ``on_delay``; cleared after ``clear_hold`` (resp. ``warn_clear_hold``) of any other state.
@@ -69,9 +70,9 @@ received yet"), never OK before its inputs are known.
 received since the start, or no depth / the depth stale: every line shares the depth), not
 because its own tension went stale after it reported, is ``suppressed``: its message says so
 (``blind: no depth received yet (suppressed by design: alarm on sensors)``), its alarm is not
-active (:mod:`catenary_monitor.core.monitor.acknowledge`) and its changes into and out of that
+active (:mod:`catenary_monitor.core.alarms.acknowledge`) and its changes into and out of that
 STALE are not announced (:attr:`Transition.suppressed`): the one ``sensors`` alarm reports the
-cause (:func:`catenary_monitor.core.monitor.health.sensors_status`).
+cause (:func:`catenary_monitor.core.rules.health.sensors_status`).
 
 Level: ERROR if an ERROR latch is up, else STALE if stale, else WARN if a warning latch is up,
 else OK. **ERROR outranks STALE** (a sensor dropout must not hide a lifted anchor) although
@@ -83,22 +84,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from enum import IntEnum
 from typing import Any, Mapping, NamedTuple, Sequence
 
 import numpy as np
 
-from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig
-from catenary_monitor.core.monitor import sensor_state
-from catenary_monitor.core.monitor.channels import describe
-
-try:  # the latch's loop in C (core/_loops.c; optional: else the numpy passes)
-    from catenary_monitor.core.monitor import _twin_loops as _loops  # type: ignore[attr-defined]
-except ImportError:  # not built
-    _loops = None
+from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, AlarmConfig, LineConfig
+from catenary_monitor.core.rules.level import RANK, Level
+from catenary_monitor.core.rules import sensor_state
+from catenary_monitor.core.rules.channels import describe
 
 __all__ = [
-    'Level',
     'AlarmInputs',
     'Latch',
     'AlarmState',
@@ -108,7 +103,6 @@ __all__ = [
     'CONDITIONS',
     'ERROR_CONDITIONS',
     'DIAGNOSTIC_KEYS',
-    'RANK',
     'replay_levels',
     'diagnostic_values',
     'quiet_change',
@@ -118,41 +112,9 @@ __all__ = [
 ]
 
 
-class Level(IntEnum):
-    """DiagnosticStatus level (same numbers as diagnostic_msgs)."""
-
-    OK = 0
-    WARN = 1
-    ERROR = 2
-    STALE = 3
-
-
-#: Severity rank used to combine and order levels (not the level number: ERROR > STALE).
-RANK = {Level.OK: 0, Level.WARN: 1, Level.STALE: 2, Level.ERROR: 3}
-
-#: Latched conditions, in message order: ERRORs, then WARNs.
-CONDITIONS = (
-    'uplift',
-    'input',
-    'anchor_margin',
-    'tide_margin',
-    'load_margin',
-    'safety_factor',
-    'time_to_uplift',
-    'inconsistent',
-    # Margins within the sensors' accuracy, and holding.
-    'uplift_possible',
-    'drag_margin',
-    # Sensor sanity: core/monitor/sensor_state.py.
-    'sensor_error',
-    'sensor_warn',
-    # Hou et al.'s third regime, the anchor dragging: core/monitor/holding.py.
-    'dragging',
-    # Chain fatigue (Miner's damage): core/monitor/fatigue.py.
-    'fatigue',
-    # A load cell's channel failed (the tension from the others): core/monitor/channels.py.
-    'channel',
-)
+#: Latched conditions, in message order: ERRORs, then WARNs (every alarm condition but
+#: ``stale``, which has no latch).
+CONDITIONS = tuple(c for c in ALARM_CONDITIONS if c != 'stale')
 #: The conditions that raise an ERROR (the others a WARN).
 ERROR_CONDITIONS = _ERRORS = ('uplift', 'input', 'sensor_error', 'dragging')
 _WARNS = tuple(c for c in CONDITIONS if c not in _ERRORS)
@@ -201,17 +163,17 @@ class AlarmInputs:
     uplift_force_upper: float = math.nan  # N, the uplift force's bound within sensor accuracy
     drag_margin: float = math.nan  # N, holding capacity minus horizontal load
     holding_capacity: float = math.nan  # N, anchor and grounded chain (for the message)
-    sensor_state: float = 0.0  # core.monitor.sensor_state line state code (0 ok)
+    sensor_state: float = 0.0  # core.rules.sensor_state line state code (0 ok)
     sensor_tension: float = math.nan  # N, the newest tension the state was decided on
     mbl: float = math.nan  # N, the line's MBL (for the message)
-    drag_state: float = math.nan  # core.holding code (2 dragging), NaN unknown
+    drag_state: float = math.nan  # core.rules.holding code (2 dragging), NaN unknown
     implied_anchor_distance: float = math.nan  # m (for the message)
     fatigue_damage: float = math.nan  # Miner's damage so far
     fatigue_life_left: float = math.nan  # s at the last day's rate (for the message)
     dynamic_uplift: float = math.nan  # N, the uplift at the wave window's peak (wave_window)
     uplift_view: float = math.nan  # 1: time_to_uplift is the chain length's, 0: R held's
     channels_healthy: float = math.nan  # a line of several channels: how many are healthy
-    channel_states: float = math.nan  # their states (core.channels code; NaN: one channel)
+    channel_states: float = math.nan  # their states (core.rules.channels code; NaN: one channel)
     span: float = math.nan  # m, the span the line was solved at (for the dragging message)
 
 
@@ -759,19 +721,17 @@ def _latch_series(
     depends on the latch state at the run's start (a breach run cannot clear, a clear run cannot
     raise). So every "set" and "reset" candidate is found independently and the latch is the
     most recent candidate, forward-filled from ``start.active``. Also returns the final latch.
-    Where core/_loops.c is built, a window with a breach is one C loop of ``_step`` instead
-    (the numpy passes cost ~17 ns per update there).
+
+    The latch's one column loop (:func:`_step` is its reference), numpy and no C: on the
+    million-message replay (12 lines, 2.7 M latch updates in windows with a breach; 1.3 s in
+    all) these passes take 47 ms, a C loop of ``_step`` took 3.6 ms, and without a compiler its
+    fallback, ``_step`` in a Python loop, would take 2.1 s.
     """
     n = codes.size
     if n == 0:
         return np.zeros(0, dtype=bool), start
     if not start.active and not (codes == _BREACH).any():
         return np.zeros(n, dtype=bool), Latch()  # only a breach run can raise the latch
-    if _loops is not None and codes.dtype == np.int8 and t.dtype == np.float64:
-        out = np.empty(n, dtype=bool)
-        pending = math.nan if start.since is None else start.since
-        args = (np.ascontiguousarray(codes), np.ascontiguousarray(t), on_delay, hold)
-        return out, Latch(*_loops.latch(*args, start.active, pending, out))
     idx = np.arange(n)
     starts = np.empty(n, dtype=bool)
     starts[0] = True
@@ -1089,7 +1049,7 @@ DIAGNOSTIC_KEYS = (
     'load_margin',
     'safety_factor',
     'time_to_uplift',
-    # Margins with uncertainty (core/monitor/uncertainty.py) and holding (core/monitor/holding.py).
+    # Margins with uncertainty (core/rules/uncertainty.py) and holding (core/rules/holding.py).
     'uplift_force_upper',
     'anchor_margin_lower',
     'tide_margin_lower',
@@ -1097,19 +1057,19 @@ DIAGNOSTIC_KEYS = (
     'holding_capacity',
     'drag_margin',
     'implied_anchor_distance',
-    # The tide margin at fixed chain length (core/monitor/holding.py).
+    # The tide margin at fixed chain length (core/rules/holding.py).
     'tide_margin_at_length',
-    # The anchor's drag state code (core/monitor/holding.py).
+    # The anchor's drag state code (core/rules/holding.py).
     'drag_state',
-    # Chain fatigue (core/monitor/fatigue.py): Miner's damage, its rate (1/s), life left (s).
+    # Chain fatigue (core/rules/fatigue.py): Miner's damage, its rate (1/s), life left (s).
     'fatigue_damage',
     'fatigue_damage_rate',
     'fatigue_life_left',
-    # Wave-frequency tension and the dynamic uplift (core/monitor/wave_window.py).
+    # Wave-frequency tension and the dynamic uplift (core/rules/wave_window.py).
     'wave_tension',
     'peak_tension',
     'dynamic_uplift',
-    # A line of several channels (core/monitor/channels.py): healthy count, states code.
+    # A line of several channels (core/rules/channels.py): healthy count, states code.
     'channels_healthy',
     'channel_states',
 )

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-from catenary_monitor.core.monitor.acknowledge import UNACKNOWLEDGED, AckState, shelved
+from catenary_monitor.core.alarms.acknowledge import UNACKNOWLEDGED, AckState, shelved
 
 __all__ = ['AlarmEvent', 'KINDS', 'entries', 'raised']
 

@@ -47,11 +47,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-try:  # samples' loop in C (core/monitor/_twin_loops.c; optional: else the numpy passes)
-    from catenary_monitor.core.monitor import _twin_loops as _loops  # type: ignore[attr-defined]
-except ImportError:  # not built
-    _loops = None
-
 __all__ = [
     'LINE_STATES',
     'DEPTH_STATES',
@@ -151,16 +146,17 @@ def samples(
     jitter: float,
 ) -> tuple[np.ndarray, np.ndarray, Memory]:
     """:func:`sample` over sorted readings: ``changed`` and ``spiked`` [s] after each, and the
-    memory after the last."""
+    memory after the last.
+
+    The sensor memory's one column loop (:func:`sample` is its reference), numpy and no C: on
+    the million-message replay (a million readings; 1.3 s in all) these passes take 28 ms, a C
+    loop took 4.6 ms, and without a compiler its fallback, :func:`sample` in a Python loop,
+    would take 8 s."""
     n = len(values)
     if n == 0:
         return np.zeros(0), np.zeros(0), mem
     values = np.ascontiguousarray(values, np.float64)
     stamps = np.ascontiguousarray(stamps, np.float64)
-    if _loops is not None and values.shape == stamps.shape == (n,):
-        ch, sp = np.empty(n), np.empty(n)
-        final = _loops.samples(values, stamps, *mem, resolution, rate, jitter, ch, sp)
-        return ch, sp, Memory(*final)
     good = np.isfinite(values)
     every = bool(good.all())
     idx = None if every else np.flatnonzero(good)

@@ -59,7 +59,7 @@ of it).
 from __future__ import annotations
 
 import math
-from typing import Any, Optional
+from typing import Any, NamedTuple, Optional
 
 import numpy as np
 
@@ -73,6 +73,7 @@ __all__ = [
     'OVERLOADED',
     'DRAGGING',
     'DRAG_STATES',
+    'HoldingInputs',
     'holding',
     'holding_scalar',
     'holding_loaded',
@@ -90,45 +91,32 @@ HOLDING, OVERLOADED, DRAGGING = 0, 1, 2
 DRAG_STATES = ('holding', 'overloaded', 'dragging')
 
 
-def holding(
-    w: Any,
-    ea: Any,
-    chain_length: Any,
-    anchor_holding: Any,
-    anchor_weight: Any,
-    chain_friction: Any,
-    tension: Any,
-    depth: Any,
-    horizontal: Any,
-    suspended: Any,
-    uplift: Any,
-    anchor_distance: Any = np.nan,
-    tolerance: float = np.inf,
-) -> dict[str, np.ndarray]:
+class HoldingInputs(NamedTuple):
+    """A line's holding data and its nominal solve, arrays or plain floats (NaN: not given;
+    ``ea`` inf: inextensible): chain ``weight`` in water (N/m), ``ea`` (N), ``chain_length``
+    (m), ``anchor_holding``, ``anchor_weight`` (N), ``chain_friction`` (-); hook ``tension``
+    (N), ``depth`` (m, hook height added), ``horizontal`` tension (N), ``suspended`` length (m),
+    ``uplift`` force (N); the installed ``anchor_distance`` (m)."""
+
+    weight: Any
+    ea: Any
+    chain_length: Any
+    anchor_holding: Any
+    anchor_weight: Any
+    chain_friction: Any
+    tension: Any
+    depth: Any
+    horizontal: Any
+    suspended: Any
+    uplift: Any
+    anchor_distance: Any = math.nan
+
+
+def holding(line: HoldingInputs, tolerance: float = np.inf) -> dict[str, np.ndarray]:
     """:data:`FIELDS`, :data:`LENGTH_FIELDS` and :data:`DRAG_FIELDS` -> arrays from the line
-    data (NaN: not given; ``ea`` inf: inextensible) and the nominal solve: hook ``tension`` (N),
-    ``depth`` (m, hook height added), ``horizontal`` tension (N), ``suspended`` length (m) and
-    ``uplift`` force (N); the installed ``anchor_distance`` (m) and ``drag_tolerance`` (m)
-    decide ``drag_state``."""
-    arrays = np.broadcast_arrays(
-        *(
-            np.asarray(v, dtype=float)
-            for v in (
-                w,
-                ea,
-                chain_length,
-                anchor_holding,
-                anchor_weight,
-                chain_friction,
-                tension,
-                depth,
-                horizontal,
-                suspended,
-                uplift,
-                anchor_distance,
-            )
-        )
-    )
+    data and the nominal solve (:class:`HoldingInputs`); the installed ``anchor_distance`` (m)
+    and ``drag_tolerance`` (m) decide ``drag_state``."""
+    arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in line))
     w, ea, length, a_hold, a_weight, mu, t, h, r, s, v, x0 = arrays
     if np.isnan(length).all() and np.isnan(a_hold).all():  # nothing configured: all NaN
         return {key: np.full(t.shape, np.nan) for key in FIELDS + LENGTH_FIELDS + DRAG_FIELDS}
@@ -168,102 +156,36 @@ def drag_word(code: float) -> str:
     return DRAG_STATES[int(code)] if code == code else 'unknown'
 
 
-def holding_scalar(
-    w: float,
-    ea: float,
-    chain_length: float,
-    anchor_holding: float,
-    anchor_weight: float,
-    chain_friction: float,
-    tension: float,
-    depth: float,
-    horizontal: float,
-    suspended: float,
-    uplift: float,
-    anchor_distance: float = math.nan,
-    tolerance: float = math.inf,
-) -> dict[str, float]:
+def holding_scalar(line: HoldingInputs, tolerance: float = math.inf) -> dict[str, float]:
     """:func:`holding` of one line in plain floats (the monitor's per-sample path, an order of
     magnitude faster on one element): the same formulas in the same order, the fixed-length
     chain by :func:`~catenary_monitor.core.physics.fixed_length.span_from_tension_scalar` and
     :func:`~catenary_monitor.core.physics.fixed_length.lift_depth_scalar`. Where plain floats
     raise (an overflow, a root of a negative number) the array path answers instead, so the
     numbers are the array path's to rounding (test_holding)."""
-    args = (
-        w,
-        ea,
-        chain_length,
-        anchor_holding,
-        anchor_weight,
-        chain_friction,
-        tension,
-        depth,
-        horizontal,
-        suspended,
-        uplift,
-        anchor_distance,
-    )
-    floats = [float(v) for v in args] + [float(tolerance)]
+    floats = HoldingInputs(*(float(v) for v in line))
     try:
-        return _holding_floats(*floats)
+        return _holding_floats(floats, float(tolerance))
     except (ValueError, OverflowError, ZeroDivisionError):
         array_path: Any = holding
-        arrays = array_path(*([v] for v in floats[:-1]), tolerance)
+        arrays = array_path(HoldingInputs(*([v] for v in floats)), float(tolerance))
         return {key: float(v[0]) for key, v in arrays.items()}
 
 
 def holding_loaded(
-    loads: point_loads.PointLoads,
-    w: float,
-    chain_length: float,
-    anchor_holding: float,
-    anchor_weight: float,
-    chain_friction: float,
-    tension: float,
-    depth: float,
-    horizontal: float,
-    suspended: float,
-    uplift: float,
-    anchor_distance: float = math.nan,
-    tolerance: float = math.inf,
+    loads: point_loads.PointLoads, line: HoldingInputs, tolerance: float = math.inf
 ) -> dict[str, float]:
-    """:func:`holding_scalar` of a chain with point ``loads`` (inextensible; module docstring),
-    the nominal solve's values with those loads."""
-    f = float
+    """:func:`holding_scalar` of a chain with point ``loads`` (inextensible: ``line.ea`` is not
+    taken; module docstring), the nominal solve's values with those loads."""
+    floats = HoldingInputs(*(float(v) for v in line))._replace(ea=math.inf)
     try:
-        return _holding_floats(
-            f(w),
-            math.inf,
-            f(chain_length),
-            f(anchor_holding),
-            f(anchor_weight),
-            f(chain_friction),
-            f(tension),
-            f(depth),
-            f(horizontal),
-            f(suspended),
-            f(uplift),
-            f(anchor_distance),
-            f(tolerance),
-            loads=loads,
-        )
+        return _holding_floats(floats, float(tolerance), loads=loads)
     except (ValueError, OverflowError, ZeroDivisionError):
         return dict.fromkeys(FIELDS + LENGTH_FIELDS + DRAG_FIELDS, math.nan)
 
 
 def _holding_floats(
-    w: float,
-    ea: float,
-    length: float,
-    a_hold: float,
-    a_weight: float,
-    mu: float,
-    t: float,
-    h: float,
-    r: float,
-    s: float,
-    v: float,
-    x0: float,
+    line: HoldingInputs,
     tolerance: float,
     *,
     loads: Optional[point_loads.PointLoads] = None,
@@ -271,6 +193,7 @@ def _holding_floats(
     """:func:`holding_scalar` itself (raises where :mod:`math` does); ``loads``: the chain's
     point loads (:func:`holding_loaded`)."""
     nan = math.nan
+    w, ea, length, a_hold, a_weight, mu, t, h, r, s, v, x0 = line
     if length != length and a_hold != a_hold:  # nothing configured: all NaN
         return dict.fromkeys(FIELDS + LENGTH_FIELDS + DRAG_FIELDS, nan)
     solved = r == r

@@ -18,7 +18,7 @@ from typing import NamedTuple, Sequence
 import numpy as np
 
 from catenary_monitor.core.config.parameters import AlarmConfig
-from catenary_monitor.core.monitor.alarms import Level
+from catenary_monitor.core.rules.level import Level
 
 __all__ = ['NAME', 'Flood', 'initial', 'decide', 'status', 'values', 'counts']
 

@@ -1,7 +1,7 @@
 """Margins with the waves and the sensors' accuracy: the worst case over the box of true readings.
 
 The tension the bounds start from is the line's *dynamic tension* ``T_dyn = peak_tension +
-wave_allowance x wave_tension`` (:mod:`catenary_monitor.core.monitor.wave_window`: the largest
+wave_allowance x wave_tension`` (:mod:`catenary_monitor.core.rules.wave_window`: the largest
 reading of the last ``wave_window`` seconds plus an allowance for the anchor's dynamic force
 beyond the quasi-static; 0.3 covers every MoorDyn scene of docs/dynamics.md), not the one
 reading: the quasi-static solve at ``T_dyn`` is the ``dynamic_uplift`` (:func:`dynamic_uplift`),
@@ -120,23 +120,25 @@ def bounds(
     ea: Any,
     tension: Any,
     depth: Any,
-    d_t: Any,
+    tension_accuracy: Any,
     d_h: Any,
     nominal_uplift: Any,
 ) -> dict[str, np.ndarray]:
     """:data:`FIELDS` -> arrays for readings ``tension`` (N) and ``depth`` (m, hook height
-    added), per-element line constants (``ea`` inf: inextensible) and accuracies ``d_t`` (N,
-    NaN: not given) and ``d_h`` (m, 0: exact); ``nominal_uplift`` (N) is the nominal solve's
-    uplift force (NaN: no solve, no bounds)."""
-    given = (w, x, mbl, ea, tension, depth, d_t, d_h, nominal_uplift)
+    added), per-element line constants (``ea`` inf: inextensible) and accuracies
+    ``tension_accuracy`` (N, NaN: not given) and ``d_h`` (m, 0: exact); ``nominal_uplift``
+    (N) is the nominal solve's uplift force (NaN: no solve, no bounds)."""
+    given = (w, x, mbl, ea, tension, depth, tension_accuracy, d_h, nominal_uplift)
     arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in given))
-    w, x, mbl, ea, t, h, dt, dh, f0 = (a.ravel() for a in arrays)
-    keep = (~np.isnan(dt) | (dh > 0.0)) & ~np.isnan(f0)
+    w, x, mbl, ea, t, h, tension_accuracy, dh, f0 = (a.ravel() for a in arrays)
+    keep = (~np.isnan(tension_accuracy) | (dh > 0.0)) & ~np.isnan(f0)
     shape = arrays[0].shape
     out = {key: np.full(len(t), np.nan) for key in FIELDS}
     k = np.flatnonzero(keep)
     if k.size:
-        upper, anchor, tide = _worst(w[k], x[k], mbl[k], ea[k], t[k], h[k], dt[k], dh[k])
+        upper, anchor, tide = _worst(
+            w[k], x[k], mbl[k], ea[k], t[k], h[k], tension_accuracy[k], dh[k]
+        )
         out['uplift_force_upper'][k] = np.fmax(upper, f0[k])
         out['anchor_margin_lower'][k] = anchor
         out['tide_margin_lower'][k] = tide
@@ -150,12 +152,12 @@ def _worst(
     ea: np.ndarray,
     t: np.ndarray,
     h: np.ndarray,
-    dt: np.ndarray,
+    tension_accuracy: np.ndarray,
     dh: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(largest uplift force, smallest anchor margin, smallest tide margin) over the five
     candidate depths at ``T + dT`` (NaN where every candidate is impossible)."""
-    t_up = t + np.where(np.isnan(dt), 0.0, dt)
+    t_up = t + np.where(np.isnan(tension_accuracy), 0.0, tension_accuracy)
     hs = depth_candidates(w, x, t_up, h, dh)
     n = len(t)
     rep = [np.broadcast_to(v, (5, n)).ravel() for v in (w, x, mbl, ea, t_up)]
@@ -225,7 +227,7 @@ def loaded_bounds(
     loads: Any,
     tension: float,
     depth: float,
-    d_t: float,
+    tension_accuracy: float,
     d_h: float,
     nominal_uplift: float,
 ) -> dict[str, float]:
@@ -241,9 +243,9 @@ def loaded_bounds(
         return solve(w, h, tension=t, anchor_distance=x, mbl=mbl, point_loads=loads)
 
     out['dynamic_uplift'] = _fmax(float(at(tension, depth).uplift_force), nominal_uplift)
-    if d_t != d_t and not d_h > 0.0:
+    if tension_accuracy != tension_accuracy and not d_h > 0.0:
         return out
-    t_up = tension + (0.0 if d_t != d_t else d_t)
+    t_up = tension + (0.0 if tension_accuracy != tension_accuracy else tension_accuracy)
     spread = (-1.0, -0.5, 0.0, 0.5, 1.0) if d_h > 0.0 else (0.0,)
     rs = [at(t_up, depth + f * d_h) for f in spread]
     ups = [float(r.uplift_force) for r in rs if r.uplift_force == r.uplift_force]

@@ -6,8 +6,8 @@ annunciated. Conditions in ``unshelvable_conditions`` (default: ``uplift``, the 
 ERROR) are never hidden: a request naming one is refused, a whole-alarm shelf never covers one,
 and a whole-alarm shelf asked while one is active is refused. The states themselves (the shelf
 on the alarm, its expiry returning the alarm unacknowledged) are
-:mod:`catenary_monitor.core.monitor.acknowledge`'s; the monitor core applies the requests
-(:class:`~catenary_monitor.core.monitor.monitor_core.Shelve` events) and records them.
+:mod:`catenary_monitor.core.alarms.acknowledge`'s; the monitor core applies the requests
+(:class:`~catenary_monitor.core.monitor.events.Shelve` events) and records them.
 
 Requests: ``std_msgs/msg/String`` on :data:`SHELVE_TOPIC`, data ``LINE SECONDS [ORIGIN...]``
 or ``LINE.CONDITION SECONDS [ORIGIN...]`` (``sensors`` for the sensors' common-cause alarm;
@@ -24,8 +24,9 @@ from typing import Mapping, NamedTuple, Optional, Sequence
 import numpy as np
 
 from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, AlarmConfig
-from catenary_monitor.core.monitor.acknowledge import REQUEST_LIMIT, SENSORS, WHOLE, bounded_text
-from catenary_monitor.core.monitor.alarms import CONDITIONS, ERROR_CONDITIONS, Level
+from catenary_monitor.core.alarms.acknowledge import REQUEST_LIMIT, SENSORS, WHOLE, bounded_text
+from catenary_monitor.core.alarms.latches import CONDITIONS, ERROR_CONDITIONS
+from catenary_monitor.core.rules.level import Level
 
 __all__ = [
     'SHELVE_TOPIC',
@@ -45,7 +46,7 @@ _ERRORS = ERROR_CONDITIONS
 
 class ShelveRequest(NamedTuple):
     """A shelving request: the alarm (a line name or ``sensors``), the condition
-    (:data:`~catenary_monitor.core.monitor.acknowledge.WHOLE` for the whole alarm), the
+    (:data:`~catenary_monitor.core.alarms.acknowledge.WHOLE` for the whole alarm), the
     duration [s] (0: unshelve) and who asked."""
 
     alarm: str
@@ -57,9 +58,9 @@ class ShelveRequest(NamedTuple):
 def parse_request(text: str) -> ShelveRequest:
     """The request of a shelving message's text (ValueError with one line when it is not
     ``LINE[.CONDITION] SECONDS [ORIGIN...]``), as an acknowledgement's is read: only its first
-    :data:`~catenary_monitor.core.monitor.acknowledge.REQUEST_LIMIT` characters, the origin
+    :data:`~catenary_monitor.core.alarms.acknowledge.REQUEST_LIMIT` characters, the origin
     (default ``ros``) and the names bounded
-    (:func:`~catenary_monitor.core.monitor.acknowledge.bounded_text`)."""
+    (:func:`~catenary_monitor.core.alarms.acknowledge.bounded_text`)."""
     parts = text[:REQUEST_LIMIT].strip().split(None, 2)
     usage = 'expected "LINE[.CONDITION] SECONDS [ORIGIN]" (0 seconds unshelves)'
     if len(parts) < 2:
@@ -86,7 +87,7 @@ def hidden_conditions(condition: str, unshelvable: Sequence[str]) -> frozenset[s
 
 def masked_level(active: Sequence[bool], stale: bool, hidden: frozenset[str]) -> Level:
     """The line's level without the ``hidden`` conditions (``active``: the latches' flags in
-    :data:`~catenary_monitor.core.monitor.alarms.CONDITIONS` order; ``stale``: an input stale),
+    :data:`~catenary_monitor.core.alarms.latches.CONDITIONS` order; ``stale``: an input stale),
     by the level rule ERROR > STALE > WARN > OK."""
     up = {cond for cond, on in zip(CONDITIONS, active) if on and cond not in hidden}
     if up & set(_ERRORS):

@@ -2,10 +2,10 @@
 
 One alarm per line, and one for the sensors' common causes (:data:`SENSORS`: the depth sensor
 silent, lines that never reported since the start;
-:func:`catenary_monitor.core.monitor.health.sensors_status`).
+:func:`catenary_monitor.core.rules.health.sensors_status`).
 A line's alarm is *active* while its level is not OK (WARN, STALE or ERROR), except while it is
 **suppressed by design**: the line is STALE only because of a common cause (no depth, or no
-tension ever received: :attr:`~catenary_monitor.core.monitor.alarms.AlarmState.suppressed`), which
+tension ever received: :attr:`~catenary_monitor.core.alarms.latches.AlarmState.suppressed`), which
 the one ``sensors`` alarm reports, raised once the silence outlasts its timeout. So a blind start
 or a silent depth sensor is one alarm, not one per line; a tension sensor that goes silent after
 it reported is its own line's alarm at once.
@@ -34,10 +34,10 @@ stops being active, ``unacknowledged`` becomes ``returned-unacknowledged`` and `
 becomes ``normal``. An acknowledgement turns ``unacknowledged`` into ``acknowledged`` and
 ``returned-unacknowledged`` into ``normal``; it never clears an active alarm: only the condition
 does. :func:`step` is idempotent (same level, same activity: no change), which is what lets the
-vectorized twin (:mod:`catenary_monitor.core.monitor.twin`) apply it only where its inputs change.
+vectorized twin (:mod:`catenary_monitor.core.twin.engine`) apply it only where its inputs change.
 
 **Shelving** (:func:`shelve`, :func:`unshelve`; requests and rules in
-:mod:`catenary_monitor.core.monitor.shelving`): the alarm follows the level its shelf leaves
+:mod:`catenary_monitor.core.alarms.shelving`): the alarm follows the level its shelf leaves
 visible (``masked``: the level without the shelved conditions); shelving takes the alarm off
 the list when that level is not active. When the shelf ends (it expires at the first step at or
 after ``shelved_until``, or an operator unshelves) and it was hiding an active condition, the
@@ -59,7 +59,8 @@ from typing import Optional, Sequence
 
 import numpy as np
 
-from catenary_monitor.core.monitor.alarms import CONDITIONS, ERROR_CONDITIONS, RANK, Level
+from catenary_monitor.core.alarms.latches import CONDITIONS, ERROR_CONDITIONS
+from catenary_monitor.core.rules.level import RANK, Level
 
 _NAN = math.nan
 
@@ -299,7 +300,7 @@ def condition(level: Level, latches: Sequence[bool]) -> str:
     impossible input, ``sensor_error``, ``dragging``), ``stale``, a warning's name
     (``anchor_margin``, ...) or ``none`` when OK.
 
-    ``latches`` are the active flags of :data:`~catenary_monitor.core.monitor.alarms.CONDITIONS`.
+    ``latches`` are the active flags of :data:`~catenary_monitor.core.alarms.latches.CONDITIONS`.
     """
     if level == Level.ERROR:
         for name, up in zip(CONDITIONS, latches):

@@ -38,11 +38,6 @@ from typing import NamedTuple
 
 import numpy as np
 
-try:  # uplift_times' loop in C (core/monitor/_twin_loops.c; optional: else the numpy passes)
-    from catenary_monitor.core.monitor import _twin_loops as _loops  # type: ignore[attr-defined]
-except ImportError:  # not built
-    _loops = None
-
 __all__ = [
     'BINS',
     'TrendState',
@@ -223,14 +218,8 @@ def time_to_uplift(tide_margin: float, uplift_force: float, rate: float, excess:
 def uplift_times(
     tide_margin: np.ndarray, uplift_force: np.ndarray, rate: np.ndarray, excess: np.ndarray
 ) -> np.ndarray:
-    """:func:`time_to_uplift` on arrays [s]."""
-    if _loops is not None:
-        columns = [np.ascontiguousarray(c, np.float64) for c in (tide_margin, uplift_force)]
-        columns += [np.ascontiguousarray(c, np.float64) for c in (rate, excess)]
-        if columns[0].ndim == 1 and all(c.shape == columns[0].shape for c in columns):
-            out = np.empty(columns[0].shape)
-            _loops.uplift_times(*columns, out)
-            return out
+    """:func:`time_to_uplift` on arrays [s] (its one column form, numpy and no C: on the
+    million-message replay these passes take 9 ms of 1.3 s, a C loop took 3 ms)."""
     with np.errstate(divide='ignore', invalid='ignore'):
         up = rate > 0.0
         ahead = np.maximum(tide_margin + excess, 0.0)

@@ -12,8 +12,8 @@ study, docs/dynamics.md). The monitor therefore keeps, per line, the readings of
     half the window's range, ``(max - min) / 2``: the wave-frequency tension amplitude.
 
 The dynamic uplift and the bounds take ``peak_tension + wave_allowance x wave_tension``
-(:mod:`catenary_monitor.core.monitor.uncertainty`). Only finite readings above 0 and within the
-plausible bound (:data:`~catenary_monitor.core.monitor.plausible.MAX_TENSION_PER_MBL` x MBL)
+(:mod:`catenary_monitor.core.rules.uncertainty`). Only finite readings above 0 and within the
+plausible bound (:data:`~catenary_monitor.core.rules.plausible.MAX_TENSION_PER_MBL` x MBL)
 enter the window: an impossible reading has its own alarm and must not inflate the swing.
 
 Why a window of extremes, not a spectrum or a running mean: the maximum and the minimum are
@@ -32,7 +32,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from catenary_monitor.core.monitor.plausible import MAX_TENSION_PER_MBL
+from catenary_monitor.core.rules.plausible import MAX_TENSION_PER_MBL
 
 __all__ = ['FIELDS', 'WaveState', 'valid', 'step', 'series']
 
