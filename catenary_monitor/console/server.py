@@ -71,8 +71,8 @@ _CSP = (
 
 
 class Source(Protocol):
-    """What the server asks of its data source (:class:`~.live.LiveSource`,
-    :class:`~.replay.ReplaySource`)."""
+    """What the server asks of its data source (:class:`~.ros_source.LiveSource`,
+    :class:`~.log_source.ReplaySource`)."""
 
     mode: str
 
