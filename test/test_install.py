@@ -205,3 +205,116 @@ def test_the_node_runs_from_the_install(installs, kind, tmp_path):
     assert 'monitoring 12 lines' in text, text
     assert proc.returncode == 0, text
     assert list((tmp_path / 'log').glob('*.mcap')) and (tmp_path / 'log/metadata.yaml').exists()
+
+
+# ------------------------------------------------- the systemd units, as a user without a home
+NOBODY = 65534
+
+
+def _owned(path: Path, mode: int = 0o755) -> Path:
+    """A folder (or file) of the service user, as systemd's StateDirectory= makes it."""
+    if not path.exists():
+        path.mkdir(parents=True)
+    os.chown(path, NOBODY, NOBODY)
+    path.chmod(mode)
+    return path
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as sock:
+        sock.bind(('127.0.0.1', 0))
+        return int(sock.getsockname()[1])
+
+
+def _as_unit(name: str, places: dict, port: int, log: Path) -> subprocess.Popen:
+    """The unit's ExecStart as the unprivileged user (setpriv), with systemd's environment for a
+    user without a home and the unit's Environment=, from /."""
+    from systemd_units import BASE_ENV, command
+
+    argv, unit_env = command(name, places)
+    if '--port' in argv:
+        argv[argv.index('--port') + 1] = str(port)
+    env = dict(BASE_ENV, **unit_env)
+    env['ROS_DOMAIN_ID'] = os.environ['ROS_DOMAIN_ID']  # this test's domain
+    env['ROS_STATIC_PEERS'] = '127.0.0.1'
+    setpriv = ['setpriv', f'--reuid={NOBODY}', f'--regid={NOBODY}', '--clear-groups', '--']
+    out = open(log, 'w')
+    return subprocess.Popen([*setpriv, *argv], env=env, cwd='/', stdout=out,
+                            stderr=subprocess.STDOUT)  # fmt: skip
+
+
+def _wait_for(log: Path, proc: subprocess.Popen, pattern: str, timeout: float) -> str:
+    import re
+
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        text = log.read_text()
+        match = re.search(pattern, text)
+        if match:
+            return match.group(0)
+        assert proc.poll() is None, text
+        time.sleep(0.2)
+    raise AssertionError(f'{pattern!r} not seen: {log.read_text()}')
+
+
+def test_the_units_run_as_a_user_without_a_home(installs):
+    """Each unit's ExecStart from the Debian venv as ``nobody`` (home /nonexistent), with the
+    unit's Environment= and the state and log folders systemd would make: the monitor logs and
+    writes its MCAP log, the console serves, and a program acknowledges through it with an
+    operator's token (202 in her name; 401 without it)."""
+    import urllib.error
+    import urllib.request
+
+    from systemd_units import ETC, LOGS, STATE, VENV
+
+    if shutil.which('setpriv') is None or os.geteuid() != 0:
+        pytest.skip('needs setpriv and root')
+    venv = installs.venv('debian')
+    base = installs.base / 'units'
+    etc = base / 'etc'
+    etc.mkdir(parents=True)
+    (etc / 'dock.yaml').write_text((ROOT / 'config/dock_template.yaml').read_text())
+    token = 'b0a7d1e5c3f9e2d4a6b8c0d2'
+    (etc / 'operators').write_text(f'alice:{token}\n')
+    _owned(etc / 'operators', 0o600)
+    places = {VENV: str(venv), f'{ETC}/dock.yaml': str(etc / 'dock.yaml'),
+              f'{ETC}/operators': str(etc / 'operators'), STATE: str(_owned(base / 'state')),
+              LOGS: str(_owned(base / 'logs'))}  # fmt: skip
+    port = _free_port()
+    monitor = _as_unit('catenary-monitor.service', places, port, base / 'monitor.out')
+    console = _as_unit('catenary-monitor-console.service', places, port, base / 'console.out')
+    try:
+        _wait_for(base / 'monitor.out', monitor, r'monitoring 4 lines', 90.0)
+        _wait_for(base / 'monitor.out', monitor, r'static peers 127\.0\.0\.1', 5.0)
+        url = _wait_for(base / 'console.out', console, r'http://127\.0\.0\.1:\d+/', 90.0)
+        assert 'also at http://' in (base / 'console.out').read_text()  # bound to 0.0.0.0
+        with urllib.request.urlopen(url, timeout=10) as reply:
+            assert reply.status == 200
+        # a program: no Origin; without a token 401, then `catenary-monitor ack` as alice
+        request = urllib.request.Request(url + 'api/ack', b'{"line": "all"}',
+                                         {'Content-Type': 'application/json'})  # fmt: skip
+        with pytest.raises(urllib.error.HTTPError) as refused:
+            urllib.request.urlopen(request, timeout=10)
+        assert refused.value.code == 401
+        button = base / 'button.token'
+        button.write_text(token + '\n')
+        button.chmod(0o600)
+        deadline = time.monotonic() + 30.0
+        while True:  # until the console's publisher has met the monitor (503 before)
+            done = _run(venv, 'ack', 'all', '--console', url, '--token-file', str(button))
+            if done.returncode == 0 or time.monotonic() > deadline:
+                break
+            time.sleep(1.0)
+        assert done.returncode == 0, done.stderr
+        assert done.stdout.startswith('acknowledged all as alice: all alice via console')
+    finally:
+        for proc in (console, monitor):
+            proc.send_signal(signal.SIGTERM)
+        statuses = [proc.wait(timeout=30) for proc in (console, monitor)]
+    assert statuses == [0, 0], [(base / f).read_text() for f in ('console.out', 'monitor.out')]
+    assert list((base / 'logs').glob('*.mcap')) and (base / 'logs/metadata.yaml').exists()
+    assert list((base / 'state/log').iterdir())  # rcl's own log files, in the state folder
+    text = (base / 'monitor.out').read_text() + (base / 'console.out').read_text()
+    assert 'Traceback' not in text and token not in text, text
