@@ -286,6 +286,7 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
     from catenary_monitor.cli import (
         console_client,
         dock,
+        dock_setup,
         fleet,
         log,
         replay,
@@ -303,6 +304,7 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
         whatif.register,
         log.register,
         console_client.register,
+        dock_setup.register,
     ]
     # the console first (as before the benchmarks), then the others by name
     for ep in sorted(
