@@ -18,6 +18,7 @@ import shutil
 import signal
 import subprocess
 import sys
+import sysconfig
 import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
@@ -305,3 +306,49 @@ def test_run_restart_on_failure_stops_on_a_bad_parameter_and_on_sigterm(tmp_path
         out, _ = proc.communicate(timeout=20)
     assert proc.returncode == 0, text + out
     assert 'starting it again' not in out and 'MCAP log closed' in text + out
+
+
+@pytest.mark.slow
+def test_real_colcon_build_puts_the_commands_in_lib(tmp_path):
+    """colcon itself (colcon-common-extensions in a venv of its own, with Jazzy's setuptools
+    68.1.2), plain and ``--symlink-install``: the commands in ``lib/catenary_monitor`` (colcon
+    reads setup.cfg's script directory; pip, through pyproject.toml, never does), none in
+    ``bin``, and ``ros2 run``'s command runs from there."""
+    tools = tmp_path / 'colcon'
+    subprocess.run([sys.executable, '-m', 'venv', str(tools)], check=True, timeout=120)
+    done = subprocess.run(
+        [str(tools / 'bin/pip'), 'install', '-q', 'colcon-common-extensions',
+         'setuptools==68.1.2'], capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    src = tmp_path / 'ws/src/catenary_monitor'
+    files = subprocess.run(
+        ['git', 'ls-files', '-z'], cwd=ROOT, capture_output=True, check=True
+    ).stdout.split(b'\0')
+    for name in filter(None, files):
+        if (ROOT / name.decode()).is_file():
+            (src / name.decode()).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / name.decode(), src / name.decode())
+    env = dict(os.environ, CATENARY_MONITOR_NO_EXTENSIONS='1')
+    env.pop('PYTHONPATH', None)
+    for flags in ([], ['--symlink-install']):
+        ws = tmp_path / 'ws'
+        for part in ('build', 'install', 'log'):
+            shutil.rmtree(ws / part, ignore_errors=True)
+        done = subprocess.run([str(tools / 'bin/colcon'), 'build', *flags], cwd=ws, env=env,
+                              capture_output=True, text=True, timeout=600)  # fmt: skip
+        assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+        prefix = ws / 'install' / PKG
+        lib = prefix / 'lib' / PKG
+        assert {p.name for p in lib.iterdir()} >= {'catenary-monitor', 'monitor', 'dock_simulator'}
+        assert not (prefix / 'bin').exists(), flags
+        site = next(prefix.glob('lib/python3*/site-packages'))
+        # colcon's Python runs the command (its shebang); numpy and the rest: this suite's
+        deps = sysconfig.get_paths()['purelib']
+        run_env = dict(env, PYTHONPATH=os.pathsep.join([str(site), str(ws / 'build' / PKG), deps]))
+        done = subprocess.run(
+            [str(lib / 'catenary-monitor'), 'solve', '--weight', '1300', '--depth', '20.85',
+             '--tension', '1623.5e3', '--anchor-distance', '121.06'],
+            capture_output=True, text=True, env=run_env, timeout=120,
+        )  # fmt: skip
+        assert done.returncode == 0 and 'ANCHOR LIFTED' in done.stdout, (flags, done.stderr)
