@@ -273,11 +273,21 @@ def _rewrite(results: Path, out_dir: Path, config: Any, span: Optional[float]) -
     return path
 
 
+def _replay(argv: list[str]) -> int:
+    """``catenary-monitor replay ARGV`` in this process (its parser alone: the command line's
+    main imports this module)."""
+    from catenary_monitor.cli import replay
+
+    parser = argparse.ArgumentParser(prog='catenary-monitor')
+    replay.register(parser.add_subparsers())
+    args = parser.parse_args(argv)
+    return int(args.func(args) or 0)
+
+
 def estimate(config: Any, tension_rate: float, depth_rate: float, seconds: float = 120.0,
              depth: float = 20.0) -> dict[str, Any]:  # fmt: skip
     """The node's MCAP log for ``config`` at these rates: bytes per second of logging, the
     bytes of a file's fixed part, files and bytes per day."""
-    from catenary_monitor.cli.main import main
     from catenary_monitor.core.config.parameters import config_to_params, params_file_text
     from catenary_monitor.replay.outputs import si_inputs
 
@@ -293,7 +303,7 @@ def estimate(config: Any, tension_rate: float, depth_rate: float, seconds: float
                   str(base / 'results.mcap'), '--quiet']  # fmt: skip
         quiet = io.StringIO()
         with contextlib.redirect_stdout(quiet), contextlib.redirect_stderr(quiet):
-            status = main(replay)
+            status = _replay(replay)
         if status != 0:
             raise RuntimeError(f'the replay of the made-up inputs failed: {quiet.getvalue()}')
         full = _rewrite(base / 'results.mcap', base / 'full', config, None)

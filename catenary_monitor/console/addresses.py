@@ -51,7 +51,7 @@ def interface_addresses(family: int = socket.AF_INET) -> list[str]:
             infos = socket.getaddrinfo(socket.gethostname(), None, family)
         except OSError:
             infos = []
-        found = [info[4][0] for info in infos]
+        found = [str(info[4][0]) for info in infos]
     loopback = '127.0.0.1' if family == socket.AF_INET else '::1'
     out = [loopback]
     for text in found:
