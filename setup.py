@@ -82,6 +82,8 @@ setup(
         ('share/' + package_name + '/foxglove', glob('foxglove/*.json')),
         ('share/' + package_name + '/launch', glob('launch/*.launch.xml')),
         ('share/' + package_name + '/deploy', glob('deploy/*.service')),
+        # the units' Documentation=
+        ('share/' + package_name + '/docs', ['docs/deploy.md']),
     ],
     python_requires='>=3.10',
     install_requires=[

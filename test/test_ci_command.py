@@ -49,9 +49,16 @@ def _fake_path(tmp_path: Path, tools: tuple[str, ...]) -> Path:
     return bin_dir
 
 
-def _install(tmp_path: Path, tools: tuple[str, ...]) -> tuple[int, str, list[str]]:
-    bin_dir = _fake_path(tmp_path, tools)
-    env = {'PATH': str(bin_dir), 'APT_SIMULATE': '1'}
+#: What every machine here has besides the tools a test names: Debian's python3 with venv, and
+#: systemd-analyze.
+BASE = ('python3', 'systemd-analyze')
+
+
+def _install(
+    tmp_path: Path, tools: tuple[str, ...], base: tuple[str, ...] = BASE
+) -> tuple[int, str, list[str]]:
+    bin_dir = _fake_path(tmp_path, tools + base)
+    env = {'PATH': str(bin_dir), 'APT_SIMULATE': '1', 'DEBIAN_PYTHON': str(bin_dir / 'python3')}
     done = subprocess.run(
         ['/bin/sh', str(SCRIPT)], env=env, capture_output=True, text=True, timeout=60
     )
@@ -74,6 +81,18 @@ def test_only_what_is_missing_is_asked_for(tmp_path, have, wanted):
     rc, err, asked = _install(tmp_path, have)
     assert rc == 0, err
     assert asked == [f'install -s -y -qq {wanted}']
+
+
+def test_debian_python_without_venv_and_no_systemd_analyze(tmp_path):
+    """Debian's python3 without python3-venv (no ensurepip), no systemd-analyze: both asked."""
+    bin_dir = _fake_path(tmp_path, ('node', 'npm', 'chromium', 'chromedriver', 'python3'))
+    (bin_dir / 'python3').write_text('#!/bin/sh\nexit 1\n')
+    env = {'PATH': str(bin_dir), 'APT_SIMULATE': '1', 'DEBIAN_PYTHON': str(bin_dir / 'python3')}
+    done = subprocess.run(['/bin/sh', str(SCRIPT)], env=env, capture_output=True, text=True,
+                          timeout=60)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    asked = (tmp_path / 'apt.log').read_text().splitlines()
+    assert asked == ['install -s -y -qq python3-venv systemd']
 
 
 def test_a_complete_machine_asks_apt_for_nothing(tmp_path):

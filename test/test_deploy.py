@@ -11,19 +11,24 @@ There is no ``ros2`` CLI nor ``launch`` on PyPI: ``ros2 run PKG EXE ARGS`` is
 from __future__ import annotations
 
 import ast
-import configparser
 import os
 import re
 import shlex
+import shutil
 import signal
 import subprocess
 import sys
+import sysconfig
 import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import pytest
 from ros_harness import child_env
+from systemd_units import ETC, LOGS, STATE, UNITS, VENV, read_unit
+from systemd_units import command as units_command
+
+from catenary_monitor.cli.run import NO_RESTART
 
 from catenary_monitor.core.config.parameters import config_from_params, load_params_file
 
@@ -87,7 +92,8 @@ def test_colcon_layout_and_ros2_run(install, tmp_path):
     share = prefix / 'share' / PKG
     assert (prefix / 'share/ament_index/resource_index/packages' / PKG).exists()
     for name in ('package.xml', 'launch/monitor.launch.xml', 'config/floating_dock.yaml',
-                 'config/dock_template.yaml', 'deploy/catenary-monitor.service'):  # fmt: skip
+                 'config/dock_template.yaml', 'deploy/catenary-monitor.service',
+                 'deploy/catenary-monitor-console.service', 'docs/deploy.md'):  # fmt: skip
         assert (share / name).is_file(), name
     proc = _ros2_run(
         install, 'catenary-monitor', 'run', '--params-file',
@@ -116,23 +122,29 @@ def test_launch_file_names_what_the_install_has(install, tmp_path):
     assert root.tag == 'launch'
     args = {a.get('name'): a.get('default') for a in root.iter('arg')}
     assert {'params_file', 'console', 'console_port', 'console_bind'} <= set(args)
-    params = _substitute(args['params_file'], args, share)
-    assert Path(params).is_file()
-    config_from_params(load_params_file(params))
+    assert args['params_file'] is None  # required: no demo dock by default
+    args['params_file'] = str(share / 'config/dock_template.yaml')
     nodes = list(root.iter('node'))
-    assert [n.get('exec') for n in nodes] == ['monitor', 'catenary-monitor']
+    assert [n.get('exec') for n in nodes] == ['catenary-monitor', 'catenary-monitor']
     for node in nodes:
         assert node.get('pkg') == PKG
         assert (prefix / 'lib' / PKG / node.get('exec')).is_file()
-        for p in node.iter('param'):
-            assert Path(_substitute(p.get('from'), args, share)).is_file()
+        assert node.get('respawn') is None  # launch's respawn restarts after any exit
+    from catenary_monitor.cli.main import build_parser
+
+    # The monitor restarts as the unit does: after a failure, RestartSec later, not after 2.
+    unit = read_unit('catenary-monitor.service')[0]['Service']
+    monitor = shlex.split(_substitute(nodes[0].get('args'), args, share))
+    parsed = build_parser().parse_args([*monitor, '--ros-args', '-r', '__node:=catenary_monitor'])
+    assert parsed.func.__name__ == 'cmd_run' and parsed.params_file == args['params_file']
+    assert parsed.restart_on_failure == float(unit['RestartSec'])
+    assert unit['RestartPreventExitStatus'] == '2' and NO_RESTART == (0, 2)
+    config_from_params(load_params_file(parsed.params_file))
     # The console's command line as launch builds it is one its parser takes.
     console = shlex.split(_substitute(nodes[1].get('args'), args, share))
     assert console[0] == 'console'
-    from catenary_monitor.cli.main import build_parser
-
     parsed = build_parser().parse_args([*console, '--ros-args', '-r', '__ns:=/'])
-    assert parsed.params_file == params and parsed.bind == '127.0.0.1'
+    assert parsed.params_file == args['params_file'] and parsed.bind == '127.0.0.1'
 
 
 def test_package_xml_lists_every_runtime_dependency():
@@ -166,27 +178,22 @@ def test_package_xml_lists_every_runtime_dependency():
 
 
 def test_systemd_unit_command_runs_and_stops_as_systemd_stops_it(tmp_path):
-    unit = configparser.ConfigParser(strict=False, interpolation=None)
-    unit.optionxform = str  # type: ignore[assignment,method-assign]
-    text = (ROOT / 'deploy/catenary-monitor.service').read_text()
-    unit.read_string(text)
-    environment = re.findall(r'^Environment=(\S+?)=(.*)$', text, re.M)
+    unit, environment = read_unit('catenary-monitor.service')
     assert 'network-online.target' in unit['Unit']['After']
     assert 'network-online.target' in unit['Unit']['Wants']
     service = unit['Service']
-    assert service['Restart'] == 'on-failure' and service['KillSignal'] == 'SIGTERM'
-    assert service['RestartPreventExitStatus'] == '2'
     command = shlex.split(service['ExecStart'])
-    venv_exe, params_at, log_at = command[0], command.index('--params-file') + 1, None
-    assert venv_exe == '/opt/catenary_monitor/.venv/bin/catenary-monitor'
-    log_at = command.index('--log-dir') + 1
+    assert command[0] == '/opt/catenary_monitor/.venv/bin/catenary-monitor'
+    assert command[command.index('--log-dir') + 1] == LOGS
     # This checkout's install stands in for /opt/catenary_monitor, a test file for /etc.
     params = tmp_path / 'dock.yaml'
     params.write_text((ROOT / 'config/dock_template.yaml').read_text())
+    places = {VENV: str(Path(sys.executable).parent.parent), f'{ETC}/dock.yaml': str(params),
+              STATE: str(tmp_path / 'state'), LOGS: str(tmp_path / 'log')}  # fmt: skip
+    command, unit_env = units_command('catenary-monitor.service', places)
     command[0] = str(Path(sys.executable).parent / 'catenary-monitor')
-    command[params_at], command[log_at] = str(params), str(tmp_path / 'log')
     env = child_env()
-    for key, value in environment:
+    for key, value in unit_env.items():
         if key.startswith('ROS_') and key != 'ROS_DOMAIN_ID':  # the test's own domain kept
             env[key] = value.replace('192.168.1.20', '127.0.0.1')
     proc = subprocess.Popen(command, env=env, stdout=subprocess.PIPE,
@@ -199,6 +206,40 @@ def test_systemd_unit_command_runs_and_stops_as_systemd_stops_it(tmp_path):
     assert proc.returncode == 0, text + out
     assert 'static peers 127.0.0.1' in text + out
     assert list((tmp_path / 'log').glob('*.mcap')) and (tmp_path / 'log/metadata.yaml').exists()
+    assert list((tmp_path / 'state/log').iterdir())  # rcl's own log, in the state directory
+
+
+def test_the_two_units_share_user_state_and_restart_policy(install):
+    prefix, _ = install
+    (monitor, monitor_env), (console, console_env) = (read_unit(u) for u in UNITS)
+    for unit, env in ((monitor, monitor_env), (console, console_env)):
+        service = unit['Service']
+        assert (service['User'], service['Group']) == ('catenary', 'catenary')
+        assert service['StateDirectory'] == 'catenary_monitor'
+        assert env['ROS_HOME'] == STATE and env['ROS_LOG_DIR'].startswith(STATE + '/')
+        assert (service['Restart'], service['RestartSec']) == ('on-failure', '5')
+        assert service['RestartPreventExitStatus'] == '2' and service['KillSignal'] == 'SIGTERM'
+        doc = unit['Unit']['Documentation']
+        assert doc.startswith(f'file://{VENV}/')
+        assert (prefix / doc[len(f'file://{VENV}/'):]).is_file(), doc  # what pip installs
+    assert monitor['Service']['LogsDirectory'] == 'catenary_monitor'
+    assert monitor_env['ROS_DOMAIN_ID'] == console_env['ROS_DOMAIN_ID']
+    assert 'catenary-monitor.service' in console['Unit']['After']
+    console_cmd = shlex.split(console['Service']['ExecStart'])
+    assert console_cmd[1] == 'console' and '--token-file' in console_cmd
+
+
+@pytest.mark.skipif(shutil.which('systemd-analyze') is None, reason='no systemd-analyze')
+def test_systemd_analyze_verifies_both_units(tmp_path):
+    """``systemd-analyze verify`` on each unit as shipped, but for ExecStart's program (it must
+    exist): this checkout's venv's."""
+    exe = str(Path(sys.executable).parent / 'catenary-monitor')
+    for name in UNITS:
+        text = (ROOT / 'deploy' / name).read_text()
+        (tmp_path / name).write_text(text.replace(f'{VENV}/bin/catenary-monitor', exe))
+    done = subprocess.run(['systemd-analyze', 'verify', *(str(tmp_path / n) for n in UNITS)],
+                          capture_output=True, text=True, timeout=60)  # fmt: skip
+    assert (done.returncode, done.stdout + done.stderr) == (0, '')
 
 
 def test_params_template_is_a_valid_dock_with_a_checklist():
@@ -208,3 +249,106 @@ def test_params_template_is_a_valid_dock_with_a_checklist():
     for word in ('CHECK', 'tension_scale', 'depth_offset', 'hook_height', 'gauge_height',
                  'measured from', 'log_max_total_size'):  # fmt: skip
         assert word in text, word
+
+
+def _counting_child(tmp_path, *statuses: str) -> list[str]:
+    """A child exiting with the next of ``statuses`` at each start (``kill``: SIGKILL)."""
+    count = tmp_path / 'starts'
+    script = (
+        'import os, pathlib, signal, sys\n'
+        f'p = pathlib.Path({str(count)!r})\n'
+        'n = len(p.read_text()) if p.exists() else 0\n'
+        "p.write_text('x' * (n + 1))\n"
+        'status = sys.argv[n + 1]\n'
+        "if status == 'kill':\n"
+        '    os.kill(os.getpid(), signal.SIGKILL)\n'
+        'sys.exit(int(status))\n'
+    )
+    return [sys.executable, '-c', script, *statuses]
+
+
+@pytest.mark.parametrize(
+    'statuses, starts, status',
+    [
+        (('1', 'kill', '0'), 3, 0),  # a failure and a crash restarted, then a clean stop
+        (('1', '2', '0'), 2, 2),  # a bad params file: not started again
+        (('0',), 1, 0),
+    ],
+)
+def test_restart_on_failure_is_the_units_policy(tmp_path, capfd, statuses, starts, status):
+    from catenary_monitor.cli.run import supervise
+
+    assert supervise(_counting_child(tmp_path, *statuses), 0.05) == status
+    assert len((tmp_path / 'starts').read_text()) == starts
+    assert capfd.readouterr().err.count('starting it again in 0.05 s') == starts - 1
+
+
+def test_run_restart_on_failure_stops_on_a_bad_parameter_and_on_sigterm(tmp_path):
+    bad = tmp_path / 'bad.yaml'
+    bad.write_text((ROOT / 'config/dock_template.yaml').read_text().replace(
+        'weight: 1300.0  # CHECK N/m submerged', 'weight: -1300.0'))  # fmt: skip
+    exe = str(Path(sys.executable).parent / 'catenary-monitor')
+    log = ['--log-dir', str(tmp_path / 'log')]
+    done = subprocess.run([exe, 'run', '--params-file', str(bad), *log, '--restart-on-failure',
+                           '0.1'], capture_output=True, text=True, env=child_env(),
+                          timeout=120)  # fmt: skip
+    assert done.returncode == 2, done.stderr
+    assert 'starting it again' not in done.stderr and 'weight' in done.stderr
+    good = ROOT / 'config/dock_template.yaml'
+    proc = subprocess.Popen([exe, 'run', '--params-file', str(good), *log,
+                             '--restart-on-failure', '5'], env=child_env(),
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True)  # fmt: skip
+    try:
+        text = _wait_line(proc, 'monitoring 4 lines', 60.0)
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        out, _ = proc.communicate(timeout=20)
+    assert proc.returncode == 0, text + out
+    assert 'starting it again' not in out and 'MCAP log closed' in text + out
+
+
+@pytest.mark.slow
+def test_real_colcon_build_puts_the_commands_in_lib(tmp_path):
+    """colcon itself (colcon-common-extensions in a venv of its own, with Jazzy's setuptools
+    68.1.2), plain and ``--symlink-install``: the commands in ``lib/catenary_monitor`` (colcon
+    reads setup.cfg's script directory; pip, through pyproject.toml, never does), none in
+    ``bin``, and ``ros2 run``'s command runs from there."""
+    tools = tmp_path / 'colcon'
+    subprocess.run([sys.executable, '-m', 'venv', str(tools)], check=True, timeout=120)
+    done = subprocess.run(
+        [str(tools / 'bin/pip'), 'install', '-q', 'colcon-common-extensions',
+         'setuptools==68.1.2'], capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    src = tmp_path / 'ws/src/catenary_monitor'
+    files = subprocess.run(
+        ['git', 'ls-files', '-z'], cwd=ROOT, capture_output=True, check=True
+    ).stdout.split(b'\0')
+    for name in filter(None, files):
+        if (ROOT / name.decode()).is_file():
+            (src / name.decode()).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copy2(ROOT / name.decode(), src / name.decode())
+    env = dict(os.environ, CATENARY_MONITOR_NO_EXTENSIONS='1')
+    env.pop('PYTHONPATH', None)
+    for flags in ([], ['--symlink-install']):
+        ws = tmp_path / 'ws'
+        for part in ('build', 'install', 'log'):
+            shutil.rmtree(ws / part, ignore_errors=True)
+        done = subprocess.run([str(tools / 'bin/colcon'), 'build', *flags], cwd=ws, env=env,
+                              capture_output=True, text=True, timeout=600)  # fmt: skip
+        assert done.returncode == 0, done.stdout[-2000:] + done.stderr[-2000:]
+        prefix = ws / 'install' / PKG
+        lib = prefix / 'lib' / PKG
+        assert {p.name for p in lib.iterdir()} >= {'catenary-monitor', 'monitor', 'dock_simulator'}
+        assert not (prefix / 'bin').exists(), flags
+        site = next(prefix.glob('lib/python3*/site-packages'))
+        # colcon's Python runs the command (its shebang); numpy and the rest: this suite's
+        deps = sysconfig.get_paths()['purelib']
+        run_env = dict(env, PYTHONPATH=os.pathsep.join([str(site), str(ws / 'build' / PKG), deps]))
+        done = subprocess.run(
+            [str(lib / 'catenary-monitor'), 'solve', '--weight', '1300', '--depth', '20.85',
+             '--tension', '1623.5e3', '--anchor-distance', '121.06'],
+            capture_output=True, text=True, env=run_env, timeout=120,
+        )  # fmt: skip
+        assert done.returncode == 0 and 'ANCHOR LIFTED' in done.stdout, (flags, done.stderr)

@@ -1,6 +1,8 @@
 #!/bin/sh
 # The test suite's system tools, installed only where missing: Chromium and ChromeDriver (the
-# console's browser tests), Node.js and npm (the independent MCAP reader, @mcap/core).
+# console's browser tests), Node.js and npm (the independent MCAP reader, @mcap/core), the venv
+# module of Debian's own python3 (test_install.py installs the package with it) and systemd's
+# systemd-analyze (test_deploy.py verifies the units).
 #
 # Each tool is asked for on its own condition and an installed one is never replaced: a machine
 # whose Node.js came from another packager (nodesource) keeps it, because Debian's npm conflicts
@@ -8,6 +10,7 @@
 # missing. APT_SIMULATE=1 runs apt-get in simulate mode (-s): nothing is installed (the tests).
 set -u
 missing=""
+debian_python="${DEBIAN_PYTHON:-/usr/bin/python3}"
 command -v chromium >/dev/null 2>&1 || missing="$missing chromium"
 command -v chromedriver >/dev/null 2>&1 || missing="$missing chromium-driver"
 if ! command -v node >/dev/null 2>&1; then
@@ -21,6 +24,9 @@ elif ! command -v npm >/dev/null 2>&1; then
     fi
     missing="$missing npm"
 fi
+# Debian's python3 makes venvs only with python3-venv (ensurepip and its pip wheel)
+"$debian_python" -c 'import ensurepip, venv' >/dev/null 2>&1 || missing="$missing python3-venv"
+command -v systemd-analyze >/dev/null 2>&1 || missing="$missing systemd"
 [ -z "$missing" ] && exit 0
 
 simulate=""

@@ -283,7 +283,17 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
     those installed under the :data:`COMMAND_GROUP` entry points."""
     from importlib.metadata import entry_points
 
-    from catenary_monitor.cli import dock, fleet, log, replay, report_alarms, run, whatif
+    from catenary_monitor.cli import (
+        console_client,
+        dock,
+        dock_setup,
+        fleet,
+        log,
+        replay,
+        report_alarms,
+        run,
+        whatif,
+    )
 
     found: list[Callable[[argparse._SubParsersAction], None]] = [
         run.register,
@@ -293,6 +303,8 @@ def _extensions() -> list[Callable[[argparse._SubParsersAction], None]]:
         dock.register,
         whatif.register,
         log.register,
+        console_client.register,
+        dock_setup.register,
     ]
     # the console first (as before the benchmarks), then the others by name
     for ep in sorted(

@@ -3,7 +3,8 @@
 Live: ``catenary-monitor console [--params-file F] [--port 8080] [--bind 127.0.0.1]
 [--token-file FILE | --read-only] [--tls-cert F --tls-key F]``.
 Replay: ``catenary-monitor console --log FILE|DIR [--params-file F]``. Prints the URL on one line
-(``console: http://HOST:PORT/ ...``) and serves until Ctrl-C or SIGTERM. Exit 2 with one line on a
+(``console: http://HOST:PORT/ ...``; then ``console: also at URL`` for each other address it is
+reached at) and serves until Ctrl-C or SIGTERM. Exit 2 with one line on a
 bad params file, token file or certificate, an unreadable log, a port in use, or a bind beyond
 loopback with neither ``--token-file`` nor ``--read-only``.
 """
@@ -85,7 +86,7 @@ def cmd_console(args: argparse.Namespace) -> int:
         what += f'; {len(access["operators"].names)} operators sign in to act'
     elif server.access == 'read-only':
         what += '; read-only'
-    print(f'console: {server.url} ({what}; Ctrl-C stops)', flush=True)
+    _print_urls(server, what)
     try:
         while not stop.wait(0.5):
             pass
@@ -94,6 +95,17 @@ def cmd_console(args: argparse.Namespace) -> int:
         if source.mode == 'live':
             source.stop()
     return 0
+
+
+def _print_urls(server: Any, what: str) -> None:
+    """``console: URL (...)`` for this PC, then ``console: also at URL`` for every other
+    address it is reached at (each interface's when bound to all of them)."""
+    from catenary_monitor.console.addresses import reachable_urls
+
+    print(f'console: {server.url} ({what}; Ctrl-C stops)', flush=True)
+    for url in reachable_urls(server.scheme, server.bind, server.port):
+        if url != server.url:
+            print(f'console: also at {url}', flush=True)
 
 
 class _Refused(Exception):

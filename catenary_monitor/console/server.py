@@ -29,14 +29,17 @@ Routes (:data:`PAGES`, :data:`ACTIONS`):
     sign in: the operator a bearer token names (changes nothing).
 
 Every route of :data:`ACTIONS` passes :meth:`ConsoleServer.authorize` first: refused (403) on a
-``--read-only`` console and unless the request comes from the console's own page (the ``Host``
+``--read-only`` console and, but for a program with a token (below), unless the request comes
+from the console's own page (the ``Host``
 header names this server: ``127.0.0.1``, ``localhost`` or ``[::1]`` with its port, or the
 ``--bind`` address, any host when bound to all interfaces; the ``Origin`` header is present and
 equals ``SCHEME://HOST``; the body is ``application/json``, which a cross-site form cannot send
 without a CORS preflight, never answered); with a token file, refused (401) without
 ``Authorization: Bearer TOKEN`` of one of its operators. So another web site open in the
 operator's browser cannot act, nor a page that reaches the console through DNS rebinding, nor,
-with a token file, anyone without a token.
+with a token file, anyone without a token. A program (:meth:`ConsoleServer.program_client`: no
+``Origin``, which every browser sends with a POST) acts with an operator's token on a console
+with a token file, in that operator's name (``catenary-monitor ack``, a button's script).
 """
 
 from __future__ import annotations
@@ -181,6 +184,13 @@ class ConsoleServer:
             return 'the body must be application/json'
         return None
 
+    def program_client(self, headers: Mapping[str, str]) -> bool:
+        """A program's request, not a browser's: no ``Origin`` header (a browser sends one with
+        every POST, so a page cannot pass for a program) on a console with a token file. It
+        must then carry an operator's bearer token (401 otherwise): ``catenary-monitor ack``,
+        a button's script, a SCADA. ``headers``: lower-case names."""
+        return self.operators is not None and 'origin' not in headers
+
     def authorize(self, request: Request) -> Actor:
         """Who is acting, for every state-changing request (every route of :data:`ACTIONS`
         passes here first): refused (403) on a read-only console, from another origin, a
@@ -188,7 +198,7 @@ class ConsoleServer:
         bearer token. The actor's ``origin`` names the operator, the console and the client."""
         if self.read_only:
             raise HttpError(403, 'this console is read-only (started with --read-only)')
-        refusal = self.refusal(request.headers)
+        refusal = None if self.program_client(request.headers) else self.refusal(request.headers)
         if refusal is not None:
             raise HttpError(403, refusal)
         where = f'console {self.hostname} client {request.client}'
