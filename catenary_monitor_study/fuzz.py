@@ -108,8 +108,24 @@ _MCAP_TOKENS = (
 )  # fmt: skip
 
 
+def _mcap_library_messages(data: bytes) -> Optional[set[tuple[str, int, int, bytes]]]:
+    """The messages the ``mcap`` library reads from ``data`` with its CRCs checked, or None
+    when it refuses the file."""
+    from mcap.reader import make_reader
+
+    try:
+        reader = make_reader(io.BytesIO(data), validate_crcs=True)
+        return {
+            (channel.topic, m.log_time, m.sequence, bytes(m.data))
+            for _, channel, m in reader.iter_messages(log_time_order=False)
+        }
+    except Exception:  # noqa: BLE001 - whatever it refuses, it refuses
+        return None
+
+
 def _check_mcap_read(data: bytes, work: Path) -> None:
-    """The log reader's public entry points: only McapReadError (empty log, wrong type)."""
+    """The log reader's public entry points: only McapReadError (empty log, wrong type); and
+    a message the ``mcap`` library reads (CRCs checked) is never lost without a named skip."""
     from catenary_monitor.io.mcap_read import (
         McapReadError,
         ReadReport,
@@ -121,15 +137,30 @@ def _check_mcap_read(data: bytes, work: Path) -> None:
     path = work / 'case.mcap'
     path.write_bytes(data)
     report = ReadReport()
+    ours = set()
     try:
-        for _ in iter_messages(path, None, report):
-            pass
+        for m in iter_messages(path, None, report):
+            ours.add((m.topic, m.log_time_ns, m.sequence, bytes(m.data)))
     except McapReadError:
         pass
+    theirs = _mcap_library_messages(data)
+    if theirs is not None and not theirs <= ours and report.complete:
+        raise Finding(f'{len(theirs - ours)} message(s) the mcap library reads lost unreported')
     try:
         read_float64_topics(path, [_TOPIC])
     except McapReadError:
         pass
+    from catenary_monitor.io import mcap_read
+
+    # what replay, alarms, fleet and the console's --log stream a log with
+    iter_windows: Any = getattr(mcap_read, 'iter_windows', None)
+    if iter_windows is not None:
+        try:
+            raw = ['/catenary_monitor/events']
+            for _ in iter_windows(path, [_TOPIC], raw, 16, ReadReport(), allow_empty=True):
+                pass
+        except McapReadError:
+            pass
     read_summary(path)
 
 
@@ -138,7 +169,8 @@ _RECOVERED = ('recovered', 'finished_in_place', 'already_finished', 'not_mcap', 
 
 def _check_mcap_recover(data: bytes, work: Path) -> None:
     """Recovery never raises; a file it says it finished, the ``mcap`` library reads whole
-    (summary, every message) and it holds the count recovery gives."""
+    (summary, every message) and it holds the count recovery gives, and every message the
+    library read in the original unless recovery names damage."""
     from mcap.reader import make_reader
 
     from catenary_monitor.io.mcap_recover import recover_file
@@ -162,6 +194,10 @@ def _check_mcap_recover(data: bytes, work: Path) -> None:
         raise Finding('a recovered file without a summary')
     if count != result.messages or summary.statistics.message_count != count:
         raise Finding(f'recovered {result.messages} messages, the file holds {count}')
+    before = _mcap_library_messages(data)
+    after = _mcap_library_messages((dst / 'case.mcap').read_bytes())
+    if before is not None and after is not None and not before <= after and not result.damaged:
+        raise Finding(f'{len(before - after)} message(s) lost by recovery, none reported')
 
 
 # ---------------------------------------------------------------- CDR
