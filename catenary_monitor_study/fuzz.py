@@ -376,17 +376,18 @@ _HTTP_TOKENS = (
 )  # fmt: skip
 
 
-def _exchange(port: int, data: bytes) -> bytes:
-    """Send ``data``, end the sending side, read until the server closes (1 s at most)."""
+def _exchange(port: int, data: bytes, wait: float = 5.0) -> bytes:
+    """Send ``data``, end the sending side, read until the server closes (``wait`` s at most:
+    an event stream goes on)."""
     with socket.create_connection(('127.0.0.1', port), timeout=5) as sock:
         try:
             sock.sendall(data)
             sock.shutdown(socket.SHUT_WR)
         except OSError:
             return b''
-        sock.settimeout(1.0)
+        sock.settimeout(wait)
         out = b''
-        deadline = time.monotonic() + 1.0
+        deadline = time.monotonic() + wait
         try:
             while time.monotonic() < deadline:
                 chunk = sock.recv(65536)
@@ -403,8 +404,8 @@ def _check_http(data: bytes, work: Path) -> None:
     an unexpected error; a good request is answered after each case."""
     server = _HTTP.get('server') or _http_setup()
     errors = server.transport.errors
-    reply = _exchange(server.port, data.replace(b'127.0.0.1:8080', f'127.0.0.1:{server.port}'
-                                                .encode()))  # fmt: skip
+    data = data.replace(b'127.0.0.1:8080', f'127.0.0.1:{server.port}'.encode())
+    reply = _exchange(server.port, data, 1.0 if b'/api/stream' in data else 5.0)
     for line in reply.split(b'\r\n'):
         if line.startswith(b'HTTP/1.1 5') and not line.startswith(b'HTTP/1.1 503'):
             raise Finding(f'answered {line[:40]!r}')

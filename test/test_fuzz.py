@@ -48,11 +48,11 @@ def test_the_harness_finds_a_planted_failure(tmp_path: Path) -> None:
 
 
 def test_fuzz_command_reports_its_figures(tmp_path: Path, capsys: Any) -> None:
-    """``catenary-monitor fuzz --minutes 0.05 --target cdr --target params --json``: the
+    """``catenary-monitor fuzz --minutes 0.1 --target cdr --target params --json``: the
     progress lines, then the cases and failures per target; exit 0."""
     from catenary_monitor.cli.main import main
 
-    code = main(['fuzz', '--minutes', '0.05', '--target', 'cdr', '--target', 'params',
+    code = main(['fuzz', '--minutes', '0.1', '--target', 'cdr', '--target', 'params',
                  '--out', str(tmp_path / 'found'), '--seed', '3', '--json'])  # fmt: skip
     out = capsys.readouterr().out
     rows = json.loads(out[out.index('\n{') + 1 :])
