@@ -67,7 +67,7 @@ MAX_STREAMS = 40
 #: Stream slots only reserved streams (an operator's, with a valid token) may take.
 RESERVED_STREAMS = 8
 #: Unreserved streams of one client address at most (its oldest closes for a new one).
-STREAMS_PER_CLIENT = 4
+STREAMS_PER_CLIENT = 8
 #: Threads running the application's request handlers.
 REQUEST_WORKERS = 8
 #: Bytes of a request head (request line and headers) at most.
