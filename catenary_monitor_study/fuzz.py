@@ -20,8 +20,10 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import hashlib
 import io
 import json
+import re
 import shutil
 import socket
 import struct
@@ -536,14 +538,14 @@ def fuzz_target(
         why = _one(target, data, work)
         if why is None:
             return
-        kind = why.split(':')[0]
+        kind = _kind(why)
         if kind in seen:
             return
         seen.add(kind)
         entry = {'why': why}
         if out is not None:
             out.mkdir(parents=True, exist_ok=True)
-            name = out / f'{target.name}-{len(outcome.failures):03d}.bin'
+            name = out / f'{target.name}-{hashlib.sha1(data).hexdigest()[:12]}.bin'
             name.write_bytes(data)
             entry['input'] = str(name)
         outcome.failures.append(entry)
@@ -562,6 +564,11 @@ def fuzz_target(
             target.teardown()
     outcome.seconds = time.monotonic() - t0
     return outcome
+
+
+def _kind(why: str) -> str:
+    """A failure's kind: its words before the first colon, numbers left out."""
+    return re.sub(r'\d+', 'N', why.split(':')[0])
 
 
 @contextlib.contextmanager
@@ -606,9 +613,9 @@ def run(
                 total = outcomes[name]
                 total.cases += one.cases
                 total.seconds += one.seconds
-                known = {f['why'].split(':')[0] for f in total.failures}
+                known = {_kind(f['why']) for f in total.failures}
                 for found in one.failures:
-                    if found['why'].split(':')[0] not in known:
+                    if _kind(found['why']) not in known:
                         total.failures.append(found)
                         report(f'fuzz {name}: FAILURE {found["why"]} ({found.get("input", "")})')
             report(
