@@ -140,6 +140,9 @@ setup(
         'dynamics': ['moordyn>=2.3'],
         # catenary-monitor fleet: many docks' logs replayed on Dask, results as Parquet.
         'fleet': ['dask[distributed]>=2024.1', 'pyarrow>=14'],
+        # catenary-monitor fuzz (docs/fuzzing.md): Hypothesis always; --atheris needs atheris
+        # (libFuzzer; wheels for CPython on Linux x86_64).
+        'fuzz': ['hypothesis>=6', 'atheris>=2.3'],
     },
     ext_modules=EXTENSIONS,
     zip_safe=False,

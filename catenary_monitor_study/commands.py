@@ -1,8 +1,9 @@
 """The study's sub-commands for ``catenary-monitor`` (entry point ``catenary_monitor.commands``).
 
 ``bench``, ``bench-methods``, ``bench-replay`` and ``bench-latency`` measure the monitor against
-baselines in the same run. They live outside the monitor's runtime import graph: the command line
-finds this module through its entry point, and nothing in ``catenary_monitor`` imports it.
+baselines in the same run; ``fuzz`` fuzzes what reads untrusted bytes. They live outside the
+monitor's runtime import graph: the command line finds this module through its entry point, and
+nothing in ``catenary_monitor`` imports it.
 """
 
 from __future__ import annotations
@@ -54,6 +55,7 @@ def register(sub: Any) -> None:
         bench_methods,
         bench_replay,
         bench_soak,
+        fuzz,
     )
 
     bench_console.register(sub)
@@ -63,6 +65,7 @@ def register(sub: Any) -> None:
     bench_flood.register(sub)
     bench_step.register(sub)
     bench_fleet.register(sub)
+    fuzz.register(sub)
     for module in (bench_core, bench_methods, bench_replay):
         module.register(sub)
     # bench runs as a library user's process (glibc defaults; --keep-freed-memory to compare)

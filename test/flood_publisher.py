@@ -1,8 +1,9 @@
 """Publish std_msgs/Float64 tensions on /mooring/NAME/tension for NAME in argv[1] (comma
-separated) at argv[2] Hz each, and a depth at 10 Hz, for argv[3] s (sensor-data QoS): a
-node-intake load for test_node_guard. Prints ``sent N`` at the end; SIGTERM ends it early,
-cleanly (its participant leaves the graph: Fast DDS segfaulted now and then in the teardown of a
-monitor stopped just after a flood publisher was SIGKILLed)."""
+separated) at argv[2] Hz each, and a depth at argv[4] Hz (default 10), for argv[3] s
+(sensor-data QoS): a node-intake load for test_node_guard and test_log_retention. Prints ``sent
+N`` at the end; SIGTERM ends it early, cleanly (its participant leaves the graph: Fast DDS
+segfaulted now and then in the teardown of a monitor stopped just after a flood publisher was
+SIGKILLed)."""
 
 import signal
 import sys
@@ -17,6 +18,7 @@ from std_msgs.msg import Float64
 
 def main() -> None:
     names, rate, duration = sys.argv[1].split(','), float(sys.argv[2]), float(sys.argv[3])
+    depth_rate = float(sys.argv[4]) if len(sys.argv) > 4 else 10.0
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
     rclpy.init(signal_handler_options=SignalHandlerOptions.NO)
@@ -36,7 +38,7 @@ def main() -> None:
             for p in pubs:
                 p.publish(tension)
             sent, k = sent + len(pubs), k + 1
-        while d < int(now * 10.0):
+        while d < int(now * depth_rate):
             depth.publish(level)
             sent, d = sent + 1, d + 1
         time.sleep(0.0005)

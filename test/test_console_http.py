@@ -163,7 +163,7 @@ def test_malformed_requests_get_4xx_never_a_traceback(served: Any, capfd: Any) -
     cases = [
         (b'GARBAGE\r\n\r\n', 400),
         (b'GET / HTTP/1.1\r\n\r\n', 400),
-        (b'GET / HTTP/1.1\r\nHost: x\r\nX-Pad: ' + b'a' * 65536 + b'\r\n\r\n', 431),
+        (b'GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Pad: ' + b'a' * 65536 + b'\r\n\r\n', 431),
         (b'POST /api/ack HTTP/1.1\r\nHost: x\r\nTransfer-Encoding: chunked\r\n\r\n0\r\n\r\n', 411),
         (
             b'POST /api/ack HTTP/1.1\r\nHost: x\r\nContent-Length: 3\r\nContent-Length: 4\r\n\r\n',
@@ -173,11 +173,11 @@ def test_malformed_requests_get_4xx_never_a_traceback(served: Any, capfd: Any) -
         (ack_request(port, b'["line_11"]'), 400),
         (ack_request(port, b'{"line": "line 11 x"}'), 400),
         (ack_request(port, b'{"line": 11}'), 400),
-        (b'DELETE /api/ack HTTP/1.1\r\nHost: x\r\n\r\n', 405),
-        (b'GET /api/ack HTTP/1.1\r\nHost: x\r\n\r\n', 405),
-        (b'POST /nothing HTTP/1.1\r\nHost: x\r\nContent-Length: 0\r\n\r\n', 404),
-        (b'GET /api/frame?t=nan HTTP/1.1\r\nHost: x\r\n\r\n', 400),
-        (b'GET /static/../../etc/passwd HTTP/1.1\r\nHost: x\r\n\r\n', 404),
+        (b'DELETE /api/ack HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n', 405),
+        (b'GET /api/ack HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n', 405),
+        (b'POST /nothing HTTP/1.1\r\nHost: 127.0.0.1\r\nContent-Length: 0\r\n\r\n', 404),
+        (b'GET /api/frame?t=nan HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n', 400),
+        (b'GET /static/../../etc/passwd HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n', 404),
     ]
     for data, status in cases:
         reply = exchange(port, data, quiet=0.3)
@@ -190,7 +190,10 @@ def test_malformed_requests_get_4xx_never_a_traceback(served: Any, capfd: Any) -
 def test_keep_alive_and_pipelining(served: Any) -> None:
     """Two requests on one connection, sent together, get two answers in order."""
     server, _ = served
-    data = b'GET /api/config HTTP/1.1\r\nHost: x\r\n\r\nGET /api/frame HTTP/1.1\r\nHost: x\r\n\r\n'
+    data = (
+        b'GET /api/config HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n'
+        b'GET /api/frame HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n'
+    )
     reply = exchange(server.port, data, quiet=0.5)
     assert statuses(reply) == [200, 200]
     assert reply.endswith(b'<open>')  # kept alive
@@ -199,7 +202,7 @@ def test_keep_alive_and_pipelining(served: Any) -> None:
 def _get(port: int, path: str = '/api/config', timeout: float = 5.0) -> int:
     reply = exchange(
         port,
-        f'GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n'.encode(),
+        f'GET {path} HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n'.encode(),
         quiet=timeout,
     )
     return statuses(reply)[0] if statuses(reply) else 0
@@ -214,7 +217,7 @@ def test_slowloris_and_half_open_connections(served: Any) -> None:
     slow = []
     for _ in range(200):
         sock = socket.create_connection(('127.0.0.1', server.port), timeout=10)
-        sock.sendall(b'GET /api/config HTTP/1.1\r\nHost: x\r\nX-Slow: ')
+        sock.sendall(b'GET /api/config HTTP/1.1\r\nHost: 127.0.0.1\r\nX-Slow: ')
         slow.append(sock)
     t0 = time.monotonic()
     for _ in range(20):
@@ -227,7 +230,7 @@ def test_slowloris_and_half_open_connections(served: Any) -> None:
     streams = []
     for k in range(200):
         sock = socket.create_connection(('127.0.0.1', server.port), timeout=10)
-        sock.sendall(b'GET /api/stream HTTP/1.1\r\nHost: x\r\n\r\n')
+        sock.sendall(b'GET /api/stream HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n')
         streams.append(sock)
         if k % 20 == 19:  # reset in waves, some while a frame is being written
             time.sleep(0.1)
@@ -377,7 +380,7 @@ def test_console_on_another_loopback_address_with_tokens(tmp_path: Path) -> None
         # 200 half-open connections and 50 streams reset under the writer
         for _ in range(200):
             sock = socket.create_connection(('127.0.0.2', port), timeout=10)
-            sock.sendall(b'GET /api/stream HTTP/1.1\r\nHost: x\r\n\r\n')
+            sock.sendall(b'GET /api/stream HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n')
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack('ii', 1, 0))
             sock.close()
         time.sleep(1.0)
@@ -391,7 +394,8 @@ def test_console_on_another_loopback_address_with_tokens(tmp_path: Path) -> None
 
 
 def _get_host(port: int, host: str) -> int:
-    reply = exchange(port, b'GET /api/config HTTP/1.1\r\nHost: x\r\n\r\n', host=host, quiet=2.0)
+    data = f'GET /api/config HTTP/1.1\r\nHost: {host}\r\n\r\n'.encode()
+    reply = exchange(port, data, host=host, quiet=2.0)
     return statuses(reply)[0] if statuses(reply) else 0
 
 
@@ -456,7 +460,8 @@ def test_read_only_and_tls(tmp_path: Path) -> None:
     server.start()
     try:
         assert statuses(exchange(server.port, ack_request(server.port))) == [403]
-        reply = exchange(server.port, b'GET /api/config HTTP/1.1\r\nHost: x\r\n\r\n', quiet=0.5)
+        data = b'GET /api/config HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n'
+        reply = exchange(server.port, data, quiet=0.5)
         assert (
             json.loads(reply.split(b'\r\n\r\n', 1)[1].split(b'<open>')[0])['access'] == 'read-only'
         )
@@ -469,7 +474,7 @@ def test_read_only_and_tls(tmp_path: Path) -> None:
     server.start()
     try:
         assert server.url.startswith('https://127.0.0.1:')
-        assert exchange(server.port, b'GET / HTTP/1.1\r\nHost: x\r\n\r\n', quiet=3.0) in (
+        assert exchange(server.port, b'GET / HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n', quiet=3.0) in (
             b'',
             b'<reset>',
         )

@@ -171,3 +171,160 @@ def test_the_node_reports_each_deletion(tmp_path):
     assert all(r['reason'] == 'age' and r['bytes'] > 0 for r in deletions)
     assert not any((log / n).exists() for n in named)
     assert check_folder(log) > 0
+
+
+# ---------------------------------------------------------------- the smallest bound; whose files
+def _payload(k: int) -> bytes:
+    """A status-like message: 4 B encapsulation and 196 B that compress only in part."""
+    return b'\x00\x01\x00\x00' + bytes((k * 7 + i * i) % 251 for i in range(196))
+
+
+def test_the_bound_holds_at_the_smallest_sizes_without_any_tick(tmp_path):
+    """log_rotate_size 0.1 MiB and log_max_total_size 400000 at 800 messages a second, and
+    the caller's timer never running (a flood keeps an executor's timers waiting): the
+    retention runs at every rotation, so the folder never holds more than its bound. (It ran
+    only from tick(): 140 files, 3.0 MB after 15 s, nothing deleted.)"""
+    folder = tmp_path / 'log'
+    mono, wall = Clock(100.0), Clock(1.795e9)
+    bound = 400_000
+    log = McapLogger(
+        folder, fsync=False, max_bytes=int(0.1 * 2**20), clock=mono, wall_clock=wall,
+        max_total_bytes=bound,
+    )  # fmt: skip
+    log.register('/a', 'diagnostic_msgs/msg/DiagnosticArray')
+    log.add_metadata('catenary_monitor', {'parameters': 'x' * 3000})  # as the node does
+    peak, files = 0, set()
+    for k in range(12_000):  # 15 s at 800/s
+        mono.now += 1 / 800
+        wall.now += 1 / 800
+        log.write('/a', _payload(k), T0 + k * 1_250_000)
+        files.add(log.current_path)
+        if k % 50 == 0:
+            peak = max(peak, folder_bytes(folder))
+    deleted = log.take_deleted()
+    log.close()
+    assert len(files) > 25 and len(deleted) >= len(files) - 8
+    assert peak <= bound and folder_bytes(folder) <= bound, peak
+    assert [p.name for p, _, _ in deleted] == sorted(p.name for p, _, _ in deleted)
+    assert listed(folder) == sorted(p.name for p in folder.glob('*.mcap'))
+
+
+def _run(folder: Path, wall0: float, n: int, **kw) -> list[Path]:
+    """``n`` files of the logger (each rotated by hand) with its wall clock at ``wall0``."""
+    mono, wall = Clock(100.0), Clock(wall0)
+    log = McapLogger(folder, fsync=False, clock=mono, wall_clock=wall, **kw)
+    log.register('/a', 'std_msgs/msg/Float64')
+    payload = b'\x00\x01\x00\x00' + struct.pack('<d', 1.0) * 800
+    made = []
+    for k in range(n):
+        for j in range(10):
+            mono.now += 1.0
+            wall.now += 1.0
+            log.write('/a', payload, int(wall.now * 1e9))
+        made.append(log.current_path)
+        if k < n - 1:
+            log.rotate()
+    log.close()
+    return made
+
+
+def test_retention_deletes_only_its_own_files_the_future_dated_first(tmp_path):
+    """A user's copy of a node file under another name, a file named as the node names them
+    but written by another tool, and a file touched to 2100: the first two are neither counted
+    nor deleted; the node's own files go by their recorded end, a file recorded in 2100 (a
+    clock error later corrected) first of all, whatever the modification times say."""
+    from mcap.writer import Writer
+
+    folder = tmp_path / 'log'
+    future = _run(folder, 4.1e9, 1)  # recorded in 2099
+    old = _run(folder, 1.795e9 - 7200, 3)  # two hours ago
+    keep = folder / 'storm_evidence_keep.mcap'
+    keep.write_bytes(old[0].read_bytes())  # a user's copy: the node's header, another name
+    alien = folder / 'catenary_monitor_20261201T000000Z_0000.mcap'  # the node's name, not its file
+    with open(alien, 'wb') as f:
+        w = Writer(f)
+        w.start(profile='ros2', library='someone else')
+        w.finish()
+    for p in (alien, keep, future[0]):
+        os.utime(p, (1.795e9 - 9000,) * 2)  # oldest by modification time
+    os.utime(old[1], (4.2e9,) * 2)  # touched to 2103: its recorded end decides
+    size = old[0].stat().st_size
+    mono, wall = Clock(100.0), Clock(1.795e9)
+    log = McapLogger(
+        folder, fsync=False, clock=mono, wall_clock=wall, max_bytes=size,
+        max_total_bytes=3 * size + size // 16 + 4096 + size // 2,
+    )  # fmt: skip  # room for two finished files and the open one's reserve
+    log.register('/a', 'std_msgs/msg/Float64')
+    log.apply_retention()
+    gone = log.take_deleted()
+    log.close()
+    assert [(p.name, why) for p, _, why in gone] == [
+        (future[0].name, 'future'), (old[0].name, 'size')
+    ], gone
+    assert keep.exists() and alien.exists() and old[1].exists() and old[2].exists()
+
+
+def test_a_node_file_recovered_after_a_crash_is_still_its_own(tmp_path):
+    from catenary_monitor.io.mcap_recover import recover_file
+
+    folder = tmp_path / 'log'
+    made = _run(folder, 1.795e9 - 7200, 2)
+    data = made[0].read_bytes()
+    made[0].write_bytes(data[: len(data) * 2 // 3])  # cut: no summary, as after SIGKILL
+    assert recover_file(made[0]).status == 'recovered'
+    log = McapLogger(folder, fsync=False, max_total_bytes=1, max_bytes=1)
+    log.register('/a', 'std_msgs/msg/Float64')
+    log.apply_retention()
+    assert {p.name for p, _, _ in log.take_deleted()} == {m.name for m in made}
+    log.close()
+
+
+@pytest.mark.timeout(150)
+def test_the_node_holds_the_smallest_bound_under_a_flood(tmp_path):
+    """The node with log_rotate_size 0.1 MiB and log_max_total_size 400000, one line and the
+    depth at 400 samples/s each for 15 s: its files never exceed the bound (sampled every
+    0.1 s) and deletions are reported during the flood; a user's file in the folder survives,
+    and a file of the node recorded in 2099 is the first to go, named as such."""
+    import subprocess
+    import sys
+
+    from ros_harness import child_env, output_of, start_monitor, stop, write_params
+
+    params = write_params(
+        tmp_path / 'p.yaml',
+        {'a': {'weight': 1300.0, 'anchor_distance': 121.06, 'mbl': 5.17e6}},
+        log_rotate_size=0.1,
+        log_max_total_size=400000,
+    )
+    log = tmp_path / 'log'
+    future = _run(log, 4.1e9, 1)[0]
+    (log / 'metadata.yaml').unlink()
+    keep = log / 'storm_evidence_keep.mcap'
+    keep.write_bytes(future.read_bytes())
+    proc = start_monitor(params, log)
+    flood = None
+    peak, during = 0, 0
+    try:
+        time.sleep(3.0)
+        flood = subprocess.Popen(
+            [sys.executable, str(Path(__file__).with_name('flood_publisher.py')), 'a', '400',
+             '15', '400'],
+            stdout=subprocess.PIPE, text=True, env=child_env(),
+        )  # fmt: skip
+        while flood.poll() is None:
+            own = [p for p in log.glob('catenary_monitor_*.mcap')]
+            peak = max(peak, sum(p.stat().st_size for p in own if p.exists()))
+            time.sleep(0.1)
+        during = output_of(proc).count('log retention: deleted')
+        sent = int(flood.communicate()[0].split()[-1])
+    finally:
+        if flood is not None and flood.poll() is None:
+            flood.terminate()
+        code = stop(proc)
+    text = output_of(proc)
+    assert code == 0 and sent > 10_000, text[-2000:]
+    assert peak <= 400_000, peak
+    assert during >= 10, text[-2000:]
+    first = next(ln for ln in text.splitlines() if 'log retention: deleted' in ln)
+    assert future.name in first and 'dated ahead of the present' in first, first
+    assert keep.exists()

@@ -117,6 +117,12 @@ def cmd_fleet(args: argparse.Namespace) -> int:
         )
         return 2
     out = Path(args.out)
+    try:
+        out.resolve()
+    except (RuntimeError, OSError) as err:  # a symlink loop (RuntimeError before 3.13)
+        why = getattr(err, 'strerror', None) or 'a symlink loop'
+        print(f'catenary-monitor fleet: --out {out}: {why}', file=sys.stderr)
+        return 2
     if out.exists() and not out.is_dir():
         print(f'catenary-monitor fleet: --out {out} is a file, not a folder', file=sys.stderr)
         return 2

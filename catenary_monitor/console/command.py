@@ -143,29 +143,38 @@ def _access(args: argparse.Namespace) -> dict[str, Any]:
             f'--bind {args.bind} reaches beyond this PC: give --token-file FILE (operators '
             'who may acknowledge) or --read-only'
         )
-    tls = _tls(args.tls_cert, args.tls_key)
+    tls = _tls(args.tls_cert, args.tls_key, args.allow_expired)
     if operators is not None and tls is None and not is_loopback(args.bind):
         print(
             'catenary-monitor console: warning: tokens cross the network in clear text '
             '(give --tls-cert and --tls-key)',
             file=sys.stderr,
         )
-    return {'operators': operators, 'read_only': bool(args.read_only or args.log), 'tls': tls}
+    return {
+        'operators': operators,
+        'read_only': bool(args.read_only or args.log),
+        'tls': tls,
+        'server_names': args.server_name or (),
+    }
 
 
-def _tls(cert: Optional[str], key: Optional[str]) -> Optional[ssl.SSLContext]:
-    """A TLS server context (TLS 1.2 at least) from a certificate and its key, or None."""
+def _tls(
+    cert: Optional[str], key: Optional[str], allow_expired: bool = False
+) -> Optional[ssl.SSLContext]:
+    """A TLS server context (TLS 1.2 at least) from a certificate and its key, or None;
+    a certificate not valid now is refused unless ``allow_expired`` (a loud warning)."""
+    from catenary_monitor.console.tls import CertificateError, server_context
+
     if not cert and not key:
         return None
     if not (cert and key):
         raise _Refused('--tls-cert and --tls-key go together')
-    context = ssl.SSLContext(ssl.PROTOCOL_TLS_SERVER)
-    context.minimum_version = ssl.TLSVersion.TLSv1_2
     try:
-        context.load_cert_chain(cert, key)
-    except (OSError, ssl.SSLError) as err:
-        reason = getattr(err, 'strerror', None) or getattr(err, 'reason', None) or err
-        raise _Refused(f'cannot use the certificate {cert} with the key {key}: {reason}')
+        context, warning = server_context(cert, key, allow_expired=allow_expired)
+    except CertificateError as err:
+        raise _Refused(str(err)) from None
+    if warning:
+        _warn(warning)
     return context
 
 
@@ -232,6 +241,19 @@ def register(sub: Any) -> None:
     )
     p.add_argument('--tls-cert', metavar='FILE', help='serve HTTPS with this certificate (PEM)')
     p.add_argument('--tls-key', metavar='FILE', help='the private key of --tls-cert (PEM)')
+    p.add_argument(
+        '--allow-expired',
+        action='store_true',
+        help='serve a certificate that expired or is not valid yet (a loud warning; renew it)',
+    )
+    p.add_argument(
+        '--server-name',
+        action='append',
+        metavar='NAME',
+        help='a host name the operators open the console by (e.g. dockpc.local; repeatable): '
+        'requests naming another host are refused (DNS rebinding); IP addresses, localhost, '
+        'the --bind name and this PC\'s host name are always accepted',
+    )
     p.add_argument(
         '--log', nargs='+', metavar='FILE|DIR', help='replay a recorded MCAP log (files or dirs)'
     )

@@ -14,7 +14,12 @@ slowly or goes away holds no thread. The bounds (module constants):
   not read whole is answered with ``Connection: close`` and the connection closed, so nothing
   that follows a body is ever taken for a request (no smuggling);
 * the application's handlers run on :data:`REQUEST_WORKERS` threads, event streams on at most
-  :data:`MAX_STREAMS` more (503 beyond);
+  :data:`MAX_STREAMS` more. A stream the application marks ``reserved`` (an operator's, with
+  a valid token) may use every slot; the others at most ``MAX_STREAMS - RESERVED_STREAMS``, at
+  most :data:`STREAMS_PER_CLIENT` per client address. A new stream is never refused: beyond a
+  bound it closes the oldest unreserved stream of the same address, else the oldest unreserved
+  one, else (reserved, every slot taken) the oldest reserved one, so a flood of streams cannot
+  blind an operator, and the newest page always gets one;
 * a response the client does not take within :data:`WRITE_TIMEOUT` s closes the connection; a
   client that goes away ends its stream, nothing else.
 
@@ -45,6 +50,8 @@ __all__ = [
     'HttpTransport',
     'MAX_CONNECTIONS',
     'MAX_STREAMS',
+    'RESERVED_STREAMS',
+    'STREAMS_PER_CLIENT',
     'HEAD_LIMIT',
     'HEAD_TIMEOUT',
     'IDLE_TIMEOUT',
@@ -56,7 +63,11 @@ __all__ = [
 #: Open connections at most (one more closes the one waiting longest for its request).
 MAX_CONNECTIONS = 256
 #: Event streams (Server-Sent Events) at most, each on its own worker thread.
-MAX_STREAMS = 32
+MAX_STREAMS = 40
+#: Stream slots only reserved streams (an operator's, with a valid token) may take.
+RESERVED_STREAMS = 8
+#: Unreserved streams of one client address at most (its oldest closes for a new one).
+STREAMS_PER_CLIENT = 8
 #: Threads running the application's request handlers.
 REQUEST_WORKERS = 8
 #: Bytes of a request head (request line and headers) at most.
@@ -88,13 +99,15 @@ class Request:
 @dataclass
 class Response:
     """What a handler answers. ``stream``: a blocking iterator of chunks (an event stream),
-    sent as they come until it ends or the client goes away; then ``body`` is not used."""
+    sent as they come until it ends or the client goes away; then ``body`` is not used.
+    ``reserved``: the stream may take the slots kept for operators (see the module doc)."""
 
     status: int
     body: bytes = b''
     content_type: str = 'application/json'
     headers: list[tuple[str, str]] = field(default_factory=list)
     stream: Optional[Iterator[bytes]] = None
+    reserved: bool = False
 
 
 class HttpError(Exception):
@@ -138,6 +151,7 @@ class _Connection:
         peer = writer.get_extra_info('peername')
         self.client = str(peer[0]) if isinstance(peer, tuple) and peer else ''
         self.waiting_since: Optional[float] = time.monotonic()  # None: being served
+        self.received = 0  # bytes read from the client so far
 
     def abort(self) -> None:
         transport = self.writer.transport
@@ -156,13 +170,22 @@ class HttpTransport:
         self.loop = asyncio.new_event_loop()
         self.loop.set_exception_handler(self._loop_error)
         self.workers = ThreadPoolExecutor(REQUEST_WORKERS, thread_name_prefix='http')
-        self.stream_workers = ThreadPoolExecutor(MAX_STREAMS, thread_name_prefix='stream')
+        # A stream closed for a newer one holds its worker until its frame wait ends (<= 0.5 s).
+        self.stream_workers = ThreadPoolExecutor(
+            MAX_STREAMS + RESERVED_STREAMS, thread_name_prefix='stream'
+        )
         self.connections: dict[_Connection, None] = {}  # insertion order: oldest first
-        self.streams = 0
+        self.open_streams: dict[_Connection, bool] = {}  # -> reserved; oldest first
+        self.evicted = 0  # streams closed for a newer one
         self.stopping = threading.Event()
         self.errors = 0  # unexpected errors reported (one line each, the first ten)
         self._thread: Optional[threading.Thread] = None
         self._server: Optional[asyncio.AbstractServer] = None
+
+    @property
+    def streams(self) -> int:
+        """Event streams open now."""
+        return len(self.open_streams)
 
     # ------------------------------------------------------------------ life cycle
     def start(self) -> threading.Thread:
@@ -253,7 +276,9 @@ class HttpTransport:
         remaining = deadline - self.loop.time()
         if remaining <= 0:
             raise TimeoutError
-        conn.h11.receive_data(await asyncio.wait_for(conn.reader.read(_READ), remaining))
+        data = await asyncio.wait_for(conn.reader.read(_READ), remaining)
+        conn.received += len(data)
+        conn.h11.receive_data(data)
 
     async def _next_event(self, conn: _Connection, deadline: float) -> Any:
         while True:
@@ -291,6 +316,7 @@ class HttpTransport:
         client closed, or stayed idle for :data:`IDLE_TIMEOUT` s)."""
         deadline = self.loop.time() + IDLE_TIMEOUT
         begun = False
+        start = conn.received - len(conn.h11.trailing_data[0])  # where this request begins
         while True:
             event = conn.h11.next_event()
             if isinstance(event, h11.Request):
@@ -306,6 +332,11 @@ class HttpTransport:
                 if not begun:
                     return None
                 raise
+        # h11 checks its buffer only while a head is incomplete: a head read whole in one
+        # more read could pass its limit by up to a read's size.
+        size = conn.received - len(conn.h11.trailing_data[0]) - start
+        if size > HEAD_LIMIT:
+            raise HttpError(431, f'request head of {size} bytes (at most {HEAD_LIMIT})')
         method = event.method.decode('ascii', 'replace')
         target = event.target.decode('ascii', 'replace')
         path = target.split('?', 1)[0]
@@ -410,15 +441,10 @@ class HttpTransport:
     async def _stream(self, conn: _Connection, response: Response) -> None:
         """Send a stream's chunks as its iterator yields them (on a stream worker)."""
         assert response.stream is not None
-        if self.streams >= MAX_STREAMS:
-            await self._send_error(
-                conn, 503, f'too many streams (at most {MAX_STREAMS})', [('Retry-After', '5')]
-            )
-            return
-        self.streams += 1
+        self._admit_stream(conn, response.reserved)
         try:
             await self._write(conn, conn.h11.send(self._head(response, None, True)) or b'')
-            while not self.stopping.is_set():
+            while not self.stopping.is_set() and conn in self.open_streams:
                 chunk = await self.loop.run_in_executor(
                     self.stream_workers, next, response.stream, None
                 )
@@ -426,4 +452,23 @@ class HttpTransport:
                     break
                 await self._write(conn, conn.h11.send(h11.Data(data=chunk)) or b'')
         finally:
-            self.streams -= 1
+            self.open_streams.pop(conn, None)
+
+    def _admit_stream(self, conn: _Connection, reserved: bool) -> None:
+        """Count a new stream in, closing the one it displaces beyond a bound (module doc)."""
+        streams = self.open_streams
+        free = [c for c, r in streams.items() if not r]
+        victim = None
+        if not reserved:
+            mine = [c for c in free if c.client == conn.client]
+            if len(mine) >= STREAMS_PER_CLIENT:
+                victim = mine[0]
+            elif len(free) >= MAX_STREAMS - RESERVED_STREAMS:
+                victim = free[0]
+        elif len(streams) >= MAX_STREAMS:
+            victim = free[0] if free else next(iter(streams))
+        if victim is not None:
+            streams.pop(victim, None)
+            self.evicted += 1
+            victim.abort()
+        streams[conn] = reserved

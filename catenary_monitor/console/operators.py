@@ -59,11 +59,20 @@ def load_operators(path: str) -> tuple[Operators, Optional[str]]:
     """The operators of the token file ``path`` and a warning (None: none): a file that
     others than its owner may read. Raises :class:`TokenFileError` naming the line."""
     try:
-        info = os.stat(path)
-        if info.st_size > MAX_FILE_SIZE:
-            raise TokenFileError(f'{path}: {info.st_size} bytes (a token file is at most 64 KiB)')
-        with open(path, encoding='utf-8') as f:
-            text = f.read(MAX_FILE_SIZE + 1)
+        # Opened without waiting (a FIFO would block a plain open until a writer comes),
+        # then refused unless a regular file.
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK | getattr(os, 'O_NOCTTY', 0))
+        try:
+            info = os.fstat(fd)
+            if not stat.S_ISREG(info.st_mode):
+                raise TokenFileError(f'the token file {path} is not a regular file')
+            if info.st_size > MAX_FILE_SIZE:
+                raise TokenFileError(
+                    f'{path}: {info.st_size} bytes (a token file is at most 64 KiB)'
+                )
+            text = os.read(fd, MAX_FILE_SIZE + 1).decode('utf-8')
+        finally:
+            os.close(fd)
     except OSError as err:
         raise TokenFileError(f'cannot read the token file {path}: {err.strerror or err}')
     except UnicodeDecodeError:

@@ -44,6 +44,7 @@ with a token file, in that operator's name (``catenary-monitor ack``, a button's
 
 from __future__ import annotations
 
+import ipaddress
 import json
 import math
 import socket
@@ -53,7 +54,7 @@ import time
 from dataclasses import dataclass
 from http import HTTPStatus
 from importlib import resources
-from typing import Any, Callable, Iterator, Mapping, Optional, Protocol
+from typing import Any, Callable, Iterator, Mapping, Optional, Protocol, Sequence
 
 from catenary_monitor.console.frames import AckError
 from catenary_monitor.console.http_transport import HttpError, HttpTransport, Request, Response
@@ -130,6 +131,7 @@ class ConsoleServer:
         operators: Optional[Operators] = None,
         read_only: bool = False,
         tls: Optional[ssl.SSLContext] = None,
+        server_names: Sequence[str] = (),
     ) -> None:
         self.source = source
         self.bind = bind
@@ -144,7 +146,10 @@ class ConsoleServer:
         self.any_host = bind in ('0.0.0.0', '::', '')
         names = {'127.0.0.1', 'localhost', '[::1]', bind if ':' not in bind else f'[{bind}]'}
         self.hosts = {f'{n}:{self.port}' for n in names}
+        #: The names a request's ``Host`` may give (besides any IP address): DNS rebinding.
         self.hostname = socket.gethostname()
+        self.names = {'localhost', _bare(bind), _bare(self.hostname)} - {''}
+        self.names |= {_bare(n) for n in server_names}
 
     @property
     def url(self) -> str:
@@ -169,6 +174,19 @@ class ConsoleServer:
         self.transport.stop()
 
     # ------------------------------------------------------------------ the policy
+    def host_refusal(self, host: str) -> Optional[str]:
+        """Why a request's ``Host`` header does not name this console (None: it does): a
+        page reaching the console through DNS rebinding sends its own name. Accepted: an IP
+        address (no rebinding there), ``localhost``, the ``--bind`` name, this PC's host name
+        and the ``--server-name`` names (any port: a proxy may forward it)."""
+        name = _split_host(host)[0]
+        if _bare(name) in self.names or _is_address(name):
+            return None
+        return (
+            f'Host {host[:80]!r} is not a name of this console (a page reaching it through DNS '
+            f'rebinding?): open {self.url} or start it with --server-name NAME'
+        )
+
     def refusal(self, headers: Mapping[str, str]) -> Optional[str]:
         """Why a state-changing request must be refused as not coming from this console's page
         (None: it does). ``headers``: lower-case names."""
@@ -231,6 +249,9 @@ class ConsoleServer:
         return _json({'error': message}), 'application/json', _HEADERS
 
     def handle(self, request: Request) -> Response:
+        refused = self.host_refusal(request.headers.get('host', ''))
+        if refused is not None:
+            raise HttpError(421, refused)
         try:
             if request.method == 'POST':
                 limit, action = ACTIONS[request.path]
@@ -306,9 +327,24 @@ def _trend(server: ConsoleServer, request: Request) -> Response:
 
 
 def _stream(server: ConsoleServer, request: Request) -> Response:
+    """The live stream; with an operator's token (``Authorization: Bearer``) a reserved one,
+    which a flood of streams without a token cannot displace (401 for a token that is not
+    one of the token file's)."""
     if server.source.mode != 'live':
         raise HttpError(409, 'replay has no live stream: use /api/frame?t=')
-    return Response(200, b'', 'text/event-stream', list(_HEADERS), stream=server.events())
+    reserved = False
+    authorization = request.headers.get('authorization')
+    if authorization is not None and server.operators is not None:
+        if server.operators.who(authorization) is None:
+            raise HttpError(
+                401,
+                'not an operator token of this console (stream without it, or sign in again)',
+                [('WWW-Authenticate', 'Bearer realm="catenary-monitor console"')],
+            )
+        reserved = True
+    return Response(
+        200, b'', 'text/event-stream', list(_HEADERS), stream=server.events(), reserved=reserved
+    )
 
 
 def _favicon(server: ConsoleServer, request: Request) -> Response:
@@ -387,6 +423,31 @@ ACTIONS: dict[str, tuple[int, Callable[[ConsoleServer, Request, Actor], Response
     '/api/shelve': (1024, _shelve),
     '/api/operator': (1024, _operator),
 }
+
+
+def _split_host(host: str) -> tuple[str, str]:
+    """(name, port) of a ``Host`` value: ``NAME[:PORT]`` or ``[V6][:PORT]`` (port '' when
+    none)."""
+    if host.startswith('['):
+        name, _, rest = host[1:].partition(']')
+        return name, rest[1:] if rest.startswith(':') else rest
+    if host.count(':') == 1:
+        name, _, port = host.partition(':')
+        return name, port
+    return host, ''
+
+
+def _bare(name: str) -> str:
+    """A host name as compared: lower case, no brackets, no trailing dot."""
+    return name.strip().lower().strip('[]').rstrip('.')
+
+
+def _is_address(name: str) -> bool:
+    try:
+        ipaddress.ip_address(_bare(name))
+    except ValueError:
+        return False
+    return True
 
 
 def _time(text: Optional[str]) -> Optional[float]:

@@ -40,15 +40,21 @@ open the folder at any time; the file being written joins it when it is finished
 
 Retention and free space
 ------------------------
-With ``max_total_bytes`` and/or ``max_age`` (0: keep all), the folder's finished ``*.mcap``
-files are deleted oldest first (by modification time, the end of a file) once the folder's MCAP
-files exceed ``max_total_bytes`` with the open one counted at the size it may reach before it
-rotates (``max_bytes``, a sixteenth more for its summary: the bound holds between two checks),
-or once a file ended more than ``max_age`` seconds ago. The file being written is never touched,
-nor a file another process holds locked (a second logger's open file). Each deletion is kept in
-:attr:`McapLogger.deleted` (path, bytes, why) for the caller to report, and ``metadata.yaml`` is
-rewritten at once, so it only ever lists files that exist. The check runs when a file is
-finished and every ``retention_period`` seconds in :meth:`tick`. With ``min_free_bytes``,
+With ``max_total_bytes`` and/or ``max_age`` (0: keep all), the logger deletes finished files
+it wrote itself: a name ``<prefix>_<UTC stamp>_<index>.mcap`` and a Header whose library is this
+module's (a user's ``storm_evidence_keep.mcap``, or a copy under another name, is neither
+counted nor touched). Oldest first by the end time recorded in each file (its last message's
+log time; the modification time when it has no summary), except that a file whose recorded end
+lies more than :data:`FUTURE_SLACK` s ahead of the wall clock (written while the clock was wrong)
+goes first: it is never kept ahead of the present. The size rule: once its files exceed
+``max_total_bytes`` with the open one counted at the size it may reach before it rotates
+(``max_bytes``, a sixteenth more for its summary); the age rule: a file last modified more than
+``max_age`` seconds ago. The file being written is never touched, nor a file another process
+holds locked (a second logger's open file). Each deletion is kept in :attr:`McapLogger.deleted`
+(path, bytes, why) for the caller to report, and ``metadata.yaml`` is rewritten at once, so it
+only ever lists files that exist. The check runs whenever a file is finished (in :meth:`write`
+itself, so the bound holds between rotations however late the caller's timer runs) and every
+``retention_period`` seconds in :meth:`tick`. With ``min_free_bytes``,
 :attr:`McapLogger.warning` says so while the file system holds less than that free (checked as
 often): a warning before anything is lost to a full disk.
 
@@ -73,6 +79,8 @@ from __future__ import annotations
 
 import datetime as _dt
 import os
+import re
+import struct
 import threading
 import time
 from dataclasses import dataclass, field
@@ -93,7 +101,11 @@ from catenary_monitor.io.ros_schemas import (
     type_description_hash,
 )
 
-__all__ = ['McapLogger', 'QOS_PRESETS']
+__all__ = ['McapLogger', 'QOS_PRESETS', 'FUTURE_SLACK']
+
+#: A finished file whose recorded end lies this far (s) ahead of the wall clock is dated in the
+#: future (a clock error): the retention deletes it first.
+FUTURE_SLACK = 600.0
 
 #: Named QoS presets accepted by :meth:`McapLogger.register` (rosbag2 ``offered_qos_profiles``).
 QOS_PRESETS: dict[str, str] = {
@@ -278,6 +290,8 @@ class McapLogger:
         self.retention_period = float(retention_period)
         self._next_retention = float('-inf')
         self.deleted: list[tuple[Path, int, str]] = []
+        # name -> (size, mtime ns, written by a logger of this module, recorded end s or None)
+        self._owned: dict[str, tuple[int, int, bool, float | None]] = {}
         self.deleted_files = 0
         self.deleted_bytes = 0
         self.warning: str | None = None
@@ -528,14 +542,16 @@ class McapLogger:
             return out
 
     def take_deleted(self) -> list[tuple[Path, int, str]]:
-        """The retention's deletions since the last call (path, bytes, ``size`` or ``age``)."""
+        """The retention's deletions since the last call (path, bytes, ``size``, ``age`` or
+        ``future``: dated ahead of the present, deleted first for the size bound)."""
         with self._lock:
             out, self.deleted = self.deleted, []
             return out
 
     def apply_retention(self) -> None:
-        """Delete the oldest finished MCAP files beyond ``max_total_bytes`` or ``max_age``
-        (never the open file, nor one another process holds locked); check the free space."""
+        """Delete the oldest finished MCAP files this logger's kind wrote beyond
+        ``max_total_bytes`` or ``max_age`` (never the open file, nor one another process holds
+        locked, nor anyone else's file); check the free space."""
         with self._lock:
             self._check_free_space()
             if not (self.max_total_bytes or self.max_age):
@@ -549,15 +565,15 @@ class McapLogger:
             # sixteenth, and 4 KiB for the next file's start): the folder stays under the bound
             # until the next check.
             reserve = max(self._open_size(), self.max_bytes) + self.max_bytes // 16 + 4096
-            total = sum(size for _, size, _ in files) + reserve
+            total = sum(size for _, size, _, _ in files) + reserve
             wall = self._wall_clock()
             gone = False
-            for path, size, mtime in files:  # oldest first
+            for path, size, mtime, future in files:  # the future-dated, then the oldest
                 why = None
                 if self.max_age and wall - mtime > self.max_age:
                     why = 'age'
                 elif self.max_total_bytes and total > self.max_total_bytes:
-                    why = 'size'
+                    why = 'future' if future else 'size'
                 if why is None or _locked_elsewhere(path):
                     continue
                 try:
@@ -576,21 +592,40 @@ class McapLogger:
             if gone:
                 self._write_bag_metadata()
 
-    def _retention_candidates(self) -> list[tuple[Path, int, float]]:
-        """The folder's MCAP files but the open one: (path, bytes, mtime), oldest first."""
+    def _retention_candidates(self) -> list[tuple[Path, int, float, bool]]:
+        """The finished files this logger's kind wrote (not the open one): (path, bytes,
+        mtime, dated in the future); the future-dated first, then by recorded end time."""
         current = self.current_path
-        out = []
+        wall = self._wall_clock()
+        found = []
+        seen = set()
         with os.scandir(self.log_dir) as entries:
             for entry in entries:
-                if not entry.name.endswith('.mcap') or not entry.is_file(follow_symlinks=False):
+                if not self._own_name(entry.name) or not entry.is_file(follow_symlinks=False):
                     continue
                 path = self.log_dir / entry.name
                 if current is not None and path == current:
                     continue
                 st = entry.stat(follow_symlinks=False)
-                out.append((path, int(st.st_size), float(st.st_mtime)))
-        out.sort(key=lambda item: (item[2], item[0].name))
-        return out
+                seen.add(entry.name)
+                key = (int(st.st_size), int(st.st_mtime_ns))
+                known = self._owned.get(entry.name)
+                if known is None or known[:2] != key:
+                    known = (*key, _written_here(path), _recorded_end(path))
+                    self._owned[entry.name] = known
+                if not known[2]:
+                    continue
+                end = known[3] if known[3] is not None else float(st.st_mtime)
+                found.append((end <= wall + FUTURE_SLACK, end, entry.name, path, st))
+        for gone in set(self._owned) - seen:
+            del self._owned[gone]
+        found.sort(key=lambda item: item[:3])
+        return [(p, int(st.st_size), float(st.st_mtime), not now) for now, _, _, p, st in found]
+
+    def _own_name(self, name: str) -> bool:
+        """Whether ``name`` is of the form this logger gives its files."""
+        rest = name[len(self.prefix) :]
+        return name.startswith(self.prefix) and _OWN_NAME.fullmatch(rest) is not None
 
     def _open_size(self) -> int:
         if self._file is None:
@@ -632,6 +667,7 @@ class McapLogger:
                 return
             self._finish_current()
             self._ensure_open(self._clock(), force=True)
+            self.apply_retention()
 
     def close(self) -> None:
         """Finish the current file with its summary and write ``metadata.yaml``. Idempotent;
@@ -693,6 +729,7 @@ class McapLogger:
         if too_old or too_big:
             self._finish_current()
             self._ensure_open(now, force=True)
+            self.apply_retention()  # the bound holds at once, however late tick() runs
 
     def _flush_if_due(self, now: float) -> bool:
         if self._oldest_pending is None or now - self._oldest_pending < self.flush_period:
@@ -978,6 +1015,38 @@ class McapLogger:
         self.error = f'{what}: {exc}'
         self.last_error = self.error
         self.error_count += 1
+
+
+_OWN_NAME = re.compile(r'_\d{8}T\d{6}Z_\d{4,}\.mcap')
+_MAGIC = b'\x89MCAP0\r\n'
+_RECORD = struct.Struct('<BQ')
+
+
+def _written_here(path: Path) -> bool:
+    """Whether the file's Header names this module as its library (recovery appends to it,
+    so a recovered file is still the logger's)."""
+    try:
+        with open(path, 'rb') as f:
+            data = f.read(1024)
+        if not data.startswith(_MAGIC):
+            return False
+        op, _ = _RECORD.unpack_from(data, len(_MAGIC))
+        at = len(_MAGIC) + _RECORD.size
+        (n,) = struct.unpack_from('<I', data, at)  # the profile
+        at += 4 + n
+        (n,) = struct.unpack_from('<I', data, at)
+        library = data[at + 4 : at + 4 + n]
+    except (OSError, struct.error):
+        return False
+    return op == 0x01 and library.startswith(_LIBRARY.split(';')[0].encode())
+
+
+def _recorded_end(path: Path) -> float | None:
+    """The log time (s) of the file's last message, from its summary (None without one)."""
+    info = _bag.file_info(path)
+    if info is None or not info.message_count:
+        return None
+    return (info.starting_time_ns + info.duration_ns) * 1e-9
 
 
 def _check_time(name: str, value: int) -> int:

@@ -10,7 +10,6 @@ replayed again as one task; a dock that fails is named in one line and the other
 from __future__ import annotations
 
 import logging
-import shutil
 import time
 import uuid
 import warnings
@@ -18,12 +17,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Optional, Sequence
 
-from catenary_monitor.replay.fleet_dataset import remove_parts
+from catenary_monitor.replay.fleet_dataset import clear_tmp, remove_parts
 from catenary_monitor.replay.fleet_tasks import (
     Carry,
     DockPlan,
     FleetError,
     PieceRestart,
+    dock_name,
     finish_dock,
     finished_summary,
     forget_from,
@@ -125,7 +125,7 @@ def run_fleet(
         client.close()
         if cluster is not None:
             cluster.close()
-    shutil.rmtree(root / '_fleet' / 'tmp', ignore_errors=True)  # what killed tasks left
+    clear_tmp(root)  # what killed tasks left, and nothing else
     run.seconds = time.monotonic() - t0 - run.startup_seconds
     return run
 
@@ -141,7 +141,11 @@ def _plans(folders: Sequence[Path], run: FleetRun) -> list[_Dock]:
     docks: list[_Dock] = []
     seen: dict[str, str] = {}
     for folder in folders:
-        name = Path(folder).resolve().name
+        try:
+            name = dock_name(Path(folder))
+        except FleetError as err:  # this folder alone: the other docks go on
+            run.failed[Path(folder).name or str(folder)] = str(err)
+            continue
         if name in seen:
             run.failed[f'{name} ({folder})'] = (
                 f'{folder}: a dock named {name} is given twice ({seen[name]}); the dock is '

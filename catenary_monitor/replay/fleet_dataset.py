@@ -10,9 +10,12 @@ is null, so that SQL aggregates skip it (a NaN sorts above every number there).
 started) and ``RESULTS/daily`` (per line and UTC day: extremes with their times, and the
 seconds at each level) are written once per dock when its last task is done.
 
-Every file is written under ``RESULTS/_fleet/tmp`` and renamed into place (atomic on one
-file system), so a reader or a killed task never sees half a file. Names starting with ``_``
-or ``.`` are not part of the datasets (pyarrow and DuckDB globs of ``*.parquet`` skip them).
+Every file is written under ``RESULTS/_fleet/tmp`` (in a folder named :data:`TMP_PREFIX`...)
+and renamed into place (atomic on one file system), so a reader or a killed task never sees
+half a file. Names starting with ``_`` or ``.`` are not part of the datasets (pyarrow and DuckDB
+globs of ``*.parquet`` skip them). Nothing the fleet did not write is ever deleted: it replaces
+and removes only its own file names (``part-K.parquet``), and clears only its own temporary
+folders; a user's file in ``RESULTS`` (``episodes/dock=D/notes.txt``, ``_fleet/tmp/x``) stays.
 """
 
 from __future__ import annotations
@@ -36,6 +39,8 @@ __all__ = [
     'DailyExtremes',
     'MESSAGE_COLUMNS',
     'PartWriter',
+    'TMP_PREFIX',
+    'clear_tmp',
     'day_of',
     'episodes_table',
     'level_seconds',
@@ -46,6 +51,30 @@ __all__ = [
 ]
 
 DAY_NS = 86_400 * 10**9
+#: The fleet's temporary folders under ``RESULTS/_fleet/tmp`` (no other entry there is its).
+TMP_PREFIX = 'fleet-tmp-'
+
+
+def _tmp_dir(root: Path, what: str) -> Path:
+    return root / '_fleet' / 'tmp' / f'{TMP_PREFIX}{what}-{uuid.uuid4().hex[:8]}'
+
+
+def clear_tmp(root: Path) -> None:
+    """Remove the fleet's temporary folders (what killed tasks left), nothing else; then
+    ``_fleet/tmp`` itself when that leaves it empty."""
+    tmp = root / '_fleet' / 'tmp'
+    try:
+        entries = list(os.scandir(tmp))
+    except OSError:
+        return
+    for entry in entries:
+        if entry.name.startswith(TMP_PREFIX) and entry.is_dir(follow_symlinks=False):
+            shutil.rmtree(entry.path, ignore_errors=True)
+    try:
+        tmp.rmdir()
+    except OSError:
+        pass
+
 
 #: Every column of the messages dataset: the replay CSV's, all of them.
 MESSAGE_COLUMNS = tuple(name for name, _ in CSV_ALL)
@@ -113,7 +142,7 @@ class PartWriter:
 
     def __init__(self, root: Path, dock: str, task: int) -> None:
         self.root, self.dock, self.task = root, dock, task
-        self.tmp = root / '_fleet' / 'tmp' / f'{dock}-{task:06d}-{uuid.uuid4().hex[:8]}'
+        self.tmp = _tmp_dir(root, f'{dock}-{task:06d}')
         self.writers: dict[int, tuple[Path, Any]] = {}
         self.rows = 0
 
@@ -299,23 +328,29 @@ def replace_dock_tables(
     root: Path, dock: str, tables: dict[str, tuple[pa.Table, Optional[np.ndarray]]]
 ) -> None:
     """Write the dock's ``episodes`` and ``daily`` datasets anew: for each, a file per date
-    (``dates``: each row's date string, or the table's ``date`` column) under a fresh folder
-    that then takes the place of the dock's old one."""
+    (``dates``: each row's date string, or the table's ``date`` column), each renamed into
+    ``NAME/dock=D/date=Y/part-0.parquet``; then the dock's ``part-0.parquet`` of dates no
+    longer there are removed (with their folders when that empties them). Anything else in
+    those folders is left as it is."""
     for name, (table, dates) in tables.items():
         if dates is None:
             dates = np.asarray(table.column('date').to_pylist(), dtype=object)
             table = table.drop_columns(['date'])
         base = root / name / f'dock={dock}'
-        fresh = root / '_fleet' / 'tmp' / f'{name}-{dock}-{uuid.uuid4().hex[:8]}'
+        fresh = _tmp_dir(root, f'{name}-{dock}')
         fresh.mkdir(parents=True, exist_ok=True)
+        written = set()
         for date in sorted(set(dates.tolist())):
             rows = np.flatnonzero(dates == date)
-            folder = fresh / f'date={date}'
-            folder.mkdir()
-            pq.write_table(table.take(pa.array(rows)), folder / 'part-0.parquet')
-        old = root / '_fleet' / 'tmp' / f'old-{name}-{dock}-{uuid.uuid4().hex[:8]}'
-        base.parent.mkdir(parents=True, exist_ok=True)
-        if base.exists():
-            os.replace(base, old)
-        os.replace(fresh, base)
-        shutil.rmtree(old, ignore_errors=True)
+            part = fresh / f'date={date}.parquet'
+            pq.write_table(table.take(pa.array(rows)), part)
+            _atomic_place(part, base / f'date={date}' / 'part-0.parquet')
+            written.add(f'date={date}')
+        for old in base.glob('date=*/part-0.parquet'):
+            if old.parent.name not in written:
+                old.unlink(missing_ok=True)
+                try:
+                    old.parent.rmdir()  # only when empty
+                except OSError:
+                    pass
+        shutil.rmtree(fresh, ignore_errors=True)

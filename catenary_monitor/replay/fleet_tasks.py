@@ -31,6 +31,7 @@ folder without that file).
 from __future__ import annotations
 
 import copy
+import errno
 import hashlib
 import json
 import os
@@ -80,6 +81,7 @@ __all__ = [
     'DockPlan',
     'FleetError',
     'PieceRestart',
+    'dock_name',
     'finish_dock',
     'plan_dock',
     'resume_point',
@@ -92,6 +94,18 @@ PARAMS_FILE = 'catenary_monitor.yaml'
 
 class FleetError(Exception):
     """A dock that cannot be replayed (no log, no parameters): ``str()`` is one line."""
+
+
+def dock_name(folder: Path) -> str:
+    """The dock a folder is (its resolved name). Raises :class:`FleetError` for a folder that
+    cannot be resolved: a symlink loop (RuntimeError in Python < 3.13, ELOOP after)."""
+    try:
+        return Path(folder).resolve().name
+    except RuntimeError:
+        raise FleetError(f'{folder}: a symlink loop (the folder cannot be resolved)') from None
+    except OSError as err:
+        why = 'a symlink loop' if err.errno == errno.ELOOP else (err.strerror or str(err))
+        raise FleetError(f'{folder}: {why} (the folder cannot be resolved)') from None
 
 
 class PieceRestart(Exception):
@@ -183,7 +197,7 @@ def plan_dock(folder: Path, serial: bool = False) -> DockPlan:
     else:
         pieces = tuple((i,) for i in range(len(paths)))
     return DockPlan(
-        name=folder.resolve().name,
+        name=dock_name(folder),
         folder=str(folder),
         files=tuple(str(p) for p in paths),
         identity=tuple(_identity(p) for p in paths),

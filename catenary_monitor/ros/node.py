@@ -163,6 +163,9 @@ COALESCE_AFTER = 1.0
 #: A sample callback runs the periodic tick (the watchdog) itself this many periods after the
 #: previous one (its timer waiting in the executor's queue behind a flood's callbacks).
 LATE_TIMER = 1.1
+#: The log timer's period [s]: flush when due, retention, logger status (a sample callback runs
+#: it too when it is late, as the watchdog).
+LOG_PERIOD = 0.25
 
 
 def _events_executor_wanted() -> bool:
@@ -548,7 +551,8 @@ class CatenaryMonitor(Node):
         self._watchdog_wall = time.monotonic()
         # Wall-clock timers: they run while a simulated ROS clock stands still.
         steady = Clock(clock_type=ClockType.STEADY_TIME)
-        self._log_timer = self.create_timer(0.25, self._on_log_timer, clock=steady)
+        self._log_wall = time.monotonic()  # the log timer's last run
+        self._log_timer = self.create_timer(LOG_PERIOD, self._on_log_tick, clock=steady)
         self._watchdog = self.create_timer(WATCHDOG_PERIOD, self._on_watchdog_timer, clock=steady)
 
     # ------------------------------------------------------------------ callbacks
@@ -704,15 +708,17 @@ class CatenaryMonitor(Node):
 
     def _timers_late(self) -> None:
         """Report the intake counts at once when a sample was not handled while the intake
-        status said OK; run the periodic tick and the watchdog here when their timers are late
-        by a tenth of a period (:data:`LATE_TIMER`): a flood's callbacks wait ahead of them in
-        the executor's queue, and /diagnostics must keep its time."""
+        status said OK; run the periodic tick, the watchdog and the log timer here when their
+        timers are late by a tenth of a period (:data:`LATE_TIMER`): a flood's callbacks wait
+        ahead of them in the executor's queue, and /diagnostics must keep its time."""
         if self._intake_due and self.core.state.intake[0] == Level.OK:
             self._report_intake(time.monotonic(), force=True)
         if self._now_ns() - self._tick_ns >= LATE_TIMER * self._period_ns:
             self._tick()
         if time.monotonic() - self._watchdog_wall >= LATE_TIMER * WATCHDOG_PERIOD:
             self._on_watchdog()
+        if time.monotonic() - self._log_wall >= LATE_TIMER * LOG_PERIOD:
+            self._on_log_timer()
 
     def _check_clock(self, wall: float) -> None:
         """With ``use_sim_time``: a ClockHealth event (and /diagnostics) every watchdog
@@ -854,9 +860,15 @@ class CatenaryMonitor(Node):
         else:
             self.get_logger().info(text)
 
+    def _on_log_tick(self) -> None:
+        """The log timer (none when a sample callback ran it lately)."""
+        if time.monotonic() - self._log_wall >= 0.5 * LOG_PERIOD:
+            self._on_log_timer()
+
     @_guarded
     def _on_log_timer(self) -> None:
         """Flush the MCAP chunk when due (bounded loss on SIGKILL); report logger changes."""
+        self._log_wall = time.monotonic()
         if self.log is not None:
             self.log.tick()
             self._report_deleted()
@@ -883,11 +895,11 @@ class CatenaryMonitor(Node):
         """One log line and one events-channel record per file the retention deleted."""
         assert self.log is not None
         for path, size, why in self.log.take_deleted():
-            rule = (
-                f'older than log_max_age {self.config.log_max_age:g} s'
-                if why == 'age'
-                else f'the folder above log_max_total_size {self.config.log_max_total_size:g} B'
-            )
+            rule = f'the folder above log_max_total_size {self.config.log_max_total_size:g} B'
+            if why == 'age':
+                rule = f'older than log_max_age {self.config.log_max_age:g} s'
+            elif why == 'future':
+                rule += ', first as dated ahead of the present (written with a wrong clock)'
             shown = f'{size / 2**20:.1f} MiB' if size >= 2**20 else f'{size / 1024:.1f} KiB'
             self.get_logger().warning(f'log retention: deleted {path.name} ({shown}): {rule}')
             record = {'kind': 'log_deleted', 'path': str(path), 'bytes': size, 'reason': why}

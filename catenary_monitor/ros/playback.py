@@ -15,6 +15,15 @@ rate). A node started with ``use_sim_time`` then judges the playback in log time
 10`` its timeouts, hold times and trends run ten times faster, as they ran in the recording.
 The clock never goes backwards within a pass; ``--loop`` starts it again at the log's start.
 
+ROS 2 time ends in 2038: ``builtin_interfaces/msg/Time`` is ``int32 sec`` + ``uint32 nanosec``
+(the message definition; ROS 1's ``uint32`` ran to 2106). rclpy's setter takes any integer and
+the serializer keeps its low 32 bits: 2**31 s (2038-01-19T03:14:08Z) arrives as -2**31 (1901),
+2**32 s (2106) as 0 (1970), so /clock goes backwards; and rclpy's TimeSource raises
+``ValueError`` on negative seconds, in every ``use_sim_time`` node it reaches. Shifting the
+clock would misplace everything the log's time decides (tide tables, days, header stamps).
+So the messages recorded at or past :data:`CLOCK_END_NS` are left out, counted and named in
+one line (the offline replay reads any time); a log with nothing before it is refused (exit 2).
+
 Timing: a wall-clock schedule (``time.monotonic``) fixed at the start of each pass, so a late
 message does not delay the following ones; the lateness is reported at the end (median, p99,
 max). ``--loop`` starts the next pass one median message gap after the last message.
@@ -38,12 +47,21 @@ import numpy as np
 from catenary_monitor.io.mcap_scan import ReadReport
 from catenary_monitor.io.mcap_summary import channels_of
 
-__all__ = ['CLOCK_PERIOD', 'INPUT_TYPES', 'CLOCK_TOPIC', 'input_topics_of_log', 'publish']
+__all__ = [
+    'CLOCK_END_NS',
+    'CLOCK_PERIOD',
+    'INPUT_TYPES',
+    'CLOCK_TOPIC',
+    'input_topics_of_log',
+    'publish',
+]
 
 #: Wall time between two /clock messages while no input message is due [s] (40 Hz, as
 #: ``ros2 bag play --clock``'s default).
 CLOCK_PERIOD = 0.025
 CLOCK_TOPIC = '/clock'
+#: The first log time (ns) /clock cannot carry: 2**31 s, 2038-01-19T03:14:08Z (int32 seconds).
+CLOCK_END_NS = 2**31 * 10**9
 #: The types the monitor reads, which playback publishes.
 INPUT_TYPES = (
     'std_msgs/msg/Float64',
@@ -84,8 +102,21 @@ def publish(
 ) -> int:
     """Play ``messages`` (topic -> (log times ns, CDR payloads, type name)) read with
     ``report``, with /clock; returns the exit status (see :mod:`catenary_monitor.cli.replay`).
+    Messages at or past :data:`CLOCK_END_NS` are left out (one line); none before it: 2.
     """
+    messages, late, first_late = _before_clock_end(messages)
     topics = [t for t, (ts, _, _) in messages.items() if len(ts)]
+    if late:
+        what = 'every message is' if not topics else f'{late} message(s)'
+        print(
+            f'replay --publish: {what} recorded from {_utc(first_late)} on: ROS 2\'s /clock '
+            'cannot carry a time past 2038-01-19T03:14:07Z (builtin_interfaces/Time: int32 '
+            + ('seconds): nothing to publish' if not topics else 'seconds): left out')
+            + ' (replay the log without --publish to read them)',
+            file=sys.stderr,
+        )
+    if not topics:
+        return 2
     types = [messages[t][2] for t in topics]
     t_ns = np.concatenate([messages[t][0] for t in topics])
     which = np.concatenate([np.full(len(messages[t][0]), k) for k, t in enumerate(topics)])
@@ -102,6 +133,30 @@ def publish(
             file=sys.stderr,
         )
     return _play(topics, types, which, t_ns, offsets, payloads, rate, loop, wait, quiet)
+
+
+def _before_clock_end(messages: Messages) -> tuple[Messages, int, int]:
+    """The messages /clock can carry, how many were left out and the first of those (ns)."""
+    kept: Messages = {}
+    late, first = 0, 0
+    for topic, (ts, payloads, type_name) in messages.items():
+        ts = np.asarray(ts, dtype=np.uint64)
+        ok = ts < np.uint64(CLOCK_END_NS)
+        if not ok.all():
+            late += int((~ok).sum())
+            lowest = int(ts[~ok].min())
+            first = lowest if not first else min(first, lowest)
+            payloads = [p for p, keep in zip(payloads, ok.tolist()) if keep]
+            ts = ts[ok]
+        kept[topic] = (ts.astype(np.int64), payloads, type_name)
+    return kept, late, first
+
+
+def _utc(t_ns: int) -> str:
+    import datetime as _dt
+
+    epoch = _dt.datetime(1970, 1, 1, tzinfo=_dt.timezone.utc)
+    return (epoch + _dt.timedelta(microseconds=t_ns // 1000)).strftime('%Y-%m-%dT%H:%M:%SZ')
 
 
 def _play(

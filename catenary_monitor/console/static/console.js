@@ -7,6 +7,9 @@ const KN = 1e-3;
 const SILENCE_S = 30;        // a silenced alarm sounds again after this (IMO MSC.302(87))
 const REPEAT_S = 5;          // an unacknowledged ERROR beeps again every REPEAT_S
 const SERVER_TIMEOUT_S = 2.5;  // no stream message for this long: the console server is gone
+const RETRY_MIN_S = 0.5, RETRY_MAX_S = 8;  // the stream's retries: doubling, jittered
+const STREAM_SILENT_S = 5;     // an open stream without a frame this long is cut and retried
+const NO_FRAME = { alarms: [] };  // what sound() is given before the first frame
 
 const S = {
   config: null, frame: null, line: null, span: 3600, tab: 'active',
@@ -14,6 +17,8 @@ const S = {
   lastMessage: 0, serverLost: false, configPending: false, replay: { t: 0, playing: false, speed: 10, last: 0 },
   trendAt: 0, bench: location.search.includes('bench=1') ? [] : null,
   operator: null,  // the signed-in operator's name (a token console); the token is in sessionStorage
+  liveStart: 0,    // when the page began to wait for live data (performance.now() ms)
+  stream: { state: 'connecting', why: '', failures: 0, retryAt: 0, abort: null, restart: false },
 };
 window.cmConsole = S;  // for the tests and the latency benchmark
 
@@ -47,7 +52,9 @@ function ago(s) {
 
 // ---------------------------------------------------------------- start
 async function start() {
-  S.config = await (await fetch('/api/config')).json();
+  S.liveStart = performance.now();
+  setInterval(watchdog, 250);
+  S.config = await fetchConfig();
   $('mode').textContent = S.config.mode === 'live' ? 'LIVE' : 'REPLAY';
   buildLines();
   bindPickers();
@@ -64,7 +71,6 @@ async function start() {
   unlockAudio();
   document.addEventListener('click', () => { if (S.audio) S.audio.resume().then(updateSoundButton); }, { once: true });
   if (S.config.mode === 'live') startLive(); else startReplay();
-  setInterval(watchdog, 250);
   setInterval(refreshTrend, 2000);
   let resized = 0;
   window.addEventListener('resize', () => { clearTimeout(resized); resized = setTimeout(refreshTrend, 200); });
@@ -108,10 +114,99 @@ function sinceFrame() {
   return (performance.now() - S.lastMessage) / 1000;
 }
 
-function startLive() {
-  const source = new EventSource('/api/stream');
-  source.onmessage = (ev) => { S.lastMessage = performance.now(); S.serverLost = false; render(JSON.parse(ev.data)); };
-  source.onerror = () => {};  // the browser reconnects by itself; the watchdog shows the banner
+// The configuration, asked again with backoff until the console server answers (the banner
+// says so meanwhile).
+async function fetchConfig() {
+  for (let delay = RETRY_MIN_S; ; delay = Math.min(delay * 2, RETRY_MAX_S)) {
+    try {
+      const res = await fetch('/api/config', { cache: 'no-store' });
+      if (res.ok) return await res.json();
+      S.stream.why = `the console server answered ${res.status}`;
+    } catch (e) { S.stream.why = 'the console server does not answer'; }
+    await retryPause(delay);
+  }
+}
+
+function retryPause(delay) {
+  const wait = delay * (0.75 + 0.5 * Math.random());
+  S.stream.state = 'retrying';
+  S.stream.failures += 1;
+  S.stream.retryAt = performance.now() + wait * 1000;
+  return new Promise((resolve) => setTimeout(resolve, wait * 1000));
+}
+
+// The frames come over GET /api/stream (Server-Sent Events), read with fetch: the operator's
+// token goes along (a reserved stream, which a flood of streams cannot displace), and every
+// failure is seen and retried with backoff: a refusal (503, 401, ...), a cut, a silent
+// stream. (EventSource never retries after a non-200 answer.)
+async function startLive() {
+  const st = S.stream;
+  for (let delay = RETRY_MIN_S; ; delay = Math.min(delay * 2, RETRY_MAX_S)) {
+    const ctrl = new AbortController();
+    st.abort = ctrl;
+    let frames = 0;
+    try {
+      const headers = { Accept: 'text/event-stream' };
+      const token = sessionStorage.getItem(TOKEN_KEY);
+      if (token) headers.Authorization = `Bearer ${token}`;
+      st.state = 'connecting';
+      const res = await fetch('/api/stream', { headers, cache: 'no-store', signal: ctrl.signal });
+      if (res.status === 401 && token) { sessionStorage.removeItem(TOKEN_KEY); setOperator(null); }
+      if (!res.ok || !res.body) {
+        let why = '';
+        try { why = (await res.json()).error; } catch (e) { /* not JSON */ }
+        throw new Error(`the stream was refused (${res.status}${why ? `: ${why}` : ''})`);
+      }
+      st.state = 'open';
+      frames = await readStream(res.body.getReader(), ctrl);
+      st.why = 'the stream ended';
+    } catch (e) {
+      if (!ctrl.signal.aborted) st.why = e && e.message ? e.message : String(e);
+    }
+    if (st.restart) { st.restart = false; delay = RETRY_MIN_S / 2; continue; }  // signed in
+    if (frames > 0) delay = RETRY_MIN_S;
+    await retryPause(delay);
+  }
+}
+
+// Renders each event of an open stream; returns how many frames it carried once it ends.
+async function readStream(reader, ctrl) {
+  const decoder = new TextDecoder();
+  let buffer = '', frames = 0, last = performance.now();
+  const silent = setInterval(() => {
+    if ((performance.now() - last) / 1000 > STREAM_SILENT_S) {
+      S.stream.why = `the stream carried nothing for ${STREAM_SILENT_S} s`;
+      ctrl.abort();
+    }
+  }, 1000);
+  try {
+    for (;;) {
+      const { value, done } = await reader.read();
+      if (done) return frames;
+      buffer += decoder.decode(value, { stream: true });
+      for (let cut = buffer.indexOf('\n\n'); cut >= 0; cut = buffer.indexOf('\n\n')) {
+        const data = buffer.slice(0, cut).split('\n').filter((l) => l.startsWith('data:'))
+          .map((l) => l.slice(5).replace(/^ /, '')).join('\n');
+        buffer = buffer.slice(cut + 2);
+        if (!data) continue;
+        frames += 1;
+        last = S.lastMessage = performance.now();
+        S.serverLost = false;
+        S.stream.why = '';
+        render(JSON.parse(data));
+      }
+    }
+  } finally {
+    clearInterval(silent);
+  }
+}
+
+// A new stream at once (with the token just signed in with: a reserved one).
+function restartStream() {
+  const st = S.stream;
+  if (!st.abort || !S.config || S.config.mode !== 'live') return;
+  st.restart = true;
+  st.abort.abort();
 }
 
 function startReplay() {
@@ -725,6 +820,7 @@ async function signIn(ev) {
   $('signin').hidden = true;
   $('signin-error').textContent = '';
   setOperator((await res.json()).operator);
+  restartStream();
 }
 
 function bindAccess() {
@@ -865,13 +961,31 @@ function render(frame) {
   if (S.bench) S.bench.push([performance.timeOrigin + performance.now(), frame.lines.map((l) => l.top_tension)]);
 }
 
+// Why the page has no live data and when it tries again (the stream's state).
+function streamWords() {
+  const st = S.stream;
+  const why = st.why || (st.state === 'open' ? 'the stream is silent' : 'no answer yet');
+  const left = (st.retryAt - performance.now()) / 1000;
+  return st.state === 'retrying' && left > 0 ? `${why}; retrying in ${Math.ceil(left)} s` : `${why}; connecting…`;
+}
+
 function renderBanner(frame) {
   const b = $('banner'), pill = $('status-pill');
   let text = null, kind = null;
+  if (!frame) {  // nothing received yet
+    if (S.serverLost) {
+      kind = 'lost';
+      text = `NO LIVE DATA for ${ago((performance.now() - S.liveStart) / 1000)} since the page opened — ${streamWords()}`;
+    }
+    if (kind) { b.hidden = false; b.dataset.connection = kind; b.textContent = text; }
+    pill.className = `pill ${kind === 'lost' ? 'lost' : 'ok'}`;
+    pill.textContent = kind === 'lost' ? 'NO LIVE DATA' : 'connecting…';
+    return;
+  }
   const silent = frame.silent_s === null || frame.silent_s === undefined ? null : frame.silent_s + sinceFrame();
   if (S.serverLost) {
     kind = 'lost';
-    text = `CONSOLE SERVER UNREACHABLE for ${ago(sinceFrame())} — nothing shown is current (last data ${clock(frame.now)})`;
+    text = `CONSOLE SERVER UNREACHABLE for ${ago(sinceFrame())} — nothing shown is current (last data ${clock(frame.now)}) — ${streamWords()}`;
   } else if (frame.connection === 'lost') {
     kind = 'lost';
     text = frame.snapshot_t === null ? `NO DATA FROM THE MONITOR: nothing on /diagnostics for ${ago(silent)} since the console started` :
@@ -885,12 +999,17 @@ function renderBanner(frame) {
   pill.textContent = kind === 'lost' ? 'CONNECTION LOST' : kind === 'waiting' ? 'waiting' : `monitor ok · ${ago(silent)}`;
 }
 
+// Live data lost (no frame for SERVER_TIMEOUT_S, or none since the page opened): banner,
+// STALE tiles and the loss-of-monitoring tone, repeated while it lasts.
 function watchdog() {
-  if (!S.config || S.config.mode !== 'live' || !S.lastMessage) return;
-  const lost = (performance.now() - S.lastMessage) / 1000 > SERVER_TIMEOUT_S;
-  if (lost !== S.serverLost) { S.serverLost = lost; if (S.frame) render(S.frame); }
-  else if (lost && S.frame) sound(S.frame, true); // no frames come while the server is gone
-  if (S.frame) renderTimes(S.frame);
+  if (S.config && S.config.mode !== 'live') return;
+  const since = S.lastMessage || S.liveStart;
+  const lost = (performance.now() - since) / 1000 > SERVER_TIMEOUT_S;
+  if (lost !== S.serverLost) {
+    S.serverLost = lost;
+    if (S.frame) render(S.frame); else if (lost) sound(NO_FRAME, true);
+  } else if (lost) sound(S.frame || NO_FRAME, true); // no frames come while the server is gone
+  if (S.frame) renderTimes(S.frame); else renderBanner(null);
   updateSoundButton();
 }
 
