@@ -19,11 +19,16 @@ fields read from a log as columns, so live and replay take the same readings. Fi
 
 The stamped types are taken at their header stamp (:func:`stamp_fault` refuses a stamp too far
 ahead of the monitor's clock or going backwards).
+
+A recorded log's own stamps (the log time each message was received at) can be wrong too: a
+recorder that booted with its clock in 1970, or one that jumped to 2100 and back.
+:func:`far_stamps` finds the samples far from every other (:data:`STAMP_FAR`): bad stamps,
+left out and counted by the replay, never a span of time to step through.
 """
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+from typing import Any, Mapping, Optional
 
 import numpy as np
 
@@ -43,6 +48,8 @@ __all__ = [
     'depth_si',
     'stamp_fault',
     'stamp_faults',
+    'STAMP_FAR',
+    'far_stamps',
 ]
 
 #: Standard gravity [m/s^2] (the pressure-to-depth conversion).
@@ -62,6 +69,9 @@ DEPTH_FIELDS = {
 STAMPED = frozenset({WRENCH, FLUID_PRESSURE, RANGE})
 #: :func:`stamp_fault` codes: a header stamp ahead of the clock, or before the one before.
 FAULT_AHEAD, FAULT_BACKWARDS = 1, 2
+#: A recorded sample more than this far [s] from every other sample of the log is a bad stamp
+#: (:func:`far_stamps`): a year, longer than any gap between a dock's recordings.
+STAMP_FAR = 365.0 * 86_400.0
 
 
 def tension_si(line: LineConfig, fields: Mapping[str, Any]) -> Any:
@@ -120,3 +130,27 @@ def stamp_faults(
     code[(sample < newest) & ~ahead] = FAULT_BACKWARDS
     code[ahead] = FAULT_AHEAD
     return code
+
+
+def far_stamps(
+    stamps: np.ndarray,
+    before_ns: Optional[int] = None,
+    after_ns: Optional[int] = None,
+    far: float = STAMP_FAR,
+) -> np.ndarray:
+    """Which samples of a stretch of log are bad stamps (bool): more than ``far`` [s] from
+    their nearest neighbour, the samples of every input merged. ``stamps``: the stretch's
+    samples (ns, sorted); ``before_ns`` / ``after_ns``: the sample just before / after the
+    stretch (None: none). A sample without any neighbour (a log of one sample) is not one;
+    samples at one stamp are each other's neighbours."""
+    s = np.asarray(stamps, np.int64)
+    n = len(s)
+    if not n:
+        return np.zeros(0, bool)
+    limit, inf = far * 1e9, np.inf
+    f = s.astype(np.float64)  # no int64 wrap between stamps of any two centuries
+    gaps = np.diff(f)
+    left = np.concatenate([[inf if before_ns is None else f[0] - float(before_ns)], gaps])
+    right = np.concatenate([gaps, [inf if after_ns is None else float(after_ns) - f[-1]]])
+    alone = (left == inf) & (right == inf)
+    return (left > limit) & (right > limit) & ~alone
