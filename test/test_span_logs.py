@@ -24,10 +24,14 @@ import pytest
 import span_logs
 from replay_data import T0_NS, core_steps, dock_config, generate
 from ros_harness import child_env
-from test_batch import compare
+from test_batch import assert_same_state, assert_statuses_agree, compare, ticks_for
 from test_hostile_commands import WRAP
+from test_stamped_inputs import events, plain, stamped_scene, window
 
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
+from catenary_monitor.core.rules import readings
 from catenary_monitor.core.rules.readings import STAMP_FAR, far_stamps
+from catenary_monitor.core.twin.engine import advance
 from catenary_monitor.core.twin.window import grid_ticks, quiet_span, tick_grid
 from catenary_monitor.replay.driver import ReplayError, replay_log
 
@@ -73,6 +77,48 @@ def test_a_sample_far_from_every_other_is_a_bad_stamp() -> None:
         False,
         False,
     ]
+
+
+def test_a_header_stamp_from_1970_is_a_bad_stamp_for_the_node_and_replay_alike() -> None:
+    """A stamped sensor's first samples stamped 1970 (its clock not set yet): refused by the
+    core (the node's decision path) as bad stamps, not taken as readings 56 years old, and by
+    its twin (replay) the same way: every transition, snapshot and the state left agree."""
+    codes = readings.stamp_faults(
+        np.array([T0_NS] * 4), np.array([7, T0_NS - 10**9, T0_NS + 5 * 10**9, 7]), -1, 1.0
+    )
+    assert codes.tolist() == [readings.FAULT_FAR, 0, readings.FAULT_AHEAD, readings.FAULT_FAR]
+    assert readings.stamp_fault(T0_NS, 7, -1, 1.0) == readings.FAULT_FAR
+    config, cols, depth = stamped_scene(bad=False, seconds=40.0)
+    a, v, st = cols['line_01']
+    st = st.copy()
+    st[:3] = 7 + np.arange(3)
+    cols['line_01'] = (a, v, st)
+    dst = depth[2].copy()
+    dst[0] = 9
+    depth = (depth[0], depth[1], dst)
+    ticks = ticks_for(*plain(cols, depth))
+    core = MonitorCore(config, T0_NS)
+    steps = [core.step(ev) for ev in events(config, cols, depth, ticks)]
+    twin = MonitorCore(config, T0_NS)
+    cut = T0_NS + 20 * SECOND
+    results = [
+        advance(twin, window(config, cols, depth, ticks, lo, hi), snapshots=True)
+        for lo, hi in ((None, cut), (cut, None))
+    ]
+    want_sn = [s.snapshot for s in steps if s.snapshot is not None]
+    got_sn = [sn for r in results for sn in r.snapshots]
+    assert [s.stamp_ns for s in got_sn] == [s.stamp_ns for s in want_sn]
+    for g, w in zip(got_sn, want_sn):
+        assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
+    key = lambda c: (c.transition.time, c.component)  # noqa: E731
+    want_tr = sorted([c for s in steps for c in s.transitions], key=key)
+    assert sorted([c for r in results for c in r.changes()], key=key) == want_tr
+    assert_same_state(twin, core)
+    first = next(s.snapshot for s in steps if s.kind == 'tick')
+    line = dict(first.statuses[0].values)
+    assert line['sensor_state'] == 'bad_stamp', line
+    assert float(line['tension_age']) < 60.0  # the 1970 samples were no reading
+    assert core.state.lines[0].sample_ns > T0_NS - SECOND
 
 
 def test_the_grid_of_a_log_without_silences_is_the_whole_grid() -> None:

@@ -323,7 +323,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'double',
         1.0,
         'A stamped sample whose header stamp is this far ahead of the monitor\'s clock at its '
-        'arrival is refused (sensor state bad_stamp), as is one stamped before the one before',
+        'arrival is refused (sensor state bad_stamp), as is one stamped more than a year '
+        'behind it or before the one before',
         's',
         0.0,
         3600.0,
