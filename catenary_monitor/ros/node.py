@@ -967,7 +967,7 @@ class CatenaryMonitor(Node):
         if record.kind == 'unshelved' and record.by == 'expired':
             self.get_logger().warning(
                 f'SHELVE {record.alarm}: shelf expired after {record.time - record.value:.0f} s; '
-                'the alarm is annunciated again'
+                'the alarm is shown again'
             )
         elif record.kind == 'chattering':
             a = self.config.alarm

@@ -57,10 +57,13 @@ def _differ(a: float, b: float) -> bool:
 
 
 def raised(old: AckState, new: AckState) -> bool:
-    """Whether the alarm was raised (annunciated) between ``old`` and ``new``."""
-    return new.state == UNACKNOWLEDGED and (
-        old.state != UNACKNOWLEDGED or _differ(new.raised, old.raised)
-    )
+    """Whether the alarm was raised (annunciated) between ``old`` and ``new`` (not when a
+    shelf ends on an alarm back as it was shelved, raised when it was)."""
+    if new.state != UNACKNOWLEDGED:
+        return False
+    if shelved(old) and not shelved(new) and not _differ(new.raised, old.raised):
+        return False
+    return old.state != UNACKNOWLEDGED or _differ(new.raised, old.raised)
 
 
 def entries(
