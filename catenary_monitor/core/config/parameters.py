@@ -240,7 +240,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         True,
         'Accept alarm acknowledgements (/catenary_monitor/acknowledge) and shelving requests '
         '(/catenary_monitor/shelve) from any publisher; false: only from a console (a node '
-        'catenary_console_*, the only publisher on the topic): where operators act through the '
+        'catenary_console_*, the message\'s publisher): where operators act through the '
         'authenticated console (docs/node.md, Security)',
         '',
         None,
