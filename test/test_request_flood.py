@@ -39,10 +39,11 @@ def test_the_limit_lets_a_burst_through_then_a_request_a_second() -> None:
     assert limit.due(5.0) == []  # at most one record per period
     assert limit.due(REPORT_EVERY + 0.1) == [('a', 101)]
     assert limit.due(100.0, every_one=True) == []
-    many = RequestLimit(keys=4)
-    for k in range(10):  # beyond KEYS_MAX, new publishers share a bucket
-        many.admit(str(k), 0.0)
+    many = RequestLimit(keys=4, burst=1)
+    for k in range(10):  # beyond KEYS_MAX, new publishers share their group's bucket
+        many.admit(f'shelve {k}', 0.0)
     assert len(many._buckets) <= 5
+    assert many.due(0.0) == [('shelve (other publishers)', 5)]
 
 
 def test_a_refusal_is_recorded_answered_and_replayed_alike() -> None:
@@ -181,7 +182,13 @@ def test_a_flood_of_requests_costs_a_request_a_second_and_locks_no_operator_out(
     # The flood's answer, and no alarm raised by it (the warning was raised once, before).
     assert answer is not None and 'over the rate limit' in answer['values']['shelve_answer']
     events = [e for e in _events(log_dir) if e is not None]
-    flood = [e for e in events if 'request_flooder' in getattr(e, 'publisher', '')]
+    others = ('catenary_console_flood', 'request_tool')
+    flood = [
+        e
+        for e in events
+        if isinstance(e, (Shelve, Refusal)) and not any(o in e.publisher for o in others)
+    ]
+    assert any('/request_flooder gid' in e.publisher for e in flood)
     admitted = [e for e in flood if isinstance(e, Shelve)]
     refused = [e for e in flood if isinstance(e, Refusal)]
     assert BURST <= len(admitted) <= BURST + seconds + 3, len(admitted)

@@ -555,6 +555,8 @@ class CatenaryMonitor(Node):
         self._limit = RequestLimit()
         self._senders: dict[tuple[str, bytes], str] = {}  # (topic, GID) -> node's full name
         self._sequences: dict[tuple[str, bytes], int] = {}  # (topic, GID) -> newest number
+        self._graph_read: dict[str, float] = {}  # topic -> when its publishers were listed
+        self._named: dict[str, str] = {}  # a rate-limit key -> its publisher, as last named
         self._diag_timer = self.create_timer(1.0 / cfg.alarm.diagnostic_rate, self._on_period)
         self._period_ns = int(1e9 / cfg.alarm.diagnostic_rate)
         self._tick_ns = self._now_ns()  # the newest tick's stamp
@@ -811,7 +813,12 @@ class CatenaryMonitor(Node):
         one recorded core event."""
         request = _REQUESTS[topic]
         publisher, node = self._sender(topic, taken.gid)
-        key = f'{request} {publisher}'
+        # A publisher's bucket by its GID: the same before and after the graph names its node.
+        key = f'{request} {publisher if taken.gid is None else taken.gid.hex()}'
+        if len(self._named) > 4096:  # publishers come and go: forget their names, not limits
+            for known in (self._named, self._senders, self._sequences):
+                known.clear()
+        self._named[key] = publisher
         if taken.gid is not None and taken.sequence is not None:
             last = self._sequences.get((topic, taken.gid))
             self._sequences[(topic, taken.gid)] = taken.sequence
@@ -841,9 +848,9 @@ class CatenaryMonitor(Node):
         if gid is None:
             return publisher_identity(self._publishers_on(topic)), None
         node = self._senders.get((topic, gid))
-        if node is None:
-            endpoints = self._publishers_on(topic)
-            for name, g in endpoints:
+        if node is None and time.monotonic() - self._graph_read.get(topic, -1.0) >= 0.5:
+            self._graph_read[topic] = time.monotonic()  # at most twice a second per topic
+            for name, g in self._publishers_on(topic):
                 self._senders[(topic, g[: len(gid)])] = name
             node = self._senders.get((topic, gid))
         if node is None:
@@ -877,9 +884,8 @@ class CatenaryMonitor(Node):
         """Record each publisher's requests refused over its rate limit since its last
         record (one record per publisher and period at most)."""
         for key, n in self._limit.due(now):
-            request, _, publisher = key.partition(' ')
             why = f'over the rate limit of its publisher ({limit_text()})'
-            self._refuse(request, '', why, '', publisher, n)
+            self._refuse(key.partition(' ')[0], '', why, '', self._named.get(key, key), n)
 
     def _acknowledge(self, text: str, publisher: str) -> None:
         """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event, or
@@ -1118,9 +1124,8 @@ class CatenaryMonitor(Node):
         try:
             self._report_intake(time.monotonic(), force=True)
             for key, n in self._limit.due(time.monotonic(), every_one=True):
-                request, _, publisher = key.partition(' ')
                 why = f'over the rate limit of its publisher ({limit_text()})'
-                self._refuse(request, '', why, '', publisher, n)
+                self._refuse(key.partition(' ')[0], '', why, '', self._named.get(key, key), n)
         except Exception as exc:  # noqa: BLE001 - closing the log matters more
             self.get_logger().error(f'last intake counts not recorded: {exc}')
         try:

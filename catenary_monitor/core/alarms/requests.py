@@ -40,14 +40,22 @@ class _Bucket:
     reported: float = -math.inf  # s, the last record of its refusals
 
 
+def _others(key: str) -> str:
+    """The shared bucket of a key's group (a key is ``GROUP NAME``: the group kept)."""
+    group, _, _ = key.partition(' ')
+    return f'{group} {OTHERS}'
+
+
 def limit_text(burst: int = BURST, rate: float = RATE) -> str:
     """The limit in words (for the refusal's reason)."""
     return f'{burst} at once, {rate:g} a second after that'
 
 
 class RequestLimit:
-    """Token buckets per publisher (``key``): :meth:`admit` a request, :meth:`due` the
-    records of the refused ones."""
+    """Token buckets per publisher (``key``: ``GROUP NAME``, e.g. the request and the
+    publisher's GID): :meth:`admit` a request, :meth:`due` the records of the refused ones.
+    Beyond ``keys`` publishers, a new one shares its group's bucket (``GROUP`` +
+    :data:`OTHERS`)."""
 
     def __init__(
         self,
@@ -66,7 +74,7 @@ class RequestLimit:
             if len(self._buckets) >= self.keys:
                 self._forget_idle(now)
             if len(self._buckets) >= self.keys:
-                key = OTHERS
+                key = _others(key)
                 bucket = self._buckets.get(key)
         if bucket is None:
             bucket = self._buckets[key] = _Bucket(float(self.burst), now)
@@ -97,11 +105,10 @@ class RequestLimit:
         behind a flood)."""
         if n <= 0:
             return
-        bucket = self._buckets.get(key) or self._buckets.get(OTHERS)
-        if bucket is None:
-            _, bucket = self._bucket(key, -math.inf)
-        bucket.refused += n
-        self._pending.add(key if key in self._buckets else OTHERS)
+        if key not in self._buckets:
+            key, _ = self._bucket(key, -math.inf)
+        self._buckets[key].refused += n
+        self._pending.add(key)
 
     def due(self, now: float, every_one: bool = False) -> list[tuple[str, int]]:
         """The records to make at ``now`` [s]: (key, refused requests since its last record)
