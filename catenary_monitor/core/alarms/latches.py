@@ -83,7 +83,8 @@ news). The message joins every applicable condition with ``'; '``, ERRORs first.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any, Mapping, NamedTuple, Sequence
 
 import numpy as np
@@ -298,9 +299,15 @@ class LineAlarm:
         stale_t, stale_d = self._stale(inputs, now)
         stale = stale_t or stale_d
         latches = []
-        for cond, latch in zip(CONDITIONS, state.latches):
-            code = self._classify(cond, inputs, stale)
-            latches.append(_step(latch, code, now, *self._timing(cond)))
+        classify = self._classify
+        for (cond, margin, on_delay, hold, low, high), latch in zip(self._plan, state.latches):
+            if margin:  # a warning with a threshold and a deadband (_classify's last case)
+                value = getattr(inputs, cond)
+                clear = value >= high and not stale
+                code = _BREACH if value < low else (_CLEAR if clear else _HOLD)
+            else:
+                code = classify(cond, inputs, stale)
+            latches.append(_step(latch, code, now, on_delay, hold))
         input_message = state.input_message
         if inputs.status != 0:
             input_message = _status_text(inputs.status, inputs.status_message)
@@ -308,25 +315,39 @@ class LineAlarm:
         level = _combine(active, stale)
         own = stale_t and inputs.tension_stamp == inputs.tension_stamp
         suppressed = level == Level.STALE and not own
-        message = _blind_text(
-            self._message(active, inputs, now, stale_t, stale_d, input_message), suppressed
-        )
+        if stale or any(active):
+            message = _blind_text(
+                self._message(active, inputs, now, stale_t, stale_d, input_message), suppressed
+            )
+        else:  # nothing up, nothing stale (so not blind): what _message says then
+            message = 'OK'
         entered, events = state.entered, []
         if level != state.level:
             entered, duration = _episode(entered, state.level, level, now)
             quiet = quiet_change(state.level, state.suppressed, level, suppressed)
             events.append(Transition(now, state.level, level, message, duration, quiet))
-        new = replace(
-            state,
-            level=level,
-            message=message,
-            latches=tuple(latches),
-            entered=entered,
-            input_message=input_message if active[1] else '',
-            suppressed=suppressed,
-            stale=stale,
+        new = AlarmState(
+            level,
+            message,
+            tuple(latches),
+            entered,
+            input_message if active[1] else '',
+            suppressed,
+            stale,
         )
         return new, events
+
+    @cached_property
+    def _plan(self) -> tuple[tuple[str, bool, float, float, float, float], ...]:
+        """Per condition (:data:`CONDITIONS` order): its name, whether it is a warning with a
+        threshold and a deadband (:data:`_MARGINS`), its on-delay and hold (s) and, for those,
+        the limits it is raised below and cleared at or above (the configuration's, fixed)."""
+        nan = math.nan
+        return tuple(
+            (cond, cond in _MARGINS, *self._timing(cond))
+            + (self._warn_limits(cond) if cond in _MARGINS else (nan, nan))
+            for cond in CONDITIONS
+        )
 
     def _stale(self, x: AlarmInputs, now: float) -> tuple[bool, bool]:
         """(tension stale, never received or blind, depth stale or never received)."""
@@ -648,13 +669,13 @@ def _status_text(status: int, message: str) -> str:
 
 def _step(latch: Latch, code: int, now: float, on_delay: float, hold: float) -> Latch:
     """One latch update: raise after ``on_delay`` of breaches, clear after ``hold`` of clears."""
-    want = _CLEAR if latch.active else _BREACH
-    if code != want:
-        return Latch(latch.active, None)
-    since = now if latch.since is None or latch.since > now else latch.since
-    if now - since >= (hold if latch.active else on_delay):
-        return Latch(not latch.active, None)
-    return Latch(latch.active, since)
+    active, since = latch
+    if code != (_CLEAR if active else _BREACH):
+        return latch if since is None else Latch(active, None)
+    since = now if since is None or since > now else since
+    if now - since >= (hold if active else on_delay):
+        return Latch(not active, None)
+    return latch if since == latch.since else Latch(active, since)
 
 
 def _combine(active: Sequence[bool], stale: bool) -> Level:
