@@ -325,6 +325,17 @@ def test_the_lifted_chains_critical_depths_against_mpmath():
         assert family(x_peak)[2] > 0 and family(x_trough)[2] > 0  # both lifted
 
 
+def test_the_lifted_critical_depths_grow_with_the_tension():
+    """Over the span, both critical depths are least at C_MIN (c - 1/t*) and grow with c = T/(w
+    x) (every node of the table): a box shallower than that takes neither from the table."""
+    from catenary_monitor.core.rules import uncertainty as u
+
+    c = np.exp(u._S0 + u._DS * np.arange(u._N + 1))
+    h_f, h_t = u.lifted_critical_depths(1.0, 1.0, c)
+    assert h_f[0] == pytest.approx(u._ETA0, rel=1e-12) == h_t[0]
+    assert np.all(np.diff(h_f) > 0) and np.all(np.diff(h_t) > 0)
+
+
 @pytest.mark.parametrize('c', [1.509, 1.6, 3.0, 20.0, 1000.0])
 def test_the_lifted_force_is_concave_and_the_tide_margin_convex_in_depth(c):
     """What the tangent bound rests on: over the depths at which a chain of fixed hook tension

@@ -133,9 +133,11 @@ _LIMITS = {'time_to_uplift': 'uplift_time'}  # parameter prefix where it is not 
 _HOLD, _BREACH, _CLEAR = 0, 1, 2  # classification of one update for one condition
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class AlarmInputs:
-    """One update of one line: solved quantities (SI) and the stamps of the newest samples.
+    """One update of one line: solved quantities (SI) and the stamps of the newest samples
+    (built afresh for every update and never changed: slots, not frozen, whose ``__init__``
+    costs five times as much).
 
     NaN marks a quantity that does not apply. ``status`` is the solver's code (0 = ok) and
     ``status_message`` its sentence. Stamps are the receive times (s, same clock as ``now``)
@@ -481,17 +483,27 @@ class LineAlarm:
         return '; '.join(parts) if parts else 'OK'
 
     def _warn_text(self, cond: str, value: float, hold: float) -> str:
-        low, high = self._warn_limits(cond)
-        label = cond.replace('_', ' ')
-        scale, unit, digits = {
-            'load_margin': (1e3, ' kN', 1),
-            'drag_margin': (1e3, ' kN', 1),
-            'safety_factor': (1.0, '', 2),
-        }.get(cond, (1.0, ' m', 2))
-        v, lo, hi = (_fmt(a, scale, digits) for a in (value, low, high))
+        label, scale, unit, digits, low, lo, hi = self._warn_formats[cond]
+        v = _fmt(value, scale, digits)
         if value < low:
             return f'{label} {v}{unit} < {lo}{unit}'
         return f'{label} {v}{unit}, warning held (clears after {hold:g} s at >= {hi}{unit})'
+
+    @cached_property
+    def _warn_formats(self) -> dict[str, tuple[str, float, str, int, float, str, str]]:
+        """Per warning with a threshold: its label, scale, unit and digits, the limit it is
+        raised below and both limits as printed (the configuration's, formatted once)."""
+        out = {}
+        for cond in _MARGINS:
+            low, high = self._warn_limits(cond)
+            scale, unit, digits = {
+                'load_margin': (1e3, ' kN', 1),
+                'drag_margin': (1e3, ' kN', 1),
+                'safety_factor': (1.0, '', 2),
+            }.get(cond, (1.0, ' m', 2))
+            lo, hi = _fmt(low, scale, digits), _fmt(high, scale, digits)
+            out[cond] = (cond.replace('_', ' '), scale, unit, digits, low, lo, hi)
+        return out
 
     def _uplift_time_text(self, x: AlarmInputs, hold: float) -> str:
         """The message of the ``time_to_uplift`` condition (minutes, the tide's rate in m/h,

@@ -93,6 +93,9 @@ _K = math.cosh(T_STAR) - 1.0
 _KA = _K / (1.0 + _K)  # h_a = _KA T / w
 #: ``c = T/(w x)`` below which no depth lifts the anchor: ``cosh(t*)/t*``.
 C_MIN = math.cosh(T_STAR) / T_STAR
+#: The lifted chain's critical depths over its span at ``C_MIN`` (``c - 1/t*``), the least
+#: they take: both grow with ``c`` (tested), so a box below ``_ETA0 x`` needs no table.
+_ETA0 = C_MIN - 1.0 / T_STAR
 _NAN = math.nan
 _INF = math.inf
 
@@ -369,28 +372,50 @@ def _lifted(
     w: np.ndarray, x: np.ndarray, t: np.ndarray, lo: np.ndarray, hi: np.ndarray, h_a: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """(uplift upper, tide lower) of chains lifted somewhere in ``[lo, hi]`` (at ``h_a``): one
-    solve at each clipped critical depth (``h_a`` where the table's depth is not lifted) plus
-    the tangent's rise across the box."""
-    h_f, h_t = lifted_critical_depths(w, x, t)
-    n = len(t)
-    at = np.concatenate([np.minimum(np.maximum(h_f, lo), hi), np.minimum(np.maximum(h_t, lo), hi)])
-    w2, x2, t2 = (np.concatenate([v, v]) for v in (w, x, t))
-    r = solve(w2, at, tension=t2, anchor_distance=x2)
+    solve at each clipped critical depth (one where both clip to the same; ``h_a`` where the
+    table's depth is not lifted) plus the tangent's rise across the box."""
+    h_f, h_t = hi.copy(), hi.copy()
+    deep = np.flatnonzero(hi > _ETA0 * x)  # else both critical depths are below the box
+    if deep.size:
+        c_f, c_t = lifted_critical_depths(w[deep], x[deep], t[deep])
+        h_f[deep] = np.minimum(np.maximum(c_f, lo[deep]), hi[deep])
+        h_t[deep] = np.minimum(np.maximum(c_t, lo[deep]), hi[deep])
+    at_f, rh_f, f, tide_f = _solve_lifted(w, x, t, h_f, h_a)
+    upper = f + np.where(f > 0.0, _rise(_slopes(w, x, t, rh_f, f)[0], at_f, lo, hi), 0.0)
+    tide = tide_f.copy()
+    at_t, rh_t, f_t = at_f, rh_f, f
+    two = np.flatnonzero(h_t != h_f)
+    if two.size:
+        at_t, rh_t, f_t = at_f.copy(), rh_f.copy(), f.copy()
+        sub = _solve_lifted(w[two], x[two], t[two], h_t[two], h_a[two])
+        at_t[two], rh_t[two], f_t[two], tide[two] = sub
+    d_t = _slopes(w, x, t, rh_t, f_t)[1]
+    fall = -_rise(-d_t, at_t, lo, hi)
+    return upper, tide + np.where(f_t > 0.0, fall, 0.0)
+
+
+def _rise(slope: Any, at: Any, lo: Any, hi: Any) -> Any:
+    """``max(0, slope (h - at))`` over ``h`` in ``[lo, hi]`` (arrays)."""
+    return np.maximum(np.maximum(slope * (hi - at), slope * (lo - at)), 0.0)
+
+
+def _solve_lifted(
+    w: np.ndarray, x: np.ndarray, t: np.ndarray, at: np.ndarray, h_a: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(depth, horizontal tension, uplift force, tide margin) of the solve at ``(t, at)``, at
+    ``h_a`` where ``at`` is not lifted (arrays)."""
+    with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
+        r = solve(w, at, tension=t, anchor_distance=x)
     rh, f, tide = (np.array(getattr(r, k), dtype=float) for k in _LIFTED_KEYS)
     miss = np.flatnonzero(~(f > 0.0))
     if miss.size:  # the table's depth beside a narrow lifted interval: h_a (lifted)
-        at[miss] = np.concatenate([h_a, h_a])[miss]
-        again = solve(w2[miss], at[miss], tension=t2[miss], anchor_distance=x2[miss])
+        at = at.copy()
+        at[miss] = h_a[miss]
+        with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
+            again = solve(w[miss], at[miss], tension=t[miss], anchor_distance=x[miss])
         for column, key in zip((rh, f, tide), _LIFTED_KEYS):
             column[miss] = np.asarray(getattr(again, key), dtype=float)
-    d_f, d_t = _slopes(w2, x2, t2, rh, f)
-    lo2, hi2 = np.concatenate([lo, lo]), np.concatenate([hi, hi])
-    rise = np.maximum(np.maximum(d_f * (hi2 - at), d_f * (lo2 - at)), 0.0)
-    fall = np.minimum(np.minimum(d_t * (hi2 - at), d_t * (lo2 - at)), 0.0)
-    lifted = f > 0.0  # else (at the lifted interval's very edge) the solve's values alone
-    upper = f + np.where(lifted, rise, 0.0)
-    low = tide + np.where(lifted, fall, 0.0)
-    return upper[:n], low[n:]
+    return at, rh, f, tide
 
 
 _LIFTED_KEYS = ('horizontal_tension', 'uplift_force', 'tide_margin')
@@ -441,8 +466,12 @@ def _analytic_one(
         b = cat.two_prod_diff(t, w, h_t) / w
         half = math.sinh(0.5 * x / b)
         return _fmax(0.0, f0), anchor, 2.0 * b * half * half - h_t
-    h_f, h_t = lifted_critical_depths_one(w, x, t)
-    upper, tide = _lifted_one(w, x, t, lo, hi, _clip(h_f, lo, hi), _clip(h_t, lo, hi), h_a)
+    if hi > _ETA0 * x:
+        h_f, h_t = lifted_critical_depths_one(w, x, t)
+        h_f, h_t = _clip(h_f, lo, hi), _clip(h_t, lo, hi)
+    else:  # both critical depths below the box (a span longer than 1.48 depths)
+        h_f = h_t = hi
+    upper, tide = _lifted_one(w, x, t, lo, hi, h_f, h_t, h_a)
     return _fmax(upper, f0), anchor, tide
 
 
@@ -450,19 +479,21 @@ def _lifted_one(
     w: float, x: float, t: float, lo: float, hi: float, h_f: float, h_t: float, h_a: float
 ) -> tuple[float, float]:
     """:func:`_lifted` of one chain: one solve where both critical depths clip to the same."""
-    at_f, rh, f, _ = _solve_lifted(w, x, t, h_f, h_a)
+    at_f, rh, f, _ = _solve_lifted_one(w, x, t, h_f, h_a)
     upper = f
     if f > 0.0:
         d_f = _slopes(w, x, t, rh, f, cat._MATH)[0]
         upper = f + max(d_f * (hi - at_f), d_f * (lo - at_f), 0.0)
-    at_t, rh, f, tide = (at_f, rh, f, _) if h_t == h_f else _solve_lifted(w, x, t, h_t, h_a)
+    at_t, rh, f, tide = (at_f, rh, f, _) if h_t == h_f else _solve_lifted_one(w, x, t, h_t, h_a)
     if f > 0.0:
         d_t = _slopes(w, x, t, rh, f, cat._MATH)[1]
         tide = tide + min(d_t * (hi - at_t), d_t * (lo - at_t), 0.0)
     return upper, tide
 
 
-def _solve_lifted(w: float, x: float, t: float, at: float, h_a: float) -> tuple[float, ...]:
+def _solve_lifted_one(
+    w: float, x: float, t: float, at: float, h_a: float
+) -> tuple[float, ...]:
     """(depth, horizontal tension, uplift force, tide margin) of the solve at ``(t, at)``, or
     at ``h_a`` where ``at`` is not lifted."""
     r = solve(w, at, tension=t, anchor_distance=x)

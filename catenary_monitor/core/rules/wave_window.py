@@ -80,7 +80,7 @@ def step(
 ) -> tuple[float, float]:
     """One reading [N] at ``now`` [s] (``state`` updated in place): ``peak_tension`` and
     ``wave_tension`` [N] over the valid readings at or after ``now - window``."""
-    if bool(valid(np.array([tension]), mbl)[0]):
+    if math.isfinite(tension) and 0.0 < tension <= MAX_TENSION_PER_MBL * mbl:  # valid()
         _push(state, now, tension)
     start = now - window
     for queue in (state.high, state.low):
