@@ -809,7 +809,9 @@ class LevelSeries:
         initial: AlarmState,
         status_messages: Mapping[int, str] | None,
     ) -> None:
-        self.alarm, self.times, self._x, self._status = alarm, times, x, status
+        self.alarm, self.times, self._status = alarm, times, status
+        self._x: dict[str, np.ndarray] | None = x
+        self._last = ''  # the last update's message once the inputs are forgotten
         self._texts, self._table = texts, status_messages or {}
         self._stale_t, self._stale_d, self._active = stale_t, stale_d, active
         self._latches, self._initial = latches, initial
@@ -844,6 +846,14 @@ class LevelSeries:
         text = str(self._texts[j]) if self._texts is not None else self._table.get(code, '')
         return _status_text(code, text)
 
+    def forget_inputs(self) -> None:
+        """Let the inputs go (a window's worth of columns per line): :meth:`message_at` is then
+        only the last update's (its transitions' messages are taken already)."""
+        last = self.times.size - 1
+        if last >= 0 and self._x is not None:
+            self._last = self.message_at(last)
+        self._x = None
+
     def active(self, cond: str) -> np.ndarray:
         """Per update: whether condition ``cond``'s latch is up after it."""
         return self._active[cond]
@@ -856,6 +866,10 @@ class LevelSeries:
         """The line's message after update ``i`` (as ``AlarmState.message``)."""
         if self.levels[i] == Level.OK:
             return 'OK'
+        if self._x is None:  # forget_inputs: the last update's only
+            if i != self.times.size - 1:
+                raise ValueError('LevelSeries.message_at: the inputs were forgotten')
+            return self._last
         floats: dict[str, Any] = {k: float(self._x[k][i]) for k in _INPUT_FIELDS}
         sample = AlarmInputs(**floats, status=int(self._status[i]))
         flags = [bool(self._active[cond][i]) for cond in CONDITIONS]

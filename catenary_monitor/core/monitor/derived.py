@@ -103,8 +103,8 @@ def derived_values(
         return out
     if len(cfgs) == 1 and _wants_holding(cfgs[0]):  # one line for every element (the twin)
         out.update(holding_values(cfgs, named, alarm.drag_tolerance))
-    elif len(cfgs) == 1:
-        out.update({key: np.full(n, np.nan) for key in HOLDING_FIELDS})
+    elif len(cfgs) == 1:  # none: one read-only NaN each, no memory per element
+        out.update({key: np.broadcast_to(np.float64(np.nan), (n,)) for key in HOLDING_FIELDS})
     else:
         raise ValueError('derived_values: the holding of several lines is the core\'s')
     return out

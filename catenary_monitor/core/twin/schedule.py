@@ -100,7 +100,8 @@ def line_steps(line: LineState, tt: np.ndarray, window: Window) -> LineSteps:
 
 
 def pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
-    """``column[idx]`` where ``idx >= 0``, else ``before`` (the core's value before the window)."""
+    """``column[idx]`` where ``idx >= 0``, else ``before`` (the core's value before the window;
+    an empty column gives a read-only view of ``before``)."""
     if (
         _loops is not None
         and len(column)
@@ -111,8 +112,8 @@ def pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
         out = np.empty(len(idx))
         _loops.pick(np.ascontiguousarray(idx), np.ascontiguousarray(column), before, out)
         return out
-    if not len(column):
-        return np.full(len(idx), before)
+    if not len(column):  # the value before throughout: read-only, no memory per step
+        return np.broadcast_to(np.asarray(before), (len(idx),))
     # ``before`` appended last: index -1 (``_newest``'s "none yet") picks it, one gather; the
     # dtype as ``np.where`` would give it (a Python scalar does not widen the column)
     picked = np.append(column, before)[idx]
