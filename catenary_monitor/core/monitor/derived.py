@@ -87,16 +87,7 @@ def derived_values(
     tension = uncertainty.dynamic_tension(
         named['peak_tension'], named['wave_tension'], alarm.wave_allowance
     )
-    out.update(bound_values(cfgs, alarm.depth_accuracy, dict(named, top_tension=tension)))
-    out['dynamic_uplift'] = uncertainty.dynamic_uplift(
-        _column(cfgs, 'weight'),
-        _span(cfgs, named),
-        _column(cfgs, 'mbl'),
-        _column(cfgs, 'ea'),
-        tension,
-        named['depth'],
-        named['uplift_force'],
-    )
+    out.update(bound_values(cfgs, alarm.depth_accuracy, dict(named, top_tension=tension), True))
     if any(c.point_loads is not None for c in cfgs):  # with its clumps and buoys
         _loaded_bounds(cfgs, alarm.depth_accuracy, dict(named, top_tension=tension), out)
     if not holding:
@@ -140,11 +131,15 @@ def _loaded_bounds(
 
 
 def bound_values(
-    cfgs: Sequence[LineConfig], depth_accuracy: float, named: dict[str, np.ndarray]
+    cfgs: Sequence[LineConfig],
+    depth_accuracy: float,
+    named: dict[str, np.ndarray],
+    dynamic: bool = False,
 ) -> dict[str, np.ndarray]:
     """The bounds (:data:`catenary_monitor.core.rules.uncertainty.FIELDS`) per element of the
     nominal values ``named`` (VALUE_FIELDS -> arrays), each element's line in ``cfgs`` (one
-    config, or one per element); the core and its batch twin both call this."""
+    config, or one per element); the core and its batch twin both call this. ``dynamic``:
+    also ``dynamic_uplift`` (``named['top_tension']`` the dynamic tension)."""
     return uncertainty.bounds(
         _column(cfgs, 'weight'),
         _span(cfgs, named),
@@ -155,6 +150,7 @@ def bound_values(
         np.array([c.tension_accuracy_or_default for c in cfgs]),
         depth_accuracy,
         named['uplift_force'],
+        dynamic,
     )
 
 

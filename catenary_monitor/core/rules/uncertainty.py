@@ -98,6 +98,7 @@ C_MIN = math.cosh(T_STAR) / T_STAR
 _ETA0 = C_MIN - 1.0 / T_STAR
 _NAN = math.nan
 _INF = math.inf
+_SPARE = 1.0 + 1e-15  # t > w h (1 + 1e-15): t > w h exactly, whatever the product's rounding
 
 
 def dynamic_tension(peak: Any, wave: Any, allowance: float) -> np.ndarray:
@@ -155,17 +156,19 @@ def dynamic_uplift_one(
 
 
 def _valid(w: Any, x: Any, t: Any, lo: Any, hi: Any) -> Any:
-    """Where every depth of ``[lo, hi]`` is a possible reading of hook tension ``t`` (arrays)."""
-    finite = np.isfinite(w) & np.isfinite(x) & np.isfinite(t) & np.isfinite(lo) & np.isfinite(hi)
-    return finite & (w > 0.0) & (x > 0.0) & (lo > 0.0) & (t > w * hi)
+    """Where every depth of ``[lo, hi]`` is a possible reading of hook tension ``t`` (arrays;
+    ``t > w hi`` with the product's rounding to spare, finite: NaN and inf fail one of
+    these)."""
+    inf = np.inf
+    return (w > 0.0) & (w < inf) & (x > 0.0) & (x < inf) & (lo > 0.0) & (t < inf) & (
+        t > w * hi * _SPARE
+    )
 
 
 def _valid_one(w: float, x: float, t: float, lo: float, hi: float) -> bool:
     """:func:`_valid` of plain floats."""
-    isfinite = math.isfinite
-    if not (isfinite(w) and isfinite(x) and isfinite(t) and isfinite(lo) and isfinite(hi)):
-        return False
-    return w > 0.0 and x > 0.0 and lo > 0.0 and t > w * hi
+    inf = math.inf
+    return 0.0 < w < inf and 0.0 < x < inf and lo > 0.0 and t < inf and t > w * hi * _SPARE
 
 
 def _x_min(w: Any, t: Any, h: Any) -> Any:
@@ -319,50 +322,82 @@ def bounds(
     tension_accuracy: Any,
     d_h: Any,
     nominal_uplift: Any,
+    dynamic: bool = False,
 ) -> dict[str, np.ndarray]:
     """:data:`FIELDS` -> arrays for readings ``tension`` (N) and ``depth`` (m, hook height
     added), per-element line constants (``ea`` inf: inextensible) and accuracies
     ``tension_accuracy`` (N, NaN: not given) and ``d_h`` (m, 0: exact); ``nominal_uplift``
     (N) is the nominal solve's uplift force (NaN: no solve, no bounds). The worst case from
-    the analysis where it applies, else the sampled box (module docstring)."""
+    the analysis where it applies, else the sampled box (module docstring). ``dynamic``: also
+    ``dynamic_uplift`` (:func:`dynamic_uplift` at ``tension``: 0 N without a solve where the
+    whole box is grounded, the uplift growing with the tension)."""
     given = (w, x, mbl, ea, tension, depth, tension_accuracy, d_h, nominal_uplift)
     arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in given))
-    w, x, mbl, ea, t, h, tension_accuracy, dh, f0 = (a.ravel() for a in arrays)
-    keep = (~np.isnan(tension_accuracy) | (dh > 0.0)) & ~np.isnan(f0)
-    shape = arrays[0].shape
-    out = {key: np.full(len(t), np.nan) for key in FIELDS}
-    t_up = t + np.where(np.isnan(tension_accuracy), 0.0, tension_accuracy)
+    shape, n = arrays[0].shape, arrays[0].size
+    w, x, mbl, ea, t, h, accuracy, dh, f0 = (_lean(a) for a in arrays)
+    out = {key: np.full(n, np.nan) for key in FIELDS + (('dynamic_uplift',) if dynamic else ())}
     with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
-        analytic = keep & np.isinf(ea) & (ea > 0.0) & _valid(w, x, t_up, h - dh, h + dh)
+        keep = ((accuracy == accuracy) | (dh > 0.0)) & (f0 == f0)
+        t_up = t + np.where(accuracy == accuracy, accuracy, 0.0)
+        lo, hi = h - dh, h + dh
+        analytic = keep & (ea == np.inf) & _valid(w, x, t_up, lo, hi)
         k = np.flatnonzero(analytic)
         if k.size:
-            columns = _analytic(w[k], x[k], t_up[k], h[k] - dh[k], h[k] + dh[k], f0[k])
+            columns = _analytic(*(_at(v, k, n) for v in (w, x, t_up, lo, hi, f0)))
             for key, column in zip(FIELDS, columns):
                 out[key][k] = column
+            if dynamic:  # a grounded box (clear of rounding): no uplift at its tension or below
+                g = k[columns[1] > 1e-9 * _at(x, k, n)]
+                out['dynamic_uplift'][g] = np.fmax(0.0, _at(f0, g, n))
     k = np.flatnonzero(keep & ~analytic)
     if k.size:
-        sampled = sampled_bounds(
-            w[k], x[k], mbl[k], ea[k], t[k], h[k], tension_accuracy[k], dh[k], f0[k]
-        )
+        given = (w, x, mbl, ea, t, h, accuracy, dh, f0)
+        sampled = sampled_bounds(*(_at(v, k, n) for v in given))
         for key in FIELDS:
             out[key][k] = sampled[key]
+    if dynamic:
+        k = np.flatnonzero(np.isnan(out['dynamic_uplift']) & ~np.isnan(f0))
+        if k.size:
+            given = (w, x, mbl, ea, t, h, f0)
+            out['dynamic_uplift'][k] = dynamic_uplift(*(_at(v, k, n) for v in given))
     return {key: v.reshape(shape) for key, v in out.items()}
 
 
+def _lean(a: np.ndarray) -> Any:
+    """A broadcast input as computed on: its one value where it is one value repeated (a
+    line's constant), else flat."""
+    if a.ndim and a.size > 1 and not any(a.strides):
+        return a.flat[0]
+    return a.ravel()
+
+
+def _at(v: Any, k: np.ndarray, n: int) -> Any:
+    """``v`` at the elements ``k`` of ``n`` (a constant as it is; all of them: no copy)."""
+    if np.ndim(v) == 0 or k.size == n:
+        return v
+    return v[k]
+
+
 def _analytic(
-    w: np.ndarray, x: np.ndarray, t: np.ndarray, lo: np.ndarray, hi: np.ndarray, f0: np.ndarray
+    w: Any, x: Any, t: np.ndarray, lo: np.ndarray, hi: np.ndarray, f0: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(uplift upper, anchor lower, tide lower) over ``[lo, hi]`` at hook tension ``t``, every
     depth possible, inextensible (module docstring)."""
     c = t / w
     h_a = np.minimum(np.maximum(_KA * c, lo), hi)
-    anchor = x - _x_min(w, t, h_a)
+    b = cat.two_prod_diff(t, w, h_a) / w
+    anchor = x - b * cat.acosh1p(h_a / b)
     h_t = np.minimum(np.maximum(c - x / T_STAR, lo), hi)
-    b = cat.two_prod_diff(t, w, h_t) / w
-    tide = cat.depth_reached(b, x) - h_t
+    other = np.flatnonzero(h_t != h_a)  # usually none: both at the deeper end
+    if other.size:
+        b = b.copy()
+        b[other] = cat.two_prod_diff(t[other], _at(w, other, 0), h_t[other]) / _at(w, other, 0)
+    half = np.sinh(0.5 * x / b)
+    tide = 2.0 * b * half * half - h_t
     upper = np.fmax(0.0, f0)
     k = np.flatnonzero(anchor < 0.0)
     if k.size:
+        w, x = np.broadcast_to(w, t.shape), np.broadcast_to(x, t.shape)
         up, tide[k] = _lifted(w[k], x[k], t[k], lo[k], hi[k], h_a[k])
         upper[k] = np.fmax(up, f0[k])
     return upper, anchor, tide
@@ -460,10 +495,12 @@ def _analytic_one(
     """:func:`_analytic` of plain floats."""
     c = t / w
     h_a = _clip(_KA * c, lo, hi)
-    anchor = x - _x_min_one(w, t, h_a)
+    b = cat.two_prod_diff(t, w, h_a) / w
+    z = h_a / b
+    anchor = x - b * math.log1p(z + math.sqrt(z * (2.0 + z)))
     if not anchor < 0.0:  # grounded over the whole box
         h_t = _clip(c - x / T_STAR, lo, hi)
-        b = cat.two_prod_diff(t, w, h_t) / w
+        b = b if h_t == h_a else cat.two_prod_diff(t, w, h_t) / w
         half = math.sinh(0.5 * x / b)
         return _fmax(0.0, f0), anchor, 2.0 * b * half * half - h_t
     if hi > _ETA0 * x:

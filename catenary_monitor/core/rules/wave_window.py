@@ -142,10 +142,16 @@ def series(
     numbers = np.concatenate(
         [np.array([e[2] for e in carried], np.int64), state.number[0] + np.cumsum(ok) - 1]
     )
-    final = WaveState(deque(), deque(), [0])
     keep = np.flatnonzero(~np.isnan(values[lo[-1] :])) + lo[-1]
-    for t, v, i in zip(times[keep].tolist(), values[keep].tolist(), numbers[keep].tolist()):
-        final.number[0] = i
-        _push(final, t, v)
-    final.number[0] = state.number[0] + int(ok.sum())
+    v = values[keep]
+    # a queue keeps a reading no later one reaches (high: strictly above every later one; low:
+    # strictly below), which pushing them one by one leaves
+    above = v > np.append(np.maximum.accumulate(v[::-1])[::-1][1:], -np.inf)
+    below = v < np.append(np.minimum.accumulate(v[::-1])[::-1][1:], np.inf)
+    entries = list(zip(times[keep].tolist(), v.tolist(), numbers[keep].tolist()))
+    final = WaveState(
+        deque(e for e, up in zip(entries, above.tolist()) if up),
+        deque(e for e, down in zip(entries, below.tolist()) if down),
+        [state.number[0] + int(ok.sum())],
+    )
     return peak, wave, final
