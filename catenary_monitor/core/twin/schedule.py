@@ -102,6 +102,10 @@ def line_steps(line: LineState, tt: np.ndarray, window: Window) -> LineSteps:
 def pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
     """``column[idx]`` where ``idx >= 0``, else ``before`` (the core's value before the window;
     an empty column gives a read-only view of ``before``)."""
+    if len(column) > 1 and not column.strides[0] and isinstance(before, (float, int)):
+        same = column[0] == before or (column[0] != column[0] and before != before)
+        if same or not (idx < 0).any():  # a constant column (a read-only view) stays one
+            return np.broadcast_to(column[:1].astype(np.result_type(column, before)), (len(idx),))
     if (
         _loops is not None
         and len(column)
