@@ -58,12 +58,13 @@ def _sampled_bounds() -> Iterator[None]:
     the analysis): :func:`~catenary_monitor.core.rules.uncertainty.sampled_bounds`."""
     from catenary_monitor.core.rules import uncertainty
 
-    def sampled(*given: float) -> tuple[float, ...]:
+    def sampled(*given: float) -> tuple[float, float, float]:
         b = uncertainty.sampled_bounds(*(np.array([v]) for v in given))
-        return tuple(float(b[key][0]) for key in uncertainty.FIELDS)
+        upper, anchor, tide = (float(b[key][0]) for key in uncertainty.FIELDS)
+        return upper, anchor, tide
 
     analytic = uncertainty.bounds_one
-    uncertainty.bounds_one = sampled
+    uncertainty.bounds_one = sampled  # type: ignore[assignment]
     try:
         yield
     finally:

@@ -358,8 +358,8 @@ def bounds(
     if dynamic:
         k = np.flatnonzero(np.isnan(out['dynamic_uplift']) & ~np.isnan(f0))
         if k.size:
-            given = (w, x, mbl, ea, t, h, f0)
-            out['dynamic_uplift'][k] = dynamic_uplift(*(_at(v, k, n) for v in given))
+            line = (w, x, mbl, ea, t, h, f0)
+            out['dynamic_uplift'][k] = dynamic_uplift(*(_at(v, k, n) for v in line))
     return {key: v.reshape(shape) for key, v in out.items()}
 
 
