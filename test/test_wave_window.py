@@ -1,6 +1,7 @@
-"""The wave window (core/rules/wave_window.py): its column form (series, the twin's) against its
-scalar step (the core's) on random readings in pieces, invalid ones among them: the same peak
-and wave tensions after every reading and the same queues after each piece."""
+"""The wave window (core/rules/wave_window.py): its column form (series, the twin's; its C loop
+and its numpy sparse table) against its scalar step (the core's) on random readings in pieces,
+invalid ones among them: the same peak and wave tensions after every reading and the same
+queues after each piece."""
 
 import math
 
@@ -11,7 +12,12 @@ from catenary_monitor.core.rules import wave_window
 
 
 @pytest.mark.parametrize('seed', [1, 2, 3])
-def test_series_equals_the_step_reading_by_reading(seed):
+@pytest.mark.parametrize('loop', ['C', 'numpy'])
+def test_series_equals_the_step_reading_by_reading(seed, loop, monkeypatch):
+    if loop == 'numpy':
+        monkeypatch.setattr(wave_window, '_wave_loop', None)
+    elif wave_window._wave_loop is None:
+        pytest.skip('the C loop is not built')
     rng = np.random.default_rng(seed)
     n, mbl, window = 3000, 4.8e6, 30.0
     t = np.cumsum(rng.uniform(0.0, 0.2, n))  # equal stamps too

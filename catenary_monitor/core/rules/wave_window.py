@@ -34,6 +34,11 @@ import numpy as np
 
 from catenary_monitor.core.rules.plausible import MAX_TENSION_PER_MBL
 
+try:  # the column loop in C (_wave_loop.c beside this file; else a sparse table in numpy)
+    from catenary_monitor.core.rules import _wave_loop  # type: ignore[attr-defined]
+except ImportError:  # not built
+    _wave_loop = None
+
 __all__ = ['FIELDS', 'WaveState', 'valid', 'step', 'series']
 
 #: The outputs derived from the window (appended to the per-line outputs), in order.
@@ -121,7 +126,9 @@ def series(
     state: WaveState, t_s: np.ndarray, tension: np.ndarray, mbl: float, window: float
 ) -> tuple[np.ndarray, np.ndarray, WaveState]:
     """:func:`step` over sorted readings in vectorized code: ``peak_tension`` and
-    ``wave_tension`` [N] after each, and the state after the last."""
+    ``wave_tension`` [N] after each, and the state after the last. The window's extremes by
+    two monotone queues in C (``_wave_loop.c``: one pass), else by a sparse table in numpy
+    (log2 of the window's readings passes): the same numbers."""
     n = len(t_s)
     if n == 0:
         return np.zeros(0), np.zeros(0), state
@@ -133,9 +140,14 @@ def series(
     before = np.array([e[1] for e in carried], np.float64)
     values = np.concatenate([before, np.where(ok, tension, np.nan)])
     m = len(carried)
-    hi = np.arange(m, m + n)
-    lo = np.searchsorted(times, t_s - window, 'left')
-    peak, low = _range_extremes(values, lo, hi)
+    lo = np.searchsorted(times, t_s[-1:] - window, 'left')  # the last reading's window
+    if _wave_loop is not None:  # two monotone queues in C, one pass
+        peak, low = np.empty(n), np.empty(n)
+        _wave_loop.extremes(times, values, m, float(window), peak, low)
+    else:  # a sparse table in numpy: the same maxima and minima
+        peak, low = _range_extremes(
+            values, np.searchsorted(times, t_s - window, 'left'), np.arange(m, m + n)
+        )
     wave = (peak - low) * 0.5
     # The queues after the last reading: rebuilt from the window's readings (numbered as the
     # core numbered them), the same entries as pushing them one by one.
