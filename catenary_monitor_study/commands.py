@@ -46,6 +46,7 @@ def register(sub: Any) -> None:
     """Add the benchmark sub-commands to the ``catenary-monitor`` parser."""
     from catenary_monitor_study import (
         bench_body,
+        bench_bounds,
         bench_dynamics,
         bench_console,
         bench_core,
@@ -64,6 +65,7 @@ def register(sub: Any) -> None:
     bench_soak.register(sub)
     bench_flood.register(sub)
     bench_step.register(sub)
+    bench_bounds.register(sub)
     bench_fleet.register(sub)
     fuzz.register(sub)
     for module in (bench_core, bench_methods, bench_replay):

@@ -440,10 +440,14 @@ def _stream(
                     alarm_events=result.alarm_events,
                 )
                 sink(replay, part)
+                del result, replay, part, part_events  # not held while the next is recomputed
             state.windows += 1
             state.messages += window.messages
             state.bytes_done = window.bytes_done
             state.core = core
+            # nothing of this window held while the next one is read and recomputed (its
+            # results and inputs were a window's worth of memory on top of the next one's)
+            del window, whole, inputs, tensions, depth, parts, others
             if progress is not None:
                 progress(state)
     except UnorderedLogError as err:
