@@ -1,7 +1,8 @@
 """The study's sub-commands for ``catenary-monitor`` (entry point ``catenary_monitor.commands``).
 
 ``bench``, ``bench-methods``, ``bench-replay`` and ``bench-latency`` measure the monitor against
-baselines in the same run. They live outside the monitor's runtime import graph: the command line
+baselines in the same run; ``bench-alarms`` counts its annunciations on generated normal days and
+injected faults. They live outside the monitor's runtime import graph: the command line
 finds this module through its entry point, and nothing in ``catenary_monitor`` imports it.
 """
 
@@ -44,6 +45,7 @@ def _batch(func: Any) -> Any:
 def register(sub: Any) -> None:
     """Add the benchmark sub-commands to the ``catenary-monitor`` parser."""
     from catenary_monitor_study import (
+        bench_alarms,
         bench_body,
         bench_dynamics,
         bench_console,
@@ -57,6 +59,7 @@ def register(sub: Any) -> None:
     )
 
     bench_console.register(sub)
+    bench_alarms.register(sub)
     bench_body.register(sub)
     bench_dynamics.register(sub)
     bench_soak.register(sub)

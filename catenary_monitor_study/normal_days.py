@@ -69,6 +69,8 @@ __all__ = [
     'hook_tensions',
     'wave_motion',
     'scene_margins',
+    'storm_line',
+    'fit_mean_depth',
 ]
 
 #: Where the logs start by default: 2025-03-01 00:00 UTC [ns].
@@ -719,6 +721,21 @@ def _storm_peak(scene: Scene, storm: Storm) -> float:
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if uplift(mid) < storm.uplift else (lo, mid)
     return hi
+
+
+def storm_line(scene: Scene, direction: Optional[float] = None) -> str:
+    """The line a storm from ``direction`` [deg; default the weather's storm's, else 270]
+    loads most (its tension under 0.5 MN at the mean depth): the line it lifts first."""
+    storm = scene.weather.storm
+    direction = direction if direction is not None else (storm.direction if storm else 270.0)
+    push = push_direction(direction)
+    model = _model(scene)
+    arm = 30.0 if storm is None else storm.arm
+    load = 0.5e6 * np.array([push[0], push[1], arm * push[1]])
+    eq = solve_equilibrium(model, scene.mean_depth, load)
+    if eq.lines is None:
+        return model.names[0]
+    return model.names[int(np.nanargmax(eq.lines.statics.top_tension))]
 
 
 def fit_mean_depth(scene: Scene, design: float, clearance: float = 1.5) -> float:

@@ -176,7 +176,9 @@ def _cell_kind(scene: Scene, name: str) -> tuple[str, str]:
     return kind, unit
 
 
-def _silent(scene: Scene, kinds: tuple[str, ...], line: Optional[str], t: np.ndarray) -> np.ndarray:
+def _silent(
+    scene: Scene, kinds: tuple[str, ...], line: Optional[str], t: np.ndarray
+) -> np.ndarray:
     """Which of the times ``t`` [s] fall in a silence fault of ``kinds`` (for ``line``)."""
     out = np.zeros(len(t), bool)
     for f in scene.faults:
