@@ -248,7 +248,8 @@ class Weather:
     ``gust`` (a share, minutes), from ``direction`` +- ``veer`` deg; a tidal current up to
     ``current`` m/s (flooding from ``current_from``); waves of ``hs`` m (plus ``hs_per_wind``
     per m/s of wind) with a peak period ``tp`` s; the dock's wave-frequency motion per metre
-    of wave height (``sway``, ``surge`` m, ``yaw`` rad, ``heave`` m, RMS)."""
+    of wave height (``sway``, ``surge`` m, ``yaw`` rad, ``heave`` m, RMS); the sea level's
+    meteorological ``residual`` [m, RMS, hours]."""
 
     wind: float = 7.0
     wander: float = 3.0
@@ -264,6 +265,7 @@ class Weather:
     surge: float = 0.06
     yaw: float = 2.5e-4
     heave: float = 0.05
+    residual: float = 0.03
     storm: Optional[Storm] = None
 
 
@@ -411,15 +413,16 @@ def paper_scene(
     seed: int = 1,
     weather: Optional[Weather] = None,
     settings: Optional[dict[str, Any]] = None,
+    mean_depth: Optional[float] = None,
 ) -> Scene:
     """The paper's dock (config/floating_dock.yaml, 12 lines of 81 mm U3 chain, 246 m x 51 m)
     at ``port`` read by ``gauge``, its mean depth fitted so that the fixed-length chains keep
-    their margins over the port's tide (:func:`fit_mean_depth`)."""
+    their margins over the port's tide (:func:`fit_mean_depth`) unless ``mean_depth`` is given."""
     flat = load_params_file(_dock_yaml())
     flat.pop('log_dir', None)
     names = list(flat['lines'])
     return _scene(f'paper-{port}-{gauge}', flat, names, PORTS[port], GAUGES[gauge], days,
-                  faults, seed, weather or Weather(), settings, 20.85)  # fmt: skip
+                  faults, seed, weather or Weather(), settings, 20.85, mean_depth)  # fmt: skip
 
 
 def _scene(
@@ -434,6 +437,7 @@ def _scene(
     weather: Weather,
     settings: Optional[dict[str, Any]],
     design: float,
+    mean_depth: Optional[float] = None,
 ) -> Scene:
     kinds = _line_kinds(names)
     _apply_faults(kinds, faults)
@@ -442,7 +446,7 @@ def _scene(
     flat.update(settings or {})
     base = Scene(name, _frozen(flat), port, gauge, days * 86400.0, 20.0, weather, Cells(),
                  faults, START_NS, seed)  # fmt: skip
-    depth = fit_mean_depth(base, design)
+    depth = fit_mean_depth(base, design) if mean_depth is None else mean_depth
     flat = dict(base.flat)
     _sensor_params(flat, gauge, depth, kinds)
     flat.update(settings or {})
@@ -566,15 +570,15 @@ def still_depth(scene: Scene, t: np.ndarray, rng_seed: Optional[int] = None) -> 
 
 
 @functools.lru_cache(maxsize=8)
-def _residual_table(seed: int, seconds: float) -> tuple[np.ndarray, np.ndarray]:
+def _residual_table(seed: int, seconds: float, rms: float) -> tuple[np.ndarray, np.ndarray]:
     rng = np.random.default_rng(seed * 7919 + 17)
     grid = np.arange(0.0, seconds + 120.0, 60.0)
-    walk = 0.03 * _ou(rng, len(grid), 60.0, 6 * 3600.0)
+    walk = rms * _ou(rng, len(grid), 60.0, 6 * 3600.0)
     return grid, walk
 
 
 def _residual(scene: Scene) -> Any:
-    grid, walk = _residual_table(scene.seed, scene.seconds)
+    grid, walk = _residual_table(scene.seed, scene.seconds, scene.weather.residual)
     return lambda t: np.interp(t, grid, walk)
 
 
@@ -645,7 +649,8 @@ def _weather_table(
     wander = _ou(rng, n, grid, 4 * 3600.0)
     gust = _ou(rng, n, grid, 90.0)
     veer = _ou(rng, n, grid, 3 * 3600.0)
-    wind = np.clip(np.clip(w.wind + w.wander * wander, 0.5, None) * (1.0 + w.gust * gust), 0, None)
+    wind = np.clip(w.wind + w.wander * wander, min(0.5, w.wind), None) * (1.0 + w.gust * gust)
+    wind = np.clip(wind, 0.0, None)
     table = {
         'wind': wind,
         'wind_from': w.direction + w.veer * veer,
