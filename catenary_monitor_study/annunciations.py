@@ -81,6 +81,8 @@ class Counter:
     def abandon(self) -> None:
         self.level: dict[str, int] = {}
         self.events: list[Annunciation] = []
+        #: Every level change of each status: name -> [(time s, level)], in time order.
+        self.changes: dict[str, list[tuple[float, int]]] = {}
         self.snapshots = 0
         self.start: float | None = None
         self.end: float | None = None
@@ -166,6 +168,11 @@ class Counter:
         first = levels[0] if before is None else before
         prev = np.concatenate([[first], levels[:-1]])
         self.level[name] = int(levels[-1])
+        moves = self.changes.setdefault(name, [])
+        if before is None:
+            moves.append((float(stamps[0]) * 1e-9, int(levels[0])))
+        for i in np.flatnonzero(levels != prev).tolist():
+            moves.append((float(stamps[i]) * 1e-9, int(levels[i])))
         out = []
         for i in np.flatnonzero(_rank(levels) > _rank(prev)).tolist():
             message, state = pieces[int(piece[i])][2](int(index[i]))
@@ -174,6 +181,16 @@ class Counter:
         return out
 
     # ------------------------------------------------------------------ tallies
+    def level_at(self, name: str, t: np.ndarray) -> np.ndarray:
+        """The status's level at times ``t`` [s] (-1 before it was first seen)."""
+        moves = self.changes.get(name, [])
+        if not moves:
+            return np.full(len(t), -1)
+        times = np.array([m[0] for m in moves])
+        levels = np.array([m[1] for m in moves])
+        i = np.searchsorted(times, t, 'right') - 1
+        return np.where(i >= 0, levels[np.maximum(i, 0)], -1)
+
     def heard(self, since: float = -np.inf, until: float = np.inf) -> list[Annunciation]:
         """The annunciations the operator heard in ``[since, until)`` [s]."""
         return [a for a in self.events if not a.hidden and since <= a.time < until]

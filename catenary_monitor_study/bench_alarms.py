@@ -28,6 +28,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import shutil
 import sys
 import tempfile
@@ -35,6 +36,8 @@ import time
 from collections import Counter as Tally
 from pathlib import Path
 from typing import Any, Callable, Optional
+
+import numpy as np
 
 from catenary_monitor_study.annunciations import Counter, family
 from catenary_monitor_study.normal_days import (
@@ -46,6 +49,7 @@ from catenary_monitor_study.normal_days import (
     paper_scene,
     scene_margins,
     storm_line,
+    truth_statics,
 )
 from catenary_monitor_study.normal_days_log import write_scene
 
@@ -187,8 +191,31 @@ def _summary(kind: str, scene: Scene, counter: Counter, figures: dict[str, Any])
             'first_out_right': bool(first is not None and named and first == named[0]),
             'cause_named': bool(named),
             'expected': f'{fam}: {word}',
+            'flood_first_out': [m.group(1) for a in inside if a.status == 'alarms'
+                                for m in [re.search(r'first out: (\S+)', a.message)] if m],
         }  # fmt: skip
+        if fault.line is not None:
+            out['fault']['line_view'] = _line_view(scene, counter, fault.line)
     return out
+
+
+def _line_view(scene: Scene, counter: Counter, line: str) -> dict[str, Any]:
+    """What the faulty line showed: seconds at each level over the scene, and while its
+    anchor truly lifted (the truth's quasi-static uplift > 0), how long it read OK."""
+    t, r = truth_statics(scene)
+    k = [x.name for x in scene.config.lines].index(line)
+    level = counter.level_at(line, scene.start_s + t)
+    step = float(t[1] - t[0]) if len(t) > 1 else 0.0
+    words = {-1: 'unseen', 0: 'OK', 1: 'WARN', 2: 'ERROR', 3: 'STALE'}
+    with np.errstate(invalid='ignore'):
+        lifted = np.asarray(r.uplift_force[:, k] > 0.0)
+    return {
+        'seconds_at': {words[v]: float(np.sum(level == v) * step) for v in np.unique(level)},
+        'truly_lifted_s': float(lifted.sum() * step),
+        'ok_while_lifted_s': float(np.sum(lifted & (level == 0)) * step),
+        'true_uplift_max_kN': float(np.nanmax(r.uplift_force[:, k])) / 1e3
+        if np.any(np.isfinite(r.uplift_force[:, k])) else None,
+    }
 
 
 def _classes(counter: Counter, events: list[Any]) -> list[dict[str, Any]]:
@@ -293,6 +320,15 @@ def table(figures: dict[str, Any]) -> str:
         ]
         if first:
             rows.append(f'  first-out: {first["status"]}: {first["message"][:110]}')
+        if f['flood_first_out']:
+            rows.append(f'  flood banner first-out: {", ".join(f["flood_first_out"])}')
+        view = f.get('line_view')
+        if view:
+            at = ', '.join(f'{k} {v:.0f} s' for k, v in view['seconds_at'].items())
+            rows.append(f'  {f["line"]} showed: {at}; its anchor truly lifted '
+                        f'{view["truly_lifted_s"]:.0f} s (up to '
+                        f'{view["true_uplift_max_kN"] or 0:.0f} kN), read OK for '
+                        f'{view["ok_while_lifted_s"]:.0f} s of them')  # fmt: skip
         for c in f['causes'][:6]:
             rows.append(f'  {c["count"]:>5}  {c["status"]} {c["level"]}: {c["cause"][:90]}')
     for r in figures['scenes']:

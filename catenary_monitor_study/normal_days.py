@@ -69,10 +69,13 @@ __all__ = [
     'hook_tensions',
     'wave_motion',
     'scene_margins',
+    'truth_statics',
     'storm_line',
     'fit_mean_depth',
 ]
 
+#: The paper's 81 mm U3 chain's axial stiffness, 1.01e8 d^2 kN (config/floating_dock.yaml) [N].
+PAPER_EA = 6.63e8
 #: Where the logs start by default: 2025-03-01 00:00 UTC [ns].
 START_NS = 1_740_787_200_000_000_000
 #: 2000-01-01 12:00 UTC (J2000) as Unix time [s]: the origin of the mean longitudes.
@@ -187,12 +190,13 @@ class Gauge:
     double_read: float = 0.0
 
 
-#: The gauges of the benchmark: a radar gauge of 1 cm (a harbour's radar: 1 Hz, 30 s average),
+#: The gauges of the benchmark: a radar gauge of 1 cm (a harbour's radar: 1 Hz, 30 s average,
+#: 0.5 mm of noise left after it),
 #: a pressure gauge of 1 mm with 2 mm noise (1 Hz, 1 s average, waves attenuated to a fifth at
 #: the seabed, an occasional double read) and an ideal 1 mm gauge without noise (the still
 #: water level itself, 1 Hz).
 GAUGES = {
-    'radar_1cm': Gauge('radar_1cm', 'radar', 0.01, noise=0.002, average=30.0, height=8.0),
+    'radar_1cm': Gauge('radar_1cm', 'radar', 0.01, noise=0.0005, average=30.0, height=8.0),
     'pressure_1mm': Gauge(
         'pressure_1mm',
         'pressure',
@@ -421,6 +425,8 @@ def paper_scene(
     flat = load_params_file(_dock_yaml())
     flat.pop('log_dir', None)
     names = list(flat['lines'])
+    for name in names:  # the 81 mm chain's stiffness (the params file's note): finite storms
+        flat[f'{name}.ea'] = PAPER_EA
     return _scene(f'paper-{port}-{gauge}', flat, names, PORTS[port], GAUGES[gauge], days,
                   faults, seed, weather or Weather(), settings, 20.85, mean_depth)  # fmt: skip
 
@@ -441,12 +447,13 @@ def _scene(
 ) -> Scene:
     kinds = _line_kinds(names)
     _apply_faults(kinds, faults)
+    name += ''.join(f'-{f.kind}' for f in faults)
     flat['tide_table'] = tide_table(port, START_NS * 1e-9)
     flat['tide_table_epoch'] = START_NS * 1e-9
     flat.update(settings or {})
     base = Scene(name, _frozen(flat), port, gauge, days * 86400.0, 20.0, weather, Cells(),
                  faults, START_NS, seed)  # fmt: skip
-    depth = fit_mean_depth(base, design) if mean_depth is None else mean_depth
+    depth = _fitted(_physics(base), design) if mean_depth is None else mean_depth
     flat = dict(base.flat)
     _sensor_params(flat, gauge, depth, kinds)
     flat.update(settings or {})
@@ -466,7 +473,8 @@ def drawn_scene(
     settings: Optional[dict[str, Any]] = None,
 ) -> Scene:
     """A dock you have not seen, drawn from ``seed``: a pontoon of 80-250 m by 20-50 m moored
-    by 4-12 lines of U3 stud-link chain of 48-90 mm at 8-30 m depth, a pretension of 5-9 % of
+    by 4-12 lines of U3 stud-link chain of 48-90 mm (elastic: EA = 1.01e8 d^2 kN) at 8-30 m
+    depth, a pretension of 5-9 % of
     the MBL with 10-25 m of chain on the seabed; one of the ports; the weather drawn too; the gauge
     drawn unless given."""
     rng = np.random.default_rng(10_000 + seed)
@@ -499,6 +507,7 @@ def drawn_scene(
             f'{name}.hook_y': round(y, 2),
             f'{name}.heading': round(heading % 360.0, 2),
             f'{name}.chain_length': chain,
+            f'{name}.ea': round(1.01e11 * (d_mm / 1000.0) ** 2, -4),
             f'{name}.tension_topic': f'/cells/{name}/force',
         })  # fmt: skip
     freeboard, walls = float(rng.uniform(1.5, 3.0)), float(rng.uniform(0.0, 10.0))
@@ -669,19 +678,32 @@ _PHYSICS = ('lines', 'weight', 'anchor_distance', 'mbl', 'hook_x', 'hook_y', 'ho
             'heading', 'chain_length', 'ea', 'allowed_uplift')  # fmt: skip
 
 
+def _physics(scene: Scene) -> Scene:
+    """The scene as its physics sees it (the sensors, the monitor's settings and the faults
+    but a parted chain left out): the key of what is computed once per dock and weather."""
+    kept = ('anchor_margin_warn', 'anchor_margin_deadband', 'tide_margin_warn',
+            'tide_margin_deadband', 'tension_accuracy')  # fmt: skip
+    physics = tuple(
+        (k, v)
+        for k, v in scene.params
+        if k.split('.')[-1] in _PHYSICS + kept
+        or k.split('.')[-1].startswith(('dock_', 'point_load'))
+    )
+    return replace(scene, name='', params=physics, gauge=GAUGES['exact_1mm'], cells=Cells(),
+                   faults=tuple(f for f in scene.faults if f.kind == 'parted'))  # fmt: skip
+
+
+@functools.lru_cache(maxsize=8)
+def _fitted(scene: Scene, design: float) -> float:
+    return fit_mean_depth(scene, design)
+
+
 def coarse(scene: Scene, grid: Optional[float] = None) -> Coarse:
     """The scene's slow truth every ``grid`` s (default the scene's): the dock at rest where
     its chains balance wind, current and wave drift (and the storm) at the still-water depth;
     after a parted fault, on the remaining lines. Scenes that differ only in their sensors
     share it (computed once)."""
-    physics = tuple(
-        (k, v)
-        for k, v in scene.params
-        if k.split('.')[-1] in _PHYSICS or k.split('.')[-1].startswith(('dock_', 'point_load'))
-    )
-    key = replace(scene, name='', params=physics, gauge=GAUGES['exact_1mm'], cells=Cells(),
-                  faults=tuple(f for f in scene.faults if f.kind == 'parted'))  # fmt: skip
-    return _coarse(key, grid or scene.grid)
+    return _coarse(_physics(scene), grid or scene.grid)
 
 
 @functools.lru_cache(maxsize=4)
@@ -749,8 +771,9 @@ def storm_line(scene: Scene, direction: Optional[float] = None) -> str:
 
 
 def fit_mean_depth(scene: Scene, design: float, clearance: float = 1.5) -> float:
-    """The mean depth [m] at which the scene's chains keep, over its tide and weather (every
-    10 min, no waves, no storm), an anchor margin of ``anchor_margin_warn +
+    """The mean depth [m] at which the scene's chains keep, over its port's tide (three days or
+    the scene, every 10 min) and weather (its 200 strongest winds also at high water; no
+    storm), an anchor margin of ``anchor_margin_warn +
     anchor_margin_deadband + clearance`` and a tide margin of ``tide_margin_warn +
     tide_margin_deadband + clearance``: the depth the fixed-length chains were laid for, so
     that a normal day alarms nothing: the margins taken at each line's wave-peak tension (four
@@ -761,15 +784,19 @@ def fit_mean_depth(scene: Scene, design: float, clearance: float = 1.5) -> float
     need_anchor = a.anchor_margin_warn + a.anchor_margin_deadband + clearance
     need_tide = a.tide_margin_warn + a.tide_margin_deadband + clearance
     grid, table = _weather_table(scene.weather, scene.seed, scene.seconds, scene.grid)
-    every = grid[:: max(1, int(round(600.0 / scene.grid)))]
+    # the tide over at least three days (a short scene's dock was laid for its port, not for
+    # its hours), the weather where it is; the 200 strongest winds also at high water
+    span = max(scene.seconds, 3 * 86400.0)
+    t_tide = np.arange(0.0, span, 600.0)
+    level = tide_level(scene.port, scene.start_s + t_tide) + _residual(scene)(t_tide)
     strongest = grid[np.argsort(table['wind'])[-200:]]
-    t = np.unique(np.concatenate([every, strongest]))
-    tide = tide_level(scene.port, scene.start_s + t) + _residual(scene)(t)
-    loads = _loads(scene, _weather_series(scene, t))
+    t = np.concatenate([np.mod(t_tide, scene.seconds), strongest])
+    tide = np.concatenate([level, np.full(len(strongest), float(np.max(level)))])
+    weather = _weather_series(scene, t)
+    loads = _loads(scene, weather)
     model = _model(scene)
     x = np.array([line.anchor_distance for line in config.lines])
-
-    hs = scene.weather.hs + scene.weather.hs_per_wind * _weather_series(scene, t)['wind']
+    hs = scene.weather.hs + scene.weather.hs_per_wind * weather['wind']
     accuracy = model.accuracy
 
     def worst(mean: float) -> float:
@@ -874,28 +901,39 @@ def hook_tensions(scene: Scene, c: Coarse, t: np.ndarray) -> np.ndarray:
     return out
 
 
+def truth_statics(scene: Scene) -> tuple[np.ndarray, Any]:
+    """The scene's quasi-static truth on its grid (no waves): times [s] and the monitor's
+    solve of every line's true hook tension at the true depth (``SolveResult`` of shape
+    (times, lines); a parted line NaN after it parted)."""
+    c = coarse(scene)
+    model = _model(scene)
+    x = np.array([line.anchor_distance for line in scene.config.lines])
+    tens = hook_tensions_static(scene, c)
+    parted = scene.fault('parted')
+    if parted is not None and parted.line in model.names:
+        tens[c.parted :, model.names.index(parted.line)] = math.nan
+    h = c.depth[:, None] + model.hook_height[None, :]
+    r = solve(model.weight[None, :], h, tension=tens, anchor_distance=x[None, :],
+              mbl=model.mbl[None, :])  # fmt: skip
+    return c.t, r
+
+
 def scene_margins(scene: Scene) -> dict[str, float]:
     """The scene's truth against the monitor's thresholds, on its grid (no waves): the least
     anchor margin [m], tide margin [m] and safety factor, the largest uplift [N], the tide's
     range [m] and the longest slack water (the tide within 1 cm for) [s]."""
     c = coarse(scene)
-    model = _model(scene)
-    config = scene.config
-    x = np.array([line.anchor_distance for line in config.lines])
-    k = c.parted
-    h = c.depth[:k, None] + model.hook_height[None, :]
-    tens = hook_tensions_static(scene, c)[:k]
-    r = solve(model.weight[None, :], h, tension=tens, anchor_distance=x[None, :],
-              mbl=model.mbl[None, :])  # fmt: skip
+    _, r = truth_statics(scene)
     tide = c.depth
-    return {
-        'anchor_margin_min': float(np.nanmin(r.anchor_margin)),
-        'tide_margin_min': float(np.nanmin(r.tide_margin)),
-        'safety_factor_min': float(np.nanmin(r.safety_factor)),
-        'uplift_max': float(np.nanmax(r.uplift_force)),
-        'tide_range': float(np.ptp(tide)),
-        'slack_water_max_s': _longest_within(c.t, tide, 0.01),
-    }
+    with np.errstate(invalid='ignore'):
+        return {
+            'anchor_margin_min': float(np.nanmin(r.anchor_margin)),
+            'tide_margin_min': float(np.nanmin(r.tide_margin)),
+            'safety_factor_min': float(np.nanmin(r.safety_factor)),
+            'uplift_max': float(np.nanmax(r.uplift_force)),
+            'tide_range': float(np.ptp(tide)),
+            'slack_water_max_s': _longest_within(c.t, tide, 0.01),
+        }
 
 
 def hook_tensions_static(scene: Scene, c: Coarse) -> np.ndarray:
