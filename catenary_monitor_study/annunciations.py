@@ -21,7 +21,7 @@ import re
 import struct
 from collections import Counter as Tally
 from pathlib import Path
-from typing import Any, Iterable, NamedTuple, Sequence
+from typing import Any, Callable, Iterable, NamedTuple, Sequence
 
 import numpy as np
 
@@ -142,18 +142,12 @@ class Counter:
                     name = _get(group.name, k * n)
                     state = (group.values[group.keys.index('alarm_state')]
                              if 'alarm_state' in group.keys else '')  # fmt: skip
-
-                    def text(i: int, g: Any = group, at: int = k * n, st: Any = state) -> tuple:
-                        return _get(g.message, at + i), (_get(st, at + i) if st else '')
-
+                    text = _column_text(group, k * n, state)
                 else:
                     rows = group[k * n : (k + 1) * n]
                     levels = np.array([int(r.level) for r in rows])
                     name = rows[0].name
-
-                    def text(i: int, rows: Any = rows) -> tuple:
-                        return rows[i].message, dict(rows[i].values).get('alarm_state', '')
-
+                    text = _row_text(rows)
                 series.setdefault(_short(name), []).append((stamps, levels, text))
 
     def _rises(self, name: str, pieces: list[tuple[np.ndarray, np.ndarray, Any]]) -> list:
@@ -200,6 +194,16 @@ class Counter:
         words = {1: 'WARN', 2: 'ERROR', 3: 'STALE'}
         return Tally((family(a.status), words.get(a.after, str(a.after)), cause(a.message))
                      for a in events)  # fmt: skip
+
+
+def _column_text(group: Any, at: int, state: Any) -> Callable[[int], tuple[str, str]]:
+    """(message, alarm_state) of the ``i``-th snapshot of a status in columns."""
+    return lambda i: (_get(group.message, at + i), _get(state, at + i) if state else '')
+
+
+def _row_text(rows: Any) -> Callable[[int], tuple[str, str]]:
+    """(message, alarm_state) of the ``i``-th of a status's rows."""
+    return lambda i: (rows[i].message, dict(rows[i].values).get('alarm_state', ''))
 
 
 def _short(name: str) -> str:

@@ -466,7 +466,7 @@ class _Writer:
             if b <= a:
                 continue
             lo, hi = int(offsets[a]), int(offsets[b - 1] + size[b - 1])
-            self.w.write_records(memoryview(buf[lo:hi]), channel[a:b], t_sorted[a:b],
+            self.w.write_records(buf[lo:hi].tobytes(), channel[a:b], t_sorted[a:b],
                                  offsets[a:b] - offsets[a])  # fmt: skip
 
 
