@@ -564,3 +564,55 @@ def _strings(texts: list[str]) -> list[tuple[np.ndarray, np.ndarray]]:
         block = np.frombuffer(b''.join(raw[i] for i in idx.tolist()), np.uint8)
         out.append((idx, block.reshape(len(idx), size)))
     return out
+
+
+def main(argv: Optional[list[str]] = None) -> int:
+    """``python -m catenary_monitor_study.normal_days_log DIR [...]``: write one scene's log and
+    params file (then ``catenary-monitor replay DIR/SCENE.mcap``, ``catenary-monitor alarms``)."""
+    import argparse
+    import sys
+
+    from catenary_monitor_study.normal_days import (
+        FAULT_KINDS,
+        GAUGES,
+        Fault,
+        drawn_scene,
+        paper_scene,
+        scene_margins,
+    )
+
+    p = argparse.ArgumentParser(prog='normal_days_log', description=main.__doc__)
+    p.add_argument('folder', help='where the log and its params file go')
+    p.add_argument('--dock', default='paper', help='paper or drawn:SEED (default: paper)')
+    p.add_argument('--gauge', default='radar_1cm', choices=sorted(GAUGES))
+    p.add_argument('--days', type=float, default=2.0, help='length [days] (default: 2)')
+    p.add_argument('--seed', type=int, default=1)
+    p.add_argument('--fault', action='append', default=[], metavar='KIND[:AT[:SECONDS[:LINE]]]',
+                   help=f'a fault ({", ".join(FAULT_KINDS)}) from AT s for SECONDS s on LINE '
+                   '(repeatable)')  # fmt: skip
+    args = p.parse_args(argv)
+    faults = []
+    for text in args.fault:
+        kind, *rest = text.split(':')
+        if kind not in FAULT_KINDS:
+            print(f'normal_days_log: unknown fault {kind!r}', file=sys.stderr)
+            return 2
+        at = float(rest[0]) if rest else 0.0
+        seconds = float(rest[1]) if len(rest) > 1 else math.inf
+        line = rest[2] if len(rest) > 2 else None
+        value = {'parted': 12.0, 'pressure_step': 0.3}.get(kind, math.nan)
+        faults.append(Fault(kind, at, seconds, line, value))
+    if args.dock == 'paper':
+        scene = paper_scene(args.gauge, days=args.days, faults=tuple(faults), seed=args.seed)
+    else:
+        seed = int(args.dock.split(':', 1)[1])
+        scene = drawn_scene(seed, args.gauge, days=args.days, faults=tuple(faults))
+    facts = write_scene(scene, Path(args.folder))
+    print(json.dumps({'log': str(facts.log), 'params': str(facts.params), 'bytes': facts.bytes,
+                      'messages': sum(facts.messages.values()), 'mean_depth': scene.mean_depth,
+                      'margins': scene_margins(scene)}))  # fmt: skip
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
