@@ -103,6 +103,12 @@ def drop_log(tmp_path_factory):
     return scene, ndl.write_scene(scene, tmp_path_factory.mktemp('drop'))
 
 
+@pytest.fixture(scope='module')
+def drop_counts(drop_log):
+    """The drop log replayed into the bench's two sinks."""
+    return replay_counts(drop_log[1].log, drop_log[1].params)
+
+
 def test_the_log_holds_what_the_drivers_publish(drop_log):
     scene, facts = drop_log
     config = scene.config
@@ -115,7 +121,7 @@ def test_the_log_holds_what_the_drivers_publish(drop_log):
                      'sensor_msgs/msg/Range'}
 
 
-def test_annunciations_in_replay_are_those_replay_out_records(drop_log, tmp_path):
+def test_annunciations_in_replay_are_those_replay_out_records(drop_log, drop_counts, tmp_path):
     """The bench's count from the replay driver's snapshots equals the /diagnostics that
     ``replay --out`` writes (decoded by mcap_ros2 and by our decoder), and the gateway's 15 s
     of silence is heard."""
@@ -123,7 +129,7 @@ def test_annunciations_in_replay_are_those_replay_out_records(drop_log, tmp_path
     from mcap_ros2.decoder import DecoderFactory
 
     scene, facts = drop_log
-    counter, figures = replay_counts(facts.log, facts.params)
+    counter, figures = drop_counts
     out = tmp_path / 'out.mcap'
     code = main(['replay', str(facts.log), '--params-file', str(facts.params), '--out', str(out),
                  '--quiet'])
@@ -178,3 +184,20 @@ def test_counter_takes_a_status_once_it_was_ok():
     assert [(a.status, a.after, a.hidden) for a in c.events] == [
         ('tide', 1, ''), ('tide', 2, ''), ('line_01', 3, 'suppressed')]
     assert len(c.heard()) == 2
+
+
+def test_the_bench_reports_a_fault_window(drop_log, drop_counts):
+    """The bench's row of a fault scene: the window's annunciations, their causes, the
+    first-out and whether it names the fault, both counts and their gap; and its table."""
+    from catenary_monitor_study.bench_alarms import _summary, table
+
+    scene, _ = drop_log
+    counter, figures = drop_counts
+    row = _summary('gateway_drop', scene, counter, figures)
+    fault = row['fault']
+    assert fault['window_s'] == [600.0, 735.0]
+    assert fault['annunciations'] == len(counter.heard(scene.start_s + 600, scene.start_s + 735))
+    assert row['gap'] == row['diagnostics_annunciations'] - row['alarms_report_annunciations']
+    assert fault['first_out'] is not None and fault['causes']
+    text = table({'dock': 'paper', 'seed': 1, 'seconds': 1.0, 'scenes': [row]})
+    assert 'fault gateway_drop' in text and scene.name in text
