@@ -170,10 +170,12 @@ def _summary(kind: str, scene: Scene, counter: Counter, figures: dict[str, Any])
     inside = [a for a in heard if lo <= a.time - start < hi]
     outside = [a for a in heard if not lo <= a.time - start < hi]
     mean, peak = _period_stats(outside, start, end)
+    verdict = 'acceptable' if mean <= 1.0 else 'manageable' if mean <= 2.0 else 'over-demanding'
     out['outside'] = {
         'annunciations': len(outside),
         'per_10min_mean': mean,
         'per_10min_peak': peak,
+        'verdict': 'quiet' if not outside else verdict,
         'by_class': _classes(counter, outside),
     }
     if fault is not None:
@@ -194,6 +196,8 @@ def _summary(kind: str, scene: Scene, counter: Counter, figures: dict[str, Any])
             'flood_first_out': [m.group(1) for a in inside if a.status == 'alarms'
                                 for m in [re.search(r'first out: (\S+)', a.message)] if m],
         }  # fmt: skip
+        f = out['fault']
+        f['met'] = bool(f['cause_named'] and f['first_out_right'] and len(inside) <= 2)
         if fault.line is not None:
             out['fault']['line_view'] = _line_view(scene, counter, fault.line)
     return out
@@ -294,15 +298,18 @@ def table(figures: dict[str, Any]) -> str:
         f'({figures["seconds"]:.0f} s)',
         f'targets: normal days {TARGET_MEAN}; peak {TARGET_PEAK}; each fault {TARGET_FAULT}',
         '',
-        f'{"scene":<34} {"hours":>5} {"heard":>6} {"/10min":>7} {"peak":>5} '
-        f'{"alarms":>7} {"gap":>6}',
+        f'{"scene":<44} {"hours":>5} {"heard":>6} {"/10min":>7} {"peak":>5} '
+        f'{"alarms":>7} {"gap":>6}  verdict',
     ]
     for r in figures['scenes']:
         o = r['outside']
+        verdict = o['verdict']
+        if r.get('fault'):
+            verdict += ' / fault ' + ('met' if r['fault']['met'] else 'not met')
         rows.append(
-            f'{r["scene"]:<34} {r["hours"]:>5.1f} {r["diagnostics_annunciations"]:>6} '
+            f'{r["scene"]:<44} {r["hours"]:>5.1f} {r["diagnostics_annunciations"]:>6} '
             f'{o["per_10min_mean"]:>7.2f} {o["per_10min_peak"]:>5} '
-            f'{r["alarms_report_annunciations"]:>7} {r["gap"]:>6}'
+            f'{r["alarms_report_annunciations"]:>7} {r["gap"]:>6}  {verdict}'
         )
     rows += ['', '("heard": every status leaving OK on /diagnostics; "alarms": what '
              '`catenary-monitor alarms --json` counts; /10min and peak outside the faults)']
