@@ -65,6 +65,8 @@ EXPECTED = {
     'parted': ('line', 'parted'),
     'pressure_step': ('tide', 'depth'),
 }
+#: The normal scenes' gauges by default: one of each kind.
+NORMAL_GAUGES = ('radar_1cm', 'pressure_1mm', 'exact_1mm')
 #: The fault scenes' gauge (the others read by the radar).
 FAULT_GAUGE = {'pressure_step': 'pressure_1mm'}
 TARGET_MEAN = 'about 1 per 10 min acceptable, 2 the most manageable (ISA-18.2 / EEMUA 191)'
@@ -241,7 +243,7 @@ def run(
     settings: Optional[dict[str, Any]] = None,
 ) -> dict[str, Any]:
     """Generate, replay and count every scene; the figures (JSON-ready)."""
-    gauges = list(GAUGES) if gauges is None else gauges
+    gauges = list(NORMAL_GAUGES) if gauges is None else gauges
     faults = list(FAULT_KINDS) if faults is None else faults
     folder = Path(keep) if keep else Path(tempfile.mkdtemp(prefix='bench_alarms_'))
     say = _Say(quiet)
@@ -364,8 +366,9 @@ def register(sub: Any) -> None:
                    help='length of each normal scene [days] (default: 2)')
     p.add_argument('--hours', type=float, default=6.0,
                    help='length of each fault scene [h], the fault half-way (default: 6)')
-    p.add_argument('--gauges', default=','.join(GAUGES),
-                   help=f'the normal scenes\' gauges (default: {",".join(GAUGES)})')
+    p.add_argument('--gauges', default=','.join(NORMAL_GAUGES),
+                   help=f'the normal scenes\' gauges, of {",".join(GAUGES)} (default: '
+                   f'{",".join(NORMAL_GAUGES)})')
     p.add_argument('--faults', default=','.join(FAULT_KINDS),
                    help='the faults, comma-separated, or none (default: all: '
                    f'{",".join(FAULT_KINDS)})')

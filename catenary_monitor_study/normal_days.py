@@ -191,12 +191,14 @@ class Gauge:
 
 
 #: The gauges of the benchmark: a radar gauge of 1 cm (a harbour's radar: 1 Hz, 30 s average,
-#: 0.5 mm of noise left after it),
+#: 0.5 mm of noise left after it; ``radar_1cm_still``: none, so its output steps only when the
+#: tide crosses a centimetre),
 #: a pressure gauge of 1 mm with 2 mm noise (1 Hz, 1 s average, waves attenuated to a fifth at
 #: the seabed, an occasional double read) and an ideal 1 mm gauge without noise (the still
 #: water level itself, 1 Hz).
 GAUGES = {
     'radar_1cm': Gauge('radar_1cm', 'radar', 0.01, noise=0.0005, average=30.0, height=8.0),
+    'radar_1cm_still': Gauge('radar_1cm_still', 'radar', 0.01, average=30.0, height=8.0),
     'pressure_1mm': Gauge(
         'pressure_1mm',
         'pressure',
