@@ -37,6 +37,8 @@ from catenary_monitor.core.physics.fixed_length import lift_depth, statics_at_sp
 
 __all__ = [
     'stuck_gauge',
+    'last_steps',
+    'hidden_steps',
     'tide_motion',
     'accel_bound',
     'spike_threshold',
@@ -141,12 +143,25 @@ def stuck_gauge(
 
 
 def last_steps(stamps: np.ndarray, values: np.ndarray, resolution: float) -> np.ndarray:
-    """The time [s] of each reading's last step beyond ``resolution`` (``floor(x / res)``
-    changed), as the core's sensor memory keeps it."""
-    q = np.floor(np.asarray(values) / resolution) if resolution > 0 else np.asarray(values)
+    """The time [s] of each reading's last step of ``resolution`` (``round(x / res)``
+    changed), as the core's sensor memory keeps it. ``round``, not today's ``floor``: a
+    gauge's readings lie on its resolution's grid, where floor's bin edges are, so a float's
+    last bit (a Range's float32 taken from the gauge height) puts two neighbouring steps in
+    one bin and hides the step (:func:`hidden_steps`)."""
+    q = np.round(np.asarray(values) / resolution) if resolution > 0 else np.asarray(values)
     change = np.concatenate([[True], q[1:] != q[:-1]])
     at = np.where(change, stamps, -np.inf)
     return np.maximum.accumulate(at)
+
+
+def hidden_steps(values: np.ndarray, resolution: float) -> tuple[int, int]:
+    """How many changes between consecutive readings ``floor(x / res)`` and ``round(x / res)``
+    miss (today's binning and the proposed one)."""
+    v = np.asarray(values, np.float64)
+    moved = np.diff(v) != 0
+    floor = np.diff(np.floor(v / resolution)) == 0
+    near = np.diff(np.round(v / resolution)) == 0
+    return int(np.sum(moved & floor)), int(np.sum(moved & near))
 
 
 def spike_threshold(

@@ -162,3 +162,15 @@ def test_chart_defaults_from_the_lines(day):
     lo, hi = sr.chart_range(scene.config)
     assert lo < float(np.min(c.depth)) - 5.0 and hi > float(np.max(c.depth)) + 5.0
     assert not lo <= 0.3 <= hi  # the pressure gauge stepping to 0.3 m: impossible
+
+
+def test_steps_on_the_gauges_grid_are_seen_by_rounding():
+    """A 1 cm radar's depths (gauge height - a float32 range) lie on the centimetre grid within
+    a float's last bit: ``floor(x / 0.01)`` (today's sensor memory) puts about a third of the
+    neighbouring steps in one bin -- the gauge looks still while it steps, and configuring
+    ``depth_resolution: 0.01`` makes the stuck rule worse; ``round`` sees every step."""
+    depth = np.round(np.arange(17.5, 19.5, 0.01), 2)
+    ranges = (26.443 - depth).astype(np.float32)
+    readings = 26.443 - ranges.astype(np.float64)
+    by_floor, by_round = sr.hidden_steps(readings, 0.01)
+    assert by_floor > 0.2 * len(depth) and by_round == 0
