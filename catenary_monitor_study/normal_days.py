@@ -853,7 +853,7 @@ class WaveMotion(NamedTuple):
 
 
 @functools.lru_cache(maxsize=8)
-def _components(seed: int, tp: float, n: int = 40) -> tuple[np.ndarray, np.ndarray]:
+def wave_components(seed: int, tp: float, n: int = 40) -> tuple[np.ndarray, np.ndarray]:
     """Frequencies [Hz] (n,) and phases [rad] (4, n) of the wave components: periods drawn
     around ``tp`` (a narrow, JONSWAP-like peak; no two commensurate, so the sum never
     repeats)."""
@@ -865,7 +865,7 @@ def _components(seed: int, tp: float, n: int = 40) -> tuple[np.ndarray, np.ndarr
 def wave_motion(scene: Scene, t: np.ndarray, hs: np.ndarray) -> WaveMotion:
     """The wave-frequency motion at ``t`` [s], scaled by the wave height ``hs`` [m] there."""
     w = scene.weather
-    f, phi = _components(scene.seed, w.tp)
+    f, phi = wave_components(scene.seed, w.tp)
     amp = math.sqrt(2.0 / len(f))
     arg = 2 * np.pi * np.asarray(t)[:, None] * f[None, :]
     unit = [amp * np.cos(arg + phi[d][None, :]).sum(axis=1) for d in range(4)]

@@ -54,7 +54,7 @@ from catenary_monitor.io.ros_schemas import (
 from catenary_monitor_study.normal_days import (
     Coarse,
     Scene,
-    _components,
+    wave_components,
     coarse,
     hook_tensions,
     still_depth,
@@ -253,7 +253,7 @@ def gauge_levels(scene: Scene, c: Coarse, t: np.ndarray, rng: np.random.Generato
     depth = still_depth(scene, t)
     if g.kind != 'float64':
         hs = np.interp(t, c.t, c.hs)
-        f, phi = _components(scene.seed + 1000, scene.weather.tp)
+        f, phi = wave_components(scene.seed + 1000, scene.weather.tp)
         amp = math.sqrt(2.0 / len(f)) * g.attenuation
         avg = max(g.average, 1e-9)
         gain = np.sinc(f * avg)  # numpy's sinc(x) = sin(pi x) / (pi x)
