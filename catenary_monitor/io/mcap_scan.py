@@ -36,6 +36,7 @@ from catenary_monitor.io.mcap_records import (
     OP_ATTACHMENT,
     OP_CHANNEL,
     OP_CHUNK,
+    OP_CHUNK_INDEX,
     OP_DATA_END,
     OP_FOOTER,
     OP_HEADER,
@@ -253,6 +254,9 @@ class Scanner:
         report.files.append(self.file_report)
         self.schemas: dict[int, str] = {}  # schema id -> name (data section)
         self.summary_schemas: dict[int, str] = {}
+        # chunk start offset -> chunk record length (opcode and length included), from the
+        # summary's Chunk Index records: a chunk whose opcode byte is damaged is still read
+        self.summary_chunks: dict[int, int] = {}
         self.summary_channels: dict[int, tuple[int, str, str]] = {}  # id -> schema, topic, enc
         self.channels: dict[int, Channel] = {}
         self.accepted: set[int] = set()
@@ -386,6 +390,9 @@ class Scanner:
                     self.summary_channels[channel_id] = tuple(rest)  # type: ignore[assignment]
                 elif op == OP_STATISTICS:
                     self.stats_counts = statistics_counts(data, body, end)
+                elif op == OP_CHUNK_INDEX and length >= 32:
+                    start, size = struct.unpack_from('<QQ', data, body + 16)
+                    self.summary_chunks[start] = size
             except BadRecord as exc:
                 self.skip(pos, 'corrupt_region', f'unreadable summary record: {exc}')
             pos = end
@@ -413,6 +420,14 @@ class Scanner:
                 break
             op, length = RECORD_HEAD.unpack_from(data, pos)
             end = pos + 9 + length
+            if op != OP_CHUNK and self.summary_chunks.get(pos) == 9 + length:
+                # the summary's (CRC-checked) chunk index puts a chunk here: its opcode byte is
+                # damaged (an unknown opcode is skipped by the spec, and its messages with it)
+                self.skip(
+                    pos, 'corrupt_region', f'a chunk\'s opcode damaged (0x{op:02x}); the chunk '
+                    "read through the summary's chunk index", 0,
+                )  # fmt: skip
+                op = OP_CHUNK
             if op not in KNOWN_OPS and op < 0x80:
                 pos = self._resync(pos, f'invalid record opcode 0x{op:02x}')
                 continue
