@@ -67,11 +67,14 @@ def test_restart_after_sigkill_recovers_every_file_and_the_folder_is_a_bag(clien
     assert not is_finished(killed)
     readable = {(m.topic, m.log_time_ns, m.data) for m in iter_messages(killed)}
     assert len(readable) > 60
+    users = log_dir / 'survey_2026.mcap'  # a user's unfinished file: never rewritten
+    users.write_bytes(killed.read_bytes())
 
     proc = start_monitor(params, log_dir)
     try:
         out = wait_output(proc, f'recovered unfinished MCAP log {killed.name}', 60.0)
         assert 'original kept as' in out
+        assert "survey_2026.mcap in the log folder is not the node's own: left as it is" in out
         status = client.wait_status(
             LOGGER, 30.0, OK, check=lambda s: s['values'].get('files_recovered') == '1'
         )
@@ -82,6 +85,9 @@ def test_restart_after_sigkill_recovers_every_file_and_the_folder_is_a_bag(clien
         client.feed('/tide/depth', None)
         assert stop(proc) == 0
     assert is_finished(killed) and (log_dir / (killed.name + BACKUP_SUFFIX)).exists()
+    assert users.read_bytes() == (log_dir / (killed.name + BACKUP_SUFFIX)).read_bytes()
+    assert not (log_dir / (users.name + BACKUP_SUFFIX)).exists()
+    users.unlink()
     after = {(m.topic, m.log_time_ns, m.data) for m in iter_messages(killed)}
     assert readable <= after, f'{len(readable - after)} readable messages lost by recovery'
     files = sorted(log_dir.glob('*.mcap'))

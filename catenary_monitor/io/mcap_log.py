@@ -101,7 +101,7 @@ from catenary_monitor.io.ros_schemas import (
     type_description_hash,
 )
 
-__all__ = ['McapLogger', 'QOS_PRESETS', 'FUTURE_SLACK']
+__all__ = ['McapLogger', 'QOS_PRESETS', 'FUTURE_SLACK', 'own_file_name']
 
 #: A finished file whose recorded end lies this far (s) ahead of the wall clock is dated in the
 #: future (a clock error): the retention deletes it first.
@@ -624,8 +624,7 @@ class McapLogger:
 
     def _own_name(self, name: str) -> bool:
         """Whether ``name`` is of the form this logger gives its files."""
-        rest = name[len(self.prefix) :]
-        return name.startswith(self.prefix) and _OWN_NAME.fullmatch(rest) is not None
+        return own_file_name(self.prefix, name)
 
     def _open_size(self) -> int:
         if self._file is None:
@@ -1020,6 +1019,14 @@ class McapLogger:
 
 
 _OWN_NAME = re.compile(r'_\d{8}T\d{6}Z_\d{4,}\.mcap')
+
+
+def own_file_name(prefix: str, name: str) -> bool:
+    """Whether ``name`` is of the form a logger with ``prefix`` gives its files
+    (``PREFIX_YYYYMMDDTHHMMSSZ_NNNN.mcap``): retention and start-up recovery touch no other."""
+    return name.startswith(prefix) and _OWN_NAME.fullmatch(name[len(prefix) :]) is not None
+
+
 _MAGIC = b'\x89MCAP0\r\n'
 _RECORD = struct.Struct('<BQ')
 

@@ -116,7 +116,7 @@ from catenary_monitor.core.monitor.monitor_core import MonitorCore, Step
 from catenary_monitor.core.rules.fatigue import to_record
 from catenary_monitor.core.physics import elastic
 from catenary_monitor.io import fatigue_store
-from catenary_monitor.io.mcap_log import McapLogger
+from catenary_monitor.io.mcap_log import McapLogger, own_file_name
 from catenary_monitor.io.cdr import string_text
 from catenary_monitor.io.mcap_recover import (
     RECOVERED,
@@ -342,7 +342,14 @@ class CatenaryMonitor(Node):
         """The MCAP logger (never raises on disk errors: those become its ``error``)."""
         try:
             # Files a crash left unfinished, found before this run's first file exists.
-            unfinished = unfinished_files(self._log_dir())
+            unfinished, theirs = [], []
+            for path in unfinished_files(self._log_dir()):
+                (unfinished if own_file_name(NODE_NAME, path.name) else theirs).append(path)
+            for path in theirs:  # a user's file is never rewritten
+                self.get_logger().warning(
+                    f'unfinished MCAP file {path.name} in the log folder is not the node\'s own: '
+                    'left as it is (catenary-monitor recover finishes it)'
+                )
             # Flushed at 0.75 s age, checked every 0.25 s: a SIGKILL loses at most the last second.
             # A vanished file or directory is seen at the next 0.25 s tick; retries every 1 s.
             log = McapLogger(
