@@ -44,6 +44,7 @@ import threading
 import time
 import traceback
 from functools import partial, wraps
+from pathlib import Path
 from typing import Any, Optional, Sequence
 
 import rclpy
@@ -342,7 +343,8 @@ class CatenaryMonitor(Node):
         """The MCAP logger (never raises on disk errors: those become its ``error``)."""
         try:
             # Files a crash left unfinished, found before this run's first file exists.
-            unfinished, theirs = [], []
+            unfinished: list[Path] = []
+            theirs: list[Path] = []
             for path in unfinished_files(self._log_dir()):
                 (unfinished if own_file_name(NODE_NAME, path.name) else theirs).append(path)
             for path in theirs:  # a user's file is never rewritten
