@@ -594,7 +594,8 @@ def run(
     report: Callable[[str], None] = print,
 ) -> dict[str, Outcome]:
     """The targets in turn, ``batch`` cases or a slice of the time at a time (at most a
-    minute, the same for each), for ``minutes``; the outcomes."""
+    minute, the same for each), for ``minutes`` (each target at least one slice); the
+    outcomes."""
     import random
 
     stop_at = time.monotonic() + minutes * 60.0
@@ -604,13 +605,15 @@ def run(
     with tempfile.TemporaryDirectory(prefix='catenary-fuzz-') as tmp:
         while time.monotonic() < stop_at:
             for name in targets:
-                if time.monotonic() >= stop_at:
-                    break
-                one = fuzz_target(
-                    TARGETS[name], batch, Path(tmp) / name, rng.randrange(1 << 30), out,
-                    min(stop_at, time.monotonic() + share),
-                )  # fmt: skip
                 total = outcomes[name]
+                now = time.monotonic()
+                if now >= stop_at and total.cases:
+                    continue
+                # every target's first slice is whole, however long the others took
+                end = now + share if not total.cases else min(stop_at, now + share)
+                one = fuzz_target(
+                    TARGETS[name], batch, Path(tmp) / name, rng.randrange(1 << 30), out, end
+                )
                 total.cases += one.cases
                 total.seconds += one.seconds
                 known = {_kind(f['why']) for f in total.failures}

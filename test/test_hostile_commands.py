@@ -57,7 +57,8 @@ if serve:  # the console: up when it prints its URL, then Ctrl-C
         err += 'TEST: did not stop within 60 s of SIGINT'
     out = first + out
 else:
-    p = subprocess.run(argv, capture_output=True, text=True, timeout=120)
+    # 300 s: a guard against a hang (the limits are CPU and RSS, measured beside it)
+    p = subprocess.run(argv, capture_output=True, text=True, timeout=300)
     out, err, wall = p.stdout, p.stderr, time.monotonic() - t0
 ru = resource.getrusage(resource.RUSAGE_CHILDREN)
 print(json.dumps({'rc': p.returncode, 'out': out, 'err': err, 'wall': wall,

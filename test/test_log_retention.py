@@ -62,9 +62,10 @@ def test_the_folder_stays_under_its_bound_over_a_long_run(tmp_path):
         wall.now += 0.01
         log.write('/a', payload, T0 + i * 10_000_000)
         log.tick()
-        current = log.current_path
-        assert current is not None and current.exists()  # the open file is never touched
-        opened.add(current)
+        current = log.current_path  # None between a rotation and the next message
+        if current is not None:
+            assert current.exists()  # the open file is never touched
+            opened.add(current)
         deleted += log.take_deleted()
         if i % 10 == 0:
             peak = max(peak, folder_bytes(folder))

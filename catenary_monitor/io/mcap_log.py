@@ -312,6 +312,7 @@ class McapLogger:
         self._file_index = 0
         self._closed = False
         self._next_retry = float('-inf')
+        self._rotated = False  # a file finished by rotation, its successor not opened yet
         self._finished_bytes = 0
         # Messages in the writer's open chunk (not yet flushed), per topic, with payload bytes.
         self._pending: dict[str, list[int]] = {}
@@ -520,7 +521,8 @@ class McapLogger:
                 self._finish_abandoned(now)
             self._rotate_if_due(now)
             if self._file is None:
-                self._ensure_open(now)
+                if not self._rotated:  # a rotated file's successor opens with a message
+                    self._ensure_open(now)
                 return False
             return self._flush_if_due(now)
 
@@ -667,6 +669,7 @@ class McapLogger:
             self._finish_current()
             if self._file is None:
                 self._next_retry = float('-inf')  # the next file opens with the next message
+                self._rotated = True
             self.apply_retention()
 
     def close(self) -> None:
@@ -732,6 +735,7 @@ class McapLogger:
                 # the next file opens with the next message (a file without messages is not
                 # a valid MCAP to strict readers: its summary lists empty groups)
                 self._next_retry = float('-inf')
+                self._rotated = True
             self.apply_retention()  # the bound holds at once, however late tick() runs
 
     def _flush_if_due(self, now: float) -> bool:
@@ -772,6 +776,7 @@ class McapLogger:
             return True
         if not force and now < self._next_retry:
             return False
+        self._rotated = False
         path: Path | None = None
         stream: IO[bytes] | None = None
         try:
