@@ -32,7 +32,7 @@ from catenary_monitor.replay.fleet_tasks import (
     run_piece,
 )
 
-__all__ = ['FleetRun', 'Progress', 'run_fleet']
+__all__ = ['FleetRun', 'Progress', 'local_cluster', 'run_fleet', 'start_method']
 
 
 @dataclass
@@ -90,7 +90,7 @@ def run_fleet(
     ``workers`` one-core worker processes (default: the usable CPUs), or the cluster whose
     scheduler is at ``scheduler`` (its workers must see ``out`` and the folders at the same
     paths)."""
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     run = FleetRun()
     root = Path(out).resolve()
@@ -101,15 +101,7 @@ def run_fleet(
     if scheduler:
         client = Client(scheduler, timeout='30s')
     else:
-        with warnings.catch_warnings():  # "port 8787 in use" of its HTTP server: harmless
-            warnings.simplefilter('ignore', UserWarning)
-            cluster = LocalCluster(
-                n_workers=workers,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                silence_logs=logging.CRITICAL,
-            )
+        cluster = local_cluster(workers)
         client = Client(cluster)
     try:
         run.workers = len(client.scheduler_info()['workers'])
@@ -128,6 +120,40 @@ def run_fleet(
     clear_tmp(root)  # what killed tasks left, and nothing else
     run.seconds = time.monotonic() - t0 - run.startup_seconds
     return run
+
+
+def start_method() -> str:
+    """How the local cluster starts its worker processes: ``fork`` where the system has it
+    (each worker a copy of this process, which has imported the replay already: 0.5 s on a
+    quiet machine where ``spawn``, Dask's default, took 1.5-2 s to start two workers, import
+    the replay in each and stop them, and 7-13 s at a load of 12), else Dask's setting."""
+    import multiprocessing
+
+    import dask
+
+    if 'fork' in multiprocessing.get_all_start_methods():
+        return 'fork'
+    return str(dask.config.get('distributed.worker.multiprocessing-method'))
+
+
+def local_cluster(workers: Optional[int] = None) -> Any:
+    """A local cluster of ``workers`` one-core worker processes (default: the usable CPUs),
+    started by :func:`start_method` (this module imported the replay's tasks: a forked worker
+    has them)."""
+    import dask
+    from distributed import LocalCluster
+
+    with warnings.catch_warnings(), dask.config.set(
+        {'distributed.worker.multiprocessing-method': start_method()}
+    ):
+        warnings.simplefilter('ignore', UserWarning)  # "port 8787 in use" of its HTTP server
+        return LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            silence_logs=logging.CRITICAL,
+        )
 
 
 def _warm() -> None:
@@ -225,9 +251,21 @@ def _drive(
         if progress is not None:
             progress(state)
             state.notes = []
-        if not pending.has_ready():
-            time.sleep(0.05)
+        _wait_for_one(pending)
     run.messages = state.messages
+
+
+def _wait_for_one(pending: Any, timeout: float = 0.1) -> None:
+    """Until a future is done (woken by it, as ``as_completed``'s own iterator is) or
+    ``timeout`` s: a fixed sleep of 50 ms here cost a small run up to a second."""
+    condition = getattr(pending, 'thread_condition', None)
+    if condition is None:
+        if not pending.has_ready():
+            time.sleep(0.01)
+        return
+    with condition:
+        if not pending.has_ready():
+            condition.wait(timeout=timeout)
 
 
 def _look_for_lost(client: Any, addresses: set[str], run: FleetRun, state: Progress) -> set[str]:
