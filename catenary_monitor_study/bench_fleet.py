@@ -6,8 +6,10 @@ paper dock's 12 lines at 10 Hz, the tide at 1 Hz, zstd chunks; ``--messages-per-
 folder's ``catenary_monitor.yaml``), then times, as commands in their own processes, rounds in
 turn: the baseline, what a user would otherwise run (a serial loop of ``catenary-monitor replay
 DIR --params-file DIR/catenary_monitor.yaml --csv DOCK.csv`` over the folders); the same loop
-without the CSV (the summary only: the least a replay does); and ``catenary-monitor fleet`` on
-a local cluster of 1 worker and of 2 (``--workers-list``), each into a fresh results folder.
+without the CSV (the summary only: the least a replay does); ``catenary-monitor fleet`` on
+a local cluster of its own of 1 worker and of 2 (``--workers-list``); and ``fleet
+--scheduler`` on a cluster of 2 started once for all the rounds (``reused``), each into a
+fresh results folder.
 Reports per mode the median wall time and its ratio to the baseline, the fleet's fixed cost
 (its wall time minus its replay: the imports, the cluster's start and stop), and checks that
 every fleet run's messages dataset is identical to the first's (row for row) and holds the
@@ -162,18 +164,24 @@ def _replay_loop(folders: list[Path], csv_dir: Optional[Path]) -> dict[str, Any]
             'wall_s': round(wall, 3), 'cpu_s': round(cpu, 3)}  # fmt: skip
 
 
-def _fleet(folders: list[Path], results: Path, workers: int, first: Path) -> dict[str, Any]:
-    """One ``fleet`` command on a fresh local cluster into a fresh folder, compared with the
-    first."""
+def _fleet(
+    folders: list[Path], results: Path, workers: int, first: Path, scheduler: str = ''
+) -> dict[str, Any]:
+    """One ``fleet`` command into a fresh folder, compared with the first: on a fresh local
+    cluster of ``workers``, or on the running cluster at ``scheduler`` (started once)."""
     shutil.rmtree(results, ignore_errors=True)
-    args = ['fleet', *map(str, folders), '--out', str(results), '--workers', str(workers)]
+    args = ['fleet', *map(str, folders), '--out', str(results)]
+    args += ['--scheduler', scheduler] if scheduler else ['--workers', str(workers)]
     wall, cpu, text = _command(args + ['--quiet', '--json'])
     fleet = json.loads(text)
+    if scheduler:  # the workers are not the command's children: their CPU from the run
+        cpu += fleet['worker_cpu_seconds']
     same = _same_rows(first, results)
     if results != first:
         shutil.rmtree(results, ignore_errors=True)
+    mode = f'fleet, {workers} worker{"s" if workers > 1 else ""}'
     return {
-        'mode': f'fleet, {workers} worker{"s" if workers > 1 else ""}',
+        'mode': mode + (', reused' if scheduler else ''),
         'workers': workers,
         'wall_s': round(wall, 3),
         'cpu_s': round(cpu, 3),
@@ -193,9 +201,11 @@ def run(
     workers_list: tuple[int, ...] = (1, 2),
     keep: Optional[Path] = None,
     repeat: int = 3,
+    reuse: bool = True,
 ) -> dict[str, Any]:
     """Generate the fleet, time every mode ``repeat`` times (in turn); returns the figures
-    (per mode, the median round)."""
+    (per mode, the median round). ``reuse``: also the fleet on a cluster of the largest
+    worker count started once for every round (``fleet --scheduler``)."""
     tmp = Path(keep) if keep else Path(tempfile.mkdtemp(prefix='bench_fleet_'))
     load = os.getloadavg()
     try:
@@ -205,12 +215,21 @@ def run(
         csv_dir.mkdir(exist_ok=True)
         rounds: dict[str, list[dict[str, Any]]] = {}
         first = tmp / f'results_{workers_list[0]}_0'
-        for k in range(repeat):  # the modes in turn: a change of load hits each
-            for r in (_replay_loop(folders, csv_dir), _replay_loop(folders, None)):
-                rounds.setdefault(r['mode'], []).append(r)
-            for n in workers_list:
-                r = _fleet(folders, tmp / f'results_{n}_{k}', n, first)
-                rounds.setdefault(r['mode'], []).append(r)
+        reused = _cluster(max(workers_list)) if reuse else None
+        try:
+            for k in range(repeat):  # the modes in turn: a change of load hits each
+                modes = [_replay_loop(folders, csv_dir), _replay_loop(folders, None)]
+                modes += [_fleet(folders, tmp / f'results_{n}_{k}', n, first)
+                          for n in workers_list]  # fmt: skip
+                if reused is not None:
+                    n = len(reused.scheduler_info()['workers'])
+                    address = reused.scheduler_address
+                    modes.append(_fleet(folders, tmp / f'reused_{k}', n, first, address))
+                for r in modes:
+                    rounds.setdefault(r['mode'], []).append(r)
+        finally:
+            if reused is not None:
+                reused.close()
         same_csv = all(same_as_csv(first, f.name, csv_dir / f'{f.name}.csv') for f in folders)
         runs = [_median(rounds[mode]) for mode in rounds]
         base = {r['mode']: r['wall_s'] for r in runs}
@@ -233,6 +252,14 @@ def run(
     finally:
         if keep is None:
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _cluster(workers: int) -> Any:
+    """The local cluster the ``reused`` rounds share, started once, as the command starts its
+    own (:func:`catenary_monitor.replay.fleet_cluster.local_cluster`)."""
+    from catenary_monitor.replay.fleet_cluster import local_cluster
+
+    return local_cluster(workers)
 
 
 def _median(rounds: list[dict[str, Any]]) -> dict[str, Any]:
@@ -301,6 +328,7 @@ def cmd_bench_fleet(args: argparse.Namespace) -> int:
         workers_list=tuple(args.workers_list),
         keep=Path(args.keep) if args.keep else None,
         repeat=args.repeat,
+        reuse=not args.no_reuse,
     )
     print(json.dumps(out) if args.json else _text(out))
     fleets = [r for r in out['runs'] if 'workers' in r]
@@ -337,6 +365,10 @@ def register(sub: Any) -> None:
     p.add_argument(
         '--repeat', type=int, default=3, help='rounds of every worker count (default 3)'
     )
+    p.add_argument(
+        '--no-reuse', action='store_true',
+        help='no rounds on a cluster started once (fleet --scheduler)',
+    )  # fmt: skip
     p.add_argument('--keep', metavar='DIR', help='generate and keep the fleet and results here')
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench_fleet)

@@ -135,8 +135,21 @@ def message_table(columns: dict[str, Any]) -> pa.Table:
         elif name == 'time':
             arrays[name] = pa.array(column, pa.int64())
         else:  # unknown (NaN) is null: SQL aggregates skip it (NaN sorts above +inf)
-            arrays[name] = pa.array(column, pa.float64(), from_pandas=True)
+            arrays[name] = _nan_null(np.asarray(column, np.float64))
     return pa.table(arrays)
+
+
+def _nan_null(values: np.ndarray) -> pa.Array:
+    """A float64 array with NaN as null, over ``values``' own memory (the validity bitmap
+    packed from ``isnan``: half the CPU of ``pa.array(from_pandas=True)``, the same array)."""
+    values = np.ascontiguousarray(values)
+    nan = np.isnan(values)
+    nulls = int(nan.sum())
+    if not nulls:
+        return pa.array(values, pa.float64())
+    valid = np.packbits(~nan, bitorder='little')
+    buffers = [pa.py_buffer(valid), pa.py_buffer(values)]
+    return pa.Array.from_buffers(pa.float64(), len(values), buffers, null_count=nulls)
 
 
 def _atomic_place(tmp: Path, final: Path) -> None:
