@@ -222,7 +222,7 @@ def run(
                 modes += [_fleet(folders, tmp / f'results_{n}_{k}', n, first)
                           for n in workers_list]  # fmt: skip
                 if reused is not None:
-                    n = len(reused.scheduler_info()['workers'])
+                    n = len(reused.scheduler_info['workers'])
                     address = reused.scheduler_address
                     modes.append(_fleet(folders, tmp / f'reused_{k}', n, first, address))
                 for r in modes:
