@@ -1,16 +1,24 @@
-"""``catenary-monitor bench-fleet``: the fleet replay on one worker against two, same fleet.
+"""``catenary-monitor bench-fleet``: the fleet replay against the shell loop of ``replay`` it
+replaces, same folders, same run.
 
 Generates (seeded) ``--docks`` dock folders of ``--files`` rotated node-shaped logs each (the
 paper dock's 12 lines at 10 Hz, the tide at 1 Hz, zstd chunks; ``--messages-per-file``; the
-folder's ``catenary_monitor.yaml``), then replays the fleet with ``catenary-monitor fleet`` on
-a fresh local cluster of 1 worker and of 2 workers (``--workers-list``), each into a fresh
-results folder, in the same run. Reports per run the cluster's start (the workers' imports
-included) and the replay after it, the replay's messages per second, the speed-up against 1
-worker, and checks that every run's messages dataset is identical to the first's (row for
-row). From the measured rate per worker it prints what 100 docks x 1 year of 12 lines at 20 Hz
-would cost on N workers.
+folder's ``catenary_monitor.yaml``), then times, as commands in their own processes, rounds in
+turn: the baseline, what a user would otherwise run (a serial loop of ``catenary-monitor replay
+DIR --params-file DIR/catenary_monitor.yaml --csv DOCK.csv`` over the folders); the same loop
+without the CSV (the summary only: the least a replay does); ``catenary-monitor fleet`` on
+a local cluster of its own of 1 worker and of 2 (``--workers-list``); and ``fleet
+--scheduler`` on a cluster of 2 started once for all the rounds (``reused``), each into a
+fresh results folder.
+Reports per mode the median wall time and its ratio to the baseline, the fleet's fixed cost
+(its wall time minus its replay: the imports, the cluster's start and stop), and checks that
+every fleet run's messages dataset is identical to the first's (row for row) and holds the
+serial replays' CSV rows (every row, each value equal at the CSV's printed precision). From
+the workers' CPU time it prints what 100 docks x 1 year of 12 lines at 20 Hz would cost on N
+workers.
 
-The machines are shared: run it when nothing else is running and read the ratio first.
+The machines are shared: the load average before and after is printed with the figures; read
+the ratios (same run, rounds in turn), not the seconds.
 """
 
 from __future__ import annotations
@@ -20,15 +28,20 @@ import json
 import os
 import shutil
 import statistics
+import subprocess
+import sys
 import tempfile
 import time
 from pathlib import Path
 from typing import Any, Optional
 
-__all__ = ['register', 'run']
+__all__ = ['register', 'run', 'same_as_csv']
 
 #: One dock at 12 lines x 20 Hz and its tide at 1 Hz, for a year: the messages.
 YEAR_MESSAGES = (12 * 20 + 1) * 86_400 * 365
+
+#: The baseline's mode name, and the loop without outputs.
+LOOP_CSV, LOOP_BARE = 'replay --csv loop', 'replay loop'
 
 
 def generate_fleet(root: Path, docks: int, files: int, per_file: int) -> dict[str, Any]:
@@ -72,34 +85,159 @@ def _same_rows(first: Path, other: Path) -> bool:
     return all(pq.read_table(first / p).equals(pq.read_table(other / p)) for p in a)
 
 
+def same_as_csv(results: Path, dock: str, csv: Path) -> bool:
+    """Whether the fleet's rows of ``dock`` are the rows of ``catenary-monitor replay --csv``
+    (any of its columns): as many, in time order, the same words, the time to the us (the CSV
+    prints s) and every value within half the CSV's last printed decimal (``nan``: null)."""
+    import numpy as np
+    import pyarrow as pa
+    import pyarrow.compute as pc
+    import pyarrow.dataset as ds
+    from pyarrow import csv as pacsv
+
+    from catenary_monitor.replay.outputs import CSV_ALL
+
+    decimals = dict(CSV_ALL)
+    want = pacsv.read_csv(csv).to_pydict()
+    table = ds.dataset(results / 'messages' / f'dock={dock}', format='parquet').to_table()
+    table = table.take(pc.sort_indices(table, [('time', 'ascending')]))
+    if table.num_rows != len(want['time']):
+        return False
+    for name, values in want.items():
+        got = table.column(name)
+        if name == 'time':
+            ns = np.round(np.asarray(values, np.float64) * 1e9)
+            ok = np.abs(got.to_numpy() - ns) <= 1e3  # a float64 of s holds about a us
+        elif pa.types.is_dictionary(got.type) or pa.types.is_string(got.type):
+            words = np.asarray(got.cast(pa.string()).to_pylist(), dtype=object)
+            ok = words == np.asarray([str(v) for v in values], dtype=object)
+        else:
+            x = got.to_numpy(zero_copy_only=False).astype(np.float64)
+            y = np.asarray(values, np.float64)  # None (the CSV's nan) -> NaN
+            tol = 0.5 * 10.0 ** -(decimals[name] or 0) * (1 + 1e-9) + 1e-9 * np.abs(y)
+            ok = (np.isnan(x) & np.isnan(y)) | (x == y) | (np.abs(x - y) <= tol)
+        if not bool(np.all(ok)):
+            return False
+    return True
+
+
+def _children_cpu() -> float:
+    """CPU s (user and system) of this process's finished children and theirs."""
+    import resource
+
+    used = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return used.ru_utime + used.ru_stime
+
+
+def _command(args: list[str]) -> tuple[float, float, str]:
+    """``catenary-monitor ARGS`` in its own process (this tree's package): wall s, CPU s (the
+    command's and its workers'), stdout."""
+    import catenary_monitor
+
+    tree = str(Path(catenary_monitor.__file__).resolve().parents[1])
+    env = dict(os.environ)
+    env['PYTHONPATH'] = os.pathsep.join([tree, *filter(None, [env.get('PYTHONPATH')])])
+    cpu, t0 = _children_cpu(), time.perf_counter()
+    done = subprocess.run(
+        [sys.executable, '-m', 'catenary_monitor', *args],
+        env=env,
+        capture_output=True,
+        text=True,
+    )
+    wall, cpu = time.perf_counter() - t0, _children_cpu() - cpu
+    if done.returncode != 0:
+        raise RuntimeError(f'catenary-monitor {" ".join(args)}: exit {done.returncode}: '
+                           f'{done.stderr.strip()[-500:]}')  # fmt: skip
+    return wall, cpu, done.stdout
+
+
+def _replay_loop(folders: list[Path], csv_dir: Optional[Path]) -> dict[str, Any]:
+    """The serial loop of ``replay`` over the folders (``csv_dir``: each writes DOCK.csv)."""
+    wall = cpu = 0.0
+    for folder in folders:
+        args = ['replay', str(folder), '--params-file', str(folder / 'catenary_monitor.yaml')]
+        if csv_dir is not None:
+            args += ['--csv', str(csv_dir / f'{folder.name}.csv')]
+        w, c, _ = _command(args + ['--quiet'])
+        wall, cpu = wall + w, cpu + c
+    return {'mode': LOOP_BARE if csv_dir is None else LOOP_CSV,
+            'wall_s': round(wall, 3), 'cpu_s': round(cpu, 3)}  # fmt: skip
+
+
+def _fleet(
+    folders: list[Path], results: Path, workers: int, first: Path, scheduler: str = ''
+) -> dict[str, Any]:
+    """One ``fleet`` command into a fresh folder, compared with the first: on a fresh local
+    cluster of ``workers``, or on the running cluster at ``scheduler`` (started once)."""
+    shutil.rmtree(results, ignore_errors=True)
+    args = ['fleet', *map(str, folders), '--out', str(results)]
+    args += ['--scheduler', scheduler] if scheduler else ['--workers', str(workers)]
+    wall, cpu, text = _command(args + ['--quiet', '--json'])
+    fleet = json.loads(text)
+    if scheduler:  # the workers are not the command's children: their CPU from the run
+        cpu += fleet['worker_cpu_seconds']
+    same = _same_rows(first, results)
+    if results != first:
+        shutil.rmtree(results, ignore_errors=True)
+    mode = f'fleet, {workers} worker{"s" if workers > 1 else ""}'
+    return {
+        'mode': mode + (', reused' if scheduler else ''),
+        'workers': workers,
+        'wall_s': round(wall, 3),
+        'cpu_s': round(cpu, 3),
+        'fixed_s': round(wall - fleet['seconds'], 3),
+        'startup_s': fleet['startup_seconds'],
+        'replay_s': fleet['seconds'],
+        'worker_cpu_s': fleet['worker_cpu_seconds'],
+        'messages': fleet['messages'],
+        'identical_to_first': same,
+    }
+
+
 def run(
-    docks: int = 3,
+    docks: int = 4,
     files: int = 4,
     per_file: int = 200_000,
     workers_list: tuple[int, ...] = (1, 2),
     keep: Optional[Path] = None,
     repeat: int = 3,
+    reuse: bool = True,
 ) -> dict[str, Any]:
-    """Generate the fleet, replay it ``repeat`` times per worker count (in turn); returns the
-    figures (per worker count, the median round)."""
+    """Generate the fleet, time every mode ``repeat`` times (in turn); returns the figures
+    (per mode, the median round). ``reuse``: also the fleet on a cluster of the largest
+    worker count started once for every round (``fleet --scheduler``)."""
     tmp = Path(keep) if keep else Path(tempfile.mkdtemp(prefix='bench_fleet_'))
     load = os.getloadavg()
     try:
         facts = generate_fleet(tmp / 'docks', docks, files, per_file)
         folders = sorted((tmp / 'docks').iterdir())
-        rounds: dict[int, list[dict[str, Any]]] = {n: [] for n in workers_list}
+        csv_dir = tmp / 'csv'
+        csv_dir.mkdir(exist_ok=True)
+        rounds: dict[str, list[dict[str, Any]]] = {}
         first = tmp / f'results_{workers_list[0]}_0'
-        for k in range(repeat):  # the worker counts in turn: a change of load hits both
-            for n in workers_list:
-                rounds[n].append(_one_run(folders, tmp / f'results_{n}_{k}', n, first))
-        runs = [_median_run(n, rounds[n]) for n in workers_list]
-        base = runs[0]['replay_s'] * runs[0]['workers']
+        reused = _cluster(max(workers_list)) if reuse else None
+        try:
+            for k in range(repeat):  # the modes in turn: a change of load hits each
+                modes = [_replay_loop(folders, csv_dir), _replay_loop(folders, None)]
+                modes += [_fleet(folders, tmp / f'results_{n}_{k}', n, first)
+                          for n in workers_list]  # fmt: skip
+                if reused is not None:
+                    n = len(reused.scheduler_info['workers'])
+                    address = reused.scheduler_address
+                    modes.append(_fleet(folders, tmp / f'reused_{k}', n, first, address))
+                for r in modes:
+                    rounds.setdefault(r['mode'], []).append(r)
+        finally:
+            if reused is not None:
+                reused.close()
+        same_csv = all(same_as_csv(first, f.name, csv_dir / f'{f.name}.csv') for f in folders)
+        runs = [_median(rounds[mode]) for mode in rounds]
+        base = {r['mode']: r['wall_s'] for r in runs}
         for r in runs:
-            r['speedup'] = round(runs[0]['replay_s'] / r['replay_s'], 3)
-            r['efficiency'] = round(base / (r['replay_s'] * r['workers']), 3)
-        per_cpu = statistics.median(
-            x['messages'] / x['worker_cpu_s'] for n in workers_list for x in rounds[n]
-        )
+            r['vs_replay_csv_loop'] = round(base[LOOP_CSV] / r['wall_s'], 3)
+            r['vs_replay_loop'] = round(base[LOOP_BARE] / r['wall_s'], 3)
+        fleets = [x for mode, xs in rounds.items() for x in xs if 'workers' in x]
+        per_cpu = statistics.median(x['messages'] / x['worker_cpu_s'] for x in fleets)
         return {
             'fleet': facts,
             'cpus': len(os.sched_getaffinity(0)),
@@ -107,6 +245,7 @@ def run(
             'repeat': repeat,
             'runs': runs,
             'rounds': rounds,
+            'identical_to_replay_csv': same_csv,
             'per_worker_messages_per_cpu_s': round(per_cpu),
             'year_100_docks': _cost(per_cpu),
         }
@@ -115,37 +254,21 @@ def run(
             shutil.rmtree(tmp, ignore_errors=True)
 
 
-def _one_run(folders: list[Path], results: Path, workers: int, first: Path) -> dict[str, Any]:
-    """One fleet run on a fresh local cluster into a fresh folder, compared with the first."""
-    from catenary_monitor.replay.fleet_cluster import run_fleet
+def _cluster(workers: int) -> Any:
+    """The local cluster the ``reused`` rounds share, started once, as the command starts its
+    own (:func:`catenary_monitor.replay.fleet_cluster.local_cluster`)."""
+    from catenary_monitor.replay.fleet_cluster import local_cluster
 
-    shutil.rmtree(results, ignore_errors=True)
-    t0 = time.perf_counter()
-    fleet = run_fleet(folders, results, workers=workers)
-    wall = time.perf_counter() - t0
-    if fleet.failed:
-        raise RuntimeError(f'fleet failed: {fleet.failed}')
-    same = _same_rows(first, results)
-    if results != first:
-        shutil.rmtree(results, ignore_errors=True)
-    return {
-        'workers': workers,
-        'wall_s': round(wall, 3),
-        'startup_s': round(fleet.startup_seconds, 3),
-        'replay_s': round(fleet.seconds, 3),
-        'worker_cpu_s': round(fleet.worker_cpu_seconds, 3),
-        'messages': fleet.messages,
-        'messages_per_s': round(fleet.messages / fleet.seconds),
-        'identical_to_first': same,
-    }
+    return local_cluster(workers)
 
 
-def _median_run(workers: int, rounds: list[dict[str, Any]]) -> dict[str, Any]:
-    """The round with the median replay time (and whether every round was identical)."""
-    ordered = sorted(rounds, key=lambda r: r['replay_s'])
+def _median(rounds: list[dict[str, Any]]) -> dict[str, Any]:
+    """The round with the median wall time (and whether every round was identical)."""
+    ordered = sorted(rounds, key=lambda r: r['wall_s'])
     out = dict(ordered[(len(ordered) - 1) // 2])
-    out['identical_to_first'] = all(r['identical_to_first'] for r in rounds)
-    out['replay_s_all'] = [r['replay_s'] for r in rounds]
+    if 'identical_to_first' in out:
+        out['identical_to_first'] = all(r['identical_to_first'] for r in rounds)
+    out['wall_s_all'] = [r['wall_s'] for r in rounds]
     return out
 
 
@@ -169,16 +292,24 @@ def _text(out: dict[str, Any]) -> str:
         f'fleet: {f["docks"]} docks, {f["files"]} files, {f["messages"] / 1e6:.1f} M messages, '
         f'{f["bytes"] / 1e6:.0f} MB; {out["cpus"]} CPUs, load average '
         f'{out["load_average"][0][0]:.1f} before, {out["load_average"][1][0]:.1f} after',
-        f'median of {out["repeat"]} rounds (the worker counts in turn):',
-        'workers  start s  replay s  M msg/s  speed-up  efficiency  identical  rounds: replay s',
+        f'median of {out["repeat"]} rounds (the modes in turn), wall time of the commands:',
+        'mode                 wall s   CPU s  x replay --csv loop  x replay loop  fixed s'
+        '  identical  rounds: wall s',
     ]
     for r in out['runs']:
+        fleet = 'workers' in r
         lines.append(
-            f'{r["workers"]:>7}  {r["startup_s"]:>7.2f}  {r["replay_s"]:>8.2f}  '
-            f'{r["messages_per_s"] / 1e6:>7.2f}  {r["speedup"]:>8.2f}  {r["efficiency"]:>10.2f}'
-            f'  {"yes" if r["identical_to_first"] else "NO":>9}  '
-            + ' '.join(f'{x:.2f}' for x in r['replay_s_all'])
-        )
+            f'{r["mode"]:<19}  {r["wall_s"]:>6.2f}  {r["cpu_s"]:>6.2f}  '
+            f'{r["vs_replay_csv_loop"]:>19.2f}  '
+            f'{r["vs_replay_loop"]:>13.2f}  '
+            + (f'{r["fixed_s"]:>7.2f}  {"yes" if r["identical_to_first"] else "NO":>9}'
+               if fleet else f'{"-":>7}  {"-":>9}')
+            + '  ' + ' '.join(f'{x:.2f}' for x in r['wall_s_all'])
+        )  # fmt: skip
+    lines.append(
+        'the fleet\'s rows are the serial replays\' CSV rows: '
+        + ('yes' if out['identical_to_replay_csv'] else 'NO')
+    )
     c = out['year_100_docks']
     per = out['per_worker_messages_per_cpu_s']
     lines.append(
@@ -197,9 +328,12 @@ def cmd_bench_fleet(args: argparse.Namespace) -> int:
         workers_list=tuple(args.workers_list),
         keep=Path(args.keep) if args.keep else None,
         repeat=args.repeat,
+        reuse=not args.no_reuse,
     )
     print(json.dumps(out) if args.json else _text(out))
-    return 0 if all(r['identical_to_first'] for r in out['runs']) else 1
+    fleets = [r for r in out['runs'] if 'workers' in r]
+    same = all(r['identical_to_first'] for r in fleets) and out['identical_to_replay_csv']
+    return 0 if same else 1
 
 
 def _workers(text: str) -> list[int]:
@@ -216,21 +350,25 @@ def register(sub: Any) -> None:
     """Add ``bench-fleet`` to the ``catenary-monitor`` parser."""
     p = sub.add_parser(
         'bench-fleet',
-        help='the fleet replay on 1 worker against 2 (same fleet, identical results)',
+        help='the fleet replay (1 and 2 workers) against a serial loop of replay',
         description=__doc__.split('\n\n')[1] if __doc__ else None,
     )
-    p.add_argument('--docks', type=int, default=3, help='dock folders (default 3)')
+    p.add_argument('--docks', type=int, default=4, help='dock folders (default 4)')
     p.add_argument('--files', type=int, default=4, help='log files per dock (default 4)')
     p.add_argument(
         '--messages-per-file', type=int, default=200_000, help='messages per file (default 2e5)'
     )
     p.add_argument(
         '--workers-list', type=_workers, default=[1, 2], metavar='N,M',
-        help='worker counts to run, the first the baseline (default 1,2)',
+        help='worker counts of the fleet runs (default 1,2)',
     )  # fmt: skip
     p.add_argument(
         '--repeat', type=int, default=3, help='rounds of every worker count (default 3)'
     )
+    p.add_argument(
+        '--no-reuse', action='store_true',
+        help='no rounds on a cluster started once (fleet --scheduler)',
+    )  # fmt: skip
     p.add_argument('--keep', metavar='DIR', help='generate and keep the fleet and results here')
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench_fleet)

@@ -167,6 +167,24 @@ def test_fleet_equals_serial_replays_and_names_the_damage(fleet, cluster, tmp_pa
         assert spent[daily['line'].astype(str) == line].sum() == pytest.approx(span, abs=1e-6)
 
 
+def test_the_rows_are_those_of_the_replay_command_s_csv(fleet, cluster, tmp_path, capsys):
+    """What a user would otherwise run, a serial loop of ``catenary-monitor replay DIR --csv``:
+    every column of every row the same (at the CSV's printed precision), as bench-fleet
+    checks on its fleet."""
+    from catenary_monitor_study.bench_fleet import same_as_csv
+
+    folders = fleet['folders'][:2]  # a node's log, and a damaged sensor recording
+    results = tmp_path / 'results'
+    assert not run_fleet(folders, results, scheduler=cluster).failed
+    for folder in folders:
+        csv = tmp_path / f'{folder.name}.csv'
+        args = ['replay', str(folder), '--csv', str(csv), '--csv-columns', 'all', '--quiet']
+        own = folder / 'catenary_monitor.yaml'
+        code = main(args + (['--params-file', str(own)] if own.exists() else []))
+        assert code == 0, capsys.readouterr().err
+        assert same_as_csv(results, folder.name, csv), folder.name
+
+
 def test_a_killed_worker_loses_and_duplicates_nothing(fleet, cluster, tmp_path):
     """Kill the worker that is replaying a piece, once the first piece is done."""
     from distributed import get_client

@@ -167,19 +167,21 @@ def _tension_rows(
     t = np.concatenate([r.t_ns[rows] for r, rows in parts])
     line = np.concatenate([np.full(len(rows), k, np.int64) for k, (_, rows) in enumerate(parts)])
     order = np.argsort(t, kind='stable')
-    values = {
-        k: np.concatenate([r.values[k][rows] for r, rows in parts])[order]
-        for k in VALUE_FIELDS
-        if k in keys
-    }
+    # Each column: the lines' whole arrays joined, then one gather of the rows in time order.
+    offsets = np.cumsum([0] + [len(r.t_ns) for r, _ in parts[:-1]])
+    pick = np.concatenate([rows + off for (_, rows), off in zip(parts, offsets.tolist())])
+    pick = pick[order]
+
+    def joined(arrays: list[np.ndarray]) -> np.ndarray:
+        return np.concatenate(arrays)[pick]
+
+    values = {k: joined([r.values[k] for r in result.lines]) for k in VALUE_FIELDS if k in keys}
     status = (
-        np.concatenate([r.status[rows] for r, rows in parts])[order]
-        if 'status' in keys
-        else np.zeros(0, np.int64)
+        joined([r.status for r in result.lines]) if 'status' in keys else np.zeros(0, np.int64)
     )
-    level = np.concatenate([r.level[rows] for r, rows in parts])[order]
+    level = joined([r.level for r in result.lines])
     if 'model' in keys:
-        values['model'] = np.concatenate([r.model_codes[rows] for r, rows in parts])[order]
+        values['model'] = joined([r.model_codes for r in result.lines])
     return t[order], values, line[order], status, level
 
 
