@@ -776,11 +776,12 @@ def fit_mean_depth(scene: Scene, design: float, clearance: float = 1.5) -> float
     """The mean depth [m] at which the scene's chains keep, over its port's tide (three days or
     the scene, every 30 min: an M2 crest sampled there is within 0.2 % of its amplitude) and
     weather (its 200 strongest winds also at high water; no storm), an anchor margin of
-    ``anchor_margin_warn + anchor_margin_deadband + clearance`` and a tide margin of ``tide_margin_warn +
-    tide_margin_deadband + clearance``: the depth the fixed-length chains were laid for, so
-    that a normal day alarms nothing: the margins taken at each line's wave-peak tension (four
-    standard deviations of the waves' motion, :func:`_wave_peak`) plus its sensor accuracy,
-    as the monitor's bounds take them (bisection in ``[0.6, 1.2] x design``)."""
+    ``anchor_margin_warn + anchor_margin_deadband + clearance`` and a tide margin of
+    ``tide_margin_warn + tide_margin_deadband + clearance``: the depth the fixed-length chains
+    were laid for, so that a normal day alarms nothing: the margins taken at each line's
+    wave-peak tension (four standard deviations of the waves' motion, :func:`_wave_peak`) plus
+    its sensor accuracy, as the monitor's bounds take them (bisection in ``[0.6, 1.2] x
+    design``)."""
     config = scene.config
     a = config.alarm
     need_anchor = a.anchor_margin_warn + a.anchor_margin_deadband + clearance
