@@ -39,6 +39,7 @@ from typing import Any, Callable, Optional
 
 import numpy as np
 
+from catenary_monitor.cli.table import json_ready
 from catenary_monitor_study.annunciations import Counter, family
 from catenary_monitor_study.normal_days import (
     FAULT_KINDS,
@@ -402,15 +403,5 @@ def _command(args: argparse.Namespace) -> int:
         return 2
     figures = run(args.dock, args.days, args.hours, gauges, faults, args.seed, args.keep,
                   args.quiet, dict(_setting(s) for s in args.set) or None)  # fmt: skip
-    print(json.dumps(_finite(figures)) if args.json else table(figures))
+    print(json.dumps(json_ready(figures)) if args.json else table(figures))
     return 0
-
-
-def _finite(value: Any) -> Any:
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite(v) for v in value]
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value

@@ -15,7 +15,7 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
-from catenary_monitor.cli.table import format_table
+from catenary_monitor.cli.table import format_table, json_ready
 
 __all__ = ['register', 'cmd_equilibrium', 'cmd_envelope']
 
@@ -149,24 +149,13 @@ def cmd_equilibrium(args: argparse.Namespace) -> int:
             'environment': env,
             'lines': lines,
         }
-        print(json.dumps(_finite(out), allow_nan=False))
+        print(json.dumps(json_ready(out), allow_nan=False))
     else:
         print(_equilibrium_table(eq, depth, load, env, lines))
     if not ok:
         print(f'catenary-monitor: {eq.message}', file=sys.stderr)
         return 3
     return 0
-
-
-def _finite(obj: Any) -> Any:
-    """NaN and infinities as None, for strict JSON."""
-    if isinstance(obj, float):
-        return obj if math.isfinite(obj) else None
-    if isinstance(obj, dict):
-        return {k: _finite(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_finite(v) for v in obj]
-    return obj
 
 
 def _equilibrium_table(
@@ -258,7 +247,7 @@ def cmd_envelope(args: argparse.Namespace) -> int:
                 for depth, rows in results
             ],
         }
-        print(json.dumps(_finite(out), allow_nan=False))
+        print(json.dumps(json_ready(out), allow_nan=False))
     else:
         for depth, rows in results:
             print(_envelope_table(depth, rows, wind, why))

@@ -39,6 +39,7 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
+from catenary_monitor.cli.table import json_ready
 from catenary_monitor.cli.status_line import StatusLine
 from catenary_monitor.core.config.parameters import (
     ConfigError,
@@ -235,7 +236,7 @@ def _offline(args: argparse.Namespace) -> int:
         },
     )
     text = (
-        json.dumps(_finite(summary), allow_nan=False, default=_json_default)
+        json.dumps(json_ready(summary), allow_nan=False, default=_json_default)
         if args.json
         else out.summary_text(summary)
     )
@@ -407,17 +408,6 @@ def _csv_columns(text: str) -> Sequence[str]:
             + ', '.join(name for name, _ in CSV_ALL)
         )
     return names
-
-
-def _finite(value: Any) -> Any:
-    """The summary with non-finite floats as None (JSON has no NaN)."""
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite(v) for v in value]
-    if isinstance(value, float) and not np.isfinite(value):
-        return None
-    return value
 
 
 def _json_default(value: Any) -> Any:

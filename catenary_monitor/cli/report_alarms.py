@@ -14,11 +14,12 @@ from __future__ import annotations
 import argparse
 import datetime as _dt
 import json
-import math
 import os
 import sys
 from pathlib import Path
 from typing import Any, Optional
+
+from catenary_monitor.cli.table import json_ready
 
 __all__ = ['register', 'cmd_alarms']
 
@@ -125,7 +126,7 @@ def cmd_alarms(args: argparse.Namespace) -> int:
         _write_files(figures, args)
     except OSError as err:
         return _fail(f'cannot write {err.filename}: {err.strerror}')
-    text = json.dumps(_finite(figures), allow_nan=False) if args.json else _text(figures, args)
+    text = json.dumps(json_ready(figures), allow_nan=False) if args.json else _text(figures, args)
     try:
         print(text)
         sys.stdout.flush()
@@ -180,14 +181,3 @@ def _text(figures: dict[str, Any], args: argparse.Namespace) -> str:
     text = '\n'.join([report_text(figures), *stamp_lines(figures.get('logs', {}))])
     files = [f for f in (args.plot, args.html) if f]
     return text + (f'\nwritten: {", ".join(files)}' if files else '')
-
-
-def _finite(value: Any) -> Any:
-    """JSON-ready: non-finite floats as None (JSON has no NaN)."""
-    if isinstance(value, dict):
-        return {k: _finite(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_finite(v) for v in value]
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    return value

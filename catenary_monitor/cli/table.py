@@ -1,10 +1,11 @@
-"""Plain-text tables of the command line."""
+"""Plain-text tables and strict JSON of the command line."""
 
 from __future__ import annotations
 
-from typing import Sequence
+import math
+from typing import Any, Sequence
 
-__all__ = ['format_table']
+__all__ = ['format_table', 'json_ready']
 
 
 def format_table(rows: Sequence[Sequence[str]], header: Sequence[str]) -> str:
@@ -19,3 +20,15 @@ def format_table(rows: Sequence[Sequence[str]], header: Sequence[str]) -> str:
 
     rule = '  '.join('-' * w for w in widths)
     return '\n'.join([line(header), rule, *(line(r) for r in rows)])
+
+
+def json_ready(value: Any) -> Any:
+    """``value`` (dicts, lists, tuples, floats) with NaN and infinities as None: strict JSON
+    has no NaN."""
+    if isinstance(value, dict):
+        return {k: json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [json_ready(v) for v in value]
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
