@@ -3,15 +3,17 @@
 Pure (no rclpy, no clock). Two parts, each with a scalar path (the core) and an array path (its
 batch twin) that share the arithmetic, so live and replay decide alike:
 
-* **per sample** (:func:`sample`, :func:`samples`): what a sensor's readings remember: the
-  newest finite reading and its stamp, when it last *changed*: entered another step of the
-  resolution (``floor(x / resolution)``, ``tension_resolution`` N, ``depth_resolution`` m; a
-  reading drifting at rate r changes at least every resolution / r) than the reading before;
-  when it last
-  *spiked*: a step ``|dx| > rate_max * (dt + jitter) + resolution`` between consecutive finite
-  readings (a rate of change no chain and no tide can have; ``stamp_jitter`` because the
-  stamps are arrival times, and samples delivered in a bunch arrive closer than they were
-  taken). Non-finite readings are not remembered.
+* **per sample** (:func:`sample`, :func:`samples`; the depth: :func:`sample_depth`): what a
+  sensor's readings remember: the newest finite reading and its stamp, when it last *changed*:
+  moved to another step of the resolution (``round(x / resolution)``: a gauge's readings lie
+  on its grid, where ``floor``'s bin edges would be; ``tension_resolution`` N,
+  ``depth_resolution`` m; a reading drifting at rate r changes at least every resolution / r)
+  than the reading before; when it last *spiked*: a step ``|dx| > rate_max * (dt + jitter) +
+  resolution`` between consecutive finite readings (a rate of change no chain and no tide can
+  have; ``stamp_jitter`` for every input type: delivery bunches arrival stamps, a driver's
+  double read its header stamps), for the depth plus ``spike_noise_k`` x sqrt(2) x the
+  gauge's own noise. The depth memory keeps what the stuck rule needs of the sea too
+  (:class:`DepthMemory`). Non-finite readings are not remembered.
 * **per tick** (:func:`decide_lines`, :func:`decide_depth`): the states, decided at every tick
   (``diagnostic_rate``) from the newest readings, in this precedence (the first that holds):
 
@@ -36,8 +38,9 @@ batch twin) that share the arithmetic, so live and replay decide alike:
 
   The depth sensor: ``out_of_range`` (ERROR, depth outside ``[depth_min, depth_max]``, the
   chart range), ``bad_stamp`` (WARN, as a line's), ``spike`` (WARN, within ``sensor_hold``),
-  ``stuck`` (WARN, no change beyond ``depth_resolution`` for ``stuck_time`` while a line's
-  tension changed since), ``ok``.
+  ``stuck`` (WARN, still while the sea is known to have moved ``depth_stuck_steps``
+  resolutions since its last step: :func:`decide_depth`, :func:`tide_motion`; never against
+  the lines, which move with every wave), ``ok``.
 """
 
 from __future__ import annotations
@@ -337,19 +340,19 @@ def sample_depth(
     apart is no spike, a glitch of metres still is."""
     if not math.isfinite(value):
         return mem
-    g = _getter(cfg)
-    resolution = g('depth_resolution')
+    c: Any = cfg
+    resolution = c.depth_resolution
     dt = stamp - mem.stamp
     d = abs(value - mem.value)
-    noise = g('spike_noise_k') * NOISE_DIFF_SIGMA2 * mem.noise
-    spike = d > g('depth_rate_max') * (dt + jitter) + resolution + noise
+    noise = c.spike_noise_k * NOISE_DIFF_SIGMA2 * mem.noise
+    spike = d > c.depth_rate_max * (dt + jitter) + resolution + noise
     step = _step_one(mem.value, value, resolution)
     quantum, level, hours = mem.quantum, mem.noise, mem.hours
     if not spike:
-        if d > 0.0:
-            quantum = min(quantum, d)
-        if d == d and dt > 0.0:
-            level += -math.expm1(-dt / g('spike_noise_time')) * (d - level)
+        if 0.0 < d < quantum:
+            quantum = d
+        if dt > 0.0 and d == d:
+            level += -math.expm1(-dt / c.spike_noise_time) * (d - level)
         hours = _hours(hours, stamp, value)
     return DepthMemory(
         value,
@@ -376,6 +379,8 @@ def _hours(
     hour = float(math.floor(stamp / 3600.0))
     if hours and hours[-1][0] == hour:
         _, lo, hi = hours[-1]
+        if lo <= value <= hi:
+            return hours
         return hours[:-1] + ((hour, min(lo, value), max(hi, value)),)
     keep = tuple(h for h in hours if h[0] > hour - SEEN_HOURS)
     return keep + ((hour, value, value),)
@@ -388,13 +393,15 @@ def sea_columns(mems: list[DepthMemory]) -> tuple[np.ndarray, np.ndarray, SeaCol
     changed, spiked = np.empty(n), np.empty(n)
     quantum, rate, seen = np.empty(n), np.empty(n), np.empty(n)
     day = np.zeros(n, bool)
+    last: Any = None
+    span, whole = 0.0, False
     for i, m in enumerate(mems):
         changed[i], spiked[i], quantum[i], rate[i] = m.changed, m.spiked, m.quantum, m.rate
-        if m.hours:
-            seen[i] = max(h[2] for h in m.hours) - min(h[1] for h in m.hours)
-            day[i] = m.hours[0][0] <= m.hours[-1][0] - (SEEN_HOURS - 1)
-        else:
-            seen[i] = 0.0
+        if m.hours is not last:  # memories in a row mostly share their hours
+            last = m.hours
+            span = max(h[2] for h in last) - min(h[1] for h in last) if last else 0.0
+            whole = bool(last) and last[0][0] <= last[-1][0] - (SEEN_HOURS - 1)
+        seen[i], day[i] = span, whole
     return changed, spiked, SeaColumns(quantum, rate, seen, day)
 
 
