@@ -220,3 +220,16 @@ def test_the_study_keeps_only_the_rules_to_come():
     for name in ('stuck_gauge', 'tide_motion', 'last_steps', 'spike_threshold',
                  'noise_estimate', 'intake_level', 'hidden_steps'):  # fmt: skip
         assert not hasattr(sr, name), name
+
+
+def test_an_hour_of_the_radar_replayed_annunciates_no_tide_nor_intake(tmp_path):
+    """The bench's path end to end: an hour at the paper's dock (Pillar Point, the radar of
+    1 cm at 1 cm, the table in the params file), written as the node logs it and replayed: no
+    tide or intake status leaves OK (the old rule warned 'stuck' about 10 times an hour)."""
+    from catenary_monitor_study.bench_alarms import replay_counts
+
+    scene = nd.paper_scene('radar_1cm', days=1 / 24, mean_depth=18.3)
+    facts = ndl.write_scene(scene, tmp_path)
+    counter, _ = replay_counts(facts.log, facts.params)
+    heard = [(a.status, a.message) for a in counter.heard()]
+    assert not [h for h in heard if h[0].endswith(('tide', 'intake'))], heard
