@@ -121,3 +121,27 @@ def test_coalesced_samples_are_not_missing_against_the_sample_rate():
     values = dict(_status(core).values)
     assert values['messages_missing'] == '0'
     assert values['messages_dropped'] == values['messages_coalesced'] == '1500'
+
+
+def test_a_lone_lost_sample_is_counted_not_annunciated():
+    """A WARN needs intake_warn_count samples AND intake_warn_share of the window's: 3 of
+    7640 lost stay OK with the counts in the values and the message; 100 of 7640 (1.3 %)
+    warn; 15 of 7640 (0.2 %) stay OK; ERROR from 5 % as ever."""
+    from catenary_monitor.core.rules.health import intake_status
+
+    level, text = intake_status(7637, 3, float("nan"), 60.0)
+    assert level == Level.OK
+    assert text == (
+        '3 of 7640 tension and depth samples dropped in the last 60 s (0.0 %): below the '
+        'warning (10 samples and 1 %)'
+    )
+    assert intake_status(7540, 100, 0.01, 60.0)[0] == Level.WARN
+    assert intake_status(7625, 15, 0.01, 60.0)[0] == Level.OK
+    assert intake_status(19, 1, 0.01, 60.0)[0] == Level.ERROR  # 5 %: ERROR as ever
+    assert intake_status(7637, 3, 0.01, 60.0, warn_count=1, warn_share=0.0)[0] == Level.WARN
+    core = MonitorCore(dock_config(1), T0_NS)
+    core.step(Intake(_at(1.0), (100, 1), (0, 0), 0.01, 1.0))
+    core.step(Intake(_at(11.0), (997, 10), (3, 0), 0.01, 10.0))
+    status = _status(core)
+    assert status.level == Level.OK and dict(status.values)['messages_dropped'] == '3'
+    assert 'none dropped' not in status.message

@@ -751,7 +751,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
             (
                 'stuck_time',
                 60.0,
-                'stuck: no change beyond the resolution this long while the dock moves',
+                'stuck: no change beyond the resolution this long while the dock moves (a line); '
+                'the depth gauge at least this long still (and see depth_stuck_steps)',
                 's',
                 1.0,
                 86400.0,
@@ -775,12 +776,58 @@ PARAMETERS: tuple[ParamSpec, ...] = (
             (
                 'stamp_jitter',
                 0.25,
-                'spike: a Float64 reading\'s arrival stamp may be off by this much (delivery '
-                'bunches samples); a step is compared with the rate x (dt + this); stamped '
-                'inputs use their header stamps and no jitter',
+                'spike: a reading\'s stamp may be off by this much, for every input type '
+                '(delivery bunches a Float64\'s arrival stamps, a driver\'s double read its '
+                'header stamps); a step is compared with the rate x (dt + this)',
                 's',
                 0.0,
                 10.0,
+            ),
+            (
+                'spike_noise_k',
+                5.0,
+                'spike: a depth step must also exceed this x sqrt(2) x the gauge\'s own noise '
+                '(1 sigma, estimated online from its successive differences)',
+                '',
+                0.0,
+                100.0,
+            ),
+            (
+                'spike_noise_time',
+                600.0,
+                'spike: time constant of the depth gauge\'s online noise estimate',
+                's',
+                1.0,
+                86400.0,
+            ),
+            (
+                'depth_stuck_steps',
+                3.0,
+                'stuck: the depth gauge is stuck when the tide is known to have moved more '
+                'than this many resolution steps (depth_resolution or the gauge\'s own '
+                'step, the larger) since its last step: the tide_table\'s forecast, else the '
+                'trend\'s rate at that step less the most the tide bends',
+                '',
+                1.0,
+                1000.0,
+            ),
+            (
+                'depth_residual_rate',
+                2.0e-5,
+                'stuck: with a tide_table, the sea may differ from its forecast by this rate '
+                '(a surge the table does not hold); taken off the forecast\'s motion',
+                'm/s',
+                0.0,
+                1.0,
+            ),
+            (
+                'depth_still_max',
+                10800.0,
+                'stuck: no depth step this long is stuck on a gauge that saw 10 steps of tide '
+                'over the last day, whatever the tide\'s motion (no tide rests this long)',
+                's',
+                60.0,
+                1.0e7,
             ),
             (
                 'sensor_hold',
@@ -848,6 +895,25 @@ PARAMETERS: tuple[ParamSpec, ...] = (
                 's',
                 0.0,
                 1.0,
+            ),
+            (
+                'intake_warn_count',
+                10.0,
+                'Intake: a WARN needs at least this many samples dropped (lost, missing or '
+                'coalesced) in the last 60 s, and intake_warn_share of them; fewer are counted '
+                'in the values, the status OK (ERROR from 5 % as ever)',
+                '',
+                0.0,
+                1.0e9,
+            ),
+            (
+                'intake_warn_share',
+                0.01,
+                'Intake: a WARN needs at least this share of the last 60 s\'s samples dropped, '
+                'and intake_warn_count of them',
+                '',
+                0.0,
+                0.05,
             ),
         )
     ),
@@ -1541,6 +1607,11 @@ class AlarmConfig:
     tension_rate_max: float = _default('tension_rate_max')
     depth_rate_max: float = _default('depth_rate_max')
     stamp_jitter: float = _default('stamp_jitter')
+    spike_noise_k: float = _default('spike_noise_k')
+    spike_noise_time: float = _default('spike_noise_time')
+    depth_stuck_steps: float = _default('depth_stuck_steps')
+    depth_residual_rate: float = _default('depth_residual_rate')
+    depth_still_max: float = _default('depth_still_max')
     sensor_hold: float = _default('sensor_hold')
     parted_drop: float = _default('parted_drop')
     parted_window: float = _default('parted_window')
@@ -1550,6 +1621,8 @@ class AlarmConfig:
     tension_sample_rate: float = _default('tension_sample_rate')
     depth_sample_rate: float = _default('depth_sample_rate')
     intake_step_budget: float = _default('intake_step_budget')
+    intake_warn_count: float = _default('intake_warn_count')
+    intake_warn_share: float = _default('intake_warn_share')
     tide_table: str = _default('tide_table')
     tide_table_epoch: float = _default('tide_table_epoch')
     tide_forecast_horizon: float = _default('tide_forecast_horizon')

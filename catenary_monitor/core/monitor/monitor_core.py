@@ -147,12 +147,6 @@ def _stamp_s(stamp_ns: int) -> float:
     return stamp_ns * 1e-9
 
 
-def _jitter(alarm: Any, sample_ns: Optional[int]) -> float:
-    """How far off a reading's stamp may be [s]: ``stamp_jitter`` for a reading stamped at its
-    arrival (delivery bunches samples), 0 for one at the sensor's own header stamp."""
-    return alarm.stamp_jitter if sample_ns is None else 0.0
-
-
 class MonitorCore:
     """The monitor's one decision path: :meth:`step` an event, get a :class:`Step`.
 
@@ -280,7 +274,7 @@ class MonitorCore:
             line.tension,
             a.tension_resolution,
             a.tension_rate_max * line.config.mbl,
-            _jitter(a, ev.sample_ns),
+            a.stamp_jitter,
         )
         line.fatigue, line.fatigue_values = fatigue_rule.step(
             line.fatigue, line.tension_s, line.tension, self.curves[ev.line]
@@ -305,13 +299,13 @@ class MonitorCore:
         self.state.depth, self.state.depth_s = float(ev.value), _stamp_s(sample_ns)
         window = a.tide_trend_window
         self.state.trend = tide_trend.step(self.state.trend, sample_ns, self.state.depth, window)
-        self.state.depth_memory = sensor_state.sample(
+        self.state.depth_memory = sensor_state.sample_depth(
             self.state.depth_memory,
             self.state.depth_s,
             self.state.depth,
-            a.depth_resolution,
-            a.depth_rate_max,
-            _jitter(a, ev.sample_ns),
+            a,
+            self.state.trend.rate,
+            a.stamp_jitter,
         )
         log: list[AlarmEvent] = []
         changes = self._decide_tide(ev.stamp_ns)
@@ -557,6 +551,8 @@ class MonitorCore:
             self.state.intake[0] == Level.OK,
             sum(self.intake_missing()),
             coalesced,
+            self.config.alarm.intake_warn_count,
+            self.config.alarm.intake_warn_share,
         )
         changes = self._set_component('intake', new, ev.stamp_ns)
         return self._finish(ev.stamp_ns, 'intake', [], changes)
@@ -738,16 +734,16 @@ class MonitorCore:
         )
         for k, line in enumerate(lines):
             line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
-        dm = self.state.depth_memory
+        d_changed, d_spiked, sea = sensor_state.sea_columns([self.state.depth_memory])
         self.state.depth_code = int(
             sensor_state.decide_depth(
                 a,
                 now,
                 np.array([self.state.depth]),
                 np.array([self.state.depth_s]),
-                np.array([dm.changed]),
-                np.array([dm.spiked]),
-                changed,
+                d_changed,
+                d_spiked,
+                sea,
                 np.array([self.state.depth_refused]),
             )[0]
         )

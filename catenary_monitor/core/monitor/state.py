@@ -288,7 +288,7 @@ class SensorPart(NamedTuple):
     """The sensor decisions' memory: the depth sensor's and its state, and the ticks and
     tensions the suspected_parted test still needs."""
 
-    depth_memory: sensor_state.Memory
+    depth_memory: sensor_state.DepthMemory
     depth_code: int
     sensor_times: np.ndarray
     sensor_rows: np.ndarray
@@ -359,7 +359,7 @@ class CoreState:
     depth_s: float = _NAN  # s, its stamp
     depth_stale: bool = False
     trend: tide_trend.TrendState = field(default_factory=tide_trend.TrendState)  # tide rate
-    depth_memory: sensor_state.Memory = field(default_factory=sensor_state.Memory)
+    depth_memory: sensor_state.DepthMemory = field(default_factory=sensor_state.DepthMemory)
     depth_code: int = sensor_state.OK  # the depth sensor's state at the newest tick
     depth_sample_ns: int = -1  # ns, the newest accepted depth sample's stamp (-1: none)
     depth_refused: float = -math.inf  # s, when a depth sample's stamp was last refused

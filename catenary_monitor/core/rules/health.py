@@ -155,7 +155,8 @@ def parameters_status(messages: tuple[str, ...], until: float, now: float) -> tu
 CLOCK_STOPPED_AFTER = 3.0
 #: Intake: the counts are summed over this long [s].
 INTAKE_WINDOW = 60.0
-#: Intake: dropped share of the samples at or above which the status is ERROR (any drop: WARN).
+#: Intake: dropped share of the samples at or above which the status is ERROR (a WARN needs
+#: ``intake_warn_count`` and ``intake_warn_share``).
 DROPPED_ERROR_SHARE = 0.05
 #: Intake: share of wall time spent in callbacks (over the last BUSY_WINDOW [s]) at or above
 #: which the node cannot keep up, and below which that WARN clears (hysteresis: no flicker).
@@ -207,6 +208,8 @@ def intake_status(
     was_ok: bool = True,
     missing: int = 0,
     coalesced: int = 0,
+    warn_count: float = 10.0,
+    warn_share: float = 0.01,
 ) -> tuple[Level, str]:
     """Level and message of the sample intake over the last ``window`` [s].
 
@@ -218,7 +221,9 @@ def intake_status(
     leaves the older ones out: counted, never queued); ``busy``: share of wall time spent in
     callbacks over the last :data:`BUSY_WINDOW` (NaN: unknown). Every sample not handled
     counts as dropped: ERROR when at least :data:`DROPPED_ERROR_SHARE` of the samples were,
-    WARN on any, or when the node is busy :data:`BUSY_WARN_SHARE` of the time
+    WARN on a loss to act on (at least ``warn_count`` samples AND ``warn_share`` of them: a
+    lone lost datagram is counted in the values and said in the OK message, never
+    annunciated), or when the node is busy :data:`BUSY_WARN_SHARE` of the time
     (:data:`BUSY_CLEAR_SHARE` while the status is not OK, ``was_ok`` False), else OK.
     """
     counted = dropped
@@ -246,14 +251,20 @@ def intake_status(
             f'node cannot keep up: {100.0 * share:.0f} % of tension and depth samples '
             f'dropped in the last {window:g} s ({dropped} of {total}){busy_text}'
         )
-    if dropped:
-        return Level.WARN, (
-            f'{dropped} of {total} tension and depth samples dropped in the last {window:g} s '
-            f'({100.0 * share:.1f} %){busy_text}'
-        )
+    text = (
+        f'{dropped} of {total} tension and depth samples dropped in the last {window:g} s '
+        f'({100.0 * share:.1f} %)'
+    )
+    if dropped and dropped >= warn_count and share >= warn_share:
+        return Level.WARN, text + busy_text
     if busy == busy and busy >= (BUSY_WARN_SHARE if was_ok else BUSY_CLEAR_SHARE):
         return Level.WARN, (
             f'node cannot keep up: busy {100.0 * busy:.0f} % of the last {BUSY_WINDOW:g} s in '
             'callbacks (samples may be lost)'
+        )
+    if dropped:
+        return Level.OK, (
+            f'{text}: below the warning ({warn_count:g} samples and '
+            f'{100.0 * warn_share:g} %){busy_text}'
         )
     return Level.OK, f'{received} samples counted in the last {window:g} s, none dropped'

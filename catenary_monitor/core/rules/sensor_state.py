@@ -3,15 +3,17 @@
 Pure (no rclpy, no clock). Two parts, each with a scalar path (the core) and an array path (its
 batch twin) that share the arithmetic, so live and replay decide alike:
 
-* **per sample** (:func:`sample`, :func:`samples`): what a sensor's readings remember: the
-  newest finite reading and its stamp, when it last *changed*: entered another step of the
-  resolution (``floor(x / resolution)``, ``tension_resolution`` N, ``depth_resolution`` m; a
-  reading drifting at rate r changes at least every resolution / r) than the reading before;
-  when it last
-  *spiked*: a step ``|dx| > rate_max * (dt + jitter) + resolution`` between consecutive finite
-  readings (a rate of change no chain and no tide can have; ``stamp_jitter`` because the
-  stamps are arrival times, and samples delivered in a bunch arrive closer than they were
-  taken). Non-finite readings are not remembered.
+* **per sample** (:func:`sample`, :func:`samples`; the depth: :func:`sample_depth`): what a
+  sensor's readings remember: the newest finite reading and its stamp, when it last *changed*:
+  moved to another step of the resolution (``round(x / resolution)``: a gauge's readings lie
+  on its grid, where ``floor``'s bin edges would be; ``tension_resolution`` N,
+  ``depth_resolution`` m; a reading drifting at rate r changes at least every resolution / r)
+  than the reading before; when it last *spiked*: a step ``|dx| > rate_max * (dt + jitter) +
+  resolution`` between consecutive finite readings (a rate of change no chain and no tide can
+  have; ``stamp_jitter`` for every input type: delivery bunches arrival stamps, a driver's
+  double read its header stamps), for the depth plus ``spike_noise_k`` x sqrt(2) x the
+  gauge's own noise. The depth memory keeps what the stuck rule needs of the sea too
+  (:class:`DepthMemory`). Non-finite readings are not remembered.
 * **per tick** (:func:`decide_lines`, :func:`decide_depth`): the states, decided at every tick
   (``diagnostic_rate``) from the newest readings, in this precedence (the first that holds):
 
@@ -36,16 +38,19 @@ batch twin) that share the arithmetic, so live and replay decide alike:
 
   The depth sensor: ``out_of_range`` (ERROR, depth outside ``[depth_min, depth_max]``, the
   chart range), ``bad_stamp`` (WARN, as a line's), ``spike`` (WARN, within ``sensor_hold``),
-  ``stuck`` (WARN, no change beyond ``depth_resolution`` for ``stuck_time`` while a line's
-  tension changed since), ``ok``.
+  ``stuck`` (WARN, still while the sea is known to have moved ``depth_stuck_steps``
+  resolutions since its last step: :func:`decide_depth`, :func:`tide_motion`; never against
+  the lines, which move with every wave), ``ok``.
 """
 
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, Callable, NamedTuple
 
 import numpy as np
+
+from catenary_monitor.core.rules.tide_table import predicted
 
 __all__ = [
     'LINE_STATES',
@@ -62,6 +67,11 @@ __all__ = [
     'DEPTH_BAD_STAMP',
     'ERROR_STATES',
     'Memory',
+    'DepthMemory',
+    'SeaColumns',
+    'sample_depth',
+    'sea_columns',
+    'tide_motion',
     'LineLimits',
     'sample',
     'samples',
@@ -128,17 +138,19 @@ def sample(
 
 
 def _step_one(before: float, after: float, resolution: float) -> bool:
-    """Whether a reading is in another resolution step than the one before (``floor(x /
-    resolution)``; a resolution of 0: another value; no reading before: yes), in plain floats
-    (:func:`samples` takes the same test on columns)."""
+    """Whether a reading is on another step of the resolution than the one before
+    (``round(x / resolution)``: a gauge's readings lie on its grid, where ``floor``'s bin edges
+    are, and a float's last bit would put neighbouring steps in one bin; a resolution of 0:
+    another value; no reading before: yes), in plain floats (:func:`samples` takes the same
+    test on columns)."""
     if not resolution > 0.0:
         return not after == before
     a, b = after / resolution, before / resolution
-    if a != a or b != b:  # no reading before (NaN): floor(NaN) equals nothing
+    if a != a or b != b:  # no reading before (NaN): round(NaN) equals nothing
         return True
-    if math.isinf(a) or math.isinf(b):  # floor(inf) is inf
+    if math.isinf(a) or math.isinf(b):  # round(inf) is inf
         return not a == b
-    return math.floor(a) != math.floor(b)
+    return round(a) != round(b)
 
 
 def samples(
@@ -170,7 +182,7 @@ def samples(
     with np.errstate(invalid='ignore', divide='ignore'):
         d = np.abs(np.diff(vv))
         if resolution > 0.0:
-            q = np.floor(vv / resolution)
+            q = np.round(vv / resolution)
             change = ~(q[1:] == q[:-1])
         else:
             change = ~(vv[1:] == vv[:-1])
@@ -267,6 +279,184 @@ def decide_lines(
     return code
 
 
+#: Semidiurnal (M2) angular speed [rad/s]: a tide of amplitude A bends at most A x this^2.
+M2_OMEGA = 2.0 * math.pi / (12.4206012 * 3600.0)
+#: Without a table, before a day of readings: the most a tide bends [m/s^2], an M2 tide of 3 m
+#: amplitude (a range of 6 m; few docks see more).
+DEFAULT_BEND = 3.0 * M2_OMEGA**2
+#: Hours of readings whose range (x 1.5, as an M2 tide) bounds the tide's bend without a table.
+SEEN_HOURS = 25
+#: Grid [s] on which the table's forecast range since the gauge's last step is taken.
+FORECAST_GRID = 60.0
+#: The noise estimate (mean absolute successive difference) x this is 1 sigma x sqrt(2):
+#: ``sqrt(pi) / 2 x sqrt(2)`` (white noise: E|x1 - x2| = 2 sigma / sqrt(pi)).
+NOISE_DIFF_SIGMA2 = math.sqrt(math.pi / 2.0)
+
+
+class DepthMemory(NamedTuple):
+    """The depth sensor's per-sample memory: :class:`Memory`'s four fields, then what the sea
+    rules need: the smallest nonzero step between consecutive readings (the gauge's own
+    quantum) [m], the readings' noise (an exponentially weighted mean absolute successive
+    difference) [m], the tide trend's rate at the last step [m/s] (NaN: unknown), and the
+    readings' extremes per hour, ``(hour, lo, hi)`` over the last :data:`SEEN_HOURS` hours
+    (spiked readings enter none of these)."""
+
+    value: float = math.nan
+    stamp: float = math.nan
+    changed: float = _NEVER
+    spiked: float = _NEVER
+    quantum: float = math.inf
+    noise: float = 0.0
+    rate: float = math.nan
+    hours: tuple[tuple[float, float, float], ...] = ()
+
+
+class SeaColumns(NamedTuple):
+    """What the stuck rule knows of the sea at each tick (arrays over ticks), from the depth
+    memory: the gauge's own quantum [m] (inf: no step yet), the trend's rate at its last step
+    [m/s], the range its readings spanned over the last day [m] and whether they span a whole
+    day (``seen_day``: then the range bounds the tide's bend)."""
+
+    quantum: np.ndarray
+    rate: np.ndarray
+    seen: np.ndarray
+    seen_day: np.ndarray
+
+
+def sample_depth(
+    mem: DepthMemory,
+    stamp: float,
+    value: float,
+    cfg: object,
+    trend_rate: float,
+    jitter: float,
+) -> DepthMemory:
+    """The depth memory after one reading ``value`` [m] at ``stamp`` [s]; ``trend_rate`` the
+    tide trend's rate after it [m/s] and ``jitter`` how far off a stamp may be [s].
+
+    A spike is a jump beyond ``depth_rate_max`` x (dt + jitter) + ``depth_resolution`` +
+    ``spike_noise_k`` x sqrt(2) x the readings' own noise (1 sigma, from the memory's
+    estimate: its time constant ``spike_noise_time``): a noisy gauge's double read a few ms
+    apart is no spike, a glitch of metres still is."""
+    if not math.isfinite(value):
+        return mem
+    c: Any = cfg
+    resolution = c.depth_resolution
+    dt = stamp - mem.stamp
+    d = abs(value - mem.value)
+    noise = c.spike_noise_k * NOISE_DIFF_SIGMA2 * mem.noise
+    spike = d > c.depth_rate_max * (dt + jitter) + resolution + noise
+    step = _step_one(mem.value, value, resolution)
+    quantum, level, hours = mem.quantum, mem.noise, mem.hours
+    if not spike:
+        if 0.0 < d < quantum:
+            quantum = d
+        if dt > 0.0 and d == d:
+            level += -math.expm1(-dt / c.spike_noise_time) * (d - level)
+        hours = _hours(hours, stamp, value)
+    return DepthMemory(
+        value,
+        stamp,
+        stamp if step else mem.changed,
+        stamp if spike else mem.spiked,
+        quantum,
+        level,
+        trend_rate if step else mem.rate,
+        hours,
+    )
+
+
+def _getter(cfg: object) -> Callable[[str], Any]:
+    """``cfg``'s parameters by name (``cfg``: the
+    :class:`~catenary_monitor.core.config.parameters.AlarmConfig`)."""
+    return lambda name: getattr(cfg, name)
+
+
+def _hours(
+    hours: tuple[tuple[float, float, float], ...], stamp: float, value: float
+) -> tuple[tuple[float, float, float], ...]:
+    """The per-hour extremes after a reading (the last :data:`SEEN_HOURS` hours kept)."""
+    hour = float(math.floor(stamp / 3600.0))
+    if hours and hours[-1][0] == hour:
+        _, lo, hi = hours[-1]
+        if lo <= value <= hi:
+            return hours
+        return hours[:-1] + ((hour, min(lo, value), max(hi, value)),)
+    keep = tuple(h for h in hours if h[0] > hour - SEEN_HOURS)
+    return keep + ((hour, value, value),)
+
+
+def sea_columns(mems: list[DepthMemory]) -> tuple[np.ndarray, np.ndarray, SeaColumns]:
+    """The depth memories' ``changed`` and ``spiked`` [s] and :class:`SeaColumns`, one per
+    memory (the core: its one memory; the twin: the memory at each tick)."""
+    n = len(mems)
+    changed, spiked = np.empty(n), np.empty(n)
+    quantum, rate, seen = np.empty(n), np.empty(n), np.empty(n)
+    day = np.zeros(n, bool)
+    last: Any = None
+    span, whole = 0.0, False
+    for i, m in enumerate(mems):
+        changed[i], spiked[i], quantum[i], rate[i] = m.changed, m.spiked, m.quantum, m.rate
+        if m.hours is not last:  # memories in a row mostly share their hours
+            last = m.hours
+            span = max(h[2] for h in last) - min(h[1] for h in last) if last else 0.0
+            whole = bool(last) and last[0][0] <= last[-1][0] - (SEEN_HOURS - 1)
+        seen[i], day[i] = span, whole
+    return changed, spiked, SeaColumns(quantum, rate, seen, day)
+
+
+def tide_motion(
+    cfg: object,
+    changed: np.ndarray,
+    now: np.ndarray,
+    sea: SeaColumns,
+    ask: np.ndarray,
+    floor: np.ndarray,
+) -> np.ndarray:
+    """The least the sea must have moved [m] between each ``changed`` and ``now`` [s] (0
+    where not ``ask``; with a table, 0 too where even its fastest rise would not exceed
+    ``floor`` [m]: no forecast taken).
+
+    With a tide table: the range of its forecast over the interval (every
+    :data:`FORECAST_GRID` s, and at ``now``) less what a surge the table does not hold may
+    have undone (``depth_residual_rate`` x the time). Without one: from the trend's rate at
+    the last step r and the most the tide can bend a (an M2 tide 1.5 x the range the gauge saw
+    over a day; :data:`DEFAULT_BEND` before a day), ``max(0, r' tau - a tau^2 / 2)``,
+    ``r' = |r| - a W / 2`` (the trend is the mean rate over its window W, half a window
+    late), ``tau`` at most ``r' / a`` (where the bent sea would turn); 0 where the rate is
+    unknown. Either never falls as ``now`` goes on: once the sea must have moved, a gauge
+    that has not stepped since stays stuck until it steps."""
+    g = _getter(cfg)
+    tau = now - changed
+    out = np.zeros(len(now))
+    table = g('constituents')
+    if table:
+        speed = sum(abs(c.amplitude) * math.radians(abs(c.speed)) / 3600.0 for c in table)
+        with np.errstate(invalid='ignore'):
+            ask = ask & np.isfinite(changed) & (tau > 0.0) & (tau * speed > floor)
+        epoch, residual = g('tide_table_epoch'), g('depth_residual_rate')
+        for c in np.unique(changed[ask]).tolist():
+            idx = np.flatnonzero(ask & (changed == c))
+            nows = now[idx]
+            grid = np.arange(c, float(nows.max()), FORECAST_GRID)
+            pg = predicted(table, grid, epoch)
+            pn = predicted(table, nows, epoch)
+            hi, lo = np.maximum.accumulate(pg), np.minimum.accumulate(pg)
+            # at each grid point: the forecast's range so far less the surge's allowance; the
+            # most of it since the step (once the sea must have moved, the gauge should have)
+            sofar = np.maximum.accumulate((hi - lo) - residual * (grid - c))
+            k = np.searchsorted(grid, nows, 'left') - 1  # the grid's points before now
+            top, bottom = np.maximum(hi[k], pn), np.minimum(lo[k], pn)
+            out[idx] = np.maximum(sofar[k], (top - bottom) - residual * (nows - c))
+        return np.maximum(out, 0.0)
+    bend = np.where(sea.seen_day, 0.75 * sea.seen * M2_OMEGA**2, DEFAULT_BEND)
+    r = np.maximum(np.abs(sea.rate) - 0.5 * bend * g('tide_trend_window'), 0.0)
+    with np.errstate(invalid='ignore'):
+        tau = np.minimum(tau, r / bend)  # the most since the step: the sea turns at r / a
+        motion = np.maximum(r * tau - 0.5 * bend * tau * tau, 0.0)
+    return np.where(ask & np.isfinite(motion), motion, 0.0)
+
+
 def decide_depth(
     cfg: object,
     now: np.ndarray,
@@ -274,29 +464,37 @@ def decide_depth(
     depth_s: np.ndarray,
     mem_changed: np.ndarray,
     mem_spiked: np.ndarray,
-    line_changed: np.ndarray,
+    sea: SeaColumns,
     refused: np.ndarray | None = None,
 ) -> np.ndarray:
     """Depth sensor state codes (int8 per tick) from the newest depth [m] and its stamp [s],
-    the depth memory's ``changed`` and ``spiked`` [s], each line's ``changed`` (ticks,
-    lines) [s] and when a depth sample's stamp was last refused [s] (None: never)."""
+    the depth memory's ``changed`` and ``spiked`` [s], what it knows of the sea
+    (:class:`SeaColumns`) and when a depth sample's stamp was last refused [s] (None: never).
+
+    Stuck: still reporting, no step for ``stuck_time``, and the sea known to have moved more
+    than ``depth_stuck_steps`` x the resolution (``depth_resolution`` or the gauge's own
+    quantum, the larger) since its last step (:func:`tide_motion`); or no step for
+    ``depth_still_max`` on a gauge that has seen 10 resolutions of tide over the last day
+    (no tide rests that long). The lines' motion never enters: they move with every wave."""
+    g = _getter(cfg)
+    res_cfg = g('depth_resolution')
     with np.errstate(invalid='ignore'):
-        reporting = np.isfinite(depth) & (now - depth_s <= getattr(cfg, 'depth_timeout'))
-        out = reporting & (
-            (depth < getattr(cfg, 'depth_min')) | (depth > getattr(cfg, 'depth_max'))
-        )
-        spike = now - mem_spiked <= getattr(cfg, 'sensor_hold')
-        quiet = now - mem_changed >= getattr(cfg, 'stuck_time')
-        newest = (
-            np.max(line_changed, axis=1) if line_changed.shape[1] else np.full(len(now), _NEVER)
-        )
-        stuck = reporting & quiet & (newest > mem_changed)
+        reporting = np.isfinite(depth) & (now - depth_s <= g('depth_timeout'))
+        out = reporting & ((depth < g('depth_min')) | (depth > g('depth_max')))
+        spike = now - mem_spiked <= g('sensor_hold')
+        tau = now - mem_changed
+        quiet = reporting & (tau >= g('stuck_time'))
+        res = np.where(sea.quantum < math.inf, np.maximum(sea.quantum, res_cfg), res_cfg)
+        need = g('depth_stuck_steps') * res
+        moved = tide_motion(cfg, mem_changed, now, sea, quiet, need) > need
+        still = (tau >= g('depth_still_max')) & (sea.seen >= 10.0 * res)
+    stuck = quiet & (moved | still)
     code = np.full(len(now), OK, np.int8)
     code[stuck] = STUCK
     code[spike] = SPIKE
     if refused is not None:
         with np.errstate(invalid='ignore'):
-            code[now - refused <= getattr(cfg, 'sensor_hold')] = DEPTH_BAD_STAMP
+            code[now - refused <= g('sensor_hold')] = DEPTH_BAD_STAMP
     code[out] = OUT_OF_RANGE
     return code
 
@@ -323,7 +521,7 @@ def depth_message(code: int, depth: float, cfg: object) -> str:
     """What the depth sensor's state tells the operator to check (empty for ``ok``)."""
     lo, hi = getattr(cfg, 'depth_min'), getattr(cfg, 'depth_max')
     return {
-        STUCK: f'depth sensor stuck at {depth:.2f} m while the lines move: check the tide '
+        STUCK: f'depth sensor stuck at {depth:.2f} m while the tide moves: check the tide '
         'gauge and its cable',
         SPIKE: 'depth sensor spike (a change no tide makes): check the tide gauge, its cable '
         'and electrical noise',

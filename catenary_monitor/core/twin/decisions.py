@@ -121,8 +121,9 @@ def decide_sensors_window(
         ts = window.sample_s(k)
         mem = line.sensor_memory
         rate = a.tension_rate_max * line.config.mbl
-        jitter = 0.0 if window.stamped(k) else a.stamp_jitter
-        ch, sp, memory = sensor_state.samples(mem, ts, tv, a.tension_resolution, rate, jitter)
+        ch, sp, memory = sensor_state.samples(
+            mem, ts, tv, a.tension_resolution, rate, a.stamp_jitter
+        )
         memories.append(memory)
         j = np.searchsorted(tt, ticks, 'right') - 1  # tensions go before a tick at one stamp
         tension[:, k] = pick(j, tv, line.tension)
@@ -133,14 +134,11 @@ def decide_sensors_window(
         refused[:, k] = pick(np.searchsorted(r, ticks, 'right') - 1, r * 1e-9, line.stamp_refused)
     dd, dv = window.depth
     ds = window.sample_s(None)
-    dmem = core.state.depth_memory
-    jitter = 0.0 if window.stamped(None) else a.stamp_jitter
-    dch, dsp, depth_memory = sensor_state.samples(
-        dmem, ds, dv, a.depth_resolution, a.depth_rate_max, jitter
-    )
+    depth_mems = _depth_memories(core, window)
+    depth_memory = depth_mems[-1]
     j = np.searchsorted(dd, ticks, 'right') - 1  # depth goes before a tick at one stamp
     depth, depth_s = pick(j, dv, core.state.depth), pick(j, ds, core.state.depth_s)
-    d_changed, d_spiked = pick(j, dch, dmem.changed), pick(j, dsp, dmem.spiked)
+    d_changed, d_spiked, sea = sensor_state.sea_columns([depth_mems[i + 1] for i in j.tolist()])
     r = refusals.depth
     d_refused = pick(np.searchsorted(r, ticks, 'right') - 1, r * 1e-9, core.state.depth_refused)
     if n == 0:
@@ -172,7 +170,7 @@ def decide_sensors_window(
         refused,
     )
     depth_codes = sensor_state.decide_depth(
-        a, now, depth, depth_s, d_changed, d_spiked, changed, d_refused
+        a, now, depth, depth_s, d_changed, d_spiked, sea, d_refused
     )
     for k, line in enumerate(lines):
         line.take(
@@ -186,6 +184,23 @@ def decide_sensors_window(
         SensorPart(depth_memory, int(depth_codes[-1]), times[keep:], rows[keep:])
     )
     return SensorColumns(codes, depth_codes, before, before_depth)
+
+
+def _depth_memories(core: MonitorCore, window: Window) -> list[sensor_state.DepthMemory]:
+    """The depth memory before the window, then after each of its depth samples: the core's
+    :func:`~catenary_monitor.core.rules.sensor_state.sample_depth` in a loop (the depth is a
+    slow input: a second's sample costs microseconds), with the tide trend's rate after each
+    sample as the core steps it."""
+    a = core.config.alarm
+    _, dv = window.depth
+    ds = window.sample_s(None)
+    rates, _, _ = tide_trend.series(
+        core.state.trend, window.sample_ns(None), dv, a.tide_trend_window
+    )
+    mems = [core.state.depth_memory]
+    for t, v, r in zip(ds.tolist(), dv.tolist(), rates.tolist()):
+        mems.append(sensor_state.sample_depth(mems[-1], t, v, a, r, a.stamp_jitter))
+    return mems
 
 
 def decide_tide(

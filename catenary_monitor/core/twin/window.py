@@ -80,12 +80,6 @@ class Window:
         """Input messages in the window."""
         return sum(len(t) for t, _ in self.tensions) + len(self.depth[0])
 
-    def stamped(self, k: Optional[int]) -> bool:
-        """Whether line ``k``'s samples (None: the depth's) carry header stamps."""
-        if k is None:
-            return self.depth_stamps is not None
-        return self.tension_stamps is not None and self.tension_stamps[k] is not None
-
     def sample_ns(self, k: Optional[int]) -> np.ndarray:
         """The reading times (ns) of line ``k``'s samples (None: the depth's): the header
         stamps of a stamped input, else the arrival times."""
