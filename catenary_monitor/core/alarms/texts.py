@@ -51,7 +51,7 @@ ACTIONS: dict[str, str] = {
     'load_margin': 'reduce the load',
     'safety_factor': 'reduce the load',
     'time_to_uplift': 'pay out chain or reduce load',
-    'inconsistent': 'check load cell, chain, anchor',
+    'inconsistent': 'check cell, chain, anchor',
     'uplift_possible': 'treat as uplift',
     'drag_margin': 'watch the anchor',
     'sensor_error': 'check chain and load cell at once',
@@ -149,15 +149,16 @@ def headline(message: str, condition: str = '', limit: int = HEADLINE_LIMIT) -> 
             return with_action if len(with_action) <= limit else message
         return message
     more = f' (+{len(parts) - 1} more)' if len(parts) > 1 else ''
-    for form in _shorter(parts[0]):
-        text = form + more
-        if len(text) > limit:
-            continue
-        if action and not blind and not _names_action(form):
-            with_action = f'{text}: {action}'
-            if len(with_action) <= limit:
-                return with_action
-        return text
+    forms = [form + more for form in _shorter(parts[0])]
+    if action:  # the longest form that names what to do, its own advice or the action's
+        for form, text in zip(_shorter(parts[0]), forms):
+            if _names_action(form) and len(text) <= limit:
+                return text
+            if len(text) + 2 + len(action) <= limit:
+                return f'{text}: {action}'
+    for text in forms:
+        if len(text) <= limit:
+            return text
     return _cut(parts[0], limit - len(more)) + more
 
 
