@@ -210,11 +210,17 @@ def _start_monitor(params: str, log_dir: Path, env: dict[str, str]) -> subproces
 
 
 def _start_simulator(
-    params: str, duration: float, env: dict[str, str], origin: list[float], moordyn: bool = False
+    params: str,
+    duration: float,
+    env: dict[str, str],
+    origin: list[float],
+    moordyn: bool = False,
+    timeout: float = 180.0,
 ) -> subprocess.Popen:
-    """The dock simulator (``moordyn``: its tensions from MoorDyn), started before the monitor:
-    it computes its episode, then begins it as the monitor subscribes, so the monitor never
-    waits for its sensors; ``origin[0]`` becomes the episode's start (wall time, s)."""
+    """The dock simulator (``moordyn``: its tensions from MoorDyn), started before the monitor
+    and returned once it has computed its episode (or ``timeout`` s passed); it begins the
+    episode as the monitor subscribes, so the monitor never waits for its sensors. ``origin[0]``
+    becomes the episode's start (wall time, s)."""
     table = str(Path(params).parent / MOORDYN_TABLE)
     dynamics = ['--dynamics', 'moordyn', '--moordyn-table', table, '--rate', str(MOORDYN_RATE)]
     dynamics = dynamics if moordyn else []
@@ -237,13 +243,19 @@ def _start_simulator(
         text=True,
     )
 
+    ready = threading.Event()
+
     def read() -> None:
         assert sim.stdout is not None
         for line in sim.stdout:
-            if line.startswith('episode start '):
+            if line.startswith('waiting for subscribers'):
+                ready.set()
+            elif line.startswith('episode start '):
                 origin[0] = float(line.split()[2])
+        ready.set()  # it ended (its stderr says why)
 
     threading.Thread(target=read, daemon=True).start()
+    ready.wait(timeout)
     return sim
 
 

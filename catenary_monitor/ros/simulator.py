@@ -76,7 +76,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         default=0.0,
         metavar='S',
         help='begin the episode once every topic has a subscriber (the monitor), waiting at '
-        'most S s (0: at once); prints "episode start WALL_TIME" when it begins',
+        'most S s (0: at once); prints "waiting for subscribers" once its episode is computed, '
+        'and "episode start WALL_TIME" when it begins',
     )
     parser.add_argument(
         '--moordyn-table',
@@ -122,7 +123,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     depth_pub = node.create_publisher(Float64, config.depth_topic, qos_profile_sensor_data)
     rng = np.random.default_rng(scenario.seed)
     clock = node.get_clock()
-    _wait_for_subscribers(node, [*pubs, depth_pub], args.wait_for_subscribers)
+    if args.wait_for_subscribers > 0.0:
+        print('waiting for subscribers', flush=True)
+        _wait_for_subscribers(node, [*pubs, depth_pub], args.wait_for_subscribers)
     t0 = clock.now().nanoseconds
     print(f'episode start {time.time():.6f}', flush=True)
     state = {'next_depth': 0.0, 'done': False}
