@@ -567,7 +567,7 @@ def _draw_levels(ax: Any, ep: _Episode) -> None:
             )
     ax.set_yticks([0, 1, 2, 3], ['OK', 'WARN', 'ERROR', 'STALE'])
     ax.set_ylabel('alarm level')
-    ax.set_xlabel('time since the simulator started [s]')
+    ax.set_xlabel('time since the episode began [s]')
     ax.legend(loc='upper right', fontsize=8)
 
 
