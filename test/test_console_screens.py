@@ -115,6 +115,7 @@ return {
   rows_inside: rows.every(inside),
   one_line: rows.every((r) => r.getBoundingClientRect().height <= lh(r) + 8),
   plan_inside: inside(document.getElementById('plan')),
+  response_inside: inside(document.getElementById('response')),
   first_tiles: [...document.querySelectorAll('.tile .badge')].filter(inside).length,
   response: document.querySelector('#response .r-text').textContent,
   response_line: document.getElementById('response').dataset.line,
@@ -138,6 +139,7 @@ def test_plan_tiles_and_alarm_list_share_the_first_screen(demo_page: Any) -> Non
         seen = driver.execute_script(FIRST_SCREEN)
         assert seen['rows'] == 5 and seen['rows_inside'], (width, seen)
         assert seen['plan_inside'] and seen['first_tiles'] >= 3, (width, seen)
+        assert seen['response_inside'], (width, seen)
         if width == 1280:
             assert seen['one_line'], seen
         assert seen['response_line'] == 'line_11', seen  # the list's first, unacknowledged
