@@ -149,16 +149,24 @@ def headline(message: str, condition: str = '', limit: int = HEADLINE_LIMIT) -> 
             return with_action if len(with_action) <= limit else message
         return message
     more = f' (+{len(parts) - 1} more)' if len(parts) > 1 else ''
-    forms = [form + more for form in _shorter(parts[0])]
-    if action:  # the longest form that names what to do, its own advice or the action's
-        for form, text in zip(_shorter(parts[0]), forms):
-            if _names_action(form) and len(text) <= limit:
-                return text
-            if len(text) + 2 + len(action) <= limit:
-                return f'{text}: {action}'
-    for text in forms:
-        if len(text) <= limit:
-            return text
+    shorter = _shorter(parts[0])
+
+    def told(form: str) -> str:  # the form, with the action where it names none and it fits
+        text = form + more
+        if action and not _names_action(form) and len(text) + 2 + len(action) <= limit:
+            return f'{text}: {action}'
+        return text
+
+    # Remarks in parentheses may go for the action; the figures (cut at ': ') may not.
+    bare = _drop_parens(parts[0])
+    for form in [parts[0]] + ([bare] if bare and bare != parts[0] else []):
+        if len(told(form)) <= limit and (told(form) != form + more or not action):
+            return told(form)
+        if _names_action(form) and len(form + more) <= limit:
+            return form + more
+    for form in shorter:
+        if len(form + more) <= limit:
+            return told(form)
     return _cut(parts[0], limit - len(more)) + more
 
 
