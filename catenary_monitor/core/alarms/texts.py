@@ -115,11 +115,23 @@ def _shorter(part: str) -> list[str]:
     if bare and bare != part:
         forms.append(bare)
     head = bare or part
-    while ': ' in head:
-        head = head[: head.rindex(': ')]
-        if len(head) >= 12:
-            forms.append(head)
+    for cut in reversed(_colons(head)):
+        if cut >= 12:
+            forms.append(head[:cut])
     return forms
+
+
+def _colons(text: str) -> list[int]:
+    """Where ``': '`` stands outside quotes and parentheses in ``text``."""
+    out, depth, quoted = [], 0, False
+    for i, c in enumerate(text):
+        if c == '"':
+            quoted = not quoted
+        elif not quoted and c in '()':
+            depth = max(depth + (1 if c == '(' else -1), 0)
+        elif not quoted and not depth and text.startswith(': ', i):
+            out.append(i)
+    return out
 
 
 def _cut(text: str, limit: int) -> str:
