@@ -17,6 +17,7 @@ action (:data:`ACTIONS`). A pure function of the message, so the core and its tw
 
 from __future__ import annotations
 
+import re
 from functools import lru_cache
 from typing import Mapping, Sequence
 
@@ -75,36 +76,46 @@ ACTIONS: dict[str, str] = {
 _ACTION_WORDS = ('check ', 'reduce ', 'pay out', 'inspect', 'watch ', 'survey', 'free ')
 
 
+def _outside(text: str, i: int) -> bool:
+    """Whether position ``i`` of ``text`` is outside parentheses and quotes."""
+    depth = text.count('(', 0, i) - text.count(')', 0, i)
+    return depth <= 0 and text.count('"', 0, i) % 2 == 0
+
+
+def _at(text: str, sep: str) -> list[int]:
+    """Where ``sep`` stands outside parentheses and quotes in ``text``."""
+    out, i = [], text.find(sep)
+    plain = '(' not in text and '"' not in text
+    while i >= 0:
+        if plain or _outside(text, i):
+            out.append(i)
+        i = text.find(sep, i + 1)
+    return out
+
+
 def split_parts(message: str) -> list[str]:
     """``message`` split at ``'; '`` outside parentheses and quotes (its conditions' parts)."""
-    parts, depth, quoted, start = [], 0, False, 0
-    for i, c in enumerate(message):
-        if c == '"':
-            quoted = not quoted
-        elif quoted:
-            continue
-        elif c == '(':
-            depth += 1
-        elif c == ')':
-            depth = max(depth - 1, 0)
-        elif c == ';' and depth == 0 and message.startswith('; ', i):
-            parts.append(message[start:i])
-            start = i + 2
+    if '; ' not in message:
+        return [message] if message else []
+    parts, start = [], 0
+    for i in _at(message, '; '):
+        parts.append(message[start:i])
+        start = i + 2
     parts.append(message[start:])
     return [p for p in parts if p]
 
 
+_PARENS = re.compile(r'\s*\([^()]*\)')
+
+
 def _drop_parens(text: str) -> str:
-    """``text`` without its parenthesized remarks (outermost), spaces tidied."""
-    out, depth = [], 0
-    for c in text:
-        if c == '(':
-            depth += 1
-        elif c == ')' and depth:
-            depth -= 1
-        elif not depth:
-            out.append(c)
-    return ' '.join(''.join(out).split()).replace(' :', ':').replace(' ,', ',')
+    """``text`` without its parenthesized remarks, spaces tidied."""
+    while '(' in text:
+        bare = _PARENS.sub('', text)
+        if bare == text:
+            break
+        text = bare
+    return ' '.join(text.split()).replace(' :', ':').replace(' ,', ',')
 
 
 def _shorter(part: str) -> list[str]:
@@ -115,23 +126,10 @@ def _shorter(part: str) -> list[str]:
     if bare and bare != part:
         forms.append(bare)
     head = bare or part
-    for cut in reversed(_colons(head)):
+    for cut in reversed(_at(head, ': ')):
         if cut >= 12:
             forms.append(head[:cut])
     return forms
-
-
-def _colons(text: str) -> list[int]:
-    """Where ``': '`` stands outside quotes and parentheses in ``text``."""
-    out, depth, quoted = [], 0, False
-    for i, c in enumerate(text):
-        if c == '"':
-            quoted = not quoted
-        elif not quoted and c in '()':
-            depth = max(depth + (1 if c == '(' else -1), 0)
-        elif not quoted and not depth and text.startswith(': ', i):
-            out.append(i)
-    return out
 
 
 def _cut(text: str, limit: int) -> str:
@@ -150,16 +148,15 @@ def headline(message: str, condition: str = '', limit: int = HEADLINE_LIMIT) -> 
     part shortened as needed, ``(+n more)`` for the others, and the ``condition``'s short
     action where it fits and the part names none. A message within the limit is its own
     headline (a single part's with the action where it fits)."""
+    blind = message.startswith('blind: ')
+    action = '' if blind or message == 'OK' else ACTIONS.get(condition, '')
+    if len(message) <= limit:
+        if not action or _names_action(message) or len(message) + 2 + len(action) > limit:
+            return message
+        return f'{message}: {action}' if len(split_parts(message)) == 1 else message
     parts = split_parts(message)
     if not parts:
         return _cut(message, limit)
-    blind = parts[0].startswith('blind: ')
-    action = '' if blind or message == 'OK' else ACTIONS.get(condition, '')
-    if len(message) <= limit:
-        with_action = f'{message}: {action}'
-        if len(parts) == 1 and action and not _names_action(message):
-            return with_action if len(with_action) <= limit else message
-        return message
     more = f' (+{len(parts) - 1} more)' if len(parts) > 1 else ''
     shorter = _shorter(parts[0])
 
@@ -228,6 +225,8 @@ def status_texts(
 def active_conditions(latches: Sequence[bool], stale: bool) -> str:
     """The ``conditions`` value of a line: its active latched conditions (message order),
     then ``stale`` while an input is stale, comma separated (``''``: none)."""
+    if not any(latches):
+        return 'stale' if stale else ''
     names = [c for c, up in zip(CONDITIONS, latches) if up]
     return ','.join(names + ['stale'] if stale else names)
 
