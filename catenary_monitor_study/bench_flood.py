@@ -419,7 +419,9 @@ def flood(
             if st.name == INTAKE:
                 values = {kv.key: kv.value for kv in st.values}
                 with lock:
-                    diagnostics.append((now, st.level[0], st.message, values))
+                    # the full text (the message is its headline)
+                    text = values.get('detail', st.message)
+                    diagnostics.append((now, st.level[0], text, values))
                 return
         with lock:
             diagnostics.append((now, 0, '', {}))

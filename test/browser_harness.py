@@ -141,7 +141,7 @@ _LONG = (
 #: What the live storm's dynamic uplift ERROR says while its warnings are held (the live
 #: demo's longest messages: every alarm row carries one).
 _HELD = (
-    'anchor uplift 1.2 kN > allowed 0.0 kN (dynamic: at the waves\' peak tension; quasi-static '
+    'anchor uplift 1.2 kN > allowed 0.0 kN at the wave peak (quasi-static '
     '0.0 kN); anchor margin 5.06 m, warning held (clears after 6 s at >= 6.00 m); tide margin '
     '1.93 m, warning held (clears after 6 s at >= 1.20 m); uplift possible within sensor '
     'accuracy: up to 5.6 kN > allowed 0.0 kN (nominal 0.0 kN)'
@@ -158,6 +158,7 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
     estimate; line_05 a load cell of three channels, one silent), the intake WARN, and an
     alarm flood whose first out is line_11."""
     from catenary_monitor.console.frames import Status
+    from catenary_monitor.core.alarms.texts import status_texts
 
     out: dict[str, Any] = {}
     for k, name in enumerate(names):
@@ -192,7 +193,8 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
             # the span solved at: the dock estimate's (moved) on all but line_01 (installed)
             'span': 121.06 + (0.0 if k == 0 else 0.39 + 0.01 * k),
             'span_source': 'installed' if k == 0 else 'dock_estimate',
-            'dynamic_uplift': 161.0e3 if lifted else 0.0,
+            # line_07's ERROR is on its dynamic uplift (the quasi-static one is 0)
+            'dynamic_uplift': 161.0e3 if lifted else (1.2e3 if name == 'line_07' else 0.0),
             'fatigue_damage': 3.2e-4 * (k + 1),
             'fatigue_life_left': 2.7e9 / (k + 1),
             'tension_age': 0.4,
@@ -211,7 +213,11 @@ def demo_statuses(names: Sequence[str], now: float) -> dict[str, Any]:
         }
         if name == 'line_05':  # a load cell of three channels, the second silent
             values.update(channels_healthy=2.0, channel_states=5.0)
-        out[name] = Status(level, msg, {k: str(v) for k, v in values.items()})
+        # as the monitor publishes it: the headline, the full text and the response apart
+        condition = str(values['alarm_condition']) if level != 'OK' else 'none'
+        head, texts = status_texts(msg, level == 'OK', condition)
+        values.update(texts)
+        out[name] = Status(level, head, {k: str(v) for k, v in values.items()})
     out['tide'] = Status('OK', 'depth 21.95 m', {'depth': '21.95', 'rate': repr(0.31 / 3600)})
     out['logger'] = Status('OK', 'writing /var/log/catenary_monitor/2026-12-02.mcap', {})
     out['intake'] = Status(

@@ -309,7 +309,13 @@ def test_before_any_input_every_line_is_stale_and_says_why():
         'STALE',
         'blind: no tension received yet; no depth received yet' + note,
     )
-    assert messages['catenary_monitor: tide'] == ('STALE', 'no depth received yet')
+    # the headline names what to do; the full text is the detail
+    assert messages['catenary_monitor: tide'] == (
+        'STALE',
+        'no depth received yet: check the tide gauge',
+    )
+    tide = [st for st in step.snapshot.statuses if st.name == 'catenary_monitor: tide'][0]
+    assert dict(tide.values)['detail'] == 'no depth received yet'
     step = core.step(Tension(T0_NS + 2 * 10**9, 0, 372e3))
     assert step.outputs[0].values[11] == -1 and math.isnan(step.outputs[0].values[4])
     assert core.state.lines[0].state.message == 'blind: no depth received yet' + note
@@ -545,7 +551,7 @@ def test_run_log_flags_runtime_changes_as_the_core_does():
     flags = [(s.stamp_ns, s.statuses[-1]) for s in want]
     assert all(st.name == 'catenary_monitor: parameters' for _, st in flags)
     text = 'allowed_uplift of line_01 changed 0 N -> 1e+09 N at runtime'
-    at = {round((t - T0_NS) * 1e-9): (int(st.level), st.message) for t, st in flags}
+    at = {round((t - T0_NS) * 1e-9): (int(st.level), dict(st.values)['detail']) for t, st in flags}
     assert at[5] == (0, 'runtime changes allowed; none made')
     assert at[15] == (1, text) and at[29] == (1, text)
     assert at[35][0] == 0 and at[70] == (1, text.replace('0 N -> 1e+09', '1e+09 N -> 0'))

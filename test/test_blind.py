@@ -76,7 +76,7 @@ def test_a_blind_start_up_is_one_alarm_raised_after_the_timeout():
     run.step(Tick(T0_NS + S))  # 1 s: within tension_timeout, no alarm at all
     assert run.announced() == [] and run.rows() == []
     sensors = run.statuses()['sensors']
-    assert (sensors.level.name, sensors.message) == (
+    assert (sensors.level.name, dict(sensors.values)['detail']) == (
         'OK',
         'starting: no tension from all 12 lines and no depth yet (an alarm if still silent '
         '1.5 s after start for tensions, 4 s for the depth)',
@@ -86,7 +86,7 @@ def test_a_blind_start_up_is_one_alarm_raised_after_the_timeout():
     assert run.announced() == [('sensors', 'OK', 'STALE')]
     statuses = run.statuses()
     sensors = statuses['sensors']
-    assert sensors.message == (
+    assert dict(sensors.values)['detail'] == (
         'waiting for sensors: no tension from all 12 lines within 1.5 s of start, '
         'no depth within 4 s: all 12 lines blind'
     )
@@ -165,10 +165,11 @@ def test_the_replay_twin_recomputes_a_blind_start_and_a_silent_depth():
     assert waiting and waiting[0][2].startswith('waiting for sensors: no tension from all 3')
     assert not any(a[0] == 'line_03' for a in announced)
     silent = [
-        st.message
+        dict(st.values)['detail']
         for s in steps
         if s.snapshot is not None
         for st in s.snapshot.statuses
-        if st.name == 'catenary_monitor: sensors' and 'depth sensor silent' in st.message
+        if st.name == 'catenary_monitor: sensors'
+        and 'depth sensor silent' in dict(st.values)['detail']
     ]
     assert silent and silent[0].startswith('waiting for sensors: no tension from line_03')

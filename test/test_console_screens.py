@@ -87,14 +87,12 @@ def test_page_fits_every_screen(demo_page: Any) -> None:
         problems[(width, height)] = layout_problems(driver, (width, height) == (1920, 937))
         driver.save_screenshot(str(SHOTS / f'console_{width}x{height}.png'))
     assert not any(problems.values()), problems
-    # The long message is all there, wrapped over several lines of its tile.
-    lines = driver.execute_script(
-        "const m = document.querySelector('.tile[data-line=\"line_11\"] .msg');"
-        'return [m.textContent, m.getBoundingClientRect().height'
-        ' / parseFloat(getComputedStyle(m).fontSize)]'
+    # The tile's message is the alarm's headline (at most 100 characters), all of it shown.
+    head = driver.execute_script(
+        "return document.querySelector('.tile[data-line=\"line_11\"] .msg').textContent"
     )
-    assert lines[0].endswith('check the anchor and the chain on the seabed')
-    assert lines[1] > 3.0  # over two lines high
+    assert head.startswith('anchor uplift 152.3 kN > allowed 0.0 kN (+3 more): ')
+    assert len(head) <= 100
     # line_05's load cell: a row per channel, named by its topic's last part, its state
     chans = driver.execute_script(
         "return [...document.querySelectorAll('.tile[data-line=\"line_05\"] .v-ch')]"
@@ -104,6 +102,69 @@ def test_page_fits_every_screen(demo_page: Any) -> None:
         ['channel a', 'ok'], ['channel b', 'silent'], ['channel c', 'ok']
     ]  # fmt: skip
     assert 'warn' in chans[1][2] and 'warn' not in chans[0][2]
+
+
+FIRST_SCREEN = """
+const H = innerHeight, W = innerWidth;
+const inside = (e) => { const b = e.getBoundingClientRect();
+  return b.top >= 0 && b.bottom <= H + 0.5 && b.left >= 0 && b.right <= W + 0.5; };
+const rows = [...document.querySelectorAll('#alarms tbody tr')];
+const lh = (e) => parseFloat(getComputedStyle(e).fontSize) * 1.6;
+return {
+  rows: rows.length,
+  rows_inside: rows.every(inside),
+  one_line: rows.every((r) => r.getBoundingClientRect().height <= lh(r) + 8),
+  plan_inside: inside(document.getElementById('plan')),
+  response_inside: inside(document.getElementById('response')),
+  first_tiles: [...document.querySelectorAll('.tile .badge')].filter(inside).length,
+  response: document.querySelector('#response .r-text').textContent,
+  response_line: document.getElementById('response').dataset.line,
+};
+"""
+
+
+def test_plan_tiles_and_alarm_list_share_the_first_screen(demo_page: Any) -> None:
+    """At 1280x720 (a control room's laptop) and 1920x1080: every alarm row one line and in
+    the window, the whole dock plan and the first tiles on the first screen without
+    scrolling; the selected alarm's response text under the list (a click selects another);
+    the ERROR on a dynamic uplift shows that uplift on its tile."""
+    driver = demo_page
+    for width, height in ((1280, 720), (1920, 1080)):
+        set_viewport(driver, width, height)
+        wait_for(
+            f'the page at {width}x{height}',
+            lambda: driver.execute_script('return [innerWidth, innerHeight]') == [width, height],
+            10.0,
+        )
+        seen = driver.execute_script(FIRST_SCREEN)
+        assert seen['rows'] == 5 and seen['rows_inside'], (width, seen)
+        assert seen['plan_inside'] and seen['first_tiles'] >= 3, (width, seen)
+        assert seen['response_inside'], (width, seen)
+        if width == 1280:
+            assert seen['one_line'], seen
+        assert seen['response_line'] == 'line_11', seen  # the list's first, unacknowledged
+        assert seen['response'].startswith('Cause: the chain pulls its anchor upward'), seen
+        assert not layout_problems(driver, width == 1920)
+    set_viewport(driver, 1280, 720)
+    driver.execute_script(
+        "document.querySelector('#alarms tr[data-line=\"line_07\"] td.msg-cell').click()"
+    )
+    wait_for(
+        'line_07 selected',
+        lambda: driver.execute_script(FIRST_SCREEN)['response_line'] == 'line_07',
+        10.0,
+    )
+    detail = driver.execute_script(
+        "return document.querySelector('#response .r-detail').textContent"
+    )
+    assert 'warning held' in detail  # the held conditions: in the detail, not the headline
+    # line_07's ERROR is on its dynamic uplift: the tile shows it (not the quasi-static 0.0 kN)
+    uplift = driver.execute_script(
+        "const t = document.querySelector('.tile[data-line=\"line_07\"]');"
+        "return [t.querySelector('.k-uplift').textContent,"
+        " t.querySelector('.v-uplift').textContent]"
+    )
+    assert uplift == ['uplift, wave peak', '1.2 kN'], uplift
 
 
 def test_tide_margins_and_time_to_uplift_on_the_tiles(demo_page: Any) -> None:

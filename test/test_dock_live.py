@@ -62,14 +62,15 @@ def test_a_drifting_sensor_is_flagged_and_only_that_line(drifting):
     line = status[f'catenary_monitor: {bad}']
     values = dict(line.values)
     assert values['sensor_state'] == 'inconsistent'
-    assert 'check the tension sensor' in line.message and 'anchor (dragging)' in line.message
+    detail = values['detail']  # the full text; the message is its headline
+    assert 'check the tension sensor' in detail and 'anchor (dragging)' in detail
     assert float(values['residual']) > 0.1 * float(values['expected_tension'])
     assert float(values['residual_sigma']) > config.dock.residual_limit
     others = [dict(status[f'catenary_monitor: {n.name}'].values) for n in config.lines]
     assert sum(v['sensor_state'] == 'inconsistent' for v in others) == 1
     # The dock status: OK, the offset and load of the generating equilibrium.
     dock = status['catenary_monitor: dock']
-    assert dock.level.name == 'OK' and bad in dock.message
+    assert dock.level.name == 'OK' and bad in dict(dock.values)['detail']
     d = dict(dock.values)
     grid, _, offsets = true_tensions(config, seconds)
     assert abs(float(d['offset_y']) - offsets[-1, 1]) < 0.06  # m; sigma of the fit ~0.01 m
@@ -101,7 +102,7 @@ def test_the_twin_computes_the_same_dock_estimate_event_by_event():
     steps = compare(config, tensions, depth, ticks, cuts)
     # Not vacuous: the drifting line is flagged, and the dock status changes level.
     assert any(
-        'tension inconsistent' in st.message
+        'tension inconsistent' in dict(st.values)['detail']
         for s in steps
         if s.snapshot is not None
         for st in s.snapshot.statuses
@@ -144,7 +145,7 @@ def test_the_dock_is_stale_until_three_lines_report():
     core = MonitorCore(config, T0_NS)
     step = core.step(Tick(T0_NS + 10**9))
     dock = {st.name: st for st in step.snapshot.statuses}['catenary_monitor: dock']
-    assert dock.level.name == 'STALE' and 'needs 3' in dock.message
+    assert dock.level.name == 'STALE' and 'needs 3' in dict(dock.values)['detail']
     assert [k for k, _ in dock.values] == [
         'offset_x',
         'offset_y',
@@ -153,6 +154,9 @@ def test_the_dock_is_stale_until_three_lines_report():
         'load_y',
         'load_mz',
         'readings',
+        'conditions',
+        'detail',
+        'response',
     ]
 
 

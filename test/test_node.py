@@ -324,9 +324,12 @@ def test_unwritable_log_dir_is_an_error_diagnostic_not_a_stop(client, tmp_path):
     proc = start_monitor(params, blocker / 'log', out_dir=tmp_path)
     try:
         s = client.wait_status(
-            'catenary_monitor: logger', 30.0, ERROR, check=lambda s: str(blocker) in s['message']
+            'catenary_monitor: logger',
+            30.0,
+            ERROR,
+            check=lambda s: str(blocker) in s['values']['detail'],  # the path: in the detail
         )
-        assert 'MCAP log not written' in s['message']
+        assert s['message'].startswith('MCAP log not written') and len(s['message']) <= 100
         client.wait_matched([topic('nolog')], 30.0)
         client.feed('/tide/depth', DEPTH)
         client.feed(topic('nolog'), 400e3)

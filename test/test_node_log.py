@@ -116,9 +116,13 @@ def test_deleted_log_dir_is_an_error_within_seconds_then_a_new_file(client, tmp_
         shutil.rmtree(log_dir)
         t_delete = time.monotonic()
         s = client.wait_status(
-            LOGGER, 10.0, ERROR, since=t_delete, check=lambda s: 'vanished' in s['message']
+            LOGGER,
+            10.0,
+            ERROR,
+            since=t_delete,
+            check=lambda s: 'vanished' in s['values']['detail'],  # the full text
         )
-        assert 'lost' in s['message']
+        assert 'lost' in s['values']['detail'] and len(s['message']) <= 100
         s = client.wait_status(LOGGER, 15.0, OK, since=time.monotonic())
         new_path = Path(s['values']['file'])
         assert new_path.parent == log_dir and new_path.name != first.name

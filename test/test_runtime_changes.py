@@ -93,7 +93,7 @@ def test_allowed_changes_are_logged_and_recorded(client, tmp_path):
         # The flag: a WARN naming old and new values, in the very array that first shows it
         # the active uplift still ERROR (it clears only after clear_hold of clear input).
         flagged = client.wait_status(FLAG, 10.0, WARN, since=t0)
-        assert flagged['message'] == line and flagged['values']['changes'] == '1', flagged
+        assert flagged['values']['detail'] == line and flagged['values']['changes'] == '1', flagged
         with client.lock:
             first = next(
                 e

@@ -108,7 +108,7 @@ def assert_raised_and_cleared(steps, state, level, what, k=0):
     assert codes[-1][1] == sensor_state.OK, state
     assert all(c in (sensor_state.OK, code) for _, c in codes), (state, set(c for _, c in codes))
     shown = line_statuses(steps, k)
-    raised = [t for t, st in shown if st.level.name == level and what in st.message]
+    raised = [t for t, st in shown if st.level.name == level and what in dict(st.values)['detail']]
     assert raised, (state, {(st.level.name, st.message) for _, st in shown})
     assert dict(shown[-1][1].values)['sensor_state'] == 'ok'
     assert {dict(st.values)['sensor_state'] for t, st in shown if t == raised[0]} == {state}

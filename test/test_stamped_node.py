@@ -122,7 +122,7 @@ def test_stamped_sensors_in_kn_live_and_replayed(tmp_path):
             checked += 1
         c = entry['catenary_monitor: c']
         if c['values']['measured_tension'] != 'nan':
-            assert c['level'] == 2 and 'wrong units?' in c['message']
+            assert c['level'] == 2 and 'wrong units?' in c['values']['detail']
     assert checked >= 10
     # Replay of the node's log: the same levels and values at the same stamps.
     config = load_config(str(params))

@@ -1,12 +1,15 @@
 """``catenary-monitor demo``: the paper's dock through a storm, simulator and monitor as processes.
 
-Starts the monitor (``python -m catenary_monitor.ros.node``) on config/floating_dock.yaml, the
-operator's console (``catenary-monitor console``, its URL printed; :func:`start_console`), then
-the dock simulator (``python -m catenary_monitor.ros.simulator``; with ``moordyn``, its tensions
-from MoorDyn and the lines given MoorDyn's chain stiffness); prints each alarm transition
-the monitor reports as it happens; after the episode stops the console and the monitor with
-SIGINT (the MCAP file gets its summary), reads the log back and draws a PNG chart (matplotlib,
-Agg backend).
+Prints the episode's story (:meth:`catenary_monitor.sim.scenario.Scenario.story`: the storm's
+load, the anchors it lifts and the tension it brings, how fast its time runs). Starts the dock
+simulator (``python -m catenary_monitor.ros.simulator``; with ``moordyn``, its tensions from
+MoorDyn and the lines given MoorDyn's chain stiffness), which begins its episode as the monitor
+subscribes (the monitor never waits for its sensors), the monitor (``python -m
+catenary_monitor.ros.node``) on config/floating_dock.yaml and the operator's console
+(``catenary-monitor console``, its URL printed; :func:`start_console`); prints each alarm
+transition the monitor reports as it happens (its headline); after the episode stops the
+console and the monitor with SIGINT (the MCAP file gets its summary), reads the log back and
+draws a PNG chart (matplotlib, Agg backend).
 The demo itself imports no rclpy except to decode the logged outputs for the chart.
 """
 
@@ -24,6 +27,7 @@ from typing import Any, NamedTuple, Optional
 
 import numpy as np
 
+from catenary_monitor.core.alarms.texts import headline
 from catenary_monitor.sim.scenario import default_config_path
 
 __all__ = ['run_demo', 'start_console', 'DEMO_OVERRIDES']
@@ -32,7 +36,8 @@ __all__ = ['run_demo', 'start_console', 'DEMO_OVERRIDES']
 #: tide 813 times fast): clear holds longer than the simulator's 4 s wave period, shorter than
 #: the episode; a tide trend over 10 s (2.3 h of that tide) and a time-to-uplift warning at
 #: 15 s (3.4 h); the anchor-margin warning at 2 m, so that the rising tide's time-to-uplift
-#: warning is line 11's first.
+#: warning is line 11's first; the wave window two wave periods (the default 30 s would hold
+#: the storm's peak tension past its easing: uplift alarms the story no longer has).
 DEMO_OVERRIDES = {
     'clear_hold': 6.0,
     'warn_clear_hold': 6.0,
@@ -40,6 +45,7 @@ DEMO_OVERRIDES = {
     'uplift_time_warn': 8.0,
     'uplift_time_deadband': 3.0,
     'anchor_margin_warn': 2.0,
+    'wave_window': 8.0,
 }
 
 _ALARM = re.compile(r'\[(\d+\.\d+)\] \[[^\]]+\]: ALARM (\S+): (\S+) -> (\S+): (.*)$')
@@ -101,8 +107,9 @@ def _relay(
                 continue
             flush_online()
             on, off = (_LEVEL_COLOURS.get(new, ''), '\033[0m') if colour else ('', '')
+            head = headline(text)  # the operator's headline; the log keeps the full text
             print(
-                f'  t = {t:5.1f} s  {on}{name:8s} {old:>5s} -> {new:5s}{off}  {text}', flush=True
+                f'  t = {t:5.1f} s  {on}{name:8s} {old:>5s} -> {new:5s}{off}  {head}', flush=True
             )
         elif 'Traceback' in line or line.startswith('catenary_monitor:'):
             print(f'  monitor: {line}', file=sys.stderr, flush=True)
@@ -172,6 +179,16 @@ def demo_params(params: str, out: Path, ea: Optional[float] = None) -> str:
     return str(path)
 
 
+def demo_story(params: str, duration: float, moordyn: bool = False) -> list[str]:
+    """The banner's sentences: the episode's own storm, the tension it brings and how fast
+    its time runs (:meth:`catenary_monitor.sim.scenario.Scenario.story`)."""
+    from catenary_monitor.core.config.parameters import config_from_params, load_params_file
+    from catenary_monitor.sim.scenario import Scenario
+
+    scenario = Scenario(config_from_params(load_params_file(params)), duration)
+    return scenario.story(moordyn)
+
+
 def _start_monitor(params: str, log_dir: Path, env: dict[str, str]) -> subprocess.Popen:
     """The monitor node as its own process, logging into ``log_dir``, output piped."""
     return subprocess.Popen(
@@ -192,11 +209,18 @@ def _start_monitor(params: str, log_dir: Path, env: dict[str, str]) -> subproces
     )
 
 
-def _run_simulator(
-    params: str, duration: float, env: dict[str, str], moordyn: bool = False
-) -> Optional[str]:
-    """Drive the dock through the storm (blocks for ``duration`` s; ``moordyn``: the tensions
-    from MoorDyn); its stderr if it failed."""
+def _start_simulator(
+    params: str,
+    duration: float,
+    env: dict[str, str],
+    origin: list[float],
+    moordyn: bool = False,
+    timeout: float = 180.0,
+) -> subprocess.Popen:
+    """The dock simulator (``moordyn``: its tensions from MoorDyn), started before the monitor
+    and returned once it has computed its episode (or ``timeout`` s passed); it begins the
+    episode as the monitor subscribes, so the monitor never waits for its sensors. ``origin[0]``
+    becomes the episode's start (wall time, s)."""
     table = str(Path(params).parent / MOORDYN_TABLE)
     dynamics = ['--dynamics', 'moordyn', '--moordyn-table', table, '--rate', str(MOORDYN_RATE)]
     dynamics = dynamics if moordyn else []
@@ -209,19 +233,41 @@ def _run_simulator(
             params,
             '--duration',
             str(duration),
+            '--wait-for-subscribers',
+            '120',
             *dynamics,
         ],
         env=env,
-        stdout=subprocess.DEVNULL,
+        stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
     )
+
+    ready = threading.Event()
+
+    def read() -> None:
+        assert sim.stdout is not None
+        for line in sim.stdout:
+            if line.startswith('waiting for subscribers'):
+                ready.set()
+            elif line.startswith('episode start '):
+                origin[0] = float(line.split()[2])
+        ready.set()  # it ended (its stderr says why)
+
+    threading.Thread(target=read, daemon=True).start()
+    ready.wait(timeout)
+    return sim
+
+
+def _finish_simulator(sim: subprocess.Popen, duration: float) -> Optional[str]:
+    """Wait for the simulator's episode to end; its stderr if it failed."""
     try:
-        _, err = sim.communicate(timeout=duration + 60.0)
+        sim.wait(timeout=duration + 180.0)
     finally:
         if sim.poll() is None:
             sim.send_signal(signal.SIGINT)
             sim.wait(10)
+    err = sim.stderr.read() if sim.stderr is not None else ''
     return err if sim.returncode != 0 else None
 
 
@@ -296,10 +342,9 @@ def run_demo(
     before = set(log_dir.glob('*.mcap'))
     env = child_env()
     print(f'catenary_monitor demo: the floating dock of Hu & Tang (2004), 12 chains, {given}')
-    print(
-        f'  a storm builds to the typhoon load on line_11 (R = 1584.6 kN), then eases; '
-        f'{duration:g} s of wall time (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]})'
-    )
+    for line in demo_story(params, duration, moordyn):
+        print(f'  {line}')
+    print(f'  (ROS_DOMAIN_ID={env["ROS_DOMAIN_ID"]})')
     if moordyn:
         print(
             f'  the hook tensions from MoorDyn (12 chains with inertia, drag and seabed '
@@ -310,9 +355,10 @@ def run_demo(
         )
         spent = _moordyn_table(params, duration, out / MOORDYN_TABLE)
         print(f' {spent:.0f} s')
-    monitor = _start_monitor(params, log_dir, env)
     t0 = time.time()
-    origin = [t0]  # becomes the simulator's start: the printed times and the chart's
+    origin = [t0]  # becomes the episode's start: the printed times and the chart's
+    sim = _start_simulator(params, duration, env, origin, moordyn)
+    monitor = _start_monitor(params, log_dir, env)
     events: list = []
     transcript: list = []
     ready = threading.Event()
@@ -330,24 +376,25 @@ def run_demo(
                 file=sys.stderr,
             )
             return 1
+        print(
+            '  monitor running; the dock simulator begins its episode as the monitor '
+            'subscribes (alarm transitions follow, t in s since the episode began, as on the '
+            'chart)\n'
+        )
         if console_port is not None:
             console, url = start_console(params, env, console_port)
             if console is None:
                 print(f'  the console did not start ({url}); the demo goes on without it')
             else:
                 print(f'  console: {url}  (open it in a browser on this machine)')
-        print(
-            '  monitor running; starting the dock simulator (alarm transitions follow, t in s '
-            'since the simulator started, as on the chart)\n'
-        )
-        origin[0] = time.time()
-        sim_err = _run_simulator(params, duration, env, moordyn)
+        sim_err = _finish_simulator(sim, duration)
         if sim_err is not None:
             print(f'catenary_monitor demo: simulator failed:\n{sim_err}', file=sys.stderr)
             return 1
     except KeyboardInterrupt:
         print('\n  interrupted')
     finally:
+        _stop(sim, 10)
         _stop(console, 10)
         _stop(monitor, 15)
         relay.join(5)
@@ -460,7 +507,7 @@ def _read_episode(files: list[Path], params: str, origin_ns: Optional[int]) -> _
 
 
 def _draw_tensions(ax: Any, ep: _Episode) -> None:
-    """Every line's hook tension, the focus lines in colour, and Table 3's typhoon tension."""
+    """Every line's hook tension, the focus lines in colour."""
     for line in ep.config.lines:
         n = line.name
         t, v = ep.cols[line.tension_topic]
@@ -473,16 +520,6 @@ def _draw_tensions(ax: Any, ep: _Episode) -> None:
             label=n if n in ep.focus else None,
         )
     ax.plot([], [], color='grey', lw=0.5, label='other lines')
-    ax.axhline(1623.4, color='k', ls=':', lw=0.8)
-    ax.text(
-        0.99,
-        1623.4,
-        'table 3 (typhoon, line 11): T = 1623.4 kN ',
-        va='bottom',
-        ha='right',
-        fontsize=8,
-        transform=ax.get_yaxis_transform(),
-    )
     ax.set_ylabel('hook tension [kN]')
     ax.legend(loc='upper left', fontsize=8)
 
@@ -530,7 +567,7 @@ def _draw_levels(ax: Any, ep: _Episode) -> None:
             )
     ax.set_yticks([0, 1, 2, 3], ['OK', 'WARN', 'ERROR', 'STALE'])
     ax.set_ylabel('alarm level')
-    ax.set_xlabel('time since the simulator started [s]')
+    ax.set_xlabel('time since the episode began [s]')
     ax.legend(loc='upper right', fontsize=8)
 
 

@@ -214,6 +214,9 @@ def alarm_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dic
                 'raised': _num(st.values.get('alarm_raised')),
                 'condition': st.values.get('alarm_condition', ''),
                 'message': st.message,
+                # the full text of every condition, and what to do (cause, consequence, action)
+                'detail': st.values.get('detail', st.message),
+                'response': st.values.get('response', ''),
                 'acknowledged_by': st.values.get('acknowledged_by', ''),
                 'acknowledged_at': _num(st.values.get('acknowledged_at')),
                 'chattering': st.values.get('chattering') == 'true',
@@ -477,6 +480,8 @@ def _line_view(
             shelved_until=_num(v.get('shelved_until')),
             shelved_by=v.get('shelved_by', ''),
             chattering=v.get('chattering') == 'true',
+            detail=v.get('detail', status.message),
+            response=v.get('response', ''),
         )
         for key in (
             'top_tension',
@@ -508,8 +513,19 @@ def _line_view(
         rx, values = output
         for key in ('top_tension', 'anchor_margin', 'uplift_force', 'safety_factor'):
             view[key] = _finite(float(values[_INDEX[key]]))
+    view.update(_uplift_shown(view))
     view['age_s'] = None if sample_t is None else max(now - sample_t, 0.0)
     return view
+
+
+def _uplift_shown(view: Mapping[str, Any]) -> dict[str, Any]:
+    """The uplift the tile shows: the one the alarm is raised on (``uplift_shown``, N), the
+    dynamic uplift at the waves' peak tension where it exceeds the quasi-static one
+    (``uplift_dynamic`` true), else the quasi-static ``uplift_force``."""
+    static, dynamic = view.get('uplift_force'), view.get('dynamic_uplift')
+    if dynamic is not None and (static is None or dynamic > static):
+        return {'uplift_shown': dynamic, 'uplift_dynamic': True}
+    return {'uplift_shown': static, 'uplift_dynamic': False}
 
 
 def build_frame(

@@ -87,6 +87,7 @@ from catenary_monitor.core.alarms.acknowledge import (
     publisher_identity,
 )
 from catenary_monitor.core.alarms.journal import AlarmEvent
+from catenary_monitor.core.alarms.texts import TEXT_KEYS
 from catenary_monitor.core.alarms.requests import RequestLimit, limit_text
 from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.alarms.shelving import SHELVE_TOPIC
@@ -1091,7 +1092,10 @@ class CatenaryMonitor(Node):
         for st in snapshot.statuses:
             values = st.values
             if st.name == f'{NODE_NAME}: logger' and self.log is not None:
-                values = tuple(self.log.diagnostic_values().items()) + self._recovery_values()
+                texts = tuple((k, v) for k, v in values if k in TEXT_KEYS)
+                values = (
+                    tuple(self.log.diagnostic_values().items()) + self._recovery_values() + texts
+                )
             statuses.append(
                 DiagnosticStatus(
                     level=bytes([int(st.level)]),

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from typing import Any, Optional, Sequence
 
 import numpy as np
@@ -41,6 +42,17 @@ def _moordyn_source(scenario: Scenario, table: Optional[str]) -> 'MoorDynTension
     return MoorDynTensions.compute(scenario)
 
 
+def _wait_for_subscribers(node: Any, pubs: Sequence[Any], timeout: float) -> None:
+    """Spin until every publisher has a subscriber or ``timeout`` s have passed."""
+    import rclpy
+
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline and rclpy.ok():
+        if all(pub.get_subscription_count() > 0 for pub in pubs):
+            return
+        rclpy.spin_once(node, timeout_sec=0.05)
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Publish the scenario in real time until ``--duration`` has passed, then exit 0."""
     parser = argparse.ArgumentParser(prog='dock_simulator', description=__doc__.splitlines()[0])
@@ -57,6 +69,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         choices=('static', 'moordyn'),
         default='static',
         help='the tensions from the dock\'s equilibrium (static) or from MoorDyn',
+    )
+    parser.add_argument(
+        '--wait-for-subscribers',
+        type=float,
+        default=0.0,
+        metavar='S',
+        help='begin the episode once every topic has a subscriber (the monitor), waiting at '
+        'most S s (0: at once); prints "waiting for subscribers" once its episode is computed, '
+        'and "episode start WALL_TIME" when it begins',
     )
     parser.add_argument(
         '--moordyn-table',
@@ -102,7 +123,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     depth_pub = node.create_publisher(Float64, config.depth_topic, qos_profile_sensor_data)
     rng = np.random.default_rng(scenario.seed)
     clock = node.get_clock()
+    if args.wait_for_subscribers > 0.0:
+        print('waiting for subscribers', flush=True)
+        _wait_for_subscribers(node, [*pubs, depth_pub], args.wait_for_subscribers)
     t0 = clock.now().nanoseconds
+    print(f'episode start {time.time():.6f}', flush=True)
     state = {'next_depth': 0.0, 'done': False}
 
     def tick() -> None:

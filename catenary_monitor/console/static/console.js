@@ -268,7 +268,7 @@ function buildTiles() {
     const t = el('div', { class: 'tile', 'data-line': line.name, 'data-level': 'STALE' });
     t.innerHTML = `<div class="tile-head"><span class="name"></span><span class="badge"></span></div>
       <div class="bar"><div class="fill"></div><div class="mark"></div><div class="bar-label"></div></div>
-      <dl class="vals"><dt>anchor margin</dt><dd class="v-margin"></dd><dt>uplift</dt><dd class="v-uplift"></dd>
+      <dl class="vals"><dt>anchor margin</dt><dd class="v-margin"></dd><dt class="k-uplift">uplift</dt><dd class="v-uplift"></dd>
       <dt>safety factor</dt><dd class="v-sf"></dd><dt>uplift in</dt><dd class="v-ttu"></dd>
       <dt title="${TIDE_R}">tide to lift, R held</dt><dd class="v-tide" title="${TIDE_R}"></dd>
       <dt class="x-tidel" title="${TIDE_L}">tide to lift, chain length held</dt><dd class="v-tidel x-tidel" title="${TIDE_L}"></dd>
@@ -370,9 +370,13 @@ function renderTile(view, lost, frame) {
   m.textContent = `${num(view.anchor_margin, 2)} m`;
   m.className = 'v-margin ' + (view.anchor_margin !== null && view.anchor_margin < 0 ? 'bad' :
     (view.anchor_margin !== null && view.anchor_margin < S.config.anchor_margin_warn ? 'warn' : ''));
-  const u = t.querySelector('.v-uplift');
-  u.textContent = `${num(view.uplift_force, 1, KN)} kN`;
-  u.className = 'v-uplift ' + (view.uplift_force > (cfg.allowed_uplift || 0) ? 'bad' : '');
+  // The uplift the alarm is raised on: the dynamic one (at the waves' peak tension) where it
+  // exceeds the quasi-static one, which the title then gives.
+  const u = t.querySelector('.v-uplift'), lift = view.uplift_shown;
+  u.textContent = `${num(lift, 1, KN)} kN`;
+  u.className = 'v-uplift ' + (lift > (cfg.allowed_uplift || 0) ? 'bad' : '');
+  u.title = view.uplift_dynamic ? `at the waves' peak tension; quasi-static ${num(view.uplift_force, 1, KN)} kN` : '';
+  setText(t.querySelector('.k-uplift'), view.uplift_dynamic ? 'uplift, wave peak' : 'uplift');
   const sf = t.querySelector('.v-sf');
   sf.textContent = num(view.safety_factor, 2);
   sf.className = 'v-sf ' + (view.safety_factor !== null && view.safety_factor < S.config.safety_factor_warn ? 'warn' : '');
@@ -552,12 +556,39 @@ function renderFlood(frame, lost) {
 }
 let shelvedKey = '';
 
+// The selected alarm (a click on its row; else the list's first): its headline, what to do
+// (the monitor's response text: cause, consequence, action) and every condition in full.
+function pickedAlarm(frame) {
+  const names = frame.alarms.map((a) => a.line);
+  return names.includes(S.alarm) ? S.alarm : names[0];
+}
+
+function selectAlarm(line) {
+  S.alarm = line;
+  alarmKey = '';
+  if (S.frame) render(S.frame);
+}
+
+function renderResponse(frame, lost) {
+  const box = $('response'), name = pickedAlarm(frame);
+  const a = frame.alarms.find((r) => r.line === name);
+  box.hidden = !a || S.tab !== 'active';
+  if (!a) return;
+  box.dataset.line = a.line;
+  setText(box.querySelector('.r-head'), `${a.line} · ${a.level} · ${a.condition.replaceAll('_', ' ')}: ${a.message}`);
+  setText(box.querySelector('.r-text'), a.response || '');
+  const detail = a.detail && a.detail !== a.message ? a.detail : '';
+  setText(box.querySelector('.r-detail'), detail);
+  box.querySelector('.r-detail').hidden = !detail;
+}
+
 const rowsByLine = new Map();
 function setText(node, text) { if (node.textContent !== text) node.textContent = text; }
 
 function makeRow(line) {
   const tr = el('tr', { 'data-line': line });
   for (let k = 0; k < 7; k++) tr.appendChild(el('td'));
+  tr.addEventListener('click', (ev) => { if (!ev.target.closest('button')) selectAlarm(line); });
   tr.children[0].className = 'when';
   tr.children[4].className = 'msg-cell';
   tr.children[4].appendChild(el('div'));
@@ -586,8 +617,11 @@ function renderActive(frame, lost, replay) {
     setText(td[1], a.line);
     setText(td[2], a.level);
     setText(td[3], a.condition.replaceAll('_', ' '));
-    setText(td[4].firstChild, a.message + (a.shelved_condition ? ` (${a.shelved_condition.replaceAll('_', ' ')} shelved)` : ''));
-    td[4].title = a.message;
+    td[3].title = td[3].textContent;
+    const head = a.message + (a.shelved_condition ? ` (${a.shelved_condition.replaceAll('_', ' ')} shelved)` : '');
+    setText(td[4].firstChild, head);
+    td[4].firstChild.title = head;  // one line in the list: the whole headline below and here
+    tr.classList.toggle('picked', a.line === pickedAlarm(frame));
     tr.dataset.firstOut = a.first_out ? 'true' : 'false';
     tr.dataset.chattering = a.chattering ? 'true' : 'false';
     td[5].textContent = a.state.replace('-', ' ');
@@ -601,6 +635,7 @@ function renderActive(frame, lost, replay) {
     if (body.children[i] !== tr) body.insertBefore(tr, body.children[i] || null);
   });
   $('n-active').textContent = `(${frame.alarms.length})`;
+  renderResponse(frame, lost);
   $('ack-all').disabled = replay || lost || !canAct() || !frame.alarms.some((a) => a.state !== 'acknowledged');
   $('no-alarms').hidden = S.tab !== 'active' || frame.alarms.length > 0;
 }

@@ -414,10 +414,7 @@ class LineAlarm:
             if f > allowed:
                 text = f'anchor uplift {_fmt(f, 1e3)} kN > allowed {_fmt(allowed, 1e3)} kN'
                 if f - x.uplift_force > max(1.0, 1e-6 * f):  # not a rounding apart
-                    text += (
-                        f' (dynamic: at the waves\' peak tension; quasi-static '
-                        f'{_fmt(x.uplift_force, 1e3)} kN)'
-                    )
+                    text += f' at the wave peak (quasi-static {_fmt(x.uplift_force, 1e3)} kN)'
                 parts.append(text)
             else:
                 level = self.uplift_clear_level
@@ -573,9 +570,9 @@ class LineAlarm:
             )
             return (
                 f'anchor dragging: horizontal load {_fmt(load, 1e3)} kN > holding '
-                f'{_fmt(x.holding_capacity, 1e3)} kN and the chain puts the anchor '
-                f'{_fmt(x.implied_anchor_distance - span, 1.0, 2)} m beyond {where} '
-                f'(implied {_fmt(x.implied_anchor_distance, 1.0, 2)} m)'
+                f'{_fmt(x.holding_capacity, 1e3)} kN (the chain puts the anchor '
+                f'{_fmt(x.implied_anchor_distance - span, 1.0, 2)} m beyond {where}, '
+                f'implied {_fmt(x.implied_anchor_distance, 1.0, 2)} m)'
             )
         return f'anchor dragging alarm held (clears after {hold:g} s of the anchor holding)'
 
@@ -662,8 +659,8 @@ def _inconsistent_text(x: AlarmInputs, hold: float) -> str:
         gap = 'the other lines put the hook beyond its chain\'s reach'
     else:
         gap = (
-            f'measured {_fmt(expected + residual, 1e3)} kN, the dock position the other lines '
-            f'agree on gives {_fmt(expected, 1e3)} kN ({residual / 1e3:+.1f} kN, '
+            f'{_fmt(expected + residual, 1e3)} kN, expected {_fmt(expected, 1e3)} kN (from the '
+            f'dock position the other lines agree on; {residual / 1e3:+.1f} kN, '
             f'{x.dock_sigma:+.1f} sigma)'
         )
     check = (

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Mapping, NamedTuple, Optional
 
+from catenary_monitor.core.config.responses import DEFAULT_RESPONSES, RESPONSE_PREFIX
 from catenary_monitor.core.config.tide_constituents import (
     MAX_CONSTITUENTS,
     MAX_TABLE_CHARS,
@@ -1262,6 +1263,21 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         100.0,
         group='dock',
     ),
+    # The response text of each alarm condition (core/config/responses.py; docs/alarm_texts.md).
+    *(
+        ParamSpec(
+            f'{RESPONSE_PREFIX}{cond}',
+            'string',
+            text,
+            f'What the operator reads for {cond!r} beside its headline: cause, consequence, '
+            'action',
+            '',
+            None,
+            None,
+            group='responses',
+        )
+        for cond, text in DEFAULT_RESPONSES.items()
+    ),
 )
 
 _GLOBAL = {p.name: p for p in PARAMETERS if p.scope == 'global'}
@@ -1750,6 +1766,9 @@ class MonitorConfig:
     depth_offset: float = _default('depth_offset')  # m
     alarm: AlarmConfig = field(default_factory=AlarmConfig)
     dock: DockConfig = field(default_factory=DockConfig)
+    #: The ``response_texts.<condition>`` parameters that differ from the shipped texts
+    #: (:data:`~catenary_monitor.core.config.responses.DEFAULT_RESPONSES`), as (condition, text).
+    response_texts: tuple[tuple[str, str], ...] = ()
     #: Built for the dock as one body only (``equilibrium``, ``envelope``), not for the monitor:
     #: lines with point loads may then be placed on the dock. Not a parameter.
     body_only: bool = field(default=False, compare=False, repr=False)
@@ -1941,6 +1960,11 @@ def config_from_params(flat: Mapping[str, Any], *, body_only: bool = False) -> M
         **{key: values[key] for key in _TOP_LEVEL},
         alarm=alarm,
         dock=dock,
+        response_texts=tuple(
+            (cond, values[RESPONSE_PREFIX + cond])
+            for cond, text in DEFAULT_RESPONSES.items()
+            if values[RESPONSE_PREFIX + cond] != text
+        ),
         body_only=body_only,
     )
 
@@ -1970,6 +1994,8 @@ def config_to_params(config: MonitorConfig) -> dict[str, Any]:
             if _PER_LINE[key].optional and (value is None or value != value):
                 continue  # not given
             flat[f'{line.name}.{key}'] = 0.0 if key == 'ea' and value is None else value
+    for cond, text in config.response_texts:  # the shipped ones are left out (the defaults)
+        flat[RESPONSE_PREFIX + cond] = text
     return flat
 
 
@@ -1978,7 +2004,10 @@ def all_parameters(config: MonitorConfig) -> dict[str, Any]:
     optional parameters not given as NaN."""
     flat = config_to_params(config)
     names = [line.name for line in config.lines]
-    return {name: flat.get(name, math.nan) for name, _ in expand_parameters(names)}
+    return {
+        name: flat.get(name, spec.default if spec.group == 'responses' else math.nan)
+        for name, spec in expand_parameters(names)
+    }
 
 
 def resolve_topic(topic: str, node_name: str = 'catenary_monitor') -> str:
@@ -2002,6 +2031,7 @@ NON_DECIDING = frozenset(
         'log_create_dir',
         'allow_runtime_changes',
         'acknowledge_from_ros',
+        *(RESPONSE_PREFIX + cond for cond in DEFAULT_RESPONSES),
     }
 )
 

@@ -92,6 +92,7 @@ from catenary_monitor.core.monitor.status import (
     sensors_component,
     tide_component,
     tide_with_sensor,
+    with_texts,
 )
 from catenary_monitor.core.physics.solve import solve
 from catenary_monitor.core.rules import channels
@@ -948,9 +949,12 @@ class MonitorCore:
                     if dock
                     else ()
                 ),
+                [latch.active for latch in line.state.latches],
+                self.config.response_texts,
             )
             for line in self.state.lines
         ]
+        n_lines = len(statuses)
         statuses.append(
             tide_component(
                 self.state.tide,
@@ -975,7 +979,12 @@ class MonitorCore:
         if dock:
             statuses.append(dock_component(self.state.dock, self.state.dock_values))
         statuses += self.guard_components(now)
-        return Snapshot(stamp_ns, tuple(statuses))
+        return Snapshot(stamp_ns, tuple(statuses[:n_lines]) + self.texts(statuses[n_lines:]))
+
+    def texts(self, statuses: Sequence[ComponentStatus]) -> tuple[ComponentStatus, ...]:
+        """The components' statuses with their headlines, details and response texts
+        (:func:`~catenary_monitor.core.monitor.status.with_texts`)."""
+        return tuple(with_texts(s, self.config.response_texts) for s in statuses)
 
     def alarms_component(
         self, status: tuple[Level, str], flood: alarm_flood.Flood

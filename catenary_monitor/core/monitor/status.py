@@ -19,6 +19,11 @@ from catenary_monitor.core.alarms.latches import (
     Transition,
     diagnostic_values,
 )
+from catenary_monitor.core.alarms.texts import (
+    active_conditions,
+    component_condition,
+    status_texts,
+)
 from catenary_monitor.core.config.parameters import LineConfig, MonitorConfig
 from catenary_monitor.core.monitor.events import NODE_NAME
 from catenary_monitor.core.monitor.state import VALUE_FIELDS, LineState
@@ -40,6 +45,7 @@ __all__ = [
     'sensors_component',
     'dock_component',
     'tide_component',
+    'with_texts',
 ]
 
 _INCONSISTENT = CONDITIONS.index('inconsistent')
@@ -80,6 +86,8 @@ def line_status(
     tension_age: float,
     sensor_word: str = 'ok',
     extra: Sequence[tuple[str, str]] = (),
+    latches: Sequence[bool] = (),
+    responses: Sequence[tuple[str, str]] = (),
 ) -> ComponentStatus:
     """One line's ``DiagnosticStatus``: the contract keys (SI strings ``float()`` reads back
     exactly), then ``measured_tension``, ``tension_age`` [s], ``anchor_distance``,
@@ -89,7 +97,10 @@ def line_status(
     its source: :func:`catenary_monitor.core.rules.dock_watch.span_word`), then ``extra``
     (the alarm's acknowledgement keys:
     :func:`~catenary_monitor.core.alarms.acknowledge.diagnostic_values`; with the dock model,
-    :func:`line_dock_values`)."""
+    :func:`line_dock_values`), then ``conditions``, ``detail`` and ``response``
+    (:func:`~catenary_monitor.core.alarms.texts.status_texts`: the ``message`` is the
+    headline of the alarm's full ``message``; ``latches`` the active flags of its conditions,
+    ``responses`` the configured response texts)."""
     named = dict(zip(VALUE_FIELDS, values))
     pairs = diagnostic_values(named) + [
         ('measured_tension', repr(float(values[0]))),
@@ -105,9 +116,23 @@ def line_status(
         ('span_source', dock_live.span_word(named['span_source'])),
         *extra,
     ]
+    condition = next((v for k, v in extra if k == 'alarm_condition'), 'none')
+    active = active_conditions(latches, level == Level.STALE)
+    head, texts = status_texts(message, level == Level.OK, condition, responses, active)
     return ComponentStatus(
-        f'{NODE_NAME}: {config.name}', level, message, hardware_id, tuple(pairs)
+        f'{NODE_NAME}: {config.name}', level, head, hardware_id, tuple(pairs) + texts
     )
+
+
+def with_texts(
+    status: ComponentStatus, responses: Sequence[tuple[str, str]] = ()
+) -> ComponentStatus:
+    """A component's status (not a line's) with its headline as ``message`` and the values
+    ``conditions``, ``detail`` and ``response``
+    (:func:`~catenary_monitor.core.alarms.texts.status_texts`)."""
+    condition = component_condition(status.name)
+    head, texts = status_texts(status.message, status.level == Level.OK, condition, responses)
+    return status._replace(message=head, values=status.values + texts)
 
 
 def view_word(view: float) -> str:

@@ -11,6 +11,7 @@ import numpy as np
 from catenary_monitor.core.alarms import acknowledge as alarm_ack
 from catenary_monitor.core.alarms import flood as alarm_flood
 from catenary_monitor.core.alarms.latches import DIAGNOSTIC_KEYS, LevelSeries
+from catenary_monitor.core.alarms.texts import TEXT_KEYS, active_conditions, status_texts
 from catenary_monitor.core.monitor.events import NODE_NAME
 from catenary_monitor.core.monitor.monitor_core import MonitorCore
 from catenary_monitor.core.monitor.state import VALUE_FIELDS, LineState
@@ -234,15 +235,12 @@ def build_snapshots(m: WindowMade) -> list[Snapshot]:
     worst = m.max_damage(stamps)
     out = []
     for n, stamp in enumerate(stamps.tolist()):
-        statuses = [col[n] for col in columns]
-        statuses.append(tides[n])
-        statuses.append(blinds[n])
-        statuses.append(alarms[n])
-        statuses.append(logger)
+        statuses = [tides[n], blinds[n], alarms[n], logger]
         if dock is not None:
             statuses.append(_dock_status(core, dock, int(tick_at[n])))
         statuses += core.guard_components(stamp * 1e-9, worst[n])
-        out.append(Snapshot(stamp, tuple(statuses)))
+        lines = tuple(col[n] for col in columns)
+        out.append(Snapshot(stamp, lines + core.texts(statuses)))
     return out
 
 
@@ -301,6 +299,8 @@ def _line_statuses(m: WindowMade, k: int, stamps: np.ndarray) -> list[ComponentS
                 stamps[n] * 1e-9 - ts,
                 word,
                 tuple(alarm_ack.diagnostic_values(acks.at(i), level, latches)) + extra,
+                latches,
+                m.core.config.response_texts,
             )
         )
     return out
@@ -340,22 +340,47 @@ def _at(index: np.ndarray, at: np.ndarray) -> np.ndarray:
 
 def _level_columns(
     series: LevelSeries, before: LineBefore, at: np.ndarray
-) -> tuple[np.ndarray, list[str], list[str]]:
-    """Level, message and the alarm's condition per stamp (after step ``at``, else as before
-    the window)."""
+) -> tuple[np.ndarray, list[str], list[str], list[str]]:
+    """Level, message, the alarm's condition and its active conditions (the ``conditions``
+    value) per stamp (after step ``at``, else as before the window)."""
     levels = _take(series.levels, at, int(before.level), np.int64)
-    messages, conditions = [], []
+    messages, conditions, actives = [], [], []
     for i, level in zip(at.tolist(), levels.tolist()):
         if i < 0:
             messages.append(before.message)
             conditions.append(alarm_ack.condition(before.level, before.latches))
+            actives.append(active_conditions(before.latches, level == Level.STALE))
         elif level == Level.OK:
             messages.append('OK')
             conditions.append('none')
+            actives.append(active_conditions(series.active_at(i), False))
         else:
+            latches = series.active_at(i)
             messages.append(series.message_at(i))
-            conditions.append(alarm_ack.condition(Level(level), series.active_at(i)))
-    return levels, messages, conditions
+            conditions.append(alarm_ack.condition(Level(level), latches))
+            actives.append(active_conditions(latches, level == Level.STALE))
+    return levels, messages, conditions, actives
+
+
+def _text_columns(
+    levels: np.ndarray,
+    messages: list[str],
+    conditions: list[str],
+    actives: list[str],
+    responses: tuple[tuple[str, str], ...],
+) -> tuple[list[str], list[list[str]]]:
+    """The headlines and the ``conditions``, ``detail`` and ``response`` values per stamp
+    (:func:`~catenary_monitor.core.alarms.texts.status_texts`, each distinct row once)."""
+    cache: dict[tuple[str, bool, str, str], tuple[str, list[str]]] = {}
+    heads, rows = [], []
+    for row in zip(messages, (lv == Level.OK for lv in levels.tolist()), conditions, actives):
+        got = cache.get(row)
+        if got is None:
+            head, texts = status_texts(row[0], row[1], row[2], responses, row[3])
+            got = cache[row] = head, [v for _, v in texts]
+        heads.append(got[0])
+        rows.append(got[1])
+    return heads, rows
 
 
 def _word_columns(
@@ -419,7 +444,10 @@ def _line_columns(m: WindowMade, k: int, stamps: np.ndarray) -> StatusColumns:
     """:func:`_line_statuses` in columns (the same strings, built per key, not per status)."""
     line, r, series, steps, tt, before, acks, _, _ = m.line_parts(k)
     at = np.searchsorted(steps.times, stamps, 'right') - 1
-    levels, messages, conditions = _level_columns(series, before, at)
+    levels, messages, conditions, actives = _level_columns(series, before, at)
+    heads, texts = _text_columns(
+        levels, messages, conditions, actives, m.core.config.response_texts
+    )
     # The newest solve's values, status and model.
     s = _at(steps.s_idx, at)
     values = {
@@ -452,6 +480,7 @@ def _line_columns(m: WindowMade, k: int, stamps: np.ndarray) -> StatusColumns:
     ]
     columns += [f if isinstance(f, str) else _same(f) for f in ack_columns]
     columns += [_same([row[e] for row in extra]) for e in range(len(extra_keys))]
+    columns += [_same([row[e] for row in texts]) for e in range(len(TEXT_KEYS))]
     keys = (
         *DIAGNOSTIC_KEYS,
         'measured_tension',
@@ -467,11 +496,12 @@ def _line_columns(m: WindowMade, k: int, stamps: np.ndarray) -> StatusColumns:
         'span_source',
         *ack_keys,
         *extra_keys,
+        *TEXT_KEYS,
     )
     return StatusColumns(
         levels,
         f'{NODE_NAME}: {config.name}',
-        _same(messages),
+        _same(heads),
         line.hardware_id,
         keys,
         tuple(columns),
@@ -518,16 +548,17 @@ def build_snapshot_columns(m: WindowMade) -> SnapshotColumns | list[Snapshot]:
         groups += [(c, 1) for c in lines]
     tick_at = np.searchsorted(window.ticks, stamps, 'right') - 1
     tides = _tide_statuses(core, window, tide, stamps, m.depth_before, m.tide_before, m.depth_word)
-    groups.append((tides, 1))
-    groups.append((m.blind_statuses(stamps), 1))
-    groups.append((m.alarms_statuses(stamps), 1))
+    groups.append((list(core.texts(tides)), 1))
+    groups.append((list(core.texts(m.blind_statuses(stamps))), 1))
+    groups.append((list(core.texts(m.alarms_statuses(stamps))), 1))
     logger = ComponentStatus(
         'catenary_monitor: logger', core.state.logger[0], core.state.logger[1], core.logger_id, ()
     )
-    groups.append(([logger] * n, 1))
+    groups.append((list(core.texts([logger])) * n, 1))
     if dock is not None:
-        groups.append(([_dock_status(core, dock, int(i)) for i in tick_at.tolist()], 1))
+        docks = [_dock_status(core, dock, int(i)) for i in tick_at.tolist()]
+        groups.append((list(core.texts(docks)), 1))
     width = len(guards[0]) if guards else 0
     if width:
-        groups.append(([row[g] for g in range(width) for row in guards], width))
+        groups.append((list(core.texts([row[g] for g in range(width) for row in guards])), width))
     return SnapshotColumns(stamps, tuple(groups))
