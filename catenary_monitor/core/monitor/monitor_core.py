@@ -106,13 +106,24 @@ from catenary_monitor.core.rules.health import (
     logger_status,
     missing_samples,
     parameters_status,
+    DEPTH_INPUT,
+    common_cause,
+    common_cause_groups,
     sensors_status,
     tide_status,
 )
 from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.rules.plausible import reading_status, reading_status_array
 
-__all__ = ['LineOutput', 'Step', 'MonitorCore', 'channel_limits', 'sensor_limits']
+__all__ = [
+    'LineOutput',
+    'Step',
+    'MonitorCore',
+    'channel_limits',
+    'sensor_limits',
+    'input_names',
+    'silence_timeouts',
+]
 
 _NAN = math.nan
 _INCONSISTENT = CONDITIONS.index('inconsistent')
@@ -145,6 +156,11 @@ class Step(NamedTuple):
 
 def _stamp_s(stamp_ns: int) -> float:
     return stamp_ns * 1e-9
+
+
+def _active(ack: alarm_ack.AckState) -> bool:
+    """Whether the alarm's condition is active (not returned)."""
+    return ack.active_since == ack.active_since
 
 
 def _jitter(alarm: Any, sample_ns: Optional[int]) -> float:
@@ -217,6 +233,7 @@ class MonitorCore:
             clock_entered=start,
             intake_entered=start,
             fatigue_entered=start,
+            silent_grouped=(False,) * (len(lines) + 1),
         )
         self.state.sensors = self._sensors_now(start)
         self.state.alarms = alarm_flood.status(self.state.flood, config.alarm)
@@ -503,12 +520,14 @@ class MonitorCore:
     ) -> list[Change]:
         """The flood decision (core.alarms.flood) after an event that raised an alarm, or at a
         tick; its start and end go to the journal ``log``."""
-        raised = [(e.time, e.alarm) for e in log if e.kind == 'raised']
+        raised = [(e.time, e.alarm) for e in log if e.kind == 'raised' and self._counted(e.alarm)]
         if not raised and not tick:
             return []
         now = _stamp_s(stamp_ns)
         old = self.state.flood
-        new = alarm_flood.decide(old, raised, now, self.config.alarm)
+        active = [ln.config.name for ln in self.state.lines if _active(ln.ack)]
+        active += [alarm_ack.SENSORS] if _active(self.state.sensors_ack) else []
+        new = alarm_flood.decide(old, raised, now, self.config.alarm, active)
         self.state.flood = new
         if new.since == new.since and old.since != old.since:
             name, at = new.first_out
@@ -516,6 +535,10 @@ class MonitorCore:
         elif old.since == old.since and new.since != new.since:
             log.append(AlarmEvent(now, alarm_flood.NAME, 'flood_end', value=now - old.since))
         return self._set_component('alarms', alarm_flood.status(new, self.config.alarm), stamp_ns)
+
+    def _counted(self, alarm: str) -> bool:
+        """Whether a raise of ``alarm`` counts in the flood (a line's, the sensors')."""
+        return alarm in self.index or alarm == alarm_ack.SENSORS
 
     def _on_clock(self, ev: ClockHealth) -> Step:
         """The ROS clock's state; always a snapshot (the node sends these on a wall-clock
@@ -688,6 +711,8 @@ class MonitorCore:
             self.state.start_s,
             a.tension_timeout,
             a.depth_timeout,
+            self.state.common_causes,
+            [line.config.name for line in self.state.lines],
         )
 
     def _decide_blind(self, stamp_ns: int, log: list[AlarmEvent]) -> list[Change]:
@@ -738,6 +763,15 @@ class MonitorCore:
         )
         for k, line in enumerate(lines):
             line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
+        last = np.array([[line.tension_s for line in lines] + [self.state.depth_s]])
+        grouped = common_cause(
+            last, now, silence_timeouts(self.config), a.common_cause_window,
+            self.state.silent_grouped,
+        )[0]  # fmt: skip
+        self.state.silent_grouped = tuple(grouped.tolist())
+        self.state.common_causes = common_cause_groups(
+            input_names(self.config), last[0], grouped, a.common_cause_window
+        )
         dm = self.state.depth_memory
         self.state.depth_code = int(
             sensor_state.decide_depth(
@@ -891,6 +925,7 @@ class MonitorCore:
                     self.state.depth_stale,
                     self.state.trend.rate,
                     bool(self.config.alarm.constituents),
+                    self.state.silent_grouped[k],
                 ),
                 now,
             )
@@ -1058,6 +1093,17 @@ def channel_limits(core: MonitorCore, line: LineState) -> channels.Limits:
         a.channel_tolerance,
         int(line.config.min_channels),
     )
+
+
+def input_names(config: MonitorConfig) -> list[str]:
+    """The inputs a common cause can silence: each line's name, then ``depth``."""
+    return [c.name for c in config.lines] + [DEPTH_INPUT]
+
+
+def silence_timeouts(config: MonitorConfig) -> np.ndarray:
+    """Each line's ``tension_timeout``, then ``depth_timeout`` [s]."""
+    a = config.alarm
+    return np.array([a.tension_timeout] * len(config.lines) + [a.depth_timeout])
 
 
 def sensor_limits(config: MonitorConfig) -> sensor_state.LineLimits:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, NamedTuple, Optional
+from typing import Any, Callable, NamedTuple, Optional
 
 import numpy as np
 
@@ -16,7 +16,13 @@ from catenary_monitor.core.alarms import acknowledge as alarm_ack
 from catenary_monitor.core.alarms import flood as alarm_flood
 from catenary_monitor.core.alarms.journal import AlarmEvent, entries, raised
 from catenary_monitor.core.alarms.latches import CONDITIONS, LevelSeries, Transition, quiet_change
-from catenary_monitor.core.monitor.monitor_core import MonitorCore, channel_limits, sensor_limits
+from catenary_monitor.core.monitor.monitor_core import (
+    MonitorCore,
+    channel_limits,
+    input_names,
+    sensor_limits,
+    silence_timeouts,
+)
 from catenary_monitor.core.monitor.state import (
     BlindPart,
     DockPart,
@@ -29,7 +35,13 @@ from catenary_monitor.core.monitor.state import (
 from catenary_monitor.core.monitor.status import tide_with_sensor
 from catenary_monitor.core.rules import channels, readings, sensor_state, tide_trend
 from catenary_monitor.core.rules import dock_watch as dock_live
-from catenary_monitor.core.rules.health import sensors_status, tide_status
+from catenary_monitor.core.rules.health import (
+    CommonCause,
+    common_cause,
+    common_cause_groups,
+    sensors_status,
+    tide_status,
+)
 from catenary_monitor.core.rules.level import RANK, Level
 from catenary_monitor.core.rules.plausible import MAX_DEPTH
 from catenary_monitor.core.twin.schedule import LineSteps, level_changes, merge, newest, pick
@@ -99,6 +111,16 @@ class SensorColumns:
     depth_codes: np.ndarray
     before: list[int]
     before_depth: int
+    # Silent under a common cause (core.rules.health.common_cause): (ticks, lines + depth), the
+    # flags before the window, and the causes at each tick that has one (and before).
+    grouped: np.ndarray
+    before_grouped: tuple[bool, ...]
+    causes: dict[int, tuple[CommonCause, ...]]
+    before_causes: tuple[CommonCause, ...]
+
+    def causes_at(self, i: int) -> tuple[CommonCause, ...]:
+        """The common causes after tick ``i`` (-1: before the window)."""
+        return self.before_causes if i < 0 else self.causes.get(i, ())
 
 
 def decide_sensors_window(
@@ -111,6 +133,7 @@ def decide_sensors_window(
     n, m = len(ticks), len(lines)
     before = [line.sensor_code for line in lines]
     before_depth = core.state.depth_code
+    flags, causes = core.state.silent_grouped, core.state.common_causes
     now = ticks * 1e-9
     tension, tension_s = np.empty((n, m)), np.empty((n, m))
     changed, spiked = np.empty((n, m)), np.empty((n, m))
@@ -147,7 +170,10 @@ def decide_sensors_window(
         for line, memory in zip(lines, memories):
             line.take(line.read(LineRulesPart)._replace(sensor_memory=memory))
         core.state.take(core.state.read(SensorPart)._replace(depth_memory=depth_memory))
-        return SensorColumns(np.zeros((0, m), np.int8), np.zeros(0, np.int8), before, before_depth)
+        return SensorColumns(
+            np.zeros((0, m), np.int8), np.zeros(0, np.int8), before, before_depth,
+            np.zeros((0, m + 1), bool), flags, {}, causes,
+        )  # fmt: skip
     times = np.concatenate([core.state.sensor_times, now])
     rows = np.vstack(
         [core.state.sensor_rows, sensor_state.history_row(now, tension, spiked, a.sensor_hold)]
@@ -182,10 +208,23 @@ def decide_sensors_window(
                 parted_seen=float(seen[-1, k]),
             )
         )
+    last = np.column_stack([tension_s, depth_s])
+    window_s = a.common_cause_window
+    grouped = common_cause(last, now, silence_timeouts(core.config), window_s, flags)
+    names = input_names(core.config)
+    found = {
+        i: common_cause_groups(names, last[i], grouped[i], window_s)
+        for i in np.flatnonzero(grouped.any(axis=1)).tolist()
+    }
     core.state.take(
-        SensorPart(depth_memory, int(depth_codes[-1]), times[keep:], rows[keep:])
+        SensorPart(
+            depth_memory, int(depth_codes[-1]), times[keep:], rows[keep:],
+            tuple(grouped[-1].tolist()), found.get(n - 1, ()),
+        )  # fmt: skip
     )
-    return SensorColumns(codes, depth_codes, before, before_depth)
+    return SensorColumns(
+        codes, depth_codes, before, before_depth, grouped, flags, found, causes
+    )
 
 
 def decide_tide(
@@ -238,6 +277,8 @@ class BlindColumns:
     transitions: list[Transition]
     acks: alarm_ack.AckSeries
     before: tuple[tuple[Level, str], int]  # the status and the lines waiting before the window
+    tick_at: np.ndarray  # per decision: the newest tick of the window (-1: before it)
+    sensors: SensorColumns  # the common causes at the ticks
 
 
 def blind_status_at(
@@ -256,10 +297,14 @@ def blind_status_at(
         core.state.start_s,
         a.tension_timeout,
         a.depth_timeout,
+        blind.sensors.causes_at(int(blind.tick_at[i])),
+        [line.config.name for line in core.state.lines],
     )
 
 
-def decide_blind(core: MonitorCore, window: Window, tide: TideColumns) -> BlindColumns:
+def decide_blind(
+    core: MonitorCore, window: Window, tide: TideColumns, sensors: SensorColumns
+) -> BlindColumns:
     """The sensors alarm at every tide decision of the window, its transitions and its
     acknowledgement states; leaves the core's as after the window."""
     a, times = core.config.alarm, tide.times
@@ -276,10 +321,12 @@ def decide_blind(core: MonitorCore, window: Window, tide: TideColumns) -> BlindC
     since = times * 1e-9 - core.state.start_s
     late = waiting.any(axis=1) & (since > a.tension_timeout)
     silent = tide.stale | (np.isnan(tide.depth_s) & (since > a.depth_timeout))
-    levels = np.where(late | silent, Level.STALE, Level.OK).astype(np.int8)
+    tick_at = newest(tide.kinds == KIND_TICK)
+    caused = pick(tick_at, sensors.grouped.any(axis=1), bool(sensors.before_causes)).astype(bool)
+    levels = np.where(late | silent | caused, Level.STALE, Level.OK).astype(np.int8)
     before = (core.state.sensors, core.state.sensors_waiting)
     acks = alarm_ack.AckSeries(core.state.sensors_ack, levels[:0], [])
-    blind = BlindColumns(waiting, levels, [], acks, before)
+    blind = BlindColumns(waiting, levels, [], acks, before, tick_at, sensors)
     old, entered = core.state.sensors[0], core.state.sensors_entered
     for i in level_changes(levels, old).tolist():
         new = blind_status_at(core, tide, blind, i)
@@ -431,7 +478,20 @@ def window_journal(
             (t, k, e) for t, e in _journal(line.config.name, acks[k], steps[k].times, condition)
         ]
     raises = [(t, k, e.alarm) for t, k, e in ranked if e.kind == 'raised']
-    flood, flood_log = _decide_flood(core, window, raises)
+
+    def active(stamp: int) -> set[str]:
+        """The alarms active after the event at ``stamp`` [ns]."""
+        out = set()
+        for k, line in enumerate(core.state.lines):
+            i = int(np.searchsorted(steps[k].times, stamp, 'right')) - 1
+            if _active(acks[k].at(i)):
+                out.add(line.config.name)
+        i = int(np.searchsorted(tide.times, stamp, 'right')) - 1
+        if _active(blind.acks.at(i)):
+            out.add(alarm_ack.SENSORS)
+        return out
+
+    flood, flood_log = _decide_flood(core, window, raises, active)
     ranked += [(t, len(core.state.lines), e) for t, e in flood_log]
     ranked.sort(key=lambda r: (r[0], r[1]))
     return [e for _, _, e in ranked], flood
@@ -522,6 +582,10 @@ def write_refusals(core: MonitorCore, refusals: _Refusals) -> None:
         core.state.take(core.state.read(TidePart)._replace(depth_refused=refused))
 
 
+def _active(ack: alarm_ack.AckState) -> bool:
+    return ack.active_since == ack.active_since
+
+
 def _raised_condition(series: LevelSeries, unshelvable: Any) -> Any:
     """The condition a raise of the line's alarm at step ``i`` names (the visible one under
     the alarm's shelf), as the core's ``_raised_condition``."""
@@ -552,6 +616,7 @@ class FloodColumns(NamedTuple):
     status_before: tuple[Level, str]
     transitions: list[Transition]
     changes: np.ndarray  # the decisions at which the status's level changed
+    first: dict[int, tuple[str, float]]  # each start decision's first out
 
     def at(self, j: int) -> alarm_flood.Flood:
         """The flood decision ``j`` (-1: as before the window)."""
@@ -564,16 +629,19 @@ class FloodColumns(NamedTuple):
             return alarm_flood.Flood(recent)
         if start < 0:
             return alarm_flood.Flood(recent, self.before.since, self.before.first_out)
-        first = int(self.lo[start])
         since = float(self.stamps[start] * 1e-9)
-        return alarm_flood.Flood(recent, since, (self.names[first], float(self.times[first])))
+        return alarm_flood.Flood(recent, since, self.first[start])
 
 
 def _decide_flood(
-    core: MonitorCore, window: Window, raises: list[tuple[int, int, str]]
+    core: MonitorCore,
+    window: Window,
+    raises: list[tuple[int, int, str]],
+    active: Callable[[int], set[str]],
 ) -> tuple[FloodColumns, list[tuple[int, AlarmEvent]]]:
     """The flood decisions at the window's raises (stamp ns, rank, alarm) and ticks, their
-    journal records; leaves the core's flood state as after the window."""
+    journal records; leaves the core's flood state as after the window. ``active(stamp)``:
+    the alarms active after the event at ``stamp`` [ns] (a flood's first out is one)."""
     a = core.config.alarm
     raises = sorted(raises)
     before, status_before = core.state.flood, core.state.alarms
@@ -595,8 +663,13 @@ def _decide_flood(
     start = np.where(episode > 0, first[np.maximum(episode - 1, 0)] if len(first) else -1, -1)
     start = np.where(flooded, start, -2)
     changes = np.flatnonzero(flooded != was)
+    outs = {}
+    for j in first.tolist():
+        lo_j = int(lo[j])
+        recent = list(zip(times[lo_j : lo_j + int(count[j])].tolist(), names[lo_j:]))
+        outs[j] = alarm_flood.first_out(recent, active(int(stamps[j])))
     flood = FloodColumns(
-        stamps, lo, count, start, times, names, before, status_before, [], changes
+        stamps, lo, count, start, times, names, before, status_before, [], changes, outs
     )
     log: list[tuple[int, AlarmEvent]] = []
     old, entered = status_before, core.state.alarms_entered

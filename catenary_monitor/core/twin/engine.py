@@ -157,6 +157,8 @@ def _line_inputs(
         inputs['sensor_state'] = pick(steps.k_idx, codes, sensors.before[k])
         inputs['sensor_tension'] = pick(steps.t_idx, window.tensions[k][1], line.tension)
         inputs['mbl'] = line.config.mbl
+        grouped = sensors.grouped[:, k].astype(np.float64)
+        inputs['silent_group'] = pick(steps.k_idx, grouped, float(sensors.before_grouped[k]))
     if dock is not None:
         before_dock = dock.before[2][k]
         columns = dock.decision.line_inputs
@@ -314,7 +316,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
     depth_word = depth_state_word(core.state.depth_s, core.state.depth_code)
     sensors = decide_sensors_window(core, window, refusals)
     tide, tide_transitions = decide_tide(core, window, sensors)
-    blind = decide_blind(core, window, tide)
+    blind = decide_blind(core, window, tide, sensors)
     dock = decide_dock_window(core, window, tide)
     results, series, steps, acks, damage = [], [], [], [], []
     for k, line in enumerate(core.state.lines):
