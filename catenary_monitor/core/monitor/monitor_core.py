@@ -39,7 +39,12 @@ import numpy as np
 from catenary_monitor.core.alarms import acknowledge as alarm_ack
 from catenary_monitor.core.alarms import flood as alarm_flood
 from catenary_monitor.core.alarms import shelving
-from catenary_monitor.core.alarms.journal import AlarmEvent, entries
+from catenary_monitor.core.alarms.journal import (
+    COMPONENTS,
+    AlarmEvent,
+    component_entries,
+    entries,
+)
 from catenary_monitor.core.alarms.latches import CONDITIONS, LineAlarm, Transition, quiet_change
 from catenary_monitor.core.body.dock_model import DockModel
 from catenary_monitor.core.config.parameters import (
@@ -123,6 +128,7 @@ __all__ = [
     'sensor_limits',
     'input_names',
     'silence_timeouts',
+    'component_log',
 ]
 
 _NAN = math.nan
@@ -348,6 +354,7 @@ class MonitorCore:
         changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns, log)
         changes += self._decide_flood(ev.stamp_ns, log, tick=True)
         snapshot = self.snapshot(ev.stamp_ns)
+        log = component_log(changes) + log
         return Step(ev.stamp_ns, 'tick', (), snapshot, tuple(changes), tuple(log))
 
     def _on_fatigue_store(self, ev: FatigueStore) -> Step:
@@ -368,7 +375,9 @@ class MonitorCore:
         self.state.fatigue_word = ev.state
         level = FATIGUE_STORE_STATES.get(ev.state, Level.WARN)
         changes = self._set_component('fatigue', (level, ev.message), ev.stamp_ns)
-        return Step(ev.stamp_ns, 'fatigue', (), self.snapshot(ev.stamp_ns), tuple(changes))
+        snapshot = self.snapshot(ev.stamp_ns)
+        log = tuple(component_log(changes))
+        return Step(ev.stamp_ns, 'fatigue', (), snapshot, tuple(changes), log)
 
     def _on_logger(self, ev: LoggerHealth) -> Step:
         new = logger_status(ev.error, ev.path, ev.warning)
@@ -545,7 +554,9 @@ class MonitorCore:
         timer while the ROS clock stands still, so /diagnostics keeps coming)."""
         self.state.clock_seen = True
         changes = self._set_component('clock', clock_status(ev.stopped_for), ev.stamp_ns)
-        return Step(ev.stamp_ns, 'clock', (), self.snapshot(ev.stamp_ns), tuple(changes))
+        snapshot = self.snapshot(ev.stamp_ns)
+        log = tuple(component_log(changes))
+        return Step(ev.stamp_ns, 'clock', (), snapshot, tuple(changes), log)
 
     def _on_intake(self, ev: Intake) -> Step:
         """Sample counts: the intake status over the last :data:`INTAKE_WINDOW` of them."""
@@ -666,7 +677,9 @@ class MonitorCore:
         self.state.changes_until = now + ev.config.runtime_change_warn_time
         new = parameters_status(self.state.changes, self.state.changes_until, now)
         changes = self._set_component('parameters', new, ev.stamp_ns)
-        return Step(ev.stamp_ns, 'configure', (), self.snapshot(ev.stamp_ns), tuple(changes))
+        snapshot = self.snapshot(ev.stamp_ns)
+        log = tuple(component_log(changes))
+        return Step(ev.stamp_ns, 'configure', (), snapshot, tuple(changes), log)
 
     def reconfigure(self, config: MonitorConfig) -> None:
         """Take new line constants and alarm rules (same line names); alarm states are kept."""
@@ -954,6 +967,7 @@ class MonitorCore:
         changes = changes + self._decide_flood(stamp_ns, log)
         outputs = tuple(self.output(k) for k in solved)
         snapshot = self.snapshot(stamp_ns) if changes else None
+        log = component_log(changes) + log
         return Step(stamp_ns, kind, outputs, snapshot, tuple(changes), tuple(log))
 
     # ------------------------------------------------------------------ views
@@ -1093,6 +1107,16 @@ def channel_limits(core: MonitorCore, line: LineState) -> channels.Limits:
         a.channel_tolerance,
         int(line.config.min_channels),
     )
+
+
+def component_log(changes: Sequence[Change]) -> list[AlarmEvent]:
+    """The journal records of the component statuses' level ``changes`` (the tide, the
+    intake, ...: :data:`~catenary_monitor.core.alarms.journal.COMPONENTS`), in order."""
+    out: list[AlarmEvent] = []
+    for change in changes:
+        if change.component in COMPONENTS:
+            out += component_entries(change.component, change.transition)
+    return out
 
 
 def input_names(config: MonitorConfig) -> list[str]:

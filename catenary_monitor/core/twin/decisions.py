@@ -14,7 +14,12 @@ import numpy as np
 from catenary_monitor.core.alarms import shelving
 from catenary_monitor.core.alarms import acknowledge as alarm_ack
 from catenary_monitor.core.alarms import flood as alarm_flood
-from catenary_monitor.core.alarms.journal import AlarmEvent, entries, raised
+from catenary_monitor.core.alarms.journal import (
+    AlarmEvent,
+    component_entries,
+    entries,
+    raised,
+)
 from catenary_monitor.core.alarms.latches import CONDITIONS, LevelSeries, Transition, quiet_change
 from catenary_monitor.core.monitor.monitor_core import (
     MonitorCore,
@@ -463,11 +468,21 @@ def window_journal(
     series: list[LevelSeries],
     steps: list[LineSteps],
     acks: list[alarm_ack.AckSeries],
+    tide_transitions: list[Transition],
+    dock: Optional[DockColumns],
 ) -> tuple[list[AlarmEvent], FloodColumns]:
-    """The window's alarm journal (the sensors alarm, each line's, the flood's) in the core's
-    order (time; within one event the sensors, the lines, the flood), and the flood decisions."""
+    """The window's alarm journal (the tide's and the dock's, the sensors alarm, each line's,
+    the flood's) in the core's order (time; within one event the components, the sensors, the
+    lines, the flood), and the flood decisions."""
     unshelvable = core.config.alarm.unshelvable_conditions
     ranked: list[tuple[int, int, AlarmEvent]] = []
+    at = level_changes(tide.level, core.state.tide[0])
+    for i, tr in zip(at.tolist(), tide_transitions):
+        ranked += [(int(tide.times[i]), -2, e) for e in component_entries('tide', tr)]
+    if dock is not None and len(dock.levels):
+        at = level_changes(dock.levels, dock.before[0][0])
+        for i, tr in zip(at.tolist(), dock.transitions):
+            ranked += [(int(window.ticks[i]), -2, e) for e in component_entries('dock', tr)]
     sensors = _journal(
         alarm_ack.SENSORS, blind.acks, tide.times, lambda i, a: alarm_ack.condition(a.level, ())
     )
@@ -477,7 +492,7 @@ def window_journal(
         ranked += [
             (t, k, e) for t, e in _journal(line.config.name, acks[k], steps[k].times, condition)
         ]
-    raises = [(t, k, e.alarm) for t, k, e in ranked if e.kind == 'raised']
+    raises = [(t, k, e.alarm) for t, k, e in ranked if e.kind == 'raised' and k > -2]
 
     def active(stamp: int) -> set[str]:
         """The alarms active after the event at ``stamp`` [ns]."""

@@ -329,7 +329,9 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         steps.append(st)
         acks.append(a)
         damage.append(DamageColumns(window.tensions[k][0], d, before))
-    journal, flood = window_journal(core, window, tide, blind, series, steps, acks)
+    journal, flood = window_journal(
+        core, window, tide, blind, series, steps, acks, tide_transitions, dock
+    )
     times = [c[0] for c in (*given.tensions, given.depth, (given.ticks, None)) if len(c[0])]
     start = int(min(t[0] for t in times)) if times else core.state.last_ns
     end = int(max(t[-1] for t in times)) if times else core.state.last_ns
