@@ -6,7 +6,9 @@ import math
 import numpy as np
 import pytest
 
+from catenary_monitor.core.alarms.flood import first_out
 from catenary_monitor.core.config.tide_constituents import parse_table
+from catenary_monitor.core.rules.health import common_cause, silent_groups
 from catenary_monitor_study import normal_days as nd
 from catenary_monitor_study import normal_days_log as ndl
 from catenary_monitor_study import sea_rules as sr
@@ -123,15 +125,18 @@ def test_a_gateway_drop_is_one_cause_a_silent_cell_its_own():
         return np.array([float(s.log_ns[s.log_ns <= scene.start_ns + now * 1e9][-1])
                          for s in streams]) * 1e-9 - scene.start_s  # fmt: skip
 
-    groups = sr.common_silence(last_before(608.0), 608.0, 5.0)
-    assert [sorted(g) for g in groups] == [list(range(12))]
-    groups = sr.common_silence(last_before(910.0), 910.0, 5.0)
-    assert groups == [[3]]
+    def grouped(now):
+        last = last_before(now)[None, :]
+        return common_cause(last, np.array([now]), np.full(12, 5.0), 1.0, [False] * 12)[0]
+
+    assert grouped(608.0).all()  # the gateway's twelve lines: one cause
+    assert not grouped(910.0).any()  # line_04 alone: its own alarm
+    assert silent_groups(last_before(910.0), last_before(910.0) < 905.0, 1.0) == [[3]]
 
 
 def test_first_out_is_the_first_still_active():
     raises = [(10.0, 'sensors'), (55.0, 'line_11'), (56.0, 'line_10')]
-    assert sr.first_out(raises, ['line_11', 'line_10']) == (55.0, 'line_11')
+    assert first_out(raises, ['line_11', 'line_10']) == ('line_11', 55.0)
 
 
 @pytest.mark.parametrize('kind,factor', [('units_dan', 10.0), ('units_tf', 9.80665)])

@@ -303,16 +303,19 @@ class LineAlarm:
         if not math.isfinite(now):
             raise ValueError(f'now must be finite, got {now!r}')
         stale_t, stale_d = self._stale(inputs, now)
+        # nothing clears on a tension older than its timeout, STALE shown or not yet
+        ts = inputs.tension_stamp
+        held = stale_t or stale_d or now - ts > self.config.tension_timeout
         stale = stale_t or stale_d
         latches = []
         classify = self._classify
         for (cond, margin, on_delay, hold, low, high), latch in zip(self._plan, state.latches):
             if margin:  # a warning with a threshold and a deadband (_classify's last case)
                 value = getattr(inputs, cond)
-                clear = value >= high and not stale
+                clear = value >= high and not held
                 code = _BREACH if value < low else (_CLEAR if clear else _HOLD)
             else:
-                code = classify(cond, inputs, stale)
+                code = classify(cond, inputs, held)
             latches.append(_step(latch, code, now, on_delay, hold))
         input_message = state.input_message
         if inputs.status != 0:
@@ -970,8 +973,10 @@ def replay_levels(
     x = {k: _column(inputs.get(k, getattr(default, k)), np.float64, n) for k in _INPUT_FIELDS}
     status = _column(inputs.get('status', 0), np.int64, n)
     stale_t, stale_d = _stale_columns(alarm, t, x, inputs.get('depth_stale'))
-    stale = stale_t | stale_d
-    classified = _classify_columns(alarm, x, status, stale, initial.latches)
+    with np.errstate(invalid='ignore'):
+        late = t - x['tension_stamp'] > alarm.config.tension_timeout
+    held = stale_t | stale_d | late  # nothing clears on a tension older than its timeout
+    classified = _classify_columns(alarm, x, status, held, initial.latches)
     active, latches = {}, []
     quiet = np.zeros(n, dtype=bool)
     quiet.flags.writeable = False

@@ -21,6 +21,7 @@ __all__ = [
     'silent_groups',
     'common_cause',
     'common_cause_groups',
+    'runs',
     'CommonCause',
     'clock_time',
     'logger_status',
@@ -119,18 +120,27 @@ def common_cause(
     grouped = np.zeros((n, m), bool)
     if several.any():
         rows = np.where(silent[several], last[several], -np.inf)
-        unique, back = np.unique(rows, axis=0, return_inverse=True)
-        flags = np.zeros(unique.shape, bool)
-        for u, row in enumerate(unique):
+        first, run = runs(rows)
+        flags = np.zeros((len(first), m), bool)
+        for u, row in enumerate(rows[first]):
             for group in silent_groups(row, row > -np.inf, window):
                 if len(group) >= 2:
                     flags[u, group] = True
-        grouped[several] = flags[np.asarray(back).reshape(-1)]
+        grouped[several] = flags[run]
     idx = np.arange(n)[:, None]
     was = np.asarray(before, bool)[None, :]
     found = np.maximum.accumulate(np.where(grouped, idx, np.where(was & (idx == 0), -1, -2)))
     fresh = np.maximum.accumulate(np.where(~silent, idx, -2))
     return silent & (found > fresh)
+
+
+def runs(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The runs of equal consecutive ``rows`` (2-D): each run's first row, and each row's
+    run (a silent input's last sample does not change while it is silent: a day of silence is
+    one run)."""
+    differ = np.ones(len(rows), bool)
+    differ[1:] = (rows[1:] != rows[:-1]).any(axis=1)
+    return np.flatnonzero(differ), np.cumsum(differ) - 1
 
 
 def common_cause_groups(
@@ -173,7 +183,8 @@ def _cause_text(cause: CommonCause, order: Sequence[str]) -> str:
         head = f'depth gauge and {len(lines)} {what} silent' if lines else 'depth gauge silent'
     else:
         head = f'{what} silent'
-    where = f'{len(lines)} lines ({_span(lines, order)})' if len(lines) > 3 else _span(lines, order)
+    where = _span(lines, order)
+    where = f'{len(lines)} lines ({where})' if len(lines) > 3 else where
     text = f'{head}: {where} since {clock_time(since)}: gateway, network or power'
     return text + ('; every line blind' if depth else '')
 

@@ -44,6 +44,7 @@ from catenary_monitor.core.rules.health import (
     CommonCause,
     common_cause,
     common_cause_groups,
+    runs,
     sensors_status,
     tide_status,
 )
@@ -120,12 +121,16 @@ class SensorColumns:
     # flags before the window, and the causes at each tick that has one (and before).
     grouped: np.ndarray
     before_grouped: tuple[bool, ...]
-    causes: dict[int, tuple[CommonCause, ...]]
+    cause_ids: np.ndarray  # per tick: its causes in ``causes`` (-1: none)
+    causes: list[tuple[CommonCause, ...]]
     before_causes: tuple[CommonCause, ...]
 
     def causes_at(self, i: int) -> tuple[CommonCause, ...]:
         """The common causes after tick ``i`` (-1: before the window)."""
-        return self.before_causes if i < 0 else self.causes.get(i, ())
+        if i < 0:
+            return self.before_causes
+        j = int(self.cause_ids[i])
+        return self.causes[j] if j >= 0 else ()
 
 
 def decide_sensors_window(
@@ -177,7 +182,7 @@ def decide_sensors_window(
         core.state.take(core.state.read(SensorPart)._replace(depth_memory=depth_memory))
         return SensorColumns(
             np.zeros((0, m), np.int8), np.zeros(0, np.int8), before, before_depth,
-            np.zeros((0, m + 1), bool), flags, {}, causes,
+            np.zeros((0, m + 1), bool), flags, np.zeros(0, np.int64), [], causes,
         )  # fmt: skip
     times = np.concatenate([core.state.sensor_times, now])
     rows = np.vstack(
@@ -216,20 +221,32 @@ def decide_sensors_window(
     last = np.column_stack([tension_s, depth_s])
     window_s = a.common_cause_window
     grouped = common_cause(last, now, silence_timeouts(core.config), window_s, flags)
-    names = input_names(core.config)
-    found = {
-        i: common_cause_groups(names, last[i], grouped[i], window_s)
-        for i in np.flatnonzero(grouped.any(axis=1)).tolist()
-    }
+    ids, found = _causes(input_names(core.config), last, grouped, window_s)
     core.state.take(
         SensorPart(
             depth_memory, int(depth_codes[-1]), times[keep:], rows[keep:],
-            tuple(grouped[-1].tolist()), found.get(n - 1, ()),
+            tuple(grouped[-1].tolist()), found[ids[-1]] if ids[-1] >= 0 else (),
         )  # fmt: skip
     )
     return SensorColumns(
-        codes, depth_codes, before, before_depth, grouped, flags, found, causes
+        codes, depth_codes, before, before_depth, grouped, flags, ids, found, causes
     )
+
+
+def _causes(
+    names: list[str], last: np.ndarray, grouped: np.ndarray, window: float
+) -> tuple[np.ndarray, list[tuple[CommonCause, ...]]]:
+    """Per tick, the index of its common causes among the distinct ones (-1: none): the
+    silent inputs' stamps do not change while they are silent, so a day of silence is one."""
+    ids = np.full(len(grouped), -1, np.int64)
+    some = np.flatnonzero(grouped.any(axis=1))
+    if not len(some):
+        return ids, []
+    rows = np.where(grouped[some], last[some], -np.inf)
+    first, run = runs(rows)
+    found = [common_cause_groups(names, row, row > -np.inf, window) for row in rows[first]]
+    ids[some] = run
+    return ids, found
 
 
 def decide_tide(
@@ -327,7 +344,8 @@ def decide_blind(
     late = waiting.any(axis=1) & (since > a.tension_timeout)
     silent = tide.stale | (np.isnan(tide.depth_s) & (since > a.depth_timeout))
     tick_at = newest(tide.kinds == KIND_TICK)
-    caused = pick(tick_at, sensors.grouped.any(axis=1), bool(sensors.before_causes)).astype(bool)
+    has_cause = np.asarray(sensors.grouped.any(axis=1), np.float64)
+    caused = pick(tick_at, has_cause, float(bool(sensors.before_causes))) == 1.0
     levels = np.where(late | silent | caused, Level.STALE, Level.OK).astype(np.int8)
     before = (core.state.sensors, core.state.sensors_waiting)
     acks = alarm_ack.AckSeries(core.state.sensors_ack, levels[:0], [])
