@@ -171,3 +171,31 @@ def test_a_flood_first_out_is_active_in_core_and_twin():
     assert floods
     for f in floods:
         assert f.by  # an alarm still active names it
+
+
+def test_a_line_disagreeing_under_the_common_cause_is_shown_not_its_alarm():
+    """The dock estimate's disagreement while the sensors alarm stands (two load cells silent
+    together) is its consequence: the line's ``inconsistent`` condition holds (neither raised
+    nor cleared) meanwhile; the dock status shows the residuals. The twin agrees."""
+    from dock_data import dock_config as body_config
+    from dock_data import generate_dock
+
+    config = body_config(tension_timeout=2.0)
+    tensions, depth = generate_dock(
+        config, 120.0, drifting=8, drift_from=0.1, drift_to=0.3, seed=5
+    )
+    for name in ('line_01', 'line_02'):
+        tensions[name] = _cut(tensions[name], 5.0, 70.0)
+    ticks = ticks_for(tensions, depth)
+    steps = compare(config, tensions, depth, ticks, [T0_NS + int(s * 1e9) for s in (9.5, 40.0)])
+    seen = []
+    for s in steps:
+        if s.snapshot is None:
+            continue
+        st = {x.name.split(': ')[-1]: x for x in s.snapshot.statuses}
+        stands = st['sensors'].level != Level.OK
+        seen.append((stands, 'tension inconsistent' in st['line_09'].message))
+    assert any(stands for stands, _ in seen)
+    # never newly flagged while the cause stands; flagged once the lines are back
+    first = [i for i, (stands, flagged) in enumerate(seen) if flagged]
+    assert first and not seen[first[0]][0]

@@ -939,6 +939,7 @@ class MonitorCore:
                     self.state.trend.rate,
                     bool(self.config.alarm.constituents),
                     self.state.silent_grouped[k],
+                    self.state.sensors[0] != Level.OK,
                 ),
                 now,
             )

@@ -223,10 +223,13 @@ class LineState:
         rate: float = _NAN,
         table: bool = False,
         silent_group: bool = False,
+        blind: bool = False,
     ) -> AlarmInputs:
         """The alarm inputs of this line now (newest results, stamps, the tide's decision and
         its trend ``rate`` [m/s]; ``table``: the time to uplift is the tide table's;
-        ``silent_group``: silent under a common cause at the newest tick)."""
+        ``silent_group``: silent under a common cause at the newest tick; ``blind``: the
+        ``sensors`` alarm stands, so the dock estimate's disagreement is its consequence,
+        shown and not this line's alarm: ``inconsistent`` untested)."""
         v, d = self.values, self.dock
         return AlarmInputs(
             uplift_force=v[5],
@@ -245,7 +248,7 @@ class LineState:
             tension_stamp=self.tension_s,
             depth_stamp=depth_s,
             depth_stale=depth_stale,
-            inconsistent=d[0],
+            inconsistent=_NAN if blind else d[0],
             dock_residual=d[1],
             dock_expected=d[2],
             dock_sigma=d[3],

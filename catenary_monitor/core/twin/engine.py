@@ -50,8 +50,10 @@ from catenary_monitor.core.monitor.status import depth_word as depth_state_word
 from catenary_monitor.core.rules import channels, wave_window
 from catenary_monitor.core.rules import dock_watch as dock_live
 from catenary_monitor.core.rules import fatigue as fatigue_rule
+from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.rules.plausible import status_messages
 from catenary_monitor.core.twin.decisions import (
+    BlindColumns,
     DockColumns,
     SensorColumns,
     TideColumns,
@@ -113,9 +115,10 @@ def _line_inputs(
     dock: Optional[DockColumns] = None,
     k: int = 0,
     sensors: Optional[SensorColumns] = None,
+    blind: Optional[BlindColumns] = None,
 ) -> dict[str, Any]:
     """The alarm inputs at every step of the line (newest solve, stamps, tide decision, the
-    newest tick's dock estimate and sensor state)."""
+    newest tick's dock estimate and sensor state, whether the sensors alarm stands)."""
     s = steps.s_idx
     before = dict(zip(VALUE_FIELDS, line.values))
     inputs: dict[str, Any] = {
@@ -165,6 +168,12 @@ def _line_inputs(
         for j, key in enumerate(dock_live.LINE_INPUTS):
             col = columns[:, k, j] if columns is not None else np.zeros(0)
             inputs[key] = pick(steps.k_idx, col, before_dock[j])
+        if blind is not None:  # the sensors alarm stands: the disagreement is its consequence
+            stands = np.asarray(blind.levels != Level.OK, np.float64)
+            was = float(blind.before[0][0] != Level.OK)
+            masked = pick(steps.dk_idx, stands, was) == 1.0
+            if masked.any():
+                inputs['inconsistent'] = np.where(masked, np.nan, inputs['inconsistent'])
     return inputs
 
 
@@ -175,6 +184,7 @@ def _advance_line(
     tide: TideColumns,
     sensors: SensorColumns,
     dock: Optional[DockColumns] = None,
+    blind: Optional[BlindColumns] = None,
 ) -> tuple[LineResult, LevelSeries, LineSteps, alarm_ack.AckSeries, np.ndarray]:
     """One line through the window; leaves the line's state in the core as after the steps
     (the core's depth and tide still as before the window). The last item: the line's fatigue
@@ -197,7 +207,9 @@ def _advance_line(
     for j, key in enumerate(channels.FIELDS):
         column = fused[j] if fused is not None else np.zeros(0)
         values[key] = pick(at, column, line.channel_values[j])
-    inputs = _line_inputs(core, line, steps, tide, values, status, window, tt, dock, k, sensors)
+    inputs = _line_inputs(
+        core, line, steps, tide, values, status, window, tt, dock, k, sensors, blind
+    )
     series = replay_levels(
         steps.times * 1e-9, inputs, line.alarm, status_messages(line.config), initial=line.state
     )
@@ -321,7 +333,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
     results, series, steps, acks, damage = [], [], [], [], []
     for k, line in enumerate(core.state.lines):
         before = line.fatigue_values[0]
-        r, s, st, a, d = _advance_line(core, k, window, tide, sensors, dock)
+        r, s, st, a, d = _advance_line(core, k, window, tide, sensors, dock, blind)
         if not snapshots:  # no snapshot asks for a message: the inputs go now, not at the end
             s.forget_inputs()
         results.append(r)
