@@ -23,6 +23,7 @@ __all__ = [
     'common_cause_groups',
     'runs',
     'CommonCause',
+    'DEPTH_INPUT',
     'clock_time',
     'logger_status',
     'parameters_status',
@@ -82,6 +83,8 @@ def _names(names: Sequence[str], lines: int) -> str:
 #: One common cause: the inputs that fell silent together (line names, ``depth`` for the depth
 #: gauge) and the first one's last sample [s].
 CommonCause = tuple[tuple[str, ...], float]
+#: The depth gauge's name among the inputs of a common cause.
+DEPTH_INPUT = 'depth'
 
 
 def silent_groups(last: np.ndarray, silent: np.ndarray, window: float) -> list[list[int]]:
@@ -187,10 +190,6 @@ def _cause_text(cause: CommonCause, order: Sequence[str]) -> str:
     where = f'{len(lines)} lines ({where})' if len(lines) > 3 else where
     text = f'{head}: {where} since {clock_time(since)}: gateway, network or power'
     return text + ('; every line blind' if depth else '')
-
-
-#: The depth gauge's name among the inputs of a common cause.
-DEPTH_INPUT = 'depth'
 
 
 def sensors_status(
