@@ -10,9 +10,9 @@ on generated normal days and faults. Pure functions on plain arrays (SI: m, N, s
 judgement one of the core's rules would make instead of today's (DESIGN_ALARMS.md says where
 each goes and with which parameters):
 
-* :func:`common_silence`: inputs that fell silent together (their last samples within
-  ``together`` s), one group per cause.
-* :func:`first_out`: a flood's first-out among the alarms still active.
+* (moved into the core: inputs that fell silent together are
+  ``catenary_monitor.core.rules.health.common_cause``, a flood's first out among the alarms
+  still active ``catenary_monitor.core.alarms.flood.first_out``.)
 * :func:`units_factor`, :func:`at_rest_tension`, :func:`units_check`: a tension off by a unit
   factor (10, 9.80665, 100, 1000, lbf...) against the line's own statics, scaled by the dock's
   common loading (the median of every line's reading over its statics).
@@ -23,7 +23,7 @@ each goes and with which parameters):
 from __future__ import annotations
 
 import math
-from typing import Optional, Sequence
+from typing import Optional
 
 import numpy as np
 
@@ -31,45 +31,12 @@ from catenary_monitor.core.config.parameters import MonitorConfig
 from catenary_monitor.core.physics.fixed_length import lift_depth, statics_at_span
 
 __all__ = [
-    'common_silence',
-    'first_out',
     'UNIT_FACTORS',
     'units_factor',
     'at_rest_tension',
     'units_check',
     'chart_range',
 ]
-
-
-def common_silence(
-    last: np.ndarray, now: float, timeout: float, together: float = 1.0
-) -> list[list[int]]:
-    """The inputs silent at ``now`` (``now - last > timeout``), grouped by cause: inputs whose
-    last samples [s] lie within ``together`` s of the group's first silent one fell silent
-    together (a gateway, a network, a power supply). Groups of two or more are a common
-    cause; a group of one keeps its own alarm."""
-    last = np.asarray(last, np.float64)
-    silent = np.flatnonzero(~(now - last <= timeout))
-    order = silent[np.argsort(last[silent], kind='stable')]
-    groups: list[list[int]] = []
-    for i in order.tolist():
-        if groups and abs(last[i] - last[groups[-1][0]]) <= together:
-            groups[-1].append(i)
-        else:
-            groups.append([i])
-    return groups
-
-
-def first_out(
-    raises: Sequence[tuple[float, str]], active: Sequence[str]
-) -> Optional[tuple[float, str]]:
-    """A flood's first-out: the earliest raise (time, alarm) of its window whose alarm is still
-    active when the flood begins (a returned one, e.g. the start-up wait, is no cause)."""
-    live = set(active)
-    for t, alarm in sorted(raises):
-        if alarm in live:
-            return t, alarm
-    return None
 
 
 #: Factors a tension reading can be off by (the true tension / the reading as configured),

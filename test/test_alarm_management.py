@@ -374,8 +374,11 @@ def test_flood_decisions_count_raises_in_the_window():
     f = alarm_flood.initial()
     f = alarm_flood.decide(f, [(1.0, 'a'), (2.0, 'b'), (3.0, 'c')], 3.0, a)
     assert f.since != f.since and alarm_flood.status(f, a)[0] == Level.OK
-    f = alarm_flood.decide(f, [(4.0, 'd')], 4.0, a)
+    f = alarm_flood.decide(f, [(4.0, 'd')], 4.0, a, active={'a', 'c', 'd'})
     assert (f.since, f.first_out) == (4.0, ('a', 1.0))
+    # 'a' returned before the flood: the first out is the first raise still active
+    g = alarm_flood.decide(alarm_flood.initial(), list(f.recent), 4.0, a, active={'c', 'd'})
+    assert g.first_out == ('c', 3.0)
     assert alarm_flood.status(f, a) == (
         Level.WARN,
         'ALARM FLOOD: 4 alarms raised in the last 10 s (more than 3); first out: a',

@@ -52,8 +52,10 @@ def test_periods_floods_standing_shelves_and_restarts():
     report(_window([], [], starts=[T0 + 1.5 * DAY]), None)
     f = report.figures()
     assert f['periods'] == len(np.unique(np.floor(ticks / 600.0)))
-    assert f['annunciated'] == 5 and f['per_10min_peak'] == 3
-    assert f['per_10min_mean'] == pytest.approx(5 / f['periods'])
+    # the five raises and the flood status's WARN (heard on /diagnostics as a raise)
+    assert f['annunciated'] == 6 and f['per_10min_peak'] == 4
+    assert f['per_10min_mean'] == pytest.approx(6 / f['periods'])
+    assert f['components']['alarms']['annunciated'] == 1
     assert f['flood_share'] == pytest.approx(2 / f['periods'])  # the flood spans two periods
     assert f['floods'] == 1 and f['flood_s'] == pytest.approx(675.0)
     one, two = f['lines']['line_01'], f['lines']['line_02']

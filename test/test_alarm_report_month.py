@@ -81,6 +81,7 @@ def test_a_month_of_logs_in_bounded_memory_with_progress_and_chart(month: Any) -
     # A month of 10-minute periods (ticks every 100 s: every period has some).
     assert report['periods'] == pytest.approx(30 * 24 * 6, abs=2)
     per_alarm = [a['annunciated'] for a in report['lines'].values()]
+    per_alarm += [a['annunciated'] for a in report['components'].values()]
     assert report['annunciated'] == sum(per_alarm) + report['sensors']['annunciated'] > 0
     assert report['per_10min_mean'] == pytest.approx(report['annunciated'] / report['periods'])
     assert set(report['lines']) == {f'line_{k:02d}' for k in range(1, 13)}

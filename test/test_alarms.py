@@ -56,6 +56,9 @@ def run(alarm, updates, state=None):
 
 
 def alarm_with(allowed_uplift=0.0, **config):
+    """A line's alarm rules; a lone line's STALE at its timeout (``common_cause_window`` 0)
+    unless the test says otherwise."""
+    config.setdefault('common_cause_window', 0.0)
     return LineAlarm(AlarmConfig(**config), allowed_uplift)
 
 
@@ -231,6 +234,21 @@ def test_nan_quantity_keeps_a_raised_alarm():
 
 
 # --- stale -------------------------------------------------------------------------------------
+
+
+def test_a_lone_line_is_stale_one_common_cause_window_late_unless_grouped():
+    """Alone, a line's own STALE waits ``common_cause_window`` (1 s) past its timeout (the
+    common cause is found first); silent with other inputs it is STALE at its timeout,
+    suppressed by design (the sensors alarm announces it)."""
+    alarm = alarm_with(tension_timeout=5.0, common_cause_window=1.0)
+    x = dict(CALM, tension_stamp=1.0)
+    at = [(t, AlarmInputs(**x, depth_stamp=t)) for t in (0.0, 6.5, 7.0, 7.5)]
+    _, levels, events = run(alarm, at)
+    assert levels == [Level.OK, Level.OK, Level.OK, Level.STALE]
+    assert not events[0].suppressed
+    grouped = [(t, AlarmInputs(**x, depth_stamp=t, silent_group=1.0)) for t in (0.0, 6.5)]
+    state, levels, events = run(alarm, grouped)
+    assert levels == [Level.OK, Level.STALE] and events[0].suppressed and state.suppressed
 
 
 def test_stale_tension_is_detected_and_recovers():

@@ -154,10 +154,13 @@ def test_the_dock_is_stale_until_three_lines_report():
         'load_y',
         'load_mz',
         'readings',
+        'alarm_state',
         'conditions',
         'detail',
         'response',
     ]
+    # blind lines: a consequence, shown and not annunciated (the sensors alarm's)
+    assert dict(dock.values)['alarm_state'] == 'suppressed'
 
 
 def test_no_dock_status_without_the_dock_geometry():

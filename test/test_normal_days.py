@@ -151,7 +151,44 @@ def test_annunciations_in_replay_are_those_replay_out_records(drop_log, drop_cou
                 break
     heard = counter.heard(scene.start_s + 600.0, scene.start_s + 700.0)
     assert heard, 'the gateway drop was not heard at all'
-    assert figures['annunciated'] <= len(counter.heard())
+    assert figures['annunciated'] == len(counter.heard())
+
+
+def test_a_gateway_drop_is_one_annunciation_the_sensors_common_cause(drop_log, drop_counts):
+    """Twelve lines silent together: one annunciation, the ``sensors`` alarm naming them (each
+    line's STALE and the dock's "no dock estimate" shown suppressed), first in its window; the
+    alarm report counts what /diagnostics shows."""
+    scene, _ = drop_log
+    counter, figures = drop_counts
+    heard = counter.heard(scene.start_s + 600.0, scene.start_s + 700.0)
+    assert [(a.status, a.after) for a in heard] == [('sensors', 3)], heard
+    assert heard[0].message.startswith('load cells silent: 12 lines (line_01..line_12) since ')
+    hidden = {a.status for a in counter.events if a.hidden and a.time > scene.start_s + 600.0}
+    assert {'line_01', 'line_12', 'dock'} <= hidden
+    assert figures['annunciated'] == len(counter.heard())
+    assert figures['sensors']['annunciated'] == 1
+
+
+@pytest.fixture(scope='module', params=['silent_cell', 'silent_gauge'])
+def silent_counts(request, tmp_path_factory):
+    """Fifteen minutes at the paper's dock read by a pressure gauge, line_04's cell or the
+    gauge silent for 200 s from 450 s, replayed into the bench's two sinks."""
+    line = 'line_04' if request.param == 'silent_cell' else None
+    fault = nd.Fault(request.param, 450.0, 200.0, line)
+    scene = nd.paper_scene('pressure_1mm', days=15 / 1440, faults=(fault,), mean_depth=18.3)
+    facts = ndl.write_scene(scene, tmp_path_factory.mktemp(request.param))
+    return request.param, scene, replay_counts(facts.log, facts.params)
+
+
+def test_a_silent_input_is_its_own_annunciation_and_counted(silent_counts):
+    """One silent load cell: its own STALE; a silent gauge: the sensors alarm (the tide's and
+    the dock's STALE are its consequences, shown suppressed). ``alarms --json`` counts every
+    annunciation of /diagnostics."""
+    kind, scene, (counter, figures) = silent_counts
+    heard = counter.heard(scene.start_s + 450.0, scene.start_s + 700.0)
+    want = ('line_04', 3) if kind == 'silent_cell' else ('sensors', 3)
+    assert [(a.status, a.after) for a in heard] == [want], heard
+    assert figures['annunciated'] == len(counter.heard())
 
 
 def test_causes_mask_numbers():

@@ -12,10 +12,11 @@ import pytest
 from replay_data import T0_NS
 from test_batch import compare, ticks_for
 
+from catenary_monitor.core.alarms.flood import first_out
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
 from catenary_monitor.core.config.tide_constituents import parse_table
 from catenary_monitor.core.rules import sensor_state, tide_trend
-from catenary_monitor.core.rules.health import intake_status
+from catenary_monitor.core.rules.health import common_cause, intake_status, silent_groups
 from catenary_monitor.core.rules.level import Level
 from catenary_monitor_study import normal_days as nd
 from catenary_monitor_study import normal_days_log as ndl
@@ -151,6 +152,61 @@ def test_the_noise_estimate_follows_the_gauge():
     assert mem.spiked == 901.0  # the glitch and the return: spikes, not in the memory's range
     _, _, sea = sensor_state.sea_columns([mem])
     assert sea.seen[0] < 0.05 and 0.0 < sea.quantum[0] < 0.001
+
+
+def test_a_gateway_drop_is_one_cause_a_silent_cell_its_own():
+    scene = nd.paper_scene('radar_1cm', days=0.02, mean_depth=18.3,
+                           faults=(nd.Fault('gateway_drop', 600.0, 15.0),
+                                   nd.Fault('silent_cell', 900.0, 600.0, 'line_04')))  # fmt: skip
+    streams, _, _ = ndl.cell_streams(scene, nd.coarse(scene), 0.0, 1700.0,
+                                     np.random.default_rng(1))  # fmt: skip
+
+    def last_before(now):
+        return np.array([float(s.log_ns[s.log_ns <= scene.start_ns + now * 1e9][-1])
+                         for s in streams]) * 1e-9 - scene.start_s  # fmt: skip
+
+    def grouped(now):
+        last = last_before(now)[None, :]
+        return common_cause(last, np.array([now]), np.full(12, 5.0), 1.0, [False] * 12)[0]
+
+    assert grouped(608.0).all()  # the gateway's twelve lines: one cause
+    assert not grouped(910.0).any()  # line_04 alone: its own alarm
+    assert silent_groups(last_before(910.0), last_before(910.0) < 905.0, 1.0) == [[3]]
+
+
+def test_first_out_is_the_first_still_active():
+    raises = [(10.0, 'sensors'), (55.0, 'line_11'), (56.0, 'line_10')]
+    assert first_out(raises, ['line_11', 'line_10']) == ('line_11', 55.0)
+
+
+@pytest.mark.parametrize('kind,factor', [('units_dan', 10.0), ('units_tf', 9.80665)])
+def test_a_unit_mistake_is_found_against_the_lines_statics(day, kind, factor):
+    """daN on an N line, tonnes-force on a kN line: the line's reading against its own at-rest
+    statics scaled by the dock's common loading names the factor; the other lines, over a
+    normal day every 10 min, fit."""
+    scene, c = day
+    config = scene.config
+    bad, hits, windows = 'line_11', 0, 0
+    for at in np.arange(600.0, scene.seconds - 600.0, 600.0):
+        t = at + np.arange(0.0, 60.0, 0.1)
+        truth = nd.hook_tensions(scene, c, t)
+        depth = float(np.median(nd.still_depth(scene, t)))
+        reading = np.median(truth, axis=0)
+        assert sr.units_check(config, reading, depth) == [None] * 12, at
+        reading[10] /= factor  # the cell's unit read as the configured one
+        found = sr.units_check(config, reading, depth)
+        # 10 and 9.81 are 2 % apart, the dock's loads blur more: either names the mistake
+        assert found[:10] + found[11:] == [None] * 11, (at, bad, found)
+        hits += found[10] in (10.0, 9.80665)
+        windows += 1
+    assert hits >= 0.95 * windows, (hits, windows)
+
+
+def test_chart_defaults_from_the_lines(day):
+    scene, c = day
+    lo, hi = sr.chart_range(scene.config)
+    assert lo < float(np.min(c.depth)) - 5.0 and hi > float(np.max(c.depth)) + 5.0
+    assert not lo <= 0.3 <= hi  # the pressure gauge stepping to 0.3 m: impossible
 
 
 def test_steps_on_the_gauges_grid_are_seen_by_rounding():

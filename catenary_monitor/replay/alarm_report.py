@@ -8,8 +8,11 @@ sink that only counts their journal records
 (:mod:`catenary_monitor.core.alarms.journal`), window by window: its memory is a few
 counters per alarm and one per 10-minute period, whatever the length of the logs.
 
-Figures, overall and per alarm (each line's and the sensors'): alarms raised (annunciated; a
-shelved or suppressed condition is not) per 10-minute period, mean and peak; the share of
+Figures, overall and per alarm (each line's, the sensors', and every component status that
+leaves OK: the tide, the intake, the logger, the fatigue store, the dock estimate, the clock,
+the parameters and the flood status ``alarms``): alarms raised (annunciated, as the operator
+hears them on ``/diagnostics``; a shelved or suppressed condition is not) per 10-minute period,
+mean and peak; the share of
 10-minute periods in which the monitor's flood status was raised; the most frequent alarms;
 chattering episodes; standing alarms (active longer than 24 h); time to acknowledge; time
 shelved. Each is set against the standards' targets (:data:`TARGETS`). Times are s (Unix);
@@ -27,7 +30,8 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import MonitorConfig
 from catenary_monitor.core.alarms.acknowledge import SENSORS
-from catenary_monitor.core.alarms.journal import AlarmEvent
+from catenary_monitor.core.alarms.flood import NAME as FLOOD
+from catenary_monitor.core.alarms.journal import COMPONENTS, AlarmEvent
 from catenary_monitor.core.monitor.events import Start
 from catenary_monitor.core.twin.engine import ReplayResult
 from catenary_monitor.core.twin.window import Window
@@ -106,7 +110,8 @@ class AlarmReport:
         self.config, self.period, self.standing_s, self.top = config, period, standing, top
         self.since = -math.inf if since is None else since
         self.until = math.inf if until is None else until
-        self.names = [line.name for line in config.lines] + [SENSORS]
+        self.components = [*COMPONENTS, FLOOD]
+        self.names = [line.name for line in config.lines] + [SENSORS] + self.components
         self.abandon()
 
     def abandon(self) -> None:
@@ -154,18 +159,17 @@ class AlarmReport:
 
     def _take(self, e: AlarmEvent) -> None:
         self.records += 1
-        if e.alarm == 'alarms':
-            if e.kind == 'flood':
-                self.floods += 1
-                self.flood_open = e.time
-            elif e.kind == 'flood_end':
+        if e.alarm == FLOOD and e.kind in ('flood', 'flood_end'):
+            if e.kind == 'flood_end':
                 self._flood_end(e.time)
-            return
+                return
+            self.floods += 1
+            self.flood_open = e.time
         tally = self.tallies.get(e.alarm)
         if tally is None:
             return
         t = e.time
-        if e.kind == 'raised':
+        if e.kind in ('raised', 'flood'):  # the flood status's WARN is heard as a raise
             tally.raised += 1
             k = int(math.floor(t / self.period))
             tally.bins[k] += 1
@@ -252,8 +256,13 @@ class AlarmReport:
                 ]
             ],
             'targets': self._targets(mean, peak, share, chattering, standing),
-            'lines': {name: alarms[name] for name in self.names if name != SENSORS},
+            'lines': {
+                name: alarms[name]
+                for name in self.names
+                if name != SENSORS and name not in self.components
+            },
             'sensors': alarms[SENSORS],
+            'components': {name: alarms[name] for name in self.components},
             'per_10min': self.series(),
         }
 
@@ -367,6 +376,7 @@ def report_text(figures: dict[str, Any]) -> str:
     ]
     rows = dict(f['lines'])
     rows[SENSORS] = f['sensors']
+    rows.update({k: a for k, a in f.get('components', {}).items() if a['annunciated']})
     for name, a in rows.items():
         lines.append(
             f'{name:<12} {a["annunciated"]:>7} {_num(a["per_10min_mean"]):>7} '

@@ -5,22 +5,23 @@ Every alarm raised (annunciated: a line's, the sensors'; not a shelved or suppre
 counted with its time. The monitor decides at every event that raised one and at every tick:
 the count is of the raises in the last ``flood_window`` s (``now - window < t <= now``); more
 than ``flood_count`` is a flood (WARN), which names its *first out*, the oldest raise of the
-window when the flood began (the alarm most likely to be its cause). The decision is a function
-of the raise times, so the vectorized twin makes it on columns (:func:`counts`) and gets the
-same transitions. Times in s.
+window whose alarm is still active when the flood began (the alarm most likely to be its
+cause: never one that returned, such as the start-up wait; :func:`first_out`). The count is a
+function of the raise times, so the vectorized twin makes it on columns (:func:`counts`) and
+gets the same transitions. Times in s.
 """
 
 from __future__ import annotations
 
 import math
-from typing import NamedTuple, Sequence
+from typing import Collection, NamedTuple, Sequence
 
 import numpy as np
 
 from catenary_monitor.core.config.parameters import AlarmConfig
 from catenary_monitor.core.rules.level import Level
 
-__all__ = ['NAME', 'Flood', 'initial', 'decide', 'status', 'values', 'counts']
+__all__ = ['NAME', 'Flood', 'initial', 'decide', 'first_out', 'status', 'values', 'counts']
 
 #: The status's name (``catenary_monitor: alarms``).
 NAME = 'alarms'
@@ -42,17 +43,34 @@ def initial() -> Flood:
     return Flood()
 
 
+def first_out(
+    recent: Sequence[tuple[float, str]], active: Collection[str]
+) -> tuple[str, float]:
+    """A flood's first out: the oldest raise (alarm, time [s]) of ``recent`` (time, alarm),
+    in order, whose alarm is ``active`` when the flood begins; ``('', nan)`` when every one
+    returned."""
+    for t, alarm in recent:
+        if alarm in active:
+            return alarm, t
+    return '', _NAN
+
+
 def decide(
-    flood: Flood, raised: Sequence[tuple[float, str]], now: float, config: AlarmConfig
+    flood: Flood,
+    raised: Sequence[tuple[float, str]],
+    now: float,
+    config: AlarmConfig,
+    active: Collection[str] = (),
 ) -> Flood:
-    """The decision at ``now`` [s] after the ``raised`` (time, alarm) of this event."""
+    """The decision at ``now`` [s] after the ``raised`` (time, alarm) of this event; ``active``
+    the alarms active now (the first out is one of them)."""
     cut = now - config.flood_window
     recent = tuple(r for r in (*flood.recent, *raised) if r[0] > cut)
     if len(recent) <= config.flood_count:
         return Flood(recent)
     if flood.since == flood.since:
         return Flood(recent, flood.since, flood.first_out)
-    return Flood(recent, now, (recent[0][1], recent[0][0]))
+    return Flood(recent, now, first_out(recent, active))
 
 
 def status(flood: Flood, config: AlarmConfig) -> tuple[Level, str]:
@@ -67,7 +85,7 @@ def status(flood: Flood, config: AlarmConfig) -> tuple[Level, str]:
     return (
         Level.WARN,
         f'ALARM FLOOD: {n} {word} raised in the last {window:g} s (more than {limit}); '
-        f'first out: {flood.first_out[0]}',
+        f'first out: {flood.first_out[0] or "none still active"}',
     )
 
 

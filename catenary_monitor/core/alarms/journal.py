@@ -3,10 +3,11 @@
 The monitor core (and its vectorized twin, from the same alarm states) writes an
 :class:`AlarmEvent` whenever an alarm is raised (annunciated), acknowledged, becomes active or
 clears, is shelved or unshelved (by whom, or ``expired``), starts or stops chattering, when a
-request (shelving or acknowledging) is refused, and when an alarm flood starts or ends. The
-node prints them, the alarm report (``catenary-monitor alarms``) counts them: one alarm logic,
-its records read
-twice. Times in s on the monitor's clock.
+request (shelving or acknowledging) is refused, and when an alarm flood starts or ends; and
+whenever a component status (:data:`COMPONENTS`: the tide, the intake, ...) leaves OK, rises
+or returns (:func:`component_entries`). The node prints them, the alarm report
+(``catenary-monitor alarms``) counts them: one alarm logic, its records read twice. Times in s
+on the monitor's clock.
 """
 
 from __future__ import annotations
@@ -15,8 +16,14 @@ import math
 from typing import NamedTuple
 
 from catenary_monitor.core.alarms.acknowledge import UNACKNOWLEDGED, AckState, shelved
+from catenary_monitor.core.alarms.latches import Transition
+from catenary_monitor.core.rules.level import RANK, Level
 
-__all__ = ['AlarmEvent', 'KINDS', 'entries', 'raised']
+__all__ = ['AlarmEvent', 'KINDS', 'COMPONENTS', 'entries', 'raised', 'component_entries']
+
+#: The component statuses whose changes the journal records as alarms (the lines, ``sensors``
+#: and the flood's ``alarms`` have their own records).
+COMPONENTS = ('tide', 'intake', 'logger', 'fatigue', 'dock', 'clock', 'parameters')
 
 #: Every kind of record, in the order :func:`entries` writes those of one step.
 KINDS = (
@@ -107,4 +114,22 @@ def entries(
         out.append(AlarmEvent(now, alarm, 'cleared', value=now - old.active_since))
     if new.chattering != old.chattering:
         out.append(AlarmEvent(now, alarm, 'chattering' if new.chattering else 'chattering_end'))
+    return out
+
+
+def component_entries(name: str, change: Transition) -> list[AlarmEvent]:
+    """The records of a level ``change`` of the component status ``name``: ``active`` when it
+    leaves OK, ``raised`` (its new level, condition ``NAME.LEVEL``, e.g. ``tide.warn``) when
+    its level rises (OK < WARN < STALE < ERROR), ``cleared`` when it returns to OK (``value``
+    how long it was not OK [s]); a change not announced (``change.suppressed``: a consequence
+    of blind inputs, which the ``sensors`` alarm announces) is neither active nor raised."""
+    old, new, now = change.old, change.new, change.time
+    out = []
+    if old == Level.OK and new != Level.OK and not change.suppressed:
+        out.append(AlarmEvent(now, name, 'active'))
+    if RANK[new] > RANK[old] and not change.suppressed:
+        out.append(AlarmEvent(now, name, 'raised', new.name, f'{name}.{new.name.lower()}'))
+    if new == Level.OK and old != Level.OK:
+        duration = math.nan if change.duration is None else change.duration
+        out.append(AlarmEvent(now, name, 'cleared', value=duration))
     return out

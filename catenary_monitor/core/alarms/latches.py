@@ -54,7 +54,9 @@ Conditions, each with its own latch:
     all, by the rule below.
 stale (STALE, no latch)
     no tension or no depth received yet (the line is blind: its results cannot be computed), the
-    newest tension older than ``tension_timeout``, or the depth stale (older than
+    newest tension older than ``tension_timeout`` (and, unless the line fell silent with
+    other inputs, older than ``tension_timeout + common_cause_window``: the common cause is
+    found before a lone line's own STALE), or the depth stale (older than
     ``depth_timeout``; the monitor decides this once for every line, see
     :attr:`AlarmInputs.depth_stale`).
 
@@ -67,8 +69,9 @@ A line starts blind: :meth:`LineAlarm.initial` is STALE ("no tension received ye
 received yet"), never OK before its inputs are known.
 
 **Suppressed by design.** A line that is STALE only because of a common cause (no tension
-received since the start, or no depth / the depth stale: every line shares the depth), not
-because its own tension went stale after it reported, is ``suppressed``: its message says so
+received since the start, no depth / the depth stale: every line shares the depth, or its
+tension silent together with other inputs: :attr:`AlarmInputs.silent_group`), not because its
+own tension alone went stale after it reported, is ``suppressed``: its message says so
 (``blind: no depth received yet (suppressed by design: alarm on sensors)``), its alarm is not
 active (:mod:`catenary_monitor.core.alarms.acknowledge`) and its changes into and out of that
 STALE are not announced (:attr:`Transition.suppressed`): the one ``sensors`` alarm reports the
@@ -178,6 +181,7 @@ class AlarmInputs:
     channels_healthy: float = math.nan  # a line of several channels: how many are healthy
     channel_states: float = math.nan  # their states (core.rules.channels code; NaN: one channel)
     span: float = math.nan  # m, the span the line was solved at (for the dragging message)
+    silent_group: float = 0.0  # 1: silent with other inputs (core.rules.health.common_cause)
 
 
 class Latch(NamedTuple):
@@ -299,16 +303,19 @@ class LineAlarm:
         if not math.isfinite(now):
             raise ValueError(f'now must be finite, got {now!r}')
         stale_t, stale_d = self._stale(inputs, now)
+        # nothing clears on a tension older than its timeout, STALE shown or not yet
+        ts = inputs.tension_stamp
+        held = stale_t or stale_d or now - ts > self.config.tension_timeout
         stale = stale_t or stale_d
         latches = []
         classify = self._classify
         for (cond, margin, on_delay, hold, low, high), latch in zip(self._plan, state.latches):
             if margin:  # a warning with a threshold and a deadband (_classify's last case)
                 value = getattr(inputs, cond)
-                clear = value >= high and not stale
+                clear = value >= high and not held
                 code = _BREACH if value < low else (_CLEAR if clear else _HOLD)
             else:
-                code = classify(cond, inputs, stale)
+                code = classify(cond, inputs, held)
             latches.append(_step(latch, code, now, on_delay, hold))
         input_message = state.input_message
         if inputs.status != 0:
@@ -316,6 +323,7 @@ class LineAlarm:
         active = [latch.active for latch in latches]
         level = _combine(active, stale)
         own = stale_t and inputs.tension_stamp == inputs.tension_stamp
+        own = own and inputs.silent_group != 1.0
         suppressed = level == Level.STALE and not own
         if stale or any(active):
             message = _blind_text(
@@ -354,7 +362,11 @@ class LineAlarm:
     def _stale(self, x: AlarmInputs, now: float) -> tuple[bool, bool]:
         """(tension stale, never received or blind, depth stale or never received)."""
         ts, ds = x.tension_stamp, x.depth_stamp
-        stale_t = ts != ts or now - ts > self.config.tension_timeout
+        timeout = self.config.tension_timeout
+        stale_t = ts != ts or (
+            now - ts > timeout
+            and (x.silent_group == 1.0 or now - ts > timeout + self.config.common_cause_window)
+        )
         stale_t = stale_t or self.blind(x.channels_healthy)
         if ds != ds:
             return stale_t, True
@@ -738,6 +750,7 @@ _INPUT_FIELDS = (
     'channels_healthy',
     'channel_states',
     'span',
+    'silent_group',
 )
 
 
@@ -821,7 +834,7 @@ class LevelSeries:
         np.copyto(levels, np.int8(Level.STALE), where=stale_t | stale_d)
         np.copyto(levels, np.int8(Level.ERROR), where=err)
         self.levels = levels
-        own = stale_t & ~np.isnan(x['tension_stamp'])
+        own = stale_t & ~np.isnan(x['tension_stamp']) & (x['silent_group'] != 1.0)
         #: Per update: STALE only by a common cause (suppressed by design).
         self.suppressed = (levels == Level.STALE) & ~own
         #: Per update: an input stale or never received.
@@ -957,8 +970,10 @@ def replay_levels(
     x = {k: _column(inputs.get(k, getattr(default, k)), np.float64, n) for k in _INPUT_FIELDS}
     status = _column(inputs.get('status', 0), np.int64, n)
     stale_t, stale_d = _stale_columns(alarm, t, x, inputs.get('depth_stale'))
-    stale = stale_t | stale_d
-    classified = _classify_columns(alarm, x, status, stale, initial.latches)
+    with np.errstate(invalid='ignore'):
+        late = t - x['tension_stamp'] > alarm.config.tension_timeout
+    held = stale_t | stale_d | late  # nothing clears on a tension older than its timeout
+    classified = _classify_columns(alarm, x, status, held, initial.latches)
     active, latches = {}, []
     quiet = np.zeros(n, dtype=bool)
     quiet.flags.writeable = False
@@ -1000,7 +1015,12 @@ def _stale_columns(
     cfg = alarm.config
     ts, ds = x['tension_stamp'], x['depth_stamp']
     with np.errstate(invalid='ignore'):
-        stale_t = np.isnan(ts) | (t - ts > cfg.tension_timeout)
+        grouped = x['silent_group'] == 1.0
+        age = t - ts
+        late = (age > cfg.tension_timeout) & (
+            grouped | (age > cfg.tension_timeout + cfg.common_cause_window)
+        )
+        stale_t = np.isnan(ts) | late
         if alarm.channel_names:  # a blind line of several channels
             stale_t = stale_t | _blind_column(alarm, x)
         if depth_stale is None:

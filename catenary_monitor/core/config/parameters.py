@@ -1104,6 +1104,16 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         86400.0,
     ),
     ParamSpec(
+        'common_cause_window',
+        'double',
+        1.0,
+        'Inputs whose last samples lie within this of each other fell silent together: two or '
+        'more raise the one sensors alarm, a lone silent line its own STALE this much later',
+        's',
+        0.0,
+        60.0,
+    ),
+    ParamSpec(
         'diagnostic_rate',
         'double',
         1.0,
@@ -1653,6 +1663,7 @@ class AlarmConfig:
     clear_hold: float = _default('clear_hold')
     tension_timeout: float = _default('tension_timeout')
     depth_timeout: float = _default('depth_timeout')
+    common_cause_window: float = _default('common_cause_window')
     diagnostic_rate: float = _default('diagnostic_rate')
     shelve_max: float = _default('shelve_max')
     unshelvable_conditions: tuple[str, ...] = _default('unshelvable_conditions')

@@ -39,7 +39,12 @@ import numpy as np
 from catenary_monitor.core.alarms import acknowledge as alarm_ack
 from catenary_monitor.core.alarms import flood as alarm_flood
 from catenary_monitor.core.alarms import shelving
-from catenary_monitor.core.alarms.journal import AlarmEvent, entries
+from catenary_monitor.core.alarms.journal import (
+    COMPONENTS,
+    AlarmEvent,
+    component_entries,
+    entries,
+)
 from catenary_monitor.core.alarms.latches import CONDITIONS, LineAlarm, Transition, quiet_change
 from catenary_monitor.core.body.dock_model import DockModel
 from catenary_monitor.core.config.parameters import (
@@ -107,13 +112,25 @@ from catenary_monitor.core.rules.health import (
     logger_status,
     missing_samples,
     parameters_status,
+    DEPTH_INPUT,
+    common_cause,
+    common_cause_groups,
     sensors_status,
     tide_status,
 )
 from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.rules.plausible import reading_status, reading_status_array
 
-__all__ = ['LineOutput', 'Step', 'MonitorCore', 'channel_limits', 'sensor_limits']
+__all__ = [
+    'LineOutput',
+    'Step',
+    'MonitorCore',
+    'channel_limits',
+    'sensor_limits',
+    'input_names',
+    'silence_timeouts',
+    'component_log',
+]
 
 _NAN = math.nan
 _INCONSISTENT = CONDITIONS.index('inconsistent')
@@ -146,6 +163,11 @@ class Step(NamedTuple):
 
 def _stamp_s(stamp_ns: int) -> float:
     return stamp_ns * 1e-9
+
+
+def _active(ack: alarm_ack.AckState) -> bool:
+    """Whether the alarm's condition is active (not returned)."""
+    return ack.active_since == ack.active_since
 
 
 class MonitorCore:
@@ -212,6 +234,7 @@ class MonitorCore:
             clock_entered=start,
             intake_entered=start,
             fatigue_entered=start,
+            silent_grouped=(False,) * (len(lines) + 1),
         )
         self.state.sensors = self._sensors_now(start)
         self.state.alarms = alarm_flood.status(self.state.flood, config.alarm)
@@ -326,6 +349,7 @@ class MonitorCore:
         changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns, log)
         changes += self._decide_flood(ev.stamp_ns, log, tick=True)
         snapshot = self.snapshot(ev.stamp_ns)
+        log = component_log(changes) + log
         return Step(ev.stamp_ns, 'tick', (), snapshot, tuple(changes), tuple(log))
 
     def _on_fatigue_store(self, ev: FatigueStore) -> Step:
@@ -346,7 +370,9 @@ class MonitorCore:
         self.state.fatigue_word = ev.state
         level = FATIGUE_STORE_STATES.get(ev.state, Level.WARN)
         changes = self._set_component('fatigue', (level, ev.message), ev.stamp_ns)
-        return Step(ev.stamp_ns, 'fatigue', (), self.snapshot(ev.stamp_ns), tuple(changes))
+        snapshot = self.snapshot(ev.stamp_ns)
+        log = tuple(component_log(changes))
+        return Step(ev.stamp_ns, 'fatigue', (), snapshot, tuple(changes), log)
 
     def _on_logger(self, ev: LoggerHealth) -> Step:
         new = logger_status(ev.error, ev.path, ev.warning)
@@ -498,12 +524,14 @@ class MonitorCore:
     ) -> list[Change]:
         """The flood decision (core.alarms.flood) after an event that raised an alarm, or at a
         tick; its start and end go to the journal ``log``."""
-        raised = [(e.time, e.alarm) for e in log if e.kind == 'raised']
+        raised = [(e.time, e.alarm) for e in log if e.kind == 'raised' and self._counted(e.alarm)]
         if not raised and not tick:
             return []
         now = _stamp_s(stamp_ns)
         old = self.state.flood
-        new = alarm_flood.decide(old, raised, now, self.config.alarm)
+        active = [ln.config.name for ln in self.state.lines if _active(ln.ack)]
+        active += [alarm_ack.SENSORS] if _active(self.state.sensors_ack) else []
+        new = alarm_flood.decide(old, raised, now, self.config.alarm, active)
         self.state.flood = new
         if new.since == new.since and old.since != old.since:
             name, at = new.first_out
@@ -512,12 +540,18 @@ class MonitorCore:
             log.append(AlarmEvent(now, alarm_flood.NAME, 'flood_end', value=now - old.since))
         return self._set_component('alarms', alarm_flood.status(new, self.config.alarm), stamp_ns)
 
+    def _counted(self, alarm: str) -> bool:
+        """Whether a raise of ``alarm`` counts in the flood (a line's, the sensors')."""
+        return alarm in self.index or alarm == alarm_ack.SENSORS
+
     def _on_clock(self, ev: ClockHealth) -> Step:
         """The ROS clock's state; always a snapshot (the node sends these on a wall-clock
         timer while the ROS clock stands still, so /diagnostics keeps coming)."""
         self.state.clock_seen = True
         changes = self._set_component('clock', clock_status(ev.stopped_for), ev.stamp_ns)
-        return Step(ev.stamp_ns, 'clock', (), self.snapshot(ev.stamp_ns), tuple(changes))
+        snapshot = self.snapshot(ev.stamp_ns)
+        log = tuple(component_log(changes))
+        return Step(ev.stamp_ns, 'clock', (), snapshot, tuple(changes), log)
 
     def _on_intake(self, ev: Intake) -> Step:
         """Sample counts: the intake status over the last :data:`INTAKE_WINDOW` of them."""
@@ -640,7 +674,9 @@ class MonitorCore:
         self.state.changes_until = now + ev.config.runtime_change_warn_time
         new = parameters_status(self.state.changes, self.state.changes_until, now)
         changes = self._set_component('parameters', new, ev.stamp_ns)
-        return Step(ev.stamp_ns, 'configure', (), self.snapshot(ev.stamp_ns), tuple(changes))
+        snapshot = self.snapshot(ev.stamp_ns)
+        log = tuple(component_log(changes))
+        return Step(ev.stamp_ns, 'configure', (), snapshot, tuple(changes), log)
 
     def reconfigure(self, config: MonitorConfig) -> None:
         """Take new line constants and alarm rules (same line names); alarm states are kept."""
@@ -685,6 +721,8 @@ class MonitorCore:
             self.state.start_s,
             a.tension_timeout,
             a.depth_timeout,
+            self.state.common_causes,
+            [line.config.name for line in self.state.lines],
         )
 
     def _decide_blind(self, stamp_ns: int, log: list[AlarmEvent]) -> list[Change]:
@@ -735,6 +773,15 @@ class MonitorCore:
         )
         for k, line in enumerate(lines):
             line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
+        last = np.array([[line.tension_s for line in lines] + [self.state.depth_s]])
+        grouped = common_cause(
+            last, now, silence_timeouts(self.config), a.common_cause_window,
+            self.state.silent_grouped,
+        )[0]  # fmt: skip
+        self.state.silent_grouped = tuple(grouped.tolist())
+        self.state.common_causes = common_cause_groups(
+            input_names(self.config), last[0], grouped, a.common_cause_window
+        )
         d_changed, d_spiked, sea = sensor_state.sea_columns([self.state.depth_memory])
         self.state.depth_code = int(
             sensor_state.decide_depth(
@@ -888,6 +935,8 @@ class MonitorCore:
                     self.state.depth_stale,
                     self.state.trend.rate,
                     bool(self.config.alarm.constituents),
+                    self.state.silent_grouped[k],
+                    self.state.sensors[0] != Level.OK,
                 ),
                 now,
             )
@@ -916,6 +965,7 @@ class MonitorCore:
         changes = changes + self._decide_flood(stamp_ns, log)
         outputs = tuple(self.output(k) for k in solved)
         snapshot = self.snapshot(stamp_ns) if changes else None
+        log = component_log(changes) + log
         return Step(stamp_ns, kind, outputs, snapshot, tuple(changes), tuple(log))
 
     # ------------------------------------------------------------------ views
@@ -1063,6 +1113,27 @@ def channel_limits(core: MonitorCore, line: LineState) -> channels.Limits:
         a.channel_tolerance,
         int(line.config.min_channels),
     )
+
+
+def component_log(changes: Sequence[Change]) -> list[AlarmEvent]:
+    """The journal records of the component statuses' level ``changes`` (the tide, the
+    intake, ...: :data:`~catenary_monitor.core.alarms.journal.COMPONENTS`), in order."""
+    out: list[AlarmEvent] = []
+    for change in changes:
+        if change.component in COMPONENTS:
+            out += component_entries(change.component, change.transition)
+    return out
+
+
+def input_names(config: MonitorConfig) -> list[str]:
+    """The inputs a common cause can silence: each line's name, then ``depth``."""
+    return [c.name for c in config.lines] + [DEPTH_INPUT]
+
+
+def silence_timeouts(config: MonitorConfig) -> np.ndarray:
+    """Each line's ``tension_timeout``, then ``depth_timeout`` [s]."""
+    a = config.alarm
+    return np.array([a.tension_timeout] * len(config.lines) + [a.depth_timeout])
 
 
 def sensor_limits(config: MonitorConfig) -> sensor_state.LineLimits:

@@ -217,10 +217,19 @@ class LineState:
         return self.config.anchor_distance, float(dock_live.INSTALLED)
 
     def inputs(
-        self, depth_s: float, depth_stale: bool, rate: float = _NAN, table: bool = False
+        self,
+        depth_s: float,
+        depth_stale: bool,
+        rate: float = _NAN,
+        table: bool = False,
+        silent_group: bool = False,
+        blind: bool = False,
     ) -> AlarmInputs:
         """The alarm inputs of this line now (newest results, stamps, the tide's decision and
-        its trend ``rate`` [m/s]; ``table``: the time to uplift is the tide table's)."""
+        its trend ``rate`` [m/s]; ``table``: the time to uplift is the tide table's;
+        ``silent_group``: silent under a common cause at the newest tick; ``blind``: the
+        ``sensors`` alarm stands, so the dock estimate's disagreement is its consequence,
+        shown and not this line's alarm: ``inconsistent`` untested)."""
         v, d = self.values, self.dock
         return AlarmInputs(
             uplift_force=v[5],
@@ -239,7 +248,7 @@ class LineState:
             tension_stamp=self.tension_s,
             depth_stamp=depth_s,
             depth_stale=depth_stale,
-            inconsistent=d[0],
+            inconsistent=_NAN if blind else d[0],
             dock_residual=d[1],
             dock_expected=d[2],
             dock_sigma=d[3],
@@ -255,6 +264,7 @@ class LineState:
             channels_healthy=self.channel_values[0],
             channel_states=self.channel_values[1],
             span=v[VALUE_INDEX['span']],
+            silent_group=1.0 if silent_group else 0.0,
         )
 
     def read(self, kind: type[LinePart]) -> LinePart:
@@ -285,13 +295,16 @@ class TidePart(NamedTuple):
 
 
 class SensorPart(NamedTuple):
-    """The sensor decisions' memory: the depth sensor's and its state, and the ticks and
-    tensions the suspected_parted test still needs."""
+    """The sensor decisions' memory: the depth sensor's and its state, the ticks and
+    tensions the suspected_parted test still needs, and the common causes of silence at the
+    newest tick (each line's and the depth's flag, the groups)."""
 
     depth_memory: sensor_state.DepthMemory
     depth_code: int
     sensor_times: np.ndarray
     sensor_rows: np.ndarray
+    silent_grouped: tuple[bool, ...]
+    common_causes: tuple[tuple[tuple[str, ...], float], ...]
 
 
 class BlindPart(NamedTuple):
@@ -361,6 +374,10 @@ class CoreState:
     trend: tide_trend.TrendState = field(default_factory=tide_trend.TrendState)  # tide rate
     depth_memory: sensor_state.DepthMemory = field(default_factory=sensor_state.DepthMemory)
     depth_code: int = sensor_state.OK  # the depth sensor's state at the newest tick
+    # Silent under a common cause at the newest tick (core.rules.health.common_cause): each
+    # line's flag, then the depth's; the causes (inputs, since when [s]).
+    silent_grouped: tuple[bool, ...] = ()
+    common_causes: tuple[tuple[tuple[str, ...], float], ...] = ()
     depth_sample_ns: int = -1  # ns, the newest accepted depth sample's stamp (-1: none)
     depth_refused: float = -math.inf  # s, when a depth sample's stamp was last refused
     sensor_times: np.ndarray = field(default_factory=lambda: np.zeros(0))  # s, the ticks the

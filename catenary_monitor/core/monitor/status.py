@@ -46,6 +46,7 @@ __all__ = [
     'dock_component',
     'tide_component',
     'with_texts',
+    'consequence_state',
 ]
 
 _INCONSISTENT = CONDITIONS.index('inconsistent')
@@ -201,14 +202,28 @@ def sensors_component(
     return ComponentStatus(f'{NODE_NAME}: sensors', state[0], state[1], NODE_NAME, values)
 
 
+#: ``alarm_state`` of a component status whose STALE is a consequence of blind inputs (the
+#: tide's, the dock's): shown, not annunciated (the ``sensors`` alarm announces the cause).
+_CONSEQUENCE_STATES = {Level.OK: alarm_ack.NORMAL, Level.STALE: alarm_ack.SUPPRESSED}
+
+
+def consequence_state(level: Level) -> str:
+    """The ``alarm_state`` of the tide's or the dock's status at ``level``: ``normal`` (OK),
+    ``suppressed`` (STALE: blind inputs, announced by the ``sensors`` alarm), else ``active``
+    (annunciated when it rose)."""
+    return _CONSEQUENCE_STATES.get(level, 'active')
+
+
 def dock_component(
     dock: tuple[Level, str], values: tuple[tuple[str, str], ...]
 ) -> ComponentStatus:
     """The ``catenary_monitor: dock`` status: the estimate's level and message, values
     ``offset_x``, ``offset_y`` [m], ``yaw_deg``, ``load_x``, ``load_y`` [N], ``load_mz`` [N m],
-    ``readings`` (NaN strings before the first estimate)."""
+    ``readings`` (NaN strings before the first estimate), ``alarm_state``
+    (:func:`consequence_state`)."""
     if not values:
         values = tuple((k, 'nan') for k in dock_live.DOCK_KEYS[:-1]) + (('readings', '0'),)
+    values = values + (('alarm_state', consequence_state(dock[0])),)
     return ComponentStatus(f'{NODE_NAME}: dock', dock[0], dock[1], 'dock model', values)
 
 
@@ -225,7 +240,8 @@ def tide_component(
     [m/s], the trend (:mod:`~catenary_monitor.core.rules.tide_trend`; nan while unknown), and the
     depth sensor's ``sensor_state``
     (:data:`catenary_monitor.core.rules.sensor_state.DEPTH_STATES`) and
-    ``tide_forecast``, what the times to uplift follow (:func:`forecast_word`)."""
+    ``tide_forecast``, what the times to uplift follow (:func:`forecast_word`), and
+    ``alarm_state`` (:func:`consequence_state`)."""
     return ComponentStatus(
         f'{NODE_NAME}: tide',
         tide[0],
@@ -237,5 +253,6 @@ def tide_component(
             ('rate', repr(float(rate))),
             ('sensor_state', sensor_word),
             ('tide_forecast', forecast),
+            ('alarm_state', consequence_state(tide[0])),
         ),
     )

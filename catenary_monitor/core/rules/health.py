@@ -10,12 +10,21 @@ from __future__ import annotations
 import math
 from typing import Optional, Sequence
 
+import numpy as np
+
 from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.rules.plausible import MAX_DEPTH
 
 __all__ = [
     'tide_status',
     'sensors_status',
+    'silent_groups',
+    'common_cause',
+    'common_cause_groups',
+    'runs',
+    'CommonCause',
+    'DEPTH_INPUT',
+    'clock_time',
     'logger_status',
     'parameters_status',
     'clock_stopped',
@@ -71,6 +80,118 @@ def _names(names: Sequence[str], lines: int) -> str:
     return f'{len(names)} lines ({", ".join(names[:2])}, ...)'
 
 
+#: One common cause: the inputs that fell silent together (line names, ``depth`` for the depth
+#: gauge) and the first one's last sample [s].
+CommonCause = tuple[tuple[str, ...], float]
+#: The depth gauge's name among the inputs of a common cause.
+DEPTH_INPUT = 'depth'
+
+
+def silent_groups(last: np.ndarray, silent: np.ndarray, window: float) -> list[list[int]]:
+    """The ``silent`` inputs grouped by cause: in the order of their last samples ``last`` [s],
+    each joins the group whose first last sample is at most ``window`` [s] before its own (they
+    fell silent together: a gateway, a network, a power supply), else starts a group."""
+    last = np.asarray(last, np.float64)
+    which = np.flatnonzero(np.asarray(silent, bool))
+    order = which[np.argsort(last[which], kind='stable')]
+    groups: list[list[int]] = []
+    for i in order.tolist():
+        if groups and last[i] - last[groups[-1][0]] <= window:
+            groups[-1].append(i)
+        else:
+            groups.append([i])
+    return groups
+
+
+def common_cause(
+    last: np.ndarray,
+    now: np.ndarray,
+    timeout: np.ndarray,
+    window: float,
+    before: Sequence[bool],
+) -> np.ndarray:
+    """Per decision at ``now`` [s] (n,) and input (its last samples ``last`` [s], (n, m);
+    NaN: none yet, which is no silence but a wait), whether the input is silent under a common
+    cause: silent (older than its ``timeout`` [s], (m,)) and in a group of two or more of
+    :func:`silent_groups`, or under one at the previous decision and silent since (``before``:
+    the flags before the first decision). A lone silent input is its own alarm."""
+    last = np.asarray(last, np.float64)
+    n, m = last.shape
+    with np.errstate(invalid='ignore'):
+        silent = np.asarray(now, np.float64)[:, None] - last > np.asarray(timeout, np.float64)
+    several = silent.sum(axis=1) >= 2
+    grouped = np.zeros((n, m), bool)
+    if several.any():
+        rows = np.where(silent[several], last[several], -np.inf)
+        first, run = runs(rows)
+        flags = np.zeros((len(first), m), bool)
+        for u, row in enumerate(rows[first]):
+            for group in silent_groups(row, row > -np.inf, window):
+                if len(group) >= 2:
+                    flags[u, group] = True
+        grouped[several] = flags[run]
+    idx = np.arange(n)[:, None]
+    was = np.asarray(before, bool)[None, :]
+    found = np.maximum.accumulate(np.where(grouped, idx, np.where(was & (idx == 0), -1, -2)))
+    fresh = np.maximum.accumulate(np.where(~silent, idx, -2))
+    return silent & (found > fresh)
+
+
+def runs(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The runs of equal consecutive ``rows`` (2-D): each run's first row, and each row's
+    run (a silent input's last sample does not change while it is silent: a day of silence is
+    one run)."""
+    differ = np.ones(len(rows), bool)
+    differ[1:] = (rows[1:] != rows[:-1]).any(axis=1)
+    return np.flatnonzero(differ), np.cumsum(differ) - 1
+
+
+def common_cause_groups(
+    names: Sequence[str], last: Sequence[float], grouped: Sequence[bool], window: float
+) -> tuple[CommonCause, ...]:
+    """The common causes of one decision: the inputs under one (``grouped``, from
+    :func:`common_cause`) grouped by their last samples [s] (:func:`silent_groups`), each
+    with its names and since when."""
+    stamps = np.asarray(last, np.float64)
+    return tuple(
+        (tuple(names[i] for i in sorted(group)), float(stamps[group[0]]))
+        for group in silent_groups(stamps, np.asarray(grouped, bool), window)
+    )
+
+
+def clock_time(t: float) -> str:
+    """``t`` [s, Unix] as the UTC time of day to a tenth of a second (``08:10:03.2``)."""
+    tenths = int(math.floor(t * 10.0)) % 864000
+    sec, tenth = divmod(tenths, 10)
+    return f'{sec // 3600:02d}:{sec // 60 % 60:02d}:{sec % 60:02d}.{tenth}'
+
+
+def _span(names: Sequence[str], order: Sequence[str]) -> str:
+    """``line_01..line_09`` (consecutive in the configuration), else up to three named."""
+    at = [order.index(n) for n in names if n in order]
+    if len(names) > 3 and at == list(range(at[0], at[0] + len(at))):
+        return f'{names[0]}..{names[-1]}'
+    if len(names) > 3:
+        return f'{", ".join(names[:2])}, ...'
+    return ', '.join(names)
+
+
+def _cause_text(cause: CommonCause, order: Sequence[str]) -> str:
+    """One common cause's sentence."""
+    names, since = cause
+    lines = [n for n in names if n != DEPTH_INPUT]
+    depth = len(lines) < len(names)
+    what = 'load cells' if len(lines) > 1 else 'load cell'
+    if depth:
+        head = f'depth gauge and {len(lines)} {what} silent' if lines else 'depth gauge silent'
+    else:
+        head = f'{what} silent'
+    where = _span(lines, order)
+    where = f'{len(lines)} lines ({where})' if len(lines) > 3 else where
+    text = f'{head}: {where} since {clock_time(since)}: gateway, network or power'
+    return text + ('; every line blind' if depth else '')
+
+
 def sensors_status(
     waiting: Sequence[str],
     lines: int,
@@ -80,6 +201,8 @@ def sensors_status(
     start: float,
     tension_timeout: float,
     depth_timeout: float,
+    causes: Sequence[CommonCause] = (),
+    order: Sequence[str] = (),
 ) -> tuple[Level, str]:
     """Level and message of the sensors' common-cause alarm (``catenary_monitor: sensors``).
 
@@ -88,17 +211,22 @@ def sensors_status(
     (NaN: none yet) and ``depth_stale`` the tide's decision that it is older than
     ``depth_timeout`` [s]; ``now`` [s].
 
-    STALE (one alarm for many blind lines, their own STALE suppressed by design) when lines are
-    still waiting ``tension_timeout`` after the start ("waiting for sensors"), or the depth is
-    stale or still missing ``depth_timeout`` after the start ("depth sensor silent": every line
-    is blind); else OK: every sensor reporting, or within those timeouts of the start (the
-    lines and the tide are STALE meanwhile, and the message names what has not reported yet).
+    STALE (one alarm for many blind lines, their own STALE suppressed by design) when inputs
+    fell silent together (``causes``, :func:`common_cause_groups`: "load cells silent: 9 lines
+    (line_01..line_09) since 08:10:03.2: gateway, network or power", ``order`` the lines'
+    names in the configuration), when lines are still waiting ``tension_timeout`` after the
+    start ("waiting for sensors"), or the depth is stale or still missing ``depth_timeout``
+    after the start ("depth sensor silent": every line is blind); else OK: every sensor
+    reporting, or within those timeouts of the start (the lines and the tide are STALE
+    meanwhile, and the message names what has not reported yet).
     """
     since = now - start
     late = list(waiting) if since > tension_timeout else []
     no_depth = depth_s != depth_s
     silent = depth_stale or (no_depth and since > depth_timeout)
-    parts = []
+    parts = [_cause_text(cause, order) for cause in causes]
+    if any(DEPTH_INPUT in cause[0] for cause in causes):
+        silent = False  # said with its cause
     if late:
         text = f'waiting for sensors: no tension from {_names(late, lines)} within '
         text += f'{tension_timeout:g} s of start'

@@ -7,16 +7,27 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, NamedTuple, Optional
+from typing import Any, Callable, NamedTuple, Optional
 
 import numpy as np
 
 from catenary_monitor.core.alarms import shelving
 from catenary_monitor.core.alarms import acknowledge as alarm_ack
 from catenary_monitor.core.alarms import flood as alarm_flood
-from catenary_monitor.core.alarms.journal import AlarmEvent, entries, raised
+from catenary_monitor.core.alarms.journal import (
+    AlarmEvent,
+    component_entries,
+    entries,
+    raised,
+)
 from catenary_monitor.core.alarms.latches import CONDITIONS, LevelSeries, Transition, quiet_change
-from catenary_monitor.core.monitor.monitor_core import MonitorCore, channel_limits, sensor_limits
+from catenary_monitor.core.monitor.monitor_core import (
+    MonitorCore,
+    channel_limits,
+    input_names,
+    sensor_limits,
+    silence_timeouts,
+)
 from catenary_monitor.core.monitor.state import (
     BlindPart,
     DockPart,
@@ -29,7 +40,14 @@ from catenary_monitor.core.monitor.state import (
 from catenary_monitor.core.monitor.status import tide_with_sensor
 from catenary_monitor.core.rules import channels, readings, sensor_state, tide_trend
 from catenary_monitor.core.rules import dock_watch as dock_live
-from catenary_monitor.core.rules.health import sensors_status, tide_status
+from catenary_monitor.core.rules.health import (
+    CommonCause,
+    common_cause,
+    common_cause_groups,
+    runs,
+    sensors_status,
+    tide_status,
+)
 from catenary_monitor.core.rules.level import RANK, Level
 from catenary_monitor.core.rules.plausible import MAX_DEPTH
 from catenary_monitor.core.twin.schedule import LineSteps, level_changes, merge, newest, pick
@@ -99,6 +117,20 @@ class SensorColumns:
     depth_codes: np.ndarray
     before: list[int]
     before_depth: int
+    # Silent under a common cause (core.rules.health.common_cause): (ticks, lines + depth), the
+    # flags before the window, and the causes at each tick that has one (and before).
+    grouped: np.ndarray
+    before_grouped: tuple[bool, ...]
+    cause_ids: np.ndarray  # per tick: its causes in ``causes`` (-1: none)
+    causes: list[tuple[CommonCause, ...]]
+    before_causes: tuple[CommonCause, ...]
+
+    def causes_at(self, i: int) -> tuple[CommonCause, ...]:
+        """The common causes after tick ``i`` (-1: before the window)."""
+        if i < 0:
+            return self.before_causes
+        j = int(self.cause_ids[i])
+        return self.causes[j] if j >= 0 else ()
 
 
 def decide_sensors_window(
@@ -111,6 +143,7 @@ def decide_sensors_window(
     n, m = len(ticks), len(lines)
     before = [line.sensor_code for line in lines]
     before_depth = core.state.depth_code
+    flags, causes = core.state.silent_grouped, core.state.common_causes
     now = ticks * 1e-9
     tension, tension_s = np.empty((n, m)), np.empty((n, m))
     changed, spiked = np.empty((n, m)), np.empty((n, m))
@@ -145,7 +178,10 @@ def decide_sensors_window(
         for line, memory in zip(lines, memories):
             line.take(line.read(LineRulesPart)._replace(sensor_memory=memory))
         core.state.take(core.state.read(SensorPart)._replace(depth_memory=depth_memory))
-        return SensorColumns(np.zeros((0, m), np.int8), np.zeros(0, np.int8), before, before_depth)
+        return SensorColumns(
+            np.zeros((0, m), np.int8), np.zeros(0, np.int8), before, before_depth,
+            np.zeros((0, m + 1), bool), flags, np.zeros(0, np.int64), [], causes,
+        )  # fmt: skip
     times = np.concatenate([core.state.sensor_times, now])
     rows = np.vstack(
         [core.state.sensor_rows, sensor_state.history_row(now, tension, spiked, a.sensor_hold)]
@@ -180,10 +216,35 @@ def decide_sensors_window(
                 parted_seen=float(seen[-1, k]),
             )
         )
+    last = np.column_stack([tension_s, depth_s])
+    window_s = a.common_cause_window
+    grouped = common_cause(last, now, silence_timeouts(core.config), window_s, flags)
+    ids, found = _causes(input_names(core.config), last, grouped, window_s)
     core.state.take(
-        SensorPart(depth_memory, int(depth_codes[-1]), times[keep:], rows[keep:])
+        SensorPart(
+            depth_memory, int(depth_codes[-1]), times[keep:], rows[keep:],
+            tuple(grouped[-1].tolist()), found[ids[-1]] if ids[-1] >= 0 else (),
+        )  # fmt: skip
     )
-    return SensorColumns(codes, depth_codes, before, before_depth)
+    return SensorColumns(
+        codes, depth_codes, before, before_depth, grouped, flags, ids, found, causes
+    )
+
+
+def _causes(
+    names: list[str], last: np.ndarray, grouped: np.ndarray, window: float
+) -> tuple[np.ndarray, list[tuple[CommonCause, ...]]]:
+    """Per tick, the index of its common causes among the distinct ones (-1: none): the
+    silent inputs' stamps do not change while they are silent, so a day of silence is one."""
+    ids = np.full(len(grouped), -1, np.int64)
+    some = np.flatnonzero(grouped.any(axis=1))
+    if not len(some):
+        return ids, []
+    rows = np.where(grouped[some], last[some], -np.inf)
+    first, run = runs(rows)
+    found = [common_cause_groups(names, row, row > -np.inf, window) for row in rows[first]]
+    ids[some] = run
+    return ids, found
 
 
 def _depth_memories(core: MonitorCore, window: Window) -> list[sensor_state.DepthMemory]:
@@ -253,6 +314,8 @@ class BlindColumns:
     transitions: list[Transition]
     acks: alarm_ack.AckSeries
     before: tuple[tuple[Level, str], int]  # the status and the lines waiting before the window
+    tick_at: np.ndarray  # per decision: the newest tick of the window (-1: before it)
+    sensors: SensorColumns  # the common causes at the ticks
 
 
 def blind_status_at(
@@ -271,10 +334,14 @@ def blind_status_at(
         core.state.start_s,
         a.tension_timeout,
         a.depth_timeout,
+        blind.sensors.causes_at(int(blind.tick_at[i])),
+        [line.config.name for line in core.state.lines],
     )
 
 
-def decide_blind(core: MonitorCore, window: Window, tide: TideColumns) -> BlindColumns:
+def decide_blind(
+    core: MonitorCore, window: Window, tide: TideColumns, sensors: SensorColumns
+) -> BlindColumns:
     """The sensors alarm at every tide decision of the window, its transitions and its
     acknowledgement states; leaves the core's as after the window."""
     a, times = core.config.alarm, tide.times
@@ -291,10 +358,13 @@ def decide_blind(core: MonitorCore, window: Window, tide: TideColumns) -> BlindC
     since = times * 1e-9 - core.state.start_s
     late = waiting.any(axis=1) & (since > a.tension_timeout)
     silent = tide.stale | (np.isnan(tide.depth_s) & (since > a.depth_timeout))
-    levels = np.where(late | silent, Level.STALE, Level.OK).astype(np.int8)
+    tick_at = newest(tide.kinds == KIND_TICK)
+    has_cause = np.asarray(sensors.grouped.any(axis=1), np.float64)
+    caused = pick(tick_at, has_cause, float(bool(sensors.before_causes))) == 1.0
+    levels = np.where(late | silent | caused, Level.STALE, Level.OK).astype(np.int8)
     before = (core.state.sensors, core.state.sensors_waiting)
     acks = alarm_ack.AckSeries(core.state.sensors_ack, levels[:0], [])
-    blind = BlindColumns(waiting, levels, [], acks, before)
+    blind = BlindColumns(waiting, levels, [], acks, before, tick_at, sensors)
     old, entered = core.state.sensors[0], core.state.sensors_entered
     for i in level_changes(levels, old).tolist():
         new = blind_status_at(core, tide, blind, i)
@@ -431,11 +501,21 @@ def window_journal(
     series: list[LevelSeries],
     steps: list[LineSteps],
     acks: list[alarm_ack.AckSeries],
+    tide_transitions: list[Transition],
+    dock: Optional[DockColumns],
 ) -> tuple[list[AlarmEvent], FloodColumns]:
-    """The window's alarm journal (the sensors alarm, each line's, the flood's) in the core's
-    order (time; within one event the sensors, the lines, the flood), and the flood decisions."""
+    """The window's alarm journal (the tide's and the dock's, the sensors alarm, each line's,
+    the flood's) in the core's order (time; within one event the components, the sensors, the
+    lines, the flood), and the flood decisions."""
     unshelvable = core.config.alarm.unshelvable_conditions
     ranked: list[tuple[int, int, AlarmEvent]] = []
+    at = level_changes(tide.level, core.state.tide[0])
+    for i, tr in zip(at.tolist(), tide_transitions):
+        ranked += [(int(tide.times[i]), -2, e) for e in component_entries('tide', tr)]
+    if dock is not None and len(dock.levels):
+        at = level_changes(dock.levels, dock.before[0][0])
+        for i, tr in zip(at.tolist(), dock.transitions):
+            ranked += [(int(window.ticks[i]), -2, e) for e in component_entries('dock', tr)]
     sensors = _journal(
         alarm_ack.SENSORS, blind.acks, tide.times, lambda i, a: alarm_ack.condition(a.level, ())
     )
@@ -445,8 +525,21 @@ def window_journal(
         ranked += [
             (t, k, e) for t, e in _journal(line.config.name, acks[k], steps[k].times, condition)
         ]
-    raises = [(t, k, e.alarm) for t, k, e in ranked if e.kind == 'raised']
-    flood, flood_log = _decide_flood(core, window, raises)
+    raises = [(t, k, e.alarm) for t, k, e in ranked if e.kind == 'raised' and k > -2]
+
+    def active(stamp: int) -> set[str]:
+        """The alarms active after the event at ``stamp`` [ns]."""
+        out = set()
+        for k, line in enumerate(core.state.lines):
+            i = int(np.searchsorted(steps[k].times, stamp, 'right')) - 1
+            if _active(acks[k].at(i)):
+                out.add(line.config.name)
+        i = int(np.searchsorted(tide.times, stamp, 'right')) - 1
+        if _active(blind.acks.at(i)):
+            out.add(alarm_ack.SENSORS)
+        return out
+
+    flood, flood_log = _decide_flood(core, window, raises, active)
     ranked += [(t, len(core.state.lines), e) for t, e in flood_log]
     ranked.sort(key=lambda r: (r[0], r[1]))
     return [e for _, _, e in ranked], flood
@@ -537,6 +630,10 @@ def write_refusals(core: MonitorCore, refusals: _Refusals) -> None:
         core.state.take(core.state.read(TidePart)._replace(depth_refused=refused))
 
 
+def _active(ack: alarm_ack.AckState) -> bool:
+    return ack.active_since == ack.active_since
+
+
 def _raised_condition(series: LevelSeries, unshelvable: Any) -> Any:
     """The condition a raise of the line's alarm at step ``i`` names (the visible one under
     the alarm's shelf), as the core's ``_raised_condition``."""
@@ -567,6 +664,7 @@ class FloodColumns(NamedTuple):
     status_before: tuple[Level, str]
     transitions: list[Transition]
     changes: np.ndarray  # the decisions at which the status's level changed
+    first: dict[int, tuple[str, float]]  # each start decision's first out
 
     def at(self, j: int) -> alarm_flood.Flood:
         """The flood decision ``j`` (-1: as before the window)."""
@@ -579,16 +677,19 @@ class FloodColumns(NamedTuple):
             return alarm_flood.Flood(recent)
         if start < 0:
             return alarm_flood.Flood(recent, self.before.since, self.before.first_out)
-        first = int(self.lo[start])
         since = float(self.stamps[start] * 1e-9)
-        return alarm_flood.Flood(recent, since, (self.names[first], float(self.times[first])))
+        return alarm_flood.Flood(recent, since, self.first[start])
 
 
 def _decide_flood(
-    core: MonitorCore, window: Window, raises: list[tuple[int, int, str]]
+    core: MonitorCore,
+    window: Window,
+    raises: list[tuple[int, int, str]],
+    active: Callable[[int], set[str]],
 ) -> tuple[FloodColumns, list[tuple[int, AlarmEvent]]]:
     """The flood decisions at the window's raises (stamp ns, rank, alarm) and ticks, their
-    journal records; leaves the core's flood state as after the window."""
+    journal records; leaves the core's flood state as after the window. ``active(stamp)``:
+    the alarms active after the event at ``stamp`` [ns] (a flood's first out is one)."""
     a = core.config.alarm
     raises = sorted(raises)
     before, status_before = core.state.flood, core.state.alarms
@@ -610,8 +711,13 @@ def _decide_flood(
     start = np.where(episode > 0, first[np.maximum(episode - 1, 0)] if len(first) else -1, -1)
     start = np.where(flooded, start, -2)
     changes = np.flatnonzero(flooded != was)
+    outs = {}
+    for j in first.tolist():
+        lo_j = int(lo[j])
+        recent = list(zip(times[lo_j : lo_j + int(count[j])].tolist(), names[lo_j:]))
+        outs[j] = alarm_flood.first_out(recent, active(int(stamps[j])))
     flood = FloodColumns(
-        stamps, lo, count, start, times, names, before, status_before, [], changes
+        stamps, lo, count, start, times, names, before, status_before, [], changes, outs
     )
     log: list[tuple[int, AlarmEvent]] = []
     old, entered = status_before, core.state.alarms_entered

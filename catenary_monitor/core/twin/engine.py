@@ -50,8 +50,10 @@ from catenary_monitor.core.monitor.status import depth_word as depth_state_word
 from catenary_monitor.core.rules import channels, wave_window
 from catenary_monitor.core.rules import dock_watch as dock_live
 from catenary_monitor.core.rules import fatigue as fatigue_rule
+from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.rules.plausible import status_messages
 from catenary_monitor.core.twin.decisions import (
+    BlindColumns,
     DockColumns,
     SensorColumns,
     TideColumns,
@@ -113,9 +115,10 @@ def _line_inputs(
     dock: Optional[DockColumns] = None,
     k: int = 0,
     sensors: Optional[SensorColumns] = None,
+    blind: Optional[BlindColumns] = None,
 ) -> dict[str, Any]:
     """The alarm inputs at every step of the line (newest solve, stamps, tide decision, the
-    newest tick's dock estimate and sensor state)."""
+    newest tick's dock estimate and sensor state, whether the sensors alarm stands)."""
     s = steps.s_idx
     before = dict(zip(VALUE_FIELDS, line.values))
     inputs: dict[str, Any] = {
@@ -157,12 +160,20 @@ def _line_inputs(
         inputs['sensor_state'] = pick(steps.k_idx, codes, sensors.before[k])
         inputs['sensor_tension'] = pick(steps.t_idx, window.tensions[k][1], line.tension)
         inputs['mbl'] = line.config.mbl
+        grouped = sensors.grouped[:, k].astype(np.float64)
+        inputs['silent_group'] = pick(steps.k_idx, grouped, float(sensors.before_grouped[k]))
     if dock is not None:
         before_dock = dock.before[2][k]
         columns = dock.decision.line_inputs
         for j, key in enumerate(dock_live.LINE_INPUTS):
             col = columns[:, k, j] if columns is not None else np.zeros(0)
             inputs[key] = pick(steps.k_idx, col, before_dock[j])
+        if blind is not None:  # the sensors alarm stands: the disagreement is its consequence
+            stands = np.asarray(blind.levels != Level.OK, np.float64)
+            was = float(blind.before[0][0] != Level.OK)
+            masked = pick(steps.dk_idx, stands, was) == 1.0
+            if masked.any():
+                inputs['inconsistent'] = np.where(masked, np.nan, inputs['inconsistent'])
     return inputs
 
 
@@ -173,6 +184,7 @@ def _advance_line(
     tide: TideColumns,
     sensors: SensorColumns,
     dock: Optional[DockColumns] = None,
+    blind: Optional[BlindColumns] = None,
 ) -> tuple[LineResult, LevelSeries, LineSteps, alarm_ack.AckSeries, np.ndarray]:
     """One line through the window; leaves the line's state in the core as after the steps
     (the core's depth and tide still as before the window). The last item: the line's fatigue
@@ -195,7 +207,9 @@ def _advance_line(
     for j, key in enumerate(channels.FIELDS):
         column = fused[j] if fused is not None else np.zeros(0)
         values[key] = pick(at, column, line.channel_values[j])
-    inputs = _line_inputs(core, line, steps, tide, values, status, window, tt, dock, k, sensors)
+    inputs = _line_inputs(
+        core, line, steps, tide, values, status, window, tt, dock, k, sensors, blind
+    )
     series = replay_levels(
         steps.times * 1e-9, inputs, line.alarm, status_messages(line.config), initial=line.state
     )
@@ -314,12 +328,12 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
     depth_word = depth_state_word(core.state.depth_s, core.state.depth_code)
     sensors = decide_sensors_window(core, window, refusals)
     tide, tide_transitions = decide_tide(core, window, sensors)
-    blind = decide_blind(core, window, tide)
+    blind = decide_blind(core, window, tide, sensors)
     dock = decide_dock_window(core, window, tide)
     results, series, steps, acks, damage = [], [], [], [], []
     for k, line in enumerate(core.state.lines):
         before = line.fatigue_values[0]
-        r, s, st, a, d = _advance_line(core, k, window, tide, sensors, dock)
+        r, s, st, a, d = _advance_line(core, k, window, tide, sensors, dock, blind)
         if not snapshots:  # no snapshot asks for a message: the inputs go now, not at the end
             s.forget_inputs()
         results.append(r)
@@ -327,7 +341,9 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
         steps.append(st)
         acks.append(a)
         damage.append(DamageColumns(window.tensions[k][0], d, before))
-    journal, flood = window_journal(core, window, tide, blind, series, steps, acks)
+    journal, flood = window_journal(
+        core, window, tide, blind, series, steps, acks, tide_transitions, dock
+    )
     times = [c[0] for c in (*given.tensions, given.depth, (given.ticks, None)) if len(c[0])]
     start = int(min(t[0] for t in times)) if times else core.state.last_ns
     end = int(max(t[-1] for t in times)) if times else core.state.last_ns
