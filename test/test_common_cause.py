@@ -126,7 +126,7 @@ def test_a_gateway_drop_is_one_alarm_and_a_lone_line_its_own():
     # its own STALE a common_cause_window after its timeout: 60 + 1.5 + 1 s
     assert 62.4 < lone[0][0] < 63.8
     # every line's STALE in the drop was shown suppressed
-    shown = [(st.level, st.message) for s in steps if s.snapshot is not None
+    shown = [(st.level, dict(st.values)['detail']) for s in steps if s.snapshot is not None
              and 37.0 < s.stamp_ns * 1e-9 - T0_NS * 1e-9 < 44.0
              for st in s.snapshot.statuses if st.name.endswith('line_01')]  # fmt: skip
     assert shown and {level for level, _ in shown} == {Level.STALE}
@@ -194,7 +194,7 @@ def test_a_line_disagreeing_under_the_common_cause_is_shown_not_its_alarm():
             continue
         st = {x.name.split(': ')[-1]: x for x in s.snapshot.statuses}
         stands = st['sensors'].level != Level.OK
-        seen.append((stands, 'tension inconsistent' in st['line_09'].message))
+        seen.append((stands, 'tension inconsistent' in dict(st['line_09'].values)['detail']))
     assert any(stands for stands, _ in seen)
     # never newly flagged while the cause stands; flagged once the lines are back
     first = [i for i, (stands, flagged) in enumerate(seen) if flagged]
