@@ -80,6 +80,7 @@ class PointLoadTable:
     horizontal: np.ndarray  # (nh, nu) N
     span_error: float  # m, the largest measured at the cells' centres
     tension_error: float  # relative, the largest measured at the cells' centres
+    slack_horizontal: float = 0.0  # N, H at a span below the first node (NaN: not modelled)
 
     def _at_depth(self, h: np.ndarray) -> tuple[np.ndarray, ...]:
         """The three columns at depths ``h`` (n,): (n, nu) each, NaN rows outside the range."""
@@ -109,7 +110,8 @@ class PointLoadTable:
 
     def state_at_span(self, h: np.ndarray, span: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(hook tension [N], H [N]) at spans ``span`` and hook depths ``h`` (n,): NaN outside
-        the table but H 0 for a span slacker than its lowest node."""
+        the table but H 0 for a span slacker than its lowest node (NaN where the slackest
+        states are not modelled: a buoy)."""
         h, span = np.asarray(h, float), np.asarray(span, float)
         if h.size <= SCALAR_MAX:
             pairs = [_scalar(self).state_at_span(a, b) for a, b in zip(h.tolist(), span.tolist())]
@@ -132,7 +134,7 @@ class PointLoadTable:
         horizontal, _ = _cubic(hor, k, tt)
         with np.errstate(invalid='ignore'):
             slack = span < s[:, 0]
-        return tension, np.where(slack, 0.0, horizontal)
+        return tension, np.where(slack, self.slack_horizontal, horizontal)
 
 
 def _weights(t: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -211,23 +213,37 @@ def build_table(
     if depths[0] <= 0.0:
         raise TableError(f'hook depths from {depth_lo:g} m: the table needs {step:g} m below')
     u = np.linspace(math.log(H_MIN_FACTOR * w * length), math.log(H_MAX_FACTOR * mbl), U_NODES)
-    span, tension, horizontal = _grid(w, length, loads, depths, np.exp(u))
+    span, tension, horizontal = _grid(w, length, loads, depths, np.exp(u), trim=True)
+    slack = 0.0 if horizontal.shape[1] == u.size else math.nan
+    u = u[u.size - horizontal.shape[1] :]
     table = PointLoadTable(
-        float(depths[0]), step, depth_lo, depth_hi, span, tension, horizontal, 0.0, 0.0
+        float(depths[0]), step, depth_lo, depth_hi, span, tension, horizontal, 0.0, 0.0, slack
     )
     return dataclasses.replace(table, **_measured_error(table, w, length, loads, u))
 
 
 def _grid(
-    w: float, length: float, loads: PointLoads, depths: np.ndarray, horizontal: np.ndarray
+    w: float,
+    length: float,
+    loads: PointLoads,
+    depths: np.ndarray,
+    horizontal: np.ndarray,
+    trim: bool = False,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The exact states on the grid (rows depths, columns H); ``trim``: the slackest columns
+    not modelled at some depth left out (a buoy that would lie on the seabed)."""
     shape = (depths.size, horizontal.size)
     span, tension = np.empty(shape), np.empty(shape)
     for j, h in enumerate(depths.tolist()):
         for i, hor in enumerate(horizontal.tolist()):
             s, ans = state_at_horizontal(w, h, length, hor, loads)
             span[j, i], tension[j, i] = s, ans.tension
-    if not (np.all(np.isfinite(span)) and np.all(np.isfinite(tension))):
+    good = np.all(np.isfinite(span) & np.isfinite(tension), axis=0)
+    first = int(np.argmax(good)) if good.any() else horizontal.size
+    if trim and first < horizontal.size - 8:  # a buoy on the seabed at the slackest: from here
+        span, tension, horizontal = span[:, first:], tension[:, first:], horizontal[first:]
+        shape, good = span.shape, good[first:]
+    if not good.all():
         raise TableError('a state the static model does not follow (a buoy on the seabed)')
     if not (np.all(np.diff(span, axis=1) > 0.0) and np.all(np.diff(tension, axis=1) > 0.0)):
         raise TableError('span or tension not rising with the horizontal tension')
@@ -347,7 +363,7 @@ class _Scalar:
         found = None if at is None else self._locate(self.span, at, span)
         if at is None or found is None:
             slack = at is not None and span < self._node(self.span, at, 0)
-            return math.nan, (0.0 if slack else math.nan)
+            return math.nan, (self.table.slack_horizontal if slack else math.nan)
         k, t, _ = found
         x = t + (k - min(max(k, 1), self.nu - 3))
         tension, _ = _cubic_f(self._stencil(self.tension, at, k), x)
