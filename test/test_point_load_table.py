@@ -104,10 +104,9 @@ def test_plain_floats_and_numpy_give_the_same_bits():
     h = rng.uniform(LOW - 0.2, HIGH + 0.2, n)
     t = np.exp(rng.uniform(np.log(1e4), np.log(6e6), n))
     s = rng.uniform(95.0, 122.0, n)
-    for many, one in (
-        (table.span_at_tension(h, t), [table.span_at_tension(h[i : i + 1], t[i : i + 1]) for i in range(n)]),
-        (table.state_at_span(h, s), [table.state_at_span(h[i : i + 1], s[i : i + 1]) for i in range(n)]),
-    ):  # fmt: skip
+    for query, y in ((table.span_at_tension, t), (table.state_at_span, s)):
+        many = query(h, y)
+        one = [query(h[i : i + 1], y[i : i + 1]) for i in range(n)]
         for k in range(2):
             col = np.concatenate([o[k] for o in one])
             assert np.array_equal(many[k], col, equal_nan=True)

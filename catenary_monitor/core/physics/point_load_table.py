@@ -104,8 +104,8 @@ class PointLoadTable:
         """(span [m], dT/ds [N/m]) of hook tensions ``tension`` at hook depths ``h`` (n,)."""
         h, tension = np.asarray(h, float), np.asarray(tension, float)
         if h.size <= SCALAR_MAX:  # the live core's few: plain floats, the same bits
-            pairs = [_scalar(self).span_at_tension(a, b) for a, b in zip(h.tolist(), tension.tolist())]
-            return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+            one = _scalar(self).span_at_tension
+            return _columns([one(a, b) for a, b in zip(h.tolist(), tension.tolist())])
         return self._span_at_tension(h, tension)
 
     def state_at_span(self, h: np.ndarray, span: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -114,11 +114,13 @@ class PointLoadTable:
         states are not modelled: a buoy)."""
         h, span = np.asarray(h, float), np.asarray(span, float)
         if h.size <= SCALAR_MAX:
-            pairs = [_scalar(self).state_at_span(a, b) for a, b in zip(h.tolist(), span.tolist())]
-            return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+            one = _scalar(self).state_at_span
+            return _columns([one(a, b) for a, b in zip(h.tolist(), span.tolist())])
         return self._state_at_span(h, span)
 
-    def _span_at_tension(self, h: np.ndarray, tension: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _span_at_tension(
+        self, h: np.ndarray, tension: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         s, t, _ = self._at_depth(np.asarray(h, float))
         k, tt = _locate(t, np.asarray(tension, float))
         value, ds = _cubic(s, k, tt)
@@ -135,6 +137,10 @@ class PointLoadTable:
         with np.errstate(invalid='ignore'):
             slack = span < s[:, 0]
         return tension, np.where(slack, self.slack_horizontal, horizontal)
+
+
+def _columns(pairs: list[tuple[float, float]]) -> tuple[np.ndarray, np.ndarray]:
+    return np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
 
 
 def _weights(t: np.ndarray) -> tuple[np.ndarray, ...]:
