@@ -22,10 +22,11 @@ from catenary_monitor.core.config.parameters import (
 )
 from catenary_monitor.core.physics import point_loads as pl
 from catenary_monitor.core.physics.point_load_table import build_table
+from catenary_monitor_study import bench_point_loads
 
 W, L, MBL = 1300.0, 122.6247, 4.827e6
-LOW, HIGH = 19.0, 23.0
-CLUMPED = ('line_01', 'line_06', 'line_07', 'line_12')
+LOW, HIGH = bench_point_loads.DEPTHS
+CLUMPED = bench_point_loads.CLUMPED
 LOADS = [
     pl.PointLoads.of([40.0], [30e3]),
     pl.PointLoads.of([60.0], [40e3]),
@@ -35,12 +36,10 @@ LOADS = [
 
 
 def clumped_params(**extra):
-    """The paper's dock with a 30 kN clump weight 60 m up four lines, tables over 19-23 m."""
-    flat = load_params_file(DOCK_YAML)
-    for name in CLUMPED:
-        flat[f'{name}.point_load_positions'] = [60.0]
-        flat[f'{name}.point_load_weights'] = [30e3]
-    flat.update({'dock_table_depth_min': LOW, 'dock_table_depth_max': HIGH, **extra})
+    """The paper's dock with a 30 kN clump weight 60 m up four lines, tables over 19-23 m (as
+    bench-point-loads has it)."""
+    flat = bench_point_loads.clumped_params(str(DOCK_YAML))
+    flat.update(extra)
     return flat
 
 
@@ -193,3 +192,73 @@ def test_the_twin_estimates_the_clumped_dock_as_the_core_does():
     ticks = ticks_for(tensions, depth)
     steps = compare(config, tensions, depth, ticks, [T0_NS + int(7.3e9)])
     assert any(c.component == 'dock' for s in steps for c in s.transitions)
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+def test_run_watches_the_clumped_dock_within_a_centimetre_of_moorpy(tmp_path):
+    """`catenary-monitor run` on the clumped dock's params file: MoorPy's hook tensions
+    published live give the dock status MoorPy's offset within 1 cm."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    import rclpy
+    from diagnostic_msgs.msg import DiagnosticArray
+    from rclpy.qos import QoSProfile
+    from rclpy.serialization import deserialize_message
+    from std_msgs.msg import Float64
+
+    from catenary_monitor.io.mcap_read import iter_messages
+
+    root = Path(__file__).resolve().parents[1]
+    params = tmp_path / 'clumped.yaml'
+    flat = clumped_params(log_dir=str(tmp_path / 'logs'), diagnostic_rate=4.0)
+    params.write_text(params_file_text(flat))
+    model, scenes = _moorpy_scenes()
+    _, offset, tensions = scenes[1]
+    env = dict(os.environ, PYTHONPATH=str(root), PYTHONUNBUFFERED='1')
+    out_path = tmp_path / 'node.out'
+    with open(out_path, 'w+') as out:
+        cmd = [sys.executable, '-m', 'catenary_monitor', 'run', '--params-file', str(params)]
+        proc = subprocess.Popen(cmd, env=env, stdout=out, stderr=subprocess.STDOUT)
+        try:
+            if not rclpy.ok():
+                rclpy.init()
+            client = rclpy.create_node('point_load_run_test')
+            qos = QoSProfile(depth=10)
+            topics = [f'/mooring/{n}/tension' for n in model.names]
+            pubs = [client.create_publisher(Float64, t, qos) for t in topics]
+            depth_pub = client.create_publisher(Float64, '/tide/depth', qos)
+            deadline = time.monotonic() + 60.0
+            while time.monotonic() < deadline and proc.poll() is None:
+                if all(p.get_subscription_count() for p in [*pubs, depth_pub]):
+                    break
+                time.sleep(0.05)
+            assert depth_pub.get_subscription_count(), out_path.read_text()
+            start = time.monotonic()
+            while time.monotonic() - start < 4.0:
+                depth_pub.publish(Float64(data=20.85))
+                for pub, v in zip(pubs, tensions.tolist()):
+                    pub.publish(Float64(data=v))
+                time.sleep(0.1)
+            time.sleep(1.0)
+            client.destroy_node()
+        finally:
+            if proc.poll() is None:
+                proc.send_signal(signal.SIGTERM)
+            code = proc.wait(30)
+    assert code == 0, out_path.read_text()
+    files = sorted((tmp_path / 'logs').glob('*.mcap'))
+    arrays = [
+        deserialize_message(m.data, DiagnosticArray)
+        for m in iter_messages(files, ['/diagnostics'])
+    ]
+    dock = [s for s in arrays[-1].status if s.name == 'catenary_monitor: dock'][0]
+    values = {kv.key: kv.value for kv in dock.values}
+    assert abs(float(values['offset_x']) - offset[0]) < 0.01, (values, offset)
+    assert abs(float(values['offset_y']) - offset[1]) < 0.01, (values, offset)
+    assert 0.0 < float(values['table_span_error']) < 1e-3
