@@ -236,8 +236,11 @@ def estimate_dock(
 def _spans(model: DockModel, h: np.ndarray, tensions: np.ndarray) -> tuple[np.ndarray, ...]:
     """The span each tension implies and ``dT/ds`` there, (n, m) each: closed forms for a
     plain chain, the table of a line with point loads (its exact solve where it has none)."""
-    s_meas, dt_ds = span_and_sensitivity(model.weight, h, model.chain_length, tensions, model.ea)
-    for i in _loaded(model):
+    loaded = _loaded(model)
+    plain = np.array(tensions, copy=True)
+    plain[:, loaded] = math.nan  # (their own answers below)
+    s_meas, dt_ds = span_and_sensitivity(model.weight, h, model.chain_length, plain, model.ea)
+    for i in loaded:
         table = model.tables[i] if model.tables else None
         if table is not None:
             s_meas[:, i], dt_ds[:, i] = table.span_at_tension(h[:, i], tensions[:, i])
@@ -250,9 +253,12 @@ def _at_spans(
     model: DockModel, h: np.ndarray, span: np.ndarray, start: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Hook and horizontal tension at the spans, (n, m) each (as :func:`_spans` solves)."""
-    st = statics_at_span(model.weight, h, model.chain_length, span, model.ea, start)
+    loaded = _loaded(model)
+    plain = np.array(span, copy=True)
+    plain[:, loaded] = math.nan  # not the plain chain's Newton: their own answers below
+    st = statics_at_span(model.weight, h, model.chain_length, plain, model.ea, start)
     top, horizontal = np.array(st.top_tension), np.array(st.horizontal_tension)
-    for i in _loaded(model):
+    for i in loaded:
         table = model.tables[i] if model.tables else None
         if table is not None:
             top[:, i], horizontal[:, i] = table.state_at_span(h[:, i], span[:, i])
