@@ -76,7 +76,7 @@ def _ticks(model: Any, config: Any, tensions: np.ndarray) -> Callable[[], None]:
     return loop
 
 
-def _batch(model: Any, config: Any, tensions: np.ndarray) -> Callable[[], None]:
+def _batch(model: Any, config: Any, tensions: np.ndarray) -> Callable[[], object]:
     from catenary_monitor.core.rules import dock_watch
 
     n, m = tensions.shape

@@ -225,7 +225,8 @@ def build_table(
     table = PointLoadTable(
         float(depths[0]), step, depth_lo, depth_hi, span, tension, horizontal, 0.0, 0.0, slack
     )
-    return dataclasses.replace(table, **_measured_error(table, w, length, loads, u))
+    span_error, tension_error = _measured_error(table, w, length, loads, u)
+    return dataclasses.replace(table, span_error=span_error, tension_error=tension_error)
 
 
 def _grid(
@@ -258,7 +259,7 @@ def _grid(
 
 def _measured_error(
     table: PointLoadTable, w: float, length: float, loads: PointLoads, u: np.ndarray
-) -> dict[str, float]:
+) -> tuple[float, float]:
     """The largest span error [m] and relative tension error of the table at the centres of
     its cells within the range, against the exact state."""
     depths = table.depth0 + table.depth_step * np.arange(table.span.shape[0])
@@ -273,7 +274,7 @@ def _measured_error(
     t_tab, _ = table.state_at_span(h, span.ravel())
     ds = np.abs(s_tab - span.ravel())
     dt = np.abs(t_tab / tension.ravel() - 1.0)
-    return {'span_error': _largest(ds), 'tension_error': _largest(dt)}
+    return _largest(ds), _largest(dt)
 
 
 def _largest(err: np.ndarray) -> float:
