@@ -262,3 +262,20 @@ def test_run_watches_the_clumped_dock_within_a_centimetre_of_moorpy(tmp_path):
     assert abs(float(values['offset_x']) - offset[0]) < 0.01, (values, offset)
     assert abs(float(values['offset_y']) - offset[1]) < 0.01, (values, offset)
     assert 0.0 < float(values['table_span_error']) < 1e-3
+
+
+def test_a_tide_outside_the_tables_leaves_those_lines_out_in_words():
+    """A depth beyond dock_table_depth_max: the clumped lines are not used (the plain eight
+    still place the dock), and the dock status says why its load is not estimated."""
+    from catenary_monitor.core.monitor.events import Depth, Tension, Tick
+    from catenary_monitor.core.monitor.monitor_core import MonitorCore
+
+    config = config_from_params(clumped_params())
+    core = MonitorCore(config, 0)
+    core.step(Depth(1, HIGH + 0.5))
+    for i in range(12):
+        core.step(Tension(10 + i, i, 3.9e5))
+    core.step(Tick(1_000_000_000))
+    dock = [s for s in core.snapshot(1_000_000_001).statuses if s.name.endswith(': dock')][0]
+    assert dock.level == 0 and dict(dock.values)['readings'] == '8', dock
+    assert "outside its table's depths" in dock.message

@@ -233,6 +233,11 @@ def dock_message(model: DockModel, decision: DockDecision, i: int) -> str:
     if np.all(np.isfinite(est.load[:2])):
         size = math.hypot(float(est.load[0]), float(est.load[1]))
         text += f'; load {size / 1e3:.0f} kN from {load_from_deg(est.load):.0f} deg'
+    elif model.tables:
+        text += (
+            '; load not estimated (a line would be beyond its reach, or one with point loads '
+            "is outside its table's depths)"
+        )
     else:
         text += '; load not estimated (a line would be beyond its reach)'
     bad = [
