@@ -279,3 +279,16 @@ def test_a_tide_outside_the_tables_leaves_those_lines_out_in_words():
     dock = [s for s in core.snapshot(1_000_000_001).statuses if s.name.endswith(': dock')][0]
     assert dock.level == 0 and dict(dock.values)['readings'] == '8', dock
     assert "outside its table's depths" in dock.message
+
+
+@pytest.mark.slow
+def test_bench_point_loads_runs_and_reports_its_baseline():
+    """The benchmark's figures exist and are sane (no timing asserted: ratios are read)."""
+    from catenary_monitor.sim.scenario import default_config_path
+
+    r = bench_point_loads.run(str(default_config_path()), ticks=3, exact_ticks=1)
+    assert set(r['ms_per_tick']) == {'plain', 'tables', 'exact'} and r['exact_over_tables'] > 0
+    assert r['clumped'] == 4 and 0.0 < r['table_span_error_m'] < 1e-3
+    assert max(r['moorpy']['offset_error_m'].values()) < 0.01
+    text = bench_point_loads._text(r)
+    assert 'exact / tables' in text and 'MoorPy' in text
