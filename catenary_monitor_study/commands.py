@@ -56,6 +56,7 @@ def register(sub: Any) -> None:
         bench_flood,
         bench_step,
         bench_methods,
+        bench_point_loads,
         bench_replay,
         bench_soak,
         fuzz,
@@ -64,6 +65,7 @@ def register(sub: Any) -> None:
     bench_console.register(sub)
     bench_alarms.register(sub)
     bench_body.register(sub)
+    bench_point_loads.register(sub)
     bench_dynamics.register(sub)
     bench_soak.register(sub)
     bench_flood.register(sub)

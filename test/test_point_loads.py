@@ -221,7 +221,8 @@ def test_bad_point_loads_are_one_line_errors(extra, message):
 
 def test_whatif_hangs_a_line_with_point_loads_as_installed():
     """whatif: a line not given hangs as installed, its clump and buoy included (problem 5 with
-    point loads), and the scene's level follows; the dock model refuses point loads by name."""
+    point loads), and the scene's level follows; the dock model asks for the depths of its
+    point-load lines' tables by name."""
     from catenary_monitor.core.config.parameters import ConfigError, LineConfig, MonitorConfig
     from catenary_monitor.core.monitor.whatif_scene import hanging_tensions
 
@@ -231,15 +232,12 @@ def test_whatif_hangs_a_line_with_point_loads_as_installed():
     assert got == pytest.approx(ref.tension, rel=1e-12)
     line = dict(weight=W, anchor_distance=120.0, mbl=4.8e6, hook_x=1.0, hook_y=0.0)
     line.update(heading=90.0, chain_length=125.0)
-    with pytest.raises(ConfigError, match='does not model point loads'):
-        MonitorConfig(
-            lines=(
-                LineConfig(name='a', **line),
-                LineConfig(
-                    name='b', point_load_positions=(50.0,), point_load_weights=(1e4,), **line
-                ),
-            )
-        )
+    lines = (
+        LineConfig(name='a', **line),
+        LineConfig(name='b', point_load_positions=(50.0,), point_load_weights=(1e4,), **line),
+    )
+    with pytest.raises(ConfigError, match='dock_table_depth_min'):
+        MonitorConfig(lines=lines)
 
 
 def test_point_loads_doc_parameter_table_is_generated():

@@ -32,6 +32,7 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import DockConfig, MonitorConfig
 from catenary_monitor.core.physics.fixed_length import LineRegime, LineStatics, statics_at_span
+from catenary_monitor.core.physics.point_load_table import PointLoadTable, table_for
 from catenary_monitor.core.physics.point_loads import PointLoads, line_statics
 
 __all__ = ['DockModel', 'BodyLines', 'line_states', 'direction']
@@ -61,6 +62,9 @@ class DockModel:
     dock: DockConfig
     #: Per line: its clump weights and buoys (None: a plain chain); () when no line has any.
     loads: tuple[Optional[PointLoads], ...] = ()
+    #: Per line with point loads: its surrogate for the live estimate (None: none; the exact
+    #: solve then), over ``dock_table_depth_min`` - ``_max``; () when no line has one.
+    tables: tuple[Optional[PointLoadTable], ...] = ()
 
     @classmethod
     def from_config(cls, config: MonitorConfig) -> DockModel:
@@ -97,7 +101,15 @@ class DockModel:
             tension_accuracy=np.array([line.tension_accuracy_or_default for line in lines]),
             dock=config.dock,
             loads=_point_loads(config),
+            tables=_tables(config),
         )
+
+    @property
+    def table_span_error(self) -> float:
+        """The largest span error [m] of the lines' surrogates as measured when built (NaN:
+        no line has one)."""
+        errors = [t.span_error for t in self.tables if t is not None]
+        return max(errors) if errors else math.nan
 
     @property
     def size(self) -> float:
@@ -111,6 +123,23 @@ def _point_loads(config: MonitorConfig) -> tuple[Optional[PointLoads], ...]:
         for line in config.lines
     ]
     return tuple(loads) if any(p is not None for p in loads) else ()
+
+
+def _tables(config: MonitorConfig) -> tuple[Optional[PointLoadTable], ...]:
+    depths = config.dock.table_depths
+    if depths is None:
+        return ()
+    tables = [
+        table_for(
+            line.weight,
+            float(line.chain_length or 0.0),
+            None if line.point_loads is None else PointLoads.of(*line.point_loads),
+            line.mbl,
+            (depths[0] + line.hook_height, depths[1] + line.hook_height),
+        )
+        for line in config.lines
+    ]
+    return tuple(tables) if any(t is not None for t in tables) else ()
 
 
 class BodyLines(NamedTuple):

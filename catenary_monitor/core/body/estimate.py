@@ -41,6 +41,7 @@ from typing import NamedTuple, Optional
 import numpy as np
 
 from catenary_monitor.core.body.dock_model import DockModel
+from catenary_monitor.core.physics import point_loads
 from catenary_monitor.core.physics.fixed_length import span_and_sensitivity, statics_at_span
 
 __all__ = ['DockEstimate', 'estimate_dock', 'REMOVE_Z', 'MAX_FLAGS', 'MIN_REDUNDANT', 'MIN_LINES']
@@ -182,9 +183,7 @@ def estimate_dock(
     default = float(np.max(model.tension_accuracy[given])) if given.any() else 1.0
     tension_accuracy = np.where(given, model.tension_accuracy, default)[None, :]
     with np.errstate(invalid='ignore', divide='ignore', over='ignore'):
-        s_meas, dt_ds = span_and_sensitivity(
-            model.weight, h, model.chain_length, np.where(usable, tensions, np.nan), model.ea
-        )
+        s_meas, dt_ds = _spans(model, h, np.where(usable, tensions, np.nan))
         fits = usable & np.isfinite(s_meas) & (dt_ds > 0)
         weight = np.where(fits, (dt_ds / tension_accuracy) ** 2, 0.0)
         weight = np.where(np.isfinite(weight), weight, 0.0)
@@ -216,10 +215,9 @@ def estimate_dock(
         valid = enough & ok
         span, _, unit = _geometry(model, q)
         start = np.where(usable, tensions, np.nan)  # the measured tension: a close start
-        st = statics_at_span(model.weight, h, model.chain_length, span, model.ea, start)
-        expected = st.top_tension
+        expected, horizontal = _at_spans(model, h, span, start)
         residual = np.where(usable, tensions - expected, np.nan)
-        load = _load(model, q, st.horizontal_tension, unit)
+        load = _load(model, q, horizontal, unit)
     nan = np.nan
     return DockEstimate(
         valid=valid,
@@ -233,6 +231,77 @@ def estimate_dock(
         readings=readings,
         span=np.where(valid[:, None], span, nan),
     )
+
+
+def _spans(model: DockModel, h: np.ndarray, tensions: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The span each tension implies and ``dT/ds`` there, (n, m) each: closed forms for a
+    plain chain, the table of a line with point loads (its exact solve where it has none)."""
+    loaded = _loaded(model)
+    plain = np.array(tensions, copy=True)
+    plain[:, loaded] = math.nan  # (their own answers below)
+    s_meas, dt_ds = span_and_sensitivity(model.weight, h, model.chain_length, plain, model.ea)
+    for i in loaded:
+        table = model.tables[i] if model.tables else None
+        if table is not None:
+            s_meas[:, i], dt_ds[:, i] = table.span_at_tension(h[:, i], tensions[:, i])
+        else:
+            s_meas[:, i], dt_ds[:, i] = _exact_spans(model, i, h[:, i], tensions[:, i])
+    return s_meas, dt_ds
+
+
+def _at_spans(
+    model: DockModel, h: np.ndarray, span: np.ndarray, start: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Hook and horizontal tension at the spans, (n, m) each (as :func:`_spans` solves)."""
+    loaded = _loaded(model)
+    plain = np.array(span, copy=True)
+    plain[:, loaded] = math.nan  # not the plain chain's Newton: their own answers below
+    st = statics_at_span(model.weight, h, model.chain_length, plain, model.ea, start)
+    top, horizontal = np.array(st.top_tension), np.array(st.horizontal_tension)
+    for i in loaded:
+        table = model.tables[i] if model.tables else None
+        if table is not None:
+            top[:, i], horizontal[:, i] = table.state_at_span(h[:, i], span[:, i])
+        else:
+            top[:, i], horizontal[:, i] = _exact_states(model, i, h[:, i], span[:, i])
+    return top, horizontal
+
+
+def _loaded(model: DockModel) -> list[int]:
+    return [i for i, loads in enumerate(model.loads) if loads is not None]
+
+
+def _exact_spans(
+    model: DockModel, i: int, h: np.ndarray, tension: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Line ``i``'s spans from its tensions by the exact chain-length solve (its roots, about
+    15 ms each; a model without tables: the surrogate's baseline)."""
+    loads = model.loads[i]
+    assert loads is not None
+    w, length = float(model.weight[i]), float(model.chain_length[i])
+    start = float(np.hypot(*(model.anchor[i] - model.hook[i])))
+    spans, slopes = np.full(h.shape, math.nan), np.full(h.shape, math.nan)
+    for k, (hk, tk) in enumerate(zip(h.tolist(), tension.tolist())):
+        if tk == tk:
+            s = point_loads.span_at_tension(w, hk, length, tk, loads, start)
+            if s == s:
+                spans[k], slopes[k] = s, point_loads.line_statics(w, hk, length, s, loads)[7]
+    return spans, slopes
+
+
+def _exact_states(
+    model: DockModel, i: int, h: np.ndarray, span: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Line ``i``'s hook and horizontal tension at the spans, exactly."""
+    loads = model.loads[i]
+    assert loads is not None
+    w, length = float(model.weight[i]), float(model.chain_length[i])
+    top, horizontal = np.full(h.shape, math.nan), np.full(h.shape, math.nan)
+    for k, (hk, sk) in enumerate(zip(h.tolist(), span.tolist())):
+        if sk == sk:
+            values = point_loads.line_statics(w, hk, length, sk, loads)
+            horizontal[k], top[k] = values[0], values[1]
+    return top, horizontal
 
 
 def _normalized(

@@ -1263,6 +1263,31 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         3600.0,
         group='dock',
     ),
+    *(
+        ParamSpec(
+            name,
+            'double',
+            _NOT_GIVEN,
+            text,
+            'm',
+            0.0,
+            1.0e4,
+            optional=True,
+            group='point_loads',
+        )
+        for name, text in (
+            (
+                'dock_table_depth_min',
+                'Lowest tide depth the live dock estimate tabulates its lines with point loads '
+                'at (needed with hook_x, hook_y and point loads; the line adds its hook_height)',
+            ),
+            (
+                'dock_table_depth_max',
+                'Highest tide depth the live dock estimate tabulates its lines with point loads '
+                'at (needed with hook_x, hook_y and point loads)',
+            ),
+        )
+    ),
     ParamSpec(
         'dock_residual_limit',
         'double',
@@ -1718,6 +1743,15 @@ class DockConfig:
     wave_drift_coefficient: float = _default('dock_wave_drift_coefficient')
     residual_limit: float = _default('dock_residual_limit')
     residual_time: float = _default('dock_residual_time')
+    table_depth_min: float | None = None
+    table_depth_max: float | None = None
+
+    @property
+    def table_depths(self) -> Optional[tuple[float, float]]:
+        """The tide depths ``(low, high)`` [m] of the point-load lines' tables, or None."""
+        if self.table_depth_min is None or self.table_depth_max is None:
+            return None
+        return self.table_depth_min, self.table_depth_max
 
     def __post_init__(self) -> None:
         for f in dataclasses.fields(self):
@@ -1811,6 +1845,8 @@ class MonitorConfig:
         if not self.log_dir:
             raise ConfigError('log_dir', 'must not be empty')
         _check_geometry(self.lines, self.body_only)
+        if self.has_dock_model and not self.body_only:
+            _check_tables(self.lines, self.dock)
         seen = {self.depth_topic: 'depth_topic'}
         for line in self.lines:
             many = bool(line.tension_topics)
@@ -1845,18 +1881,9 @@ def _set(value: Any) -> bool:
 def _check_geometry(lines: tuple[LineConfig, ...], body_only: bool = False) -> None:
     """A line with a hook position asks for the dock model: every line then needs all of
     :data:`GEOMETRY` (``heading`` or ``chain_length`` alone are other features' business).
-    The monitor's live dock estimate does not take point loads (``body_only``: the offline
-    equilibrium and envelope do)."""
+    Lines with point loads are checked by :func:`_check_tables` (``body_only``: not)."""
     if not any(line.hook_x is not None or line.hook_y is not None for line in lines):
         return
-    for line in lines:
-        if line.point_loads is not None and not body_only:
-            raise ConfigError(
-                f'{line.name}.point_load_positions',
-                "the monitor's live dock estimate (hook_x, hook_y given) does not model point "
-                'loads: remove the point loads or the dock geometry (catenary-monitor '
-                'equilibrium and envelope take both)',
-            )
     for line in lines:
         for key in GEOMETRY:
             if not _set(getattr(line, key)):
@@ -1865,6 +1892,39 @@ def _check_geometry(lines: tuple[LineConfig, ...], body_only: bool = False) -> N
                     'missing: the dock model (hook_x, hook_y given) needs hook_x, hook_y, '
                     'heading and chain_length on every line',
                 )
+
+
+def _check_tables(lines: tuple[LineConfig, ...], dock: DockConfig) -> None:
+    """The live dock estimate takes a line with point loads through its table over
+    ``dock_table_depth_min`` - ``dock_table_depth_max`` (built here, once per distinct chain:
+    :mod:`catenary_monitor.core.physics.point_load_table`); one line if it cannot."""
+    from catenary_monitor.core.physics.point_load_table import TableError, table_for
+    from catenary_monitor.core.physics.point_loads import PointLoads
+
+    loaded = [line for line in lines if line.point_loads is not None]
+    if not loaded:
+        return
+    depths = dock.table_depths
+    if depths is None:
+        raise ConfigError(
+            'dock_table_depth_min',
+            f'{loaded[0].name} has point loads: the live dock estimate (hook_x, hook_y given) '
+            'tabulates such lines over the tide depths dock_table_depth_min - '
+            'dock_table_depth_max (m): give both',
+        )
+    if not depths[0] <= depths[1]:
+        raise ConfigError('dock_table_depth_max', f'{depths[1]:g} m is below the minimum')
+    for line in loaded:
+        assert line.point_loads is not None and line.chain_length is not None
+        hooks = (depths[0] + line.hook_height, depths[1] + line.hook_height)
+        try:
+            table_for(
+                line.weight, line.chain_length, PointLoads.of(*line.point_loads), line.mbl, hooks
+            )
+        except TableError as err:
+            raise ConfigError(
+                f'{line.name}.point_load_positions', f'no table for the dock estimate: {err}'
+            ) from err
 
 
 def expand_parameters(lines: tuple[str, ...] | list[str]) -> Iterator[tuple[str, ParamSpec]]:

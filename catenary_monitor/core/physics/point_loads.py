@@ -52,6 +52,7 @@ __all__ = [
     'line_statics',
     'span_at_tension',
     'lift_depth',
+    'state_at_horizontal',
 ]
 
 #: ``model`` of an answer with point loads.
@@ -649,3 +650,46 @@ def lift_depth(w: float, length: float, span: float, loads: PointLoads) -> float
     if p is None or p.z_min < -1e-9 * max(abs(p.z), 1.0) or not p.z > 0.0:
         return math.nan
     return p.z
+
+
+def state_at_horizontal(
+    w: float, depth: float, length: float, horizontal: float, loads: PointLoads
+) -> tuple[float, Answer]:
+    """A chain of ``length`` with its point loads, hook ``depth`` m above the seabed, held with
+    horizontal tension ``horizontal`` [N]: ``(span, Answer)`` (problem 5 the other way round,
+    one root instead of :func:`solve_length`'s nest: the surrogate's tables are built on it).
+    Grounded (``V_A = 0``): the touchdown's place on its path (:func:`_touchdown_path`) where
+    the grounded and suspended lengths make up the chain; lifted: the anchor's vertical force
+    that brings the whole chain to ``depth``. ``(NaN, NOT_MODELLED answer)`` where the static
+    model does not follow the chain (a buoy on the seabed, the chain through it)."""
+    h_ = horizontal
+    try:
+        if not (w > 0.0 and depth > 0.0 and length > depth and h_ > 0.0):
+            raise ValueError('no chain')
+        hang = walk(w, h_, 0.0, loads, depth=depth)
+        if hang is None:
+            raise ValueError('never reaches the depth')
+        if hang.s > length:  # a chain tangent at the anchor would need more: the anchor lifts
+
+            def height(va: float) -> float:
+                p = walk(w, h_, va, loads, length=length)
+                return (-_BIG if p is None else p.z) - depth
+
+            hi = max(h_, w * length)
+            while height(hi) < 0.0:
+                hi *= 4.0
+            va = _root(height, 0.0, hi)
+            p = walk(w, h_, va, loads, length=length)
+            assert p is not None
+            return p.x, _answer(h_, va, p, math.nan, math.nan, 0.0)
+
+        def excess(g: float, v0: float) -> float:  # chain left over: > 0 more on the seabed
+            return length - g - _top(w, h_, v0, loads, depth, g).s
+
+        g, v0 = _touchdown_path(lambda g, v0: -excess(g, v0), loads, length - depth)
+        if _buoy_grounded(loads, g):
+            return math.nan, _NAN_ANSWER
+        p = _top(w, h_, v0, loads, depth, g)
+        return g + p.x, _answer(h_, 0.0, p, math.nan, math.nan, g)
+    except (ValueError, OverflowError, ZeroDivisionError, AssertionError):
+        return math.nan, _NAN_ANSWER

@@ -57,6 +57,7 @@ __all__ = [
     'solve_spans',
     'span_word',
     'DOCK_KEYS',
+    'TABLE_KEY',
     'DockDecision',
     'Smoothing',
     'smooth_step',
@@ -76,6 +77,9 @@ DOCK_KEYS = ('offset_x', 'offset_y', 'yaw_deg', 'load_x', 'load_y', 'load_mz', '
 #: installed ``anchor_distance``, or the hook's distance to its anchor in the dock estimate.
 SPAN_SOURCES = ('installed', 'dock_estimate')
 INSTALLED, DOCK_ESTIMATE = 0, 1
+#: The dock status value, where a line has point loads, of its tables' largest span error [m]
+#: (:mod:`catenary_monitor.core.physics.point_load_table`, measured when they were built).
+TABLE_KEY = 'table_span_error'
 
 
 class DockDecision(NamedTuple):
@@ -88,6 +92,8 @@ class DockDecision(NamedTuple):
     line_inputs: np.ndarray  # (n, m, 4): LINE_INPUTS
     flagged: np.ndarray  # (n, m) bool: |S| > dock_residual_limit
     span: np.ndarray  # (n, m) m, NaN: the installed anchor_distance
+    #: The largest span error [m] of the point-load lines' tables (NaN: none has one).
+    table_span_error: float = math.nan
 
 
 class Smoothing(NamedTuple):
@@ -189,7 +195,8 @@ def decide_dock(
     flagged = np.abs(stat) > limit
     flag = np.where(flagged, 1.0, np.where(np.isfinite(stat), 0.0, math.nan))
     inputs = np.stack([flag, est.residual, est.expected, stat], axis=-1)
-    return DockDecision(est, level, inputs, flagged, solve_spans(est.span, flag)), state
+    spans = solve_spans(est.span, flag)
+    return DockDecision(est, level, inputs, flagged, spans, model.table_span_error), state
 
 
 def solve_spans(span: np.ndarray, flag: np.ndarray) -> np.ndarray:
@@ -226,6 +233,11 @@ def dock_message(model: DockModel, decision: DockDecision, i: int) -> str:
     if np.all(np.isfinite(est.load[:2])):
         size = math.hypot(float(est.load[0]), float(est.load[1]))
         text += f'; load {size / 1e3:.0f} kN from {load_from_deg(est.load):.0f} deg'
+    elif model.tables:
+        text += (
+            '; load not estimated (a line would be beyond its reach, or one with point loads '
+            "is outside its table's depths)"
+        )
     else:
         text += '; load not estimated (a line would be beyond its reach)'
     bad = [
@@ -243,7 +255,9 @@ def dock_values(decision: DockDecision, i: int) -> tuple[tuple[str, str], ...]:
     x, y, psi = (float(v) for v in est.offset)
     fx, fy, mz = (float(v) for v in est.load)
     numbers = (x, y, math.degrees(psi), fx, fy, mz)
-    return tuple(zip(DOCK_KEYS, [repr(v) for v in numbers] + [str(int(est.readings))]))
+    values = tuple(zip(DOCK_KEYS, [repr(v) for v in numbers] + [str(int(est.readings))]))
+    error = decision.table_span_error
+    return values + ((TABLE_KEY, repr(error)),) if error == error else values
 
 
 def sensor_state(latched: bool, flag: float) -> str:
