@@ -20,7 +20,14 @@ import sys
 import threading
 from typing import Any, Optional
 
-__all__ = ['register', 'cmd_console']
+__all__ = [
+    'register',
+    'cmd_console',
+    'add_server_options',
+    'server_access',
+    'print_urls',
+    'Refused',
+]
 
 
 def _fail(message: str, code: int = 2) -> int:
@@ -65,8 +72,8 @@ def cmd_console(args: argparse.Namespace) -> int:
 
         source = LiveSource(config, args.ros_args)
     try:
-        access = _access(args)
-    except _Refused as err:
+        access = server_access(args)
+    except Refused as err:
         return _fail(str(err))
     try:
         server = ConsoleServer(source, args.bind, args.port, **access)
@@ -86,7 +93,7 @@ def cmd_console(args: argparse.Namespace) -> int:
         what += f'; {len(access["operators"].names)} operators sign in to act'
     elif server.access == 'read-only':
         what += '; read-only'
-    _print_urls(server, what)
+    print_urls(server, what)
     try:
         while not stop.wait(0.5):
             pass
@@ -97,18 +104,19 @@ def cmd_console(args: argparse.Namespace) -> int:
     return 0
 
 
-def _print_urls(server: Any, what: str) -> None:
+def print_urls(server: Any, what: str, label: str = 'console') -> None:
     """``console: URL (...)`` for this PC, then ``console: also at URL`` for every other
-    address it is reached at (each interface's when bound to all of them)."""
+    address it is reached at (each interface's when bound to all of them); ``label`` names
+    the page (``harbour``)."""
     from catenary_monitor.console.addresses import reachable_urls
 
-    print(f'console: {server.url} ({what}; Ctrl-C stops)', flush=True)
+    print(f'{label}: {server.url} ({what}; Ctrl-C stops)', flush=True)
     for url in reachable_urls(server.scheme, server.bind, server.port):
         if url != server.url:
-            print(f'console: also at {url}', flush=True)
+            print(f'{label}: also at {url}', flush=True)
 
 
-class _Refused(Exception):
+class Refused(Exception):
     """A console that must not start as asked: ``str()`` is one line."""
 
 
@@ -125,7 +133,7 @@ def is_loopback(bind: str) -> bool:
     return bool(found) and all(ipaddress.ip_address(f[4][0]).is_loopback for f in found)
 
 
-def _access(args: argparse.Namespace) -> dict[str, Any]:
+def server_access(args: argparse.Namespace) -> dict[str, Any]:
     """The server's access settings (operators, read-only, TLS) from the command line; a bind
     beyond loopback needs ``--token-file`` or ``--read-only``."""
     from catenary_monitor.console.operators import TokenFileError, load_operators
@@ -135,11 +143,11 @@ def _access(args: argparse.Namespace) -> dict[str, Any]:
         try:
             operators, warning = load_operators(args.token_file)
         except TokenFileError as err:
-            raise _Refused(str(err)) from None
+            raise Refused(str(err)) from None
         if warning:
             print(f'catenary-monitor console: warning: {warning}', file=sys.stderr)
     elif not args.read_only and not args.log and not is_loopback(args.bind):
-        raise _Refused(
+        raise Refused(
             f'--bind {args.bind} reaches beyond this PC: give --token-file FILE (operators '
             'who may acknowledge) or --read-only'
         )
@@ -168,11 +176,11 @@ def _tls(
     if not cert and not key:
         return None
     if not (cert and key):
-        raise _Refused('--tls-cert and --tls-key go together')
+        raise Refused('--tls-cert and --tls-key go together')
     try:
         context, warning = server_context(cert, key, allow_expired=allow_expired)
     except CertificateError as err:
-        raise _Refused(str(err)) from None
+        raise Refused(str(err)) from None
     if warning:
         _warn(warning)
     return context
@@ -205,22 +213,10 @@ def _write_layout(args: argparse.Namespace) -> int:
     return 0
 
 
-def register(sub: Any) -> None:
-    """Add ``console`` to the ``catenary-monitor`` parser."""
-    p = sub.add_parser(
-        'console',
-        help="the operator's page in a browser: live, or over a recorded log",
-        description="Serve the operator's console: dock plan, a tile per line, tide, trends, "
-        'alarm list with acknowledgement and history. Live it is a ROS client of the monitor; '
-        'with --log it replays a recorded log with a time slider.',
-    )
-    p.add_argument(
-        '--params-file',
-        metavar='FILE',
-        help='the monitor\'s params YAML (lines, headings, MBL); live default: the lines the '
-        'monitor names on /diagnostics; replay default: the parameters recorded in the log',
-    )
-    p.add_argument('--port', type=int, default=8080, help='TCP port (0: any free port)')
+def add_server_options(p: Any, what: str, port: int = 8080) -> None:
+    """The HTTP server's options of a page (``what``: ``console``, ``harbour``): --port,
+    --bind, --token-file, --read-only, --tls-cert, --tls-key, --allow-expired, --server-name."""
+    p.add_argument('--port', type=int, default=port, help='TCP port (0: any free port)')
     p.add_argument(
         '--bind',
         default='127.0.0.1',
@@ -237,7 +233,7 @@ def register(sub: Any) -> None:
     p.add_argument(
         '--read-only',
         action='store_true',
-        help='nobody acknowledges from this console (the page only shows)',
+        help=f'nobody acknowledges from this {what} (the page only shows)',
     )
     p.add_argument('--tls-cert', metavar='FILE', help='serve HTTPS with this certificate (PEM)')
     p.add_argument('--tls-key', metavar='FILE', help='the private key of --tls-cert (PEM)')
@@ -250,10 +246,31 @@ def register(sub: Any) -> None:
         '--server-name',
         action='append',
         metavar='NAME',
-        help='a host name the operators open the console by (e.g. dockpc.local; repeatable): '
+        help=f'a host name the operators open the {what} by (e.g. dockpc.local; repeatable): '
         'requests naming another host are refused (DNS rebinding); IP addresses, localhost, '
         'the --bind name and this PC\'s host name are always accepted',
     )
+
+
+def register(sub: Any) -> None:
+    """Add ``console`` (and ``harbour``, :mod:`.harbour_command`) to the ``catenary-monitor``
+    parser."""
+    from catenary_monitor.console import harbour_command
+
+    p = sub.add_parser(
+        'console',
+        help="the operator's page in a browser: live, or over a recorded log",
+        description="Serve the operator's console: dock plan, a tile per line, tide, trends, "
+        'alarm list with acknowledgement and history. Live it is a ROS client of the monitor; '
+        'with --log it replays a recorded log with a time slider.',
+    )
+    p.add_argument(
+        '--params-file',
+        metavar='FILE',
+        help='the monitor\'s params YAML (lines, headings, MBL); live default: the lines the '
+        'monitor names on /diagnostics; replay default: the parameters recorded in the log',
+    )
+    add_server_options(p, 'console')
     p.add_argument(
         '--log', nargs='+', metavar='FILE|DIR', help='replay a recorded MCAP log (files or dirs)'
     )
@@ -271,3 +288,4 @@ def register(sub: Any) -> None:
         help='the rest is passed to ROS',
     )
     p.set_defaults(func=cmd_console, long_running=True)
+    harbour_command.register(sub)
