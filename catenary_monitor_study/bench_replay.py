@@ -422,14 +422,15 @@ def peak_rss(
             continue
         cmd = [sys.executable, '-c', _CHILD, 'replay', *logs]
         cmd += ['--params-file', str(params), '--quiet', '--json', *args, *extra]
-        t0 = time.perf_counter()
+        t0, cpu0 = time.perf_counter(), _children_cpu()
         done = subprocess.run(cmd, capture_output=True, text=True)
-        wall = time.perf_counter() - t0
+        wall, cpu = time.perf_counter() - t0, _children_cpu() - cpu0
         summary = json.loads(done.stdout) if done.returncode == 0 else {}
         hwm = [ln for ln in done.stderr.splitlines() if ln.startswith('VmHWM:')]
         out[mode] = {
             'rss_mb': round(int(hwm[-1].split()[1]) / 1024, 1) if hwm else None,
             'wall_s': round(wall, 2),
+            'cpu_s': round(cpu, 2),
             'replay_s': summary.get('timing', {}).get('total_s'),
             'exit': done.returncode,
         }
@@ -437,6 +438,19 @@ def peak_rss(
             f.unlink(missing_ok=True)
     return out
 
+
+def _children_cpu() -> float:
+    """User + system seconds of this process's finished children."""
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+#: End to end, the command as a user runs it (the summary of the log): at least this rate
+#: (messages over the child's wall time) and at most this peak RSS (MiB, VmHWM).
+TARGET_END_TO_END = 2.5e6
+TARGET_RSS_MB = 210.0
 
 #: The child of :func:`peak_rss`: the command, then its peak RSS on stderr.
 _CHILD = (
@@ -512,7 +526,18 @@ def cmd_bench_replay(args: argparse.Namespace) -> int:
     for mode, m in r['peak_rss_mb'].items():
         print(
             f'peak RSS, catenary-monitor replay ({mode}, a child process): {m["rss_mb"]:.0f} MB, '
-            f'{m["wall_s"]:.2f} s wall ({m["replay_s"]} s in replay)'
+            f'{m["wall_s"]:.2f} s wall, {m["cpu_s"]:.2f} s CPU ({m["replay_s"]} s in replay)'
+        )
+    m = r['peak_rss_mb'].get('summary')
+    if m:
+        wall_rate, cpu_rate = r['messages'] / m['wall_s'], r['messages'] / max(m['cpu_s'], 1e-9)
+        rate_ok, rss_ok = wall_rate >= TARGET_END_TO_END, m['rss_mb'] <= TARGET_RSS_MB
+        print(
+            f'end to end (catenary-monitor replay LOG, its summary, default bounds): '
+            f'{wall_rate / 1e6:.2f} M msg/s ({cpu_rate / 1e6:.2f} M per CPU second), peak '
+            f'{m["rss_mb"]:.0f} MB; targets >= {TARGET_END_TO_END / 1e6:g} M msg/s '
+            f'{"met" if rate_ok else "NOT met"}, <= {TARGET_RSS_MB:g} MB '
+            f'{"met" if rss_ok else "NOT met"}'
         )
     return 0
 

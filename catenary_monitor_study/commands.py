@@ -1,9 +1,10 @@
 """The study's sub-commands for ``catenary-monitor`` (entry point ``catenary_monitor.commands``).
 
 ``bench``, ``bench-methods``, ``bench-replay`` and ``bench-latency`` measure the monitor against
-baselines in the same run; ``fuzz`` fuzzes what reads untrusted bytes. They live outside the
-monitor's runtime import graph: the command line finds this module through its entry point, and
-nothing in ``catenary_monitor`` imports it.
+baselines in the same run; ``bench-alarms`` counts its annunciations on generated normal days and
+injected faults; ``fuzz`` fuzzes what reads untrusted bytes. They live outside the monitor's
+runtime import graph: the command line finds this module through its entry point, and nothing in
+``catenary_monitor`` imports it.
 """
 
 from __future__ import annotations
@@ -45,7 +46,9 @@ def _batch(func: Any) -> Any:
 def register(sub: Any) -> None:
     """Add the benchmark sub-commands to the ``catenary-monitor`` parser."""
     from catenary_monitor_study import (
+        bench_alarms,
         bench_body,
+        bench_bounds,
         bench_dynamics,
         bench_console,
         bench_core,
@@ -59,11 +62,13 @@ def register(sub: Any) -> None:
     )
 
     bench_console.register(sub)
+    bench_alarms.register(sub)
     bench_body.register(sub)
     bench_dynamics.register(sub)
     bench_soak.register(sub)
     bench_flood.register(sub)
     bench_step.register(sub)
+    bench_bounds.register(sub)
     bench_fleet.register(sub)
     fuzz.register(sub)
     for module in (bench_core, bench_methods, bench_replay):

@@ -693,8 +693,11 @@ def cmd_fuzz(args: argparse.Namespace) -> int:
               file=sys.stderr)  # fmt: skip
         return 2
     out = Path(args.out)
-    _limit_memory(args.memory_mib)
-    outcomes = run(args.minutes, names, out, args.seed, report=lambda s: print(s, flush=True))
+    before = _limit_memory(args.memory_mib)
+    try:
+        outcomes = run(args.minutes, names, out, args.seed, report=lambda s: print(s, flush=True))
+    finally:
+        _restore_memory(before)
     atheris_cases: dict[str, int] = {}
     if args.atheris:
         if not has_atheris():
@@ -728,17 +731,28 @@ def cmd_fuzz(args: argparse.Namespace) -> int:
     return 1 if any(row['failures'] for row in rows.values()) else 0
 
 
-def _limit_memory(mib: int) -> None:
+def _limit_memory(mib: int) -> tuple[int, int] | None:
     """An address-space limit: an input that makes a reader allocate without bound is a
-    MemoryError (a failure), not a machine brought down."""
+    MemoryError (a failure), not a machine brought down. Returns the limit it replaced."""
     if not mib:
-        return
+        return None
     try:
         import resource
 
-        resource.setrlimit(resource.RLIMIT_AS, (mib << 20, mib << 20))
+        before = resource.getrlimit(resource.RLIMIT_AS)
+        resource.setrlimit(resource.RLIMIT_AS, (mib << 20, before[1]))
+        return before
     except (ImportError, ValueError, OSError):
-        pass
+        return None
+
+
+def _restore_memory(before: tuple[int, int] | None) -> None:
+    """Put back the limit :func:`_limit_memory` replaced (a caller in the same process, such as
+    the test suite, starts browsers and nodes afterwards)."""
+    if before is not None:
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_AS, before)
 
 
 def register(sub: Any) -> None:

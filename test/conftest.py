@@ -27,6 +27,7 @@ EXTENSIONS = {
     'catenary_monitor/io/_scan': ('_scan.c',),
     'catenary_monitor/core/twin/_twin_loops': ('_twin_loops.c',),
     'catenary_monitor/core/rules/_fatigue_loop': ('_fatigue_loop.c',),
+    'catenary_monitor/core/rules/_wave_loop': ('_wave_loop.c',),
 }
 
 

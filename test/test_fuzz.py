@@ -50,8 +50,11 @@ def test_the_harness_finds_a_planted_failure(tmp_path: Path) -> None:
 def test_fuzz_command_reports_its_figures(tmp_path: Path, capsys: Any) -> None:
     """``catenary-monitor fuzz --minutes 0.1 --target cdr --target params --json``: the
     progress lines, then the cases and failures per target; exit 0."""
+    import resource
+
     from catenary_monitor.cli.main import main
 
+    limit = resource.getrlimit(resource.RLIMIT_AS)
     code = main(['fuzz', '--minutes', '0.1', '--target', 'cdr', '--target', 'params',
                  '--out', str(tmp_path / 'found'), '--seed', '3', '--json'])  # fmt: skip
     out = capsys.readouterr().out
@@ -59,6 +62,8 @@ def test_fuzz_command_reports_its_figures(tmp_path: Path, capsys: Any) -> None:
     assert code == 0 and set(rows) == {'cdr', 'params'}, out
     assert all(r['cases'] > 0 and r['failures'] == [] for r in rows.values()), rows
     assert main(['fuzz', '--minutes', '0.01', '--target', 'nothing']) == 2
+    # the memory limit is the run's own: this process starts browsers and nodes afterwards
+    assert resource.getrlimit(resource.RLIMIT_AS) == limit
 
 
 @pytest.mark.xfail(

@@ -92,6 +92,7 @@ def test_age_deletes_finished_files_only_and_the_metadata_follows(tmp_path):
     for k in range(4):
         log.write('/a', payload, T0 + k)
         log.rotate()
+    log.write('/a', payload, T0 + 5)  # the next file opens with its first message
     finished = sorted(p for p in folder.glob('*.mcap') if p != log.current_path)
     assert len(finished) == 4
     for k, p in enumerate(finished):  # ended 4, 3, 2, 1 hours ago
@@ -104,7 +105,7 @@ def test_age_deletes_finished_files_only_and_the_metadata_follows(tmp_path):
     assert listed(folder) == [finished[3].name]
     log.write('/a', payload, T0 + 10)
     log.close()
-    assert rosbags_count([folder]) == 2
+    assert rosbags_count([folder]) == 3
 
 
 def test_low_free_space_is_a_warning_before_anything_is_lost(tmp_path):
@@ -328,3 +329,23 @@ def test_the_node_holds_the_smallest_bound_under_a_flood(tmp_path):
     first = next(ln for ln in text.splitlines() if 'log retention: deleted' in ln)
     assert future.name in first and 'dated ahead of the present' in first, first
     assert keep.exists()
+
+
+def test_a_stop_right_after_a_rotation_leaves_no_empty_file(tmp_path):
+    """A file rotated out by age, then the node stopped before its next message: no file
+    without messages is left (the mcap writer drops an empty chunk and its channels but lists
+    them in the summary; pymcap-cli doctor called that file broken). Every file passes all
+    three readers."""
+    folder = tmp_path / 'log'
+    mono = Clock(100.0)
+    log = McapLogger(folder, fsync=False, clock=mono, max_seconds=1.0)
+    log.register('/a', 'std_msgs/msg/Float64')
+    log.register('/b', 'std_msgs/msg/Float64')  # never written
+    log.add_metadata('dock', {'name': 'test'})
+    payload = b'\x00\x01\x00\x00' + struct.pack('<d', 1.0)
+    log.write('/a', payload, T0)
+    mono.now += 1.5
+    log.tick()  # rotates by age
+    log.close()
+    assert len(list(folder.glob('*.mcap'))) == 1
+    assert check_folder(folder) == 1

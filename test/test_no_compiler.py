@@ -79,10 +79,11 @@ def test_it_installs_without_a_compiler_and_runs_on_numpy(installed):
         'import catenary_monitor as cm\n'
         'from catenary_monitor.core.physics import fused_kernel\n'
         'from catenary_monitor.core.twin import schedule\n'
-        'from catenary_monitor.core.rules import fatigue\n'
+        'from catenary_monitor.core.rules import fatigue, wave_window\n'
         'from catenary_monitor.io import mcap_scan\n'
         'print(cm.__file__)\n'
-        'print(fused_kernel.AVAILABLE, schedule._loops, fatigue._fatigue_loop, mcap_scan._scan)\n'
+        'print(fused_kernel.AVAILABLE, schedule._loops, fatigue._fatigue_loop, mcap_scan._scan,'
+        ' wave_window._wave_loop)\n'
         'print(cm.solve(1300.0, 20.85, tension=1623.5e3, anchor_distance=121.06).uplift_force)\n'
     )
     out = subprocess.run(
@@ -91,7 +92,7 @@ def test_it_installs_without_a_compiler_and_runs_on_numpy(installed):
     assert out.returncode == 0, out.stderr
     where, loaded, uplift = out.stdout.splitlines()
     assert Path(where).resolve().is_relative_to(installed.resolve())
-    assert loaded == 'False None None None'
+    assert loaded == 'False None None None None'
     assert float(uplift) == pytest.approx(193267.5, rel=1e-5)  # the seed's Table 4 answer
 
 

@@ -185,3 +185,203 @@ def test_uplift_bound_finds_a_peak_inside_the_depth_interval(t):
             true = np.nanmax(solve(w, grid, tension=t, anchor_distance=x).uplift_force)
             assert b >= true * (1 - 1e-6), (dh, off)
             assert b <= true * (1 + 1e-9)
+
+
+# --- the worst case from the analysis (bounds) against the box sampled densely -----------------
+
+
+def _readings(rng, n):
+    """Readings around and beyond the uplift of random lines, boxes of every possible reading
+    (``T + dT > w (h + dh)``, ``h - dh > 0``): ``w, h, x, t, dt, dh``."""
+    w = rng.uniform(200.0, 3000.0, n)
+    h = rng.uniform(3.0, 80.0, n)
+    x = rng.uniform(0.3, 4.0, n) * h
+    t_crit = np.asarray(solve(w, h, tension=w * h * 10, anchor_distance=x).load_margin)
+    t = np.maximum((t_crit + w * h * 10) * rng.uniform(0.7, 2.0, n), w * h * 1.2)
+    dt = t * rng.uniform(0.0, 0.05, n)
+    dh = rng.choice([0.0, 0.02, 0.05, 0.2, 1.0], n)
+    keep = (t + dt > w * (h + dh) * 1.0001) & (h - dh > 0.0)
+    return tuple(v[keep] for v in (w, h, x, t, dt, dh))
+
+
+def _dense(w, x, t, h, dh, f0, m=4001):
+    """The box's worst values sampled: ``m`` depths over ``[h - dh, h + dh]`` at ``t``."""
+    r = solve(w, np.linspace(h - dh, h + dh, m), tension=t, anchor_distance=x)
+    return (
+        max(float(np.max(r.uplift_force)), f0),
+        float(np.min(r.anchor_margin)),
+        float(np.min(r.tide_margin)),
+    )
+
+
+@pytest.mark.parametrize('seed', [3, 4])
+def test_the_bounds_are_the_densely_sampled_worst_case(seed):
+    """On random readings (lifted somewhere in the box for about 80 %, boxes of 0 to 2 m in
+    depth) each bound is the worst value of 4001 depths at T + dT to 1e-6 relative (the
+    uplift of its value, the anchor margin of x, the tide margin of h), and never on the
+    unsafe side of it beyond rounding: the sampling can only miss a worst value."""
+    from catenary_monitor.core.rules.uncertainty import FIELDS
+
+    rng = np.random.default_rng(seed)
+    w, h, x, t, dt, dh = _readings(rng, 700)
+    f0 = np.asarray(solve(w, h, tension=t, anchor_distance=x).uplift_force)
+    b = bounds(w, x, 1e12, math.inf, t, h, dt, dh, f0)
+    lifted = 0
+    for i in range(len(t)):
+        want = _dense(w[i], x[i], t[i] + dt[i], h[i], dh[i], f0[i])
+        scale = (max(want[0], 1e-9), x[i], h[i])
+        lifted += want[0] > 0.0
+        for key, v, s, sign in zip(FIELDS, want, scale, (1.0, -1.0, -1.0)):
+            safe = sign * (float(b[key][i]) - v) / s  # >= 0 on the safe side
+            assert -1e-12 <= safe <= 1e-6, (i, key, float(b[key][i]), v)
+    assert lifted > 0.6 * len(t)
+
+
+def test_the_bounds_are_never_less_safe_than_the_sampled_box():
+    """The analysis takes the worst of the whole box; the sampled box (five depths and the
+    uplift's parabola) the worst of some of its points: the upper bound is at least the
+    sampled one and the lower bounds at most theirs (to rounding)."""
+    from catenary_monitor.core.rules.uncertainty import sampled_bounds
+
+    rng = np.random.default_rng(5)
+    w, h, x, t, dt, dh = _readings(rng, 3000)
+    f0 = np.asarray(solve(w, h, tension=t, anchor_distance=x).uplift_force)
+    b = bounds(w, x, 1e12, math.inf, t, h, dt, dh, f0)
+    s = sampled_bounds(w, x, 1e12, math.inf, t, h, dt, dh, f0)
+    keys = ('uplift_force_upper', 'anchor_margin_lower', 'tide_margin_lower')
+    up, am, tm = (np.asarray(b[k]) for k in keys)
+    assert np.all(up >= s['uplift_force_upper'] * (1 - 1e-12))
+    assert np.all(am <= s['anchor_margin_lower'] + 1e-12 * x)
+    assert np.all(tm <= s['tide_margin_lower'] + 1e-12 * h)
+
+
+def test_one_line_in_plain_floats_gives_the_arrays_numbers():
+    """bounds_one (the monitor's per-sample path) against bounds() on the same readings as
+    arrays: the analysis, the sampled box of an elastic chain and of a box reaching impossible
+    readings, no accuracy, no nominal solve."""
+    from catenary_monitor.core.rules.uncertainty import FIELDS, bounds_one
+
+    rng = np.random.default_rng(6)
+    w, h, x, t, dt, dh = _readings(rng, 1500)
+    n = len(t)
+    ea = np.where(rng.random(n) < 0.1, 6.63e8, math.inf)
+    dt = np.where(rng.random(n) < 0.05, math.nan, dt)
+    h = np.where(rng.random(n) < 0.05, t / w - 0.5 * dh, h)  # some boxes reach T <= w h
+    f0 = np.asarray(solve(w, h, tension=t, anchor_distance=x).uplift_force)
+    f0 = np.where(rng.random(n) < 0.03, math.nan, f0)
+    b = bounds(w, x, 4.8e6, ea, t, h, dt, dh, f0)
+    for i in range(n):
+        one = bounds_one(
+            float(w[i]), float(x[i]), 4.8e6, float(ea[i]), float(t[i]), float(h[i]),
+            float(dt[i]), float(dh[i]), float(f0[i]),
+        )  # fmt: skip
+        for key, v in zip(FIELDS, one):
+            want = float(b[key][i])
+            assert (math.isnan(v) and math.isnan(want)) or v == pytest.approx(
+                want, rel=1e-12, abs=1e-9
+            ), (i, key, v, want)
+
+
+def test_the_lifted_chains_critical_depths_against_mpmath():
+    """The depths where a lifted chain's uplift force peaks and its tide margin is lowest at
+    fixed hook tension (the table and its Newton step) against the same family in 30 digits:
+    the force and the tide margin maximized and minimized over the depth directly."""
+    mpmath = pytest.importorskip('mpmath')
+    from catenary_monitor.core.rules.uncertainty import lifted_critical_depths_one
+
+    mp = mpmath.mp
+    mp.dps = 30
+    w, x = 1300.0, 121.06
+    for c in (1.52, 1.6, 2.0, 3.0, 10.0, 100.0, 1000.0):
+        t = c * w * x
+
+        def family(big_x):
+            u = mp.acosh(c * big_x) - big_x
+            return x * (c - mp.cosh(u) / big_x), w * x * mp.sinh(u) / big_x, u
+
+        def depth_at(big_x):
+            return family(big_x)[0]
+
+        def force(big_x):
+            return family(big_x)[1]
+
+        def tide(big_x):  # a (cosh X - 1) - h, a = x / X
+            return x / big_x * (mp.cosh(big_x) - 1) - depth_at(big_x)
+
+        def bisect(f, lo, hi):
+            f_lo = f(lo) > 0
+            for _ in range(120):
+                mid = (lo + hi) / 2
+                lo, hi = (mid, hi) if (f(mid) > 0) == f_lo else (lo, mid)
+            return (lo + hi) / 2
+
+        low = mp.mpf(1) / c * (1 + mp.mpf(10) ** -20)  # the family's shallowest member
+        x_peak = bisect(lambda z: mp.diff(force, z), low, mp.sqrt(1 + 1 / mp.mpf(c) ** 2))
+        x_off = bisect(lambda z: mp.cosh(z) - c * z, mp.mpf(T_STAR), 2 + 2 * mp.log(2 * c))
+        x_trough = bisect(lambda z: mp.diff(tide, z), x_peak, x_off)
+        h_f, h_t = lifted_critical_depths_one(w, x, t)
+        assert h_f == pytest.approx(float(depth_at(x_peak)), rel=1e-9), c
+        assert h_t == pytest.approx(float(depth_at(x_trough)), rel=1e-9), c
+        assert family(x_peak)[2] > 0 and family(x_trough)[2] > 0  # both lifted
+
+
+def test_the_lifted_critical_depths_grow_with_the_tension():
+    """Over the span, both critical depths are least at C_MIN (c - 1/t*) and grow with c = T/(w
+    x) (every node of the table): a box shallower than that takes neither from the table."""
+    from catenary_monitor.core.rules import uncertainty as u
+
+    c = np.exp(u._S0 + u._DS * np.arange(u._N + 1))
+    h_f, h_t = u.lifted_critical_depths(1.0, 1.0, c)
+    assert h_f[0] == pytest.approx(u._ETA0, rel=1e-12) == h_t[0]
+    assert np.all(np.diff(h_f) > 0) and np.all(np.diff(h_t) > 0)
+
+
+@pytest.mark.parametrize('c', [1.509, 1.6, 3.0, 20.0, 1000.0])
+def test_the_lifted_force_is_concave_and_the_tide_margin_convex_in_depth(c):
+    """What the tangent bound rests on: over the depths at which a chain of fixed hook tension
+    lifts its anchor the uplift force is concave and the tide margin convex (second
+    differences of the solve on a fine grid, to rounding)."""
+    w, x = 1300.0, 121.06
+    t = c * w * x
+    h = np.linspace(0.01, t / w * 0.9999, 200001)
+    r = solve(w, h, tension=t, anchor_distance=x)
+    f = np.asarray(r.uplift_force)
+    lifted = np.flatnonzero(f > 0)
+    assert lifted.size > 100
+    f, tide = f[lifted], np.asarray(r.tide_margin)[lifted]
+    assert np.all(np.diff(f, 2) <= 1e-12 * f.max() * 64)
+    assert np.all(np.diff(tide, 2) >= -1e-12 * np.abs(tide).max() * 64)
+
+
+def test_the_dynamic_uplift_solves_only_where_the_anchor_lifts(monkeypatch):
+    """dynamic_uplift (arrays) and dynamic_uplift_one: the solve's uplift force at the dynamic
+    tension (at least the nominal), a grounded chain's 0 without a solve."""
+    from catenary_monitor.core.rules import uncertainty
+
+    rng = np.random.default_rng(7)
+    w, h, x, t, _, _ = _readings(rng, 2000)
+    f0 = np.asarray(solve(w, h, tension=0.9 * t, anchor_distance=x).uplift_force)
+    want = np.fmax(np.asarray(solve(w, h, tension=t, anchor_distance=x).uplift_force), f0)
+    got = uncertainty.dynamic_uplift(w, x, 4.8e6, math.inf, t, h, f0)
+    assert np.array_equal(got, want)
+    for i in range(0, len(t), 7):
+        one = uncertainty.dynamic_uplift_one(
+            float(w[i]), float(x[i]), 4.8e6, math.inf, float(t[i]), float(h[i]), float(f0[i])
+        )
+        assert one == pytest.approx(want[i], rel=1e-12, abs=1e-9)
+    solved = []
+    monkeypatch.setattr(uncertainty, 'solve', lambda *a, **k: solved.append(1) or solve(*a, **k))
+    grounded = ~(want > 0)
+    uncertainty.dynamic_uplift(w[grounded], x[grounded], 4.8e6, math.inf, t[grounded],
+                               h[grounded], f0[grounded])  # fmt: skip
+    assert grounded.sum() > 100 and solved == []
+
+
+def test_an_elastic_chain_takes_the_sampled_box():
+    from catenary_monitor.core.rules.uncertainty import sampled_bounds
+
+    t, h, dt, dh = 1.2e6, 20.85, 24e3, 0.02
+    f0 = solve(W, h, tension=t, anchor_distance=X, ea=6.63e8).uplift_force
+    b = bounds(W, X, 4.8e6, 6.63e8, t, h, dt, dh, f0)
+    s = sampled_bounds(W, X, 4.8e6, 6.63e8, t, h, dt, dh, f0)
+    assert all(float(b[k]) == float(s[k]) for k in b)

@@ -64,6 +64,7 @@ from catenary_monitor.replay.driver import (
     input_topics,
     load_config,
     log_parameters,
+    stamp_figures,
 )
 
 __all__ = ['register', 'cmd_replay']
@@ -230,6 +231,7 @@ def _offline(args: argparse.Namespace) -> int:
                 'jobs': args.jobs,
             },
             'timing': {k: round(v, 3) for k, v in timing.items()},
+            **stamp_figures(state),
         },
     )
     text = (

@@ -90,7 +90,13 @@ def cmd_alarms(args: argparse.Namespace) -> int:
     """Replay the logs into the alarm report; print it (table or JSON), write the files."""
     from catenary_monitor.cli.allocator import keep_freed_memory
     from catenary_monitor.cli.replay import Progress
-    from catenary_monitor.replay.driver import WINDOW_MESSAGES, ReplayError, drive, expand
+    from catenary_monitor.replay.driver import (
+        WINDOW_MESSAGES,
+        ReplayError,
+        drive,
+        expand,
+        stamp_figures,
+    )
 
     keep_freed_memory()
     try:
@@ -114,6 +120,7 @@ def cmd_alarms(args: argparse.Namespace) -> int:
         return _fail(str(err), err.code)
     figures = report.figures()  # type: ignore[attr-defined]
     figures['logs'] = {'files': len(paths), 'bytes': size, 'messages': state.messages}
+    figures['logs'].update(stamp_figures(state))
     try:
         _write_files(figures, args)
     except OSError as err:
@@ -168,7 +175,9 @@ def _write_files(figures: dict[str, Any], args: argparse.Namespace) -> None:
 def _text(figures: dict[str, Any], args: argparse.Namespace) -> str:
     from catenary_monitor.replay.alarm_report import report_text
 
-    text = report_text(figures)
+    from catenary_monitor.replay.driver import stamp_lines
+
+    text = '\n'.join([report_text(figures), *stamp_lines(figures.get('logs', {}))])
     files = [f for f in (args.plot, args.html) if f]
     return text + (f'\nwritten: {", ".join(files)}' if files else '')
 

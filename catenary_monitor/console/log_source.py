@@ -32,7 +32,7 @@ from catenary_monitor.core.monitor.state import VALUE_FIELDS, output_values
 from catenary_monitor.core.monitor.status import Snapshot
 from catenary_monitor.core.twin.engine import ReplayResult
 
-__all__ = ['LogError', 'load_log', 'ReplaySource']
+__all__ = ['LOG_STATUSES', 'LogError', 'load_log', 'max_snapshots', 'ReplaySource']
 
 
 class LogError(Exception):
@@ -43,6 +43,18 @@ class LogError(Exception):
         self.code = code
 
 
+#: The diagnostic statuses the log view holds at most (every snapshot's, about 2 kB each with
+#: its history): about 200 MB beside the interpreter's 90 MB.
+LOG_STATUSES = 100_000
+
+
+def max_snapshots(config: MonitorConfig) -> int:
+    """How many snapshots (ticks) of ``config``'s monitor the log view holds at most: a longer
+    log is refused in one line (a line and the tide, sensors, alarms, logger statuses each;
+    a dock's and the guards' too)."""
+    return LOG_STATUSES // (len(config.lines) + 7)
+
+
 def load_log(
     logs: Sequence[str],
     params_file: Optional[str],
@@ -50,7 +62,9 @@ def load_log(
 ) -> tuple[MonitorConfig, ReplayResult, tuple[np.ndarray, np.ndarray], list[Path]]:
     """(configuration, every step with its snapshots, the depth column, the files) of a log:
     the params file's configuration, else the one the node recorded. ``on_damage`` gets one
-    line when parts of the log were skipped (damaged, or crafted: the reader's bounds)."""
+    line when parts of the log were skipped (damaged, or crafted: the reader's bounds), and
+    one on bad stamps left out and on silences not ticked through. A log of more ticks than
+    :func:`max_snapshots` is refused (LogError)."""
     from catenary_monitor.core.config.parameters import ConfigError, config_from_params
     from catenary_monitor.io.mcap_read import expand_paths
     from catenary_monitor.replay.driver import (
@@ -73,8 +87,14 @@ def load_log(
                 raise LogError('the log holds no catenary_monitor parameters: give --params-file')
             config = config_from_params(recorded[1])
             follow = True
+        notes: list[str] = []
         result, _, depth, report = replay_log(
-            paths, config, follow_log=follow, snapshots=True
+            paths,
+            config,
+            follow_log=follow,
+            snapshots=True,
+            max_ticks=max_snapshots(config),
+            notes=notes,
         )
     except FileNotFoundError as err:
         raise LogError(str(err)) from None
@@ -82,6 +102,9 @@ def load_log(
         raise LogError(str(err), err.code) from None
     except ConfigError as err:
         raise LogError(f'the parameters recorded in the log are invalid: {err}') from None
+    if on_damage is not None:
+        for note in notes:
+            on_damage(note)
     if report.skips and on_damage is not None:
         first = report.skips[0]
         on_damage(

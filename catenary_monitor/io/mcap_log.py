@@ -391,11 +391,6 @@ class McapLogger:
             self._topics[topic] = info
             self.messages_written.setdefault(topic, 0)
             self.bytes_written.setdefault(topic, 0)
-            if self._file is not None:
-                try:
-                    self._register_channel(self._file, topic, info)
-                except Exception as exc:  # noqa: BLE001 - disk errors never reach the caller
-                    self._fail('cannot write MCAP channel', exc)
 
     def add_metadata(self, name: str, data: Mapping[str, Any]) -> None:
         """Write a file-level Metadata record now and repeat it at the start of later files.
@@ -471,6 +466,11 @@ class McapLogger:
             assert self._file is not None
             payload = bytes(data)
             try:
+                if not info.channel_id:
+                    # a channel is written with its first message, in the same chunk: the mcap
+                    # writer drops a chunk without messages (its schemas and channels too) but
+                    # keeps them in the summary, which readers then find without a definition
+                    self._register_channel(self._file, topic, info)
                 self._file.writer.add_message(
                     channel_id=info.channel_id,
                     log_time=log_time_ns,
@@ -666,7 +666,8 @@ class McapLogger:
             if self._closed:
                 return
             self._finish_current()
-            self._ensure_open(self._clock(), force=True)
+            if self._file is None:
+                self._next_retry = float('-inf')  # the next file opens with the next message
             self.apply_retention()
 
     def close(self) -> None:
@@ -728,7 +729,10 @@ class McapLogger:
         too_big = self._flushed_size + self._pending_bytes >= self.max_bytes
         if too_old or too_big:
             self._finish_current()
-            self._ensure_open(now, force=True)
+            if self._file is None:
+                # the next file opens with the next message (a file without messages is not
+                # a valid MCAP to strict readers: its summary lists empty groups)
+                self._next_retry = float('-inf')
             self.apply_retention()  # the bound holds at once, however late tick() runs
 
     def _flush_if_due(self, now: float) -> bool:
@@ -793,8 +797,6 @@ class McapLogger:
             dir_stat, file_stat = os.stat(self.log_dir), os.fstat(stream.fileno())
             opened.dir_id = (dir_stat.st_dev, dir_stat.st_ino)
             opened.file_id = (file_stat.st_dev, file_stat.st_ino)
-            for topic, info in self._topics.items():
-                self._register_channel(opened, topic, info)
             for name, record in self._metadata.items():
                 writer.add_metadata(name, record)
             writer.flush()

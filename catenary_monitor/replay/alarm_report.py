@@ -182,8 +182,8 @@ class AlarmReport:
         elif e.kind == 'unshelved' and tally.shelf_open is not None:
             tally.shelved_s += max(t - tally.shelf_open, 0.0)
             tally.shelf_open = None
-        elif e.kind == 'refused':
-            tally.refused += 1
+        elif e.kind == 'refused' and not e.level:  # a shelving request's (NaN: one)
+            tally.refused += int(e.value) if e.value == e.value else 1
         elif e.kind == 'chattering':
             tally.chattering += 1
             tally.chatter_open = t

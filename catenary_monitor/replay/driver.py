@@ -29,7 +29,7 @@ from __future__ import annotations
 import copy
 import json
 from functools import partial
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import (
     Any,
@@ -63,7 +63,13 @@ from catenary_monitor.core.monitor.events import (
 )
 from catenary_monitor.core.monitor.monitor_core import MonitorCore
 from catenary_monitor.core.twin.engine import ReplayResult, run_log
-from catenary_monitor.core.twin.window import Window, concat_lines, slice_window, tick_grid
+from catenary_monitor.core.twin.window import (
+    Window,
+    concat_lines,
+    grid_ticks,
+    quiet_span,
+    slice_window,
+)
 from catenary_monitor.core.physics import fused_kernel
 from catenary_monitor.io import mcap_read, sensor_cdr
 from catenary_monitor.io.cdr import string_message, string_text
@@ -95,6 +101,8 @@ __all__ = [
     'log_parameters',
     'read_inputs',
     'replay_log',
+    'stamp_figures',
+    'stamp_lines',
     'stream',
 ]
 
@@ -108,6 +116,11 @@ WINDOW_MESSAGES = 1 << 17
 #: With snapshots (``--out``), a window is recomputed in parts of at most this many ticks:
 #: a part's snapshots (in columns) and their payloads take about 30 kB per tick until written.
 TICKS_PER_PART = 512
+
+#: A window on a grid of ticks is recomputed in parts of at most this many ticks (the window
+#: holds a bounded number of messages, but each may be followed by a silence the grid ticks
+#: through for :func:`quiet_span`).
+GRID_TICKS_PER_PART = 1 << 14
 
 _TICK_PAYLOAD = string_message('{"kind": "tick"}')
 
@@ -143,6 +156,14 @@ class StreamState:
     bytes_total: int = 0
     core: Optional[MonitorCore] = None  # the core after the last window
     grid_k: int = 0  # the next grid tick's index
+    # A log stepped on a grid (no recorded ticks): its samples, its bad stamps and silences.
+    last_sample_ns: Optional[int] = None  # the newest input sample read, a bad stamp or not
+    last_input_ns: Optional[int] = None  # the newest input sample stepped
+    ticked_to: Optional[int] = None  # the newest grid tick given
+    bad_stamps: int = 0  # samples far from every other (core.rules.readings.far_stamps)
+    bad_stamp_first: list[tuple[str, int]] = field(default_factory=list)  # (input, ns), <= 3
+    silences: int = 0  # silences longer than the grid ticks after an input (quiet_span)
+    silent_ns: int = 0  # the time of those silences the grid did not tick through
 
 
 def _events(window: LogWindow) -> tuple[bool, np.ndarray, list[Any]]:
@@ -282,6 +303,7 @@ def stream(
     progress: Optional[Callable[[StreamState], None]] = None,
     resume: Optional[StreamState] = None,
     goes_on: bool = False,
+    next_ns: Optional[int] = None,
 ) -> StreamState:
     """Replay ``paths`` window by window; ``sink(result, window)`` gets each window's
     :class:`ReplayResult` (its ticks, events, start) and its input :class:`Window`.
@@ -290,12 +312,17 @@ def stream(
     next): ``resume`` is the state the previous piece returned (its core goes on; it is not
     changed); ``goes_on``: more pieces follow (a piece without any input is then no error).
     Grid ticks of the gap between two pieces come with the next piece, before its inputs, as
-    in one stream. The pieces' results are those of the whole log
+    in one stream; ``next_ns``: the first stamp of the next piece (whether this piece's last
+    sample is a bad stamp depends on it). The pieces' results are those of the whole log
     (:mod:`catenary_monitor.replay.fleet_tasks`).
 
     ``ticks``: ``auto`` takes the node's recorded ticks when the log has them, else a grid at
-    ``diagnostic_rate``; ``log`` requires them; ``grid`` ignores them. ``follow_log``: apply
-    the parameter changes the node recorded (with the recorded parameters only);
+    ``diagnostic_rate``; ``log`` requires them; ``grid`` ignores them. On a grid, a sample far
+    from every other (:func:`catenary_monitor.core.rules.readings.far_stamps`) is a bad stamp,
+    left out and counted, and a silence of the inputs is ticked through only for
+    :func:`~catenary_monitor.core.twin.window.quiet_span` (the state counts the silences).
+    ``follow_log``: apply the parameter changes the node recorded (with the recorded
+    parameters only);
     ``window_messages`` None replays the log as one window. Raises :class:`Restart` (see the
     module docstring), and what :func:`iter_windows` raises (EmptyLogError at the end).
     The solve kernel leaves the cores of the decoding to it: the read-ahead thread's, or the
@@ -317,6 +344,7 @@ def stream(
             progress,
             resume,
             goes_on,
+            next_ns,
         )
 
 
@@ -333,6 +361,7 @@ def _stream(
     progress: Optional[Callable[[StreamState], None]],
     resume: Optional[StreamState] = None,
     goes_on: bool = False,
+    next_ns: Optional[int] = None,
 ) -> StreamState:
     """:func:`stream` itself."""
     state = StreamState() if resume is None else copy.deepcopy(resume)
@@ -341,7 +370,7 @@ def _stream(
     topics = [resolve_topic(config.depth_topic), *lines_topics]
     raw = [EVENTS_TOPIC] if ticks != 'grid' else []
     typed = typed_inputs(config)
-    core, grid_k = state.core, state.grid_k
+    core = state.core
     try:
         for window in iter_windows(
             paths,
@@ -357,6 +386,8 @@ def _stream(
             if not follow_log:
                 others = [e for e in others if not isinstance(e, Reconfigure)]
             inputs = _inputs(config, window)
+            if not (seen if core is None else state.ticks_from_log):  # stepped on a grid
+                inputs = _without_bad_stamps(state, config, window, inputs, next_ns)
             tensions, depth = inputs.tensions, inputs.depth
             if core is None:
                 firsts = [int(c[0][0]) for c in (*tensions, depth) if len(c[0])]
@@ -380,10 +411,6 @@ def _stream(
                 raise Restart('a start record after the first window, none before it')
             elif seen and not state.ticks_from_log:
                 raise Restart('events records after a first window without any')
-            if not state.ticks_from_log:
-                tick_ns, grid_k = _grid(
-                    state, window, tensions, depth, grid_k, config.alarm.diagnostic_rate, goes_on
-                )
             whole = Window(
                 tensions,
                 depth,
@@ -392,7 +419,12 @@ def _stream(
                 inputs.depth_stamps,
                 inputs.channels,
             )
-            for part, part_events in _parts(whole, others, TICKS_PER_PART if snapshots else 0):
+            if state.ticks_from_log:
+                parts = _parts(whole, others, TICKS_PER_PART if snapshots else 0)
+            else:  # no recorded events: ``others`` is empty
+                cap = TICKS_PER_PART if snapshots else GRID_TICKS_PER_PART
+                parts = _grid_parts(state, config, window, whole, cap, goes_on)
+            for part, part_events in parts:
                 result, core = run_log(core, part, part_events, snapshots)
                 replay = ReplayResult(
                     result.lines,
@@ -408,10 +440,14 @@ def _stream(
                     alarm_events=result.alarm_events,
                 )
                 sink(replay, part)
+                del result, replay, part, part_events  # not held while the next is recomputed
             state.windows += 1
             state.messages += window.messages
             state.bytes_done = window.bytes_done
-            state.core, state.grid_k = core, grid_k
+            state.core = core
+            # nothing of this window held while the next one is read and recomputed (its
+            # results and inputs were a window's worth of memory on top of the next one's)
+            del window, whole, inputs, tensions, depth, parts, others
             if progress is not None:
                 progress(state)
     except UnorderedLogError as err:
@@ -435,36 +471,153 @@ def _parts(window: Window, events: list[Any], ticks: int) -> Iterator[tuple[Wind
         lo = hi
 
 
-def _grid(
+def _grid_parts(
     state: StreamState,
+    config: MonitorConfig,
     window: LogWindow,
-    tensions: list[Any],
-    depth: Any,
-    k0: int,
-    rate_hz: float,
+    whole: Window,
+    cap: int,
     goes_on: bool = False,
-) -> tuple[np.ndarray, int]:
-    """The grid ticks of a window (:func:`tick_grid` from ``k0``) below the window's end, or up
-    to the last input message in the final window (none in a final window without input
-    when the log ``goes_on`` in another piece); and the next k."""
+) -> Iterator[tuple[Window, list[Any]]]:
+    """The window with its grid ticks (:func:`grid_ticks` from ``state.grid_k``), in parts of at
+    most ``cap`` ticks, each cut in time before the next part's first tick (as :func:`_parts`).
+
+    The ticks reach the window's end, except after its newest input when a silence longer
+    than the grid ticks through (:func:`quiet_span`) reaches the window's end: those come with
+    the next window (before its inputs), or never when no input follows; in a final window
+    (one of a piece that ``goes_on`` too) they end at the newest input. ``state`` takes the
+    next k, the newest input and tick, and the silences."""
+    rate = config.alarm.diagnostic_rate
+    quiet = int(quiet_span(config) * 1e9)
+    columns = [t for t, _ in (*whole.tensions, whole.depth) if len(t)]
+    stamps = np.unique(np.concatenate(columns)) if columns else np.zeros(0, np.int64)
+    before = state.last_input_ns
+    last = int(stamps[-1]) if len(stamps) else before
+    if last is None:  # no input yet (a piece without any): nothing to tick
+        yield whole, []
+        return
+    end = window.hi - 1 if window.hi is not None else last
+    if window.final or window.hi is None or window.hi - last > quiet:
+        end = last
+    if (
+        window.final
+        and not len(stamps)
+        and not goes_on
+        and state.ticked_to is not None
+        and state.ticked_to > last
+    ):
+        raise Restart('the last window has no input message')
+    seq = stamps if before is None else np.concatenate([[before], stamps])
+    gaps = np.diff(seq)
+    silent = gaps[gaps > quiet]
+    state.silences += len(silent)
+    state.silent_ns += int((silent - quiet).sum())
+    state.last_input_ns = last
     start = state.start_ns or 0
-    period = 1e9 / rate_hz
-    if window.final:
-        lasts = [int(c[0][-1]) for c in (*tensions, depth) if len(c[0])]
-        if not lasts:
-            if state.windows and not goes_on:
-                raise Restart('the last window has no input message')
-            return np.zeros(0, np.int64), k0
-        end = max(lasts)
-        if end < start:
-            return np.zeros(0, np.int64), k0
-        n = int((end - start) // period) + 1
-    else:
-        assert window.hi is not None
-        end = window.hi - 1
-        n = max(0, int((window.hi - start) // period) + 1)
-    ticks = tick_grid(start, end, rate_hz, k0, n)
-    return ticks, k0 + len(ticks)
+    ticks, k = grid_ticks(start, rate, state.grid_k, stamps, before, quiet, end, cap)
+    lo: Optional[int] = None
+    while True:
+        nxt, k_next = np.zeros(0, np.int64), k
+        if len(ticks) == cap:
+            nxt, k_next = grid_ticks(start, rate, k, stamps, before, quiet, end, cap)
+        hi = int(nxt[0]) if len(nxt) else None
+        part = slice_window(whole, lo, hi)
+        part.ticks = ticks
+        if len(ticks):
+            state.ticked_to = int(ticks[-1])
+        state.grid_k = k
+        yield part, []
+        if hi is None:
+            return
+        lo, ticks, k = hi, nxt, k_next
+
+
+def _utc(t: float) -> str:
+    try:
+        text = str(np.datetime_as_string(np.datetime64(int(round(t * 1e3)), 'ms'), 'ms'))
+        return text.replace('T', ' ') + ' UTC'
+    except (OverflowError, ValueError):
+        return f'{t!r} s'
+
+
+def stamp_lines(figures: Mapping[str, Any]) -> list[str]:
+    """One line on the bad stamps a grid replay left out and one on the silences it did not
+    tick through, of :func:`stamp_figures` (none when there were none)."""
+    out = []
+    bad = figures.get('bad_stamps')
+    if bad:
+        days = readings.STAMP_FAR / 86_400.0
+        first = ', '.join(f'{b["input"]} at {_utc(b["time"])}' for b in bad['first'])
+        more = ', ...' if bad['count'] > len(bad['first']) else ''
+        out.append(
+            f'bad stamps: {bad["count"]} input sample(s) stamped more than {days:g} days from '
+            f'every other, left out ({first}{more})'
+        )
+    quiet = figures.get('silences')
+    if quiet:
+        out.append(
+            f'silences: {quiet["count"]} gap(s) in the inputs longer than the grid ticks '
+            f'after an input, {quiet["not_ticked_s"] / 86_400.0:.2f} days not ticked through'
+        )
+    return out
+
+
+def stamp_figures(state: StreamState) -> dict[str, Any]:
+    """The bad stamps and the silences of a grid replay, for a summary (``bad_stamps``,
+    ``silences``; empty when there are none)."""
+    out: dict[str, Any] = {}
+    if state.bad_stamps:
+        out['bad_stamps'] = {
+            'count': state.bad_stamps,
+            'first': [{'input': n, 'time': ns * 1e-9} for n, ns in state.bad_stamp_first],
+        }
+    if state.silences:
+        out['silences'] = {'count': state.silences, 'not_ticked_s': state.silent_ns * 1e-9}
+    return out
+
+
+def _without_bad_stamps(
+    state: StreamState,
+    config: MonitorConfig,
+    window: LogWindow,
+    inputs: Inputs,
+    next_ns: Optional[int],
+) -> Inputs:
+    """The window's inputs without their bad stamps (samples far from every other:
+    :func:`catenary_monitor.core.rules.readings.far_stamps`), counted in ``state``. The
+    neighbours across windows: the newest sample before (``state``), and after the window the
+    message its end was cut at (``next_ns`` after the final window of a piece that goes on)."""
+    columns = [t for t, _ in (*inputs.tensions, inputs.depth) if len(t)]
+    if not columns:
+        return inputs
+    stamps = np.sort(np.concatenate(columns), kind='stable')
+    after = window.hi if not window.final else next_ns
+    far = readings.far_stamps(stamps, state.last_sample_ns, after)
+    state.last_sample_ns = int(stamps[-1])
+    if not far.any():
+        return inputs
+    bad = stamps[far]
+    names = [line.name for line in config.lines] + ['depth']
+    keep = [~np.isin(t, bad) for t, _ in (*inputs.tensions, inputs.depth)]
+    for name, (t, _), kept in zip(names, (*inputs.tensions, inputs.depth), keep):
+        for stamp in t[~kept].tolist():
+            state.bad_stamps += 1
+            if len(state.bad_stamp_first) < 3:
+                state.bad_stamp_first.append((name, int(stamp)))
+
+    def cut(col: Any, kept: np.ndarray) -> Any:
+        return None if col is None else col[kept]
+
+    n = len(config.lines)
+    tensions = [(t[m], v[m]) for (t, v), m in zip(inputs.tensions, keep[:n])]
+    depth = (inputs.depth[0][keep[n]], inputs.depth[1][keep[n]])
+    t_stamps = (
+        None
+        if inputs.tension_stamps is None
+        else [cut(c, m) for c, m in zip(inputs.tension_stamps, keep[:n])]
+    )
+    chans = None if inputs.channels is None else [cut(c, m) for c, m in zip(inputs.channels, keep)]
+    return Inputs(tensions, depth, t_stamps, cut(inputs.depth_stamps, keep[n]), chans)
 
 
 # --- the log, its parameters and the runs
@@ -634,13 +787,23 @@ def drive(
 
 
 class _Collect:
-    """A sink that keeps every window's results (for :func:`replay_log`)."""
+    """A sink that keeps every window's results (for :func:`replay_log`): at most
+    ``max_ticks`` ticks (None: no bound; more is a :class:`ReplayError`)."""
 
-    def __init__(self) -> None:
+    def __init__(self, max_ticks: Optional[int] = None) -> None:
         self.results: list[ReplayResult] = []
         self.windows: list[Window] = []
+        self.max_ticks = max_ticks
+        self.ticks = 0
 
     def __call__(self, result: ReplayResult, window: Window) -> None:
+        self.ticks += len(result.tick_ns)
+        if self.max_ticks is not None and self.ticks > self.max_ticks:
+            raise ReplayError(
+                f'the log has more than {self.max_ticks} periodic steps (each a diagnostic '
+                'snapshot held in memory): too long to hold at once; replay a shorter piece '
+                'of it, or summarize it with catenary-monitor replay'
+            )
         self.results.append(result)
         self.windows.append(window)
 
@@ -665,14 +828,18 @@ def replay_log(
     follow_log: bool = True,
     snapshots: bool = False,
     window_messages: Optional[int] = WINDOW_MESSAGES,
+    max_ticks: Optional[int] = None,
+    notes: Optional[list[str]] = None,
 ) -> LogReplay:
     """Every step of a log as one :class:`ReplayResult` (the windows' results joined), with the
     input columns and the read report: for the console's log view and the tests. Memory grows
-    with the log; the command writes its outputs window by window (:func:`drive`)."""
+    with the log; the command writes its outputs window by window (:func:`drive`).
+    ``max_ticks``: a log of more ticks is refused (:class:`ReplayError`) before they are
+    held; ``notes`` gets the lines on bad stamps and silences (:func:`stamp_lines`)."""
     sink, state, report = drive(
         paths,
         config,
-        lambda _: _Collect(),
+        lambda _: _Collect(max_ticks),
         ticks=ticks,
         follow_log=follow_log,
         snapshots=snapshots,
@@ -684,6 +851,8 @@ def replay_log(
         name: _joined_column([w.tensions[k] for w in sink.windows]) for k, name in enumerate(names)
     }
     depth = _joined_column([w.depth for w in sink.windows])
+    if notes is not None:
+        notes += stamp_lines(stamp_figures(state))
     return LogReplay(_joined(sink.results, state), tensions, depth, report)
 
 

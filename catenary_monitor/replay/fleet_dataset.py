@@ -138,7 +138,9 @@ def _atomic_place(tmp: Path, final: Path) -> None:
 
 class PartWriter:
     """The message parts of one task: a Parquet file per UTC day it touches, a row group per
-    window, written under ``tmp`` and moved into ``root/messages`` by :meth:`commit`."""
+    window, written under ``tmp`` and moved into ``root/messages`` by :meth:`commit`. Only
+    the newest day's file is open (the rows come in time order), however many days a task
+    spans."""
 
     def __init__(self, root: Path, dock: str, task: int) -> None:
         self.root, self.dock, self.task = root, dock, task
@@ -164,13 +166,19 @@ class PartWriter:
                 self.writers[day] = (path, writer)
             self.writers[day][1].write_table(table.slice(lo, hi - lo))
         self.rows += table.num_rows
+        newest = int(days[-1])
+        for day, (path, writer) in list(self.writers.items()):
+            if day < newest and writer is not None:  # the rows come in time order: done
+                writer.close()
+                self.writers[day] = (path, None)
 
     def commit(self) -> list[str]:
         """Close the files and move each to ``messages/dock=D/date=Y/part-K.parquet``; returns
         the dates written."""
         dates = []
         for day, (path, writer) in sorted(self.writers.items()):
-            writer.close()
+            if writer is not None:
+                writer.close()
             date = _date(day)
             _atomic_place(path, self.final(date))
             dates.append(date)
@@ -187,7 +195,8 @@ class PartWriter:
     def abandon(self) -> None:
         """Drop what was written (the task is skipped or done again)."""
         for _, writer in self.writers.values():
-            writer.close()
+            if writer is not None:
+                writer.close()
         self.writers, self.rows = {}, 0
         shutil.rmtree(self.tmp, ignore_errors=True)
 

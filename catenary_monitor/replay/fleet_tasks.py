@@ -61,6 +61,8 @@ from catenary_monitor.replay.driver import (
     StreamState,
     load_config,
     log_parameters,
+    stamp_figures,
+    stamp_lines,
     stream,
 )
 from catenary_monitor.replay.fleet_dataset import (
@@ -385,6 +387,9 @@ def _stream_piece(
     """The stream of one piece into the sink (the dock as one task: as ``replay`` does, in
     one window when it cannot be streamed)."""
     window: Optional[int] = WINDOW_MESSAGES
+    goes_on = task < len(plan.pieces) - 1
+    # The next piece's first stamp: whether this piece's last sample is a bad stamp.
+    next_ns = first_log_time(Path(plan.files[plan.pieces[task + 1][0]])) if goes_on else None
     while True:
         sink = _PieceSink(carry, writer)
         try:
@@ -396,7 +401,8 @@ def _stream_piece(
                 window_messages=window,
                 report=report,
                 resume=carry.stream,
-                goes_on=task < len(plan.pieces) - 1,
+                goes_on=goes_on,
+                next_ns=next_ns,
             )
         except Restart as err:
             if len(plan.pieces) > 1:
@@ -463,13 +469,19 @@ def finish_dock(plan: DockPlan, carry: Carry, root: str) -> dict[str, Any]:
         'end': end * 1e-9,
         'episodes': len(episodes),
         'closest': _closest(daily),
-        'damage': [*plan.refused, *carry.notes],
+        'damage': [*plan.refused, *carry.notes, *_bad_stamps(carry.stream)],
     }
     _write_atomic(
         out / '_fleet' / f'dock={plan.name}' / 'done.json',
         json.dumps({'digest': plan.digest(len(plan.pieces) - 1), 'summary': summary}).encode(),
     )
     return summary
+
+
+def _bad_stamps(state: Optional[StreamState]) -> list[str]:
+    """The line on the samples the dock's replay left out as bad stamps (none: [])."""
+    figures = {} if state is None else stamp_figures(state)
+    return stamp_lines({'bad_stamps': figures.get('bad_stamps')})
 
 
 def _closest(daily: DailyExtremes) -> Optional[dict[str, Any]]:

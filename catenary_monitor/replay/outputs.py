@@ -45,6 +45,7 @@ from catenary_monitor.core.twin.window import (
 )
 from catenary_monitor.core.monitor.state import NO_DEPTH, OUTPUT_FIELDS, VALUE_FIELDS
 from catenary_monitor.core.twin.engine import ReplayResult
+from catenary_monitor.replay.driver import stamp_lines
 from catenary_monitor.io.cdr import (
     diagnostic_array_bodies,
     diagnostic_array_parts,
@@ -916,6 +917,7 @@ def summary_text(summary: dict[str, Any]) -> str:
             out.append(f'  {s["path"]} @ byte {s["offset"]}: {s["kind"]}: {s["reason"]}{lost}')
     if summary['missing_topics']:
         out.append(f'no messages on: {", ".join(summary["missing_topics"])}')
+    out += stamp_lines(summary)
     for name, c in summary.get('components', {}).items():
         final = c['final_level']
         final = 'level unchanged' if final is None else f'final level {final}'

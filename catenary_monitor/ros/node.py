@@ -78,6 +78,7 @@ from catenary_monitor.core.config.parameters import (
 from catenary_monitor.core.rules import readings
 from catenary_monitor.core.alarms.acknowledge import (
     ACKNOWLEDGE_TOPIC,
+    CONSOLE_NODE_PREFIX,
     SENSORS,
     bounded_text,
     console_only_refusal,
@@ -85,6 +86,7 @@ from catenary_monitor.core.alarms.acknowledge import (
     publisher_identity,
 )
 from catenary_monitor.core.alarms.journal import AlarmEvent
+from catenary_monitor.core.alarms.requests import RequestLimit, limit_text
 from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.alarms.shelving import SHELVE_TOPIC
 from catenary_monitor.core.alarms.shelving import parse_request as parse_shelve_request
@@ -101,6 +103,7 @@ from catenary_monitor.core.monitor.events import (
     Intake,
     LoggerHealth,
     Reconfigure,
+    Refusal,
     Shelve,
     Start,
     Tension,
@@ -114,12 +117,14 @@ from catenary_monitor.core.rules.fatigue import to_record
 from catenary_monitor.core.physics import elastic
 from catenary_monitor.io import fatigue_store
 from catenary_monitor.io.mcap_log import McapLogger
+from catenary_monitor.io.cdr import string_text
 from catenary_monitor.io.mcap_recover import (
     RECOVERED,
     RecoverResult,
     recover_in_child,
     unfinished_files,
 )
+from catenary_monitor.ros.request_reader import RequestReader, Taken
 
 __all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'CatenaryMonitor', 'main']
 
@@ -160,6 +165,9 @@ DRAIN_MAX = 1000
 #: coalesced (logged, counted, left out); a shorter hiccup (a node held off the CPU by other
 #: processes) is caught up with, sample by sample, within ``intake_step_budget`` of steps.
 COALESCE_AFTER = 1.0
+#: The operators' request topics are read this often [s] of wall time.
+REQUEST_PERIOD = 0.05
+_REQUESTS = {ACKNOWLEDGE_TOPIC: 'acknowledge', SHELVE_TOPIC: 'shelve'}
 #: A sample callback runs the periodic tick (the watchdog) itself this many periods after the
 #: previous one (its timer waiting in the executor's queue behind a flood's callbacks).
 LATE_TIMER = 1.1
@@ -539,12 +547,19 @@ class CatenaryMonitor(Node):
             )
         ]
         self._output_cdr = OutputEncoder(self._output)
-        self._ack_sub = self.create_subscription(
-            String, ACKNOWLEDGE_TOPIC, self._on_acknowledge, _RELIABLE
-        )
-        self._shelve_sub = self.create_subscription(
-            String, SHELVE_TOPIC, self._on_shelve, _RELIABLE
-        )
+        # The operators' requests, each with its publisher's GID (ros/request_reader.py),
+        # rate-limited per publisher (core/alarms/requests.py).
+        self._requests = RequestReader(self, [ACKNOWLEDGE_TOPIC, SHELVE_TOPIC])
+        if self._requests.why_no_gid:
+            self.get_logger().warning(
+                f'operators\' requests: {self._requests.why_no_gid}: rate-limited per set of '
+                'publishers on each topic'
+            )
+        self._limit = RequestLimit()
+        self._senders: dict[tuple[str, bytes], str] = {}  # (topic, GID) -> node's full name
+        self._sequences: dict[tuple[str, bytes], int] = {}  # (topic, GID) -> newest number
+        self._graph_read: dict[str, float] = {}  # topic -> when its publishers were listed
+        self._named: dict[str, str] = {}  # a rate-limit key -> its publisher, as last named
         self._diag_timer = self.create_timer(1.0 / cfg.alarm.diagnostic_rate, self._on_period)
         self._period_ns = int(1e9 / cfg.alarm.diagnostic_rate)
         self._tick_ns = self._now_ns()  # the newest tick's stamp
@@ -554,6 +569,7 @@ class CatenaryMonitor(Node):
         self._log_wall = time.monotonic()  # the log timer's last run
         self._log_timer = self.create_timer(LOG_PERIOD, self._on_log_tick, clock=steady)
         self._watchdog = self.create_timer(WATCHDOG_PERIOD, self._on_watchdog_timer, clock=steady)
+        self._request_timer = self.create_timer(REQUEST_PERIOD, self._on_requests, clock=steady)
 
     # ------------------------------------------------------------------ callbacks
     def _now_ns(self) -> int:
@@ -789,30 +805,109 @@ class CatenaryMonitor(Node):
         self._record(Tick(self._tick_ns))
 
     @_guarded
-    def _on_acknowledge(self, msg: String) -> None:
-        """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event, with
-        its publisher as the ROS graph names it; refused (one warning line) for an unknown
-        line, and, with ``acknowledge_from_ros`` false, unless only consoles publish."""
-        endpoints = self._publishers_on(ACKNOWLEDGE_TOPIC)
-        publisher = publisher_identity(endpoints)
-        if not self.config.acknowledge_from_ros:
-            refusal = console_only_refusal(endpoints)
-            if refusal is not None:
-                self.get_logger().warning(
-                    f'acknowledge refused: {refusal}', throttle_duration_sec=10.0
-                )
-                return
+    def _on_requests(self) -> None:
+        """Take the waiting requests of both topics, each as its publisher's (rate-limited);
+        record the refused ones due."""
+        for topic in (ACKNOWLEDGE_TOPIC, SHELVE_TOPIC):
+            for taken in self._requests.take(topic):
+                self._request(topic, taken)
+        self._report_refused(time.monotonic())
+
+    def _request(self, topic: str, taken: Taken) -> None:
+        """One request: over its publisher's rate limit it is counted (and recorded with the
+        others, :meth:`_report_refused`); else read, and acknowledged, shelved or refused, each
+        one recorded core event."""
+        request = _REQUESTS[topic]
+        publisher, node = self._sender(topic, taken.gid)
+        # A publisher's bucket by its GID: the same before and after the graph names its node.
+        key = f'{request} {publisher if taken.gid is None else taken.gid.hex()}'
+        if len(self._named) > 4096:  # publishers come and go: forget their names, not limits
+            for known in (self._named, self._senders, self._sequences):
+                known.clear()
+        self._named[key] = publisher
+        if taken.gid is not None and taken.sequence is not None:
+            last = self._sequences.get((topic, taken.gid))
+            self._sequences[(topic, taken.gid)] = taken.sequence
+            if last is not None and taken.sequence > last + 1:  # lost behind a flood
+                self._limit.refuse(key, taken.sequence - last - 1)
+        if not self._limit.admit(key, time.monotonic()):
+            self._report_refused(time.monotonic())
+            return
         try:
-            line, origin = parse_request(msg.data)
+            text = string_text(taken.data)
+        except ValueError:
+            self._refuse(request, '', 'not a std_msgs/msg/String', '', publisher)
+            return
+        refusal = self._sender_refusal(topic, node)
+        if refusal is not None:
+            self._refuse(request, text.split(None, 1)[0][:64] if text.strip() else '',
+                         refusal, '', publisher)  # fmt: skip
+            return
+        if request == 'acknowledge':
+            self._acknowledge(text, publisher)
+        else:
+            self._shelve(text, publisher)
+
+    def _sender(self, topic: str, gid: Optional[bytes]) -> tuple[str, Optional[str]]:
+        """(the publisher as the middleware names it, its node's full name or None) of a
+        message from ``gid`` (None: unknown; named from every publisher on the topic)."""
+        if gid is None:
+            return publisher_identity(self._publishers_on(topic)), None
+        node = self._senders.get((topic, gid))
+        if node is None and time.monotonic() - self._graph_read.get(topic, -1.0) >= 0.5:
+            self._graph_read[topic] = time.monotonic()  # at most twice a second per topic
+            for name, g in self._publishers_on(topic):
+                self._senders[(topic, g[: len(gid)])] = name
+            node = self._senders.get((topic, gid))
+        if node is None:
+            return f'gid {".".join(f"{b:02x}" for b in gid)} (not on the ROS graph)', None
+        return publisher_identity([(node, gid)]), node
+
+    def _sender_refusal(self, topic: str, node: Optional[str]) -> Optional[str]:
+        """Why a request from ``node`` (None: unknown) is refused where only a console may
+        send one (``acknowledge_from_ros`` false), or None."""
+        if self.config.acknowledge_from_ros:
+            return None
+        if node is None:
+            return console_only_refusal(self._publishers_on(topic))
+        if node.rsplit('/', 1)[-1].startswith(CONSOLE_NODE_PREFIX):
+            return None
+        return f'acknowledge_from_ros is false and {node} is not a console'
+
+    def _refuse(
+        self, request: str, alarm: str, reason: str, origin: str, publisher: str, n: int = 1
+    ) -> None:
+        """Record a request refused before the alarm rules (one core event, its answer the
+        step's note), and log it."""
+        self._record(Refusal(self._stamp(), request, alarm, reason, origin, publisher, n))
+        more = f' ({n} requests)' if n > 1 else ''
+        named = f' [{alarm}]' if alarm else ''
+        self.get_logger().warning(
+            f'{request} refused: {bounded_text(reason, 240)}{more}{named} ({publisher})'
+        )
+
+    def _report_refused(self, now: float) -> None:
+        """Record each publisher's requests refused over its rate limit since its last
+        record (one record per publisher and period at most)."""
+        for key, n in self._limit.due(now):
+            why = f'over the rate limit of its publisher ({limit_text()})'
+            self._refuse(key.partition(' ')[0], '', why, '', self._named.get(key, key), n)
+
+    def _acknowledge(self, text: str, publisher: str) -> None:
+        """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event, or
+        a recorded refusal (unreadable, an unknown line)."""
+        try:
+            line, origin = parse_request(text)
         except ValueError as err:
-            self.get_logger().warning(f'acknowledge refused: {err}')
+            self._refuse('acknowledge', '', str(err), '', publisher)
             return
         if line is not None and line not in self.core.index and line != SENSORS:
-            self.get_logger().warning(
-                f'acknowledge refused: unknown line {bounded_text(line, 64)!r} (lines: '
-                f'{", ".join(self._names)}; {SENSORS}: the sensors alarm)',
-                throttle_duration_sec=10.0,
+            shown = bounded_text(line, 64)
+            why = (
+                f'unknown line {shown!r} (lines: {", ".join(self._names)}; {SENSORS}: the '
+                'sensors alarm)'
             )
+            self._refuse('acknowledge', shown, why, origin, publisher)
             return
         self._record(Acknowledge(self._stamp(), line, origin, publisher))
         self.get_logger().info(f'ACKNOWLEDGED {line or "all"} by {origin} ({publisher})')
@@ -827,38 +922,22 @@ class CatenaryMonitor(Node):
             )
         ]
 
-    @_guarded
-    def _on_shelve(self, msg: String) -> None:
-        """An operator's shelving request (``LINE[.CONDITION] SECONDS [ORIGIN]``), checked as an
-        acknowledgement is (its publisher named, ``acknowledge_from_ros`` false: consoles only,
-        an unknown alarm refused here); then one recorded core event, whose answer (shelved,
-        unshelved, or refused by the core's rules) is one log line."""
-        endpoints = self._publishers_on(SHELVE_TOPIC)
-        publisher = publisher_identity(endpoints)
-        if not self.config.acknowledge_from_ros:
-            refusal = console_only_refusal(endpoints)
-            if refusal is not None:
-                self.get_logger().warning(f'shelve refused: {refusal}', throttle_duration_sec=10.0)
-                return
+    def _shelve(self, text: str, publisher: str) -> None:
+        """An operator's shelving request (``LINE[.CONDITION] SECONDS [ORIGIN]``): one recorded
+        core event, whose answer (shelved, unshelved, or refused by the core's rules: an
+        unknown alarm too) is one log line; an unreadable one a recorded refusal."""
         try:
-            request = parse_shelve_request(msg.data)
+            request = parse_shelve_request(text)
         except ValueError as err:
-            self.get_logger().warning(f'shelve refused: {err}', throttle_duration_sec=10.0)
+            first = text.strip().split(None, 1)[0][:64] if text.strip() else ''
+            self._refuse('shelve', bounded_text(first, 64), str(err), '', publisher)
             return
-        if request.alarm not in self.core.index and request.alarm != SENSORS:
-            self.get_logger().warning(
-                f'shelve refused: unknown alarm {bounded_text(request.alarm, 64)!r} (alarms: '
-                f'{", ".join(self._names)}, {SENSORS})',
-                throttle_duration_sec=10.0,
-            )
-            return
-        event = Shelve(self._stamp(), *request, publisher)
-        step = self._record(event)
-        text = f'SHELVE {step.note} ({publisher})'
+        step = self._record(Shelve(self._stamp(), *request, publisher))
+        line = f'SHELVE {step.note} ({publisher})'
         if ': refused: ' in step.note:
-            self.get_logger().warning(text)
+            self.get_logger().warning(line)
         else:
-            self.get_logger().info(text)
+            self.get_logger().info(line)
 
     def _on_log_tick(self) -> None:
         """The log timer (none when a sample callback ran it lately)."""
@@ -979,7 +1058,7 @@ class CatenaryMonitor(Node):
         if record.kind == 'unshelved' and record.by == 'expired':
             self.get_logger().warning(
                 f'SHELVE {record.alarm}: shelf expired after {record.time - record.value:.0f} s; '
-                'the alarm is annunciated again'
+                'the alarm is shown again'
             )
         elif record.kind == 'chattering':
             a = self.config.alarm
@@ -1052,9 +1131,13 @@ class CatenaryMonitor(Node):
             self.log.add_metadata(NODE_NAME, self._metadata(config))
 
     def close(self) -> None:
-        """Record the last intake counts, then finish the MCAP file (summary written)."""
+        """Record the last intake counts and refused requests, then finish the MCAP file
+        (summary written)."""
         try:
             self._report_intake(time.monotonic(), force=True)
+            for key, n in self._limit.due(time.monotonic(), every_one=True):
+                why = f'over the rate limit of its publisher ({limit_text()})'
+                self._refuse(key.partition(' ')[0], '', why, '', self._named.get(key, key), n)
         except Exception as exc:  # noqa: BLE001 - closing the log matters more
             self.get_logger().error(f'last intake counts not recorded: {exc}')
         try:
@@ -1063,6 +1146,11 @@ class CatenaryMonitor(Node):
             self.get_logger().error(f'fatigue store not written at the end: {exc}')
         if self.log is not None:
             self.log.close()
+
+    def destroy_node(self) -> None:
+        """Destroy the request topics' helper node, then this one."""
+        self._requests.close()
+        super().destroy_node()
 
 
 _FLOAT64_LE = struct.Struct('<d')

@@ -41,7 +41,9 @@ vectorized twin (:mod:`catenary_monitor.core.twin.engine`) apply it only where i
 visible (``masked``: the level without the shelved conditions); shelving takes the alarm off
 the list when that level is not active. When the shelf ends (it expires at the first step at or
 after ``shelved_until``, or an operator unshelves) and it was hiding an active condition, the
-alarm returns ``unacknowledged``, raised again at that time.
+alarm returns ``unacknowledged``, raised again at that time, unless it was active when shelved
+and never cleared since (nor rose in severity): then it returns to the state it was shelved in,
+raised no more than it was, however often a shelf is put on and taken off.
 
 **Chattering**: the alarm keeps the times of its newest ``chatter_count`` level changes
 (``flips``); it is ``chattering`` while the oldest of them is at most ``chatter_window`` old
@@ -146,6 +148,7 @@ class AckState:
     shelved_by: str = ''  # the origin the shelving request claimed
     shelved_publisher: str = ''  # who published it, as the middleware saw it
     shelved_condition: str = ''  # WHOLE or one condition; '' not shelved
+    shelved_state: str = ''  # the alarm's state when shelved ('' not shelved)
     flips: tuple[float, ...] = ()  # s, the newest chatter_count level changes
     chattering: bool = False
     active_since: float = math.nan  # s, since when the condition is active; NaN: not active
@@ -246,6 +249,10 @@ def shelve(
     ``publisher``, both bounded): ``condition`` is :data:`WHOLE` or one condition; ``masked``
     the level the shelf leaves visible. An alarm whose visible level is not active leaves the
     list (``normal``, shown ``shelved``)."""
+    before = ack.state
+    if shelved(ack):  # shelved again: as it was before the first shelf, unless it cleared since
+        still = ack.active_since == ack.active_since and ack.active_since <= ack.shelved_at
+        before = ack.shelved_state if still else NORMAL
     ack = replace(
         ack,
         shelved_until=until,
@@ -253,6 +260,7 @@ def shelve(
         shelved_by=bounded_text(origin),
         shelved_publisher=bounded_text(publisher),
         shelved_condition=condition,
+        shelved_state=before,
     )
     if masked == Level.OK or (suppressed and masked == Level.STALE):
         ack = replace(ack, state=NORMAL)
@@ -264,7 +272,11 @@ def unshelve(
 ) -> AckState:
     """The alarm's shelf ended at ``now`` (s; expired, or an operator unshelved it): ``level``
     the line's level, ``masked`` what the shelf left visible. An active condition the shelf hid
-    returns the alarm ``unacknowledged``, raised at ``now``."""
+    returns the alarm ``unacknowledged``, raised at ``now``; but an alarm that was active when
+    shelved and never cleared under the shelf, no more severe now, returns as it was then
+    (``unacknowledged`` since it was raised, or ``acknowledged``): a shelf toggled on and off
+    raises nothing that was not raised before."""
+    before, since = ack.shelved_state, ack.shelved_at
     ack = replace(
         ack,
         shelved_until=_NAN,
@@ -272,9 +284,19 @@ def unshelve(
         shelved_by='',
         shelved_publisher='',
         shelved_condition='',
+        shelved_state='',
     )
     quiet = suppressed and level == Level.STALE
     if RANK[level] > RANK[masked] and level != Level.OK and not quiet:
+        held = (
+            before in (UNACKNOWLEDGED, ACKNOWLEDGED)
+            and ack.active_since == ack.active_since
+            and ack.active_since <= since
+            and RANK[level] <= RANK[ack.level]
+        )
+        if held:
+            state = before if ack.state == NORMAL else ack.state
+            return replace(ack, state=state, level=level, suppressed=False)
         return replace(ack, state=UNACKNOWLEDGED, level=level, raised=now, suppressed=False)
     return _follow(ack, level, now, suppressed)
 

@@ -3,8 +3,9 @@
 The monitor core (and its vectorized twin, from the same alarm states) writes an
 :class:`AlarmEvent` whenever an alarm is raised (annunciated), acknowledged, becomes active or
 clears, is shelved or unshelved (by whom, or ``expired``), starts or stops chattering, when a
-shelving request is refused, and when an alarm flood starts or ends. The node prints them, the
-alarm report (``catenary-monitor alarms``) counts them: one alarm logic, its records read
+request (shelving or acknowledging) is refused, and when an alarm flood starts or ends. The
+node prints them, the alarm report (``catenary-monitor alarms``) counts them: one alarm logic,
+its records read
 twice. Times in s on the monitor's clock.
 """
 
@@ -41,7 +42,9 @@ class AlarmEvent(NamedTuple):
     alarm) and ``value``: ``acknowledged`` when the alarm was raised [s], ``shelved`` until
     when [s], ``unshelved`` since when it was shelved [s], ``cleared`` how long it was active
     [s], ``flood`` when the first out was raised [s]; NaN otherwise. ``refused`` holds the
-    reason in ``condition``."""
+    reason in ``condition``, ``level`` ``acknowledge`` for a refused acknowledgement ('' a
+    shelving request) and ``value`` how many requests it stands for (NaN: one, refused by the
+    shelving rules)."""
 
     time: float
     alarm: str
@@ -57,10 +60,13 @@ def _differ(a: float, b: float) -> bool:
 
 
 def raised(old: AckState, new: AckState) -> bool:
-    """Whether the alarm was raised (annunciated) between ``old`` and ``new``."""
-    return new.state == UNACKNOWLEDGED and (
-        old.state != UNACKNOWLEDGED or _differ(new.raised, old.raised)
-    )
+    """Whether the alarm was raised (annunciated) between ``old`` and ``new`` (not when a
+    shelf ends on an alarm back as it was shelved, raised when it was)."""
+    if new.state != UNACKNOWLEDGED:
+        return False
+    if shelved(old) and not shelved(new) and not _differ(new.raised, old.raised):
+        return False
+    return old.state != UNACKNOWLEDGED or _differ(new.raised, old.raised)
 
 
 def entries(

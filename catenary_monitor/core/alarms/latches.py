@@ -83,7 +83,8 @@ news). The message joins every applicable condition with ``'; '``, ERRORs first.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any, Mapping, NamedTuple, Sequence
 
 import numpy as np
@@ -132,9 +133,11 @@ _LIMITS = {'time_to_uplift': 'uplift_time'}  # parameter prefix where it is not 
 _HOLD, _BREACH, _CLEAR = 0, 1, 2  # classification of one update for one condition
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)
 class AlarmInputs:
-    """One update of one line: solved quantities (SI) and the stamps of the newest samples.
+    """One update of one line: solved quantities (SI) and the stamps of the newest samples
+    (built afresh for every update and never changed: slots, not frozen, whose ``__init__``
+    costs five times as much).
 
     NaN marks a quantity that does not apply. ``status`` is the solver's code (0 = ok) and
     ``status_message`` its sentence. Stamps are the receive times (s, same clock as ``now``)
@@ -298,9 +301,15 @@ class LineAlarm:
         stale_t, stale_d = self._stale(inputs, now)
         stale = stale_t or stale_d
         latches = []
-        for cond, latch in zip(CONDITIONS, state.latches):
-            code = self._classify(cond, inputs, stale)
-            latches.append(_step(latch, code, now, *self._timing(cond)))
+        classify = self._classify
+        for (cond, margin, on_delay, hold, low, high), latch in zip(self._plan, state.latches):
+            if margin:  # a warning with a threshold and a deadband (_classify's last case)
+                value = getattr(inputs, cond)
+                clear = value >= high and not stale
+                code = _BREACH if value < low else (_CLEAR if clear else _HOLD)
+            else:
+                code = classify(cond, inputs, stale)
+            latches.append(_step(latch, code, now, on_delay, hold))
         input_message = state.input_message
         if inputs.status != 0:
             input_message = _status_text(inputs.status, inputs.status_message)
@@ -308,25 +317,39 @@ class LineAlarm:
         level = _combine(active, stale)
         own = stale_t and inputs.tension_stamp == inputs.tension_stamp
         suppressed = level == Level.STALE and not own
-        message = _blind_text(
-            self._message(active, inputs, now, stale_t, stale_d, input_message), suppressed
-        )
+        if stale or any(active):
+            message = _blind_text(
+                self._message(active, inputs, now, stale_t, stale_d, input_message), suppressed
+            )
+        else:  # nothing up, nothing stale (so not blind): what _message says then
+            message = 'OK'
         entered, events = state.entered, []
         if level != state.level:
             entered, duration = _episode(entered, state.level, level, now)
             quiet = quiet_change(state.level, state.suppressed, level, suppressed)
             events.append(Transition(now, state.level, level, message, duration, quiet))
-        new = replace(
-            state,
-            level=level,
-            message=message,
-            latches=tuple(latches),
-            entered=entered,
-            input_message=input_message if active[1] else '',
-            suppressed=suppressed,
-            stale=stale,
+        new = AlarmState(
+            level,
+            message,
+            tuple(latches),
+            entered,
+            input_message if active[1] else '',
+            suppressed,
+            stale,
         )
         return new, events
+
+    @cached_property
+    def _plan(self) -> tuple[tuple[str, bool, float, float, float, float], ...]:
+        """Per condition (:data:`CONDITIONS` order): its name, whether it is a warning with a
+        threshold and a deadband (:data:`_MARGINS`), its on-delay and hold (s) and, for those,
+        the limits it is raised below and cleared at or above (the configuration's, fixed)."""
+        nan = math.nan
+        return tuple(
+            (cond, cond in _MARGINS, *self._timing(cond))
+            + (self._warn_limits(cond) if cond in _MARGINS else (nan, nan))
+            for cond in CONDITIONS
+        )
 
     def _stale(self, x: AlarmInputs, now: float) -> tuple[bool, bool]:
         """(tension stale, never received or blind, depth stale or never received)."""
@@ -460,17 +483,27 @@ class LineAlarm:
         return '; '.join(parts) if parts else 'OK'
 
     def _warn_text(self, cond: str, value: float, hold: float) -> str:
-        low, high = self._warn_limits(cond)
-        label = cond.replace('_', ' ')
-        scale, unit, digits = {
-            'load_margin': (1e3, ' kN', 1),
-            'drag_margin': (1e3, ' kN', 1),
-            'safety_factor': (1.0, '', 2),
-        }.get(cond, (1.0, ' m', 2))
-        v, lo, hi = (_fmt(a, scale, digits) for a in (value, low, high))
+        label, scale, unit, digits, low, lo, hi = self._warn_formats[cond]
+        v = _fmt(value, scale, digits)
         if value < low:
             return f'{label} {v}{unit} < {lo}{unit}'
         return f'{label} {v}{unit}, warning held (clears after {hold:g} s at >= {hi}{unit})'
+
+    @cached_property
+    def _warn_formats(self) -> dict[str, tuple[str, float, str, int, float, str, str]]:
+        """Per warning with a threshold: its label, scale, unit and digits, the limit it is
+        raised below and both limits as printed (the configuration's, formatted once)."""
+        out = {}
+        for cond in _MARGINS:
+            low, high = self._warn_limits(cond)
+            scale, unit, digits = {
+                'load_margin': (1e3, ' kN', 1),
+                'drag_margin': (1e3, ' kN', 1),
+                'safety_factor': (1.0, '', 2),
+            }.get(cond, (1.0, ' m', 2))
+            lo, hi = _fmt(low, scale, digits), _fmt(high, scale, digits)
+            out[cond] = (cond.replace('_', ' '), scale, unit, digits, low, lo, hi)
+        return out
 
     def _uplift_time_text(self, x: AlarmInputs, hold: float) -> str:
         """The message of the ``time_to_uplift`` condition (minutes, the tide's rate in m/h,
@@ -648,13 +681,13 @@ def _status_text(status: int, message: str) -> str:
 
 def _step(latch: Latch, code: int, now: float, on_delay: float, hold: float) -> Latch:
     """One latch update: raise after ``on_delay`` of breaches, clear after ``hold`` of clears."""
-    want = _CLEAR if latch.active else _BREACH
-    if code != want:
-        return Latch(latch.active, None)
-    since = now if latch.since is None or latch.since > now else latch.since
-    if now - since >= (hold if latch.active else on_delay):
-        return Latch(not latch.active, None)
-    return Latch(latch.active, since)
+    active, since = latch
+    if code != (_CLEAR if active else _BREACH):
+        return latch if since is None else Latch(active, None)
+    since = now if since is None or since > now else since
+    if now - since >= (hold if active else on_delay):
+        return Latch(not active, None)
+    return latch if since == latch.since else Latch(active, since)
 
 
 def _combine(active: Sequence[bool], stale: bool) -> Level:
@@ -776,7 +809,9 @@ class LevelSeries:
         initial: AlarmState,
         status_messages: Mapping[int, str] | None,
     ) -> None:
-        self.alarm, self.times, self._x, self._status = alarm, times, x, status
+        self.alarm, self.times, self._status = alarm, times, status
+        self._x: dict[str, np.ndarray] | None = x
+        self._last = ''  # the last update's message once the inputs are forgotten
         self._texts, self._table = texts, status_messages or {}
         self._stale_t, self._stale_d, self._active = stale_t, stale_d, active
         self._latches, self._initial = latches, initial
@@ -811,6 +846,14 @@ class LevelSeries:
         text = str(self._texts[j]) if self._texts is not None else self._table.get(code, '')
         return _status_text(code, text)
 
+    def forget_inputs(self) -> None:
+        """Let the inputs go (a window's worth of columns per line): :meth:`message_at` is then
+        only the last update's (its transitions' messages are taken already)."""
+        last = self.times.size - 1
+        if last >= 0 and self._x is not None:
+            self._last = self.message_at(last)
+        self._x = None
+
     def active(self, cond: str) -> np.ndarray:
         """Per update: whether condition ``cond``'s latch is up after it."""
         return self._active[cond]
@@ -823,6 +866,10 @@ class LevelSeries:
         """The line's message after update ``i`` (as ``AlarmState.message``)."""
         if self.levels[i] == Level.OK:
             return 'OK'
+        if self._x is None:  # forget_inputs: the last update's only
+            if i != self.times.size - 1:
+                raise ValueError('LevelSeries.message_at: the inputs were forgotten')
+            return self._last
         floats: dict[str, Any] = {k: float(self._x[k][i]) for k in _INPUT_FIELDS}
         sample = AlarmInputs(**floats, status=int(self._status[i]))
         flags = [bool(self._active[cond][i]) for cond in CONDITIONS]

@@ -240,7 +240,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         True,
         'Accept alarm acknowledgements (/catenary_monitor/acknowledge) and shelving requests '
         '(/catenary_monitor/shelve) from any publisher; false: only from a console (a node '
-        'catenary_console_*, the only publisher on the topic): where operators act through the '
+        'catenary_console_*, the message\'s publisher): where operators act through the '
         'authenticated console (docs/node.md, Security)',
         '',
         None,
@@ -323,7 +323,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'double',
         1.0,
         'A stamped sample whose header stamp is this far ahead of the monitor\'s clock at its '
-        'arrival is refused (sensor state bad_stamp), as is one stamped before the one before',
+        'arrival is refused (sensor state bad_stamp), as is one stamped more than a year '
+        'behind it or before the one before',
         's',
         0.0,
         3600.0,

@@ -36,6 +36,7 @@ __all__ = [
     'bound_values',
     'holding_values',
     'holding_one',
+    'derived_one',
 ]
 
 _NAN = math.nan
@@ -86,24 +87,15 @@ def derived_values(
     tension = uncertainty.dynamic_tension(
         named['peak_tension'], named['wave_tension'], alarm.wave_allowance
     )
-    out.update(bound_values(cfgs, alarm.depth_accuracy, dict(named, top_tension=tension)))
-    out['dynamic_uplift'] = uncertainty.dynamic_uplift(
-        _column(cfgs, 'weight'),
-        _span(cfgs, named),
-        _column(cfgs, 'mbl'),
-        _column(cfgs, 'ea'),
-        tension,
-        named['depth'],
-        named['uplift_force'],
-    )
+    out.update(bound_values(cfgs, alarm.depth_accuracy, dict(named, top_tension=tension), True))
     if any(c.point_loads is not None for c in cfgs):  # with its clumps and buoys
         _loaded_bounds(cfgs, alarm.depth_accuracy, dict(named, top_tension=tension), out)
     if not holding:
         return out
     if len(cfgs) == 1 and _wants_holding(cfgs[0]):  # one line for every element (the twin)
         out.update(holding_values(cfgs, named, alarm.drag_tolerance))
-    elif len(cfgs) == 1:
-        out.update({key: np.full(n, np.nan) for key in HOLDING_FIELDS})
+    elif len(cfgs) == 1:  # none: one read-only NaN each, no memory per element
+        out.update({key: np.broadcast_to(np.float64(np.nan), (n,)) for key in HOLDING_FIELDS})
     else:
         raise ValueError('derived_values: the holding of several lines is the core\'s')
     return out
@@ -139,11 +131,15 @@ def _loaded_bounds(
 
 
 def bound_values(
-    cfgs: Sequence[LineConfig], depth_accuracy: float, named: dict[str, np.ndarray]
+    cfgs: Sequence[LineConfig],
+    depth_accuracy: float,
+    named: dict[str, np.ndarray],
+    dynamic: bool = False,
 ) -> dict[str, np.ndarray]:
     """The bounds (:data:`catenary_monitor.core.rules.uncertainty.FIELDS`) per element of the
     nominal values ``named`` (VALUE_FIELDS -> arrays), each element's line in ``cfgs`` (one
-    config, or one per element); the core and its batch twin both call this."""
+    config, or one per element); the core and its batch twin both call this. ``dynamic``:
+    also ``dynamic_uplift`` (``named['top_tension']`` the dynamic tension)."""
     return uncertainty.bounds(
         _column(cfgs, 'weight'),
         _span(cfgs, named),
@@ -154,6 +150,7 @@ def bound_values(
         np.array([c.tension_accuracy_or_default for c in cfgs]),
         depth_accuracy,
         named['uplift_force'],
+        dynamic,
     )
 
 
@@ -234,10 +231,14 @@ def add_derived(
 ) -> None:
     """The fatigue values, the wave values, the dynamic uplift, the bounds, the holding
     values and the time to uplift of freshly solved lines (from their values;
-    :func:`derived_values`, the holding of one line in plain floats: :func:`holding_one`)."""
+    :func:`derived_values`; one line, a tension event, in plain floats: :func:`derived_one`)."""
     for line in lines:
         line.values = with_fatigue(line.values, line.fatigue_values)
         set_channels(line)
+    if len(lines) == 1:
+        line = lines[0]
+        line.values = derived_one(line, alarm, depth_s, trend)
+        return
     named = {k: np.array([line.values[i] for line in lines]) for k, i in VALUE_INDEX.items()}
     named['peak_tension'] = np.array([line.peak_tension for line in lines])
     named['wave_tension'] = np.array([line.wave_tension for line in lines])
@@ -246,11 +247,7 @@ def add_derived(
     derived = derived_values(cfgs, alarm, named, holding=False)
     some = [k for k, line in enumerate(lines) if _wants_holding(line.config)]
     held: dict[str, Any] = {key: np.full(len(lines), np.nan) for key in HOLDING_FIELDS}
-    if len(some) == 1:  # a tension event: plain floats
-        one = holding_one(cfgs[some[0]], lines[some[0]].values, tolerance)
-        for key in HOLDING_FIELDS:
-            held[key][some[0]] = one[key]
-    elif some:
+    if some:
         idx = np.array(some)
         part = holding_values(
             [cfgs[k] for k in some], {k: v[idx] for k, v in named.items()}, tolerance
@@ -271,6 +268,62 @@ def add_derived(
         for i, column in at:
             v[i] = column[j]
         line.values = tuple(v)
+
+
+_AT = VALUE_INDEX
+_BOUNDS_AT = tuple(VALUE_INDEX[key] for key in uncertainty.FIELDS)
+_HOLDING_AT = tuple((VALUE_INDEX[key], key) for key in HOLDING_FIELDS)
+
+
+def derived_one(
+    line: LineState, alarm: AlarmConfig, depth_s: float, trend: TrendState
+) -> tuple[float, ...]:
+    """:func:`add_derived` of one line in plain floats: its values with the derived ones in
+    their places (the same formulas as :func:`derived_values` on arrays, to rounding: the
+    bounds by :func:`~catenary_monitor.core.rules.uncertainty.bounds_one`, the holding by
+    :func:`holding_one`; test_derived_one)."""
+    lc, v = line.config, list(line.values)
+    h, f0 = v[_AT['depth']], v[_AT['uplift_force']]
+    peak, wave = line.peak_tension, line.wave_tension
+    tension = peak + alarm.wave_allowance * wave  # uncertainty.dynamic_tension
+    x = _given_span(lc, v[_AT['span']])
+    v[_AT['peak_tension']], v[_AT['wave_tension']] = peak, wave
+    if lc.point_loads is None:
+        ea = math.inf if lc.ea is None else lc.ea
+        given = (lc.weight, x, lc.mbl, ea, tension, h)
+        bounds = uncertainty.bounds_one(
+            *given, lc.tension_accuracy_or_default, alarm.depth_accuracy, f0
+        )
+        for i, value in zip(_BOUNDS_AT, bounds):
+            v[i] = value
+        v[_AT['dynamic_uplift']] = uncertainty.dynamic_uplift_one(*given, f0)
+    else:
+        loaded = uncertainty.loaded_bounds(
+            lc.weight,
+            x,
+            lc.mbl,
+            lc.point_loads,
+            tension,
+            h,
+            float(lc.tension_accuracy_or_default),
+            alarm.depth_accuracy,
+            f0,
+        )
+        for key, value in loaded.items():
+            v[_AT[key]] = value
+    if _wants_holding(lc):
+        held = holding_one(lc, v, alarm.drag_tolerance)
+        for i, key in _HOLDING_AT:
+            v[i] = held[key]
+    else:
+        for i, _ in _HOLDING_AT:
+            v[i] = _NAN
+    tide, at_length = v[_AT['tide_margin']], v[_AT['tide_margin_at_length']]
+    margin = at_length if at_length < tide else tide  # tide_trend.nearer_margin
+    view = 1.0 if at_length < tide else (_NAN if tide != tide else 0.0)
+    v[_AT['time_to_uplift']] = uplift_times(alarm, depth_s, trend, [margin], [f0])[0]
+    v[_AT['time_to_uplift_view']] = view
+    return tuple(v)
 
 
 def uplift_times(

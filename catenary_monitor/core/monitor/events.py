@@ -6,7 +6,8 @@
 logger's state changed), :class:`Reconfigure` (accepted parameter change), :class:`Acknowledge`
 (an operator acknowledged a line's alarm, or all: :mod:`catenary_monitor.core.alarms.acknowledge`),
 :class:`Shelve` (an operator shelved or unshelved an alarm:
-:mod:`catenary_monitor.core.alarms.shelving`), :class:`ClockHealth`, :class:`Intake`,
+:mod:`catenary_monitor.core.alarms.shelving`), :class:`Refusal` (a request refused before
+the alarm rules), :class:`ClockHealth`, :class:`Intake`,
 :class:`Coalesced` and :class:`FatigueStore`, each with its time ``stamp_ns`` (ns on the
 monitor's clock; events come in time order). The node records the events that are not input
 messages on :data:`EVENTS_TOPIC` (:func:`event_record`), so that replay redoes every step
@@ -38,6 +39,9 @@ __all__ = [
     'Start',
     'Acknowledge',
     'Shelve',
+    'REQUESTS',
+    'REASON_LIMIT',
+    'Refusal',
     'ClockHealth',
     'Intake',
     'Coalesced',
@@ -48,6 +52,8 @@ __all__ = [
     'parse_event_record',
 ]
 
+#: Characters kept of a refusal's reason.
+REASON_LIMIT = 240
 #: Node name: the ``/diagnostics`` status names start with it; params files use it as top key.
 NODE_NAME = 'catenary_monitor'
 #: MCAP-only channel where the node records the events that are not input messages (ticks,
@@ -130,6 +136,28 @@ class Shelve(NamedTuple):
     publisher: str = ''
 
 
+#: :attr:`Refusal.request` of each request topic's requests.
+REQUESTS = ('acknowledge', 'shelve')
+
+
+class Refusal(NamedTuple):
+    """A request refused before the alarm rules could take it: unreadable (a duration that is
+    not a finite number >= 0, an empty acknowledgement), from a publisher that may not send
+    it (``acknowledge_from_ros`` false), or over its publisher's rate limit
+    (:mod:`catenary_monitor.core.alarms.requests`). ``request`` (:data:`REQUESTS`), the
+    ``alarm`` it named ('' none), the one-line ``reason``, ``origin`` and ``publisher`` as for
+    :class:`Shelve`, and ``requests``: how many requests the record stands for (those over a rate
+    limit are summed, one record per publisher and period)."""
+
+    stamp_ns: int
+    request: str
+    alarm: str
+    reason: str
+    origin: str = ''
+    publisher: str = ''
+    requests: int = 1
+
+
 class ClockHealth(NamedTuple):
     """The ROS clock (``use_sim_time``) at ``stamp_ns``: ``stopped_for`` [s] of wall time
     without advancing (None: it advances)."""
@@ -199,6 +227,7 @@ Event = Union[
     Reconfigure,
     Acknowledge,
     Shelve,
+    Refusal,
     ClockHealth,
     Intake,
     FatigueStore,
@@ -236,6 +265,16 @@ def event_record(event: Union[Event, Start]) -> Optional[dict[str, Any]]:
             'seconds': event.seconds,
             'origin': alarm_ack.bounded_text(event.origin),
             'publisher': alarm_ack.bounded_text(event.publisher),
+        }
+    if isinstance(event, Refusal):
+        return {
+            'kind': 'refused',
+            'request': event.request,
+            'alarm': alarm_ack.bounded_text(event.alarm),
+            'reason': alarm_ack.bounded_text(event.reason, REASON_LIMIT),
+            'origin': alarm_ack.bounded_text(event.origin),
+            'publisher': alarm_ack.bounded_text(event.publisher),
+            'requests': int(event.requests),
         }
     if isinstance(event, ClockHealth):
         return {'kind': 'clock', 'stopped_for': event.stopped_for}
@@ -299,6 +338,19 @@ def parse_event_record(stamp_ns: int, text: str) -> Optional[Union[Event, Start]
                 seconds,
                 alarm_ack.bounded_text(str(record.get('origin', ''))),
                 alarm_ack.bounded_text(str(record.get('publisher', ''))),
+            )
+        if kind == 'refused':
+            request, count = str(record['request']), int(record.get('requests', 1))
+            if request not in REQUESTS or count < 1:
+                return None
+            return Refusal(
+                stamp_ns,
+                request,
+                alarm_ack.bounded_text(str(record.get('alarm', ''))),
+                alarm_ack.bounded_text(str(record['reason']), REASON_LIMIT),
+                alarm_ack.bounded_text(str(record.get('origin', ''))),
+                alarm_ack.bounded_text(str(record.get('publisher', ''))),
+                count,
             )
         if kind == 'fatigue':
             lines = record.get('lines')

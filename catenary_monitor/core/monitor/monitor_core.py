@@ -50,6 +50,7 @@ from catenary_monitor.core.config.parameters import (
 from catenary_monitor.core.monitor.derived import add_derived
 from catenary_monitor.core.monitor.events import (
     NODE_NAME,
+    REASON_LIMIT,
     FATIGUE_STORE_STATES,
     Acknowledge,
     ClockHealth,
@@ -60,6 +61,7 @@ from catenary_monitor.core.monitor.events import (
     Intake,
     LoggerHealth,
     Reconfigure,
+    Refusal,
     Shelve,
     Tension,
     Tick,
@@ -128,9 +130,9 @@ class LineOutput(NamedTuple):
 
 class Step(NamedTuple):
     """What one event did: the outputs of the lines solved, the snapshot (or None), the
-    transitions, the alarm journal's records and, for a shelving request, the monitor's answer
-    (``note``); ``kind`` is ``tension``, ``depth``, ``tick``, ``logger``, ``configure``,
-    ``acknowledge``, ``shelve``, ``clock`` or ``intake``."""
+    transitions, the alarm journal's records and, for a shelving request or a refused one,
+    the monitor's answer (``note``); ``kind`` is ``tension``, ``depth``, ``tick``, ``logger``,
+    ``configure``, ``acknowledge``, ``shelve``, ``refused``, ``clock`` or ``intake``."""
 
     stamp_ns: int
     kind: str
@@ -245,6 +247,8 @@ class MonitorCore:
             return self._on_acknowledge(event)
         if isinstance(event, Shelve):
             return self._on_shelve(event)
+        if isinstance(event, Refusal):
+            return self._on_refusal(event)
         if isinstance(event, ClockHealth):
             return self._on_clock(event)
         if isinstance(event, Intake):
@@ -355,10 +359,17 @@ class MonitorCore:
         return self._finish(ev.stamp_ns, 'logger', [], changes)
 
     def _on_acknowledge(self, ev: Acknowledge) -> Step:
-        """Acknowledge one line's alarm (or every line's; an unknown name changes nothing);
-        the snapshot shows it at once."""
+        """Acknowledge one line's alarm (or every line's); the snapshot shows it at once. An
+        unknown name changes nothing: a refused request in the journal (``level``
+        ``acknowledge``), the step's ``note`` its answer."""
         now = _stamp_s(ev.stamp_ns)
         log: list[AlarmEvent] = []
+        if ev.line is not None and ev.line not in self.index and ev.line != alarm_ack.SENSORS:
+            names = ', '.join([*self.index, alarm_ack.SENSORS])
+            refusal = Refusal(
+                ev.stamp_ns, 'acknowledge', ev.line, f'unknown alarm (alarms: {names})', ev.origin
+            )
+            return self._on_refusal(refusal)
         for line in self.state.lines:
             if ev.line is None or ev.line == line.config.name:
                 old = line.ack
@@ -401,6 +412,32 @@ class MonitorCore:
         changes = self._decide_flood(ev.stamp_ns, log)
         snapshot = self.snapshot(ev.stamp_ns)
         return Step(ev.stamp_ns, 'shelve', (), snapshot, tuple(changes), tuple(log), answer)
+
+    def _on_refusal(self, ev: Refusal) -> Step:
+        """A request refused before the alarm rules (its record in the journal: ``refused``,
+        the reason, who, ``value`` the requests it stands for; ``level`` ``acknowledge`` for
+        an acknowledgement's). A shelving request's is its answer, as the rules' refusals
+        are (the ``alarms`` status, shown at once); the answer is the step's ``note``."""
+        now = _stamp_s(ev.stamp_ns)
+        target = alarm_ack.bounded_text(ev.alarm, 120) or '?'
+        reason = alarm_ack.bounded_text(ev.reason, REASON_LIMIT)
+        many = f' ({ev.requests} requests)' if ev.requests > 1 else ''
+        answer = f'{target}: refused: {reason}{many}'
+        record = AlarmEvent(
+            now,
+            target,
+            'refused',
+            '' if ev.request == 'shelve' else ev.request,
+            reason,
+            alarm_ack.bounded_text(ev.origin),
+            float(ev.requests),
+        )
+        if ev.request != 'shelve':
+            return Step(ev.stamp_ns, 'refused', (), None, (), (record,), answer)
+        self.state.shelve_answer = answer
+        self.state.shelve_requests += int(ev.requests)
+        snapshot = self.snapshot(ev.stamp_ns)
+        return Step(ev.stamp_ns, 'refused', (), snapshot, (), (record,), answer)
 
     def _shelf(
         self,

@@ -29,10 +29,10 @@ free point between two lines) to 1e-6 and against seed 002's equation (6).
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any, Callable, NamedTuple, Optional, Sequence
 
-from scipy.optimize import brentq
 
 from catenary_monitor.core.physics.result import ALL_KEYS, SolveResult, Status
 
@@ -191,8 +191,17 @@ class Answer(NamedTuple):
 _NAN_ANSWER = Answer(NOT_MODELLED, *((math.nan,) * 7))
 
 
+@functools.lru_cache(maxsize=None)
+def _brentq() -> Any:
+    """``scipy.optimize.brentq``, imported on a chain's first point-load solve (scipy.optimize
+    takes about 0.3 s to import: every command paid it at start, for lines most docks lack)."""
+    from scipy.optimize import brentq
+
+    return brentq
+
+
 def _root(f: object, lo: float, hi: float) -> float:
-    return float(brentq(f, lo, hi, xtol=1e-300, rtol=RTOL, maxiter=400))
+    return float(_brentq()(f, lo, hi, xtol=1e-300, rtol=RTOL, maxiter=400))
 
 
 def _top(w: float, h_: float, va: float, loads: PointLoads, depth: float, shift: float) -> Profile:
@@ -590,7 +599,7 @@ def span_at_tension(
         a, b = _bracket(excess, min(max(start, lo), hi), lo, hi)
         if a != a:
             return math.nan
-        return float(brentq(excess, a, b, xtol=1e-12, rtol=1e-13, maxiter=200))
+        return float(_brentq()(excess, a, b, xtol=1e-12, rtol=1e-13, maxiter=200))
     except (ValueError, OverflowError, ZeroDivisionError):
         return math.nan
 

@@ -58,6 +58,7 @@ of it).
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any, NamedTuple, Optional
 
@@ -216,7 +217,7 @@ def _holding_floats(
     elif solved and length == length:
         implied = fixed_length.span_from_tension_scalar(w, h, length, t, ea)
         span = implied if x0 != x0 else x0  # the hook where it is installed
-        lift = fixed_length.lift_depth_scalar(w, length, span, ea)
+        lift = _lift_depth(w, length, span, ea)
     margin = capacity - r
     state = float(DRAGGING if implied - x0 > tolerance else OVERLOADED) if margin < 0.0 else 0.0
     return {
@@ -227,6 +228,13 @@ def _holding_floats(
         'tide_margin_at_length': lift - h,
         'drag_state': nan if margin != margin else state,
     }
+
+
+#: :func:`~catenary_monitor.core.physics.fixed_length.lift_depth_scalar` remembered: the lift
+#: depth is the line's geometry (its weight, chain length and span), not the sample's, so a
+#: line's samples between two span updates take one Newton iteration, not one each (the same
+#: bits: a pure function of four floats).
+_lift_depth = functools.lru_cache(maxsize=256)(fixed_length.lift_depth_scalar)
 
 
 def _maximum0(x: float) -> float:

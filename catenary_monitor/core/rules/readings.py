@@ -18,12 +18,17 @@ fields read from a log as columns, so live and replay take the same readings. Fi
   depth the tide status reports.
 
 The stamped types are taken at their header stamp (:func:`stamp_fault` refuses a stamp too far
-ahead of the monitor's clock or going backwards).
+ahead of the monitor's clock, a year or more behind it, or going backwards).
+
+A recorded log's own stamps (the log time each message was received at) can be wrong too: a
+recorder that booted with its clock in 1970, or one that jumped to 2100 and back.
+:func:`far_stamps` finds the samples far from every other (:data:`STAMP_FAR`): bad stamps,
+left out and counted by the replay, never a span of time to step through.
 """
 
 from __future__ import annotations
 
-from typing import Any, Mapping
+from typing import Any, Mapping, Optional
 
 import numpy as np
 
@@ -39,10 +44,13 @@ __all__ = [
     'STAMPED',
     'FAULT_AHEAD',
     'FAULT_BACKWARDS',
+    'FAULT_FAR',
     'tension_si',
     'depth_si',
     'stamp_fault',
     'stamp_faults',
+    'STAMP_FAR',
+    'far_stamps',
 ]
 
 #: Standard gravity [m/s^2] (the pressure-to-depth conversion).
@@ -60,8 +68,12 @@ DEPTH_FIELDS = {
 }
 #: The types taken at their header stamp (the others at arrival).
 STAMPED = frozenset({WRENCH, FLUID_PRESSURE, RANGE})
-#: :func:`stamp_fault` codes: a header stamp ahead of the clock, or before the one before.
-FAULT_AHEAD, FAULT_BACKWARDS = 1, 2
+#: :func:`stamp_fault` codes: a header stamp ahead of the clock, before the one before, or
+#: more than :data:`STAMP_FAR` before its arrival (a sensor's clock in 1970).
+FAULT_AHEAD, FAULT_BACKWARDS, FAULT_FAR = 1, 2, 3
+#: A recorded sample more than this far [s] from every other sample of the log is a bad stamp
+#: (:func:`far_stamps`): a year, longer than any gap between a dock's recordings.
+STAMP_FAR = 365.0 * 86_400.0
 
 
 def tension_si(line: LineConfig, fields: Mapping[str, Any]) -> Any:
@@ -96,10 +108,13 @@ def depth_si(config: MonitorConfig, fields: Mapping[str, Any]) -> Any:
 
 def stamp_fault(arrival_ns: int, sample_ns: int, last_ns: int, ahead_max: float) -> int:
     """0, or why a stamped sample is refused: :data:`FAULT_AHEAD` (its stamp more than
-    ``ahead_max`` [s] after its arrival on the monitor's clock), :data:`FAULT_BACKWARDS` (before
-    the newest accepted stamp ``last_ns``; -1: none yet). Equal stamps are accepted."""
+    ``ahead_max`` [s] after its arrival on the monitor's clock), :data:`FAULT_FAR` (more than
+    :data:`STAMP_FAR` before it), :data:`FAULT_BACKWARDS` (before the newest accepted stamp
+    ``last_ns``; -1: none yet). Equal stamps are accepted."""
     if sample_ns - arrival_ns > ahead_max * 1e9:
         return FAULT_AHEAD
+    if arrival_ns - sample_ns > STAMP_FAR * 1e9:
+        return FAULT_FAR
     if sample_ns < last_ns:
         return FAULT_BACKWARDS
     return 0
@@ -109,14 +124,40 @@ def stamp_faults(
     arrival_ns: np.ndarray, sample_ns: np.ndarray, last_ns: int, ahead_max: float
 ) -> np.ndarray:
     """:func:`stamp_fault` over a column of samples in arrival order (int8 codes): a sample is
-    refused when ahead, or before the newest accepted one (the running maximum of the
-    samples not ahead: a sample going backwards never raises it)."""
+    refused when ahead, far behind, or before the newest accepted one (the running maximum of
+    the samples neither ahead nor far behind: a sample going backwards never raises it)."""
     arrival = np.asarray(arrival_ns, np.int64)
     sample = np.asarray(sample_ns, np.int64)
     ahead = (sample - arrival) > ahead_max * 1e9
-    eligible = np.where(ahead, np.iinfo(np.int64).min, sample)
+    far = ~ahead & ((arrival - sample) > STAMP_FAR * 1e9)
+    eligible = np.where(ahead | far, np.iinfo(np.int64).min, sample)
     newest = np.maximum.accumulate(np.concatenate([[last_ns], eligible]))[:-1]
     code = np.zeros(len(sample), np.int8)
-    code[(sample < newest) & ~ahead] = FAULT_BACKWARDS
+    code[(sample < newest) & ~ahead & ~far] = FAULT_BACKWARDS
+    code[far] = FAULT_FAR
     code[ahead] = FAULT_AHEAD
     return code
+
+
+def far_stamps(
+    stamps: np.ndarray,
+    before_ns: Optional[int] = None,
+    after_ns: Optional[int] = None,
+    far: float = STAMP_FAR,
+) -> np.ndarray:
+    """Which samples of a stretch of log are bad stamps (bool): more than ``far`` [s] from
+    their nearest neighbour, the samples of every input merged. ``stamps``: the stretch's
+    samples (ns, sorted); ``before_ns`` / ``after_ns``: the sample just before / after the
+    stretch (None: none). A sample without any neighbour (a log of one sample) is not one;
+    samples at one stamp are each other's neighbours."""
+    s = np.asarray(stamps, np.int64)
+    n = len(s)
+    if not n:
+        return np.zeros(0, bool)
+    limit, inf = far * 1e9, np.inf
+    f = s.astype(np.float64)  # no int64 wrap between stamps of any two centuries
+    gaps = np.diff(f)
+    left = np.concatenate([[inf if before_ns is None else f[0] - float(before_ns)], gaps])
+    right = np.concatenate([gaps, [inf if after_ns is None else float(after_ns) - f[-1]]])
+    alone = (left == inf) & (right == inf)
+    return (left > limit) & (right > limit) & ~alone

@@ -122,19 +122,23 @@ def sample(
     if not math.isfinite(value):
         return mem
     d = abs(value - mem.value)
-    step = bool(_steps(np.array([mem.value]), np.array([value]), resolution)[0])
-    changed = stamp if step else mem.changed
+    changed = stamp if _step_one(mem.value, value, resolution) else mem.changed
     spiked = stamp if d > rate * (stamp - mem.stamp + jitter) + resolution else mem.spiked
     return Memory(value, stamp, changed, spiked)
 
 
-def _steps(before: np.ndarray, after: np.ndarray, resolution: float) -> np.ndarray:
-    """Whether each reading is in another resolution step than the one before (``floor(x /
-    resolution)``; a resolution of 0: another value; no reading before: yes)."""
-    with np.errstate(invalid='ignore', divide='ignore'):
-        if resolution > 0.0:
-            return ~(np.floor(after / resolution) == np.floor(before / resolution))
-        return ~(after == before)
+def _step_one(before: float, after: float, resolution: float) -> bool:
+    """Whether a reading is in another resolution step than the one before (``floor(x /
+    resolution)``; a resolution of 0: another value; no reading before: yes), in plain floats
+    (:func:`samples` takes the same test on columns)."""
+    if not resolution > 0.0:
+        return not after == before
+    a, b = after / resolution, before / resolution
+    if a != a or b != b:  # no reading before (NaN): floor(NaN) equals nothing
+        return True
+    if math.isinf(a) or math.isinf(b):  # floor(inf) is inf
+        return not a == b
+    return math.floor(a) != math.floor(b)
 
 
 def samples(

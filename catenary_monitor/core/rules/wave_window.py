@@ -34,6 +34,11 @@ import numpy as np
 
 from catenary_monitor.core.rules.plausible import MAX_TENSION_PER_MBL
 
+try:  # the column loop in C (_wave_loop.c beside this file; else a sparse table in numpy)
+    from catenary_monitor.core.rules import _wave_loop  # type: ignore[attr-defined]
+except ImportError:  # not built
+    _wave_loop = None
+
 __all__ = ['FIELDS', 'WaveState', 'valid', 'step', 'series']
 
 #: The outputs derived from the window (appended to the per-line outputs), in order.
@@ -80,7 +85,7 @@ def step(
 ) -> tuple[float, float]:
     """One reading [N] at ``now`` [s] (``state`` updated in place): ``peak_tension`` and
     ``wave_tension`` [N] over the valid readings at or after ``now - window``."""
-    if bool(valid(np.array([tension]), mbl)[0]):
+    if math.isfinite(tension) and 0.0 < tension <= MAX_TENSION_PER_MBL * mbl:  # valid()
         _push(state, now, tension)
     start = now - window
     for queue in (state.high, state.low):
@@ -121,7 +126,9 @@ def series(
     state: WaveState, t_s: np.ndarray, tension: np.ndarray, mbl: float, window: float
 ) -> tuple[np.ndarray, np.ndarray, WaveState]:
     """:func:`step` over sorted readings in vectorized code: ``peak_tension`` and
-    ``wave_tension`` [N] after each, and the state after the last."""
+    ``wave_tension`` [N] after each, and the state after the last. The window's extremes by
+    two monotone queues in C (``_wave_loop.c``: one pass), else by a sparse table in numpy
+    (log2 of the window's readings passes): the same numbers."""
     n = len(t_s)
     if n == 0:
         return np.zeros(0), np.zeros(0), state
@@ -133,19 +140,30 @@ def series(
     before = np.array([e[1] for e in carried], np.float64)
     values = np.concatenate([before, np.where(ok, tension, np.nan)])
     m = len(carried)
-    hi = np.arange(m, m + n)
-    lo = np.searchsorted(times, t_s - window, 'left')
-    peak, low = _range_extremes(values, lo, hi)
+    lo = np.searchsorted(times, t_s[-1:] - window, 'left')  # the last reading's window
+    if _wave_loop is not None:  # two monotone queues in C, one pass
+        peak, low = np.empty(n), np.empty(n)
+        _wave_loop.extremes(times, values, m, float(window), peak, low)
+    else:  # a sparse table in numpy: the same maxima and minima
+        peak, low = _range_extremes(
+            values, np.searchsorted(times, t_s - window, 'left'), np.arange(m, m + n)
+        )
     wave = (peak - low) * 0.5
     # The queues after the last reading: rebuilt from the window's readings (numbered as the
     # core numbered them), the same entries as pushing them one by one.
     numbers = np.concatenate(
         [np.array([e[2] for e in carried], np.int64), state.number[0] + np.cumsum(ok) - 1]
     )
-    final = WaveState(deque(), deque(), [0])
     keep = np.flatnonzero(~np.isnan(values[lo[-1] :])) + lo[-1]
-    for t, v, i in zip(times[keep].tolist(), values[keep].tolist(), numbers[keep].tolist()):
-        final.number[0] = i
-        _push(final, t, v)
-    final.number[0] = state.number[0] + int(ok.sum())
+    v = values[keep]
+    # a queue keeps a reading no later one reaches (high: strictly above every later one; low:
+    # strictly below), which pushing them one by one leaves
+    above = v > np.append(np.maximum.accumulate(v[::-1])[::-1][1:], -np.inf)
+    below = v < np.append(np.minimum.accumulate(v[::-1])[::-1][1:], np.inf)
+    entries = list(zip(times[keep].tolist(), v.tolist(), numbers[keep].tolist()))
+    final = WaveState(
+        deque(e for e, up in zip(entries, above.tolist()) if up),
+        deque(e for e, down in zip(entries, below.tolist()) if down),
+        [state.number[0] + int(ok.sum())],
+    )
     return peak, wave, final

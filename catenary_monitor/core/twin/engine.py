@@ -320,6 +320,8 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
     for k, line in enumerate(core.state.lines):
         before = line.fatigue_values[0]
         r, s, st, a, d = _advance_line(core, k, window, tide, sensors, dock)
+        if not snapshots:  # no snapshot asks for a message: the inputs go now, not at the end
+            s.forget_inputs()
         results.append(r)
         series.append(s)
         steps.append(st)

@@ -100,7 +100,12 @@ def line_steps(line: LineState, tt: np.ndarray, window: Window) -> LineSteps:
 
 
 def pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
-    """``column[idx]`` where ``idx >= 0``, else ``before`` (the core's value before the window)."""
+    """``column[idx]`` where ``idx >= 0``, else ``before`` (the core's value before the window;
+    an empty column gives a read-only view of ``before``)."""
+    if len(column) > 1 and not column.strides[0] and isinstance(before, (float, int)):
+        same = column[0] == before or (column[0] != column[0] and before != before)
+        if same or not (idx < 0).any():  # a constant column (a read-only view) stays one
+            return np.broadcast_to(column[:1].astype(np.result_type(column, before)), (len(idx),))
     if (
         _loops is not None
         and len(column)
@@ -111,8 +116,8 @@ def pick(idx: np.ndarray, column: np.ndarray, before: float) -> np.ndarray:
         out = np.empty(len(idx))
         _loops.pick(np.ascontiguousarray(idx), np.ascontiguousarray(column), before, out)
         return out
-    if not len(column):
-        return np.full(len(idx), before)
+    if not len(column):  # the value before throughout: read-only, no memory per step
+        return np.broadcast_to(np.asarray(before), (len(idx),))
     # ``before`` appended last: index -1 (``_newest``'s "none yet") picks it, one gather; the
     # dtype as ``np.where`` would give it (a Python scalar does not widen the column)
     picked = np.append(column, before)[idx]

@@ -137,7 +137,11 @@ _NOT_SOLVED = frozenset(('depth', 'top_tension', 'time_to_uplift')) | frozenset(
 )
 
 
-_ROWS = {k: ALL_KEYS.index(k) for k in VALUE_FIELDS if k in ALL_KEYS}
+#: The kernel's rows the values take (the measured tension and depth are the inputs', the
+#: grounded length the holding rule's): only those are written.
+_KERNEL_ROWS = tuple(
+    k for k in ALL_KEYS if k in VALUE_FIELDS and k not in ('top_tension', 'grounded_length')
+)
 
 
 def _solve_updates_kernel(
@@ -158,9 +162,11 @@ def _solve_updates_kernel(
     x: Any = (
         float(line.anchor_distance) if span is None else np.ascontiguousarray(span, dtype=float)
     )
-    rows, status = fused_kernel.solve_arrays(float(line.weight), h, t, x, float(line.mbl), len(t))
+    rows, status = fused_kernel.solve_arrays(
+        float(line.weight), h, t, x, float(line.mbl), len(t), rows=_KERNEL_ROWS
+    )
     status[np.isnan(h)] = NO_DEPTH
-    out = {k: rows[i] for k, i in _ROWS.items()}
+    out = dict(zip(_KERNEL_ROWS, rows))
     if keep:
         out['depth'], out['top_tension'] = h, t
         return out, status
@@ -300,8 +306,11 @@ def _spans(
     dock estimate (:func:`dock_live.solve_spans`), the installed span where it gives none."""
     n = int(np.count_nonzero(steps.solved))
     installed = line.config.anchor_distance
-    if dock is None:
-        return np.full(n, installed), np.full(n, float(dock_live.INSTALLED))
+    if dock is None:  # constants: read-only, no memory per step
+        return (
+            np.broadcast_to(np.float64(installed), (n,)),
+            np.broadcast_to(np.float64(dock_live.INSTALLED), (n,)),
+        )
     column = dock.decision.span[:, k] if dock.decision.span is not None else np.zeros(0)
     estimate = pick(steps.k_idx[steps.solved], column, dock.span_before[k])
     known = ~np.isnan(estimate)

@@ -1,6 +1,7 @@
 """The twin's data: a :class:`Window` of log columns (its events), what the twin made of it
 (:class:`LineResult`, :class:`WindowResult`; the snapshots in columns: :class:`SnapshotColumns`),
-and the helpers on them: :func:`tick_grid`, :func:`slice_window`, :func:`concat_lines`,
+and the helpers on them: :func:`tick_grid` (and :func:`grid_ticks` over a log's silences),
+:func:`slice_window`, :func:`concat_lines`,
 :func:`worst`."""
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import numpy as np
 
 from catenary_monitor.core.alarms.journal import AlarmEvent
 from catenary_monitor.core.alarms.latches import Transition
+from catenary_monitor.core.config.parameters import MonitorConfig
 from catenary_monitor.core.monitor.state import NO_DEPTH, NO_MODEL, VALUE_FIELDS
 from catenary_monitor.core.monitor.status import Change, ComponentStatus, Snapshot
 from catenary_monitor.core.physics import elastic, point_loads
@@ -29,6 +31,8 @@ __all__ = [
     'LineResult',
     'WindowResult',
     'tick_grid',
+    'quiet_span',
+    'grid_ticks',
     'COLUMNS',
     'Field',
     'StatusColumns',
@@ -210,6 +214,78 @@ def tick_grid(
     k = np.arange(k0, max(k0, n), dtype=np.int64)
     ticks = start_ns + np.rint(k * period).astype(np.int64)
     return ticks[ticks <= end_ns]
+
+
+def quiet_span(config: MonitorConfig) -> float:
+    """How long [s] a grid of ticks goes on after an input when no other follows.
+
+    Without inputs, what a tick can still change runs on the clock: an input goes stale
+    (``tension_timeout``, ``depth_timeout``), a raise waits ``on_delay``, a sensor state held
+    since the last sample ends (``sensor_hold``, ``parted_window``, ``stuck_time``) and its
+    latch clears after a clear hold; then what counts those changes over a window
+    (``flood_window``, ``chatter_window``) or smooths the dock (``dock_residual_time``) forgets
+    them. The longest such chain, and two periods more: a tick later in the same silence
+    decides nothing new (its snapshot differs only in the ages it shows), so the grid does not
+    tick through it, and a silence of days costs what one of this length does."""
+    a = config.alarm
+    held = max(a.sensor_hold, a.parted_window, a.stuck_time) + max(
+        a.clear_hold, a.warn_clear_hold
+    )
+    first = max(a.tension_timeout, a.depth_timeout, a.on_delay, held)
+    windows = max(a.flood_window, a.chatter_window, config.dock.residual_time)
+    return first + windows + 2.0 / a.diagnostic_rate
+
+
+def grid_ticks(
+    start_ns: int,
+    rate_hz: float,
+    k0: int,
+    inputs: np.ndarray,
+    before_ns: Optional[int],
+    quiet_ns: int,
+    end_ns: int,
+    cap: Optional[int] = None,
+) -> tuple[np.ndarray, int]:
+    """The grid ticks ``start + rint(k * 1e9 / rate)`` (ns) with ``k >= k0``, at or before
+    ``end_ns``, that follow an input by at most ``quiet_ns`` (:func:`quiet_span`), at most
+    ``cap`` of them (the first); and the k after the last one given (``k0`` if none).
+
+    ``inputs``: the input stamps (ns, sorted) of a stretch of log; ``before_ns`` the newest
+    input before them (None: none). The ticks are a set defined by the whole log (every grid
+    point within ``quiet_ns`` after an input), so a log cut in windows gets the same ones.
+    The work is in the inputs and the ticks given, never in the time they span."""
+    period = 1e9 / rate_hz
+    s = np.asarray(inputs, np.int64)
+    if before_ns is not None:
+        s = np.concatenate([np.array([before_ns], np.int64), s])
+    if not len(s) or end_ns < s[0]:
+        return np.zeros(0, np.int64), k0
+    breaks = np.flatnonzero(np.diff(s) > quiet_ns)
+    lo = s[np.concatenate([[0], breaks + 1])]
+    hi = np.minimum(s[np.concatenate([breaks, [len(s) - 1]])] + quiet_ns, end_ns)
+    keep = hi >= lo
+    lo, hi = lo[keep], hi[keep]
+    # Each stretch's candidate k: one period of slack either side for the rounding.
+    ka = np.maximum(np.floor((lo - start_ns) / period).astype(np.int64) - 1, k0)
+    kb = np.floor((hi - start_ns) / period).astype(np.int64) + 1
+    every = np.maximum(kb - ka + 1, 0)
+    budget = None if cap is None else int(cap) + 2
+    while True:
+        count = every
+        if budget is not None:  # the candidates of the first ``budget`` (some fall out)
+            count = np.minimum(every, np.maximum(budget - (np.cumsum(every) - every), 0))
+        total = int(count.sum())
+        first = np.cumsum(count) - count
+        k = np.repeat(ka, count) + (np.arange(total, dtype=np.int64) - np.repeat(first, count))
+        ticks = start_ns + np.rint(k * period).astype(np.int64)
+        inside = (ticks >= np.repeat(lo, count)) & (ticks <= np.repeat(hi, count))
+        k, ticks = k[inside], ticks[inside]
+        if cap is None or len(k) >= cap or total == int(every.sum()):
+            break
+        budget = 2 * budget  # type: ignore[operator]
+    if cap is not None:
+        k, ticks = k[:cap], ticks[:cap]
+    return ticks, (int(k[-1]) + 1 if len(k) else k0)
 
 
 #: ``advance(..., snapshots=COLUMNS)``: the snapshots as :class:`SnapshotColumns`.

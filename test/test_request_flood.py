@@ -1,0 +1,211 @@
+"""Operators' requests from the ROS graph: rate-limited per publisher, every refusal recorded
+and answered (core/alarms/requests.py, ros/request_reader.py, the Refusal event).
+
+A node gone wrong sends 1,000 shelving requests a second for 10 s (a shelf toggled on and off
+on a warning line); meanwhile a console acknowledges and shelves. The monitor must stay quiet
+(it had published 562 /diagnostics arrays a second and logged 5,700 lines in 10 s; the
+toggling raised the warning 34 times), take the console's requests (the console is one
+publisher: never locked out), and account for every request of the flood in its records.
+Requests refused before the alarm rules (a duration of nan, inf or -1, an unknown alarm or
+line, an empty acknowledgement) each leave a record and an answer.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from ros_harness import Client, child_env, output_of, start_monitor, stop, write_params
+
+from catenary_monitor.core.alarms.requests import BURST, REPORT_EVERY, RequestLimit
+
+HERE = Path(__file__).resolve().parent
+ACK = '/catenary_monitor/acknowledge'
+SHELVE = '/catenary_monitor/shelve'
+LINE = dict(weight=1300.0, anchor_distance=120.0, mbl=4.827e6)
+OK_T, WARN_T = 372e3, 450e3  # line_01 at 450 kN: anchor margin 4.1 m, WARN
+
+
+def test_the_limit_lets_a_burst_through_then_a_request_a_second() -> None:
+    limit = RequestLimit()
+    assert [limit.admit('a', 0.0) for _ in range(BURST + 5)].count(True) == BURST
+    assert limit.due(0.0) == [('a', 5)]  # the first record at once
+    assert not limit.admit('a', 0.5) and limit.admit('a', 1.5)  # one a second after that
+    assert limit.admit('b', 0.5)  # another publisher is not held back
+    limit.refuse('a', 100)  # lost behind the flood, before they were read
+    assert limit.due(5.0) == []  # at most one record per period
+    assert limit.due(REPORT_EVERY + 0.1) == [('a', 101)]
+    assert limit.due(100.0, every_one=True) == []
+    many = RequestLimit(keys=4, burst=1)
+    for k in range(10):  # beyond KEYS_MAX, new publishers share their group's bucket
+        many.admit(f'shelve {k}', 0.0)
+    assert len(many._buckets) <= 5
+    assert many.due(0.0) == [('shelve (other publishers)', 5)]
+
+
+def test_a_refusal_is_recorded_answered_and_replayed_alike() -> None:
+    """A Refusal: its record round-trips, the core journals and answers it (a shelving
+    request's on the alarms status, at once), an acknowledgement of an unknown line is one
+    too, and the twin (run_log) makes the same records."""
+    import json
+
+    import numpy as np
+    from replay_data import T0_NS, dock_config
+
+    from catenary_monitor.core.monitor.events import (
+        Acknowledge,
+        Refusal,
+        Tick,
+        event_record,
+        parse_event_record,
+    )
+    from catenary_monitor.core.monitor.monitor_core import MonitorCore
+    from catenary_monitor.core.twin.engine import run_log
+    from catenary_monitor.core.twin.window import Window
+
+    ev = Refusal(T0_NS + 5, 'shelve', 'line_01', 'over the rate limit', 'x', '/n gid 01', 42)
+    assert parse_event_record(ev.stamp_ns, json.dumps(event_record(ev))) == ev
+    bad = '{"kind": "refused", "request": "reboot", "reason": "r"}'
+    assert parse_event_record(0, bad) is None
+    config = dock_config(2)
+    core = MonitorCore(config, T0_NS)
+    step = core.step(ev)
+    assert step.note == 'line_01: refused: over the rate limit (42 requests)'
+    alarms = {st.name: dict(st.values) for st in step.snapshot.statuses}
+    assert alarms['catenary_monitor: alarms']['shelve_answer'] == step.note
+    assert alarms['catenary_monitor: alarms']['shelve_requests'] == '42'
+    (record,) = step.alarm_events
+    got = (record.kind, record.alarm, record.value, record.level)
+    assert got == ('refused', 'line_01', 42.0, '')
+    ack = core.step(Acknowledge(T0_NS + 6, 'nope', 'op', '/n gid 01'))
+    assert ack.kind == 'refused' and ack.snapshot is None and 'unknown alarm' in ack.note
+    assert ack.alarm_events[0].level == 'acknowledge'
+    events = [ev, Acknowledge(T0_NS + 6, 'nope', 'op', '/n gid 01')]
+    ticks = np.array([T0_NS + 10], np.int64)
+    want = MonitorCore(config, T0_NS)
+    journal = [e for x in [*events, Tick(int(ticks[0]))] for e in want.step(x).alarm_events]
+    empty = (np.zeros(0, np.int64), np.zeros(0))
+    result, _ = run_log(MonitorCore(config, T0_NS), Window([empty, empty], empty, ticks), events)
+    assert sorted(result.alarm_events) == sorted(journal)
+
+
+def _events(log_dir: Path) -> list:
+    from catenary_monitor.core.monitor.events import EVENTS_TOPIC, parse_event_record
+    from catenary_monitor.io.cdr import string_text
+    from catenary_monitor.io.mcap_read import iter_messages
+
+    files = sorted(log_dir.glob('*.mcap'))
+    return [
+        parse_event_record(m.log_time_ns, string_text(m.data))
+        for m in iter_messages(files, [EVENTS_TOPIC])
+    ]
+
+
+@pytest.mark.ros
+def test_a_flood_of_requests_costs_a_request_a_second_and_locks_no_operator_out(
+    tmp_path: Path,
+) -> None:
+    import rclpy
+    from rclpy.qos import QoSProfile
+    from std_msgs.msg import String
+
+    from catenary_monitor.core.monitor.events import Acknowledge, Refusal, Shelve
+
+    params = write_params(tmp_path / 'p.yaml', {'line_01': LINE, 'line_02': LINE})
+    log_dir = tmp_path / 'log'
+    proc = start_monitor(params, log_dir)
+    client = Client('request_flood_client')
+    console = rclpy.create_node('catenary_console_flood')
+    tool = rclpy.create_node('request_tool')
+    flooder = None
+    try:
+        ack = console.create_publisher(String, ACK, QoSProfile(depth=10))
+        shelve = console.create_publisher(String, SHELVE, QoSProfile(depth=10))
+        bad_shelve = tool.create_publisher(String, SHELVE, QoSProfile(depth=10))
+        bad_ack = tool.create_publisher(String, ACK, QoSProfile(depth=10))
+        topics = ['/mooring/line_01/tension', '/mooring/line_02/tension', '/tide/depth']
+        client.wait_matched(topics, 60.0)
+        for pub in (ack, shelve, bad_shelve, bad_ack):
+            client.wait_for(lambda p=pub: p.get_subscription_count() > 0, 30.0, 'the monitor')
+        client.feed('/tide/depth', 20.85)
+        client.feed('/mooring/line_02/tension', OK_T)
+        client.feed('/mooring/line_01/tension', WARN_T)
+        client.wait_status('catenary_monitor: line_01', 30.0, level=1)
+        # Refused before the rules: each one recorded and answered, none silent.
+        for text in ('line_01 nan tool', 'line_01 inf tool', 'line_01 -1 tool', 'nope 60 tool'):
+            bad_shelve.publish(String(data=text))
+            time.sleep(0.3)
+        for text in ('nope tool', '   '):
+            bad_ack.publish(String(data=text))
+            time.sleep(0.3)
+        client.wait_for(lambda: output_of(proc).count('refused') >= 6, 10.0, 'the refusals')
+        # The flood: a shelf toggled on and off, 1,000 requests a second for 10 s.
+        flooder = subprocess.Popen(
+            [sys.executable, str(HERE / 'request_flood.py'), SHELVE, '1000', '10',
+             'line_01 600 flood', 'line_01 0 flood'],
+            stdout=subprocess.PIPE, text=True, env=child_env(),
+        )  # fmt: skip
+        assert flooder.stdout is not None and flooder.stdout.readline().strip() == 'matched'
+        t0 = time.monotonic()
+        lines0 = len(output_of(proc).splitlines())
+        time.sleep(4.0)
+        ack.publish(String(data='line_01 console op'))  # the console, mid-flood
+        shelve.publish(String(data='line_02 60 console op'))
+        out, _ = flooder.communicate(timeout=60)
+        t1 = time.monotonic()
+        sent = int(out.split()[-1])
+        time.sleep(1.5)
+        text = output_of(proc)
+        during = text.splitlines()[lines0:]
+        arrays = [t for t, _ in client.diagnostics if t0 <= t <= t1]
+        answer = client.latest_status('catenary_monitor: alarms')
+    finally:
+        if flooder is not None and flooder.poll() is None:
+            flooder.terminate()
+        console.destroy_node()
+        tool.destroy_node()
+        client.close()
+        code = stop(proc, sig=2)
+    assert code == 0, output_of(proc)
+    seconds = t1 - t0
+    print(f'{sent} requests in {seconds:.1f} s: {len(arrays)} /diagnostics arrays, '
+          f'{len(during)} log lines')  # fmt: skip
+    assert sent > 5000
+    assert len(arrays) / seconds < 5.0, len(arrays)  # 1 Hz ticks and a request a second
+    assert len(during) < 60, '\n'.join(during[:80])
+    # The console was heard mid-flood, named by its own GID.
+    assert 'ACKNOWLEDGED line_01 by console op (/catenary_console_flood gid ' in text, text
+    assert 'SHELVE line_02 shelved for 60 s by console op (/catenary_console_flood gid' in text
+    # The flood's answer, and no alarm raised by it (the warning was raised once, before).
+    assert answer is not None and 'over the rate limit' in answer['values']['shelve_answer']
+    events = [e for e in _events(log_dir) if e is not None]
+    others = ('catenary_console_flood', 'request_tool')
+    flood = [
+        e
+        for e in events
+        if isinstance(e, (Shelve, Refusal)) and not any(o in e.publisher for o in others)
+    ]
+    assert any('/request_flooder gid' in e.publisher for e in flood)
+    admitted = [e for e in flood if isinstance(e, Shelve)]
+    refused = [e for e in flood if isinstance(e, Refusal)]
+    assert BURST <= len(admitted) <= BURST + seconds + 3, len(admitted)
+    assert len(refused) <= seconds / REPORT_EVERY + 3, refused
+    # Every request of the flood is accounted for: taken, or refused and counted.
+    assert len(admitted) + sum(e.requests for e in refused) == sent
+    ours = [e for e in events if isinstance(e, (Acknowledge, Shelve))]
+    assert any('catenary_console_flood' in e.publisher for e in ours)
+    # Refused before the rules: recorded as refusals (or by the rules: the unknown alarm).
+    tools = [e for e in events if 'request_tool' in getattr(e, 'publisher', '')]
+    reasons = [e.reason for e in tools if isinstance(e, Refusal)]
+    assert len(reasons) == 5, reasons  # nan, inf, -1, the unknown line, the empty ack
+    assert any('nope' == e.alarm for e in tools if isinstance(e, Shelve))  # the rules refuse
+    from catenary_monitor.replay.driver import expand, load_config, replay_log
+
+    replay = replay_log(expand([str(log_dir)]), load_config(str(params)), ticks='log')
+    journal = replay.result.alarm_events
+    assert sum(1 for e in journal if e.kind == 'refused') >= 6 + len(refused)
+    raised = [e for e in journal if e.kind == 'raised' and e.alarm == 'line_01']
+    assert len(raised) == 1, raised
