@@ -51,6 +51,8 @@ MAX_DOMAIN_ID = 232
 _NAME = re.compile(r'^[A-Za-z0-9_][A-Za-z0-9_.-]{0,63}$')
 _NUMBER = r'[-+]?(?:\d+(?:\.\d*)?|\.\d+)'
 _POSITION = re.compile(rf'@({_NUMBER}),({_NUMBER})$')
+#: Alarm states whose condition is still there (``returned-unacknowledged`` is not).
+_IN_ALARM = ('unacknowledged', 'acknowledged')
 #: Inter-arrival gaps kept to learn the period of a monitor the harbour has no params for.
 _GAPS = 9
 
@@ -117,29 +119,42 @@ def worst_level(levels: Sequence[str]) -> str:
 
 @dataclass
 class DockState:
-    """What the harbour heard from one dock: the newest array's statuses and when it came,
-    and the traffic (arrays, bytes) since the harbour started at ``started`` (s)."""
+    """What the harbour heard from one dock: the newest array's statuses and when it came
+    (``rx``), when its worst level became what it is (``level_since``; a monitor heard again
+    after a silence starts anew), when the first array came, and the traffic (arrays, bytes)
+    since the harbour started at ``started`` (s). ``period``: the monitor's ``/diagnostics``
+    period from its params file (s; None: learned from the arrays' gaps)."""
 
     started: float
+    period: Optional[float] = None
     statuses: dict[str, Status] = field(default_factory=dict)
     rx: Optional[float] = None
+    first_rx: Optional[float] = None
+    level: Optional[str] = None
+    level_since: Optional[float] = None
     arrays: int = 0
     bytes: int = 0
     gaps: list[float] = field(default_factory=list)
 
     def feed(self, rx: float, statuses: dict[str, Status], size: int) -> None:
         """One array of the dock's monitor received at ``rx`` (s), ``size`` bytes of CDR."""
+        silent = self.rx is not None and rx - self.rx > self.silence_limit()
         if self.rx is not None:
             self.gaps.append(max(rx - self.rx, 0.0))
             del self.gaps[:-_GAPS]
+        level = worst_level([st.level for st in statuses.values()])
+        if level != self.level or silent or self.rx is None:
+            self.level, self.level_since = level, rx
         self.statuses, self.rx = statuses, rx
+        self.first_rx = rx if self.first_rx is None else self.first_rx
         self.arrays += 1
         self.bytes += size
 
-    def silence_limit(self, period: Optional[float]) -> float:
+    def silence_limit(self) -> float:
         """Seconds without an array after which the monitor counts as silent: the console's
         rule (twice the period plus 1 s) with the period from the params file, else the
         median gap between the last arrays (the default 1 Hz until three came)."""
+        period = self.period
         if period is None:
             period = statistics.median(self.gaps) if len(self.gaps) >= 3 else 1.0
         return silence_limit(1.0 / max(period, 0.01))
@@ -198,14 +213,19 @@ def _extreme(lines: list[dict[str, Any]], key: str, pick: Any) -> tuple[Any, Opt
 
 def _first_out(statuses: Mapping[str, Status], rows: list[dict[str, Any]]) -> tuple[str, str]:
     """The dock's first out and where it comes from: during a flood the monitor's own
-    (``flood``: the alarm raised first when the flood began), else the active alarm raised
-    first (``earliest``); ('', '') with no alarm active."""
+    (``flood``: the alarm raised first when the flood began), else the alarm raised first
+    among those still in alarm (``earliest``; one that returned to normal unacknowledged is
+    listed but starts nothing); ('', '') with no alarm in alarm."""
     alarms = statuses.get('alarms')
     if alarms is not None and alarms.values.get('flood') == 'true':
         name = alarms.values.get('first_out', '')
         if name:
             return name, 'flood'
-    raised = [(r.get('raised') or math.inf, r.get('line', '')) for r in rows]
+    raised = [
+        (r.get('raised') or math.inf, r.get('line', ''))
+        for r in rows
+        if r.get('state') in _IN_ALARM
+    ]
     if not raised:
         return '', ''
     return min(raised)[1], 'earliest'
@@ -233,7 +253,7 @@ def dock_view(spec: DockSpec, state: DockState, now: float) -> dict[str, Any]:
     docs/harbour.md for every key."""
     statuses = state.statuses
     age = None if state.rx is None else max(now - state.rx, 0.0)
-    limit = state.silence_limit(spec.period)
+    limit = state.silence_limit()
     alive = age is not None and age <= limit
     names = line_names(spec, statuses)
     lines = [_line(n, statuses.get(n), alive) for n in names]
@@ -257,6 +277,7 @@ def dock_view(spec: DockSpec, state: DockState, now: float) -> dict[str, Any]:
         'domain_id': spec.domain_id,
         'level': last if (alive and last is not None) else 'STALE',
         'last_level': last,
+        'level_since': _level_since(state, alive, limit),
         'message': _message(spec, statuses, alive, age, limit, now - state.started),
         'monitor_alive': alive,
         'status_age_s': age,
@@ -276,8 +297,17 @@ def dock_view(spec: DockSpec, state: DockState, now: float) -> dict[str, Any]:
         'components': components,
         'console_url': spec.console_url,
         'position': None if spec.lat is None else {'lat': spec.lat, 'lon': spec.lon},
-        'received': {'arrays': state.arrays, 'bytes': state.bytes},
+        'received': {'arrays': state.arrays, 'bytes': state.bytes, 'first': state.first_rx},
     }
+
+
+def _level_since(state: DockState, alive: bool, limit: float) -> float:
+    """When the dock's level (as shown) began (s): its worst level's change while its monitor
+    is alive, else the moment its silence passed the limit (from the harbour's start when
+    nothing ever came)."""
+    if alive and state.level_since is not None:
+        return state.level_since
+    return (state.rx if state.rx is not None else state.started) + limit
 
 
 def _message(

@@ -57,10 +57,24 @@ HARBOUR_FILES = {
 
 
 class HarbourServer(ConsoleServer):
-    """The harbour page on ``bind:port`` over a :class:`.harbour_source.HarbourSource`."""
+    """The harbour page on ``bind:port`` over a :class:`.harbour_source.HarbourSource` (the
+    console's keyword arguments: ``operators``, ``read_only``, ``tls``, ``server_names``)."""
 
     #: A harbour frame holds every dock: at most 4 a second to each page.
     frame_interval = 0.25
+
+    def __init__(self, source: Any, bind: str = '127.0.0.1', port: int = 8090, **kw: Any):
+        super().__init__(source, bind, port, **kw)
+
+    def authorize(self, request: Request) -> Actor:
+        """The console's policy; a harbour without operators says where to acknowledge."""
+        if self.read_only and self.operators is None:
+            raise HttpError(
+                403,
+                'this harbour is read-only: acknowledge at the dock\'s own console (or start '
+                'the harbour with --token-file)',
+            )
+        return super().authorize(request)
 
     def routes(self) -> tuple[Mapping[str, Page], Mapping[str, tuple[int, Action]]]:
         return HARBOUR_PAGES, HARBOUR_ACTIONS
@@ -110,13 +124,22 @@ def _acknowledge(server: ConsoleServer, request: Request, actor: Actor) -> Respo
         if any(c.isspace() for c in value):
             raise HttpError(400, usage)
     try:
-        sent = _source(server).acknowledge(dock, line, actor.origin.replace('console', 'harbour'))
+        sent = _source(server).acknowledge(dock, line, _harbour_origin(actor.origin))
     except AckError as err:
         raise HttpError(err.status, str(err)) from None
     return ok_response(
         json_body({'sent': sent, 'dock': dock, 'operator': actor.name}),
         status=int(HTTPStatus.ACCEPTED),
     )
+
+
+def _harbour_origin(origin: str) -> str:
+    """The actor's origin as the dock's monitor records it: ``console HOST`` becomes
+    ``harbour HOST`` (the operator's name untouched)."""
+    head, sep, rest = origin.rpartition(' via console ')
+    if sep:
+        return f'{head} via harbour {rest}'
+    return 'harbour ' + origin[len('console '):] if origin.startswith('console ') else origin
 
 
 #: The harbour's GET routes (``/static/NAME`` besides).

@@ -74,14 +74,21 @@ class HarbourSource:
         self.started = time.time()
         self.cond = threading.Condition()
         self.version = 0
-        self.states = {d.name: DockState(self.started) for d in self.specs}
+        self.states = {d.name: DockState(self.started, d.period) for d in self.specs}
         self.errors: dict[str, str] = {}
         self._docks = [_Dock(d) for d in self.specs]
         self._stop = threading.Event()
 
     # ------------------------------------------------------------------ ROS side
     def start(self) -> None:
-        """One context, node and spinning thread per dock (its own domain)."""
+        """One context, node and spinning thread per dock (its own domain); ``started`` is
+        now, once rclpy is loaded (the docks' ages and silences count from here)."""
+        import rclpy  # noqa: F401 - loaded before the clock starts
+
+        with self.cond:
+            self.started = time.time()
+            for state in self.states.values():
+                state.started = self.started
         for dock in self._docks:
             self._start_dock(dock)
             dock.thread = threading.Thread(
