@@ -169,7 +169,9 @@ def test_the_three_docks_are_listed_with_their_levels_within_3_s(harbour):
     # the learned period of the dock without a params file (1 Hz until three gaps): 2 Hz,
     # silent after 2 s
     south = wait_until(
-        'four arrays from south', lambda: (d := docks(url)['south'])['received']['arrays'] > 4 and d, 30.0
+        'five arrays from south',
+        lambda: (d := docks(url)['south'])['received']['arrays'] > 4 and d,
+        30.0,
     )
     assert south['silence_limit_s'] == pytest.approx(2.0, abs=0.3)
     assert found['north']['silence_limit_s'] == 2.0
@@ -258,7 +260,8 @@ for (const t of tiles) {
   const r = box(t);
   for (const e of t.querySelectorAll('*')) {
     const b = box(e);
-    if (b.left < r.left - 1 || b.right > r.right + 1 || b.top < r.top - 1 || b.bottom > r.bottom + 1)
+    if (b.left < r.left - 1 || b.right > r.right + 1
+        || b.top < r.top - 1 || b.bottom > r.bottom + 1)
       out.push(`${t.dataset.dock}: ${e.className || e.tagName} outside its tile`);
   }
   for (const e of [t.querySelector('.level'), t.querySelector('.name')]) {

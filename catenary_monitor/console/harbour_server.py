@@ -64,6 +64,8 @@ class HarbourServer(ConsoleServer):
     frame_interval = 0.25
 
     def __init__(self, source: Any, bind: str = '127.0.0.1', port: int = 8090, **kw: Any):
+        # read-only unless operators are given (tokens): no "open" harbour
+        kw['read_only'] = bool(kw.get('read_only')) or kw.get('operators') is None
         super().__init__(source, bind, port, **kw)
 
     def authorize(self, request: Request) -> Actor:
