@@ -261,3 +261,35 @@ def test_bad_command_lines_exit_2_with_one_line(args, words):
     )
     assert p.returncode == 2, p.stderr
     assert words in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+
+
+class _Info:
+    def __init__(self, name: str, namespace: str = '/') -> None:
+        self.node_name, self.node_namespace = name, namespace
+
+
+class _Graph:
+    """Stands in for the dock's node: who publishes /diagnostics."""
+
+    def __init__(self, *infos: _Info) -> None:
+        self.infos = list(infos)
+
+    def get_publishers_info_by_topic(self, topic: str) -> list[_Info]:
+        assert topic == '/diagnostics'
+        return self.infos
+
+
+def test_two_monitors_in_one_domain_make_the_dock_stale(fed_source):
+    """Two docks in one domain (or a discovery server matching across domains): their arrays
+    cannot be told apart: STALE, both named, a row of its own; a driver's diagnostics and the
+    harbour's own node do not count."""
+    one = _Graph(_Info('catenary_monitor'), _Info('gauge_driver'), _Info('catenary_monitor', '/x'))
+    fed_source.check_publishers('a', one)
+    view = fed_source.docks()[0]
+    assert view['level'] == 'STALE' and view['monitor_alive'] is True
+    assert view['monitors'] == ['/catenary_monitor', '/x/catenary_monitor']
+    assert '2 monitors publish /diagnostics in domain 81' in view['message']
+    rows = fed_source.frame()['alarms']
+    assert (rows[0]['dock'], rows[0]['state']) == ('a', 'monitors mixed')
+    fed_source.check_publishers('a', _Graph(_Info('catenary_monitor'), _Info('gauge_driver')))
+    assert fed_source.docks()[0]['level'] == 'OK'

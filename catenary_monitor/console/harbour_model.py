@@ -38,6 +38,7 @@ __all__ = [
     'line_names',
     'dock_view',
     'harbour_alarms',
+    'mixed',
     'worst_level',
     'LEVEL_RANK',
     'MAX_DOMAIN_ID',
@@ -334,19 +335,33 @@ def _message(
     return 'every status OK'
 
 
+def mixed(view: dict[str, Any], monitors: Sequence[str]) -> None:
+    """Mark a dock view whose domain holds several monitors (``monitors``: their node names):
+    their arrays cannot be told apart, so the dock is STALE, whatever they say."""
+    view['level'] = 'STALE'
+    view['monitors'] = list(monitors)
+    view['level_since'] = None
+    view['message'] = (
+        f'{len(monitors)} monitors publish /diagnostics in domain {view["domain_id"]} '
+        f'({", ".join(monitors)}): the harbour cannot tell them apart; give each dock its own '
+        'domain (a discovery server matches across domains: see the deploy guide)'
+    )
+
+
 def harbour_alarms(docks: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
     """The harbour-wide alarm list: every dock's active alarms, each dock's first out first,
     then unacknowledged before acknowledged, ERROR before STALE before WARN, newest first; a
-    silent dock is one row of its own (``monitor silent``), before every other."""
+    silent dock is one row of its own (``monitor silent``), before every other, as is a dock
+    whose domain holds several monitors (``monitors mixed``)."""
     rank_state = {'unacknowledged': 0, 'returned-unacknowledged': 1, 'acknowledged': 2}
     rows: list[dict[str, Any]] = []
     for dock in docks:
-        if not dock['monitor_alive']:
+        if not dock['monitor_alive'] or len(dock.get('monitors', ())) > 1:
             rows.append(
                 {
                     'dock': dock['name'],
                     'line': '',
-                    'state': 'monitor silent',
+                    'state': 'monitor silent' if not dock['monitor_alive'] else 'monitors mixed',
                     'level': 'STALE',
                     'raised': None,
                     'message': dock['message'],
@@ -356,7 +371,7 @@ def harbour_alarms(docks: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
         rows.extend(dock['alarms'])
     rows.sort(
         key=lambda r: (
-            r['state'] != 'monitor silent',
+            r['state'] not in ('monitor silent', 'monitors mixed'),
             not r.get('first_out'),
             rank_state.get(r.get('state', ''), 3),
             -LEVEL_RANK.get(r.get('level', 'STALE'), 2),

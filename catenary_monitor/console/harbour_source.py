@@ -27,15 +27,19 @@ from catenary_monitor.console.harbour_model import (
     dock_view,
     harbour_alarms,
     line_names,
+    mixed,
     worst_level,
 )
 from catenary_monitor.core.alarms.acknowledge import ACKNOWLEDGE_TOPIC, ALL_LINES, SENSORS
 from catenary_monitor.core.config.parameters import COMPONENTS
+from catenary_monitor.core.monitor.events import NODE_NAME
 
 __all__ = ['HarbourSource', 'NODE_PREFIX']
 
 #: The harbour's node name in every domain (then its process id).
 NODE_PREFIX = 'catenary_console_harbour'
+#: Seconds between two looks at who publishes /diagnostics in a dock's domain.
+PUBLISHERS_CHECK = 2.0
 
 
 class _Dock:
@@ -76,6 +80,7 @@ class HarbourSource:
         self.version = 0
         self.states = {d.name: DockState(self.started, d.period) for d in self.specs}
         self.errors: dict[str, str] = {}
+        self.crowded: dict[str, list[str]] = {}
         self._docks = [_Dock(d) for d in self.specs]
         self._stop = threading.Event()
 
@@ -136,14 +141,35 @@ class HarbourSource:
 
         executor = SingleThreadedExecutor(context=dock.context)
         executor.add_node(dock.node)
+        check = 0.0
         try:
             while not self._stop.is_set() and dock.context.ok():
                 executor.spin_once(timeout_sec=0.5)
+                if time.monotonic() >= check:
+                    check = time.monotonic() + PUBLISHERS_CHECK
+                    self.check_publishers(dock.spec.name, dock.node)
         except Exception as exc:  # noqa: BLE001 - shown on the page, the others go on
             with self.cond:
                 self.errors[dock.spec.name] = f'ROS client stopped: {exc}'
         finally:
             executor.shutdown(0.5)
+
+    def check_publishers(self, name: str, node: Any) -> None:
+        """Note the monitors publishing ``/diagnostics`` in the dock's domain when there are
+        several (two docks in one domain, or a discovery server matching across domains):
+        their arrays cannot be told apart, so the dock is shown STALE, naming them."""
+        monitors = sorted(
+            {
+                f'{info.node_namespace.rstrip("/")}/{info.node_name}'
+                for info in node.get_publishers_info_by_topic('/diagnostics')
+                if info.node_name == NODE_NAME
+            }
+        )
+        with self.cond:
+            if len(monitors) > 1:
+                self.crowded[name] = monitors
+            else:
+                self.crowded.pop(name, None)
 
     def stop(self) -> None:
         """Stop every thread, destroy the nodes and shut each context down."""
@@ -195,9 +221,12 @@ class HarbourSource:
         with self.cond:
             views = [dock_view(s, self.states[s.name], now) for s in self.specs]
             errors = dict(self.errors)
+            crowded = dict(self.crowded)
         for view in views:
             if view['name'] in errors:
                 view['message'] = errors[view['name']]
+            if view['name'] in crowded:
+                mixed(view, crowded[view['name']])
             if self.kpis is not None:
                 view['kpis'] = kpis.get(view['name'], [])
         return views

@@ -71,6 +71,8 @@ function tile(dock) {
     const last = dock.last_level ? ` (last ${dock.last_level})` : '';
     t.appendChild(el('div', 'silent', dock.status_age_s === null ? 'NO DATA FROM ITS MONITOR'
       : `MONITOR SILENT${last}`));
+  } else if (dock.monitors && dock.monitors.length > 1) {
+    t.appendChild(el('div', 'silent', `${dock.monitors.length} MONITORS IN ONE DOMAIN`));
   }
   t.appendChild(el('div', 'msg', dock.message));
   const dl = el('dl');
@@ -152,7 +154,7 @@ function renderMap(frame) {
 }
 
 function alarmRow(r) {
-  const silent = r.state === 'monitor silent';
+  const silent = !r.line;  // the dock itself: its monitor silent, or several mixed
   const box = el('div', `alarm st-${r.state.replace(/ /g, '-')}${silent ? ' silent' : ''}`);
   box.dataset.dock = r.dock;
   const where = el('span', 'where', r.line ? `${r.dock} · ${r.line}` : r.dock);
