@@ -18,7 +18,7 @@ import sys
 import threading
 from typing import Any
 
-from catenary_monitor.console.command import (
+from catenary_monitor.console.server_options import (
     Refused,
     add_server_options,
     print_urls,
