@@ -62,13 +62,12 @@ def capture_array(domain: int, seconds: float, tmp: str) -> bytes:
     context = _context(domain)
     node = rclpy.create_node('bench_harbour_capture', context=context)
     largest = [b'']
-    node.create_subscription(
-        DiagnosticArray,
-        '/diagnostics',
-        lambda data: largest.__setitem__(0, max(largest[0], data, key=len)),
-        10,
-        raw=True,
-    )
+
+    def keep(data: bytes) -> None:
+        if len(data) > len(largest[0]):
+            largest[0] = data
+
+    node.create_subscription(DiagnosticArray, '/diagnostics', keep, 10, raw=True)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     monitor = subprocess.Popen(
