@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from harbour_data import write_kpi_dataset
 from ros_harness import Client, child_env, start_monitor, stop, write_params
 
 pytestmark = [pytest.mark.ros, pytest.mark.usefixtures('no_callback_errors')]
@@ -114,6 +115,7 @@ def harbour(tmp_path_factory: Any) -> Any:
             '--dock', f'middle={middle}:{tmp / "middle.yaml"}@32.318,-64.829',
             '--dock', f'south={south}',
             '--console-url', 'middle=http://127.0.0.1:8080/',
+            '--fleet-dataset', str(write_kpi_dataset(tmp / 'fleet')),
         ]  # fmt: skip
         proc = subprocess.Popen(
             [sys.executable, '-m', 'catenary_monitor.cli.main', 'harbour', *args, '--port', '0'],
@@ -240,6 +242,12 @@ def test_the_page_shows_the_three_tiles(harbour, tmp_path):
             assert driver.execute_script(
                 "return document.querySelectorAll('#map g[data-dock]').length;"
             ) == 2
+            kpis = driver.execute_script(
+                "return [...document.querySelectorAll('.tile [data-kpis]')]"
+                '.map((e) => e.textContent);'
+            )
+            assert kpis[0].startswith('fleet 2026-12-01: 0.02 alarms/10 min, 27 min in alarm')
+            assert kpis[1:] == ['fleet: no day of this dock in the dataset'] * 2
             first = driver.execute_script(
                 "const r = document.querySelector('#alarms .alarm');"
                 "return r && r.dataset.dock + ' ' + !!r.querySelector('.first');"

@@ -293,3 +293,35 @@ def test_two_monitors_in_one_domain_make_the_dock_stale(fed_source):
     assert (rows[0]['dock'], rows[0]['state']) == ('a', 'monitors mixed')
     fed_source.check_publishers('a', _Graph(_Info('catenary_monitor'), _Info('gauge_driver')))
     assert fed_source.docks()[0]['level'] == 'OK'
+
+
+def test_fleet_kpis_per_dock_and_day(tmp_path):
+    """Alarms per 10 min, time in alarm and fatigue from a dataset the fleet's writers wrote;
+    a dock not in it has none; a damaged file is one line, not a traceback."""
+    from harbour_data import EXPECTED, write_kpi_dataset
+
+    from catenary_monitor.console.harbour_fleet import FleetKpis, dock_kpis
+
+    root = write_kpi_dataset(tmp_path / 'results')
+    got = dock_kpis(root, 'north')
+    assert [k['day'] for k in got] == [e['day'] for e in EXPECTED]
+    for k, e in zip(got, EXPECTED):
+        assert k == pytest.approx(e), k['day']
+    assert dock_kpis(root, 'south') == []
+    kpis = FleetKpis(str(root), ['north', 'south'])
+    source = HarbourSource([DockSpec('north', 81), DockSpec('south', 82)], kpis=kpis)
+    views = source.docks()
+    assert views[0]['kpis'][-1]['alarms'] == 3 and views[1]['kpis'] == []
+    bad = next((root / 'daily' / 'dock=north').glob('date=*/part-0.parquet'))
+    bad.write_bytes(b'not parquet')
+    error = FleetKpis(str(root), ['north'])()['north']['error']
+    assert error.startswith(f'fleet dataset {root}: ') and '\n' not in error
+
+
+def test_fleet_dataset_option_refuses_a_folder_that_is_not_one(tmp_path):
+    p = subprocess.run(
+        [sys.executable, '-m', 'catenary_monitor.cli.main', 'harbour', '--dock', 'a=81',
+         '--fleet-dataset', str(tmp_path), '--port', '0'],
+        capture_output=True, text=True, env=child_env(), timeout=120,
+    )  # fmt: skip
+    assert p.returncode == 2 and 'no daily/ folder there' in p.stderr

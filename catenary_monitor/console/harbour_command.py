@@ -1,12 +1,13 @@
 """``catenary-monitor harbour``: every dock of a port live on one page.
 
 ``catenary-monitor harbour --dock NAME=DOMAIN_ID[:PARAMS_FILE][@LAT,LON] ... [--console-url
-NAME=URL ...] [--port 8090] [--bind 127.0.0.1] [--token-file FILE] [--tls-cert F --tls-key F]``.
+NAME=URL ...] [--fleet-dataset DIR] [--port 8090] [--bind 127.0.0.1] [--token-file FILE]
+[--tls-cert F --tls-key F]``.
 One process joins each dock's ROS domain (:mod:`.harbour_source`) and serves the harbour page
 (:mod:`.harbour_server`). Read-only unless ``--token-file`` names operators, who may then
 acknowledge a dock's alarm from it. Prints ``harbour: URL (...)`` once it listens and serves
 until Ctrl-C or SIGTERM. Exit 2 with one line on a bad ``--dock``, params file, token file or
-certificate, a dock named twice, or a port in use.
+certificate, a dock named twice, a fleet dataset that is not one, or a port in use.
 """
 
 from __future__ import annotations
@@ -67,6 +68,25 @@ def dock_specs(docks: list[str], consoles: list[str]) -> list[Any]:
     return out
 
 
+def fleet_kpis(folder: str, docks: list[str]) -> Any:
+    """The docks' daily KPIs from the fleet dataset ``folder`` (:mod:`.harbour_fleet`).
+    Raises Refused with one line: no such folder, or no pyarrow."""
+    from pathlib import Path
+
+    if not (Path(folder) / 'daily').is_dir():
+        raise Refused(
+            f'--fleet-dataset {folder}: no daily/ folder there (the RESULTS folder of '
+            'catenary-monitor fleet --out RESULTS)'
+        )
+    try:
+        import pyarrow  # noqa: F401 - the extra's, checked before serving
+    except ImportError:
+        raise Refused('--fleet-dataset needs pyarrow: pip install "catenary_monitor[fleet]"')
+    from catenary_monitor.console.harbour_fleet import FleetKpis
+
+    return FleetKpis(folder, docks)
+
+
 def cmd_harbour(args: argparse.Namespace) -> int:
     """Join every dock's domain and serve the harbour page until a signal."""
     from catenary_monitor.console.harbour_server import HarbourServer
@@ -79,7 +99,15 @@ def cmd_harbour(args: argparse.Namespace) -> int:
         access = server_access(args)
     except Refused as err:
         return _fail(str(err))
-    source = HarbourSource(specs, acknowledge=not access['read_only'], ros_args=args.ros_args)
+    kpis = None
+    if args.fleet_dataset:
+        try:
+            kpis = fleet_kpis(args.fleet_dataset, [s.name for s in specs])
+        except Refused as err:
+            return _fail(str(err))
+    source = HarbourSource(
+        specs, acknowledge=not access['read_only'], kpis=kpis, ros_args=args.ros_args
+    )
     try:
         server = HarbourServer(source, args.bind, args.port, **access)
     except OSError as err:
@@ -135,6 +163,12 @@ def register(sub: Any) -> None:
         action='append',
         metavar='NAME=URL',
         help='the dock\'s own console, linked from its tile (repeatable)',
+    )
+    p.add_argument(
+        '--fleet-dataset',
+        metavar='DIR',
+        help='the fleet\'s results (catenary-monitor fleet --out DIR): each dock\'s daily KPIs '
+        '(alarms per 10 min, time in alarm, fatigue) on its tile, for the docks of that name',
     )
     add_server_options(p, 'harbour', port=8090)
     p.add_argument(

@@ -89,12 +89,29 @@ function tile(dock) {
   row(dl, 'monitor', dock.monitor_alive ? 'alive' : 'NOT ALIVE', !dock.monitor_alive);
   row(dl, 'newest status', age(dock.status_age_s), !dock.monitor_alive);
   t.appendChild(dl);
-  if (dock.kpis && dock.kpis.length) {
-    const k = dock.kpis[dock.kpis.length - 1];
-    t.appendChild(el('div', 'kpis', `${k.day}: ${k.alarms_per_10min.toFixed(2)} alarms/10 min, `
-      + `${duration(k.time_in_alarm_s)} in alarm, fatigue ${k.fatigue.toExponential(2)}`));
-  }
+  if (dock.kpis) t.appendChild(kpiLine(dock.kpis));
   return t;
+}
+
+// The fleet's newest day of the dock (--fleet-dataset): alarms per 10 min, time in alarm,
+// the accumulated fatigue of its worst line.
+function kpiLine(kpis) {
+  const box = el('div', 'kpis');
+  box.dataset.kpis = '';
+  if (!Array.isArray(kpis)) {
+    box.textContent = `fleet: ${kpis.error}`;
+    return box;
+  }
+  if (!kpis.length) {
+    box.textContent = 'fleet: no day of this dock in the dataset';
+    return box;
+  }
+  const k = kpis[kpis.length - 1];
+  const rate = k.alarms_per_10min === null ? '—' : k.alarms_per_10min.toFixed(2);
+  const fatigue = k.fatigue === null ? '—' : `${k.fatigue.toExponential(2)} (${k.fatigue_line})`;
+  box.textContent = `fleet ${k.day}: ${rate} alarms/10 min, ${duration(k.time_in_alarm_s)} in `
+    + `alarm, fatigue ${fatigue}`;
+  return box;
 }
 
 function renderTiles(frame) {
