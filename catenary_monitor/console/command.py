@@ -12,16 +12,16 @@ loopback with neither ``--token-file`` nor ``--read-only``.
 from __future__ import annotations
 
 import argparse
-import signal
 import sys
-import threading
 from typing import Any
 
 from catenary_monitor.console.server_options import (
     Refused,
     add_server_options,
+    cannot_listen,
     print_urls,
     server_access,
+    stop_on_signal,
     tls_context,
 )
 
@@ -79,13 +79,8 @@ def cmd_console(args: argparse.Namespace) -> int:
     try:
         server = ConsoleServer(source, args.bind, args.port, **access)
     except OSError as err:
-        return _fail(
-            f'cannot listen on {args.bind}:{args.port}: {err.strerror or err} '
-            '(choose --port N, or --port 0 for any free port)'
-        )
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
+        return _fail(cannot_listen(args.bind, args.port, err))
+    stop = stop_on_signal()
     if source.mode == 'live':
         source.start()
     server.start()

@@ -14,16 +14,16 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import signal
 import sys
-import threading
 from typing import Any
 
 from catenary_monitor.console.server_options import (
     Refused,
     add_server_options,
+    cannot_listen,
     print_urls,
     server_access,
+    stop_on_signal,
 )
 
 __all__ = ['register', 'cmd_harbour', 'dock_specs']
@@ -111,13 +111,8 @@ def cmd_harbour(args: argparse.Namespace) -> int:
     try:
         server = HarbourServer(source, args.bind, args.port, **access)
     except OSError as err:
-        return _fail(
-            f'cannot listen on {args.bind}:{args.port}: {err.strerror or err} '
-            '(choose --port N, or --port 0 for any free port)'
-        )
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
+        return _fail(cannot_listen(args.bind, args.port, err))
+    stop = stop_on_signal()
     try:
         source.start()
     except Exception as err:  # noqa: BLE001 - rclpy's errors: one line, exit 2

@@ -8,8 +8,10 @@ from __future__ import annotations
 import argparse
 import ipaddress
 import socket
+import signal
 import ssl
 import sys
+import threading
 from typing import Any, Optional
 
 __all__ = [
@@ -19,6 +21,8 @@ __all__ = [
     'tls_context',
     'is_loopback',
     'Refused',
+    'cannot_listen',
+    'stop_on_signal',
 ]
 
 
@@ -145,3 +149,19 @@ def add_server_options(p: Any, what: str, port: int = 8080) -> None:
         'requests naming another host are refused (DNS rebinding); IP addresses, localhost, '
         'the --bind name and this PC\'s host name are always accepted',
     )
+
+
+def cannot_listen(bind: str, port: int, err: OSError) -> str:
+    """The one line of a server that cannot bind ``bind:port``."""
+    return (
+        f'cannot listen on {bind}:{port}: {err.strerror or err} '
+        '(choose --port N, or --port 0 for any free port)'
+    )
+
+
+def stop_on_signal() -> threading.Event:
+    """An event set by SIGINT or SIGTERM (the page's server then stops cleanly)."""
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    return stop
