@@ -96,7 +96,7 @@ def cmd_harbour(args: argparse.Namespace) -> int:
     args.read_only = bool(args.read_only or not args.token_file)
     try:
         specs = dock_specs(args.dock, args.console_url or [])
-        access = server_access(args)
+        access = server_access(args, 'harbour')
     except Refused as err:
         return _fail(str(err))
     kpis = None
@@ -120,7 +120,12 @@ def cmd_harbour(args: argparse.Namespace) -> int:
         source.stop()
         return _fail(f'cannot join the docks\' ROS domains: {err}')
     server.start()
-    what = f'{len(specs)} docks in domains ' + ', '.join(str(s.domain_id) for s in specs)
+    domains = ', '.join(str(s.domain_id) for s in specs)
+    what = (
+        f'1 dock in domain {domains}'
+        if len(specs) == 1
+        else f'{len(specs)} docks in domains {domains}'
+    )
     if server.access == 'token':
         what += f'; {len(access["operators"].names)} operators sign in to acknowledge'
     else:

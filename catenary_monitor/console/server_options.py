@@ -26,8 +26,8 @@ __all__ = [
 ]
 
 
-def _warn(message: str) -> None:
-    print(f'catenary-monitor console: {message}', file=sys.stderr, flush=True)
+def _warn(message: str, what: str = 'console') -> None:
+    print(f'catenary-monitor {what}: {message}', file=sys.stderr, flush=True)
 
 
 def print_urls(server: Any, what: str, label: str = 'console') -> None:
@@ -59,7 +59,7 @@ def is_loopback(bind: str) -> bool:
     return bool(found) and all(ipaddress.ip_address(f[4][0]).is_loopback for f in found)
 
 
-def server_access(args: argparse.Namespace) -> dict[str, Any]:
+def server_access(args: argparse.Namespace, what: str = 'console') -> dict[str, Any]:
     """The server's access settings (operators, read-only, TLS) from the command line; a bind
     beyond loopback needs ``--token-file`` or ``--read-only``."""
     from catenary_monitor.console.operators import TokenFileError, load_operators
@@ -71,16 +71,16 @@ def server_access(args: argparse.Namespace) -> dict[str, Any]:
         except TokenFileError as err:
             raise Refused(str(err)) from None
         if warning:
-            print(f'catenary-monitor console: warning: {warning}', file=sys.stderr)
+            _warn(f'warning: {warning}', what)
     elif not args.read_only and not args.log and not is_loopback(args.bind):
         raise Refused(
             f'--bind {args.bind} reaches beyond this PC: give --token-file FILE (operators '
             'who may acknowledge) or --read-only'
         )
-    tls = tls_context(args.tls_cert, args.tls_key, args.allow_expired)
+    tls = tls_context(args.tls_cert, args.tls_key, args.allow_expired, what)
     if operators is not None and tls is None and not is_loopback(args.bind):
         print(
-            'catenary-monitor console: warning: tokens cross the network in clear text '
+            f'catenary-monitor {what}: warning: tokens cross the network in clear text '
             '(give --tls-cert and --tls-key)',
             file=sys.stderr,
         )
@@ -93,10 +93,11 @@ def server_access(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def tls_context(
-    cert: Optional[str], key: Optional[str], allow_expired: bool = False
+    cert: Optional[str], key: Optional[str], allow_expired: bool = False, what: str = 'console'
 ) -> Optional[ssl.SSLContext]:
     """A TLS server context (TLS 1.2 at least) from a certificate and its key, or None;
-    a certificate not valid now is refused unless ``allow_expired`` (a loud warning)."""
+    a certificate not valid now is refused unless ``allow_expired`` (a loud warning, naming
+    the page ``what``)."""
     from catenary_monitor.console.tls import CertificateError, server_context
 
     if not cert and not key:
@@ -108,7 +109,7 @@ def tls_context(
     except CertificateError as err:
         raise Refused(str(err)) from None
     if warning:
-        _warn(warning)
+        _warn(warning, what)
     return context
 
 
