@@ -28,7 +28,7 @@ import pytest
 from harbour_data import write_kpi_dataset
 from ros_harness import Client, child_env, start_monitor, stop, write_params
 
-pytestmark = [pytest.mark.ros, pytest.mark.usefixtures('no_callback_errors')]
+pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.usefixtures('no_callback_errors')]
 
 W = 1300.0  # N/m, the paper's chain
 DEPTH = 20.85  # m
