@@ -28,6 +28,8 @@ from typing import Any, Mapping, Optional, Sequence
 from urllib.parse import urlsplit
 
 from catenary_monitor.console.frames import Status, alarm_rows, silence_limit
+from catenary_monitor.console.frames import diagnostic_number as _num
+from catenary_monitor.console.frames import forecast_state as _forecast_state
 from catenary_monitor.core.config.parameters import COMPONENTS, MonitorConfig
 
 __all__ = [
@@ -159,23 +161,6 @@ class DockState:
         if period is None:
             period = statistics.median(self.gaps) if len(self.gaps) >= 3 else 1.0
         return silence_limit(1.0 / max(period, 0.01))
-
-
-def _num(text: Optional[str]) -> Optional[float]:
-    """A /diagnostics number (None: missing, unreadable, NaN or infinite)."""
-    try:
-        value = float(text) if text is not None else math.nan
-    except ValueError:
-        return None
-    return value if math.isfinite(value) else None
-
-
-def _forecast_state(text: Optional[str]) -> str:
-    """``unknown`` (NaN or missing), ``not coming`` (inf), ``lifted`` (0) or ``forecast``."""
-    value = _num(text)
-    if value is None:
-        return 'not coming' if text is not None and text.strip() == 'inf' else 'unknown'
-    return 'lifted' if value <= 0.0 else 'forecast'
 
 
 def line_names(spec: DockSpec, statuses: Mapping[str, Status]) -> list[str]:
