@@ -38,6 +38,8 @@ __all__ = ['HarbourSource', 'NODE_PREFIX']
 
 #: The harbour's node name in every domain (then its process id).
 NODE_PREFIX = 'catenary_console_harbour'
+#: One rclpy.init at a time (the docks' threads join their domains together).
+_INIT_LOCK = threading.Lock()
 #: Seconds between two looks at who publishes /diagnostics in a dock's domain.
 PUBLISHERS_CHECK = 2.0
 
@@ -51,6 +53,8 @@ class _Dock:
         self.node: Any = None
         self.ack_pub: Any = None
         self.thread: Optional[threading.Thread] = None
+        self.ready = threading.Event()
+        self.failure: Optional[str] = None
 
 
 class HarbourSource:
@@ -89,17 +93,38 @@ class HarbourSource:
         """One context, node and spinning thread per dock (its own domain); ``started`` is
         now, once rclpy is loaded (the docks' ages and silences count from here)."""
         import rclpy  # noqa: F401 - loaded before the clock starts
+        import rclpy.executors  # noqa: F401
+        from diagnostic_msgs.msg import DiagnosticArray  # noqa: F401
 
         with self.cond:
             self.started = time.time()
             for state in self.states.values():
                 state.started = self.started
+        # Every dock joins its domain in its own thread, at once: a harbour of many docks
+        # hears the last as soon as the first.
         for dock in self._docks:
-            self._start_dock(dock)
             dock.thread = threading.Thread(
-                target=self._spin, args=(dock,), name=f'ros-{dock.spec.name}', daemon=True
-            )
+                target=self._join_and_spin, args=(dock,), name=f'ros-{dock.spec.name}',
+                daemon=True,
+            )  # fmt: skip
             dock.thread.start()
+        for dock in self._docks:
+            dock.ready.wait(60.0)
+        failed = [d for d in self._docks if d.failure is not None]
+        if failed and len(failed) == len(self._docks):
+            raise RuntimeError(f'dock {failed[0].spec.name}: {failed[0].failure}')
+
+    def _join_and_spin(self, dock: _Dock) -> None:
+        try:
+            self._start_dock(dock)
+        except Exception as exc:  # noqa: BLE001 - on the dock's tile; the others go on
+            dock.failure = str(exc)
+            with self.cond:
+                self.errors[dock.spec.name] = f'cannot join domain {dock.spec.domain_id}: {exc}'
+            return
+        finally:
+            dock.ready.set()
+        self._spin(dock)
 
     def _start_dock(self, dock: _Dock) -> None:
         import rclpy
@@ -109,12 +134,13 @@ class HarbourSource:
         from rclpy.signals import SignalHandlerOptions
 
         context = Context()
-        rclpy.init(
-            args=['catenary_harbour', *self.ros_args],
-            context=context,
-            domain_id=dock.spec.domain_id,
-            signal_handler_options=SignalHandlerOptions.NO,
-        )
+        with _INIT_LOCK:  # rcl's logging set-up is process-wide: one init at a time
+            rclpy.init(
+                args=['catenary_harbour', *self.ros_args],
+                context=context,
+                domain_id=dock.spec.domain_id,
+                signal_handler_options=SignalHandlerOptions.NO,
+            )
         dock.context = context
         dock.node = rclpy.create_node(
             f'{NODE_PREFIX}_{os.getpid()}',
