@@ -54,6 +54,7 @@ def register(sub: Any) -> None:
         bench_core,
         bench_fleet,
         bench_flood,
+        bench_harbour,
         bench_step,
         bench_methods,
         bench_point_loads,
@@ -72,6 +73,7 @@ def register(sub: Any) -> None:
     bench_step.register(sub)
     bench_bounds.register(sub)
     bench_fleet.register(sub)
+    bench_harbour.register(sub)
     fuzz.register(sub)
     for module in (bench_core, bench_methods, bench_replay):
         module.register(sub)

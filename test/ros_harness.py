@@ -53,9 +53,14 @@ def write_params(
 
 
 def start_monitor(
-    params_file: Path, log_dir: Path, *ros_args: str, out_dir: Optional[Path] = None
+    params_file: Path,
+    log_dir: Path,
+    *ros_args: str,
+    out_dir: Optional[Path] = None,
+    domain_id: Optional[int] = None,
 ) -> subprocess.Popen:
-    """Start ``python -m catenary_monitor.ros.node`` with a params file; stdout/stderr to files."""
+    """Start ``python -m catenary_monitor.ros.node`` with a params file; stdout/stderr to files
+    (``domain_id``: in that ROS domain, else in this process's)."""
     out_dir = out_dir or log_dir.parent
     out = open(out_dir / f'monitor_{os.getpid()}_{time.monotonic_ns()}.out', 'w+')
     cmd = [
@@ -69,7 +74,10 @@ def start_monitor(
         f'log_dir:={log_dir}',
         *ros_args,
     ]
-    proc = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, env=child_env())
+    env = child_env()
+    if domain_id is not None:
+        env['ROS_DOMAIN_ID'] = str(domain_id)
+    proc = subprocess.Popen(cmd, stdout=out, stderr=subprocess.STDOUT, env=env)
     proc.output_file = out  # type: ignore[attr-defined]
     STARTED.append(proc)
     return proc
@@ -124,15 +132,22 @@ def status_dict(status: Any) -> dict[str, Any]:
 class Client:
     """A test node in this process: publishes inputs, records diagnostics and outputs."""
 
-    def __init__(self, name: str = 'node_test_client') -> None:
+    def __init__(self, name: str = 'node_test_client', domain_id: Optional[int] = None) -> None:
+        """``domain_id``: join that ROS domain with a context of its own (the process's default
+        context and ROS_DOMAIN_ID otherwise)."""
         import rclpy
         from diagnostic_msgs.msg import DiagnosticArray
+        from rclpy.context import Context
         from rclpy.executors import SingleThreadedExecutor
 
-        if not rclpy.ok():
+        self.context: Any = None
+        if domain_id is not None:
+            self.context = Context()
+            rclpy.init(context=self.context, domain_id=domain_id)
+        elif not rclpy.ok():
             rclpy.init()
         self.rclpy = rclpy
-        self.node = rclpy.create_node(name)
+        self.node = rclpy.create_node(name, context=self.context)
         self.lock = threading.RLock()
         self.diagnostics: list[tuple[float, dict[str, dict[str, Any]]]] = []
         self.outputs: dict[str, list[tuple[float, list[float]]]] = defaultdict(list)
@@ -142,7 +157,7 @@ class Client:
         self.sent: dict[str, list[tuple[float, float]]] = defaultdict(list)
         self.node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diag, 50)
         self.node.create_timer(0.1, self._on_feed)
-        self.executor = SingleThreadedExecutor()
+        self.executor = SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self._thread = threading.Thread(target=self._spin, daemon=True)
         self._thread.start()
@@ -269,3 +284,5 @@ class Client:
         self.executor.shutdown(timeout_sec=1.0)
         self.node.destroy_node()
         self._thread.join(2.0)
+        if self.context is not None:
+            self.context.try_shutdown()

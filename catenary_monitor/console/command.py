@@ -12,15 +12,23 @@ loopback with neither ``--token-file`` nor ``--read-only``.
 from __future__ import annotations
 
 import argparse
-import ipaddress
-import signal
-import socket
-import ssl
 import sys
-import threading
-from typing import Any, Optional
+from typing import Any
+
+from catenary_monitor.console.server_options import (
+    Refused,
+    add_server_options,
+    cannot_listen,
+    print_urls,
+    server_access,
+    stop_on_signal,
+    tls_context,
+)
 
 __all__ = ['register', 'cmd_console']
+
+#: The TLS context of --tls-cert/--tls-key (:func:`.server_options.tls_context`).
+_tls = tls_context
 
 
 def _fail(message: str, code: int = 2) -> int:
@@ -65,19 +73,14 @@ def cmd_console(args: argparse.Namespace) -> int:
 
         source = LiveSource(config, args.ros_args)
     try:
-        access = _access(args)
-    except _Refused as err:
+        access = server_access(args)
+    except Refused as err:
         return _fail(str(err))
     try:
         server = ConsoleServer(source, args.bind, args.port, **access)
     except OSError as err:
-        return _fail(
-            f'cannot listen on {args.bind}:{args.port}: {err.strerror or err} '
-            '(choose --port N, or --port 0 for any free port)'
-        )
-    stop = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: stop.set())
+        return _fail(cannot_listen(args.bind, args.port, err))
+    stop = stop_on_signal()
     if source.mode == 'live':
         source.start()
     server.start()
@@ -86,7 +89,7 @@ def cmd_console(args: argparse.Namespace) -> int:
         what += f'; {len(access["operators"].names)} operators sign in to act'
     elif server.access == 'read-only':
         what += '; read-only'
-    _print_urls(server, what)
+    print_urls(server, what)
     try:
         while not stop.wait(0.5):
             pass
@@ -95,87 +98,6 @@ def cmd_console(args: argparse.Namespace) -> int:
         if source.mode == 'live':
             source.stop()
     return 0
-
-
-def _print_urls(server: Any, what: str) -> None:
-    """``console: URL (...)`` for this PC, then ``console: also at URL`` for every other
-    address it is reached at (each interface's when bound to all of them)."""
-    from catenary_monitor.console.addresses import reachable_urls
-
-    print(f'console: {server.url} ({what}; Ctrl-C stops)', flush=True)
-    for url in reachable_urls(server.scheme, server.bind, server.port):
-        if url != server.url:
-            print(f'console: also at {url}', flush=True)
-
-
-class _Refused(Exception):
-    """A console that must not start as asked: ``str()`` is one line."""
-
-
-def is_loopback(bind: str) -> bool:
-    """True when ``bind`` (an address or a host name) is reachable from this PC only."""
-    try:
-        return ipaddress.ip_address(bind.strip('[]')).is_loopback
-    except ValueError:
-        pass
-    try:
-        found = socket.getaddrinfo(bind, None)
-    except OSError:
-        return False
-    return bool(found) and all(ipaddress.ip_address(f[4][0]).is_loopback for f in found)
-
-
-def _access(args: argparse.Namespace) -> dict[str, Any]:
-    """The server's access settings (operators, read-only, TLS) from the command line; a bind
-    beyond loopback needs ``--token-file`` or ``--read-only``."""
-    from catenary_monitor.console.operators import TokenFileError, load_operators
-
-    operators = None
-    if args.token_file:
-        try:
-            operators, warning = load_operators(args.token_file)
-        except TokenFileError as err:
-            raise _Refused(str(err)) from None
-        if warning:
-            print(f'catenary-monitor console: warning: {warning}', file=sys.stderr)
-    elif not args.read_only and not args.log and not is_loopback(args.bind):
-        raise _Refused(
-            f'--bind {args.bind} reaches beyond this PC: give --token-file FILE (operators '
-            'who may acknowledge) or --read-only'
-        )
-    tls = _tls(args.tls_cert, args.tls_key, args.allow_expired)
-    if operators is not None and tls is None and not is_loopback(args.bind):
-        print(
-            'catenary-monitor console: warning: tokens cross the network in clear text '
-            '(give --tls-cert and --tls-key)',
-            file=sys.stderr,
-        )
-    return {
-        'operators': operators,
-        'read_only': bool(args.read_only or args.log),
-        'tls': tls,
-        'server_names': args.server_name or (),
-    }
-
-
-def _tls(
-    cert: Optional[str], key: Optional[str], allow_expired: bool = False
-) -> Optional[ssl.SSLContext]:
-    """A TLS server context (TLS 1.2 at least) from a certificate and its key, or None;
-    a certificate not valid now is refused unless ``allow_expired`` (a loud warning)."""
-    from catenary_monitor.console.tls import CertificateError, server_context
-
-    if not cert and not key:
-        return None
-    if not (cert and key):
-        raise _Refused('--tls-cert and --tls-key go together')
-    try:
-        context, warning = server_context(cert, key, allow_expired=allow_expired)
-    except CertificateError as err:
-        raise _Refused(str(err)) from None
-    if warning:
-        _warn(warning)
-    return context
 
 
 def _write_layout(args: argparse.Namespace) -> int:
@@ -206,7 +128,10 @@ def _write_layout(args: argparse.Namespace) -> int:
 
 
 def register(sub: Any) -> None:
-    """Add ``console`` to the ``catenary-monitor`` parser."""
+    """Add ``console`` (and ``harbour``, :mod:`.harbour_command`) to the ``catenary-monitor``
+    parser."""
+    from catenary_monitor.console import harbour_command
+
     p = sub.add_parser(
         'console',
         help="the operator's page in a browser: live, or over a recorded log",
@@ -220,40 +145,7 @@ def register(sub: Any) -> None:
         help='the monitor\'s params YAML (lines, headings, MBL); live default: the lines the '
         'monitor names on /diagnostics; replay default: the parameters recorded in the log',
     )
-    p.add_argument('--port', type=int, default=8080, help='TCP port (0: any free port)')
-    p.add_argument(
-        '--bind',
-        default='127.0.0.1',
-        metavar='ADDR',
-        help='address to listen on (default %(default)s: this PC only; beyond loopback, e.g. '
-        '0.0.0.0, needs --token-file or --read-only)',
-    )
-    p.add_argument(
-        '--token-file',
-        metavar='FILE',
-        help='operators who may acknowledge: one NAME:TOKEN a line; every state-changing '
-        'request then needs "Authorization: Bearer TOKEN" (the page asks for it)',
-    )
-    p.add_argument(
-        '--read-only',
-        action='store_true',
-        help='nobody acknowledges from this console (the page only shows)',
-    )
-    p.add_argument('--tls-cert', metavar='FILE', help='serve HTTPS with this certificate (PEM)')
-    p.add_argument('--tls-key', metavar='FILE', help='the private key of --tls-cert (PEM)')
-    p.add_argument(
-        '--allow-expired',
-        action='store_true',
-        help='serve a certificate that expired or is not valid yet (a loud warning; renew it)',
-    )
-    p.add_argument(
-        '--server-name',
-        action='append',
-        metavar='NAME',
-        help='a host name the operators open the console by (e.g. dockpc.local; repeatable): '
-        'requests naming another host are refused (DNS rebinding); IP addresses, localhost, '
-        'the --bind name and this PC\'s host name are always accepted',
-    )
+    add_server_options(p, 'console')
     p.add_argument(
         '--log', nargs='+', metavar='FILE|DIR', help='replay a recorded MCAP log (files or dirs)'
     )
@@ -271,3 +163,4 @@ def register(sub: Any) -> None:
         help='the rest is passed to ROS',
     )
     p.set_defaults(func=cmd_console, long_running=True)
+    harbour_command.register(sub)

@@ -585,3 +585,8 @@ def build_frame(
         'history': list(history[-200:]),
         **extra,
     }
+
+
+#: A /diagnostics number and what a time to uplift says, for the other views (the harbour's).
+diagnostic_number = _num
+forecast_state = _forecast_state

@@ -60,7 +60,22 @@ from catenary_monitor.console.frames import AckError
 from catenary_monitor.console.http_transport import HttpError, HttpTransport, Request, Response
 from catenary_monitor.console.operators import Operators
 
-__all__ = ['Source', 'ConsoleServer', 'Actor', 'STATIC_FILES', 'PAGES', 'ACTIONS']
+__all__ = [
+    'Source',
+    'ConsoleServer',
+    'Actor',
+    'STATIC_FILES',
+    'PAGES',
+    'ACTIONS',
+    'Page',
+    'Action',
+    'json_body',
+    'ok_response',
+    'static_body',
+    'stream_page',
+    'favicon_page',
+    'operator_page',
+]
 
 #: The page's files (package data under console/static) and their content types.
 STATIC_FILES = {
@@ -120,7 +135,13 @@ class ConsoleServer:
     ``operators``: the token file's operators (every state-changing request then needs a valid
     ``Authorization: Bearer TOKEN``); ``read_only``: every state-changing request is refused;
     ``tls``: serve HTTPS with this context. Binding happens here (OSError: the port is taken).
+
+    Another page (the harbour's) serves through the same policy and transport as a subclass
+    that gives its own :meth:`routes` and :meth:`static_files`.
     """
+
+    #: Seconds at least between two frames of an event stream.
+    frame_interval = 0.05
 
     def __init__(
         self,
@@ -172,6 +193,14 @@ class ConsoleServer:
     def shutdown(self) -> None:
         self.stopping.set()
         self.transport.stop()
+
+    def routes(self) -> tuple[Mapping[str, Page], Mapping[str, tuple[int, Action]]]:
+        """The GET routes (``/static/NAME`` besides) and the state-changing (POST) ones."""
+        return PAGES, ACTIONS
+
+    def static_files(self) -> Mapping[str, str]:
+        """The files ``/static/NAME`` serves (package data under console/static): type."""
+        return STATIC_FILES
 
     # ------------------------------------------------------------------ the policy
     def host_refusal(self, host: str) -> Optional[str]:
@@ -233,14 +262,15 @@ class ConsoleServer:
 
     # ------------------------------------------------------------------ the transport's side
     def body_limit(self, method: str, path: str) -> int:
+        pages, actions = self.routes()
         if method == 'POST':
-            if path in ACTIONS:
-                return ACTIONS[path][0]
-            if path in PAGES:
+            if path in actions:
+                return actions[path][0]
+            if path in pages:
                 raise HttpError(405, f'{path} is read with GET', [('Allow', 'GET')])
             raise HttpError(404, f'no such action: {path[:100]}')
         if method == 'GET':
-            if path in ACTIONS:
+            if path in actions:
                 raise HttpError(405, f'{path} takes a POST', [('Allow', 'POST')])
             return 0
         raise HttpError(405, f'method {method[:20]} not allowed', [('Allow', 'GET, POST')])
@@ -252,11 +282,12 @@ class ConsoleServer:
         refused = self.host_refusal(request.headers.get('host', ''))
         if refused is not None:
             raise HttpError(421, refused)
+        pages, actions = self.routes()
         try:
             if request.method == 'POST':
-                limit, action = ACTIONS[request.path]
+                limit, action = actions[request.path]
                 return action(self, request, self.authorize(request))
-            page = PAGES.get(request.path)
+            page = pages.get(request.path)
             if page is None and request.path.startswith('/static/'):
                 page = _static_page
             if page is None:
@@ -271,7 +302,7 @@ class ConsoleServer:
         version, last = -1, 0.0
         while not self.stopping.is_set():
             version = self.source.wait(version, 0.5)
-            wait = 0.05 - (time.monotonic() - last)
+            wait = self.frame_interval - (time.monotonic() - last)
             if wait > 0:
                 time.sleep(wait)
             last = time.monotonic()
@@ -306,9 +337,10 @@ def _index(server: ConsoleServer, request: Request) -> Response:
 
 def _static_page(server: ConsoleServer, request: Request) -> Response:
     name = request.path[len('/static/') :]
-    if name not in STATIC_FILES:
+    files = server.static_files()
+    if name not in files:
         raise HttpError(404, f'no such file: {name[:100]}')
-    return _ok(_static(name), STATIC_FILES[name])
+    return _ok(_static(name), files[name])
 
 
 def _config(server: ConsoleServer, request: Request) -> Response:
@@ -405,8 +437,13 @@ def _operator(server: ConsoleServer, request: Request, actor: Actor) -> Response
     return _ok(_json({'operator': actor.name, 'access': server.access}))
 
 
+#: A GET route's handler(server, request).
+Page = Callable[[ConsoleServer, Request], Response]
+#: A state-changing route's handler(server, request, actor).
+Action = Callable[[ConsoleServer, Request, Actor], Response]
+
 #: GET routes: path -> handler(server, request) (``/static/NAME`` besides).
-PAGES: dict[str, Callable[[ConsoleServer, Request], Response]] = {
+PAGES: dict[str, Page] = {
     '/': _index,
     '/index.html': _index,
     '/favicon.ico': _favicon,
@@ -418,11 +455,19 @@ PAGES: dict[str, Callable[[ConsoleServer, Request], Response]] = {
 #: The state-changing routes (POST): path -> (largest body in bytes, handler(server, request,
 #: actor)). The server calls :meth:`ConsoleServer.authorize` before every one of them: a new
 #: action is added here and nowhere else.
-ACTIONS: dict[str, tuple[int, Callable[[ConsoleServer, Request, Actor], Response]]] = {
+ACTIONS: dict[str, tuple[int, Action]] = {
     '/api/ack': (1024, _acknowledge),
     '/api/shelve': (1024, _shelve),
     '/api/operator': (1024, _operator),
 }
+
+# What another page served through this policy (the harbour's) builds on.
+json_body = _json
+ok_response = _ok
+static_body = _static
+stream_page = _stream
+favicon_page = _favicon
+operator_page = _operator
 
 
 def _split_host(host: str) -> tuple[str, str]:
