@@ -278,7 +278,7 @@ def test_a_tide_outside_the_tables_leaves_those_lines_out_in_words():
     core.step(Tick(1_000_000_000))
     dock = [s for s in core.snapshot(1_000_000_001).statuses if s.name.endswith(': dock')][0]
     assert dock.level == 0 and dict(dock.values)['readings'] == '8', dock
-    assert "outside its table's depths" in dock.message
+    assert "outside its table's depths" in dict(dock.values)['detail']
 
 
 @pytest.mark.slow
