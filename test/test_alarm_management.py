@@ -233,7 +233,7 @@ def test_shelving_the_uplift_error_is_refused_with_a_message():
     step = core.step(Shelve(now + 1, 'line_02', 'uplift', 600.0, 'console op'))
     assert step.note == (
         'line_02.uplift: refused: line_02: the uplift ERROR cannot be shelved '
-        '(unshelvable_conditions: uplift)'
+        '(unshelvable_conditions: uplift, input, sensor_error, stale, dragging, sensors)'
     )
     step = core.step(Shelve(now + 2, 'line_02', ALL, 600.0, 'console op'))
     assert 'its active uplift ERROR cannot be shelved' in step.note
@@ -275,11 +275,13 @@ def test_a_whole_line_shelf_hides_its_warning_until_it_expires():
         step = second(k)
     assert _status(step, 'line_01').level == Level.WARN
     step = core.step(Shelve(T0_NS + 3 * S + 5, 'line_01', ALL, 5.0, 'bridge'))
-    assert step.note == 'line_01 shelved for 5 s by bridge'
+    assert step.note == (
+        'line_01 shelved for 5 s by bridge: anchor_margin (a new condition still annunciates)'
+    )
     values = dict(_status(step, 'line_01').values)
     assert values['alarm_state'] == 'shelved' and values['acknowledged'] == 'true'
     assert float(values['shelved_until']) == pytest.approx((T0_NS + 3 * S + 5) * 1e-9 + 5.0)
-    assert values['shelved_by'] == 'bridge' and values['shelved_condition'] == 'all'
+    assert values['shelved_by'] == 'bridge' and values['shelved_condition'] == 'anchor_margin'
     assert _status(step, 'line_01').level == Level.WARN  # computed and shown
     for k in range(4, 8):  # 4..7 s: the shelf holds
         step = second(k)
@@ -315,15 +317,20 @@ def test_run_log_shelves_chatters_and_floods_as_the_core_does():
     unshelved by an operator, refused), chattering and a flood: the twin's snapshots, journal
     and final state equal the core's event by event."""
     config, tensions, depth, ticks = _storm_core(
-        flood_count=6, flood_window=60.0, chatter_window=20.0, shelve_max=120.0
+        flood_count=6,
+        flood_window=60.0,
+        chatter_window=20.0,
+        shelve_max=120.0,
+        unshelvable_conditions=('uplift',),  # the sensors alarm and stale shelvable here
     )
     extra = [
-        Shelve(_at(5.0), 'line_02', ALL, 20.0, 'op a'),  # expires at 25 s, in a stretch
+        Shelve(_at(5.0), 'line_01', ALL, 20.0, 'op a'),  # its WARN; expires at 25 s, in a stretch
+        Shelve(_at(6.0), 'line_02', ALL, 20.0, 'op a2'),  # refused: nothing active
         Shelve(_at(9.0), 'line_02', 'uplift', 30.0, 'op b'),  # refused
-        Shelve(_at(12.0), 'line_01', 'anchor_margin', 30.0, 'op c'),
+        Shelve(_at(12.0), 'line_03', 'anchor_margin', 30.0, 'op c'),
         Shelve(_at(15.0), 'sensors', ALL, 60.0, 'op d'),
         Acknowledge(_at(16.0), None, 'op e'),
-        Shelve(_at(50.0), 'line_03', ALL, 100.0, 'op f'),
+        Shelve(_at(50.0), 'line_03', 'anchor_margin', 100.0, 'op f'),
         Shelve(_at(60.0), 'nope', ALL, 10.0, 'op g'),  # refused
         Shelve(_at(62.0), 'line_01', ALL, 1e6, 'op h'),  # refused: too long
         Shelve(_at(70.0), 'line_03', ALL, 0.0, 'op i'),  # unshelved by an operator

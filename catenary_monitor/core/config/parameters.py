@@ -32,6 +32,7 @@ from catenary_monitor.core.config.tide_constituents import (
 __all__ = [
     'REQUIRED',
     'ALARM_CONDITIONS',
+    'SENSORS_ALARM',
     'COMPONENTS',
     'RESERVED_NAMES',
     'FLOAT64',
@@ -1058,9 +1059,11 @@ PARAMETERS: tuple[ParamSpec, ...] = (
     ParamSpec(
         'unshelvable_conditions',
         'string_array',
-        ('uplift',),
-        'Alarm conditions no operator may shelve (uplift, input, sensor_error, stale, '
-        'anchor_margin, ...); a shelved alarm still annunciates them',
+        ('uplift', 'input', 'sensor_error', 'stale', 'dragging', 'sensors'),
+        'Alarm conditions no operator may shelve: by default what blinds or endangers the dock '
+        '(a lifted anchor, an impossible input, wrong units or depth, a parted or slack chain or '
+        'over MBL, a stale line, a dragging anchor, and the sensors common-cause alarm); a '
+        'shelved alarm still annunciates them',
         '',
         None,
         None,
@@ -1204,6 +1207,9 @@ _PER_LINE = {p.name: p for p in PARAMETERS if p.scope == 'line'}
 #: Parameters rclpy itself may find in a params file; accepted and ignored here.
 ROS_BUILTIN_PARAMETERS = frozenset({'use_sim_time', 'start_type_description_service'})
 _ROS_BUILTIN_PREFIXES = ('qos_overrides.',)
+
+#: The sensors' common-cause alarm: a name of ``unshelvable_conditions`` besides the conditions.
+SENSORS_ALARM = 'sensors'
 
 #: Every condition of a line's alarm, the one list of their names: the latched ones in message
 #: order, ERRORs then WARNs (:data:`catenary_monitor.core.alarms.latches.CONDITIONS`), then
@@ -1580,11 +1586,11 @@ class AlarmConfig:
             if getattr(self, name) != int(getattr(self, name)):
                 raise ConfigError(name, f'must be a whole number, got {getattr(self, name)!r}')
         for cond in self.unshelvable_conditions:
-            if cond not in ALARM_CONDITIONS:
+            if cond not in ALARM_CONDITIONS and cond != SENSORS_ALARM:
                 raise ConfigError(
                     'unshelvable_conditions',
                     f'unknown alarm condition {cond!r} '
-                    f'(conditions: {", ".join(ALARM_CONDITIONS)})',
+                    f'(conditions: {", ".join(ALARM_CONDITIONS)}, {SENSORS_ALARM})',
                 )
         try:
             table = parse_table(self.tide_table)

@@ -393,7 +393,8 @@ class MonitorCore:
         active = None if line is None else [latch.active for latch in line.state.latches]
         names = [ln.config.name for ln in self.state.lines]
         target = ev.alarm if ev.condition == alarm_ack.WHOLE else f'{ev.alarm}.{ev.condition}'
-        refused = shelving.refusal(request, names, a, active)
+        stale = line is not None and line.state.stale
+        refused = shelving.refusal(request, names, a, active, stale)
         log: list[AlarmEvent] = []
         if refused is not None:
             answer = f'{target}: refused: {refused}'
@@ -460,11 +461,18 @@ class MonitorCore:
             new = alarm_ack.unshelve(old, now, level, masked, suppressed)
             return new, f'{ev.alarm} unshelved by {ev.origin}'
         until = now + ev.seconds
-        masked = self._masked(line, replace(old, shelved_condition=ev.condition))
+        condition, covers = ev.condition, ''
+        if line is not None and condition == alarm_ack.WHOLE:
+            # a line shelf covers the conditions active now, never a later one
+            up = [latch.active for latch in line.state.latches]
+            unshelvable = self.config.alarm.unshelvable_conditions
+            condition = ','.join(shelving.active_conditions(up, line.state.stale, unshelvable))
+            covers = f': {condition} (a new condition still annunciates)'
+        masked = self._masked(line, replace(old, shelved_condition=condition))
         new = alarm_ack.shelve(
-            old, now, until, ev.condition, ev.origin, masked, suppressed, ev.publisher
+            old, now, until, condition, ev.origin, masked, suppressed, ev.publisher
         )
-        return new, f'{target} shelved for {ev.seconds:g} s by {ev.origin}'
+        return new, f'{target} shelved for {ev.seconds:g} s by {ev.origin}{covers}'
 
     def _masked(self, line: Optional[LineState], ack: alarm_ack.AckState) -> Level:
         """The level ``ack``'s shelf leaves visible of ``line`` (None: the sensors alarm, whose
