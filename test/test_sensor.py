@@ -197,14 +197,25 @@ def test_slack_keeps_the_impossible_input_status_and_adds_the_state():
 
 
 def test_suspected_parted_line():
+    """The chain parted below the hook: the tension falls to the hanging rest's weight; the
+    other lines need not rise. Named ``suspected_parted`` as long as it stays down (not slack,
+    not an impossible input)."""
     t, tensions, depth_t, depth = scene(6)
     after = during(t)
-    tensions[0][after] *= 0.2  # still above the hanging chain's weight: not slack
-    for k in (1, 2):
-        tensions[k][after] *= 1.25
+    tensions[0][after] = 0.6 * W * DEPTH  # the chain left below the hook: under w*h
     cfg = config(tension_rate_max=100.0)
     steps = run(cfg, t, tensions, depth_t, depth)
     assert_raised_and_cleared(steps, 'suspected_parted', 'ERROR', 'parted')
+    codes = [c for s, c in line_codes(steps) if EVENT_S[0] + 2.0 <= s < EVENT_S[1]]
+    assert set(codes) == {sensor_state.PARTED}, set(codes)  # held past sensor_hold (5 s)
+
+
+def test_a_line_that_falls_but_still_hangs_is_not_parted():
+    t, tensions, depth_t, depth = scene(6)
+    after = during(t)
+    tensions[0][after] *= 0.2  # 80 kN: above the hanging chain's weight
+    steps = run(config(tension_rate_max=100.0), t, tensions, depth_t, depth)
+    assert sensor_state.PARTED not in {c for _, c in line_codes(steps)}
 
 
 def test_a_line_that_falls_with_the_others_is_not_parted():

@@ -247,8 +247,8 @@ def shelve(
 ) -> AckState:
     """The alarm shelved at ``now`` until ``until`` (s) by ``origin`` (as claimed; published by
     ``publisher``, both bounded): ``condition`` is :data:`WHOLE` or conditions (joined by
-    ``,``); ``masked`` the level the shelf leaves visible. An alarm whose visible level is not active leaves the
-    list (``normal``, shown ``shelved``)."""
+    ``,``); ``masked`` the level the shelf leaves visible. An alarm whose visible level is not
+    active leaves the list (``normal``, shown ``shelved``)."""
     before = ack.state
     if shelved(ack):  # shelved again: as it was before the first shelf, unless it cleared since
         still = ack.active_since == ack.active_since and ack.active_since <= ack.shelved_at

@@ -90,6 +90,7 @@ from typing import Any, Mapping, NamedTuple, Sequence
 import numpy as np
 
 from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, AlarmConfig, LineConfig
+from catenary_monitor.core.physics.result import Status
 from catenary_monitor.core.rules.level import RANK, Level
 from catenary_monitor.core.rules import sensor_state
 from catenary_monitor.core.rules.channels import describe
@@ -366,7 +367,9 @@ class LineAlarm:
         if cond == 'input':
             if self.blind(x.channels_healthy):  # no tension to judge: blind, not impossible
                 return _HOLD
-            return _BREACH if x.status != 0 else (_HOLD if stale else _CLEAR)
+            if _impossible(x.status, x.sensor_state):
+                return _BREACH
+            return _HOLD if stale else _CLEAR
         if cond == 'uplift':
             force = uplift_seen(x.uplift_force, x.dynamic_uplift)
             breach = force > self.allowed_uplift
@@ -606,6 +609,17 @@ def uplift_seen(nominal: float, dynamic: float) -> float:
     if dynamic != dynamic:
         return nominal
     return dynamic if nominal != nominal else max(nominal, dynamic)  # as np.fmax
+
+
+def _impossible(status: int, sensor: float) -> bool:
+    """Whether a solve's ``status`` is an impossible input: any but 0, except ``T <= w*h`` on
+    a line whose ``sensor_state`` is ``suspected_parted`` (that condition names it)."""
+    return status != 0 and not (status == Status.TENSION and sensor == sensor_state.PARTED)
+
+
+def _impossible_column(status: np.ndarray, sensor: np.ndarray) -> np.ndarray:
+    """:func:`_impossible` per update."""
+    return (status != 0) & ~((status == Status.TENSION) & (sensor == sensor_state.PARTED))
 
 
 def _sensor_codes(cond: str, code: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -1049,7 +1063,11 @@ def _classify_columns(
         up_clear &= x['anchor_margin'] >= cfg.uplift_clear_margin
     out = {
         'uplift': codes('uplift', f > alarm.allowed_uplift, up_clear),
-        'input': codes('input', (status != 0) & ~_blind_column(alarm, x), status == 0),
+        'input': codes(
+            'input',
+            _impossible_column(status, x['sensor_state']) & ~_blind_column(alarm, x),
+            ~_impossible_column(status, x['sensor_state']),
+        ),
     }
     for cond in _MARGINS:
         low, high = alarm._warn_limits(cond)

@@ -194,4 +194,3 @@ def refusal(
                 f'the request); shelve one condition as {alarm}.CONDITION'
             )
     return None
-

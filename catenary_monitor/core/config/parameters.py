@@ -794,7 +794,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
             (
                 'parted_drop',
                 0.75,
-                'suspected_parted: the tension fell by this fraction in parted_window',
+                'suspected_parted: the tension fell by this fraction in parted_window, to at or '
+                'below the hanging chain\'s own weight w*h',
                 '',
                 0.05,
                 1.0,

@@ -724,28 +724,35 @@ class MonitorCore:
         ref, keep = sensor_state.reference(
             self.state.sensor_times, self.state.sensor_rows, now, a.parted_window
         )
-        pattern = sensor_state.parted_pattern(tension, ref, a.parted_drop)
+        limits = sensor_limits(self.config)
+        depth = np.array([self.state.depth])
+        slack = sensor_state.slack_mask(limits, tension, depth)
+        pattern = sensor_state.parted_pattern(tension, ref, a.parted_drop, slack)
         seen = np.array([[line.parted_seen for line in lines]])
         seen = np.where(pattern, now[:, None], seen)
+        firm = np.array([line.firm_seen for line in lines])
+        firm = sensor_state.firm_times(now, slack, firm)
         self.state.sensor_times = np.append(self.state.sensor_times[keep:], now)
         spiked = np.array([[line.sensor_memory.spiked for line in lines]])
         row = sensor_state.history_row(now, tension, spiked, a.sensor_hold)
         self.state.sensor_rows = np.vstack([self.state.sensor_rows[keep:], row])
         codes = sensor_state.decide_lines(
             a,
-            sensor_limits(self.config),
+            limits,
             now,
             tension,
             np.array([[line.tension_s for line in lines]]),
             changed,
             spiked,
             seen,
-            np.array([self.state.depth]),
+            depth,
             np.array([self.state.depth_memory.changed]),
             np.array([[line.stamp_refused for line in lines]]),
+            firm,
         )
         for k, line in enumerate(lines):
             line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
+            line.firm_seen = float(firm[0, k])
         dm = self.state.depth_memory
         self.state.depth_code = int(
             sensor_state.decide_depth(

@@ -154,6 +154,7 @@ class LineRulesPart(NamedTuple):
     sensor_memory: sensor_state.Memory
     sensor_code: int
     parted_seen: float
+    firm_seen: float
     wave: wave_window.WaveState
     peak_tension: float
     wave_tension: float
@@ -196,6 +197,7 @@ class LineState:
     )  # the tension sensor's per-sample memory
     sensor_code: int = sensor_state.OK  # sensor state decided at the newest tick
     parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
+    firm_seen: float = -math.inf  # s, the newest tick with the tension above w*h
     coalesced_until: int = -1  # ns: this line's samples stamped up to it were not stepped
     fatigue: fatigue_rule.FatigueState = fatigue_rule.FatigueState()  # the streamed count
     fatigue_values: tuple[float, ...] = (0.0, _NAN, _NAN)  # fatigue_rule.FIELDS now

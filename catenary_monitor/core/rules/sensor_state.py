@@ -20,8 +20,11 @@ batch twin) that share the arithmetic, so live and replay decide alike:
   ======================  =====  ===================================================
   ``over_mbl`` (3)        ERROR  newest tension > MBL
   ``suspected_parted``    ERROR  tension fell below ``(1 - parted_drop)`` x its value
-  (5)                            ``parted_window`` ago while the other lines' sum
-                                 rose; held ``sensor_hold`` after last seen
+  (5)                            ``parted_window`` ago to at or below w * h (what a
+                                 chain parted below the hook reads; the other lines
+                                 need not rise: a pretensioned dock's opposite lines
+                                 slacken); held while the tension stays at or below
+                                 w * h, and ``sensor_hold`` after last seen
   ``slack`` (4)           ERROR  tension <= w * h (the hanging chain's own weight at
                                  the depth at the hook)
   ``bad_stamp`` (6)       WARN   a sample refused for its header stamp (ahead of the
@@ -66,6 +69,8 @@ __all__ = [
     'sample',
     'samples',
     'parted_pattern',
+    'slack_mask',
+    'firm_times',
     'decide_lines',
     'decide_depth',
     'reference',
@@ -215,17 +220,28 @@ def _moved_since(changed: np.ndarray, depth_changed: np.ndarray) -> np.ndarray:
         return np.maximum(newest, depth_changed[:, None]) > changed
 
 
-def parted_pattern(tension: np.ndarray, ref: np.ndarray, drop: float) -> np.ndarray:
-    """Per (tick, line): the tension fell below ``(1 - drop)`` x its reference while the
-    other lines' sum rose above theirs (NaN references: no)."""
-    lines = tension.shape[1]
+def parted_pattern(
+    tension: np.ndarray, ref: np.ndarray, drop: float, slack: np.ndarray
+) -> np.ndarray:
+    """Per (tick, line): the tension fell below ``(1 - drop)`` x its reference to at or below
+    the hanging chain's own weight (``slack``, :func:`slack_mask`; NaN references: no)."""
     with np.errstate(invalid='ignore'):
-        fell = tension < (1.0 - drop) * ref
-        total, total_ref = np.sum(tension, axis=1), np.sum(ref, axis=1)
-        others = total[:, None] - tension
-        others_ref = total_ref[:, None] - ref
-        rose = others > others_ref
-    return fell & rose & (lines > 1)
+        return (tension < (1.0 - drop) * ref) & slack
+
+
+def slack_mask(limits: LineLimits, tension: np.ndarray, depth: np.ndarray) -> np.ndarray:
+    """Per (tick, line): the tension [N] at or below the hanging chain's own weight ``w h`` at
+    the depth [m] (per tick) at the hook (an unknown depth: no)."""
+    h = depth[:, None] + limits.hook_height[None, :]
+    with np.errstate(invalid='ignore'):
+        return np.isfinite(h) & (h > 0) & (tension <= limits.weight * h)
+
+
+def firm_times(now: np.ndarray, slack: np.ndarray, before: np.ndarray) -> np.ndarray:
+    """Per (tick, line): when the line was last above ``w h`` at a tick [s] (``before``: as
+    before the first tick, per line)."""
+    at = np.where(slack, -math.inf, now[:, None])
+    return np.maximum.accumulate(np.vstack([before[None, :], at]), axis=0)[1:]
 
 
 def decide_lines(
@@ -240,21 +256,24 @@ def decide_lines(
     depth: np.ndarray,
     depth_changed: np.ndarray,
     refused: np.ndarray | None = None,
+    firm: np.ndarray | None = None,
 ) -> np.ndarray:
     """Line state codes (int8, shape (ticks, lines)) at ticks ``now`` [s] from each line's
     newest tension [N] and its stamp [s], its memory's ``changed`` and ``spiked`` [s], when
     the parted pattern was last seen [s], the newest depth [m] and the depth's ``changed``,
-    and when a sample's stamp was last refused [s] (None: never).
+    when a sample's stamp was last refused [s] (None: never) and when the line was last above
+    ``w h`` at a tick (:func:`firm_times`; None: the parted state only ``sensor_hold`` long).
     ``cfg`` is the :class:`~catenary_monitor.core.config.parameters.AlarmConfig`."""
     t_now = now[:, None]
     hold = getattr(cfg, 'sensor_hold')
-    h = depth[:, None] + limits.hook_height[None, :]
+    slack = slack_mask(limits, tension, depth)
     with np.errstate(invalid='ignore'):
         reporting = np.isfinite(tension) & (t_now - tension_s <= getattr(cfg, 'tension_timeout'))
         over = tension > limits.mbl
-        slack = np.isfinite(h) & (h > 0) & (tension <= limits.weight * h)
         spike = t_now - spiked <= hold
         parted = t_now - parted_seen <= hold
+        if firm is not None:
+            parted |= slack & (parted_seen > firm)  # slack ever since it parted
         quiet = t_now - changed >= getattr(cfg, 'stuck_time')
     stuck = reporting & quiet & _moved_since(changed, depth_changed)
     code = np.full(tension.shape, OK, np.int8)
@@ -313,8 +332,8 @@ def line_message(code: int, tension: float, mbl: float) -> str:
         '(about to part?) and the sensor calibration',
         SLACK: f'tension {kn} at or below the hanging chain\'s own weight: slack or parted line '
         'or failed sensor: check the chain, the stopper and the load cell',
-        PARTED: f'suspected parted line: tension collapsed to {kn} while the other lines rose: '
-        'check the chain and the anchor at once',
+        PARTED: f'suspected parted chain: tension collapsed to {kn}, at or below the hanging '
+        'chain\'s own weight: check the chain and the anchor at once',
         BAD_STAMP: BAD_STAMP_TEXT.format(what='tension'),
     }.get(int(code), '')
 

@@ -153,14 +153,17 @@ def decide_sensors_window(
         [core.state.sensor_rows, sensor_state.history_row(now, tension, spiked, a.sensor_hold)]
     )
     ref, keep = sensor_state.reference(times, rows, now, a.parted_window)
-    pattern = sensor_state.parted_pattern(tension, ref, a.parted_drop)
+    limits = sensor_limits(core.config)
+    slack = sensor_state.slack_mask(limits, tension, depth)
+    pattern = sensor_state.parted_pattern(tension, ref, a.parted_drop, slack)
     first = np.array([[line.parted_seen for line in lines]])
     seen = np.maximum.accumulate(
         np.vstack([first, np.where(pattern, now[:, None], -math.inf)]), axis=0
     )[1:]
+    firm = sensor_state.firm_times(now, slack, np.array([line.firm_seen for line in lines]))
     codes = sensor_state.decide_lines(
         a,
-        sensor_limits(core.config),
+        limits,
         now,
         tension,
         tension_s,
@@ -170,6 +173,7 @@ def decide_sensors_window(
         depth,
         d_changed,
         refused,
+        firm,
     )
     depth_codes = sensor_state.decide_depth(
         a, now, depth, depth_s, d_changed, d_spiked, changed, d_refused
@@ -180,6 +184,7 @@ def decide_sensors_window(
                 sensor_memory=memories[k],
                 sensor_code=int(codes[-1, k]),
                 parted_seen=float(seen[-1, k]),
+                firm_seen=float(firm[-1, k]),
             )
         )
     core.state.take(
