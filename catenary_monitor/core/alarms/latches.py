@@ -353,11 +353,12 @@ class LineAlarm:
         )
 
     def _stale(self, x: AlarmInputs, now: float) -> tuple[bool, bool]:
-        """(tension stale, never received or blind, depth stale or never received)."""
+        """(tension stale, never received or blind, depth stale, never received or impossible:
+        outside the chart, the tide's ERROR, the line blind by it)."""
         ts, ds = x.tension_stamp, x.depth_stamp
         stale_t = ts != ts or now - ts > self.config.tension_timeout
         stale_t = stale_t or self.blind(x.channels_healthy)
-        if ds != ds:
+        if ds != ds or x.status == Status.IMPLAUSIBLE_DEPTH:
             return stale_t, True
         if x.depth_stale is None:
             return stale_t, now - ds > self.config.depth_timeout
@@ -455,6 +456,8 @@ class LineAlarm:
                 continue
             if math.isnan(stamp):
                 parts.append(f'no {name} received yet')
+            elif name == 'depth' and x.status == Status.IMPLAUSIBLE_DEPTH:
+                parts.append('depth outside the chart: not solved (the tide status names it)')
             else:
                 parts.append(
                     f'{name} stale: last sample {_fmt(now - stamp)} s ago '
@@ -613,13 +616,17 @@ def uplift_seen(nominal: float, dynamic: float) -> float:
 
 def _impossible(status: int, sensor: float) -> bool:
     """Whether a solve's ``status`` is an impossible input: any but 0, except ``T <= w*h`` on
-    a line whose ``sensor_state`` is ``suspected_parted`` (that condition names it)."""
+    a line whose ``sensor_state`` is ``suspected_parted`` (that condition names it) and an
+    impossible depth (the tide's ERROR names it; the line is blind by it)."""
+    if status == Status.IMPLAUSIBLE_DEPTH:
+        return False  # the depth's: the tide's ERROR, the line blind by it
     return status != 0 and not (status == Status.TENSION and sensor == sensor_state.PARTED)
 
 
 def _impossible_column(status: np.ndarray, sensor: np.ndarray) -> np.ndarray:
     """:func:`_impossible` per update."""
-    return (status != 0) & ~((status == Status.TENSION) & (sensor == sensor_state.PARTED))
+    parted = (status == Status.TENSION) & (sensor == sensor_state.PARTED)
+    return (status != 0) & (status != Status.IMPLAUSIBLE_DEPTH) & ~parted
 
 
 def _sensor_codes(cond: str, code: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -974,6 +981,7 @@ def replay_levels(
     x = {k: _column(inputs.get(k, getattr(default, k)), np.float64, n) for k in _INPUT_FIELDS}
     status = _column(inputs.get('status', 0), np.int64, n)
     stale_t, stale_d = _stale_columns(alarm, t, x, inputs.get('depth_stale'))
+    stale_d = stale_d | (status == Status.IMPLAUSIBLE_DEPTH)
     stale = stale_t | stale_d
     classified = _classify_columns(alarm, x, status, stale, initial.latches)
     active, latches = {}, []

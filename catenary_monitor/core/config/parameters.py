@@ -810,16 +810,22 @@ PARAMETERS: tuple[ParamSpec, ...] = (
             ),
             (
                 'depth_min',
-                0.0,
-                'Chart range of the depth sensor: a depth below this is out_of_range',
+                math.nan,
+                'Chart range of the depth sensor: a depth below this is impossible (out_of_range: '
+                'the tide ERROR, no line solves on it); NaN: from the lines, 0.5 x the shallowest '
+                'depth at which a chain lifts its anchor at its installed span (0 without '
+                'chain_length)',
                 'm',
                 0.0,
                 12000.0,
             ),
             (
                 'depth_max',
-                12000.0,
-                'Chart range of the depth sensor: a depth above this is out_of_range',
+                math.nan,
+                'Chart range of the depth sensor: a depth above this is impossible (out_of_range: '
+                'the tide ERROR, no line solves on it); NaN: from the lines, 1.25 x the deepest '
+                'depth at which a chain lifts its anchor at its installed span (12000 without '
+                'chain_length)',
                 'm',
                 0.0,
                 12000.0,
@@ -1659,6 +1665,35 @@ _TOP_LEVEL = (
 #: Per-line parameters that place a line on the dock (all given on every line, or none).
 GEOMETRY = ('hook_x', 'hook_y', 'heading', 'chain_length')
 
+#: The default chart range as multiples of the shallowest and deepest depth [m] at which a
+#: line's fixed-length chain lifts its anchor at its installed span: the depths the dock was
+#: laid for lie below those; a gauge reading half of them or a quarter more is a datum, scale or
+#: sensor fault.
+CHART_LOW, CHART_HIGH = 0.5, 1.25
+
+
+def chart_range(lines: Iterable[LineConfig]) -> tuple[float, float]:
+    """The default ``(depth_min, depth_max)`` [m] from the lines: :data:`CHART_LOW` x the
+    shallowest and :data:`CHART_HIGH` x the deepest depth at which a fixed-length chain lifts
+    its anchor at its installed span (the hook height taken off); ``(0, 12000)`` without chain
+    lengths."""
+    from catenary_monitor.core.physics.fixed_length import lift_depth_scalar
+
+    lifts = []
+    for line in lines:
+        if line.chain_length is None or not line.chain_length == line.chain_length:
+            continue
+        ea = math.inf if not line.ea else line.ea
+        try:
+            lift = lift_depth_scalar(line.weight, line.chain_length, line.anchor_distance, ea)
+        except (ValueError, OverflowError, ZeroDivisionError):
+            continue
+        if lift == lift and lift - line.hook_height > 0.0:
+            lifts.append(lift - line.hook_height)
+    if not lifts:
+        return 0.0, 12000.0
+    return CHART_LOW * min(lifts), min(CHART_HIGH * max(lifts), 12000.0)
+
 
 @dataclass(frozen=True)
 class MonitorConfig:
@@ -1723,6 +1758,20 @@ class MonitorConfig:
                 other = seen.setdefault(topic, name)
                 if other != name:
                     raise ConfigError(name, f'topic {topic!r} is already used by {other}')
+
+    @property
+    def chart(self) -> tuple[float, float]:
+        """The depth sensor's chart range ``(depth_min, depth_max)`` [m]: as set, else from the
+        lines (:func:`chart_range`)."""
+        got = getattr(self, '_chart', None)
+        if got is None:
+            lo, hi = self.alarm.depth_min, self.alarm.depth_max
+            if lo != lo or hi != hi:
+                low, high = chart_range(self.lines)
+                lo, hi = (low if lo != lo else lo), (high if hi != hi else hi)
+            got = (lo, hi)
+            object.__setattr__(self, '_chart', got)
+        return got
 
     def headings(self) -> list[float]:
         """Each line's heading (deg, clockwise from the bow, in [0, 360)): ``NAME.heading``

@@ -678,7 +678,9 @@ class MonitorCore:
             self.state.depth_s == self.state.depth_s and now - self.state.depth_s > timeout
         )
         status = tide_status(self.state.depth, self.state.depth_s, now, timeout)
-        new = tide_with_sensor(status, self.state.depth_code, self.state.depth, self.config.alarm)
+        new = tide_with_sensor(
+            status, self.state.depth_code, self.state.depth, self.config.alarm, self.config.chart
+        )
         return self._set_component('tide', new, stamp_ns)
 
     def _sensors_now(self, now: float) -> tuple[Level, str]:
@@ -764,6 +766,7 @@ class MonitorCore:
                 np.array([dm.spiked]),
                 changed,
                 np.array([self.state.depth_refused]),
+                self.config.chart,
             )[0]
         )
 
@@ -843,7 +846,8 @@ class MonitorCore:
         line.values = with_sensor(line.values + NAN_VALUES[len(line.values) :], line.sensor_code)
         line.values = with_span(line.values, span)
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
-        code = reading_status(t, h, lc.mbl, lc.weight)
+        lo, hi = self.config.chart
+        code = reading_status(t, h, lc.mbl, lc.weight, lo + lc.hook_height, hi + lc.hook_height)
         if code:
             set_implausible(line, code)
         add_derived([line], self.config.alarm, self.state.depth_s, self.state.trend)
@@ -883,8 +887,10 @@ class MonitorCore:
             line.values = with_span(with_sensor(line.values, line.sensor_code), spans[i])
             line.status, line.status_message = int(status[i]), str(messages[i])
             line.model = str(models[i])
+        lo, hi = self.config.chart
+        hook = np.array([c.hook_height for c in cfgs])
         codes = reading_status_array(
-            tension, h, [c.mbl for c in cfgs], [c.weight for c in cfgs]
+            tension, h, [c.mbl for c in cfgs], [c.weight for c in cfgs], lo + hook, hi + hook
         ).tolist()
         for line, code in zip(lines, codes):
             if code:

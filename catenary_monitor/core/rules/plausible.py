@@ -51,16 +51,25 @@ UNITS_FACTOR = 100.0  # -, a tension this many times below w * h is off by order
 KN = 1000.0  # N per kN: the scale a load cell in kN needs
 
 
-def reading_status(tension: float, depth: float, mbl: float, weight: float = math.nan) -> int:
+def reading_status(
+    tension: float,
+    depth: float,
+    mbl: float,
+    weight: float = math.nan,
+    low: float = -math.inf,
+    high: float = MAX_DEPTH,
+) -> int:
     """0, or the Status of an implausible finite reading.
 
     Parameters: hook tension [N], depth at the hook [m], minimum breaking load [N], the
-    chain's submerged weight [N/m] (NaN: no check below). An implausible depth wins over an
-    implausible tension; non-finite readings give 0 (the solver reports them).
+    chain's submerged weight [N/m] (NaN: no check below), the chart range at the hook [m]
+    (``depth_min``, ``depth_max`` + the hook height: outside it the depth is impossible). An
+    implausible depth wins over an implausible tension; non-finite readings give 0 (the solver
+    reports them).
     """
     if not (math.isfinite(tension) and math.isfinite(depth)):
         return 0
-    if depth > MAX_DEPTH:
+    if depth > MAX_DEPTH or depth > high or depth < low:
         return int(Status.IMPLAUSIBLE_DEPTH)
     if tension > MAX_TENSION_PER_MBL * mbl:
         return int(Status.IMPLAUSIBLE_TENSION)
@@ -74,13 +83,20 @@ def reading_status(tension: float, depth: float, mbl: float, weight: float = mat
     return 0
 
 
-def reading_status_array(tension: Any, depth: Any, mbl: Any, weight: Any = math.nan) -> np.ndarray:
+def reading_status_array(
+    tension: Any,
+    depth: Any,
+    mbl: Any,
+    weight: Any = math.nan,
+    low: Any = -math.inf,
+    high: Any = MAX_DEPTH,
+) -> np.ndarray:
     """:func:`reading_status` element by element (int64 array of the broadcast shape)."""
     t, h = np.asarray(tension, dtype=float), np.asarray(depth, dtype=float)
     w = np.asarray(weight, dtype=float)
     with np.errstate(invalid='ignore'):
         finite = np.isfinite(t) & np.isfinite(h)
-        deep = finite & (h > MAX_DEPTH)
+        deep = finite & ((h > MAX_DEPTH) | (h > high) | (h < low))
         strong = finite & ~deep & (t > MAX_TENSION_PER_MBL * np.asarray(mbl, dtype=float))
         hanging = w * h
         weak = (
@@ -94,7 +110,7 @@ def reading_status_array(tension: Any, depth: Any, mbl: Any, weight: Any = math.
                 | ((t <= hanging) & (hanging < KN * t) & (KN * t <= np.asarray(mbl, float)))
             )
         )
-    out = np.zeros(np.broadcast(t, h, w).shape, dtype=np.int64)
+    out = np.zeros(np.broadcast(t, h, w, deep).shape, dtype=np.int64)
     out[deep] = Status.IMPLAUSIBLE_DEPTH
     out[strong] = Status.IMPLAUSIBLE_TENSION
     out[weak] = Status.WRONG_UNITS
@@ -121,6 +137,11 @@ def status_messages(line: LineConfig) -> dict[int, str]:
     out = dict(STATUS_MESSAGES)
     out[Status.IMPLAUSIBLE_TENSION] = (
         f'{STATUS_MESSAGES[Status.IMPLAUSIBLE_TENSION]}: {units_hint(line, False)}'
+    )
+    out[Status.IMPLAUSIBLE_DEPTH] = (
+        'depth outside the chart (depth_min, depth_max) or deeper than any sea (above '
+        f'{MAX_DEPTH:g} m): the tide gauge\'s datum, scale or the sensor; not solved (the tide '
+        'status names it)'
     )
     out[Status.WRONG_UNITS] = (
         'hook tension 100 times or more below the hanging chain\'s own weight w*h, or below it '

@@ -295,15 +295,17 @@ def decide_depth(
     mem_spiked: np.ndarray,
     line_changed: np.ndarray,
     refused: np.ndarray | None = None,
+    chart: tuple[float, float] | None = None,
 ) -> np.ndarray:
     """Depth sensor state codes (int8 per tick) from the newest depth [m] and its stamp [s],
     the depth memory's ``changed`` and ``spiked`` [s], each line's ``changed`` (ticks,
-    lines) [s] and when a depth sample's stamp was last refused [s] (None: never)."""
+    lines) [s], when a depth sample's stamp was last refused [s] (None: never) and the chart
+    range [m] (None: ``cfg``'s ``depth_min``, ``depth_max``; the monitor passes
+    :attr:`~catenary_monitor.core.config.parameters.MonitorConfig.chart`)."""
+    lo, hi = _chart(cfg, chart)
     with np.errstate(invalid='ignore'):
         reporting = np.isfinite(depth) & (now - depth_s <= getattr(cfg, 'depth_timeout'))
-        out = reporting & (
-            (depth < getattr(cfg, 'depth_min')) | (depth > getattr(cfg, 'depth_max'))
-        )
+        out = reporting & ((depth < lo) | (depth > hi))
         spike = now - mem_spiked <= getattr(cfg, 'sensor_hold')
         quiet = now - mem_changed >= getattr(cfg, 'stuck_time')
         newest = (
@@ -338,16 +340,24 @@ def line_message(code: int, tension: float, mbl: float) -> str:
     }.get(int(code), '')
 
 
-def depth_message(code: int, depth: float, cfg: object) -> str:
-    """What the depth sensor's state tells the operator to check (empty for ``ok``)."""
-    lo, hi = getattr(cfg, 'depth_min'), getattr(cfg, 'depth_max')
+def _chart(cfg: object, chart: tuple[float, float] | None) -> tuple[float, float]:
+    """``chart``, else ``cfg``'s ``(depth_min, depth_max)``."""
+    return chart if chart is not None else (getattr(cfg, 'depth_min'), getattr(cfg, 'depth_max'))
+
+
+def depth_message(
+    code: int, depth: float, cfg: object, chart: tuple[float, float] | None = None
+) -> str:
+    """What the depth sensor's state tells the operator to check (empty for ``ok``; ``chart``
+    as :func:`decide_depth`'s)."""
+    lo, hi = _chart(cfg, chart)
     return {
         STUCK: f'depth sensor stuck at {depth:.2f} m while the lines move: check the tide '
         'gauge and its cable',
         SPIKE: 'depth sensor spike (a change no tide makes): check the tide gauge, its cable '
         'and electrical noise',
-        OUT_OF_RANGE: f'depth {depth:.2f} m outside the chart range [{lo:g}, {hi:g}] m: check '
-        'the depth sensor\'s datum, offset and scaling (or the range)',
+        OUT_OF_RANGE: f'impossible depth {depth:.2f} m (chart {lo:.4g}-{hi:.4g} m): the gauge\'s '
+        'datum, scale or the sensor; no line is solved on it',
         DEPTH_BAD_STAMP: BAD_STAMP_TEXT.format(what='depth'),
     }.get(int(code), '')
 

@@ -87,7 +87,8 @@ def tide_status_at(core: MonitorCore, tide: TideColumns, i: int) -> tuple[Level,
         float(tide.times[i] * 1e-9),
         core.config.alarm.depth_timeout,
     )
-    return tide_with_sensor(status, int(tide.sensor[i]), float(tide.depth[i]), core.config.alarm)
+    code, depth = int(tide.sensor[i]), float(tide.depth[i])
+    return tide_with_sensor(status, code, depth, core.config.alarm, core.config.chart)
 
 
 @dataclass
@@ -176,7 +177,7 @@ def decide_sensors_window(
         firm,
     )
     depth_codes = sensor_state.decide_depth(
-        a, now, depth, depth_s, d_changed, d_spiked, changed, d_refused
+        a, now, depth, depth_s, d_changed, d_spiked, changed, d_refused, core.config.chart
     )
     for k, line in enumerate(lines):
         line.take(
