@@ -11,6 +11,7 @@ from test_batch import compare, ticks_for
 
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
 from catenary_monitor.core.rules import sensor_state
+from catenary_monitor.core.rules.plausible import UNIT_FACTORS
 from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 from catenary_monitor.core.twin.engine import recompute
 from catenary_monitor.core.physics.solve import solve
@@ -262,7 +263,8 @@ def test_depth_sensor_states(state, level, what):
 def test_a_state_for_every_code_and_a_word_for_every_state():
     assert (
         sensor_state.LINE_STATES[sensor_state.OK] == 'ok'
-        and len(set(sensor_state.LINE_STATES)) == 7
+        and len(set(sensor_state.LINE_STATES)) == len(sensor_state.LINE_STATES)
+        and len(sensor_state.LINE_STATES) == sensor_state.UNITS_BASE + len(UNIT_FACTORS)
     )
     for code in range(1, 7):
         assert sensor_state.line_message(code, 1e6, MBL)

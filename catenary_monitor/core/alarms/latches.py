@@ -93,6 +93,7 @@ from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, AlarmConfi
 from catenary_monitor.core.physics.result import Status
 from catenary_monitor.core.rules.level import RANK, Level
 from catenary_monitor.core.rules import sensor_state
+from catenary_monitor.core.rules.plausible import units_text
 from catenary_monitor.core.rules.channels import describe
 
 __all__ = [
@@ -250,6 +251,8 @@ class LineAlarm:
     anchor_distance: float = math.nan  # m, installed (for the dragging message)
     channel_names: tuple[str, ...] = ()  # a line of several channels: their topics
     min_channels: int = 1
+    name: str = ''  # the line's (for the wrong-units message)
+    tension_scale: float = 1.0  # its tension_scale (the wrong-units message)
 
     @classmethod
     def for_line(cls, line: LineConfig, config: AlarmConfig) -> LineAlarm:
@@ -260,6 +263,8 @@ class LineAlarm:
             line.anchor_distance,
             line.channel_topics,
             int(line.min_channels),
+            line.name,
+            line.tension_scale,
         )
 
     def blind(self, healthy: float) -> bool:
@@ -434,7 +439,10 @@ class LineAlarm:
                     text += f' and anchor margin >= {_fmt(self.config.uplift_clear_margin)} m'
                 parts.append(text + ')')
         if active[1]:
-            if x.status != 0:
+            if sensor_state.is_units(x.sensor_state):
+                index = int(x.sensor_state) - sensor_state.UNITS_BASE
+                parts.append(units_text(self.name, self.tension_scale, index, x.sensor_tension))
+            elif x.status != 0:
                 parts.append(f'impossible input: {input_message}')
             else:
                 parts.append(
@@ -620,13 +628,16 @@ def _impossible(status: int, sensor: float) -> bool:
     impossible depth (the tide's ERROR names it; the line is blind by it)."""
     if status == Status.IMPLAUSIBLE_DEPTH:
         return False  # the depth's: the tide's ERROR, the line blind by it
+    if sensor_state.is_units(sensor):
+        return True  # a reading off by a unit factor
     return status != 0 and not (status == Status.TENSION and sensor == sensor_state.PARTED)
 
 
 def _impossible_column(status: np.ndarray, sensor: np.ndarray) -> np.ndarray:
     """:func:`_impossible` per update."""
     parted = (status == Status.TENSION) & (sensor == sensor_state.PARTED)
-    return (status != 0) & (status != Status.IMPLAUSIBLE_DEPTH) & ~parted
+    units = sensor >= sensor_state.UNITS_BASE
+    return ((status != 0) & (status != Status.IMPLAUSIBLE_DEPTH) & ~parted) | units
 
 
 def _sensor_codes(cond: str, code: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -635,17 +646,20 @@ def _sensor_codes(cond: str, code: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     for state in sensor_state.ERROR_STATES[1:]:
         errors = errors | (code == state)
     breach = errors if cond == 'sensor_error' else ~errors & (code > 0)
+    if cond != 'sensor_error':
+        breach &= code < sensor_state.UNITS_BASE  # wrong units: the input condition's
     return breach, ~breach & np.isfinite(code)
 
 
 def _sensor_code(cond: str, code: float) -> tuple[bool, bool]:
     """:func:`_sensor_codes` of one code (the per-sample path: no arrays)."""
     errors = code in _ERROR_CODES
-    breach = errors if cond == 'sensor_error' else not errors and code > 0
+    breach = errors if cond == 'sensor_error' else not errors and 0 < code < _UNITS
     return breach, not breach and math.isfinite(code)
 
 
 _ERROR_CODES = frozenset(float(c) for c in sensor_state.ERROR_STATES)
+_UNITS = float(sensor_state.UNITS_BASE)
 
 
 def _sensor_text(x: AlarmInputs, cond: str, hold: float) -> str:

@@ -831,6 +831,18 @@ PARAMETERS: tuple[ParamSpec, ...] = (
                 12000.0,
             ),
             (
+                'units_window',
+                600.0,
+                'wrong units: a line whose reading is off by a unit factor (10, 9.81, 100, 1000, '
+                '4.45, 4448 or their inverses) against its fixed-length statics at rest x the '
+                'dock\'s common loading, judged while the dock is calm, is an input ERROR naming '
+                'its tension_scale; held until its reading fits the statics for this long (0: no '
+                'check; needs chain_length on 3 lines or more)',
+                's',
+                0.0,
+                86400.0,
+            ),
+            (
                 'tension_sample_rate',
                 0.0,
                 'Intake: each load cell publishes at this rate; fewer samples are counted '
@@ -1559,6 +1571,7 @@ class AlarmConfig:
     parted_window: float = _default('parted_window')
     depth_min: float = _default('depth_min')
     depth_max: float = _default('depth_max')
+    units_window: float = _default('units_window')
     stamp_ahead_max: float = _default('stamp_ahead_max')
     tension_sample_rate: float = _default('tension_sample_rate')
     depth_sample_rate: float = _default('depth_sample_rate')

@@ -110,6 +110,7 @@ from catenary_monitor.core.rules.health import (
     tide_status,
 )
 from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.rules import plausible
 from catenary_monitor.core.rules.plausible import reading_status, reading_status_array
 
 __all__ = ['LineOutput', 'Step', 'MonitorCore', 'channel_limits', 'sensor_limits']
@@ -168,7 +169,16 @@ class MonitorCore:
         in the root namespace); ``depth_id`` the depth topic; ``logger_id`` the log directory.
     """
 
-    __slots__ = ('config', 'index', 'depth_id', 'logger_id', 'dock_model', 'curves', 'state')
+    __slots__ = (
+        'config',
+        'index',
+        'depth_id',
+        'logger_id',
+        'dock_model',
+        'curves',
+        'rest_table',
+        'state',
+    )
 
     def __init__(
         self,
@@ -195,6 +205,7 @@ class MonitorCore:
             for lc in config.lines
         ]
         self.curves = [fatigue_rule.Curve.of(lc) for lc in config.lines]
+        self.rest_table = plausible.rest_table(config, config.chart)
         self.index = {line.config.name: k for k, line in enumerate(lines)}
         self.depth_id = depth_id or resolve_topic(config.depth_topic)
         self.logger_id = logger_id
@@ -662,6 +673,7 @@ class MonitorCore:
             self.state.trend = tide_trend.TrendState()  # other bins: the trend starts again
         self.config = config
         self.curves = [fatigue_rule.Curve.of(lc) for lc in config.lines]
+        self.rest_table = plausible.rest_table(config, config.chart)
         for line, lc in zip(self.state.lines, config.lines):
             line.config, line.alarm = lc, LineAlarm.for_line(lc, config.alarm)
         self.dock_model = DockModel.from_config(config) if config.has_dock_model else None
@@ -734,6 +746,19 @@ class MonitorCore:
         seen = np.where(pattern, now[:, None], seen)
         firm = np.array([line.firm_seen for line in lines])
         firm = sensor_state.firm_times(now, slack, firm)
+        tension_s = np.array([[line.tension_s for line in lines]])
+        units, memories = plausible.units_decide(
+            self.rest_table,
+            units_rule(self.config),
+            [line.units for line in lines],
+            now,
+            tension,
+            tension_s,
+            depth,
+            np.array([self.state.depth_s]),
+            (a.tension_timeout, a.depth_timeout),
+            self.config.chart,
+        )
         self.state.sensor_times = np.append(self.state.sensor_times[keep:], now)
         spiked = np.array([[line.sensor_memory.spiked for line in lines]])
         row = sensor_state.history_row(now, tension, spiked, a.sensor_hold)
@@ -743,7 +768,7 @@ class MonitorCore:
             limits,
             now,
             tension,
-            np.array([[line.tension_s for line in lines]]),
+            tension_s,
             changed,
             spiked,
             seen,
@@ -751,10 +776,11 @@ class MonitorCore:
             np.array([self.state.depth_memory.changed]),
             np.array([[line.stamp_refused for line in lines]]),
             firm,
+            units,
         )
         for k, line in enumerate(lines):
             line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
-            line.firm_seen = float(firm[0, k])
+            line.firm_seen, line.units = float(firm[0, k]), memories[k]
         dm = self.state.depth_memory
         self.state.depth_code = int(
             sensor_state.decide_depth(
@@ -1079,6 +1105,11 @@ def channel_limits(core: MonitorCore, line: LineState) -> channels.Limits:
         a.channel_tolerance,
         int(line.config.min_channels),
     )
+
+
+def units_rule(config: MonitorConfig) -> plausible.UnitsRule:
+    """The units check's rule (core.rules.plausible): ``units_window``, the rest fixed."""
+    return plausible.UnitsRule(window=config.alarm.units_window)
 
 
 def sensor_limits(config: MonitorConfig) -> sensor_state.LineLimits:

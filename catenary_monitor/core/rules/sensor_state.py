@@ -50,7 +50,18 @@ from typing import NamedTuple
 
 import numpy as np
 
+from catenary_monitor.core.rules.plausible import UNIT_FACTORS
+
+
+def _unit_word(factor: float) -> str:
+    """``x10``, ``x9.81``, ``x4448``, ``div10``: a unit factor in a state word."""
+    f, word = (factor, 'x') if factor >= 1.0 else (1.0 / factor, 'div')
+    return f'{word}{f:.3g}' if f < 100.0 else f'{word}{f:.0f}'
+
+
 __all__ = [
+    'UNITS_BASE',
+    'is_units',
     'LINE_STATES',
     'DEPTH_STATES',
     'NO_DATA',
@@ -80,8 +91,19 @@ __all__ = [
     'depth_message',
 ]
 
+#: The first ``wrong_units`` state's code: ``UNITS_BASE + i`` a reading off by
+#: :data:`~catenary_monitor.core.rules.plausible.UNIT_FACTORS` ``[i]`` (an ``input`` ERROR).
+UNITS_BASE = 7
 #: Line states by code (the ``sensor_state`` output field is the code, /diagnostics the word).
-LINE_STATES = ('ok', 'stuck', 'spike', 'over_mbl', 'slack', 'suspected_parted', 'bad_stamp')
+LINE_STATES = (
+    'ok',
+    'stuck',
+    'spike',
+    'over_mbl',
+    'slack',
+    'suspected_parted',
+    'bad_stamp',
+) + tuple(f'wrong_units_{_unit_word(f)}' for f, _ in UNIT_FACTORS)
 OK, STUCK, SPIKE, OVER_MBL, SLACK, PARTED, BAD_STAMP = range(7)
 #: Depth sensor states by code.
 DEPTH_STATES = ('ok', 'stuck', 'spike', 'out_of_range', 'bad_stamp')
@@ -257,12 +279,15 @@ def decide_lines(
     depth_changed: np.ndarray,
     refused: np.ndarray | None = None,
     firm: np.ndarray | None = None,
+    units: np.ndarray | None = None,
 ) -> np.ndarray:
     """Line state codes (int8, shape (ticks, lines)) at ticks ``now`` [s] from each line's
     newest tension [N] and its stamp [s], its memory's ``changed`` and ``spiked`` [s], when
     the parted pattern was last seen [s], the newest depth [m] and the depth's ``changed``,
     when a sample's stamp was last refused [s] (None: never) and when the line was last above
-    ``w h`` at a tick (:func:`firm_times`; None: the parted state only ``sensor_hold`` long).
+    ``w h`` at a tick (:func:`firm_times`; None: the parted state only ``sensor_hold`` long)
+    and the unit factor each line is claimed off by
+    (:func:`~catenary_monitor.core.rules.plausible.units_latch`; -1 or None: none).
     ``cfg`` is the :class:`~catenary_monitor.core.config.parameters.AlarmConfig`."""
     t_now = now[:, None]
     hold = getattr(cfg, 'sensor_hold')
@@ -282,6 +307,9 @@ def decide_lines(
     if refused is not None:
         with np.errstate(invalid='ignore'):
             code[(t_now - refused <= hold) & ~(over | slack | parted)] = BAD_STAMP
+    if units is not None:
+        wrong = (units >= 0) & ~(over | slack | parted)
+        code[wrong] = (UNITS_BASE + units[wrong]).astype(np.int8)
     code[over] = OVER_MBL
     return code
 
@@ -385,6 +413,11 @@ def history_row(
     reading spiked within ``hold`` (a spike is no reference)."""
     with np.errstate(invalid='ignore'):
         return np.where(now[:, None] - spiked <= hold, math.nan, tension)
+
+
+def is_units(code: float) -> bool:
+    """Whether a line state code is a ``wrong_units`` one (an ``input`` ERROR)."""
+    return code >= UNITS_BASE
 
 
 def line_word(code: int, dock: str = '') -> str:

@@ -16,7 +16,12 @@ from catenary_monitor.core.alarms import acknowledge as alarm_ack
 from catenary_monitor.core.alarms import flood as alarm_flood
 from catenary_monitor.core.alarms.journal import AlarmEvent, entries, raised
 from catenary_monitor.core.alarms.latches import CONDITIONS, LevelSeries, Transition, quiet_change
-from catenary_monitor.core.monitor.monitor_core import MonitorCore, channel_limits, sensor_limits
+from catenary_monitor.core.monitor.monitor_core import (
+    MonitorCore,
+    channel_limits,
+    sensor_limits,
+    units_rule,
+)
 from catenary_monitor.core.monitor.state import (
     BlindPart,
     DockPart,
@@ -31,6 +36,7 @@ from catenary_monitor.core.rules import channels, readings, sensor_state, tide_t
 from catenary_monitor.core.rules import dock_watch as dock_live
 from catenary_monitor.core.rules.health import sensors_status, tide_status
 from catenary_monitor.core.rules.level import RANK, Level
+from catenary_monitor.core.rules import plausible
 from catenary_monitor.core.rules.plausible import MAX_DEPTH
 from catenary_monitor.core.twin.schedule import LineSteps, level_changes, merge, newest, pick
 from catenary_monitor.core.twin.window import KIND_DEPTH, KIND_TICK, Column, Window
@@ -162,6 +168,18 @@ def decide_sensors_window(
         np.vstack([first, np.where(pattern, now[:, None], -math.inf)]), axis=0
     )[1:]
     firm = sensor_state.firm_times(now, slack, np.array([line.firm_seen for line in lines]))
+    units, units_after = plausible.units_decide(
+        core.rest_table,
+        units_rule(core.config),
+        [line.units for line in lines],
+        now,
+        tension,
+        tension_s,
+        depth,
+        depth_s,
+        (a.tension_timeout, a.depth_timeout),
+        core.config.chart,
+    )
     codes = sensor_state.decide_lines(
         a,
         limits,
@@ -175,6 +193,7 @@ def decide_sensors_window(
         d_changed,
         refused,
         firm,
+        units,
     )
     depth_codes = sensor_state.decide_depth(
         a, now, depth, depth_s, d_changed, d_spiked, changed, d_refused, core.config.chart
@@ -186,6 +205,7 @@ def decide_sensors_window(
                 sensor_code=int(codes[-1, k]),
                 parted_seen=float(seen[-1, k]),
                 firm_seen=float(firm[-1, k]),
+                units=units_after[k],
             )
         )
     core.state.take(
