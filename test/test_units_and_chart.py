@@ -94,3 +94,39 @@ def test_unit_factors_named_and_far_from_one():
     text = plausible.units_text('line_11', 1.0, 0, 16e3)
     assert text.startswith('wrong units? reading x10 fits the chain\'s statics (daN?')
     assert 'line_11.tension_scale 1 -> 10 ' in text
+
+
+def _run(scene, tmp_path_factory, name):
+    facts = ndl.write_scene(scene, tmp_path_factory.mktemp(name))
+    return replay_counts(facts.log, facts.params)[0]
+
+
+def test_a_pressure_gauge_at_0_3_m_is_an_impossible_depth_and_blinds_no_line_loudly(
+    tmp_path_factory,
+):
+    """The pressure gauge steps to 0.3 m for 10 min: the tide is ERROR "impossible depth"
+    (never OK meanwhile), no line solves on it nor annunciates (each blind by it)."""
+    fault = nd.Fault('pressure_step', 600.0, 600.0, None, 0.3)
+    scene = nd.paper_scene('pressure_1mm', days=20 / 1440.0, faults=(fault,), mean_depth=18.3)
+    scene = dataclasses.replace(scene, cells=dataclasses.replace(scene.cells, rate=2.0))
+    counter = _run(scene, tmp_path_factory, 'pressure')
+    t0 = scene.start_s
+    heard = counter.heard(t0 + 600.0, t0 + 1200.0)
+    tide = [a for a in heard if a.status == 'tide']
+    assert tide and tide[0].after == 2 and 'impossible depth 0.30 m (chart ' in tide[0].message
+    assert not [a for a in heard if a.status.startswith('line_')], heard[:3]
+    during = counter.level_at('tide', t0 + np.arange(602.0, 1199.0, 1.0))
+    assert (during == 2).all()
+
+
+def test_a_parted_chain_is_one_error_on_its_line(tmp_path_factory):
+    """The chain parts 12 m below line_11's hook: its line raises one ERROR; the others stay
+    quiet (the other lines' sum need not rise)."""
+    fault = nd.Fault('parted', 600.0, math.inf, LINE, 12.0)
+    scene = _scene((fault,), storm=False)
+    scene = dataclasses.replace(scene, seconds=1200.0)
+    counter = _run(scene, tmp_path_factory, 'parted')
+    heard = counter.heard(scene.start_s + 600.0, scene.start_s + 1200.0)
+    mine = [a for a in heard if a.status == LINE]
+    assert len(mine) == 1 and mine[0].after == 2, heard[:4]
+    assert not [a for a in heard if a.status.startswith('line_') and a.status != LINE]
