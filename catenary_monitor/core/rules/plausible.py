@@ -181,7 +181,7 @@ UNIT_FACTORS = (
 )
 _LOG_FACTORS = np.log([f for f, _ in UNIT_FACTORS])
 #: Points of the at-rest table over the chart range (linear between them).
-REST_POINTS = 2000
+REST_POINTS = 400
 
 
 class UnitsRule(NamedTuple):
@@ -282,12 +282,20 @@ def _nanmedian_rows(x: np.ndarray) -> np.ndarray:
 
 
 def _nanpercentile_rows(x: np.ndarray, q: float) -> np.ndarray:
-    """The ``q`` percentile of each row's finite values (NaN for none), quietly."""
-    out = np.full(len(x), math.nan)
-    some = np.any(np.isfinite(x), axis=1)
-    if some.any():
-        out[some] = np.nanpercentile(x[some], q, axis=1)
-    return out
+    """The ``q`` percentile of each row's non-NaN values (linear between the order statistics,
+    as numpy's default; NaN for none): a sort, not ``np.nanpercentile`` (20 times the cost on a
+    tick's row)."""
+    n = len(x)
+    if not n or not x.shape[1]:
+        return np.full(n, math.nan)
+    ranked = np.sort(x, axis=1)  # NaN last
+    count = np.sum(~np.isnan(x), axis=1)
+    pos = q / 100.0 * np.maximum(count - 1, 0)
+    lo = np.floor(pos).astype(np.int64)
+    hi = np.minimum(lo + 1, np.maximum(count - 1, 0))
+    rows = np.arange(n)
+    a, b = ranked[rows, lo], ranked[rows, hi]
+    return np.where(count > 0, a + (pos - lo) * (b - a), math.nan)
 
 
 def units_latch(
@@ -309,28 +317,30 @@ def units_latch(
         idx = units_factors(ratio, rule.tolerance, rule.far)
         claim = (idx >= 0) & quiet[:, None] & judged
         near = judged & (np.abs(np.log(ratio)) < math.log(rule.fit))
-    out = np.full((n, m), -1, np.int64)
-    after = []
-    rows = np.arange(n)
-    for k in range(m):
-        mem = memory[k]
-        claimed = _newest(np.where(claim[:, k], now, -math.inf), mem.claimed)
-        far = _newest(np.where(near[:, k], -math.inf, now), mem.far)
-        cleared = _newest(np.where(now - far >= rule.window, now, -math.inf), mem.cleared)
-        last = _newest(np.where(claim[:, k], rows, -1), -1).astype(np.int64)
-        factor = np.where(last >= 0, idx[np.maximum(last, 0), k], mem.factor)
-        out[:, k] = np.where(claimed > cleared, factor, -1)
-        if n:
-            after.append(UnitsMemory(float(claimed[-1]), int(factor[-1]), float(far[-1]),
-                                     float(cleared[-1])))  # fmt: skip
-        else:
-            after.append(mem)
+    if not n:
+        return np.full((0, m), -1, np.int64), list(memory)
+    before = np.array([[x.claimed for x in memory], [x.far for x in memory],
+                       [x.cleared for x in memory]])  # fmt: skip
+    claimed = _newest(np.where(claim, now[:, None], -math.inf), before[0])
+    far = _newest(np.where(near, -math.inf, now[:, None]), before[1])
+    cleared = _newest(np.where(now[:, None] - far >= rule.window, now[:, None], -math.inf),
+                      before[2])  # fmt: skip
+    last = _newest(np.where(claim, np.arange(n)[:, None], -1), np.full(m, -1.0))
+    last = last.astype(np.int64)
+    picked = np.take_along_axis(idx, np.maximum(last, 0), axis=0)
+    factor = np.where(last >= 0, picked, np.array([x.factor for x in memory])[None, :])
+    out = np.where(claimed > cleared, factor, -1).astype(np.int64)
+    after = [
+        UnitsMemory(float(claimed[-1, k]), int(factor[-1, k]), float(far[-1, k]),
+                    float(cleared[-1, k]))  # fmt: skip
+        for k in range(m)
+    ]
     return out, after
 
 
-def _newest(x: np.ndarray, before: float) -> np.ndarray:
-    """The running maximum of ``x`` after ``before``."""
-    return np.maximum.accumulate(np.concatenate([[before], x]))[1:]
+def _newest(x: np.ndarray, before: np.ndarray) -> np.ndarray:
+    """The running maximum down the rows of ``x`` (ticks, lines) after the row ``before``."""
+    return np.maximum.accumulate(np.vstack([before[None, :], x]), axis=0)[1:]
 
 
 def units_text(name: str, scale: float, index: int, tension: float) -> str:

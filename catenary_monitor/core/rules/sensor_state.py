@@ -27,6 +27,11 @@ batch twin) that share the arithmetic, so live and replay decide alike:
                                  w * h, and ``sensor_hold`` after last seen
   ``slack`` (4)           ERROR  tension <= w * h (the hanging chain's own weight at
                                  the depth at the hook)
+  ``wrong_units_x10``     ERROR  the reading off by a unit factor against the line's
+  ... (7-17)             input  statics, judged while the dock is calm
+                                 (:func:`~catenary_monitor.core.rules.plausible.
+                                 units_decide`); the ``input`` condition's, not a
+                                 sensor condition's
   ``bad_stamp`` (6)       WARN   a sample refused for its header stamp (ahead of the
                                  monitor's clock by ``stamp_ahead_max``, or before
                                  the one before) within ``sensor_hold``
