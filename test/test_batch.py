@@ -470,9 +470,6 @@ def _lookahead_config(**alarm):
     sinker with grounded chain, line_03 a drag anchor with chain length only."""
     import dataclasses
 
-    # chains far longer than the span needs (lifting only at 63-257 m): the chart the lines
-    # would give (0.5-1.25 x those) refuses the test's 21 m, so the chart is set
-    alarm = {'depth_min': 0.0, 'depth_max': 100.0, **alarm}
     base = dock_config(3, depth_accuracy=0.3, drag_margin_warn=150e3, **alarm)
     extra = [
         dict(tension_accuracy=40e3, ea=6.0e8, chain_length=300.0),

@@ -75,7 +75,7 @@ def test_a_normal_stretch_claims_no_unit_mistake(normal_run):
 def test_the_chart_comes_from_the_lines_and_refuses_a_gauge_at_0_3_m():
     scene = _scene(storm=False)
     lo, hi = scene.config.chart
-    assert 10.0 < lo < 13.0 and 25.0 < hi < 30.0, (lo, hi)  # lifts at 22.2-22.3 m
+    assert 5.0 < lo < 6.5 and 25.0 < hi < 30.0, (lo, hi)  # lifts at 22.2-22.3 m
     assert not lo <= 0.3 <= hi and lo < 18.3 - 1.0 and hi > 18.3 + 1.0
     no_chain = [dataclasses.replace(x, chain_length=None) for x in scene.config.lines]
     assert chart_range(no_chain) == (0.0, 12000.0)

@@ -812,7 +812,7 @@ PARAMETERS: tuple[ParamSpec, ...] = (
                 'depth_min',
                 math.nan,
                 'Chart range of the depth sensor: a depth below this is impossible (out_of_range: '
-                'the tide ERROR, no line solves on it); NaN: from the lines, 0.5 x the shallowest '
+                'the tide ERROR, no line solves on it); NaN: from the lines, 0.25 x the shallowest '
                 'depth at which a chain lifts its anchor at its installed span (0 without '
                 'chain_length)',
                 'm',
@@ -1680,9 +1680,10 @@ GEOMETRY = ('hook_x', 'hook_y', 'heading', 'chain_length')
 
 #: The default chart range as multiples of the shallowest and deepest depth [m] at which a
 #: line's fixed-length chain lifts its anchor at its installed span: the depths the dock was
-#: laid for lie below those; a gauge reading half of them or a quarter more is a datum, scale or
-#: sensor fault.
-CHART_LOW, CHART_HIGH = 0.5, 1.25
+#: laid for lie below those; a gauge reading a quarter of them or a quarter more is a datum,
+#: scale or sensor fault. A quarter, not half: a chain laid with much grounded length lifts far
+#: deeper than the dock floats (130 m of chain at a 100 m span lifts at about 60 m).
+CHART_LOW, CHART_HIGH = 0.25, 1.25
 
 
 def chart_range(lines: Iterable[LineConfig]) -> tuple[float, float]:
