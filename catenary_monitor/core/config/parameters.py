@@ -812,9 +812,9 @@ PARAMETERS: tuple[ParamSpec, ...] = (
                 'depth_min',
                 math.nan,
                 'Chart range of the depth sensor: a depth below this is impossible (out_of_range: '
-                'the tide ERROR, no line solves on it); NaN: from the lines, 0.25 x the shallowest '
-                'depth at which a chain lifts its anchor at its installed span (0 without '
-                'chain_length)',
+                'the tide ERROR, no line solves on it); NaN: from the lines, 0.25 x the '
+                'shallowest depth at which a chain lifts its anchor at its installed span (0 '
+                'without chain_length)',
                 'm',
                 0.0,
                 12000.0,
