@@ -233,7 +233,7 @@ def test_shelving_the_uplift_error_is_refused_with_a_message():
     step = core.step(Shelve(now + 1, 'line_02', 'uplift', 600.0, 'console op'))
     assert step.note == (
         'line_02.uplift: refused: line_02: the uplift ERROR cannot be shelved '
-        '(unshelvable_conditions: uplift)'
+        '(unshelvable_conditions: uplift, input, sensor_error, stale, dragging, sensors)'
     )
     step = core.step(Shelve(now + 2, 'line_02', ALL, 600.0, 'console op'))
     assert 'its active uplift ERROR cannot be shelved' in step.note
@@ -275,11 +275,13 @@ def test_a_whole_line_shelf_hides_its_warning_until_it_expires():
         step = second(k)
     assert _status(step, 'line_01').level == Level.WARN
     step = core.step(Shelve(T0_NS + 3 * S + 5, 'line_01', ALL, 5.0, 'bridge'))
-    assert step.note == 'line_01 shelved for 5 s by bridge'
+    assert step.note == (
+        'line_01 shelved for 5 s by bridge: anchor_margin (a new condition still annunciates)'
+    )
     values = dict(_status(step, 'line_01').values)
     assert values['alarm_state'] == 'shelved' and values['acknowledged'] == 'true'
     assert float(values['shelved_until']) == pytest.approx((T0_NS + 3 * S + 5) * 1e-9 + 5.0)
-    assert values['shelved_by'] == 'bridge' and values['shelved_condition'] == 'all'
+    assert values['shelved_by'] == 'bridge' and values['shelved_condition'] == 'anchor_margin'
     assert _status(step, 'line_01').level == Level.WARN  # computed and shown
     for k in range(4, 8):  # 4..7 s: the shelf holds
         step = second(k)
@@ -315,15 +317,20 @@ def test_run_log_shelves_chatters_and_floods_as_the_core_does():
     unshelved by an operator, refused), chattering and a flood: the twin's snapshots, journal
     and final state equal the core's event by event."""
     config, tensions, depth, ticks = _storm_core(
-        flood_count=6, flood_window=60.0, chatter_window=20.0, shelve_max=120.0
+        flood_count=6,
+        flood_window=60.0,
+        chatter_window=20.0,
+        shelve_max=120.0,
+        unshelvable_conditions=('uplift',),  # the sensors alarm and stale shelvable here
     )
     extra = [
-        Shelve(_at(5.0), 'line_02', ALL, 20.0, 'op a'),  # expires at 25 s, in a stretch
+        Shelve(_at(5.0), 'line_01', ALL, 20.0, 'op a'),  # its WARN; expires at 25 s, in a stretch
+        Shelve(_at(6.0), 'line_02', ALL, 20.0, 'op a2'),  # refused: nothing active
         Shelve(_at(9.0), 'line_02', 'uplift', 30.0, 'op b'),  # refused
-        Shelve(_at(12.0), 'line_01', 'anchor_margin', 30.0, 'op c'),
+        Shelve(_at(12.0), 'line_03', 'anchor_margin', 30.0, 'op c'),
         Shelve(_at(15.0), 'sensors', ALL, 60.0, 'op d'),
         Acknowledge(_at(16.0), None, 'op e'),
-        Shelve(_at(50.0), 'line_03', ALL, 100.0, 'op f'),
+        Shelve(_at(50.0), 'line_03', 'anchor_margin', 100.0, 'op f'),
         Shelve(_at(60.0), 'nope', ALL, 10.0, 'op g'),  # refused
         Shelve(_at(62.0), 'line_01', ALL, 1e6, 'op h'),  # refused: too long
         Shelve(_at(70.0), 'line_03', ALL, 0.0, 'op i'),  # unshelved by an operator
@@ -398,3 +405,95 @@ def test_a_blind_start_is_one_raise_not_a_flood():
     assert _status(steps[-1], 'alarms').message == (
         '1 alarm raised in the last 600 s (a flood is more than 1)'
     )
+
+
+# --- nothing a shelf can hide ------------------------------------------------------------------
+
+
+def _calm(seconds=200.0):
+    """Three calm lines at 5 Hz and a tide gauge at 1 Hz (test_sensor's scene), as columns."""
+    from test_sensor import columns, config, scene
+
+    cfg = config(tension_rate_max=100.0)
+    t, tensions, depth_t, depth = scene(3)
+    keep, keep_d = t < seconds, depth_t < seconds
+    return cfg, t[keep], [v[keep] for v in tensions], depth_t[keep_d], depth[keep_d], columns
+
+
+def _core_and_twin(cfg, cols, dep, extra):
+    """The core event by event and the twin over the whole log (must agree); the steps."""
+    ticks = ticks_for(cols, dep, rate=1.0)
+    core = MonitorCore(cfg, T0_NS)
+    steps = [core.step(e) for e in _events(cfg, cols, dep, ticks, extra)]
+    twin = MonitorCore(cfg, T0_NS)
+    window = Window([cols[line.name] for line in cfg.lines], dep, ticks)
+    result, twin = run_log(twin, window, extra, snapshots=True)
+    want = [s.snapshot for s in steps if s.snapshot is not None]
+    for g, w in zip(result.snapshots, want):
+        assert_statuses_agree(g.statuses, w.statuses, g.stamp_ns)
+    assert sorted(result.alarm_events) == sorted(e for s in steps for e in s.alarm_events)
+    assert_same_state(twin, core)
+    return steps
+
+
+def _shown(steps, name):
+    """(time s, level, message, values) of a status in every snapshot."""
+    return [
+        ((s.stamp_ns - T0_NS) * 1e-9, st.level, st.message, dict(st.values))
+        for s in steps
+        if s.snapshot is not None
+        for st in s.snapshot.statuses
+        if st.name == f'catenary_monitor: {name}'
+    ]
+
+
+def test_a_shelved_sensors_alarm_still_annunciates_a_silent_gauge():
+    """The sensors common-cause alarm is unshelvable by default: the shelf is refused, and the
+    gauge falling silent (every line blind) raises it, unacknowledged."""
+    cfg, t, tensions, depth_t, depth, columns = _calm()
+    silent = depth_t < 60.0  # the gauge stops at 60 s
+    cols, dep = columns(t, tensions, depth_t[silent], depth[silent])
+    extra = [Shelve(_at(30.0), 'sensors', ALL, 3600.0, 'night shift')]
+    steps = _core_and_twin(cfg, cols, dep, extra)
+    answer = next(s.note for s in steps if s.kind == 'shelve')
+    assert 'sensors common-cause alarm (loss of monitoring) cannot be shelved' in answer
+    late = [x for x in _shown(steps, 'sensors') if x[0] > 60.0 + cfg.alarm.depth_timeout + 1.0]
+    assert late and all(x[1] == Level.STALE for x in late), late[:2]
+    assert late[0][3]['alarm_state'] == 'unacknowledged' and late[0][3]['shelved'] == 'false'
+    assert 'depth sensor silent' in late[0][2]
+    raised = [e for s in steps for e in s.alarm_events if e.alarm == 'sensors']
+    assert [e.kind for e in raised if e.kind == 'raised'] == ['raised']
+
+
+def test_a_line_shelved_for_a_stuck_cell_still_annunciates_its_parted_chain():
+    """A line shelved whole while its load cell is stuck shelves that condition
+    (``sensor_warn``) only; its chain parting then raises the suspected_parted ERROR at once:
+    unacknowledged, not shelved, named."""
+    from test_sensor import DEPTH, W
+
+    cfg, t, tensions, depth_t, depth, columns = _calm()
+    stuck = (t >= 30.0) & (t < 120.0)
+    tensions[0][stuck] = tensions[0][np.argmax(stuck)]  # the cell freezes at 30 s
+    tensions[0][t >= 120.0] = 0.6 * W * DEPTH  # the chain parts below the hook at 120 s
+    cols, dep = columns(t, tensions, depth_t, depth)
+    extra = [Shelve(_at(80.0), 'line_00', ALL, 3600.0, 'night shift')]
+    steps = _core_and_twin(cfg, cols, dep, extra)
+    answer = next(s.note for s in steps if s.kind == 'shelve')
+    assert answer == (
+        'line_00 shelved for 3600 s by night shift: sensor_warn (a new condition still '
+        'annunciates)'
+    )
+    before = [x for x in _shown(steps, 'line_00') if 85.0 < x[0] < 120.0]
+    assert before and all(x[3]['alarm_state'] == 'shelved' for x in before)  # hidden
+    after = [x for x in _shown(steps, 'line_00') if x[0] > 122.0]
+    assert after and all(x[1] == Level.ERROR for x in after), after[:2]
+    first = after[0][3]
+    assert first['alarm_state'] == 'unacknowledged' and first['shelved'] == 'true'
+    assert first['shelved_condition'] == 'sensor_warn'
+    # its T <= w*h is an impossible input at the sample, suspected_parted from the next tick
+    # on (the input condition then clears: clear_hold 10 s)
+    assert first['alarm_condition'] in ('input', 'sensor_error')
+    assert all('suspected parted' in x[2] for x in after), after[0][2]
+    late = [x for x in after if x[0] > 135.0]
+    assert late and all(x[3]['alarm_condition'] == 'sensor_error' for x in late)
+    assert all('impossible input' not in x[2] for x in late), late[0][2]

@@ -149,11 +149,12 @@ def test_live_shelving_refusal_and_expiry(scripted_run: Any) -> None:
     # The uplift ERROR cannot be shelved: the monitor says why, in its answer and its log.
     assert facts['refusal'] == (
         'line_04.uplift: refused: line_04: the uplift ERROR cannot be shelved '
-        '(unshelvable_conditions: uplift)'
+        '(unshelvable_conditions: uplift, input, sensor_error, stale, dragging, sensors)'
     )
     out = facts['output']
     assert 'SHELVE line_04: refused: line_04: its active uplift ERROR cannot be shelved' in out
-    assert 'SHELVE line_02 shelved for 6 s by bridge watch (/bridge_operator gid' in out
+    assert 'SHELVE line_02 shelved for 6 s by bridge watch: ' in out  # its active conditions
+    assert '(a new condition still annunciates) (/bridge_operator gid' in out
     assert 'SHELVE line_02: shelf expired after 6 s; the alarm is shown again' in out
     assert 'CHATTERING line_05' in out and 'ALARM alarms: OK -> WARN: ALARM FLOOD' in out
     # Still active at the expiry, unacknowledged when shelved: unacknowledged again, raised

@@ -141,15 +141,16 @@ def live_run(tmp_path_factory: Any) -> Any:
 
 def _shelve_in_the_page(driver: Any) -> dict[str, Any]:
     """Shelving from the page, answered by the monitor: the lifted line as a whole (refused:
-    its uplift ERROR), then line_01 for 10 min (listed as shelved), then unshelved."""
+    its uplift ERROR), then line_01's anchor margin for 10 min (listed as shelved; a whole-line
+    shelf covers only the conditions active when asked), then unshelved."""
     from selenium.webdriver.support.ui import Select
 
     out: dict[str, Any] = {}
     answer = driver.find_element('id', 'shelve-answer')
 
-    def shelve(line: str) -> None:
+    def shelve(line: str, condition: str = 'all') -> None:
         Select(driver.find_element('id', 'shelve-line')).select_by_value(line)
-        Select(driver.find_element('id', 'shelve-condition')).select_by_value('all')
+        Select(driver.find_element('id', 'shelve-condition')).select_by_value(condition)
         Select(driver.find_element('id', 'shelve-duration')).select_by_value('600')
         driver.find_element('id', 'shelve-go').click()
 
@@ -157,7 +158,7 @@ def _shelve_in_the_page(driver: Any) -> dict[str, Any]:
     out['refused'] = wait_for(
         'the refusal', lambda: 'refused' in answer.text and answer.text, 30.0
     )
-    shelve('line_01')
+    shelve('line_01', 'anchor_margin')
     out['shelved'] = wait_for(
         'the answer', lambda: 'shelved for' in answer.text and answer.text, 30.0
     )
@@ -204,7 +205,7 @@ def test_live_page_storm_acknowledge_and_monitor_loss(live_run: Any) -> None:
     assert 'line_11: refused: line_11: its active uplift ERROR cannot be shelved' in (
         shelving['refused']
     ), shelving
-    assert shelving['shelved'].startswith('line_01 shelved for 600 s by console ')
+    assert shelving['shelved'].startswith('line_01.anchor_margin shelved for 600 s by console ')
     assert shelving['listed'] == ['line_01']
     shelves = [r for r in records if r['kind'] == 'shelve']
     assert [(r['alarm'], r['seconds']) for r in shelves] == [

@@ -153,7 +153,7 @@ def test_a_flood_of_requests_costs_a_request_a_second_and_locks_no_operator_out(
         lines0 = len(output_of(proc).splitlines())
         time.sleep(4.0)
         ack.publish(String(data='line_01 console op'))  # the console, mid-flood
-        shelve.publish(String(data='line_02 60 console op'))
+        shelve.publish(String(data='line_02.anchor_margin 60 console op'))
         out, _ = flooder.communicate(timeout=60)
         t1 = time.monotonic()
         sent = int(out.split()[-1])
@@ -178,7 +178,8 @@ def test_a_flood_of_requests_costs_a_request_a_second_and_locks_no_operator_out(
     assert len(during) < 60, '\n'.join(during[:80])
     # The console was heard mid-flood, named by its own GID.
     assert 'ACKNOWLEDGED line_01 by console op (/catenary_console_flood gid ' in text, text
-    assert 'SHELVE line_02 shelved for 60 s by console op (/catenary_console_flood gid' in text
+    shelf = 'SHELVE line_02.anchor_margin shelved for 60 s by console op'
+    assert f'{shelf} (/catenary_console_flood gid' in text
     # The flood's answer, and no alarm raised by it (the warning was raised once, before).
     assert answer is not None and 'over the rate limit' in answer['values']['shelve_answer']
     events = [e for e in _events(log_dir) if e is not None]

@@ -11,6 +11,7 @@ from test_batch import compare, ticks_for
 
 from catenary_monitor.core.config.parameters import AlarmConfig, LineConfig, MonitorConfig
 from catenary_monitor.core.rules import sensor_state
+from catenary_monitor.core.rules.plausible import UNIT_FACTORS
 from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 from catenary_monitor.core.twin.engine import recompute
 from catenary_monitor.core.physics.solve import solve
@@ -197,14 +198,25 @@ def test_slack_keeps_the_impossible_input_status_and_adds_the_state():
 
 
 def test_suspected_parted_line():
+    """The chain parted below the hook: the tension falls to the hanging rest's weight; the
+    other lines need not rise. Named ``suspected_parted`` as long as it stays down (not slack,
+    not an impossible input)."""
     t, tensions, depth_t, depth = scene(6)
     after = during(t)
-    tensions[0][after] *= 0.2  # still above the hanging chain's weight: not slack
-    for k in (1, 2):
-        tensions[k][after] *= 1.25
+    tensions[0][after] = 0.6 * W * DEPTH  # the chain left below the hook: under w*h
     cfg = config(tension_rate_max=100.0)
     steps = run(cfg, t, tensions, depth_t, depth)
     assert_raised_and_cleared(steps, 'suspected_parted', 'ERROR', 'parted')
+    codes = [c for s, c in line_codes(steps) if EVENT_S[0] + 2.0 <= s < EVENT_S[1]]
+    assert set(codes) == {sensor_state.PARTED}, set(codes)  # held past sensor_hold (5 s)
+
+
+def test_a_line_that_falls_but_still_hangs_is_not_parted():
+    t, tensions, depth_t, depth = scene(6)
+    after = during(t)
+    tensions[0][after] *= 0.2  # 80 kN: above the hanging chain's weight
+    steps = run(config(tension_rate_max=100.0), t, tensions, depth_t, depth)
+    assert sensor_state.PARTED not in {c for _, c in line_codes(steps)}
 
 
 def test_a_line_that_falls_with_the_others_is_not_parted():
@@ -251,7 +263,8 @@ def test_depth_sensor_states(state, level, what):
 def test_a_state_for_every_code_and_a_word_for_every_state():
     assert (
         sensor_state.LINE_STATES[sensor_state.OK] == 'ok'
-        and len(set(sensor_state.LINE_STATES)) == 7
+        and len(set(sensor_state.LINE_STATES)) == len(sensor_state.LINE_STATES)
+        and len(sensor_state.LINE_STATES) == sensor_state.UNITS_BASE + len(UNIT_FACTORS)
     )
     for code in range(1, 7):
         assert sensor_state.line_message(code, 1e6, MBL)

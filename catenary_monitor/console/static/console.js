@@ -693,7 +693,7 @@ function buildShelveForm() {
   for (const l of S.config.lines) line.appendChild(el('option', { value: l.name }, l.name));
   line.appendChild(el('option', { value: 'sensors' }, 'sensors'));
   cond.textContent = '';
-  cond.appendChild(el('option', { value: 'all' }, 'the whole alarm'));
+  cond.appendChild(el('option', { value: 'all' }, 'its active conditions'));
   for (const c of S.config.alarm_conditions || []) cond.appendChild(el('option', { value: c, 'data-condition': c }, c.replaceAll('_', ' ')));
   if (keep[0]) line.value = keep[0];
   if (keep[1]) cond.value = keep[1];
@@ -716,7 +716,7 @@ function updateShelveForm(frame, lost, replay) {
     for (const o of $('shelve-condition').options) {
       const never = (f.unshelvable || []).includes(o.value);
       o.disabled = never;
-      o.textContent = o.value === 'all' ? 'the whole alarm' : o.value.replaceAll('_', ' ') + (never ? ' (never shelved)' : '');
+      o.textContent = o.value === 'all' ? 'its active conditions' : o.value.replaceAll('_', ' ') + (never ? ' (never shelved)' : '');
     }
   }
   const off = replay || lost || !canAct() || !$('shelve-duration').children.length;

@@ -147,7 +147,7 @@ class AckState:
     shelved_at: float = math.nan  # s, when the shelf was put on
     shelved_by: str = ''  # the origin the shelving request claimed
     shelved_publisher: str = ''  # who published it, as the middleware saw it
-    shelved_condition: str = ''  # WHOLE or one condition; '' not shelved
+    shelved_condition: str = ''  # the conditions shelved (joined by ','), or WHOLE; '' not
     shelved_state: str = ''  # the alarm's state when shelved ('' not shelved)
     flips: tuple[float, ...] = ()  # s, the newest chatter_count level changes
     chattering: bool = False
@@ -246,9 +246,9 @@ def shelve(
     publisher: str = '',
 ) -> AckState:
     """The alarm shelved at ``now`` until ``until`` (s) by ``origin`` (as claimed; published by
-    ``publisher``, both bounded): ``condition`` is :data:`WHOLE` or one condition; ``masked``
-    the level the shelf leaves visible. An alarm whose visible level is not active leaves the
-    list (``normal``, shown ``shelved``)."""
+    ``publisher``, both bounded): ``condition`` is :data:`WHOLE` or conditions (joined by
+    ``,``); ``masked`` the level the shelf leaves visible. An alarm whose visible level is not
+    active leaves the list (``normal``, shown ``shelved``)."""
     before = ack.state
     if shelved(ack):  # shelved again: as it was before the first shelf, unless it cleared since
         still = ack.active_since == ack.active_since and ack.active_since <= ack.shelved_at
@@ -346,7 +346,8 @@ def diagnostic_values(
     ``alarm_condition``, ``acknowledged_at`` [s], ``acknowledged_by`` (the last one's origin, as
     it claimed) and ``acknowledged_publisher`` (who published it, as the middleware saw it),
     then ``shelved`` (``true``/``false``), ``shelved_until`` [s, NaN when not],
-    ``shelved_condition`` (``all`` or one condition), ``shelved_by``, ``shelved_publisher`` and
+    ``shelved_condition`` (the conditions shelved, joined by ``,``; ``all`` for the sensors
+    alarm), ``shelved_by``, ``shelved_publisher`` and
     ``chattering`` (``true``/``false``)."""
     pending = ack.state in (UNACKNOWLEDGED, RETURNED_UNACKNOWLEDGED)
     raised = math.nan if ack.state == NORMAL else ack.raised

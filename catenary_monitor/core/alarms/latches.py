@@ -93,8 +93,10 @@ from typing import Any, Mapping, NamedTuple, Sequence
 import numpy as np
 
 from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, AlarmConfig, LineConfig
+from catenary_monitor.core.physics.result import Status
 from catenary_monitor.core.rules.level import RANK, Level
 from catenary_monitor.core.rules import sensor_state
+from catenary_monitor.core.rules.plausible import units_text
 from catenary_monitor.core.rules.channels import describe
 
 __all__ = [
@@ -253,6 +255,8 @@ class LineAlarm:
     anchor_distance: float = math.nan  # m, installed (for the dragging message)
     channel_names: tuple[str, ...] = ()  # a line of several channels: their topics
     min_channels: int = 1
+    name: str = ''  # the line's (for the wrong-units message)
+    tension_scale: float = 1.0  # its tension_scale (the wrong-units message)
 
     @classmethod
     def for_line(cls, line: LineConfig, config: AlarmConfig) -> LineAlarm:
@@ -263,6 +267,8 @@ class LineAlarm:
             line.anchor_distance,
             line.channel_topics,
             int(line.min_channels),
+            line.name,
+            line.tension_scale,
         )
 
     def blind(self, healthy: float) -> bool:
@@ -360,7 +366,8 @@ class LineAlarm:
         )
 
     def _stale(self, x: AlarmInputs, now: float) -> tuple[bool, bool]:
-        """(tension stale, never received or blind, depth stale or never received)."""
+        """(tension stale, never received or blind, depth stale, never received or impossible:
+        outside the chart, the tide's ERROR, the line blind by it)."""
         ts, ds = x.tension_stamp, x.depth_stamp
         timeout = self.config.tension_timeout
         stale_t = ts != ts or (
@@ -368,7 +375,7 @@ class LineAlarm:
             and (x.silent_group == 1.0 or now - ts > timeout + self.config.common_cause_window)
         )
         stale_t = stale_t or self.blind(x.channels_healthy)
-        if ds != ds:
+        if ds != ds or x.status == Status.IMPLAUSIBLE_DEPTH:
             return stale_t, True
         if x.depth_stale is None:
             return stale_t, now - ds > self.config.depth_timeout
@@ -378,7 +385,9 @@ class LineAlarm:
         if cond == 'input':
             if self.blind(x.channels_healthy):  # no tension to judge: blind, not impossible
                 return _HOLD
-            return _BREACH if x.status != 0 else (_HOLD if stale else _CLEAR)
+            if _impossible(x.status, x.sensor_state):
+                return _BREACH
+            return _HOLD if stale else _CLEAR
         if cond == 'uplift':
             force = uplift_seen(x.uplift_force, x.dynamic_uplift)
             breach = force > self.allowed_uplift
@@ -439,7 +448,10 @@ class LineAlarm:
                     text += f' and anchor margin >= {_fmt(self.config.uplift_clear_margin)} m'
                 parts.append(text + ')')
         if active[1]:
-            if x.status != 0:
+            if sensor_state.is_units(x.sensor_state):
+                index = int(x.sensor_state) - sensor_state.UNITS_BASE
+                parts.append(units_text(self.name, self.tension_scale, index, x.sensor_tension))
+            elif x.status != 0:
                 parts.append(f'impossible input: {input_message}')
             else:
                 parts.append(
@@ -461,6 +473,8 @@ class LineAlarm:
                 continue
             if math.isnan(stamp):
                 parts.append(f'no {name} received yet')
+            elif name == 'depth' and x.status == Status.IMPLAUSIBLE_DEPTH:
+                parts.append('depth outside the chart: not solved (the tide status names it)')
             else:
                 parts.append(
                     f'{name} stale: last sample {_fmt(now - stamp)} s ago '
@@ -617,23 +631,44 @@ def uplift_seen(nominal: float, dynamic: float) -> float:
     return dynamic if nominal != nominal else max(nominal, dynamic)  # as np.fmax
 
 
+def _impossible(status: int, sensor: float) -> bool:
+    """Whether a solve's ``status`` is an impossible input: any but 0, except ``T <= w*h`` on
+    a line whose ``sensor_state`` is ``suspected_parted`` (that condition names it) and an
+    impossible depth (the tide's ERROR names it; the line is blind by it)."""
+    if status == Status.IMPLAUSIBLE_DEPTH:
+        return False  # the depth's: the tide's ERROR, the line blind by it
+    if sensor_state.is_units(sensor):
+        return True  # a reading off by a unit factor
+    return status != 0 and not (status == Status.TENSION and sensor == sensor_state.PARTED)
+
+
+def _impossible_column(status: np.ndarray, sensor: np.ndarray) -> np.ndarray:
+    """:func:`_impossible` per update."""
+    parted = (status == Status.TENSION) & (sensor == sensor_state.PARTED)
+    units = sensor >= sensor_state.UNITS_BASE
+    return ((status != 0) & (status != Status.IMPLAUSIBLE_DEPTH) & ~parted) | units
+
+
 def _sensor_codes(cond: str, code: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(breach, clear) of a sensor condition from line state codes (NaN: hold)."""
     errors = code == sensor_state.ERROR_STATES[0]  # np.isin's machinery cost 4 ns per code
     for state in sensor_state.ERROR_STATES[1:]:
         errors = errors | (code == state)
     breach = errors if cond == 'sensor_error' else ~errors & (code > 0)
+    if cond != 'sensor_error':
+        breach &= code < sensor_state.UNITS_BASE  # wrong units: the input condition's
     return breach, ~breach & np.isfinite(code)
 
 
 def _sensor_code(cond: str, code: float) -> tuple[bool, bool]:
     """:func:`_sensor_codes` of one code (the per-sample path: no arrays)."""
     errors = code in _ERROR_CODES
-    breach = errors if cond == 'sensor_error' else not errors and code > 0
+    breach = errors if cond == 'sensor_error' else not errors and 0 < code < _UNITS
     return breach, not breach and math.isfinite(code)
 
 
 _ERROR_CODES = frozenset(float(c) for c in sensor_state.ERROR_STATES)
+_UNITS = float(sensor_state.UNITS_BASE)
 
 
 def _sensor_text(x: AlarmInputs, cond: str, hold: float) -> str:
@@ -970,6 +1005,7 @@ def replay_levels(
     x = {k: _column(inputs.get(k, getattr(default, k)), np.float64, n) for k in _INPUT_FIELDS}
     status = _column(inputs.get('status', 0), np.int64, n)
     stale_t, stale_d = _stale_columns(alarm, t, x, inputs.get('depth_stale'))
+    stale_d = stale_d | (status == Status.IMPLAUSIBLE_DEPTH)
     with np.errstate(invalid='ignore'):
         late = t - x['tension_stamp'] > alarm.config.tension_timeout
     held = stale_t | stale_d | late  # nothing clears on a tension older than its timeout
@@ -1066,7 +1102,11 @@ def _classify_columns(
         up_clear &= x['anchor_margin'] >= cfg.uplift_clear_margin
     out = {
         'uplift': codes('uplift', f > alarm.allowed_uplift, up_clear),
-        'input': codes('input', (status != 0) & ~_blind_column(alarm, x), status == 0),
+        'input': codes(
+            'input',
+            _impossible_column(status, x['sensor_state']) & ~_blind_column(alarm, x),
+            ~_impossible_column(status, x['sensor_state']),
+        ),
     }
     for cond in _MARGINS:
         low, high = alarm._warn_limits(cond)

@@ -1,10 +1,14 @@
 """Shelving an alarm (ISA-18.2 / IEC 62682): requests, the rules, what a shelf hides.
 
-An operator shelves a line's alarm, or one condition of it, for a bounded time
-(``shelve_max``): the shelved conditions are still computed, logged and shown, but not
-annunciated. Conditions in ``unshelvable_conditions`` (default: ``uplift``, the lifted anchor's
-ERROR) are never hidden: a request naming one is refused, a whole-alarm shelf never covers one,
-and a whole-alarm shelf asked while one is active is refused. The states themselves (the shelf
+An operator shelves conditions of a line's alarm for a bounded time (``shelve_max``): the
+shelved conditions are still computed, logged and shown, but not annunciated. A shelf is of
+conditions, never of a whole line: ``LINE SECONDS`` shelves the conditions active at the request
+(recorded in the shelf, ``shelved_condition`` ``anchor_margin,sensor_warn``), so a new, different
+condition on a shelved line is annunciated; with none active it is refused. Conditions in
+``unshelvable_conditions`` (default: ``uplift``, ``input``, ``sensor_error``, ``stale``,
+``dragging`` and ``sensors``, the common-cause alarm: what endangers the dock or blinds the
+monitor) are never hidden: a request naming one is refused, and a line shelf asked while one is
+active is refused. The states themselves (the shelf
 on the alarm, its expiry returning the alarm unacknowledged) are
 :mod:`catenary_monitor.core.alarms.acknowledge`'s; the monitor core applies the requests
 (:class:`~catenary_monitor.core.monitor.events.Shelve` events) and records them.
@@ -33,6 +37,7 @@ __all__ = [
     'ShelveRequest',
     'parse_request',
     'hidden_conditions',
+    'active_conditions',
     'masked_level',
     'masked_levels',
     'refusal',
@@ -78,11 +83,22 @@ def parse_request(text: str) -> ShelveRequest:
 
 
 def hidden_conditions(condition: str, unshelvable: Sequence[str]) -> frozenset[str]:
-    """The conditions a shelf of ``condition`` (:data:`WHOLE` or one) hides: never an
-    unshelvable one."""
+    """The conditions a shelf of ``condition`` (one condition, several joined by ``,``, or
+    :data:`WHOLE`: every one) hides: never an unshelvable one."""
     if condition == WHOLE:
         return frozenset(c for c in ALARM_CONDITIONS if c not in unshelvable)
-    return frozenset({condition}) - frozenset(unshelvable)
+    return frozenset(condition.split(',')) - frozenset(unshelvable)
+
+
+def active_conditions(
+    active: Sequence[bool], stale: bool, unshelvable: Sequence[str]
+) -> tuple[str, ...]:
+    """The shelvable conditions active on a line (``active``: its latch flags in
+    :data:`~catenary_monitor.core.alarms.latches.CONDITIONS` order; ``stale``: an input stale):
+    what a line shelf (``LINE SECONDS``) covers."""
+    up = [c for c, on in zip(CONDITIONS, active) if on]
+    up += ['stale'] if stale else []
+    return tuple(c for c in up if c not in unshelvable)
 
 
 def masked_level(active: Sequence[bool], stale: bool, hidden: frozenset[str]) -> Level:
@@ -130,10 +146,12 @@ def refusal(
     lines: Sequence[str],
     config: AlarmConfig,
     active: Optional[Sequence[bool]] = None,
+    stale: bool = False,
 ) -> Optional[str]:
     """Why ``request`` is refused (one line), or None: an unknown alarm or condition, every
-    alarm at once, too long, shelving disabled, an unshelvable condition, or a whole-alarm
-    shelf over an active unshelvable condition (``active``: the line's latch flags)."""
+    alarm at once, too long, shelving disabled, an unshelvable condition or alarm (the
+    ``sensors`` one), a line shelf over an active unshelvable condition or with nothing active
+    to shelve (``active``: the line's latch flags, ``stale``: an input stale)."""
     alarm, cond = request.alarm, request.condition
     if alarm == 'all':
         return 'shelve one alarm at a time (LINE or LINE.CONDITION), not all'
@@ -147,7 +165,14 @@ def refusal(
         return f'{request.seconds:g} s is longer than shelve_max ({config.shelve_max:g} s)'
     unshelvable = ', '.join(config.unshelvable_conditions) or 'none'
     if alarm == SENSORS:
-        return None if cond == WHOLE else 'the sensors alarm has no conditions: shelve "sensors"'
+        if cond != WHOLE:
+            return 'the sensors alarm has no conditions: shelve "sensors"'
+        if SENSORS in config.unshelvable_conditions:
+            return (
+                'the sensors common-cause alarm (loss of monitoring) cannot be shelved '
+                f'(unshelvable_conditions: {unshelvable})'
+            )
+        return None
     if cond != WHOLE and cond not in ALARM_CONDITIONS:
         return f'unknown condition {cond!r} (conditions: {", ".join(ALARM_CONDITIONS)})'
     if cond in config.unshelvable_conditions:
@@ -163,4 +188,9 @@ def refusal(
                     f'(unshelvable_conditions: {unshelvable}); shelve one other condition '
                     f'as {alarm}.CONDITION'
                 )
+        if not active_conditions(active, stale, config.unshelvable_conditions):
+            return (
+                f'{alarm}: nothing active to shelve (a shelf covers the conditions active at '
+                f'the request); shelve one condition as {alarm}.CONDITION'
+            )
     return None

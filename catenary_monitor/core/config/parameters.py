@@ -33,6 +33,7 @@ from catenary_monitor.core.config.tide_constituents import (
 __all__ = [
     'REQUIRED',
     'ALARM_CONDITIONS',
+    'SENSORS_ALARM',
     'COMPONENTS',
     'RESERVED_NAMES',
     'FLOAT64',
@@ -731,7 +732,10 @@ PARAMETERS: tuple[ParamSpec, ...] = (
     ),
     # Sensor sanity (core/rules/sensor_state.py; table in docs/node.md).
     *(
-        ParamSpec(name, 'double', default, text, unit, lo, hi, group='sensor')
+        ParamSpec(
+            name, 'double', default, text, unit, lo, hi, group='sensor',
+            optional=name in ('depth_min', 'depth_max'),  # NaN: the chart from the lines
+        )  # fmt: skip
         for name, default, text, unit, lo, hi in (
             (
                 'tension_resolution',
@@ -841,7 +845,8 @@ PARAMETERS: tuple[ParamSpec, ...] = (
             (
                 'parted_drop',
                 0.75,
-                'suspected_parted: the tension fell by this fraction in parted_window',
+                'suspected_parted: the tension fell by this fraction in parted_window, to at or '
+                'below the hanging chain\'s own weight w*h',
                 '',
                 0.05,
                 1.0,
@@ -856,19 +861,37 @@ PARAMETERS: tuple[ParamSpec, ...] = (
             ),
             (
                 'depth_min',
-                0.0,
-                'Chart range of the depth sensor: a depth below this is out_of_range',
+                math.nan,
+                'Chart range of the depth sensor: a depth below this is impossible (out_of_range: '
+                'the tide ERROR, no line solves on it); NaN: from the lines, 0.25 x the '
+                'shallowest depth at which a chain lifts its anchor at its installed span (0 '
+                'without chain_length)',
                 'm',
                 0.0,
                 12000.0,
             ),
             (
                 'depth_max',
-                12000.0,
-                'Chart range of the depth sensor: a depth above this is out_of_range',
+                math.nan,
+                'Chart range of the depth sensor: a depth above this is impossible (out_of_range: '
+                'the tide ERROR, no line solves on it); NaN: from the lines, 1.25 x the deepest '
+                'depth at which a chain lifts its anchor at its installed span (12000 without '
+                'chain_length)',
                 'm',
                 0.0,
                 12000.0,
+            ),
+            (
+                'units_window',
+                600.0,
+                'wrong units: a line whose reading is off by a unit factor (10, 9.81, 100, 1000, '
+                '4.45, 4448 or their inverses) against its fixed-length statics at rest x the '
+                'dock\'s common loading, judged while the dock is calm, is an input ERROR naming '
+                'its tension_scale; held until its reading fits the statics for this long (0: no '
+                'check; needs chain_length on 3 lines or more)',
+                's',
+                0.0,
+                86400.0,
             ),
             (
                 'tension_sample_rate',
@@ -1135,9 +1158,11 @@ PARAMETERS: tuple[ParamSpec, ...] = (
     ParamSpec(
         'unshelvable_conditions',
         'string_array',
-        ('uplift',),
-        'Alarm conditions no operator may shelve (uplift, input, sensor_error, stale, '
-        'anchor_margin, ...); a shelved alarm still annunciates them',
+        ('uplift', 'input', 'sensor_error', 'stale', 'dragging', 'sensors'),
+        'Alarm conditions no operator may shelve: by default what blinds or endangers the dock '
+        '(a lifted anchor, an impossible input, wrong units or depth, a parted or slack chain or '
+        'over MBL, a stale line, a dragging anchor, and the sensors common-cause alarm); a '
+        'shelved alarm still annunciates them',
         '',
         None,
         None,
@@ -1321,6 +1346,9 @@ _PER_LINE = {p.name: p for p in PARAMETERS if p.scope == 'line'}
 #: Parameters rclpy itself may find in a params file; accepted and ignored here.
 ROS_BUILTIN_PARAMETERS = frozenset({'use_sim_time', 'start_type_description_service'})
 _ROS_BUILTIN_PREFIXES = ('qos_overrides.',)
+
+#: The sensors' common-cause alarm: a name of ``unshelvable_conditions`` besides the conditions.
+SENSORS_ALARM = 'sensors'
 
 #: Every condition of a line's alarm, the one list of their names: the latched ones in message
 #: order, ERRORs then WARNs (:data:`catenary_monitor.core.alarms.latches.CONDITIONS`), then
@@ -1668,6 +1696,7 @@ class AlarmConfig:
     parted_window: float = _default('parted_window')
     depth_min: float = _default('depth_min')
     depth_max: float = _default('depth_max')
+    units_window: float = _default('units_window')
     stamp_ahead_max: float = _default('stamp_ahead_max')
     tension_sample_rate: float = _default('tension_sample_rate')
     depth_sample_rate: float = _default('depth_sample_rate')
@@ -1705,11 +1734,11 @@ class AlarmConfig:
             if getattr(self, name) != int(getattr(self, name)):
                 raise ConfigError(name, f'must be a whole number, got {getattr(self, name)!r}')
         for cond in self.unshelvable_conditions:
-            if cond not in ALARM_CONDITIONS:
+            if cond not in ALARM_CONDITIONS and cond != SENSORS_ALARM:
                 raise ConfigError(
                     'unshelvable_conditions',
                     f'unknown alarm condition {cond!r} '
-                    f'(conditions: {", ".join(ALARM_CONDITIONS)})',
+                    f'(conditions: {", ".join(ALARM_CONDITIONS)}, {SENSORS_ALARM})',
                 )
         try:
             table = parse_table(self.tide_table)
@@ -1786,6 +1815,36 @@ _TOP_LEVEL = (
 #: Per-line parameters that place a line on the dock (all given on every line, or none).
 GEOMETRY = ('hook_x', 'hook_y', 'heading', 'chain_length')
 
+#: The default chart range as multiples of the shallowest and deepest depth [m] at which a
+#: line's fixed-length chain lifts its anchor at its installed span: the depths the dock was
+#: laid for lie below those; a gauge reading a quarter of them or a quarter more is a datum,
+#: scale or sensor fault. A quarter, not half: a chain laid with much grounded length lifts far
+#: deeper than the dock floats (130 m of chain at a 100 m span lifts at about 60 m).
+CHART_LOW, CHART_HIGH = 0.25, 1.25
+
+
+def chart_range(lines: Iterable[LineConfig]) -> tuple[float, float]:
+    """The default ``(depth_min, depth_max)`` [m] from the lines: :data:`CHART_LOW` x the
+    shallowest and :data:`CHART_HIGH` x the deepest depth at which a fixed-length chain lifts
+    its anchor at its installed span (the hook height taken off); ``(0, 12000)`` without chain
+    lengths."""
+    from catenary_monitor.core.physics.fixed_length import lift_depth_scalar
+
+    lifts = []
+    for line in lines:
+        if line.chain_length is None or not line.chain_length == line.chain_length:
+            continue
+        ea = math.inf if not line.ea else line.ea
+        try:
+            lift = lift_depth_scalar(line.weight, line.chain_length, line.anchor_distance, ea)
+        except (ValueError, OverflowError, ZeroDivisionError):
+            continue
+        if lift == lift and lift - line.hook_height > 0.0:
+            lifts.append(lift - line.hook_height)
+    if not lifts:
+        return 0.0, 12000.0
+    return CHART_LOW * min(lifts), min(CHART_HIGH * max(lifts), 12000.0)
+
 
 @dataclass(frozen=True)
 class MonitorConfig:
@@ -1855,6 +1914,20 @@ class MonitorConfig:
                 other = seen.setdefault(topic, name)
                 if other != name:
                     raise ConfigError(name, f'topic {topic!r} is already used by {other}')
+
+    @property
+    def chart(self) -> tuple[float, float]:
+        """The depth sensor's chart range ``(depth_min, depth_max)`` [m]: as set, else from the
+        lines (:func:`chart_range`)."""
+        got = getattr(self, '_chart', None)
+        if got is None:
+            lo, hi = self.alarm.depth_min, self.alarm.depth_max
+            if lo != lo or hi != hi:
+                low, high = chart_range(self.lines)
+                lo, hi = (low if lo != lo else lo), (high if hi != hi else hi)
+            got = (lo, hi)
+            object.__setattr__(self, '_chart', got)
+        return got
 
     def headings(self) -> list[float]:
         """Each line's heading (deg, clockwise from the bow, in [0, 360)): ``NAME.heading``

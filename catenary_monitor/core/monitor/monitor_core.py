@@ -119,6 +119,7 @@ from catenary_monitor.core.rules.health import (
     tide_status,
 )
 from catenary_monitor.core.rules.level import Level
+from catenary_monitor.core.rules import plausible
 from catenary_monitor.core.rules.plausible import reading_status, reading_status_array
 
 __all__ = [
@@ -185,7 +186,16 @@ class MonitorCore:
         in the root namespace); ``depth_id`` the depth topic; ``logger_id`` the log directory.
     """
 
-    __slots__ = ('config', 'index', 'depth_id', 'logger_id', 'dock_model', 'curves', 'state')
+    __slots__ = (
+        'config',
+        'index',
+        'depth_id',
+        'logger_id',
+        'dock_model',
+        'curves',
+        'rest_table',
+        'state',
+    )
 
     def __init__(
         self,
@@ -212,6 +222,7 @@ class MonitorCore:
             for lc in config.lines
         ]
         self.curves = [fatigue_rule.Curve.of(lc) for lc in config.lines]
+        self.rest_table = plausible.rest_table(config, config.chart)
         self.index = {line.config.name: k for k, line in enumerate(lines)}
         self.depth_id = depth_id or resolve_topic(config.depth_topic)
         self.logger_id = logger_id
@@ -414,7 +425,8 @@ class MonitorCore:
         active = None if line is None else [latch.active for latch in line.state.latches]
         names = [ln.config.name for ln in self.state.lines]
         target = ev.alarm if ev.condition == alarm_ack.WHOLE else f'{ev.alarm}.{ev.condition}'
-        refused = shelving.refusal(request, names, a, active)
+        stale = line is not None and line.state.stale
+        refused = shelving.refusal(request, names, a, active, stale)
         log: list[AlarmEvent] = []
         if refused is not None:
             answer = f'{target}: refused: {refused}'
@@ -481,11 +493,18 @@ class MonitorCore:
             new = alarm_ack.unshelve(old, now, level, masked, suppressed)
             return new, f'{ev.alarm} unshelved by {ev.origin}'
         until = now + ev.seconds
-        masked = self._masked(line, replace(old, shelved_condition=ev.condition))
+        condition, covers = ev.condition, ''
+        if line is not None and condition == alarm_ack.WHOLE:
+            # a line shelf covers the conditions active now, never a later one
+            up = [latch.active for latch in line.state.latches]
+            unshelvable = self.config.alarm.unshelvable_conditions
+            condition = ','.join(shelving.active_conditions(up, line.state.stale, unshelvable))
+            covers = f': {condition} (a new condition still annunciates)'
+        masked = self._masked(line, replace(old, shelved_condition=condition))
         new = alarm_ack.shelve(
-            old, now, until, ev.condition, ev.origin, masked, suppressed, ev.publisher
+            old, now, until, condition, ev.origin, masked, suppressed, ev.publisher
         )
-        return new, f'{target} shelved for {ev.seconds:g} s by {ev.origin}'
+        return new, f'{target} shelved for {ev.seconds:g} s by {ev.origin}{covers}'
 
     def _masked(self, line: Optional[LineState], ack: alarm_ack.AckState) -> Level:
         """The level ``ack``'s shelf leaves visible of ``line`` (None: the sensors alarm, whose
@@ -687,6 +706,7 @@ class MonitorCore:
             self.state.trend = tide_trend.TrendState()  # other bins: the trend starts again
         self.config = config
         self.curves = [fatigue_rule.Curve.of(lc) for lc in config.lines]
+        self.rest_table = plausible.rest_table(config, config.chart)
         for line, lc in zip(self.state.lines, config.lines):
             line.config, line.alarm = lc, LineAlarm.for_line(lc, config.alarm)
         self.dock_model = DockModel.from_config(config) if config.has_dock_model else None
@@ -703,7 +723,9 @@ class MonitorCore:
             self.state.depth_s == self.state.depth_s and now - self.state.depth_s > timeout
         )
         status = tide_status(self.state.depth, self.state.depth_s, now, timeout)
-        new = tide_with_sensor(status, self.state.depth_code, self.state.depth, self.config.alarm)
+        new = tide_with_sensor(
+            status, self.state.depth_code, self.state.depth, self.config.alarm, self.config.chart
+        )
         return self._set_component('tide', new, stamp_ns)
 
     def _sensors_now(self, now: float) -> tuple[Level, str]:
@@ -751,28 +773,49 @@ class MonitorCore:
         ref, keep = sensor_state.reference(
             self.state.sensor_times, self.state.sensor_rows, now, a.parted_window
         )
-        pattern = sensor_state.parted_pattern(tension, ref, a.parted_drop)
+        limits = sensor_limits(self.config)
+        depth = np.array([self.state.depth])
+        slack = sensor_state.slack_mask(limits, tension, depth)
+        pattern = sensor_state.parted_pattern(tension, ref, a.parted_drop, slack)
         seen = np.array([[line.parted_seen for line in lines]])
         seen = np.where(pattern, now[:, None], seen)
+        firm = np.array([line.firm_seen for line in lines])
+        firm = sensor_state.firm_times(now, slack, firm)
+        tension_s = np.array([[line.tension_s for line in lines]])
+        units, memories = plausible.units_decide(
+            self.rest_table,
+            units_rule(self.config),
+            [line.units for line in lines],
+            now,
+            tension,
+            tension_s,
+            depth,
+            np.array([self.state.depth_s]),
+            (a.tension_timeout, a.depth_timeout),
+            self.config.chart,
+        )
         self.state.sensor_times = np.append(self.state.sensor_times[keep:], now)
         spiked = np.array([[line.sensor_memory.spiked for line in lines]])
         row = sensor_state.history_row(now, tension, spiked, a.sensor_hold)
         self.state.sensor_rows = np.vstack([self.state.sensor_rows[keep:], row])
         codes = sensor_state.decide_lines(
             a,
-            sensor_limits(self.config),
+            limits,
             now,
             tension,
-            np.array([[line.tension_s for line in lines]]),
+            tension_s,
             changed,
             spiked,
             seen,
-            np.array([self.state.depth]),
+            depth,
             np.array([self.state.depth_memory.changed]),
             np.array([[line.stamp_refused for line in lines]]),
+            firm,
+            units,
         )
         for k, line in enumerate(lines):
             line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
+            line.firm_seen, line.units = float(firm[0, k]), memories[k]
         last = np.array([[line.tension_s for line in lines] + [self.state.depth_s]])
         grouped = common_cause(
             last, now, silence_timeouts(self.config), a.common_cause_window,
@@ -793,6 +836,7 @@ class MonitorCore:
                 d_spiked,
                 sea,
                 np.array([self.state.depth_refused]),
+                self.config.chart,
             )[0]
         )
 
@@ -872,7 +916,8 @@ class MonitorCore:
         line.values = with_sensor(line.values + NAN_VALUES[len(line.values) :], line.sensor_code)
         line.values = with_span(line.values, span)
         line.status, line.status_message, line.model = int(r.status), r.message, r.model
-        code = reading_status(t, h, lc.mbl, lc.weight)
+        lo, hi = self.config.chart
+        code = reading_status(t, h, lc.mbl, lc.weight, lo + lc.hook_height, hi + lc.hook_height)
         if code:
             set_implausible(line, code)
         add_derived([line], self.config.alarm, self.state.depth_s, self.state.trend)
@@ -912,8 +957,10 @@ class MonitorCore:
             line.values = with_span(with_sensor(line.values, line.sensor_code), spans[i])
             line.status, line.status_message = int(status[i]), str(messages[i])
             line.model = str(models[i])
+        lo, hi = self.config.chart
+        hook = np.array([c.hook_height for c in cfgs])
         codes = reading_status_array(
-            tension, h, [c.mbl for c in cfgs], [c.weight for c in cfgs]
+            tension, h, [c.mbl for c in cfgs], [c.weight for c in cfgs], lo + hook, hi + hook
         ).tolist()
         for line, code in zip(lines, codes):
             if code:
@@ -1134,6 +1181,11 @@ def silence_timeouts(config: MonitorConfig) -> np.ndarray:
     """Each line's ``tension_timeout``, then ``depth_timeout`` [s]."""
     a = config.alarm
     return np.array([a.tension_timeout] * len(config.lines) + [a.depth_timeout])
+
+
+def units_rule(config: MonitorConfig) -> plausible.UnitsRule:
+    """The units check's rule (core.rules.plausible): ``units_window``, the rest fixed."""
+    return plausible.UnitsRule(window=config.alarm.units_window)
 
 
 def sensor_limits(config: MonitorConfig) -> sensor_state.LineLimits:

@@ -31,7 +31,7 @@ from catenary_monitor.core.rules import holding as holding_rule
 from catenary_monitor.core.rules import sensor_state, tide_trend, uncertainty, wave_window
 from catenary_monitor.core.rules.health import clock_status
 from catenary_monitor.core.rules.level import Level
-from catenary_monitor.core.rules.plausible import status_messages
+from catenary_monitor.core.rules.plausible import UnitsMemory, status_messages
 
 __all__ = [
     'OUTPUT_FIELDS',
@@ -154,6 +154,8 @@ class LineRulesPart(NamedTuple):
     sensor_memory: sensor_state.Memory
     sensor_code: int
     parted_seen: float
+    firm_seen: float
+    units: UnitsMemory
     wave: wave_window.WaveState
     peak_tension: float
     wave_tension: float
@@ -196,6 +198,8 @@ class LineState:
     )  # the tension sensor's per-sample memory
     sensor_code: int = sensor_state.OK  # sensor state decided at the newest tick
     parted_seen: float = -math.inf  # s, when the suspected_parted pattern was last seen
+    firm_seen: float = -math.inf  # s, the newest tick with the tension above w*h
+    units: UnitsMemory = UnitsMemory()  # the wrong-units latch (core.rules.plausible)
     coalesced_until: int = -1  # ns: this line's samples stamped up to it were not stepped
     fatigue: fatigue_rule.FatigueState = fatigue_rule.FatigueState()  # the streamed count
     fatigue_values: tuple[float, ...] = (0.0, _NAN, _NAN)  # fatigue_rule.FIELDS now

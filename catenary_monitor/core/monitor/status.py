@@ -168,14 +168,18 @@ def forecast_word(config: MonitorConfig, rate: float) -> str:
 
 
 def tide_with_sensor(
-    tide: tuple[Level, str], code: int, depth: float, config: Any
+    tide: tuple[Level, str],
+    code: int,
+    depth: float,
+    config: Any,
+    chart: tuple[float, float] | None = None,
 ) -> tuple[Level, str]:
     """The tide's (level, message) with the depth sensor's state: the worse level (stuck and
     spike WARN, out_of_range ERROR), the sensor's message appended."""
     if code == sensor_state.OK:
         return tide
     level = Level.ERROR if code == sensor_state.OUT_OF_RANGE else Level.WARN
-    text = sensor_state.depth_message(code, depth, config)
+    text = sensor_state.depth_message(code, depth, config, chart)
     if tide[0] == Level.OK:
         return level, text
     return (tide[0] if RANK[tide[0]] >= RANK[level] else level), f'{tide[1]}; {text}'

@@ -136,16 +136,19 @@ def readings(
     depth_ok: np.ndarray,
     tension: np.ndarray,
     tension_s: np.ndarray,
+    chart: tuple[float, float] = (0.0, MAX_DEPTH),
 ) -> np.ndarray:
     """(n, m) bool: the readings that count (see the module docstring). ``now`` (n,) s;
     ``depth`` (n,) m and ``depth_ok`` (n,) bool (known, not stale); ``tension`` and
-    ``tension_s`` (n, m) N and s (NaN: none yet)."""
+    ``tension_s`` (n, m) N and s (NaN: none yet); ``chart`` the depth's chart range [m]
+    (outside it no line counts)."""
     with np.errstate(invalid='ignore'):
         h = depth[:, None] + model.hook_height[None, :]
         fresh = ~np.isnan(tension_s) & (now[:, None] - tension_s <= timeout)
         good = np.isfinite(tension) & (tension > model.weight[None, :] * h)
         good &= reading_status_array(tension, h, model.mbl[None, :]) == 0
         depth_good = depth_ok & np.isfinite(depth) & (depth > 0) & (depth <= MAX_DEPTH)
+        depth_good &= (depth >= chart[0]) & (depth <= chart[1])
     return fresh & good & depth_good[:, None]
 
 
@@ -167,7 +170,9 @@ def decide_dock(
     vectorized, and a run is cut where the flags change: each tick is estimated exactly as a
     core stepping one tick at a time does.
     """
-    use = readings(model, config.alarm.tension_timeout, now, depth, depth_ok, tension, tension_s)
+    use = readings(
+        model, config.alarm.tension_timeout, now, depth, depth_ok, tension, tension_s, config.chart
+    )
     limit, tau = config.dock.residual_limit, config.dock.residual_time
     h = np.where(np.isfinite(depth), depth, 1.0)
     n, m = tension.shape

@@ -22,10 +22,18 @@ batch twin) that share the arithmetic, so live and replay decide alike:
   ======================  =====  ===================================================
   ``over_mbl`` (3)        ERROR  newest tension > MBL
   ``suspected_parted``    ERROR  tension fell below ``(1 - parted_drop)`` x its value
-  (5)                            ``parted_window`` ago while the other lines' sum
-                                 rose; held ``sensor_hold`` after last seen
+  (5)                            ``parted_window`` ago to at or below w * h (what a
+                                 chain parted below the hook reads; the other lines
+                                 need not rise: a pretensioned dock's opposite lines
+                                 slacken); held while the tension stays at or below
+                                 w * h, and ``sensor_hold`` after last seen
   ``slack`` (4)           ERROR  tension <= w * h (the hanging chain's own weight at
                                  the depth at the hook)
+  ``wrong_units_x10``     ERROR  the reading off by a unit factor against the line's
+  ... (7-17)             input  statics, judged while the dock is calm
+                                 (:func:`~catenary_monitor.core.rules.plausible.
+                                 units_decide`); the ``input`` condition's, not a
+                                 sensor condition's
   ``bad_stamp`` (6)       WARN   a sample refused for its header stamp (ahead of the
                                  monitor's clock by ``stamp_ahead_max``, or before
                                  the one before) within ``sensor_hold``
@@ -50,9 +58,19 @@ from typing import Any, Callable, NamedTuple
 
 import numpy as np
 
+from catenary_monitor.core.rules.plausible import UNIT_FACTORS
 from catenary_monitor.core.rules.tide_table import predicted
 
+
+def _unit_word(factor: float) -> str:
+    """``x10``, ``x9.81``, ``x4448``, ``div10``: a unit factor in a state word."""
+    f, word = (factor, 'x') if factor >= 1.0 else (1.0 / factor, 'div')
+    return f'{word}{f:.3g}' if f < 100.0 else f'{word}{f:.0f}'
+
+
 __all__ = [
+    'UNITS_BASE',
+    'is_units',
     'LINE_STATES',
     'DEPTH_STATES',
     'NO_DATA',
@@ -76,6 +94,8 @@ __all__ = [
     'sample',
     'samples',
     'parted_pattern',
+    'slack_mask',
+    'firm_times',
     'decide_lines',
     'decide_depth',
     'reference',
@@ -85,8 +105,19 @@ __all__ = [
     'depth_message',
 ]
 
+#: The first ``wrong_units`` state's code: ``UNITS_BASE + i`` a reading off by
+#: :data:`~catenary_monitor.core.rules.plausible.UNIT_FACTORS` ``[i]`` (an ``input`` ERROR).
+UNITS_BASE = 7
 #: Line states by code (the ``sensor_state`` output field is the code, /diagnostics the word).
-LINE_STATES = ('ok', 'stuck', 'spike', 'over_mbl', 'slack', 'suspected_parted', 'bad_stamp')
+LINE_STATES = (
+    'ok',
+    'stuck',
+    'spike',
+    'over_mbl',
+    'slack',
+    'suspected_parted',
+    'bad_stamp',
+) + tuple(f'wrong_units_{_unit_word(f)}' for f, _ in UNIT_FACTORS)
 OK, STUCK, SPIKE, OVER_MBL, SLACK, PARTED, BAD_STAMP = range(7)
 #: Depth sensor states by code.
 DEPTH_STATES = ('ok', 'stuck', 'spike', 'out_of_range', 'bad_stamp')
@@ -227,17 +258,28 @@ def _moved_since(changed: np.ndarray, depth_changed: np.ndarray) -> np.ndarray:
         return np.maximum(newest, depth_changed[:, None]) > changed
 
 
-def parted_pattern(tension: np.ndarray, ref: np.ndarray, drop: float) -> np.ndarray:
-    """Per (tick, line): the tension fell below ``(1 - drop)`` x its reference while the
-    other lines' sum rose above theirs (NaN references: no)."""
-    lines = tension.shape[1]
+def parted_pattern(
+    tension: np.ndarray, ref: np.ndarray, drop: float, slack: np.ndarray
+) -> np.ndarray:
+    """Per (tick, line): the tension fell below ``(1 - drop)`` x its reference to at or below
+    the hanging chain's own weight (``slack``, :func:`slack_mask`; NaN references: no)."""
     with np.errstate(invalid='ignore'):
-        fell = tension < (1.0 - drop) * ref
-        total, total_ref = np.sum(tension, axis=1), np.sum(ref, axis=1)
-        others = total[:, None] - tension
-        others_ref = total_ref[:, None] - ref
-        rose = others > others_ref
-    return fell & rose & (lines > 1)
+        return (tension < (1.0 - drop) * ref) & slack
+
+
+def slack_mask(limits: LineLimits, tension: np.ndarray, depth: np.ndarray) -> np.ndarray:
+    """Per (tick, line): the tension [N] at or below the hanging chain's own weight ``w h`` at
+    the depth [m] (per tick) at the hook (an unknown depth: no)."""
+    h = depth[:, None] + limits.hook_height[None, :]
+    with np.errstate(invalid='ignore'):
+        return np.isfinite(h) & (h > 0) & (tension <= limits.weight * h)
+
+
+def firm_times(now: np.ndarray, slack: np.ndarray, before: np.ndarray) -> np.ndarray:
+    """Per (tick, line): when the line was last above ``w h`` at a tick [s] (``before``: as
+    before the first tick, per line)."""
+    at = np.where(slack, -math.inf, now[:, None])
+    return np.maximum.accumulate(np.vstack([before[None, :], at]), axis=0)[1:]
 
 
 def decide_lines(
@@ -252,21 +294,27 @@ def decide_lines(
     depth: np.ndarray,
     depth_changed: np.ndarray,
     refused: np.ndarray | None = None,
+    firm: np.ndarray | None = None,
+    units: np.ndarray | None = None,
 ) -> np.ndarray:
     """Line state codes (int8, shape (ticks, lines)) at ticks ``now`` [s] from each line's
     newest tension [N] and its stamp [s], its memory's ``changed`` and ``spiked`` [s], when
     the parted pattern was last seen [s], the newest depth [m] and the depth's ``changed``,
-    and when a sample's stamp was last refused [s] (None: never).
+    when a sample's stamp was last refused [s] (None: never) and when the line was last above
+    ``w h`` at a tick (:func:`firm_times`; None: the parted state only ``sensor_hold`` long)
+    and the unit factor each line is claimed off by
+    (:func:`~catenary_monitor.core.rules.plausible.units_latch`; -1 or None: none).
     ``cfg`` is the :class:`~catenary_monitor.core.config.parameters.AlarmConfig`."""
     t_now = now[:, None]
     hold = getattr(cfg, 'sensor_hold')
-    h = depth[:, None] + limits.hook_height[None, :]
+    slack = slack_mask(limits, tension, depth)
     with np.errstate(invalid='ignore'):
         reporting = np.isfinite(tension) & (t_now - tension_s <= getattr(cfg, 'tension_timeout'))
         over = tension > limits.mbl
-        slack = np.isfinite(h) & (h > 0) & (tension <= limits.weight * h)
         spike = t_now - spiked <= hold
         parted = t_now - parted_seen <= hold
+        if firm is not None:
+            parted |= slack & (parted_seen > firm)  # slack ever since it parted
         quiet = t_now - changed >= getattr(cfg, 'stuck_time')
     stuck = reporting & quiet & _moved_since(changed, depth_changed)
     code = np.full(tension.shape, OK, np.int8)
@@ -275,6 +323,9 @@ def decide_lines(
     if refused is not None:
         with np.errstate(invalid='ignore'):
             code[(t_now - refused <= hold) & ~(over | slack | parted)] = BAD_STAMP
+    if units is not None:
+        wrong = (units >= 0) & ~(over | slack | parted)
+        code[wrong] = (UNITS_BASE + units[wrong]).astype(np.int8)
     code[over] = OVER_MBL
     return code
 
@@ -466,10 +517,13 @@ def decide_depth(
     mem_spiked: np.ndarray,
     sea: SeaColumns,
     refused: np.ndarray | None = None,
+    chart: tuple[float, float] | None = None,
 ) -> np.ndarray:
     """Depth sensor state codes (int8 per tick) from the newest depth [m] and its stamp [s],
     the depth memory's ``changed`` and ``spiked`` [s], what it knows of the sea
-    (:class:`SeaColumns`) and when a depth sample's stamp was last refused [s] (None: never).
+    (:class:`SeaColumns`), when a depth sample's stamp was last refused [s] (None: never) and
+    the chart range [m] (None: ``cfg``'s ``depth_min``, ``depth_max``; the monitor passes
+    :attr:`~catenary_monitor.core.config.parameters.MonitorConfig.chart`).
 
     Stuck: still reporting, no step for ``stuck_time``, and the sea known to have moved more
     than ``depth_stuck_steps`` x the resolution (``depth_resolution`` or the gauge's own
@@ -477,10 +531,11 @@ def decide_depth(
     ``depth_still_max`` on a gauge that has seen 10 resolutions of tide over the last day
     (no tide rests that long). The lines' motion never enters: they move with every wave."""
     g = _getter(cfg)
+    lo, hi = _chart(cfg, chart)
     res_cfg = g('depth_resolution')
     with np.errstate(invalid='ignore'):
         reporting = np.isfinite(depth) & (now - depth_s <= g('depth_timeout'))
-        out = reporting & ((depth < g('depth_min')) | (depth > g('depth_max')))
+        out = reporting & ((depth < lo) | (depth > hi))
         spike = now - mem_spiked <= g('sensor_hold')
         tau = now - mem_changed
         quiet = reporting & (tau >= g('stuck_time'))
@@ -511,22 +566,30 @@ def line_message(code: int, tension: float, mbl: float) -> str:
         '(about to part?) and the sensor calibration',
         SLACK: f'tension {kn} at or below the hanging chain\'s own weight: slack or parted line '
         'or failed sensor: check the chain, the stopper and the load cell',
-        PARTED: f'suspected parted line: tension collapsed to {kn} while the other lines rose: '
-        'check the chain and the anchor at once',
+        PARTED: f'suspected parted chain: tension collapsed to {kn}, at or below the hanging '
+        'chain\'s own weight: check the chain and the anchor at once',
         BAD_STAMP: BAD_STAMP_TEXT.format(what='tension'),
     }.get(int(code), '')
 
 
-def depth_message(code: int, depth: float, cfg: object) -> str:
-    """What the depth sensor's state tells the operator to check (empty for ``ok``)."""
-    lo, hi = getattr(cfg, 'depth_min'), getattr(cfg, 'depth_max')
+def _chart(cfg: object, chart: tuple[float, float] | None) -> tuple[float, float]:
+    """``chart``, else ``cfg``'s ``(depth_min, depth_max)``."""
+    return chart if chart is not None else (getattr(cfg, 'depth_min'), getattr(cfg, 'depth_max'))
+
+
+def depth_message(
+    code: int, depth: float, cfg: object, chart: tuple[float, float] | None = None
+) -> str:
+    """What the depth sensor's state tells the operator to check (empty for ``ok``; ``chart``
+    as :func:`decide_depth`'s)."""
+    lo, hi = _chart(cfg, chart)
     return {
         STUCK: f'depth sensor stuck at {depth:.2f} m while the tide moves: check the tide '
         'gauge and its cable',
         SPIKE: 'depth sensor spike (a change no tide makes): check the tide gauge, its cable '
         'and electrical noise',
-        OUT_OF_RANGE: f'depth {depth:.2f} m outside the chart range [{lo:g}, {hi:g}] m: check '
-        'the depth sensor\'s datum, offset and scaling (or the range)',
+        OUT_OF_RANGE: f'impossible depth {depth:.2f} m (chart {lo:.4g}-{hi:.4g} m): the gauge\'s '
+        'datum, scale or the sensor; no line is solved on it',
         DEPTH_BAD_STAMP: BAD_STAMP_TEXT.format(what='depth'),
     }.get(int(code), '')
 
@@ -554,6 +617,11 @@ def history_row(
     reading spiked within ``hold`` (a spike is no reference)."""
     with np.errstate(invalid='ignore'):
         return np.where(now[:, None] - spiked <= hold, math.nan, tension)
+
+
+def is_units(code: float) -> bool:
+    """Whether a line state code is a ``wrong_units`` one (an ``input`` ERROR)."""
+    return code >= UNITS_BASE
 
 
 def line_word(code: int, dock: str = '') -> str:

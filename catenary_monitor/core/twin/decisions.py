@@ -27,6 +27,7 @@ from catenary_monitor.core.monitor.monitor_core import (
     input_names,
     sensor_limits,
     silence_timeouts,
+    units_rule,
 )
 from catenary_monitor.core.monitor.state import (
     BlindPart,
@@ -49,6 +50,7 @@ from catenary_monitor.core.rules.health import (
     tide_status,
 )
 from catenary_monitor.core.rules.level import RANK, Level
+from catenary_monitor.core.rules import plausible
 from catenary_monitor.core.rules.plausible import MAX_DEPTH
 from catenary_monitor.core.twin.schedule import LineSteps, level_changes, merge, newest, pick
 from catenary_monitor.core.twin.window import KIND_DEPTH, KIND_TICK, Column, Window
@@ -105,7 +107,8 @@ def tide_status_at(core: MonitorCore, tide: TideColumns, i: int) -> tuple[Level,
         float(tide.times[i] * 1e-9),
         core.config.alarm.depth_timeout,
     )
-    return tide_with_sensor(status, int(tide.sensor[i]), float(tide.depth[i]), core.config.alarm)
+    code, depth = int(tide.sensor[i]), float(tide.depth[i])
+    return tide_with_sensor(status, code, depth, core.config.alarm, core.config.chart)
 
 
 @dataclass
@@ -187,14 +190,29 @@ def decide_sensors_window(
         [core.state.sensor_rows, sensor_state.history_row(now, tension, spiked, a.sensor_hold)]
     )
     ref, keep = sensor_state.reference(times, rows, now, a.parted_window)
-    pattern = sensor_state.parted_pattern(tension, ref, a.parted_drop)
+    limits = sensor_limits(core.config)
+    slack = sensor_state.slack_mask(limits, tension, depth)
+    pattern = sensor_state.parted_pattern(tension, ref, a.parted_drop, slack)
     first = np.array([[line.parted_seen for line in lines]])
     seen = np.maximum.accumulate(
         np.vstack([first, np.where(pattern, now[:, None], -math.inf)]), axis=0
     )[1:]
+    firm = sensor_state.firm_times(now, slack, np.array([line.firm_seen for line in lines]))
+    units, units_after = plausible.units_decide(
+        core.rest_table,
+        units_rule(core.config),
+        [line.units for line in lines],
+        now,
+        tension,
+        tension_s,
+        depth,
+        depth_s,
+        (a.tension_timeout, a.depth_timeout),
+        core.config.chart,
+    )
     codes = sensor_state.decide_lines(
         a,
-        sensor_limits(core.config),
+        limits,
         now,
         tension,
         tension_s,
@@ -204,9 +222,11 @@ def decide_sensors_window(
         depth,
         d_changed,
         refused,
+        firm,
+        units,
     )
     depth_codes = sensor_state.decide_depth(
-        a, now, depth, depth_s, d_changed, d_spiked, sea, d_refused
+        a, now, depth, depth_s, d_changed, d_spiked, sea, d_refused, core.config.chart
     )
     for k, line in enumerate(lines):
         line.take(
@@ -214,6 +234,8 @@ def decide_sensors_window(
                 sensor_memory=memories[k],
                 sensor_code=int(codes[-1, k]),
                 parted_seen=float(seen[-1, k]),
+                firm_seen=float(firm[-1, k]),
+                units=units_after[k],
             )
         )
     last = np.column_stack([tension_s, depth_s])

@@ -349,7 +349,11 @@ def _solve_at(
         a_depth = critical_parameters(lc, dv + lc.hook_height)
         a_before = critical_parameters(lc, np.array([core.state.depth + lc.hook_height]))[0]
         values, status = solve_updates(lc, tension, h, pick(d_idx, a_depth, a_before))
-    _mark_implausible(values, status, used, reading_status_array(tension, h, lc.mbl, lc.weight))
+    lo, hi = core.config.chart
+    code = reading_status_array(
+        tension, h, lc.mbl, lc.weight, lo + lc.hook_height, hi + lc.hook_height
+    )
+    _mark_implausible(values, status, used, code)
     return values, status, used
 
 

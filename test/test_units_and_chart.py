@@ -1,0 +1,132 @@
+"""Units and ranges that announce themselves, on generated scenes (catenary_monitor_study's
+normal_days_log, replayed as the node's log): a load cell in daN on a line set in N, and one in
+tonnes-force on a line set in kN, while a storm lifts that line's anchor, is an ``input`` ERROR
+"wrong units?" naming its ``tension_scale`` from the first tick and never reads OK; a normal
+stretch claims nothing; the chart range comes from the lines and refuses a depth of 0.3 m."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from catenary_monitor.core.config.parameters import chart_range
+from catenary_monitor.core.rules import plausible
+from catenary_monitor_study import normal_days as nd
+from catenary_monitor_study import normal_days_log as ndl
+from catenary_monitor_study.bench_alarms import replay_counts
+
+MINUTES = 30.0
+LINE = 'line_11'  # the line a storm from 270 deg lifts (catenary_monitor_study.storm_line)
+
+
+def _scene(faults=(), storm=True):
+    """Half an hour at the paper's dock: calm for 12 min, then a storm lifting line_11's
+    anchor by 190 kN from 22 to 28 min; load cells at 2 Hz (the rules need no more)."""
+    weather = nd.Weather()
+    if storm:
+        weather = dataclasses.replace(
+            weather, storm=nd.Storm(1500.0, LINE, rise=600.0, hold=360.0, fall=600.0)
+        )
+    scene = nd.paper_scene('radar_1cm', days=MINUTES / 1440.0, faults=faults,
+                           weather=weather, mean_depth=18.3)  # fmt: skip
+    return dataclasses.replace(scene, cells=dataclasses.replace(scene.cells, rate=2.0))
+
+
+@pytest.fixture(scope='module', params=['units_dan', 'units_tf'])
+def units_run(request, tmp_path_factory):
+    scene = _scene((nd.Fault(request.param, 0.0, math.inf, LINE),))
+    facts = ndl.write_scene(scene, tmp_path_factory.mktemp(request.param))
+    counter, _ = replay_counts(facts.log, facts.params)
+    return request.param, scene, counter
+
+
+def test_a_unit_mistake_is_an_input_error_naming_the_scale_and_never_ok(units_run):
+    kind, scene, counter = units_run
+    assert nd.scene_margins(scene)['uplift_max'] > 150e3  # the storm truly lifts an anchor
+    # judged at the first tick (0.5 s; before it the line had one solve, 0.1 s before)
+    levels = [level for t, level in counter.changes[LINE] if t >= scene.start_s + 0.5]
+    assert levels and 0 not in levels, counter.changes[LINE][:10]  # never OK
+    raised = [a for a in counter.heard() if a.status == LINE]
+    assert raised and raised[0].after == 2, raised[:3]  # ERROR
+    text = raised[0].message
+    assert 'wrong units?' in text and f'{LINE}.tension_scale' in text, text
+    scale = 1.0 if kind == 'units_dan' else 1000.0
+    assert f'tension_scale {scale:g} -> ' in text, text
+    assert ('daN' in text) and ('tonnes-force' in text), text  # 10 and 9.81: both named
+    others = [a for a in counter.heard() if 'wrong units' in a.message and a.status != LINE]
+    assert not others, others[:3]
+
+
+@pytest.fixture(scope='module')
+def normal_run(tmp_path_factory):
+    scene = _scene(storm=False)
+    facts = ndl.write_scene(scene, tmp_path_factory.mktemp('normal'))
+    return scene, replay_counts(facts.log, facts.params)[0]
+
+
+def test_a_normal_stretch_claims_no_unit_mistake(normal_run):
+    scene, counter = normal_run
+    claims = [a for a in counter.heard() if 'wrong units' in a.message]
+    assert not claims, claims[:3]
+    assert not [a for a in counter.heard() if a.status.startswith('line_')]
+
+
+def test_the_chart_comes_from_the_lines_and_refuses_a_gauge_at_0_3_m():
+    scene = _scene(storm=False)
+    lo, hi = scene.config.chart
+    assert 5.0 < lo < 6.5 and 25.0 < hi < 30.0, (lo, hi)  # lifts at 22.2-22.3 m
+    assert not lo <= 0.3 <= hi and lo < 18.3 - 1.0 and hi > 18.3 + 1.0
+    no_chain = [dataclasses.replace(x, chain_length=None) for x in scene.config.lines]
+    assert chart_range(no_chain) == (0.0, 12000.0)
+    assert chart_range(scene.config.lines) == (lo, hi)
+
+
+def test_unit_factors_named_and_far_from_one():
+    assert plausible.UNIT_FACTORS[plausible.units_factor(10.2)][0] == 10.0
+    assert plausible.UNIT_FACTORS[plausible.units_factor(9.7)][0] == 9.80665
+    assert plausible.UNIT_FACTORS[plausible.units_factor(1.0 / 1020.0)][0] == 0.001
+    assert plausible.UNIT_FACTORS[plausible.units_factor(4.4)][0] == 4.4482216
+    for ratio in (1.0, 2.5, 0.4, 30.0, math.nan, -10.0, 0.0):  # no claim
+        assert plausible.units_factor(ratio) == -1, ratio
+    got = plausible.units_factors(np.array([[10.0, 1.0], [1e-3, 4448.0]]))
+    assert got.tolist() == [[0, -1], [8, 5]]
+    text = plausible.units_text('line_11', 1.0, 0, 16e3)
+    assert text.startswith('wrong units? reading x10 fits the chain\'s statics (daN?')
+    assert 'line_11.tension_scale 1 -> 10 ' in text
+
+
+def _run(scene, tmp_path_factory, name):
+    facts = ndl.write_scene(scene, tmp_path_factory.mktemp(name))
+    return replay_counts(facts.log, facts.params)[0]
+
+
+def test_a_pressure_gauge_at_0_3_m_is_an_impossible_depth_and_blinds_no_line_loudly(
+    tmp_path_factory,
+):
+    """The pressure gauge steps to 0.3 m for 10 min: the tide is ERROR "impossible depth"
+    (never OK meanwhile), no line solves on it nor annunciates (each blind by it)."""
+    fault = nd.Fault('pressure_step', 600.0, 600.0, None, 0.3)
+    scene = nd.paper_scene('pressure_1mm', days=20 / 1440.0, faults=(fault,), mean_depth=18.3)
+    scene = dataclasses.replace(scene, cells=dataclasses.replace(scene.cells, rate=2.0))
+    counter = _run(scene, tmp_path_factory, 'pressure')
+    t0 = scene.start_s
+    heard = counter.heard(t0 + 600.0, t0 + 1200.0)
+    tide = [a for a in heard if a.status == 'tide']
+    assert tide and tide[0].after == 2 and 'impossible depth 0.30 m (chart ' in tide[0].message
+    assert not [a for a in heard if a.status.startswith('line_')], heard[:3]
+    during = counter.level_at('tide', t0 + np.arange(602.0, 1199.0, 1.0))
+    assert (during == 2).all()
+
+
+def test_a_parted_chain_is_one_error_on_its_line(tmp_path_factory):
+    """The chain parts 12 m below line_11's hook: its line raises one ERROR; the others stay
+    quiet (the other lines' sum need not rise)."""
+    fault = nd.Fault('parted', 600.0, math.inf, LINE, 12.0)
+    scene = _scene((fault,), storm=False)
+    scene = dataclasses.replace(scene, seconds=1200.0)
+    counter = _run(scene, tmp_path_factory, 'parted')
+    heard = counter.heard(scene.start_s + 600.0, scene.start_s + 1200.0)
+    mine = [a for a in heard if a.status == LINE]
+    assert len(mine) == 1 and mine[0].after == 2, heard[:4]
+    assert not [a for a in heard if a.status.startswith('line_') and a.status != LINE]
