@@ -493,7 +493,7 @@ def test_a_line_shelved_for_a_stuck_cell_still_annunciates_its_parted_chain():
     # its T <= w*h is an impossible input at the sample, suspected_parted from the next tick
     # on (the input condition then clears: clear_hold 10 s)
     assert first['alarm_condition'] in ('input', 'sensor_error')
-    assert all('suspected parted' in x[2] for x in after), after[0][2]
+    assert all('suspected parted' in x[3]['detail'] for x in after), after[0][3]['detail']
     late = [x for x in after if x[0] > 135.0]
     assert late and all(x[3]['alarm_condition'] == 'sensor_error' for x in late)
     assert all('impossible input' not in x[2] for x in late), late[0][2]

@@ -209,7 +209,8 @@ def test_defaults_come_from_the_table():
     config = config_from_params(_minimal())
     table = {spec.name: spec for spec in PARAMETERS}
     for f in dataclasses.fields(AlarmConfig):
-        assert getattr(config.alarm, f.name) == table[f.name].default
+        got, default = getattr(config.alarm, f.name), table[f.name].default
+        assert got == default or (got != got and default != default), f.name  # NaN: not set
     assert config.depth_topic == table['depth_topic'].default == '/tide/depth'
     assert config.line('a').allowed_uplift == table['allowed_uplift'].default == 0.0
     assert config.line('a').hook_height == 0.0

@@ -255,7 +255,7 @@ def test_depth_sensor_states(state, level, what):
     words = tide_words(steps)
     hit = [x for x in words if x[1] == state]
     assert hit and EVENT_S[0] - 30.0 <= hit[0][0] <= EVENT_S[1] + 25.0
-    assert hit[0][2].level.name == level and what in hit[0][2].message
+    assert hit[0][2].level.name == level and what in dict(hit[0][2].values)['detail']
     assert words[-1][1] == 'ok' and words[-1][2].level.name == 'OK'
     assert {w for _, w, _ in words} == {'ok', state}
 

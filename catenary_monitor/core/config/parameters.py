@@ -863,9 +863,9 @@ PARAMETERS: tuple[ParamSpec, ...] = (
                 'depth_min',
                 math.nan,
                 'Chart range of the depth sensor: a depth below this is impossible (out_of_range: '
-                'the tide ERROR, no line solves on it); NaN: from the lines, 0.25 x the '
-                'shallowest depth at which a chain lifts its anchor at its installed span (0 '
-                'without chain_length)',
+                'the tide ERROR, no line solves on it); NaN: 0 (the lines bound the depth from '
+                'above only: give the lowest water less a margin to catch a gauge\'s datum '
+                'error)',
                 'm',
                 0.0,
                 12000.0,
@@ -1820,14 +1820,16 @@ GEOMETRY = ('hook_x', 'hook_y', 'heading', 'chain_length')
 #: laid for lie below those; a gauge reading a quarter of them or a quarter more is a datum,
 #: scale or sensor fault. A quarter, not half: a chain laid with much grounded length lifts far
 #: deeper than the dock floats (130 m of chain at a 100 m span lifts at about 60 m).
-CHART_LOW, CHART_HIGH = 0.25, 1.25
+CHART_HIGH = 1.25
 
 
 def chart_range(lines: Iterable[LineConfig]) -> tuple[float, float]:
-    """The default ``(depth_min, depth_max)`` [m] from the lines: :data:`CHART_LOW` x the
-    shallowest and :data:`CHART_HIGH` x the deepest depth at which a fixed-length chain lifts
-    its anchor at its installed span (the hook height taken off); ``(0, 12000)`` without chain
-    lengths."""
+    """The default ``(depth_min, depth_max)`` [m] from the lines: 0, and :data:`CHART_HIGH` x
+    the deepest depth at which a fixed-length chain lifts its anchor at its installed span (the
+    hook height taken off; 12000 without chain lengths). The geometry bounds the depth from
+    above only: a shallower sea lays more chain on the seabed (a long chain on a short span
+    lifts its anchor only far deeper than the dock lies), so a gauge's datum error below the
+    dock's depth is found only against a ``depth_min`` the installer gives."""
     from catenary_monitor.core.physics.fixed_length import lift_depth_scalar
 
     lifts = []
@@ -1843,7 +1845,7 @@ def chart_range(lines: Iterable[LineConfig]) -> tuple[float, float]:
             lifts.append(lift - line.hook_height)
     if not lifts:
         return 0.0, 12000.0
-    return CHART_LOW * min(lifts), min(CHART_HIGH * max(lifts), 12000.0)
+    return 0.0, min(CHART_HIGH * max(lifts), 12000.0)
 
 
 @dataclass(frozen=True)
