@@ -351,4 +351,5 @@ def test_workers_are_counted_lost_only_when_the_scheduler_no_longer_has_them():
     assert addresses == {'tcp://a', 'tcp://b'} and run.workers_lost == 0 and not state.notes
     client.workers = {'tcp://b': 1}
     fleet_cluster._look_for_lost(client, addresses, run, state)
-    assert run.workers_lost == 1 and state.notes == ['worker tcp://a lost: its tasks are done again']
+    assert run.workers_lost == 1
+    assert state.notes == ['worker tcp://a lost: its tasks are done again']
