@@ -329,3 +329,27 @@ def test_a_future_cancelled_elsewhere_fails_its_dock_in_words():
     fleet_cluster._collect(_Client(), _Future('cancelled'), dock, Path('.'), 't', run,
                            fleet_cluster.Progress(), {}, None)  # fmt: skip
     assert dock.failed and 'cancelled (not by this run)' in run.failed['dock_x']
+
+
+def test_workers_are_counted_lost_only_when_the_scheduler_no_longer_has_them():
+    """The client's cached ``scheduler_info()`` can hold cluster totals only (its periodic
+    update asks for no workers): a loaded machine reported every worker lost of a run that
+    lost none. The look asks the scheduler for its workers now."""
+    from catenary_monitor.replay import fleet_cluster
+
+    class _Client:
+        workers = {'tcp://a': 1, 'tcp://b': 1}
+
+        def scheduler_info(self) -> dict[str, Any]:
+            return {'workers': {}}  # the totals-only cache
+
+        def nthreads(self) -> dict[str, int]:
+            return dict(self.workers)
+
+    client, run, state = _Client(), fleet_cluster.FleetRun(), fleet_cluster.Progress()
+    addresses = fleet_cluster._look_for_lost(client, {'tcp://a', 'tcp://b'}, run, state)
+    assert addresses == {'tcp://a', 'tcp://b'} and run.workers_lost == 0 and not state.notes
+    client.workers = {'tcp://b': 1}
+    fleet_cluster._look_for_lost(client, addresses, run, state)
+    assert run.workers_lost == 1
+    assert state.notes == ['worker tcp://a lost: its tasks are done again']

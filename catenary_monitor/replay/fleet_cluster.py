@@ -105,7 +105,7 @@ def run_fleet(
         cluster = local_cluster(workers)
         client = Client(cluster)
     try:
-        run.workers = len(client.scheduler_info()['workers'])
+        run.workers = len(workers_now(client))
         client.run(_warm)  # each worker imports the replay once, before the clock of the replay
         run.startup_seconds = time.monotonic() - t0
         cpu = client.run(time.process_time)
@@ -249,7 +249,7 @@ def _drive(
             pending.add(future)
         state.tasks_total += len(dock.plan.pieces)
     state.tasks_total -= run.tasks_reused
-    addresses = set(client.scheduler_info()['workers'])
+    addresses = workers_now(client)
     next_look = 0.0
     while not pending.is_empty():
         for future in pending.next_batch(block=False) if pending.has_ready() else []:
@@ -281,9 +281,18 @@ def _wait_for_one(pending: Any, timeout: float = 0.1) -> None:
             condition.wait(timeout=timeout)
 
 
+def workers_now(client: Any) -> set[str]:
+    """The addresses of the cluster's workers, asked of the scheduler now. Not
+    ``client.scheduler_info()['workers']``: the client's periodic update of that cache asks
+    for totals only (no workers), and when it lands between the call's own update and its
+    return, every worker looks gone (a loaded machine reported two workers lost of a run that
+    lost none)."""
+    return set(client.nthreads())
+
+
 def _look_for_lost(client: Any, addresses: set[str], run: FleetRun, state: Progress) -> set[str]:
     """The workers now; those gone since the last look are counted and named."""
-    now = set(client.scheduler_info()['workers'])
+    now = workers_now(client)
     lost = addresses - now
     if lost:
         run.workers_lost += len(lost)
