@@ -1,8 +1,8 @@
 """``catenary-monitor harbour``: every dock of a port live on one page.
 
 ``catenary-monitor harbour --dock NAME=DOMAIN_ID[:PARAMS_FILE][@LAT,LON] ... [--console-url
-NAME=URL ...] [--fleet-dataset DIR] [--port 8090] [--bind 127.0.0.1] [--token-file FILE]
-[--tls-cert F --tls-key F]``.
+NAME=URL ...] [--discovery-server NAME=HOST:PORT ...] [--fleet-dataset DIR] [--port 8090]
+[--bind 127.0.0.1] [--token-file FILE] [--tls-cert F --tls-key F]``.
 One process joins each dock's ROS domain (:mod:`.harbour_source`) and serves the harbour page
 (:mod:`.harbour_server`). Read-only unless ``--token-file`` names operators, who may then
 acknowledge a dock's alarm from it. Prints ``harbour: URL (...)`` once it listens and serves
@@ -14,8 +14,9 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 import sys
-from typing import Any
+from typing import Any, Sequence
 
 from catenary_monitor.console.server_options import (
     Refused,
@@ -34,10 +35,24 @@ def _fail(message: str, code: int = 2) -> int:
     return code
 
 
-def dock_specs(docks: list[str], consoles: list[str]) -> list[Any]:
-    """The ``--dock`` and ``--console-url`` options as dock specs, each params file read.
-    Raises Refused with one line."""
-    from catenary_monitor.console.harbour_model import parse_console_url, parse_dock
+#: The process-wide discovery server: on one, the ROS domains no longer keep docks apart.
+SHARED_SERVER = (
+    'ROS_DISCOVERY_SERVER is set for the whole harbour: through a discovery server every '
+    'domain hears every monitor (a silent dock would show another\'s statuses); give each '
+    'dock its own with --discovery-server NAME=HOST:PORT, or unset it'
+)
+
+
+def dock_specs(
+    docks: list[str], consoles: list[str], servers: Sequence[str] = ()
+) -> list[Any]:
+    """The ``--dock``, ``--console-url`` and ``--discovery-server`` options as dock specs,
+    each params file read. Raises Refused with one line."""
+    from catenary_monitor.console.harbour_model import (
+        parse_console_url,
+        parse_discovery_server,
+        parse_dock,
+    )
     from catenary_monitor.core.config.parameters import (
         ConfigError,
         config_from_params,
@@ -47,15 +62,19 @@ def dock_specs(docks: list[str], consoles: list[str]) -> list[Any]:
     try:
         specs = [parse_dock(text) for text in docks]
         urls = dict(parse_console_url(text) for text in consoles)
+        found = dict(parse_discovery_server(text) for text in servers)
     except ValueError as err:
         raise Refused(str(err)) from None
     names = [s.name for s in specs]
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise Refused(f'--dock {twice[0]} given twice: every dock needs its own name')
-    unknown = sorted(set(urls) - set(names))
-    if unknown:
-        raise Refused(f'--console-url {unknown[0]}: no --dock of that name')
+    for option, given in (('--console-url', urls), ('--discovery-server', found)):
+        unknown = sorted(set(given) - set(names))
+        if unknown:
+            raise Refused(f'{option} {unknown[0]}: no --dock of that name')
+    if os.environ.get('ROS_DISCOVERY_SERVER') and len(names) > 1 and set(found) != set(names):
+        raise Refused(SHARED_SERVER)
     out = []
     for spec in specs:
         config = None
@@ -64,7 +83,14 @@ def dock_specs(docks: list[str], consoles: list[str]) -> list[Any]:
                 config = config_from_params(load_params_file(spec.params_file))
             except ConfigError as err:
                 raise Refused(f'dock {spec.name}: {spec.params_file}: {err}') from None
-        out.append(dataclasses.replace(spec, config=config, console_url=urls.get(spec.name)))
+        out.append(
+            dataclasses.replace(
+                spec,
+                config=config,
+                console_url=urls.get(spec.name),
+                discovery_server=found.get(spec.name),
+            )
+        )
     return out
 
 
@@ -95,7 +121,7 @@ def cmd_harbour(args: argparse.Namespace) -> int:
     args.log = None
     args.read_only = bool(args.read_only or not args.token_file)
     try:
-        specs = dock_specs(args.dock, args.console_url or [])
+        specs = dock_specs(args.dock, args.console_url or [], args.discovery_server or [])
         access = server_access(args, 'harbour')
     except Refused as err:
         return _fail(str(err))
@@ -163,6 +189,13 @@ def register(sub: Any) -> None:
         action='append',
         metavar='NAME=URL',
         help='the dock\'s own console, linked from its tile (repeatable)',
+    )
+    p.add_argument(
+        '--discovery-server',
+        action='append',
+        metavar='NAME=HOST:PORT',
+        help='the Fast DDS discovery server(s) of the dock\'s domain, as ROS_DISCOVERY_SERVER '
+        'writes them (docks on other subnets, docs/deploy.md); each dock its own (repeatable)',
     )
     p.add_argument(
         '--fleet-dataset',

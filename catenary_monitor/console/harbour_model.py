@@ -72,6 +72,7 @@ class DockSpec:
     lon: Optional[float] = None
     console_url: Optional[str] = None
     config: Optional[MonitorConfig] = None
+    discovery_server: Optional[str] = None  # ROS_DISCOVERY_SERVER for this dock's domain
 
     @property
     def line_names(self) -> list[str]:
@@ -113,6 +114,27 @@ def parse_console_url(text: str) -> tuple[str, str]:
     if parts.scheme not in ('http', 'https') or not parts.netloc or not url.isprintable():
         raise ValueError(f'--console-url {text[:80]!r}: the URL must be http:// or https://')
     return name, url
+
+
+#: One entry of a ``ROS_DISCOVERY_SERVER`` list: a host name or IPv4 address, a port.
+_SERVER = re.compile(r'^[A-Za-z0-9_.-]{1,253}(:[0-9]{1,5})?$')
+
+
+def parse_discovery_server(text: str) -> tuple[str, str]:
+    """``NAME=SERVERS`` (the ``--discovery-server`` option): the dock and its Fast DDS
+    discovery server(s) as ``ROS_DISCOVERY_SERVER`` writes them (``HOST:PORT``, entries
+    separated by ``;``, an entry's position its server id). Raises ValueError with one line."""
+    usage = f'--discovery-server {text[:80]!r}: expected NAME=HOST:PORT[;HOST:PORT...]'
+    name, sep, servers = text.partition('=')
+    if not sep or not _NAME.match(name):
+        raise ValueError(usage)
+    entries = [e for e in servers.split(';') if e]
+    ports = [int(e.rpartition(':')[2]) for e in entries if ':' in e]
+    if not entries or not all(_SERVER.match(e) for e in entries) or not all(
+        1 <= p <= 65535 for p in ports
+    ):
+        raise ValueError(f'{usage} (a port 1 to 65535; an empty entry keeps a server id free)')
+    return name, servers
 
 
 def worst_level(levels: Sequence[str]) -> str:

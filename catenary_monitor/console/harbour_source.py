@@ -14,11 +14,12 @@ Reception times are the harbour's wall clock; :mod:`.harbour_model` builds the v
 
 from __future__ import annotations
 
+import contextlib
 import os
 import socket
 import threading
 import time
-from typing import Any, Callable, Optional, Sequence
+from typing import Any, Callable, Iterator, Optional, Sequence
 
 from catenary_monitor.console.frames import AckError, statuses_by_name
 from catenary_monitor.console.harbour_model import (
@@ -42,6 +43,24 @@ NODE_PREFIX = 'catenary_console_harbour'
 _INIT_LOCK = threading.Lock()
 #: Seconds between two looks at who publishes /diagnostics in a dock's domain.
 PUBLISHERS_CHECK = 2.0
+
+
+@contextlib.contextmanager
+def _discovery_env(servers: Optional[str]) -> Iterator[None]:
+    """``ROS_DISCOVERY_SERVER`` set to ``servers`` while a dock's participant is made (the
+    process's own value kept otherwise and restored after)."""
+    if servers is None:
+        yield
+        return
+    before = os.environ.get('ROS_DISCOVERY_SERVER')
+    os.environ['ROS_DISCOVERY_SERVER'] = servers
+    try:
+        yield
+    finally:
+        if before is None:
+            os.environ.pop('ROS_DISCOVERY_SERVER', None)
+        else:
+            os.environ['ROS_DISCOVERY_SERVER'] = before
 
 
 class _Dock:
@@ -134,20 +153,22 @@ class HarbourSource:
         from rclpy.signals import SignalHandlerOptions
 
         context = Context()
-        with _INIT_LOCK:  # rcl's logging set-up is process-wide: one init at a time
+        with _INIT_LOCK, _discovery_env(dock.spec.discovery_server):
+            # rcl's logging set-up is process-wide: one init at a time; the participant (made
+            # with the first node) reads ROS_DISCOVERY_SERVER: the dock's own, if it has one
             rclpy.init(
                 args=['catenary_harbour', *self.ros_args],
                 context=context,
                 domain_id=dock.spec.domain_id,
                 signal_handler_options=SignalHandlerOptions.NO,
             )
-        dock.context = context
-        dock.node = rclpy.create_node(
-            f'{NODE_PREFIX}_{os.getpid()}',
-            context=context,
-            start_parameter_services=False,
-            enable_rosout=False,
-        )
+            dock.context = context
+            dock.node = rclpy.create_node(
+                f'{NODE_PREFIX}_{os.getpid()}',
+                context=context,
+                start_parameter_services=False,
+                enable_rosout=False,
+            )
         dock.node.create_subscription(
             DiagnosticArray,
             '/diagnostics',
