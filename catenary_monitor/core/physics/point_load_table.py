@@ -118,6 +118,14 @@ class PointLoadTable:
             return _columns([one(a, b) for a, b in zip(h.tolist(), span.tolist())])
         return self._state_at_span(h, span)
 
+    def span_at_tension_one(self, h: float, tension: float) -> tuple[float, float]:
+        """:meth:`span_at_tension` of one query in plain floats (the same bits)."""
+        return _scalar(self).span_at_tension(h, tension)
+
+    def state_at_span_one(self, h: float, span: float) -> tuple[float, float]:
+        """:meth:`state_at_span` of one query in plain floats (the same bits)."""
+        return _scalar(self).state_at_span(h, span)
+
     def _span_at_tension(
         self, h: np.ndarray, tension: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
