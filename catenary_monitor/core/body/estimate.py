@@ -36,7 +36,7 @@ means the other lines put this hook beyond its chain's reach).
 from __future__ import annotations
 
 import math
-from typing import NamedTuple, Optional
+from typing import Any, NamedTuple, Optional
 
 import numpy as np
 
@@ -180,7 +180,7 @@ def estimate_dock(
             zip(depth.tolist(), np.asarray(tensions, float).tolist(), usable.tolist())
         )
     ]
-    cols = list(zip(*rows)) if rows else [[]] * len(DockEstimate._fields)
+    cols: list[Any] = list(zip(*rows)) if rows else [()] * len(DockEstimate._fields)
     return DockEstimate(
         valid=np.array(cols[0], bool),
         offset=np.array(cols[1], float).reshape(n, 3),

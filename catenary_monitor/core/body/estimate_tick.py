@@ -92,7 +92,7 @@ def _lines(model: DockModel) -> _Lines:
     given = np.isfinite(model.tension_accuracy)
     default = float(np.max(model.tension_accuracy[given])) if given.any() else 1.0
     accuracy = np.where(given, model.tension_accuracy, default)
-    tables = list(model.tables) if model.tables else [None] * m
+    tables: list[Optional[PointLoadTable]] = list(model.tables) if model.tables else [None] * m
     loaded = [loads is not None for loads in model.loads] if model.loads else [False] * m
     view = _Lines(
         model.hook[:, 0].tolist(),
