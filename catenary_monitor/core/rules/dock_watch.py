@@ -44,10 +44,11 @@ from typing import NamedTuple
 import numpy as np
 
 from catenary_monitor.core.body.dock_model import DockModel
-from catenary_monitor.core.body.estimate import MIN_LINES, DockEstimate, estimate_dock
+from catenary_monitor.core.body.estimate import MIN_LINES, REMOVE_Z, DockEstimate, estimate_dock
+from catenary_monitor.core.body.estimate_tick import TickEstimate, estimate_tick
 from catenary_monitor.core.config.parameters import MonitorConfig
 from catenary_monitor.core.rules.level import Level
-from catenary_monitor.core.rules.plausible import MAX_DEPTH, reading_status_array
+from catenary_monitor.core.rules.plausible import MAX_DEPTH, reading_status, reading_status_array
 
 __all__ = [
     'LINE_INPUTS',
@@ -170,6 +171,17 @@ def decide_dock(
     vectorized, and a run is cut where the flags change: each tick is estimated exactly as a
     core stepping one tick at a time does.
     """
+    if now.shape == (1,):  # the live core's one tick: plain floats, the same bits
+        return _decide_tick(
+            model,
+            config,
+            float(now[0]),
+            float(depth[0]),
+            bool(depth_ok[0]),
+            tension[0].tolist(),
+            tension_s[0].tolist(),
+            state,
+        )
     use = readings(
         model, config.alarm.tension_timeout, now, depth, depth_ok, tension, tension_s, config.chart
     )
@@ -202,6 +214,99 @@ def decide_dock(
     inputs = np.stack([flag, est.residual, est.expected, stat], axis=-1)
     spans = solve_spans(est.span, flag)
     return DockDecision(est, level, inputs, flagged, spans, model.table_span_error), state
+
+
+def _decide_tick(
+    model: DockModel,
+    config: MonitorConfig,
+    now: float,
+    depth: float,
+    depth_ok: bool,
+    tension: list[float],
+    tension_s: list[float],
+    state: Smoothing,
+) -> tuple[DockDecision, Smoothing]:
+    """:func:`decide_dock` of one tick in plain floats (:func:`readings`, the estimate,
+    :func:`smooth_step` and the inputs: the same operations element by element)."""
+    timeout, (low, high) = config.alarm.tension_timeout, config.chart
+    limit, tau = config.dock.residual_limit, config.dock.residual_time
+    depth_good = (
+        depth_ok and math.isfinite(depth) and 0.0 < depth <= MAX_DEPTH and low <= depth <= high
+    )
+    use = []
+    for t, t_s, w, hh, mbl in zip(
+        tension, tension_s, model.weight.tolist(), model.hook_height.tolist(), model.mbl.tolist()
+    ):
+        h = depth + hh
+        use.append(
+            depth_good
+            and t_s == t_s
+            and now - t_s <= timeout
+            and math.isfinite(t)
+            and t > w * h
+            and reading_status(t, h, mbl) == 0
+        )
+    est = estimate_tick(
+        model,
+        depth if math.isfinite(depth) else 1.0,
+        tension,
+        use,
+        state.flagged.tolist(),
+        REMOVE_Z,
+    )
+    stat, new = _smooth_tick(state, now, est.normalized, tau, limit)
+    flags = [1.0 if abs(z) > limit else (0.0 if math.isfinite(z) else math.nan) for z in stat]
+    spans = [
+        s if f == 0.0 and math.isfinite(s) else math.nan for s, f in zip(est.span, flags)
+    ]
+    inputs = np.array([list(zip(flags, est.residual, est.expected, stat))], float)
+    decision = DockDecision(
+        _one(est),
+        np.array([Level.OK if est.valid else Level.STALE], np.int8),
+        inputs,
+        np.array([[f == 1.0 for f in flags]]),
+        np.array([spans], float),
+        model.table_span_error,
+    )
+    return decision, new
+
+
+def _one(est: TickEstimate) -> DockEstimate:
+    """A one-row DockEstimate of a tick's estimate."""
+    return DockEstimate(
+        valid=np.array([est.valid]),
+        offset=np.array([est.offset], float),
+        load=np.array([est.load], float),
+        expected=np.array([est.expected], float),
+        residual=np.array([est.residual], float),
+        normalized=np.array([est.normalized], float),
+        dropped=np.array([est.dropped], bool),
+        used=np.array([est.used], bool),
+        readings=np.array([est.readings], np.int64),
+        span=np.array([est.span], float),
+    )
+
+
+def _smooth_tick(
+    state: Smoothing, now: float, z: list[float], tau: float, limit: float
+) -> tuple[list[float], Smoothing]:
+    """:func:`smooth_step` in plain floats (the same operations element by element)."""
+    last = state.last_s
+    lam = 1.0 if last != last else -math.expm1(-(now - last) / tau)
+    means, variances, flagged, stat = [], [], [], []
+    for zk, mean, var in zip(z, state.mean.tolist(), state.var.tolist()):
+        seen = math.isfinite(zk)
+        if seen and var != var:
+            mean, var = zk, 1.0
+        elif seen:
+            mean, var = mean + lam * (zk - mean), (1.0 - lam) * (1.0 - lam) * var + lam * lam
+        held = mean / math.sqrt(var) if var == var else math.nan
+        means.append(mean)
+        variances.append(var)
+        flagged.append(False if var != var else abs(held) > limit)
+        stat.append(held if seen else math.nan)
+    new = Smoothing(np.array(means, float), np.array(variances, float), np.array(flagged), now)
+    return stat, new
 
 
 def solve_spans(span: np.ndarray, flag: np.ndarray) -> np.ndarray:
