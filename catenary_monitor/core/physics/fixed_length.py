@@ -699,10 +699,13 @@ def _from_tension_scalar(w: float, h: float, length: float, t: float, ea: float)
     """:func:`_from_tension` of one chain (the same closed forms in the same order). Raises
     what :mod:`math` raises where numpy gives NaN or inf."""
     sqrt, asinh = math.sqrt, math.asinh
-    ta, d = anchor_end_tension(w, h, t, ea, cat._MATH)
+    if ea == math.inf:  # what anchor_end_tension gives there, exactly
+        ta, d = cat.two_prod_diff(t, w, h) + 0.0, w * h
+    else:
+        ta, d = anchor_end_tension(w, h, t, ea, cat._MATH)
+    inv_ea = 1.0 / ea
     wl = w * length
     va = 0.5 * (d * (t + ta) / wl - wl)
-    inv_ea = 1.0 / ea
     if va > 0.0:  # lifted
         r = sqrt(cat._maximum((ta - va) * (ta + va), 0.0))
         s = r / w * asinh((wl * ta - va * d) / (r * r)) + r * length * inv_ea
