@@ -54,13 +54,21 @@ def _same(got, want):
         np.testing.assert_allclose(a, b, rtol=1e-8, atol=atol, err_msg=field)
 
 
-@pytest.mark.parametrize('dock', ['plain', 'tables', 'exact'])
+def _model(dock):
+    if dock == 'plain':
+        return DockModel.from_config(dock_config())
+    if dock == 'elastic':
+        config = dock_config()
+        flat = {f'{line.name}.ea': 6.63e8 for line in config.lines}
+        return DockModel.from_config(dock_config(**flat))
+    return _clumped_model(tables=dock == 'tables')
+
+
+@pytest.mark.parametrize('dock', ['plain', 'elastic', 'tables', 'exact'])
 def test_one_tick_in_plain_floats_is_the_array_estimate(dock):
-    model = (
-        DockModel.from_config(dock_config())
-        if dock == 'plain'
-        else _clumped_model(tables=dock == 'tables')
-    )
+    model = _model(dock)
+    if dock == 'elastic':
+        assert np.isfinite(model.ea).all()
     n = 4 if dock == 'exact' else 60
     depth, tensions, usable = _readings(model, n, seed=3)
     exclude = np.zeros(tensions.shape[1], bool)
