@@ -47,6 +47,7 @@ from catenary_monitor.core.body.estimate_tick import (
     MIN_LINES,
     MIN_REDUNDANT,
     STEP_TOL,
+    TickEstimate,
     estimate_tick,
     exact_spans,
     exact_states,
@@ -58,6 +59,7 @@ __all__ = [
     'DockEstimate',
     'estimate_dock',
     'estimate_dock_arrays',
+    'stack_ticks',
     'REMOVE_Z', 'MAX_FLAGS', 'MIN_REDUNDANT', 'MIN_LINES']
 
 #: The largest normalized residual above this is dropped from this estimate's fit (a good
@@ -180,6 +182,11 @@ def estimate_dock(
             zip(depth.tolist(), np.asarray(tensions, float).tolist(), usable.tolist())
         )
     ]
+    return stack_ticks(rows, n, m)
+
+
+def stack_ticks(rows: list[TickEstimate], n: int, m: int) -> DockEstimate:
+    """``n`` ticks' estimates of ``m`` lines as one DockEstimate."""
     cols: list[Any] = list(zip(*rows)) if rows else [()] * len(DockEstimate._fields)
     return DockEstimate(
         valid=np.array(cols[0], bool),
