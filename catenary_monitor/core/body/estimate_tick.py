@@ -281,6 +281,8 @@ def _fit(
         d1 = i01 * b0 + i11 * b1 + i12 * b2
         d2 = i02 * b0 + i12 * b1 + i22 * b2
         q = [q[0] + d0, q[1] + d1, q[2] + d2]
+        if not (math.isfinite(q[0]) and math.isfinite(q[1]) and math.isfinite(q[2])):
+            return q, None, _geometry(v, [_NAN, _NAN, _NAN])  # as numpy: no fit
         if math.hypot(d0, d1) <= tol and abs(d2) <= STEP_TOL:
             converged = True
             break
@@ -355,7 +357,7 @@ def estimate_tick(
             s, d = _span_of(model, v, k, h[k], tensions[k])
             s_meas[k], dt_ds[k] = s, d
             if s == s and d > 0.0:
-                wk = d / v.accuracy[k]
+                wk = d / v.accuracy[k] if v.accuracy[k] != 0.0 else math.inf
                 wk = wk * wk
                 weight[k] = wk if math.isfinite(wk) else 0.0
     readings = sum(1 for wk in weight if wk > 0.0)
