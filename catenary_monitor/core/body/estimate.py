@@ -1,7 +1,8 @@
 """The dock's offset and environmental load from the measured tensions of all its lines, and
-the lines that disagree with the rest (the live consistency check; pure, vectorized over
-estimates so that replay computes every tick's estimate in one call, element by element as
-the live core does one at a time).
+the lines that disagree with the rest (the live consistency check; pure). :func:`estimate_dock`
+makes each estimate in plain floats (:mod:`.estimate_tick`: the live core one tick at a time,
+replay tick by tick, the same bits); :func:`estimate_dock_arrays` is the same estimate
+vectorized over estimates in numpy, its reference (equal to rounding).
 
 Each measured hook tension T_i implies a span ``s_i`` (closed form for the fixed-length chain,
 :func:`catenary_monitor.core.physics.fixed_length.span_and_sensitivity`) with the standard
@@ -60,7 +61,11 @@ __all__ = [
     'estimate_dock',
     'estimate_dock_arrays',
     'stack_ticks',
-    'REMOVE_Z', 'MAX_FLAGS', 'MIN_REDUNDANT', 'MIN_LINES']
+    'REMOVE_Z',
+    'MAX_FLAGS',
+    'MIN_REDUNDANT',
+    'MIN_LINES',
+]
 
 #: The largest normalized residual above this is dropped from this estimate's fit (a good
 #: line is dropped now and then at little cost; a bad one stops biasing the others).

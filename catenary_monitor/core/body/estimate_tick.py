@@ -384,11 +384,9 @@ def estimate_tick(
             z = _normalized(g, cov, s_meas, weight, flagged, testable)
     valid = readings >= MIN_LINES and cov is not None
     if not valid:
-        nans = [_NAN] * m
-        return TickEstimate(
-            False, (_NAN,) * 3, (_NAN,) * 3, nans, nans, nans, [False] * m, [False] * m,
-            readings, nans,
-        )  # fmt: skip
+        nans, no = [_NAN] * m, [False] * m
+        none = (_NAN, _NAN, _NAN)
+        return TickEstimate(False, none, none, nans, nans, nans, no, no, readings, nans)
     expected, residual = [_NAN] * m, [_NAN] * m
     fx = fy = mz = 0.0
     for k in range(m):
