@@ -1,7 +1,8 @@
 """The dock's offset and environmental load from the measured tensions of all its lines, and
-the lines that disagree with the rest (the live consistency check; pure, vectorized over
-estimates so that replay computes every tick's estimate in one call, element by element as
-the live core does one at a time).
+the lines that disagree with the rest (the live consistency check; pure). :func:`estimate_dock`
+makes each estimate in plain floats (:mod:`.estimate_tick`: the live core one tick at a time,
+replay tick by tick, the same bits); :func:`estimate_dock_arrays` is the same estimate
+vectorized over estimates in numpy, its reference (equal to rounding).
 
 Each measured hook tension T_i implies a span ``s_i`` (closed form for the fixed-length chain,
 :func:`catenary_monitor.core.physics.fixed_length.span_and_sensitivity`) with the standard
@@ -36,29 +37,39 @@ means the other lines put this hook beyond its chain's reach).
 from __future__ import annotations
 
 import math
-from typing import NamedTuple, Optional
+from typing import Any, NamedTuple, Optional
 
 import numpy as np
 
 from catenary_monitor.core.body.dock_model import DockModel
-from catenary_monitor.core.physics import point_loads
+from catenary_monitor.core.body.estimate_tick import (
+    MAX_FLAGS,
+    MAXITER,
+    MIN_LINES,
+    MIN_REDUNDANT,
+    STEP_TOL,
+    TickEstimate,
+    estimate_tick,
+    exact_spans,
+    exact_states,
+    loaded_lines,
+)
 from catenary_monitor.core.physics.fixed_length import span_and_sensitivity, statics_at_span
 
-__all__ = ['DockEstimate', 'estimate_dock', 'REMOVE_Z', 'MAX_FLAGS', 'MIN_REDUNDANT', 'MIN_LINES']
+__all__ = [
+    'DockEstimate',
+    'estimate_dock',
+    'estimate_dock_arrays',
+    'stack_ticks',
+    'REMOVE_Z',
+    'MAX_FLAGS',
+    'MIN_REDUNDANT',
+    'MIN_LINES',
+]
 
 #: The largest normalized residual above this is dropped from this estimate's fit (a good
 #: line is dropped now and then at little cost; a bad one stops biasing the others).
 REMOVE_Z = 3.0
-#: Gauss-Newton steps at most; stops when the step is below STEP_TOL of the dock's size (yaw:
-#: in rad). Spans are nearly linear in the offset: 3-5 steps.
-MAXITER = 20
-STEP_TOL = 1e-10
-#: At most this many lines flagged (and dropped) per estimate.
-MAX_FLAGS = 3
-#: A line is flagged only if at least this many readings remain in the fit (redundancy >= 2).
-MIN_REDUNDANT = 5
-#: Readings needed for an estimate (3 unknowns).
-MIN_LINES = 3
 
 
 class DockEstimate(NamedTuple):
@@ -164,7 +175,48 @@ def estimate_dock(
     exclude: Optional[np.ndarray] = None,
     remove: float = REMOVE_Z,
 ) -> DockEstimate:
-    """Offsets, loads, residuals and flags of ``n`` estimates.
+    """Offsets, loads, residuals and flags of ``n`` estimates, one at a time in plain floats
+    (:func:`~catenary_monitor.core.body.estimate_tick.estimate_tick`; parameters as
+    :func:`estimate_dock_arrays`): each row the same bits whichever rows it comes with."""
+    depth = np.asarray(depth, dtype=float)
+    n, m = tensions.shape
+    ex = None if exclude is None else np.broadcast_to(exclude, (n, m)).tolist()
+    rows = [
+        estimate_tick(model, d, t, u, None if ex is None else ex[i], remove)
+        for i, (d, t, u) in enumerate(
+            zip(depth.tolist(), np.asarray(tensions, float).tolist(), usable.tolist())
+        )
+    ]
+    return stack_ticks(rows, n, m)
+
+
+def stack_ticks(rows: list[TickEstimate], n: int, m: int) -> DockEstimate:
+    """``n`` ticks' estimates of ``m`` lines as one DockEstimate."""
+    cols: list[Any] = list(zip(*rows)) if rows else [()] * len(DockEstimate._fields)
+    return DockEstimate(
+        valid=np.array(cols[0], bool),
+        offset=np.array(cols[1], float).reshape(n, 3),
+        load=np.array(cols[2], float).reshape(n, 3),
+        expected=np.array(cols[3], float).reshape(n, m),
+        residual=np.array(cols[4], float).reshape(n, m),
+        normalized=np.array(cols[5], float).reshape(n, m),
+        dropped=np.array(cols[6], bool).reshape(n, m),
+        used=np.array(cols[7], bool).reshape(n, m),
+        readings=np.array(cols[8], np.int64),
+        span=np.array(cols[9], float).reshape(n, m),
+    )
+
+
+def estimate_dock_arrays(
+    model: DockModel,
+    depth: np.ndarray,
+    tensions: np.ndarray,
+    usable: np.ndarray,
+    exclude: Optional[np.ndarray] = None,
+    remove: float = REMOVE_Z,
+) -> DockEstimate:
+    """Offsets, loads, residuals and flags of ``n`` estimates, vectorized over them (the
+    reference formulation of :func:`estimate_dock`, equal to it to rounding).
 
     Parameters
     ----------
@@ -236,7 +288,7 @@ def estimate_dock(
 def _spans(model: DockModel, h: np.ndarray, tensions: np.ndarray) -> tuple[np.ndarray, ...]:
     """The span each tension implies and ``dT/ds`` there, (n, m) each: closed forms for a
     plain chain, the table of a line with point loads (its exact solve where it has none)."""
-    loaded = _loaded(model)
+    loaded = loaded_lines(model)
     plain = np.array(tensions, copy=True)
     plain[:, loaded] = math.nan  # (their own answers below)
     s_meas, dt_ds = span_and_sensitivity(model.weight, h, model.chain_length, plain, model.ea)
@@ -245,7 +297,7 @@ def _spans(model: DockModel, h: np.ndarray, tensions: np.ndarray) -> tuple[np.nd
         if table is not None:
             s_meas[:, i], dt_ds[:, i] = table.span_at_tension(h[:, i], tensions[:, i])
         else:
-            s_meas[:, i], dt_ds[:, i] = _exact_spans(model, i, h[:, i], tensions[:, i])
+            s_meas[:, i], dt_ds[:, i] = exact_spans(model, i, h[:, i], tensions[:, i])
     return s_meas, dt_ds
 
 
@@ -253,7 +305,7 @@ def _at_spans(
     model: DockModel, h: np.ndarray, span: np.ndarray, start: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """Hook and horizontal tension at the spans, (n, m) each (as :func:`_spans` solves)."""
-    loaded = _loaded(model)
+    loaded = loaded_lines(model)
     plain = np.array(span, copy=True)
     plain[:, loaded] = math.nan  # not the plain chain's Newton: their own answers below
     st = statics_at_span(model.weight, h, model.chain_length, plain, model.ea, start)
@@ -263,44 +315,7 @@ def _at_spans(
         if table is not None:
             top[:, i], horizontal[:, i] = table.state_at_span(h[:, i], span[:, i])
         else:
-            top[:, i], horizontal[:, i] = _exact_states(model, i, h[:, i], span[:, i])
-    return top, horizontal
-
-
-def _loaded(model: DockModel) -> list[int]:
-    return [i for i, loads in enumerate(model.loads) if loads is not None]
-
-
-def _exact_spans(
-    model: DockModel, i: int, h: np.ndarray, tension: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Line ``i``'s spans from its tensions by the exact chain-length solve (its roots, about
-    15 ms each; a model without tables: the surrogate's baseline)."""
-    loads = model.loads[i]
-    assert loads is not None
-    w, length = float(model.weight[i]), float(model.chain_length[i])
-    start = float(np.hypot(*(model.anchor[i] - model.hook[i])))
-    spans, slopes = np.full(h.shape, math.nan), np.full(h.shape, math.nan)
-    for k, (hk, tk) in enumerate(zip(h.tolist(), tension.tolist())):
-        if tk == tk:
-            s = point_loads.span_at_tension(w, hk, length, tk, loads, start)
-            if s == s:
-                spans[k], slopes[k] = s, point_loads.line_statics(w, hk, length, s, loads)[7]
-    return spans, slopes
-
-
-def _exact_states(
-    model: DockModel, i: int, h: np.ndarray, span: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """Line ``i``'s hook and horizontal tension at the spans, exactly."""
-    loads = model.loads[i]
-    assert loads is not None
-    w, length = float(model.weight[i]), float(model.chain_length[i])
-    top, horizontal = np.full(h.shape, math.nan), np.full(h.shape, math.nan)
-    for k, (hk, sk) in enumerate(zip(h.tolist(), span.tolist())):
-        if sk == sk:
-            values = point_loads.line_statics(w, hk, length, sk, loads)
-            horizontal[k], top[k] = values[0], values[1]
+            top[:, i], horizontal[:, i] = exact_states(model, i, h[:, i], span[:, i])
     return top, horizontal
 
 

@@ -681,3 +681,153 @@ def _elastic_lift_depth_scalar(
             break
     z = q / r
     return r / w * (z * z / (sqrt(1.0 + z * z) + 1.0)) + q * length / (2.0 * ea)
+
+
+class _StateF(NamedTuple):
+    """:class:`_State` of one chain in plain floats (the branch taken, not both)."""
+
+    span: float
+    r: float
+    v: float
+    va: float
+    ta: float
+    d: float
+    lifted: bool
+
+
+def _from_tension_scalar(w: float, h: float, length: float, t: float, ea: float) -> _StateF:
+    """:func:`_from_tension` of one chain (the same closed forms in the same order). Raises
+    what :mod:`math` raises where numpy gives NaN or inf."""
+    sqrt, asinh = math.sqrt, math.asinh
+    if ea == math.inf:  # what anchor_end_tension gives there, exactly
+        ta, d = cat.two_prod_diff(t, w, h) + 0.0, w * h
+    else:
+        ta, d = anchor_end_tension(w, h, t, ea, cat._MATH)
+    inv_ea = 1.0 / ea
+    wl = w * length
+    va = 0.5 * (d * (t + ta) / wl - wl)
+    if va > 0.0:  # lifted
+        r = sqrt(cat._maximum((ta - va) * (ta + va), 0.0))
+        s = r / w * asinh((wl * ta - va * d) / (r * r)) + r * length * inv_ea
+        return _StateF(s, r, va + wl, va, ta, d, True)
+    v = sqrt(d * (t + ta))
+    s = (length - v / w) + ta / w * asinh(v / ta) + ta * length * inv_ea
+    return _StateF(s, ta, v, cat._maximum(va, 0.0), ta, d, False)
+
+
+def _f_asinh_scalar(rho: float) -> float:
+    """:func:`_f_asinh` of one float."""
+    if rho < 0.1:
+        r2 = rho * rho
+        return (
+            rho
+            * r2
+            * (
+                1.0 / 3.0
+                - r2
+                * (3.0 / 10.0 - r2 * (15.0 / 56.0 - r2 * (35.0 / 144.0 - r2 * (315.0 / 1408.0))))
+            )
+        )
+    return math.asinh(rho) - rho / math.sqrt(1.0 + rho * rho)
+
+
+def _f_asinh_diff_scalar(p: float, q: float) -> float:
+    """:func:`_f_asinh_diff` of one pair."""
+    if not p < 0.1:
+        return _f_asinh_scalar(p) - _f_asinh_scalar(q)
+    p2 = p * p
+    qn = q * q * q
+    pn = p * p + p * q + q * q
+    total = 0.0
+    for coef in (1.0 / 3.0, -3.0 / 10.0, 15.0 / 56.0, -35.0 / 144.0, 315.0 / 1408.0):
+        total = total + coef * pn
+        pn = p2 * pn + qn * (p + q)
+        qn = qn * q * q
+    return (p - q) * total
+
+
+def _dt_ds_scalar(w: float, length: float, t: float, s: _StateF, inv_ea: float) -> float:
+    """``dT/ds`` of :func:`_stiffness` for one chain."""
+    r, v, va, ta, d = s.r, s.v, s.va, s.ta, s.d
+    rho, rho_a = v / r, va / r
+    if s.lifted:
+        j_sr = _f_asinh_diff_scalar(rho, rho_a) / w + length * inv_ea
+        t_minus, ta_eff, num = d, ta, w * length * ta - va * d
+    else:
+        j_sr = _f_asinh_scalar(rho) / w + length * inv_ea
+        t_minus, ta_eff = v * v / (t + r), r
+        num = v * ta_eff
+    j_sv = -r * t_minus / (t * ta_eff * w)
+    j_hv = num / (t * ta_eff * w) + min(v / w, length) * inv_ea
+    det = j_sr * j_hv - j_sv * j_sv
+    dr = j_hv / det
+    dv = -j_sv / det
+    return (r * dr + v * dv) / t
+
+
+def span_and_sensitivity_scalar(
+    w: float, h: float, length: float, tension: float, ea: float
+) -> tuple[float, float]:
+    """:func:`span_and_sensitivity` of one chain in plain floats (the same closed forms; NaN at
+    or below the slack tension). Raises what :mod:`math` raises where numpy gives NaN or inf
+    (the caller then uses the array path)."""
+    st = _from_tension_scalar(w, h, length, tension, ea)
+    if not st.r > 0.0:
+        return math.nan, math.nan
+    return st.span, _dt_ds_scalar(w, length, tension, st, 1.0 / ea)
+
+
+def tension_at_span_scalar(
+    w: float, h: float, length: float, span: float, ea: float, t_start: float
+) -> tuple[float, float]:
+    """``(T, R)`` [N] of :func:`statics_at_span` for one chain started from ``t_start`` (finite,
+    > 0): slack (``D0``, 0), taut (inf, inf), else the same safeguarded Newton in plain floats,
+    each chain stopping at its own convergence. Raises ValueError where the array path is
+    needed (an invalid input, an inextensible chain whose Newton did not converge: the
+    problem-5 kernels) and what :mod:`math` raises where numpy gives NaN or inf."""
+    if not (
+        w > 0.0 and h > 0.0 and length > h and span >= 0.0 and ea > 0.0 and t_start > 0.0
+    ) or not (math.isfinite(w) and math.isfinite(length) and math.isfinite(span)):
+        raise ValueError('outside the scalar path')
+    d0 = 2.0 * h * w / (1.0 + math.sqrt(1.0 + 2.0 * h * w / ea))
+    if span <= length - d0 / w:
+        return d0, 0.0
+    rigid = math.isinf(ea)
+    if rigid and span >= math.sqrt((length - h) * (length + h)):
+        return math.inf, math.inf
+    t, ok = _newton_tension_scalar(w, h, length, span, ea, t_start, d0)
+    if not ok:
+        if rigid:
+            raise ValueError('no convergence: the problem-5 kernels')
+        return math.nan, math.nan
+    return t, _from_tension_scalar(w, h, length, t, ea).r
+
+
+def _newton_tension_scalar(
+    w: float, h: float, length: float, span: float, ea: float, t: float, d0: float
+) -> tuple[float, bool]:
+    """:func:`_newton_tension` of one chain: (T, converged)."""
+    lo, hi = d0, math.inf
+    t = t if t > lo else 2.0 * lo
+    inv_ea = 1.0 / ea
+    tol = _EPS4 * span
+    for _ in range(MAXITER):
+        st = _from_tension_scalar(w, h, length, t, ea)
+        f = st.span - span
+        if f < 0.0:
+            lo = cat._maximum(lo, t)
+        elif f > 0.0:
+            hi = min(hi, t)
+        step = -f * _dt_ds_scalar(w, length, t, st, inv_ea)
+        new = t + step
+        at_root = abs(f) <= tol
+        conv = abs(step) <= T_STEP_TOL * t or at_root
+        bad = not (lo < new < hi) and not at_root
+        if bad:
+            new = 0.5 * (lo + hi) if math.isfinite(hi) else 2.0 * t
+        conv = conv or (math.isfinite(hi) and (hi - lo) <= 4e-16 * hi)
+        if not (at_root or (bad and conv)):
+            t = new
+        if conv:
+            return t, True
+    return t, False

@@ -28,6 +28,7 @@ top) the answer is NaN: the estimate then does not use the line (a slacker span 
 
 from __future__ import annotations
 
+import bisect
 import dataclasses
 import functools
 import math
@@ -117,6 +118,14 @@ class PointLoadTable:
             one = _scalar(self).state_at_span
             return _columns([one(a, b) for a, b in zip(h.tolist(), span.tolist())])
         return self._state_at_span(h, span)
+
+    def span_at_tension_one(self, h: float, tension: float) -> tuple[float, float]:
+        """:meth:`span_at_tension` of one query in plain floats (the same bits)."""
+        return _scalar(self).span_at_tension(h, tension)
+
+    def state_at_span_one(self, h: float, span: float) -> tuple[float, float]:
+        """:meth:`state_at_span` of one query in plain floats (the same bits)."""
+        return _scalar(self).state_at_span(h, span)
 
     def _span_at_tension(
         self, h: np.ndarray, tension: np.ndarray
@@ -297,8 +306,9 @@ def table_for(
 class _Scalar:
     """A table's queries in plain floats for one element at a time (the live core: numpy on
     one-element arrays costs ~1 ms a query). Every operation is the numpy path's, in its order:
-    the depth's weights, the cell found by bisection over the nodes interpolated to the depth
-    (the numpy path counts them; the same cell where they rise), the chord and Newton steps."""
+    the depth's weights, the cell where the nodes interpolated to the depth pass the value (the
+    numpy path counts them; the same cell where they rise), the chord and Newton steps (their
+    fixed count: a zero step leaves the rest as they are)."""
 
     __slots__ = ('table', 'span', 'tension', 'horizontal', 'nh', 'nu')
 
@@ -328,24 +338,30 @@ class _Scalar:
         self, grid: list[list[float]], at: tuple[int, tuple[float, ...]], y: float
     ) -> Optional[tuple[int, float, tuple[float, ...]]]:
         """(cell k, t in it, the cubic's four nodes) where the cubic takes ``y``, or None."""
-        lo, hi = 0, self.nu
-        while lo < hi:
-            mid = (lo + hi) // 2
-            if self._node(grid, at, mid) <= y:
-                lo = mid + 1
-            else:
-                hi = mid
-        if not (1 <= lo <= self.nu - 1) or y != y:
+        if y != y:
+            return None
+        node = self._node
+        # The count of nodes <= y: from the depth node's own row (rising), moved to the
+        # interpolated row's (a cell or two at most), as a bisection over it finds.
+        lo = bisect.bisect_right(grid[at[0]], y)
+        while lo > 0 and node(grid, at, lo - 1) > y:
+            lo -= 1
+        while lo < self.nu and node(grid, at, lo) <= y:
+            lo += 1
+        if not (1 <= lo <= self.nu - 1):
             return None
         k = lo - 1
         nodes = self._stencil(grid, at, k)
-        a, b = self._node(grid, at, k), self._node(grid, at, k + 1)
+        a, b = node(grid, at, k), node(grid, at, k + 1)
         t = (y - a) / (b - a)
         shift = k - min(max(k, 1), self.nu - 3)
         for _ in range(NEWTON_STEPS):
             value, slope = _cubic_f(nodes, t + shift)
             step = (value - y) / slope if slope != 0.0 else 0.0
-            t = min(max(t - step, 0.0), 1.0)
+            new = min(max(t - step, 0.0), 1.0)
+            if new == t:  # so at every step left: the same bits
+                break
+            t = new
         return k, t, nodes
 
     def _stencil(

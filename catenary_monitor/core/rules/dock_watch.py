@@ -1,9 +1,10 @@
 """The dock estimate as the monitor makes it: at every tick, from each line's newest tension.
 
-One decision, for the live core and its vectorized twin alike (:func:`decide_dock` takes
-arrays over ticks; the core passes one): which readings count (:func:`readings`), the estimate
-(:func:`~catenary_monitor.core.body.estimate.estimate_dock`), the ``dock`` status, and what
-each line's alarm sees (:data:`LINE_INPUTS`).
+One decision, for the live core and its twin alike (:func:`decide_dock` takes arrays over
+ticks, the core passes one, and decides them one after the other in plain floats): which
+readings count (:func:`readings`), the estimate
+(:func:`~catenary_monitor.core.body.estimate_tick.estimate_tick`), the ``dock`` status, and
+what each line's alarm sees (:data:`LINE_INPUTS`).
 
 A reading counts when its line has a tension no older than ``tension_timeout``, finite, above
 ``w h`` and plausible (:mod:`catenary_monitor.core.rules.plausible`; otherwise the line's own
@@ -44,10 +45,11 @@ from typing import NamedTuple
 import numpy as np
 
 from catenary_monitor.core.body.dock_model import DockModel
-from catenary_monitor.core.body.estimate import MIN_LINES, DockEstimate, estimate_dock
+from catenary_monitor.core.body.estimate import MIN_LINES, REMOVE_Z, DockEstimate, stack_ticks
+from catenary_monitor.core.body.estimate_tick import TickEstimate, estimate_tick
 from catenary_monitor.core.config.parameters import MonitorConfig
 from catenary_monitor.core.rules.level import Level
-from catenary_monitor.core.rules.plausible import MAX_DEPTH, reading_status_array
+from catenary_monitor.core.rules.plausible import MAX_DEPTH, reading_status
 
 __all__ = [
     'LINE_INPUTS',
@@ -112,44 +114,71 @@ class Smoothing(NamedTuple):
 
 
 def smooth_step(
-    state: Smoothing, now: float, z: np.ndarray, tau: float, limit: float
-) -> tuple[np.ndarray, Smoothing]:
+    state: Smoothing, now: float, z: list[float], tau: float, limit: float
+) -> tuple[list[float], Smoothing]:
     """One tick: the statistic S (m,) from the normalized residuals ``z`` (NaN: not tested,
     which leaves the line's average as it was) and the new state."""
-    mean, var, last = state.mean, state.var, state.last_s
+    last = state.last_s
     lam = 1.0 if last != last else -math.expm1(-(now - last) / tau)
-    seen = np.isfinite(z)
-    first = seen & np.isnan(var)
-    mean = np.where(first, z, np.where(seen, mean + lam * (z - mean), mean))
-    var = np.where(first, 1.0, np.where(seen, (1.0 - lam) * (1.0 - lam) * var + lam * lam, var))
-    with np.errstate(invalid='ignore'):
-        held = mean / np.sqrt(var)
-        flagged = np.where(np.isnan(var), False, np.abs(held) > limit)
-    return np.where(seen, held, math.nan), Smoothing(mean, var, flagged, now)
+    means, variances, flagged, stat = [], [], [], []
+    for zk, mean, var in zip(z, state.mean.tolist(), state.var.tolist()):
+        seen = math.isfinite(zk)
+        if seen and var != var:  # the first residual
+            mean, var = zk, 1.0
+        elif seen:
+            mean, var = mean + lam * (zk - mean), (1.0 - lam) * (1.0 - lam) * var + lam * lam
+        held = mean / math.sqrt(var) if var == var else math.nan
+        means.append(mean)
+        variances.append(var)
+        flagged.append(False if var != var else abs(held) > limit)
+        stat.append(held if seen else math.nan)
+    new = Smoothing(np.array(means, float), np.array(variances, float), np.array(flagged), now)
+    return stat, new
 
 
 def readings(
     model: DockModel,
     timeout: float,
-    now: np.ndarray,
-    depth: np.ndarray,
-    depth_ok: np.ndarray,
-    tension: np.ndarray,
-    tension_s: np.ndarray,
+    now: float,
+    depth: float,
+    depth_ok: bool,
+    tension: list[float],
+    tension_s: list[float],
     chart: tuple[float, float] = (0.0, MAX_DEPTH),
-) -> np.ndarray:
-    """(n, m) bool: the readings that count (see the module docstring). ``now`` (n,) s;
-    ``depth`` (n,) m and ``depth_ok`` (n,) bool (known, not stale); ``tension`` and
-    ``tension_s`` (n, m) N and s (NaN: none yet); ``chart`` the depth's chart range [m]
-    (outside it no line counts)."""
-    with np.errstate(invalid='ignore'):
-        h = depth[:, None] + model.hook_height[None, :]
-        fresh = ~np.isnan(tension_s) & (now[:, None] - tension_s <= timeout)
-        good = np.isfinite(tension) & (tension > model.weight[None, :] * h)
-        good &= reading_status_array(tension, h, model.mbl[None, :]) == 0
-        depth_good = depth_ok & np.isfinite(depth) & (depth > 0) & (depth <= MAX_DEPTH)
-        depth_good &= (depth >= chart[0]) & (depth <= chart[1])
-    return fresh & good & depth_good[:, None]
+) -> list[bool]:
+    """Per line, whether its reading counts at one tick (see the module docstring): ``now`` s;
+    ``depth`` m and ``depth_ok`` (known, not stale); the lines' newest ``tension`` N and its
+    time ``tension_s`` s (NaN: none yet); ``chart`` the depth's chart range [m] (outside it no
+    line counts)."""
+    depth_good = (
+        depth_ok
+        and math.isfinite(depth)
+        and 0.0 < depth <= MAX_DEPTH
+        and chart[0] <= depth <= chart[1]
+    )
+    if not depth_good:
+        return [False] * len(tension)
+    use = []
+    for t, t_s, w, hh, mbl in zip(
+        tension, tension_s, model.weight.tolist(), model.hook_height.tolist(), model.mbl.tolist()
+    ):
+        h = depth + hh
+        use.append(
+            t_s == t_s
+            and now - t_s <= timeout
+            and math.isfinite(t)
+            and t > w * h
+            and reading_status(t, h, mbl) == 0
+        )
+    return use
+
+
+class _Tick(NamedTuple):
+    """One tick's decision in plain values."""
+
+    estimate: TickEstimate
+    flag: list[float]  # LINE_INPUTS' first: 1.0 flagged, 0.0 tested and consistent, NaN
+    stat: list[float]  # the smoothed statistic S
 
 
 def decide_dock(
@@ -162,46 +191,58 @@ def decide_dock(
     tension_s: np.ndarray,
     state: Smoothing,
 ) -> tuple[DockDecision, Smoothing]:
-    """The dock decisions at ``n`` ticks in time order (arrays as :func:`readings`), from the
-    smoothing ``state`` before the first; and the state after the last.
+    """The dock decisions at ``n`` ticks in time order, from the smoothing ``state`` before the
+    first; and the state after the last. ``now`` (n,) s; ``depth`` (n,) m and ``depth_ok``
+    (n,) bool (known, not stale); ``tension`` and ``tension_s`` (n, m) N and s (NaN: none yet).
 
     The lines flagged after one tick are left out of the next tick's fit (a bad line must not
-    bias the others' residuals). So the ticks are estimated in runs with one set left out,
-    vectorized, and a run is cut where the flags change: each tick is estimated exactly as a
-    core stepping one tick at a time does.
+    bias the others' residuals). So the ticks are decided one after the other, each in plain
+    floats (:func:`~catenary_monitor.core.body.estimate_tick.estimate_tick`): the live core's
+    one tick and replay's window of ticks go through the same code, the same bits.
     """
+    n, m = tension.shape
+    ticks: list[_Tick] = []
+    for t_now, d, ok, t, t_s in zip(
+        now.tolist(), depth.tolist(), depth_ok.tolist(), tension.tolist(), tension_s.tolist()
+    ):
+        tick, state = _decide_tick(model, config, t_now, d, bool(ok), t, t_s, state)
+        ticks.append(tick)
+    est = stack_ticks([tick.estimate for tick in ticks], n, m)
+    flag = np.array([tick.flag for tick in ticks], float).reshape(n, m)
+    stat = np.array([tick.stat for tick in ticks], float).reshape(n, m)
+    inputs = np.stack([flag, est.residual, est.expected, stat], axis=-1)
+    decision = DockDecision(
+        est,
+        np.array([Level.OK if v else Level.STALE for v in est.valid.tolist()], np.int8),
+        inputs,
+        flag == 1.0,
+        solve_spans(est.span, flag),
+        model.table_span_error,
+    )
+    return decision, state
+
+
+def _decide_tick(
+    model: DockModel,
+    config: MonitorConfig,
+    now: float,
+    depth: float,
+    depth_ok: bool,
+    tension: list[float],
+    tension_s: list[float],
+    state: Smoothing,
+) -> tuple[_Tick, Smoothing]:
+    """One tick: the readings, the estimate (the lines flagged after the last tick left out),
+    the smoothing and what each line takes from it."""
     use = readings(
         model, config.alarm.tension_timeout, now, depth, depth_ok, tension, tension_s, config.chart
     )
     limit, tau = config.dock.residual_limit, config.dock.residual_time
-    h = np.where(np.isfinite(depth), depth, 1.0)
-    n, m = tension.shape
-    rows: list[DockEstimate] = []
-    stat = np.full((n, m), math.nan)
-    start = 0
-    while start < n:
-        est = estimate_dock(model, h[start:], tension[start:], use[start:], state.flagged)
-        stop = n
-        for i in range(start, n):
-            stat[i], new = smooth_step(state, float(now[i]), est.normalized[i - start], tau, limit)
-            changed = not np.array_equal(new.flagged, state.flagged)
-            state = new
-            if changed:
-                stop = i + 1
-                break
-        rows.append(DockEstimate(*(v[: stop - start] for v in est)))
-        start = stop
-    est = (
-        DockEstimate(*(np.concatenate(parts) for parts in zip(*rows)))
-        if rows
-        else estimate_dock(model, h, tension, use)
-    )
-    level = np.where(est.valid, Level.OK, Level.STALE).astype(np.int8)
-    flagged = np.abs(stat) > limit
-    flag = np.where(flagged, 1.0, np.where(np.isfinite(stat), 0.0, math.nan))
-    inputs = np.stack([flag, est.residual, est.expected, stat], axis=-1)
-    spans = solve_spans(est.span, flag)
-    return DockDecision(est, level, inputs, flagged, spans, model.table_span_error), state
+    h = depth if math.isfinite(depth) else 1.0
+    est = estimate_tick(model, h, tension, use, state.flagged.tolist(), REMOVE_Z)
+    stat, state = smooth_step(state, now, est.normalized, tau, limit)
+    flag = [1.0 if abs(z) > limit else (0.0 if math.isfinite(z) else math.nan) for z in stat]
+    return _Tick(est, flag, stat), state
 
 
 def solve_spans(span: np.ndarray, flag: np.ndarray) -> np.ndarray:
