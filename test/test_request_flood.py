@@ -95,6 +95,27 @@ def test_a_refusal_is_recorded_answered_and_replayed_alike() -> None:
     assert sorted(result.alarm_events) == sorted(journal)
 
 
+def test_a_publisher_listed_before_its_node_is_named_once_its_node_is_known() -> None:
+    """The middleware lists a new publisher under a placeholder (``_NODE_NAME_UNKNOWN_``) for
+    a while after discovering it: its requests are recorded by GID alone meanwhile, and by its
+    node's name once the graph knows it, never under the placeholder for good (which also
+    refused a console as not one where only consoles may acknowledge)."""
+    from types import SimpleNamespace
+
+    from catenary_monitor.ros.node import CatenaryMonitor
+
+    gid = bytes(range(16))
+    graph = [('_NODE_NAMESPACE_UNKNOWN_/_NODE_NAME_UNKNOWN_', gid + bytes(8))]
+    fake = SimpleNamespace(_senders={}, _graph_read={}, _publishers_on=lambda topic: graph)
+    publisher, node = CatenaryMonitor._sender(fake, SHELVE, gid)
+    assert node is None and publisher.startswith('gid 00.01.02') and 'UNKNOWN' not in publisher
+    graph[:] = [('/catenary_console_a', gid + bytes(8))]
+    assert CatenaryMonitor._sender(fake, SHELVE, gid)[1] is None  # asked again at most 2 Hz
+    fake._graph_read.clear()
+    publisher, node = CatenaryMonitor._sender(fake, SHELVE, gid)
+    assert node == '/catenary_console_a' and publisher.startswith('/catenary_console_a gid 00')
+
+
 #: A publisher's GID in a record's ``publisher``: ``/NODE gid 01.0f...`` once the graph names
 #: it, ``gid 01.0f... (not on the ROS graph)`` before (under load, a publisher's first messages).
 _GID = re.compile(r'gid ((?:[0-9a-f]{2}\.)*[0-9a-f]{2})')
