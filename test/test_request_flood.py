@@ -17,6 +17,7 @@ import re
 import subprocess
 import sys
 import time
+from collections import Counter
 from pathlib import Path
 from typing import Any
 
@@ -245,7 +246,9 @@ def test_a_flood_of_requests_costs_a_request_a_second_and_locks_no_operator_out(
     unnamed = sum('not on the ROS graph' in e.publisher for e in sent_by)
     print(f'{len(sent_by)} records of requests, {unnamed} of a publisher not named yet')
     flooder = {_gid(e) for e in sent_by if '/request_flooder' in e.publisher}
-    assert len(flooder) == 1 and not flooder & (tool_gids | console_gids), flooder
+    names = Counter(e.publisher.partition(' gid ')[0] or 'by GID alone' for e in sent_by)
+    assert len(flooder) == 1 and not flooder & (tool_gids | console_gids), (flooder, names)
+    assert not any('_UNKNOWN_' in name for name in names), names  # never the placeholder
     assert {_gid(e) for e in sent_by} <= flooder | tool_gids | console_gids
     flood = [e for e in sent_by if isinstance(e, (Shelve, Refusal)) and _gid(e) in flooder]
     admitted = [e for e in flood if isinstance(e, Shelve)]
