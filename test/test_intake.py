@@ -145,3 +145,26 @@ def test_a_lone_lost_sample_is_counted_not_annunciated():
     status = _status(core)
     assert status.level == Level.OK and dict(status.values)['messages_dropped'] == '3'
     assert 'none dropped' not in status.message
+
+
+def test_a_busy_node_says_the_smaller_loss_it_counted():
+    """A node busy 70 % of the time warns that it cannot keep up; 5 of 2005 samples lost
+    (below the warning) are said in that message too, with their figures, and counted in the
+    values: a warning about the load never hides a loss the node has counted."""
+    from catenary_monitor.core.rules.health import intake_status
+
+    level, text = intake_status(2000, 5, 0.7, 60.0)
+    assert level == Level.WARN
+    assert text == (
+        'node cannot keep up: busy 70 % of the last 5 s in callbacks (samples may be lost); '
+        '5 of 2005 tension and depth samples dropped in the last 60 s (0.2 %): below the '
+        'warning (10 samples and 1 %)'
+    )
+    assert 'dropped' not in intake_status(2005, 0, 0.7, 60.0)[1]  # nothing lost: not said
+    core = MonitorCore(dock_config(1), T0_NS)
+    core.step(Intake(_at(1.0), (100, 1), (0, 0), 0.7, 1.0))
+    core.step(Intake(_at(2.0), (997, 10), (3, 0), 0.7, 1.0))
+    status = _status(core)
+    assert status.level == Level.WARN and dict(status.values)['messages_dropped'] == '3'
+    assert status.message.startswith('node cannot keep up: busy 70 %')
+    assert '3 of 1111 tension and depth samples dropped' in status.message

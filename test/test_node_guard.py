@@ -24,6 +24,11 @@ pytestmark = pytest.mark.ros
 W, DEPTH, MBL = 1300.0, 20.85, 4.827e6
 CLOCK, INTAKE = 'catenary_monitor: clock', 'catenary_monitor: intake'
 OK, ERROR = 0, 2
+#: The flood's rate per line [Hz], and the load cells' configured one: 12 lines at 1 kHz are
+#: more than the node steps on one core, or more than the flood's publisher sends on a loaded
+#: one: a loss either way (at 400 Hz a lightly loaded node stepped 98.9 % of them, at the
+#: edge of the warning's 1 %, and once took over 40 s to lose more).
+FLOOD = 1000.0
 
 
 def _lines(n):
@@ -104,33 +109,42 @@ def _dropped(status):
     return int(status['values']['messages_dropped'])
 
 
-@pytest.mark.xfail(
-    strict=False,
-    reason=(
-        "the intake's dropped-sample count under a 400 Hz flood is not reached "
-        'since the intake warns by share and count (seen on a fresh clone '
-        '2026-12-07; to fix)'
-    ),
-)
+def _to_act_on(status):
+    """True when the intake's values show a loss an operator must act on, by the defaults:
+    at least intake_warn_count samples and intake_warn_share of the window's not handled."""
+    from catenary_monitor.core.config.parameters import AlarmConfig
+
+    a = AlarmConfig()
+    dropped, handled = _dropped(status), int(status['values']['messages_handled'])
+    share = dropped / (dropped + handled) if dropped + handled else 0.0
+    return dropped >= a.intake_warn_count and share >= a.intake_warn_share
+
+
 @pytest.mark.parametrize('executor', ['single', 'events'])
 def test_an_overflowing_intake_is_counted_and_reported(client, tmp_path, monkeypatch, executor):
-    """12 lines at 400 Hz into the node: it cannot keep up, and says so; with the load cells'
-    rate configured, the samples it never saw are counted under either executor."""
+    """12 lines at 1 kHz into the node (12,010 samples a second), the load cells' rate
+    configured: a loss to act on (lost against the publisher's sequence numbers, coalesced,
+    or never sent at the rate: missing), and the intake leaves OK with a headline naming it,
+    under either executor. No message of the intake, warned or not, leaves out a loss
+    counted in its values (a smaller one is said with its figures, beside the busy
+    callbacks too)."""
     monkeypatch.setenv('CATENARY_MONITOR_EXECUTOR', executor)
     lines = _lines(12)
-    params = write_params(tmp_path / 'params.yaml', lines, tension_sample_rate=400.0)
+    params = write_params(tmp_path / 'params.yaml', lines, tension_sample_rate=FLOOD)
     t0 = time.monotonic()  # the client keeps what earlier tests' monitors published
     proc = start_monitor(params, tmp_path / 'log')
-    flood = _flood(list(lines), 400.0, 60.0)
+    flood = _flood(list(lines), FLOOD, 60.0)
     try:
-        s = client.wait_status(INTAKE, 60.0, since=t0, check=lambda s: s['level'] != OK)
-        if executor == 'single':  # the publisher's sequence numbers: samples lost, counted
-            s = client.wait_status(INTAKE, 60.0, since=t0, check=lambda s: _dropped(s) > 0)
-            # the headline names the first cause (busy, under load); the detail every one
-            assert 'dropped' in s['message'] + s['values'].get('detail', ''), s
-        else:
-            assert 'cannot keep up' in s['message'] or _dropped(s) > 0, s
-        print('intake:', s['level'], s['message'], s['values'].get('messages_missing'))
+        s = client.wait_status(INTAKE, 60.0, since=t0, check=_to_act_on)
+        print(f'\nintake after {time.monotonic() - t0:.0f} s:', s['level'], s['message'])
+        assert s['level'] != OK, s
+        # the headline the operator reads names the loss (lost or coalesced, or missing)
+        assert 'dropped' in s['message'] or 'missing' in s['message'], s
+        with client.lock:
+            seen = [e[INTAKE] for t, e in client.diagnostics if t >= t0 and INTAKE in e]
+        for st in seen:  # never silent: the figure of the values in the full message
+            if _dropped(st):
+                assert f"{_dropped(st)} of " in st['values']['detail'], st
     finally:
         _end(flood)
         assert stop(proc) == 0

@@ -178,6 +178,13 @@ LATE_TIMER = 1.1
 LOG_PERIOD = 0.25
 
 
+def _unnamed(node: str) -> bool:
+    """True for the name the middleware lists a publisher under before its node is known
+    (rmw_dds_common's ``_NODE_NAMESPACE_UNKNOWN_/_NODE_NAME_UNKNOWN_``: an endpoint discovered
+    ahead of its participant's node list, for tens of milliseconds, longer under load)."""
+    return '_NODE_NAME_UNKNOWN_' in node or '_NODE_NAMESPACE_UNKNOWN_' in node
+
+
 def _events_executor_wanted() -> bool:
     """True unless ``CATENARY_MONITOR_EXECUTOR=single`` asks for the SingleThreadedExecutor."""
     return os.environ.get('CATENARY_MONITOR_EXECUTOR', 'events') != 'single'
@@ -867,7 +874,8 @@ class CatenaryMonitor(Node):
         if node is None and time.monotonic() - self._graph_read.get(topic, -1.0) >= 0.5:
             self._graph_read[topic] = time.monotonic()  # at most twice a second per topic
             for name, g in self._publishers_on(topic):
-                self._senders[(topic, g[: len(gid)])] = name
+                if not _unnamed(name):  # the middleware's placeholder: asked again, not kept
+                    self._senders[(topic, g[: len(gid)])] = name
             node = self._senders.get((topic, gid))
         if node is None:
             return f'gid {".".join(f"{b:02x}" for b in gid)} (not on the ROS graph)', None

@@ -367,32 +367,34 @@ def intake_status(
             f'{window:g} s ({missing} of {total} expected at the sample rates): a sensor '
             f'slower than its sample rate, or samples lost before the node{busy_text}'
         )
-    if missing:
-        busy_text = f'; {missing} of them missing against the sample rates{busy_text}'
+    # what the loss was made of (coalesced, missing), said with its figures in every message
+    detail = f'; {missing} of them missing against the sample rates' if missing else ''
     if coalesced:
-        busy_text = (
+        detail = (
             f'; {coalesced} coalesced (logged, the newer sample of their input handled '
-            f'instead), {lost} lost before the node{busy_text}'
+            f'instead), {lost} lost before the node{detail}'
         )
     if dropped and share >= DROPPED_ERROR_SHARE:
         return Level.ERROR, (
             f'node cannot keep up: {100.0 * share:.0f} % of tension and depth samples '
-            f'dropped in the last {window:g} s ({dropped} of {total}){busy_text}'
+            f'dropped in the last {window:g} s ({dropped} of {total}){detail}{busy_text}'
         )
     text = (
         f'{dropped} of {total} tension and depth samples dropped in the last {window:g} s '
         f'({100.0 * share:.1f} %)'
     )
     if dropped and dropped >= warn_count and share >= warn_share:
-        return Level.WARN, text + busy_text
+        return Level.WARN, text + detail + busy_text
+    # a smaller loss is never annunciated for itself, but never left out of a message either
+    below = (
+        f'{text}: below the warning ({warn_count:g} samples and {100.0 * warn_share:g} %)'
+        f'{detail}'
+    )
     if busy == busy and busy >= (BUSY_WARN_SHARE if was_ok else BUSY_CLEAR_SHARE):
         return Level.WARN, (
             f'node cannot keep up: busy {100.0 * busy:.0f} % of the last {BUSY_WINDOW:g} s in '
-            'callbacks (samples may be lost)'
+            'callbacks (samples may be lost)' + (f'; {below}' if dropped else '')
         )
     if dropped:
-        return Level.OK, (
-            f'{text}: below the warning ({warn_count:g} samples and '
-            f'{100.0 * warn_share:g} %){busy_text}'
-        )
+        return Level.OK, below + busy_text
     return Level.OK, f'{received} samples counted in the last {window:g} s, none dropped'
