@@ -92,6 +92,9 @@ class HarbourSource:
     def start(self) -> None:
         """One context, node and spinning thread per dock (its own domain); ``started`` is
         now, once rclpy is loaded (the docks' ages and silences count from here)."""
+        from catenary_monitor.ros.dds_profile import use_announce_profile
+
+        use_announce_profile()  # a monitor restarting meets the harbour within 1 s
         import rclpy  # noqa: F401 - loaded before the clock starts
         import rclpy.executors  # noqa: F401
         from diagnostic_msgs.msg import DiagnosticArray  # noqa: F401
