@@ -1,11 +1,12 @@
-// catenary_monitor's pages (the console, the harbour): how both read their server. GET
+// catenary_monitor's pages (the console, the harbour): how both talk to their server. GET
 // /api/config is asked again with backoff until the server answers; GET /api/stream is read
 // with fetch, not EventSource, so the operator's token goes along and every failure is seen
 // and retried (a refusal, a cut, a silent stream; EventSource never retries after a non-200
-// answer). Loaded before the page's own script; each page keeps its own state and retry loop.
+// answer); a request that changes something is a POST of JSON with the token. Loaded before
+// the page's own script; each page keeps its own state, token and retry loop.
 'use strict';
 
-const cmStream = Object.freeze({
+const cmLink = Object.freeze({
   RETRY_MIN_S: 0.5,  // the retries: doubling from here ...
   RETRY_MAX_S: 8,    // ... to here, each jittered by a quarter
   SILENT_S: 5,       // an open stream without a frame this long is cut and retried
@@ -82,5 +83,14 @@ const cmStream = Object.freeze({
     } finally {
       clearInterval(silent);
     }
+  },
+
+  // POSTs `body` as JSON to `path` with `token` (null: none); a 401 calls `rejected()`.
+  async post(path, body, token, rejected) {
+    const headers = { 'Content-Type': 'application/json' };
+    if (token) headers.Authorization = `Bearer ${token}`;
+    const res = await fetch(path, { method: 'POST', headers, body: JSON.stringify(body) });
+    if (res.status === 401) rejected();
+    return res;
   },
 });
