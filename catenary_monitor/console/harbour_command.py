@@ -1,7 +1,8 @@
 """``catenary-monitor harbour``: every dock of a port live on one page.
 
 ``catenary-monitor harbour --dock NAME=DOMAIN_ID[:PARAMS_FILE][@LAT,LON] ... [--console-url
-NAME=URL ...] [--fleet-dataset DIR] [--port 8090] [--bind 127.0.0.1] [--token-file FILE]
+NAME=URL ...] [--discovery-server NAME=SERVERS ...]
+[--fleet-dataset DIR] [--port 8090] [--bind 127.0.0.1] [--token-file FILE]
 [--tls-cert F --tls-key F]``.
 One process joins each dock's ROS domain (:mod:`.harbour_source`) and serves the harbour page
 (:mod:`.harbour_server`). Read-only unless ``--token-file`` names operators, who may then
@@ -34,10 +35,14 @@ def _fail(message: str, code: int = 2) -> int:
     return code
 
 
-def dock_specs(docks: list[str], consoles: list[str]) -> list[Any]:
-    """The ``--dock`` and ``--console-url`` options as dock specs, each params file read.
-    Raises Refused with one line."""
-    from catenary_monitor.console.harbour_model import parse_console_url, parse_dock
+def dock_specs(docks: list[str], consoles: list[str], servers: Any = ()) -> list[Any]:
+    """The ``--dock``, ``--console-url`` and ``--discovery-server`` options as dock specs,
+    each params file read. Raises Refused with one line."""
+    from catenary_monitor.console.harbour_model import (
+        parse_console_url,
+        parse_discovery_server,
+        parse_dock,
+    )
     from catenary_monitor.core.config.parameters import (
         ConfigError,
         config_from_params,
@@ -47,15 +52,17 @@ def dock_specs(docks: list[str], consoles: list[str]) -> list[Any]:
     try:
         specs = [parse_dock(text) for text in docks]
         urls = dict(parse_console_url(text) for text in consoles)
+        found = dict(parse_discovery_server(text) for text in servers)
     except ValueError as err:
         raise Refused(str(err)) from None
     names = [s.name for s in specs]
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise Refused(f'--dock {twice[0]} given twice: every dock needs its own name')
-    unknown = sorted(set(urls) - set(names))
-    if unknown:
-        raise Refused(f'--console-url {unknown[0]}: no --dock of that name')
+    for option, given in (('--console-url', urls), ('--discovery-server', found)):
+        unknown = sorted(set(given) - set(names))
+        if unknown:
+            raise Refused(f'{option} {unknown[0]}: no --dock of that name')
     out = []
     for spec in specs:
         config = None
@@ -64,7 +71,14 @@ def dock_specs(docks: list[str], consoles: list[str]) -> list[Any]:
                 config = config_from_params(load_params_file(spec.params_file))
             except ConfigError as err:
                 raise Refused(f'dock {spec.name}: {spec.params_file}: {err}') from None
-        out.append(dataclasses.replace(spec, config=config, console_url=urls.get(spec.name)))
+        out.append(
+            dataclasses.replace(
+                spec,
+                config=config,
+                console_url=urls.get(spec.name),
+                discovery_server=found.get(spec.name),
+            )
+        )
     return out
 
 
@@ -95,7 +109,7 @@ def cmd_harbour(args: argparse.Namespace) -> int:
     args.log = None
     args.read_only = bool(args.read_only or not args.token_file)
     try:
-        specs = dock_specs(args.dock, args.console_url or [])
+        specs = dock_specs(args.dock, args.console_url or [], args.discovery_server or [])
         access = server_access(args, 'harbour')
     except Refused as err:
         return _fail(str(err))
@@ -163,6 +177,15 @@ def register(sub: Any) -> None:
         action='append',
         metavar='NAME=URL',
         help='the dock\'s own console, linked from its tile (repeatable)',
+    )
+    p.add_argument(
+        '--discovery-server',
+        action='append',
+        metavar='NAME=SERVERS',
+        help='the Fast DDS discovery server(s) of that dock (its ROS_DISCOVERY_SERVER value, '
+        'e.g. north=10.0.21.5:11811): the harbour\'s participant in that dock\'s domain is a '
+        'client of these alone (repeatable; a process-wide ROS_DISCOVERY_SERVER would match '
+        'every dock in every domain)',
     )
     p.add_argument(
         '--fleet-dataset',

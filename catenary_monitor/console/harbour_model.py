@@ -37,6 +37,7 @@ __all__ = [
     'DockState',
     'parse_dock',
     'parse_console_url',
+    'parse_discovery_server',
     'line_names',
     'dock_view',
     'harbour_alarms',
@@ -63,7 +64,9 @@ _GAPS = 9
 @dataclass(frozen=True)
 class DockSpec:
     """One dock of the harbour: its name, ROS domain, params file (its monitor's: lines and
-    the ``/diagnostics`` rate), position (degrees, WGS84) and its console's URL."""
+    the ``/diagnostics`` rate), position (degrees, WGS84), its console's URL and the Fast DDS
+    discovery server(s) its participant uses (a ``ROS_DISCOVERY_SERVER`` value; None: the
+    process's discovery)."""
 
     name: str
     domain_id: int
@@ -71,6 +74,7 @@ class DockSpec:
     lat: Optional[float] = None
     lon: Optional[float] = None
     console_url: Optional[str] = None
+    discovery_server: Optional[str] = None
     config: Optional[MonitorConfig] = None
 
     @property
@@ -113,6 +117,23 @@ def parse_console_url(text: str) -> tuple[str, str]:
     if parts.scheme not in ('http', 'https') or not parts.netloc or not url.isprintable():
         raise ValueError(f'--console-url {text[:80]!r}: the URL must be http:// or https://')
     return name, url
+
+
+#: A ``ROS_DISCOVERY_SERVER`` value: addresses (IPv4, [IPv6], names) with ports, ``;``-separated
+#: by server id (an empty place for an id not used).
+_SERVERS = re.compile(r'^[A-Za-z0-9_.:\[\];-]{1,1000}$')
+
+
+def parse_discovery_server(text: str) -> tuple[str, str]:
+    """``NAME=SERVERS`` (the ``--discovery-server`` option): the dock and the
+    ``ROS_DISCOVERY_SERVER`` value its participant uses. Raises ValueError with one line."""
+    name, sep, servers = text.partition('=')
+    if not sep or not _NAME.match(name) or not _SERVERS.match(servers) or not servers.strip(';'):
+        raise ValueError(
+            f'--discovery-server {text[:80]!r}: expected NAME=ADDRESS:PORT (a '
+            'ROS_DISCOVERY_SERVER value: ;-separated by server id)'
+        )
+    return name, servers
 
 
 def worst_level(levels: Sequence[str]) -> str:

@@ -14,11 +14,12 @@ Reception times are the harbour's wall clock; :mod:`.harbour_model` builds the v
 
 from __future__ import annotations
 
+import contextlib
 import os
 import socket
 import threading
 import time
-from typing import Any, Callable, Optional, Sequence
+from typing import Any, Callable, Iterator, Optional, Sequence
 
 from catenary_monitor.console.frames import AckError, statuses_by_name
 from catenary_monitor.console.harbour_model import (
@@ -42,6 +43,25 @@ NODE_PREFIX = 'catenary_console_harbour'
 _INIT_LOCK = threading.Lock()
 #: Seconds between two looks at who publishes /diagnostics in a dock's domain.
 PUBLISHERS_CHECK = 2.0
+
+
+@contextlib.contextmanager
+def _discovery_server(servers: Optional[str], apply: bool) -> Iterator[None]:
+    """``ROS_DISCOVERY_SERVER`` set to the dock's ``servers`` while its participant is made
+    (a dock without: the process's own, if any), when ``apply``; restored after."""
+    if not apply or not servers:
+        yield
+        return
+    name = 'ROS_DISCOVERY_SERVER'
+    before = os.environ.get(name)
+    os.environ[name] = servers
+    try:
+        yield
+    finally:
+        if before is None:
+            os.environ.pop(name, None)
+        else:
+            os.environ[name] = before
 
 
 class _Dock:
@@ -86,6 +106,9 @@ class HarbourSource:
         self.errors: dict[str, str] = {}
         self.crowded: dict[str, list[str]] = {}
         self._docks = [_Dock(d) for d in self.specs]
+        # With a dock's own discovery server, each participant is made alone, under the
+        # environment naming its servers (Fast DDS reads it as the participant is created).
+        self._one_at_a_time = any(d.discovery_server for d in self.specs)
         self._stop = threading.Event()
 
     # ------------------------------------------------------------------ ROS side
@@ -94,7 +117,8 @@ class HarbourSource:
         now, once rclpy is loaded (the docks' ages and silences count from here)."""
         from catenary_monitor.ros.dds_profile import use_announce_profile
 
-        use_announce_profile()  # a monitor restarting meets the harbour within 1 s
+        if not self._one_at_a_time:  # (a discovery server's clients do not announce so)
+            use_announce_profile()  # a monitor restarting meets the harbour within 1 s
         import rclpy  # noqa: F401 - loaded before the clock starts
         import rclpy.executors  # noqa: F401
         from diagnostic_msgs.msg import DiagnosticArray  # noqa: F401
@@ -138,19 +162,18 @@ class HarbourSource:
 
         context = Context()
         with _INIT_LOCK:  # rcl's logging set-up is process-wide: one init at a time
-            rclpy.init(
-                args=['catenary_harbour', *self.ros_args],
-                context=context,
-                domain_id=dock.spec.domain_id,
-                signal_handler_options=SignalHandlerOptions.NO,
-            )
-        dock.context = context
-        dock.node = rclpy.create_node(
-            f'{NODE_PREFIX}_{os.getpid()}',
-            context=context,
-            start_parameter_services=False,
-            enable_rosout=False,
-        )
+            with _discovery_server(dock.spec.discovery_server, self._one_at_a_time):
+                rclpy.init(
+                    args=['catenary_harbour', *self.ros_args],
+                    context=context,
+                    domain_id=dock.spec.domain_id,
+                    signal_handler_options=SignalHandlerOptions.NO,
+                )
+                dock.context = context
+                if self._one_at_a_time:
+                    dock.node = self._create_node(context)
+        if dock.node is None:
+            dock.node = self._create_node(context)
         dock.node.create_subscription(
             DiagnosticArray,
             '/diagnostics',
@@ -164,6 +187,17 @@ class HarbourSource:
             dock.ack_pub = dock.node.create_publisher(
                 String, ACKNOWLEDGE_TOPIC, QoSProfile(depth=10)
             )
+
+    @staticmethod
+    def _create_node(context: Any) -> Any:
+        import rclpy
+
+        return rclpy.create_node(
+            f'{NODE_PREFIX}_{os.getpid()}',
+            context=context,
+            start_parameter_services=False,
+            enable_rosout=False,
+        )
 
     def _spin(self, dock: _Dock) -> None:
         from rclpy.executors import SingleThreadedExecutor
@@ -186,14 +220,16 @@ class HarbourSource:
     def check_publishers(self, name: str, node: Any) -> None:
         """Note the monitors publishing ``/diagnostics`` in the dock's domain when there are
         several (two docks in one domain, or a discovery server matching across domains):
-        their arrays cannot be told apart, so the dock is shown STALE, naming them."""
-        monitors = sorted(
-            {
+        their arrays cannot be told apart, so the dock is shown STALE, naming them. Counted by
+        publisher, not by name: every dock's monitor has the same name by default."""
+        found = {
+            bytes(getattr(info, 'endpoint_gid', b'')) or id(info): (
                 f'{info.node_namespace.rstrip("/")}/{info.node_name}'
-                for info in node.get_publishers_info_by_topic('/diagnostics')
-                if info.node_name == NODE_NAME
-            }
-        )
+            )
+            for info in node.get_publishers_info_by_topic('/diagnostics')
+            if info.node_name == NODE_NAME
+        }
+        monitors = sorted(found.values())
         with self.cond:
             if len(monitors) > 1:
                 self.crowded[name] = monitors
