@@ -137,8 +137,7 @@ async function startLive() {
     let frames = 0;
     try {
       st.state = 'connecting';
-      const token = sessionStorage.getItem(TOKEN_KEY);
-      const reader = await cmLink.open(token, ctrl.signal, signedOut);
+      const reader = await cmLink.open(TOKEN_KEY, ctrl.signal, signedOut);
       st.state = 'open';
       frames = await cmLink.read(reader, ctrl, liveFrame, (why) => { st.why = why; });
       st.why = 'the stream ended';
@@ -774,15 +773,13 @@ function canAct() {
 }
 
 // Every state-changing request goes through here (a POST of JSON, with the token if any).
-// (`token`: one being tried, signing in: its refusal signs nobody out.)
+// (`token`: one being tried, signing in.)
 function act(path, body, token) {
-  const stored = sessionStorage.getItem(TOKEN_KEY);
-  return cmLink.post(path, body, token || stored, token ? () => {} : signedOut);
+  return cmLink.post(path, body, TOKEN_KEY, signedOut, token);
 }
 
-// The stored token was refused: nobody is signed in any more.
+// The stored token was refused (and forgotten): nobody is signed in any more.
 function signedOut() {
-  sessionStorage.removeItem(TOKEN_KEY);
   setOperator(null);
 }
 

@@ -236,8 +236,7 @@ async function startLive() {
     const ctrl = new AbortController();
     let frames = 0;
     try {
-      const token = sessionStorage.getItem(TOKEN_KEY);
-      const reader = await cmLink.open(token, ctrl.signal, signedOut);
+      const reader = await cmLink.open(TOKEN_KEY, ctrl.signal, signedOut);
       S.last = performance.now();
       frames = await cmLink.read(reader, ctrl, liveFrame, why);
       S.why = 'the stream ended';
@@ -250,15 +249,13 @@ async function startLive() {
 }
 
 // ---------------------------------------------------------------- access (a token harbour)
-// (`token`: one being tried, signing in: its refusal signs nobody out.)
+// (`token`: one being tried, signing in.)
 function act(path, body, token) {
-  const stored = sessionStorage.getItem(TOKEN_KEY);
-  return cmLink.post(path, body, token || stored, token ? () => {} : signedOut);
+  return cmLink.post(path, body, TOKEN_KEY, signedOut, token);
 }
 
-// The stored token was refused: nobody is signed in any more.
+// The stored token was refused (and forgotten): nobody is signed in any more.
 function signedOut() {
-  sessionStorage.removeItem(TOKEN_KEY);
   setOperator(null);
 }
 

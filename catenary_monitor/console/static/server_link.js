@@ -38,13 +38,15 @@ const cmLink = Object.freeze({
     }
   },
 
-  // Opens GET /api/stream with `token` (null: none) and returns its reader; a 401 to a token
-  // calls `rejected()` (the page signs the operator out); any refusal throws, naming it.
-  async open(token, signal, rejected) {
+  // Opens GET /api/stream with the operator's token (kept under `key` in sessionStorage, if
+  // any) and returns its reader; a refused token is forgotten and `signedOut()` called; any
+  // refusal throws, naming it.
+  async open(key, signal, signedOut) {
+    const token = sessionStorage.getItem(key);
     const headers = { Accept: 'text/event-stream' };
     if (token) headers.Authorization = `Bearer ${token}`;
     const res = await fetch('/api/stream', { headers, cache: 'no-store', signal });
-    if (res.status === 401 && token) rejected();
+    if (res.status === 401 && token) { sessionStorage.removeItem(key); signedOut(); }
     if (!res.ok || !res.body) {
       let why = '';
       try { why = (await res.json()).error; } catch (e) { /* not JSON */ }
@@ -85,12 +87,15 @@ const cmLink = Object.freeze({
     }
   },
 
-  // POSTs `body` as JSON to `path` with `token` (null: none); a 401 calls `rejected()`.
-  async post(path, body, token, rejected) {
+  // POSTs `body` as JSON to `path` with the token kept under `key` (sessionStorage), or with
+  // `trying`, a token being signed in with. A refused stored token is forgotten and
+  // `signedOut()` called; a refused token being tried signs nobody out.
+  async post(path, body, key, signedOut, trying) {
+    const token = trying || sessionStorage.getItem(key);
     const headers = { 'Content-Type': 'application/json' };
     if (token) headers.Authorization = `Bearer ${token}`;
     const res = await fetch(path, { method: 'POST', headers, body: JSON.stringify(body) });
-    if (res.status === 401) rejected();
+    if (res.status === 401 && !trying) { sessionStorage.removeItem(key); signedOut(); }
     return res;
   },
 });
