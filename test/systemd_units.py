@@ -12,6 +12,8 @@ from typing import Mapping
 
 ROOT = Path(__file__).resolve().parents[1]
 UNITS = ('catenary-monitor.service', 'catenary-monitor-console.service')
+#: The harbour PC's unit (no monitor there).
+HARBOUR_UNIT = 'catenary-monitor-harbour.service'
 VENV = '/opt/catenary_monitor/.venv'
 STATE = '/var/lib/catenary_monitor'
 LOGS = '/var/log/catenary_monitor'

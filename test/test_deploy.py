@@ -25,7 +25,7 @@ from pathlib import Path
 
 import pytest
 from ros_harness import child_env
-from systemd_units import ETC, LOGS, STATE, UNITS, VENV, read_unit
+from systemd_units import ETC, HARBOUR_UNIT, LOGS, STATE, UNITS, VENV, read_unit
 from systemd_units import command as units_command
 
 from catenary_monitor.cli.run import NO_RESTART
@@ -93,8 +93,12 @@ def test_colcon_layout_and_ros2_run(install, tmp_path):
     assert (prefix / 'share/ament_index/resource_index/packages' / PKG).exists()
     for name in ('package.xml', 'launch/monitor.launch.xml', 'config/floating_dock.yaml',
                  'config/dock_template.yaml', 'deploy/catenary-monitor.service',
-                 'deploy/catenary-monitor-console.service', 'docs/deploy.md'):  # fmt: skip
+                 'deploy/catenary-monitor-console.service', f'deploy/{HARBOUR_UNIT}',
+                 'docs/deploy.md'):  # fmt: skip
         assert (share / name).is_file(), name
+    # the package data: the pages' shared stream reader, the DDS announcement profile
+    for name in ('console/static/server_link.js', 'ros/fastdds_announce.xml'):
+        assert (site / PKG / name).is_file(), name
     proc = _ros2_run(
         install, 'catenary-monitor', 'run', '--params-file',
         str(share / 'config/floating_dock.yaml'), '--log-dir', str(tmp_path / 'log'),
@@ -230,16 +234,59 @@ def test_the_two_units_share_user_state_and_restart_policy(install):
 
 
 @pytest.mark.skipif(shutil.which('systemd-analyze') is None, reason='no systemd-analyze')
-def test_systemd_analyze_verifies_both_units(tmp_path):
-    """``systemd-analyze verify`` on each unit as shipped, but for ExecStart's program (it must
-    exist): this checkout's venv's."""
+def test_systemd_analyze_verifies_the_units(tmp_path):
+    """``systemd-analyze verify`` on each unit as shipped (the dock's two, the harbour PC's),
+    but for ExecStart's program (it must exist): this checkout's venv's."""
     exe = str(Path(sys.executable).parent / 'catenary-monitor')
-    for name in UNITS:
+    units = (*UNITS, HARBOUR_UNIT)
+    assert sorted(units) == sorted(p.name for p in (ROOT / 'deploy').glob('*.service'))
+    for name in units:
         text = (ROOT / 'deploy' / name).read_text()
         (tmp_path / name).write_text(text.replace(f'{VENV}/bin/catenary-monitor', exe))
-    done = subprocess.run(['systemd-analyze', 'verify', *(str(tmp_path / n) for n in UNITS)],
+    done = subprocess.run(['systemd-analyze', 'verify', *(str(tmp_path / n) for n in units)],
                           capture_output=True, text=True, timeout=60)  # fmt: skip
     assert (done.returncode, done.stdout + done.stderr) == (0, '')
+
+
+def test_the_harbour_unit_runs_read_only_and_stops_as_systemd_stops_it(install, tmp_path):
+    """The harbour PC's unit: the dock units' user, state and restart policy, no monitor to
+    wait for, no domain of its own; its command, on this checkout's install with the docks in
+    the test's domain and the static peers on this host, serves read-only and exits 0 on
+    SIGTERM."""
+    prefix, _ = install
+    unit, environment = read_unit(HARBOUR_UNIT)
+    service = unit['Service']
+    assert (service['User'], service['Group']) == ('catenary', 'catenary')
+    assert service['StateDirectory'] == 'catenary_monitor' and 'LogsDirectory' not in service
+    assert environment['ROS_HOME'] == STATE and environment['ROS_LOG_DIR'].startswith(STATE)
+    assert (service['Restart'], service['RestartSec']) == ('on-failure', '5')
+    assert service['RestartPreventExitStatus'] == '2' and service['KillSignal'] == 'SIGTERM'
+    assert 'ROS_DOMAIN_ID' not in environment  # each dock's domain is its --dock's
+    assert unit['Unit']['After'] == 'network-online.target'
+    doc = unit['Unit']['Documentation']
+    assert (prefix / doc[len(f'file://{VENV}/'):]).is_file(), doc  # what pip installs
+    places = {VENV: str(Path(sys.executable).parent.parent), STATE: str(tmp_path / 'state')}
+    command, unit_env = units_command(HARBOUR_UNIT, places)
+    assert command[1] == 'harbour' and '--token-file' not in command
+    domain = os.environ['ROS_DOMAIN_ID']
+    command = [domain.join(re.split(r'(?<==)\d+$', a)) if a.count('=') == 1 and
+               a.split('=')[1].isdigit() else a for a in command]  # fmt: skip
+    command[command.index('--port') + 1] = '0'  # any free port
+    command[command.index('--bind') + 1] = '127.0.0.1'
+    env = child_env()
+    for key, value in unit_env.items():
+        if key.startswith('ROS_'):
+            env[key] = re.sub(r'10\.0\.\d+\.5', '127.0.0.1', value)
+    proc = subprocess.Popen(command, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True)  # fmt: skip
+    try:
+        text = _wait_line(proc, 'harbour: http', 90.0)
+    finally:
+        proc.send_signal(signal.SIGTERM)
+        out, _ = proc.communicate(timeout=int(service['TimeoutStopSec']))
+    assert proc.returncode == 0, text + out
+    assert f'3 docks in domains {domain}, {domain}, {domain}; read-only' in text
+    assert list((tmp_path / 'state/log').iterdir())  # rcl's own log, in the state directory
 
 
 def test_params_template_is_a_valid_dock_with_a_checklist():

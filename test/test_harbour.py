@@ -61,7 +61,8 @@ def docks(url: str) -> dict[str, Any]:
     return {d['name']: d for d in get_json(url + 'api/docks')}
 
 
-def wait_until(what: str, check: Any, timeout: float) -> Any:
+def wait_until(what: str, check: Any, timeout: float, show: Any = None) -> Any:
+    """Poll ``check`` until truthy; on timeout the error names ``show()`` (what was seen)."""
     deadline = time.monotonic() + timeout
     last = None
     while time.monotonic() < deadline:
@@ -69,7 +70,16 @@ def wait_until(what: str, check: Any, timeout: float) -> Any:
         if last:
             return last
         time.sleep(0.1)
-    raise AssertionError(f'timed out after {timeout} s waiting for {what}')
+    seen = f'; last seen: {show()}' if show is not None else ''
+    raise AssertionError(f'timed out after {timeout} s waiting for {what}{seen}')
+
+
+def levels(url: str) -> list[tuple[Any, ...]]:
+    """Each dock's level, arrays received and message (a timeout's evidence)."""
+    return [
+        (d['name'], d['level'], d['received']['arrays'], d['message'])
+        for d in get_json(url + 'api/docks')
+    ]
 
 
 @pytest.fixture(scope='module')
@@ -95,6 +105,9 @@ def harbour(tmp_path_factory: Any) -> Any:
                 tide_trend_window=5.0,
                 clear_hold=1.0,
                 warn_clear_hold=1.0,
+                # the feed is a constant: a loaded machine's slow set-up must not make it a
+                # stuck sensor (WARN after stuck_time, 60 s by default)
+                stuck_time=3600.0,
             )
             monitors[name] = start_monitor(params, tmp / f'log_{name}', domain_id=domain)
             clients[name] = Client(f'harbour_test_{name}', domain_id=domain)
@@ -144,14 +157,6 @@ def harbour(tmp_path_factory: Any) -> Any:
             client.close()
 
 
-@pytest.mark.xfail(
-    strict=False,
-    reason=(
-        'the third dock first heard 3.2-3.3 s after start on this 2-core '
-        'machine against the 3 s target (seen on fresh clones 2026-12-07; to '
-        'fix)'
-    ),
-)
 def test_the_three_docks_are_listed_with_their_levels_within_3_s(harbour):
     url, _, _ = harbour
     config = get_json(url + 'api/config')
@@ -160,6 +165,7 @@ def test_the_three_docks_are_listed_with_their_levels_within_3_s(harbour):
         'the three docks OK in /api/docks',
         lambda: (d := docks(url)) and all(v['level'] == 'OK' for v in d.values()) and d,
         60.0,
+        lambda: levels(url),
     )
     assert list(found) == list(DOCKS)
     for name, domain in zip(DOCKS, _domains()):

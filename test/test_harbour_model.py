@@ -22,6 +22,7 @@ from catenary_monitor.console.harbour_model import (
     dock_view,
     harbour_alarms,
     parse_console_url,
+    parse_discovery_server,
     parse_dock,
 )
 from catenary_monitor.console.harbour_server import HarbourServer
@@ -86,6 +87,14 @@ def test_console_url_option():
     for bad in ('a=javascript:alert(1)', 'a=ftp://x/', 'a', 'a=http://'):
         with pytest.raises(ValueError):
             parse_console_url(bad)
+
+
+def test_discovery_server_option():
+    assert parse_discovery_server('a=10.0.21.5:11811') == ('a', '10.0.21.5:11811')
+    assert parse_discovery_server('b=;[::1]:11812') == ('b', ';[::1]:11812')  # server id 1
+    for bad in ('a', 'a=', 'a=;', 'a=x y:1', 'a=$(reboot)', '=1.2.3.4:11811'):
+        with pytest.raises(ValueError):
+            parse_discovery_server(bad)
 
 
 def test_a_dock_never_heard_is_stale_and_says_so():
@@ -249,6 +258,8 @@ def test_server_with_operators_acknowledges_through_the_source(fed_source):
         (['--dock', 'a=999'], '0 to 232'),
         (['--dock', 'a=81:/nonexistent/p.yaml'], 'dock a: /nonexistent/p.yaml'),
         (['--dock', 'a=81', '--console-url', 'b=http://x/'], 'no --dock of that name'),
+        (['--dock', 'a=81', '--discovery-server', 'b=1.2.3.4:11811'], 'no --dock of that name'),
+        (['--dock', 'a=81', '--discovery-server', 'a=x y'], 'expected NAME=ADDRESS:PORT'),
     ],
 )
 def test_bad_command_lines_exit_2_with_one_line(args, words):
@@ -264,8 +275,12 @@ def test_bad_command_lines_exit_2_with_one_line(args, words):
 
 
 class _Info:
+    gids = 0
+
     def __init__(self, name: str, namespace: str = '/') -> None:
         self.node_name, self.node_namespace = name, namespace
+        _Info.gids += 1
+        self.endpoint_gid = [_Info.gids] + [0] * 15  # rclpy's: a list of 16 ints
 
 
 class _Graph:
@@ -293,6 +308,10 @@ def test_two_monitors_in_one_domain_make_the_dock_stale(fed_source):
     assert (rows[0]['dock'], rows[0]['state']) == ('a', 'monitors mixed')
     fed_source.check_publishers('a', _Graph(_Info('catenary_monitor'), _Info('gauge_driver')))
     assert fed_source.docks()[0]['level'] == 'OK'
+    # two docks' monitors of the same name (the default), heard in one domain: two publishers
+    fed_source.check_publishers('a', _Graph(_Info('catenary_monitor'), _Info('catenary_monitor')))
+    view = fed_source.docks()[0]
+    assert view['level'] == 'STALE' and view['monitors'] == ['/catenary_monitor'] * 2
 
 
 def test_fleet_kpis_per_dock_and_day(tmp_path):

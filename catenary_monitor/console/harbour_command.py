@@ -1,8 +1,9 @@
 """``catenary-monitor harbour``: every dock of a port live on one page.
 
 ``catenary-monitor harbour --dock NAME=DOMAIN_ID[:PARAMS_FILE][@LAT,LON] ... [--console-url
-NAME=URL ...] [--discovery-server NAME=HOST:PORT ...] [--fleet-dataset DIR] [--port 8090]
-[--bind 127.0.0.1] [--token-file FILE] [--tls-cert F --tls-key F]``.
+NAME=URL ...] [--discovery-server NAME=SERVERS ...]
+[--fleet-dataset DIR] [--port 8090] [--bind 127.0.0.1] [--token-file FILE]
+[--tls-cert F --tls-key F]``.
 One process joins each dock's ROS domain (:mod:`.harbour_source`) and serves the harbour page
 (:mod:`.harbour_server`). Read-only unless ``--token-file`` names operators, who may then
 acknowledge a dock's alarm from it. Prints ``harbour: URL (...)`` once it listens and serves
@@ -16,7 +17,7 @@ import argparse
 import dataclasses
 import os
 import sys
-from typing import Any, Sequence
+from typing import Any
 
 from catenary_monitor.console.server_options import (
     Refused,
@@ -39,13 +40,11 @@ def _fail(message: str, code: int = 2) -> int:
 SHARED_SERVER = (
     'ROS_DISCOVERY_SERVER is set for the whole harbour: through a discovery server every '
     'domain hears every monitor (a silent dock would show another\'s statuses); give each '
-    'dock its own with --discovery-server NAME=HOST:PORT, or unset it'
+    'dock its own with --discovery-server NAME=SERVERS, or unset it'
 )
 
 
-def dock_specs(
-    docks: list[str], consoles: list[str], servers: Sequence[str] = ()
-) -> list[Any]:
+def dock_specs(docks: list[str], consoles: list[str], servers: Any = ()) -> list[Any]:
     """The ``--dock``, ``--console-url`` and ``--discovery-server`` options as dock specs,
     each params file read. Raises Refused with one line."""
     from catenary_monitor.console.harbour_model import (
@@ -193,9 +192,11 @@ def register(sub: Any) -> None:
     p.add_argument(
         '--discovery-server',
         action='append',
-        metavar='NAME=HOST:PORT',
-        help='the Fast DDS discovery server(s) of the dock\'s domain, as ROS_DISCOVERY_SERVER '
-        'writes them (docks on other subnets, docs/deploy.md); each dock its own (repeatable)',
+        metavar='NAME=SERVERS',
+        help='the Fast DDS discovery server(s) of that dock (its ROS_DISCOVERY_SERVER value, '
+        'e.g. north=10.0.21.5:11811): the harbour\'s participant in that dock\'s domain is a '
+        'client of these alone (repeatable; a process-wide ROS_DISCOVERY_SERVER would match '
+        'every dock in every domain)',
     )
     p.add_argument(
         '--fleet-dataset',

@@ -37,6 +37,7 @@ __all__ = [
     'DockState',
     'parse_dock',
     'parse_console_url',
+    'parse_discovery_server',
     'line_names',
     'dock_view',
     'harbour_alarms',
@@ -63,7 +64,9 @@ _GAPS = 9
 @dataclass(frozen=True)
 class DockSpec:
     """One dock of the harbour: its name, ROS domain, params file (its monitor's: lines and
-    the ``/diagnostics`` rate), position (degrees, WGS84) and its console's URL."""
+    the ``/diagnostics`` rate), position (degrees, WGS84), its console's URL and the Fast DDS
+    discovery server(s) its participant uses (a ``ROS_DISCOVERY_SERVER`` value; None: the
+    process's discovery)."""
 
     name: str
     domain_id: int
@@ -71,8 +74,8 @@ class DockSpec:
     lat: Optional[float] = None
     lon: Optional[float] = None
     console_url: Optional[str] = None
+    discovery_server: Optional[str] = None
     config: Optional[MonitorConfig] = None
-    discovery_server: Optional[str] = None  # ROS_DISCOVERY_SERVER for this dock's domain
 
     @property
     def line_names(self) -> list[str]:
@@ -116,24 +119,27 @@ def parse_console_url(text: str) -> tuple[str, str]:
     return name, url
 
 
-#: One entry of a ``ROS_DISCOVERY_SERVER`` list: a host name or IPv4 address, a port.
-_SERVER = re.compile(r'^[A-Za-z0-9_.-]{1,253}(:[0-9]{1,5})?$')
+#: A ``ROS_DISCOVERY_SERVER`` value: addresses (IPv4, [IPv6], names) with ports, ``;``-separated
+#: by server id (an empty place for an id not used).
+_SERVERS = re.compile(r'^[A-Za-z0-9_.:\[\];-]{1,1000}$')
 
 
 def parse_discovery_server(text: str) -> tuple[str, str]:
-    """``NAME=SERVERS`` (the ``--discovery-server`` option): the dock and its Fast DDS
-    discovery server(s) as ``ROS_DISCOVERY_SERVER`` writes them (``HOST:PORT``, entries
-    separated by ``;``, an entry's position its server id). Raises ValueError with one line."""
-    usage = f'--discovery-server {text[:80]!r}: expected NAME=HOST:PORT[;HOST:PORT...]'
+    """``NAME=SERVERS`` (the ``--discovery-server`` option): the dock and the
+    ``ROS_DISCOVERY_SERVER`` value its participant uses. Raises ValueError with one line."""
     name, sep, servers = text.partition('=')
-    if not sep or not _NAME.match(name):
-        raise ValueError(usage)
-    entries = [e for e in servers.split(';') if e]
-    ports = [int(e.rpartition(':')[2]) for e in entries if ':' in e]
-    if not entries or not all(_SERVER.match(e) for e in entries) or not all(
-        1 <= p <= 65535 for p in ports
+    ports = [int(p) for p in re.findall(r':([0-9]+)(?:;|$)', servers)]
+    if (
+        not sep
+        or not _NAME.match(name)
+        or not _SERVERS.match(servers)
+        or not servers.strip(';')
+        or not all(1 <= p <= 65535 for p in ports)
     ):
-        raise ValueError(f'{usage} (a port 1 to 65535; an empty entry keeps a server id free)')
+        raise ValueError(
+            f'--discovery-server {text[:80]!r}: expected NAME=ADDRESS:PORT (a '
+            'ROS_DISCOVERY_SERVER value: ;-separated by server id)'
+        )
     return name, servers
 
 

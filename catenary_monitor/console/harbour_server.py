@@ -5,7 +5,8 @@ page and routes.
 Routes:
 
 ``GET /``, ``GET /static/NAME``
-    the harbour page (``harbour.html``, ``harbour.js``, ``harbour.css``);
+    the harbour page (``harbour.html``, ``harbour.js``, ``harbour.css``, and ``server_link.js``,
+    the stream reader it shares with the console's page);
 ``GET /api/config``
     the docks (name, domain, position, console URL, lines), the host and ``access``;
 ``GET /api/docks``
@@ -52,6 +53,7 @@ __all__ = ['HarbourServer', 'HARBOUR_FILES']
 HARBOUR_FILES = {
     'harbour.html': 'text/html; charset=utf-8',
     'harbour.js': 'text/javascript; charset=utf-8',
+    'server_link.js': 'text/javascript; charset=utf-8',
     'harbour.css': 'text/css; charset=utf-8',
 }
 

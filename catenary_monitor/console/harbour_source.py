@@ -46,21 +46,22 @@ PUBLISHERS_CHECK = 2.0
 
 
 @contextlib.contextmanager
-def _discovery_env(servers: Optional[str]) -> Iterator[None]:
-    """``ROS_DISCOVERY_SERVER`` set to ``servers`` while a dock's participant is made (the
-    process's own value kept otherwise and restored after)."""
-    if servers is None:
+def _discovery_server(servers: Optional[str], apply: bool) -> Iterator[None]:
+    """``ROS_DISCOVERY_SERVER`` set to the dock's ``servers`` while its participant is made
+    (a dock without: the process's own, if any), when ``apply``; restored after."""
+    if not apply or not servers:
         yield
         return
-    before = os.environ.get('ROS_DISCOVERY_SERVER')
-    os.environ['ROS_DISCOVERY_SERVER'] = servers
+    name = 'ROS_DISCOVERY_SERVER'
+    before = os.environ.get(name)
+    os.environ[name] = servers
     try:
         yield
     finally:
         if before is None:
-            os.environ.pop('ROS_DISCOVERY_SERVER', None)
+            os.environ.pop(name, None)
         else:
-            os.environ['ROS_DISCOVERY_SERVER'] = before
+            os.environ[name] = before
 
 
 class _Dock:
@@ -105,12 +106,19 @@ class HarbourSource:
         self.errors: dict[str, str] = {}
         self.crowded: dict[str, list[str]] = {}
         self._docks = [_Dock(d) for d in self.specs]
+        # With a dock's own discovery server, each participant is made alone, under the
+        # environment naming its servers (Fast DDS reads it as the participant is created).
+        self._one_at_a_time = any(d.discovery_server for d in self.specs)
         self._stop = threading.Event()
 
     # ------------------------------------------------------------------ ROS side
     def start(self) -> None:
         """One context, node and spinning thread per dock (its own domain); ``started`` is
         now, once rclpy is loaded (the docks' ages and silences count from here)."""
+        from catenary_monitor.ros.dds_profile import use_announce_profile
+
+        if not self._one_at_a_time:  # (a discovery server's clients do not announce so)
+            use_announce_profile()  # a monitor restarting meets the harbour within 1 s
         import rclpy  # noqa: F401 - loaded before the clock starts
         import rclpy.executors  # noqa: F401
         from diagnostic_msgs.msg import DiagnosticArray  # noqa: F401
@@ -153,22 +161,19 @@ class HarbourSource:
         from rclpy.signals import SignalHandlerOptions
 
         context = Context()
-        with _INIT_LOCK, _discovery_env(dock.spec.discovery_server):
-            # rcl's logging set-up is process-wide: one init at a time; the participant (made
-            # with the first node) reads ROS_DISCOVERY_SERVER: the dock's own, if it has one
-            rclpy.init(
-                args=['catenary_harbour', *self.ros_args],
-                context=context,
-                domain_id=dock.spec.domain_id,
-                signal_handler_options=SignalHandlerOptions.NO,
-            )
-            dock.context = context
-            dock.node = rclpy.create_node(
-                f'{NODE_PREFIX}_{os.getpid()}',
-                context=context,
-                start_parameter_services=False,
-                enable_rosout=False,
-            )
+        with _INIT_LOCK:  # rcl's logging set-up is process-wide: one init at a time
+            with _discovery_server(dock.spec.discovery_server, self._one_at_a_time):
+                rclpy.init(
+                    args=['catenary_harbour', *self.ros_args],
+                    context=context,
+                    domain_id=dock.spec.domain_id,
+                    signal_handler_options=SignalHandlerOptions.NO,
+                )
+                dock.context = context
+                if self._one_at_a_time:
+                    dock.node = self._create_node(context)
+        if dock.node is None:
+            dock.node = self._create_node(context)
         dock.node.create_subscription(
             DiagnosticArray,
             '/diagnostics',
@@ -182,6 +187,17 @@ class HarbourSource:
             dock.ack_pub = dock.node.create_publisher(
                 String, ACKNOWLEDGE_TOPIC, QoSProfile(depth=10)
             )
+
+    @staticmethod
+    def _create_node(context: Any) -> Any:
+        import rclpy
+
+        return rclpy.create_node(
+            f'{NODE_PREFIX}_{os.getpid()}',
+            context=context,
+            start_parameter_services=False,
+            enable_rosout=False,
+        )
 
     def _spin(self, dock: _Dock) -> None:
         from rclpy.executors import SingleThreadedExecutor
@@ -204,14 +220,16 @@ class HarbourSource:
     def check_publishers(self, name: str, node: Any) -> None:
         """Note the monitors publishing ``/diagnostics`` in the dock's domain when there are
         several (two docks in one domain, or a discovery server matching across domains):
-        their arrays cannot be told apart, so the dock is shown STALE, naming them."""
-        monitors = sorted(
-            {
+        their arrays cannot be told apart, so the dock is shown STALE, naming them. Counted by
+        publisher, not by name: every dock's monitor has the same name by default."""
+        found = {
+            bytes(getattr(info, 'endpoint_gid', b'')) or id(info): (
                 f'{info.node_namespace.rstrip("/")}/{info.node_name}'
-                for info in node.get_publishers_info_by_topic('/diagnostics')
-                if info.node_name == NODE_NAME
-            }
-        )
+            )
+            for info in node.get_publishers_info_by_topic('/diagnostics')
+            if info.node_name == NODE_NAME
+        }
+        monitors = sorted(found.values())
         with self.cond:
             if len(monitors) > 1:
                 self.crowded[name] = monitors

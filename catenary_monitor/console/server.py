@@ -81,6 +81,7 @@ __all__ = [
 STATIC_FILES = {
     'index.html': 'text/html; charset=utf-8',
     'console.js': 'text/javascript; charset=utf-8',
+    'server_link.js': 'text/javascript; charset=utf-8',
     'console.css': 'text/css; charset=utf-8',
 }
 _CSP = (

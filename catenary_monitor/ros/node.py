@@ -52,7 +52,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import WrenchStamped
 from rcl_interfaces.msg import FloatingPointRange, ParameterDescriptor, SetParametersResult
 from rclpy.clock import Clock, ClockType
-from rclpy.event_handler import SubscriptionEventCallbacks
+from rclpy.event_handler import PublisherEventCallbacks, SubscriptionEventCallbacks
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -126,6 +126,7 @@ from catenary_monitor.io.mcap_recover import (
     recover_in_child,
     unfinished_files,
 )
+from catenary_monitor.ros.dds_profile import use_announce_profile
 from catenary_monitor.ros.request_reader import RequestReader, Taken
 
 __all__ = ['NODE_NAME', 'OUTPUT_FIELDS', 'CatenaryMonitor', 'main']
@@ -554,7 +555,14 @@ class CatenaryMonitor(Node):
                 self._input_channel.append(j)
                 self._input_topic.append(extra.topic_name)
                 self._register(extra.topic_name, readings.FLOAT64, 'sensor_data')
-        self._diag_pub = self.create_publisher(DiagnosticArray, '/diagnostics', _RELIABLE)
+        # A new reader of /diagnostics (the harbour, a console joining late) has the current
+        # array at once, not one period later.
+        self._diag_pub = self.create_publisher(
+            DiagnosticArray,
+            '/diagnostics',
+            _RELIABLE,
+            event_callbacks=PublisherEventCallbacks(matched=self._on_diag_matched),
+        )
         self._register('/diagnostics', 'diagnostic_msgs/msg/DiagnosticArray', 'default')
         self._register(EVENTS_TOPIC, 'std_msgs/msg/String', 'default')
         self._output = Float64MultiArray()
@@ -810,6 +818,12 @@ class CatenaryMonitor(Node):
     def _on_period(self) -> None:
         """The periodic tick's timer (none when a sample callback ran it lately)."""
         if self._now_ns() - self._tick_ns >= 0.5 * self._period_ns:
+            self._tick()
+
+    @_guarded
+    def _on_diag_matched(self, info: Any) -> None:
+        """A reader of /diagnostics matched: a tick now, so it hears the monitor at once."""
+        if info.current_count_change > 0:
             self._tick()
 
     def _tick(self) -> None:
@@ -1308,6 +1322,7 @@ def main(
         return 2
     stop = threading.Event()
     _install_signal_handlers(stop)
+    use_announce_profile()  # met within 1 s by a harbour or console joining later
     try:
         rclpy.init(args=argv, signal_handler_options=SignalHandlerOptions.NO)
     except Exception as exc:  # noqa: BLE001 - rcl rejects an unreadable params file here

@@ -7,8 +7,6 @@ const KN = 1e-3;
 const SILENCE_S = 30;        // a silenced alarm sounds again after this (IMO MSC.302(87))
 const REPEAT_S = 5;          // an unacknowledged ERROR beeps again every REPEAT_S
 const SERVER_TIMEOUT_S = 2.5;  // no stream message for this long: the console server is gone
-const RETRY_MIN_S = 0.5, RETRY_MAX_S = 8;  // the stream's retries: doubling, jittered
-const STREAM_SILENT_S = 5;     // an open stream without a frame this long is cut and retried
 const NO_FRAME = { alarms: [] };  // what sound() is given before the first frame
 
 const S = {
@@ -115,90 +113,49 @@ function sinceFrame() {
 }
 
 // The configuration, asked again with backoff until the console server answers (the banner
-// says so meanwhile).
-async function fetchConfig() {
-  for (let delay = RETRY_MIN_S; ; delay = Math.min(delay * 2, RETRY_MAX_S)) {
-    try {
-      const res = await fetch('/api/config', { cache: 'no-store' });
-      if (res.ok) return await res.json();
-      S.stream.why = `the console server answered ${res.status}`;
-    } catch (e) { S.stream.why = 'the console server does not answer'; }
-    await retryPause(delay);
-  }
+// says so meanwhile; server_link.js).
+function fetchConfig() {
+  return cmLink.config('console', (why) => { S.stream.why = why; }, retryPause);
 }
 
 function retryPause(delay) {
-  const wait = delay * (0.75 + 0.5 * Math.random());
+  const wait = cmLink.jitter(delay);
   S.stream.state = 'retrying';
   S.stream.failures += 1;
   S.stream.retryAt = performance.now() + wait * 1000;
-  return new Promise((resolve) => setTimeout(resolve, wait * 1000));
+  return cmLink.sleep(wait);
 }
 
-// The frames come over GET /api/stream (Server-Sent Events), read with fetch: the operator's
-// token goes along (a reserved stream, which a flood of streams cannot displace), and every
-// failure is seen and retried with backoff: a refusal (503, 401, ...), a cut, a silent
-// stream. (EventSource never retries after a non-200 answer.)
+// The frames come over GET /api/stream (server_link.js): the operator's token goes along (a
+// reserved stream, which a flood of streams cannot displace), and every failure is seen and
+// retried with backoff: a refusal (503, 401, ...), a cut, a silent stream.
 async function startLive() {
   const st = S.stream;
-  for (let delay = RETRY_MIN_S; ; delay = Math.min(delay * 2, RETRY_MAX_S)) {
+  for (let delay = cmLink.RETRY_MIN_S; ; delay = cmLink.next(delay)) {
     const ctrl = new AbortController();
     st.abort = ctrl;
     let frames = 0;
     try {
-      const headers = { Accept: 'text/event-stream' };
-      const token = sessionStorage.getItem(TOKEN_KEY);
-      if (token) headers.Authorization = `Bearer ${token}`;
       st.state = 'connecting';
-      const res = await fetch('/api/stream', { headers, cache: 'no-store', signal: ctrl.signal });
-      if (res.status === 401 && token) { sessionStorage.removeItem(TOKEN_KEY); setOperator(null); }
-      if (!res.ok || !res.body) {
-        let why = '';
-        try { why = (await res.json()).error; } catch (e) { /* not JSON */ }
-        throw new Error(`the stream was refused (${res.status}${why ? `: ${why}` : ''})`);
-      }
+      const reader = await cmLink.open(TOKEN_KEY, ctrl.signal, signedOut);
       st.state = 'open';
-      frames = await readStream(res.body.getReader(), ctrl);
+      frames = await cmLink.read(reader, ctrl, liveFrame, (why) => { st.why = why; });
       st.why = 'the stream ended';
     } catch (e) {
       if (!ctrl.signal.aborted) st.why = e && e.message ? e.message : String(e);
     }
-    if (st.restart) { st.restart = false; delay = RETRY_MIN_S / 2; continue; }  // signed in
-    if (frames > 0) delay = RETRY_MIN_S;
+    if (st.restart) { st.restart = false; delay = cmLink.RETRY_MIN_S / 2; continue; }  // signed in
+    if (frames > 0) delay = cmLink.RETRY_MIN_S;
     await retryPause(delay);
   }
 }
 
-// Renders each event of an open stream; returns how many frames it carried once it ends.
-async function readStream(reader, ctrl) {
-  const decoder = new TextDecoder();
-  let buffer = '', frames = 0, last = performance.now();
-  const silent = setInterval(() => {
-    if ((performance.now() - last) / 1000 > STREAM_SILENT_S) {
-      S.stream.why = `the stream carried nothing for ${STREAM_SILENT_S} s`;
-      ctrl.abort();
-    }
-  }, 1000);
-  try {
-    for (;;) {
-      const { value, done } = await reader.read();
-      if (done) return frames;
-      buffer += decoder.decode(value, { stream: true });
-      for (let cut = buffer.indexOf('\n\n'); cut >= 0; cut = buffer.indexOf('\n\n')) {
-        const data = buffer.slice(0, cut).split('\n').filter((l) => l.startsWith('data:'))
-          .map((l) => l.slice(5).replace(/^ /, '')).join('\n');
-        buffer = buffer.slice(cut + 2);
-        if (!data) continue;
-        frames += 1;
-        last = S.lastMessage = performance.now();
-        S.serverLost = false;
-        S.stream.why = '';
-        render(JSON.parse(data));
-      }
-    }
-  } finally {
-    clearInterval(silent);
-  }
+// One frame of the live stream: rendered, the server heard.
+function liveFrame(frame) {
+  S.lastMessage = performance.now();
+  S.serverLost = false;
+  S.stream.why = '';
+  render(frame);
 }
 
 // A new stream at once (with the token just signed in with: a reserved one).
@@ -816,13 +773,14 @@ function canAct() {
 }
 
 // Every state-changing request goes through here (a POST of JSON, with the token if any).
-async function act(path, body, token) {
-  const headers = { 'Content-Type': 'application/json' };
-  const t = token || sessionStorage.getItem(TOKEN_KEY);
-  if (t) headers.Authorization = `Bearer ${t}`;
-  const res = await fetch(path, { method: 'POST', headers, body: JSON.stringify(body) });
-  if (res.status === 401 && !token) { sessionStorage.removeItem(TOKEN_KEY); setOperator(null); }
-  return res;
+// (`token`: one being tried, signing in.)
+function act(path, body, token) {
+  return cmLink.post(path, body, TOKEN_KEY, signedOut, token);
+}
+
+// The stored token was refused (and forgotten): nobody is signed in any more.
+function signedOut() {
+  setOperator(null);
 }
 
 function setOperator(name) {

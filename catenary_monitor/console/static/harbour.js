@@ -1,10 +1,9 @@
 // catenary_monitor harbour page: every dock's tile, the map and the harbour-wide alarm list,
-// from GET /api/config once and GET /api/stream (Server-Sent Events read with fetch, retried
-// with backoff). The page decides nothing: levels, ages and alarms come from the server.
+// from GET /api/config once and GET /api/stream (server_link.js: Server-Sent Events read with
+// fetch, retried with backoff). The page decides nothing: levels, ages and alarms come from
+// the server.
 'use strict';
 
-const RETRY_MIN_S = 0.5, RETRY_MAX_S = 8;  // the stream's retries: doubling, jittered
-const STREAM_SILENT_S = 5;                 // an open stream without a frame this long is cut
 const TOKEN_KEY = 'catenary-harbour-token';
 const S = { config: null, frame: null, last: 0, why: '', operator: null };
 const $ = (id) => document.getElementById(id);
@@ -210,7 +209,7 @@ function render(frame) {
 // ---------------------------------------------------------------- the connection
 function tick() {
   $('clock').textContent = new Date().toLocaleTimeString();
-  const lost = !S.frame || (performance.now() - S.last) / 1000 > STREAM_SILENT_S;
+  const lost = !S.frame || (performance.now() - S.last) / 1000 > cmLink.SILENT_S;
   const pill = $('status-pill');
   pill.textContent = lost ? 'no data' : 'live';
   pill.className = `pill ${lost ? 'lost' : 'ok'}`;
@@ -222,82 +221,42 @@ function tick() {
     : '';
 }
 
-function pause(delay) {
-  const wait = delay * (0.75 + 0.5 * Math.random());
-  return new Promise((resolve) => setTimeout(resolve, wait * 1000));
-}
+const pause = (delay) => cmLink.sleep(cmLink.jitter(delay));
+const why = (text) => { S.why = text; };
 
-async function loadConfig() {
-  for (let delay = RETRY_MIN_S; ; delay = Math.min(delay * 2, RETRY_MAX_S)) {
-    try {
-      const res = await fetch('/api/config', { cache: 'no-store' });
-      if (res.ok) return await res.json();
-      S.why = `the harbour server answered ${res.status}`;
-    } catch (e) { S.why = 'the harbour server does not answer'; }
-    await pause(delay);
-  }
-}
-
-async function readStream(reader, ctrl) {
-  const decoder = new TextDecoder();
-  let buffer = '', frames = 0;
-  const silent = setInterval(() => {
-    if ((performance.now() - S.last) / 1000 > STREAM_SILENT_S) {
-      S.why = `the stream carried nothing for ${STREAM_SILENT_S} s`;
-      ctrl.abort();
-    }
-  }, 1000);
-  try {
-    for (;;) {
-      const { value, done } = await reader.read();
-      if (done) return frames;
-      buffer += decoder.decode(value, { stream: true });
-      for (let cut = buffer.indexOf('\n\n'); cut >= 0; cut = buffer.indexOf('\n\n')) {
-        const data = buffer.slice(0, cut).split('\n').filter((l) => l.startsWith('data:'))
-          .map((l) => l.slice(5).replace(/^ /, '')).join('\n');
-        buffer = buffer.slice(cut + 2);
-        if (!data) continue;
-        frames += 1;
-        S.last = performance.now();
-        S.why = '';
-        render(JSON.parse(data));
-      }
-    }
-  } finally {
-    clearInterval(silent);
-  }
+// One frame of the stream: rendered, the server heard.
+function liveFrame(frame) {
+  S.last = performance.now();
+  S.why = '';
+  render(frame);
 }
 
 async function startLive() {
-  for (let delay = RETRY_MIN_S; ; delay = Math.min(delay * 2, RETRY_MAX_S)) {
+  for (let delay = cmLink.RETRY_MIN_S; ; delay = cmLink.next(delay)) {
     const ctrl = new AbortController();
     let frames = 0;
     try {
-      const headers = { Accept: 'text/event-stream' };
-      const token = sessionStorage.getItem(TOKEN_KEY);
-      if (token) headers.Authorization = `Bearer ${token}`;
-      const res = await fetch('/api/stream', { headers, cache: 'no-store', signal: ctrl.signal });
-      if (res.status === 401 && token) { sessionStorage.removeItem(TOKEN_KEY); setOperator(null); }
-      if (!res.ok || !res.body) throw new Error(`the stream was refused (${res.status})`);
+      const reader = await cmLink.open(TOKEN_KEY, ctrl.signal, signedOut);
       S.last = performance.now();
-      frames = await readStream(res.body.getReader(), ctrl);
+      frames = await cmLink.read(reader, ctrl, liveFrame, why);
       S.why = 'the stream ended';
     } catch (e) {
       if (!ctrl.signal.aborted) S.why = e && e.message ? e.message : String(e);
     }
-    if (frames > 0) delay = RETRY_MIN_S;
+    if (frames > 0) delay = cmLink.RETRY_MIN_S;
     await pause(delay);
   }
 }
 
 // ---------------------------------------------------------------- access (a token harbour)
-async function act(path, body, token) {
-  const headers = { 'Content-Type': 'application/json' };
-  const t = token || sessionStorage.getItem(TOKEN_KEY);
-  if (t) headers.Authorization = `Bearer ${t}`;
-  const res = await fetch(path, { method: 'POST', headers, body: JSON.stringify(body) });
-  if (res.status === 401 && !token) { sessionStorage.removeItem(TOKEN_KEY); setOperator(null); }
-  return res;
+// (`token`: one being tried, signing in.)
+function act(path, body, token) {
+  return cmLink.post(path, body, TOKEN_KEY, signedOut, token);
+}
+
+// The stored token was refused (and forgotten): nobody is signed in any more.
+function signedOut() {
+  setOperator(null);
 }
 
 function setOperator(name) {
@@ -343,7 +302,7 @@ function wireSignin() {
 
 async function main() {
   setInterval(tick, 500);
-  S.config = await loadConfig();
+  S.config = await cmLink.config('harbour', why, pause);
   document.title = `harbour · ${S.config.docks.length} docks · ${S.config.host}`;
   wireSignin();
   setOperator(null);
