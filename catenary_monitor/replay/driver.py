@@ -490,7 +490,9 @@ def _grid_parts(
     rate = config.alarm.diagnostic_rate
     quiet = int(quiet_span(config) * 1e9)
     columns = [t for t, _ in (*whole.tensions, whole.depth) if len(t)]
-    stamps = np.unique(np.concatenate(columns)) if columns else np.zeros(0, np.int64)
+    # sorted, repeats kept (grid_ticks and the silences read only gaps > quiet): a stable
+    # sort merges the columns' sorted runs (numpy's hashed unique took 1.1 s of 3.8 s here)
+    stamps = np.sort(np.concatenate(columns), kind='stable') if columns else np.zeros(0, np.int64)
     before = state.last_input_ns
     last = int(stamps[-1]) if len(stamps) else before
     if last is None:  # no input yet (a piece without any): nothing to tick
