@@ -460,8 +460,15 @@ def _hours_seen(hours: tuple[tuple[float, float, float], ...]) -> tuple[float, b
     """The range [m] the per-hour extremes span, and whether they span :data:`SEEN_HOURS`."""
     if not hours:
         return 0.0, False
-    span = max(h[2] for h in hours) - min(h[1] for h in hours)
-    return span, hours[0][0] <= hours[-1][0] - (SEEN_HOURS - 1)
+    top, bottom, whole = _hours_top(hours)
+    return top - bottom, whole
+
+
+def _hours_top(hours: tuple[tuple[float, float, float], ...]) -> tuple[float, float, bool]:
+    """The highest and lowest of (non-empty) per-hour extremes [m], and whether they span
+    :data:`SEEN_HOURS`."""
+    top, bottom = max(h[2] for h in hours), min(h[1] for h in hours)
+    return top, bottom, hours[0][0] <= hours[-1][0] - (SEEN_HOURS - 1)
 
 
 def depth_samples(
@@ -484,6 +491,7 @@ def depth_samples(
     noise_k = c.spike_noise_k * NOISE_DIFF_SIGMA2
     value, stamp, changed, spiked, quantum, level, rate, hours = mem
     span, whole = _hours_seen(hours)
+    top, bottom, _ = _hours_top(hours) if hours else (0.0, 0.0, False)
     rows = [(changed, spiked, quantum, rate, span)]
     days = [whole]
     took = False
@@ -502,10 +510,17 @@ def depth_samples(
                     quantum = d
                 if dt > 0.0 and d == d:
                     level += -math.expm1(-dt / tau) * (d - level)
-                after = _hours(hours, t, v)
-                if after is not hours:
-                    hours = after
-                    span, whole = _hours_seen(hours)
+                hour = float(math.floor(t / 3600.0))
+                if hours and hours[-1][0] == hour:  # the hour's extremes, and all hours'
+                    _, lo, hi = hours[-1]
+                    if not lo <= v <= hi:
+                        hours = hours[:-1] + ((hour, min(lo, v), max(hi, v)),)
+                        top, bottom = max(top, v), min(bottom, v)
+                        span = top - bottom
+                else:
+                    hours = _hours(hours, t, v)
+                    top, bottom, whole = _hours_top(hours)
+                    span = top - bottom
             value, stamp = v, t
         rows.append((changed, spiked, quantum, rate, span))
         days.append(whole)
