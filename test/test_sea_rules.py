@@ -209,6 +209,39 @@ def test_chart_defaults_from_the_lines(day):
     assert lo == 0.0 and hi > float(np.max(c.depth)) + 5.0
 
 
+def test_the_depth_column_loop_is_the_scalar_sample():
+    """The twin's one loop over a window's depths (depth_samples) gives the memory and the sea
+    columns that sample_depth reading by reading and sea_columns give: a gauge on a 1 cm grid
+    over two days (the hours' window full), with glitches, NaNs, repeated stamps and a
+    memory carried in."""
+    rng = np.random.default_rng(7)
+    n = 6000
+    t = np.sort(rng.uniform(0.0, 2.2 * 86_400.0, n))
+    t[100:104] = t[100]
+    v = np.round(12.0 + 1.5 * np.sin(t / 7000.0) + rng.normal(0.0, 0.004, n), 2)
+    v[rng.integers(0, n, 25)] += 4.0
+    v[rng.integers(0, n, 25)] = math.nan
+    rates = rng.normal(0.0, 1e-4, n).tolist()
+    cfg = AlarmConfig(depth_resolution=0.01, spike_noise_time=120.0)
+    start = sensor_state.DepthMemory()
+    for k in range(50):  # a memory carried in from an earlier window
+        start = sensor_state.sample_depth(start, k - 50.0, 12.0, cfg, 0.0, 0.25)
+    mems = [start]
+    for s, x, r in zip(t.tolist(), v.tolist(), rates):
+        mems.append(sensor_state.sample_depth(mems[-1], s, x, cfg, r, 0.25))
+    (ch, sp, sea), mem = sensor_state.depth_samples(
+        start, t.tolist(), v.tolist(), cfg, rates, 0.25
+    )
+    assert mem == mems[-1]
+    want_ch, want_sp, want = sensor_state.sea_columns(mems)
+    assert ch.tolist() == want_ch.tolist() and sp.tolist() == want_sp.tolist()
+    for got, expected in zip(sea, want):
+        assert got.dtype == expected.dtype and np.array_equal(got, expected, equal_nan=True)
+    assert want.seen_day.any() and not want.seen_day.all() and np.isfinite(want_sp).any()
+    (_, _, empty), same = sensor_state.depth_samples(start, [], [], cfg, [], 0.25)
+    assert same is start and len(empty.quantum) == 1
+
+
 def test_steps_on_the_gauges_grid_are_seen_by_rounding():
     """A 1 cm radar's depths (gauge height - a float32 range) lie on the centimetre grid within
     a float's last bit: ``floor(x / 0.01)`` puts about a third of the neighbouring steps in

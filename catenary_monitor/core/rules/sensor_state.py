@@ -88,6 +88,7 @@ __all__ = [
     'DepthMemory',
     'SeaColumns',
     'sample_depth',
+    'depth_samples',
     'sea_columns',
     'tide_motion',
     'LineLimits',
@@ -450,10 +451,84 @@ def sea_columns(mems: list[DepthMemory]) -> tuple[np.ndarray, np.ndarray, SeaCol
         changed[i], spiked[i], quantum[i], rate[i] = m.changed, m.spiked, m.quantum, m.rate
         if m.hours is not last:  # memories in a row mostly share their hours
             last = m.hours
-            span = max(h[2] for h in last) - min(h[1] for h in last) if last else 0.0
-            whole = bool(last) and last[0][0] <= last[-1][0] - (SEEN_HOURS - 1)
+            span, whole = _hours_seen(last)
         seen[i], day[i] = span, whole
     return changed, spiked, SeaColumns(quantum, rate, seen, day)
+
+
+def _hours_seen(hours: tuple[tuple[float, float, float], ...]) -> tuple[float, bool]:
+    """The range [m] the per-hour extremes span, and whether they span :data:`SEEN_HOURS`."""
+    if not hours:
+        return 0.0, False
+    top, bottom, whole = _hours_top(hours)
+    return top - bottom, whole
+
+
+def _hours_top(hours: tuple[tuple[float, float, float], ...]) -> tuple[float, float, bool]:
+    """The highest and lowest of (non-empty) per-hour extremes [m], and whether they span
+    :data:`SEEN_HOURS`."""
+    top, bottom = max(h[2] for h in hours), min(h[1] for h in hours)
+    return top, bottom, hours[0][0] <= hours[-1][0] - (SEEN_HOURS - 1)
+
+
+def depth_samples(
+    mem: DepthMemory,
+    stamps: list[float],
+    values: list[float],
+    cfg: object,
+    rates: list[float],
+    jitter: float,
+) -> tuple[tuple[np.ndarray, np.ndarray, SeaColumns], DepthMemory]:
+    """:func:`sample_depth` over a window's readings (``stamps`` [s], ``values`` [m], the
+    trend's ``rates`` [m/s] after each) and :func:`sea_columns` of the memories: before the
+    readings (row 0), then after each; and the memory after the last.
+
+    The same arithmetic as :func:`sample_depth`, in one loop of local floats (the twin's
+    depth: :func:`sample_depth` and a memory per reading took 0.3 s of CPU on a 3e6-message
+    replay's 24804 depth readings)."""
+    c: Any = cfg
+    resolution, rate_max, tau = c.depth_resolution, c.depth_rate_max, c.spike_noise_time
+    noise_k = c.spike_noise_k * NOISE_DIFF_SIGMA2
+    value, stamp, changed, spiked, quantum, level, rate, hours = mem
+    span, whole = _hours_seen(hours)
+    top, bottom, _ = _hours_top(hours) if hours else (0.0, 0.0, False)
+    rows = [(changed, spiked, quantum, rate, span)]
+    days = [whole]
+    took = False
+    for t, v, r in zip(stamps, values, rates):
+        if math.isfinite(v):
+            took = True
+            dt = t - stamp
+            d = abs(v - value)
+            spike = d > rate_max * (dt + jitter) + resolution + noise_k * level
+            if _step_one(value, v, resolution):
+                changed, rate = t, r
+            if spike:
+                spiked = t
+            else:
+                if 0.0 < d < quantum:
+                    quantum = d
+                if dt > 0.0 and d == d:
+                    level += -math.expm1(-dt / tau) * (d - level)
+                hour = float(math.floor(t / 3600.0))
+                if hours and hours[-1][0] == hour:  # the hour's extremes, and all hours'
+                    _, lo, hi = hours[-1]
+                    if not lo <= v <= hi:
+                        hours = hours[:-1] + ((hour, min(lo, v), max(hi, v)),)
+                        top, bottom = max(top, v), min(bottom, v)
+                        span = top - bottom
+                else:
+                    hours = _hours(hours, t, v)
+                    top, bottom, whole = _hours_top(hours)
+                    span = top - bottom
+            value, stamp = v, t
+        rows.append((changed, spiked, quantum, rate, span))
+        days.append(whole)
+    if took:
+        mem = DepthMemory(value, stamp, changed, spiked, quantum, level, rate, hours)
+    out = np.array(rows, np.float64).T
+    day = np.array(days, bool)
+    return (out[0], out[1], SeaColumns(out[2], out[3], out[4], day)), mem
 
 
 def tide_motion(

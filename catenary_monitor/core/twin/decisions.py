@@ -170,11 +170,12 @@ def decide_sensors_window(
         refused[:, k] = pick(np.searchsorted(r, ticks, 'right') - 1, r * 1e-9, line.stamp_refused)
     dd, dv = window.depth
     ds = window.sample_s(None)
-    depth_mems = _depth_memories(core, window)
-    depth_memory = depth_mems[-1]
+    (d_ch, d_sp, d_sea), depth_memory = _depth_memories(core, window)
     j = np.searchsorted(dd, ticks, 'right') - 1  # depth goes before a tick at one stamp
     depth, depth_s = pick(j, dv, core.state.depth), pick(j, ds, core.state.depth_s)
-    d_changed, d_spiked, sea = sensor_state.sea_columns([depth_mems[i + 1] for i in j.tolist()])
+    at = j + 1  # row 0: the memory before the window
+    d_changed, d_spiked = d_ch[at], d_sp[at]
+    sea = sensor_state.SeaColumns(*(column[at] for column in d_sea))
     r = refusals.depth
     d_refused = pick(np.searchsorted(r, ticks, 'right') - 1, r * 1e-9, core.state.depth_refused)
     if n == 0:
@@ -269,21 +270,23 @@ def _causes(
     return ids, found
 
 
-def _depth_memories(core: MonitorCore, window: Window) -> list[sensor_state.DepthMemory]:
-    """The depth memory before the window, then after each of its depth samples: the core's
-    :func:`~catenary_monitor.core.rules.sensor_state.sample_depth` in a loop (the depth is a
-    slow input: a second's sample costs microseconds), with the tide trend's rate after each
-    sample as the core steps it."""
+def _depth_memories(
+    core: MonitorCore, window: Window
+) -> tuple[tuple[np.ndarray, np.ndarray, sensor_state.SeaColumns], sensor_state.DepthMemory]:
+    """The depth memory's ``changed``, ``spiked`` and sea columns before the window (row 0),
+    then after each of its depth samples, and the memory after the last: the core's
+    :func:`~catenary_monitor.core.rules.sensor_state.sample_depth` in one loop
+    (:func:`~catenary_monitor.core.rules.sensor_state.depth_samples`), with the tide trend's
+    rate after each sample as the core steps it."""
     a = core.config.alarm
     _, dv = window.depth
     ds = window.sample_s(None)
     rates, _, _ = tide_trend.series(
         core.state.trend, window.sample_ns(None), dv, a.tide_trend_window
     )
-    mems = [core.state.depth_memory]
-    for t, v, r in zip(ds.tolist(), dv.tolist(), rates.tolist()):
-        mems.append(sensor_state.sample_depth(mems[-1], t, v, a, r, a.stamp_jitter))
-    return mems
+    return sensor_state.depth_samples(
+        core.state.depth_memory, ds.tolist(), dv.tolist(), a, rates.tolist(), a.stamp_jitter
+    )
 
 
 def decide_tide(
