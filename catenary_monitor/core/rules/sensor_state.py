@@ -97,6 +97,7 @@ __all__ = [
     'slack_mask',
     'firm_times',
     'decide_lines',
+    'with_units',
     'decide_depth',
     'reference',
     'history_row',
@@ -323,11 +324,18 @@ def decide_lines(
     if refused is not None:
         with np.errstate(invalid='ignore'):
             code[(t_now - refused <= hold) & ~(over | slack | parted)] = BAD_STAMP
-    if units is not None:
-        wrong = (units >= 0) & ~(over | slack | parted)
-        code[wrong] = (UNITS_BASE + units[wrong]).astype(np.int8)
     code[over] = OVER_MBL
-    return code
+    return code if units is None else with_units(code, units)
+
+
+def with_units(code: np.ndarray, units: np.ndarray) -> np.ndarray:
+    """Line state codes (:func:`decide_lines`) with the ``wrong_units`` claims (the index of
+    the unit factor per (tick, line), -1: none): a claim outranks every state but the ERROR
+    ones (over MBL, suspected parted, slack). Decided after the dock estimate, whose expected
+    tensions are one of its witnesses (:func:`~catenary_monitor.core.rules.plausible.
+    units_decide`)."""
+    wrong = (units >= 0) & ~np.isin(code, ERROR_STATES)
+    return np.where(wrong, UNITS_BASE + units, code).astype(np.int8)
 
 
 #: Semidiurnal (M2) angular speed [rad/s]: a tide of amplitude A bends at most A x this^2.
