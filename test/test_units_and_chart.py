@@ -78,8 +78,10 @@ def test_a_normal_stretch_claims_no_unit_mistake(normal_run):
 def test_the_chart_comes_from_the_lines_and_refuses_a_gauge_at_0_3_m():
     scene = _scene(storm=False)
     lo, hi = scene.config.chart
-    # the lines bound the depth from above (they lift at 22.2-22.3 m); below, the installer's
-    assert lo == 0.0 and 25.0 < hi < 30.0, (lo, hi)
+    # the lines lift at 22.2-22.3 m: 1.25 x the deepest above, 0.05 x the shallowest below (a
+    # gauge's datum or scale fault, never a low water)
+    assert 1.0 < lo < 1.2 and 25.0 < hi < 30.0, (lo, hi)
+    assert lo > 0.3  # a pressure gauge stepping to 0.3 m is impossible by default
     no_chain = [dataclasses.replace(x, chain_length=None) for x in scene.config.lines]
     assert chart_range(no_chain) == (0.0, 12000.0)
     assert chart_range(scene.config.lines) == (lo, hi)
