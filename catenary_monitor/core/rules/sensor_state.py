@@ -263,9 +263,11 @@ def parted_pattern(
     tension: np.ndarray, ref: np.ndarray, drop: float, slack: np.ndarray
 ) -> np.ndarray:
     """Per (tick, line): the tension fell below ``(1 - drop)`` x its reference to at or below
-    the hanging chain's own weight (``slack``, :func:`slack_mask`; NaN references: no)."""
+    the hanging chain's own weight (``slack``, :func:`slack_mask`; NaN references: no), and not
+    below 0 (the rest of a parted chain still hangs from the hook: a negative force is the
+    cell's or its zero's, an impossible input)."""
     with np.errstate(invalid='ignore'):
-        return (tension < (1.0 - drop) * ref) & slack
+        return (tension < (1.0 - drop) * ref) & slack & (tension >= 0.0)
 
 
 def slack_mask(limits: LineLimits, tension: np.ndarray, depth: np.ndarray) -> np.ndarray:
