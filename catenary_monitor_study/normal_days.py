@@ -874,12 +874,32 @@ def wave_motion(scene: Scene, t: np.ndarray, hs: np.ndarray) -> WaveMotion:
                       w.heave * hs * unit[3])  # fmt: skip
 
 
+def dock_offset(scene: Scene, c: Coarse, t: np.ndarray) -> np.ndarray:
+    """The dock's slow offset (len(t), 3) at ``t`` [s], between the grid's equilibria; with a
+    parted chain, at the intact dock's until the chain parts, then settling over one grid step
+    onto the other lines (never moving before it parts: on the grid alone the row after the
+    parting would pull the dock away from the parting line's anchor during the step before,
+    loading that chain towards uplift before it parts)."""
+    parted = scene.fault('parted')
+    if parted is None or not 0 < c.parted < len(c.t) - 1:
+        return np.stack([np.interp(t, c.t, c.offset[:, j]) for j in range(3)], axis=1)
+    i, at = c.parted, parted.at
+    before = t < at
+    after_t = np.concatenate([[at], c.t[i + 1 :]])
+    out = np.empty((len(t), 3))
+    for j in range(3):
+        out[before, j] = np.interp(t[before], c.t[:i], c.offset[:i, j])
+        after_q = np.concatenate([[np.interp(at, c.t[:i], c.offset[:i, j])], c.offset[i + 1 :, j]])
+        out[~before, j] = np.interp(t[~before], after_t, after_q)
+    return out
+
+
 def hook_tensions(scene: Scene, c: Coarse, t: np.ndarray) -> np.ndarray:
     """True hook tensions [N] (len(t), lines) at ``t`` [s from the start]: every chain at its
     hook, the dock at its equilibrium moved by the waves, the hooks at the still-water depth
     plus their heave; a parted line carries the chain hanging below its hook."""
     model = _model(scene)
-    q = np.stack([np.interp(t, c.t, c.offset[:, j]) for j in range(3)], axis=1)
+    q = dock_offset(scene, c, t)
     hs = np.interp(t, c.t, c.hs)
     wave = wave_motion(scene, t, hs)
     q[:, 0] += wave.surge

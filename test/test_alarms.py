@@ -541,14 +541,14 @@ def test_vectorized_wave_and_status_table():
     updates = wave_updates(8.0, seconds=120.0)
     assert len(assert_replay_matches(alarm_with(), updates)) == 1
     times, cols = as_arrays(
-        [(0.0, fresh(0.0)), (1.0, AlarmInputs(status=4, tension_stamp=1.0, depth_stamp=1.0))]
+        [(0.0, fresh(0.0)), (1.0, AlarmInputs(status=1, tension_stamp=1.0, depth_stamp=1.0))]
     )
     del cols['status_message']
     result = replay_levels(
         times,
         cols,
         alarm_with(),
-        status_messages={4: 'tension is NaN'},
+        status_messages={1: 'tension is NaN'},
         initial=in_service(alarm_with(), 0.0),
     )
     assert result.transitions[0].message == 'impossible input: tension is NaN'

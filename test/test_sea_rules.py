@@ -205,8 +205,9 @@ def test_a_unit_mistake_is_found_against_the_lines_statics(day, kind, factor):
 def test_chart_defaults_from_the_lines(day):
     scene, c = day
     lo, hi = sr.chart_range(scene.config)
-    # the lines bound the depth from above only; below, the installer's depth_min
-    assert lo == 0.0 and hi > float(np.max(c.depth)) + 5.0
+    # the lines bound the depth far below the lowest water (a gauge's datum or scale fault),
+    # a quarter above their deepest lift depth
+    assert 0.3 < lo < 0.1 * float(np.min(c.depth)) and hi > float(np.max(c.depth)) + 5.0
 
 
 def test_the_depth_column_loop_is_the_scalar_sample():

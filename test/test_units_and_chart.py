@@ -78,8 +78,10 @@ def test_a_normal_stretch_claims_no_unit_mistake(normal_run):
 def test_the_chart_comes_from_the_lines_and_refuses_a_gauge_at_0_3_m():
     scene = _scene(storm=False)
     lo, hi = scene.config.chart
-    # the lines bound the depth from above (they lift at 22.2-22.3 m); below, the installer's
-    assert lo == 0.0 and 25.0 < hi < 30.0, (lo, hi)
+    # the lines lift at 22.2-22.3 m: 1.25 x the deepest above, 0.05 x the shallowest below (a
+    # gauge's datum or scale fault, never a low water)
+    assert 1.0 < lo < 1.2 and 25.0 < hi < 30.0, (lo, hi)
+    assert lo > 0.3  # a pressure gauge stepping to 0.3 m is impossible by default
     no_chain = [dataclasses.replace(x, chain_length=None) for x in scene.config.lines]
     assert chart_range(no_chain) == (0.0, 12000.0)
     assert chart_range(scene.config.lines) == (lo, hi)
@@ -110,8 +112,8 @@ def test_a_pressure_gauge_at_0_3_m_is_an_impossible_depth_and_blinds_no_line_lou
     """The pressure gauge steps to 0.3 m for 10 min: the tide is ERROR "impossible depth"
     (never OK meanwhile), no line solves on it nor annunciates (each blind by it)."""
     fault = nd.Fault('pressure_step', 600.0, 600.0, None, 0.3)
-    scene = nd.paper_scene('pressure_1mm', days=20 / 1440.0, faults=(fault,), mean_depth=18.3,
-                           settings={'depth_min': 12.0})  # the installer's chart  # fmt: skip
+    scene = nd.paper_scene('pressure_1mm', days=20 / 1440.0, faults=(fault,), mean_depth=18.3)
+    assert 0.3 < scene.config.chart[0] < 17.0  # the default chart from the lines
     scene = dataclasses.replace(scene, cells=dataclasses.replace(scene.cells, rate=2.0))
     counter = _run(scene, tmp_path_factory, 'pressure')
     t0 = scene.start_s
@@ -133,4 +135,55 @@ def test_a_parted_chain_is_one_error_on_its_line(tmp_path_factory):
     heard = counter.heard(scene.start_s + 600.0, scene.start_s + 1200.0)
     mine = [a for a in heard if a.status == LINE]
     assert len(mine) == 1 and mine[0].after == 2, heard[:4]
+    assert 'suspected parted' in mine[0].message, mine[0]  # named, never an impossible input
     assert not [a for a in heard if a.status.startswith('line_') and a.status != LINE]
+
+
+def _drawn(faults, minutes=10.0):
+    """A dock none of the rules was written on (drawn:2: 8 lines of 48 mm chain, Bermuda),
+    load cells at 2 Hz; a units fault brings a storm lifting its line's anchor throughout."""
+    scene = nd.drawn_scene(2, 'radar_1cm', days=minutes / 1440.0, faults=faults)
+    return dataclasses.replace(scene, cells=dataclasses.replace(scene.cells, rate=2.0))
+
+
+@pytest.mark.parametrize('kind', ['units_dan', 'units_tf'])
+def test_a_unit_mistake_in_a_storm_is_named_on_a_drawn_dock(kind, tmp_path_factory):
+    """No calm window: the dock estimate is the witness. The line is one ERROR "wrong units?"
+    naming its tension_scale from the first tick, never OK; no other line is claimed."""
+    line = nd.storm_line(_drawn(()))
+    scene = _drawn((nd.Fault(kind, 0.0, math.inf, line),))
+    assert nd.scene_margins(scene)['uplift_max'] > 150e3  # the storm lifts its anchor
+    counter = _run(scene, tmp_path_factory, f'drawn-{kind}')
+    levels = [level for t, level in counter.changes[line] if t >= scene.start_s + 0.5]
+    assert levels and 0 not in levels, counter.changes[line][:10]
+    mine = [a for a in counter.heard() if a.status == line]
+    assert len(mine) == 1 and mine[0].after == 2, mine[:3]
+    assert 'wrong units?' in mine[0].message and f'{line}.tension_scale' in mine[0].message
+    assert not [a for a in counter.heard() if 'wrong units' in a.message and a.status != line]
+
+
+def test_a_parted_chain_is_named_on_a_drawn_dock(tmp_path_factory):
+    line = nd.storm_line(_drawn(()))
+    scene = _drawn((nd.Fault('parted', 300.0, math.inf, line, 12.0),))
+    counter = _run(scene, tmp_path_factory, 'drawn-parted')
+    heard = counter.heard(scene.start_s + 300.0, scene.start_s + 600.0)
+    assert heard and heard[0].status == line, heard[:3]  # first out
+    assert heard[0].after == 2 and 'suspected parted' in heard[0].message, heard[0]
+    assert len([a for a in heard if a.status == line]) == 1, heard[:4]
+
+
+def test_the_dock_witness_claims_a_flagged_line_off_by_a_unit_factor():
+    rule = plausible.UnitsRule()
+    tension = np.array([[100e3, 100e3, 100e3, 12e3, 100e3, 100e3]])
+    fresh = np.ones_like(tension, bool)
+    inputs = np.zeros((1, 6, 4))
+    inputs[..., 2] = 100e3  # the expected tensions
+    inputs[0, 3, 0] = 1.0  # line 3 flagged: 100 / 12 = 8.3, within 25 % of 9.81
+    idx, fits = plausible.dock_units(inputs, tension, fresh, rule)
+    assert plausible.UNIT_FACTORS[idx[0, 3]][0] == 9.80665 and (np.delete(idx, 3) == -1).all()
+    assert fits[0].tolist() == [True, True, True, False, True, True]
+    inputs[0, 3, 2] = 40e3  # 3.3x: near no factor within 25 %
+    assert (plausible.dock_units(inputs, tension, fresh, rule)[0] == -1).all()
+    inputs[0, 3, 2] = 100e3
+    inputs[0, :3, 0] = 1.0  # four of six flagged: the estimate does not stand
+    assert (plausible.dock_units(inputs, tension, fresh, rule)[0] == -1).all()

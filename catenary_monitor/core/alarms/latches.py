@@ -632,21 +632,24 @@ def uplift_seen(nominal: float, dynamic: float) -> float:
 
 
 def _impossible(status: int, sensor: float) -> bool:
-    """Whether a solve's ``status`` is an impossible input: any but 0, except ``T <= w*h`` on
-    a line whose ``sensor_state`` is ``suspected_parted`` (that condition names it) and an
-    impossible depth (the tide's ERROR names it; the line is blind by it)."""
+    """Whether a solve's ``status`` is an impossible input: any but 0, except an impossible
+    depth (the tide's ERROR names it; the line is blind by it) and ``T <= w*h`` but on a line
+    whose ``sensor_state`` the tick decided ``slack``: a tension falling to ``T <= w*h`` is
+    judged at the next tick (``diagnostic_rate``, before the next /diagnostics), where the
+    sensor states tell a parted chain (``suspected_parted`` names it, never as an impossible
+    input first) from a slack reading."""
     if status == Status.IMPLAUSIBLE_DEPTH:
         return False  # the depth's: the tide's ERROR, the line blind by it
     if sensor_state.is_units(sensor):
         return True  # a reading off by a unit factor
-    return status != 0 and not (status == Status.TENSION and sensor == sensor_state.PARTED)
+    return status != 0 and not (status == Status.TENSION and sensor != sensor_state.SLACK)
 
 
 def _impossible_column(status: np.ndarray, sensor: np.ndarray) -> np.ndarray:
     """:func:`_impossible` per update."""
-    parted = (status == Status.TENSION) & (sensor == sensor_state.PARTED)
+    pending = (status == Status.TENSION) & (sensor != sensor_state.SLACK)
     units = sensor >= sensor_state.UNITS_BASE
-    return ((status != 0) & (status != Status.IMPLAUSIBLE_DEPTH) & ~parted) | units
+    return ((status != 0) & (status != Status.IMPLAUSIBLE_DEPTH) & ~pending) | units
 
 
 def _sensor_codes(cond: str, code: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

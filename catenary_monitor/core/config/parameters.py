@@ -863,9 +863,10 @@ PARAMETERS: tuple[ParamSpec, ...] = (
                 'depth_min',
                 math.nan,
                 'Chart range of the depth sensor: a depth below this is impossible (out_of_range: '
-                'the tide ERROR, no line solves on it); NaN: 0 (the lines bound the depth from '
-                'above only: give the lowest water less a margin to catch a gauge\'s datum '
-                'error)',
+                'the tide ERROR, no line solves on it); NaN: from the lines, 0.05 x the '
+                'shallowest depth at which a chain lifts its anchor at its installed span (0 '
+                'without chain lengths): a gauge\'s datum or scale fault, never a low water; '
+                'give the lowest water less a margin to catch a smaller datum error',
                 'm',
                 0.0,
                 12000.0,
@@ -886,9 +887,10 @@ PARAMETERS: tuple[ParamSpec, ...] = (
                 600.0,
                 'wrong units: a line whose reading is off by a unit factor (10, 9.81, 100, 1000, '
                 '4.45, 4448 or their inverses) against its fixed-length statics at rest x the '
-                'dock\'s common loading, judged while the dock is calm, is an input ERROR naming '
-                'its tension_scale; held until its reading fits the statics for this long (0: no '
-                'check; needs chain_length on 3 lines or more)',
+                'dock\'s common loading, judged while the dock is calm, or against the dock '
+                'estimate\'s expected tension from the lines that agree, in any weather, is an '
+                'input ERROR naming its tension_scale; held until its reading fits for this long '
+                '(0: no check; needs chain_length on 3 lines or more)',
                 's',
                 0.0,
                 86400.0,
@@ -1815,21 +1817,26 @@ _TOP_LEVEL = (
 #: Per-line parameters that place a line on the dock (all given on every line, or none).
 GEOMETRY = ('hook_x', 'hook_y', 'heading', 'chain_length')
 
-#: The default chart range as multiples of the shallowest and deepest depth [m] at which a
-#: line's fixed-length chain lifts its anchor at its installed span: the depths the dock was
-#: laid for lie below those; a gauge reading a quarter of them or a quarter more is a datum,
-#: scale or sensor fault. A quarter, not half: a chain laid with much grounded length lifts far
-#: deeper than the dock floats (130 m of chain at a 100 m span lifts at about 60 m).
+#: The default chart range as multiples of the shallowest (``depth_min``) and the deepest
+#: (``depth_max``) depth [m] at which a line's fixed-length chain lifts its anchor at its
+#: installed span. The depths the dock was laid for lie below the lift depths, and far above a
+#: twentieth of them: a chain laid with much grounded length lifts deeper than the dock floats
+#: (130 m of chain at a 100 m span lifts at about 60 m; a dock moored so lies at 15-20 m, a
+#: quarter of it), none at twenty times its depth. A gauge reading below a twentieth of the
+#: shallowest lift depth (a pressure gauge stepping to 0.3 m; paper dock: below 1.1 m) or a
+#: quarter above the deepest is a datum, scale or sensor fault.
+CHART_LOW = 0.05
 CHART_HIGH = 1.25
 
 
 def chart_range(lines: Iterable[LineConfig]) -> tuple[float, float]:
-    """The default ``(depth_min, depth_max)`` [m] from the lines: 0, and :data:`CHART_HIGH` x
-    the deepest depth at which a fixed-length chain lifts its anchor at its installed span (the
-    hook height taken off; 12000 without chain lengths). The geometry bounds the depth from
-    above only: a shallower sea lays more chain on the seabed (a long chain on a short span
-    lifts its anchor only far deeper than the dock lies), so a gauge's datum error below the
-    dock's depth is found only against a ``depth_min`` the installer gives."""
+    """The default ``(depth_min, depth_max)`` [m] from the lines: :data:`CHART_LOW` x the
+    shallowest and :data:`CHART_HIGH` x the deepest depth at which a fixed-length chain lifts
+    its anchor at its installed span (the hook height taken off; 0 and 12000 without chain
+    lengths). The low bound is loose on purpose: a shallower sea only lays more chain on the
+    seabed (a long chain on a short span lifts its anchor far deeper than the dock lies), so it
+    catches a gauge's datum or scale fault (a pressure gauge stepping to 0.3 m), never a low
+    water; an installer who knows the lowest water gives ``depth_min`` closer."""
     from catenary_monitor.core.physics.fixed_length import lift_depth_scalar
 
     lifts = []
@@ -1845,7 +1852,7 @@ def chart_range(lines: Iterable[LineConfig]) -> tuple[float, float]:
             lifts.append(lift - line.hook_height)
     if not lifts:
         return 0.0, 12000.0
-    return 0.0, min(CHART_HIGH * max(lifts), 12000.0)
+    return CHART_LOW * min(lifts), min(CHART_HIGH * max(lifts), 12000.0)
 
 
 @dataclass(frozen=True)

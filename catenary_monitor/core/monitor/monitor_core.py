@@ -357,6 +357,7 @@ class MonitorCore:
         changes += self._decide_blind(ev.stamp_ns, log)
         if self.dock_model is not None:
             changes += self._decide_dock(ev.stamp_ns)
+        self._decide_units(ev.stamp_ns)
         changes += self._step_lines(range(len(self.state.lines)), ev.stamp_ns, log)
         changes += self._decide_flood(ev.stamp_ns, log, tick=True)
         snapshot = self.snapshot(ev.stamp_ns)
@@ -782,18 +783,6 @@ class MonitorCore:
         firm = np.array([line.firm_seen for line in lines])
         firm = sensor_state.firm_times(now, slack, firm)
         tension_s = np.array([[line.tension_s for line in lines]])
-        units, memories = plausible.units_decide(
-            self.rest_table,
-            units_rule(self.config),
-            [line.units for line in lines],
-            now,
-            tension,
-            tension_s,
-            depth,
-            np.array([self.state.depth_s]),
-            (a.tension_timeout, a.depth_timeout),
-            self.config.chart,
-        )
         self.state.sensor_times = np.append(self.state.sensor_times[keep:], now)
         spiked = np.array([[line.sensor_memory.spiked for line in lines]])
         row = sensor_state.history_row(now, tension, spiked, a.sensor_hold)
@@ -811,11 +800,10 @@ class MonitorCore:
             np.array([self.state.depth_memory.changed]),
             np.array([[line.stamp_refused for line in lines]]),
             firm,
-            units,
         )
         for k, line in enumerate(lines):
             line.sensor_code, line.parted_seen = int(codes[0, k]), float(seen[0, k])
-            line.firm_seen, line.units = float(firm[0, k]), memories[k]
+            line.firm_seen = float(firm[0, k])
         last = np.array([[line.tension_s for line in lines] + [self.state.depth_s]])
         grouped = common_cause(
             last, now, silence_timeouts(self.config), a.common_cause_window,
@@ -839,6 +827,31 @@ class MonitorCore:
                 self.config.chart,
             )[0]
         )
+
+    def _decide_units(self, stamp_ns: int) -> None:
+        """The units check at a tick, after the dock estimate (one of its witnesses):
+        each line's ``wrong_units`` claim over its sensor state (core.rules.plausible)."""
+        a, lines = self.config.alarm, self.state.lines
+        now = np.array([_stamp_s(stamp_ns)])
+        dock = None
+        if self.dock_model is not None:
+            dock = np.array([[line.dock for line in lines]])
+        units, memories = plausible.units_decide(
+            self.rest_table,
+            units_rule(self.config),
+            [line.units for line in lines],
+            now,
+            np.array([[line.tension for line in lines]]),
+            np.array([[line.tension_s for line in lines]]),
+            np.array([self.state.depth]),
+            np.array([self.state.depth_s]),
+            (a.tension_timeout, a.depth_timeout),
+            self.config.chart,
+            dock,
+        )
+        codes = sensor_state.with_units(np.array([[line.sensor_code for line in lines]]), units)
+        for k, line in enumerate(lines):
+            line.sensor_code, line.units = int(codes[0, k]), memories[k]
 
     def _decide_dock(self, stamp_ns: int) -> list[Change]:
         """The dock estimate from every line's newest tension (core.rules.dock_watch): the dock

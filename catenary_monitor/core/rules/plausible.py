@@ -27,7 +27,7 @@ Both tension sentences end with "wrong units?" and the parameter to check
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, Optional
 
 import numpy as np
 
@@ -53,6 +53,7 @@ __all__ = [
     'units_latch',
     'units_text',
     'units_decide',
+    'dock_units',
 ]
 
 MAX_DEPTH = 12_000.0  # m
@@ -185,16 +186,27 @@ REST_POINTS = 400
 
 
 class UnitsRule(NamedTuple):
-    """The units check's thresholds: a ratio (expected / reading) at least ``far`` off 1 and
-    within ``tolerance`` (relative) of a unit factor is a claim; one within ``fit`` of 1 for
-    ``window`` s clears it; judged only while the dock is calm (the 75th percentile of the
-    lines' deviation from the common loading within ``calm``)."""
+    """The units check's thresholds. Two witnesses of a line's expected tension:
+
+    * its statics at rest x the dock's common loading, judged only while the dock is calm
+      (the 75th percentile of the lines' deviation from the common loading within ``calm``):
+      a ratio (expected / reading) at least ``far`` off 1 and within ``tolerance``
+      (relative) of a unit factor is a claim;
+    * where the dock model exists, the dock estimate's expected tension from the lines that
+      agree with each other (:mod:`~catenary_monitor.core.rules.dock_watch`), in any weather:
+      a line the estimate flags as disagreeing, whose ratio is within ``dock_tolerance`` of a
+      unit factor (and at least ``far`` off 1), while at most a third of the lines are flagged
+      (the others agree: the estimate stands), is a claim.
+
+    A ratio within ``fit`` of 1 (the statics' at rest, or the dock estimate's while the line
+    agrees with it) for ``window`` s clears it."""
 
     far: float = 3.0
     tolerance: float = 0.4
     fit: float = 1.25
     calm: float = 1.5
     window: float = 600.0
+    dock_tolerance: float = 0.25
 
 
 class UnitsMemory(NamedTuple):
@@ -305,18 +317,26 @@ def units_latch(
     calm: np.ndarray,
     judged: np.ndarray,
     rule: UnitsRule,
+    dock: Optional[tuple[np.ndarray, np.ndarray]] = None,
 ) -> tuple[np.ndarray, list[UnitsMemory]]:
     """Per (tick, line): the index of the unit factor a line is claimed off by (-1: none),
     and each line's latch after the last tick. A claim needs a calm dock (``calm`` within
-    ``rule.calm``) and the line's ``ratio`` off by a unit factor (:func:`units_factors`);
-    it holds until the ratio was within ``rule.fit`` of 1 for ``rule.window`` s (a tick not
-    ``judged``, e.g. a stale reading or depth, is not within). Ticks ``now`` [s]."""
+    ``rule.calm``) and the line's ``ratio`` off by a unit factor (:func:`units_factors`), or
+    the dock estimate's claim ``dock`` = (factor index (-1: none), the line tested and
+    agreeing) per (tick, line) (:func:`dock_units`); it holds until the ratio was within
+    ``rule.fit`` of 1, or of the dock estimate's expectation while agreeing with it, for
+    ``rule.window`` s (a tick
+    not ``judged``, e.g. a stale reading or depth, is not within). Ticks ``now`` [s]."""
     n, m = ratio.shape
     with np.errstate(invalid='ignore', divide='ignore'):
         quiet = calm <= math.log(rule.calm)
         idx = units_factors(ratio, rule.tolerance, rule.far)
         claim = (idx >= 0) & quiet[:, None] & judged
         near = judged & (np.abs(np.log(ratio)) < math.log(rule.fit))
+    if dock is not None:
+        idx = np.where(dock[0] >= 0, dock[0], idx)
+        claim |= dock[0] >= 0
+        near |= dock[1]
     if not n:
         return np.full((0, m), -1, np.int64), list(memory)
     before = np.array([[x.claimed for x in memory], [x.far for x in memory],
@@ -359,6 +379,29 @@ def units_text(name: str, scale: float, index: int, tension: float) -> str:
     )
 
 
+def dock_units(
+    inputs: np.ndarray, tension: np.ndarray, fresh: np.ndarray, rule: UnitsRule
+) -> tuple[np.ndarray, np.ndarray]:
+    """The dock estimate's witness of the units, per (tick, line): the index of the unit
+    factor a line's ``tension`` [N] is off by against the estimate's expected tension (-1:
+    none), and whether the line was tested, agrees and reads within ``rule.fit`` of the
+    expected tension (a witness that the reading fits). ``inputs`` (ticks, lines, 4) are the
+    estimate's :data:`~catenary_monitor.core.rules.dock_watch.LINE_INPUTS` at the tick (flag
+    1.0 disagreeing, 0.0 agreeing, NaN untested; the expected tension the others' fitted
+    position gives the line); ``fresh`` the readings judged. A claim needs the line flagged
+    and at most a third of the lines flagged (the rest agree with each other)."""
+    flag, expected = inputs[..., 0], inputs[..., 2]
+    m = tension.shape[1]
+    with np.errstate(invalid='ignore', divide='ignore'):
+        flagged = fresh & (flag == 1.0)
+        few = np.sum(flag == 1.0, axis=1) <= max(1, m // 3)
+        ratio = expected / tension
+        fits = fresh & (flag == 0.0) & (np.abs(np.log(ratio)) < math.log(rule.fit))
+        ratio = np.where(flagged & few[:, None], ratio, math.nan)
+    idx = units_factors(ratio, rule.dock_tolerance, rule.far)
+    return idx, fits
+
+
 def units_decide(
     table: tuple[np.ndarray, np.ndarray],
     rule: UnitsRule,
@@ -370,19 +413,22 @@ def units_decide(
     depth_s: np.ndarray,
     timeouts: tuple[float, float],
     chart: tuple[float, float],
+    dock: Optional[np.ndarray] = None,
 ) -> tuple[np.ndarray, list[UnitsMemory]]:
     """The units check at ticks ``now`` [s] (the core's one tick, the twin's window of them):
     per (tick, line) the index of the unit factor a line is claimed off by (-1: none), and the
     latches after (:func:`units_latch`). From each line's newest tension [N] and its stamp [s]
-    and the newest depth [m] and its stamp [s] per tick; a reading older than its timeout
-    (``tension_timeout``, ``depth_timeout`` [s]) or a depth outside the ``chart`` is not
-    judged. ``rule.window`` 0: no check."""
+    and the newest depth [m] and its stamp [s] per tick, and the dock estimate's line inputs
+    at the tick (``dock`` (ticks, lines, 4), :func:`dock_units`; None: no dock model); a
+    reading older than its timeout (``tension_timeout``, ``depth_timeout`` [s]) or a depth
+    outside the ``chart`` is not judged. ``rule.window`` 0: no check."""
     n, m = tension.shape
-    if not rule.window > 0.0 or not len(table[0]):
+    if not rule.window > 0.0 or (not len(table[0]) and dock is None):
         return np.full((n, m), -1, np.int64), list(memory)
     with np.errstate(invalid='ignore'):
         depth_ok = (now - depth_s <= timeouts[1]) & (depth >= chart[0]) & (depth <= chart[1])
         fresh = (now[:, None] - tension_s <= timeouts[0]) & depth_ok[:, None]
     ratio, calm = units_ratios(table, np.where(depth_ok, depth, math.nan),
                                np.where(fresh, tension, math.nan))  # fmt: skip
-    return units_latch(memory, now, ratio, calm, fresh & np.isfinite(ratio), rule)
+    witness = None if dock is None else dock_units(dock, tension, fresh, rule)
+    return units_latch(memory, now, ratio, calm, fresh & np.isfinite(ratio), rule, witness)

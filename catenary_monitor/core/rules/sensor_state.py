@@ -98,6 +98,7 @@ __all__ = [
     'slack_mask',
     'firm_times',
     'decide_lines',
+    'with_units',
     'decide_depth',
     'reference',
     'history_row',
@@ -263,9 +264,11 @@ def parted_pattern(
     tension: np.ndarray, ref: np.ndarray, drop: float, slack: np.ndarray
 ) -> np.ndarray:
     """Per (tick, line): the tension fell below ``(1 - drop)`` x its reference to at or below
-    the hanging chain's own weight (``slack``, :func:`slack_mask`; NaN references: no)."""
+    the hanging chain's own weight (``slack``, :func:`slack_mask`; NaN references: no), and not
+    below 0 (the rest of a parted chain still hangs from the hook: a negative force is the
+    cell's or its zero's, an impossible input)."""
     with np.errstate(invalid='ignore'):
-        return (tension < (1.0 - drop) * ref) & slack
+        return (tension < (1.0 - drop) * ref) & slack & (tension >= 0.0)
 
 
 def slack_mask(limits: LineLimits, tension: np.ndarray, depth: np.ndarray) -> np.ndarray:
@@ -324,11 +327,18 @@ def decide_lines(
     if refused is not None:
         with np.errstate(invalid='ignore'):
             code[(t_now - refused <= hold) & ~(over | slack | parted)] = BAD_STAMP
-    if units is not None:
-        wrong = (units >= 0) & ~(over | slack | parted)
-        code[wrong] = (UNITS_BASE + units[wrong]).astype(np.int8)
     code[over] = OVER_MBL
-    return code
+    return code if units is None else with_units(code, units)
+
+
+def with_units(code: np.ndarray, units: np.ndarray) -> np.ndarray:
+    """Line state codes (:func:`decide_lines`) with the ``wrong_units`` claims (the index of
+    the unit factor per (tick, line), -1: none): a claim outranks every state but the ERROR
+    ones (over MBL, suspected parted, slack). Decided after the dock estimate, whose expected
+    tensions are one of its witnesses (:func:`~catenary_monitor.core.rules.plausible.
+    units_decide`)."""
+    wrong = (units >= 0) & ~np.isin(code, ERROR_STATES)
+    return np.where(wrong, UNITS_BASE + units, code).astype(np.int8)
 
 
 #: Semidiurnal (M2) angular speed [rad/s]: a tide of amplitude A bends at most A x this^2.

@@ -60,6 +60,7 @@ __all__ = [
     'tide_status_at',
     'SensorColumns',
     'decide_sensors_window',
+    'decide_units_window',
     'decide_tide',
     'BlindColumns',
     'blind_status_at',
@@ -127,6 +128,9 @@ class SensorColumns:
     cause_ids: np.ndarray  # per tick: its causes in ``causes`` (-1: none)
     causes: list[tuple[CommonCause, ...]]
     before_causes: tuple[CommonCause, ...]
+    #: What the units check takes at the ticks (:func:`decide_units_window`): now [s], each
+    #: line's newest tension [N] and stamp [s], the newest depth [m] and stamp [s].
+    readings: tuple[np.ndarray, ...] = ()
 
     def causes_at(self, i: int) -> tuple[CommonCause, ...]:
         """The common causes after tick ``i`` (-1: before the window)."""
@@ -199,18 +203,6 @@ def decide_sensors_window(
         np.vstack([first, np.where(pattern, now[:, None], -math.inf)]), axis=0
     )[1:]
     firm = sensor_state.firm_times(now, slack, np.array([line.firm_seen for line in lines]))
-    units, units_after = plausible.units_decide(
-        core.rest_table,
-        units_rule(core.config),
-        [line.units for line in lines],
-        now,
-        tension,
-        tension_s,
-        depth,
-        depth_s,
-        (a.tension_timeout, a.depth_timeout),
-        core.config.chart,
-    )
     codes = sensor_state.decide_lines(
         a,
         limits,
@@ -224,7 +216,6 @@ def decide_sensors_window(
         d_changed,
         refused,
         firm,
-        units,
     )
     depth_codes = sensor_state.decide_depth(
         a, now, depth, depth_s, d_changed, d_spiked, sea, d_refused, core.config.chart
@@ -236,7 +227,6 @@ def decide_sensors_window(
                 sensor_code=int(codes[-1, k]),
                 parted_seen=float(seen[-1, k]),
                 firm_seen=float(firm[-1, k]),
-                units=units_after[k],
             )
         )
     last = np.column_stack([tension_s, depth_s])
@@ -250,8 +240,44 @@ def decide_sensors_window(
         )  # fmt: skip
     )
     return SensorColumns(
-        codes, depth_codes, before, before_depth, grouped, flags, ids, found, causes
+        codes, depth_codes, before, before_depth, grouped, flags, ids, found, causes,
+        (now, tension, tension_s, depth, depth_s),
+    )  # fmt: skip
+
+
+def decide_units_window(
+    core: MonitorCore, sensors: SensorColumns, dock: Optional['DockColumns']
+) -> None:
+    """The units check at the window's ticks, after the dock estimate (one of its
+    witnesses): the ``wrong_units`` claims put over the lines' sensor codes (``sensors`` is
+    changed); leaves the core's units latches and codes as after the last tick (as the
+    core's ``_decide_units``)."""
+    if not sensors.readings:
+        return
+    lines = core.state.lines
+    a = core.config.alarm
+    now, tension, tension_s, depth, depth_s = sensors.readings
+    inputs = None if dock is None else dock.decision.line_inputs
+    units, units_after = plausible.units_decide(
+        core.rest_table,
+        units_rule(core.config),
+        [line.units for line in lines],
+        now,
+        tension,
+        tension_s,
+        depth,
+        depth_s,
+        (a.tension_timeout, a.depth_timeout),
+        core.config.chart,
+        inputs,
     )
+    sensors.codes = sensor_state.with_units(sensors.codes, units)
+    for k, line in enumerate(lines):
+        line.take(
+            line.read(LineRulesPart)._replace(
+                sensor_code=int(sensors.codes[-1, k]), units=units_after[k]
+            )
+        )
 
 
 def _causes(

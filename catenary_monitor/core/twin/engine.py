@@ -62,6 +62,7 @@ from catenary_monitor.core.twin.decisions import (
     decide_blind,
     decide_dock_window,
     decide_sensors_window,
+    decide_units_window,
     decide_tide,
     fuse_channels,
     window_journal,
@@ -330,6 +331,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
     tide, tide_transitions = decide_tide(core, window, sensors)
     blind = decide_blind(core, window, tide, sensors)
     dock = decide_dock_window(core, window, tide)
+    decide_units_window(core, sensors, dock)
     results, series, steps, acks, damage = [], [], [], [], []
     for k, line in enumerate(core.state.lines):
         before = line.fatigue_values[0]
