@@ -551,6 +551,7 @@ def register(sub: Any) -> None:
         type=float,
         default=0.0,
         metavar='S',
-        help='--publish: wait up to S s until every topic has a subscriber',
+        help='--publish: wait up to S s until every topic has a subscriber (and /clock its '
+        'listed ones)',
     )
     p.set_defaults(func=cmd_replay, long_running=lambda a: bool(a.publish))

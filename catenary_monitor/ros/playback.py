@@ -195,11 +195,7 @@ def _play(
             clock.clock.sec, clock.clock.nanosec = divmod(int(log_ns), 1_000_000_000)
             clock_pub.publish(clock)
 
-        deadline = time.monotonic() + wait
-        while wait > 0 and not stop.is_set() and time.monotonic() < deadline:
-            if all(p.get_subscription_count() > 0 for p in pubs):
-                break
-            stop.wait(0.05)
+        _wait_for_readers(node, pubs, clock_pub, stop, wait)
         gap = float(np.median(np.diff(offsets))) if len(offsets) > 1 else 0.0
         which_l, offsets_l, times_l = which.tolist(), offsets.tolist(), t_ns.tolist()
         first = times_l[0]
@@ -233,6 +229,22 @@ def _play(
         node.destroy_node()
         rclpy.try_shutdown()
     return 0
+
+
+def _wait_for_readers(
+    node: Any, pubs: list[Any], clock_pub: Any, stop: threading.Event, wait: float
+) -> None:
+    """Wait up to ``wait`` s until every data topic has a matched reader and every reader the
+    graph already lists (on /clock too) is matched, so a sim-time node's /clock reader found
+    with its data readers sees the first tick."""
+    deadline = time.monotonic() + wait
+    every = [*pubs, clock_pub]
+    while wait > 0 and not stop.is_set() and time.monotonic() < deadline:
+        if all(p.get_subscription_count() > 0 for p in pubs) and all(
+            p.get_subscription_count() >= node.count_subscribers(p.topic_name) for p in every
+        ):
+            return
+        stop.wait(0.05)
 
 
 def _wait_ticking(
