@@ -104,3 +104,29 @@ def test_alarms_json_counts_what_diagnostics_show(counted, capsys):
         t0 = scene.start_s + 90.0
         window = [a for a in heard if t0 <= a.time < t0 + 60.0]
         assert [(a.status, a.after) for a in window] == [('sensors', 3)], window
+
+
+def test_a_component_out_of_its_suppressed_stale_is_raised_as_diagnostics_show_it():
+    """The tide's and the dock's STALE is shown ``suppressed`` (the sensors alarm announces
+    it): leaving it for a WARN is heard, as the counter of /diagnostics hears it; another
+    component's STALE (the intake's) was heard already."""
+    from catenary_monitor.core.alarms.journal import component_entries
+    from catenary_monitor.core.alarms.latches import Transition
+    from catenary_monitor.core.rules.level import Level
+    from catenary_monitor_study.annunciations import Counter
+
+    def kinds(name, old, new, quiet=False):
+        return [e.kind for e in component_entries(name, Transition(9.0, old, new, '', 1.0,
+                                                                   quiet))]  # fmt: skip
+
+    assert kinds('tide', Level.STALE, Level.WARN) == ['active', 'raised']
+    assert kinds('dock', Level.STALE, Level.ERROR) == ['active', 'raised']
+    assert kinds('intake', Level.STALE, Level.WARN) == []
+    assert kinds('tide', Level.OK, Level.STALE, quiet=True) == []
+    assert kinds('tide', Level.STALE, Level.OK, quiet=True) == ['cleared']
+    c = Counter()
+    rows = [(3, 'suppressed'), (1, 'active'), (0, 'normal'), (3, 'suppressed'), (1, 'active')]
+    for k, (level, state) in enumerate(rows):
+        c.take_rows(k * 1_000_000_000, [('catenary_monitor: tide', level, 'x',
+                                         {'alarm_state': state})])  # fmt: skip
+    assert [(a.before, a.after) for a in c.heard()] == [(3, 1), (3, 1)]
