@@ -3,10 +3,14 @@
 The monitor publishes (and ``catenary-monitor replay --out`` records) a ``DiagnosticArray`` at
 every tick: a status per line and the ``tide``, ``sensors``, ``alarms``, ``logger``, ``dock``,
 ``fatigue``, ``intake``, ``parameters`` and ``clock`` statuses. An operator hears a status
-when its level rises: OK to WARN, ERROR or STALE (raised), or WARN to ERROR (escalated); a
-status whose ``alarm_state`` says ``suppressed`` or ``shelved`` at that moment is shown as such
-and not annunciated (counted apart, ``hidden``). A status that starts non-OK (the start-up
-wait) has not left OK.
+when what it shows active rises: OK to WARN, ERROR or STALE (raised), or WARN to ERROR
+(escalated); a status whose ``alarm_state`` says ``suppressed`` or ``shelved`` shows nothing
+active (a level it rises to then is shown as such and not annunciated: counted apart,
+``hidden``), so leaving it for an active level is a raise (a line's suppressed start-up STALE
+followed by an anchor-margin WARN is heard). An alarm with an acknowledgement state (a line's,
+the ``sensors``': ``alarm_raised`` among its values) is heard as the console lists it: when its
+``alarm_state`` becomes ``unacknowledged`` from another state, or with a new ``alarm_raised``
+(raised again). A status that starts non-OK (the start-up wait) has not left OK.
 
 :class:`Counter` takes the replay driver's snapshots (:class:`Snapshot`, or the columns of
 ``snapshots='columns'``: levels compared as arrays, the text read only where a level rises);
@@ -21,7 +25,7 @@ import re
 import struct
 from collections import Counter as Tally
 from pathlib import Path
-from typing import Any, Callable, Iterable, NamedTuple, Sequence
+from typing import Any, Callable, Iterable, NamedTuple, Optional, Sequence
 
 import numpy as np
 
@@ -33,6 +37,8 @@ __all__ = ['Annunciation', 'Counter', 'cause', 'family', 'read_results', 'HIDDEN
 
 #: ``alarm_state`` values under which a raised status is not annunciated.
 HIDDEN = ('suppressed', 'shelved')
+#: ``alarm_state`` of an alarm the console lists as raised and waiting for an acknowledgement.
+UNACKNOWLEDGED = 'unacknowledged'
 _PREFIX = 'catenary_monitor: '
 
 
@@ -81,6 +87,8 @@ class Counter:
 
     def abandon(self) -> None:
         self.level: dict[str, int] = {}
+        #: Each status's last (level, alarm_state, alarm_raised or None).
+        self.shown: dict[str, tuple[int, str, Optional[str]]] = {}
         self.events: list[Annunciation] = []
         #: Every level change of each status: name -> [(time s, level)], in time order.
         self.changes: dict[str, list[tuple[float, int]]] = {}
@@ -94,7 +102,7 @@ class Counter:
     def take(self, snapshots: Iterable[Snapshot | SnapshotColumns]) -> None:
         """One window's snapshots (in any order: a window's event snapshots can come after
         its tick columns; each status is followed in time order)."""
-        series: dict[str, list[tuple[np.ndarray, np.ndarray, Any]]] = {}
+        series: dict[str, list[tuple[Any, ...]]] = {}
         for snap in snapshots:
             if isinstance(snap, SnapshotColumns):
                 self._columns(snap, series)
@@ -103,9 +111,11 @@ class Counter:
                 self.snapshots += 1
                 self._mark(stamp)
                 for st in snap.statuses:
-                    text = (st.message, dict(st.values).get('alarm_state', ''))
+                    values = dict(st.values)
+                    text = (st.message, values.get('alarm_state', ''))
                     series.setdefault(_short(st.name), []).append(
-                        (stamp, np.array([int(st.level)]), lambda i, t=text: t))
+                        (stamp, np.array([int(st.level)]), lambda i, t=text: t,
+                         *_shown([values])))  # fmt: skip
         found: list[Annunciation] = []
         for name, pieces in series.items():
             found += self._rises(name, pieces)
@@ -121,7 +131,7 @@ class Counter:
         for name, level, message, values in statuses:
             text = (message, values.get('alarm_state', ''))
             self.events += self._rises(_short(name), [(stamp, np.array([level]),
-                                                       lambda i, t=text: t)])  # fmt: skip
+                                                       lambda i, t=text: t, *_shown([values]))])
 
     def _mark(self, stamps: np.ndarray) -> None:
         if len(stamps):
@@ -144,32 +154,51 @@ class Counter:
                     state = (group.values[group.keys.index('alarm_state')]
                              if 'alarm_state' in group.keys else '')  # fmt: skip
                     text = _column_text(group, k * n, state)
+                    shown = _column_shown(group, k * n, n)
                 else:
                     rows = group[k * n : (k + 1) * n]
                     levels = np.array([int(r.level) for r in rows])
                     name = rows[0].name
                     text = _row_text(rows)
-                series.setdefault(_short(name), []).append((stamps, levels, text))
+                    shown = _shown([dict(r.values) for r in rows])
+                series.setdefault(_short(name), []).append((stamps, levels, text, *shown))
 
-    def _rises(self, name: str, pieces: list[tuple[np.ndarray, np.ndarray, Any]]) -> list:
-        """The rises of one status over ``pieces`` (stamps, levels, text(i)) in time order."""
+    def _rises(self, name: str, pieces: list[tuple[Any, ...]]) -> list:
+        """The rises of one status over ``pieces`` (stamps, levels, text(i), alarm states,
+        ``alarm_raised`` or None) in time order."""
         stamps = np.concatenate([p[0] for p in pieces])
         levels = np.concatenate([p[1] for p in pieces])
+        states = np.concatenate([p[3] for p in pieces])
+        raised = None if pieces[0][4] is None else np.concatenate([p[4] for p in pieces])
         piece = np.concatenate([np.full(len(p[0]), j) for j, p in enumerate(pieces)])
         index = np.concatenate([np.arange(len(p[0])) for p in pieces])
         order = np.argsort(stamps, kind='stable')
         stamps, levels, piece, index = stamps[order], levels[order], piece[order], index[order]
+        states = states[order]
         before = self.level.get(name)
-        first = levels[0] if before is None else before
-        prev = np.concatenate([[first], levels[:-1]])
+        first = (levels[0], states[0], None if raised is None else raised[order][0])
+        last = first if before is None else self.shown[name]
+        prev = np.concatenate([[last[0]], levels[:-1]])
+        prev_states = np.concatenate([[last[1]], states[:-1]])
         self.level[name] = int(levels[-1])
         moves = self.changes.setdefault(name, [])
         if before is None:
             moves.append((float(stamps[0]) * 1e-9, int(levels[0])))
         for i in np.flatnonzero(levels != prev).tolist():
             moves.append((float(stamps[i]) * 1e-9, int(levels[i])))
+        hidden = np.isin(states, HIDDEN)
+        rose = _rank(levels) > _rank(prev)
+        if raised is None:  # a status: heard when what it shows active rises
+            shown = np.where(np.isin(prev_states, HIDDEN), 0, prev)
+            heard = ~hidden & (_rank(levels) > _rank(shown))
+        else:  # an alarm: heard when the console lists it (raised again)
+            raised = raised[order]
+            prev_raised = np.concatenate([[last[2]], raised[:-1]])
+            unack = states == UNACKNOWLEDGED
+            heard = unack & ((prev_states != UNACKNOWLEDGED) | (raised != prev_raised))
+        self.shown[name] = (int(levels[-1]), states[-1], None if raised is None else raised[-1])
         out = []
-        for i in np.flatnonzero(_rank(levels) > _rank(prev)).tolist():
+        for i in np.flatnonzero(heard | (hidden & rose)).tolist():
             message, state = pieces[int(piece[i])][2](int(index[i]))
             out.append(Annunciation(float(stamps[i]) * 1e-9, name, int(prev[i]), int(levels[i]),
                                     message, state if state in HIDDEN else ''))  # fmt: skip
@@ -200,6 +229,28 @@ class Counter:
 def _column_text(group: Any, at: int, state: Any) -> Callable[[int], tuple[str, str]]:
     """(message, alarm_state) of the ``i``-th snapshot of a status in columns."""
     return lambda i: (_get(group.message, at + i), _get(state, at + i) if state else '')
+
+
+def _shown(values: Sequence[dict]) -> tuple[np.ndarray, Optional[np.ndarray]]:
+    """The ``alarm_state`` of each of a status's values (empty when it has none) and its
+    ``alarm_raised`` (None for a status without one)."""
+    states = np.array([v.get('alarm_state', '') for v in values], object)
+    if not values or 'alarm_raised' not in values[0]:
+        return states, None
+    return states, np.array([v['alarm_raised'] for v in values], object)
+
+
+def _column_shown(group: Any, at: int, n: int) -> tuple[np.ndarray, Optional[np.ndarray]]:
+    """:func:`_shown` of the ``n`` snapshots of a status in columns from ``at``."""
+
+    def column(key: str) -> np.ndarray:
+        field = group.values[group.keys.index(key)]
+        if isinstance(field, str):
+            return np.full(n, field, object)
+        return np.array(field[at : at + n], object)
+
+    states = column('alarm_state') if 'alarm_state' in group.keys else np.full(n, '', object)
+    return states, column('alarm_raised') if 'alarm_raised' in group.keys else None
 
 
 def _row_text(rows: Any) -> Callable[[int], tuple[str, str]]:

@@ -19,11 +19,15 @@ from catenary_monitor.core.alarms.acknowledge import UNACKNOWLEDGED, AckState, s
 from catenary_monitor.core.alarms.latches import Transition
 from catenary_monitor.core.rules.level import RANK, Level
 
-__all__ = ['AlarmEvent', 'KINDS', 'COMPONENTS', 'entries', 'raised', 'component_entries']
+__all__ = ['AlarmEvent', 'KINDS', 'COMPONENTS', 'CONSEQUENCES', 'entries', 'raised',
+           'component_entries']
 
 #: The component statuses whose changes the journal records as alarms (the lines, ``sensors``
 #: and the flood's ``alarms`` have their own records).
 COMPONENTS = ('tide', 'intake', 'logger', 'fatigue', 'dock', 'clock', 'parameters')
+#: The components whose STALE is a consequence of blind inputs, shown ``suppressed`` (the
+#: ``sensors`` alarm announces the cause): leaving it for another level is leaving OK.
+CONSEQUENCES = ('tide', 'dock')
 
 #: Every kind of record, in the order :func:`entries` writes those of one step.
 KINDS = (
@@ -122,12 +126,15 @@ def component_entries(name: str, change: Transition) -> list[AlarmEvent]:
     leaves OK, ``raised`` (its new level, condition ``NAME.LEVEL``, e.g. ``tide.warn``) when
     its level rises (OK < WARN < STALE < ERROR), ``cleared`` when it returns to OK (``value``
     how long it was not OK [s]); a change not announced (``change.suppressed``: a consequence
-    of blind inputs, which the ``sensors`` alarm announces) is neither active nor raised."""
+    of blind inputs, which the ``sensors`` alarm announces) is neither active nor raised, and
+    leaving such a STALE (:data:`CONSEQUENCES`) for WARN is leaving OK, as ``/diagnostics``
+    shows it (``alarm_state`` ``suppressed``, then ``active``)."""
     old, new, now = change.old, change.new, change.time
     out = []
-    if old == Level.OK and new != Level.OK and not change.suppressed:
+    quiet = old == Level.OK or (old == Level.STALE and name in CONSEQUENCES)
+    if quiet and new != Level.OK and not change.suppressed:
         out.append(AlarmEvent(now, name, 'active'))
-    if RANK[new] > RANK[old] and not change.suppressed:
+    if (RANK[new] > RANK[old] or quiet and new != Level.OK) and not change.suppressed:
         out.append(AlarmEvent(now, name, 'raised', new.name, f'{name}.{new.name.lower()}'))
     if new == Level.OK and old != Level.OK:
         duration = math.nan if change.duration is None else change.duration

@@ -41,6 +41,7 @@ from catenary_monitor.core.alarms import flood as alarm_flood
 from catenary_monitor.core.alarms import shelving
 from catenary_monitor.core.alarms.journal import (
     COMPONENTS,
+    CONSEQUENCES,
     AlarmEvent,
     component_entries,
     entries,
@@ -137,7 +138,7 @@ _NAN = math.nan
 _INCONSISTENT = CONDITIONS.index('inconsistent')
 _SOLVED = VALUE_FIELDS[2:11]  # taken from the solve result (the first two are the inputs)
 #: The components whose STALE is a consequence of blind inputs, announced by the sensors alarm.
-_CONSEQUENCES = ('tide', 'dock')
+_CONSEQUENCES = CONSEQUENCES
 
 
 class LineOutput(NamedTuple):
