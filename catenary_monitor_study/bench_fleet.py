@@ -194,6 +194,46 @@ def _fleet(
     }
 
 
+def pieces_cpu(folders: list[Path], root: Path) -> dict[str, float]:
+    """Every dock's chain of pieces run in this process, one after the other, as a worker
+    runs them (no Dask): CPU s in all, and of it the message parts' steps (the rows' columns
+    in time order, their Arrow table, the Parquet writing, the daily extremes)."""
+    from catenary_monitor.replay import fleet_dataset, fleet_tasks
+
+    spent = {'rows': 0.0, 'table': 0.0, 'parquet': 0.0, 'daily': 0.0}
+    timed = [(fleet_tasks, 'window_columns', 'rows'), (fleet_tasks, 'message_table', 'table'),
+             (fleet_dataset.PartWriter, 'add', 'parquet'),
+             (fleet_dataset.DailyExtremes, 'add', 'daily')]  # fmt: skip
+    saved = [(owner, name, getattr(owner, name)) for owner, name, _ in timed]
+
+    def clocked(f: Any, what: str) -> Any:
+        def g(*args: Any) -> Any:
+            t = time.process_time()
+            try:
+                return f(*args)
+            finally:
+                spent[what] += time.process_time() - t
+
+        return g
+
+    for (owner, name, what), (_, _, f) in zip(timed, saved):
+        setattr(owner, name, clocked(f, what))
+    try:
+        fleet_tasks.one_core()
+        t0 = time.process_time()
+        for folder in folders:
+            plan = fleet_tasks.plan_dock(folder)
+            before = None
+            for task in range(len(plan.pieces)):
+                before = fleet_tasks.run_piece(plan, task, before, str(root))
+        total = time.process_time() - t0
+    finally:
+        for owner, name, f in saved:
+            setattr(owner, name, f)
+        shutil.rmtree(root, ignore_errors=True)
+    return {'cpu_s': round(total, 3), **{k: round(v, 3) for k, v in spent.items()}}
+
+
 def run(
     docks: int = 4,
     files: int = 4,
@@ -231,6 +271,7 @@ def run(
             if reused is not None:
                 reused.close()
         same_csv = all(same_as_csv(first, f.name, csv_dir / f'{f.name}.csv') for f in folders)
+        in_process = pieces_cpu(folders, tmp / 'pieces')
         runs = [_median(rounds[mode]) for mode in rounds]
         base = {r['mode']: r['wall_s'] for r in runs}
         for r in runs:
@@ -246,6 +287,7 @@ def run(
             'runs': runs,
             'rounds': rounds,
             'identical_to_replay_csv': same_csv,
+            'pieces_in_one_process': in_process,
             'per_worker_messages_per_cpu_s': round(per_cpu),
             'year_100_docks': _cost(per_cpu),
         }
@@ -309,6 +351,12 @@ def _text(out: dict[str, Any]) -> str:
     lines.append(
         'the fleet\'s rows are the serial replays\' CSV rows: '
         + ('yes' if out['identical_to_replay_csv'] else 'NO')
+    )
+    p = out['pieces_in_one_process']
+    lines.append(
+        f'the pieces in one process (no Dask): {p["cpu_s"]:.2f} CPU s, of it the rows\' '
+        f'columns {p["rows"]:.2f}, their table {p["table"]:.2f}, the Parquet parts '
+        f'{p["parquet"]:.2f}, the daily extremes {p["daily"]:.2f}'
     )
     c = out['year_100_docks']
     per = out['per_worker_messages_per_cpu_s']

@@ -265,8 +265,10 @@ class DailyExtremes:
         line = np.asarray(columns['line'][0], np.int64)
         days = day_of(t)
         key = line * (int(days.max() - days.min()) + 1) + (days - days.min())
+        if int(key.max()) < 1 << 16:  # numpy's stable sort of 16-bit keys is a radix sort
+            key = key.astype(np.uint16)
         order = np.argsort(key, kind='stable')  # within a cell: time order
-        key = key[order]
+        key = np.take(key, order)
         starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
         ends = np.r_[starts[1:], len(key)]
         cells = []
@@ -276,7 +278,7 @@ class DailyExtremes:
             cell['messages'] += hi - lo
             cells.append(cell)
         for column, source, kind, timed in DAILY_FIELDS:
-            values = columns[source][order]
+            values = np.take(columns[source], order)
             reduce = np.fmin if kind == 'min' else np.fmax
             best = reduce.reduceat(values, starts)  # NaN only where the cell's all are
             first = None
