@@ -151,3 +151,81 @@ def test_tiles_carry_the_sensor_state():
     statuses = {'a': st('WARN', 'normal', sensor_state='stuck'), 'b': st('OK', 'normal')}
     frame = build_frame(10.0, ['a', 'b'], 9.5, statuses, **kw)
     assert [line['sensor_state'] for line in frame['lines']] == ['stuck', 'ok']
+
+
+def _frame(statuses, lines=('line_01',)):
+    kw = dict(outputs={}, sample_t={}, depth=None, history=[], silence_limit_s=3.0)
+    return build_frame(10.0, list(lines), 9.5, statuses, **kw)
+
+
+def test_a_normal_day_lists_no_component():
+    """Every component OK (and the flood status, the sensors alarm normal): no row."""
+    statuses = {
+        name: Status('OK', 'ok', {'alarm_state': 'normal'} if name in ('tide', 'dock') else {})
+        for name in ('tide', 'intake', 'logger', 'fatigue', 'dock', 'clock', 'parameters')
+    }
+    statuses['line_01'] = st('OK', 'normal')
+    statuses['sensors'] = st('OK', 'normal')
+    statuses['alarms'] = Status('OK', 'no flood', {'flood': 'false'})
+    assert _frame(statuses)['alarms'] == []
+
+
+def test_component_statuses_not_ok_are_listed_active_by_level():
+    """The tide's impossible depth (ERROR), the fatigue store, the dock, the intake, the logger,
+    the clock and the parameters are rows of kind ``component``, state ``active`` (not
+    acknowledgeable), ERROR before STALE before WARN, each after the unacknowledged line alarms
+    of its level; the lines' rows keep their fields and say ``kind``."""
+    statuses = {
+        'line_01': st('ERROR', 'unacknowledged', 5.0),
+        'line_02': st('WARN', 'acknowledged', 4.0),
+        'sensors': st('WARN', 'unacknowledged', 3.0),
+        'tide': Status(
+            'ERROR',
+            'depth 0.300 m impossible: outside the chart 18.0-26.0 m',
+            {
+                'alarm_state': 'active',
+                'conditions': 'tide',
+                'detail': 'depth 0.300 m impossible: outside the chart 18.0-26.0 m (depth_min)',
+                'response': 'Cause: the depth gauge ...',
+            },
+        ),
+        'intake': Status('WARN', 'node cannot keep up', {}),
+        'fatigue': Status('WARN', 'fatigue store not written', {'conditions': 'fatigue_store'}),
+        'logger': Status('STALE', 'not writing', {}),
+        'dock': Status('WARN', 'dock estimate off', {'alarm_state': 'active'}),
+    }
+    rows = _frame(statuses, ['line_01', 'line_02'])['alarms']
+    order = [(r['line'], r['kind'], r['state'], r['level']) for r in rows]
+    assert order == [
+        ('line_01', 'line', 'unacknowledged', 'ERROR'),
+        ('tide', 'component', 'active', 'ERROR'),
+        ('logger', 'component', 'active', 'STALE'),
+        ('sensors', 'sensors', 'unacknowledged', 'WARN'),
+        ('intake', 'component', 'active', 'WARN'),
+        ('fatigue', 'component', 'active', 'WARN'),
+        ('dock', 'component', 'active', 'WARN'),
+        ('line_02', 'line', 'acknowledged', 'WARN'),
+    ]
+    tide = rows[1]
+    assert tide['condition'] == 'tide' and tide['response'].startswith('Cause:')
+    assert tide['detail'].endswith('(depth_min)') and tide['raised'] is None
+    assert rows[5]['condition'] == 'fatigue_store' and rows[4]['condition'] == 'intake'
+    assert set(rows[0]) == set(tide)  # the same fields on every row
+
+
+def test_a_suppressed_stale_tide_is_not_listed_twice():
+    """The tide STALE under the sensors alarm (alarm_state suppressed) is the sensors' row
+    only; the harbour's list (alarm_rows without components) is the lines' and sensors'."""
+    statuses = {
+        'line_01': st('STALE', 'suppressed'),
+        'sensors': st('STALE', 'unacknowledged', 7.0),
+        'tide': Status('STALE', 'depth silent', {'alarm_state': 'suppressed'}),
+        'dock': Status('STALE', 'no estimate', {'alarm_state': 'suppressed'}),
+        'intake': Status('WARN', 'node cannot keep up', {}),
+    }
+    rows = _frame(statuses)['alarms']
+    assert [(r['line'], r['kind']) for r in rows] == [
+        ('sensors', 'sensors'),
+        ('intake', 'component'),
+    ]
+    assert [r['line'] for r in alarm_rows(statuses, ['line_01'])] == ['sensors']

@@ -21,6 +21,7 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, MonitorConfig
 from catenary_monitor.core.alarms.acknowledge import SENSORS
+from catenary_monitor.core.alarms.journal import COMPONENTS
 from catenary_monitor.core.monitor.events import NODE_NAME
 from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 
@@ -32,6 +33,8 @@ __all__ = [
     'console_config',
     'alarm_rows',
     'alarm_names',
+    'component_rows',
+    'COMPONENT_ALARMS',
     'shelved_rows',
     'flood_view',
     'History',
@@ -187,17 +190,31 @@ def alarm_names(lines: Sequence[str]) -> list[str]:
     return [*lines, SENSORS]
 
 
-def alarm_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dict[str, Any]]:
+#: The component statuses listed as alarms while not OK (the ones the alarm journal records and
+#: ``catenary-monitor alarms`` counts: tide, intake, logger, fatigue store, dock, clock,
+#: parameters); the node acknowledges none of them: each row is ``active`` until it clears.
+COMPONENT_ALARMS = COMPONENTS
+#: Row order: the state's rank (an active component ranks with the unacknowledged alarms, after
+#: them at the same level), then the level's (ERROR before STALE before WARN).
+_RANK_STATE = {'unacknowledged': 0, 'active': 0, 'returned-unacknowledged': 1, 'acknowledged': 2}
+_RANK_LEVEL = {'ERROR': 0, 'STALE': 1, 'WARN': 2, 'OK': 3}
+_RANK_KIND = {'line': 0, 'sensors': 0, 'component': 1}
+
+
+def alarm_rows(
+    statuses: Mapping[str, Status], lines: Sequence[str], components: bool = False
+) -> list[dict[str, Any]]:
     """The alarm list: one row per alarm (each line's, the sensors') that is neither
     ``normal`` nor ``suppressed`` (by design: the sensors alarm stands for it) nor ``shelved``
     (listed apart: :func:`shelved_rows`), most urgent first (unacknowledged, then
     returned-unacknowledged, then acknowledged; ERROR before STALE before WARN; newest first).
-    Each row says whether the alarm chatters, whether one of its conditions is shelved, and
-    whether it is the first out of the flood the monitor reports (:func:`flood_view`)."""
+    Each row says its ``kind`` (``line``, ``sensors``), whether the alarm chatters, whether one
+    of its conditions is shelved, and whether it is the first out of the flood the monitor
+    reports (:func:`flood_view`). With ``components`` (the console's list) the component
+    statuses not OK are listed too (:func:`component_rows`), each after the unacknowledged
+    alarms of its level."""
     flood = flood_view(statuses)
     first = flood['first_out'] if flood['flood'] else None
-    rank_state = {'unacknowledged': 0, 'returned-unacknowledged': 1, 'acknowledged': 2}
-    rank_level = {'ERROR': 0, 'STALE': 1, 'WARN': 2, 'OK': 3}
     rows: list[dict[str, Any]] = []
     for name in alarm_names(lines):
         st = statuses.get(name)
@@ -209,6 +226,7 @@ def alarm_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dic
         rows.append(
             {
                 'line': name,
+                'kind': 'sensors' if name == SENSORS else 'line',
                 'state': state,
                 'level': st.level,
                 'raised': _num(st.values.get('alarm_raised')),
@@ -228,13 +246,52 @@ def alarm_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dic
                 'first_out': name == first,
             }
         )
+    if components:
+        rows += component_rows(statuses, lines)
     rows.sort(
         key=lambda r: (
-            rank_state.get(r['state'], 3),
-            rank_level.get(r['level'], 3),
+            _RANK_STATE.get(r['state'], 3),
+            _RANK_LEVEL.get(r['level'], 3),
+            _RANK_KIND.get(r['kind'], 1),
             -(r['raised'] or 0.0),
         )
     )
+    return rows
+
+
+def component_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dict[str, Any]]:
+    """The component statuses (:data:`COMPONENT_ALARMS`) that are not OK, as alarm rows of
+    ``kind`` ``component`` and state ``active`` (the node acknowledges none: the row clears
+    when its condition does), a STALE the ``sensors`` alarm announces (``alarm_state``
+    ``suppressed``) left out; ``raised`` None (the monitor publishes no time for them). A
+    component named as a line is the line's; the flood's first out is marked as on a line's."""
+    flood = flood_view(statuses)
+    first = flood['first_out'] if flood['flood'] else None
+    rows: list[dict[str, Any]] = []
+    for name in COMPONENT_ALARMS:
+        st = statuses.get(name)
+        if st is None or name in lines or st.level == 'OK':
+            continue
+        if st.values.get('alarm_state', 'active') in ('normal', 'suppressed', 'shelved'):
+            continue
+        rows.append(
+            {
+                'line': name,
+                'kind': 'component',
+                'state': 'active',
+                'level': st.level,
+                'raised': None,
+                'condition': st.values.get('conditions', '') or name,
+                'message': st.message,
+                'detail': st.values.get('detail', st.message),
+                'response': st.values.get('response', ''),
+                'acknowledged_by': '',
+                'acknowledged_at': None,
+                'chattering': False,
+                'shelved_condition': '',
+                'first_out': name == first,
+            }
+        )
     return rows
 
 
@@ -579,7 +636,7 @@ def build_frame(
             'message': logger.message if logger else '',
         },
         'monitor': monitor_rows(statuses),
-        'alarms': alarm_rows(statuses, config_lines),
+        'alarms': alarm_rows(statuses, config_lines, components=True),
         'shelved': shelved_rows(statuses, config_lines),
         'flood': flood_view(statuses),
         'history': list(history[-200:]),
