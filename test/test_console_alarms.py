@@ -199,7 +199,9 @@ def test_a_tide_error_is_listed_active_and_beeps_until_it_leaves_error(tmp_path:
             ' [...r.querySelectorAll("button")].filter(b => !b.hidden).length]',
         )
         assert seen[0] == 'component' and 'lvl-ERROR' in seen[1] and seen[3] == 0, seen
-        assert 'impossible' in seen[2] and 'clears when its condition does' in seen[2], seen
+        assert 'impossible' in seen[2] and 'clears itself' in seen[2], seen
+        head = _js(driver, "return document.querySelector('#response .r-head').textContent")
+        assert head.endswith('(clears when its condition does)'), head
         wait_for('the tide ERROR beeps', lambda: _js(driver, beeps) >= 1, 5.0)
         wait_for('and beeps again', lambda: _js(driver, beeps) >= 2, 8.0)
         source.tide = Status('WARN', 'depth sensor stuck', {'alarm_state': 'active'})

@@ -532,7 +532,8 @@ function renderResponse(frame, lost) {
   box.hidden = !a || S.tab !== 'active';
   if (!a) return;
   box.dataset.line = a.line;
-  setText(box.querySelector('.r-head'), `${a.line} · ${a.level} · ${a.condition.replaceAll('_', ' ')}: ${a.message}`);
+  const clears = a.kind === 'component' ? ` (${CLEARS})` : '';
+  setText(box.querySelector('.r-head'), `${a.line} · ${a.level} · ${a.condition.replaceAll('_', ' ')}: ${a.message}${clears}`);
   setText(box.querySelector('.r-text'), a.response || '');
   const detail = a.detail && a.detail !== a.message ? a.detail : '';
   setText(box.querySelector('.r-detail'), detail);
@@ -562,7 +563,7 @@ function makeRow(line, kind) {
   tr.children[6].appendChild(sh);
   if (kind === 'component') {
     b.hidden = true; sh.hidden = true;
-    tr.children[6].appendChild(el('span', { class: 'clears', title: `${line}: not acknowledged: the row goes when the status is OK again` }, CLEARS));
+    tr.children[6].appendChild(el('span', { class: 'clears', title: `${line} ${CLEARS} (not acknowledged: the row goes when the status is OK again)` }, 'clears itself'));
   }
   return tr;
 }
