@@ -229,3 +229,32 @@ def test_a_suppressed_stale_tide_is_not_listed_twice():
         ('intake', 'component'),
     ]
     assert [r['line'] for r in alarm_rows(statuses, ['line_01'])] == ['sensors']
+
+
+def test_history_records_a_component_raised_and_cleared_and_dates_its_row():
+    """A component status listed as an alarm enters the history (raised, raised again when its
+    level rises, cleared when OK or suppressed again); its row's time raised is when the
+    console saw it leave OK."""
+    h = History()
+    seq = [
+        (1.0, Status('OK', 'depth 21.9 m', {'alarm_state': 'normal'})),
+        (2.0, Status('WARN', 'depth sensor stuck', {'alarm_state': 'active'})),
+        (3.0, Status('ERROR', 'depth 0.300 m impossible', {'alarm_state': 'active'})),
+        (4.0, Status('WARN', 'depth sensor stuck', {'alarm_state': 'active'})),
+        (5.0, Status('STALE', 'depth silent', {'alarm_state': 'suppressed'})),
+        (6.0, Status('ERROR', 'depth 0.300 m impossible', {'alarm_state': 'active'})),
+    ]
+    for t, s in seq:
+        h.feed(t, {'tide': s, 'line_01': st('OK', 'normal')}, ['line_01'])
+    events = [(e['time'], e['line'], e['event'], e['level']) for e in h.entries]
+    assert events == [
+        (2.0, 'tide', 'raised', 'WARN'),
+        (3.0, 'tide', 'raised again', 'ERROR'),
+        (5.0, 'tide', 'cleared', 'STALE'),
+        (6.0, 'tide', 'raised', 'ERROR'),
+    ]
+    frame = _frame({'tide': seq[-1][1]})
+    assert frame['alarms'][0]['raised'] is None  # no history given: not known
+    kw = dict(outputs={}, sample_t={}, depth=None, history=h.entries, silence_limit_s=3.0)
+    frame = build_frame(10.0, ['line_01'], 9.5, {'tide': seq[-1][1]}, **kw)
+    assert frame['alarms'][0]['raised'] == 6.0

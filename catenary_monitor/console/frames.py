@@ -199,10 +199,15 @@ COMPONENT_ALARMS = COMPONENTS
 _RANK_STATE = {'unacknowledged': 0, 'active': 0, 'returned-unacknowledged': 1, 'acknowledged': 2}
 _RANK_LEVEL = {'ERROR': 0, 'STALE': 1, 'WARN': 2, 'OK': 3}
 _RANK_KIND = {'line': 0, 'sensors': 0, 'component': 1}
+#: A component's level by severity (the journal's order: OK < WARN < STALE < ERROR).
+_SEVERITY = {'OK': 0, 'WARN': 1, 'STALE': 2, 'ERROR': 3}
 
 
 def alarm_rows(
-    statuses: Mapping[str, Status], lines: Sequence[str], components: bool = False
+    statuses: Mapping[str, Status],
+    lines: Sequence[str],
+    components: bool = False,
+    history: Sequence[dict] = (),
 ) -> list[dict[str, Any]]:
     """The alarm list: one row per alarm (each line's, the sensors') that is neither
     ``normal`` nor ``suppressed`` (by design: the sensors alarm stands for it) nor ``shelved``
@@ -211,8 +216,8 @@ def alarm_rows(
     Each row says its ``kind`` (``line``, ``sensors``), whether the alarm chatters, whether one
     of its conditions is shelved, and whether it is the first out of the flood the monitor
     reports (:func:`flood_view`). With ``components`` (the console's list) the component
-    statuses not OK are listed too (:func:`component_rows`), each after the unacknowledged
-    alarms of its level."""
+    statuses not OK are listed too (:func:`component_rows`, their time raised from
+    ``history``), each after the unacknowledged alarms of its level."""
     flood = flood_view(statuses)
     first = flood['first_out'] if flood['flood'] else None
     rows: list[dict[str, Any]] = []
@@ -247,7 +252,7 @@ def alarm_rows(
             }
         )
     if components:
-        rows += component_rows(statuses, lines)
+        rows += component_rows(statuses, lines, history)
     rows.sort(
         key=lambda r: (
             _RANK_STATE.get(r['state'], 3),
@@ -259,20 +264,29 @@ def alarm_rows(
     return rows
 
 
-def component_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dict[str, Any]]:
+def _component_listed(name: str, st: Optional[Status], lines: Sequence[str]) -> bool:
+    """Whether a component status is an alarm row: not OK, not a STALE the ``sensors`` alarm
+    announces (``alarm_state`` ``suppressed``), not named as a line (the line's)."""
+    if st is None or name in lines or st.level == 'OK':
+        return False
+    return st.values.get('alarm_state', 'active') not in ('normal', 'suppressed', 'shelved')
+
+
+def component_rows(
+    statuses: Mapping[str, Status], lines: Sequence[str], history: Sequence[dict] = ()
+) -> list[dict[str, Any]]:
     """The component statuses (:data:`COMPONENT_ALARMS`) that are not OK, as alarm rows of
     ``kind`` ``component`` and state ``active`` (the node acknowledges none: the row clears
     when its condition does), a STALE the ``sensors`` alarm announces (``alarm_state``
-    ``suppressed``) left out; ``raised`` None (the monitor publishes no time for them). A
-    component named as a line is the line's; the flood's first out is marked as on a line's."""
+    ``suppressed``) left out; ``raised``: when the console's ``history`` saw it leave OK
+    (:class:`History`; None when it has not: the monitor publishes no time for them). The
+    flood's first out is marked as on a line's."""
     flood = flood_view(statuses)
     first = flood['first_out'] if flood['flood'] else None
     rows: list[dict[str, Any]] = []
     for name in COMPONENT_ALARMS:
         st = statuses.get(name)
-        if st is None or name in lines or st.level == 'OK':
-            continue
-        if st.values.get('alarm_state', 'active') in ('normal', 'suppressed', 'shelved'):
+        if st is None or not _component_listed(name, st, lines):
             continue
         rows.append(
             {
@@ -280,7 +294,7 @@ def component_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list
                 'kind': 'component',
                 'state': 'active',
                 'level': st.level,
-                'raised': None,
+                'raised': _component_raised(history, name),
                 'condition': st.values.get('conditions', '') or name,
                 'message': st.message,
                 'detail': st.values.get('detail', st.message),
@@ -293,6 +307,17 @@ def component_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list
             }
         )
     return rows
+
+
+def _component_raised(history: Sequence[dict], name: str) -> Optional[float]:
+    """When the component ``name`` last left OK in ``history`` [s] (None: not seen)."""
+    for entry in reversed(history):
+        if entry.get('line') == name:
+            if entry.get('event') == 'raised':
+                return entry.get('time')
+            if entry.get('event') == 'cleared':
+                return None
+    return None
 
 
 def shelved_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dict[str, Any]]:
@@ -349,10 +374,12 @@ def flood_view(statuses: Mapping[str, Status]) -> dict[str, Any]:
 class History:
     """The alarm history (audit trail) seen in consecutive ``/diagnostics`` arrays: raised,
     raised again (severity rose), acknowledged (by whom), returned to normal, cleared, shelved
-    (by whom, until when) and unshelved."""
+    (by whom, until when) and unshelved; a component status listed as an alarm
+    (:func:`component_rows`): raised, raised again, cleared."""
 
     entries: list[dict[str, Any]] = field(default_factory=list)
     _last: dict[str, tuple[str, str, float]] = field(default_factory=dict)
+    _component: dict[str, str] = field(default_factory=dict)  # component -> level listed
     _shelf: dict[str, float] = field(default_factory=dict)  # alarm -> shelved until [s]
 
     def feed(self, stamp: float, statuses: Mapping[str, Status], lines: Sequence[str]) -> None:
@@ -384,8 +411,38 @@ class History:
                     'by': st.values.get('acknowledged_by', '') if event == 'acknowledged' else '',
                 }
             )
+        self._feed_components(stamp, statuses, lines)
         if len(self.entries) > HISTORY_LIMIT:
             del self.entries[: len(self.entries) - HISTORY_LIMIT]
+
+    def _feed_components(
+        self, stamp: float, statuses: Mapping[str, Status], lines: Sequence[str]
+    ) -> None:
+        """The component statuses listed as alarms (:func:`component_rows`): ``raised`` when
+        one is listed, ``raised again`` when its level rises, ``cleared`` when it is no longer
+        listed (OK again, or a STALE the sensors alarm announces), at ``stamp`` s."""
+        for name in COMPONENT_ALARMS:
+            st = statuses.get(name)
+            if st is None:
+                continue
+            new = st.level if _component_listed(name, st, lines) else 'OK'
+            old = self._component.get(name, 'OK')
+            self._component[name] = new
+            if new == old or (new != 'OK' and _SEVERITY.get(new, 3) < _SEVERITY.get(old, 0)):
+                continue
+            event = 'cleared' if new == 'OK' else ('raised' if old == 'OK' else 'raised again')
+            condition = st.values.get('conditions', '') or name
+            self.entries.append(
+                {
+                    'time': stamp,
+                    'line': name,
+                    'event': event,
+                    'level': st.level,
+                    'condition': condition,
+                    'message': st.message,
+                    'by': '',
+                }
+            )
 
     def _feed_shelf(self, stamp: float, name: str, st: Status) -> None:
         """A shelf put on (or renewed) or taken off since the previous array."""
@@ -636,7 +693,7 @@ def build_frame(
             'message': logger.message if logger else '',
         },
         'monitor': monitor_rows(statuses),
-        'alarms': alarm_rows(statuses, config_lines, components=True),
+        'alarms': alarm_rows(statuses, config_lines, True, history),
         'shelved': shelved_rows(statuses, config_lines),
         'flood': flood_view(statuses),
         'history': list(history[-200:]),
