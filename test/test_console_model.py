@@ -258,3 +258,42 @@ def test_history_records_a_component_raised_and_cleared_and_dates_its_row():
     kw = dict(outputs={}, sample_t={}, depth=None, history=h.entries, silence_limit_s=3.0)
     frame = build_frame(10.0, ['line_01'], 9.5, {'tide': seq[-1][1]}, **kw)
     assert frame['alarms'][0]['raised'] == 6.0
+
+
+def test_the_cores_impossible_depth_is_an_error_row_and_nothing_before_it():
+    """The monitor core's own statuses (3 lines, a gauge stepping to 0.3 m at half time, the
+    chart 15-30 m): no component row before the step; after it the tide's ERROR "impossible
+    depth" is a component row (raised when the console saw it); the tide's STALE under the
+    sensors alarm (the gauge then silent to the core's rules) is never a row of its own."""
+    from replay_data import T0_NS, core_steps, dock_config, generate
+
+    from catenary_monitor.core.twin.window import tick_grid
+
+    config = dock_config(3, depth_min=15.0, depth_max=30.0)
+    tensions, depth = generate(config, seconds=40.0, seed=2)
+    values = depth[1].copy()
+    values[len(values) // 2 :] = 0.3
+    step = depth[0][len(values) // 2] * 1e-9
+    inputs = [c[0] for c in (*tensions.values(), depth)]
+    start, end = int(min(c[0] for c in inputs)), int(max(c[-1] for c in inputs))
+    ticks = tick_grid(start + 123_456, end, 2.0)
+    _, steps = core_steps(config, tensions, (depth[0], values), ticks, T0_NS)
+    names = [line.name for line in config.lines]
+    history = History()
+    seen = []
+    for snap in (s.snapshot for s in steps if s.snapshot is not None):
+        statuses = statuses_by_name(
+            (c.name, int(c.level), c.message, c.values) for c in snap.statuses
+        )
+        t = snap.stamp_ns * 1e-9
+        history.feed(t, statuses, names)
+        frame = build_frame(t, names, t, statuses, {}, {}, None, history.entries, 3.0)
+        rows = [r for r in frame['alarms'] if r['kind'] == 'component']
+        seen.append((t, statuses['tide'].level, rows))
+    assert all(not rows for t, _, rows in seen if t < step)
+    after = [rows for t, _, rows in seen if t >= step and rows]
+    first = after[0][0]
+    assert (first['line'], first['level'], first['state']) == ('tide', 'ERROR', 'active')
+    assert first['message'].startswith('impossible depth 0.30 m') and first['raised'] >= step
+    assert first['response'] and first['condition'] == 'tide'
+    assert all(not rows for _, level, rows in seen if level == 'STALE')
