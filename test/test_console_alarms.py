@@ -5,7 +5,8 @@ another origin) and the monitor's refusal shown to the operator.
 
 The page is served from the demo's storm without ROS (``browser_harness.DemoSource``: line_11
 lifted and first out of a flood, line_10 chattering, line_09 shelved); the live path to the
-monitor is test_console_browser.py's.
+monitor is test_console_browser.py's. A component status leaving OK (the tide's impossible
+depth) is listed and its ERROR beeps, on a quiet dock of its own (:class:`TideSource`).
 """
 
 from __future__ import annotations
@@ -144,3 +145,76 @@ def test_a_shelve_request_from_another_origin_is_refused(page: Any) -> None:
         with pytest.raises(urllib.error.HTTPError) as err:
             urllib.request.urlopen(request, timeout=10)
         assert err.value.code == 400, bad
+
+
+class TideSource(DemoSource):
+    """A quiet dock (every line OK, nothing else to say) whose tide status the test sets."""
+
+    def __init__(self) -> None:
+        from catenary_monitor.console.frames import History, Status
+
+        super().__init__()
+        self.history = History()
+        self.tide = Status('OK', 'depth 21.95 m', {'depth': '21.95', 'alarm_state': 'normal'})
+
+    def frame(self, t: Any = None) -> dict[str, Any]:
+        from catenary_monitor.console.frames import Status, build_frame
+
+        now = time.time()
+        line = {'alarm_state': 'normal', 'top_tension': '900000.0', 'anchor_margin': '20.0'}
+        statuses = {name: Status('OK', 'ok', line) for name in self.names}
+        statuses['tide'] = self.tide
+        statuses['logger'] = Status('OK', 'writing', {})
+        sample_t = {name: now - 0.4 for name in self.names}
+        return build_frame(now, self.names, now - 0.3, statuses, {}, sample_t, None, [], 3.0)
+
+
+def test_a_tide_error_is_listed_active_and_beeps_until_it_leaves_error(tmp_path: Path) -> None:
+    """A quiet dock: no row, no beep. The tide's impossible depth (ERROR): a row of kind
+    ``component``, state ``active``, without Ack or Shelve, that says it clears when its
+    condition does; it beeps at once and again (REPEAT_S 5 s) as an unacknowledged ERROR does.
+    The same status at WARN stays listed and is silent; back at OK the row goes."""
+    from catenary_monitor.console.frames import Status
+    from catenary_monitor.console.server import ConsoleServer
+
+    source = TideSource()
+    server = ConsoleServer(source, '127.0.0.1', 0)
+    server.start()
+    driver = browser(tmp_path)
+    beeps = 'return cmConsole.beeps'
+    row = "return document.querySelector('#alarms tr[data-line=\"tide\"]')"
+    try:
+        driver.get(server.url)
+        wait_for('12 OK tiles', lambda: set(tiles(driver).values()) == {'OK'}, 60.0)
+        time.sleep(1.5)
+        assert rows(driver) == {} and _js(driver, beeps) == 0
+        text = 'depth 0.300 m impossible: outside the chart 18.0-26.0 m: check the depth gauge'
+        values = {'alarm_state': 'active', 'conditions': 'tide', 'response': 'Cause: a gauge'}
+        source.tide = Status('ERROR', text, values)
+        wait_for('the tide row', lambda: rows(driver).get('tide') == 'active', 10.0)
+        seen = _js(
+            driver,
+            row.replace('return ', 'const r = ')
+            + ';return [r.dataset.kind, r.className, r.textContent,'
+            ' [...r.querySelectorAll("button")].filter(b => !b.hidden).length]',
+        )
+        assert seen[0] == 'component' and 'lvl-ERROR' in seen[1] and seen[3] == 0, seen
+        assert 'impossible' in seen[2] and 'clears itself' in seen[2], seen
+        head = _js(driver, "return document.querySelector('#response .r-head').textContent")
+        assert head.endswith('(clears when its condition does)'), head
+        wait_for('the tide ERROR beeps', lambda: _js(driver, beeps) >= 1, 5.0)
+        wait_for('and beeps again', lambda: _js(driver, beeps) >= 2, 8.0)
+        source.tide = Status('WARN', 'depth sensor stuck', {'alarm_state': 'active'})
+        wait_for(
+            'the tide row at WARN',
+            lambda: 'lvl-WARN' in _js(driver, row.replace('return ', 'return (') + ').className'),
+            10.0,
+        )
+        quiet = _js(driver, beeps)
+        time.sleep(6.0)  # longer than REPEAT_S: a WARN never beeps
+        assert _js(driver, beeps) == quiet
+        source.tide = Status('OK', 'depth 21.95 m', {'alarm_state': 'normal'})
+        wait_for('the tide row gone', lambda: 'tide' not in rows(driver), 10.0)
+    finally:
+        driver.quit()
+        server.shutdown()

@@ -21,6 +21,7 @@ import numpy as np
 
 from catenary_monitor.core.config.parameters import ALARM_CONDITIONS, MonitorConfig
 from catenary_monitor.core.alarms.acknowledge import SENSORS
+from catenary_monitor.core.alarms.journal import COMPONENTS
 from catenary_monitor.core.monitor.events import NODE_NAME
 from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 
@@ -32,6 +33,8 @@ __all__ = [
     'console_config',
     'alarm_rows',
     'alarm_names',
+    'component_rows',
+    'COMPONENT_ALARMS',
     'shelved_rows',
     'flood_view',
     'History',
@@ -187,17 +190,36 @@ def alarm_names(lines: Sequence[str]) -> list[str]:
     return [*lines, SENSORS]
 
 
-def alarm_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dict[str, Any]]:
+#: The component statuses listed as alarms while not OK (the ones the alarm journal records and
+#: ``catenary-monitor alarms`` counts: tide, intake, logger, fatigue store, dock, clock,
+#: parameters); the node acknowledges none of them: each row is ``active`` until it clears.
+COMPONENT_ALARMS = COMPONENTS
+#: Row order: the state's rank (an active component ranks with the unacknowledged alarms, after
+#: them at the same level), then the level's (ERROR before STALE before WARN).
+_RANK_STATE = {'unacknowledged': 0, 'active': 0, 'returned-unacknowledged': 1, 'acknowledged': 2}
+_RANK_LEVEL = {'ERROR': 0, 'STALE': 1, 'WARN': 2, 'OK': 3}
+_RANK_KIND = {'line': 0, 'sensors': 0, 'component': 1}
+#: A component's level by severity (the journal's order: OK < WARN < STALE < ERROR).
+_SEVERITY = {'OK': 0, 'WARN': 1, 'STALE': 2, 'ERROR': 3}
+
+
+def alarm_rows(
+    statuses: Mapping[str, Status],
+    lines: Sequence[str],
+    components: bool = False,
+    history: Sequence[dict] = (),
+) -> list[dict[str, Any]]:
     """The alarm list: one row per alarm (each line's, the sensors') that is neither
     ``normal`` nor ``suppressed`` (by design: the sensors alarm stands for it) nor ``shelved``
     (listed apart: :func:`shelved_rows`), most urgent first (unacknowledged, then
     returned-unacknowledged, then acknowledged; ERROR before STALE before WARN; newest first).
-    Each row says whether the alarm chatters, whether one of its conditions is shelved, and
-    whether it is the first out of the flood the monitor reports (:func:`flood_view`)."""
+    Each row says its ``kind`` (``line``, ``sensors``), whether the alarm chatters, whether one
+    of its conditions is shelved, and whether it is the first out of the flood the monitor
+    reports (:func:`flood_view`). With ``components`` (the console's list) the component
+    statuses not OK are listed too (:func:`component_rows`, their time raised from
+    ``history``), each after the unacknowledged alarms of its level."""
     flood = flood_view(statuses)
     first = flood['first_out'] if flood['flood'] else None
-    rank_state = {'unacknowledged': 0, 'returned-unacknowledged': 1, 'acknowledged': 2}
-    rank_level = {'ERROR': 0, 'STALE': 1, 'WARN': 2, 'OK': 3}
     rows: list[dict[str, Any]] = []
     for name in alarm_names(lines):
         st = statuses.get(name)
@@ -209,6 +231,7 @@ def alarm_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dic
         rows.append(
             {
                 'line': name,
+                'kind': 'sensors' if name == SENSORS else 'line',
                 'state': state,
                 'level': st.level,
                 'raised': _num(st.values.get('alarm_raised')),
@@ -228,14 +251,73 @@ def alarm_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dic
                 'first_out': name == first,
             }
         )
+    if components:
+        rows += component_rows(statuses, lines, history)
     rows.sort(
         key=lambda r: (
-            rank_state.get(r['state'], 3),
-            rank_level.get(r['level'], 3),
+            _RANK_STATE.get(r['state'], 3),
+            _RANK_LEVEL.get(r['level'], 3),
+            _RANK_KIND.get(r['kind'], 1),
             -(r['raised'] or 0.0),
         )
     )
     return rows
+
+
+def _component_listed(name: str, st: Optional[Status], lines: Sequence[str]) -> bool:
+    """Whether a component status is an alarm row: not OK, not a STALE the ``sensors`` alarm
+    announces (``alarm_state`` ``suppressed``), not named as a line (the line's)."""
+    if st is None or name in lines or st.level == 'OK':
+        return False
+    return st.values.get('alarm_state', 'active') not in ('normal', 'suppressed', 'shelved')
+
+
+def component_rows(
+    statuses: Mapping[str, Status], lines: Sequence[str], history: Sequence[dict] = ()
+) -> list[dict[str, Any]]:
+    """The component statuses (:data:`COMPONENT_ALARMS`) that are not OK, as alarm rows of
+    ``kind`` ``component`` and state ``active`` (the node acknowledges none: the row clears
+    when its condition does), a STALE the ``sensors`` alarm announces (``alarm_state``
+    ``suppressed``) left out; ``raised``: when the console's ``history`` saw it leave OK
+    (:class:`History`; None when it has not: the monitor publishes no time for them). The
+    flood's first out is marked as on a line's."""
+    flood = flood_view(statuses)
+    first = flood['first_out'] if flood['flood'] else None
+    rows: list[dict[str, Any]] = []
+    for name in COMPONENT_ALARMS:
+        st = statuses.get(name)
+        if st is None or not _component_listed(name, st, lines):
+            continue
+        rows.append(
+            {
+                'line': name,
+                'kind': 'component',
+                'state': 'active',
+                'level': st.level,
+                'raised': _component_raised(history, name),
+                'condition': st.values.get('conditions', '') or name,
+                'message': st.message,
+                'detail': st.values.get('detail', st.message),
+                'response': st.values.get('response', ''),
+                'acknowledged_by': '',
+                'acknowledged_at': None,
+                'chattering': False,
+                'shelved_condition': '',
+                'first_out': name == first,
+            }
+        )
+    return rows
+
+
+def _component_raised(history: Sequence[dict], name: str) -> Optional[float]:
+    """When the component ``name`` last left OK in ``history`` [s] (None: not seen)."""
+    for entry in reversed(history):
+        if entry.get('line') == name:
+            if entry.get('event') == 'raised':
+                return entry.get('time')
+            if entry.get('event') == 'cleared':
+                return None
+    return None
 
 
 def shelved_rows(statuses: Mapping[str, Status], lines: Sequence[str]) -> list[dict[str, Any]]:
@@ -292,10 +374,12 @@ def flood_view(statuses: Mapping[str, Status]) -> dict[str, Any]:
 class History:
     """The alarm history (audit trail) seen in consecutive ``/diagnostics`` arrays: raised,
     raised again (severity rose), acknowledged (by whom), returned to normal, cleared, shelved
-    (by whom, until when) and unshelved."""
+    (by whom, until when) and unshelved; a component status listed as an alarm
+    (:func:`component_rows`): raised, raised again, cleared."""
 
     entries: list[dict[str, Any]] = field(default_factory=list)
     _last: dict[str, tuple[str, str, float]] = field(default_factory=dict)
+    _component: dict[str, str] = field(default_factory=dict)  # component -> level listed
     _shelf: dict[str, float] = field(default_factory=dict)  # alarm -> shelved until [s]
 
     def feed(self, stamp: float, statuses: Mapping[str, Status], lines: Sequence[str]) -> None:
@@ -327,8 +411,38 @@ class History:
                     'by': st.values.get('acknowledged_by', '') if event == 'acknowledged' else '',
                 }
             )
+        self._feed_components(stamp, statuses, lines)
         if len(self.entries) > HISTORY_LIMIT:
             del self.entries[: len(self.entries) - HISTORY_LIMIT]
+
+    def _feed_components(
+        self, stamp: float, statuses: Mapping[str, Status], lines: Sequence[str]
+    ) -> None:
+        """The component statuses listed as alarms (:func:`component_rows`): ``raised`` when
+        one is listed, ``raised again`` when its level rises, ``cleared`` when it is no longer
+        listed (OK again, or a STALE the sensors alarm announces), at ``stamp`` s."""
+        for name in COMPONENT_ALARMS:
+            st = statuses.get(name)
+            if st is None:
+                continue
+            new = st.level if _component_listed(name, st, lines) else 'OK'
+            old = self._component.get(name, 'OK')
+            self._component[name] = new
+            if new == old or (new != 'OK' and _SEVERITY.get(new, 3) < _SEVERITY.get(old, 0)):
+                continue
+            event = 'cleared' if new == 'OK' else ('raised' if old == 'OK' else 'raised again')
+            condition = st.values.get('conditions', '') or name
+            self.entries.append(
+                {
+                    'time': stamp,
+                    'line': name,
+                    'event': event,
+                    'level': st.level,
+                    'condition': condition,
+                    'message': st.message,
+                    'by': '',
+                }
+            )
 
     def _feed_shelf(self, stamp: float, name: str, st: Status) -> None:
         """A shelf put on (or renewed) or taken off since the previous array."""
@@ -579,7 +693,7 @@ def build_frame(
             'message': logger.message if logger else '',
         },
         'monitor': monitor_rows(statuses),
-        'alarms': alarm_rows(statuses, config_lines),
+        'alarms': alarm_rows(statuses, config_lines, True, history),
         'shelved': shelved_rows(statuses, config_lines),
         'flood': flood_view(statuses),
         'history': list(history[-200:]),

@@ -532,7 +532,8 @@ function renderResponse(frame, lost) {
   box.hidden = !a || S.tab !== 'active';
   if (!a) return;
   box.dataset.line = a.line;
-  setText(box.querySelector('.r-head'), `${a.line} · ${a.level} · ${a.condition.replaceAll('_', ' ')}: ${a.message}`);
+  const clears = a.kind === 'component' ? ` (${CLEARS})` : '';
+  setText(box.querySelector('.r-head'), `${a.line} · ${a.level} · ${a.condition.replaceAll('_', ' ')}: ${a.message}${clears}`);
   setText(box.querySelector('.r-text'), a.response || '');
   const detail = a.detail && a.detail !== a.message ? a.detail : '';
   setText(box.querySelector('.r-detail'), detail);
@@ -542,8 +543,12 @@ function renderResponse(frame, lost) {
 const rowsByLine = new Map();
 function setText(node, text) { if (node.textContent !== text) node.textContent = text; }
 
-function makeRow(line) {
-  const tr = el('tr', { 'data-line': line });
+// A component status (tide, intake, logger, fatigue store, dock, clock, parameters) that left
+// OK: listed, never acknowledged here (the node acknowledges lines and sensors only).
+const CLEARS = 'clears when its condition does';
+
+function makeRow(line, kind) {
+  const tr = el('tr', { 'data-line': line, 'data-kind': kind || 'line' });
   for (let k = 0; k < 7; k++) tr.appendChild(el('td'));
   tr.addEventListener('click', (ev) => { if (!ev.target.closest('button')) selectAlarm(line); });
   tr.children[0].className = 'when';
@@ -556,6 +561,10 @@ function makeRow(line) {
   const sh = el('button', { 'data-shelve': line, title: `shelve ${line}'s alarm (pick the condition and the time above)` }, 'Shelve');
   sh.addEventListener('click', () => pickShelve(line));
   tr.children[6].appendChild(sh);
+  if (kind === 'component') {
+    b.hidden = true; sh.hidden = true;
+    tr.children[6].appendChild(el('span', { class: 'clears', title: `${line} ${CLEARS} (not acknowledged: the row goes when the status is OK again)` }, 'clears itself'));
+  }
   return tr;
 }
 
@@ -566,7 +575,9 @@ function renderActive(frame, lost, replay) {
   for (const [line, tr] of rowsByLine) if (!want.has(line)) { tr.remove(); rowsByLine.delete(line); }
   frame.alarms.forEach((a, i) => {
     let tr = rowsByLine.get(a.line);
-    if (!tr) { tr = makeRow(a.line); rowsByLine.set(a.line, tr); }
+    if (tr && tr.dataset.kind !== (a.kind || 'line')) { tr.remove(); tr = null; }
+    if (!tr) { tr = makeRow(a.line, a.kind); rowsByLine.set(a.line, tr); }
+    const component = a.kind === 'component';
     tr.dataset.alarmState = a.state;
     tr.className = `lvl-${a.level}`;
     const td = tr.children;
@@ -585,15 +596,16 @@ function renderActive(frame, lost, replay) {
     if (a.chattering) td[5].appendChild(el('span', { class: 'chatter', title: 'chattering: many level changes in a short time (ISA-18.2)' }, 'chattering'));
     if (a.first_out) td[5].appendChild(el('span', { class: 'first-out', title: 'the first alarm of the flood' }, 'FIRST OUT'));
     td[5].title = a.state === 'acknowledged' && a.acknowledged_by ? `by ${a.acknowledged_by} at ${clock(a.acknowledged_at)}` : '';
+    if (component) td[5].title = `active: ${CLEARS}`;
     const b = td[6].firstChild;
-    b.hidden = a.state === 'acknowledged';
+    b.hidden = component || a.state === 'acknowledged';
     b.disabled = replay || lost || !canAct();
     td[6].children[1].disabled = replay || lost || !canAct();
     if (body.children[i] !== tr) body.insertBefore(tr, body.children[i] || null);
   });
   $('n-active').textContent = `(${frame.alarms.length})`;
   renderResponse(frame, lost);
-  $('ack-all').disabled = replay || lost || !canAct() || !frame.alarms.some((a) => a.state !== 'acknowledged');
+  $('ack-all').disabled = replay || lost || !canAct() || !frame.alarms.some((a) => a.kind !== 'component' && a.state !== 'acknowledged');
   $('no-alarms').hidden = S.tab !== 'active' || frame.alarms.length > 0;
 }
 
@@ -1027,10 +1039,13 @@ function updateSoundButton() {
   else { b.textContent = `sound on (silence ${SILENCE_S} s)`; b.className = 'sound on'; }
 }
 
-// Beeps for each new unacknowledged ERROR and for the loss of monitoring itself (the monitor
-// silent or the console server unreachable: an alarm of its own), again every REPEAT_S.
+// Beeps for each new unacknowledged ERROR, each component status newly at ERROR (active: it
+// beeps until it clears, as it cannot be acknowledged) and for the loss of monitoring itself
+// (the monitor silent or the console server unreachable: an alarm of its own), again every
+// REPEAT_S; silence mutes all of it for SILENCE_S.
 function sound(frame, lost) {
-  const errors = frame.alarms.filter((a) => a.state === 'unacknowledged' && a.level === 'ERROR');
+  const errors = frame.alarms.filter((a) => a.level === 'ERROR'
+    && (a.state === 'unacknowledged' || (a.kind === 'component' && a.state === 'active')));
   const keys = new Set(errors.map((a) => `${a.line}@${a.raised}`));
   if (lost) keys.add('monitoring lost');
   const fresh = [...keys].some((k) => !S.knownErrors.has(k));
