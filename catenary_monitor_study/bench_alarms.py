@@ -5,8 +5,8 @@ Generates (:mod:`catenary_monitor_study.normal_days`, seeded) days of the dock's
 operation read by each kind of tide gauge (a 1 cm radar, a 1 mm pressure gauge with 2 mm
 noise, an ideal 1 mm gauge), then shorter scenes each with one fault (a load-cell gateway
 silent for 15 s, one silent load cell, a silent gauge, daN on an N line and tonnes-force on a
-kN line while a storm lifts that line's anchor, a parted chain, a pressure gauge stepping to
-0.3 m of depth); replays each log once with the replay driver into two sinks:
+kN line while a storm lifts that line's anchor and no other, a parted chain, a pressure gauge
+stepping to 0.3 m of depth); replays each log once with the replay driver into two sinks:
 
 * the annunciations of the snapshots the monitor publishes on ``/diagnostics`` (every status
   that leaves OK or rises, :mod:`catenary_monitor_study.annunciations`): what ``replay --out``
@@ -17,7 +17,11 @@ kN line while a storm lifts that line's anchor, a parted chain, a pressure gauge
 It reports, beside the ISA-18.2 / EEMUA 191 targets: annunciations per 10 minutes on normal
 days (mean, peak) and by class (status, level, cause), both counts and their gap; per fault,
 the annunciations in its window (count, the causes named, the first-out: the first one heard
-in the window, and whether it names the fault's cause) and those outside it. A table by
+in the window, and whether it names the fault's cause) and those outside it. A units fault's
+cause is named only by a "wrong units?" naming a right factor (x10 or x9.81, which its text
+names together); its storm is :func:`~catenary_monitor_study.normal_days.isolating_storm`'s
+(the line, direction and centre that lift one end line's anchor by 5 kN at the peak while the
+other lines keep the largest anchor margin), the line the fault's. A table by
 default, ``--json`` one object; progress on stderr (``--quiet`` none). ``--keep DIR`` keeps
 the logs and params files (``catenary-monitor replay LOG --params-file LOG.yaml --out ...``
 replays any of them).
@@ -34,6 +38,7 @@ import sys
 import tempfile
 import time
 from collections import Counter as Tally
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Callable, Optional
 
@@ -47,6 +52,7 @@ from catenary_monitor_study.normal_days import (
     Fault,
     Scene,
     drawn_scene,
+    isolating_storm,
     paper_scene,
     scene_margins,
     storm_line,
@@ -98,18 +104,23 @@ def plan(
     probe = make('radar_1cm', hours / 24.0)
     names = [line.name for line in probe.config.lines]
     storm = storm_line(probe)
+    lifting = isolating_storm(probe) if {'units_dan', 'units_tf'} & set(faults) else None
+    lifted = lifting.line if lifting is not None else None
     mid = 0.5 * hours * 3600.0
     for kind in faults:
         fault = {
             'gateway_drop': Fault('gateway_drop', mid, 15.0),
             'silent_cell': Fault('silent_cell', mid, 1800.0, names[len(names) // 4]),
             'silent_gauge': Fault('silent_gauge', mid, 1800.0),
-            'units_dan': Fault('units_dan', 0.0, math.inf, storm),
-            'units_tf': Fault('units_tf', 0.0, math.inf, storm),
+            'units_dan': Fault('units_dan', 0.0, math.inf, lifted),
+            'units_tf': Fault('units_tf', 0.0, math.inf, lifted),
             'parted': Fault('parted', mid, math.inf, storm, 12.0),
             'pressure_step': Fault('pressure_step', mid, 1800.0, None, 0.3),
         }[kind]
-        out.append((kind, make(FAULT_GAUGE.get(kind, 'radar_1cm'), hours / 24.0, (fault,))))
+        scene = make(FAULT_GAUGE.get(kind, 'radar_1cm'), hours / 24.0, (fault,))
+        if kind in ('units_dan', 'units_tf'):  # the storm that lifts that line alone
+            scene = replace(scene, weather=replace(scene.weather, storm=lifting))
+        out.append((kind, scene))
     return out
 
 
@@ -183,7 +194,8 @@ def _summary(kind: str, scene: Scene, counter: Counter, figures: dict[str, Any])
     }
     if fault is not None:
         fam, word = EXPECTED[fault.kind]
-        named = [a for a in inside if family(a.status) == fam and word in a.message.lower()]
+        named = [a for a in inside if family(a.status) == fam and word in a.message.lower()
+                 and _factor_right(fault.kind, a.message)]
         first = inside[0] if inside else None
         out['fault'] = {
             'kind': fault.kind,
@@ -204,6 +216,21 @@ def _summary(kind: str, scene: Scene, counter: Counter, figures: dict[str, Any])
         if fault.line is not None:
             out['fault']['line_view'] = _line_view(scene, counter, fault.line)
     return out
+
+
+#: The factors a units fault's "wrong units?" may name: the true one, or the one 2 % from it
+#: that its text names beside it (daN x10 and tonnes-force x9.81 on kN).
+UNIT_FACTORS_RIGHT = {'units_dan': (10.0, 9.80665), 'units_tf': (9.80665, 10.0)}
+
+
+def _factor_right(kind: str, message: str) -> bool:
+    """Whether a units fault's annunciation names a right factor (``reading xF``); True for
+    the other faults."""
+    right = UNIT_FACTORS_RIGHT.get(kind)
+    if right is None:
+        return True
+    m = re.search(r'reading x([0-9.]+)', message)
+    return m is not None and any(abs(float(m.group(1)) / f - 1.0) < 0.01 for f in right)
 
 
 def _line_view(scene: Scene, counter: Counter, line: str) -> dict[str, Any]:

@@ -295,7 +295,8 @@ class Fault:
     * ``silent_cell``: line ``line``'s load cell publishes nothing;
     * ``silent_gauge``: the tide gauge publishes nothing;
     * ``units_dan``: line ``line`` is set in N (``tension_scale`` 1) but its cell reports daN
-      (from the start: an installer's mistake; the scene's storm lifts the line meanwhile);
+      (from the start: an installer's mistake; the scene's storm lifts the line meanwhile: by
+      default one from 270 deg lifting it by 190 kN, the bench's :func:`isolating_storm`);
     * ``units_tf``: line ``line`` is set in kN (``tension_scale`` 1000) but its cell reports
       tonnes-force (likewise);
     * ``parted``: line ``line``'s chain parts ``value`` m below its hook (the dock settles on the
@@ -770,6 +771,88 @@ def storm_line(scene: Scene, direction: Optional[float] = None) -> str:
     if eq.lines is None:
         return model.names[0]
     return model.names[int(np.nanargmax(eq.lines.statics.top_tension))]
+
+
+#: The uplift [N] at its peak of the storm a units scene's line is read in: its anchor lifts, the
+#: other lines' anchors keep their margins (:func:`isolating_storm`). A storm that lifts one
+#: chain by 190 kN (the paper's typhoon) drags a rigid dock far enough that its neighbours lift
+#: or warn too: on ``drawn:2`` the best direction and centre leave the nearest other line no
+#: grounded chain to spare (1.7 m); at 5 kN they keep an anchor margin of 11 m.
+UNITS_UPLIFT = 5e3
+
+
+def isolating_storm(
+    scene: Scene, uplift: float = UNITS_UPLIFT, lines: Optional[tuple[str, ...]] = None
+) -> Storm:
+    """A storm at the scene's half-time lifting one line's anchor by ``uplift`` N at its peak
+    while the other lines keep the largest anchor margin: the line (of ``lines``, default the
+    end lines, the hooks farthest fore and aft: a storm loads an inner line together with its
+    neighbours), the direction and the centre's arm searched (every 30 deg, arms -1, -0.5, 0,
+    0.5, 1 x half the dock's length; then 10 deg and 0.1 x about the best), each storm's load by
+    bisection on the dock's equilibrium at the still-water depth of its peak (no wind besides),
+    the margins the monitor's (:func:`~catenary_monitor.core.physics.solve.solve` at the lines'
+    tensions)."""
+    return _isolating(_physics(scene), scene.seconds, uplift, lines)
+
+
+@functools.lru_cache(maxsize=8)
+def _isolating(
+    scene: Scene, seconds: float, uplift: float, lines: Optional[tuple[str, ...]]
+) -> Storm:
+    model = _model(scene)
+    names = list(model.names)
+    peak = 0.5 * seconds
+    depth = float(still_depth(scene, np.array([peak]))[0])
+    x = np.array([line.anchor_distance for line in scene.config.lines])
+    length = scene.config.dock.length or 0.0
+    half = 0.5 * length if length > 0.0 else 50.0
+
+    def least(k: int, direction: float, arm: float, steps: int) -> float:
+        """The other lines' least anchor margin [m] when the storm lifts line k by ``uplift``."""
+        push = push_direction(direction)
+        unit = np.array([push[0], push[1], arm * push[1]])
+
+        def at(p: float) -> Any:
+            eq = solve_equilibrium(model, depth, p * unit)
+            if eq.status != EquilibriumStatus.CONVERGED or eq.lines is None:
+                return None
+            return eq.lines.statics
+
+        lo, hi = 0.0, 2e4
+        while True:
+            st = at(hi)
+            if st is None or hi > 1e9:
+                return -math.inf
+            if st.uplift_force[k] >= uplift:
+                break
+            lo, hi = hi, 2 * hi
+        for _ in range(steps):
+            mid = 0.5 * (lo + hi)
+            st = at(mid)
+            if st is None:
+                return -math.inf
+            lo, hi = (mid, hi) if st.uplift_force[k] < uplift else (lo, mid)
+        st = at(hi)
+        if st is None:
+            return -math.inf
+        r = solve(model.weight, depth + model.hook_height, tension=st.top_tension,
+                  anchor_distance=x)  # fmt: skip
+        with np.errstate(invalid='ignore'):
+            margin = np.where(np.isfinite(r.anchor_margin), r.anchor_margin, -np.inf)
+        return float(np.min(np.delete(margin, k)))
+
+    if lines is None:
+        hook_x = np.array([abs(line.hook_x or 0.0) for line in scene.config.lines])
+        lines = tuple(n for n, h in zip(names, hook_x) if h >= float(np.max(hook_x)) - 1e-6)
+    candidates = [names.index(n) for n in lines]
+    coarse_grid = [(least(k, d, a * half, 8), k, d, a * half) for k in candidates
+                   for d in range(0, 360, 30) for a in (-1.0, -0.5, 0.0, 0.5, 1.0)]
+    _, k, d0, a0 = max(coarse_grid)
+    fine = [(least(k, (d0 + d) % 360, a0 + a * half, 14), k, (d0 + d) % 360, a0 + a * half)
+            for d in (-20, -10, 0, 10, 20) for a in (-0.1, 0.0, 0.1)
+            if abs(a0 + a * half) <= half]  # fmt: skip
+    _, k, direction, arm = max(fine)
+    return Storm(peak, names[k], uplift, float(direction), float(arm))
 
 
 def fit_mean_depth(scene: Scene, design: float, clearance: float = 1.5) -> float:

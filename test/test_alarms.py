@@ -395,7 +395,7 @@ def test_episode_durations_for_nested_levels():
         (0.0, fresh(0.0)),
         (10.0, fresh(10.0, anchor_margin=4.0)),
         (20.0, fresh(20.0, anchor_margin=-1.0, uplift_force=1e4)),
-        (25.0, fresh(25.0, anchor_margin=4.0)),
+        (25.0, fresh(25.0, safety_factor=1.9)),  # the uplift gone, another warning stands
         (40.0, fresh(40.0)),
     ]
     _, _, events = run(alarm, updates)
@@ -405,6 +405,28 @@ def test_episode_durations_for_nested_levels():
         (25.0, Level.ERROR, Level.WARN, 5.0),
         (40.0, Level.WARN, Level.OK, 30.0),
     ]
+
+
+def test_uplift_error_never_steps_down_into_the_margin_warning():
+    # The anchor lifts at the wave peaks of a margin hovering inside the warning band: the
+    # ERROR clears only at the warning's clear level (anchor_margin_warn + deadband, 6 m),
+    # so it does not fall to WARN and re-escalate with the next wave group.
+    alarm = alarm_with(clear_hold=5.0, warn_clear_hold=5.0)
+    updates = [(0.0, fresh(0.0))]
+    for t in np.arange(60.0, 420.0, 1.0):
+        group = int(t) // 60 % 2 == 0  # a wave group lifting the anchor every other minute
+        margin = 3.0 + 2.0 * math.sin(2.0 * math.pi * t / 8.0)
+        lift = 5e3 if group and margin > 4.9 else 0.0
+        updates.append((float(t), fresh(t, anchor_margin=margin, uplift_force=lift)))
+    updates += [(float(t), fresh(t)) for t in np.arange(420.0, 440.0, 1.0)]
+    _, _, events = run(alarm, updates)
+    assert [(e.old, e.new) for e in events] == [
+        (Level.OK, Level.WARN), (Level.WARN, Level.ERROR), (Level.ERROR, Level.OK)
+    ]
+    assert 'anchor margin >= 6.0 m' in run(alarm, updates[:142])[0].message  # t 200 s
+    assert assert_replay_matches(alarm, updates) == events
+    old = alarm_with(clear_hold=5.0, warn_clear_hold=5.0, anchor_margin_warn=0.0)
+    assert len(run(old, updates)[2]) > 3  # a warning band below the clear margin: it flaps
 
 
 def test_time_going_backwards_restarts_pending_timers():

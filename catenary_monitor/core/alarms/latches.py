@@ -8,7 +8,10 @@ Conditions, each with its own latch:
 ``uplift`` (ERROR)
     raised when ``uplift_force > allowed_uplift`` has lasted ``on_delay`` (0: at the first such
     update); cleared when ``uplift_force <= max(allowed_uplift - uplift_clear_hysteresis, 0)``
-    (and, when that level is 0 N, ``anchor_margin >= uplift_clear_margin``) has held for
+    (and, when that level is 0 N, ``anchor_margin`` at or above the larger of
+    ``uplift_clear_margin`` and the anchor-margin warning's clear level, ``anchor_margin_warn +
+    anchor_margin_deadband``: the deadband of the ERROR is at least the warning's, so the ERROR
+    never steps down into that warning and back up with the next wave group) has held for
     ``clear_hold``.
 ``input`` (ERROR)
     raised at once by an impossible input (solver ``status != 0``: NaN, negative tension,
@@ -280,6 +283,14 @@ class LineAlarm:
         """Uplift force (N) at or below which the uplift alarm may clear."""
         return max(self.allowed_uplift - self.config.uplift_clear_hysteresis, 0.0)
 
+    @cached_property
+    def uplift_clear_margin(self) -> float:
+        """Anchor margin (m) the uplift alarm needs to clear at a 0 N clear level: at least the
+        anchor-margin warning's clear level (an ERROR's deadband is never narrower than the
+        warning's below it: no ERROR -> WARN -> ERROR with each wave group)."""
+        c = self.config
+        return max(c.uplift_clear_margin, c.anchor_margin_warn + c.anchor_margin_deadband)
+
     def _timing(self, cond: str) -> tuple[float, float]:
         """(on_delay, hold) in s for a condition."""
         c = self.config
@@ -392,9 +403,7 @@ class LineAlarm:
             force = uplift_seen(x.uplift_force, x.dynamic_uplift)
             breach = force > self.allowed_uplift
             level = self.uplift_clear_level
-            clear = force <= level and (
-                level > 0.0 or x.anchor_margin >= self.config.uplift_clear_margin
-            )
+            clear = force <= level and (level > 0.0 or x.anchor_margin >= self.uplift_clear_margin)
         elif cond == 'inconsistent':
             breach, clear = x.inconsistent == 1.0, x.inconsistent == 0.0
         elif cond == 'dragging':
@@ -445,7 +454,7 @@ class LineAlarm:
                     f'{_fmt(level, 1e3)} kN'
                 )
                 if level == 0.0:
-                    text += f' and anchor margin >= {_fmt(self.config.uplift_clear_margin)} m'
+                    text += f' and anchor margin >= {_fmt(self.uplift_clear_margin)} m'
                 parts.append(text + ')')
         if active[1]:
             if sensor_state.is_units(x.sensor_state):
@@ -1102,7 +1111,7 @@ def _classify_columns(
     f = np.fmax(x['uplift_force'], x['dynamic_uplift'])
     up_clear = f <= level_up
     if not level_up > 0.0:
-        up_clear &= x['anchor_margin'] >= cfg.uplift_clear_margin
+        up_clear &= x['anchor_margin'] >= alarm.uplift_clear_margin
     out = {
         'uplift': codes('uplift', f > alarm.allowed_uplift, up_clear),
         'input': codes(

@@ -1095,7 +1095,9 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         'uplift_clear_margin',
         'double',
         1.0,
-        'When the clear level is 0 N, the anchor margin must also reach this',
+        'When the clear level is 0 N, the anchor margin must also reach this, and at least '
+        'the anchor-margin warning\'s clear level (anchor_margin_warn + '
+        'anchor_margin_deadband): the ERROR never steps down into that warning',
         'm',
         0.0,
         100.0,
