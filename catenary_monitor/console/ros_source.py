@@ -1,8 +1,11 @@
 """The live console's data: a ROS client of the monitor (rclpy, in its own thread).
 
 It subscribes to ``/diagnostics`` and to every line's ``/catenary_monitor/NAME/outputs`` and
-publishes acknowledgements on ``/catenary_monitor/acknowledge``; it never talks to the monitor
-otherwise, so a console that crashes or hangs leaves the monitoring untouched. Without a params
+publishes acknowledgements on ``/catenary_monitor/acknowledge`` and shelving requests on
+``/catenary_monitor/shelve``; it never talks to the monitor otherwise, so a console that crashes
+or hangs leaves the monitoring untouched. A request carries an id (`` #ID``) and is resent with
+it until the monitor's answer shows (a flood of requests from another node may push it out of
+the monitor's queue); the monitor applies an id once. Without a params
 file the lines are those the monitor names on ``/diagnostics`` (their outputs are subscribed to
 as they appear).
 
@@ -13,9 +16,11 @@ raised, acknowledged) come in its values.
 from __future__ import annotations
 
 import os
+import secrets
 import socket
 import threading
 import time
+from collections import deque
 from typing import Any, Optional
 
 from catenary_monitor.console.frames import (
@@ -37,8 +42,12 @@ from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 
 __all__ = ['LiveSource', 'AckError', 'ANSWER_WAIT']
 
-#: Seconds a shelving request waits for the monitor's answer on /diagnostics.
-ANSWER_WAIT = 3.0
+#: Seconds a request is resent for (a shelving request waits as long for the monitor's
+#: answer on /diagnostics).
+ANSWER_WAIT = 8.0
+#: Seconds between the sends of a request not answered yet: the first resend after the first,
+#: then the second (a console's own requests stay within the monitor's limit per publisher).
+RESEND_EVERY = (0.5, 1.0)
 
 _T = OUTPUT_FIELDS.index('top_tension')
 _F = OUTPUT_FIELDS.index('uplift_force')
@@ -69,6 +78,8 @@ class LiveSource:
         self._subscribed: set[str] = set()
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
+        self._answers_seen: deque[tuple[int, str]] = deque(maxlen=256)  # (count, answer)
+        self._acks: dict[str, tuple[str, float, dict[str, str]]] = {}  # text -> resend state
         self.error: Optional[str] = None
         self.started = time.time()
 
@@ -89,6 +100,7 @@ class LiveSource:
         self._ack_pub = node.create_publisher(String, ACKNOWLEDGE_TOPIC, QoSProfile(depth=10))
         self._shelve_pub = node.create_publisher(String, SHELVE_TOPIC, QoSProfile(depth=10))
         self._String = String
+        self._ack_timer = node.create_timer(RESEND_EVERY[-1], self._resend_acks)
         for name in self.names:
             self._subscribe(name)
         self._thread = threading.Thread(target=self._spin, name='ros', daemon=True)
@@ -149,6 +161,9 @@ class LiveSource:
         with self.cond:
             self.statuses = statuses
             self.snapshot_rx = rx
+            count, answer = self._answers()
+            if not self._answers_seen or self._answers_seen[-1][0] != count:
+                self._answers_seen.append((count, answer))
             for name in self.names:
                 st = statuses.get(name)
                 age = _float(st.values.get('tension_age')) if st else None
@@ -219,20 +234,55 @@ class LiveSource:
         return {'line': line, 'lo': now - span, 'hi': now, 'series': series, 'depth': depth}
 
     def acknowledge(self, line: str, origin: str) -> str:
-        """Publish one acknowledgement (``LINE|all ORIGIN``); the monitor decides."""
+        """Publish one acknowledgement (``LINE|all ORIGIN #ID``); the monitor decides. While
+        the alarms it names still wait for it (raised at the same time), it is resent every
+        :data:`RESEND_EVERY` s, for :data:`ANSWER_WAIT` s at most."""
         if line != ALL_LINES and line not in self.names and line != SENSORS:
             raise AckError(f'unknown line {line!r}', 404)
         if self._ack_pub.get_subscription_count() == 0:
             raise AckError(f'no monitor is listening on {ACKNOWLEDGE_TOPIC}', 503)
-        text = f'{line} {origin}'
+        text = f'{line} {origin} #{_request_id()}'
+        with self.cond:
+            waiting = self._waiting_ack(line)
+            if waiting and len(self._acks) < 64:
+                self._acks[text] = (line, time.monotonic() + ANSWER_WAIT, waiting)
         self._ack_pub.publish(self._String(data=text))
         return text
 
+    def _waiting_ack(self, line: str) -> dict[str, str]:
+        """The alarms an acknowledgement of ``line`` (or ``all``) acknowledges that wait for
+        one: {alarm: when it was raised, as the monitor says}. Under ``self.cond``."""
+        names = [*self.names, SENSORS] if line == ALL_LINES else [line]
+        out = {}
+        for name in names:
+            st = self.statuses.get(name)
+            if st is not None and st.values.get('acknowledged') == 'false':
+                out[name] = st.values.get('alarm_raised', '')
+        return out
+
+    def _resend_acks(self) -> None:
+        """Resend each acknowledgement whose alarms still wait for it, as raised when it was
+        sent (never one raised since: the operator has not seen that); drop the others."""
+        now = time.monotonic()
+        with self.cond:
+            again = []
+            for text, (line, deadline, raised) in list(self._acks.items()):
+                waiting = self._waiting_ack(line)
+                if now > deadline or not waiting or any(
+                    waiting.get(k, v) != v for k, v in raised.items()
+                ) or not set(waiting) <= set(raised):
+                    del self._acks[text]
+                else:
+                    again.append(text)
+        for text in again:
+            self._ack_pub.publish(self._String(data=text))
+
     def shelve(self, alarm: str, condition: str, seconds: float, origin: str) -> dict[str, Any]:
-        """Publish one shelving request (``ALARM[.CONDITION] SECONDS ORIGIN``; 0 s unshelves),
-        then wait up to :data:`ANSWER_WAIT` s for the monitor's answer on ``/diagnostics``:
-        ``{"sent": text, "answer": the monitor's answer, or None}``; a refusal is an AckError
-        (409) carrying the monitor's own words."""
+        """Publish one shelving request (``ALARM[.CONDITION] SECONDS ORIGIN #ID``; 0 s
+        unshelves), resent every :data:`RESEND_EVERY` s until the monitor's answer shows on
+        ``/diagnostics``, for :data:`ANSWER_WAIT` s at most: ``{"sent": text, "answer": the
+        monitor's answer, or None}``; a refusal is an AckError (409) carrying the monitor's
+        own words."""
         if alarm not in self.names and alarm != SENSORS:
             raise AckError(f'unknown alarm {alarm!r}', 404)
         if self._shelve_pub.get_subscription_count() == 0:
@@ -240,21 +290,39 @@ class LiveSource:
         target = alarm if condition == WHOLE else f'{alarm}.{condition}'
         with self.cond:
             before = self._answers()[0]
-        text = f'{target} {seconds:g} {origin}'
-        self._shelve_pub.publish(self._String(data=text))
-        deadline = time.monotonic() + ANSWER_WAIT
-        with self.cond:
-            while True:
-                count, answer = self._answers()
-                if count > before and answer.startswith(target):
-                    break
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    return {'sent': text, 'answer': None}
-                self.cond.wait(left)
+        text = f'{target} {seconds:g} {origin} #{_request_id()}'
+        start = time.monotonic()
+        deadline, sends = start + ANSWER_WAIT, 0
+        answer: Optional[str] = None
+        while answer is None:
+            now = time.monotonic()
+            if now >= deadline:
+                return {'sent': text, 'answer': None}
+            self._shelve_pub.publish(self._String(data=text))
+            sends += 1
+            resend = now + RESEND_EVERY[min(sends, len(RESEND_EVERY)) - 1]
+            with self.cond:
+                while answer is None:
+                    answer = self._answer_to(before, alarm, target, origin)
+                    left = min(resend, deadline) - time.monotonic()
+                    if answer is not None or left <= 0:
+                        break
+                    self.cond.wait(left)
         if ': refused: ' in answer:
             raise AckError(answer, 409)
         return {'sent': text, 'answer': answer}
+
+    def _answer_to(self, before: int, alarm: str, target: str, origin: str) -> Optional[str]:
+        """The monitor's answer to a shelving request of ``target`` from ``origin``, among
+        those it gave after its ``before``-th (None: none yet). Under ``self.cond``."""
+        for count, answer in self._answers_seen:
+            if count <= before:
+                continue
+            if answer.startswith(f'{target}: ') or (
+                answer.startswith((f'{target} ', f'{alarm} ')) and f' by {origin}' in answer
+            ):
+                return answer
+        return None
 
     def _answers(self) -> tuple[int, str]:
         """(shelving requests the monitor answered, its newest answer), from ``/diagnostics``."""
@@ -266,6 +334,11 @@ class LiveSource:
         except ValueError:
             count = 0
         return count, st.values.get('shelve_answer', '')
+
+
+def _request_id() -> str:
+    """A new request id (the monitor applies a publisher's id once)."""
+    return secrets.token_hex(6)
 
 
 def _float(text: Optional[str]) -> Optional[float]:
