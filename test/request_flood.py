@@ -9,6 +9,7 @@ import threading
 import time
 
 import rclpy
+from rclpy.duration import Duration
 from rclpy.qos import QoSProfile
 from rclpy.signals import SignalHandlerOptions
 from std_msgs.msg import String
@@ -33,7 +34,9 @@ def main() -> None:
             pub.publish(messages[sent % len(messages)])
             sent += 1
         time.sleep(0.0005)
-    time.sleep(0.5)  # reliable delivery of the last ones
+    # reliable delivery of the last ones (under load it took longer than a fixed 0.5 s: the
+    # monitor could not account for requests it never received)
+    pub.wait_for_all_acked(Duration(seconds=10.0))
     print(f'sent {sent}', flush=True)
     node.destroy_node()
     rclpy.shutdown()

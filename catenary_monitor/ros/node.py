@@ -1170,9 +1170,12 @@ class CatenaryMonitor(Node):
             self.log.add_metadata(NODE_NAME, self._metadata(config))
 
     def close(self) -> None:
-        """Record the last intake counts and refused requests, then finish the MCAP file
-        (summary written)."""
+        """Take the requests still waiting, record the last intake counts and refused requests,
+        then finish the MCAP file (summary written)."""
         try:
+            for topic in (ACKNOWLEDGE_TOPIC, SHELVE_TOPIC):
+                for taken in self._requests.take(topic):
+                    self._request(topic, taken)
             self._report_intake(time.monotonic(), force=True)
             for key, n in self._limit.due(time.monotonic(), every_one=True):
                 why = f'over the rate limit of its publisher ({limit_text()})'
