@@ -5,7 +5,9 @@ A node gone wrong sends 1,000 shelving requests a second for 10 s (a shelf toggl
 on a warning line); meanwhile a console acknowledges and shelves. The monitor must stay quiet
 (it had published 562 /diagnostics arrays a second and logged 5,700 lines in 10 s; the
 toggling raised the warning 34 times), take the console's requests (the console is one
-publisher: never locked out), and account for every request of the flood in its records.
+publisher: never locked out; a request the flood pushed out of the monitor's queue is resent
+with its id until answered, and applied once), and account for every request of the flood in
+its records.
 Requests refused before the alarm rules (a duration of nan, inf or -1, an unknown alarm or
 line, an empty acknowledgement) each leave a record and an answer.
 """
@@ -30,8 +32,8 @@ HERE = Path(__file__).resolve().parent
 ACK = '/catenary_monitor/acknowledge'
 SHELVE = '/catenary_monitor/shelve'
 LINE = dict(weight=1300.0, anchor_distance=120.0, mbl=4.827e6)
-OK_T, WARN_T = 372e3, 450e3
-PROBES = 10  # requests sent once each mid-flood, none resent  # line_01 at 450 kN: anchor margin 4.1 m, WARN
+OK_T, WARN_T = 372e3, 450e3  # line_01 at 450 kN: anchor margin 4.1 m, WARN
+PROBES = 10  # requests sent once each mid-flood, none resent
 
 
 def test_the_limit_lets_a_burst_through_then_a_request_a_second() -> None:
@@ -95,6 +97,89 @@ def test_a_refusal_is_recorded_answered_and_replayed_alike() -> None:
     empty = (np.zeros(0, np.int64), np.zeros(0))
     result, _ = run_log(MonitorCore(config, T0_NS), Window([empty, empty], empty, ticks), events)
     assert sorted(result.alarm_events) == sorted(journal)
+
+
+def test_a_request_id_is_applied_once_per_publisher_and_remembered_boundedly() -> None:
+    from catenary_monitor.core.alarms.requests import Resends, split_id
+
+    assert split_id('line_01 60 console op #a1b2') == ('line_01 60 console op', 'a1b2')
+    assert split_id('line_01 #x') == ('line_01', 'x')
+    for text in ('#x', 'line_01 60 op#x', 'line_01 60 #bad!', 'line_01 60 #' + 'a' * 33):
+        assert split_id(text) == (text, ''), text
+    ids = Resends(kept=2, publishers=2, keep_for=60.0)
+    assert not ids.seen('a', 'r1', 0.0) and ids.seen('a', 'r1', 5.0)
+    assert not ids.seen('b', 'r1', 5.0)  # another publisher's id is its own
+    assert not ids.seen('a', 'r2', 6.0) and not ids.seen('a', 'r3', 7.0)
+    assert not ids.seen('a', 'r1', 8.0)  # beyond the 2 kept: forgotten (taken again)
+    assert ids.seen('a', 'r3', 60.0) and not ids.seen('a', 'r3', 130.0)  # kept 60 s
+    ids.seen('c', 'r1', 9.0)  # a third publisher: the longest idle one ('b') forgotten
+    assert len(ids._ids) == 2 and 'b' not in ids._ids
+
+
+class _Publisher:
+    """A request publisher whose first ``lose`` sends the flood takes; then ``answer()``."""
+
+    def __init__(self, lose: int, answer: Any = None) -> None:
+        self.sent: list[str] = []
+        self.lose, self.answer = lose, answer
+
+    def get_subscription_count(self) -> int:
+        return 1
+
+    def publish(self, msg: Any) -> None:
+        self.sent.append(msg.data)
+        if len(self.sent) > self.lose and self.answer is not None:
+            self.answer(msg.data)
+
+
+def test_the_console_resends_its_request_with_its_id_until_the_answer_shows(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A shelving request lost twice is sent a third time with the same id, and its answer
+    (told apart from the flood's on the same line) is returned; an acknowledgement is resent
+    while its alarm, raised as when it was sent, still waits for one, never once the alarm is
+    acknowledged or raised again."""
+    from types import SimpleNamespace
+
+    from catenary_monitor.console import ros_source
+    from catenary_monitor.console.frames import Status
+
+    monkeypatch.setattr(ros_source, 'RESEND_EVERY', (0.02, 0.05))
+    source = ros_source.LiveSource(None)
+    source.names = ['line_01', 'line_02']
+    source._String = lambda data: SimpleNamespace(data=data)
+    origin = 'console vm client 127.0.0.1'
+
+    def answer(text: str) -> None:
+        with source.cond:
+            n = len(source._answers_seen)
+            source._answers_seen.append((n + 1, 'line_02 shelved for 600 s by flood'))
+            source._answers_seen.append((n + 2, f'line_02 shelved for 60 s by {origin}'))
+            source.cond.notify_all()
+
+    source._shelve_pub = _Publisher(2, answer)
+    got = source.shelve('line_02', 'all', 60.0, origin)
+    assert got['answer'] == f'line_02 shelved for 60 s by {origin}', got
+    assert len(source._shelve_pub.sent) == 3 and len(set(source._shelve_pub.sent)) == 1
+    assert source._shelve_pub.sent[0] == got['sent']
+    assert got['sent'].startswith(f'line_02 60 {origin} #')
+
+    values = {'acknowledged': 'false', 'alarm_raised': '100.0'}
+    source.statuses = {'line_01': Status('WARN', '', values)}
+    source._ack_pub = _Publisher(99)
+    sent = source.acknowledge('line_01', origin)
+    source._resend_acks()
+    assert source._ack_pub.sent == [sent, sent]
+    source.statuses = {'line_01': Status('WARN', '', {**values, 'alarm_raised': '150.0'})}
+    source._resend_acks()  # raised again since: the operator has not seen that one
+    assert len(source._ack_pub.sent) == 2 and not source._acks
+    source.acknowledge('line_01', origin)
+    source.statuses = {'line_01': Status('WARN', '', {**values, 'acknowledged': 'true'})}
+    source._resend_acks()  # acknowledged: nothing more to send
+    assert len(source._ack_pub.sent) == 3 and not source._acks
+    source.statuses = {}
+    source.acknowledge('line_02', origin)  # nothing waits for it: sent once
+    assert not source._acks
 
 
 def test_a_publisher_listed_before_its_node_is_named_once_its_node_is_known() -> None:
@@ -259,7 +344,10 @@ def test_a_flood_of_requests_costs_a_request_a_second_and_locks_no_operator_out(
             and _console_gids(client.node, console_proc.pid), 10.0, 'the console on the graph'
         )
         # Refused before the rules: each one recorded and answered, none silent.
-        for text in ('line_01 nan tool', 'line_01 inf tool', 'line_01 -1 tool', 'nope 60 tool'):
+        # (the first twice with one id: the second a resend of a request taken, changing nothing)
+        texts = ('line_01 nan tool #r1', 'line_01 nan tool #r1', 'line_01 inf tool',
+                 'line_01 -1 tool', 'nope 60 tool')  # fmt: skip
+        for text in texts:
             bad_shelve.publish(String(data=text))
             time.sleep(0.3)
         for text in ('nope tool', '   '):

@@ -11,10 +11,11 @@ flood costs the node at most a request a second per publisher and a record per p
 another publisher (the console) is never locked out.
 
 A request may end in an id, `` #ID`` (1 to 32 letters, digits, ``-`` or ``_``): the console
-resends its request with the same id until it sees the answer (a request taken from the middleware's
-shared queue behind a flood may be lost before it is read), and the node applies each id of a
-publisher once (:class:`Resends`); a resend of an applied request changes nothing. Its
-memory is bounded per publisher (:data:`IDS_KEPT`) and in all (:data:`IDS_PUBLISHERS`).
+resends its request with the same id until it sees the answer (behind a flood, a request may be
+pushed out of the middleware's queue, which all publishers share, before it is read), and the
+node applies each id of a publisher once (:class:`Resends`): a resend of a request taken
+changes nothing. Its memory is bounded per publisher (:data:`IDS_KEPT`) and in all
+(:data:`IDS_PUBLISHERS`).
 
 Pure: no clock (times are passed in, s on any monotonic clock), no rclpy.
 """
