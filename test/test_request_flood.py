@@ -144,7 +144,10 @@ def test_the_console_resends_its_request_with_its_id_until_the_answer_shows(
     from catenary_monitor.console import ros_source
     from catenary_monitor.console.frames import Status
 
+    from catenary_monitor.console import resend
+
     monkeypatch.setattr(ros_source, 'RESEND_EVERY', (0.02, 0.05))
+    monkeypatch.setattr(resend, 'RESEND_EVERY', (0.0, 0.0))
     source = ros_source.LiveSource(None)
     source.names = ['line_01', 'line_02']
     source._String = lambda data: SimpleNamespace(data=data)
@@ -180,6 +183,23 @@ def test_the_console_resends_its_request_with_its_id_until_the_answer_shows(
     source.statuses = {}
     source.acknowledge('line_02', origin)  # nothing waits for it: sent once
     assert not source._acks
+
+
+def test_an_acknowledgement_is_resent_every_second_for_8_s_at_most() -> None:
+    """The harbour's and the console's: none before a second, then one a second while the
+    alarm waits, none after ANSWER_WAIT; at most ACKS_MAX followed at once."""
+    from catenary_monitor.console.frames import Status
+    from catenary_monitor.console.resend import ACKS_MAX, ANSWER_WAIT, AckResends
+
+    waits = {'line_01': Status('WARN', '', {'acknowledged': 'false', 'alarm_raised': '5.0'})}
+    acks = AckResends()
+    acks.add('line_01 op #a', ['line_01'], waits, 0.0)
+    assert acks.due(waits, 0.5) == [] and acks.due(waits, 1.0) == ['line_01 op #a']
+    assert acks.due(waits, 1.5) == [] and acks.due(waits, 2.0) == ['line_01 op #a']
+    assert acks.due(waits, ANSWER_WAIT + 0.1) == [] and len(acks) == 0
+    for k in range(ACKS_MAX + 5):
+        acks.add(f'line_01 op #{k}', ['line_01'], waits, 0.0)
+    assert len(acks) == ACKS_MAX
 
 
 def test_a_publisher_listed_before_its_node_is_named_once_its_node_is_known() -> None:

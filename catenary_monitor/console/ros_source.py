@@ -16,7 +16,6 @@ raised, acknowledged) come in its values.
 from __future__ import annotations
 
 import os
-import secrets
 import socket
 import threading
 import time
@@ -34,6 +33,7 @@ from catenary_monitor.console.frames import (
     statuses_by_name,
     tide_trend,
 )
+from catenary_monitor.console.resend import ANSWER_WAIT, RESEND_EVERY, AckResends, request_id
 from catenary_monitor.core.alarms.acknowledge import ACKNOWLEDGE_TOPIC, ALL_LINES, SENSORS, WHOLE
 from catenary_monitor.core.alarms.shelving import SHELVE_TOPIC
 from catenary_monitor.core.config.parameters import COMPONENTS, MonitorConfig
@@ -42,12 +42,6 @@ from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 
 __all__ = ['LiveSource', 'AckError', 'ANSWER_WAIT']
 
-#: Seconds a request is resent for (a shelving request waits as long for the monitor's
-#: answer on /diagnostics).
-ANSWER_WAIT = 8.0
-#: Seconds between the sends of a request not answered yet: the first resend after the first,
-#: then the second (a console's own requests stay within the monitor's limit per publisher).
-RESEND_EVERY = (0.5, 1.0)
 
 _T = OUTPUT_FIELDS.index('top_tension')
 _F = OUTPUT_FIELDS.index('uplift_force')
@@ -79,7 +73,7 @@ class LiveSource:
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
         self._answers_seen: deque[tuple[int, str]] = deque(maxlen=256)  # (count, answer)
-        self._acks: dict[str, tuple[str, float, dict[str, str]]] = {}  # text -> resend state
+        self._acks = AckResends()
         self.error: Optional[str] = None
         self.started = time.time()
 
@@ -100,7 +94,7 @@ class LiveSource:
         self._ack_pub = node.create_publisher(String, ACKNOWLEDGE_TOPIC, QoSProfile(depth=10))
         self._shelve_pub = node.create_publisher(String, SHELVE_TOPIC, QoSProfile(depth=10))
         self._String = String
-        self._ack_timer = node.create_timer(RESEND_EVERY[-1], self._resend_acks)
+        self._ack_timer = node.create_timer(RESEND_EVERY[0], self._resend_acks)
         for name in self.names:
             self._subscribe(name)
         self._thread = threading.Thread(target=self._spin, name='ros', daemon=True)
@@ -235,45 +229,23 @@ class LiveSource:
 
     def acknowledge(self, line: str, origin: str) -> str:
         """Publish one acknowledgement (``LINE|all ORIGIN #ID``); the monitor decides. While
-        the alarms it names still wait for it (raised at the same time), it is resent every
-        :data:`RESEND_EVERY` s, for :data:`ANSWER_WAIT` s at most."""
+        the alarms it names still wait for it (raised as when it was sent), it is resent
+        (:class:`~catenary_monitor.console.resend.AckResends`)."""
         if line != ALL_LINES and line not in self.names and line != SENSORS:
             raise AckError(f'unknown line {line!r}', 404)
         if self._ack_pub.get_subscription_count() == 0:
             raise AckError(f'no monitor is listening on {ACKNOWLEDGE_TOPIC}', 503)
-        text = f'{line} {origin} #{_request_id()}'
+        text = f'{line} {origin} #{request_id()}'
+        names = [*self.names, SENSORS] if line == ALL_LINES else [line]
         with self.cond:
-            waiting = self._waiting_ack(line)
-            if waiting and len(self._acks) < 64:
-                self._acks[text] = (line, time.monotonic() + ANSWER_WAIT, waiting)
+            self._acks.add(text, names, self.statuses, time.monotonic())
         self._ack_pub.publish(self._String(data=text))
         return text
 
-    def _waiting_ack(self, line: str) -> dict[str, str]:
-        """The alarms an acknowledgement of ``line`` (or ``all``) acknowledges that wait for
-        one: {alarm: when it was raised, as the monitor says}. Under ``self.cond``."""
-        names = [*self.names, SENSORS] if line == ALL_LINES else [line]
-        out = {}
-        for name in names:
-            st = self.statuses.get(name)
-            if st is not None and st.values.get('acknowledged') == 'false':
-                out[name] = st.values.get('alarm_raised', '')
-        return out
-
     def _resend_acks(self) -> None:
-        """Resend each acknowledgement whose alarms still wait for it, as raised when it was
-        sent (never one raised since: the operator has not seen that); drop the others."""
-        now = time.monotonic()
+        """Send again the acknowledgements whose alarms still wait for them."""
         with self.cond:
-            again = []
-            for text, (line, deadline, raised) in list(self._acks.items()):
-                waiting = self._waiting_ack(line)
-                if now > deadline or not waiting or any(
-                    waiting.get(k, v) != v for k, v in raised.items()
-                ) or not set(waiting) <= set(raised):
-                    del self._acks[text]
-                else:
-                    again.append(text)
+            again = self._acks.due(self.statuses, time.monotonic())
         for text in again:
             self._ack_pub.publish(self._String(data=text))
 
@@ -290,7 +262,7 @@ class LiveSource:
         target = alarm if condition == WHOLE else f'{alarm}.{condition}'
         with self.cond:
             before = self._answers()[0]
-        text = f'{target} {seconds:g} {origin} #{_request_id()}'
+        text = f'{target} {seconds:g} {origin} #{request_id()}'
         start = time.monotonic()
         deadline, sends = start + ANSWER_WAIT, 0
         answer: Optional[str] = None
@@ -334,11 +306,6 @@ class LiveSource:
         except ValueError:
             count = 0
         return count, st.values.get('shelve_answer', '')
-
-
-def _request_id() -> str:
-    """A new request id (the monitor applies a publisher's id once)."""
-    return secrets.token_hex(6)
 
 
 def _float(text: Optional[str]) -> Optional[float]:
