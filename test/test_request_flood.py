@@ -361,7 +361,7 @@ def test_a_flood_of_requests_costs_a_request_a_second_and_locks_no_operator_out(
             time.sleep(0.2)
         console_gids = client.wait_for(
             lambda: len(_console_gids(client.node, console_proc.pid)) == 2
-            and _console_gids(client.node, console_proc.pid), 10.0, 'the console on the graph'
+            and _console_gids(client.node, console_proc.pid), 30.0, 'the console on the graph'
         )
         # Refused before the rules: each one recorded and answered, none silent.
         # (the first twice with one id: the second a resend of a request taken, changing nothing)
