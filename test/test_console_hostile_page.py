@@ -24,6 +24,8 @@ from typing import Any
 import pytest
 from browser_harness import PARAMS, AckRecorder, browser, start_console, stop, wait_for
 
+from catenary_monitor.core.alarms.requests import split_id
+
 pytestmark = [pytest.mark.ros]
 
 _EVIL = """<!DOCTYPE html><html><body><script>
@@ -119,7 +121,8 @@ def test_hostile_page_reloads_and_operator_sign_in(tmp_path: Path) -> None:
         assert status == 202
         recorder.wait(2)
         assert recorder.messages[1].startswith('line_11 alice via console '), recorder.messages
-        assert recorder.messages[1].endswith(' client 127.0.0.1')
+        text, rid = split_id(recorder.messages[1])  # the request's id ends it
+        assert text.endswith(' client 127.0.0.1') and len(rid) == 12, recorder.messages
         assert 'a1b2c3d4' not in driver.current_url
     finally:
         evil.shutdown()

@@ -24,6 +24,7 @@ import pytest
 
 from catenary_monitor.console import http_transport
 from catenary_monitor.console.server import ConsoleServer
+from catenary_monitor.core.alarms.requests import split_id
 
 GOOD = b'{"line": "line_11"}'
 
@@ -376,7 +377,8 @@ def test_console_on_another_loopback_address_with_tokens(tmp_path: Path) -> None
         assert post(**alice) == [202]
         recorder.wait(1)
         assert recorder.messages[0].startswith('line_11 alice via console '), recorder.messages
-        assert recorder.messages[0].endswith(' client 127.0.0.1')
+        text, rid = split_id(recorder.messages[0])  # the request's id ends it
+        assert text.endswith(' client 127.0.0.1') and len(rid) == 12, recorder.messages
         # 200 half-open connections and 50 streams reset under the writer
         for _ in range(200):
             sock = socket.create_connection(('127.0.0.2', port), timeout=10)

@@ -31,6 +31,7 @@ from catenary_monitor.console.harbour_model import (
     mixed,
     worst_level,
 )
+from catenary_monitor.console.resend import AckResends, request_id
 from catenary_monitor.core.alarms.acknowledge import ACKNOWLEDGE_TOPIC, ALL_LINES, SENSORS
 from catenary_monitor.core.config.parameters import COMPONENTS
 from catenary_monitor.core.monitor.events import NODE_NAME
@@ -72,6 +73,7 @@ class _Dock:
         self.context: Any = None
         self.node: Any = None
         self.ack_pub: Any = None
+        self.acks = AckResends()  # its acknowledgements resent until applied
         self.thread: Optional[threading.Thread] = None
         self.ready = threading.Event()
         self.failure: Optional[str] = None
@@ -270,6 +272,20 @@ class HarbourSource:
             self.states[name].feed(rx, statuses, len(data))
             self.version += 1
             self.cond.notify_all()
+        self._resend_acks(name, statuses)
+
+    def _resend_acks(self, name: str, statuses: dict[str, Any]) -> None:
+        """Send again the dock's acknowledgements whose alarms still wait for them (checked
+        on each of its arrays: at least one a second)."""
+        dock = next((d for d in self._docks if d.spec.name == name), None)
+        if dock is None or dock.ack_pub is None:
+            return
+        from std_msgs.msg import String
+
+        with self.cond:
+            again = dock.acks.due(statuses, time.monotonic())
+        for text in again:
+            dock.ack_pub.publish(String(data=text))
 
     # ------------------------------------------------------------------ server side
     def wait(self, version: int, timeout: float) -> int:
@@ -332,8 +348,9 @@ class HarbourSource:
         }
 
     def acknowledge(self, dock: str, line: str, origin: str) -> str:
-        """Publish one acknowledgement (``LINE|all|sensors ORIGIN``) in the dock's domain; its
-        monitor decides."""
+        """Publish one acknowledgement (``LINE|all|sensors ORIGIN #ID``) in the dock's domain;
+        its monitor decides. Resent while the alarms it names still wait for it
+        (:class:`~catenary_monitor.console.resend.AckResends`)."""
         found = next((d for d in self._docks if d.spec.name == dock), None)
         if found is None:
             raise AckError(f'unknown dock {dock!r}', 404)
@@ -347,6 +364,10 @@ class HarbourSource:
             raise AckError(f'no monitor of dock {dock} is listening on {ACKNOWLEDGE_TOPIC}', 503)
         from std_msgs.msg import String
 
-        text = f'{line} {origin}'
+        text = f'{line} {origin} #{request_id()}'
+        with self.cond:
+            statuses = self.states[dock].statuses
+            alarms = [*names, SENSORS] if line == ALL_LINES else [line]
+            found.acks.add(text, alarms, statuses, time.monotonic())
         found.ack_pub.publish(String(data=text))
         return text

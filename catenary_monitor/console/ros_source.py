@@ -1,8 +1,11 @@
 """The live console's data: a ROS client of the monitor (rclpy, in its own thread).
 
 It subscribes to ``/diagnostics`` and to every line's ``/catenary_monitor/NAME/outputs`` and
-publishes acknowledgements on ``/catenary_monitor/acknowledge``; it never talks to the monitor
-otherwise, so a console that crashes or hangs leaves the monitoring untouched. Without a params
+publishes acknowledgements on ``/catenary_monitor/acknowledge`` and shelving requests on
+``/catenary_monitor/shelve``; it never talks to the monitor otherwise, so a console that crashes
+or hangs leaves the monitoring untouched. A request carries an id (`` #ID``) and is resent with
+it until the monitor's answer shows (a flood of requests from another node may push it out of
+the monitor's queue); the monitor applies an id once. Without a params
 file the lines are those the monitor names on ``/diagnostics`` (their outputs are subscribed to
 as they appear).
 
@@ -16,6 +19,7 @@ import os
 import socket
 import threading
 import time
+from collections import deque
 from typing import Any, Optional
 
 from catenary_monitor.console.frames import (
@@ -29,6 +33,7 @@ from catenary_monitor.console.frames import (
     statuses_by_name,
     tide_trend,
 )
+from catenary_monitor.console.resend import ANSWER_WAIT, RESEND_EVERY, AckResends, request_id
 from catenary_monitor.core.alarms.acknowledge import ACKNOWLEDGE_TOPIC, ALL_LINES, SENSORS, WHOLE
 from catenary_monitor.core.alarms.shelving import SHELVE_TOPIC
 from catenary_monitor.core.config.parameters import COMPONENTS, MonitorConfig
@@ -37,8 +42,6 @@ from catenary_monitor.core.monitor.state import OUTPUT_FIELDS
 
 __all__ = ['LiveSource', 'AckError', 'ANSWER_WAIT']
 
-#: Seconds a shelving request waits for the monitor's answer on /diagnostics.
-ANSWER_WAIT = 3.0
 
 _T = OUTPUT_FIELDS.index('top_tension')
 _F = OUTPUT_FIELDS.index('uplift_force')
@@ -69,6 +72,8 @@ class LiveSource:
         self._subscribed: set[str] = set()
         self._stop = threading.Event()
         self._thread: Optional[threading.Thread] = None
+        self._answers_seen: deque[tuple[int, str]] = deque(maxlen=256)  # (count, answer)
+        self._acks = AckResends()
         self.error: Optional[str] = None
         self.started = time.time()
 
@@ -89,6 +94,7 @@ class LiveSource:
         self._ack_pub = node.create_publisher(String, ACKNOWLEDGE_TOPIC, QoSProfile(depth=10))
         self._shelve_pub = node.create_publisher(String, SHELVE_TOPIC, QoSProfile(depth=10))
         self._String = String
+        self._ack_timer = node.create_timer(RESEND_EVERY[0], self._resend_acks)
         for name in self.names:
             self._subscribe(name)
         self._thread = threading.Thread(target=self._spin, name='ros', daemon=True)
@@ -149,6 +155,9 @@ class LiveSource:
         with self.cond:
             self.statuses = statuses
             self.snapshot_rx = rx
+            count, answer = self._answers()
+            if not self._answers_seen or self._answers_seen[-1][0] != count:
+                self._answers_seen.append((count, answer))
             for name in self.names:
                 st = statuses.get(name)
                 age = _float(st.values.get('tension_age')) if st else None
@@ -219,20 +228,33 @@ class LiveSource:
         return {'line': line, 'lo': now - span, 'hi': now, 'series': series, 'depth': depth}
 
     def acknowledge(self, line: str, origin: str) -> str:
-        """Publish one acknowledgement (``LINE|all ORIGIN``); the monitor decides."""
+        """Publish one acknowledgement (``LINE|all ORIGIN #ID``); the monitor decides. While
+        the alarms it names still wait for it (raised as when it was sent), it is resent
+        (:class:`~catenary_monitor.console.resend.AckResends`)."""
         if line != ALL_LINES and line not in self.names and line != SENSORS:
             raise AckError(f'unknown line {line!r}', 404)
         if self._ack_pub.get_subscription_count() == 0:
             raise AckError(f'no monitor is listening on {ACKNOWLEDGE_TOPIC}', 503)
-        text = f'{line} {origin}'
+        text = f'{line} {origin} #{request_id()}'
+        names = [*self.names, SENSORS] if line == ALL_LINES else [line]
+        with self.cond:
+            self._acks.add(text, names, self.statuses, time.monotonic())
         self._ack_pub.publish(self._String(data=text))
         return text
 
+    def _resend_acks(self) -> None:
+        """Send again the acknowledgements whose alarms still wait for them."""
+        with self.cond:
+            again = self._acks.due(self.statuses, time.monotonic())
+        for text in again:
+            self._ack_pub.publish(self._String(data=text))
+
     def shelve(self, alarm: str, condition: str, seconds: float, origin: str) -> dict[str, Any]:
-        """Publish one shelving request (``ALARM[.CONDITION] SECONDS ORIGIN``; 0 s unshelves),
-        then wait up to :data:`ANSWER_WAIT` s for the monitor's answer on ``/diagnostics``:
-        ``{"sent": text, "answer": the monitor's answer, or None}``; a refusal is an AckError
-        (409) carrying the monitor's own words."""
+        """Publish one shelving request (``ALARM[.CONDITION] SECONDS ORIGIN #ID``; 0 s
+        unshelves), resent every :data:`RESEND_EVERY` s until the monitor's answer shows on
+        ``/diagnostics``, for :data:`ANSWER_WAIT` s at most: ``{"sent": text, "answer": the
+        monitor's answer, or None}``; a refusal is an AckError (409) carrying the monitor's
+        own words."""
         if alarm not in self.names and alarm != SENSORS:
             raise AckError(f'unknown alarm {alarm!r}', 404)
         if self._shelve_pub.get_subscription_count() == 0:
@@ -240,21 +262,39 @@ class LiveSource:
         target = alarm if condition == WHOLE else f'{alarm}.{condition}'
         with self.cond:
             before = self._answers()[0]
-        text = f'{target} {seconds:g} {origin}'
-        self._shelve_pub.publish(self._String(data=text))
-        deadline = time.monotonic() + ANSWER_WAIT
-        with self.cond:
-            while True:
-                count, answer = self._answers()
-                if count > before and answer.startswith(target):
-                    break
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    return {'sent': text, 'answer': None}
-                self.cond.wait(left)
+        text = f'{target} {seconds:g} {origin} #{request_id()}'
+        start = time.monotonic()
+        deadline, sends = start + ANSWER_WAIT, 0
+        answer: Optional[str] = None
+        while answer is None:
+            now = time.monotonic()
+            if now >= deadline:
+                return {'sent': text, 'answer': None}
+            self._shelve_pub.publish(self._String(data=text))
+            sends += 1
+            resend = now + RESEND_EVERY[min(sends, len(RESEND_EVERY)) - 1]
+            with self.cond:
+                while answer is None:
+                    answer = self._answer_to(before, alarm, target, origin)
+                    left = min(resend, deadline) - time.monotonic()
+                    if answer is not None or left <= 0:
+                        break
+                    self.cond.wait(left)
         if ': refused: ' in answer:
             raise AckError(answer, 409)
         return {'sent': text, 'answer': answer}
+
+    def _answer_to(self, before: int, alarm: str, target: str, origin: str) -> Optional[str]:
+        """The monitor's answer to a shelving request of ``target`` from ``origin``, among
+        those it gave after its ``before``-th (None: none yet). Under ``self.cond``."""
+        for count, answer in self._answers_seen:
+            if count <= before:
+                continue
+            if answer.startswith(f'{target}: ') or (
+                answer.startswith((f'{target} ', f'{alarm} ')) and f' by {origin}' in answer
+            ):
+                return answer
+        return None
 
     def _answers(self) -> tuple[int, str]:
         """(shelving requests the monitor answered, its newest answer), from ``/diagnostics``."""

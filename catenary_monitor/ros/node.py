@@ -88,7 +88,7 @@ from catenary_monitor.core.alarms.acknowledge import (
 )
 from catenary_monitor.core.alarms.journal import AlarmEvent
 from catenary_monitor.core.alarms.texts import TEXT_KEYS
-from catenary_monitor.core.alarms.requests import RequestLimit, limit_text
+from catenary_monitor.core.alarms.requests import RequestLimit, Resends, limit_text, split_id
 from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.alarms.shelving import SHELVE_TOPIC
 from catenary_monitor.core.alarms.shelving import parse_request as parse_shelve_request
@@ -581,6 +581,7 @@ class CatenaryMonitor(Node):
                 'publishers on each topic'
             )
         self._limit = RequestLimit()
+        self._resends = Resends()  # the ids each publisher's requests carried lately
         self._senders: dict[tuple[str, bytes], str] = {}  # (topic, GID) -> node's full name
         self._sequences: dict[tuple[str, bytes], int] = {}  # (topic, GID) -> newest number
         self._graph_read: dict[str, float] = {}  # topic -> when its publishers were listed
@@ -869,6 +870,9 @@ class CatenaryMonitor(Node):
         except ValueError:
             self._refuse(request, '', 'not a std_msgs/msg/String', '', publisher)
             return
+        text, rid = split_id(text)
+        if rid and self._resends.seen(key, rid, time.monotonic()):
+            return  # a resend of a request taken already: answered then, applied once
         refusal = self._sender_refusal(topic, node)
         if refusal is not None:
             self._refuse(request, text.split(None, 1)[0][:64] if text.strip() else '',
@@ -1166,9 +1170,12 @@ class CatenaryMonitor(Node):
             self.log.add_metadata(NODE_NAME, self._metadata(config))
 
     def close(self) -> None:
-        """Record the last intake counts and refused requests, then finish the MCAP file
-        (summary written)."""
+        """Take the requests still waiting, record the last intake counts and refused requests,
+        then finish the MCAP file (summary written)."""
         try:
+            for topic in (ACKNOWLEDGE_TOPIC, SHELVE_TOPIC):
+                for taken in self._requests.take(topic):
+                    self._request(topic, taken)
             self._report_intake(time.monotonic(), force=True)
             for key, n in self._limit.due(time.monotonic(), every_one=True):
                 why = f'over the rate limit of its publisher ({limit_text()})'

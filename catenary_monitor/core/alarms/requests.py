@@ -10,15 +10,37 @@ core event (:class:`~catenary_monitor.core.monitor.events.Refusal`), answers and
 flood costs the node at most a request a second per publisher and a record per period, and
 another publisher (the console) is never locked out.
 
+A request may end in an id, `` #ID`` (1 to 32 letters, digits, ``-`` or ``_``): the console
+resends its request with the same id until it sees the answer (behind a flood, a request may be
+pushed out of the middleware's queue, which all publishers share, before it is read), and the
+node applies each id of a publisher once (:class:`Resends`): a resend of a request taken
+changes nothing. Its memory is bounded per publisher (:data:`IDS_KEPT`) and in all
+(:data:`IDS_PUBLISHERS`).
+
 Pure: no clock (times are passed in, s on any monotonic clock), no rclpy.
 """
 
 from __future__ import annotations
 
 import math
+import re
+from collections import OrderedDict
 from dataclasses import dataclass
 
-__all__ = ['BURST', 'RATE', 'REPORT_EVERY', 'KEYS_MAX', 'OTHERS', 'RequestLimit', 'limit_text']
+__all__ = [
+    'BURST',
+    'RATE',
+    'REPORT_EVERY',
+    'KEYS_MAX',
+    'OTHERS',
+    'IDS_KEPT',
+    'IDS_PUBLISHERS',
+    'IDS_FOR',
+    'RequestLimit',
+    'Resends',
+    'limit_text',
+    'split_id',
+]
 
 #: Requests a publisher may send at once (a storm's alarms acknowledged one by one).
 BURST = 20
@@ -30,6 +52,13 @@ REPORT_EVERY = 10.0
 KEYS_MAX = 256
 #: The bucket the publishers beyond :data:`KEYS_MAX` share.
 OTHERS = '(other publishers)'
+#: A publisher's newest request ids remembered (a console resends one id for 8 s).
+IDS_KEPT = 64
+#: Publishers whose ids are remembered at once (beyond, the longest idle is forgotten).
+IDS_PUBLISHERS = 1024
+#: An id is remembered this long [s] (a console resends its request for 8 s).
+IDS_FOR = 120.0
+_ID = re.compile(r'#[A-Za-z0-9_-]{1,32}')
 
 
 @dataclass
@@ -122,3 +151,43 @@ class RequestLimit:
                 bucket.refused, bucket.reported = 0, now
         self._pending = {k for k in self._pending if self._buckets[k].refused}
         return out
+
+
+def split_id(text: str) -> tuple[str, str]:
+    """(the request's text without its id, the id or '') of a request's ``text``: its last
+    word when that is ``#ID`` and other words come before it."""
+    body = text.rstrip()
+    head, _, last = body.rpartition(' ')
+    if not head.strip() or len(last) > 33 or _ID.fullmatch(last) is None:
+        return text, ''
+    return head.rstrip(), last[1:]
+
+
+class Resends:
+    """The request ids each publisher (``key``) sent lately: :meth:`seen` says whether a
+    request is a resend of one already taken. Bounded: :data:`IDS_KEPT` ids per publisher,
+    :data:`IDS_PUBLISHERS` publishers, each id for :data:`IDS_FOR` s."""
+
+    def __init__(
+        self, kept: int = IDS_KEPT, publishers: int = IDS_PUBLISHERS, keep_for: float = IDS_FOR
+    ) -> None:
+        self.kept, self.publishers, self.keep_for = kept, publishers, keep_for
+        self._ids: OrderedDict[str, OrderedDict[str, float]] = OrderedDict()
+
+    def seen(self, key: str, rid: str, now: float) -> bool:
+        """Whether ``key`` sent ``rid`` within :attr:`keep_for` s before ``now`` [s]; else it
+        is remembered from now on (False)."""
+        ids = self._ids.get(key)
+        if ids is None:
+            while len(self._ids) >= self.publishers:
+                self._ids.popitem(last=False)
+            ids = self._ids[key] = OrderedDict()
+        self._ids.move_to_end(key)
+        at = ids.get(rid)
+        if at is not None and now - at <= self.keep_for:
+            return True
+        ids[rid] = now
+        ids.move_to_end(rid)
+        while len(ids) > self.kept:
+            ids.popitem(last=False)
+        return False
