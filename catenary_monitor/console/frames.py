@@ -400,17 +400,9 @@ class History:
             when = raised if event.startswith('raised') else stamp
             if event == 'acknowledged':
                 when = _num(st.values.get('acknowledged_at')) or stamp
-            self.entries.append(
-                {
-                    'time': when,
-                    'line': name,
-                    'event': event,
-                    'level': st.level,
-                    'condition': st.values.get('alarm_condition', ''),
-                    'message': st.message,
-                    'by': st.values.get('acknowledged_by', '') if event == 'acknowledged' else '',
-                }
-            )
+            by = st.values.get('acknowledged_by', '') if event == 'acknowledged' else ''
+            condition = st.values.get('alarm_condition', '')
+            self.entries.append(_entry(when, name, event, st, condition, by))
         self._feed_components(stamp, statuses, lines)
         if len(self.entries) > HISTORY_LIMIT:
             del self.entries[: len(self.entries) - HISTORY_LIMIT]
@@ -431,17 +423,8 @@ class History:
             if new == old or (new != 'OK' and _SEVERITY.get(new, 3) < _SEVERITY.get(old, 0)):
                 continue
             event = 'cleared' if new == 'OK' else ('raised' if old == 'OK' else 'raised again')
-            condition = st.values.get('conditions', '') or name
             self.entries.append(
-                {
-                    'time': stamp,
-                    'line': name,
-                    'event': event,
-                    'level': st.level,
-                    'condition': condition,
-                    'message': st.message,
-                    'by': '',
-                }
+                _entry(stamp, name, event, st, st.values.get('conditions', '') or name, '')
             )
 
     def _feed_shelf(self, stamp: float, name: str, st: Status) -> None:
@@ -458,17 +441,22 @@ class History:
             self._shelf[name] = until
             event, by = 'shelved', v.get('shelved_by', '')
             condition = v.get('shelved_condition', '')
-        self.entries.append(
-            {
-                'time': stamp,
-                'line': name,
-                'event': event,
-                'level': st.level,
-                'condition': condition,
-                'message': st.message,
-                'by': by,
-            }
-        )
+        self.entries.append(_entry(stamp, name, event, st, condition, by))
+
+
+def _entry(
+    stamp: float, name: str, event: str, st: Status, condition: str, by: str
+) -> dict[str, Any]:
+    """One history entry: ``event`` of alarm ``name`` at ``stamp`` s, its status now."""
+    return {
+        'time': stamp,
+        'line': name,
+        'event': event,
+        'level': st.level,
+        'condition': condition,
+        'message': st.message,
+        'by': by,
+    }
 
 
 def _history_event(old: tuple[str, str, float], new: tuple[str, str, float]) -> Optional[str]:
