@@ -113,7 +113,9 @@ static PyObject *py_locate(PyObject *self, PyObject *args) {
     uint64_t *words = (uint64_t *)bits;
     int64_t ng = 0, ngap = 0;
     Py_ssize_t r = 0;
-    for (Py_ssize_t p = 0; p < k; p++) {
+    int outside = 0;  /* an index entry outside the file: raised once the GIL is back */
+    Py_BEGIN_ALLOW_THREADS;  /* plain memory from here: the read-ahead thread runs beside */
+    for (Py_ssize_t p = 0; p < k && !outside; p++) {
         const int64_t start = st[p], size = sz[p], end = start + size;
         Py_ssize_t r0 = r;
         int64_t entries = 0;
@@ -126,10 +128,7 @@ static PyObject *py_locate(PyObject *self, PyObject *args) {
             if (alen < MESSAGE_MIN) is_bad = 1;
             for (Py_ssize_t rr = r0; rr < r && !is_bad; rr++) {
                 const int64_t cid = tab[4 * rr + 1], at = tab[4 * rr + 2], count = tab[4 * rr + 3];
-                if (at < 0 || at + 16 * count > flen) {
-                    PyErr_SetString(PyExc_ValueError, "table: index entries outside file");
-                    goto done;
-                }
+                if (at < 0 || at + 16 * count > flen) { outside = 1; break; }
                 for (int64_t w = 0; w < count; w++) {
                     const uint64_t off = rd_u64(f + at + 16 * w + 8);
                     if (off >= (uint64_t)size || (int64_t)off + MESSAGE_MIN > size) { is_bad = 1; break; }
@@ -143,6 +142,7 @@ static PyObject *py_locate(PyObject *self, PyObject *args) {
                     *word |= bit;
                 }
             }
+            if (outside) break;
             if (!is_bad) {  /* the records in buffer order; no overlap */
                 int64_t prev_e = start;
                 for (int64_t wi = 0; wi < nwords && !is_bad; wi++) {
@@ -166,6 +166,11 @@ static PyObject *py_locate(PyObject *self, PyObject *args) {
             cursor = g[i] + 9 + (int64_t)rd_u64(a + g[i] + 1);
         }
         if (cursor < end) { gaps[2 * ngap] = cursor; gaps[2 * ngap + 1] = end; ngap++; }
+    }
+    Py_END_ALLOW_THREADS;
+    if (outside) {
+        PyErr_SetString(PyExc_ValueError, "table: index entries outside file");
+        goto done;
     }
     result = Py_BuildValue("nn", (Py_ssize_t)ng, (Py_ssize_t)ngap);
 done:
@@ -194,12 +199,14 @@ static PyObject *py_gather(PyObject *self, PyObject *args) {
             PyErr_SetString(PyExc_IndexError, "gather: position outside buf");
             goto done;
         }
+    Py_BEGIN_ALLOW_THREADS;
     if (width == 2)
         for (Py_ssize_t i = 0; i < n; i++) memcpy(o + 2 * i, a + ps[i], 2);
     else if (width == 8)
         for (Py_ssize_t i = 0; i < n; i++) memcpy(o + 8 * i, a + ps[i], 8);
     else
         for (Py_ssize_t i = 0; i < n; i++) memcpy(o + width * i, a + ps[i], (size_t)width);
+    Py_END_ALLOW_THREADS;
     Py_INCREF(Py_None);
     result = Py_None;
 done:
@@ -238,6 +245,8 @@ static PyObject *py_float64_columns(PyObject *self, PyObject *args) {
     double *v_out = (double *)v_b->buf;
     memset(counts, 0, (size_t)ntopics * 8);
     Py_ssize_t bad = 0;
+    int no_topic = 0;  /* a record of a channel without topic: raised once the GIL is back */
+    Py_BEGIN_ALLOW_THREADS;
     for (Py_ssize_t i = 0; i < n; i++) {
         topic[i] = -1;
         if (ls[i] < FLOAT64_RECORD - 9 || os[i] < 0 || os[i] + FLOAT64_RECORD > buf->len) {
@@ -250,16 +259,19 @@ static PyObject *py_float64_columns(PyObject *self, PyObject *args) {
             continue;
         }
         const int64_t tp = lt[cs[i]];
-        if (tp < 0 || tp >= ntopics) {
-            PyErr_SetString(PyExc_ValueError, "a record of a channel without topic");
-            goto done;
-        }
+        if (tp < 0 || tp >= ntopics) { no_topic = 1; break; }
         topic[i] = (int32_t)tp;
         counts[tp]++;
+    }
+    Py_END_ALLOW_THREADS;
+    if (no_topic) {
+        PyErr_SetString(PyExc_ValueError, "a record of a channel without topic");
+        goto done;
     }
     at = malloc((size_t)(ntopics > 0 ? ntopics : 1) * sizeof(int64_t));
     if (!at) { PyErr_NoMemory(); goto done; }
     int64_t sum = 0;
+    Py_BEGIN_ALLOW_THREADS;
     for (Py_ssize_t j = 0; j < ntopics; j++) { at[j] = sum; sum += counts[j]; }
     for (Py_ssize_t i = 0; i < n; i++) {
         if (topic[i] < 0) continue;
@@ -273,6 +285,7 @@ static PyObject *py_float64_columns(PyObject *self, PyObject *args) {
             memcpy(&v_out[j], &u, 8);
         }
     }
+    Py_END_ALLOW_THREADS;
     result = Py_BuildValue("nn", (Py_ssize_t)sum, bad);
 done:
     free(at);

@@ -58,8 +58,6 @@ from catenary_monitor.io.cdr import (
     string_message,
 )
 from catenary_monitor.core.physics.result import Status
-from catenary_monitor.io.csv_columns import FloatColumn, IntColumn, LabelColumn, write_rows
-from catenary_monitor.io.mcap_column_writer import ColumnWriter
 from catenary_monitor.io.ros_schemas import (
     QOS_DEFAULT,
     QOS_SENSOR_DATA,
@@ -213,6 +211,9 @@ def write_csv(
             f'unknown CSV column(s) {sorted(unknown)}; known: '
             + ', '.join(name for name, _ in CSV_ALL)
         )
+    # the formatter's tables (built on import) only for a CSV: not a summary's start
+    from catenary_monitor.io.csv_columns import FloatColumn, IntColumn, LabelColumn, write_rows
+
     decimals = dict(CSV_ALL)
     out_columns: list[Any] = []
     n = 0
@@ -406,6 +407,9 @@ class McapSink:
         depth_topic: str,
         sources: Sequence[str] = (),
     ) -> None:
+        # the MCAP writer (and the mcap library's writer) only for --out: not a summary's start
+        from catenary_monitor.io.mcap_column_writer import ColumnWriter
+
         self.w = w = ColumnWriter(stream)
         self.topics = topics
         schemas = {}

@@ -131,6 +131,9 @@ class SensorColumns:
     #: What the units check takes at the ticks (:func:`decide_units_window`): now [s], each
     #: line's newest tension [N] and stamp [s], the newest depth [m] and stamp [s].
     readings: tuple[np.ndarray, ...] = ()
+    #: The tide trend over the window's depth samples (:func:`tide_trend.series`: rates,
+    #: excess, state after), as the depth memory took it: the tide's decisions take it again.
+    trend: tuple[Any, ...] = ()
 
     def causes_at(self, i: int) -> tuple[CommonCause, ...]:
         """The common causes after tick ``i`` (-1: before the window)."""
@@ -174,7 +177,7 @@ def decide_sensors_window(
         refused[:, k] = pick(np.searchsorted(r, ticks, 'right') - 1, r * 1e-9, line.stamp_refused)
     dd, dv = window.depth
     ds = window.sample_s(None)
-    (d_ch, d_sp, d_sea), depth_memory = _depth_memories(core, window)
+    (d_ch, d_sp, d_sea), depth_memory, trend = _depth_memories(core, window)
     j = np.searchsorted(dd, ticks, 'right') - 1  # depth goes before a tick at one stamp
     depth, depth_s = pick(j, dv, core.state.depth), pick(j, ds, core.state.depth_s)
     at = j + 1  # row 0: the memory before the window
@@ -188,7 +191,7 @@ def decide_sensors_window(
         core.state.take(core.state.read(SensorPart)._replace(depth_memory=depth_memory))
         return SensorColumns(
             np.zeros((0, m), np.int8), np.zeros(0, np.int8), before, before_depth,
-            np.zeros((0, m + 1), bool), flags, np.zeros(0, np.int64), [], causes,
+            np.zeros((0, m + 1), bool), flags, np.zeros(0, np.int64), [], causes, (), trend,
         )  # fmt: skip
     times = np.concatenate([core.state.sensor_times, now])
     rows = np.vstack(
@@ -241,7 +244,7 @@ def decide_sensors_window(
     )
     return SensorColumns(
         codes, depth_codes, before, before_depth, grouped, flags, ids, found, causes,
-        (now, tension, tension_s, depth, depth_s),
+        (now, tension, tension_s, depth, depth_s), trend,
     )  # fmt: skip
 
 
@@ -298,21 +301,24 @@ def _causes(
 
 def _depth_memories(
     core: MonitorCore, window: Window
-) -> tuple[tuple[np.ndarray, np.ndarray, sensor_state.SeaColumns], sensor_state.DepthMemory]:
+) -> tuple[
+    tuple[np.ndarray, np.ndarray, sensor_state.SeaColumns],
+    sensor_state.DepthMemory,
+    tuple[Any, ...],
+]:
     """The depth memory's ``changed``, ``spiked`` and sea columns before the window (row 0),
     then after each of its depth samples, and the memory after the last: the core's
     :func:`~catenary_monitor.core.rules.sensor_state.sample_depth` in one loop
     (:func:`~catenary_monitor.core.rules.sensor_state.depth_samples`), with the tide trend's
-    rate after each sample as the core steps it."""
+    rate after each sample as the core steps it; last, that trend (:func:`tide_trend.series`)."""
     a = core.config.alarm
     _, dv = window.depth
     ds = window.sample_s(None)
-    rates, _, _ = tide_trend.series(
-        core.state.trend, window.sample_ns(None), dv, a.tide_trend_window
+    trend = tide_trend.series(core.state.trend, window.sample_ns(None), dv, a.tide_trend_window)
+    columns, memory = sensor_state.depth_samples(
+        core.state.depth_memory, ds.tolist(), dv.tolist(), a, trend[0].tolist(), a.stamp_jitter
     )
-    return sensor_state.depth_samples(
-        core.state.depth_memory, ds.tolist(), dv.tolist(), a, rates.tolist(), a.stamp_jitter
-    )
+    return columns, memory, trend
 
 
 def decide_tide(
@@ -339,9 +345,8 @@ def decide_tide(
     level = _worse(
         level, np.where(code == sensor_state.OUT_OF_RANGE, Level.ERROR, Level.WARN), code
     )
-    window_s = core.config.alarm.tide_trend_window
-    rates, excess, trend = tide_trend.series(
-        core.state.trend, window.sample_ns(None), dv, window_s
+    rates, excess, trend = sensors.trend or tide_trend.series(
+        core.state.trend, window.sample_ns(None), dv, core.config.alarm.tide_trend_window
     )
     tide = TideColumns(times, depth, depth_s, level, stale, rates, excess, trend, code, kinds)
     transitions = []
