@@ -18,11 +18,12 @@ It reports, beside the ISA-18.2 / EEMUA 191 targets: annunciations per 10 minute
 days (mean, peak) and by class (status, level, cause), both counts and their gap; per fault,
 the annunciations in its window (count, the causes named, the first-out: the first one heard
 in the window, and whether it names the fault's cause) and those outside it. A units fault's
-cause is named only by a "wrong units?" naming a right factor (x10 or x9.81, which its text
-names together); its storm is :func:`~catenary_monitor_study.normal_days.isolating_storm`'s
-(the line, direction and centre that lift one end line's anchor by 5 kN at the peak while the
-other lines keep the largest anchor margin), the line the fault's. A table by
-default, ``--json`` one object; progress on stderr (``--quiet`` none). ``--keep DIR`` keeps
+cause is named by a "wrong units?" naming a right factor (x10 or x9.81, which its text names
+together) or no factor (the unit unsure), never by one naming a wrong factor; its storm is
+:func:`~catenary_monitor_study.normal_days.isolating_storm`'s (the line, direction and
+centre that lift one end line's anchor by 5 kN at the peak while the other lines keep the
+largest anchor margin), the line the fault's. A table by default, ``--json`` one object;
+progress on stderr (``--quiet`` none). ``--keep DIR`` keeps
 the logs and params files (``catenary-monitor replay LOG --params-file LOG.yaml --out ...``
 replays any of them).
 """
@@ -219,15 +220,15 @@ def _summary(kind: str, scene: Scene, counter: Counter, figures: dict[str, Any])
 
 
 #: The factors a units fault's "wrong units?" may name: the true one, or the one 2 % from it
-#: that its text names beside it (daN x10 and tonnes-force x9.81 on kN).
+#: that its text names beside it (daN x10 and tonnes-force x9.81 on kN); or none.
 UNIT_FACTORS_RIGHT = {'units_dan': (10.0, 9.80665), 'units_tf': (9.80665, 10.0)}
 
 
 def _factor_right(kind: str, message: str) -> bool:
-    """Whether a units fault's annunciation names a right factor (``reading xF``); True for
-    the other faults."""
+    """Whether a units fault's annunciation names a right factor (``reading xF``) or none
+    (``reading far below``: the unit unsure); True for the other faults."""
     right = UNIT_FACTORS_RIGHT.get(kind)
-    if right is None:
+    if right is None or 'reading far below' in message:
         return True
     m = re.search(r'reading x([0-9.]+)', message)
     return m is not None and any(abs(float(m.group(1)) / f - 1.0) < 0.01 for f in right)

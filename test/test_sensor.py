@@ -264,7 +264,7 @@ def test_a_state_for_every_code_and_a_word_for_every_state():
     assert (
         sensor_state.LINE_STATES[sensor_state.OK] == 'ok'
         and len(set(sensor_state.LINE_STATES)) == len(sensor_state.LINE_STATES)
-        and len(sensor_state.LINE_STATES) == sensor_state.UNITS_BASE + len(UNIT_FACTORS)
+        and len(sensor_state.LINE_STATES) == sensor_state.UNITS_BASE + len(UNIT_FACTORS) + 2
     )
     for code in range(1, 7):
         assert sensor_state.line_message(code, 1e6, MBL)

@@ -6,6 +6,7 @@ stretch claims nothing; the chart range comes from the lines and refuses a depth
 
 import dataclasses
 import math
+import re
 
 import numpy as np
 import pytest
@@ -187,3 +188,43 @@ def test_the_dock_witness_claims_a_flagged_line_off_by_a_unit_factor():
     inputs[0, 3, 2] = 100e3
     inputs[0, :3, 0] = 1.0  # four of six flagged: the estimate does not stand
     assert (plausible.dock_units(inputs, tension, fresh, rule)[0] == -1).all()
+
+
+def test_at_a_lift_point_the_statics_name_no_factor_they_cannot_tell():
+    """A daN cell on a line at its anchor's lift point (drawn:2, a storm lifting ml5 by 5 kN:
+    the line carries 1.7 x the common loading) reads 6.0 x below its statics x that loading,
+    the lines spread by 0.22 (the calm measure): lbf (x4.45) and daN (x10) both fit. The claim
+    is "wrong units?" naming ml5.tension_scale but no factor, until the dock estimate (once it
+    flags the line) names x10; never OK meanwhile."""
+    from catenary_monitor.core.alarms.texts import HEADLINE_LIMIT, headline
+
+    rule = plausible.UnitsRule()
+    low, high = plausible.UNSURE_LOW, plausible.UNSURE_HIGH
+    factor = {i: f for i, (f, _) in enumerate(plausible.UNIT_FACTORS)}
+    cases = [  # (ratio, calm): the claim
+        ((5.995, 0.2213), low), ((6.336, 0.2015), low), ((1 / 6.0, 0.22), high),
+        ((10.0, 0.22), 10.0), ((4.45, 0.22), 4.4482216), ((6.0, 0.03), 4.4482216),
+        ((8.3, 0.03), 9.80665), ((20.0, 0.02), None), ((2.5, 0.3), None), ((1000.0, 0.3), 1000.0),
+    ]  # fmt: skip
+    for (ratio, calm), want in cases:
+        got = int(plausible.units_claims(np.array([ratio]), np.array([calm]), rule)[0])
+        got_f = got if got in (low, high) else factor.get(got)
+        assert got_f == want, (ratio, calm, got)
+    # the latch at the first ticks (ml5 of 8 lines; the others fit), then the dock's witness
+    ratio = np.ones((3, 8))
+    ratio[:, 4] = [5.995, 6.069, 5.718]
+    calm = np.array([0.2213, 0.2235, 0.2047])
+    judged = np.ones((3, 8), bool)
+    memory = [plausible.UnitsMemory()] * 8
+    now = np.array([0.5, 1.5, 2.5])
+    out, memory = plausible.units_latch(memory, now, ratio, calm, judged, rule)
+    assert (out[:, 4] == low).all() and (np.delete(out, 4, axis=1) == -1).all()
+    text = plausible.units_text('ml5', 1.0, low, 21.5e3)
+    head = headline(text, 'input')
+    assert len(head) <= HEADLINE_LIMIT and 'ml5.tension_scale' in head, head
+    assert 'wrong units?' in head and not re.search(r'reading [x/][0-9]', text), text
+    dock = (np.full((1, 8), -1), np.zeros((1, 8), bool))
+    dock[0][0, 4] = 0  # the estimate flags ml5 at 9.5 s: expected / reading 9.9, x10
+    out, _ = plausible.units_latch(memory, np.array([9.5]), ratio[:1], calm[:1],
+                                   judged[:1], rule, dock)  # fmt: skip
+    assert out[0, 4] == 0 and factor[int(out[0, 4])] == 10.0

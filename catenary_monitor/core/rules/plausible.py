@@ -48,6 +48,9 @@ __all__ = [
     'UnitsMemory',
     'units_factor',
     'units_factors',
+    'UNSURE_LOW',
+    'UNSURE_HIGH',
+    'units_claims',
     'rest_table',
     'units_ratios',
     'units_latch',
@@ -181,6 +184,12 @@ UNIT_FACTORS = (
     (2.24809e-4, 'N on kip'),
 )
 _LOG_FACTORS = np.log([f for f, _ in UNIT_FACTORS])
+#: Claims whose factor the witness leaves unsure (indices after :data:`UNIT_FACTORS`'): the
+#: reading far below the chain's statics (the truth a factor above 1 times it), far above.
+UNSURE_LOW = len(UNIT_FACTORS)
+UNSURE_HIGH = UNSURE_LOW + 1
+#: Factors this close (log) are one candidate: 10 and 9.81 (the text names both).
+_SAME = math.log(1.05)
 #: Points of the at-rest table over the chart range (linear between them).
 REST_POINTS = 400
 
@@ -198,6 +207,12 @@ class UnitsRule(NamedTuple):
       unit factor (and at least ``far`` off 1), while at most a third of the lines are flagged
       (the others agree: the estimate stands), is a claim.
 
+    The statics' witness is as sure as the lines agree: its ratio's log may be off by
+    ``spread`` x the calm measure besides ``tolerance``. Where another unit factor lies
+    within that, the claim names no factor (:func:`units_claims`): a line near its anchor's
+    lift point in a storm carries 1.5-2 x the common loading, and a daN cell there reads
+    6 x below it, between lbf (x4.45) and daN (x10).
+
     A ratio within ``fit`` of 1 (the statics' at rest, or the dock estimate's while the line
     agrees with it) for ``window`` s clears it."""
 
@@ -207,6 +222,7 @@ class UnitsRule(NamedTuple):
     calm: float = 1.5
     window: float = 600.0
     dock_tolerance: float = 0.25
+    spread: float = 2.0
 
 
 class UnitsMemory(NamedTuple):
@@ -236,6 +252,33 @@ def units_factors(ratio: np.ndarray, tolerance: float = 0.4, far: float = 3.0) -
         near = np.take_along_axis(off, best[..., None], axis=-1)[..., 0] <= math.log1p(tolerance)
         claim = np.isfinite(lr) & (np.abs(lr) >= math.log(far)) & near
     return np.where(claim, best, -1)
+
+
+def units_claims(
+    ratio: np.ndarray, calm: np.ndarray, rule: UnitsRule
+) -> np.ndarray:
+    """The statics' witness per element of ``ratio`` (expected / reading; ``calm`` the calm
+    measure, broadcast against it): the index in :data:`UNIT_FACTORS` of the factor named,
+    :data:`UNSURE_LOW` / :data:`UNSURE_HIGH` where the reading is off by a unit factor but
+    the factor is unsure, -1 for no claim. A factor is a candidate within ``rule.tolerance``
+    (relative) plus ``rule.spread`` x ``calm`` (log) of the ratio; it is named when it is the
+    nearest, within ``rule.tolerance`` alone, and no other candidate is left (10 and 9.81 are
+    one); any candidate and the ratio at least ``rule.far`` off 1 is a claim."""
+    with np.errstate(invalid='ignore', divide='ignore'):
+        lr = np.log(np.asarray(ratio, np.float64))
+        off = np.abs(lr[..., None] - _LOG_FACTORS)
+        off = np.where(np.isnan(off), np.inf, off)
+        best = np.argmin(off, axis=-1)
+        nearest = np.take_along_axis(off, best[..., None], axis=-1)[..., 0]
+        tight = math.log1p(rule.tolerance)
+        band = tight + rule.spread * np.asarray(calm, np.float64)
+        candidate = off <= np.broadcast_to(band, lr.shape)[..., None]
+        other = candidate & (np.abs(_LOG_FACTORS - _LOG_FACTORS[best][..., None]) > _SAME)
+        far = np.isfinite(lr) & (np.abs(lr) >= math.log(rule.far))
+        named = far & (nearest <= tight) & ~np.any(other, axis=-1)
+        unsure = far & np.any(candidate, axis=-1) & ~named
+    side = np.where(lr > 0.0, UNSURE_LOW, UNSURE_HIGH)
+    return np.where(named, best, np.where(unsure, side, -1)).astype(np.int64)
 
 
 def rest_table(
@@ -321,7 +364,7 @@ def units_latch(
 ) -> tuple[np.ndarray, list[UnitsMemory]]:
     """Per (tick, line): the index of the unit factor a line is claimed off by (-1: none),
     and each line's latch after the last tick. A claim needs a calm dock (``calm`` within
-    ``rule.calm``) and the line's ``ratio`` off by a unit factor (:func:`units_factors`), or
+    ``rule.calm``) and the line's ``ratio`` off by a unit factor (:func:`units_claims`), or
     the dock estimate's claim ``dock`` = (factor index (-1: none), the line tested and
     agreeing) per (tick, line) (:func:`dock_units`); it holds until the ratio was within
     ``rule.fit`` of 1, or of the dock estimate's expectation while agreeing with it, for
@@ -330,7 +373,7 @@ def units_latch(
     n, m = ratio.shape
     with np.errstate(invalid='ignore', divide='ignore'):
         quiet = calm <= math.log(rule.calm)
-        idx = units_factors(ratio, rule.tolerance, rule.far)
+        idx = units_claims(ratio, calm[:, None], rule)
         claim = (idx >= 0) & quiet[:, None] & judged
         near = judged & (np.abs(np.log(ratio)) < math.log(rule.fit))
     if dock is not None:
@@ -366,7 +409,15 @@ def _newest(x: np.ndarray, before: np.ndarray) -> np.ndarray:
 def units_text(name: str, scale: float, index: int, tension: float) -> str:
     """The ``wrong units?`` sentence of line ``name`` (its ``tension_scale``) claimed off by
     :data:`UNIT_FACTORS` ``[index]``, reading ``tension`` [N]: the factor, the mistake it names
-    and the scale that would fit."""
+    and the scale that would fit; for :data:`UNSURE_LOW` / :data:`UNSURE_HIGH` the side and
+    the scale to check, no factor."""
+    if index in (UNSURE_LOW, UNSURE_HIGH):
+        side = 'below' if index == UNSURE_LOW else 'above'
+        return (
+            f'wrong units? reading far {side} the chain\'s statics: check {name}.tension_scale '
+            f'(the unit unsure; it is {scale:g}, the tension is the reading x the scale, in N; '
+            f'reads {tension / 1e3:.1f} kN)'
+        )
     factor, mistake = UNIT_FACTORS[index]
     also = ''
     if factor in (10.0, 9.80665):

@@ -30,7 +30,7 @@ batch twin) that share the arithmetic, so live and replay decide alike:
   ``slack`` (4)           ERROR  tension <= w * h (the hanging chain's own weight at
                                  the depth at the hook)
   ``wrong_units_x10``     ERROR  the reading off by a unit factor against the line's
-  ... (7-17)             input  statics, judged while the dock is calm
+  ... (7-19)             input  statics, judged while the dock is calm
                                  (:func:`~catenary_monitor.core.rules.plausible.
                                  units_decide`); the ``input`` condition's, not a
                                  sensor condition's
@@ -108,7 +108,9 @@ __all__ = [
 ]
 
 #: The first ``wrong_units`` state's code: ``UNITS_BASE + i`` a reading off by
-#: :data:`~catenary_monitor.core.rules.plausible.UNIT_FACTORS` ``[i]`` (an ``input`` ERROR).
+#: :data:`~catenary_monitor.core.rules.plausible.UNIT_FACTORS` ``[i]`` (an ``input`` ERROR);
+#: the last two: far below / above the statics, the factor unsure (``wrong_units_low``,
+#: ``wrong_units_high``: :data:`~catenary_monitor.core.rules.plausible.UNSURE_LOW`).
 UNITS_BASE = 7
 #: Line states by code (the ``sensor_state`` output field is the code, /diagnostics the word).
 LINE_STATES = (
@@ -119,7 +121,10 @@ LINE_STATES = (
     'slack',
     'suspected_parted',
     'bad_stamp',
-) + tuple(f'wrong_units_{_unit_word(f)}' for f, _ in UNIT_FACTORS)
+) + tuple(f'wrong_units_{_unit_word(f)}' for f, _ in UNIT_FACTORS) + (
+    'wrong_units_low',
+    'wrong_units_high',
+)
 OK, STUCK, SPIKE, OVER_MBL, SLACK, PARTED, BAD_STAMP = range(7)
 #: Depth sensor states by code.
 DEPTH_STATES = ('ok', 'stuck', 'spike', 'out_of_range', 'bad_stamp')
