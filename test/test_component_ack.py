@@ -103,3 +103,18 @@ def test_the_twin_follows_the_tide_alarm_as_the_core():
     steps = compare(config, tensions, (dt, dv), ticks, cuts=(T0_NS + 22 * S, T0_NS + 41 * S))
     tide = [c.transition.new for s in steps for c in s.transitions if c.component == 'tide']
     assert tide.count(Level.ERROR) == 2
+
+
+def test_a_flag_expiring_between_events_shows_returned():
+    """The runtime-change flag's WARN expires at a time, not at an event: its alarm shows
+    returned (unacknowledged), or normal once acknowledged."""
+    from catenary_monitor.core.alarms import acknowledge
+
+    ack = components.follow(acknowledge.AckState(), 'parameters', Level.WARN, 1.0)
+    assert dict(components.values(ack, 'parameters', Level.WARN))['alarm_state'] == (
+        'unacknowledged'
+    )
+    shown = dict(components.values(ack, 'parameters', Level.OK))
+    assert (shown['alarm_state'], shown['acknowledged']) == ('returned-unacknowledged', 'false')
+    ack = acknowledge.acknowledge(ack, 2.0, 'op')
+    assert dict(components.values(ack, 'parameters', Level.OK))['alarm_state'] == 'normal'

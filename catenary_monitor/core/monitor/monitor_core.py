@@ -420,7 +420,7 @@ class MonitorCore:
         acks = list(self.state.component_acks)
         for k, name in enumerate(COMPONENTS):
             if ev.line is None or ev.line == name:
-                old = acks[k] = component_alarm.view(acks[k], name, self.component_level(name))
+                old = acks[k]
                 acks[k] = alarm_ack.acknowledge(old, now, ev.origin, ev.publisher)
                 log += entries(name, old, acks[k], now)
         self.state.component_acks = tuple(acks)
