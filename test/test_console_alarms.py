@@ -6,7 +6,8 @@ another origin) and the monitor's refusal shown to the operator.
 The page is served from the demo's storm without ROS (``browser_harness.DemoSource``: line_11
 lifted and first out of a flood, line_10 chattering, line_09 shelved); the live path to the
 monitor is test_console_browser.py's. A component status leaving OK (the tide's impossible
-depth) is listed and its ERROR beeps, on a quiet dock of its own (:class:`TideSource`).
+depth) is listed, its ERROR beeps until an operator acknowledges it, on a quiet dock of its own
+(:class:`TideSource`).
 """
 
 from __future__ import annotations
@@ -148,7 +149,8 @@ def test_a_shelve_request_from_another_origin_is_refused(page: Any) -> None:
 
 
 class TideSource(DemoSource):
-    """A quiet dock (every line OK, nothing else to say) whose tide status the test sets."""
+    """A quiet dock (every line OK, nothing else to say) whose tide status the test sets;
+    an acknowledgement of the tide (or of all) acknowledges it, as the monitor does."""
 
     def __init__(self) -> None:
         from catenary_monitor.console.frames import History, Status
@@ -156,6 +158,7 @@ class TideSource(DemoSource):
         super().__init__()
         self.history = History()
         self.tide = Status('OK', 'depth 21.95 m', {'depth': '21.95', 'alarm_state': 'normal'})
+        self.acks: list[str] = []
 
     def frame(self, t: Any = None) -> dict[str, Any]:
         from catenary_monitor.console.frames import Status, build_frame
@@ -168,12 +171,24 @@ class TideSource(DemoSource):
         sample_t = {name: now - 0.4 for name in self.names}
         return build_frame(now, self.names, now - 0.3, statuses, {}, sample_t, None, [], 3.0)
 
+    def acknowledge(self, line: str, origin: str) -> str:
+        from catenary_monitor.console.frames import Status
 
-def test_a_tide_error_is_listed_active_and_beeps_until_it_leaves_error(tmp_path: Path) -> None:
-    """A quiet dock: no row, no beep. The tide's impossible depth (ERROR): a row of kind
-    ``component``, state ``active``, without Ack or Shelve, that says it clears when its
-    condition does; it beeps at once and again (REPEAT_S 5 s) as an unacknowledged ERROR does.
-    The same status at WARN stays listed and is silent; back at OK the row goes."""
+        self.acks.append(line)
+        v = self.tide.values
+        if line in ('tide', 'all') and v.get('alarm_state') == 'unacknowledged':
+            v = dict(v, alarm_state='acknowledged', acknowledged='true', acknowledged_by=origin)
+            self.tide = Status(self.tide.level, self.tide.message, v)
+        return f'{line} {origin}'
+
+
+def test_a_tide_error_beeps_until_acknowledged_and_clears(tmp_path: Path) -> None:
+    """A quiet dock: no row, no beep. The tide's impossible depth (ERROR, unacknowledged): a
+    row of kind ``component`` with Ack (no Shelve: a component is not shelvable), "Ack all"
+    enabled; it beeps at once and again (REPEAT_S 5 s) as an unacknowledged ERROR does. Ack on
+    the row acknowledges it at the monitor: the row says acknowledged, the beeps stop while the
+    ERROR stands. From a monitor that publishes no alarm state for it (``active``): no button,
+    "clears itself". Back at OK the row goes."""
     from catenary_monitor.console.frames import Status
     from catenary_monitor.console.server import ConsoleServer
 
@@ -189,30 +204,44 @@ def test_a_tide_error_is_listed_active_and_beeps_until_it_leaves_error(tmp_path:
         time.sleep(1.5)
         assert rows(driver) == {} and _js(driver, beeps) == 0
         text = 'depth 0.300 m impossible: outside the chart 18.0-26.0 m: check the depth gauge'
-        values = {'alarm_state': 'active', 'conditions': 'tide', 'response': 'Cause: a gauge'}
+        values = {
+            'alarm_state': 'unacknowledged',
+            'acknowledged': 'false',
+            'alarm_raised': repr(time.time()),
+            'conditions': 'tide',
+            'response': 'Cause: a gauge',
+        }
         source.tide = Status('ERROR', text, values)
-        wait_for('the tide row', lambda: rows(driver).get('tide') == 'active', 10.0)
+        wait_for('the tide row', lambda: rows(driver).get('tide') == 'unacknowledged', 10.0)
         seen = _js(
             driver,
             row.replace('return ', 'const r = ')
             + ';return [r.dataset.kind, r.className, r.textContent,'
-            ' [...r.querySelectorAll("button")].filter(b => !b.hidden).length]',
+            ' [...r.querySelectorAll("button")].filter(b => !b.hidden).map(b => b.textContent),'
+            ' document.getElementById("ack-all").disabled, r.querySelector(".clears").hidden]',
         )
-        assert seen[0] == 'component' and 'lvl-ERROR' in seen[1] and seen[3] == 0, seen
-        assert 'impossible' in seen[2] and 'clears itself' in seen[2], seen
-        head = _js(driver, "return document.querySelector('#response .r-head').textContent")
-        assert head.endswith('(clears when its condition does)'), head
+        assert seen[0] == 'component' and 'lvl-ERROR' in seen[1], seen
+        assert 'impossible' in seen[2] and seen[5], seen  # "clears itself" hidden
+        assert seen[3] == ['Ack'] and seen[4] is False, seen
         wait_for('the tide ERROR beeps', lambda: _js(driver, beeps) >= 1, 5.0)
         wait_for('and beeps again', lambda: _js(driver, beeps) >= 2, 8.0)
-        source.tide = Status('WARN', 'depth sensor stuck', {'alarm_state': 'active'})
-        wait_for(
-            'the tide row at WARN',
-            lambda: 'lvl-WARN' in _js(driver, row.replace('return ', 'return (') + ').className'),
-            10.0,
-        )
+        _js(driver, row.replace('return ', 'return (') + ').querySelector("button").click()')
+        wait_for('acknowledged', lambda: rows(driver).get('tide') == 'acknowledged', 10.0)
+        assert source.acks == ['tide']
         quiet = _js(driver, beeps)
-        time.sleep(6.0)  # longer than REPEAT_S: a WARN never beeps
+        time.sleep(6.0)  # longer than REPEAT_S: an acknowledged ERROR never beeps again
         assert _js(driver, beeps) == quiet
+        assert _js(driver, row.replace('return ', 'return (') + ').querySelector("button").hidden')
+        # a monitor that publishes no alarm state for it: listed active, clears itself
+        source.tide = Status('WARN', 'depth sensor stuck', {'alarm_state': 'active'})
+        wait_for('the tide row active', lambda: rows(driver).get('tide') == 'active', 10.0)
+        seen = _js(
+            driver,
+            row.replace('return ', 'const r = ')
+            + ';return [r.querySelector(".clears").hidden,'
+            ' [...r.querySelectorAll("button")].filter(b => !b.hidden).length]',
+        )
+        assert seen == [False, 0], seen
         source.tide = Status('OK', 'depth 21.95 m', {'alarm_state': 'normal'})
         wait_for('the tide row gone', lambda: 'tide' not in rows(driver), 10.0)
     finally:

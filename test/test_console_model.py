@@ -263,8 +263,9 @@ def test_history_records_a_component_raised_and_cleared_and_dates_its_row():
 def test_the_cores_impossible_depth_is_an_error_row_and_nothing_before_it():
     """The monitor core's own statuses (3 lines, a gauge stepping to 0.3 m at half time, the
     chart 15-30 m): no component row before the step; after it the tide's ERROR "impossible
-    depth" is a component row (raised when the console saw it); the tide's STALE under the
-    sensors alarm (the gauge then silent to the core's rules) is never a row of its own."""
+    depth" is a component row, unacknowledged (raised when the monitor says); the tide's STALE
+    under the sensors alarm (the gauge then silent to the core's rules) is never a row of its
+    own: only the ERROR's, returned unacknowledged, until an operator acknowledges it."""
     from replay_data import T0_NS, core_steps, dock_config, generate
 
     from catenary_monitor.core.twin.window import tick_grid
@@ -293,7 +294,8 @@ def test_the_cores_impossible_depth_is_an_error_row_and_nothing_before_it():
     assert all(not rows for t, _, rows in seen if t < step)
     after = [rows for t, _, rows in seen if t >= step and rows]
     first = after[0][0]
-    assert (first['line'], first['level'], first['state']) == ('tide', 'ERROR', 'active')
+    assert (first['line'], first['level'], first['state']) == ('tide', 'ERROR', 'unacknowledged')
     assert first['message'].startswith('impossible depth 0.30 m') and first['raised'] >= step
     assert first['response'] and first['condition'] == 'tide'
-    assert all(not rows for _, level, rows in seen if level == 'STALE')
+    stale = [r['state'] for _, level, rows in seen if level == 'STALE' for r in rows]
+    assert set(stale) <= {'returned-unacknowledged'}

@@ -174,6 +174,20 @@ def test_error_dock_first_out_and_returned_alarms():
     assert (rows[0]['dock'], rows[0]['line'], rows[0]['first_out']) == ('b', 'l1', True)
 
 
+def test_a_component_status_is_a_row_of_its_dock():
+    """The tide's impossible depth (a component status, acknowledged as a line's alarm) is a
+    row of the dock's alarms and of the harbour's list, with its state."""
+    spec, state = DockSpec('c', 83), DockState(T0)
+    tide = Status('ERROR', 'impossible depth 0.30 m', {
+        'alarm_state': 'unacknowledged', 'acknowledged': 'false', 'alarm_raised': repr(T0 - 3),
+    })  # fmt: skip
+    state.feed(T0, dict(statuses(l1=line()), tide=tide), 300)
+    view = dock_view(spec, state, T0 + 0.2)
+    rows = [(r['line'], r['kind'], r['state']) for r in view['alarms']]
+    assert rows == [('tide', 'component', 'unacknowledged')]
+    assert view['first_out'] == 'tide' and harbour_alarms([view])[0]['line'] == 'tide'
+
+
 def test_the_issue_keys_of_api_docks():
     state = DockState(T0)
     state.feed(T0, statuses(l1=line()), 100)

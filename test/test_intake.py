@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from replay_data import T0_NS, dock_config
 
+from catenary_monitor.core.alarms import components
 from catenary_monitor.core.rules.health import missing_samples
 from catenary_monitor.core.monitor.events import Intake
 from catenary_monitor.core.rules.level import Level
@@ -83,6 +84,7 @@ def test_without_rates_the_values_are_as_before():
         'depth.messages_dropped',
         'messages_coalesced',
         'messages_handled',
+        *components.KEYS,  # its alarm's (acknowledgeable)
     ]
     assert core.state.intake[0] == Level.OK
     assert dict(_status(core).values)['messages_handled'] == '14'

@@ -183,6 +183,14 @@ def test_the_console_resends_its_request_with_its_id_until_the_answer_shows(
     source.statuses = {}
     source.acknowledge('line_02', origin)  # nothing waits for it: sent once
     assert not source._acks
+    # a component status is acknowledged as a line (the tide's impossible depth), by name or all
+    source.statuses = {'tide': Status('ERROR', 'impossible depth', values)}
+    sent = source.acknowledge('tide', origin)
+    assert sent.startswith(f'tide {origin} #') and len(source._acks) == 1
+    source.acknowledge('all', origin)
+    assert len(source._acks) == 2
+    with pytest.raises(ros_source.AckError):
+        source.acknowledge('tides', origin)
 
 
 def test_an_acknowledgement_is_resent_every_second_for_8_s_at_most() -> None:

@@ -165,7 +165,9 @@ def register(sub: Any) -> None:
         description="Acknowledge LINE's alarm (or all) on the operator's console, in the name of "
         'the operator whose token the file holds.',
     )
-    p.add_argument('line', metavar='LINE', help="the line (or sensors, or all)")
+    p.add_argument(
+        'line', metavar='LINE', help='the line (or sensors, a component status: tide, ..., or all)'
+    )
     p.add_argument(
         '--condition', metavar='C',
         help="only if the line's alarm stands for this condition (uplift, anchor_margin, ...)",

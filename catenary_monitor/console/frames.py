@@ -192,8 +192,11 @@ def alarm_names(lines: Sequence[str]) -> list[str]:
 
 #: The component statuses listed as alarms while not OK (the ones the alarm journal records and
 #: ``catenary-monitor alarms`` counts: tide, intake, logger, fatigue store, dock, clock,
-#: parameters); the node acknowledges none of them: each row is ``active`` until it clears.
+#: parameters), each acknowledged as a line's alarm (``alarm_state``); a monitor that publishes
+#: no state for them lists them ``active`` until they clear.
 COMPONENT_ALARMS = COMPONENTS
+#: The ``alarm_state`` of a component row that waits for nothing (an older monitor's).
+_ACTIVE = 'active'
 #: Row order: the state's rank (an active component ranks with the unacknowledged alarms, after
 #: them at the same level), then the level's (ERROR before STALE before WARN).
 _RANK_STATE = {'unacknowledged': 0, 'active': 0, 'returned-unacknowledged': 1, 'acknowledged': 2}
@@ -265,22 +268,28 @@ def alarm_rows(
 
 
 def _component_listed(name: str, st: Optional[Status], lines: Sequence[str]) -> bool:
-    """Whether a component status is an alarm row: not OK, not a STALE the ``sensors`` alarm
+    """Whether a component status is an alarm row: not OK (or OK and
+    ``returned-unacknowledged``: listed until acknowledged), not a STALE the ``sensors`` alarm
     announces (``alarm_state`` ``suppressed``), not named as a line (the line's)."""
-    if st is None or name in lines or st.level == 'OK':
+    if st is None or name in lines:
         return False
-    return st.values.get('alarm_state', 'active') not in ('normal', 'suppressed', 'shelved')
+    state = st.values.get('alarm_state', _ACTIVE)
+    if st.level == 'OK':
+        return state == 'returned-unacknowledged'
+    return state not in ('normal', 'suppressed', 'shelved')
 
 
 def component_rows(
     statuses: Mapping[str, Status], lines: Sequence[str], history: Sequence[dict] = ()
 ) -> list[dict[str, Any]]:
-    """The component statuses (:data:`COMPONENT_ALARMS`) that are not OK, as alarm rows of
-    ``kind`` ``component`` and state ``active`` (the node acknowledges none: the row clears
-    when its condition does), a STALE the ``sensors`` alarm announces (``alarm_state``
-    ``suppressed``) left out; ``raised``: when the console's ``history`` saw it leave OK
-    (:class:`History`; None when it has not: the monitor publishes no time for them). The
-    flood's first out is marked as on a line's."""
+    """The component statuses (:data:`COMPONENT_ALARMS`) listed as alarms
+    (:func:`_component_listed`), as rows of ``kind`` ``component`` in their alarm's state
+    (``unacknowledged``, ``acknowledged``, ``returned-unacknowledged``: acknowledged as a
+    line's; ``active`` from a monitor that publishes no state for them: the row clears when
+    its condition does), a STALE the ``sensors`` alarm announces (``alarm_state``
+    ``suppressed``) left out; ``raised``: ``alarm_raised``, else when the console's
+    ``history`` saw it leave OK (:class:`History`; None when it has not). The flood's first
+    out is marked as on a line's."""
     flood = flood_view(statuses)
     first = flood['first_out'] if flood['flood'] else None
     rows: list[dict[str, Any]] = []
@@ -288,19 +297,20 @@ def component_rows(
         st = statuses.get(name)
         if st is None or not _component_listed(name, st, lines):
             continue
+        raised = _num(st.values.get('alarm_raised'))
         rows.append(
             {
                 'line': name,
                 'kind': 'component',
-                'state': 'active',
+                'state': st.values.get('alarm_state', _ACTIVE),
                 'level': st.level,
-                'raised': _component_raised(history, name),
+                'raised': _component_raised(history, name) if raised is None else raised,
                 'condition': st.values.get('conditions', '') or name,
                 'message': st.message,
                 'detail': st.values.get('detail', st.message),
                 'response': st.values.get('response', ''),
-                'acknowledged_by': '',
-                'acknowledged_at': None,
+                'acknowledged_by': st.values.get('acknowledged_by', ''),
+                'acknowledged_at': _num(st.values.get('acknowledged_at')),
                 'chattering': False,
                 'shelved_condition': '',
                 'first_out': name == first,
@@ -375,11 +385,12 @@ class History:
     """The alarm history (audit trail) seen in consecutive ``/diagnostics`` arrays: raised,
     raised again (severity rose), acknowledged (by whom), returned to normal, cleared, shelved
     (by whom, until when) and unshelved; a component status listed as an alarm
-    (:func:`component_rows`): raised, raised again, cleared."""
+    (:func:`component_rows`): raised, raised again, acknowledged (by whom), cleared."""
 
     entries: list[dict[str, Any]] = field(default_factory=list)
     _last: dict[str, tuple[str, str, float]] = field(default_factory=dict)
     _component: dict[str, str] = field(default_factory=dict)  # component -> level listed
+    _component_ack: dict[str, str] = field(default_factory=dict)  # component -> acknowledged_at
     _shelf: dict[str, float] = field(default_factory=dict)  # alarm -> shelved until [s]
 
     def feed(self, stamp: float, statuses: Mapping[str, Status], lines: Sequence[str]) -> None:
@@ -417,6 +428,7 @@ class History:
             st = statuses.get(name)
             if st is None:
                 continue
+            self._feed_component_ack(stamp, name, st)
             new = st.level if _component_listed(name, st, lines) else 'OK'
             old = self._component.get(name, 'OK')
             self._component[name] = new
@@ -426,6 +438,18 @@ class History:
             self.entries.append(
                 _entry(stamp, name, event, st, st.values.get('conditions', '') or name, '')
             )
+
+    def _feed_component_ack(self, stamp: float, name: str, st: Status) -> None:
+        """A component's alarm acknowledged since the previous array (by whom)."""
+        at = st.values.get('acknowledged_at', 'nan')
+        old = self._component_ack.get(name)
+        self._component_ack[name] = at
+        when = _num(at)
+        if old is None or at == old or when is None:
+            return
+        by = st.values.get('acknowledged_by', '')
+        condition = st.values.get('conditions', '') or name
+        self.entries.append(_entry(when, name, 'acknowledged', st, condition, by))
 
     def _feed_shelf(self, stamp: float, name: str, st: Status) -> None:
         """A shelf put on (or renewed) or taken off since the previous array."""

@@ -56,7 +56,7 @@ _NAME = re.compile(r'^[A-Za-z0-9_][A-Za-z0-9_.-]{0,63}$')
 _NUMBER = r'[-+]?(?:\d+(?:\.\d*)?|\.\d+)'
 _POSITION = re.compile(rf'@({_NUMBER}),({_NUMBER})$')
 #: Alarm states whose condition is still there (``returned-unacknowledged`` is not).
-_IN_ALARM = ('unacknowledged', 'acknowledged')
+_IN_ALARM = ('unacknowledged', 'acknowledged', 'active')
 #: Inter-arrival gaps kept to learn the period of a monitor the harbour has no params for.
 _GAPS = 9
 
@@ -246,9 +246,9 @@ def _first_out(statuses: Mapping[str, Status], rows: list[dict[str, Any]]) -> tu
 
 
 def _alarms(spec: DockSpec, statuses: Mapping[str, Status], lines: list[str]) -> dict[str, Any]:
-    """The dock's active alarms (the console's rows, each with ``dock`` and ``first_out``:
-    this alarm is the dock's first out) and the first out."""
-    rows = [dict(r, dock=spec.name) for r in alarm_rows(statuses, lines)]
+    """The dock's active alarms (the console's rows, its component statuses' too, each with
+    ``dock`` and ``first_out``: this alarm is the dock's first out) and the first out."""
+    rows = [dict(r, dock=spec.name) for r in alarm_rows(statuses, lines, components=True)]
     first, source = _first_out(statuses, rows)
     for row in rows:
         row['first_out'] = row.get('line') == first
@@ -366,7 +366,12 @@ def harbour_alarms(docks: Sequence[Mapping[str, Any]]) -> list[dict[str, Any]]:
     then unacknowledged before acknowledged, ERROR before STALE before WARN, newest first; a
     silent dock is one row of its own (``monitor silent``), before every other, as is a dock
     whose domain holds several monitors (``monitors mixed``)."""
-    rank_state = {'unacknowledged': 0, 'returned-unacknowledged': 1, 'acknowledged': 2}
+    rank_state = {
+        'unacknowledged': 0,
+        'active': 0,  # a component of a monitor that does not acknowledge it
+        'returned-unacknowledged': 1,
+        'acknowledged': 2,
+    }
     rows: list[dict[str, Any]] = []
     for dock in docks:
         if not dock['monitor_alive'] or len(dock.get('monitors', ())) > 1:

@@ -21,7 +21,7 @@ import threading
 import time
 from typing import Any, Callable, Iterator, Optional, Sequence
 
-from catenary_monitor.console.frames import AckError, statuses_by_name
+from catenary_monitor.console.frames import COMPONENT_ALARMS, AckError, statuses_by_name
 from catenary_monitor.console.harbour_model import (
     DockSpec,
     DockState,
@@ -348,7 +348,8 @@ class HarbourSource:
         }
 
     def acknowledge(self, dock: str, line: str, origin: str) -> str:
-        """Publish one acknowledgement (``LINE|all|sensors ORIGIN #ID``) in the dock's domain;
+        """Publish one acknowledgement (``LINE|all|sensors|COMPONENT ORIGIN #ID``, a component
+        status such as ``tide``) in the dock's domain;
         its monitor decides. Resent while the alarms it names still wait for it
         (:class:`~catenary_monitor.console.resend.AckResends`)."""
         found = next((d for d in self._docks if d.spec.name == dock), None)
@@ -358,7 +359,7 @@ class HarbourSource:
             raise AckError('this harbour does not acknowledge (no --token-file)', 403)
         with self.cond:
             names = line_names(found.spec, self.states[dock].statuses)
-        if line not in (ALL_LINES, SENSORS) and line not in names:
+        if line not in (ALL_LINES, SENSORS, *COMPONENT_ALARMS) and line not in names:
             raise AckError(f'unknown line {line!r} of dock {dock}', 404)
         if found.ack_pub.get_subscription_count() == 0:
             raise AckError(f'no monitor of dock {dock} is listening on {ACKNOWLEDGE_TOPIC}', 503)
@@ -367,7 +368,7 @@ class HarbourSource:
         text = f'{line} {origin} #{request_id()}'
         with self.cond:
             statuses = self.states[dock].statuses
-            alarms = [*names, SENSORS] if line == ALL_LINES else [line]
+            alarms = [*names, SENSORS, *COMPONENT_ALARMS] if line == ALL_LINES else [line]
             found.acks.add(text, alarms, statuses, time.monotonic())
         found.ack_pub.publish(String(data=text))
         return text

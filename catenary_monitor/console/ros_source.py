@@ -23,6 +23,7 @@ from collections import deque
 from typing import Any, Optional
 
 from catenary_monitor.console.frames import (
+    COMPONENT_ALARMS,
     AckError,
     History,
     Status,
@@ -228,15 +229,17 @@ class LiveSource:
         return {'line': line, 'lo': now - span, 'hi': now, 'series': series, 'depth': depth}
 
     def acknowledge(self, line: str, origin: str) -> str:
-        """Publish one acknowledgement (``LINE|all ORIGIN #ID``); the monitor decides. While
-        the alarms it names still wait for it (raised as when it was sent), it is resent
+        """Publish one acknowledgement (``LINE|all ORIGIN #ID``; a line, ``sensors`` or a
+        component status such as ``tide``); the monitor decides. While the alarms it names
+        still wait for it (raised as when it was sent), it is resent
         (:class:`~catenary_monitor.console.resend.AckResends`)."""
-        if line != ALL_LINES and line not in self.names and line != SENSORS:
+        known = line in self.names or line in (ALL_LINES, SENSORS, *COMPONENT_ALARMS)
+        if not known:
             raise AckError(f'unknown line {line!r}', 404)
         if self._ack_pub.get_subscription_count() == 0:
             raise AckError(f'no monitor is listening on {ACKNOWLEDGE_TOPIC}', 503)
         text = f'{line} {origin} #{request_id()}'
-        names = [*self.names, SENSORS] if line == ALL_LINES else [line]
+        names = [*self.names, SENSORS, *COMPONENT_ALARMS] if line == ALL_LINES else [line]
         with self.cond:
             self._acks.add(text, names, self.statuses, time.monotonic())
         self._ack_pub.publish(self._String(data=text))

@@ -86,7 +86,8 @@ from catenary_monitor.core.alarms.acknowledge import (
     parse_request,
     publisher_identity,
 )
-from catenary_monitor.core.alarms.journal import AlarmEvent
+from catenary_monitor.core.alarms.components import acknowledgeable
+from catenary_monitor.core.alarms.journal import COMPONENTS, AlarmEvent
 from catenary_monitor.core.alarms.texts import TEXT_KEYS
 from catenary_monitor.core.alarms.requests import RequestLimit, Resends, limit_text, split_id
 from catenary_monitor.core.rules.level import Level
@@ -930,18 +931,20 @@ class CatenaryMonitor(Node):
             self._refuse(key.partition(' ')[0], '', why, '', self._named.get(key, key), n)
 
     def _acknowledge(self, text: str, publisher: str) -> None:
-        """An operator's acknowledgement (``LINE|all [ORIGIN]``): one recorded core event, or
-        a recorded refusal (unreadable, an unknown line)."""
+        """An operator's acknowledgement (``ALARM|all [ORIGIN]``: a line, ``sensors`` or a
+        component status such as ``tide``): one recorded core event, or a recorded refusal
+        (unreadable, an unknown alarm)."""
         try:
             line, origin = parse_request(text)
         except ValueError as err:
             self._refuse('acknowledge', '', str(err), '', publisher)
             return
-        if line is not None and line not in self.core.index and line != SENSORS:
+        known = line in self.core.index or line == SENSORS or acknowledgeable(line or '')
+        if line is not None and not known:
             shown = bounded_text(line, 64)
             why = (
                 f'unknown line {shown!r} (lines: {", ".join(self._names)}; {SENSORS}: the '
-                'sensors alarm)'
+                f'sensors alarm; components: {", ".join(COMPONENTS)})'
             )
             self._refuse('acknowledge', shown, why, origin, publisher)
             return

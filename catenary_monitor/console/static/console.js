@@ -532,7 +532,7 @@ function renderResponse(frame, lost) {
   box.hidden = !a || S.tab !== 'active';
   if (!a) return;
   box.dataset.line = a.line;
-  const clears = a.kind === 'component' ? ` (${CLEARS})` : '';
+  const clears = a.state === 'active' ? ` (${CLEARS})` : '';
   setText(box.querySelector('.r-head'), `${a.line} · ${a.level} · ${a.condition.replaceAll('_', ' ')}: ${a.message}${clears}`);
   setText(box.querySelector('.r-text'), a.response || '');
   const detail = a.detail && a.detail !== a.message ? a.detail : '';
@@ -544,7 +544,8 @@ const rowsByLine = new Map();
 function setText(node, text) { if (node.textContent !== text) node.textContent = text; }
 
 // A component status (tide, intake, logger, fatigue store, dock, clock, parameters) that left
-// OK: listed, never acknowledged here (the node acknowledges lines and sensors only).
+// OK: listed and acknowledged as a line's alarm, never shelved; from a monitor that publishes
+// no alarm state for it (state 'active') it cannot be acknowledged and clears itself.
 const CLEARS = 'clears when its condition does';
 
 function makeRow(line, kind) {
@@ -562,7 +563,7 @@ function makeRow(line, kind) {
   sh.addEventListener('click', () => pickShelve(line));
   tr.children[6].appendChild(sh);
   if (kind === 'component') {
-    b.hidden = true; sh.hidden = true;
+    sh.hidden = true;
     tr.children[6].appendChild(el('span', { class: 'clears', title: `${line} ${CLEARS} (not acknowledged: the row goes when the status is OK again)` }, 'clears itself'));
   }
   return tr;
@@ -596,16 +597,18 @@ function renderActive(frame, lost, replay) {
     if (a.chattering) td[5].appendChild(el('span', { class: 'chatter', title: 'chattering: many level changes in a short time (ISA-18.2)' }, 'chattering'));
     if (a.first_out) td[5].appendChild(el('span', { class: 'first-out', title: 'the first alarm of the flood' }, 'FIRST OUT'));
     td[5].title = a.state === 'acknowledged' && a.acknowledged_by ? `by ${a.acknowledged_by} at ${clock(a.acknowledged_at)}` : '';
-    if (component) td[5].title = `active: ${CLEARS}`;
+    const clears = a.state === 'active';  // a component of a monitor that does not acknowledge it
+    if (clears) td[5].title = `active: ${CLEARS}`;
+    if (component) td[6].querySelector('.clears').hidden = !clears;
     const b = td[6].firstChild;
-    b.hidden = component || a.state === 'acknowledged';
+    b.hidden = clears || a.state === 'acknowledged';
     b.disabled = replay || lost || !canAct();
     td[6].children[1].disabled = replay || lost || !canAct();
     if (body.children[i] !== tr) body.insertBefore(tr, body.children[i] || null);
   });
   $('n-active').textContent = `(${frame.alarms.length})`;
   renderResponse(frame, lost);
-  $('ack-all').disabled = replay || lost || !canAct() || !frame.alarms.some((a) => a.kind !== 'component' && a.state !== 'acknowledged');
+  $('ack-all').disabled = replay || lost || !canAct() || !frame.alarms.some((a) => a.state !== 'active' && a.state !== 'acknowledged');
   $('no-alarms').hidden = S.tab !== 'active' || frame.alarms.length > 0;
 }
 
@@ -1039,8 +1042,9 @@ function updateSoundButton() {
   else { b.textContent = `sound on (silence ${SILENCE_S} s)`; b.className = 'sound on'; }
 }
 
-// Beeps for each new unacknowledged ERROR, each component status newly at ERROR (active: it
-// beeps until it clears, as it cannot be acknowledged) and for the loss of monitoring itself
+// Beeps for each new unacknowledged ERROR (a component status's too), each component status
+// newly at ERROR from a monitor that does not acknowledge it (active: it beeps until it clears)
+// and for the loss of monitoring itself
 // (the monitor silent or the console server unreachable: an alarm of its own), again every
 // REPEAT_S; silence mutes all of it for SILENCE_S.
 function sound(frame, lost) {

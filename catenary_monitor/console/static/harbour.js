@@ -178,7 +178,7 @@ function alarmRow(r) {
   box.appendChild(where);
   box.appendChild(el('span', `chip lv-${r.level}`, r.level));
   const state = el('span', 'state', r.state);
-  if (S.operator && !silent && r.state !== 'acknowledged') {
+  if (S.operator && !silent && r.state !== 'acknowledged' && r.state !== 'active') {
     const b = el('button', '', 'acknowledge');
     b.addEventListener('click', () => acknowledge(r.dock, r.line));
     state.appendChild(document.createTextNode(' '));

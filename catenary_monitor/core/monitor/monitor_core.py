@@ -37,6 +37,7 @@ from typing import Any, NamedTuple, Optional, Sequence, Union
 import numpy as np
 
 from catenary_monitor.core.alarms import acknowledge as alarm_ack
+from catenary_monitor.core.alarms import components as component_alarm
 from catenary_monitor.core.alarms import flood as alarm_flood
 from catenary_monitor.core.alarms import shelving
 from catenary_monitor.core.alarms.journal import (
@@ -251,6 +252,8 @@ class MonitorCore:
         self.state.sensors = self._sensors_now(start)
         self.state.alarms = alarm_flood.status(self.state.flood, config.alarm)
         self.state.alarms_entered = start
+        levels = [self.component_level(name) for name in COMPONENTS]
+        self.state.component_acks = component_alarm.initial(levels, start)
 
     # ------------------------------------------------------------------ events
     def step(self, event: Event) -> Step:
@@ -398,8 +401,9 @@ class MonitorCore:
         ``acknowledge``), the step's ``note`` its answer."""
         now = _stamp_s(ev.stamp_ns)
         log: list[AlarmEvent] = []
-        if ev.line is not None and ev.line not in self.index and ev.line != alarm_ack.SENSORS:
-            names = ', '.join([*self.index, alarm_ack.SENSORS])
+        known = ev.line in self.index or ev.line == alarm_ack.SENSORS
+        if ev.line is not None and not known and not component_alarm.acknowledgeable(ev.line):
+            names = ', '.join([*self.index, alarm_ack.SENSORS, *COMPONENTS])
             refusal = Refusal(
                 ev.stamp_ns, 'acknowledge', ev.line, f'unknown alarm (alarms: {names})', ev.origin
             )
@@ -413,6 +417,13 @@ class MonitorCore:
             old = self.state.sensors_ack
             self.state.sensors_ack = alarm_ack.acknowledge(old, now, ev.origin, ev.publisher)
             log += entries(alarm_ack.SENSORS, old, self.state.sensors_ack, now)
+        acks = list(self.state.component_acks)
+        for k, name in enumerate(COMPONENTS):
+            if ev.line is None or ev.line == name:
+                old = acks[k]
+                acks[k] = alarm_ack.acknowledge(old, now, ev.origin, ev.publisher)
+                log += entries(name, old, acks[k], now)
+        self.state.component_acks = tuple(acks)
         snapshot = self.snapshot(ev.stamp_ns)
         return Step(ev.stamp_ns, 'acknowledge', (), snapshot, (), tuple(log))
 
@@ -691,6 +702,7 @@ class MonitorCore:
                 self.state.changes, self.state.changes_until, now
             )
             self.state.parameters_entered = self.state.changes_until
+            self._follow_component('parameters', self.state.changes_until)
         self.state.changes = held + tuple(messages)
         self.state.changes_until = now + ev.config.runtime_change_warn_time
         new = parameters_status(self.state.changes, self.state.changes_until, now)
@@ -886,8 +898,29 @@ class MonitorCore:
         now = _stamp_s(stamp_ns)
         entered = getattr(self.state, f'{name}_entered')
         setattr(self.state, f'{name}_entered', now)
+        self._follow_component(name, now)
         quiet = name in _CONSEQUENCES and quiet_change(old[0], True, new[0], True)
         return [Change(name, Transition(now, old[0], new[0], new[1], now - entered, quiet))]
+
+    def component_level(self, name: str) -> Level:
+        """The level of the component status ``name`` (:data:`COMPONENTS`) as shown now (the
+        runtime-change flag's as at its newest event)."""
+        level: Level = getattr(self.state, name)[0]
+        return level
+
+    def component_ack(self, name: str) -> alarm_ack.AckState:
+        """The alarm of the component status ``name`` (:data:`COMPONENTS`)."""
+        return self.state.component_acks[COMPONENTS.index(name)]
+
+    def _follow_component(self, name: str, now: float) -> None:
+        """Step the component ``name``'s alarm to its level, at ``now`` [s]."""
+        if name not in COMPONENTS:
+            return
+        k = COMPONENTS.index(name)
+        acks = self.state.component_acks
+        new = component_alarm.follow(acks[k], name, self.component_level(name), now)
+        if new is not acks[k]:
+            self.state.component_acks = acks[:k] + (new,) + acks[k + 1 :]
 
     def _solve_one(self, line: LineState) -> None:
         """Solve one line at the newest depth (the scalar fast path)."""
@@ -1075,6 +1108,7 @@ class MonitorCore:
                 self.state.trend.rate,
                 depth_word(self.state.depth_s, self.state.depth_code),
                 forecast_word(self.config, self.state.trend.rate),
+                self.component_ack('tide'),
             )
         )
         statuses.append(
@@ -1083,12 +1117,10 @@ class MonitorCore:
             )
         )
         statuses.append(self.alarms_component(self.state.alarms, self.state.flood))
-        level, message = self.state.logger
-        statuses.append(
-            ComponentStatus(f'{NODE_NAME}: logger', level, message, self.logger_id, ())
-        )
+        statuses.append(self.logger_component())
         if dock:
-            statuses.append(dock_component(self.state.dock, self.state.dock_values))
+            ack = self.component_ack('dock')
+            statuses.append(dock_component(self.state.dock, self.state.dock_values, ack))
         statuses += self.guard_components(now)
         return Snapshot(stamp_ns, tuple(statuses[:n_lines]) + self.texts(statuses[n_lines:]))
 
@@ -1108,6 +1140,17 @@ class MonitorCore:
         )
         return ComponentStatus(f'{NODE_NAME}: alarms', status[0], status[1], NODE_NAME, values)
 
+    def logger_component(self) -> ComponentStatus:
+        """The ``catenary_monitor: logger`` status, its alarm's keys as values."""
+        level, message = self.state.logger
+        values = self.alarm_values('logger', level)
+        return ComponentStatus(f'{NODE_NAME}: logger', level, message, self.logger_id, values)
+
+    def alarm_values(self, name: str, level: Level) -> tuple[tuple[str, str], ...]:
+        """The ``/diagnostics`` keys of the component ``name``'s alarm at ``level``
+        (:func:`~catenary_monitor.core.alarms.components.values`)."""
+        return component_alarm.values(self.component_ack(name), name, level)
+
     def guard_components(
         self, now: float, max_damage: Optional[float] = None
     ) -> list[ComponentStatus]:
@@ -1119,7 +1162,9 @@ class MonitorCore:
         if flag is not None:
             out.append(flag)
         if self.state.clock_seen:
-            out.append(ComponentStatus(f'{NODE_NAME}: clock', *self.state.clock, NODE_NAME, ()))
+            values = self.alarm_values('clock', self.state.clock[0])
+            clock = ComponentStatus(f'{NODE_NAME}: clock', *self.state.clock, NODE_NAME, values)
+            out.append(clock)
         if self.state.fatigue_seen:
             out.append(self.fatigue_component(max_damage))
         if self.state.intake_seen:
@@ -1138,7 +1183,7 @@ class MonitorCore:
             values += (
                 ('messages_coalesced', str(sum(self.intake_coalesced()))),
                 ('messages_handled', str(handled)),
-            )
+            ) + self.alarm_values('intake', self.state.intake[0])
             out.append(
                 ComponentStatus(f'{NODE_NAME}: intake', *self.state.intake, NODE_NAME, values)
             )
@@ -1150,7 +1195,11 @@ class MonitorCore:
         (``max_damage``: the twin gives it as it was at the snapshot)."""
         if max_damage is None:
             max_damage = max(line.fatigue_values[0] for line in self.state.lines)
-        values = (('store_state', self.state.fatigue_word), ('max_damage', repr(max_damage)))
+        values: tuple[tuple[str, str], ...] = (
+            ('store_state', self.state.fatigue_word),
+            ('max_damage', repr(max_damage)),
+        )
+        values += self.alarm_values('fatigue', self.state.fatigue[0])
         return ComponentStatus(f'{NODE_NAME}: fatigue', *self.state.fatigue, NODE_NAME, values)
 
     def parameters_component(self, now: float) -> Optional[ComponentStatus]:
@@ -1160,7 +1209,11 @@ class MonitorCore:
             return None
         level, message = parameters_status(self.state.changes, self.state.changes_until, now)
         until = repr(float(self.state.changes_until)) if self.state.changes else 'nan'
-        values = (('changes', str(len(self.state.changes))), ('flagged_until', until))
+        values: tuple[tuple[str, str], ...] = (
+            ('changes', str(len(self.state.changes))),
+            ('flagged_until', until),
+        )
+        values += self.alarm_values('parameters', level)
         return ComponentStatus(f'{NODE_NAME}: parameters', level, message, NODE_NAME, values)
 
 

@@ -6,7 +6,8 @@ vectorized twin (:mod:`catenary_monitor.core.twin`) writes them only through the
 ``state.take(part)``, and reads them as typed fields or as parts, ``state.read(kind)``: a part
 is a NamedTuple of the state's own fields (test/test_batch.py checks their names and types),
 one per decision the twin takes over a window (:class:`TidePart`, :class:`SensorPart`,
-:class:`BlindPart`, :class:`DockPart`, :class:`FloodPart`, :class:`StampPart`; of a line
+:class:`BlindPart`, :class:`DockPart`, :class:`FloodPart`, :class:`ComponentAckPart`,
+:class:`StampPart`; of a line
 :class:`LineInputPart`, :class:`LineSolvePart`, :class:`LineRulesPart`, :class:`LineAlarmPart`).
 """
 
@@ -47,6 +48,7 @@ __all__ = [
     'BlindPart',
     'DockPart',
     'FloodPart',
+    'ComponentAckPart',
     'StampPart',
     'LineInputPart',
     'LineSolvePart',
@@ -338,13 +340,22 @@ class FloodPart(NamedTuple):
     alarms_entered: float
 
 
+class ComponentAckPart(NamedTuple):
+    """The component statuses' alarms (:mod:`~catenary_monitor.core.alarms.components`), in
+    :data:`~catenary_monitor.core.alarms.journal.COMPONENTS` order."""
+
+    component_acks: tuple[alarm_ack.AckState, ...]
+
+
 class StampPart(NamedTuple):
     """The newest event's stamp [ns]."""
 
     last_ns: int
 
 
-CorePart = TypeVar('CorePart', TidePart, SensorPart, BlindPart, DockPart, FloodPart, StampPart)
+CorePart = TypeVar(
+    'CorePart', TidePart, SensorPart, BlindPart, DockPart, FloodPart, ComponentAckPart, StampPart
+)
 
 
 @dataclass
@@ -417,6 +428,8 @@ class CoreState:
     fatigue_word: str = ''
     fatigue_entered: float = 0.0
     fatigue_seen: bool = False
+    # The component statuses' alarms (acknowledgeable: core.alarms.components), COMPONENTS order.
+    component_acks: tuple[alarm_ack.AckState, ...] = ()
 
     def read(self, kind: type[CorePart]) -> CorePart:
         """The core's fields of one part (the twin's door)."""

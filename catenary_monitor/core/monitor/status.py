@@ -13,6 +13,7 @@ import math
 from typing import Any, NamedTuple, Sequence
 
 from catenary_monitor.core.alarms import acknowledge as alarm_ack
+from catenary_monitor.core.alarms import components as component_alarm
 from catenary_monitor.core.alarms.latches import (
     CONDITIONS,
     VIEW_TEXT,
@@ -219,15 +220,17 @@ def consequence_state(level: Level) -> str:
 
 
 def dock_component(
-    dock: tuple[Level, str], values: tuple[tuple[str, str], ...]
+    dock: tuple[Level, str],
+    values: tuple[tuple[str, str], ...],
+    ack: alarm_ack.AckState = alarm_ack.AckState(),
 ) -> ComponentStatus:
     """The ``catenary_monitor: dock`` status: the estimate's level and message, values
     ``offset_x``, ``offset_y`` [m], ``yaw_deg``, ``load_x``, ``load_y`` [N], ``load_mz`` [N m],
-    ``readings`` (NaN strings before the first estimate), ``alarm_state``
-    (:func:`consequence_state`)."""
+    ``readings`` (NaN strings before the first estimate), then its alarm's keys ``alarm_state``,
+    ``acknowledged``, ... (:func:`~catenary_monitor.core.alarms.components.values` of ``ack``)."""
     if not values:
         values = tuple((k, 'nan') for k in dock_live.DOCK_KEYS[:-1]) + (('readings', '0'),)
-    values = values + (('alarm_state', consequence_state(dock[0])),)
+    values = values + component_alarm.values(ack, 'dock', dock[0])
     return ComponentStatus(f'{NODE_NAME}: dock', dock[0], dock[1], 'dock model', values)
 
 
@@ -239,13 +242,15 @@ def tide_component(
     rate: float = math.nan,
     sensor_word: str = 'ok',
     forecast: str = 'unknown',
+    ack: alarm_ack.AckState = alarm_ack.AckState(),
 ) -> ComponentStatus:
     """The tide's ``DiagnosticStatus``: values ``depth`` [m], ``depth_age`` [s] and ``rate``
     [m/s], the trend (:mod:`~catenary_monitor.core.rules.tide_trend`; nan while unknown), and the
     depth sensor's ``sensor_state``
     (:data:`catenary_monitor.core.rules.sensor_state.DEPTH_STATES`) and
-    ``tide_forecast``, what the times to uplift follow (:func:`forecast_word`), and
-    ``alarm_state`` (:func:`consequence_state`)."""
+    ``tide_forecast``, what the times to uplift follow (:func:`forecast_word`), then its
+    alarm's keys ``alarm_state``, ``acknowledged``, ...
+    (:func:`~catenary_monitor.core.alarms.components.values` of ``ack``)."""
     return ComponentStatus(
         f'{NODE_NAME}: tide',
         tide[0],
@@ -257,6 +262,6 @@ def tide_component(
             ('rate', repr(float(rate))),
             ('sensor_state', sensor_word),
             ('tide_forecast', forecast),
-            ('alarm_state', consequence_state(tide[0])),
+            *component_alarm.values(ack, 'tide', tide[0]),
         ),
     )

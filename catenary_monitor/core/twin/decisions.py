@@ -15,6 +15,8 @@ from catenary_monitor.core.alarms import shelving
 from catenary_monitor.core.alarms import acknowledge as alarm_ack
 from catenary_monitor.core.alarms import flood as alarm_flood
 from catenary_monitor.core.alarms.journal import (
+    COMPONENTS,
+    CONSEQUENCES,
     AlarmEvent,
     component_entries,
     entries,
@@ -31,6 +33,7 @@ from catenary_monitor.core.monitor.monitor_core import (
 )
 from catenary_monitor.core.monitor.state import (
     BlindPart,
+    ComponentAckPart,
     DockPart,
     FloodPart,
     LineInputPart,
@@ -483,6 +486,39 @@ def write_tide(
             depth=float(dv[-1]), depth_s=float(last * 1e-9), depth_sample_ns=last
         )
     core.state.take(part)
+
+
+class ComponentAcks(NamedTuple):
+    """The tide's and the dock's alarms over the window (core.alarms.components): at the
+    tide's decisions and at the ticks (the dock's: None without the dock model)."""
+
+    tide: alarm_ack.AckSeries
+    dock: Optional[alarm_ack.AckSeries]
+
+
+def _component_series(
+    core: MonitorCore, name: str, times_ns: np.ndarray, levels: np.ndarray
+) -> alarm_ack.AckSeries:
+    """The component ``name``'s alarm stepped at each of its decisions (as the core steps it
+    at its level changes: idempotent elsewhere)."""
+    before = core.component_ack(name)
+    quiet = np.full(len(levels), name in CONSEQUENCES)
+    return alarm_ack.replay_acks(before, times_ns * 1e-9, levels, quiet)
+
+
+def decide_component_acks(
+    core: MonitorCore, window: Window, tide: TideColumns, dock: Optional[DockColumns]
+) -> ComponentAcks:
+    """The tide's and the dock's alarms over the window; leaves the core's as after it."""
+    acks = list(core.state.component_acks)
+    tide_acks = _component_series(core, 'tide', tide.times, tide.level)
+    acks[COMPONENTS.index('tide')] = tide_acks.final
+    dock_acks = None
+    if dock is not None:
+        dock_acks = _component_series(core, 'dock', window.ticks, dock.levels)
+        acks[COMPONENTS.index('dock')] = dock_acks.final
+    core.state.take(ComponentAckPart(tuple(acks)))
+    return ComponentAcks(tide_acks, dock_acks)
 
 
 @dataclass

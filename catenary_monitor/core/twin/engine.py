@@ -60,6 +60,7 @@ from catenary_monitor.core.twin.decisions import (
     accept,
     chatter,
     decide_blind,
+    decide_component_acks,
     decide_dock_window,
     decide_sensors_window,
     decide_units_window,
@@ -331,6 +332,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
     tide, tide_transitions = decide_tide(core, window, sensors)
     blind = decide_blind(core, window, tide, sensors)
     dock = decide_dock_window(core, window, tide)
+    component_acks = decide_component_acks(core, window, tide, dock)
     decide_units_window(core, sensors, dock)
     results, series, steps, acks, damage = [], [], [], [], []
     for k, line in enumerate(core.state.lines):
@@ -356,6 +358,7 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
             WindowMade(
                 core, window, tide, results, series, steps, depth_before, tide_before,
                 lines_before, acks, dock, sensors, depth_word, blind, flood, damage,
+                component_acks,
             )  # fmt: skip
         )
         snaps = [made] if isinstance(made, SnapshotColumns) else list(made)

@@ -32,6 +32,7 @@ from catenary_monitor.core.rules import dock_watch as dock_live
 from catenary_monitor.core.rules.level import Level
 from catenary_monitor.core.twin.decisions import (
     BlindColumns,
+    ComponentAcks,
     DockColumns,
     FloodColumns,
     SensorColumns,
@@ -109,8 +110,10 @@ def _tide_statuses(
     depth_before: tuple[float, float, bool, float],
     tide_before: tuple[Level, str],
     depth_word: str,
+    acks: Optional[alarm_ack.AckSeries] = None,
 ) -> list[ComponentStatus]:
-    """The tide status at each of ``stamps`` [ns]."""
+    """The tide status at each of ``stamps`` [ns] (``acks``: its alarm at the tide's
+    decisions; None: as the core holds it)."""
     dd, dv = window.depth
     ds = window.sample_s(None)
     tide_at = np.searchsorted(tide.times, stamps, 'right') - 1
@@ -125,7 +128,8 @@ def _tide_statuses(
         word = depth_word if i < 0 else depth_state_word(depth_s, int(tide.sensor[i]))
         age = stamp * 1e-9 - depth_s
         forecast = forecast_word(core.config, rate)
-        out.append(tide_component(state, core.depth_id, depth, age, rate, word, forecast))
+        ack = core.component_ack('tide') if acks is None else acks.at(i)
+        out.append(tide_component(state, core.depth_id, depth, age, rate, word, forecast, ack))
     return out
 
 
@@ -156,6 +160,7 @@ class WindowMade(NamedTuple):
     blind: Optional[BlindColumns] = None
     flood: Optional[FloodColumns] = None
     damage: Optional[list[DamageColumns]] = None
+    component_acks: Optional[ComponentAcks] = None
 
     def max_damage(self, stamps: np.ndarray) -> list[Optional[float]]:
         """The worst line's fatigue damage as the core held it at each of ``stamps`` [ns]
@@ -191,6 +196,21 @@ class WindowMade(NamedTuple):
             out.append(self.core.alarms_component(status, state))
         return out
 
+    def tide_statuses(self, stamps: np.ndarray) -> list[ComponentStatus]:
+        """The tide status at each of ``stamps`` [ns]."""
+        acks = None if self.component_acks is None else self.component_acks.tide
+        return _tide_statuses(
+            self.core, self.window, self.tide, stamps, self.depth_before, self.tide_before,
+            self.depth_word, acks,
+        )  # fmt: skip
+
+    def dock_acks(self) -> alarm_ack.AckSeries:
+        """The dock's alarm at the window's ticks."""
+        acks = None if self.component_acks is None else self.component_acks.dock
+        if acks is None:
+            return alarm_ack.AckSeries(self.core.component_ack('dock'), np.zeros(0, np.int64), [])
+        return acks
+
     def blind_statuses(self, stamps: np.ndarray) -> list[ComponentStatus]:
         """The sensors alarm's status at each of ``stamps`` [ns]."""
         blind = self.blind
@@ -222,36 +242,38 @@ class WindowMade(NamedTuple):
 def build_snapshots(m: WindowMade) -> list[Snapshot]:
     """Every snapshot the core made in the window (ticks and level changes), built from the
     vectorized results."""
-    core, window, tide, dock = m.core, m.window, m.tide, m.dock
+    core, window, dock = m.core, m.window, m.dock
     stamps = m.stamps()
-    tides = _tide_statuses(core, window, tide, stamps, m.depth_before, m.tide_before, m.depth_word)
+    tides = m.tide_statuses(stamps)
     blinds = m.blind_statuses(stamps)
     alarms = m.alarms_statuses(stamps)
     columns = [_line_statuses(m, k, stamps) for k in range(len(m.results))]
     tick_at = np.searchsorted(window.ticks, stamps, 'right') - 1
-    logger = ComponentStatus(
-        'catenary_monitor: logger', core.state.logger[0], core.state.logger[1], core.logger_id, ()
-    )
+    logger = core.logger_component()
     worst = m.max_damage(stamps)
     out = []
     for n, stamp in enumerate(stamps.tolist()):
         statuses = [tides[n], blinds[n], alarms[n], logger]
         if dock is not None:
-            statuses.append(_dock_status(core, dock, int(tick_at[n])))
+            statuses.append(_dock_status(core, dock, int(tick_at[n]), m.dock_acks()))
         statuses += core.guard_components(stamp * 1e-9, worst[n])
         lines = tuple(col[n] for col in columns)
         out.append(Snapshot(stamp, lines + core.texts(statuses)))
     return out
 
 
-def _dock_status(core: MonitorCore, dock: DockColumns, i: int) -> ComponentStatus:
-    """The dock status as after tick ``i`` of the window (-1: as before the window)."""
+def _dock_status(
+    core: MonitorCore, dock: DockColumns, i: int, acks: alarm_ack.AckSeries
+) -> ComponentStatus:
+    """The dock status as after tick ``i`` of the window (-1: as before the window), its
+    alarm from ``acks`` (at the ticks)."""
     if i < 0:
-        return dock_component(dock.before[0], dock.before[1])
+        return dock_component(dock.before[0], dock.before[1], acks.before)
     assert core.dock_model is not None
     level = Level(int(dock.levels[i]))
     message = dock_live.dock_message(core.dock_model, dock.decision, i)
-    return dock_component((level, message), dock_live.dock_values(dock.decision, i))
+    values = dock_live.dock_values(dock.decision, i)
+    return dock_component((level, message), values, acks.at(i))
 
 
 def _line_statuses(m: WindowMade, k: int, stamps: np.ndarray) -> list[ComponentStatus]:
@@ -532,7 +554,7 @@ def _stack(columns: list[StatusColumns], n: int) -> StatusColumns:
 def build_snapshot_columns(m: WindowMade) -> SnapshotColumns | list[Snapshot]:
     """The snapshots of :func:`_snapshots` in columns (its Snapshot s where the statuses
     after the dock do not have one shape)."""
-    core, window, tide, dock = m.core, m.window, m.tide, m.dock
+    core, window, dock = m.core, m.window, m.dock
     stamps = m.stamps()
     n = len(stamps)
     worst = m.max_damage(stamps)
@@ -547,16 +569,14 @@ def build_snapshot_columns(m: WindowMade) -> SnapshotColumns | list[Snapshot]:
     else:
         groups += [(c, 1) for c in lines]
     tick_at = np.searchsorted(window.ticks, stamps, 'right') - 1
-    tides = _tide_statuses(core, window, tide, stamps, m.depth_before, m.tide_before, m.depth_word)
+    tides = m.tide_statuses(stamps)
     groups.append((list(core.texts(tides)), 1))
     groups.append((list(core.texts(m.blind_statuses(stamps))), 1))
     groups.append((list(core.texts(m.alarms_statuses(stamps))), 1))
-    logger = ComponentStatus(
-        'catenary_monitor: logger', core.state.logger[0], core.state.logger[1], core.logger_id, ()
-    )
+    logger = core.logger_component()
     groups.append((list(core.texts([logger])) * n, 1))
     if dock is not None:
-        docks = [_dock_status(core, dock, int(i)) for i in tick_at.tolist()]
+        docks = [_dock_status(core, dock, int(i), m.dock_acks()) for i in tick_at.tolist()]
         groups.append((list(core.texts(docks)), 1))
     width = len(guards[0]) if guards else 0
     if width:
