@@ -57,7 +57,6 @@ from catenary_monitor.io import mcap_read
 from catenary_monitor.io.mcap_read import first_log_time, not_mcap
 from catenary_monitor.io.mcap_scan import McapReadError, ReadReport
 from catenary_monitor.replay.driver import (
-    WINDOW_MESSAGES,
     ReplayError,
     Restart,
     StreamState,
@@ -292,6 +291,15 @@ def one_core() -> None:
     keep_freed_memory()
 
 
+#: The messages of a piece's windows: twice the ``replay`` command's window (``WINDOW_MESSAGES``
+#: of :mod:`catenary_monitor.replay.driver`), so that a node's file of 200 000 messages is one
+#: window, not one of 131 072 and a tail: the replay's per-window work (every line's alarm
+#: series, bounds, picks) paid once per file; the pieces of 4 docks of 4 such files took 12-17 %
+#: less CPU (4.19-4.35 s against 4.79-5.07, in turn), a stream of 800 000 messages in one piece
+#: 5 % less. A worker's peak memory 43 MB more (265 MB where it was 222, in one process).
+PIECE_WINDOW = 1 << 18
+
+
 #: What a worker's C heap keeps of the memory freed (B): a window's rows (38 columns of
 #: 100 000 values, 30 MB) and the replay's own arrays are freed window after window; glibc
 #: gave them back to the system (arrays of a MB and more are mapped apart, and a heap's free
@@ -425,7 +433,7 @@ def _stream_piece(
 ) -> StreamState:
     """The stream of one piece into the sink (the dock as one task: as ``replay`` does, in
     one window when it cannot be streamed)."""
-    window: Optional[int] = WINDOW_MESSAGES
+    window: Optional[int] = PIECE_WINDOW
     goes_on = task < len(plan.pieces) - 1
     # The next piece's first stamp: whether this piece's last sample is a bad stamp.
     next_ns = first_log_time(Path(plan.files[plan.pieces[task + 1][0]])) if goes_on else None
