@@ -67,6 +67,7 @@ from catenary_monitor.replay.driver import (
     stream,
 )
 from catenary_monitor.replay.fleet_dataset import (
+    MESSAGE_COLUMNS,
     DailyExtremes,
     PartWriter,
     episodes_table,
@@ -129,6 +130,7 @@ class DockPlan:
     follow_log: bool
     params_source: str
     refused: tuple[str, ...] = ()  # files that are not MCAP: one line each, never replayed
+    columns: tuple[str, ...] = MESSAGE_COLUMNS  # the messages dataset's (fleet --columns)
 
     @property
     def serial(self) -> bool:
@@ -139,9 +141,10 @@ class DockPlan:
         """What piece ``task``'s results depend on: version, parameters, its files and those
         of the pieces before it (name, size, mtime), the cut."""
         h = hashlib.sha256()
-        h.update(
-            json.dumps([__version__, config_hash(self.config), self.follow_log]).encode()
-        )
+        facts: list[Any] = [__version__, config_hash(self.config), self.follow_log]
+        if self.columns != MESSAGE_COLUMNS:
+            facts.append(list(self.columns))
+        h.update(json.dumps(facts).encode())
         for k in range(task + 1):
             h.update(json.dumps([self.identity[i] for i in self.pieces[k]]).encode())
         return h.hexdigest()
@@ -176,9 +179,12 @@ def dock_config(folder: Path, files: list[Path]) -> tuple[MonitorConfig, bool, s
         raise FleetError(f'{folder}: the parameters recorded in the log are invalid: {err}')
 
 
-def plan_dock(folder: Path, serial: bool = False) -> DockPlan:
+def plan_dock(
+    folder: Path, serial: bool = False, columns: tuple[str, ...] = MESSAGE_COLUMNS
+) -> DockPlan:
     """The dock in ``folder`` (its name: the folder's): its ``*.mcap`` files in time order, a
-    piece per file (``serial``, or files without a known first stamp: one piece). Raises
+    piece per file (``serial``, or files without a known first stamp: one piece); ``columns``
+    those of its messages dataset (:func:`.fleet_dataset.dataset_columns`). Raises
     :class:`FleetError`."""
     folder = Path(folder).absolute()  # the workers may run elsewhere: absolute paths
     if not folder.is_dir():
@@ -209,6 +215,7 @@ def plan_dock(folder: Path, serial: bool = False) -> DockPlan:
         follow_log=follow,
         params_source=source,
         refused=tuple(refused),
+        columns=tuple(columns),
     )
 
 
@@ -328,8 +335,8 @@ class _PieceSink:
     """Takes a piece's windows: the tally, the daily extremes, the message parts; checks
     that the piece follows the one before it in time."""
 
-    def __init__(self, carry: Carry, writer: PartWriter) -> None:
-        self.carry, self.writer = carry, writer
+    def __init__(self, carry: Carry, writer: PartWriter, names: tuple[str, ...]) -> None:
+        self.carry, self.writer, self.names = carry, writer, names
         self.after = carry.last_ns
 
     def __call__(self, result: Any, window: Any) -> None:
@@ -348,9 +355,9 @@ class _PieceSink:
             self.carry.last_ns = hi if self.carry.last_ns is None else max(hi, self.carry.last_ns)
         assert self.carry.tally is not None and self.carry.daily is not None
         self.carry.tally.add(result)
-        columns = window_columns(result)
+        columns = window_columns(result, self.names)
         self.carry.daily.add(columns)
-        self.writer.add(message_table(columns))
+        self.writer.add(message_table(columns, self.names))
 
 
 def _damage_notes(report: ReadReport, where: str) -> list[str]:
@@ -438,7 +445,7 @@ def _stream_piece(
     # The next piece's first stamp: whether this piece's last sample is a bad stamp.
     next_ns = first_log_time(Path(plan.files[plan.pieces[task + 1][0]])) if goes_on else None
     while True:
-        sink = _PieceSink(carry, writer)
+        sink = _PieceSink(carry, writer, plan.columns)
         try:
             return stream(
                 files,
