@@ -354,7 +354,7 @@ def _text(out: dict[str, Any]) -> str:
         f'{f["bytes"] / 1e6:.0f} MB; {out["cpus"]} CPUs, load average '
         f'{out["load_average"][0][0]:.1f} before, {out["load_average"][1][0]:.1f} after',
         f'median of {out["repeat"]} rounds (the modes in turn), wall time of the commands:',
-        f'{"mode":<29}    wall s   CPU s  x replay --csv loop  x replay loop  fixed s'
+        f'{"mode":<29}  wall s   CPU s  x replay --csv loop  x replay loop  fixed s'
         '  identical  rounds: wall s',
     ]
     for r in out['runs']:
