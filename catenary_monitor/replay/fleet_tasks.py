@@ -301,9 +301,10 @@ def one_core() -> None:
 #: The messages of a piece's windows: twice the ``replay`` command's window (``WINDOW_MESSAGES``
 #: of :mod:`catenary_monitor.replay.driver`), so that a node's file of 200 000 messages is one
 #: window, not one of 131 072 and a tail: the replay's per-window work (every line's alarm
-#: series, bounds, picks) paid once per file; the pieces of 4 docks of 4 such files took 12-17 %
-#: less CPU (4.19-4.35 s against 4.79-5.07, in turn), a stream of 800 000 messages in one piece
-#: 5 % less. A worker's peak memory 43 MB more (265 MB where it was 222, in one process).
+#: series, bounds, picks) paid once per file; the pieces of 4 docks of 4 such files took
+#: 4.19-4.35 CPU s against 4.79-5.07 in one process (in turn, at a load of 5), the whole
+#: ``fleet`` command 4 % less CPU quiet; a stream of 800 000 messages in one piece 5 % less. A
+#: worker's peak memory 43 MB more (265 MB where it was 222, in one process).
 PIECE_WINDOW = 1 << 18
 
 
