@@ -7,9 +7,10 @@ folder's ``catenary_monitor.yaml``), then times, as commands in their own proces
 turn: the baseline, what a user would otherwise run (a serial loop of ``catenary-monitor replay
 DIR --params-file DIR/catenary_monitor.yaml --csv DOCK.csv`` over the folders); the same loop
 without the CSV (the summary only: the least a replay does); ``catenary-monitor fleet`` on
-a local cluster of its own of 1 worker and of 2 (``--workers-list``); and ``fleet
---scheduler`` on a cluster of 2 started once for all the rounds (``reused``), each into a
-fresh results folder.
+a local cluster of its own of 1 worker and of 2 (``--workers-list``); the same of 2 writing the
+columns the baseline's CSV has (``fleet --columns``: what the loop writes, as Parquet); and
+``fleet --scheduler`` on a cluster of 2 started once for all the rounds (``reused``), each into
+a fresh results folder.
 Reports per mode the median wall time and its ratio to the baseline, the fleet's fixed cost
 (its wall time minus its replay: the imports, the cluster's start and stop), and checks that
 every fleet run's messages dataset is identical to the first's (row for row) and holds the
@@ -42,6 +43,8 @@ YEAR_MESSAGES = (12 * 20 + 1) * 86_400 * 365
 
 #: The baseline's mode name, and the loop without outputs.
 LOOP_CSV, LOOP_BARE = 'replay --csv loop', 'replay loop'
+#: The fleet's mode writing the columns the baseline's CSV has (``fleet --columns``).
+CSV_MODE = 'CSV columns'
 
 
 def generate_fleet(root: Path, docks: int, files: int, per_file: int) -> dict[str, Any]:
@@ -165,13 +168,20 @@ def _replay_loop(folders: list[Path], csv_dir: Optional[Path]) -> dict[str, Any]
 
 
 def _fleet(
-    folders: list[Path], results: Path, workers: int, first: Path, scheduler: str = ''
+    folders: list[Path],
+    results: Path,
+    workers: int,
+    first: Path,
+    scheduler: str = '',
+    columns: str = '',
 ) -> dict[str, Any]:
     """One ``fleet`` command into a fresh folder, compared with the first: on a fresh local
-    cluster of ``workers``, or on the running cluster at ``scheduler`` (started once)."""
+    cluster of ``workers``, or on the running cluster at ``scheduler`` (started once);
+    ``columns``: its ``--columns``."""
     shutil.rmtree(results, ignore_errors=True)
     args = ['fleet', *map(str, folders), '--out', str(results)]
     args += ['--scheduler', scheduler] if scheduler else ['--workers', str(workers)]
+    args += ['--columns', columns] if columns else []
     wall, cpu, text = _command(args + ['--quiet', '--json'])
     fleet = json.loads(text)
     if scheduler:  # the workers are not the command's children: their CPU from the run
@@ -180,8 +190,9 @@ def _fleet(
     if results != first:
         shutil.rmtree(results, ignore_errors=True)
     mode = f'fleet, {workers} worker{"s" if workers > 1 else ""}'
+    mode += ', reused' if scheduler else ''
     return {
-        'mode': mode + (', reused' if scheduler else ''),
+        'mode': mode + (f', {CSV_MODE}' if columns else ''),
         'workers': workers,
         'wall_s': round(wall, 3),
         'cpu_s': round(cpu, 3),
@@ -255,12 +266,18 @@ def run(
         csv_dir.mkdir(exist_ok=True)
         rounds: dict[str, list[dict[str, Any]]] = {}
         first = tmp / f'results_{workers_list[0]}_0'
+        first_csv = tmp / 'csv_columns_0'
+        from catenary_monitor.replay.outputs import CSV_COLUMNS
+
+        csv_columns = ','.join(CSV_COLUMNS)
         reused = _cluster(max(workers_list)) if reuse else None
         try:
             for k in range(repeat):  # the modes in turn: a change of load hits each
                 modes = [_replay_loop(folders, csv_dir), _replay_loop(folders, None)]
                 modes += [_fleet(folders, tmp / f'results_{n}_{k}', n, first)
                           for n in workers_list]  # fmt: skip
+                modes.append(_fleet(folders, tmp / f'csv_columns_{k}', max(workers_list),
+                                    first_csv, columns=csv_columns))  # fmt: skip
                 if reused is not None:
                     n = len(reused.scheduler_info['workers'])
                     address = reused.scheduler_address
@@ -270,14 +287,16 @@ def run(
         finally:
             if reused is not None:
                 reused.close()
-        same_csv = all(same_as_csv(first, f.name, csv_dir / f'{f.name}.csv') for f in folders)
+        same_csv = all(same_as_csv(res, f.name, csv_dir / f'{f.name}.csv')
+                       for f in folders for res in (first, first_csv))  # fmt: skip
         in_process = pieces_cpu(folders, tmp / 'pieces')
         runs = [_median(rounds[mode]) for mode in rounds]
         base = {r['mode']: r['wall_s'] for r in runs}
         for r in runs:
             r['vs_replay_csv_loop'] = round(base[LOOP_CSV] / r['wall_s'], 3)
             r['vs_replay_loop'] = round(base[LOOP_BARE] / r['wall_s'], 3)
-        fleets = [x for mode, xs in rounds.items() for x in xs if 'workers' in x]
+        fleets = [x for mode, xs in rounds.items() for x in xs
+                  if 'workers' in x and CSV_MODE not in mode]  # fmt: skip
         per_cpu = statistics.median(x['messages'] / x['worker_cpu_s'] for x in fleets)
         return {
             'fleet': facts,
@@ -335,13 +354,13 @@ def _text(out: dict[str, Any]) -> str:
         f'{f["bytes"] / 1e6:.0f} MB; {out["cpus"]} CPUs, load average '
         f'{out["load_average"][0][0]:.1f} before, {out["load_average"][1][0]:.1f} after',
         f'median of {out["repeat"]} rounds (the modes in turn), wall time of the commands:',
-        'mode                 wall s   CPU s  x replay --csv loop  x replay loop  fixed s'
+        f'{"mode":<29}  wall s   CPU s  x replay --csv loop  x replay loop  fixed s'
         '  identical  rounds: wall s',
     ]
     for r in out['runs']:
         fleet = 'workers' in r
         lines.append(
-            f'{r["mode"]:<19}  {r["wall_s"]:>6.2f}  {r["cpu_s"]:>6.2f}  '
+            f'{r["mode"]:<29}  {r["wall_s"]:>6.2f}  {r["cpu_s"]:>6.2f}  '
             f'{r["vs_replay_csv_loop"]:>19.2f}  '
             f'{r["vs_replay_loop"]:>13.2f}  '
             + (f'{r["fixed_s"]:>7.2f}  {"yes" if r["identical_to_first"] else "NO":>9}'

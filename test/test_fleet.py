@@ -185,6 +185,31 @@ def test_the_rows_are_those_of_the_replay_command_s_csv(fleet, cluster, tmp_path
         assert same_as_csv(results, folder.name, csv), folder.name
 
 
+def test_columns_keeps_those_of_the_messages_and_the_daily_table_whole(fleet, cluster, tmp_path):
+    """``--columns``: the messages dataset has those (with time and line), each equal to the
+    serial replay's; the daily table is the one of a run with every column."""
+    folder = fleet['folders'][0]
+    results = tmp_path / 'results'
+    wanted = ['anchor_margin', 'level']
+    code = main(['fleet', str(folder), '--out', str(results), '--scheduler', cluster,
+                 '--columns', ','.join(wanted), '--quiet'])  # fmt: skip
+    assert code == 0
+    got = _dataset(results, 'messages', 'dock_a')
+    assert list(got) == ['time', 'line', *wanted, 'dock', 'date']
+    want = _plain(message_table(fleet['refs']['dock_a']['columns']))
+    assert np.array_equal(got['time'], want['time'])
+    assert np.array_equal(got['anchor_margin'], want['anchor_margin'], equal_nan=True)
+    assert (got['level'].astype(str) == want['level'].astype(str)).all()
+    full = tmp_path / 'full'
+    assert not run_fleet([folder], full, scheduler=cluster).failed
+    for name in ('daily', 'episodes'):
+        a, b = _dataset(results, name, 'dock_a'), _dataset(full, name, 'dock_a')
+        assert list(a) == list(b) and all(
+            np.array_equal(a[k], b[k], equal_nan=a[k].dtype.kind == 'f') for k in a
+        ), name
+    assert main(['fleet', str(folder), '--out', str(results), '--columns', 'nope']) == 2
+
+
 def test_a_killed_worker_loses_and_duplicates_nothing(fleet, cluster, tmp_path):
     """Kill the worker that is replaying a piece, once the first piece is done."""
     from distributed import get_client

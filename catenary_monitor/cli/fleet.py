@@ -3,13 +3,14 @@
 ::
 
     catenary-monitor fleet DIR [DIR ...] --out RESULTS [--workers N | --scheduler ADDRESS]
-        [--json] [--quiet | --progress]
+        [--columns LIST] [--json] [--quiet | --progress]
 
 Each DIR is a dock (its name: the folder's), replayed with the parameters its node recorded,
 or with the folder's ``catenary_monitor.yaml`` when there is one; the results equal a serial
 ``catenary-monitor replay DIR`` of each folder. RESULTS holds Parquet datasets partitioned
 ``dock=NAME/date=YYYY-MM-DD``: ``messages`` (the replay CSV's rows, every column),
-``episodes`` and ``daily`` (docs/fleet.md). Needs the ``fleet`` extra (dask[distributed],
+``episodes`` and ``daily`` (docs/fleet.md); ``--columns`` keeps some of the messages' columns
+(``time`` and ``line`` always). Needs the ``fleet`` extra (dask[distributed],
 pyarrow).
 
 Exit status: 0 every dock replayed (damaged input is named and skipped, as replay does); 2 a
@@ -109,6 +110,7 @@ def cmd_fleet(args: argparse.Namespace) -> int:
     """Entry point of ``catenary-monitor fleet``."""
     try:
         from catenary_monitor.replay.fleet_cluster import run_fleet
+        from catenary_monitor.replay.fleet_dataset import dataset_columns
     except ImportError as err:
         print(
             f'catenary-monitor fleet: needs the fleet extra ({err.name} is missing): '
@@ -126,6 +128,14 @@ def cmd_fleet(args: argparse.Namespace) -> int:
     if out.exists() and not out.is_dir():
         print(f'catenary-monitor fleet: --out {out} is a file, not a folder', file=sys.stderr)
         return 2
+    columns = None
+    if args.columns and args.columns != 'all':
+        columns = [t.strip() for t in args.columns.split(',') if t.strip()]
+        try:
+            dataset_columns(columns)
+        except ValueError as err:
+            print(f'catenary-monitor fleet: --columns: {err}', file=sys.stderr)
+            return 2
     progress = _ProgressLine(args.progress or not args.quiet)
     run = run_fleet(
         [Path(d) for d in args.dirs],
@@ -133,6 +143,7 @@ def cmd_fleet(args: argparse.Namespace) -> int:
         workers=args.workers,
         scheduler=args.scheduler,
         progress=progress,
+        columns=columns,
     )
     progress.done(run)
     for name, why in run.failed.items():
@@ -183,6 +194,13 @@ def register(sub: Any) -> None:
         metavar='ADDRESS',
         help='an existing Dask cluster (tcp://host:8786); its workers must see the folders and '
         'RESULTS at the same paths',
+    )
+    p.add_argument(
+        '--columns',
+        metavar='LIST',
+        default='all',
+        help='the messages dataset\'s columns: comma-separated names of replay --csv-columns '
+        '(time and line always), or "all" (default)',
     )
     p.add_argument('--json', action='store_true', help='print the run as one JSON object')
     p.add_argument('--quiet', action='store_true', help='no progress on stderr')

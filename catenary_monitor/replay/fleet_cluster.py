@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Optional, Sequence
 
-from catenary_monitor.replay.fleet_dataset import clear_tmp, remove_parts
+from catenary_monitor.replay.fleet_dataset import clear_tmp, dataset_columns, remove_parts
 from catenary_monitor.replay.fleet_tasks import (
     Carry,
     DockPlan,
@@ -86,17 +86,20 @@ def run_fleet(
     workers: Optional[int] = None,
     scheduler: Optional[str] = None,
     progress: Optional[Callable[[Progress], None]] = None,
+    columns: Optional[Sequence[str]] = None,
 ) -> FleetRun:
     """Replay every dock folder into the datasets under ``out`` on Dask: a local cluster of
     ``workers`` one-core worker processes (default: the usable CPUs), or the cluster whose
     scheduler is at ``scheduler`` (its workers must see ``out`` and the folders at the same
-    paths)."""
+    paths). ``columns``: the messages dataset's (with ``time`` and ``line``; default: every
+    column). Raises ValueError for an unknown column."""
     from distributed import Client
 
+    names = dataset_columns(columns)
     run = FleetRun()
     root = Path(out).resolve()
     root.mkdir(parents=True, exist_ok=True)
-    docks = _plans(folders, run)
+    docks = _plans(folders, run, names)
     t0 = time.monotonic()
     cluster = None
     if scheduler:
@@ -176,7 +179,7 @@ def _warm() -> None:
     fleet_tasks.one_core()
 
 
-def _plans(folders: Sequence[Path], run: FleetRun) -> list[_Dock]:
+def _plans(folders: Sequence[Path], run: FleetRun, columns: tuple[str, ...]) -> list[_Dock]:
     docks: list[_Dock] = []
     seen: dict[str, str] = {}
     for folder in folders:
@@ -193,7 +196,7 @@ def _plans(folders: Sequence[Path], run: FleetRun) -> list[_Dock]:
             continue
         seen[name] = str(folder)
         try:
-            docks.append(_Dock(plan_dock(Path(folder))))
+            docks.append(_Dock(plan_dock(Path(folder), columns=columns)))
         except FleetError as err:
             run.failed[name] = str(err)
     return docks
@@ -330,7 +333,7 @@ def _collect(
     if isinstance(error, PieceRestart) and len(dock.plan.pieces) > 1:
         state.notes.append(f'{dock.plan.name}: {error}; replaying it as one task')
         state.tasks_total -= len(dock.plan.pieces) - 1
-        dock.plan = plan_dock(Path(dock.plan.folder), serial=True)
+        dock.plan = plan_dock(Path(dock.plan.folder), serial=True, columns=dock.plan.columns)
         dock.generation += 1
         for fut in _submit(client, dock, root, token, run):
             owner[fut.key] = (dock, dock.generation)

@@ -37,10 +37,12 @@ from catenary_monitor.replay.outputs import CSV_ALL, message_columns
 __all__ = [
     'DAILY_FIELDS',
     'DailyExtremes',
+    'KEY_COLUMNS',
     'MESSAGE_COLUMNS',
     'PartWriter',
     'TMP_PREFIX',
     'clear_tmp',
+    'dataset_columns',
     'day_of',
     'episodes_table',
     'level_seconds',
@@ -115,15 +117,44 @@ def _date(day: int) -> str:
     return str(np.datetime64(int(day), 'D'))
 
 
-def window_columns(result: Any) -> dict[str, Any]:
-    """One window's rows, every column (:func:`message_columns`)."""
-    return message_columns(result, MESSAGE_COLUMNS)
+#: The columns every messages dataset has, whatever ``fleet --columns`` names: the row's time
+#: (its date partition) and line.
+KEY_COLUMNS = ('time', 'line')
+#: The columns the daily table is computed from.
+DAILY_SOURCES = tuple(sorted({source for _, source, _, _ in DAILY_FIELDS}))
 
 
-def message_table(columns: dict[str, Any]) -> pa.Table:
-    """One window's rows (:func:`window_columns`) as an Arrow table."""
+def dataset_columns(names: Optional[Sequence[str]] = None) -> tuple[str, ...]:
+    """The messages dataset's columns (in :data:`MESSAGE_COLUMNS` order): ``names`` and the
+    :data:`KEY_COLUMNS`; every column when ``names`` is None. Raises ValueError for a name
+    that is not a column."""
+    if names is None:
+        return MESSAGE_COLUMNS
+    unknown = [n for n in names if n not in MESSAGE_COLUMNS]
+    if unknown:
+        raise ValueError(
+            f'unknown column {unknown[0]!r}; known: ' + ', '.join(MESSAGE_COLUMNS)
+        )
+    wanted = set(names) | set(KEY_COLUMNS)
+    return tuple(n for n in MESSAGE_COLUMNS if n in wanted)
+
+
+def window_columns(result: Any, names: Sequence[str] = MESSAGE_COLUMNS) -> dict[str, Any]:
+    """One window's rows (:func:`message_columns`): the columns ``names`` and those the daily
+    table needs."""
+    if len(names) == len(MESSAGE_COLUMNS):
+        return message_columns(result, MESSAGE_COLUMNS)
+    return message_columns(result, sorted({*names, *KEY_COLUMNS, *DAILY_SOURCES}))
+
+
+def message_table(
+    columns: dict[str, Any], names: Sequence[str] = MESSAGE_COLUMNS
+) -> pa.Table:
+    """The columns ``names`` of one window's rows (:func:`window_columns`) as an Arrow
+    table."""
     arrays = {}
-    for name, column in columns.items():
+    for name in names:
+        column = columns[name]
         if name == 'status':
             codes, labels = column
             arrays[name] = pa.array(np.asarray([int(x) for x in labels], np.int64)[codes])
