@@ -7,7 +7,9 @@ import math
 
 import numpy as np
 
+from catenary_monitor.console.frames import Status, alarm_rows
 from catenary_monitor.core.alarms import acknowledge as ack
+from catenary_monitor.core.alarms.texts import headline
 from catenary_monitor.core.alarms.latches import AlarmInputs, LineAlarm, replay_levels
 from catenary_monitor.core.config.parameters import AlarmConfig
 from catenary_monitor.core.rules import sensor_state
@@ -60,7 +62,9 @@ def test_a_margin_warning_after_a_part_is_its_consequence_and_the_uplift_annunci
         (25.0, Level.WARN, True),
         (27.0, Level.ERROR, False),
     ]
-    assert "(suppressed by design: consequence of ml7's parted chain)" in events[0].message
+    assert events[0].message.startswith(
+        "consequence of ml7's parted chain (suppressed by design): anchor margin 5.00 m < 6.00 m"
+    )
     assert state.level == Level.ERROR and not state.suppressed
     assert_replay_matches(a, scene(10.0, 25.0, lift_at=27.0))
 
@@ -69,7 +73,10 @@ def test_the_consequence_is_shown_not_active():
     a = alarm()
     state, _, _ = run(a, scene(10.0, 25.0, end=60.0))
     assert state.level == Level.WARN and state.suppressed
-    assert state.message.startswith('anchor margin 5.00 m < 6.00 m')
+    assert state.message.startswith("consequence of ml7's parted chain")
+    assert headline(state.message, 'anchor_margin') == (
+        "consequence of ml7's parted chain (suppressed by design): anchor margin 5.00 m < 6.00 m"
+    )
     alarm_state = ack.step(ack.AckState(), state.level, 60.0, state.suppressed)
     assert alarm_state.state == ack.NORMAL and alarm_state.suppressed
     values = dict(ack.diagnostic_values(alarm_state, state.level, [False] * 20))
@@ -148,3 +155,16 @@ def test_parted_others_names_another_line():
     got = sensor_state.parted_others(codes)
     want = [[1, 3, 1, 1], [NAN] * 4, [NAN, 0, 0, 0], [3, 0, 0, 0]]
     np.testing.assert_array_equal(got, np.array(want, float))
+
+
+def test_the_console_lists_the_consequences_under_the_parted_alarm():
+    part = "suspected parted chain: tension collapsed to 5.3 kN, at or below the hanging chain's"
+    warn = "consequence of ml7's parted chain (suppressed by design): anchor margin 5.9 m < 6 m"
+    statuses = {
+        'ml7': Status('ERROR', part, {'alarm_state': 'unacknowledged', 'alarm_raised': '10.0'}),
+        'ml8': Status('WARN', warn, {'alarm_state': 'suppressed'}),
+        'ml1': Status('WARN', 'anchor margin 5.0 m < 6.0 m', {'alarm_state': 'unacknowledged'}),
+    }
+    rows = {r['line']: r for r in alarm_rows(statuses, ['ml1', 'ml7', 'ml8'])}
+    assert sorted(rows) == ['ml1', 'ml7']  # the consequence is not an alarm row of its own
+    assert rows['ml7']['consequences'] == ['ml8'] and rows['ml1']['consequences'] == []

@@ -117,7 +117,7 @@ __all__ = [
     'quiet_change',
     'SUPPRESSED_NOTE',
     'CONSEQUENT',
-    'consequence_note',
+    'consequence_text',
     'VIEW_TEXT',
     'uplift_seen',
 ]
@@ -240,9 +240,10 @@ class Transition(NamedTuple):
 SUPPRESSED_NOTE = ' (suppressed by design: alarm on sensors)'
 
 
-def consequence_note(peer: str) -> str:
-    """Appended to the message of a warning suppressed as a parted chain's consequence."""
-    return f' (suppressed by design: consequence of {peer}\'s parted chain)'
+def consequence_text(message: str, peer: str) -> str:
+    """The message of a warning suppressed as ``peer``'s parted chain's consequence: the cause
+    first, so that the headline keeps it."""
+    return f'consequence of {peer}\'s parted chain (suppressed by design): {message}'
 
 
 def quiet_change(old: Level, old_suppressed: bool, new: Level, new_suppressed: bool) -> bool:
@@ -384,7 +385,7 @@ class LineAlarm:
             message = self._message(active, inputs, now, stale_t, stale_d, input_message)
             message = _blind_text(message, level == Level.STALE and suppressed)
             if consequence:
-                message += consequence_note(self.peer(inputs.parted_other))
+                message = consequence_text(message, self.peer(inputs.parted_other))
         else:  # nothing up, nothing stale (so not blind): what _message says then
             message = 'OK'
         events = []
@@ -1003,7 +1004,7 @@ class LevelSeries:
             self._held(i),
         )
         if self.consequence[i]:
-            return text + consequence_note(self.alarm.peer(floats['parted_other']))
+            return consequence_text(text, self.alarm.peer(floats['parted_other']))
         return _blind_text(text, bool(self.suppressed[i]) and self.levels[i] == Level.STALE)
 
     def _walk(self) -> tuple[list[Transition], tuple[float, ...]]:
