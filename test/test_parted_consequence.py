@@ -7,6 +7,9 @@ import math
 
 import numpy as np
 
+from replay_data import T0_NS, dock_config, generate
+from test_batch import compare, ticks_for
+
 from catenary_monitor.console.frames import Status, alarm_rows
 from catenary_monitor.core.alarms import acknowledge as ack
 from catenary_monitor.core.alarms.texts import headline
@@ -168,3 +171,19 @@ def test_the_console_lists_the_consequences_under_the_parted_alarm():
     rows = {r['line']: r for r in alarm_rows(statuses, ['ml1', 'ml7', 'ml8'])}
     assert sorted(rows) == ['ml1', 'ml7']  # the consequence is not an alarm row of its own
     assert rows['ml7']['consequences'] == ['ml8'] and rows['ml1']['consequences'] == []
+
+
+def test_the_twin_equals_the_core_on_a_part_and_its_consequences():
+    """line_01's chain parts at 5 s; line_02's storm brings its margin warning (suppressed)
+    and its uplift (annunciated): the twin and the core agree, in one window and in two."""
+    config = dock_config(3)
+    tensions, depth = generate(config, seconds=90.0, seed=1, dropouts=False)
+    t, v = tensions['line_01']
+    v = np.where(t >= T0_NS + 5e9, 2e3, v)  # the rest of the chain still hangs from the hook
+    tensions['line_01'] = (t, v)
+    ticks = ticks_for(tensions, depth)
+    steps = compare(config, tensions, depth, ticks)
+    compare(config, tensions, depth, ticks, cuts=(T0_NS + 40e9,))
+    changes = [c for s in steps for c in s.transitions if c.component == 'line_02']
+    assert any(c.transition.suppressed and c.transition.new == Level.WARN for c in changes)
+    assert any(not c.transition.suppressed and c.transition.new == Level.ERROR for c in changes)
