@@ -78,7 +78,12 @@ own tension alone went stale after it reported, is ``suppressed``: its message s
 (``blind: no depth received yet (suppressed by design: alarm on sensors)``), its alarm is not
 active (:mod:`catenary_monitor.core.alarms.acknowledge`) and its changes into and out of that
 STALE are not announced (:attr:`Transition.suppressed`): the one ``sensors`` alarm reports the
-cause (:func:`catenary_monitor.core.rules.health.sensors_status`).
+cause (:func:`catenary_monitor.core.rules.health.sensors_status`). Likewise a line at WARN
+whose warnings are all of :data:`CONSEQUENT` (the margins a shifted load brings about) while
+another line is suspected parted (:attr:`AlarmInputs.parted_other`), having left OK within
+``parted_consequence_window`` after that line became so (:attr:`AlarmState.parted_since`): the
+parted line's ERROR reports the cause, the message begins with it
+(:func:`consequence_text`). An ERROR is never suppressed.
 
 Level: ERROR if an ERROR latch is up, else STALE if stale, else WARN if a warning latch is up,
 else OK. **ERROR outranks STALE** (a sensor dropout must not hide a lifted anchor) although
@@ -218,7 +223,7 @@ class AlarmState:
     latches: tuple[Latch, ...] = (Latch(),) * len(CONDITIONS)
     entered: tuple[float, ...] = (math.nan,) * 4  # s, when each severity rank was last entered
     input_message: str = ''  # last impossible-input sentence, while its alarm holds
-    suppressed: bool = True  # STALE only by a common cause (suppressed by design)
+    suppressed: bool = True  # STALE by a common cause, WARN by a part (suppressed by design)
     stale: bool = True  # an input stale or never received (the level may still be ERROR)
     parted_since: float = math.nan  # s, since when another line is suspected parted; NaN not
 
