@@ -33,6 +33,7 @@ __all__ = [
     'console_config',
     'alarm_rows',
     'alarm_names',
+    'consequence_lines',
     'component_rows',
     'COMPONENT_ALARMS',
     'shelved_rows',
@@ -217,9 +218,10 @@ def alarm_rows(
     (listed apart: :func:`shelved_rows`), most urgent first (unacknowledged, then
     returned-unacknowledged, then acknowledged; ERROR before STALE before WARN; newest first).
     Each row says its ``kind`` (``line``, ``sensors``), whether the alarm chatters, whether one
-    of its conditions is shelved, and whether it is the first out of the flood the monitor
-    reports (:func:`flood_view`). With ``components`` (the console's list) the component
-    statuses not OK are listed too (:func:`component_rows`, their time raised from
+    of its conditions is shelved, whether it is the first out of the flood the monitor
+    reports (:func:`flood_view`) and the lines whose warnings are its suppressed consequences
+    (:func:`consequence_lines`: a parted chain's). With ``components`` (the console's list) the
+    component statuses not OK are listed too (:func:`component_rows`, their time raised from
     ``history``), each after the unacknowledged alarms of its level."""
     flood = flood_view(statuses)
     first = flood['first_out'] if flood['flood'] else None
@@ -252,6 +254,7 @@ def alarm_rows(
                     else ''
                 ),
                 'first_out': name == first,
+                'consequences': consequence_lines(statuses, lines, name),
             }
         )
     if components:
@@ -265,6 +268,22 @@ def alarm_rows(
         )
     )
     return rows
+
+
+def consequence_lines(
+    statuses: Mapping[str, Status], lines: Sequence[str], name: str
+) -> list[str]:
+    """The lines whose warning is suppressed by design as a consequence of ``name``'s parted
+    chain (their message begins with it: :func:`~catenary_monitor.core.alarms.latches.
+    consequence_text`), listed under that alarm."""
+    head = f"consequence of {name}'s parted chain"
+    return [
+        line
+        for line in lines
+        if (st := statuses.get(line)) is not None
+        and st.values.get('alarm_state') == 'suppressed'
+        and st.message.startswith(head)
+    ]
 
 
 def _component_listed(name: str, st: Optional[Status], lines: Sequence[str]) -> bool:
@@ -314,6 +333,7 @@ def component_rows(
                 'chattering': False,
                 'shelved_condition': '',
                 'first_out': name == first,
+                'consequences': [],
             }
         )
     return rows

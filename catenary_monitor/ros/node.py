@@ -1077,7 +1077,7 @@ class CatenaryMonitor(Node):
     def _report(self, change: Change) -> None:
         """One console line per level change: ``ALARM NAME: OLD -> NEW: message (after N s)``;
         none for a change the core marks suppressed by design (into or out of a STALE that the
-        one ``sensors`` alarm announces)."""
+        one ``sensors`` alarm announces, or a WARN a parted chain's ERROR stands for)."""
         ev = change.transition
         if ev.suppressed:
             return

@@ -587,7 +587,8 @@ function renderActive(frame, lost, replay) {
     setText(td[2], a.level);
     setText(td[3], a.condition.replaceAll('_', ' '));
     td[3].title = td[3].textContent;
-    const head = a.message + (a.shelved_condition ? ` (${a.shelved_condition.replaceAll('_', ' ')} shelved)` : '');
+    const head = a.message + (a.shelved_condition ? ` (${a.shelved_condition.replaceAll('_', ' ')} shelved)` : '')
+      + (a.consequences && a.consequences.length ? ` · consequences (suppressed by design): ${a.consequences.join(', ')}` : '');
     setText(td[4].firstChild, head);
     td[4].firstChild.title = head;  // one line in the list: the whole headline below and here
     tr.classList.toggle('picked', a.line === pickedAlarm(frame));

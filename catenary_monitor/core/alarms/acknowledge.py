@@ -8,7 +8,9 @@ A line's alarm is *active* while its level is not OK (WARN, STALE or ERROR), exc
 tension ever received: :attr:`~catenary_monitor.core.alarms.latches.AlarmState.suppressed`), which
 the one ``sensors`` alarm reports, raised once the silence outlasts its timeout. So a blind start
 or a silent depth sensor is one alarm, not one per line; a tension sensor that goes silent after
-it reported is its own line's alarm at once.
+it reported is its own line's alarm at once. Likewise a margin WARN that another line's parted
+chain brought about (raised within ``parted_consequence_window`` of the part, while it stands):
+the parted line's ERROR reports the cause; an ERROR is never suppressed.
 
 States (:data:`STATES`, the names the ``/diagnostics`` key ``alarm_state`` and the console use):
 
@@ -206,7 +208,7 @@ def _watch(
     count, window = chatter
     flips = (ack.flips + (now,))[-count:] if flip else ack.flips
     chattering = len(flips) >= count and now - flips[-count] <= window
-    active = level != Level.OK and not (suppressed and level == Level.STALE)
+    active = level != Level.OK and not _quiet(suppressed, level)
     since = (ack.active_since if ack.active_since == ack.active_since else now) if active else _NAN
     if flips is ack.flips and chattering == ack.chattering and _same(since, ack.active_since):
         return ack
@@ -217,10 +219,16 @@ def _same(a: float, b: float) -> bool:
     return a == b or (a != a and b != b)
 
 
+def _quiet(suppressed: bool, level: Level) -> bool:
+    """Whether ``level`` is suppressed by design: ``suppressed`` applies to a STALE (blind
+    inputs' common cause) or a WARN (a parted chain's consequence) only, never an ERROR."""
+    return suppressed and level in (Level.STALE, Level.WARN)
+
+
 def _follow(ack: AckState, level: Level, now: float, suppressed: bool) -> AckState:
     """The alarm's state machine on the level it annunciates (see the module docstring);
-    ``suppressed`` applies to a STALE level only."""
-    suppressed = suppressed and level == Level.STALE
+    ``suppressed`` applies to a STALE or WARN level only (:func:`_quiet`)."""
+    suppressed = _quiet(suppressed, level)
     if suppressed != ack.suppressed:
         ack = replace(ack, suppressed=suppressed)
     active = level != Level.OK and not suppressed
@@ -262,7 +270,7 @@ def shelve(
         shelved_condition=condition,
         shelved_state=before,
     )
-    if masked == Level.OK or (suppressed and masked == Level.STALE):
+    if masked == Level.OK or _quiet(suppressed, masked):
         ack = replace(ack, state=NORMAL)
     return _follow(ack, masked, now, suppressed)
 
@@ -286,7 +294,7 @@ def unshelve(
         shelved_condition='',
         shelved_state='',
     )
-    quiet = suppressed and level == Level.STALE
+    quiet = _quiet(suppressed, level)
     if RANK[level] > RANK[masked] and level != Level.OK and not quiet:
         held = (
             before in (UNACKNOWLEDGED, ACKNOWLEDGED)

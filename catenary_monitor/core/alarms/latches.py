@@ -78,7 +78,12 @@ own tension alone went stale after it reported, is ``suppressed``: its message s
 (``blind: no depth received yet (suppressed by design: alarm on sensors)``), its alarm is not
 active (:mod:`catenary_monitor.core.alarms.acknowledge`) and its changes into and out of that
 STALE are not announced (:attr:`Transition.suppressed`): the one ``sensors`` alarm reports the
-cause (:func:`catenary_monitor.core.rules.health.sensors_status`).
+cause (:func:`catenary_monitor.core.rules.health.sensors_status`). Likewise a line at WARN
+whose warnings are all of :data:`CONSEQUENT` (the margins a shifted load brings about) while
+another line is suspected parted (:attr:`AlarmInputs.parted_other`), having left OK within
+``parted_consequence_window`` after that line became so (:attr:`AlarmState.parted_since`): the
+parted line's ERROR reports the cause, the message begins with it
+(:func:`consequence_text`). An ERROR is never suppressed.
 
 Level: ERROR if an ERROR latch is up, else STALE if stale, else WARN if a warning latch is up,
 else OK. **ERROR outranks STALE** (a sensor dropout must not hide a lifted anchor) although
@@ -116,6 +121,8 @@ __all__ = [
     'diagnostic_values',
     'quiet_change',
     'SUPPRESSED_NOTE',
+    'CONSEQUENT',
+    'consequence_text',
     'VIEW_TEXT',
     'uplift_seen',
 ]
@@ -138,6 +145,13 @@ _MARGINS = (
     'drag_margin',
 )
 _LIMITS = {'time_to_uplift': 'uplift_time'}  # parameter prefix where it is not the name
+#: The warnings a parted chain elsewhere on the dock brings about (the load shifted onto the
+#: lines left): raised within ``parted_consequence_window`` of the part, its consequence.
+CONSEQUENT = _MARGINS + ('uplift_possible',)
+_NOT_CONSEQUENT_AT = tuple(
+    i for i, c in enumerate(CONDITIONS) if c in _WARNS and c not in CONSEQUENT
+)
+_WARN_RANK = RANK[Level.WARN]  # entered[_WARN_RANK]: when the line last left OK
 _HOLD, _BREACH, _CLEAR = 0, 1, 2  # classification of one update for one condition
 
 
@@ -187,6 +201,7 @@ class AlarmInputs:
     channel_states: float = math.nan  # their states (core.rules.channels code; NaN: one channel)
     span: float = math.nan  # m, the span the line was solved at (for the dragging message)
     silent_group: float = 0.0  # 1: silent with other inputs (core.rules.health.common_cause)
+    parted_other: float = math.nan  # another line suspected parted: its index; NaN none
 
 
 class Latch(NamedTuple):
@@ -208,8 +223,9 @@ class AlarmState:
     latches: tuple[Latch, ...] = (Latch(),) * len(CONDITIONS)
     entered: tuple[float, ...] = (math.nan,) * 4  # s, when each severity rank was last entered
     input_message: str = ''  # last impossible-input sentence, while its alarm holds
-    suppressed: bool = True  # STALE only by a common cause (suppressed by design)
+    suppressed: bool = True  # STALE by a common cause, WARN by a part (suppressed by design)
     stale: bool = True  # an input stale or never received (the level may still be ERROR)
+    parted_since: float = math.nan  # s, since when another line is suspected parted; NaN not
 
 
 class Transition(NamedTuple):
@@ -229,12 +245,19 @@ class Transition(NamedTuple):
 SUPPRESSED_NOTE = ' (suppressed by design: alarm on sensors)'
 
 
+def consequence_text(message: str, peer: str) -> str:
+    """The message of a warning suppressed as ``peer``'s parted chain's consequence: the cause
+    first, so that the headline keeps it."""
+    return f'consequence of {peer}\'s parted chain (suppressed by design): {message}'
+
+
 def quiet_change(old: Level, old_suppressed: bool, new: Level, new_suppressed: bool) -> bool:
-    """Whether a level change is not announced: into a STALE suppressed by design, or out of
-    one back to OK (the common cause's own alarm announces both)."""
-    if new == Level.STALE:
+    """Whether a level change is not announced: into a STALE or WARN suppressed by design
+    (blind inputs' common cause, a parted chain's consequence), or out of one back to OK (the
+    cause's own alarm announces both)."""
+    if new in (Level.STALE, Level.WARN):
         return new_suppressed
-    return new == Level.OK and old == Level.STALE and old_suppressed
+    return new == Level.OK and old in (Level.STALE, Level.WARN) and old_suppressed
 
 
 def _blind_text(message: str, suppressed: bool) -> str:
@@ -260,10 +283,13 @@ class LineAlarm:
     min_channels: int = 1
     name: str = ''  # the line's (for the wrong-units message)
     tension_scale: float = 1.0  # its tension_scale (the wrong-units message)
+    peers: tuple[str, ...] = ()  # the dock's line names, by index (a consequence's message)
 
     @classmethod
-    def for_line(cls, line: LineConfig, config: AlarmConfig) -> LineAlarm:
-        """Rules for ``line`` under ``config``."""
+    def for_line(
+        cls, line: LineConfig, config: AlarmConfig, peers: tuple[str, ...] = ()
+    ) -> LineAlarm:
+        """Rules for ``line`` under ``config``; ``peers``: the dock's line names."""
         return cls(
             config,
             line.allowed_uplift,
@@ -272,7 +298,13 @@ class LineAlarm:
             int(line.min_channels),
             line.name,
             line.tension_scale,
+            peers,
         )
+
+    def peer(self, index: float) -> str:
+        """The name of the dock's line ``index`` (``another line`` when unknown)."""
+        k = int(index) if index == index else -1
+        return self.peers[k] if 0 <= k < len(self.peers) else 'another line'
 
     def blind(self, healthy: float) -> bool:
         """Fewer healthy channels than ``min_channels`` (a line of several channels)."""
@@ -341,16 +373,28 @@ class LineAlarm:
         level = _combine(active, stale)
         own = stale_t and inputs.tension_stamp == inputs.tension_stamp
         own = own and inputs.silent_group != 1.0
-        suppressed = level == Level.STALE and not own
-        if stale or any(active):
-            message = _blind_text(
-                self._message(active, inputs, now, stale_t, stale_d, input_message), suppressed
-            )
-        else:  # nothing up, nothing stale (so not blind): what _message says then
-            message = 'OK'
-        entered, events = state.entered, []
+        entered, duration = state.entered, None
         if level != state.level:
             entered, duration = _episode(entered, state.level, level, now)
+        parted = inputs.parted_other == inputs.parted_other
+        since = (state.parted_since if state.parted_since == state.parted_since else now)
+        since = since if parted else math.nan
+        consequence = (
+            parted
+            and level == Level.WARN
+            and not any(active[i] for i in _NOT_CONSEQUENT_AT)
+            and since <= entered[_WARN_RANK] <= since + self.config.parted_consequence_window
+        )
+        suppressed = (level == Level.STALE and not own) or consequence
+        if stale or any(active):
+            message = self._message(active, inputs, now, stale_t, stale_d, input_message)
+            message = _blind_text(message, level == Level.STALE and suppressed)
+            if consequence:
+                message = consequence_text(message, self.peer(inputs.parted_other))
+        else:  # nothing up, nothing stale (so not blind): what _message says then
+            message = 'OK'
+        events = []
+        if level != state.level:
             quiet = quiet_change(state.level, state.suppressed, level, suppressed)
             events.append(Transition(now, state.level, level, message, duration, quiet))
         new = AlarmState(
@@ -361,6 +405,7 @@ class LineAlarm:
             input_message if active[1] else '',
             suppressed,
             stale,
+            since,
         )
         return new, events
 
@@ -798,6 +843,7 @@ _INPUT_FIELDS = (
     'channel_states',
     'span',
     'silent_group',
+    'parted_other',
 )
 
 
@@ -882,14 +928,38 @@ class LevelSeries:
         np.copyto(levels, np.int8(Level.ERROR), where=err)
         self.levels = levels
         own = stale_t & ~np.isnan(x['tension_stamp']) & (x['silent_group'] != 1.0)
-        #: Per update: STALE only by a common cause (suppressed by design).
-        self.suppressed = (levels == Level.STALE) & ~own
+        self._since = _parted_since(times, x['parted_other'], initial.parted_since)
+        #: Per update: a warning suppressed as another line's parted chain's consequence.
+        self.consequence = self._consequences(alarm, levels, active)
+        #: Per update: STALE only by a common cause, or a parted chain's consequence
+        #: (suppressed by design).
+        self.suppressed = ((levels == Level.STALE) & ~own) | self.consequence
         #: Per update: an input stale or never received.
         self.stale = stale_t | stale_d
         self._bad: np.ndarray | None = None  # updates with a solver status, when first asked
         #: The updates at which the level changed (one per transition, in order).
         self.changed_at = np.zeros(0, np.int64)
         self.transitions, self._entered = self._walk()
+
+    def _consequences(
+        self, alarm: LineAlarm, levels: np.ndarray, active: dict[str, np.ndarray]
+    ) -> np.ndarray:
+        """Per update: the line's warning is a parted chain's consequence (as
+        :meth:`LineAlarm.update` decides it)."""
+        n, since = levels.size, self._since
+        warn = (levels == Level.WARN) & ~np.isnan(since)
+        if not warn.any():
+            return warn
+        for i in _NOT_CONSEQUENT_AT:
+            warn &= ~active[CONDITIONS[i]]
+        before = np.empty(n, levels.dtype)
+        before[0] = self._initial.level
+        before[1:] = levels[:-1]
+        left = (before == Level.OK) & (levels != Level.OK)
+        idx = np.maximum.accumulate(np.where(left, np.arange(n), -1))
+        began = np.where(idx >= 0, self.times[np.maximum(idx, 0)], self._initial.entered[1])
+        window = alarm.config.parted_consequence_window
+        return warn & (since <= began) & (began <= since + window)
 
     def _held(self, i: int) -> str:
         """The impossible-input sentence the input alarm holds after update ``i``."""
@@ -938,7 +1008,9 @@ class LevelSeries:
             bool(self._stale_d[i]),
             self._held(i),
         )
-        return _blind_text(text, bool(self.suppressed[i]))
+        if self.consequence[i]:
+            return consequence_text(text, self.alarm.peer(floats['parted_other']))
+        return _blind_text(text, bool(self.suppressed[i]) and self.levels[i] == Level.STALE)
 
     def _walk(self) -> tuple[list[Transition], tuple[float, ...]]:
         """Transitions (with messages and episode durations) from the initial state."""
@@ -970,7 +1042,29 @@ class LevelSeries:
             input_message=held,
             suppressed=bool(self.suppressed[-1]),
             stale=bool(self.stale[-1]),
+            parted_since=_nan_or(float(self._since[-1])),
         )
+
+
+def _nan_or(value: float) -> float:
+    """``value``, or :data:`math.nan` itself for a NaN (states compare equal field by field)."""
+    return value if value == value else math.nan
+
+
+def _parted_since(times: np.ndarray, other: np.ndarray, before: float) -> np.ndarray:
+    """Per update: since when another line is suspected parted [s] (the start of the run of
+    updates with ``other`` known, ``before`` when the first run continues one); NaN none."""
+    n = times.size
+    parted = ~np.isnan(other)
+    if not parted.any():
+        return np.full(n, math.nan)
+    was = np.empty(n, bool)
+    was[0] = before == before
+    was[1:] = parted[:-1]
+    start = parted & ~was
+    idx = np.maximum.accumulate(np.where(start, np.arange(n), -1))
+    since = np.where(idx >= 0, times[np.maximum(idx, 0)], before)
+    return np.where(parted, since, math.nan)
 
 
 def replay_levels(

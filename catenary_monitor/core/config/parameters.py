@@ -1141,6 +1141,19 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         60.0,
     ),
     ParamSpec(
+        'parted_consequence_window',
+        'double',
+        300.0,
+        'A margin warning (anchor, tide, load, safety factor, time to uplift, uplift possible, '
+        'drag margin) of another line raised within this after a line\'s chain is suspected '
+        'parted is that part\'s consequence (the load shifted onto the lines left): shown, '
+        'suppressed by design while the part stands, not annunciated; ERRORs (uplift, over '
+        'MBL) always annunciate (0: none)',
+        's',
+        0.0,
+        86400.0,
+    ),
+    ParamSpec(
         'diagnostic_rate',
         'double',
         1.0,
@@ -1722,6 +1735,7 @@ class AlarmConfig:
     tension_timeout: float = _default('tension_timeout')
     depth_timeout: float = _default('depth_timeout')
     common_cause_window: float = _default('common_cause_window')
+    parted_consequence_window: float = _default('parted_consequence_window')
     diagnostic_rate: float = _default('diagnostic_rate')
     shelve_max: float = _default('shelve_max')
     unshelvable_conditions: tuple[str, ...] = _default('unshelvable_conditions')

@@ -210,12 +210,13 @@ class MonitorCore:
         ids = hardware_ids or {}
         start = _stamp_s(start_ns)
         self.config = config
+        peers = tuple(lc.name for lc in config.lines)
         lines = [
             LineState(
                 lc,
-                LineAlarm.for_line(lc, config.alarm),
+                LineAlarm.for_line(lc, config.alarm, peers),
                 ids.get(lc.name, resolve_topic(lc.tension_topic)),
-                LineAlarm.for_line(lc, config.alarm).initial(start),
+                LineAlarm.for_line(lc, config.alarm, peers).initial(start),
                 ack=alarm_ack.initial(start),
                 fatigue=fatigue_rule.initial(lc.fatigue_damage_initial),
                 fatigue_values=(lc.fatigue_damage_initial, _NAN, _NAN),
@@ -721,8 +722,9 @@ class MonitorCore:
         self.config = config
         self.curves = [fatigue_rule.Curve.of(lc) for lc in config.lines]
         self.rest_table = plausible.rest_table(config, config.chart)
+        peers = tuple(lc.name for lc in config.lines)
         for line, lc in zip(self.state.lines, config.lines):
-            line.config, line.alarm = lc, LineAlarm.for_line(lc, config.alarm)
+            line.config, line.alarm = lc, LineAlarm.for_line(lc, config.alarm, peers)
         self.dock_model = DockModel.from_config(config) if config.has_dock_model else None
         if self.dock_model is None:  # no dock estimate: the installed spans
             for line in self.state.lines:
@@ -1020,6 +1022,8 @@ class MonitorCore:
         now = _stamp_s(stamp_ns)
         chatter = self._chatter()
         changes = []
+        codes = np.array([[line.sensor_code for line in self.state.lines]])
+        parted = sensor_state.parted_others(codes)[0].tolist()
         for k in which:
             line = self.state.lines[k]
             line.state, events = line.alarm.update(
@@ -1031,6 +1035,7 @@ class MonitorCore:
                     bool(self.config.alarm.constituents),
                     self.state.silent_grouped[k],
                     self.state.sensors[0] != Level.OK,
+                    parted[k],
                 ),
                 now,
             )

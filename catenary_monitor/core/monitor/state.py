@@ -230,12 +230,14 @@ class LineState:
         table: bool = False,
         silent_group: bool = False,
         blind: bool = False,
+        parted_other: float = _NAN,
     ) -> AlarmInputs:
         """The alarm inputs of this line now (newest results, stamps, the tide's decision and
         its trend ``rate`` [m/s]; ``table``: the time to uplift is the tide table's;
         ``silent_group``: silent under a common cause at the newest tick; ``blind``: the
         ``sensors`` alarm stands, so the dock estimate's disagreement is its consequence,
-        shown and not this line's alarm: ``inconsistent`` untested)."""
+        shown and not this line's alarm: ``inconsistent`` untested); ``parted_other``: the
+        index of another line suspected parted at the newest tick (NaN none)."""
         v, d = self.values, self.dock
         return AlarmInputs(
             uplift_force=v[5],
@@ -271,6 +273,7 @@ class LineState:
             channel_states=self.channel_values[1],
             span=v[VALUE_INDEX['span']],
             silent_group=1.0 if silent_group else 0.0,
+            parted_other=parted_other,
         )
 
     def read(self, kind: type[LinePart]) -> LinePart:

@@ -96,6 +96,7 @@ __all__ = [
     'samples',
     'parted_pattern',
     'slack_mask',
+    'parted_others',
     'firm_times',
     'decide_lines',
     'with_units',
@@ -282,6 +283,26 @@ def slack_mask(limits: LineLimits, tension: np.ndarray, depth: np.ndarray) -> np
     h = depth[:, None] + limits.hook_height[None, :]
     with np.errstate(invalid='ignore'):
         return np.isfinite(h) & (h > 0) & (tension <= limits.weight * h)
+
+
+def parted_others(codes: np.ndarray) -> np.ndarray:
+    """Per (tick, line) of line state codes (:func:`decide_lines`): the index of another line
+    suspected parted at that tick (the lowest), NaN none (float)."""
+    codes = np.atleast_2d(codes)
+    ticks, n = codes.shape
+    parted = codes == PARTED
+    out = np.full((ticks, n), math.nan)
+    if not parted.any():
+        return out
+    rows = np.arange(ticks)
+    first = np.argmax(parted, axis=1)
+    rest = parted.copy()
+    rest[rows, first] = False
+    second = np.where(rest.any(axis=1), np.argmax(rest, axis=1), -1)
+    one = parted.any(axis=1)
+    lines = np.arange(n)[None, :]
+    pick = np.where(lines != first[:, None], first[:, None], second[:, None])
+    return np.where(one[:, None] & (pick >= 0), pick.astype(np.float64), math.nan)
 
 
 def firm_times(now: np.ndarray, slack: np.ndarray, before: np.ndarray) -> np.ndarray:

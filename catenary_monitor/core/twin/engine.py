@@ -22,6 +22,7 @@ snapshots :mod:`.snapshots`'.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, Optional
 
@@ -47,7 +48,7 @@ from catenary_monitor.core.monitor.state import (
 )
 from catenary_monitor.core.monitor.status import Change, Snapshot, line_dock_values
 from catenary_monitor.core.monitor.status import depth_word as depth_state_word
-from catenary_monitor.core.rules import channels, wave_window
+from catenary_monitor.core.rules import channels, sensor_state, wave_window
 from catenary_monitor.core.rules import dock_watch as dock_live
 from catenary_monitor.core.rules import fatigue as fatigue_rule
 from catenary_monitor.core.rules.level import Level
@@ -164,6 +165,7 @@ def _line_inputs(
         inputs['mbl'] = line.config.mbl
         grouped = sensors.grouped[:, k].astype(np.float64)
         inputs['silent_group'] = pick(steps.k_idx, grouped, float(sensors.before_grouped[k]))
+        inputs['parted_other'] = _parted_other(sensors, steps, k)
     if dock is not None:
         before_dock = dock.before[2][k]
         columns = dock.decision.line_inputs
@@ -177,6 +179,17 @@ def _line_inputs(
             if masked.any():
                 inputs['inconsistent'] = np.where(masked, np.nan, inputs['inconsistent'])
     return inputs
+
+
+def _parted_other(sensors: SensorColumns, steps: LineSteps, k: int) -> Any:
+    """Per step of line ``k``: the index of another line suspected parted at the newest tick
+    (NaN none), as the core's ``parted_others`` of its lines' codes."""
+    before = sensor_state.parted_others(np.asarray([sensors.before]))[0, k]
+    codes = sensors.codes
+    if before != before and not (codes == sensor_state.PARTED).any():
+        return math.nan  # nobody parted before the window nor at its ticks
+    column = sensor_state.parted_others(codes)[:, k] if len(codes) else np.zeros(0)
+    return pick(steps.k_idx, column, float(before))
 
 
 def _advance_line(
