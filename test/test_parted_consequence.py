@@ -187,3 +187,14 @@ def test_the_twin_equals_the_core_on_a_part_and_its_consequences():
     changes = [c for s in steps for c in s.transitions if c.component == 'line_02']
     assert any(c.transition.suppressed and c.transition.new == Level.WARN for c in changes)
     assert any(not c.transition.suppressed and c.transition.new == Level.ERROR for c in changes)
+
+
+def test_a_tide_or_dock_warning_is_announced_only_its_blind_stale_is_quiet():
+    """The suppression of a line's consequence never reaches the tide's or the dock's status:
+    a WARN (also out of a blind STALE) is announced; into or out of that STALE is not."""
+    from catenary_monitor.core.alarms.latches import blind_quiet
+
+    assert blind_quiet(Level.OK, Level.STALE) and blind_quiet(Level.STALE, Level.OK)
+    assert not blind_quiet(Level.STALE, Level.WARN)
+    assert not blind_quiet(Level.OK, Level.WARN) and not blind_quiet(Level.WARN, Level.OK)
+    assert not blind_quiet(Level.OK, Level.ERROR)

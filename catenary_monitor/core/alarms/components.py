@@ -56,7 +56,8 @@ def initial(levels: Sequence[Level], start: float) -> tuple[AckState, ...]:
 def follow(ack: AckState, name: str, level: Level, now: float) -> AckState:
     """The component ``name``'s alarm after its status moved to ``level`` at ``now`` [s]
     (idempotent at an unchanged level)."""
-    return alarm_ack.step(ack, level, now, suppressed=name in CONSEQUENCES)
+    suppressed = name in CONSEQUENCES and level == Level.STALE  # a WARN or ERROR never is
+    return alarm_ack.step(ack, level, now, suppressed=suppressed)
 
 
 def view(ack: AckState, name: str, level: Level) -> AckState:

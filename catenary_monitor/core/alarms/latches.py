@@ -120,6 +120,7 @@ __all__ = [
     'replay_levels',
     'diagnostic_values',
     'quiet_change',
+    'blind_quiet',
     'SUPPRESSED_NOTE',
     'CONSEQUENT',
     'consequence_text',
@@ -258,6 +259,12 @@ def quiet_change(old: Level, old_suppressed: bool, new: Level, new_suppressed: b
     if new in (Level.STALE, Level.WARN):
         return new_suppressed
     return new == Level.OK and old in (Level.STALE, Level.WARN) and old_suppressed
+
+
+def blind_quiet(old: Level, new: Level) -> bool:
+    """Whether a change of the tide's or the dock's status is not announced: into its STALE
+    under blind inputs, or out of it back to OK (the ``sensors`` alarm announces both)."""
+    return quiet_change(old, old == Level.STALE, new, new == Level.STALE)
 
 
 def _blind_text(message: str, suppressed: bool) -> str:

@@ -47,7 +47,12 @@ from catenary_monitor.core.alarms.journal import (
     component_entries,
     entries,
 )
-from catenary_monitor.core.alarms.latches import CONDITIONS, LineAlarm, Transition, quiet_change
+from catenary_monitor.core.alarms.latches import (
+    CONDITIONS,
+    LineAlarm,
+    Transition,
+    blind_quiet,
+)
 from catenary_monitor.core.body.dock_model import DockModel
 from catenary_monitor.core.config.parameters import (
     MonitorConfig,
@@ -901,7 +906,7 @@ class MonitorCore:
         entered = getattr(self.state, f'{name}_entered')
         setattr(self.state, f'{name}_entered', now)
         self._follow_component(name, now)
-        quiet = name in _CONSEQUENCES and quiet_change(old[0], True, new[0], True)
+        quiet = name in _CONSEQUENCES and blind_quiet(old[0], new[0])
         return [Change(name, Transition(now, old[0], new[0], new[1], now - entered, quiet))]
 
     def component_level(self, name: str) -> Level:

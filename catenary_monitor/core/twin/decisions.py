@@ -22,7 +22,7 @@ from catenary_monitor.core.alarms.journal import (
     entries,
     raised,
 )
-from catenary_monitor.core.alarms.latches import CONDITIONS, LevelSeries, Transition, quiet_change
+from catenary_monitor.core.alarms.latches import CONDITIONS, LevelSeries, Transition, blind_quiet
 from catenary_monitor.core.monitor.monitor_core import (
     MonitorCore,
     channel_limits,
@@ -357,7 +357,7 @@ def decide_tide(
     for i in level_changes(level, old).tolist():
         new = tide_status_at(core, tide, i)
         t = float(now[i])
-        quiet = quiet_change(old, True, new[0], True)
+        quiet = blind_quiet(old, new[0])
         transitions.append(Transition(t, old, new[0], new[1], t - entered, quiet))
         old, entered = new[0], t
     return tide, transitions
@@ -502,7 +502,7 @@ def _component_series(
     """The component ``name``'s alarm stepped at each of its decisions (as the core steps it
     at its level changes: idempotent elsewhere)."""
     before = core.component_ack(name)
-    quiet = np.full(len(levels), name in CONSEQUENCES)
+    quiet = (levels == int(Level.STALE)) & (name in CONSEQUENCES)
     return alarm_ack.replay_acks(before, times_ns * 1e-9, levels, quiet)
 
 
@@ -569,7 +569,7 @@ def decide_dock_window(
         new = Level(int(levels[i]))
         t = float(now[i])
         message = dock_live.dock_message(model, decision, i)
-        quiet = quiet_change(old, True, new, True)
+        quiet = blind_quiet(old, new)
         transitions.append(Transition(t, old, new, message, t - entered, quiet))
         old, entered = new, t
     status = (Level(int(levels[-1])), dock_live.dock_message(model, decision, n - 1))
