@@ -70,6 +70,9 @@ from catenary_monitor.replay.driver import (
 
 __all__ = ['register', 'cmd_replay']
 
+#: ``--line-processes`` by default (where two CPUs are usable; docs/benchmarks.md).
+LINE_PROCESSES = 2
+
 
 class Progress:
     """Stage progress on stderr for long logs (cli.status_line: in place on a terminal)."""
@@ -259,6 +262,7 @@ def _stream_outputs(
     """Stream the replay into the outputs; a log that cannot be streamed is replayed again
     as one window (one line on stderr says so)."""
     from catenary_monitor.replay.driver import WINDOW_MESSAGES
+    from catenary_monitor.replay.outputs import SUMMARY_VALUES
 
     # --out builds every diagnostic snapshot: about 2.5 times the memory per message
     window: Optional[int] = args.window_messages or (
@@ -284,6 +288,8 @@ def _stream_outputs(
         jobs=args.jobs,
         progress=progress.stream,
         on_restart=restart,
+        line_processes=LINE_PROCESSES if args.line_processes is None else args.line_processes,
+        value_keys=None if args.csv or args.plot else SUMMARY_VALUES,
     )
     assert isinstance(sinks, _Sinks)
     return sinks, state, report
@@ -510,6 +516,15 @@ def register(sub: Any) -> None:
         metavar='N',
         help='decode the files of a rotated set or directory in N processes (the alarm '
         'logic stays serial: results are those of a serial run; default 1)',
+    )
+    p.add_argument(
+        '--line-processes',
+        type=count_arg,
+        default=None,
+        metavar='N',
+        help='recompute the lines of each window in N processes (1 or 2: a worker process '
+        'takes half of the lines; results are those of one process; default '
+        f'{LINE_PROCESSES} where two CPUs are usable and without --out or --jobs, else 1)',
     )
     p.add_argument(
         '--window-messages',

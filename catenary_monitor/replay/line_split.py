@@ -1,0 +1,190 @@
+"""A replay window's lines recomputed in two processes: :class:`LineSplit`.
+
+The window-wide decisions (sensors, tide, blind inputs, dock) are made once, in the replay's
+process; a worker process forked before the log is read runs some of the lines
+(:func:`catenary_monitor.core.twin.engine.advance_lines`) while this process runs the others,
+on the same core: the core after the decisions, the window and the decisions go over a socket
+(pickled, the arrays' bytes out of band), each worker line's outputs and its state's four
+parts (``LineState.read``) come back and are written through the twin's door
+(``line.take``). Each line's pass reads the core and writes only its line's state, so the
+results are those of one process, byte for byte.
+
+What comes back is what a summary and the alarm journal read: a line's results with the
+values ``value_keys`` names (None: every one), its level series without inputs, its steps'
+times. Only without snapshots (``advance`` runs the lines itself with them).
+
+The worker ignores SIGINT (the replay's process decides), exits on its socket's end of file
+(the replay's process closed it, or died), and is killed and reaped by :meth:`LineSplit.close`
+on an error or an interrupt: no process outlives the replay.
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+import signal
+import socket
+import struct
+import traceback
+from typing import Any, Collection, Optional
+
+import numpy as np
+
+from catenary_monitor.core.monitor.monitor_core import MonitorCore
+from catenary_monitor.core.monitor.state import (
+    LineAlarmPart,
+    LineInputPart,
+    LineRulesPart,
+    LineSolvePart,
+)
+from catenary_monitor.core.physics import fused_kernel
+from catenary_monitor.core.twin.engine import LineContext, LineOutput, advance_lines
+from catenary_monitor.core.twin.schedule import LineSteps
+from catenary_monitor.core.twin.window import Window
+
+__all__ = ['LineSplit', 'LineSplitError', 'usable_cpus', 'worker_lines']
+
+_PARTS = (LineInputPart, LineSolvePart, LineRulesPart, LineAlarmPart)
+_HEAD = struct.Struct('<QQ')
+
+
+class LineSplitError(RuntimeError):
+    """The worker process failed (its traceback), or went away."""
+
+
+def usable_cpus() -> int:
+    """The CPUs this process may run on (``os.sched_getaffinity``; else ``os.cpu_count``)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def worker_lines(lines: int) -> int:
+    """How many of ``lines`` the worker takes: a little more than half (this process also
+    makes the window-wide decisions and hands the results on)."""
+    return (lines + 1) // 2 if lines > 1 else 0
+
+
+def _send(sock: socket.socket, obj: Any) -> None:
+    buffers: list[pickle.PickleBuffer] = []
+    head = pickle.dumps(obj, 5, buffer_callback=buffers.append)
+    raws = [b.raw() for b in buffers]
+    sizes = [r.nbytes for r in raws]
+    sock.sendall(_HEAD.pack(len(head), len(sizes)) + struct.pack(f'<{len(sizes)}Q', *sizes))
+    sock.sendall(head)
+    for raw in raws:
+        sock.sendall(raw)
+
+
+def _exactly(sock: socket.socket, n: int) -> bytearray:
+    out = bytearray(n)
+    view = memoryview(out)
+    got = 0
+    while got < n:
+        k = sock.recv_into(view[got:], n - got)
+        if not k:
+            raise EOFError
+        got += k
+    return out
+
+
+def _recv(sock: socket.socket) -> Any:
+    size, count = _HEAD.unpack(_exactly(sock, _HEAD.size))
+    sizes = struct.unpack(f'<{count}Q', _exactly(sock, 8 * count))
+    head = _exactly(sock, size)
+    return pickle.loads(head, buffers=[_exactly(sock, n) for n in sizes])
+
+
+def _lean(out: LineOutput) -> LineOutput:
+    """What the replay's process reads of a line's outputs without snapshots."""
+    r, s, st, a, d = out
+    empty = np.zeros(0, np.int64)
+    steps = LineSteps(st.times, *([empty] * 7))  # the journal reads the steps' times only
+    return r, s, steps, a, np.zeros(0)
+
+
+def _serve(sock: socket.socket) -> None:
+    """The worker's loop: a window's lines per request, until end of file."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    fused_kernel.set_threads(1)
+    while True:
+        try:
+            core, window, context, ks, value_keys = _recv(sock)
+        except EOFError:
+            return
+        try:
+            outs = [  # one line's whole results at a time
+                _lean(advance_lines(core, window, context, [k], False, value_keys)[0])
+                for k in ks
+            ]
+            parts = [[core.state.lines[k].read(p) for p in _PARTS] for k in ks]
+            reply: Any = ('ok', outs, parts)
+        except Exception:
+            reply = ('error', traceback.format_exc())
+        _send(sock, reply)
+
+
+class LineSplit:
+    """The lines of each window in two processes (a :data:`~.engine.LineRunner`): the last
+    ``remote`` of ``lines`` in a worker forked now (before any thread of the replay starts),
+    the others here. :meth:`close` ends the worker (``with`` closes it too)."""
+
+    def __init__(
+        self, lines: int, remote: int, value_keys: Optional[Collection[str]] = None
+    ) -> None:
+        self.local = list(range(lines - remote))
+        self.remote = list(range(lines - remote, lines))
+        self.value_keys = None if value_keys is None else frozenset(value_keys)
+        mine, theirs = socket.socketpair()
+        pid = os.fork()
+        if pid == 0:  # the worker: never returns into the caller's code
+            code = 0
+            try:
+                mine.close()
+                _serve(theirs)
+            except BaseException:
+                code = 1
+            finally:
+                os._exit(code)
+        theirs.close()
+        self.sock: Optional[socket.socket] = mine
+        self.pid: Optional[int] = pid
+
+    def __call__(self, core: MonitorCore, window: Window, context: LineContext) -> list[Any]:
+        if self.sock is None:
+            raise LineSplitError('the line worker was closed')
+        try:
+            _send(self.sock, (core, window, context, self.remote, self.value_keys))
+            local = advance_lines(core, window, context, self.local, False, self.value_keys)
+            reply = _recv(self.sock)
+        except (EOFError, OSError) as err:
+            raise LineSplitError(f'the line worker went away ({err!r})') from err
+        if reply[0] != 'ok':
+            raise LineSplitError(f'the line worker failed:\n{reply[1]}')
+        _, outs, parts = reply
+        for k, line_parts in zip(self.remote, parts):
+            for part in line_parts:
+                core.state.lines[k].take(part)
+        return local + outs
+
+    def close(self, kill: bool = False) -> None:
+        """End the worker: its socket closed (it exits at end of file), killed first when
+        ``kill`` (an error or an interrupt here: it may be mid-window), then reaped."""
+        if self.sock is not None:
+            self.sock.close()
+            self.sock = None
+        if self.pid is not None:
+            pid, self.pid = self.pid, None
+            if kill:
+                try:
+                    os.kill(pid, signal.SIGKILL)
+                except ProcessLookupError:
+                    pass
+            os.waitpid(pid, 0)
+
+    def __enter__(self) -> 'LineSplit':
+        return self
+
+    def __exit__(self, kind: Any, *rest: Any) -> None:
+        self.close(kill=kind is not None)
