@@ -70,9 +70,6 @@ from catenary_monitor.replay.driver import (
 
 __all__ = ['register', 'cmd_replay']
 
-#: ``--line-processes`` by default (where two CPUs are usable; docs/benchmarks.md).
-LINE_PROCESSES = 2
-
 
 class Progress:
     """Stage progress on stderr for long logs (cli.status_line: in place on a terminal)."""
@@ -262,6 +259,7 @@ def _stream_outputs(
     """Stream the replay into the outputs; a log that cannot be streamed is replayed again
     as one window (one line on stderr says so)."""
     from catenary_monitor.replay.driver import WINDOW_MESSAGES
+    from catenary_monitor.replay.line_split import default_processes
     from catenary_monitor.replay.outputs import SUMMARY_VALUES
 
     # --out builds every diagnostic snapshot: about 2.5 times the memory per message
@@ -288,7 +286,7 @@ def _stream_outputs(
         jobs=args.jobs,
         progress=progress.stream,
         on_restart=restart,
-        line_processes=LINE_PROCESSES if args.line_processes is None else args.line_processes,
+        line_processes=args.line_processes or default_processes(),
         value_keys=None if args.csv or args.plot else SUMMARY_VALUES,
     )
     assert isinstance(sinks, _Sinks)
@@ -523,8 +521,9 @@ def register(sub: Any) -> None:
         default=None,
         metavar='N',
         help='recompute the lines of each window in N processes (1 or 2: a worker process '
-        'takes half of the lines; results are those of one process; default '
-        f'{LINE_PROCESSES} where two CPUs are usable and without --out or --jobs, else 1)',
+        'takes 7 of 12 lines; the results are those of one process; not with --out or '
+        '--jobs; default 2 where two CPUs are usable and the load average leaves one idle, '
+        'else 1)',
     )
     p.add_argument(
         '--window-messages',

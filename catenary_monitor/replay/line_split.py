@@ -20,6 +20,7 @@ on an error or an interrupt: no process outlives the replay.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import pickle
 import signal
@@ -42,7 +43,7 @@ from catenary_monitor.core.twin.engine import LineContext, LineOutput, advance_l
 from catenary_monitor.core.twin.schedule import LineSteps
 from catenary_monitor.core.twin.window import Window
 
-__all__ = ['LineSplit', 'LineSplitError', 'usable_cpus', 'worker_lines']
+__all__ = ['LineSplit', 'LineSplitError', 'default_processes', 'usable_cpus', 'worker_lines']
 
 _PARTS = (LineInputPart, LineSolvePart, LineRulesPart, LineAlarmPart)
 _HEAD = struct.Struct('<QQ')
@@ -61,9 +62,23 @@ def usable_cpus() -> int:
 
 
 def worker_lines(lines: int) -> int:
-    """How many of ``lines`` the worker takes: a little more than half (this process also
-    makes the window-wide decisions and hands the results on)."""
-    return (lines + 1) // 2 if lines > 1 else 0
+    """How many of ``lines`` the worker takes: 7 of 12 (this process also makes the
+    window-wide decisions and hands the results on; its read-ahead thread runs beside the
+    worker: docs/benchmarks.md)."""
+    return (7 * lines + 6) // 12 if lines > 1 else 0
+
+
+def default_processes() -> int:
+    """Replay's line processes by default: 2 where two CPUs are usable and the machine's
+    load leaves one idle (the 1-minute load average at most the usable CPUs less one), else 1:
+    on two busy cores the worker's share of the CPU is taken from the others and the split
+    costs more than it saves (docs/benchmarks.md)."""
+    cpus = usable_cpus()
+    try:
+        load = os.getloadavg()[0]
+    except (AttributeError, OSError):  # not on this system: do not guess the machine is idle
+        return 1
+    return 2 if cpus >= 2 and load <= cpus - 1 else 1
 
 
 def _send(sock: socket.socket, obj: Any) -> None:
@@ -102,6 +117,26 @@ def _lean(out: LineOutput) -> LineOutput:
     empty = np.zeros(0, np.int64)
     steps = LineSteps(st.times, *([empty] * 7))  # the journal reads the steps' times only
     return r, s, steps, a, np.zeros(0)
+
+
+def _only(window: Window, ks: Collection[int]) -> Window:
+    """The window with the columns of lines ``ks`` only (a line's pass reads its own columns,
+    the depth's and the ticks): the others empty, as if they had no sample."""
+    keep = set(ks)
+    none = (np.zeros(0, np.int64), np.zeros(0))
+
+    def mine(columns: Optional[list[Any]]) -> Optional[list[Any]]:
+        if columns is None:
+            return None
+        return [c if k in keep else None for k, c in enumerate(columns)]
+
+    return dataclasses.replace(
+        window,
+        tensions=[c if k in keep else none for k, c in enumerate(window.tensions)],
+        tension_stamps=mine(window.tension_stamps),
+        channels=mine(window.channels),
+        channel_values={k: v for k, v in window.channel_values.items() if k in keep},
+    )
 
 
 def _serve(sock: socket.socket) -> None:
@@ -155,7 +190,8 @@ class LineSplit:
         if self.sock is None:
             raise LineSplitError('the line worker was closed')
         try:
-            _send(self.sock, (core, window, context, self.remote, self.value_keys))
+            job = (core, _only(window, self.remote), context, self.remote, self.value_keys)
+            _send(self.sock, job)
             local = advance_lines(core, window, context, self.local, False, self.value_keys)
             reply = _recv(self.sock)
         except (EOFError, OSError) as err:
