@@ -480,7 +480,7 @@ def run_log(
                 extra.append(step.snapshot)
         lo = hi
     _keep_marks(core, marks, events)
-    lines = [concat_lines([p.lines[k] for p in pieces]) for k in range(len(core.state.lines))]
+    joined = [concat_lines([p.lines[k] for p in pieces]) for k in range(len(core.state.lines))]
     tide = [tr for p in pieces for tr in p.tide]
     others = sorted(
         others + [c for p in pieces for c in p.others], key=lambda c: c.transition.time
@@ -490,7 +490,7 @@ def run_log(
         snaps.sort(key=lambda s: s.stamp_ns)  # type: ignore[union-attr]
     return (
         WindowResult(
-            lines,
+            joined,
             tide,
             snaps,
             min(p.start_ns for p in pieces),
