@@ -68,9 +68,10 @@ def _replay(log, tmp, capsys, processes, *extra):
     return summary
 
 
-def _no_child_left() -> None:
+def _reaped(pid: int) -> None:
+    """The worker ``pid`` was reaped (no child of that id is left, running or a zombie)."""
     with pytest.raises(ChildProcessError):
-        os.waitpid(-1, os.WNOHANG)
+        os.waitpid(pid, os.WNOHANG)
 
 
 @pytest.mark.parametrize('csv', [False, True])
@@ -88,7 +89,7 @@ def test_two_processes_give_one_process_bytes(log, tmp_path, capsys, monkeypatch
     assert two == one
     if csv:
         assert (tmp_path / 'b.csv').read_bytes() == a
-    _no_child_left()
+    _reaped(two_cpus[0])
 
 
 def test_one_process_where_two_are_not_to_be_had(log, monkeypatch):
@@ -124,7 +125,7 @@ def test_a_failing_worker_is_reaped(log, tmp_path, monkeypatch, two_cpus):
             line_processes=2,
         )
     assert len(two_cpus) == 1
-    _no_child_left()
+    _reaped(two_cpus[0])
 
 
 def test_an_interrupt_here_kills_and_reaps_the_worker(log, monkeypatch, two_cpus):
@@ -146,7 +147,7 @@ def test_an_interrupt_here_kills_and_reaps_the_worker(log, monkeypatch, two_cpus
             line_processes=2,
         )  # fmt: skip
     assert len(two_cpus) == 1
-    _no_child_left()
+    _reaped(two_cpus[0])
 
 
 _SLOW = textwrap.dedent(
