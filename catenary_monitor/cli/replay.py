@@ -267,6 +267,10 @@ def _stream_outputs(
         WINDOW_MESSAGES // 2 if args.out else WINDOW_MESSAGES
     )
 
+    # two line processes by default for a summary only: with --csv every value of the worker's
+    # lines comes back (3e6 log: 252 MiB summed, slower; docs/benchmarks.md)
+    summary_only = not (args.csv or args.plot or args.out)
+
     def restart(why: str) -> None:
         if not args.quiet:
             print(
@@ -286,8 +290,8 @@ def _stream_outputs(
         jobs=args.jobs,
         progress=progress.stream,
         on_restart=restart,
-        line_processes=args.line_processes or default_processes(),
-        value_keys=None if args.csv or args.plot else SUMMARY_VALUES,
+        line_processes=args.line_processes or (default_processes() if summary_only else 1),
+        value_keys=SUMMARY_VALUES if summary_only else None,
     )
     assert isinstance(sinks, _Sinks)
     return sinks, state, report
@@ -522,8 +526,8 @@ def register(sub: Any) -> None:
         metavar='N',
         help='recompute the lines of each window in N processes (1 or 2: a worker process '
         'takes 7 of 12 lines; the results are those of one process; not with --out or '
-        '--jobs; default 2 where two CPUs are usable and the load average leaves one idle, '
-        'else 1)',
+        '--jobs; default for a summary alone, without --csv or --plot: 2 where two CPUs are '
+        'usable and the load average leaves one idle, else 1)',
     )
     p.add_argument(
         '--window-messages',
