@@ -276,9 +276,11 @@ def run(
     repeat: int = 3,
     measure_rss: bool = True,
     measure_mcap: bool = True,
+    line_processes: Optional[int] = None,
 ) -> dict[str, Any]:
     """Generate the log, time replay and the two baselines (``repeat`` interleaved rounds, the
-    median of each) and the MCAP output; returns the figures."""
+    median of each) and the MCAP output; returns the figures. ``line_processes``: the
+    summary's child command's ``--line-processes`` (None: the command's default)."""
 
     config = dock_config()
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:
@@ -316,7 +318,9 @@ def run(
                 _, written = _streamed(log, config, mcap=f)
             out_bytes = (Path(tmp) / 'out.mcap').stat().st_size
         t3 = time.perf_counter()
-        rss = peak_rss(log, config, Path(tmp)) if measure_rss else {}
+        rss = {}
+        if measure_rss:
+            rss = peak_rss(log, config, Path(tmp), line_processes=line_processes)
         updates = sum(t.updates for t in tally.lines)
         transitions = sum(len(t.transitions) for t in tally.lines)
     n = facts['messages']
@@ -403,10 +407,13 @@ def peak_rss(
     tmp: Path,
     extra: tuple[str, ...] = (),
     modes: tuple[str, ...] = ('summary', 'csv', 'out'),
+    line_processes: Optional[int] = None,
 ) -> dict[str, Any]:
     """Peak RSS (MB) and wall time (s) of ``catenary-monitor replay`` in a child process, for
     the summary only, ``--csv`` and ``--out``: the child's ``VmHWM`` (Linux), which starts
-    afresh at ``exec`` (``ru_maxrss`` of a forked child keeps the parent's high-water mark)."""
+    afresh at ``exec`` (``ru_maxrss`` of a forked child keeps the parent's high-water mark),
+    and the RSS of the child and its line worker summed (polled). ``line_processes``: the
+    summary's ``--line-processes`` (None: the command's default)."""
     import subprocess
 
     params = tmp / 'bench_params.yaml'
@@ -414,7 +421,7 @@ def peak_rss(
     logs = [str(p) for p in (logs if isinstance(logs, (list, tuple)) else [logs])]
     out: dict[str, Any] = {}
     for mode, args in (
-        ('summary', []),
+        ('summary', [] if line_processes is None else ['--line-processes', str(line_processes)]),
         ('csv', ['--csv', str(tmp / 'rss.csv')]),
         ('out', ['--out', str(tmp / 'rss.mcap')]),
     ):
@@ -509,6 +516,7 @@ def cmd_bench_replay(args: argparse.Namespace) -> int:
         args.repeat,
         not args.no_rss,
         not args.no_mcap,
+        args.line_processes,
     )
     if args.json:
         print(json.dumps(r))
@@ -611,6 +619,14 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         '--no-mcap', action='store_true', help='skip the MCAP output (slow: every snapshot)'
+    )
+    p.add_argument(
+        '--line-processes',
+        type=int,
+        default=None,
+        metavar='N',
+        help="the summary's peak-RSS run with replay --line-processes N (default: the "
+        "command's own default)",
     )
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench_replay)
