@@ -128,6 +128,27 @@ def test_a_failing_worker_is_reaped(log, tmp_path, monkeypatch, two_cpus):
     _reaped(two_cpus[0])
 
 
+def test_a_worker_killed_midway_its_lines_go_on_here(log, tmp_path, capsys, monkeypatch, two_cpus):
+    monkeypatch.setattr(mcap_scan, '_BATCH_BYTES', 1)  # windows end anywhere: many of them
+    one = _replay(log, tmp_path, capsys, 1)
+    parent = os.getpid()
+    real = line_split.advance_lines
+    calls = []
+
+    def kills_the_worker(*a, **k):
+        if os.getpid() == parent:
+            calls.append(1)
+            if len(calls) == 4:  # while the worker has its lines of this window
+                os.kill(two_cpus[-1], signal.SIGKILL)
+        return real(*a, **k)
+
+    monkeypatch.setattr(line_split, 'advance_lines', kills_the_worker)
+    with pytest.warns(RuntimeWarning, match='line worker went away'):
+        two = _replay(log, tmp_path, capsys, 2)
+    assert two == one
+    _reaped(two_cpus[-1])
+
+
 def test_an_interrupt_here_kills_and_reaps_the_worker(log, monkeypatch, two_cpus):
     parent = os.getpid()
     real = line_split.advance_lines

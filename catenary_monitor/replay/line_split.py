@@ -15,7 +15,9 @@ times. Only without snapshots (``advance`` runs the lines itself with them).
 
 The worker ignores SIGINT (the replay's process decides), exits on its socket's end of file
 (the replay's process closed it, or died), and is killed and reaped by :meth:`LineSplit.close`
-on an error or an interrupt: no process outlives the replay.
+on an error or an interrupt: no process outlives the replay. A worker that goes away (killed,
+out of memory) is said once (a RuntimeWarning) and its lines run in the replay's process from
+then on, the window it had included: the same results.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ import signal
 import socket
 import struct
 import traceback
+import warnings
 from typing import Any, Collection, Optional
 
 import numpy as np
@@ -47,10 +50,13 @@ __all__ = ['LineSplit', 'LineSplitError', 'default_processes', 'usable_cpus', 'w
 
 _PARTS = (LineInputPart, LineSolvePart, LineRulesPart, LineAlarmPart)
 _HEAD = struct.Struct('<QQ')
+#: A peer gone is an error (EPIPE), not the end of the process: the command line restores
+#: SIGPIPE's default action (``... | head``).
+_FLAGS = getattr(socket, 'MSG_NOSIGNAL', 0)
 
 
 class LineSplitError(RuntimeError):
-    """The worker process failed (its traceback), or went away."""
+    """The worker process failed (its traceback)."""
 
 
 def usable_cpus() -> int:
@@ -86,10 +92,11 @@ def _send(sock: socket.socket, obj: Any) -> None:
     head = pickle.dumps(obj, 5, buffer_callback=buffers.append)
     raws = [b.raw() for b in buffers]
     sizes = [r.nbytes for r in raws]
-    sock.sendall(_HEAD.pack(len(head), len(sizes)) + struct.pack(f'<{len(sizes)}Q', *sizes))
-    sock.sendall(head)
+    sizes_bytes = struct.pack(f'<{len(sizes)}Q', *sizes)
+    sock.sendall(_HEAD.pack(len(head), len(sizes)) + sizes_bytes, _FLAGS)
+    sock.sendall(head, _FLAGS)
     for raw in raws:
-        sock.sendall(raw)
+        sock.sendall(raw, _FLAGS)
 
 
 def _exactly(sock: socket.socket, n: int) -> bytearray:
@@ -187,15 +194,18 @@ class LineSplit:
         self.pid: Optional[int] = pid
 
     def __call__(self, core: MonitorCore, window: Window, context: LineContext) -> list[Any]:
-        if self.sock is None:
-            raise LineSplitError('the line worker was closed')
+        if self.sock is None:  # the worker went away: every line here
+            return self._here(core, window, context, self.local + self.remote)
+        job = (core, _only(window, self.remote), context, self.remote, self.value_keys)
         try:
-            job = (core, _only(window, self.remote), context, self.remote, self.value_keys)
             _send(self.sock, job)
-            local = advance_lines(core, window, context, self.local, False, self.value_keys)
+        except OSError as err:
+            return self._alone(err, core, window, context, self.local + self.remote)
+        local = self._here(core, window, context, self.local)
+        try:
             reply = _recv(self.sock)
-        except (EOFError, OSError) as err:
-            raise LineSplitError(f'the line worker went away ({err!r})') from err
+        except (EOFError, OSError) as err:  # its lines' states were not taken: redone here
+            return local + self._alone(err, core, window, context, self.remote)
         if reply[0] != 'ok':
             raise LineSplitError(f'the line worker failed:\n{reply[1]}')
         _, outs, parts = reply
@@ -203,6 +213,30 @@ class LineSplit:
             for part in line_parts:
                 core.state.lines[k].take(part)
         return local + outs
+
+    def _here(
+        self, core: MonitorCore, window: Window, context: LineContext, ks: list[int]
+    ) -> list[Any]:
+        return advance_lines(core, window, context, ks, False, self.value_keys)
+
+    def _alone(
+        self,
+        err: BaseException,
+        core: MonitorCore,
+        window: Window,
+        context: LineContext,
+        ks: list[int],
+    ) -> list[Any]:
+        """The worker went away (killed, out of memory): said once, reaped, and lines ``ks``
+        of this window and every line from now on run here (the results stay the same)."""
+        warnings.warn(
+            f'the replay\'s line worker went away ({err!r}); its lines run in one process '
+            'from now on',
+            RuntimeWarning,
+            stacklevel=2,
+        )
+        self.close(kill=True)
+        return self._here(core, window, context, ks)
 
     def close(self, kill: bool = False) -> None:
         """End the worker: its socket closed (it exits at end of file), killed first when
