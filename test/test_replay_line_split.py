@@ -104,6 +104,11 @@ def test_one_process_where_two_are_not_to_be_had(log, monkeypatch):
     monkeypatch.setattr(line_split, 'usable_cpus', lambda: 2)
     monkeypatch.delattr(os, 'fork')
     assert not driver.split_lines(config, 2)
+    # the command's default: two where a CPU is left idle by the load, else one
+    for load, cpus, want in ((0.3, 2, 2), (0.99, 2, 2), (1.5, 2, 1), (7.0, 2, 1), (0.0, 1, 1)):
+        monkeypatch.setattr(os, 'getloadavg', lambda: (load, load, load))
+        monkeypatch.setattr(line_split, 'usable_cpus', lambda: cpus)
+        assert line_split.default_processes() == want, (load, cpus)
 
 
 def test_a_failing_worker_is_reaped(log, tmp_path, monkeypatch, two_cpus):
