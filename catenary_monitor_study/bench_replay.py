@@ -276,9 +276,11 @@ def run(
     repeat: int = 3,
     measure_rss: bool = True,
     measure_mcap: bool = True,
+    line_processes: Optional[int] = None,
 ) -> dict[str, Any]:
     """Generate the log, time replay and the two baselines (``repeat`` interleaved rounds, the
-    median of each) and the MCAP output; returns the figures."""
+    median of each) and the MCAP output; returns the figures. ``line_processes``: the
+    summary's child command's ``--line-processes`` (None: the command's default)."""
 
     config = dock_config()
     with tempfile.TemporaryDirectory(dir=workdir) as tmp:
@@ -316,7 +318,9 @@ def run(
                 _, written = _streamed(log, config, mcap=f)
             out_bytes = (Path(tmp) / 'out.mcap').stat().st_size
         t3 = time.perf_counter()
-        rss = peak_rss(log, config, Path(tmp)) if measure_rss else {}
+        rss = {}
+        if measure_rss:
+            rss = peak_rss(log, config, Path(tmp), line_processes=line_processes)
         updates = sum(t.updates for t in tally.lines)
         transitions = sum(len(t.transitions) for t in tally.lines)
     n = facts['messages']
@@ -403,10 +407,13 @@ def peak_rss(
     tmp: Path,
     extra: tuple[str, ...] = (),
     modes: tuple[str, ...] = ('summary', 'csv', 'out'),
+    line_processes: Optional[int] = None,
 ) -> dict[str, Any]:
     """Peak RSS (MB) and wall time (s) of ``catenary-monitor replay`` in a child process, for
     the summary only, ``--csv`` and ``--out``: the child's ``VmHWM`` (Linux), which starts
-    afresh at ``exec`` (``ru_maxrss`` of a forked child keeps the parent's high-water mark)."""
+    afresh at ``exec`` (``ru_maxrss`` of a forked child keeps the parent's high-water mark),
+    and the RSS of the child and its line worker summed (polled). ``line_processes``: the
+    summary's ``--line-processes`` (None: the command's default)."""
     import subprocess
 
     params = tmp / 'bench_params.yaml'
@@ -414,7 +421,7 @@ def peak_rss(
     logs = [str(p) for p in (logs if isinstance(logs, (list, tuple)) else [logs])]
     out: dict[str, Any] = {}
     for mode, args in (
-        ('summary', []),
+        ('summary', [] if line_processes is None else ['--line-processes', str(line_processes)]),
         ('csv', ['--csv', str(tmp / 'rss.csv')]),
         ('out', ['--out', str(tmp / 'rss.mcap')]),
     ):
@@ -423,20 +430,46 @@ def peak_rss(
         cmd = [sys.executable, '-c', _CHILD, 'replay', *logs]
         cmd += ['--params-file', str(params), '--quiet', '--json', *args, *extra]
         t0, cpu0 = time.perf_counter(), _children_cpu()
-        done = subprocess.run(cmd, capture_output=True, text=True)
+        tree_kb = 0
+        with subprocess.Popen(
+            cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+        ) as proc:
+            while proc.poll() is None:  # the summed RSS of the child and its line worker
+                tree_kb = max(tree_kb, _tree_rss_kb(proc.pid))
+                time.sleep(0.005)
+            stdout, stderr = proc.communicate()
         wall, cpu = time.perf_counter() - t0, _children_cpu() - cpu0
-        summary = json.loads(done.stdout) if done.returncode == 0 else {}
-        hwm = [ln for ln in done.stderr.splitlines() if ln.startswith('VmHWM:')]
+        summary = json.loads(stdout) if proc.returncode == 0 else {}
+        hwm = [ln for ln in stderr.splitlines() if ln.startswith('VmHWM:')]
+        own = round(int(hwm[-1].split()[1]) / 1024, 1) if hwm else None
         out[mode] = {
-            'rss_mb': round(int(hwm[-1].split()[1]) / 1024, 1) if hwm else None,
+            'rss_mb': own,
+            'tree_rss_mb': max(own or 0.0, round(tree_kb / 1024, 1)),
             'wall_s': round(wall, 2),
             'cpu_s': round(cpu, 2),
             'replay_s': summary.get('timing', {}).get('total_s'),
-            'exit': done.returncode,
+            'exit': proc.returncode,
         }
         for f in (tmp / 'rss.csv', tmp / 'rss.mcap'):
             f.unlink(missing_ok=True)
     return out
+
+
+def _tree_rss_kb(pid: int) -> int:
+    """The summed VmRSS (kB) of process ``pid`` and its descendants now (Linux; 0 elsewhere):
+    replay's line worker (``--line-processes``) counted beside the command."""
+    total, todo = 0, [pid]
+    while todo:
+        p = todo.pop()
+        try:
+            with open(f'/proc/{p}/status') as f:
+                total += sum(int(ln.split()[1]) for ln in f if ln.startswith('VmRSS:'))
+            for task in os.listdir(f'/proc/{p}/task'):
+                with open(f'/proc/{p}/task/{task}/children') as f:
+                    todo += [int(c) for c in f.read().split()]
+        except (OSError, ValueError):
+            continue
+    return total
 
 
 def _children_cpu() -> float:
@@ -483,6 +516,7 @@ def cmd_bench_replay(args: argparse.Namespace) -> int:
         args.repeat,
         not args.no_rss,
         not args.no_mcap,
+        args.line_processes,
     )
     if args.json:
         print(json.dumps(r))
@@ -525,19 +559,20 @@ def cmd_bench_replay(args: argparse.Namespace) -> int:
     )
     for mode, m in r['peak_rss_mb'].items():
         print(
-            f'peak RSS, catenary-monitor replay ({mode}, a child process): {m["rss_mb"]:.0f} MB, '
+            f'peak RSS, catenary-monitor replay ({mode}, a child process): {m["rss_mb"]:.0f} MB '
+            f'(with its line worker, summed: {m["tree_rss_mb"]:.0f} MB), '
             f'{m["wall_s"]:.2f} s wall, {m["cpu_s"]:.2f} s CPU ({m["replay_s"]} s in replay)'
         )
     m = r['peak_rss_mb'].get('summary')
     if m:
         wall_rate, cpu_rate = r['messages'] / m['wall_s'], r['messages'] / max(m['cpu_s'], 1e-9)
-        rate_ok, rss_ok = wall_rate >= TARGET_END_TO_END, m['rss_mb'] <= TARGET_RSS_MB
+        rate_ok, rss_ok = wall_rate >= TARGET_END_TO_END, m['tree_rss_mb'] <= TARGET_RSS_MB
         print(
             f'end to end (catenary-monitor replay LOG, its summary, default bounds): '
             f'{wall_rate / 1e6:.2f} M msg/s ({cpu_rate / 1e6:.2f} M per CPU second), peak '
-            f'{m["rss_mb"]:.0f} MB; targets >= {TARGET_END_TO_END / 1e6:g} M msg/s '
-            f'{"met" if rate_ok else "NOT met"}, <= {TARGET_RSS_MB:g} MB '
-            f'{"met" if rss_ok else "NOT met"}'
+            f'{m["tree_rss_mb"]:.0f} MB (summed over its processes); targets >= '
+            f'{TARGET_END_TO_END / 1e6:g} M msg/s {"met" if rate_ok else "NOT met"}, '
+            f'<= {TARGET_RSS_MB:g} MB {"met" if rss_ok else "NOT met"}'
         )
     return 0
 
@@ -584,6 +619,14 @@ def register(sub: Any) -> None:
     )
     p.add_argument(
         '--no-mcap', action='store_true', help='skip the MCAP output (slow: every snapshot)'
+    )
+    p.add_argument(
+        '--line-processes',
+        type=int,
+        default=None,
+        metavar='N',
+        help="the summary's peak-RSS run with replay --line-processes N (default: the "
+        "command's own default)",
     )
     p.add_argument('--json', action='store_true', help='print one JSON object')
     p.set_defaults(func=cmd_bench_replay)

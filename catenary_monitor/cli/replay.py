@@ -259,11 +259,17 @@ def _stream_outputs(
     """Stream the replay into the outputs; a log that cannot be streamed is replayed again
     as one window (one line on stderr says so)."""
     from catenary_monitor.replay.driver import WINDOW_MESSAGES
+    from catenary_monitor.replay.line_split import default_processes
+    from catenary_monitor.replay.outputs import SUMMARY_VALUES
 
     # --out builds every diagnostic snapshot: about 2.5 times the memory per message
     window: Optional[int] = args.window_messages or (
         WINDOW_MESSAGES // 2 if args.out else WINDOW_MESSAGES
     )
+
+    # two line processes by default for a summary only: with --csv every value of the worker's
+    # lines comes back (3e6 log: 252 MiB summed, slower; docs/benchmarks.md)
+    summary_only = not (args.csv or args.plot or args.out)
 
     def restart(why: str) -> None:
         if not args.quiet:
@@ -284,6 +290,8 @@ def _stream_outputs(
         jobs=args.jobs,
         progress=progress.stream,
         on_restart=restart,
+        line_processes=args.line_processes or (default_processes() if summary_only else 1),
+        value_keys=SUMMARY_VALUES if summary_only else None,
     )
     assert isinstance(sinks, _Sinks)
     return sinks, state, report
@@ -510,6 +518,16 @@ def register(sub: Any) -> None:
         metavar='N',
         help='decode the files of a rotated set or directory in N processes (the alarm '
         'logic stays serial: results are those of a serial run; default 1)',
+    )
+    p.add_argument(
+        '--line-processes',
+        type=count_arg,
+        default=None,
+        metavar='N',
+        help='recompute the lines of each window in N processes (1 or 2: a worker process '
+        'takes 7 of 12 lines; the results are those of one process; not with --out or '
+        '--jobs; default for a summary alone, without --csv or --plot: 2 where two CPUs are '
+        'usable and the load average leaves one idle, else 1)',
     )
     p.add_argument(
         '--window-messages',

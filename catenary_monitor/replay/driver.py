@@ -26,14 +26,17 @@ Errors a user can act on are :class:`ReplayError` (one line, with the command's 
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import json
+import os
 from functools import partial
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import (
     Any,
     Callable,
+    Collection,
     Iterator,
     Mapping,
     NamedTuple,
@@ -62,7 +65,7 @@ from catenary_monitor.core.monitor.events import (
     parse_event_record,
 )
 from catenary_monitor.core.monitor.monitor_core import MonitorCore
-from catenary_monitor.core.twin.engine import ReplayResult, run_log
+from catenary_monitor.core.twin.engine import LineRunner, ReplayResult, run_log
 from catenary_monitor.core.twin.window import (
     Window,
     concat_lines,
@@ -307,6 +310,8 @@ def stream(
     resume: Optional[StreamState] = None,
     goes_on: bool = False,
     next_ns: Optional[int] = None,
+    line_processes: int = 1,
+    value_keys: Optional[Collection[str]] = None,
 ) -> StreamState:
     """Replay ``paths`` window by window; ``sink(result, window)`` gets each window's
     :class:`ReplayResult` (its ticks, events, start) and its input :class:`Window`.
@@ -331,9 +336,22 @@ def stream(
     The solve kernel leaves the cores of the decoding to it: the read-ahead thread's, or the
     ``jobs`` worker processes' (on two cores, two kernel threads beside the read-ahead made the
     1e7 summary 10-25 % slower than one; docs/benchmarks.md).
+
+    ``line_processes`` 2: each window's lines in two processes (:mod:`.line_split`: a worker
+    forked before the log is read), where :func:`split_lines` allows it (else one); the
+    results are the same. ``value_keys``: the line values ``sink`` reads (None: every one;
+    the others need not come back from the worker).
     """
     busy = jobs if jobs > 1 else int(mcap_read.READ_AHEAD > 0)
-    with fused_kernel.cores_left_to(busy):
+    split = split_lines(config, line_processes, snapshots, jobs)
+    with contextlib.ExitStack() as stack:
+        lines = None
+        if split:
+            from catenary_monitor.replay.line_split import LineSplit, worker_lines
+
+            n = len(config.lines)
+            lines = stack.enter_context(LineSplit(n, worker_lines(n), value_keys))
+        stack.enter_context(fused_kernel.cores_left_to(busy + int(split)))
         return _stream(
             paths,
             config,
@@ -348,7 +366,26 @@ def stream(
             resume,
             goes_on,
             next_ns,
+            lines,
         )
+
+
+def split_lines(
+    config: MonitorConfig, line_processes: int, snapshots: bool | str = False, jobs: int = 1
+) -> bool:
+    """Whether :func:`stream` runs the lines in two processes: asked for (``line_processes``
+    >= 2), two CPUs usable (``os.sched_getaffinity``), ``os.fork`` there, two lines or more,
+    no snapshots (``--out``), no decoding processes (``jobs``)."""
+    from catenary_monitor.replay.line_split import usable_cpus
+
+    return (
+        line_processes >= 2
+        and not snapshots
+        and jobs <= 1
+        and len(config.lines) >= 2
+        and hasattr(os, 'fork')
+        and usable_cpus() >= 2
+    )
 
 
 def _stream(
@@ -365,6 +402,7 @@ def _stream(
     resume: Optional[StreamState] = None,
     goes_on: bool = False,
     next_ns: Optional[int] = None,
+    lines: Optional[LineRunner] = None,
 ) -> StreamState:
     """:func:`stream` itself."""
     state = StreamState() if resume is None else copy.deepcopy(resume)
@@ -429,7 +467,7 @@ def _stream(
                 cap = TICKS_PER_PART if snapshots else GRID_TICKS_PER_PART
                 parts = _grid_parts(state, config, window, whole, cap, goes_on, stamps)
             for part, part_events in parts:
-                result, core = run_log(core, part, part_events, snapshots)
+                result, core = run_log(core, part, part_events, snapshots, lines)
                 replay = ReplayResult(
                     result.lines,
                     result.tide,
@@ -756,11 +794,14 @@ def drive(
     jobs: int = 1,
     progress: Optional[Callable[[StreamState], None]] = None,
     on_restart: Optional[Callable[[str], None]] = None,
+    line_processes: int = 1,
+    value_keys: Optional[Collection[str]] = None,
 ) -> tuple[Sink, StreamState, ReadReport]:
     """Replay ``paths`` into ``make_sink(window_messages)``: streamed, or, for a log that cannot
     be streamed (:class:`Restart`), again as one window into a new sink (``on_restart`` gets
     the reason). Returns the sink, the stream's figures and the read report; failures a user
-    can act on are :class:`ReplayError`."""
+    can act on are :class:`ReplayError`. ``line_processes``, ``value_keys``: :func:`stream`'s
+    (a caller that runs replays in worker processes of its own keeps ``line_processes`` 1)."""
     window = window_messages
     while True:
         report = ReadReport()
@@ -777,6 +818,8 @@ def drive(
                 jobs=jobs,
                 report=report,
                 progress=progress,
+                line_processes=line_processes,
+                value_keys=value_keys,
             )
             return sink, state, report
         except Restart as err:

@@ -41,6 +41,7 @@ from catenary_monitor.core.twin.window import (
     LineResult,
     SnapshotColumns,
     StatusColumns,
+    WORST_KEYS,
     worst,
 )
 from catenary_monitor.core.monitor.state import NO_DEPTH, OUTPUT_FIELDS, VALUE_FIELDS
@@ -741,6 +742,10 @@ def _better(new: Optional[dict[str, float]], cur: Optional[dict[str, float]], lo
     if cur is None:
         return True
     return new['value'] < cur['value'] if low else new['value'] > cur['value']
+
+
+#: The line values a summary reads (:class:`LineTally`: the worst values, the fatigue).
+SUMMARY_VALUES = frozenset(WORST_KEYS + ('fatigue_damage',))
 
 
 class LineTally:

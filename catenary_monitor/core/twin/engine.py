@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any, Callable, Collection, Iterable, NamedTuple, Optional
 
 import numpy as np
 
@@ -96,7 +96,11 @@ from catenary_monitor.core.twin.window import (
 )
 
 __all__ = [
+    'LineContext',
+    'LineOutput',
+    'LineRunner',
     'advance',
+    'advance_lines',
     'run_log',
     'ReplayResult',
     'recompute',
@@ -299,13 +303,65 @@ def _write_back(
         line.take(LineSolvePart(values_now, last, message, MODEL_NAMES[code]))
 
 
-def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) -> WindowResult:
+class LineContext(NamedTuple):
+    """The window-wide decisions every line's steps read (made once, before the lines)."""
+
+    tide: TideColumns
+    sensors: SensorColumns
+    dock: Optional[DockColumns]
+    blind: BlindColumns
+
+
+#: What one line's pass over a window gives: its results, level series, steps,
+#: acknowledgement series and fatigue damage after each tension sample.
+LineOutput = tuple[LineResult, LevelSeries, LineSteps, alarm_ack.AckSeries, np.ndarray]
+
+#: Who runs the lines of a window (``advance(..., lines=)``): given the core after the
+#: window-wide decisions, the window and the decisions, every line's :data:`LineOutput` in
+#: order, each line's state left in the core as :func:`advance_lines` leaves it (only
+#: asked without snapshots: the level series' inputs forgotten).
+LineRunner = Callable[[MonitorCore, Window, LineContext], list[LineOutput]]
+
+
+def advance_lines(
+    core: MonitorCore,
+    window: Window,
+    context: LineContext,
+    ks: Iterable[int],
+    keep_inputs: bool = False,
+    value_keys: Optional[Collection[str]] = None,
+) -> list[LineOutput]:
+    """Lines ``ks`` of the core through the window, in that order (each line's pass reads
+    the core and writes only that line's state); without ``keep_inputs`` each level series
+    lets its inputs go as soon as it is made (no snapshot asks for a message).
+    ``value_keys``: only those values are kept of each line's results (None: every one)."""
+    out = []
+    for k in ks:
+        r, s, st, a, d = _advance_line(
+            core, k, window, context.tide, context.sensors, context.dock, context.blind
+        )
+        if not keep_inputs:
+            s.forget_inputs()
+        if value_keys is not None:
+            r.values = {key: v for key, v in r.values.items() if key in value_keys}
+        out.append((r, s, st, a, d))
+    return out
+
+
+def advance(
+    core: MonitorCore,
+    window: Window,
+    snapshots: bool | str = False,
+    lines: Optional[LineRunner] = None,
+) -> WindowResult:
     """Step ``core`` through every event of ``window`` in vectorized code.
 
     Leaves ``core`` as ``core.step`` would, event by event (depth, tensions, tick at equal
     times), and returns what the steps did; ``snapshots=True`` also builds every diagnostic
     snapshot the core would have made (ticks and level changes); ``snapshots=COLUMNS``, the
-    same as one :class:`SnapshotColumns` (or Snapshots where it falls back).
+    same as one :class:`SnapshotColumns` (or Snapshots where it falls back). ``lines``: who
+    runs the lines without snapshots (:data:`LineRunner`; default :func:`advance_lines`
+    here).
     """
     if len(window.tensions) != len(core.state.lines):
         raise ValueError(
@@ -347,17 +403,19 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
     dock = decide_dock_window(core, window, tide)
     component_acks = decide_component_acks(core, window, tide, dock)
     decide_units_window(core, sensors, dock)
+    befores = [line.fatigue_values[0] for line in core.state.lines]
+    context = LineContext(tide, sensors, dock, blind)
+    if lines is not None and not snapshots:
+        outs = lines(core, window, context)
+    else:
+        outs = advance_lines(core, window, context, range(len(befores)), bool(snapshots))
     results, series, steps, acks, damage = [], [], [], [], []
-    for k, line in enumerate(core.state.lines):
-        before = line.fatigue_values[0]
-        r, s, st, a, d = _advance_line(core, k, window, tide, sensors, dock, blind)
-        if not snapshots:  # no snapshot asks for a message: the inputs go now, not at the end
-            s.forget_inputs()
+    for k, (r, s, st, a, d) in enumerate(outs):
         results.append(r)
         series.append(s)
         steps.append(st)
         acks.append(a)
-        damage.append(DamageColumns(window.tensions[k][0], d, before))
+        damage.append(DamageColumns(window.tensions[k][0], d, befores[k]))
     journal, flood = window_journal(
         core, window, tide, blind, series, steps, acks, tide_transitions, dock
     )
@@ -385,7 +443,11 @@ def advance(core: MonitorCore, window: Window, snapshots: bool | str = False) ->
 
 
 def run_log(
-    core: MonitorCore, window: Window, events: Any = (), snapshots: bool | str = False
+    core: MonitorCore,
+    window: Window,
+    events: Any = (),
+    snapshots: bool | str = False,
+    lines: Optional[LineRunner] = None,
 ) -> tuple[WindowResult, MonitorCore]:
     """Advance ``core`` over a whole log; return the results and the core at the end.
 
@@ -394,7 +456,7 @@ def run_log(
     stretches (inputs before an event's stamp go first), and :class:`Start` (the monitor
     restarted: a new core, blind again, from then on). ``snapshots=COLUMNS``: the snapshots
     are the pieces' in order, then the events' (not merged in time: see
-    :class:`SnapshotColumns`).
+    :class:`SnapshotColumns`). ``lines``: who runs the lines (:func:`advance`).
     """
     window, events, marks = _leave_out_coalesced(core, window, list(events))
     pieces: list[WindowResult] = []
@@ -404,7 +466,7 @@ def run_log(
     lo: Optional[int] = None
     for event in [*events, None]:
         hi = None if event is None else event.stamp_ns
-        pieces.append(advance(core, slice_window(window, lo, hi), snapshots))
+        pieces.append(advance(core, slice_window(window, lo, hi), snapshots, lines))
         journal += pieces[-1].alarm_events
         if isinstance(event, Start):
             core = MonitorCore(
@@ -418,7 +480,7 @@ def run_log(
                 extra.append(step.snapshot)
         lo = hi
     _keep_marks(core, marks, events)
-    lines = [concat_lines([p.lines[k] for p in pieces]) for k in range(len(core.state.lines))]
+    joined = [concat_lines([p.lines[k] for p in pieces]) for k in range(len(core.state.lines))]
     tide = [tr for p in pieces for tr in p.tide]
     others = sorted(
         others + [c for p in pieces for c in p.others], key=lambda c: c.transition.time
@@ -428,7 +490,7 @@ def run_log(
         snaps.sort(key=lambda s: s.stamp_ns)  # type: ignore[union-attr]
     return (
         WindowResult(
-            lines,
+            joined,
             tide,
             snaps,
             min(p.start_ns for p in pieces),

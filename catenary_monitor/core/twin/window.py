@@ -343,6 +343,17 @@ def _column_statuses(c: StatusColumns, n: int) -> list[ComponentStatus]:
     ]
 
 
+#: The values :func:`worst` reads.
+WORST_KEYS = (
+    'anchor_margin',
+    'tide_margin',
+    'load_margin',
+    'safety_factor',
+    'uplift_force',
+    'top_tension',
+)
+
+
 def worst(result: LineResult) -> dict[str, Optional[dict[str, float]]]:
     """Worst value and its time (s) of each margin and force of a line over the log.
 
@@ -350,14 +361,8 @@ def worst(result: LineResult) -> dict[str, Optional[dict[str, float]]]:
     ``uplift_force`` and ``top_tension``. None when the quantity never had a value.
     """
     out: dict[str, Optional[dict[str, float]]] = {}
-    for key, best in (
-        ('anchor_margin', np.fmin),
-        ('tide_margin', np.fmin),
-        ('load_margin', np.fmin),
-        ('safety_factor', np.fmin),
-        ('uplift_force', np.fmax),
-        ('top_tension', np.fmax),
-    ):
+    for key in WORST_KEYS:
+        best = np.fmax if key in ('uplift_force', 'top_tension') else np.fmin
         v = result.values[key]
         value = best.reduce(v) if len(v) else math.nan  # NaN only where every value is NaN
         if value != value:
