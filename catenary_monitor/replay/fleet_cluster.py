@@ -33,7 +33,14 @@ from catenary_monitor.replay.fleet_tasks import (
     run_piece,
 )
 
-__all__ = ['FleetRun', 'Progress', 'local_cluster', 'run_fleet', 'start_method']
+__all__ = [
+    'FleetRun',
+    'Progress',
+    'chain_priorities',
+    'local_cluster',
+    'run_fleet',
+    'start_method',
+]
 
 
 @dataclass
@@ -202,6 +209,25 @@ def _plans(folders: Sequence[Path], run: FleetRun, columns: tuple[str, ...]) -> 
     return docks
 
 
+#: The priority of the small tasks (a piece's message count for the progress line, a dock's
+#: end): run as soon as they can, before any piece.
+AT_ONCE = 1 << 62
+
+
+def chain_priorities(plan: DockPlan) -> list[int]:
+    """Each piece's priority on the scheduler: the bytes of the dock's log from that piece
+    on (the chain's work still ahead of it, its own included). A free worker takes the piece
+    with the most work behind it: the longest chain is never left for the end (the largest
+    dock first, then the others as their chains grow as long as its rest)."""
+    sizes = [sum(plan.identity[i][1] for i in piece) for piece in plan.pieces]
+    left = [0] * len(sizes)
+    total = 0
+    for k in range(len(sizes) - 1, -1, -1):
+        total += sizes[k]
+        left[k] = total
+    return left
+
+
 def _submit(client: Any, dock: _Dock, root: Path, token: str, run: FleetRun) -> list[Any]:
     """Submit the dock's pieces from where a previous run stopped, and its end; returns the
     futures to watch (each piece's message count, the end)."""
@@ -214,14 +240,20 @@ def _submit(client: Any, dock: _Dock, root: Path, token: str, run: FleetRun) -> 
     watch = []
     dock.futures = []
     tag = f'{token}-{dock.generation}-{plan.name}'
+    left = chain_priorities(plan)
     for task in range(start, len(plan.pieces)):
         before = client.submit(
-            run_piece, plan, task, before, str(root), key=f'fleet-piece-{tag}-{task}'
+            run_piece, plan, task, before, str(root), key=f'fleet-piece-{tag}-{task}',
+            priority=left[task],
+        )  # fmt: skip
+        count = client.submit(
+            _messages, before, key=f'fleet-count-{tag}-{task}', priority=AT_ONCE
         )
-        count = client.submit(_messages, before, key=f'fleet-count-{tag}-{task}')
         dock.futures += [before, count]
         watch.append(count)
-    end = client.submit(finish_dock, plan, before, str(root), key=f'fleet-dock-{tag}')
+    end = client.submit(
+        finish_dock, plan, before, str(root), key=f'fleet-dock-{tag}', priority=AT_ONCE
+    )
     dock.futures.append(end)
     watch.append(end)
     return watch
@@ -241,7 +273,8 @@ def _drive(
     state = Progress()
     owner: dict[str, tuple[_Dock, int]] = {}
     pending = as_completed()
-    for dock in docks:
+    # The largest dock first: the first pieces go to idle workers as they are submitted.
+    for dock in sorted(docks, key=lambda d: -chain_priorities(d.plan)[0]):
         summary = finished_summary(root, dock.plan)
         if summary is not None:
             run.docks[dock.plan.name] = summary
