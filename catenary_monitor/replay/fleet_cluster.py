@@ -84,6 +84,8 @@ class _Dock:
         self.generation = 0
         self.futures: list[Any] = []
         self.failed = False
+        self.last_count = ''  # the key of its last piece's count: done, the chain has run
+        self.ran = False  # its last piece done (or the dock failed): a worker is free of it
 
 
 def run_fleet(
@@ -251,6 +253,7 @@ def _submit(client: Any, dock: _Dock, root: Path, token: str, run: FleetRun) -> 
         )
         dock.futures += [before, count]
         watch.append(count)
+        dock.last_count = count.key
     end = client.submit(
         finish_dock, plan, before, str(root), key=f'fleet-dock-{tag}', priority=AT_ONCE
     )
@@ -273,26 +276,38 @@ def _drive(
     state = Progress()
     owner: dict[str, tuple[_Dock, int]] = {}
     pending = as_completed()
-    # The largest dock first: the first pieces go to idle workers as they are submitted.
+    waiting: list[_Dock] = []  # the docks not submitted yet, the largest first
     for dock in sorted(docks, key=lambda d: -chain_priorities(d.plan)[0]):
         summary = finished_summary(root, dock.plan)
         if summary is not None:
             run.docks[dock.plan.name] = summary
             run.docks_up_to_date.append(dock.plan.name)
             continue
-        for future in _submit(client, dock, root, token, run):
-            owner[future.key] = (dock, dock.generation)
-            pending.add(future)
-        state.tasks_total += len(dock.plan.pieces)
-    state.tasks_total -= run.tasks_reused
+        state.tasks_total += len(dock.plan.pieces) - resume_point(root, dock.plan)
+        waiting.append(dock)
     addresses = workers_now(client)
+    flying: list[_Dock] = []
+
+    def admit() -> None:  # a chain per worker: a free worker takes the largest dock left
+        flying[:] = [d for d in flying if not (d.ran or d.failed)]
+        while waiting and len(flying) < max(1, len(addresses)):
+            dock = waiting.pop(0)
+            flying.append(dock)
+            for future in _submit(client, dock, root, token, run):
+                owner[future.key] = (dock, dock.generation)
+                pending.add(future)
+
+    admit()
     next_look = 0.0
-    while not pending.is_empty():
+    while not pending.is_empty() or waiting:
         for future in pending.next_batch(block=False) if pending.has_ready() else []:
             dock, generation = owner.pop(future.key)
             if generation != dock.generation or dock.failed:
                 continue  # an abandoned start of this dock, or a failed dock's rest
             _collect(client, future, dock, root, token, run, state, owner, pending)
+            last = future.key == dock.last_count and future.status == 'finished'
+            dock.ran = dock.ran or last or dock.plan.name in run.docks
+        admit()
         if time.monotonic() >= next_look or pending.is_empty():  # twice a second, and last
             next_look = time.monotonic() + 0.5
             addresses = _look_for_lost(client, addresses, run, state)
