@@ -312,16 +312,16 @@ def test_files_that_overlap_in_time_make_the_dock_one_task(cluster, tmp_path):
     _assert_rows_equal(results, 'dock_e', _reference(folder))
 
 
-def test_a_free_worker_takes_the_largest_dock_left(cluster, tmp_path):
-    """A chain per worker, the largest dock first: with two workers the smallest dock (named
-    first) starts only after one of the two larger docks has run its last piece; every
-    piece's priority is the bytes left in its chain."""
+def test_a_free_worker_takes_the_piece_with_the_most_work_behind_it(cluster, tmp_path):
+    """A piece is submitted when a worker is free: the ready piece whose chain has the most
+    bytes left (its own included). With two workers, the smallest dock (named first) starts
+    only after one of the two larger docks has run its last piece."""
     from catenary_monitor.replay.fleet_cluster import chain_priorities
 
     folders = [
-        write_dock(tmp_path / 'in' / 'a_small', seconds=20.0, files=1, seed=6),
+        write_dock(tmp_path / 'in' / 'a_small', seconds=10.0, files=1, seed=6),
         write_dock(tmp_path / 'in' / 'b_mid', seconds=40.0, files=2, seed=7),
-        write_dock(tmp_path / 'in' / 'c_large', seconds=60.0, files=3, seed=8),
+        write_dock(tmp_path / 'in' / 'c_large', seconds=90.0, files=3, seed=8),
     ]
     left = chain_priorities(plan_dock(folders[2]))
     sizes = [p.stat().st_size for p in sorted(folders[2].glob('*.mcap'))]
