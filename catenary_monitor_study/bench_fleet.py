@@ -10,7 +10,9 @@ without the CSV (the summary only: the least a replay does); ``catenary-monitor 
 a local cluster of its own of 1 worker and of 2 (``--workers-list``); the same of 2 writing the
 columns the baseline's CSV has (``fleet --columns``: what the loop writes, as Parquet); and
 ``fleet --scheduler`` on a cluster of 2 started once for all the rounds (``reused``), each into
-a fresh results folder.
+a fresh results folder; and, in the first round, the loop of ``replay --csv --csv-columns all``
+(the rows of the fleet's default dataset, every column, as text). Each fleet mode's ratio to
+the loop writing the same rows ("same-columns loop") is the fair one both ways.
 Reports per mode the median wall time and its ratio to the baseline, the fleet's fixed cost
 (its wall time minus its replay: the imports, the cluster's start and stop), and checks that
 every fleet run's messages dataset is identical to the first's (row for row) and holds the
@@ -36,13 +38,17 @@ import time
 from pathlib import Path
 from typing import Any, Optional
 
-__all__ = ['register', 'run', 'same_as_csv']
+__all__ = ['compile_package', 'register', 'run', 'same_as_csv', 'same_columns_loop']
 
 #: One dock at 12 lines x 20 Hz and its tide at 1 Hz, for a year: the messages.
 YEAR_MESSAGES = (12 * 20 + 1) * 86_400 * 365
 
 #: The baseline's mode name, and the loop without outputs.
 LOOP_CSV, LOOP_BARE = 'replay --csv loop', 'replay loop'
+#: The loop writing every column (``replay --csv --csv-columns all``): the rows the fleet's
+#: default dataset holds, as text. Its CSVs are 60 bytes a message: timed in the first round
+#: only (ten times the fleet's wall time: the other rounds would add minutes, not precision).
+LOOP_ALL = 'replay --csv all loop'
 #: The fleet's mode writing the columns the baseline's CSV has (``fleet --columns``).
 CSV_MODE = 'CSV columns'
 
@@ -154,17 +160,35 @@ def _command(args: list[str]) -> tuple[float, float, str]:
     return wall, cpu, done.stdout
 
 
-def _replay_loop(folders: list[Path], csv_dir: Optional[Path]) -> dict[str, Any]:
-    """The serial loop of ``replay`` over the folders (``csv_dir``: each writes DOCK.csv)."""
+def compile_package() -> None:
+    """Write the bytecode of this tree's package, as ``pip install`` does: each command then
+    starts as from an installed package. Without it (``PYTHONDONTWRITEBYTECODE``, a source
+    tree) every command compiles the modules it imports again: 0.15 CPU s more per
+    ``replay``, paid four times by the loop and once by the fleet."""
+    import compileall
+
+    import catenary_monitor
+
+    compileall.compile_dir(
+        str(Path(catenary_monitor.__file__).resolve().parent), quiet=2, workers=1
+    )
+
+
+def _replay_loop(
+    folders: list[Path], csv_dir: Optional[Path], every_column: bool = False
+) -> dict[str, Any]:
+    """The serial loop of ``replay`` over the folders (``csv_dir``: each writes DOCK.csv;
+    ``every_column``: with ``--csv-columns all``)."""
     wall = cpu = 0.0
     for folder in folders:
         args = ['replay', str(folder), '--params-file', str(folder / 'catenary_monitor.yaml')]
         if csv_dir is not None:
             args += ['--csv', str(csv_dir / f'{folder.name}.csv')]
+            args += ['--csv-columns', 'all'] if every_column else []
         w, c, _ = _command(args + ['--quiet'])
         wall, cpu = wall + w, cpu + c
-    return {'mode': LOOP_BARE if csv_dir is None else LOOP_CSV,
-            'wall_s': round(wall, 3), 'cpu_s': round(cpu, 3)}  # fmt: skip
+    mode = LOOP_BARE if csv_dir is None else LOOP_ALL if every_column else LOOP_CSV
+    return {'mode': mode, 'wall_s': round(wall, 3), 'cpu_s': round(cpu, 3)}
 
 
 def _fleet(
@@ -253,17 +277,22 @@ def run(
     keep: Optional[Path] = None,
     repeat: int = 3,
     reuse: bool = True,
+    all_columns: bool = True,
 ) -> dict[str, Any]:
     """Generate the fleet, time every mode ``repeat`` times (in turn); returns the figures
     (per mode, the median round). ``reuse``: also the fleet on a cluster of the largest
-    worker count started once for every round (``fleet --scheduler``)."""
+    worker count started once for every round (``fleet --scheduler``). ``all_columns``: also
+    the loop of ``replay --csv --csv-columns all`` (:data:`LOOP_ALL`, the first round)."""
     tmp = Path(keep) if keep else Path(tempfile.mkdtemp(prefix='bench_fleet_'))
+    compile_package()
     load = os.getloadavg()
     try:
         facts = generate_fleet(tmp / 'docks', docks, files, per_file)
         folders = sorted((tmp / 'docks').iterdir())
         csv_dir = tmp / 'csv'
         csv_dir.mkdir(exist_ok=True)
+        all_dir = tmp / 'csv_all'
+        all_dir.mkdir(exist_ok=True)
         rounds: dict[str, list[dict[str, Any]]] = {}
         first = tmp / f'results_{workers_list[0]}_0'
         first_csv = tmp / 'csv_columns_0'
@@ -282,6 +311,8 @@ def run(
                     n = len(reused.scheduler_info['workers'])
                     address = reused.scheduler_address
                     modes.append(_fleet(folders, tmp / f'reused_{k}', n, first, address))
+                if k == 0 and all_columns:
+                    modes.append(_replay_loop(folders, all_dir, every_column=True))
                 for r in modes:
                     rounds.setdefault(r['mode'], []).append(r)
         finally:
@@ -289,12 +320,20 @@ def run(
                 reused.close()
         same_csv = all(same_as_csv(res, f.name, csv_dir / f'{f.name}.csv')
                        for f in folders for res in (first, first_csv))  # fmt: skip
+        if all_columns:  # the default dataset holds the rows of replay --csv-columns all
+            same_csv = same_csv and all(
+                same_as_csv(first, f.name, all_dir / f'{f.name}.csv') for f in folders
+            )
+            shutil.rmtree(all_dir, ignore_errors=True)
         in_process = pieces_cpu(folders, tmp / 'pieces')
         runs = [_median(rounds[mode]) for mode in rounds]
         base = {r['mode']: r['wall_s'] for r in runs}
         for r in runs:
             r['vs_replay_csv_loop'] = round(base[LOOP_CSV] / r['wall_s'], 3)
             r['vs_replay_loop'] = round(base[LOOP_BARE] / r['wall_s'], 3)
+            same = same_columns_loop(r['mode'])
+            if same in base:
+                r['vs_same_columns_loop'] = round(base[same] / r['wall_s'], 3)
         fleets = [x for mode, xs in rounds.items() for x in xs
                   if 'workers' in x and CSV_MODE not in mode]  # fmt: skip
         per_cpu = statistics.median(x['messages'] / x['worker_cpu_s'] for x in fleets)
@@ -313,6 +352,15 @@ def run(
     finally:
         if keep is None:
             shutil.rmtree(tmp, ignore_errors=True)
+
+
+def same_columns_loop(mode: str) -> str:
+    """The loop that writes the rows a mode writes (what a user would run for its results):
+    the fleet's default dataset, every column, against :data:`LOOP_ALL`; the fleet with the
+    CSV's columns (``--columns``) against :data:`LOOP_CSV`; a loop: none ('')."""
+    if not mode.startswith('fleet'):
+        return ''
+    return LOOP_CSV if CSV_MODE in mode else LOOP_ALL
 
 
 def _cluster(workers: int) -> Any:
@@ -354,19 +402,25 @@ def _text(out: dict[str, Any]) -> str:
         f'{f["bytes"] / 1e6:.0f} MB; {out["cpus"]} CPUs, load average '
         f'{out["load_average"][0][0]:.1f} before, {out["load_average"][1][0]:.1f} after',
         f'median of {out["repeat"]} rounds (the modes in turn), wall time of the commands:',
-        f'{"mode":<29}  wall s   CPU s  x replay --csv loop  x replay loop  fixed s'
-        '  identical  rounds: wall s',
+        f'{"mode":<29}  wall s   CPU s  x same-columns loop  x replay --csv loop'
+        '  x replay loop  fixed s  identical  rounds: wall s',
     ]
     for r in out['runs']:
         fleet = 'workers' in r
+        same = r.get('vs_same_columns_loop')
         lines.append(
             f'{r["mode"]:<29}  {r["wall_s"]:>6.2f}  {r["cpu_s"]:>6.2f}  '
-            f'{r["vs_replay_csv_loop"]:>19.2f}  '
+            + (f'{same:>19.2f}  ' if same is not None else f'{"-":>19}  ')
+            + f'{r["vs_replay_csv_loop"]:>19.2f}  '
             f'{r["vs_replay_loop"]:>13.2f}  '
             + (f'{r["fixed_s"]:>7.2f}  {"yes" if r["identical_to_first"] else "NO":>9}'
                if fleet else f'{"-":>7}  {"-":>9}')
             + '  ' + ' '.join(f'{x:.2f}' for x in r['wall_s_all'])
         )  # fmt: skip
+    lines.append(
+        'same-columns loop: the loop writing the rows the mode writes (every column: '
+        f'{LOOP_ALL}, first round; CSV columns: {LOOP_CSV})'
+    )
     lines.append(
         'the fleet\'s rows are the serial replays\' CSV rows: '
         + ('yes' if out['identical_to_replay_csv'] else 'NO')
@@ -396,6 +450,7 @@ def cmd_bench_fleet(args: argparse.Namespace) -> int:
         keep=Path(args.keep) if args.keep else None,
         repeat=args.repeat,
         reuse=not args.no_reuse,
+        all_columns=not args.no_all_columns,
     )
     print(json.dumps(out) if args.json else _text(out))
     fleets = [r for r in out['runs'] if 'workers' in r]
@@ -435,6 +490,10 @@ def register(sub: Any) -> None:
     p.add_argument(
         '--no-reuse', action='store_true',
         help='no rounds on a cluster started once (fleet --scheduler)',
+    )  # fmt: skip
+    p.add_argument(
+        '--no-all-columns', action='store_true',
+        help='no loop of replay --csv-columns all (the default dataset\'s rows as text)',
     )  # fmt: skip
     p.add_argument('--keep', metavar='DIR', help='generate and keep the fleet and results here')
     p.add_argument('--json', action='store_true', help='print one JSON object')

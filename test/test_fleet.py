@@ -312,6 +312,30 @@ def test_files_that_overlap_in_time_make_the_dock_one_task(cluster, tmp_path):
     _assert_rows_equal(results, 'dock_e', _reference(folder))
 
 
+def test_a_free_worker_takes_the_piece_with_the_most_work_behind_it(cluster, tmp_path):
+    """A piece is submitted when a worker is free: the ready piece whose chain has the most
+    bytes left (its own included). With two workers, the smallest dock (named first) starts
+    only after one of the two larger docks has run its last piece."""
+    from catenary_monitor.replay.fleet_cluster import chain_priorities
+
+    folders = [
+        write_dock(tmp_path / 'in' / 'a_small', seconds=10.0, files=1, seed=6),
+        write_dock(tmp_path / 'in' / 'b_mid', seconds=40.0, files=2, seed=7),
+        write_dock(tmp_path / 'in' / 'c_large', seconds=90.0, files=3, seed=8),
+    ]
+    left = chain_priorities(plan_dock(folders[2]))
+    sizes = [p.stat().st_size for p in sorted(folders[2].glob('*.mcap'))]
+    assert left == [sum(sizes), sizes[1] + sizes[2], sizes[2]]
+    results = tmp_path / 'results'
+    assert not run_fleet(folders, results, scheduler=cluster).failed
+
+    def written(dock: str) -> list[int]:
+        parts = (results / 'messages' / f'dock={dock}').rglob('part-*.parquet')
+        return sorted(p.stat().st_mtime_ns for p in parts)
+
+    assert written('a_small')[0] > min(written('b_mid')[-1], written('c_large')[-1])
+
+
 class _Future:
     """What :func:`fleet_cluster._collect` reads of a Dask future."""
 

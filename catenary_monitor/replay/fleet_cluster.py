@@ -33,7 +33,14 @@ from catenary_monitor.replay.fleet_tasks import (
     run_piece,
 )
 
-__all__ = ['FleetRun', 'Progress', 'local_cluster', 'run_fleet', 'start_method']
+__all__ = [
+    'FleetRun',
+    'Progress',
+    'chain_priorities',
+    'local_cluster',
+    'run_fleet',
+    'start_method',
+]
 
 
 @dataclass
@@ -64,19 +71,37 @@ class FleetRun:
     workers_lost: int = 0
 
 
-def _messages(carry: Carry) -> int:
-    """A finished piece's input messages (a small result for the progress line)."""
-    return int(carry.piece_messages)
+def _messages(carry: Carry) -> tuple[int, str]:
+    """A finished piece's input messages (a small result for the progress line), and the
+    worker that ran it (run on it: its carry is there), now free."""
+    from distributed import get_worker
+
+    try:
+        where = str(get_worker().address)
+    except ValueError:  # not on a worker
+        where = ''
+    return int(carry.piece_messages), where
 
 
 class _Dock:
-    """One dock's futures in the run (``generation`` counts its fresh starts)."""
+    """One dock's futures in the run (``generation`` counts its fresh starts) and its chain's
+    next piece to submit."""
 
     def __init__(self, plan: DockPlan) -> None:
         self.plan = plan
         self.generation = 0
         self.futures: list[Any] = []
         self.failed = False
+        self.next = 0  # the next piece to submit
+        self.before: Any = None  # what it starts from (the piece before's future, ...)
+        self.left: list[int] = []  # per piece, its priority (chain_priorities)
+        self.busy = ''  # the count key of its piece on the cluster ('' when none is)
+        self.tag = ''
+        self.freed = ''  # the worker its last piece ran on (free since)
+
+    def ready(self) -> bool:
+        """Whether its next piece can be submitted now."""
+        return not (self.busy or self.failed) and self.next < len(self.plan.pieces)
 
 
 def run_fleet(
@@ -202,29 +227,72 @@ def _plans(folders: Sequence[Path], run: FleetRun, columns: tuple[str, ...]) -> 
     return docks
 
 
-def _submit(client: Any, dock: _Dock, root: Path, token: str, run: FleetRun) -> list[Any]:
-    """Submit the dock's pieces from where a previous run stopped, and its end; returns the
-    futures to watch (each piece's message count, the end)."""
+#: The priority of the small tasks (a piece's message count for the progress line, a dock's
+#: end): run as soon as they can, before any piece.
+AT_ONCE = 1 << 62
+
+
+def chain_priorities(plan: DockPlan) -> list[int]:
+    """Each piece's priority on the scheduler: the bytes of the dock's log from that piece
+    on (the chain's work still ahead of it, its own included). A free worker takes the piece
+    with the most work behind it: the longest chain is never left for the end (the largest
+    dock first, then the others as their chains grow as long as its rest)."""
+    sizes = [sum(plan.identity[i][1] for i in piece) for piece in plan.pieces]
+    left = [0] * len(sizes)
+    total = 0
+    for k in range(len(sizes) - 1, -1, -1):
+        total += sizes[k]
+        left[k] = total
+    return left
+
+
+def _start(client: Any, dock: _Dock, root: Path, token: str, run: FleetRun) -> list[Any]:
+    """Make the dock's chain start where a previous run stopped (nothing submitted, unless
+    every piece is done: then its end); returns the futures to watch."""
     plan = dock.plan
     start = resume_point(root, plan)
     run.tasks_reused += start
     remove_parts(root, plan.name, start)
     forget_from(root, plan, start)
-    before: Any = ('checkpoint', start - 1) if start else None
-    watch = []
-    dock.futures = []
-    tag = f'{token}-{dock.generation}-{plan.name}'
-    for task in range(start, len(plan.pieces)):
-        before = client.submit(
-            run_piece, plan, task, before, str(root), key=f'fleet-piece-{tag}-{task}'
+    dock.next, dock.busy, dock.futures = start, '', []
+    dock.before = ('checkpoint', start - 1) if start else None
+    dock.left = chain_priorities(plan)
+    dock.tag = f'{token}-{dock.generation}-{plan.name}'
+    return _submit_next(client, dock, root) if start == len(plan.pieces) else []
+
+
+def _submit_next(client: Any, dock: _Dock, root: Path, worker: str = '') -> list[Any]:
+    """Submit the dock's next piece (and its end after the last); returns the futures to
+    watch (the piece's message count, the end). ``worker``: a free worker to run it on (the
+    scheduler would put it where the piece before it ran, busy with another, with the free
+    one idle until its work stealing moved it: up to a second)."""
+    plan, task, watch = dock.plan, dock.next, []
+    if task < len(plan.pieces):
+        where = {'workers': [worker], 'allow_other_workers': True} if worker else {}
+        dock.before = client.submit(
+            run_piece, plan, task, dock.before, str(root),
+            key=f'fleet-piece-{dock.tag}-{task}', priority=dock.left[task], **where,
+        )  # fmt: skip
+        count = client.submit(
+            _messages, dock.before, key=f'fleet-count-{dock.tag}-{task}', priority=AT_ONCE
         )
-        count = client.submit(_messages, before, key=f'fleet-count-{tag}-{task}')
-        dock.futures += [before, count]
+        dock.futures += [dock.before, count]
+        dock.busy, dock.next = count.key, task + 1
         watch.append(count)
-    end = client.submit(finish_dock, plan, before, str(root), key=f'fleet-dock-{tag}')
-    dock.futures.append(end)
-    watch.append(end)
+    if dock.next == len(plan.pieces):
+        end = client.submit(
+            finish_dock, plan, dock.before, str(root), key=f'fleet-dock-{dock.tag}',
+            priority=AT_ONCE,
+        )  # fmt: skip
+        dock.futures.append(end)
+        watch.append(end)
     return watch
+
+
+def _submit(client: Any, dock: _Dock, root: Path, token: str, run: FleetRun) -> list[Any]:
+    """Start the dock's chain again (:func:`_start`) and submit its first piece."""
+    watch = _start(client, dock, root, token, run)
+    return watch if watch else _submit_next(client, dock, root)
 
 
 def _drive(
@@ -241,18 +309,33 @@ def _drive(
     state = Progress()
     owner: dict[str, tuple[_Dock, int]] = {}
     pending = as_completed()
+    chains: list[_Dock] = []
     for dock in docks:
         summary = finished_summary(root, dock.plan)
         if summary is not None:
             run.docks[dock.plan.name] = summary
             run.docks_up_to_date.append(dock.plan.name)
             continue
-        for future in _submit(client, dock, root, token, run):
+        chains.append(dock)
+        for future in _start(client, dock, root, token, run):
             owner[future.key] = (dock, dock.generation)
             pending.add(future)
         state.tasks_total += len(dock.plan.pieces)
     state.tasks_total -= run.tasks_reused
     addresses = workers_now(client)
+    slots = _slots(client)
+    free = [w for w, n in sorted(client.nthreads().items()) for _ in range(n)]
+
+    def dispatch() -> None:  # each free thread: the ready piece with the most work behind it
+        ready = [d for d in chains if d.ready()]
+        busy = sum(1 for d in chains if d.busy and not d.failed)
+        ready.sort(key=lambda d: -d.left[d.next])
+        for dock in ready[: max(0, slots - busy)]:
+            for future in _submit_next(client, dock, root, free.pop(0) if free else ''):
+                owner[future.key] = (dock, dock.generation)
+                pending.add(future)
+
+    dispatch()
     next_look = 0.0
     while not pending.is_empty():
         for future in pending.next_batch(block=False) if pending.has_ready() else []:
@@ -260,9 +343,15 @@ def _drive(
             if generation != dock.generation or dock.failed:
                 continue  # an abandoned start of this dock, or a failed dock's rest
             _collect(client, future, dock, root, token, run, state, owner, pending)
+            if future.key == dock.busy and future.status == 'finished':
+                dock.busy = ''  # its piece is done: the next may go, on the worker it freed
+                if dock.freed in addresses:
+                    free.append(dock.freed)
+        dispatch()
         if time.monotonic() >= next_look or pending.is_empty():  # twice a second, and last
             next_look = time.monotonic() + 0.5
             addresses = _look_for_lost(client, addresses, run, state)
+            slots = _slots(client)
         state.elapsed = time.monotonic() - t0
         if progress is not None:
             progress(state)
@@ -282,6 +371,11 @@ def _wait_for_one(pending: Any, timeout: float = 0.1) -> None:
     with condition:
         if not pending.has_ready():
             condition.wait(timeout=timeout)
+
+
+def _slots(client: Any) -> int:
+    """The pieces the cluster runs at once: its worker threads (at least one)."""
+    return max(1, sum(client.nthreads().values()))
 
 
 def workers_now(client: Any) -> set[str]:
@@ -320,9 +414,10 @@ def _collect(
         if isinstance(result, dict):  # the dock's end
             run.docks[dock.plan.name] = result
         else:
+            messages, dock.freed = result
             state.tasks_done += 1
             run.tasks_run += 1
-            state.messages += int(result)
+            state.messages += int(messages)
         return
     if future.status in ('pending', 'lost'):  # done, then its result lost with its worker:
         owner[future.key] = (dock, dock.generation)  # Dask computes it again; wait for that

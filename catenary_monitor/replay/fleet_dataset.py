@@ -105,6 +105,17 @@ COMPRESSION = 'lz4_raw'
 #: The columns whose row groups carry min/max statistics (a reader skips row groups by time or
 #: line with them); on every float column they cost an eighth of the Parquet writing.
 STATISTICS = ['time', 'line']
+#: The message parts' pages: one data page per column of a window's row group (up to 2^18
+#: rows, 2 MB of float64), values handed to the encoder 65 536 at a time. Arrow's defaults
+#: (pages of 20 000 rows or 1 MB, batches of 1 024) cut a window of 200 000 rows into 10 pages
+#: per column, each compressed and headed apart: that part took 52.8 ms (median of 11, in
+#: turn), 39.6 with these (the same bytes within 0.5 %, the same values). A reader reads a
+#: column's row group as one page (no page index is written).
+PAGES = {
+    'data_page_size': 8 << 20,
+    'max_rows_per_page': 1 << 18,
+    'write_batch_size': 1 << 16,
+}
 _LEVEL_COLUMNS = [(f'seconds_{lv.name.lower()}', lv) for lv in Level]
 
 
@@ -218,6 +229,7 @@ class PartWriter:
                     use_dictionary=words,
                     compression=COMPRESSION,
                     write_statistics=STATISTICS,
+                    **PAGES,
                 )  # dictionaries for the words only: on the floats they cost 7 times the time
                 self.writers[day] = (path, writer)
             self.writers[day][1].write_table(table.slice(lo, hi - lo))
