@@ -19,6 +19,7 @@ def test_flake8():
             'catenary_monitor',
             'catenary_monitor_study',
             'test',
+            'tools',
             'setup.py',
         ],
         cwd=ROOT,
