@@ -30,7 +30,10 @@ def dock_config(n_lines: int = 3, **alarm: Any) -> MonitorConfig:
                 hook_height=0.5 if k == 2 else 0.0,
             )
         )
-    settings = dict(clear_hold=3.0, warn_clear_hold=2.0, tension_timeout=1.5, depth_timeout=4.0)
+    settings = dict(
+        clear_hold=3.0, warn_clear_hold=2.0, margin_clear_hold=2.0, tension_timeout=1.5,
+        depth_timeout=4.0,
+    )  # fmt: skip
     settings.update(alarm)
     return MonitorConfig(lines=tuple(lines), alarm=AlarmConfig(**settings))
 

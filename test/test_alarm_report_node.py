@@ -51,6 +51,7 @@ def scripted_run(tmp_path_factory: Any) -> Any:
         tmp / 'params.yaml',
         {name: dict(weight=1300.0, anchor_distance=120.0, mbl=4.827e6) for name in LINES},
         warn_clear_hold=0.5,
+        margin_clear_hold=0.5,
         clear_hold=1.0,
         tension_timeout=3.0,
         # a lone line's STALE at its timeout: the chattering cell's 3.6 s dropouts stay STALE

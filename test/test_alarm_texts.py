@@ -90,7 +90,8 @@ def _scenes():
         for line in base.lines
     )  # fmt: skip
     alarm = AlarmConfig(
-        clear_hold=3.0, warn_clear_hold=2.0, tension_timeout=1.5, depth_timeout=4.0,
+        clear_hold=3.0, warn_clear_hold=2.0, margin_clear_hold=2.0, tension_timeout=1.5,
+        depth_timeout=4.0,
         fatigue_damage_warn=1e-12, tide_table='M2 0.6 0.0 28.98',
     )  # fmt: skip
     config = MonitorConfig(lines=holding, alarm=alarm)

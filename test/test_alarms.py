@@ -57,8 +57,11 @@ def run(alarm, updates, state=None):
 
 def alarm_with(allowed_uplift=0.0, **config):
     """A line's alarm rules; a lone line's STALE at its timeout (``common_cause_window`` 0)
-    unless the test says otherwise."""
+    unless the test says otherwise; a test's ``warn_clear_hold`` is its margins' clear hold
+    too (``margin_clear_hold``) unless it gives that."""
     config.setdefault('common_cause_window', 0.0)
+    if 'warn_clear_hold' in config:
+        config.setdefault('margin_clear_hold', config['warn_clear_hold'])
     return LineAlarm(AlarmConfig(**config), allowed_uplift)
 
 
@@ -174,12 +177,42 @@ def test_wave_oscillation_around_uplift_gives_one_transition(period):
     )
     assert crossings > 100  # the input really does cross the threshold, many times
     assert [(e.old, e.new) for e in events] == [(Level.OK, Level.ERROR)]
-    # The storm eases: one more transition, after the hold, giving the episode length.
+    # The storm eases: one more transition, after the hold, giving the episode length (the
+    # margins' clear hold as the ERROR's here: the warning under it clears with it).
     end = updates[-1][0]
     calm = [(end + k, fresh(end + k)) for k in range(1, 40)]
-    _, _, events = run(alarm_with(), updates + calm)
+    _, _, events = run(alarm_with(margin_clear_hold=30.0), updates + calm)
     assert [(e.old, e.new) for e in events] == [(Level.OK, Level.ERROR), (Level.ERROR, Level.OK)]
     assert events[1].time == end + 31.0 and events[1].duration == end + 31.0 - events[0].time
+
+
+def storm_margins(groups, seconds, lull_amplitude=3.0, group_amplitude=5.5):
+    """A neighbour line's anchor margin in a storm (10 Hz): 10 m swinging at 8 s waves by
+    ``lull_amplitude`` (never below the warning's clear level, 6 m), and by
+    ``group_amplitude`` (below the 5 m warning at the crests) in wave groups of 30 s starting
+    at ``groups`` [s]."""
+    updates = []
+    for t in np.arange(0.0, seconds, 0.1):
+        grouped = any(g <= t < g + 30.0 for g in groups)
+        swing = group_amplitude if grouped else lull_amplitude
+        margin = 10.0 - swing * math.sin(2.0 * math.pi * t / 8.0)
+        updates.append((float(t), fresh(t, anchor_margin=margin)))
+    return updates
+
+
+def test_a_margin_warning_at_a_storms_edge_is_one_warning():
+    # Wave groups reach the warning 270 s and 420 s apart, the margin back above its clear
+    # level in between: with a clear hold of 30 s the same warning was raised three times.
+    updates = storm_margins([100.0, 400.0, 850.0], 1600.0)
+    _, _, events = run(alarm_with(), updates)
+    first = next(t for t, x in updates if x.anchor_margin < 5.0)
+    assert [(e.time, e.old, e.new) for e in events] == [
+        (first, Level.OK, Level.WARN),  # raised at the first crest below, not delayed
+        (pytest.approx(880.0 + 600.0, abs=8.0), Level.WARN, Level.OK),  # 600 s after
+    ]
+    assert assert_replay_matches(alarm_with(), updates) == events
+    short = alarm_with(margin_clear_hold=30.0)
+    assert [e.new for e in run(short, updates)[2]] == [Level.WARN, Level.OK] * 3
 
 
 def test_without_hold_the_same_wave_would_chatter():
@@ -465,6 +498,7 @@ def scenarios(draw):
         on_delay=draw(st.sampled_from([0.0, 0.5, 2.0])),
         clear_hold=draw(st.sampled_from([0.0, 1.0, 3.0])),
         warn_clear_hold=draw(st.sampled_from([0.0, 0.75, 2.5])),
+        margin_clear_hold=draw(st.sampled_from([0.0, 1.5, 2.5])),
         tension_timeout=draw(st.sampled_from([0.5, 2.0])),
         depth_timeout=draw(st.sampled_from([1.0, 5.0])),
         uplift_clear_hysteresis=draw(st.sampled_from([0.0, 1e4, 1e5])),
@@ -538,6 +572,7 @@ def test_vectorized_equals_scalar_on_a_long_random_sequence():
             on_delay=0.3,
             clear_hold=2.0,
             warn_clear_hold=1.0,
+            margin_clear_hold=1.5,
             tension_timeout=0.6,
             depth_timeout=3.0,
         ),

@@ -371,6 +371,7 @@ def schedules(draw, distinct):
         on_delay=draw(st.sampled_from([0.0, 0.3])),
         clear_hold=draw(st.sampled_from([0.0, 0.7])),
         warn_clear_hold=0.5,
+        margin_clear_hold=draw(st.sampled_from([0.5, 1.2])),
         tension_timeout=0.6,
         depth_timeout=1.1,
     )

@@ -35,7 +35,8 @@ def _config(min_channels=1):
         min_channels=float(min_channels),
     )
     alarm = AlarmConfig(
-        stuck_time=10.0, tension_timeout=5.0, warn_clear_hold=0.0, depth_timeout=86400.0
+        stuck_time=10.0, tension_timeout=5.0, warn_clear_hold=0.0, margin_clear_hold=0.0,
+        depth_timeout=86400.0,
     )
     return MonitorConfig(lines=(line,), alarm=alarm)
 

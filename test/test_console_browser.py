@@ -54,7 +54,7 @@ def live_run(tmp_path_factory: Any) -> Any:
     monitor = subprocess.Popen(
         [sys.executable, '-m', 'catenary_monitor.ros.node', '--ros-args', '--params-file']
         + [str(PARAMS), '-p', f'log_dir:={log_dir}', '-p', 'clear_hold:=6.0']
-        + ['-p', 'warn_clear_hold:=6.0'],
+        + ['-p', 'warn_clear_hold:=6.0', '-p', 'margin_clear_hold:=6.0'],
         stdout=open(tmp / 'monitor.out', 'w+'),
         stderr=subprocess.STDOUT,
         env=env,

@@ -219,3 +219,34 @@ def test_implausible_readings_are_left_out_of_the_dock_estimate_alike():
             if st.name == 'catenary_monitor: dock'
         ]
         assert dock and all(st.level.name == 'OK' for st in dock), dock
+
+
+def test_an_estimate_flagging_more_than_a_third_of_the_lines_tests_none():
+    """One wrong reading (a cell reading a tenth) is flagged alone; readings so wrong that
+    more than a third of the lines disagree leave the estimate standing for none of them: no
+    line is flagged (a four-line dock's one wrong cell biased the fit so that the three good
+    lines disagreed with it)."""
+    from catenary_monitor.core.rules.dock_watch import Smoothing, decide_dock, most_flagged
+
+    config = dock_config(tension_timeout=2.0)
+    grid, tens, _ = true_tensions(config, 40.0)
+    model = DockModel.from_config(config)
+    n, m = tens.shape
+    stamps = np.repeat(grid[:, None], m, axis=1)
+    args = (grid, np.full(n, 20.85), np.ones(n, bool))
+
+    def decide(readings):
+        return decide_dock(model, config, *args, readings, stamps, Smoothing.initial(m))[0]
+
+    one = tens.copy()
+    one[:, DRIFTING] *= 0.1
+    d = decide(one)
+    assert np.flatnonzero(d.flagged[-1]).tolist() == [DRIFTING]
+    many = tens.copy()
+    many[:, : m // 2] *= 0.5  # half the lines read half (still above the chain's weight)
+    d = decide(many)
+    beyond = np.sum(np.abs(d.line_inputs[..., 3]) > config.dock.residual_limit, axis=1)
+    assert (beyond > most_flagged(m)).any()  # not vacuous: the fit would blame many lines
+    assert not d.flagged[beyond > most_flagged(m)].any()
+    assert np.isnan(d.line_inputs[beyond > most_flagged(m)][..., 0]).all()
+    assert (d.flagged.sum(axis=1) <= most_flagged(m)).all()

@@ -105,6 +105,7 @@ def harbour(tmp_path_factory: Any) -> Any:
                 tide_trend_window=5.0,
                 clear_hold=1.0,
                 warn_clear_hold=1.0,
+                margin_clear_hold=1.0,
                 # the feed is a constant: a loaded machine's slow set-up must not make it a
                 # stuck sensor (WARN after stuck_time, 60 s by default)
                 stuck_time=3600.0,

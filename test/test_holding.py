@@ -113,6 +113,7 @@ def test_drag_warning_with_deadband():
         drag_margin_warn=7440.0,
         drag_margin_deadband=100.0,
         warn_clear_hold=0.0,
+        margin_clear_hold=0.0,
         clear_hold=0.0,
     )
     # 7500 + 25*0.75*2.9 - 85.5 = 7468.8 N: above 7440 but below 7540 at the end

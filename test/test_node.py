@@ -71,6 +71,7 @@ def monitor(tmp_path_factory, client):
         key='/**',
         clear_hold=CLEAR_HOLD,
         warn_clear_hold=CLEAR_HOLD,
+        margin_clear_hold=CLEAR_HOLD,
         tension_timeout=TENSION_TIMEOUT,
         diagnostic_rate=RATE,
         depth_timeout=30.0,

@@ -123,7 +123,7 @@ def test_the_consequence_annunciates_when_the_part_no_longer_stands():
 
 def test_vectorized_equals_scalar_across_windows_and_random_parts():
     rng = np.random.default_rng(36)
-    a = alarm(window=20.0, warn_clear_hold=2.0)
+    a = alarm(window=20.0, warn_clear_hold=2.0, margin_clear_hold=2.0)
     n, now, updates = 3000, 0.0, []
     parted, low, lift = False, False, False
     for _ in range(n):

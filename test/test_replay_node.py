@@ -52,6 +52,7 @@ PARAMS = {
     depth_timeout: 3
     clear_hold: 1
     warn_clear_hold: 1.
+    margin_clear_hold: 1.
     diagnostic_rate: 4
     line_01: {{weight: 1300, anchor_distance: 120, mbl: 4.827e6}}
     line_02.weight: 13e2
@@ -84,6 +85,7 @@ catenary_monitor:
     depth_timeout: 3.0
     clear_hold: 1.0
     warn_clear_hold: 1.0
+    margin_clear_hold: 1.0
     diagnostic_rate: 4.0
     line_01:
       weight: 1300.0

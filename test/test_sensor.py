@@ -38,6 +38,7 @@ def scene(seed=0):
 
 def config(**alarm):
     alarm.setdefault('warn_clear_hold', 10.0)
+    alarm.setdefault('margin_clear_hold', 10.0)
     alarm.setdefault('clear_hold', 10.0)
     alarm.setdefault('stuck_time', 20.0)
     alarm.setdefault('sensor_hold', 5.0)

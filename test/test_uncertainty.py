@@ -120,6 +120,7 @@ def _core(accuracy=30e3, depth_accuracy=0.2):
             anchor_margin_warn=0.0,
             tide_margin_warn=0.0,
             warn_clear_hold=0.0,
+            margin_clear_hold=0.0,
             clear_hold=0.0,
             wave_window=1.0,  # readings 2 s apart: each its own window (no wave allowance)
             uplift_time_warn=0.0,  # no trend here: its warning would hold, unknown

@@ -228,3 +228,28 @@ def test_at_a_lift_point_the_statics_name_no_factor_they_cannot_tell():
     out, _ = plausible.units_latch(memory, np.array([9.5]), ratio[:1], calm[:1],
                                    judged[:1], rule, dock)  # fmt: skip
     assert out[0, 4] == 0 and factor[int(out[0, 4])] == 10.0
+
+
+def test_on_a_dock_of_four_lines_the_line_off_by_ten_is_claimed_and_no_other():
+    """drawn:11 (four lines, 18.5 m) with ml4's daN cell at its lift point in a storm: the
+    lines read 0.83, 0.96, 0.71 and 0.215 x their at-rest statics. All four spread by 0.48
+    (log, the 75th percentile takes a quarter of ml4's own deviation): never calm, never
+    claimed (the lines' 'inconsistent' WARNs the only witness). The others without ml4 are
+    calm: ml4 is claimed, its factor unsure (lbf and daN both within the band of all four);
+    for the other lines ml4 is among the others, so the dock is not calm: no claim."""
+    rule = plausible.UnitsRule()
+    depths = np.array([10.0, 30.0])
+    table = (depths, np.full((2, 4), 150.3e3))
+    tension = np.array([[124.9e3, 144.1e3, 107.2e3, 32.3e3]])
+    depth = np.array([18.51])
+    ratio, calm = plausible.units_ratios(table, depth, tension)
+    assert calm[0] > math.log(rule.calm)  # the dock of all four lines: never calm
+    apart = plausible.others_calm(table, depth, tension)
+    assert apart[0, 3] < math.log(rule.calm) < apart[0, :3].min()
+    memory = [plausible.UnitsMemory()] * 4
+    judged = np.ones((1, 4), bool)
+    out, _ = plausible.units_latch(memory, np.array([0.5]), ratio, calm, judged, rule)
+    assert (out == -1).all()  # before: no claim
+    out, _ = plausible.units_latch(memory, np.array([0.5]), ratio, calm, judged, rule,
+                                   apart=apart)  # fmt: skip
+    assert out[0].tolist() == [-1, -1, -1, plausible.UNSURE_LOW]

@@ -41,6 +41,7 @@ __all__ = ['run_demo', 'start_console', 'DEMO_OVERRIDES']
 DEMO_OVERRIDES = {
     'clear_hold': 6.0,
     'warn_clear_hold': 6.0,
+    'margin_clear_hold': 6.0,
     'tide_trend_window': 10.0,
     'uplift_time_warn': 8.0,
     'uplift_time_deadband': 3.0,

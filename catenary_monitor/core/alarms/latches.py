@@ -18,11 +18,14 @@ Conditions, each with its own latch:
     tension <= weight * depth, ...); cleared after ``clear_hold`` of valid input.
 ``anchor_margin``, ``tide_margin``, ``load_margin``, ``safety_factor`` (WARN)
     raised when the value ``< *_warn`` has lasted ``on_delay``; cleared when ``>= *_warn +
-    *_deadband`` has held for ``warn_clear_hold``.
+    *_deadband`` has held for ``margin_clear_hold`` (600 s): the values swing with the waves
+    (metres of anchor margin at wave frequency in a storm), so a threshold's edge is reached
+    by the rare wave group or gust, minutes apart, and a clear after a lull of 30 s raised the
+    same warning again with the next one (three times in 20 min on a storm's neighbour line).
 ``time_to_uplift`` (WARN)
     the same with ``uplift_time_warn`` and ``uplift_time_deadband`` (s): the anchor lifts within
     that time if the tide keeps its trend (:mod:`catenary_monitor.core.rules.tide_trend`); inf
-    (no uplift coming) clears, NaN holds.
+    (no uplift coming) clears (after ``margin_clear_hold``), NaN holds.
 ``inconsistent`` (WARN; the dock model only, :mod:`catenary_monitor.core.rules.dock_watch`)
     raised when the dock estimate flags the line's tension as irreconcilable with the other
     lines (its smoothed normalized residual beyond ``dock_residual_limit``) for ``on_delay``;
@@ -34,7 +37,8 @@ Conditions, each with its own latch:
     back at or below ``allowed_uplift``, or when the nominal value itself is above it (the
     ``uplift`` ERROR then says so), held for ``warn_clear_hold``; NaN holds.
 ``drag_margin`` (WARN; with ``anchor_holding``, :mod:`catenary_monitor.core.rules.holding`)
-    as the margins above with ``drag_margin_warn`` and ``drag_margin_deadband`` (N).
+    as the margins above with ``drag_margin_warn`` and ``drag_margin_deadband`` (N), cleared
+    after ``margin_clear_hold``.
 ``dragging`` (ERROR; with ``anchor_holding``, :mod:`catenary_monitor.core.rules.holding`)
     raised when the line's ``drag_state`` is ``dragging`` (the load beyond the holding and the
     implied anchor distance beyond the installed one by ``drag_tolerance``) for ``on_delay``;
@@ -335,6 +339,8 @@ class LineAlarm:
         c = self.config
         if cond == 'input':
             return 0.0, c.clear_hold
+        if cond in _MARGINS:
+            return c.on_delay, c.margin_clear_hold
         return c.on_delay, (c.clear_hold if cond in _ERRORS else c.warn_clear_hold)
 
     def _warn_limits(self, cond: str) -> tuple[float, float]:
@@ -491,6 +497,7 @@ class LineAlarm:
         """Operator message for the conditions that apply, joined with '; '."""
         parts = []
         hold_e, hold_w = self.config.clear_hold, self.config.warn_clear_hold
+        hold_m = self.config.margin_clear_hold
         if active[0]:
             f, allowed = uplift_seen(x.uplift_force, x.dynamic_uplift), self.allowed_uplift
             if f > allowed:
@@ -550,7 +557,7 @@ class LineAlarm:
                 parts.append(_sensor_text(x, cond, hold_w))
             elif up and cond == 'time_to_uplift':
                 if not (active[0] and not x.time_to_uplift > 0.0):  # the ERROR says it
-                    parts.append(self._uplift_time_text(x, hold_w))
+                    parts.append(self._uplift_time_text(x, hold_m))
             elif up and cond == 'uplift_possible':
                 parts.append(self._uplift_possible_text(x, hold_w))
             elif up and cond == 'fatigue':
@@ -559,11 +566,11 @@ class LineAlarm:
                 if not blind:
                     parts.append(self._channels_text(x, False, hold_w))
             elif up and cond == 'drag_margin':
-                text = self._warn_text(cond, x.drag_margin, hold_w)
+                text = self._warn_text(cond, x.drag_margin, hold_m)
                 holding = _fmt(x.holding_capacity, 1e3)
                 parts.append(f'{text} (holding {holding} kN): anchor may drag')
             elif up:
-                parts.append(self._warn_text(cond, getattr(x, cond), hold_w))
+                parts.append(self._warn_text(cond, getattr(x, cond), hold_m))
         return '; '.join(parts) if parts else 'OK'
 
     def _warn_text(self, cond: str, value: float, hold: float) -> str:

@@ -1072,6 +1072,18 @@ PARAMETERS: tuple[ParamSpec, ...] = (
         0.0,
         3600.0,
     ),
+    ParamSpec(
+        'margin_clear_hold',
+        'double',
+        600.0,
+        'A margin warning (anchor, tide, load and drag margins, safety factor, time to '
+        'uplift) clears only after its value has held at or above warn + deadband this long: '
+        'longer than the lulls between the wave groups and gusts that reach a threshold\'s '
+        'edge in a storm (raising is not delayed)',
+        's',
+        0.0,
+        3600.0,
+    ),
     # Uplift alarm (ERROR).
     ParamSpec(
         'on_delay',
@@ -1728,6 +1740,7 @@ class AlarmConfig:
     safety_factor_warn: float = _default('safety_factor_warn')
     safety_factor_deadband: float = _default('safety_factor_deadband')
     warn_clear_hold: float = _default('warn_clear_hold')
+    margin_clear_hold: float = _default('margin_clear_hold')
     on_delay: float = _default('on_delay')
     uplift_clear_hysteresis: float = _default('uplift_clear_hysteresis')
     uplift_clear_margin: float = _default('uplift_clear_margin')

@@ -31,6 +31,12 @@ lines' newest tensions; the spans it gives are taken by the lines' solves at the
 that tick (a tick solves nothing itself), so a solve at a tension or depth sample uses the
 newest tick's estimate, in the core and in its twin alike.
 
+When more lines disagree than :func:`most_flagged` allows (a third, at least one), the estimate
+does not stand: no line is tested at that tick (none flagged, none agreeing; the spans the
+installed ones), so a line is never called inconsistent by a fit that a bad line beside it
+has biased (one reading off by x10 of a four-line dock flagged the three good lines; the
+units check names that one).
+
 The ``dock`` status is STALE while no estimate can be made (fewer than three readings, or no
 usable depth) and OK otherwise; its message gives the offset and the load and names the lines
 flagged. A line's ``inconsistent`` alarm condition (WARN) is latched in
@@ -68,6 +74,7 @@ __all__ = [
     'dock_message',
     'dock_values',
     'sensor_state',
+    'most_flagged',
 ]
 
 #: What a line's alarm takes from the estimate (AlarmInputs fields): 1.0 flagged / 0.0 tested
@@ -242,7 +249,17 @@ def _decide_tick(
     est = estimate_tick(model, h, tension, use, state.flagged.tolist(), REMOVE_Z)
     stat, state = smooth_step(state, now, est.normalized, tau, limit)
     flag = [1.0 if abs(z) > limit else (0.0 if math.isfinite(z) else math.nan) for z in stat]
+    if flag.count(1.0) > most_flagged(len(flag)):  # the estimate does not stand: none tested
+        flag = [math.nan] * len(flag)
     return _Tick(est, flag, stat), state
+
+
+def most_flagged(m: int) -> int:
+    """How many of ``m`` lines the estimate may flag and still stand (a third, at least one;
+    the units check's dock witness asks the same): beyond, the others do not agree with each
+    other and the estimate cannot tell the bad lines from the good (one reading off by x10 of
+    a four-line dock biased the fit so that the three good lines disagreed with it)."""
+    return max(1, m // 3)
 
 
 def solve_spans(span: np.ndarray, flag: np.ndarray) -> np.ndarray:

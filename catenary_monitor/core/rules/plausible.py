@@ -57,6 +57,7 @@ __all__ = [
     'units_text',
     'units_decide',
     'dock_units',
+    'others_calm',
 ]
 
 MAX_DEPTH = 12_000.0  # m
@@ -312,16 +313,11 @@ def units_ratios(
     statics at the tick's ``depth`` [m] x the dock's common loading, the median over the lines
     of reading / statics), and per tick the calm measure (the 75th percentile over the lines of
     the absolute log deviation from that loading; NaN where fewer than 3 lines are judged)."""
-    depths, rest_rows = table
     n, m = tension.shape
-    if not len(depths):
+    if not len(table[0]):
         return np.full((n, m), math.nan), np.full(n, math.nan)
-    rest = np.empty((n, m))
-    for k in range(m):
-        rest[:, k] = np.interp(depth, depths, rest_rows[:, k], left=math.nan, right=math.nan)
+    rel = _relative(table, depth, tension)
     with np.errstate(invalid='ignore', divide='ignore'):
-        rel = tension / rest
-        rel = np.where((rel > 0) & np.isfinite(rel), rel, math.nan)
         judged = np.sum(np.isfinite(rel), axis=1)
         load = _nanmedian_rows(rel)
         dev = np.abs(np.log(rel / load[:, None]))
@@ -329,6 +325,44 @@ def units_ratios(
         ratio = load[:, None] / rel
     calm = np.where(judged >= 3, calm, math.nan)
     return ratio, calm
+
+
+def _relative(
+    table: tuple[np.ndarray, np.ndarray], depth: np.ndarray, tension: np.ndarray
+) -> np.ndarray:
+    """Per (tick, line): the reading over its at-rest statics at the tick's depth (NaN where
+    either is unknown or not positive)."""
+    depths, rest_rows = table
+    n, m = tension.shape
+    rest = np.empty((n, m))
+    for k in range(m):
+        rest[:, k] = np.interp(depth, depths, rest_rows[:, k], left=math.nan, right=math.nan)
+    with np.errstate(invalid='ignore', divide='ignore'):
+        rel = tension / rest
+    return np.where((rel > 0) & np.isfinite(rel), rel, math.nan)
+
+
+def others_calm(
+    table: tuple[np.ndarray, np.ndarray], depth: np.ndarray, tension: np.ndarray
+) -> np.ndarray:
+    """Per (tick, line): the calm measure of the other lines (as :func:`units_ratios`', the
+    line left out; NaN where fewer than 2 others are judged). Whether the dock is calm for a
+    line's claim: on a dock of four lines one reading off by x10 is a quarter of the lines,
+    and its own deviation kept the dock from ever being calm (the 75th percentile of four
+    takes a quarter of the largest), so it was never claimed. The claim's band keeps the
+    measure of all the lines (:func:`units_claims`): at a lift point the line judged carries
+    2-3 x the others' loading, and the band then holds more than one factor (none named)."""
+    n, m = tension.shape
+    if not len(table[0]) or m < 3:
+        return np.full((n, m), math.nan)
+    rel = _relative(table, depth, tension)
+    others = np.array([[j for j in range(m) if j != k] for k in range(m)], np.int64)
+    rows = rel[:, others].reshape(n * m, m - 1)  # row (tick, line): the other lines
+    with np.errstate(invalid='ignore', divide='ignore'):
+        load = _nanmedian_rows(rows)
+        calm = _nanpercentile_rows(np.abs(np.log(rows / load[:, None])), 75.0)
+    judged = np.sum(np.isfinite(rows), axis=1)
+    return np.where(judged >= 2, calm, math.nan).reshape(n, m)
 
 
 def _nanmedian_rows(x: np.ndarray) -> np.ndarray:
@@ -361,10 +395,12 @@ def units_latch(
     judged: np.ndarray,
     rule: UnitsRule,
     dock: Optional[tuple[np.ndarray, np.ndarray]] = None,
+    apart: Optional[np.ndarray] = None,
 ) -> tuple[np.ndarray, list[UnitsMemory]]:
     """Per (tick, line): the index of the unit factor a line is claimed off by (-1: none),
     and each line's latch after the last tick. A claim needs a calm dock (``calm`` within
-    ``rule.calm``) and the line's ``ratio`` off by a unit factor (:func:`units_claims`), or
+    ``rule.calm``; ``apart`` given: the other lines' measure per (tick, line) within it,
+    :func:`others_calm`) and the line's ``ratio`` off by a unit factor (:func:`units_claims`), or
     the dock estimate's claim ``dock`` = (factor index (-1: none), the line tested and
     agreeing) per (tick, line) (:func:`dock_units`); it holds until the ratio was within
     ``rule.fit`` of 1, or of the dock estimate's expectation while agreeing with it, for
@@ -372,9 +408,9 @@ def units_latch(
     not ``judged``, e.g. a stale reading or depth, is not within). Ticks ``now`` [s]."""
     n, m = ratio.shape
     with np.errstate(invalid='ignore', divide='ignore'):
-        quiet = calm <= math.log(rule.calm)
+        quiet = (calm[:, None] if apart is None else apart) <= math.log(rule.calm)
         idx = units_claims(ratio, calm[:, None], rule)
-        claim = (idx >= 0) & quiet[:, None] & judged
+        claim = (idx >= 0) & quiet & judged
         near = judged & (np.abs(np.log(ratio)) < math.log(rule.fit))
     if dock is not None:
         idx = np.where(dock[0] >= 0, dock[0], idx)
@@ -445,7 +481,7 @@ def dock_units(
     m = tension.shape[1]
     with np.errstate(invalid='ignore', divide='ignore'):
         flagged = fresh & (flag == 1.0)
-        few = np.sum(flag == 1.0, axis=1) <= max(1, m // 3)
+        few = np.sum(flag == 1.0, axis=1) <= max(1, m // 3)  # dock_watch.most_flagged
         ratio = expected / tension
         fits = fresh & (flag == 0.0) & (np.abs(np.log(ratio)) < math.log(rule.fit))
         ratio = np.where(flagged & few[:, None], ratio, math.nan)
@@ -482,4 +518,7 @@ def units_decide(
     ratio, calm = units_ratios(table, np.where(depth_ok, depth, math.nan),
                                np.where(fresh, tension, math.nan))  # fmt: skip
     witness = None if dock is None else dock_units(dock, tension, fresh, rule)
-    return units_latch(memory, now, ratio, calm, fresh & np.isfinite(ratio), rule, witness)
+    apart = others_calm(table, np.where(depth_ok, depth, math.nan),
+                        np.where(fresh, tension, math.nan))  # fmt: skip
+    return units_latch(memory, now, ratio, calm, fresh & np.isfinite(ratio), rule, witness,
+                       apart)  # fmt: skip
