@@ -40,7 +40,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Optional, Sequence
 
 import numpy as np
 
@@ -59,6 +59,7 @@ __all__ = [
 #: Wall time between two /clock messages while no input message is due [s] (40 Hz, as
 #: ``ros2 bag play --clock``'s default).
 CLOCK_PERIOD = 0.025
+SETTLE = 0.3  # s the readers found must stay matched before the playback begins
 CLOCK_TOPIC = '/clock'
 #: The first log time (ns) /clock cannot carry: 2**31 s, 2038-01-19T03:14:08Z (int32 seconds).
 CLOCK_END_NS = 2**31 * 10**9
@@ -235,15 +236,22 @@ def _wait_for_readers(
     node: Any, pubs: list[Any], clock_pub: Any, stop: threading.Event, wait: float
 ) -> None:
     """Wait up to ``wait`` s until every data topic has a matched reader and every reader the
-    graph already lists (on /clock too) is matched, so a sim-time node's /clock reader found
-    with its data readers sees the first tick."""
+    graph already lists (on /clock too) is matched, and that has held for :data:`SETTLE` s
+    (a participant's readers are discovered one by one: its data reader matched first once,
+    its /clock reader 1.6 s of log time later), so a sim-time node's /clock reader found with
+    its data readers sees the first tick."""
     deadline = time.monotonic() + wait
     every = [*pubs, clock_pub]
+    since: Optional[float] = None
     while wait > 0 and not stop.is_set() and time.monotonic() < deadline:
         if all(p.get_subscription_count() > 0 for p in pubs) and all(
             p.get_subscription_count() >= node.count_subscribers(p.topic_name) for p in every
         ):
-            return
+            since = time.monotonic() if since is None else since
+            if time.monotonic() - since >= SETTLE:
+                return
+        else:
+            since = None
         stop.wait(0.05)
 
 
