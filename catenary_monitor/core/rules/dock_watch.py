@@ -55,7 +55,7 @@ from catenary_monitor.core.body.estimate import MIN_LINES, REMOVE_Z, DockEstimat
 from catenary_monitor.core.body.estimate_tick import TickEstimate, estimate_tick
 from catenary_monitor.core.config.parameters import MonitorConfig
 from catenary_monitor.core.rules.level import Level
-from catenary_monitor.core.rules.plausible import MAX_DEPTH, reading_status
+from catenary_monitor.core.rules.plausible import MAX_DEPTH, most_flagged, reading_status
 
 __all__ = [
     'LINE_INPUTS',
@@ -252,14 +252,6 @@ def _decide_tick(
     if flag.count(1.0) > most_flagged(len(flag)):  # the estimate does not stand: none tested
         flag = [math.nan] * len(flag)
     return _Tick(est, flag, stat), state
-
-
-def most_flagged(m: int) -> int:
-    """How many of ``m`` lines the estimate may flag and still stand (a third, at least one;
-    the units check's dock witness asks the same): beyond, the others do not agree with each
-    other and the estimate cannot tell the bad lines from the good (one reading off by x10 of
-    a four-line dock biased the fit so that the three good lines disagreed with it)."""
-    return max(1, m // 3)
 
 
 def solve_spans(span: np.ndarray, flag: np.ndarray) -> np.ndarray:

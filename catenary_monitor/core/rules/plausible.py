@@ -58,6 +58,7 @@ __all__ = [
     'units_decide',
     'dock_units',
     'others_calm',
+    'most_flagged',
 ]
 
 MAX_DEPTH = 12_000.0  # m
@@ -466,6 +467,14 @@ def units_text(name: str, scale: float, index: int, tension: float) -> str:
     )
 
 
+def most_flagged(m: int) -> int:
+    """How many of ``m`` lines the estimate may flag and still stand (a third, at least one;
+    the units check's dock witness asks the same): beyond, the others do not agree with each
+    other and the estimate cannot tell the bad lines from the good (one reading off by x10 of
+    a four-line dock biased the fit so that the three good lines disagreed with it)."""
+    return max(1, m // 3)
+
+
 def dock_units(
     inputs: np.ndarray, tension: np.ndarray, fresh: np.ndarray, rule: UnitsRule
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -481,7 +490,7 @@ def dock_units(
     m = tension.shape[1]
     with np.errstate(invalid='ignore', divide='ignore'):
         flagged = fresh & (flag == 1.0)
-        few = np.sum(flag == 1.0, axis=1) <= max(1, m // 3)  # dock_watch.most_flagged
+        few = np.sum(flag == 1.0, axis=1) <= most_flagged(m)
         ratio = expected / tension
         fits = fresh & (flag == 0.0) & (np.abs(np.log(ratio)) < math.log(rule.fit))
         ratio = np.where(flagged & few[:, None], ratio, math.nan)
